@@ -1,0 +1,19 @@
+//! parallax-core: the bottom layer of parallax.
+//!
+//! Maths on [glam] (rays, boxes, planes, frusta, the watertight ray-triangle test), sampling
+//! (seeded per-pixel random streams, low-discrepancy points, warps to disks, hemispheres and
+//! BRDF lobes), images ([`Image`], layered G-buffers, PNG/EXR IO) and image metrics
+//! (RMSE, PSNR, SSIM).
+//!
+//! **Invariant:** nothing in this crate knows about scenes, cameras or acceleration structures.
+
+pub mod error;
+pub mod image;
+pub mod math;
+pub mod metrics;
+pub mod sampling;
+
+pub use error::{CoreError, Result};
+pub use glam;
+pub use image::{Image, Rgb};
+pub use math::{Aabb, Frustum, Plane, Ray, TriangleHit};

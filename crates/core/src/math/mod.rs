@@ -1,0 +1,15 @@
+//! Geometry on glam: rays, boxes, planes, frusta and the watertight ray-triangle test.
+
+mod aabb;
+mod frame;
+mod frustum;
+mod plane;
+mod ray;
+mod triangle;
+
+pub use aabb::Aabb;
+pub use frame::Frame;
+pub use frustum::{Containment, Frustum};
+pub use plane::Plane;
+pub use ray::{Ray, RayDifferential};
+pub use triangle::{TriangleHit, WatertightRay, intersect_triangle_moller};

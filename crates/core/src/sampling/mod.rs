@@ -1,0 +1,1 @@
+//! Sampling: seeded per-pixel random streams, low-discrepancy points, warps.
