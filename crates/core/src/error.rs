@@ -18,6 +18,14 @@ pub enum CoreError {
     /// A file had an unexpected layout (missing channel, wrong size, ...).
     #[error("{path}: {message}")]
     Format { path: PathBuf, message: String },
+    /// Two images that must have the same size (e.g. for a metric) do not.
+    #[error("image sizes differ: {a_width}x{a_height} vs {b_width}x{b_height}")]
+    SizeMismatch {
+        a_width: u32,
+        a_height: u32,
+        b_width: u32,
+        b_height: u32,
+    },
 }
 
 /// Result alias of the core layer.

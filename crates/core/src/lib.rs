@@ -15,5 +15,8 @@ pub mod sampling;
 
 pub use error::{CoreError, Result};
 pub use glam;
-pub use image::{Image, Rgb};
+pub use image::{ExrImage, GBuffer, GSample, Image, LayeredGBuffer, NO_ID, Rgb};
+pub use image::{read_exr, write_exr};
 pub use math::{Aabb, Frustum, Plane, Ray, TriangleHit};
+pub use metrics::{psnr, psnr_rgb, rmse, rmse_rgb, ssim, ssim_rgb};
+pub use sampling::Rng;

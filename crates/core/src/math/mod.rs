@@ -7,7 +7,7 @@ mod plane;
 mod ray;
 mod triangle;
 
-pub use aabb::Aabb;
+pub use aabb::{Aabb, ROBUST_FAR_SCALE};
 pub use frame::Frame;
 pub use frustum::{Containment, Frustum};
 pub use plane::Plane;
