@@ -8,10 +8,38 @@
 //! Film coordinates are continuous pixels: pixel `(x, y)` covers `[x, x+1) x [y, y+1)` and has its
 //! centre at `(x + 0.5, y + 0.5)`; `y` grows downward. Models whose image is made of several views
 //! (stereo rig, cube map) lay the views side by side on one film; see each model.
+//!
+//! | model | file | film | depth axis | differentials |
+//! |---|---|---|---|---|
+//! | `pinhole` | [`pinhole`] | `w x h` | forward | analytic |
+//! | `ortho` | [`orthographic`] | `w x h` | forward | analytic (origin only) |
+//! | `thinlens` | [`thin_lens`] | `w x h` | forward | analytic (per lens sample) |
+//! | `stereo` | [`stereo`] | `2w x h` (w per eye) | forward | analytic (per eye) |
+//! | `cube` | [`cube`] | `6w x w` (w per face) | face axis | analytic (per face) |
+//! | `equirect` | [`equirect`] | `w x h` | ray direction | analytic |
+//! | `fisheye` | [`fisheye`] | `w x h` | ray direction | analytic |
+//! | `distorted` | [`distortion`] | `w x h` | forward | analytic (per channel) |
+//!
+//! Every model validates its parameters when built and returns [`SceneError::Camera`] with a
+//! message naming the parameter and the allowed range.
 
-mod pinhole;
+pub mod cube;
+pub mod distortion;
+pub mod equirect;
+pub mod fisheye;
+pub mod orthographic;
+pub mod pinhole;
+pub mod stereo;
+pub mod thin_lens;
 
+pub use cube::CubeMap;
+pub use distortion::Distorted;
+pub use equirect::Equirect;
+pub use fisheye::Fisheye;
+pub use orthographic::Orthographic;
 pub use pinhole::Pinhole;
+pub use stereo::{Eye, StereoRig, eye_camera};
+pub use thin_lens::ThinLens;
 
 use glam::{Mat3, Vec2, Vec3};
 use parallax_core::{Ray, math::RayDifferential};
@@ -164,7 +192,9 @@ pub struct CameraOptions {
     /// for the fisheye and 360 x 180 for the equirect.
     pub fov_deg: Option<Vec2>,
     /// Radial distortion: per-channel (R, G, B) coefficients `(k1, k2)` of
-    /// `r_d = r (1 + k1 r^2 + k2 r^4)`. Default: an HMD-like pincushion.
+    /// `r_u = r_d (1 + k1 r_d^2 + k2 r_d^4)` (display radius `r_d` -> undistorted tangent-space
+    /// radius `r_u`, both in units of the half-height; see [`distortion`]). Default: a
+    /// pre-distortion for an HMD-like pincushion lens.
     pub distortion: [[f32; 2]; 3],
 }
 
@@ -181,15 +211,96 @@ impl Default for CameraOptions {
     }
 }
 
+impl CameraOptions {
+    /// Checks the options every model shares a meaning of (model-specific ranges such as the
+    /// field of view are checked by the model that uses them).
+    pub fn validate(&self) -> Result<()> {
+        if !(self.aperture_radius.is_finite() && self.aperture_radius >= 0.0) {
+            return Err(camera_error(format!(
+                "aperture radius must be finite and >= 0, got {}",
+                self.aperture_radius
+            )));
+        }
+        if let Some(f) = self.focus_distance
+            && !(f.is_finite() && f > 0.0)
+        {
+            return Err(camera_error(format!(
+                "focus distance must be finite and > 0, got {f}"
+            )));
+        }
+        if !(self.ipd.is_finite() && self.ipd >= 0.0) {
+            return Err(camera_error(format!(
+                "ipd (eye separation) must be finite and >= 0, got {}",
+                self.ipd
+            )));
+        }
+        if let Some(h) = self.ortho_height
+            && !(h.is_finite() && h > 0.0)
+        {
+            return Err(camera_error(format!(
+                "ortho height must be finite and > 0, got {h}"
+            )));
+        }
+        if let Some(f) = self.fov_deg
+            && !f.is_finite()
+        {
+            return Err(camera_error(format!("fov must be finite, got {f}")));
+        }
+        if self.distortion.iter().flatten().any(|k| !k.is_finite()) {
+            return Err(camera_error(format!(
+                "distortion coefficients must be finite, got {:?}",
+                self.distortion
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// A [`SceneError::Camera`] with `message`.
+pub(crate) fn camera_error(message: impl Into<String>) -> SceneError {
+    SceneError::Camera(message.into())
+}
+
+/// Checks a film size given in u64 (composite films multiply the per-view size).
+pub(crate) fn check_film(width: u64, height: u64) -> Result<(u32, u32)> {
+    let w = u32::try_from(width)
+        .map_err(|_| camera_error(format!("film width {width} does not fit in 32 bits")))?;
+    let h = u32::try_from(height)
+        .map_err(|_| camera_error(format!("film height {height} does not fit in 32 bits")))?;
+    parallax_core::image::check_size(w, h).map_err(|e| camera_error(format!("film: {e}")))?;
+    Ok((w, h))
+}
+
+/// The derivative of `n = d / |d|` given `dd` (the derivative of `d`), with `len = |d|`:
+/// `dn = (I - n n^T) dd / |d|` (Igehy 1999, eq. 8 for normalised directions).
+#[inline]
+pub(crate) fn normalized_derivative(n: Vec3, len: f32, dd: Vec3) -> Vec3 {
+    (dd - n * n.dot(dd)) / len
+}
+
 /// The closed set of camera models.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Camera {
     Pinhole(Pinhole),
+    Orthographic(Orthographic),
+    ThinLens(ThinLens),
+    Stereo(StereoRig),
+    Cube(CubeMap),
+    Equirect(Equirect),
+    Fisheye(Fisheye),
+    Distorted(Distorted),
 }
 
 impl Camera {
     /// Builds a model from a pose, a film size and options. Errors on an invalid pose, a zero or
     /// absurd film size, or invalid options.
+    ///
+    /// `width x height` is the film of single-view models. Composite models take the size of
+    /// one view: the stereo rig's film is `2 * width x height` (left eye left), the cube map's
+    /// is `6 * width x width` (faces of `width x width`; `height` must still be valid but is
+    /// otherwise unused). The shared options are checked whatever the model
+    /// ([`CameraOptions::validate`]: a negative aperture is an error even for a pinhole); the
+    /// model-specific ranges (fov, distortion monotonicity) by the model that uses them.
     pub fn new(
         kind: ModelKind,
         desc: &CameraDesc,
@@ -197,21 +308,63 @@ impl Camera {
         height: u32,
         opts: &CameraOptions,
     ) -> Result<Self> {
-        parallax_core::image::check_size(width, height)
-            .map_err(|e| SceneError::Camera(e.to_string()))?;
-        let _ = opts;
-        match kind {
-            ModelKind::Pinhole => Ok(Camera::Pinhole(Pinhole::new(desc, width, height)?)),
-            other => Err(SceneError::Camera(format!(
-                "camera model {} is not implemented yet",
-                other.name()
-            ))),
+        check_film(width as u64, height as u64)?;
+        opts.validate()?;
+        let (w, h) = (width, height);
+        Ok(match kind {
+            ModelKind::Pinhole => Camera::Pinhole(Pinhole::new(desc, w, h)?),
+            ModelKind::Orthographic => {
+                Camera::Orthographic(Orthographic::new(desc, w, h, opts.ortho_height)?)
+            }
+            ModelKind::ThinLens => Camera::ThinLens(ThinLens::new(
+                desc,
+                w,
+                h,
+                opts.aperture_radius,
+                opts.focus_distance,
+            )?),
+            ModelKind::Stereo => Camera::Stereo(StereoRig::new(desc, w, h, opts.ipd)?),
+            ModelKind::Cube => Camera::Cube(CubeMap::new(desc, w)?),
+            ModelKind::Equirect => Camera::Equirect(Equirect::new(desc, w, h, opts.fov_deg)?),
+            ModelKind::Fisheye => Camera::Fisheye(Fisheye::new(desc, w, h, opts.fov_deg)?),
+            ModelKind::Distorted => Camera::Distorted(Distorted::new(desc, w, h, opts.distortion)?),
+        })
+    }
+
+    /// Which model this is.
+    pub fn kind(&self) -> ModelKind {
+        match self {
+            Camera::Pinhole(_) => ModelKind::Pinhole,
+            Camera::Orthographic(_) => ModelKind::Orthographic,
+            Camera::ThinLens(_) => ModelKind::ThinLens,
+            Camera::Stereo(_) => ModelKind::Stereo,
+            Camera::Cube(_) => ModelKind::Cube,
+            Camera::Equirect(_) => ModelKind::Equirect,
+            Camera::Fisheye(_) => ModelKind::Fisheye,
+            Camera::Distorted(_) => ModelKind::Distorted,
+        }
+    }
+
+    /// How many colour channels need their own rays: 3 for per-channel lens distortion
+    /// (subpixel rendering), 1 for every other model (channel argument ignored).
+    pub fn channel_count(&self) -> usize {
+        if matches!(self, Camera::Distorted(_)) {
+            3
+        } else {
+            1
         }
     }
 
     fn inner(&self) -> &dyn CameraModel {
         match self {
             Camera::Pinhole(c) => c,
+            Camera::Orthographic(c) => c,
+            Camera::ThinLens(c) => c,
+            Camera::Stereo(c) => c,
+            Camera::Cube(c) => c,
+            Camera::Equirect(c) => c,
+            Camera::Fisheye(c) => c,
+            Camera::Distorted(c) => c,
         }
     }
 }

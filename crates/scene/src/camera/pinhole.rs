@@ -4,12 +4,17 @@
 //! | parameter | type | default | meaning |
 //! |---|---|---|---|
 //! | `fov_y_deg` | f32 | from the pose | vertical field of view of the unshifted window |
-//! | `shift` | Vec2 | (0, 0) | image-window offset in units of the half-height (off-axis projection) |
+//! | `shift` | Vec2 | (0, 0) | image-window offset in units of the half-extent (off-axis projection) |
+//!
+//! Ray differentials are analytic (Igehy 1999, §3: the derivative of the normalised direction
+//! through the film); the origin is fixed, so its differentials are zero. `project` returns film
+//! positions outside `[0, width] x [0, height]` for points outside the frustum (useful for
+//! reprojection); it returns `None` only for points behind or on the eye plane.
 
 use glam::{Vec2, Vec3};
 use parallax_core::{Ray, math::RayDifferential};
 
-use super::{CameraFrame, CameraModel, CameraRay};
+use super::{CameraFrame, CameraModel, CameraRay, normalized_derivative};
 use crate::{CameraDesc, Result};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -35,6 +40,25 @@ impl Pinhole {
         })
     }
 
+    /// A pinhole with an explicit frame (any orthonormal basis, also a mirrored one as the cube
+    /// map's faces use) and `tan(fov_y / 2)`.
+    pub fn from_frame(frame: CameraFrame, width: u32, height: u32, tan_half_y: f32) -> Self {
+        Self {
+            frame,
+            width,
+            height,
+            tan_half_y,
+            shift: Vec2::ZERO,
+        }
+    }
+
+    /// The same camera with an off-axis image window: `shift` in units of the half-width (x) and
+    /// half-height (y), y up.
+    pub fn with_shift(mut self, shift: Vec2) -> Self {
+        self.shift = shift;
+        self
+    }
+
     /// Half-width of the image window at distance 1.
     #[inline]
     pub fn tan_half_x(&self) -> f32 {
@@ -50,6 +74,16 @@ impl Pinhole {
             (ndc_x + self.shift.x) * self.tan_half_x(),
             (ndc_y + self.shift.y) * self.tan_half_y,
             -1.0,
+        )
+    }
+
+    /// World-space derivatives of the unnormalised direction `camera_dir(film)` with respect to
+    /// film x and film y (constant over the film).
+    #[inline]
+    pub fn film_dir_derivatives(&self) -> (Vec3, Vec3) {
+        (
+            self.frame.basis.x_axis * (2.0 * self.tan_half_x() / self.width as f32),
+            self.frame.basis.y_axis * (-2.0 * self.tan_half_y / self.height as f32),
         )
     }
 
@@ -80,25 +114,15 @@ impl CameraModel for Pinhole {
         let d = self.camera_dir(film);
         let len = d.length();
         let dir = self.frame.dir_to_world(d / len);
-        // d/dfilm of normalize(d): (I - n n^T) / |d| * dd/dfilm.
-        let dd_dx = self.frame.dir_to_world(Vec3::new(
-            2.0 * self.tan_half_x() / self.width as f32,
-            0.0,
-            0.0,
-        ));
-        let dd_dy = self.frame.dir_to_world(Vec3::new(
-            0.0,
-            -2.0 * self.tan_half_y / self.height as f32,
-            0.0,
-        ));
-        let proj = |v: Vec3| (v - dir * dir.dot(v)) / len;
+        // d/dfilm of normalize(d) = (I - n n^T) / |d| * dd/dfilm, with dd/dx and dd/dy constant.
+        let (dd_dx, dd_dy) = self.film_dir_derivatives();
         Some(CameraRay {
             ray: Ray::new(self.frame.position, dir),
             differential: RayDifferential {
                 d_origin_dx: Vec3::ZERO,
                 d_origin_dy: Vec3::ZERO,
-                d_dir_dx: proj(dd_dx),
-                d_dir_dy: proj(dd_dy),
+                d_dir_dx: normalized_derivative(dir, len, dd_dx),
+                d_dir_dy: normalized_derivative(dir, len, dd_dy),
             },
             depth_axis: self.frame.forward(),
         })
