@@ -1,0 +1,120 @@
+//! Collapsing the binary build tree into the 4-wide layout of [`crate::node`].
+//!
+//! Wald, Benthin & Boulos 2008 ("Getting Rid of Packets") and Ernst & Greiner 2008 ("Multi
+//! Bounding Volume Hierarchies"): a wide node starts with the two children of a binary node and
+//! repeatedly replaces the inner child of largest surface area by its two children, until it has
+//! four children or only leaves are left. Opening the largest child first removes the boxes that
+//! rays most likely enter, i.e. the SAH-cheapest collapse.
+//!
+//! Nodes are emitted in depth-first preorder, leaf children first, and triangles in the order
+//! that preorder walk reaches them (HVVR §5, see `node.rs`).
+
+use glam::Vec3;
+
+use crate::build::{BNode, PrimRef};
+use crate::node::{ChildRef, Node4};
+use crate::tri::Tri;
+
+pub(crate) struct Collapsed {
+    pub nodes: Vec<Node4>,
+    pub tris: Vec<Tri>,
+    pub prim_ids: Vec<u32>,
+    /// Depth of the deepest wide node (root = 1).
+    pub depth: u32,
+}
+
+/// Collapses `root` (built over `refs`) into 4-wide nodes; `corners(id)` gives a triangle's
+/// vertices.
+pub(crate) fn collapse(
+    root: &BNode,
+    refs: &[PrimRef],
+    corners: impl Fn(u32) -> [Vec3; 3],
+) -> Collapsed {
+    let mut out = Collapsed {
+        nodes: Vec::new(),
+        tris: Vec::with_capacity(refs.len()),
+        prim_ids: Vec::with_capacity(refs.len()),
+        depth: 0,
+    };
+    let mut ctx = Ctx {
+        out: &mut out,
+        refs,
+        corners: &corners,
+    };
+    match root {
+        // A tiny mesh: a root node with a single leaf lane.
+        BNode::Leaf { .. } => ctx.emit(&[root], 1),
+        BNode::Inner { children, .. } => ctx.emit(&[&children[0], &children[1]], 1),
+    };
+    out
+}
+
+struct Ctx<'a, F> {
+    out: &'a mut Collapsed,
+    refs: &'a [PrimRef],
+    corners: &'a F,
+}
+
+impl<F: Fn(u32) -> [Vec3; 3]> Ctx<'_, F> {
+    /// Emits a node whose binary children are `start`; returns its index.
+    fn emit(&mut self, start: &[&BNode], depth: u32) -> u32 {
+        let index = self.out.nodes.len();
+        self.out.nodes.push(Node4::EMPTY);
+        self.out.depth = self.out.depth.max(depth);
+
+        let mut kids: [Option<&BNode>; 4] = [None; 4];
+        for (k, s) in kids.iter_mut().zip(start) {
+            *k = Some(s);
+        }
+        let mut len = start.len();
+        while len < 4 {
+            // Open the inner child of largest surface area.
+            let pick = (0..len)
+                .filter(|&i| matches!(kids[i], Some(BNode::Inner { .. })))
+                .max_by(|&a, &b| {
+                    let area = |i: usize| kids[i].map_or(0.0, |k| k.bounds().surface_area());
+                    area(a).total_cmp(&area(b))
+                });
+            let Some(i) = pick else { break };
+            let Some(BNode::Inner { children, .. }) = kids[i] else {
+                unreachable!()
+            };
+            kids[i] = Some(&children[0]);
+            kids[len] = Some(&children[1]);
+            len += 1;
+        }
+
+        // Leaves first (HVVR §5), then inner children, each group in build order.
+        let mut lane = 0;
+        let mut node = Node4::EMPTY;
+        for k in kids[..len].iter().flatten() {
+            if let BNode::Leaf { start, count, .. } = k {
+                let first = self.out.tris.len() as u32;
+                for r in &self.refs[*start as usize..(*start + *count) as usize] {
+                    self.out.tris.push(Tri::new((self.corners)(r.id)));
+                    self.out.prim_ids.push(r.id);
+                }
+                node.child[lane] = ChildRef::Leaf {
+                    first,
+                    count: *count,
+                }
+                .encode();
+                node.set_child_bounds(lane, k.bounds());
+                lane += 1;
+            }
+        }
+        // Record the leaf lanes now; inner lanes are written after their subtrees exist.
+        self.out.nodes[index] = node;
+        for k in kids[..len].iter().flatten() {
+            if let BNode::Inner { children, bounds } = k {
+                let child = self.emit(&[&children[0], &children[1]], depth + 1);
+                let n = &mut self.out.nodes[index];
+                n.child[lane] = ChildRef::Inner(child).encode();
+                n.set_child_bounds(lane, *bounds);
+                lane += 1;
+            }
+        }
+        self.out.nodes[index].num_children = lane as u32;
+        index as u32
+    }
+}
