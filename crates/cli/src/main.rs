@@ -1,1 +1,65 @@
-fn main() {}
+//! `parallax`: the command-line front end. Subcommands live in [`commands`], one file each;
+//! shared flags (scene, camera) in [`args`].
+
+mod args;
+mod commands;
+mod output;
+mod progress;
+
+use clap::{Parser, Subcommand};
+
+/// Image-space ray tracing and flexible ray casting, measured against an exact BVH ground truth.
+#[derive(Parser)]
+#[command(name = "parallax", version, about, long_about = None)]
+struct Cli {
+    /// Print nothing but errors (no progress bars, no summaries).
+    #[arg(long, global = true)]
+    quiet: bool,
+    /// Worker threads (default: all cores).
+    #[arg(long, global = true)]
+    threads: Option<usize>,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene with the exact BVH reference renderer.
+    Render(commands::render::RenderArgs),
+    /// List the built-in scenes.
+    Scenes,
+    /// Print triangles, bounds, materials, lights and cameras of a scene.
+    Info(commands::info::InfoArgs),
+    /// Render the built-in atrium with several camera models into a folder.
+    Demo(commands::demo::DemoArgs),
+    /// Benchmarks that reproduce the papers' and issues' measurements.
+    #[command(subcommand)]
+    Bench(commands::bench::BenchCommand),
+}
+
+fn main() -> std::process::ExitCode {
+    let cli = Cli::parse();
+    if let Some(n) = cli.threads {
+        if let Err(e) = rayon::ThreadPoolBuilder::new()
+            .num_threads(n.max(1))
+            .build_global()
+        {
+            eprintln!("error: cannot set up {n} threads: {e}");
+            return std::process::ExitCode::FAILURE;
+        }
+    }
+    let result = match cli.command {
+        Command::Render(a) => commands::render::run(&a, cli.quiet),
+        Command::Scenes => commands::info::scenes(),
+        Command::Info(a) => commands::info::run(&a),
+        Command::Demo(a) => commands::demo::run(&a, cli.quiet),
+        Command::Bench(b) => commands::bench::run(&b, cli.quiet),
+    };
+    match result {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,65 @@
+//! `parallax bench ...`: measurements printed as a Markdown table and optionally saved as JSON.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use clap::{Args, Subcommand};
+use parallax_render::bench::rays;
+
+use crate::args::ViewArgs;
+
+#[derive(Subcommand, Debug)]
+pub enum BenchCommand {
+    /// BVH build ms and closest-hit Mrays/s for primary (coherent) and random (incoherent) rays.
+    Rays(RaysArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct RaysArgs {
+    #[command(flatten)]
+    pub view: ViewArgs,
+    #[arg(long, default_value_t = 1280)]
+    pub width: u32,
+    #[arg(long, default_value_t = 720)]
+    pub height: u32,
+    /// Timed repetitions per mode (the best is reported).
+    #[arg(long, default_value_t = 3)]
+    pub repeats: u32,
+    /// Write the rows as JSON.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+pub fn run(cmd: &BenchCommand, quiet: bool) -> Result<()> {
+    match cmd {
+        BenchCommand::Rays(a) => {
+            let scene = a.view.load_scene()?;
+            let camera = a.view.camera(&scene, a.width, a.height)?;
+            let rows = rays::run(&scene, &camera, a.repeats);
+            if !quiet {
+                println!(
+                    "| scene | mode | rays | build ms | trace ms | Mrays/s | hit rate | threads |"
+                );
+                println!("|---|---|---|---|---|---|---|---|");
+                for r in &rows {
+                    println!(
+                        "| {} | {} | {} | {:.1} | {:.1} | {:.2} | {:.3} | {} |",
+                        r.scene,
+                        r.mode,
+                        r.rays,
+                        r.build_ms,
+                        r.trace_ms,
+                        r.mrays_per_s,
+                        r.hit_rate,
+                        r.threads
+                    );
+                }
+            }
+            if let Some(p) = &a.json {
+                std::fs::write(p, serde_json::to_string_pretty(&rows)?)
+                    .with_context(|| format!("writing {}", p.display()))?;
+            }
+            Ok(())
+        }
+    }
+}

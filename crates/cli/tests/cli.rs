@@ -1,0 +1,232 @@
+//! End-to-end runs of the `parallax` binary on built-in scenes, and its error cases.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn parallax(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_parallax"))
+        .args(args)
+        .output()
+        .expect("binary runs")
+}
+
+fn out_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("parallax-cli-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn scenes_lists_the_builtins() {
+    let o = parallax(&["scenes"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = String::from_utf8_lossy(&o.stdout);
+    for name in ["atrium", "cornell", "foliage"] {
+        assert!(s.contains(name), "{s}");
+    }
+}
+
+#[test]
+fn info_prints_counts() {
+    let o = parallax(&["info", "cornell"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = String::from_utf8_lossy(&o.stdout);
+    assert!(s.contains("triangles") && s.contains("cameras"), "{s}");
+}
+
+#[test]
+fn render_png_exr_with_aovs_and_stats() {
+    let d = out_dir("render");
+    let exr = d.join("a.exr");
+    let stats = d.join("s.json");
+    let o = parallax(&[
+        "render",
+        "--quiet",
+        "--scene",
+        "cornell",
+        "--width",
+        "40",
+        "--height",
+        "30",
+        "--out",
+        exr.to_str().unwrap(),
+        "--aov",
+        "depth,normal,albedo,id",
+        "--stats",
+        stats.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let img = parallax_core::image::exr::read_exr(&exr).unwrap();
+    assert_eq!((img.width, img.height), (40, 30));
+    for c in [
+        "R", "G", "B", "depth", "normal.X", "normal.Y", "normal.Z", "albedo.R", "albedo.G",
+        "albedo.B", "id",
+    ] {
+        assert!(img.channel(c).is_some(), "missing channel {c}");
+    }
+    // The Cornell box's front camera sees the box everywhere: finite positive depths.
+    let depth = img.channel("depth").unwrap();
+    let hits = depth.iter().filter(|d| d.is_finite() && **d > 0.0).count();
+    assert!(hits > depth.len() / 2, "{hits} of {}", depth.len());
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    for k in ["rays", "seconds", "mrays_per_s", "build_ms", "stages"] {
+        assert!(json.get(k).is_some(), "stats lack {k}: {json}");
+    }
+    assert!(json["rays"].as_u64().unwrap() >= 1200);
+
+    let png = d.join("b.png");
+    let o = parallax(&[
+        "render",
+        "--quiet",
+        "--scene",
+        "atrium",
+        "--model",
+        "fisheye",
+        "--width",
+        "42",
+        "--height",
+        "26",
+        "--out",
+        png.to_str().unwrap(),
+        "--aov",
+        "depth",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(png.exists() && d.join("b.depth.png").exists());
+}
+
+#[test]
+fn every_camera_model_renders() {
+    let d = out_dir("models");
+    for m in [
+        "pinhole",
+        "ortho",
+        "thinlens",
+        "stereo",
+        "cube",
+        "equirect",
+        "fisheye",
+        "distorted",
+    ] {
+        let p = d.join(format!("{m}.png"));
+        let o = parallax(&[
+            "render",
+            "--quiet",
+            "--scene",
+            "cornell",
+            "--model",
+            m,
+            "--width",
+            "24",
+            "--height",
+            "16",
+            "--out",
+            p.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{m}: {}", stderr(&o));
+        assert!(p.exists(), "{m}");
+    }
+}
+
+#[test]
+fn bad_input_gives_clear_errors() {
+    let d = out_dir("errors");
+    let p = d.join("x.png");
+    let p = p.to_str().unwrap();
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &["render", "--scene", "cornell", "--width", "0", "--out", p],
+            "width and height must be at least 1",
+        ),
+        (
+            &[
+                "render", "--scene", "cornell", "--width", "100000", "--height", "100000", "--out",
+                p,
+            ],
+            "2^28",
+        ),
+        (
+            &["render", "--scene", "no-such-scene", "--out", p],
+            "unknown scene",
+        ),
+        (
+            &["render", "--scene", "/nonexistent/x.glb", "--out", p],
+            "x.glb",
+        ),
+        (
+            &["render", "--scene", "cornell", "--out", "x.jpg"],
+            ".png or .exr",
+        ),
+        (
+            &[
+                "render", "--scene", "cornell", "--camera", "nope", "--out", p,
+            ],
+            "no camera \"nope\"",
+        ),
+        (
+            &[
+                "render", "--scene", "cornell", "--eye", "0,0,0", "--target", "0,0,0", "--out", p,
+            ],
+            "target must differ",
+        ),
+        (
+            &[
+                "render", "--scene", "cornell", "--model", "banana", "--out", p,
+            ],
+            "unknown camera model",
+        ),
+        (
+            &["render", "--scene", "cornell", "--spp", "0", "--out", p],
+            "--spp",
+        ),
+    ];
+    for (args, needle) in cases {
+        let o = parallax(args);
+        assert!(!o.status.success(), "{args:?} should fail");
+        let e = stderr(&o);
+        assert!(e.contains(needle), "{args:?}: expected {needle:?} in {e:?}");
+        assert!(!e.contains("panicked"), "{args:?} panicked: {e}");
+    }
+}
+
+#[test]
+fn bench_rays_writes_json_rows() {
+    let d = out_dir("bench");
+    let j = d.join("rays.json");
+    let o = parallax(&[
+        "bench",
+        "rays",
+        "--quiet",
+        "--scene",
+        "cornell",
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--repeats",
+        "1",
+        "--json",
+        j.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rows: serde_json::Value = serde_json::from_slice(&std::fs::read(&j).unwrap()).unwrap();
+    let rows = rows.as_array().unwrap();
+    assert_eq!(rows.len(), 2);
+    for r in rows {
+        for k in [
+            "mode",
+            "scene",
+            "rays",
+            "build_ms",
+            "mrays_per_s",
+            "threads",
+        ] {
+            assert!(r.get(k).is_some(), "row lacks {k}: {r}");
+        }
+        assert!(r["mrays_per_s"].as_f64().unwrap() > 0.0);
+    }
+}

@@ -1,0 +1,4 @@
+//! Benchmarks behind `parallax bench ...`: each reproduces a measurement of a paper or an issue
+//! on any scene and camera, and returns rows that the CLI prints as a Markdown table and JSON.
+
+pub mod rays;
