@@ -14,11 +14,14 @@ use glam::Vec3;
 use crate::build::{BNode, PrimRef};
 use crate::node::{ChildRef, Node4};
 use crate::tri::Tri;
+use crate::tri4::{Tri4, blocks_for};
 
 pub(crate) struct Collapsed {
     pub nodes: Vec<Node4>,
     pub tris: Vec<Tri>,
     pub prim_ids: Vec<u32>,
+    /// The leaves' triangles in blocks of four (`tri4.rs`); leaf references index these.
+    pub blocks: Vec<Tri4>,
     /// Depth of the deepest wide node (root = 1).
     pub depth: u32,
 }
@@ -34,6 +37,7 @@ pub(crate) fn collapse(
         nodes: Vec::new(),
         tris: Vec::with_capacity(refs.len()),
         prim_ids: Vec::with_capacity(refs.len()),
+        blocks: Vec::with_capacity(refs.len() / 2),
         depth: 0,
     };
     let mut ctx = Ctx {
@@ -89,9 +93,18 @@ impl<F: Fn(u32) -> [Vec3; 3]> Ctx<'_, F> {
         let mut node = Node4::EMPTY;
         for k in kids[..len].iter().flatten() {
             if let BNode::Leaf { start, count, .. } = k {
-                let first = self.out.tris.len() as u32;
-                for r in &self.refs[*start as usize..(*start + *count) as usize] {
-                    self.out.tris.push(Tri::new((self.corners)(r.id)));
+                let first = self.out.blocks.len() as u32;
+                self.out
+                    .blocks
+                    .extend((0..blocks_for(*count)).map(|_| Tri4::EMPTY));
+                for (j, r) in self.refs[*start as usize..(*start + *count) as usize]
+                    .iter()
+                    .enumerate()
+                {
+                    let tri = Tri::new((self.corners)(r.id));
+                    let index = self.out.tris.len() as u32;
+                    self.out.blocks[first as usize + j / 4].set(j % 4, &tri, index);
+                    self.out.tris.push(tri);
                     self.out.prim_ids.push(r.id);
                 }
                 node.child[lane] = ChildRef::Leaf {

@@ -47,6 +47,7 @@ mod simd;
 mod stats;
 mod traverse;
 mod tri;
+mod tri4;
 
 use std::fmt;
 use std::time::{Duration, Instant};
@@ -59,6 +60,7 @@ pub use node::{ChildRef, Node4};
 pub use reference::{brute_force_all, brute_force_closest};
 pub use stats::{Counter, NoStats, TraversalStats};
 pub use tri::Tri;
+pub use tri4::Tri4;
 
 /// A ray-triangle hit: the scene's triangle index, the ray parameter and the barycentrics of the
 /// triangle's vertices 1 and 2 (`P = (1 - u - v) * p0 + u * p1 + v * p2`).
@@ -151,6 +153,7 @@ pub struct Bvh {
     nodes: Vec<Node4>,
     tris: Vec<Tri>,
     prim_ids: Vec<u32>,
+    blocks: Vec<tri4::Tri4>,
     bounds: Aabb,
     depth: u32,
     build_time: Duration,
@@ -190,6 +193,7 @@ impl Bvh {
                 nodes: Vec::new(),
                 tris: Vec::new(),
                 prim_ids: Vec::new(),
+                blocks: Vec::new(),
                 bounds: Aabb::EMPTY,
                 depth: 0,
                 build_time: start.elapsed(),
@@ -221,6 +225,7 @@ impl Bvh {
             nodes: c.nodes,
             tris: c.tris,
             prim_ids: c.prim_ids,
+            blocks: c.blocks,
             bounds,
             depth: c.depth,
             build_time: start.elapsed(),
@@ -237,10 +242,12 @@ impl Bvh {
         self.tris.len()
     }
 
-    /// Memory held by nodes, triangle copies and the primitive map, in bytes.
+    /// Memory held by nodes, triangle copies (plain and in blocks of four) and the primitive
+    /// map, in bytes.
     pub fn bytes(&self) -> usize {
         self.nodes.len() * size_of::<Node4>()
             + self.tris.len() * size_of::<Tri>()
+            + self.blocks.len() * size_of::<Tri4>()
             + self.prim_ids.len() * size_of::<u32>()
     }
 
@@ -264,9 +271,25 @@ impl Bvh {
         &self.nodes
     }
 
-    /// The triangle copies in leaf order; leaf `(first, count)` refers to `triangles()[first..]`.
+    /// The triangle copies in leaf order; leaf `(first, count)` refers to
+    /// `triangles()[leaf_triangles(first, count)]`.
     pub fn triangles(&self) -> &[Tri] {
         &self.tris
+    }
+
+    /// The leaves' triangles in blocks of four, leaf order (layout in `tri4.rs`).
+    pub fn blocks(&self) -> &[Tri4] {
+        &self.blocks
+    }
+
+    /// The range in [`Bvh::triangles`] of the leaf `ChildRef::Leaf { first, count }` (`first`
+    /// is its first block). Panics on a reference that is not a leaf of this BVH.
+    pub fn leaf_triangles(&self, first: u32, count: u32) -> std::ops::Range<usize> {
+        if count == 0 {
+            return 0..0;
+        }
+        let start = self.blocks[first as usize].tri[0] as usize;
+        start..start + count as usize
     }
 
     /// The scene's triangle index of each entry of [`Bvh::triangles`].

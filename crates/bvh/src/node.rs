@@ -21,8 +21,10 @@
 //! ## Child references (`u32`)
 //!
 //! - bit 31 clear: inner node, bits 0..31 = index into the node array;
-//! - bit 31 set: leaf, bits 27..31 = triangle count (0..=15), bits 0..27 = first triangle in the
-//!   BVH's reordered triangle array. [`EMPTY`] = a leaf of zero triangles, so an unused lane is
+//! - bit 31 set: leaf, bits 27..31 = triangle count (0..=15), bits 0..27 = the leaf's first
+//!   block of four triangles in the BVH's block array (`tri4.rs`; a leaf of `count` triangles
+//!   owns `ceil(count / 4)` blocks; [`crate::Bvh::leaf_triangles`] gives its range in
+//!   [`crate::Bvh::triangles`]). [`EMPTY`] = a leaf of zero triangles, so an unused lane is
 //!   harmless even if it were visited.
 //!
 //! ## Order (HVVR §5, "Our implementation lays the BVH out in memory in depth-first preorder")
@@ -51,7 +53,8 @@ pub const EMPTY: u32 = LEAF_FLAG;
 pub enum ChildRef {
     /// Index of an inner node.
     Inner(u32),
-    /// A leaf: triangles `first..first + count` of the reordered triangle array.
+    /// A leaf: `count` triangles in blocks `first..` of the block array
+    /// ([`crate::Bvh::leaf_triangles`] maps it to the triangle array).
     Leaf { first: u32, count: u32 },
 }
 

@@ -43,9 +43,18 @@ impl Bvh {
             .zip(self.prim_ids.par_iter())
             .with_min_len(1024)
             .for_each(|(tri, &id)| *tri = Tri::new(mesh.triangle(id as usize)));
+        let tris = &self.tris;
+        self.blocks.par_iter_mut().with_min_len(1024).for_each(|b| {
+            for l in 0..4 {
+                if b.tri[l] != u32::MAX {
+                    let i = b.tri[l];
+                    b.set(l, &tris[i as usize], i);
+                }
+            }
+        });
 
         // Leaf lanes, in parallel over nodes.
-        let tris = &self.tris;
+        let blocks = &self.blocks;
         self.nodes
             .par_iter_mut()
             .with_min_len(256)
@@ -56,7 +65,8 @@ impl Bvh {
                         continue;
                     }
                     if let ChildRef::Leaf { first, count } = ChildRef::decode(c) {
-                        let b = tris[first as usize..(first + count) as usize]
+                        let start = blocks[first as usize].tri[0] as usize;
+                        let b = tris[start..start + count as usize]
                             .iter()
                             .fold(Aabb::EMPTY, |b, t| b.union(t.bounds()));
                         node.set_child_bounds(lane, b);

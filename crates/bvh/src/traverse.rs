@@ -11,6 +11,8 @@
 //! The stack is a fixed array of [`STACK_SIZE`] entries: a node pushes at most 3 entries, and
 //! the build bounds the depth (`build.rs`), so `3 * depth < STACK_SIZE` (checked at build).
 
+use std::mem::MaybeUninit;
+
 use glam::Vec4;
 use parallax_core::Ray;
 use parallax_core::math::ROBUST_FAR_SCALE;
@@ -19,6 +21,7 @@ use parallax_core::math::WatertightRay;
 use crate::node::{Node4, is_leaf, leaf_count, leaf_first};
 use crate::simd::{max_or_rhs, min_or_rhs};
 use crate::stats::{Counter, NoStats, TraversalStats};
+use crate::tri4::{Tri4Ray, blocks_for, lane_mask};
 use crate::{Bvh, Hit};
 
 /// Traversal stack entries.
@@ -107,7 +110,8 @@ impl Bvh {
         stats: &mut C,
         mut leaf: impl FnMut(u32, u32, &mut f32, &mut C) -> bool,
     ) {
-        let mut stack = [Entry { child: 0, t: 0.0 }; STACK_SIZE];
+        // Uninitialised: saves a 2 KB memset per ray (not measured separately).
+        let mut stack = [MaybeUninit::<Entry>::uninit(); STACK_SIZE];
         let mut sp = 0usize;
         let mut cur = 0u32; // the root
         loop {
@@ -128,10 +132,10 @@ impl Bvh {
                         while m != 0 {
                             let c = m.trailing_zeros() as usize;
                             m &= m - 1;
-                            stack[sp] = Entry {
+                            stack[sp] = MaybeUninit::new(Entry {
                                 child: node.child[c],
                                 t: tn[c],
-                            };
+                            });
                             sp += 1;
                         }
                         cur = node.child[c0];
@@ -141,10 +145,10 @@ impl Bvh {
                     let rest = rest & (rest - 1);
                     if rest == 0 {
                         let (near, far) = if tn[c0] <= tn[c1] { (c0, c1) } else { (c1, c0) };
-                        stack[sp] = Entry {
+                        stack[sp] = MaybeUninit::new(Entry {
                             child: node.child[far],
                             t: tn[far],
-                        };
+                        });
                         sp += 1;
                         cur = node.child[near];
                         continue;
@@ -170,7 +174,7 @@ impl Bvh {
                         n += 1;
                     }
                     for x in &e[..n - 1] {
-                        stack[sp] = *x;
+                        stack[sp] = MaybeUninit::new(*x);
                         sp += 1;
                     }
                     cur = e[n - 1].child;
@@ -188,7 +192,8 @@ impl Bvh {
                     return;
                 }
                 sp -= 1;
-                let e = stack[sp];
+                // SAFETY: entries below `sp` were written by the pushes above.
+                let e = unsafe { stack[sp].assume_init() };
                 if e.t <= t_max {
                     cur = e.child;
                     break;
@@ -197,54 +202,128 @@ impl Bvh {
         }
     }
 
+    /// Closest hit with the SIMD leaf test (`tri4.rs`), or the scalar per-triangle test
+    /// (`SIMD = false`, the slow twin kept for tests). Both break exact ties in `t` towards the
+    /// lower index in [`Bvh::triangles`], so the answer is the lexicographic minimum of
+    /// `(t, index)` over all hits, whatever order the leaves are visited in (the packet
+    /// traversal relies on this to return exactly the single-ray answer).
     #[inline(always)]
-    fn closest_impl<C: Counter>(&self, ray: &Ray, stats: &mut C) -> Option<Hit> {
+    fn closest_impl<C: Counter, const SIMD: bool>(&self, ray: &Ray, stats: &mut C) -> Option<Hit> {
         stats.ray();
         if self.nodes.is_empty() || !ray_ok(ray) {
             return None;
         }
         let rb = RayBoxes::new(ray);
-        let wt = WatertightRay::new(ray);
-        let mut best = None;
+        let r4 = Tri4Ray::new(WatertightRay::new(ray));
+        let mut best = Best::new();
         self.traverse::<C, true>(&rb, ray.t_max, stats, |first, count, t_max, stats| {
-            for i in first..first + count {
-                let tri = &self.tris[i as usize];
-                let h = wt.intersect_within(tri.p0, tri.p1, tri.p2, *t_max);
-                stats.triangle(h.is_some());
-                if let Some(h) = h {
-                    *t_max = h.t;
-                    best = Some((i, h));
+            if SIMD {
+                self.leaf_closest(&r4, first, count, t_max, &mut best, stats);
+            } else {
+                for i in self.leaf_triangles(first, count) {
+                    let tri = &self.tris[i];
+                    let h = r4
+                        .wt
+                        .intersect_within(tri.p0, tri.p1, tri.p2, best.limit(*t_max));
+                    stats.triangle(h.is_some());
+                    if let Some(h) = h {
+                        best.offer(h.t, i as u32, h.u, h.v, t_max);
+                    }
                 }
             }
             false
         });
-        best.map(|(i, h)| Hit {
-            prim: self.prim_ids[i as usize],
-            t: h.t,
-            u: h.u,
-            v: h.v,
-        })
+        best.hit(&self.prim_ids)
+    }
+
+    /// Tests the blocks of a leaf against one ray and keeps the closest hit in `best`.
+    #[inline(always)]
+    pub(crate) fn leaf_closest<C: Counter>(
+        &self,
+        r4: &Tri4Ray,
+        first: u32,
+        count: u32,
+        t_max: &mut f32,
+        best: &mut Best,
+        stats: &mut C,
+    ) {
+        for k in 0..blocks_for(count) {
+            let b = &self.blocks[(first + k) as usize];
+            let mask = lane_mask(count, k);
+            let h = r4.intersect(b, mask, best.limit(*t_max));
+            for l in 0..4 {
+                if mask >> l & 1 != 0 {
+                    stats.triangle(h.hit >> l & 1 != 0);
+                }
+            }
+            if h.hit != 0 {
+                let (t, u, v) = (h.t.to_array(), h.u.to_array(), h.v.to_array());
+                let mut m = h.hit;
+                while m != 0 {
+                    let l = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    best.offer(t[l], b.tri[l], u[l], v[l], t_max);
+                }
+            }
+            let mut m = h.exact;
+            while m != 0 {
+                let l = m.trailing_zeros() as usize;
+                m &= m - 1;
+                let (p0, p1, p2) = (b.vertex(l, 0), b.vertex(l, 1), b.vertex(l, 2));
+                if let Some(h) = r4.wt.intersect_within(p0, p1, p2, best.limit(*t_max)) {
+                    best.offer(h.t, b.tri[l], h.u, h.v, t_max);
+                }
+            }
+        }
     }
 
     #[inline(always)]
-    fn any_impl<C: Counter>(&self, ray: &Ray, stats: &mut C) -> bool {
+    fn any_impl<C: Counter, const SIMD: bool>(&self, ray: &Ray, stats: &mut C) -> bool {
         stats.ray();
         if self.nodes.is_empty() || !ray_ok(ray) {
             return false;
         }
         let rb = RayBoxes::new(ray);
-        let wt = WatertightRay::new(ray);
+        let r4 = Tri4Ray::new(WatertightRay::new(ray));
         let mut found = false;
         self.traverse::<C, false>(&rb, ray.t_max, stats, |first, count, t_max, stats| {
-            for tri in &self.tris[first as usize..(first + count) as usize] {
-                let h = wt.intersect_within(tri.p0, tri.p1, tri.p2, *t_max);
-                stats.triangle(h.is_some());
-                if h.is_some() {
-                    found = true;
-                    return true;
+            if SIMD {
+                for k in 0..blocks_for(count) {
+                    let b = &self.blocks[(first + k) as usize];
+                    let mask = lane_mask(count, k);
+                    let h = r4.intersect(b, mask, *t_max);
+                    for l in 0..4 {
+                        if mask >> l & 1 != 0 {
+                            stats.triangle(h.hit >> l & 1 != 0);
+                        }
+                    }
+                    if h.hit != 0 {
+                        found = true;
+                        return true;
+                    }
+                    let mut m = h.exact;
+                    while m != 0 {
+                        let l = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        let (p0, p1, p2) = (b.vertex(l, 0), b.vertex(l, 1), b.vertex(l, 2));
+                        if r4.wt.intersect_within(p0, p1, p2, *t_max).is_some() {
+                            found = true;
+                            return true;
+                        }
+                    }
                 }
+                false
+            } else {
+                for tri in &self.tris[self.leaf_triangles(first, count)] {
+                    let h = r4.wt.intersect_within(tri.p0, tri.p1, tri.p2, *t_max);
+                    stats.triangle(h.is_some());
+                    if h.is_some() {
+                        found = true;
+                        return true;
+                    }
+                }
+                false
             }
-            false
         });
         found
     }
@@ -259,13 +338,13 @@ impl Bvh {
         let rb = RayBoxes::new(ray);
         let wt = WatertightRay::new(ray);
         self.traverse::<C, false>(&rb, ray.t_max, stats, |first, count, _, stats| {
-            for i in first..first + count {
-                let tri = &self.tris[i as usize];
+            for i in self.leaf_triangles(first, count) {
+                let tri = &self.tris[i];
                 let h = wt.intersect(tri.p0, tri.p1, tri.p2);
                 stats.triangle(h.is_some());
                 if let Some(h) = h {
                     out.push(Hit {
-                        prim: self.prim_ids[i as usize],
+                        prim: self.prim_ids[i],
                         t: h.t,
                         u: h.u,
                         v: h.v,
@@ -279,24 +358,37 @@ impl Bvh {
 
     /// The closest intersection with `ray` in `(t_min, t_max)`, or `None`. Both faces of a
     /// triangle are hit. Invalid rays (non-finite, zero direction) hit nothing.
+    /// Exact ties in `t` go to the lower index in [`Bvh::triangles`].
     pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
-        self.closest_impl(ray, &mut NoStats)
+        self.closest_impl::<_, true>(ray, &mut NoStats)
     }
 
     /// [`Self::closest_hit`], adding the work done to `stats`.
     pub fn closest_hit_with_stats(&self, ray: &Ray, stats: &mut TraversalStats) -> Option<Hit> {
-        self.closest_impl(ray, stats)
+        self.closest_impl::<_, true>(ray, stats)
+    }
+
+    /// [`Self::closest_hit`] with the scalar triangle test on each leaf triangle instead of the
+    /// 4-wide one: the slow twin the tests hold the SIMD leaf test against (same answer, bit
+    /// for bit).
+    pub fn closest_hit_scalar(&self, ray: &Ray) -> Option<Hit> {
+        self.closest_impl::<_, false>(ray, &mut NoStats)
     }
 
     /// Whether anything intersects `ray` in `(t_min, t_max)` (occlusion / shadow rays). Stops
     /// at the first hit found, in no particular order.
     pub fn any_hit(&self, ray: &Ray) -> bool {
-        self.any_impl(ray, &mut NoStats)
+        self.any_impl::<_, true>(ray, &mut NoStats)
     }
 
     /// [`Self::any_hit`], adding the work done to `stats`.
     pub fn any_hit_with_stats(&self, ray: &Ray, stats: &mut TraversalStats) -> bool {
-        self.any_impl(ray, stats)
+        self.any_impl::<_, true>(ray, stats)
+    }
+
+    /// [`Self::any_hit`] with the scalar triangle test (the slow twin kept for tests).
+    pub fn any_hit_scalar(&self, ray: &Ray) -> bool {
+        self.any_impl::<_, false>(ray, &mut NoStats)
     }
 
     /// Every intersection with `ray` in `(t_min, t_max)`, sorted by `t` (ties by primitive).
@@ -315,4 +407,58 @@ impl Bvh {
 /// Sorts hits by `t`, then by primitive (allocation-free).
 pub(crate) fn sort_hits(hits: &mut [Hit]) {
     hits.sort_unstable_by(|a, b| a.t.total_cmp(&b.t).then(a.prim.cmp(&b.prim)));
+}
+
+/// The closest hit so far: `(t, index in the triangle array)` compared lexicographically.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Best {
+    pub t: f32,
+    pub tri: u32,
+    pub u: f32,
+    pub v: f32,
+}
+
+impl Best {
+    #[inline(always)]
+    pub fn new() -> Self {
+        Self {
+            t: f32::INFINITY,
+            tri: u32::MAX,
+            u: 0.0,
+            v: 0.0,
+        }
+    }
+
+    /// The exclusive upper bound for the next triangle test, given the traversal's `t_max`
+    /// (the ray's `t_max`, or `best.t` once something was hit): once a hit exists, a triangle
+    /// at exactly the same `t` must still be tested for the tie-break, so the bound is the next
+    /// float above.
+    #[inline(always)]
+    pub fn limit(&self, t_max: f32) -> f32 {
+        if self.tri == u32::MAX {
+            t_max
+        } else {
+            t_max.next_up()
+        }
+    }
+
+    /// Offers a hit with `t` below [`Self::limit`]; keeps it if it is closer, or as close with a
+    /// lower triangle index, and then shrinks `t_max` to it.
+    #[inline(always)]
+    pub fn offer(&mut self, t: f32, tri: u32, u: f32, v: f32, t_max: &mut f32) {
+        if t < self.t || (t == self.t && tri < self.tri) || self.tri == u32::MAX {
+            *self = Best { t, tri, u, v };
+            *t_max = t;
+        }
+    }
+
+    #[inline(always)]
+    pub fn hit(&self, prim_ids: &[u32]) -> Option<Hit> {
+        (self.tri != u32::MAX).then(|| Hit {
+            prim: prim_ids[self.tri as usize],
+            t: self.t,
+            u: self.u,
+            v: self.v,
+        })
+    }
 }

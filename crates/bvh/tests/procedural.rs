@@ -243,7 +243,7 @@ fn structure_invariants_and_stats() {
                 }
                 parallax_bvh::ChildRef::Leaf { first, count } => {
                     assert!((1..=4).contains(&count));
-                    for t in &bvh.triangles()[first as usize..(first + count) as usize] {
+                    for t in &bvh.triangles()[bvh.leaf_triangles(first, count)] {
                         let tb = t.bounds();
                         assert!(b.contains(tb.min) && b.contains(tb.max));
                     }

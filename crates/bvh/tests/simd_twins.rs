@@ -1,0 +1,138 @@
+//! Every fast path against its slow twin, bit for bit: the 4-wide SIMD leaf test
+//! ([`Bvh::closest_hit`], [`Bvh::any_hit`]) against the scalar per-triangle test
+//! ([`Bvh::closest_hit_scalar`], [`Bvh::any_hit_scalar`]), on rays that hit interiors and on
+//! rays aimed exactly at shared vertices and edges (where the SIMD lanes fall back to the
+//! scalar double-precision test and its tie-break), with leaves of 1, 4 and 15 triangles.
+
+mod common;
+
+use common::*;
+use glam::{Vec2, Vec3};
+use parallax_bvh::{BuildOptions, Bvh};
+use parallax_core::Ray;
+use parallax_scene::TriangleMesh;
+use parallax_scene::camera::{CameraModel, Pinhole};
+
+/// Rays aimed at every vertex and edge midpoint from random points around the mesh, plus
+/// random rays through the bounds.
+fn rays_for(mesh: &TriangleMesh, seed: u64, cap: usize) -> Vec<Ray> {
+    let b = mesh.bounds();
+    let pad = b.extent() + Vec3::ONE;
+    let (lo, hi) = (b.min - pad, b.max + pad);
+    let mut rng = Rng::new(seed);
+    let mut rays = random_rays(cap, lo, hi, seed);
+    let step = (mesh.indices.len() / cap).max(1);
+    for tri in mesh.indices.iter().step_by(step) {
+        for k in 0..3 {
+            let p = mesh.positions[tri[k] as usize];
+            let q = mesh.positions[tri[(k + 1) % 3] as usize];
+            for target in [p, (p + q) * 0.5] {
+                let o = rng.vec3_in(lo, hi);
+                rays.push(Ray::new(o, target - o));
+            }
+        }
+    }
+    rays
+}
+
+/// Asserts the twins agree on every ray; returns how many rays hit.
+fn check_twins(bvh: &Bvh, rays: &[Ray], what: &str) -> usize {
+    let mut hits = 0;
+    for r in rays {
+        let fast = bvh.closest_hit(r);
+        let slow = bvh.closest_hit_scalar(r);
+        assert_eq!(fast, slow, "{what}: closest hit differs for {r:?}");
+        // Bit-identical t, u, v (PartialEq on f32 would accept -0.0 == 0.0).
+        if let (Some(a), Some(b)) = (fast, slow) {
+            assert_eq!(
+                [a.t.to_bits(), a.u.to_bits(), a.v.to_bits()],
+                [b.t.to_bits(), b.u.to_bits(), b.v.to_bits()],
+                "{what}: {r:?}"
+            );
+        }
+        assert_eq!(
+            bvh.any_hit(r),
+            bvh.any_hit_scalar(r),
+            "{what}: any hit, {r:?}"
+        );
+        assert_eq!(
+            bvh.any_hit(r),
+            fast.is_some(),
+            "{what}: any vs closest, {r:?}"
+        );
+        hits += fast.is_some() as usize;
+    }
+    hits
+}
+
+fn meshes() -> Vec<(&'static str, TriangleMesh)> {
+    vec![
+        ("cube", cube()),
+        ("icosphere 3", icosphere(3)),
+        ("uv sphere", uv_sphere(12, 20)),
+        ("grid", grid(16)),
+        ("lattice", cube_lattice(4)),
+        ("soup", soup(2000, 0.1, 5)),
+    ]
+}
+
+#[test]
+fn simd_leaf_test_equals_scalar_twin_on_procedural_meshes() {
+    for leaf in [1, 4, 15] {
+        let opts = BuildOptions {
+            max_leaf_size: leaf,
+            ..Default::default()
+        };
+        for (name, mesh) in meshes() {
+            let bvh = Bvh::build_with(&mesh, &opts);
+            let rays = rays_for(&mesh, 3 + leaf as u64, 600);
+            let hits = check_twins(&bvh, &rays, name);
+            assert!(
+                hits * 10 > rays.len(),
+                "{name}, leaf {leaf}: {hits}/{}",
+                rays.len()
+            );
+        }
+    }
+}
+
+/// Axis-parallel rays through the grid's vertices: every edge function of many triangles is
+/// exactly zero, so the exact lanes decide.
+#[test]
+fn exact_lanes_on_grid_vertices() {
+    let mesh = grid(8);
+    let bvh = Bvh::build(&mesh);
+    let mut rays = Vec::new();
+    for p in &mesh.positions {
+        for d in [
+            -Vec3::Y,
+            Vec3::new(0.25, -1.0, 0.5),
+            Vec3::new(-0.5, -1.0, 0.0),
+        ] {
+            rays.push(Ray::new(*p - d * 2.0, d));
+        }
+    }
+    let hits = check_twins(&bvh, &rays, "grid vertices");
+    // Every vertex strictly inside the grid is owned by exactly one triangle of its fan.
+    assert!(hits >= 7 * 7 * 3, "{hits}");
+}
+
+#[test]
+fn simd_leaf_test_equals_scalar_twin_on_builtin_scenes() {
+    for name in parallax_scene::builtin::NAMES.iter() {
+        let scene = parallax_scene::builtin::by_name(name).unwrap();
+        let bvh = Bvh::build(&scene.mesh);
+        let mut rays = rays_for(&scene.mesh, 9, 400);
+        let cam = Pinhole::new(&scene.camera(None).unwrap(), 32, 24).unwrap();
+        for y in 0..24 {
+            for x in 0..32 {
+                let film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                if let Some(cr) = cam.generate_ray(film, Vec2::splat(0.5), 0) {
+                    rays.push(cr.ray);
+                }
+            }
+        }
+        let hits = check_twins(&bvh, &rays, name);
+        assert!(hits > 0, "{name}");
+    }
+}
