@@ -80,4 +80,17 @@ fn main() {
         "closest_hit_scalar {:6.2} Mrays/s ({hits} hits)",
         n / t / 1e6
     );
+    let mut out = vec![None; 16];
+    let (t, hits) = best_of(repeats, || {
+        let mut n = 0;
+        for p in rays.chunks(16) {
+            bvh.closest_hit_packet(p, &mut out);
+            n += out.iter().filter(|h| h.is_some()).count();
+        }
+        n
+    });
+    println!(
+        "packet 4x4        {:6.2} Mrays/s ({hits} hits)",
+        n / t / 1e6
+    );
 }

@@ -41,6 +41,7 @@
 mod build;
 mod collapse;
 pub mod node;
+mod packet;
 mod reference;
 mod refit;
 mod simd;
@@ -57,6 +58,7 @@ use parallax_scene::TriangleMesh;
 use rayon::prelude::*;
 
 pub use node::{ChildRef, Node4};
+pub use packet::PACKET_SIZE;
 pub use reference::{brute_force_all, brute_force_closest};
 pub use stats::{Counter, NoStats, TraversalStats};
 pub use tri::Tri;

@@ -1,0 +1,128 @@
+//! The packet traversal against single rays: `closest_hit_packet` returns exactly
+//! `closest_hit` for every ray (prim, t, u, v bit for bit), for camera rays grouped in 4x4 and
+//! 4x2 pixel tiles on the built-in scenes and Sponza, for partially filled packets, packets
+//! with invalid rays (inactive lanes), packets of incoherent rays, and slices longer than one
+//! packet; both the AVX2 node test (where the CPU has it) and the portable one.
+
+mod common;
+
+use common::*;
+use glam::{Vec2, Vec3};
+use parallax_bvh::{Bvh, Hit, PACKET_SIZE};
+use parallax_core::Ray;
+use parallax_scene::Scene;
+use parallax_scene::camera::{CameraModel, Pinhole};
+
+/// Camera rays of a `w x h` image in `tw x th` tiles, tile after tile (edge tiles partial).
+fn tiles(scene: &Scene, w: u32, h: u32, tw: u32, th: u32) -> Vec<Vec<Ray>> {
+    let cam = Pinhole::new(&scene.camera(None).unwrap(), w, h).unwrap();
+    let mut out = Vec::new();
+    for ty in (0..h).step_by(th as usize) {
+        for tx in (0..w).step_by(tw as usize) {
+            let mut p = Vec::new();
+            for y in ty..(ty + th).min(h) {
+                for x in tx..(tx + tw).min(w) {
+                    let film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                    if let Some(cr) = cam.generate_ray(film, Vec2::splat(0.5), 0) {
+                        p.push(cr.ray);
+                    }
+                }
+            }
+            out.push(p);
+        }
+    }
+    out
+}
+
+fn bits(h: Option<Hit>) -> Option<(u32, u32, u32, u32)> {
+    h.map(|h| (h.prim, h.t.to_bits(), h.u.to_bits(), h.v.to_bits()))
+}
+
+/// Asserts packet == single ray for every ray of `packet`; returns the hits.
+fn check_packet(bvh: &Bvh, packet: &[Ray], what: &str) -> usize {
+    let mut out = vec![
+        Some(Hit {
+            prim: 7,
+            t: 1.0,
+            u: 0.0,
+            v: 0.0
+        });
+        packet.len()
+    ];
+    bvh.closest_hit_packet(packet, &mut out);
+    // The portable (SSE / scalar) node test, the twin of the AVX2 one.
+    let mut portable = vec![None; packet.len()];
+    bvh.closest_hit_packet_portable(packet, &mut portable);
+    let mut hits = 0;
+    for ((r, o), p) in packet.iter().zip(&out).zip(&portable) {
+        let single = bvh.closest_hit(r);
+        assert_eq!(bits(*o), bits(single), "{what}: {r:?}");
+        assert_eq!(bits(*p), bits(single), "{what}, portable: {r:?}");
+        hits += single.is_some() as usize;
+    }
+    hits
+}
+
+fn check_scene(scene: &Scene, w: u32, h: u32) {
+    let bvh = Bvh::build(&scene.mesh);
+    let mut hits = 0;
+    for (tw, th) in [(4, 4), (4, 2), (3, 3)] {
+        for p in tiles(scene, w, h, tw, th) {
+            hits += check_packet(&bvh, &p, &scene.name);
+        }
+    }
+    assert!(hits > 0, "{}", scene.name);
+}
+
+#[test]
+fn builtin_scenes_camera_tiles() {
+    for name in parallax_scene::builtin::NAMES.iter() {
+        check_scene(&parallax_scene::builtin::by_name(name).unwrap(), 37, 22);
+    }
+}
+
+#[test]
+fn sponza_camera_tiles() {
+    let path = format!(
+        "{}/../../../shared/scenes/sponza_dabrovic/sponza_dabrovic.glb",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let scene = Scene::load(&path).unwrap();
+    check_scene(&scene, 45, 30);
+}
+
+#[test]
+fn inactive_lanes_incoherent_rays_and_long_slices() {
+    let mesh = soup(3000, 0.08, 4);
+    let bvh = Bvh::build(&mesh);
+    let mut rays = random_rays(200, Vec3::splat(-1.5), Vec3::splat(1.5), 8);
+    // Invalid rays and empty intervals in the middle of packets.
+    rays[3] = Ray::new(Vec3::ZERO, Vec3::ZERO);
+    rays[17] = Ray::segment(Vec3::ZERO, Vec3::X, 2.0, 1.0);
+    rays[18] = Ray::new(Vec3::splat(f32::NAN), Vec3::X);
+    rays[40] = Ray::segment(Vec3::splat(-2.0), Vec3::ONE, 0.0, 1.0); // ends before the soup
+    // One call over 200 rays (13 packets, the last one partial).
+    let hits = check_packet(&bvh, &rays, "soup, all");
+    assert!(hits > 50, "{hits}");
+    // Every partial size.
+    for n in 1..=PACKET_SIZE {
+        check_packet(&bvh, &rays[n..2 * n], "soup, partial");
+    }
+    // Packets of rays through a shared vertex (exact lanes, ties) from many directions.
+    let grid = grid(6);
+    let bvh = Bvh::build(&grid);
+    let mut rng = Rng::new(3);
+    for p in &grid.positions {
+        let rays: Vec<Ray> = (0..PACKET_SIZE)
+            .map(|_| {
+                let o = *p + rng.dir() * rng.range(0.5, 2.0);
+                Ray::new(o, *p - o)
+            })
+            .collect();
+        check_packet(&bvh, &rays, "grid vertex");
+    }
+    // An empty BVH and an empty slice.
+    let empty = Bvh::build(&mesh_from(Vec::new(), Vec::new()));
+    check_packet(&empty, &rays[..5], "empty");
+    check_packet(&bvh, &[], "no rays");
+}
