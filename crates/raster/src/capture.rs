@@ -1,0 +1,1 @@
+//! G-buffer captures, depth layers, cube maps, orthographic views (in progress).

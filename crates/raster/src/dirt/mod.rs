@@ -1,0 +1,1 @@
+//! DIRT capture (in progress).

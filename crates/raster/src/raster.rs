@@ -1,0 +1,1 @@
+//! The triangle rasterizer (in progress).
