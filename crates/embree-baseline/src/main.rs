@@ -159,6 +159,8 @@ enum Method<'a> {
     Embree1(&'a [Ray]),
     Embree8(&'a Packets),
     Embree16(&'a Packets),
+    /// `Bvh::closest_hit_packet` on the same packets as `Embree16`.
+    ParallaxPacket(&'a Packets),
 }
 
 impl Method<'_> {
@@ -170,13 +172,15 @@ impl Method<'_> {
             (Method::Embree8(_), false) => "Embree rtcIntersect8, 8 in a row",
             (Method::Embree16(_), true) => "Embree rtcIntersect16, 4x4 tiles",
             (Method::Embree16(_), false) => "Embree rtcIntersect16, 16 in a row",
+            (Method::ParallaxPacket(_), true) => "parallax BVH packets, 4x4 tiles",
+            (Method::ParallaxPacket(_), false) => "parallax BVH packets, 16 in a row",
         }
     }
 
     fn rays(&self) -> usize {
         match self {
             Method::Parallax(r) | Method::Embree1(r) => r.len(),
-            Method::Embree8(p) | Method::Embree16(p) => p.rays.len(),
+            Method::Embree8(p) | Method::Embree16(p) | Method::ParallaxPacket(p) => p.rays.len(),
         }
     }
 
@@ -190,6 +194,16 @@ impl Method<'_> {
             Method::Embree1(rays) => rays
                 .par_chunks(1024)
                 .map(|c| count(c.iter().filter(|r| emb.closest_hit(r).is_some()).count()))
+                .sum(),
+            Method::ParallaxPacket(p) => (0..p.packets.len())
+                .into_par_iter()
+                .with_min_len(64)
+                .map(|k| {
+                    let mut out = [None; parallax_bvh::PACKET_SIZE];
+                    let rays = p.packet(k);
+                    bvh.closest_hit_packet(rays, &mut out);
+                    count(out[..rays.len()].iter().filter(|h| h.is_some()).count())
+                })
                 .sum(),
             Method::Embree8(p) | Method::Embree16(p) => {
                 let wide = matches!(self, Method::Embree16(_));
@@ -214,7 +228,7 @@ impl Method<'_> {
     /// Embree's answers for every ray, in ray order (for the agreement check).
     fn answers(&self, emb: &EmbreeScene) -> Option<Vec<Option<PrimHit>>> {
         match self {
-            Method::Parallax(_) => None,
+            Method::Parallax(_) | Method::ParallaxPacket(_) => None,
             Method::Embree1(rays) => Some(rays.par_iter().map(|r| emb.closest_hit(r)).collect()),
             Method::Embree8(p) | Method::Embree16(p) => {
                 let wide = matches!(self, Method::Embree16(_));
@@ -239,7 +253,7 @@ impl Method<'_> {
     fn rays_in_order(&self) -> &[Ray] {
         match self {
             Method::Parallax(r) | Method::Embree1(r) => r,
-            Method::Embree8(p) | Method::Embree16(p) => &p.rays,
+            Method::Embree8(p) | Method::Embree16(p) | Method::ParallaxPacket(p) => &p.rays,
         }
     }
 }
@@ -356,9 +370,11 @@ fn run() -> Result<(), String> {
             Method::Embree1(rays),
             Method::Embree8(p8),
             Method::Embree16(p16),
+            Method::ParallaxPacket(p16),
         ];
-        // Agreement of every Embree method with the parallax BVH on the same rays.
-        for m in &methods[1..] {
+        // Agreement of every Embree method with the parallax BVH on the same rays (the packet
+        // traversal is tested to equal the single rays exactly in parallax-bvh's tests).
+        for m in &methods[1..4] {
             let e = m.answers(&emb).unwrap();
             let ordered = m.rays_in_order();
             let ok = ordered
@@ -390,7 +406,7 @@ fn run() -> Result<(), String> {
         for (threads, pool) in pools {
             // Methods interleaved within each repeat, best run per method: a burst of load from
             // other processes then hurts one run of each method rather than all runs of one.
-            let mut best = [(f64::INFINITY, f64::INFINITY); 4];
+            let mut best = [(f64::INFINITY, f64::INFINITY); 5];
             for _ in 0..args.repeats {
                 for (m, b) in methods.iter().zip(&mut best) {
                     let go = || timed(|| m.trace(&bvh, &emb));
@@ -406,7 +422,7 @@ fn run() -> Result<(), String> {
             for (m, (wall, cpu)) in methods.iter().zip(best) {
                 let mrays = m.rays() as f64 / (wall * 1e3);
                 let per_cpu = m.rays() as f64 / (cpu * 1e3);
-                let build = if matches!(m, Method::Parallax(_)) {
+                let build = if matches!(m, Method::Parallax(_) | Method::ParallaxPacket(_)) {
                     bvh_ms
                 } else {
                     emb_ms

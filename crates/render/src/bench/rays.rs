@@ -19,8 +19,9 @@ use serde::Serialize;
 /// One row of the rays benchmark.
 #[derive(Clone, Debug, Serialize)]
 pub struct RaysRow {
-    /// "primary" (one ray per pixel centre) or "random" (cosine-distributed bounce rays from
-    /// the primary hit points).
+    /// "primary" (one ray per pixel centre), "primary_packet" (the same rays in 4x4 pixel
+    /// tiles, traced with `Bvh::closest_hit_packet`) or "random" (cosine-distributed bounce
+    /// rays from the primary hit points).
     pub mode: String,
     pub scene: String,
     pub rays: u64,
@@ -83,27 +84,91 @@ pub fn time_closest(bvh: &Bvh, rays: &[Ray], repeats: u32) -> (f64, u64) {
     (best, hits)
 }
 
-/// Builds the BVH and measures both modes.
+/// The primary rays of [`make_rays`] regrouped into `tile x tile` pixel tiles, tile after tile
+/// in scanline order: `(rays, packet lengths)`; a packet holds at most
+/// [`parallax_bvh::PACKET_SIZE`] rays (edge tiles and pixels without a ray make it shorter).
+pub fn primary_tiles(camera: &Camera, tile: u32) -> (Vec<Ray>, Vec<u32>) {
+    let (w, h) = (camera.width(), camera.height());
+    let tile = tile.clamp(1, 4);
+    let mut rays = Vec::with_capacity((w * h) as usize);
+    let mut lens = Vec::new();
+    for ty in (0..h).step_by(tile as usize) {
+        for tx in (0..w).step_by(tile as usize) {
+            let start = rays.len();
+            for y in ty..(ty + tile).min(h) {
+                for x in tx..(tx + tile).min(w) {
+                    let film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                    if let Some(r) = camera.generate_ray(film, Vec2::splat(0.5), 1) {
+                        rays.push(r.ray);
+                    }
+                }
+            }
+            if rays.len() > start {
+                lens.push((rays.len() - start) as u32);
+            }
+        }
+    }
+    (rays, lens)
+}
+
+/// Times packet closest-hit queries over the tiles of [`primary_tiles`] (best of `repeats`);
+/// returns (ms, hits).
+pub fn time_closest_packets(bvh: &Bvh, rays: &[Ray], lens: &[u32], repeats: u32) -> (f64, u64) {
+    let mut starts = Vec::with_capacity(lens.len());
+    let mut s = 0usize;
+    for &l in lens {
+        starts.push(s);
+        s += l as usize;
+    }
+    let mut best = f64::INFINITY;
+    let mut hits = 0;
+    for _ in 0..repeats.max(1) {
+        let t = Instant::now();
+        hits = starts
+            .par_iter()
+            .zip(lens)
+            .with_min_len(64)
+            .map(|(&s, &l)| {
+                let mut out = [None; parallax_bvh::PACKET_SIZE];
+                let p = &rays[s..s + l as usize];
+                bvh.closest_hit_packet(p, &mut out);
+                out[..p.len()].iter().filter(|h| h.is_some()).count() as u64
+            })
+            .sum();
+        best = best.min(t.elapsed().as_secs_f64() * 1e3);
+    }
+    (best, hits)
+}
+
+/// Builds the BVH and measures the modes.
 pub fn run(scene: &Scene, camera: &Camera, repeats: u32) -> Vec<RaysRow> {
     let t = Instant::now();
     let bvh = Bvh::build(&scene.mesh);
     let build_ms = t.elapsed().as_secs_f64() * 1e3;
     let (primary, random) = make_rays(&bvh, scene, camera);
+    let (tiled, lens) = primary_tiles(camera, 4);
     let threads = rayon::current_num_threads();
-    [("primary", primary), ("random", random)]
-        .into_iter()
-        .map(|(mode, rays)| {
-            let (ms, hits) = time_closest(&bvh, &rays, repeats);
-            RaysRow {
-                mode: mode.into(),
-                scene: scene.name.clone(),
-                rays: rays.len() as u64,
-                build_ms,
-                trace_ms: ms,
-                mrays_per_s: rays.len() as f64 / (ms * 1e3),
-                hit_rate: hits as f64 / rays.len().max(1) as f64,
-                threads,
-            }
-        })
-        .collect()
+    [
+        ("primary", primary, None),
+        ("primary_packet", tiled, Some(lens)),
+        ("random", random, None),
+    ]
+    .into_iter()
+    .map(|(mode, rays, lens)| {
+        let (ms, hits) = match &lens {
+            Some(l) => time_closest_packets(&bvh, &rays, l, repeats),
+            None => time_closest(&bvh, &rays, repeats),
+        };
+        RaysRow {
+            mode: mode.into(),
+            scene: scene.name.clone(),
+            rays: rays.len() as u64,
+            build_ms,
+            trace_ms: ms,
+            mrays_per_s: rays.len() as f64 / (ms * 1e3),
+            hit_rate: hits as f64 / rays.len().max(1) as f64,
+            threads,
+        }
+    })
+    .collect()
 }
