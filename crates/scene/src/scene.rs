@@ -139,6 +139,29 @@ impl Scene {
         CameraDesc::new(c + Vec3::new(0.0, 0.3 * r, dist), c, Vec3::Y, 45.0)
     }
 
+    /// True when nothing in the scene emits light: no analytic lights, no emissive material,
+    /// black environment.
+    pub fn is_unlit(&self) -> bool {
+        self.lights.is_empty()
+            && self.environment.max_element() <= 0.0
+            && !self.materials.iter().any(|m| m.is_emissive())
+    }
+
+    /// Scene files often carry no lights (Sponza, the classroom, scans): rendering them as
+    /// they are gives a black image. Such scenes get a default rig instead — a white sky
+    /// (radiance 0.5) and a sun from high above (about 70 degrees elevation, irradiance 3) — and keep
+    /// it visible in `parallax info`. Scenes with any light are left as they are.
+    pub fn add_default_lighting_if_unlit(&mut self) {
+        if self.is_unlit() {
+            self.environment = Vec3::splat(0.5);
+            let direction = Vec3::new(0.3, -1.0, 0.2).normalize();
+            self.lights.push(Light::Directional {
+                direction,
+                irradiance: Vec3::splat(3.0),
+            });
+        }
+    }
+
     /// Checks the scene invariants (see the crate docs).
     pub fn validate(&self) -> std::result::Result<(), String> {
         self.mesh.validate(self.materials.len())?;
@@ -153,5 +176,32 @@ impl Scene {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unlit_scenes_get_the_default_rig_and_lit_ones_are_untouched() {
+        let mut s = Scene {
+            materials: vec![Material::default()],
+            ..Scene::default()
+        };
+        assert!(s.is_unlit());
+        s.add_default_lighting_if_unlit();
+        assert!(!s.is_unlit());
+        assert_eq!(s.lights.len(), 1);
+        s.add_default_lighting_if_unlit();
+        assert_eq!(s.lights.len(), 1, "a lit scene is left as it is");
+        let mut emissive = Material::default();
+        emissive.emissive = Vec3::ONE;
+        let mut e = Scene {
+            materials: vec![emissive],
+            ..Scene::default()
+        };
+        e.add_default_lighting_if_unlit();
+        assert!(e.lights.is_empty() && e.environment == Vec3::ZERO);
     }
 }

@@ -39,14 +39,16 @@ pub fn load_file(path: &Path) -> Result<Scene> {
         .extension()
         .and_then(|e| e.to_str())
         .map(|e| e.to_ascii_lowercase());
-    match ext.as_deref() {
+    let mut scene = match ext.as_deref() {
         Some("gltf" | "glb") => self::gltf::load(path, &read(path)?),
         Some("obj") => obj::load(path),
         Some("ply") => ply::load(path),
         _ => Err(SceneError::UnsupportedFormat {
             path: path.to_path_buf(),
         }),
-    }
+    }?;
+    scene.add_default_lighting_if_unlit();
+    Ok(scene)
 }
 
 fn read(path: &Path) -> Result<Vec<u8>> {
