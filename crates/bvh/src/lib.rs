@@ -187,6 +187,11 @@ impl Bvh {
         Self::build_with(mesh, &BuildOptions::default())
     }
 
+    /// Builds with the default options, or explains why the mesh cannot be indexed.
+    pub fn try_build(mesh: &TriangleMesh) -> Result<Bvh, BvhError> {
+        Self::try_build_with(mesh, &BuildOptions::default())
+    }
+
     /// Builds with explicit options; panics as [`Bvh::build`].
     pub fn build_with(mesh: &TriangleMesh, opts: &BuildOptions) -> Bvh {
         Self::try_build_with(mesh, opts).unwrap_or_else(|e| panic!("BVH build: {e}"))

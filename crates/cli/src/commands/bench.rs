@@ -35,7 +35,7 @@ pub fn run(cmd: &BenchCommand, quiet: bool) -> Result<()> {
         BenchCommand::Rays(a) => {
             let scene = a.view.load_scene()?;
             let camera = a.view.camera(&scene, a.width, a.height)?;
-            let rows = rays::run(&scene, &camera, a.repeats);
+            let rows = rays::run(&scene, &camera, a.repeats)?;
             if !quiet {
                 println!(
                     "| scene | mode | rays | build ms | trace ms | Mrays/s | hit rate | threads |"

@@ -34,7 +34,7 @@ pub fn run(a: &DemoArgs, quiet: bool) -> Result<()> {
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let scene = Scene::load(&a.scene)?;
     let t = Instant::now();
-    let bvh = Bvh::build(&scene.mesh);
+    let bvh = Bvh::try_build(&scene.mesh)?;
     let build_ms = t.elapsed().as_secs_f64() * 1e3;
     let desc = scene.camera(None)?;
     let (w, h) = (a.width, a.height);

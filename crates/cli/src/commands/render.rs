@@ -54,7 +54,7 @@ pub fn run(a: &RenderArgs, quiet: bool) -> Result<()> {
     let scene = a.view.load_scene()?;
     timer.stage("load");
     let camera = a.view.camera(&scene, a.width, a.height)?;
-    let bvh = Bvh::build(&scene.mesh);
+    let bvh = Bvh::try_build(&scene.mesh)?;
     let build_ms = timer.stage("bvh_build");
     let (w, h) = (camera.width(), camera.height());
     let pb = progress::bar(w as u64 * h as u64, "render", quiet);

@@ -7,7 +7,7 @@
 use std::time::Instant;
 
 use glam::Vec2;
-use parallax_bvh::Bvh;
+use parallax_bvh::{Bvh, BvhError};
 use parallax_core::Ray;
 use parallax_core::math::Frame;
 use parallax_core::sampling::{Rng, warp};
@@ -141,14 +141,14 @@ pub fn time_closest_packets(bvh: &Bvh, rays: &[Ray], lens: &[u32], repeats: u32)
 }
 
 /// Builds the BVH and measures the modes.
-pub fn run(scene: &Scene, camera: &Camera, repeats: u32) -> Vec<RaysRow> {
+pub fn run(scene: &Scene, camera: &Camera, repeats: u32) -> Result<Vec<RaysRow>, BvhError> {
     let t = Instant::now();
-    let bvh = Bvh::build(&scene.mesh);
+    let bvh = Bvh::try_build(&scene.mesh)?;
     let build_ms = t.elapsed().as_secs_f64() * 1e3;
     let (primary, random) = make_rays(&bvh, scene, camera);
     let (tiled, lens) = primary_tiles(camera, 4);
     let threads = rayon::current_num_threads();
-    [
+    Ok([
         ("primary", primary, None),
         ("primary_packet", tiled, Some(lens)),
         ("random", random, None),
@@ -170,5 +170,5 @@ pub fn run(scene: &Scene, camera: &Camera, repeats: u32) -> Vec<RaysRow> {
             threads,
         }
     })
-    .collect()
+    .collect())
 }
