@@ -13,3 +13,12 @@
 pub mod capture;
 pub mod dirt;
 pub mod raster;
+
+pub use capture::{
+    CaptureStats, CubeCapture, LayerCapture, capture_gbuffer, capture_layers,
+    capture_layers_filtered,
+};
+pub use raster::{
+    Fragment, Fragments, LayerMethod, Projection, RasterError, RasterOptions, RasterStats, View,
+    rasterize,
+};
