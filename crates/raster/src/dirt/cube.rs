@@ -1,0 +1,56 @@
+//! DIRT's multi-view setup (§4.1 "Overview"): six captures arranged as a cube map around the
+//! eye (Vardis et al. 2016), one [`DirtCapture`] per face in the order +X, -X, +Y, -Y, +Z, -Z.
+//! Face frames are the cube map's (mirrored) ones; the capture never relies on winding.
+
+use parallax_scene::TriangleMesh;
+use parallax_scene::camera::CubeMap;
+
+use super::{DirtCapture, DirtError, DirtOptions};
+
+/// Six DIRT captures of a cube map.
+#[derive(Clone, Debug)]
+pub struct DirtCube {
+    pub cube: CubeMap,
+    pub faces: Vec<DirtCapture>,
+}
+
+impl DirtCube {
+    /// Builds the six faces (each in parallel internally). `opts.max_entries` bounds the
+    /// entries of the whole cube.
+    pub fn build(
+        mesh: &TriangleMesh,
+        cube: &CubeMap,
+        opts: &DirtOptions,
+    ) -> Result<DirtCube, DirtError> {
+        let mut faces = Vec::with_capacity(6);
+        let mut left = opts.max_entries;
+        for i in 0..6 {
+            let face_opts = DirtOptions {
+                max_entries: left.max(1),
+                ..*opts
+            };
+            let f = DirtCapture::build(mesh, &cube.face_camera(i), &face_opts)?;
+            left = left.saturating_sub(f.stats().entries);
+            faces.push(f);
+        }
+        Ok(DirtCube {
+            cube: cube.clone(),
+            faces,
+        })
+    }
+
+    /// Face `i` (0..6).
+    pub fn face(&self, i: usize) -> &DirtCapture {
+        &self.faces[i]
+    }
+
+    /// Bytes of all six captures.
+    pub fn bytes(&self) -> u64 {
+        self.faces.iter().map(DirtCapture::bytes).sum()
+    }
+
+    /// Build time of all faces (ms).
+    pub fn total_ms(&self) -> f64 {
+        self.faces.iter().map(|f| f.stats().total_ms).sum()
+    }
+}

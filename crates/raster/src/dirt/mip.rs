@@ -1,0 +1,98 @@
+//! The min-max mip chain of DIRT's depth bounds texture (DIRT §4.1.1 "Mipmap Depth"), for
+//! Hi-Z traversal (DIRT §4.2.1, Algorithm 1 lines 1-6).
+//!
+//! Level 0 is the per-cell (pixel or tile) depth bounds; level `k + 1` has
+//! `ceil(w_k / 2) x ceil(h_k / 2)` texels, texel `(i, j)` holding the min of the mins and the
+//! max of the maxes over the children `(2i..=2i+1, 2j..=2j+1)` that exist (odd sizes: the last
+//! texel covers only the remaining child column/row). The chain ends at 1 x 1. Empty cells hold
+//! `(+inf, -inf)`, so they never widen a parent. All levels live in two flat arrays.
+
+use serde::Serialize;
+
+/// Where one level lives in the flat arrays.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct LevelInfo {
+    pub width: u32,
+    pub height: u32,
+    pub offset: usize,
+}
+
+/// One level of the chain (borrowed).
+#[derive(Clone, Copy, Debug)]
+pub struct MipLevel<'a> {
+    pub width: u32,
+    pub height: u32,
+    /// Row-major minimum view depth per texel (`+inf` where empty).
+    pub min: &'a [f32],
+    /// Row-major maximum view depth per texel (`-inf` where empty).
+    pub max: &'a [f32],
+}
+
+impl MipLevel<'_> {
+    /// `(min, max)` of texel `(x, y)`.
+    #[inline]
+    pub fn get(&self, x: u32, y: u32) -> (f32, f32) {
+        let i = (y * self.width + x) as usize;
+        (self.min[i], self.max[i])
+    }
+}
+
+/// The levels of a `width x height` chain and the total texel count.
+pub fn layout(width: u32, height: u32) -> (Vec<LevelInfo>, usize) {
+    let mut levels = Vec::new();
+    let (mut w, mut h, mut offset) = (width, height, 0usize);
+    loop {
+        levels.push(LevelInfo {
+            width: w,
+            height: h,
+            offset,
+        });
+        offset += w as usize * h as usize;
+        if w == 1 && h == 1 {
+            break;
+        }
+        w = w.div_ceil(2);
+        h = h.div_ceil(2);
+    }
+    (levels, offset)
+}
+
+/// Fills levels 1.. of `min`/`max` from level 0 (already written at offset 0).
+pub fn build_chain(levels: &[LevelInfo], min: &mut [f32], max: &mut [f32]) {
+    for k in 1..levels.len() {
+        let (c, p) = (levels[k - 1], levels[k]);
+        let (child_min, parent_min) = min.split_at_mut(p.offset);
+        let (child_max, parent_max) = max.split_at_mut(p.offset);
+        let child_min = &child_min[c.offset..];
+        let child_max = &child_max[c.offset..];
+        for y in 0..p.height {
+            for x in 0..p.width {
+                let mut lo = f32::INFINITY;
+                let mut hi = f32::NEG_INFINITY;
+                for cy in 2 * y..(2 * y + 2).min(c.height) {
+                    for cx in 2 * x..(2 * x + 2).min(c.width) {
+                        let i = (cy * c.width + cx) as usize;
+                        lo = lo.min(child_min[i]);
+                        hi = hi.max(child_max[i]);
+                    }
+                }
+                let i = (y * p.width + x) as usize;
+                parent_min[i] = lo;
+                parent_max[i] = hi;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn odd_chain_layout() {
+        let (levels, total) = layout(5, 3);
+        let sizes: Vec<_> = levels.iter().map(|l| (l.width, l.height)).collect();
+        assert_eq!(sizes, vec![(5, 3), (3, 2), (2, 1), (1, 1)]);
+        assert_eq!(total, 15 + 6 + 2 + 1);
+    }
+}
