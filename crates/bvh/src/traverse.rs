@@ -27,10 +27,16 @@ use crate::{Bvh, Hit};
 /// Traversal stack entries.
 pub(crate) const STACK_SIZE: usize = 256;
 
-#[derive(Clone, Copy)]
-struct Entry {
-    child: u32,
-    t: f32,
+/// The four children of `node` as stack keys `t_near_bits << 32 | child`; lanes the ray misses
+/// get `u64::MAX`.
+#[inline(always)]
+fn child_keys(node: &Node4, t_near: Vec4) -> [u64; 4] {
+    let t = t_near.to_array();
+    let mut k = [0u64; 4];
+    for i in 0..4 {
+        k[i] = (t[i].to_bits() as u64) << 32 | node.child[i] as u64;
+    }
+    k
 }
 
 /// A ray prepared for the 4-wide slab test.
@@ -74,7 +80,7 @@ impl RayBoxes {
     /// A zero direction component with the origin exactly on a plane gives `0 * inf = NaN`; the
     /// ray then lies in the closed slab, and `max_or_rhs` / `min_or_rhs` ignore the NaN (the
     /// accumulators on the right stay NaN-free). Returns the hit mask (bit i = lane i) and the
-    /// entry distances.
+    /// entry distances (all-ones bits, a NaN, in missed lanes).
     #[inline(always)]
     pub fn intersect(&self, node: &Node4, t_max: f32) -> (u32, Vec4) {
         let b = &node.bounds;
@@ -86,8 +92,14 @@ impl RayBoxes {
         let tfz = (b[self.far[2]] - self.org[2]) * self.inv[2];
         let t_near = max_or_rhs(tnz, max_or_rhs(tny, max_or_rhs(tnx, self.t_min)));
         let t_far = min_or_rhs(tfz, min_or_rhs(tfy, min_or_rhs(tfx, Vec4::INFINITY)));
-        let t_far = min_or_rhs(t_far * ROBUST_FAR_SCALE, Vec4::splat(t_max));
-        (t_near.cmple(t_far).bitmask(), t_near)
+        // The closest hit so far (`t_max`) is scaled too: a triangle on a box face can be hit at
+        // a `t` a few ulps below the box's computed entry distance, and culling against the
+        // bare `t_max` then depends on the visiting order (found on random Sponza rays).
+        let t_far = min_or_rhs(t_far, Vec4::splat(t_max)) * ROBUST_FAR_SCALE;
+        let hit = t_near.cmple(t_far);
+        // Missed lanes get all-ones bits, so their stack keys (`child_keys`) sort last.
+        let t_near = Vec4::select(hit, t_near, Vec4::splat(f32::from_bits(u32::MAX)));
+        (hit.bitmask(), t_near)
     }
 }
 
@@ -102,6 +114,12 @@ impl Bvh {
     /// The traversal kernel. `leaf(first, count, t_max, stats)` tests a leaf's triangles, may
     /// shrink `t_max` (closest hit), and returns `true` to stop (any hit). With `ORDERED`,
     /// children are visited near-to-far; otherwise in lane order.
+    ///
+    /// Stack entries are `u64` keys `t_bits << 32 | child`: for the non-negative entry distances
+    /// of rays with `t_min >= 0` the integer order of the keys is the order of `t`, so a
+    /// branch-free sorting network on integers orders 3-4 hit children (a negative `t_min` only
+    /// changes the visiting order, never the answer: the closest hit is the lexicographic
+    /// minimum of `(t, index)` over all hits whatever the order).
     #[inline(always)]
     fn traverse<C: Counter, const ORDERED: bool>(
         &self,
@@ -110,74 +128,76 @@ impl Bvh {
         stats: &mut C,
         mut leaf: impl FnMut(u32, u32, &mut f32, &mut C) -> bool,
     ) {
-        // Uninitialised: saves a 2 KB memset per ray (not measured separately).
-        let mut stack = [MaybeUninit::<Entry>::uninit(); STACK_SIZE];
+        // Uninitialised: saves a 2 KB memset per ray. Four spare slots: the branch-free pushes
+        // below may write (but never count) up to three entries past the live top.
+        let mut stack = [MaybeUninit::<u64>::uninit(); STACK_SIZE + 4];
         let mut sp = 0usize;
         let mut cur = 0u32; // the root
+        let nodes = self.nodes.as_ptr();
         loop {
             if !is_leaf(cur) {
-                let node = &self.nodes[cur as usize];
+                debug_assert!((cur as usize) < self.nodes.len());
+                // SAFETY: inner child references index the node array (build invariant; refit
+                // keeps the topology).
+                let node = unsafe { &*nodes.add(cur as usize) };
                 stats.node(node.num_children);
                 let (mask, t_near) = rb.intersect(node, t_max);
                 if mask != 0 {
-                    let tn = t_near.to_array();
-                    let c0 = mask.trailing_zeros() as usize;
                     let rest = mask & (mask - 1);
                     if rest == 0 {
-                        cur = node.child[c0];
+                        cur = node.child[mask.trailing_zeros() as usize];
                         continue;
                     }
+                    let keys = child_keys(node, t_near);
+                    debug_assert!(sp + 4 <= stack.len());
+                    // SAFETY: `sp + 3 < STACK_SIZE + 4` (a node pushes at most 3 entries and
+                    // `3 * depth < STACK_SIZE`, checked at build).
+                    let push = |stack: &mut [MaybeUninit<u64>], sp: usize, k: u64| unsafe {
+                        *stack.get_unchecked_mut(sp) = MaybeUninit::new(k);
+                    };
                     if !ORDERED {
+                        let c0 = mask.trailing_zeros() as usize;
                         let mut m = rest;
                         while m != 0 {
                             let c = m.trailing_zeros() as usize;
                             m &= m - 1;
-                            stack[sp] = MaybeUninit::new(Entry {
-                                child: node.child[c],
-                                t: tn[c],
-                            });
+                            push(&mut stack, sp, keys[c]);
                             sp += 1;
                         }
                         cur = node.child[c0];
                         continue;
                     }
-                    let c1 = rest.trailing_zeros() as usize;
-                    let rest = rest & (rest - 1);
-                    if rest == 0 {
-                        let (near, far) = if tn[c0] <= tn[c1] { (c0, c1) } else { (c1, c0) };
-                        stack[sp] = MaybeUninit::new(Entry {
-                            child: node.child[far],
-                            t: tn[far],
-                        });
+                    let rest2 = rest & (rest - 1);
+                    if rest2 == 0 {
+                        let (a, b) = (
+                            keys[mask.trailing_zeros() as usize],
+                            keys[rest.trailing_zeros() as usize],
+                        );
+                        push(&mut stack, sp, a.max(b));
                         sp += 1;
-                        cur = node.child[near];
+                        cur = a.min(b) as u32;
                         continue;
                     }
-                    // Three or four children: insertion sort far-to-near, push all but the
-                    // nearest, continue with the nearest.
-                    let mut e = [Entry { child: 0, t: 0.0 }; 4];
-                    let mut n = 0;
-                    let mut m = mask;
-                    while m != 0 {
-                        let c = m.trailing_zeros() as usize;
-                        m &= m - 1;
-                        let x = Entry {
-                            child: node.child[c],
-                            t: tn[c],
-                        };
-                        let mut j = n;
-                        while j > 0 && e[j - 1].t < x.t {
-                            e[j] = e[j - 1];
-                            j -= 1;
-                        }
-                        e[j] = x;
-                        n += 1;
-                    }
-                    for x in &e[..n - 1] {
-                        stack[sp] = MaybeUninit::new(*x);
-                        sp += 1;
-                    }
-                    cur = e[n - 1].child;
+                    // Three or four children: non-hit lanes have all-ones keys and sort last;
+                    // a 5-comparator network on the four keys, push far-to-near, continue with
+                    // the nearest.
+                    let [mut k0, mut k1, mut k2, mut k3] = keys;
+                    let sort2 = |a: &mut u64, b: &mut u64| {
+                        let (x, y) = (*a, *b);
+                        *a = x.min(y);
+                        *b = x.max(y);
+                    };
+                    sort2(&mut k0, &mut k1);
+                    sort2(&mut k2, &mut k3);
+                    sort2(&mut k0, &mut k2);
+                    sort2(&mut k1, &mut k3);
+                    sort2(&mut k1, &mut k2);
+                    push(&mut stack, sp, k3);
+                    sp += (rest2 & (rest2 - 1) != 0) as usize;
+                    push(&mut stack, sp, k2);
+                    push(&mut stack, sp + 1, k1);
+                    sp += 2;
+                    cur = k0 as u32;
                     continue;
                 }
             } else {
@@ -193,9 +213,9 @@ impl Bvh {
                 }
                 sp -= 1;
                 // SAFETY: entries below `sp` were written by the pushes above.
-                let e = unsafe { stack[sp].assume_init() };
-                if e.t <= t_max {
-                    cur = e.child;
+                let e = unsafe { stack.get_unchecked(sp).assume_init() };
+                if f32::from_bits((e >> 32) as u32) <= t_max * ROBUST_FAR_SCALE {
+                    cur = e as u32;
                     break;
                 }
             }
