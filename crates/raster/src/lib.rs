@@ -12,6 +12,7 @@
 
 pub mod capture;
 pub mod dirt;
+pub mod normals;
 pub mod raster;
 
 pub use capture::{
