@@ -30,6 +30,8 @@ enum Command {
     Scenes,
     /// Print triangles, bounds, materials, lights and cameras of a scene.
     Info(commands::info::InfoArgs),
+    /// Rasterized captures (depth layers, stereo, cube, DIRT) as EXR layers + PNG previews.
+    Capture(commands::capture::CaptureArgs),
     /// Render the built-in atrium with several camera models into a folder.
     Demo(commands::demo::DemoArgs),
     /// Benchmarks that reproduce the papers' and issues' measurements.
@@ -52,6 +54,7 @@ fn main() -> std::process::ExitCode {
         Command::Render(a) => commands::render::run(&a, cli.quiet),
         Command::Scenes => commands::info::scenes(),
         Command::Info(a) => commands::info::run(&a),
+        Command::Capture(a) => commands::capture::run(&a, cli.quiet),
         Command::Demo(a) => commands::demo::run(&a, cli.quiet),
         Command::Bench(b) => commands::bench::run(&b, cli.quiet),
     };

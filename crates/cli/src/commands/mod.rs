@@ -1,6 +1,7 @@
 //! One file per subcommand.
 
 pub mod bench;
+pub mod capture;
 pub mod demo;
 pub mod info;
 pub mod render;
