@@ -7,6 +7,7 @@
 //! |---|---|---|
 //! | [`LayerCapture`] | one pinhole / stereo eye / orthographic view | [`capture_layers`] |
 //! | [`CubeCapture`] | six 90° faces around a point (seamless) | [`CubeCapture::capture`] |
+//! | [`AllLayersCapture`] | one view, every surface per pixel (CSR) | [`capture_all_layers`] |
 //!
 //! Layer 0 is the G-buffer (primary visibility); layer `k` the `k`-th surface along the
 //! pixel-centre ray (depth peeling, Everitt 2001), optionally at least `Δ` behind layer
@@ -16,6 +17,7 @@
 //! **Invariant:** a resolved sample equals what the BVH reference G-buffer computes from the
 //! same primitive and barycentrics (same normal flip towards the viewer, same texture lookup).
 
+pub mod all_layers;
 pub mod cube;
 mod resolve;
 
@@ -25,6 +27,7 @@ use parallax_core::image::{GBuffer, LayeredGBuffer};
 use parallax_scene::Scene;
 use serde::Serialize;
 
+pub use all_layers::{AllLayersCapture, AllLayersStats, capture_all_layers};
 pub use cube::CubeCapture;
 pub use resolve::resolve_fragment;
 

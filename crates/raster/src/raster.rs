@@ -181,12 +181,12 @@ impl Fragments {
 /// A per-triangle predicate: rasterize triangle `prim` only if it returns true.
 pub type TriangleFilter<'a> = &'a (dyn Fn(u32) -> bool + Sync);
 
-fn ms(t: Instant) -> f64 {
+pub(crate) fn ms(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
 
 /// Sets up every triangle of `mesh` that passes `filter`, in triangle order.
-fn setup_all(
+pub(crate) fn setup_all(
     mesh: &TriangleMesh,
     view: &View,
     filter: Option<TriangleFilter>,
@@ -228,6 +228,21 @@ fn setup_all(
     tris
 }
 
+/// Errors if a triangle index of `mesh` is out of range.
+pub(crate) fn check_mesh(mesh: &TriangleMesh) -> Result<(), RasterError> {
+    let nv = mesh.positions.len();
+    if mesh
+        .indices
+        .par_iter()
+        .any(|t| t.iter().any(|&i| i as usize >= nv))
+    {
+        return Err(RasterError::InvalidMesh(format!(
+            "a triangle index is out of range ({nv} vertices)"
+        )));
+    }
+    Ok(())
+}
+
 /// Rasterizes `mesh` into `opts.layers` fragment layers per pixel of `view`, optionally only
 /// the triangles `filter` accepts. Errors on invalid options or a mesh whose indices are out of
 /// range; degenerate, behind-the-eye or huge triangles are clipped or dropped, never a panic.
@@ -239,16 +254,7 @@ pub fn rasterize(
 ) -> Result<(Fragments, RasterStats), RasterError> {
     opts.validate()?;
     parallax_core::image::check_size(view.width, view.height).map_err(RasterError::Size)?;
-    let nv = mesh.positions.len();
-    if mesh
-        .indices
-        .par_iter()
-        .any(|t| t.iter().any(|&i| i as usize >= nv))
-    {
-        return Err(RasterError::InvalidMesh(format!(
-            "a triangle index is out of range ({nv} vertices)"
-        )));
-    }
+    check_mesh(mesh)?;
     let layers = opts.layers;
     let tiles_x = view.width.div_ceil(TILE);
     let tiles_y = view.height.div_ceil(TILE);
