@@ -190,6 +190,32 @@ fn dirt_bounds_and_heatmap() {
     assert!(s["ms"]["fill"].as_f64().is_some());
 }
 
+#[test]
+fn ldc_writes_three_axis_images() {
+    let d = out_dir("ldc");
+    let s = capture(&d, "ldc", &[]);
+    let mut total = 0.0;
+    for axis in ["x", "y", "z"] {
+        let img = read_exr(d.join(format!("ldi_{axis}.exr"))).unwrap();
+        assert_eq!(
+            img.width.max(img.height),
+            32,
+            "--width = pixels along the longest side"
+        );
+        let depth = img.channel("depth").unwrap();
+        let k = img.channel("complexity").unwrap();
+        for (z, n) in depth.iter().zip(k) {
+            // A pixel has a first sample exactly when its depth complexity is positive.
+            assert_eq!(z.is_finite(), *n > 0.0);
+        }
+        total += k.iter().sum::<f32>();
+        assert!(d.join(format!("ldi_{axis}.complexity.png")).is_file());
+    }
+    // The Cornell box is closed on five sides: every axis sees surfaces.
+    assert_eq!(total as u64, s["fragments"].as_u64().unwrap());
+    assert!(s["bytes"].as_u64().unwrap() > 0);
+}
+
 fn fails_with(args: &[&str], needle: &str) {
     let o = parallax(args);
     let e = stderr(&o);

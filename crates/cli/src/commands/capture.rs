@@ -7,13 +7,13 @@
 //! | `stereo` | the same in `left/` and `right/` |
 //! | `cube` | the same in `px/ nx/ py/ ny/ pz/ nz/` (faces `--width` square) |
 //! | `dirt` | `bounds.exr` (`zmin`, `zmax` per cell), `bounds.depth.png` (zmin), `lengths.png` (heatmap of list lengths) |
-//! | `ldc` | not implemented yet |
+//! | `ldc` | per axis `ldi_x/y/z.exr` (first sample per pixel: `depth` from the box face, `normal.X/Y/Z`, R,G,B = albedo, `id`; plus `complexity` = samples per pixel), `ldi_x/y/z.complexity.png`; `--width` = pixels along the scene box's longest side |
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result, bail, ensure};
+use anyhow::{Context, Result, ensure};
 use clap::{Args, ValueEnum};
 use glam::Vec3;
 use parallax_core::Image;
@@ -23,6 +23,7 @@ use parallax_core::image::png::{
     ToneMapping, write_depth_png, write_png, write_png_linear_clamped,
 };
 use parallax_raster::dirt::{DirtCapture, DirtOptions};
+use parallax_raster::ldc::{LayeredDepthCube, LdcOptions, Ldi};
 use parallax_raster::{LayerCapture, RasterOptions, View, capture_layers};
 use parallax_scene::Scene;
 use parallax_scene::camera::{CubeMap, Eye, Pinhole, StereoRig};
@@ -147,12 +148,6 @@ fn check_args(a: &CaptureArgs) -> Result<()> {
 
 pub fn run(a: &CaptureArgs, quiet: bool) -> Result<()> {
     check_args(a)?;
-    if a.kind == CaptureView::Ldc {
-        bail!(
-            "--view ldc is not implemented yet (the layered depth cube capture is not in \
-             parallax-raster yet); use pinhole, stereo, cube or dirt"
-        );
-    }
     let start = Instant::now();
     let mut totals = Totals::default();
     let t = Instant::now();
@@ -219,7 +214,31 @@ pub fn run(a: &CaptureArgs, quiet: bool) -> Result<()> {
             write_dirt(&a.out, &d, &mut written)?;
             totals.add_stage("write", ms(t));
         }
-        CaptureView::Ldc => unreachable!("rejected above"),
+        CaptureView::Ldc => {
+            let pb = progress::bar(1, "ldc", quiet);
+            let ldc = LayeredDepthCube::build(&scene, a.width, &LdcOptions::default())
+                .context("building the layered depth cube")?;
+            pb.finish_and_clear();
+            totals.fragments += ldc.stats.samples as u64;
+            totals.bytes += ldc.bytes() as u64;
+            totals.add_stage("assign", ldc.stats.assign_ms);
+            for l in &ldc.stats.ldis {
+                totals.add_stage("setup", l.capture.raster.setup_ms);
+                totals.add_stage("bin", l.capture.raster.bin_ms);
+                totals.add_stage("raster", l.capture.raster.raster_ms);
+                totals.add_stage("fill", l.capture.fill_ms);
+                totals.add_stage("resolve", l.capture.resolve_ms);
+                totals.add_stage("coarse", l.coarse_ms);
+            }
+            totals
+                .views
+                .push(json!({ "view": "ldc", "ldc": ldc.stats }));
+            let t = Instant::now();
+            for ldi in &ldc.ldis {
+                write_ldi(&a.out, ldi, &mut written)?;
+            }
+            totals.add_stage("write", ms(t));
+        }
     }
     let stats = json!({
         "scene": scene.name,
@@ -381,5 +400,59 @@ fn write_dirt(dir: &Path, d: &DirtCapture, written: &mut Vec<PathBuf>) -> Result
     write_png_linear_clamped(&lengths, &heatmap)
         .with_context(|| format!("writing {}", lengths.display()))?;
     written.extend([exr, depth, lengths]);
+    Ok(())
+}
+
+/// `DIR/ldi_{x,y,z}.exr`: the first (nearest) sample of every pixel of one layered depth image
+/// and its depth complexity, and `DIR/ldi_{x,y,z}.complexity.png` (samples per pixel, scaled to
+/// the maximum).
+fn write_ldi(dir: &Path, ldi: &Ldi, written: &mut Vec<PathBuf>) -> Result<()> {
+    let c = &ldi.capture;
+    let (w, h) = (c.width(), c.height());
+    let n = w as usize * h as usize;
+    let mut depth = vec![f32::INFINITY; n];
+    let mut normal = vec![Vec3::ZERO; n];
+    let mut albedo = vec![Vec3::ZERO; n];
+    let mut id = vec![-1.0f32; n];
+    let mut complexity = vec![0.0f32; n];
+    for y in 0..h {
+        for x in 0..w {
+            let i = (y * w + x) as usize;
+            let r = c.range(x, y);
+            complexity[i] = r.len() as f32;
+            if let Some(first) = r.clone().next() {
+                depth[i] = c.depth[first];
+                normal[i] = c.normal[first];
+                albedo[i] = c.albedo[first];
+                id[i] = c.primitive_id[first] as f32;
+            }
+        }
+    }
+    let name = format!("ldi_{}", ["x", "y", "z"][ldi.axis]);
+    let [r, g, b] = split3(&albedo);
+    let [nx, ny, nz] = split3(&normal);
+    let exr = dir.join(format!("{name}.exr"));
+    let channels: [(&str, &[f32]); 9] = [
+        ("R", &r),
+        ("G", &g),
+        ("B", &b),
+        ("depth", &depth),
+        ("normal.X", &nx),
+        ("normal.Y", &ny),
+        ("normal.Z", &nz),
+        ("id", &id),
+        ("complexity", &complexity),
+    ];
+    write_exr(&exr, w, h, &channels).with_context(|| format!("writing {}", exr.display()))?;
+    written.push(exr);
+    let max = complexity.iter().copied().fold(1.0f32, f32::max);
+    let heat = Image::from_vec(
+        w,
+        h,
+        complexity.iter().map(|&k| Vec3::splat(k / max)).collect(),
+    )?;
+    let png = dir.join(format!("{name}.complexity.png"));
+    write_png_linear_clamped(&png, &heat).with_context(|| format!("writing {}", png.display()))?;
+    written.push(png);
     Ok(())
 }
