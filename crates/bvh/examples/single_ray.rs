@@ -98,11 +98,15 @@ fn main() {
         std::fs::write(path, lines.join("\n")).unwrap();
         return;
     }
+    let only = std::env::var("SETS").unwrap_or_default();
     for (name, rays) in [
         ("primary", &primary),
         ("shadow", &shadow),
         ("random", &random),
     ] {
+        if !only.is_empty() && !only.contains(name) {
+            continue;
+        }
         let (c, cs) = run(rays, reps, closest);
         let (an, as_) = run(rays, reps, any);
         println!(

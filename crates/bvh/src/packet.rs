@@ -98,7 +98,9 @@ impl PacketBoxes {
         let mut m = 0;
         for g in 0..GROUPS {
             if mask >> (4 * g) & 0xF != 0 {
-                m |= t.cmple(self.t_max.group(g)).bitmask() << (4 * g);
+                // Against the scaled closest hit, as the single-ray pop (`traverse.rs`).
+                let bound = self.t_max.group(g) * ROBUST_FAR_SCALE;
+                m |= t.cmple(bound).bitmask() << (4 * g);
             }
         }
         mask & m
@@ -128,7 +130,8 @@ impl PacketBoxes {
                 t_near = max_or_rhs(Vec4::select(neg, t1, t0), t_near);
                 t_far = min_or_rhs(Vec4::select(neg, t0, t1), t_far);
             }
-            let t_far = min_or_rhs(t_far * scale, self.t_max.group(g));
+            // `t_max` scaled too, as in the single-ray slab test (`traverse.rs`).
+            let t_far = min_or_rhs(t_far, self.t_max.group(g)) * scale;
             let hit = t_near.cmple(t_far);
             let m = hit.bitmask() & (mask >> (4 * g));
             if m != 0 {
@@ -169,7 +172,7 @@ impl PacketBoxes {
                     t_near = _mm256_max_ps(_mm256_blendv_ps(t0, t1, inv), t_near);
                     t_far = _mm256_min_ps(_mm256_blendv_ps(t1, t0, inv), t_far);
                 }
-                let t_far = _mm256_min_ps(_mm256_mul_ps(t_far, scale), ld(&self.t_max));
+                let t_far = _mm256_mul_ps(_mm256_min_ps(t_far, ld(&self.t_max)), scale);
                 let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(t_near, t_far);
                 let m = _mm256_movemask_ps(hit) as u32 & (mask >> (8 * h)) & 0xFF;
                 if m != 0 {

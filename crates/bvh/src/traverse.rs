@@ -72,8 +72,8 @@ impl RayBoxes {
     ///
     /// ```text
     /// t_near = max(t_min, (near_x - o_x) / d_x, (near_y - o_y) / d_y, (near_z - o_z) / d_z)
-    /// t_far  = min((far_x - o_x) / d_x, ...) * (1 + 2 gamma(3))          (Ize 2013, robust)
-    /// hit    = t_near <= min(t_far, t_max)
+    /// t_far  = min(t_max, (far_x - o_x) / d_x, ...) * (1 + 2 gamma(3))   (Ize 2013, robust)
+    /// hit    = t_near <= t_far
     /// ```
     ///
     /// Empty lanes (`min = +inf, max = -inf`) give `t_near = +inf`, `t_far = -inf`: never hit.
@@ -91,11 +91,12 @@ impl RayBoxes {
         let tfy = (b[self.far[1]] - self.org[1]) * self.inv[1];
         let tfz = (b[self.far[2]] - self.org[2]) * self.inv[2];
         let t_near = max_or_rhs(tnz, max_or_rhs(tny, max_or_rhs(tnx, self.t_min)));
-        let t_far = min_or_rhs(tfz, min_or_rhs(tfy, min_or_rhs(tfx, Vec4::INFINITY)));
         // The closest hit so far (`t_max`) is scaled too: a triangle on a box face can be hit at
         // a `t` a few ulps below the box's computed entry distance, and culling against the
-        // bare `t_max` then depends on the visiting order (found on random Sponza rays).
-        let t_far = min_or_rhs(t_far, Vec4::splat(t_max)) * ROBUST_FAR_SCALE;
+        // bare `t_max` then depends on the visiting order (found on random Sponza rays). It
+        // starts the (NaN-free) accumulator: one `min` fewer than `min(t_far, t_max)`.
+        let t_far = min_or_rhs(tfz, min_or_rhs(tfy, min_or_rhs(tfx, Vec4::splat(t_max))));
+        let t_far = t_far * ROBUST_FAR_SCALE;
         let hit = t_near.cmple(t_far);
         // Missed lanes get all-ones bits, so their stack keys (`child_keys`) sort last.
         let t_near = Vec4::select(hit, t_near, Vec4::splat(f32::from_bits(u32::MAX)));
