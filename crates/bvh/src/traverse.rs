@@ -44,7 +44,8 @@ fn child_keys(node: &Node4, t_near: Vec4) -> [u64; 4] {
 pub(crate) struct RayBoxes {
     org: [Vec4; 3],
     inv: [Vec4; 3],
-    /// Index into `Node4::bounds` of the near / far plane per axis (`2 * axis + sign`).
+    /// Byte offset into `Node4::bounds` of the near / far plane per axis
+    /// (`16 * (2 * axis + sign)`).
     near: [usize; 3],
     far: [usize; 3],
     t_min: Vec4,
@@ -61,8 +62,8 @@ impl RayBoxes {
         Self {
             org: [Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z)],
             inv: [Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z)],
-            near: [sx, 2 + sy, 4 + sz],
-            far: [1 - sx, 3 - sy, 5 - sz],
+            near: [16 * sx, 16 * (2 + sy), 16 * (4 + sz)],
+            far: [16 * (1 - sx), 16 * (3 - sy), 16 * (5 - sz)],
             t_min: Vec4::splat(ray.t_min),
         }
     }
@@ -83,13 +84,15 @@ impl RayBoxes {
     /// entry distances (all-ones bits, a NaN, in missed lanes).
     #[inline(always)]
     pub fn intersect(&self, node: &Node4, t_max: f32) -> (u32, Vec4) {
-        let b = &node.bounds;
-        let tnx = (b[self.near[0]] - self.org[0]) * self.inv[0];
-        let tny = (b[self.near[1]] - self.org[1]) * self.inv[1];
-        let tnz = (b[self.near[2]] - self.org[2]) * self.inv[2];
-        let tfx = (b[self.far[0]] - self.org[0]) * self.inv[0];
-        let tfy = (b[self.far[1]] - self.org[1]) * self.inv[1];
-        let tfz = (b[self.far[2]] - self.org[2]) * self.inv[2];
+        let base = node.bounds.as_ptr() as *const u8;
+        // SAFETY: the offsets are `16 * i` with `i < 6` (`new`), inside `bounds: [Vec4; 6]`.
+        let b = |off: usize| unsafe { *(base.add(off) as *const Vec4) };
+        let tnx = (b(self.near[0]) - self.org[0]) * self.inv[0];
+        let tny = (b(self.near[1]) - self.org[1]) * self.inv[1];
+        let tnz = (b(self.near[2]) - self.org[2]) * self.inv[2];
+        let tfx = (b(self.far[0]) - self.org[0]) * self.inv[0];
+        let tfy = (b(self.far[1]) - self.org[1]) * self.inv[1];
+        let tfz = (b(self.far[2]) - self.org[2]) * self.inv[2];
         let t_near = max_or_rhs(tnz, max_or_rhs(tny, max_or_rhs(tnx, self.t_min)));
         // The closest hit so far (`t_max`) is scaled too: a triangle on a box face can be hit at
         // a `t` a few ulps below the box's computed entry distance, and culling against the
