@@ -20,7 +20,7 @@
 use glam::{Vec2, Vec3};
 use parallax_core::{Ray, math::RayDifferential};
 
-use super::{CameraFrame, CameraModel, CameraRay, camera_error};
+use super::{CameraFrame, CameraModel, CameraRay, angular_fov};
 use crate::{CameraDesc, Result};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -36,18 +36,17 @@ impl Equirect {
     /// `fov_deg = None` = the full sphere (360 x 180).
     pub fn new(desc: &CameraDesc, width: u32, height: u32, fov_deg: Option<Vec2>) -> Result<Self> {
         let frame = CameraFrame::look_at(desc)?;
-        let fov = fov_deg.unwrap_or(Vec2::new(360.0, 180.0));
-        if !(fov.x > 0.0 && fov.x <= 360.0 && fov.y > 0.0 && fov.y <= 180.0) {
-            return Err(camera_error(format!(
-                "equirect fov must be in (0, 360] x (0, 180] degrees, got {} x {}",
-                fov.x, fov.y
-            )));
-        }
+        let fov = angular_fov(
+            "equirect",
+            fov_deg,
+            Vec2::new(360.0, 180.0),
+            Vec2::new(360.0, 180.0),
+        )?;
         Ok(Self {
             frame,
             width,
             height,
-            fov: Vec2::new(fov.x.to_radians(), fov.y.to_radians()),
+            fov,
         })
     }
 

@@ -29,7 +29,7 @@
 use glam::{Vec2, Vec3};
 use parallax_core::{Ray, math::RayDifferential};
 
-use super::{CameraFrame, CameraModel, CameraRay, camera_error};
+use super::{CameraFrame, CameraModel, CameraRay, angular_fov};
 use crate::{CameraDesc, Result};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -61,18 +61,17 @@ impl Fisheye {
     /// `fov_deg = None` = 210 x 130 degrees.
     pub fn new(desc: &CameraDesc, width: u32, height: u32, fov_deg: Option<Vec2>) -> Result<Self> {
         let frame = CameraFrame::look_at(desc)?;
-        let fov = fov_deg.unwrap_or(Vec2::new(210.0, 130.0));
-        if !(fov.x > 0.0 && fov.x <= 360.0 && fov.y > 0.0 && fov.y <= 360.0) {
-            return Err(camera_error(format!(
-                "fisheye fov must be in (0, 360] x (0, 360] degrees, got {} x {}",
-                fov.x, fov.y
-            )));
-        }
+        let fov = angular_fov(
+            "fisheye",
+            fov_deg,
+            Vec2::new(210.0, 130.0),
+            Vec2::new(360.0, 360.0),
+        )?;
         Ok(Self {
             frame,
             width,
             height,
-            fov: Vec2::new(fov.x.to_radians(), fov.y.to_radians()),
+            fov,
         })
     }
 

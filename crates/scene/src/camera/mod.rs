@@ -211,6 +211,24 @@ impl Default for CameraOptions {
     }
 }
 
+/// An angular field of view for `model`: `fov_deg` (degrees) or `default`, checked against
+/// `(0, max.x] x (0, max.y]`, returned in radians.
+pub(crate) fn angular_fov(
+    model: &str,
+    fov_deg: Option<Vec2>,
+    default: Vec2,
+    max: Vec2,
+) -> Result<Vec2> {
+    let fov = fov_deg.unwrap_or(default);
+    if !(fov.x > 0.0 && fov.x <= max.x && fov.y > 0.0 && fov.y <= max.y) {
+        return Err(camera_error(format!(
+            "{model} fov must be in (0, {}] x (0, {}] degrees, got {} x {}",
+            max.x, max.y, fov.x, fov.y
+        )));
+    }
+    Ok(Vec2::new(fov.x.to_radians(), fov.y.to_radians()))
+}
+
 impl CameraOptions {
     /// Checks the options every model shares a meaning of (model-specific ranges such as the
     /// field of view are checked by the model that uses them).
