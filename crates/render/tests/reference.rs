@@ -197,3 +197,46 @@ fn image_is_identical_for_any_thread_count() {
     assert_eq!(a.rays, b.rays);
     assert_eq!(a.gbuffer.unwrap().depth, b.gbuffer.unwrap().depth);
 }
+
+#[test]
+fn open_sky_gives_albedo_times_sky_radiance() {
+    // No lights, constant sky 1.0: an unoccluded diffuse floor reflects exactly albedo * sky
+    // (every cosine-sampled visibility ray escapes); under a roof it reflects much less.
+    let floor_radiance = |roof: bool| {
+        let mut mesh = TriangleMesh::default();
+        add_box(
+            &mut mesh,
+            Vec3::new(-10.0, -1.0, -10.0),
+            Vec3::new(10.0, 0.0, 10.0),
+            0,
+        );
+        if roof {
+            add_box(
+                &mut mesh,
+                Vec3::new(-4.0, 0.5, -4.0),
+                Vec3::new(4.0, 0.6, 4.0),
+                0,
+            );
+        }
+        let scene = Scene {
+            name: "sky".into(),
+            mesh,
+            materials: vec![Material::diffuse("grey", Vec3::splat(0.5))],
+            environment: Vec3::ONE,
+            ..Scene::default()
+        };
+        let bvh = Bvh::build(&scene.mesh);
+        let desc = CameraDesc::new(Vec3::new(3.0, 0.3, 0.0), Vec3::ZERO, Vec3::Y, 1.0);
+        let cam = Camera::new(ModelKind::Pinhole, &desc, 3, 3, &CameraOptions::default()).unwrap();
+        let opts = RenderOptions {
+            spp: 16,
+            seed: 3,
+            gbuffer: false,
+        };
+        render(&scene, &bvh, &cam, &opts, &|_| {}).image.get(1, 1).x
+    };
+    let open = floor_radiance(false);
+    assert!((open - 0.5).abs() < 1e-6, "open floor {open}");
+    let covered = floor_radiance(true);
+    assert!(covered < 0.25, "floor under the roof {covered}");
+}
