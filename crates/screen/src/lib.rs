@@ -1,0 +1,38 @@
+//! parallax-screen: screen-space ray tracing against captured depth layers.
+//!
+//! Foundation of Widmer et al. 2015, "An Adaptive Acceleration Structure for Screen-space Ray
+//! Tracing" (issue 4):
+//!
+//! - [`tracer`]: the one interface every image-space structure implements ([`ScreenTracer`],
+//!   DESIGN.md "the central seam"), its result and its work counters;
+//! - [`space`]: the NDC-like unit cube of the reference view (§3.2) in which construction and
+//!   tracing happen — a projective map, so planes stay planes and rays stay lines;
+//! - [`planes`]: the per-pixel planes of a captured layer in that cube, with the discontinuity
+//!   flag `O` (§3.2, "Bottom level generation");
+//! - [`brute`]: [`BruteForcePlanes`], every pixel plane tested against every ray — the slow twin
+//!   the quad-tree must agree with.
+//!
+//! **Invariant:** nothing here reads the scene; tracers see only what a capture holds.
+
+pub mod brute;
+pub mod planes;
+pub mod space;
+pub mod tracer;
+
+pub use brute::{BruteForcePlanes, BruteResult};
+pub use planes::{LayerPlanes, NormalSource};
+pub use space::{CubeSegment, UnitCube};
+pub use tracer::{ScreenTracer, TraceResult, TraceStats};
+
+/// Errors of building screen-space structures.
+#[derive(Debug, thiserror::Error)]
+pub enum ScreenError {
+    #[error("invalid unit cube: {0}")]
+    InvalidSpace(String),
+    #[error("capture does not match: {0}")]
+    Mismatch(String),
+    #[error(transparent)]
+    Raster(#[from] parallax_raster::RasterError),
+    #[error(transparent)]
+    Core(#[from] parallax_core::CoreError),
+}
