@@ -51,6 +51,7 @@ pub struct TriangleHit {
 impl WatertightRay {
     /// Woop et al. 2013, §3: choose the dominant axis `kz`, keep winding by swapping `kx, ky`
     /// when `dir[kz] < 0`, and precompute the shear constants.
+    #[inline]
     pub fn new(ray: &Ray) -> Self {
         let d = ray.dir;
         let a = d.abs();
