@@ -15,7 +15,8 @@ pub struct ViewArgs {
     /// A named camera of the scene (default: the scene's first camera).
     #[arg(long, conflicts_with_all = ["eye", "target"])]
     pub camera: Option<String>,
-    /// Eye position: x,y,z (or three values).
+    /// Eye position: three values `--eye x y z`, or `--eye=x,y,z` (the `=` form is needed when
+    /// the comma list starts with a minus sign).
     #[arg(long, num_args = 1..=3, value_delimiter = ',', allow_negative_numbers = true)]
     pub eye: Option<Vec<f32>>,
     /// Look-at target: x,y,z.

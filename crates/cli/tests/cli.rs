@@ -100,6 +100,24 @@ fn render_png_exr_with_aovs_and_stats() {
 }
 
 #[test]
+fn negative_coordinates_parse_in_both_spellings() {
+    let d = out_dir("coords");
+    for eye in [
+        &["--eye", "-1.5", "0.8", "-0.2"][..],
+        &["--eye=-1.5,0.8,-0.2"][..],
+    ] {
+        let p = d.join("c.png");
+        let mut args = vec![
+            "render", "--quiet", "--scene", "cornell", "--width", "8", "--height", "6",
+        ];
+        args.extend_from_slice(eye);
+        args.extend_from_slice(&["--target", "0", "1", "0", "--out", p.to_str().unwrap()]);
+        let o = parallax(&args);
+        assert!(o.status.success(), "{eye:?}: {}", stderr(&o));
+    }
+}
+
+#[test]
 fn every_camera_model_renders() {
     let d = out_dir("models");
     for m in [
