@@ -2,26 +2,15 @@
 //! channels and sizes, layer ordering, `--stats` JSON, and clean errors on bad input.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use parallax_core::image::exr::{ExrImage, read_exr};
 
-fn parallax(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_parallax"))
-        .args(args)
-        .output()
-        .expect("binary runs")
-}
+mod common;
+
+use common::{parallax, stderr};
 
 fn out_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("parallax-capture-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
+    common::out_dir("capture", name)
 }
 
 /// Runs a capture of cornell at `w x h` into `dir`, with `--stats dir/stats.json`.

@@ -1,23 +1,13 @@
 //! End-to-end runs of the `parallax` binary on built-in scenes, and its error cases.
 
 use std::path::PathBuf;
-use std::process::{Command, Output};
 
-fn parallax(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_parallax"))
-        .args(args)
-        .output()
-        .expect("binary runs")
-}
+mod common;
+
+use common::{parallax, stderr};
 
 fn out_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("parallax-cli-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
+    common::out_dir("cli", name)
 }
 
 #[test]
