@@ -14,5 +14,6 @@ pub mod lights;
 pub mod reference;
 pub mod stats;
 pub mod tiles;
+pub mod vr;
 
 pub use stats::{RunStats, StageTimer};
