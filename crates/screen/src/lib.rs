@@ -10,16 +10,26 @@
 //! - [`planes`]: the per-pixel planes of a captured layer in that cube, with the discontinuity
 //!   flag `O` (§3.2, "Bottom level generation");
 //! - [`brute`]: [`BruteForcePlanes`], every pixel plane tested against every ray — the slow twin
-//!   the quad-tree must agree with.
+//!   the quad-tree must agree with;
+//! - baselines the quad-tree is measured against (Widmer et al. 2015, Tables 2-3), all behind
+//!   [`ScreenTracer`]: [`dda`] (McGuire & Mara 2014), [`minmax`] (Tevs et al. 2008), [`hiz`]
+//!   (Uludag 2014).
 //!
 //! **Invariant:** nothing here reads the scene; tracers see only what a capture holds.
 
 pub mod brute;
+pub mod dda;
+mod depth_layers;
+pub mod hiz;
+pub mod minmax;
 pub mod planes;
 pub mod space;
 pub mod tracer;
 
 pub use brute::{BruteForcePlanes, BruteResult};
+pub use dda::{DdaOptions, DdaTracer};
+pub use hiz::{HiZOptions, HiZTracer};
+pub use minmax::{MinMaxOptions, MinMaxTracer};
 pub use planes::{LayerPlanes, NormalSource};
 pub use space::{CubeSegment, UnitCube};
 pub use tracer::{ScreenTracer, TraceResult, TraceStats};
