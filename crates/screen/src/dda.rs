@@ -148,7 +148,10 @@ impl DdaTracer {
         let mut z_prev = pr.seg.w0 as f32;
         let mut occ: Option<(f32, u32, UVec2)> = None;
         let mut steps = 0u32;
-        while s <= 1.0 && steps < self.opts.max_steps {
+        // The paper stops at the last sample with `s <= 1`, leaving the final half stride
+        // untested; on the short screen lines of small reprojections (a few pixels) that
+        // loses hits, so the march runs until the step's interval reaches the end.
+        while s - half < 1.0 && steps < self.opts.max_steps {
             steps += 1;
             let s_hi = (s + half).min(1.0);
             let z_next = 1.0 / (k0 + dk * s_hi);
@@ -157,8 +160,9 @@ impl DdaTracer {
             } else {
                 (z_next, z_prev)
             };
-            let ix = ((px + dx * s) as u32).min(w - 1);
-            let iy = ((py + dy * s) as u32).min(h - 1);
+            let sp = s.min(1.0);
+            let ix = ((px + dx * sp) as u32).min(w - 1);
+            let iy = ((py + dy * sp) as u32).min(h - 1);
             let k = (iy * w + ix) as usize * L;
             let d = &self.depth[k..k + L];
             for (l, &dl) in d.iter().enumerate() {
