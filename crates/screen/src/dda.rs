@@ -35,7 +35,7 @@ use std::time::Instant;
 use glam::UVec2;
 use parallax_core::{GBuffer, Ray};
 
-use crate::depth_layers::{PixelRay, check_layers, finish};
+use crate::depth_layers::{Clip, PixelRay, check_layers, finish};
 use crate::{ScreenError, ScreenTracer, TraceResult, TraceStats, UnitCube};
 
 /// Options of [`DdaTracer`] (the paper's parameters).
@@ -74,6 +74,7 @@ impl Default for DdaOptions {
 pub struct DdaTracer {
     pub cube: UnitCube,
     pub opts: DdaOptions,
+    clip: Clip,
     /// Number of layers used (1 or 2).
     nl: usize,
     /// View depths, interleaved per pixel (`nl` values), `+inf` where empty.
@@ -83,7 +84,11 @@ pub struct DdaTracer {
 
 impl DdaTracer {
     /// Uses the first `opts.layers` (1 or 2) of `layers` (captured from `cube.camera`).
-    pub fn new(cube: &UnitCube, layers: &[GBuffer], opts: &DdaOptions) -> Result<Self, ScreenError> {
+    pub fn new(
+        cube: &UnitCube,
+        layers: &[GBuffer],
+        opts: &DdaOptions,
+    ) -> Result<Self, ScreenError> {
         if !(1..=2).contains(&opts.layers) {
             return Err(ScreenError::Mismatch(format!(
                 "the DDA marches 1 or 2 layers, asked for {}",
@@ -112,6 +117,7 @@ impl DdaTracer {
         Ok(Self {
             cube: cube.clone(),
             opts: *opts,
+            clip: Clip::new(cube),
             nl,
             depth,
             build_ms: t.elapsed().as_secs_f64() * 1e3,
@@ -129,7 +135,12 @@ impl DdaTracer {
     }
 
     #[inline(always)]
-    fn march<const L: usize>(&self, ray: &Ray, pr: &PixelRay, stats: &mut TraceStats) -> TraceResult {
+    fn march<const L: usize>(
+        &self,
+        ray: &Ray,
+        pr: &PixelRay,
+        stats: &mut TraceStats,
+    ) -> TraceResult {
         let (w, h) = (self.cube.camera.width, self.cube.camera.height);
         let (k0, k1) = (1.0 / pr.seg.w0 as f32, 1.0 / pr.seg.w1 as f32);
         let dk = k1 - k0;
@@ -175,7 +186,13 @@ impl DdaTracer {
                     } else {
                         s
                     };
-                    return finish(ray, pr, Some((sh, l as u32, UVec2::new(ix, iy))), None, stats);
+                    return finish(
+                        ray,
+                        pr,
+                        Some((sh, l as u32, UVec2::new(ix, iy))),
+                        None,
+                        stats,
+                    );
                 }
             }
             if occ.is_none() && zmin > d[L - 1] + thick {
@@ -192,7 +209,7 @@ impl DdaTracer {
 impl ScreenTracer for DdaTracer {
     fn trace(&self, ray: &Ray, stats: &mut TraceStats) -> TraceResult {
         stats.rays += 1;
-        let Some(pr) = PixelRay::new(&self.cube, ray, self.opts.max_distance) else {
+        let Some(pr) = PixelRay::new(&self.clip, ray, self.opts.max_distance) else {
             return TraceResult::Miss;
         };
         if self.nl == 1 {

@@ -11,7 +11,7 @@
 //! (the "staircase wall" of a per-pixel height field). A ray that is farther behind is inside
 //! the layer's **occlusion volume** (Widmer et al. 2015, §4.1): no hit from this layer there.
 
-use glam::{UVec2, Vec3};
+use glam::{Mat4, UVec2, Vec3};
 use parallax_core::{GBuffer, Ray};
 
 use crate::{CubeSegment, ScreenError, TraceResult, TraceStats, UnitCube};
@@ -86,21 +86,95 @@ pub(crate) struct PixelRay {
     pub d: Vec3,
 }
 
+/// [`UnitCube::clip_ray`] in f32 with the pixel scale folded in: the per-ray set-up of every
+/// baseline (the f64 version costs as much as a short march).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Clip {
+    /// World `(p, 1)` -> homogeneous `(x W, y H, Z, view depth)`.
+    m: Mat4,
+    near: f32,
+    far: f32,
+    /// Image width and height (the `x`, `y` extent of the scaled cube).
+    sx: f32,
+    sy: f32,
+}
+
+impl Clip {
+    pub(crate) fn new(cube: &UnitCube) -> Self {
+        let scale = Mat4::from_scale(Vec3::new(
+            cube.camera.width as f32,
+            cube.camera.height as f32,
+            1.0,
+        ));
+        Self {
+            m: scale * cube.world_to_cube.as_mat4(),
+            near: cube.near,
+            far: cube.far,
+            sx: cube.camera.width as f32,
+            sy: cube.camera.height as f32,
+        }
+    }
+}
+
 impl PixelRay {
     /// `None` when the ray misses the cube (also for invalid rays). `max_distance` limits the
-    /// world distance travelled from the ray origin.
+    /// world distance travelled from the ray origin. Same faces as [`UnitCube::clip_ray`]:
+    /// with `W > 0` each is a linear inequality in world `t`.
     #[inline]
-    pub(crate) fn new(cube: &UnitCube, ray: &Ray, max_distance: f32) -> Option<Self> {
-        let mut r = *ray;
-        let len = ray.dir.length();
-        if max_distance.is_finite() && len > 0.0 {
-            r.t_max = r.t_max.min(max_distance / len);
+    pub(crate) fn new(clip: &Clip, ray: &Ray, max_distance: f32) -> Option<Self> {
+        if !ray.is_valid() || ray.t_min.is_nan() || ray.t_max.is_nan() {
+            return None;
         }
-        let seg = cube.clip_ray(&r)?;
-        let scale = Vec3::new(cube.camera.width as f32, cube.camera.height as f32, 1.0);
-        let o = seg.p0 * scale;
-        let d = seg.p1 * scale - o;
-        d.is_finite().then_some(Self { seg, o, d })
+        let mut t_max = ray.t_max;
+        if max_distance.is_finite() {
+            t_max = t_max.min(max_distance / ray.dir.length());
+        }
+        let a = clip.m * ray.origin.extend(1.0);
+        let b = clip.m * ray.dir.extend(0.0);
+        let (mut lo, mut hi) = (ray.t_min.max(0.0), t_max);
+        let (sx, sy) = (clip.sx, clip.sy);
+        let faces = [
+            (a.w - clip.near, b.w),
+            (clip.far - a.w, -b.w),
+            (a.x, b.x),
+            (a.w * sx - a.x, b.w * sx - b.x),
+            (a.y, b.y),
+            (a.w * sy - a.y, b.w * sy - b.y),
+        ];
+        for (alpha, beta) in faces {
+            if beta == 0.0 {
+                if alpha < 0.0 {
+                    return None;
+                }
+            } else {
+                let root = -alpha / beta;
+                if beta > 0.0 {
+                    lo = lo.max(root);
+                } else {
+                    hi = hi.min(root);
+                }
+            }
+        }
+        if !(lo < hi && hi.is_finite()) {
+            return None;
+        }
+        let (h0, h1) = (a + b * lo, b * hi + a);
+        if !(h0.w > 0.0 && h1.w > 0.0) {
+            return None;
+        }
+        let hi_c = Vec3::new(sx, sy, 1.0);
+        let p0 = (h0.truncate() / h0.w).clamp(Vec3::ZERO, hi_c);
+        let p1 = (h1.truncate() / h1.w).clamp(Vec3::ZERO, hi_c);
+        let d = p1 - p0;
+        let seg = CubeSegment {
+            p0: p0 / hi_c,
+            p1: p1 / hi_c,
+            t0: lo,
+            t1: hi,
+            w0: h0.w as f64,
+            w1: h1.w as f64,
+        };
+        d.is_finite().then_some(Self { seg, o: p0, d })
     }
 
     #[inline]
@@ -142,7 +216,12 @@ pub(crate) struct Pyramid<const N: usize> {
 impl<const N: usize> Pyramid<N> {
     /// Builds the levels above `base` (`W x H` values of level 0) with `reduce` combining the
     /// up-to-4 children (missing children outside the image are skipped).
-    pub(crate) fn build(w: u32, h: u32, base: Vec<[f32; N]>, reduce: fn(&mut [f32; N], &[f32; N])) -> Self {
+    pub(crate) fn build(
+        w: u32,
+        h: u32,
+        base: Vec<[f32; N]>,
+        reduce: fn(&mut [f32; N], &[f32; N]),
+    ) -> Self {
         let mut dims = vec![(w, h)];
         let mut offsets = vec![0usize];
         let mut data = base;
@@ -169,7 +248,11 @@ impl<const N: usize> Pyramid<N> {
             offsets.push(off);
             (lw, lh) = (nw, nh);
         }
-        Self { dims, offsets, data }
+        Self {
+            dims,
+            offsets,
+            data,
+        }
     }
 
     #[inline]

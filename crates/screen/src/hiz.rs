@@ -20,7 +20,7 @@ use std::time::Instant;
 use parallax_core::{GBuffer, Ray};
 
 use crate::depth_layers::{
-    DepthMap, Leaf, PixelRay, Pyramid, cascade, check_layers, covered, finish, traverse,
+    Clip, DepthMap, Leaf, PixelRay, Pyramid, cascade, check_layers, covered, finish, traverse,
 };
 use crate::{ScreenError, ScreenTracer, TraceResult, TraceStats, UnitCube};
 
@@ -53,6 +53,7 @@ impl Default for HiZOptions {
 pub struct HiZTracer {
     pub cube: UnitCube,
     pub opts: HiZOptions,
+    clip: Clip,
     map: DepthMap,
     layers: Vec<Pyramid<1>>,
     build_ms: Vec<f64>,
@@ -60,7 +61,11 @@ pub struct HiZTracer {
 
 impl HiZTracer {
     /// Builds the min pyramids of the first `opts.layers` of `layers`.
-    pub fn new(cube: &UnitCube, layers: &[GBuffer], opts: &HiZOptions) -> Result<Self, ScreenError> {
+    pub fn new(
+        cube: &UnitCube,
+        layers: &[GBuffer],
+        opts: &HiZOptions,
+    ) -> Result<Self, ScreenError> {
         let n = check_layers(cube, layers, opts.layers)?;
         if !(opts.z_thickness >= 0.0) {
             return Err(ScreenError::InvalidSpace("z_thickness must be >= 0".into()));
@@ -85,6 +90,7 @@ impl HiZTracer {
         Ok(Self {
             cube: cube.clone(),
             opts: *opts,
+            clip: Clip::new(cube),
             map,
             layers: out,
             build_ms,
@@ -128,14 +134,20 @@ impl HiZTracer {
 impl ScreenTracer for HiZTracer {
     fn trace(&self, ray: &Ray, stats: &mut TraceStats) -> TraceResult {
         stats.rays += 1;
-        let Some(pr) = PixelRay::new(&self.cube, ray, self.opts.max_distance) else {
+        let Some(pr) = PixelRay::new(&self.clip, ray, self.opts.max_distance) else {
             return TraceResult::Miss;
         };
         let (best, occ) = cascade(self.layers.len(), |li, s0, s1| {
             let pyr = &self.layers[li];
-            traverse(pyr, &pr, s0, s1, self.opts.max_steps, stats, |ix, iy, sa, sb| {
-                self.leaf(pyr, &pr, ix, iy, sa, sb)
-            })
+            traverse(
+                pyr,
+                &pr,
+                s0,
+                s1,
+                self.opts.max_steps,
+                stats,
+                |ix, iy, sa, sb| self.leaf(pyr, &pr, ix, iy, sa, sb),
+            )
         });
         finish(ray, &pr, best, occ, stats)
     }

@@ -34,7 +34,7 @@ use std::time::Instant;
 use parallax_core::{GBuffer, Ray};
 
 use crate::depth_layers::{
-    DepthMap, Leaf, PixelRay, Pyramid, cascade, check_layers, covered, finish, traverse,
+    Clip, DepthMap, Leaf, PixelRay, Pyramid, cascade, check_layers, covered, finish, traverse,
 };
 use crate::{ScreenError, ScreenTracer, TraceResult, TraceStats, UnitCube};
 
@@ -86,6 +86,7 @@ struct MinMaxLayer {
 pub struct MinMaxTracer {
     pub cube: UnitCube,
     pub opts: MinMaxOptions,
+    clip: Clip,
     map: DepthMap,
     layers: Vec<MinMaxLayer>,
     build_ms: Vec<f64>,
@@ -116,6 +117,7 @@ impl MinMaxTracer {
         Ok(Self {
             cube: cube.clone(),
             opts: *opts,
+            clip: Clip::new(cube),
             map,
             layers: out,
             build_ms,
@@ -235,7 +237,7 @@ impl MinMaxTracer {
 impl ScreenTracer for MinMaxTracer {
     fn trace(&self, ray: &Ray, stats: &mut TraceStats) -> TraceResult {
         stats.rays += 1;
-        let Some(pr) = PixelRay::new(&self.cube, ray, self.opts.max_distance) else {
+        let Some(pr) = PixelRay::new(&self.clip, ray, self.opts.max_distance) else {
             return TraceResult::Miss;
         };
         let (best, occ) = cascade(self.layers.len(), |li, s0, s1| {

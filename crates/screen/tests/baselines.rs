@@ -36,8 +36,14 @@ fn tracers(
         ..Default::default()
     };
     let mut v: Vec<(&'static str, Box<dyn ScreenTracer>)> = vec![
-        ("dda1", Box::new(DdaTracer::new(cube, layers, &dda(1)).unwrap())),
-        ("minmax", Box::new(MinMaxTracer::new(cube, layers, &mm).unwrap())),
+        (
+            "dda1",
+            Box::new(DdaTracer::new(cube, layers, &dda(1)).unwrap()),
+        ),
+        (
+            "minmax",
+            Box::new(MinMaxTracer::new(cube, layers, &mm).unwrap()),
+        ),
         (
             "minmax-flat",
             Box::new(
@@ -55,7 +61,13 @@ fn tracers(
         ("hiz", Box::new(HiZTracer::new(cube, layers, &hz).unwrap())),
     ];
     if layers.len() > 1 {
-        v.insert(1, ("dda2", Box::new(DdaTracer::new(cube, layers, &dda(2)).unwrap())));
+        v.insert(
+            1,
+            (
+                "dda2",
+                Box::new(DdaTracer::new(cube, layers, &dda(2)).unwrap()),
+            ),
+        );
     }
     v
 }
@@ -66,7 +78,12 @@ const SW: u32 = 64;
 const SH: u32 = 48;
 
 fn synth_camera() -> Pinhole {
-    let desc = CameraDesc::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.0, 0.0, -1.0), Vec3::Y, 50.0);
+    let desc = CameraDesc::new(
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(0.0, 0.0, -1.0),
+        Vec3::Y,
+        50.0,
+    );
     Pinhole::new(&desc, SW, SH).unwrap()
 }
 
@@ -101,9 +118,12 @@ fn fronto_parallel_plane_is_hit_exactly() {
                     let ray = Ray::new(eye, pixel_dir(&cam, x, y));
                     let truth = t_at_depth(&ray, 5.0);
                     let inside = cube.to_cube(ray.at(truth)).unwrap();
-                    let inside = inside.x > 0.0 && inside.x < 1.0 && inside.y > 0.0 && inside.y < 1.0;
+                    let inside =
+                        inside.x > 0.0 && inside.x < 1.0 && inside.y > 0.0 && inside.y < 1.0;
                     match tr.trace(&ray, &mut stats) {
-                        TraceResult::Hit { t, position, layer, .. } => {
+                        TraceResult::Hit {
+                            t, position, layer, ..
+                        } => {
                             assert!(inside, "{name}: hit outside the view");
                             assert_eq!(layer, 0);
                             worst = worst.max((t - truth).abs() / truth);
@@ -127,7 +147,10 @@ fn slanted_plane_hits_within_a_footprint() {
     let p0 = Vec3::new(0.0, 0.0, -5.0);
     let plane_t = |ray: &Ray| (p0 - ray.origin).dot(n) / ray.dir.dot(n);
     let layer = synth_layer(|x, y| {
-        let r = Ray::new(Vec3::ZERO, cam.camera_dir(Vec2::new(x as f32 + 0.5, y as f32 + 0.5)));
+        let r = Ray::new(
+            Vec3::ZERO,
+            cam.camera_dir(Vec2::new(x as f32 + 0.5, y as f32 + 0.5)),
+        );
         -r.at(plane_t(&r)).z
     });
     let cube = UnitCube::fit_depths(&cam, [&layer.depth[..]]).unwrap();
@@ -173,7 +196,10 @@ fn depth_step_hits_or_reports_the_occlusion_volume() {
             for x in 0..SW {
                 let ray = Ray::new(eye, pixel_dir(&cam, x, y));
                 let (t3, t6) = (t_at_depth(&ray, 3.0), t_at_depth(&ray, 6.0));
-                let (c3, c6) = (cube.to_cube(ray.at(t3)).unwrap(), cube.to_cube(ray.at(t6)).unwrap());
+                let (c3, c6) = (
+                    cube.to_cube(ray.at(t3)).unwrap(),
+                    cube.to_cube(ray.at(t6)).unwrap(),
+                );
                 let expect = if (0.0..0.5).contains(&c3.x) {
                     Some(t3)
                 } else if (0.5..1.0).contains(&c6.x) {
@@ -223,7 +249,9 @@ fn empty_pixels_have_no_height() {
                 if x < SW / 2 {
                     assert_eq!(r, TraceResult::Miss, "{name} ({x},{y})");
                 } else {
-                    let t = r.hit_t().unwrap_or_else(|| panic!("{name} ({x},{y}): {r:?}"));
+                    let t = r
+                        .hit_t()
+                        .unwrap_or_else(|| panic!("{name} ({x},{y}): {r:?}"));
                     assert!((t - t_at_depth(&ray, 4.0)).abs() < 1e-3, "{name}");
                 }
             }
@@ -236,7 +264,13 @@ fn empty_pixels_have_no_height() {
 #[test]
 fn degenerate_and_random_rays_terminate() {
     let cam = synth_camera();
-    let l0 = synth_layer(|x, y| if (x + y) % 7 == 0 { f32::INFINITY } else { 2.0 + (x % 5) as f32 });
+    let l0 = synth_layer(|x, y| {
+        if (x + y) % 7 == 0 {
+            f32::INFINITY
+        } else {
+            2.0 + (x % 5) as f32
+        }
+    });
     let l1 = synth_layer(|x, _| if x % 3 == 0 { 9.0 } else { f32::INFINITY });
     let layers = [l0, l1];
     let cube = UnitCube::fit_depths(&cam, layers.iter().map(|g| &g.depth[..])).unwrap();
@@ -264,7 +298,10 @@ fn degenerate_and_random_rays_terminate() {
         // Starting behind the eye and looking in: clipped to the near plane, same hit.
         let d = pixel_dir(&cam, SW / 2 + 1, SH / 2);
         let front = tr.trace(&Ray::new(eye, d), &mut stats).hit_t().unwrap();
-        let back = tr.trace(&Ray::new(eye - d * 0.5, d), &mut stats).hit_t().unwrap();
+        let back = tr
+            .trace(&Ray::new(eye - d * 0.5, d), &mut stats)
+            .hit_t()
+            .unwrap();
         assert!((back - 0.5 - front).abs() < 1e-3, "{name}: {front} {back}");
         // Random rays from inside and outside the frustum, any direction (incl. towards the
         // eye, parallel to the image plane and grazing): a result, never a hang.
@@ -303,12 +340,27 @@ fn bad_options_and_sizes_error() {
     assert!(HiZTracer::new(&cube, &[small], &HiZOptions::default()).is_err());
     assert!(DdaTracer::new(&cube, &[], &DdaOptions::default()).is_err());
     for bad in [
-        DdaOptions { layers: 3, ..Default::default() },
-        DdaOptions { stride: 0.5, ..Default::default() },
-        DdaOptions { jitter: 2.0, ..Default::default() },
-        DdaOptions { z_thickness: f32::NAN, ..Default::default() },
+        DdaOptions {
+            layers: 3,
+            ..Default::default()
+        },
+        DdaOptions {
+            stride: 0.5,
+            ..Default::default()
+        },
+        DdaOptions {
+            jitter: 2.0,
+            ..Default::default()
+        },
+        DdaOptions {
+            z_thickness: f32::NAN,
+            ..Default::default()
+        },
     ] {
-        assert!(DdaTracer::new(&cube, std::slice::from_ref(&l), &bad).is_err(), "{bad:?}");
+        assert!(
+            DdaTracer::new(&cube, std::slice::from_ref(&l), &bad).is_err(),
+            "{bad:?}"
+        );
     }
     // Asking for 2 layers of a 1-layer capture uses the one there is.
     let t = DdaTracer::new(&cube, std::slice::from_ref(&l), &DdaOptions::default()).unwrap();
@@ -330,10 +382,20 @@ struct Case {
 fn case(name: &str) -> Case {
     let scene = Scene::load(name).unwrap();
     let cam = Pinhole::new(&scene.camera(None).unwrap(), W, H).unwrap();
-    let cap = capture_layers(&scene, &View::from_pinhole(&cam).unwrap(), &RasterOptions::layers(2)).unwrap();
+    let cap = capture_layers(
+        &scene,
+        &View::from_pinhole(&cam).unwrap(),
+        &RasterOptions::layers(2),
+    )
+    .unwrap();
     let cube = UnitCube::fit_depths(&cam, cap.layers.layers.iter().map(|g| &g.depth[..])).unwrap();
     let bvh = Bvh::build(&scene.mesh);
-    Case { cam, cap, cube, bvh }
+    Case {
+        cam,
+        cap,
+        cube,
+        bvh,
+    }
 }
 
 /// Fraction of the stereo eye's BVH hits (eye = reference shifted 0.0325 m right, one ray per
@@ -384,7 +446,13 @@ fn quality(name: &str, min_frac: &[(&str, f64)]) {
 fn cornell_stereo_eye_agrees_with_bvh() {
     quality(
         "cornell",
-        &[("dda1", 0.0), ("dda2", 0.0), ("minmax", 0.0), ("minmax-flat", 0.0), ("hiz", 0.0)],
+        &[
+            ("dda1", 0.0),
+            ("dda2", 0.0),
+            ("minmax", 0.0),
+            ("minmax-flat", 0.0),
+            ("hiz", 0.0),
+        ],
     );
 }
 
@@ -392,6 +460,12 @@ fn cornell_stereo_eye_agrees_with_bvh() {
 fn atrium_stereo_eye_agrees_with_bvh() {
     quality(
         "atrium",
-        &[("dda1", 0.0), ("dda2", 0.0), ("minmax", 0.0), ("minmax-flat", 0.0), ("hiz", 0.0)],
+        &[
+            ("dda1", 0.0),
+            ("dda2", 0.0),
+            ("minmax", 0.0),
+            ("minmax-flat", 0.0),
+            ("hiz", 0.0),
+        ],
     );
 }
