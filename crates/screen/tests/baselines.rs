@@ -398,11 +398,11 @@ fn case(name: &str) -> Case {
     }
 }
 
-/// Fraction of the stereo eye's BVH hits (eye = reference shifted 0.0325 m right, one ray per
-/// pixel centre) that `tr` hits within two pixel footprints (at the true hit's depth) of the
-/// true hit, and the stats.
-fn agreement(c: &Case, tr: &dyn ScreenTracer) -> (f64, TraceStats) {
-    let eye = c.cam.frame.position + c.cam.frame.right() * 0.0325;
+/// Fraction of the BVH hits of an eye moved `shift` m along the reference's right axis (one
+/// ray per pixel centre) that `tr` hits within `tol` pixel footprints (at the true hit's
+/// depth) of the true hit, and the stats.
+fn agreement(c: &Case, tr: &dyn ScreenTracer, shift: f32, tol: f32) -> (f64, TraceStats) {
+    let eye = c.cam.frame.position + c.cam.frame.right() * shift;
     let (mut agree, mut total) = (0u32, 0u32);
     let mut stats = TraceStats::default();
     for y in 0..H {
@@ -417,7 +417,7 @@ fn agreement(c: &Case, tr: &dyn ScreenTracer) -> (f64, TraceStats) {
             let depth = -c.cam.frame.to_camera(truth).z;
             let fp = 2.0 * c.cam.tan_half_y * depth / H as f32;
             if let TraceResult::Hit { position, .. } = r
-                && (position - truth).length() <= 2.0 * fp
+                && (position - truth).length() <= tol * fp
             {
                 agree += 1;
             }
@@ -426,19 +426,27 @@ fn agreement(c: &Case, tr: &dyn ScreenTracer) -> (f64, TraceStats) {
     (agree as f64 / total as f64, stats)
 }
 
-fn quality(name: &str, min_frac: &[(&str, f64)]) {
+/// Per tracer name: minimum agreement for the stereo eye (0.0325 m) and for a 0.3 m shift,
+/// both within one footprint.
+fn quality(name: &str, min_frac: &[(&str, f64, f64)]) {
     let c = case(name);
     let brute = BruteForcePlanes::new(c.cube.clone(), &c.cap, NormalSource::GBuffer).unwrap();
-    let (fb, _) = agreement(&c, &brute);
-    eprintln!("{name} brute: {fb:.4}");
+    let (fb, _) = agreement(&c, &brute, 0.0325, 1.0);
+    let (fb3, _) = agreement(&c, &brute, 0.3, 1.0);
+    eprintln!("{name} brute: {fb:.4} / {fb3:.4}");
     for (tname, tr) in tracers(&c.cube, &c.cap.layers.layers, 0.1) {
-        let (f, stats) = agreement(&c, tr.as_ref());
+        let (f, stats) = agreement(&c, tr.as_ref(), 0.0325, 1.0);
+        let (f3, stats3) = agreement(&c, tr.as_ref(), 0.3, 1.0);
         eprintln!(
-            "{name} {tname}: {f:.4} (brute {fb:.4}), steps/ray {:.1}, {stats:?}",
-            stats.steps as f64 / stats.rays as f64
+            "{name} {tname}: stereo {f:.4} (brute {fb:.4}), 0.3 m {f3:.4} (brute {fb3:.4}); steps/ray {:.1} / {:.1}; occl {} / {}",
+            stats.steps as f64 / stats.rays as f64,
+            stats3.steps as f64 / stats3.rays as f64,
+            stats.occlusion_volumes,
+            stats3.occlusion_volumes,
         );
-        let want = min_frac.iter().find(|(n, _)| *n == tname).unwrap().1;
+        let &(_, want, want3) = min_frac.iter().find(|(n, _, _)| *n == tname).unwrap();
         assert!(f >= want, "{name} {tname}: {f} < {want}");
+        assert!(f3 >= want3, "{name} {tname} 0.3 m: {f3} < {want3}");
     }
 }
 
@@ -446,12 +454,15 @@ fn quality(name: &str, min_frac: &[(&str, f64)]) {
 fn cornell_stereo_eye_agrees_with_bvh() {
     quality(
         "cornell",
+        // Measured (96x64): dda 0.879 / 0.844, minmax 0.910 / 0.905, flat and hiz 0.879 /
+        // 0.854; brute-force planes 0.990 / 0.978 (flat heights on the obliquely seen walls
+        // are off by more than a footprint along the ray).
         &[
-            ("dda1", 0.0),
-            ("dda2", 0.0),
-            ("minmax", 0.0),
-            ("minmax-flat", 0.0),
-            ("hiz", 0.0),
+            ("dda1", 0.86, 0.82),
+            ("dda2", 0.86, 0.82),
+            ("minmax", 0.89, 0.88),
+            ("minmax-flat", 0.86, 0.83),
+            ("hiz", 0.86, 0.83),
         ],
     );
 }
@@ -460,12 +471,75 @@ fn cornell_stereo_eye_agrees_with_bvh() {
 fn atrium_stereo_eye_agrees_with_bvh() {
     quality(
         "atrium",
+        // Measured (96x64): dda 0.953 / 0.730, minmax 0.949 / 0.848, flat and hiz 0.953 /
+        // 0.835; brute-force planes 0.955 / 0.860.
         &[
-            ("dda1", 0.0),
-            ("dda2", 0.0),
-            ("minmax", 0.0),
-            ("minmax-flat", 0.0),
-            ("hiz", 0.0),
+            ("dda1", 0.93, 0.71),
+            ("dda2", 0.93, 0.71),
+            ("minmax", 0.93, 0.83),
+            ("minmax-flat", 0.93, 0.81),
+            ("hiz", 0.93, 0.81),
         ],
     );
+}
+
+#[test]
+fn second_layer_resolves_disocclusions() {
+    // A 0.3 m shift sees behind the boxes / columns: the cascade into layer 1 must find
+    // surfaces one layer cannot.
+    for name in ["cornell", "atrium"] {
+        let c = case(name);
+        let layers = &c.cap.layers.layers;
+        let mm = |n| {
+            MinMaxTracer::new(
+                &c.cube,
+                layers,
+                &MinMaxOptions {
+                    layers: n,
+                    ..Default::default()
+                },
+            )
+            .unwrap()
+        };
+        let hz = |n| {
+            HiZTracer::new(
+                &c.cube,
+                layers,
+                &HiZOptions {
+                    layers: n,
+                    ..Default::default()
+                },
+            )
+            .unwrap()
+        };
+        let dd = |n| {
+            DdaTracer::new(
+                &c.cube,
+                layers,
+                &DdaOptions {
+                    layers: n,
+                    ..Default::default()
+                },
+            )
+            .unwrap()
+        };
+        let pairs: [(&str, Box<dyn ScreenTracer>, Box<dyn ScreenTracer>); 3] = [
+            ("minmax", Box::new(mm(1)), Box::new(mm(2))),
+            ("hiz", Box::new(hz(1)), Box::new(hz(2))),
+            ("dda", Box::new(dd(1)), Box::new(dd(2))),
+        ];
+        for (tname, one, two) in pairs {
+            let (f1, s1) = agreement(&c, one.as_ref(), 0.3, 1.0);
+            let (f2, s2) = agreement(&c, two.as_ref(), 0.3, 1.0);
+            eprintln!(
+                "{name} {tname}: 1 layer {f1:.4} ({} occl), 2 layers {f2:.4} ({} occl)",
+                s1.occlusion_volumes, s2.occlusion_volumes
+            );
+            assert!(f2 >= f1, "{name} {tname}");
+            assert!(
+                s2.occlusion_volumes <= s1.occlusion_volumes,
+                "{name} {tname}"
+            );
+        }
+    }
 }
