@@ -27,9 +27,22 @@ struct Bench {
     truth: Vec<Option<(Vec3, f32)>>,
 }
 
-/// (Mrays/s best of `reps`, stats of one pass, agreement fraction).
-fn run(b: &Bench, tr: &dyn ScreenTracer, reps: usize) -> (f64, TraceStats, f64) {
+/// Process CPU time (user + system) in seconds, from /proc/self/stat (clock ticks of 10 ms):
+/// on a machine shared with other jobs wall time says little, CPU time per ray is stable.
+fn cpu_seconds() -> f64 {
+    let s = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    let rest = s.rsplit_once(')').map_or("", |r| r.1);
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let tick = |i: usize| f.get(i).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
+    // Fields 14 and 15 of the whole line are 12 and 13 after the ')'.
+    (tick(11) + tick(12)) / 100.0
+}
+
+/// (Mrays/s best of `reps` wall clock, Mrays per CPU second (mean over reps), stats of one
+/// pass, agreement fraction).
+fn run(b: &Bench, tr: &dyn ScreenTracer, reps: usize) -> (f64, f64, TraceStats, f64) {
     let mut best = f64::INFINITY;
+    let cpu0 = cpu_seconds();
     let mut out = Vec::new();
     let mut stats = TraceStats::default();
     for _ in 0..reps {
@@ -51,6 +64,7 @@ fn run(b: &Bench, tr: &dyn ScreenTracer, reps: usize) -> (f64, TraceStats, f64) 
             out.extend(r);
         }
     }
+    let cpu = (cpu_seconds() - cpu0) / reps as f64;
     let (mut agree, mut total) = (0u64, 0u64);
     for (r, t) in out.iter().zip(&b.truth) {
         if let Some((p, fp)) = t {
@@ -64,16 +78,17 @@ fn run(b: &Bench, tr: &dyn ScreenTracer, reps: usize) -> (f64, TraceStats, f64) 
     }
     (
         b.rays.len() as f64 / best / 1e6,
+        b.rays.len() as f64 / cpu / 1e6,
         stats,
         agree as f64 / total as f64,
     )
 }
 
 fn row(name: &str, b: &Bench, tr: &dyn ScreenTracer, reps: usize) -> f64 {
-    let (mrays, st, agree) = run(b, tr, reps);
+    let (mrays, cpu_mrays, st, agree) = run(b, tr, reps);
     let n = st.rays as f64;
     println!(
-        "| {name} | {mrays:.1} | {:.1} | {:.1} | {:.4} | {:.3} | {:.4} |",
+        "| {name} | {mrays:.1} | {cpu_mrays:.1} | {:.1} | {:.1} | {:.4} | {:.3} | {:.4} |",
         st.steps as f64 / n,
         st.plane_tests as f64 / n,
         agree,
@@ -130,9 +145,9 @@ fn main() {
         rayon::current_num_threads()
     );
     println!(
-        "\n| tracer | Mrays/s | steps/ray | plane tests/ray | agree (1 footprint) | hits/ray | occl/ray |"
+        "\n| tracer | Mrays/s (wall, best) | Mrays per CPU-s | steps/ray | plane tests/ray | agree (1 footprint) | hits/ray | occl/ray |"
     );
-    println!("|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|");
     // DDA max_steps sweep (1 and 2 layers).
     for nl in [1usize, 2] {
         let mut prev = -1.0;
@@ -150,7 +165,9 @@ fn main() {
             }
             prev = a;
         }
-        println!("| (DDA {nl}: agreement stops improving at max_steps ~{chosen:?}) | | | | | | |");
+        println!(
+            "| (DDA {nl}: agreement stops improving at max_steps ~{chosen:?}) | | | | | | | |"
+        );
     }
     for (name, opts) in [
         ("MinMax bilinear, 2 layers", MinMaxOptions::default()),
@@ -172,7 +189,7 @@ fn main() {
         let tr = MinMaxTracer::new(&cube, layers, &opts).unwrap();
         row(name, &b, &tr, 3);
         println!(
-            "| (build ms per layer {:?}, {} bytes) | | | | | | |",
+            "| (build ms per layer {:?}, {} bytes) | | | | | | | |",
             tr.build_ms()
                 .iter()
                 .map(|v| format!("{v:.1}"))
@@ -193,7 +210,7 @@ fn main() {
         let tr = HiZTracer::new(&cube, layers, &opts).unwrap();
         row(name, &b, &tr, 3);
         println!(
-            "| (build ms per layer {:?}, {} bytes) | | | | | | |",
+            "| (build ms per layer {:?}, {} bytes) | | | | | | | |",
             tr.build_ms()
                 .iter()
                 .map(|v| format!("{v:.1}"))

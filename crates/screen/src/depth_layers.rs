@@ -296,8 +296,8 @@ pub(crate) fn traverse<const N: usize>(
     let (o, d) = (ray.o, ray.d);
     let inv = Vec3::ONE / d;
     let p = ray.at(s_start);
-    let mut ix = (p.x.floor().max(0.0) as u32).min(w - 1);
-    let mut iy = (p.y.floor().max(0.0) as u32).min(h - 1);
+    let mut ix = (p.x.max(0.0) as u32).min(w - 1);
+    let mut iy = (p.y.max(0.0) as u32).min(h - 1);
     let top = pyr.top();
     let mut level = top;
     let mut s = s_start;
@@ -350,8 +350,8 @@ pub(crate) fn traverse<const N: usize>(
                         let q = ray.at(s);
                         let (x0, y0) = (cx << level, cy << level);
                         let m = (1u32 << level) - 1;
-                        ix = (q.x.floor().max(0.0) as u32).clamp(x0, (x0 + m).min(w - 1));
-                        iy = (q.y.floor().max(0.0) as u32).clamp(y0, (y0 + m).min(h - 1));
+                        ix = (q.x.max(0.0) as u32).clamp(x0, (x0 + m).min(w - 1));
+                        iy = (q.y.max(0.0) as u32).clamp(y0, (y0 + m).min(h - 1));
                     }
                 }
                 level -= 1;
@@ -383,7 +383,7 @@ pub(crate) fn traverse<const N: usize>(
                 ix = x0 - 1;
             }
         } else {
-            ix = (q.x.floor().max(0.0) as u32).clamp(x0, (x0 + m).min(w - 1));
+            ix = (q.x.max(0.0) as u32).clamp(x0, (x0 + m).min(w - 1));
         }
         if step_y {
             if d.y > 0.0 {
@@ -398,7 +398,7 @@ pub(crate) fn traverse<const N: usize>(
                 iy = y0 - 1;
             }
         } else {
-            iy = (q.y.floor().max(0.0) as u32).clamp(y0, (y0 + m).min(h - 1));
+            iy = (q.y.max(0.0) as u32).clamp(y0, (y0 + m).min(h - 1));
         }
         level = (level + 1).min(top);
     }

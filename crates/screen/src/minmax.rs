@@ -32,6 +32,7 @@
 use std::time::Instant;
 
 use parallax_core::{GBuffer, Ray};
+use rayon::prelude::*;
 
 use crate::depth_layers::{
     Clip, DepthMap, Leaf, PixelRay, Pyramid, cascade, check_layers, covered, finish, traverse,
@@ -141,41 +142,50 @@ impl MinMaxTracer {
 fn build_layer(cube: &UnitCube, map: &DepthMap, g: &GBuffer, opts: &MinMaxOptions) -> MinMaxLayer {
     let (w, h) = (cube.camera.width as i64, cube.camera.height as i64);
     let depth = &g.depth;
+    // Cube z once per pixel (one division each); +inf where empty.
+    let zs: Vec<f32> = depth
+        .iter()
+        .map(|&d| if covered(d) { map.z(d) } else { f32::INFINITY })
+        .collect();
     let mut corners = vec![[f32::INFINITY; 4]; depth.len()];
     let mut base = vec![[f32::INFINITY; 2]; depth.len()];
-    for j in 0..h {
-        for i in 0..w {
-            let k = (j * w + i) as usize;
-            let dp = depth[k];
-            if !covered(dp) {
-                continue;
-            }
-            let zp = map.z(dp);
-            let mut c = [zp; 4];
-            if opts.bilinear {
-                for (ci, (a, b)) in [(0, 0), (1, 0), (0, 1), (1, 1)].into_iter().enumerate() {
-                    let (mut sum, mut cnt) = (0.0f32, 0u32);
-                    for y in j + b - 1..=j + b {
-                        for x in i + a - 1..=i + a {
-                            if x < 0 || y < 0 || x >= w || y >= h {
-                                continue;
-                            }
-                            let dq = depth[(y * w + x) as usize];
-                            if covered(dq) && (dq - dp).abs() <= opts.continuity * dp {
-                                sum += map.z(dq);
-                                cnt += 1;
+    corners
+        .par_chunks_mut(w as usize)
+        .zip(base.par_chunks_mut(w as usize))
+        .enumerate()
+        .for_each(|(j, (crow, brow))| {
+            let j = j as i64;
+            for i in 0..w {
+                let k = (j * w + i) as usize;
+                let dp = depth[k];
+                if !covered(dp) {
+                    continue;
+                }
+                let zp = zs[k];
+                let mut c = [zp; 4];
+                if opts.bilinear {
+                    let tol = opts.continuity * dp;
+                    for (ci, (a, b)) in [(0, 0), (1, 0), (0, 1), (1, 1)].into_iter().enumerate() {
+                        let (mut sum, mut cnt) = (0.0f32, 0u32);
+                        for y in (j + b - 1).max(0)..=(j + b).min(h - 1) {
+                            for x in (i + a - 1).max(0)..=(i + a).min(w - 1) {
+                                let q = (y * w + x) as usize;
+                                // Empty neighbours have an infinite depth and fail the test.
+                                if zs[q].is_finite() && (depth[q] - dp).abs() <= tol {
+                                    sum += zs[q];
+                                    cnt += 1;
+                                }
                             }
                         }
+                        c[ci] = sum / cnt as f32;
                     }
-                    c[ci] = sum / cnt as f32;
                 }
+                let lo = c.iter().copied().fold(f32::INFINITY, f32::min);
+                let hi = c.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+                crow[i as usize] = c;
+                brow[i as usize] = [lo, map.z_behind(hi, opts.z_thickness)];
             }
-            let lo = c.iter().copied().fold(f32::INFINITY, f32::min);
-            let hi = c.iter().copied().fold(f32::NEG_INFINITY, f32::max);
-            corners[k] = c;
-            base[k] = [lo, map.z_behind(hi, opts.z_thickness)];
-        }
-    }
+        });
     let pyramid = Pyramid::build(cube.camera.width, cube.camera.height, base, |a, c| {
         a[0] = a[0].min(c[0]);
         a[1] = a[1].max(c[1]);
