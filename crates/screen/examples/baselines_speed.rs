@@ -218,6 +218,44 @@ fn main() {
             tr.bytes()
         );
     }
+    // z_thickness sweep (DDA, 1 layer): too thin misses surfaces between samples, too thick
+    // makes rays hit behind thin objects.
+    for th in [0.01f32, 0.03, 0.1, 0.3, 1.0] {
+        let opts = DdaOptions {
+            layers: 1,
+            z_thickness: th,
+            ..Default::default()
+        };
+        let tr = DdaTracer::new(&cube, layers, &opts).unwrap();
+        row(&format!("DDA 1 layer, z_thickness {th}"), &b, &tr, 1);
+    }
     let brute = BruteForcePlanes::new(cube.clone(), &cap, NormalSource::GBuffer).unwrap();
     row("BruteForcePlanes (reference)", &b, &brute, 1);
+    row(
+        "BVH closest hit (exact, for scale)",
+        &b,
+        &BvhTracer(&bvh),
+        1,
+    );
+}
+
+/// The exact BVH behind the tracer interface, to put the numbers in scale.
+struct BvhTracer<'a>(&'a Bvh);
+
+impl ScreenTracer for BvhTracer<'_> {
+    fn trace(&self, ray: &Ray, stats: &mut TraceStats) -> TraceResult {
+        stats.rays += 1;
+        match self.0.closest_hit(ray) {
+            Some(h) => {
+                stats.hits += 1;
+                TraceResult::Hit {
+                    layer: 0,
+                    pixel: glam::UVec2::ZERO,
+                    position: ray.at(h.t),
+                    t: h.t,
+                }
+            }
+            None => TraceResult::Miss,
+        }
+    }
 }
