@@ -278,7 +278,8 @@ impl<const N: usize> Pyramid<N> {
 /// decides. With `N == 2` a cell whose back-of-shell `max` lies entirely in front of the ray
 /// is skipped and recorded as an occlusion-volume entry.
 ///
-/// Traverses `s` in `[s_start, s_end]`; at most `max_steps` iterations (then gives up with what
+/// Starts at the level whose cell size first exceeds the ray's screen extent. Traverses `s`
+/// in `[s_start, s_end]`; at most `max_steps` iterations (then gives up with what
 /// it has). Integer cell stepping: every advance moves to a different cell, so the loop
 /// always progresses.
 #[inline]
@@ -299,7 +300,10 @@ pub(crate) fn traverse<const N: usize>(
     let mut ix = (p.x.max(0.0) as u32).min(w - 1);
     let mut iy = (p.y.max(0.0) as u32).min(h - 1);
     let top = pyr.top();
-    let mut level = top;
+    // Start at the finest level whose cells are as large as the ray's screen extent: the
+    // levels above only add descents (Tevs start at the root, Uludag at a fixed level).
+    let extent = d.x.abs().max(d.y.abs()) * (s_end - s_start);
+    let mut level = (32 - (extent.max(0.0) as u32).leading_zeros()).min(top);
     let mut s = s_start;
     for _ in 0..max_steps {
         stats.steps += 1;
