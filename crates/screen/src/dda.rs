@@ -27,15 +27,23 @@
 //! **`z_thickness` default 0.1 m**: a pixel's depth is a point sample, and the surface inside
 //! the pixel (and the neighbours the 1-pixel-wide DDA line skips) lies within a few cm of it
 //! at the scale of the built-in rooms; 0.1 m catches those while still letting rays pass
-//! behind thin objects (chair legs, columns' silhouettes). Measured in
-//! `examples/baselines_speed.rs` and `tests/baselines.rs`.
+//! behind thin objects. Measured (`examples/baselines_speed.rs`, atrium 1600x900, stereo eye):
+//! agreement with the BVH within one footprint is 0.9461 at 0.01 m and 0.9467 from 0.03 m to
+//! 1 m, while rays wrongly stopped behind thin objects grow with the thickness (hits per ray
+//! 0.939 -> 0.943 against the BVH's 0.948, occlusion volumes 0.0097 -> 0.0057 per ray).
+//!
+//! **`max_steps` default 200** (Widmer's stereo setting). Here the march starts at the cube's
+//! near plane (half the nearest captured depth) and ends at its far plane (twice the farthest),
+//! not at the camera's near plane, so the stereo eye's screen lines are short: on the atrium at
+//! 1600x900 agreement stops improving at 16-32 steps (12.8 steps per ray on average); the cap
+//! only matters for long rays.
 
 use std::time::Instant;
 
 use glam::UVec2;
 use parallax_core::{GBuffer, Ray};
 
-use crate::depth_layers::{Clip, PixelRay, check_layers, finish};
+use crate::depth_layers::{Clip, LayerHit, PixelRay, check_layers, finish};
 use crate::{ScreenError, ScreenTracer, TraceResult, TraceStats, UnitCube};
 
 /// Options of [`DdaTracer`] (the paper's parameters).
@@ -95,10 +103,10 @@ impl DdaTracer {
                 opts.layers
             )));
         }
-        if !(opts.stride >= 1.0 && opts.stride.is_finite())
-            || !(0.0..=1.0).contains(&opts.jitter)
-            || !(opts.z_thickness >= 0.0)
-        {
+        let stride_ok = opts.stride >= 1.0 && opts.stride.is_finite();
+        let jitter_ok = (0.0..=1.0).contains(&opts.jitter);
+        let thick_ok = opts.z_thickness >= 0.0; // false for NaN
+        if !(stride_ok && jitter_ok && thick_ok) {
             return Err(ScreenError::InvalidSpace(format!(
                 "need stride >= 1, jitter in [0, 1], z_thickness >= 0: {opts:?}"
             )));
@@ -157,7 +165,7 @@ impl DdaTracer {
         let thick = self.opts.z_thickness;
         let mut s = self.opts.jitter * ds;
         let mut z_prev = pr.seg.w0 as f32;
-        let mut occ: Option<(f32, u32, UVec2)> = None;
+        let mut occ: Option<LayerHit> = None;
         let mut steps = 0u32;
         // The paper stops at the last sample with `s <= 1`, leaving the final half stride
         // untested; on the short screen lines of small reprojections (a few pixels) that

@@ -409,6 +409,9 @@ pub(crate) fn traverse<const N: usize>(
     out
 }
 
+/// A hit or occlusion entry of the cascade: segment parameter, layer, pixel.
+pub(crate) type LayerHit = (f32, u32, UVec2);
+
 /// Cascade over layers (Widmer et al. 2015, §4.1): layer 0 is traced first; a deeper layer is
 /// traced only when the previous one reported an occlusion-volume entry before its hit (or
 /// without a hit), and only from that entry on. Returns the nearest hit over the traced
@@ -416,9 +419,9 @@ pub(crate) fn traverse<const N: usize>(
 pub(crate) fn cascade(
     layers: usize,
     mut trace_layer: impl FnMut(usize, f32, f32) -> LayerOutcome,
-) -> (Option<(f32, u32, UVec2)>, Option<(f32, u32, UVec2)>) {
-    let mut best: Option<(f32, u32, UVec2)> = None;
-    let mut occ: Option<(f32, u32, UVec2)> = None;
+) -> (Option<LayerHit>, Option<LayerHit>) {
+    let mut best: Option<LayerHit> = None;
+    let mut occ: Option<LayerHit> = None;
     let mut start = 0.0f32;
     for li in 0..layers {
         let end = best.map_or(1.0, |b| b.0);
@@ -448,8 +451,8 @@ pub(crate) fn cascade(
 pub(crate) fn finish(
     ray: &Ray,
     pr: &PixelRay,
-    best: Option<(f32, u32, UVec2)>,
-    occ: Option<(f32, u32, UVec2)>,
+    best: Option<LayerHit>,
+    occ: Option<LayerHit>,
     stats: &mut TraceStats,
 ) -> TraceResult {
     if let Some((s, layer, pixel)) = best {

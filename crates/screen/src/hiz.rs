@@ -67,7 +67,7 @@ impl HiZTracer {
         opts: &HiZOptions,
     ) -> Result<Self, ScreenError> {
         let n = check_layers(cube, layers, opts.layers)?;
-        if !(opts.z_thickness >= 0.0) {
+        if opts.z_thickness.is_nan() || opts.z_thickness < 0.0 {
             return Err(ScreenError::InvalidSpace("z_thickness must be >= 0".into()));
         }
         let map = DepthMap::new(cube);

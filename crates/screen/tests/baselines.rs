@@ -11,6 +11,8 @@ use parallax_screen::{
     NormalSource, ScreenTracer, TraceResult, TraceStats, UnitCube,
 };
 
+type Tracer = Box<dyn ScreenTracer>;
+
 fn pixel_dir(cam: &Pinhole, x: u32, y: u32) -> Vec3 {
     let film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
     cam.frame.dir_to_world(cam.camera_dir(film)).normalize()
@@ -335,9 +337,16 @@ fn bad_options_and_sizes_error() {
     let l = synth_layer(|_, _| 3.0);
     let cube = UnitCube::new(&cam, 1.0, 10.0).unwrap();
     let small = GBuffer::new(8, 8).unwrap();
-    assert!(DdaTracer::new(&cube, &[small.clone()], &DdaOptions::default()).is_err());
-    assert!(MinMaxTracer::new(&cube, &[small.clone()], &MinMaxOptions::default()).is_err());
-    assert!(HiZTracer::new(&cube, &[small], &HiZOptions::default()).is_err());
+    assert!(DdaTracer::new(&cube, std::slice::from_ref(&small), &DdaOptions::default()).is_err());
+    assert!(
+        MinMaxTracer::new(
+            &cube,
+            std::slice::from_ref(&small),
+            &MinMaxOptions::default()
+        )
+        .is_err()
+    );
+    assert!(HiZTracer::new(&cube, std::slice::from_ref(&small), &HiZOptions::default()).is_err());
     assert!(DdaTracer::new(&cube, &[], &DdaOptions::default()).is_err());
     for bad in [
         DdaOptions {
@@ -523,7 +532,7 @@ fn second_layer_resolves_disocclusions() {
             )
             .unwrap()
         };
-        let pairs: [(&str, Box<dyn ScreenTracer>, Box<dyn ScreenTracer>); 3] = [
+        let pairs: [(&str, Tracer, Tracer); 3] = [
             ("minmax", Box::new(mm(1)), Box::new(mm(2))),
             ("hiz", Box::new(hz(1)), Box::new(hz(2))),
             ("dda", Box::new(dd(1)), Box::new(dd(2))),
