@@ -552,3 +552,51 @@ fn second_layer_resolves_disocclusions() {
         }
     }
 }
+
+#[test]
+fn minmax_flat_and_hiz_find_the_same_hits() {
+    // Both trace flat per-pixel heights with the same leaf test; they differ only in how they
+    // skip (min-max bounds vs min only). Any lost or extra hit is a traversal bug.
+    for name in ["cornell", "atrium"] {
+        let c = case(name);
+        let layers = &c.cap.layers.layers;
+        let mm = MinMaxTracer::new(
+            &c.cube,
+            layers,
+            &MinMaxOptions {
+                bilinear: false,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let hz = HiZTracer::new(&c.cube, layers, &HiZOptions::default()).unwrap();
+        let (mut sm, mut sh) = (TraceStats::default(), TraceStats::default());
+        let mut compared = 0;
+        for shift in [0.0325, 0.3, -0.5] {
+            let eye = c.cam.frame.position + c.cam.frame.right() * shift + c.cam.frame.up() * 0.1;
+            for y in 0..H {
+                for x in 0..W {
+                    let ray = Ray::new(eye, pixel_dir(&c.cam, x, y));
+                    let (a, b) = (mm.trace(&ray, &mut sm), hz.trace(&ray, &mut sh));
+                    match (a.hit_t(), b.hit_t()) {
+                        (Some(ta), Some(tb)) => {
+                            assert!(
+                                (ta - tb).abs() <= 1e-4 * ta,
+                                "{name} ({x},{y}): {a:?} {b:?}"
+                            )
+                        }
+                        (None, None) => {}
+                        _ => panic!("{name} ({x},{y}) shift {shift}: {a:?} vs {b:?}"),
+                    }
+                    compared += 1;
+                }
+            }
+        }
+        eprintln!(
+            "{name}: {compared} rays; minmax steps/ray {:.2}, hiz {:.2}",
+            sm.steps as f64 / sm.rays as f64,
+            sh.steps as f64 / sh.rays as f64
+        );
+        assert_eq!(sm.hits, sh.hits);
+    }
+}
