@@ -98,25 +98,10 @@ fn row(name: &str, b: &Bench, tr: &dyn ScreenTracer, reps: usize) -> f64 {
     agree
 }
 
-fn main() {
-    let args: Vec<String> = std::env::args().collect();
-    let scene_name = args.get(1).map_or("atrium", |s| s.as_str());
-    let (w, h) = args
-        .get(2)
-        .and_then(|s| s.split_once('x'))
-        .map_or((1600, 900), |(a, b)| {
-            (a.parse().unwrap(), b.parse().unwrap())
-        });
-    let scene = Scene::load(scene_name).expect("scene");
-    let cam = Pinhole::new(&scene.camera(None).unwrap(), w, h).unwrap();
-    let view = View::from_pinhole(&cam).unwrap();
-    let t = Instant::now();
-    let cap = capture_layers(&scene, &view, &RasterOptions::layers(2)).unwrap();
-    let cap_ms = t.elapsed().as_secs_f64() * 1e3;
-    let layers = &cap.layers.layers;
-    let cube = UnitCube::fit_depths(&cam, layers.iter().map(|g| &g.depth[..])).unwrap();
-    let bvh = Bvh::build(&scene.mesh);
-    let eye = cam.frame.position + cam.frame.right() * 0.0325;
+/// The rays of an eye moved `shift` m along the reference's right axis, with BVH truth.
+fn bench(cam: &Pinhole, bvh: &Bvh, shift: f32) -> Bench {
+    let (w, h) = (cam.width, cam.height);
+    let eye = cam.frame.position + cam.frame.right() * shift;
     let rays: Vec<Ray> = (0..h)
         .flat_map(|y| (0..w).map(move |x| (x, y)))
         .map(|(x, y)| {
@@ -137,7 +122,28 @@ fn main() {
             })
         })
         .collect();
-    let b = Bench { rays, truth };
+    Bench { rays, truth }
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let scene_name = args.get(1).map_or("atrium", |s| s.as_str());
+    let (w, h) = args
+        .get(2)
+        .and_then(|s| s.split_once('x'))
+        .map_or((1600, 900), |(a, b)| {
+            (a.parse().unwrap(), b.parse().unwrap())
+        });
+    let scene = Scene::load(scene_name).expect("scene");
+    let cam = Pinhole::new(&scene.camera(None).unwrap(), w, h).unwrap();
+    let view = View::from_pinhole(&cam).unwrap();
+    let t = Instant::now();
+    let cap = capture_layers(&scene, &view, &RasterOptions::layers(2)).unwrap();
+    let cap_ms = t.elapsed().as_secs_f64() * 1e3;
+    let layers = &cap.layers.layers;
+    let cube = UnitCube::fit_depths(&cam, layers.iter().map(|g| &g.depth[..])).unwrap();
+    let bvh = Bvh::build(&scene.mesh);
+    let b = bench(&cam, &bvh, 0.0325);
     println!(
         "{scene_name} {w}x{h}, 2 layers (capture {cap_ms:.0} ms), cube near {:.3} far {:.2}, {} threads, stereo eye 0.0325 m",
         cube.near,
