@@ -243,6 +243,56 @@ fn main() {
         &BvhTracer(&bvh),
         1,
     );
+
+    // A large reprojection: 0.3 m to the right (disocclusions; the second layer matters).
+    let b = bench(&cam, &bvh, 0.3);
+    println!("\n0.3 m shift\n");
+    println!(
+        "| tracer | Mrays/s (wall, best) | Mrays per CPU-s | steps/ray | plane tests/ray | agree (1 footprint) | hits/ray | occl/ray |"
+    );
+    println!("|---|---|---|---|---|---|---|---|");
+    let dda = |n| DdaOptions {
+        layers: n,
+        ..Default::default()
+    };
+    let mm = |n| MinMaxOptions {
+        layers: n,
+        ..Default::default()
+    };
+    let hz = |n| HiZOptions {
+        layers: n,
+        ..Default::default()
+    };
+    let tracers: Vec<(&str, Box<dyn ScreenTracer>)> = vec![
+        (
+            "DDA 1 layer",
+            Box::new(DdaTracer::new(&cube, layers, &dda(1)).unwrap()),
+        ),
+        (
+            "DDA 2 layers",
+            Box::new(DdaTracer::new(&cube, layers, &dda(2)).unwrap()),
+        ),
+        (
+            "MinMax bilinear, 1 layer",
+            Box::new(MinMaxTracer::new(&cube, layers, &mm(1)).unwrap()),
+        ),
+        (
+            "MinMax bilinear, 2 layers",
+            Box::new(MinMaxTracer::new(&cube, layers, &mm(2)).unwrap()),
+        ),
+        (
+            "HiZ, 1 layer",
+            Box::new(HiZTracer::new(&cube, layers, &hz(1)).unwrap()),
+        ),
+        (
+            "HiZ, 2 layers",
+            Box::new(HiZTracer::new(&cube, layers, &hz(2)).unwrap()),
+        ),
+        ("BruteForcePlanes (reference)", Box::new(brute)),
+    ];
+    for (name, tr) in &tracers {
+        row(name, &b, tr.as_ref(), 1);
+    }
 }
 
 /// The exact BVH behind the tracer interface, to put the numbers in scale.
