@@ -1,0 +1,150 @@
+//! Reconstruction (Hunt et al. 2018, §2.1 and §2.3): resolved samples -> display image, and a
+//! picture of the sample pattern.
+//!
+//! - A **grid** set (every sample at a pixel centre with a one-pixel footprint) maps each sample
+//!   to its pixel; per-channel sets (subpixel rendering of a distorted display, §2.1) write
+//!   each sample's own colour channel into the pixel, so R, G and B of one pixel come from three
+//!   different rays.
+//! - An **irregular** set (foveated, §2.3) splats each sample's colour over its footprint with a
+//!   separable tent filter of half-width one footprint, and normalises by the summed weights
+//!   (per channel, so per-channel irregular sets work too). Pixels no footprint reaches stay
+//!   black. (HVVR visualises foveation with nearest-neighbour; the tent gives a smooth image.)
+//! - The **pattern** image colours each sample's footprint by its size (log2 of the footprint,
+//!   blue = one pixel to red = 64 pixels), alternating brightness by sample parity so that
+//!   neighbouring footprints are told apart. Tile ids will replace the size colour once the
+//!   beam hierarchy exists (issue 5 part 2).
+
+use glam::Vec3;
+use parallax_core::{Image, NO_ID, Rgb};
+use parallax_scene::camera::CameraModel;
+
+use super::{SampleSet, VisibilityBuffer};
+
+/// True when every sample sits at a pixel centre with a one-pixel footprint.
+pub fn is_grid(set: &SampleSet) -> bool {
+    set.samples
+        .iter()
+        .all(|s| s.footprint == 1.0 && s.film.x.fract() == 0.5 && s.film.y.fract() == 0.5)
+}
+
+/// The display image of `colors` (one per sample of `set`).
+pub fn reconstruct(set: &SampleSet, colors: &[Vec3]) -> Image<Rgb> {
+    assert_eq!(colors.len(), set.samples.len());
+    let (w, h) = (set.camera.width(), set.camera.height());
+    let per_channel = set.camera.channel_count() > 1;
+    let mut img = Image::new(w, h, Rgb::ZERO).expect("camera film size is valid");
+    if is_grid(set) {
+        for (s, c) in set.samples.iter().zip(colors) {
+            let (x, y) = (s.film.x as u32, s.film.y as u32);
+            if x >= w || y >= h {
+                continue;
+            }
+            let p = img.get_mut(x, y);
+            if per_channel {
+                p[s.channel as usize] = c[s.channel as usize];
+            } else {
+                *p = *c;
+            }
+        }
+        return img;
+    }
+    let mut weight = vec![Vec3::ZERO; img.len()];
+    let mut sum = vec![Vec3::ZERO; img.len()];
+    for (s, c) in set.samples.iter().zip(colors) {
+        let r = s.footprint.max(1e-3);
+        let mask = if per_channel {
+            let mut m = Vec3::ZERO;
+            m[s.channel as usize] = 1.0;
+            m
+        } else {
+            Vec3::ONE
+        };
+        let x0 = (s.film.x - r).floor().max(0.0) as u32;
+        let y0 = (s.film.y - r).floor().max(0.0) as u32;
+        let x1 = ((s.film.x + r).ceil().max(0.0) as u32).min(w);
+        let y1 = ((s.film.y + r).ceil().max(0.0) as u32).min(h);
+        for y in y0..y1 {
+            let wy = (1.0 - (y as f32 + 0.5 - s.film.y).abs() / r).max(0.0);
+            for x in x0..x1 {
+                let wx = (1.0 - (x as f32 + 0.5 - s.film.x).abs() / r).max(0.0);
+                let wgt = wx * wy;
+                if wgt > 0.0 {
+                    let i = (y * w + x) as usize;
+                    weight[i] += mask * wgt;
+                    sum[i] += *c * mask * wgt;
+                }
+            }
+        }
+    }
+    for ((p, s), wgt) in img.data_mut().iter_mut().zip(&sum).zip(&weight) {
+        *p = Vec3::select(
+            wgt.cmpgt(Vec3::ZERO),
+            *s / wgt.max(Vec3::splat(1e-20)),
+            Vec3::ZERO,
+        );
+    }
+    img
+}
+
+/// Per-pixel closest triangle of subsample 0 of a grid set (the green channel's sample of a
+/// per-channel set): the primary-visibility id image of the visibility buffer, comparable with
+/// the reference G-buffer's `primitive_id`. Pixels without a sample are [`NO_ID`].
+pub fn grid_ids(set: &SampleSet, vis: &VisibilityBuffer) -> Image<u32> {
+    let (w, h) = (set.camera.width(), set.camera.height());
+    let mut img = Image::new(w, h, NO_ID).expect("camera film size is valid");
+    let want = if set.camera.channel_count() > 1 { 1 } else { 0 };
+    let spp = set.spp as usize;
+    for (i, s) in set.samples.iter().enumerate() {
+        if s.channel != want {
+            continue;
+        }
+        let (x, y) = (s.film.x as u32, s.film.y as u32);
+        if x < w && y < h {
+            img.set(x, y, vis.prim[i * spp]);
+        }
+    }
+    img
+}
+
+/// Colour of a footprint size: log2 of the footprint from 0 (blue) to 6 (red).
+fn size_colour(footprint: f32) -> Vec3 {
+    let t = (footprint.max(1.0).log2() / 6.0).clamp(0.0, 1.0);
+    Vec3::new(t, 1.0 - (2.0 * t - 1.0).abs(), 1.0 - t)
+}
+
+/// The sample pattern (module docs): footprints filled with their size colour, centres white.
+pub fn pattern_image(set: &SampleSet) -> Image<Rgb> {
+    let (w, h) = (set.camera.width(), set.camera.height());
+    let mut img = Image::new(w, h, Rgb::ZERO).expect("camera film size is valid");
+    let per_channel = set.camera.channel_count() > 1;
+    for (i, s) in set.samples.iter().enumerate() {
+        let half = 0.5 * s.footprint;
+        let shade = if (i / set.camera.channel_count()) % 2 == 0 {
+            1.0
+        } else {
+            0.6
+        };
+        let c = size_colour(s.footprint) * shade;
+        let x0 = (s.film.x - half).round().max(0.0) as u32;
+        let y0 = (s.film.y - half).round().max(0.0) as u32;
+        let x1 = ((s.film.x + half).round().max(0.0) as u32).min(w);
+        let y1 = ((s.film.y + half).round().max(0.0) as u32).min(h);
+        for y in y0..y1 {
+            for x in x0..x1 {
+                let p = img.get_mut(x, y);
+                if per_channel {
+                    p[s.channel as usize] = c[s.channel as usize];
+                } else {
+                    *p = c;
+                }
+            }
+        }
+        if s.footprint > 2.0 {
+            let (x, y) = (s.film.x as u32, s.film.y as u32);
+            if x < w && y < h {
+                img.set(x, y, Vec3::ONE);
+            }
+        }
+    }
+    img
+}
