@@ -147,6 +147,25 @@ pub fn render_eye(
     let t = Instant::now();
     let set = SampleSet::grid(camera, opts.spp);
     let samples_ms = ms(t);
+    let mut eye = render_eye_set(scene, bvh, set, opts)?;
+    eye.timings.samples_ms = samples_ms;
+    Ok(eye)
+}
+
+/// Renders one eye's sample set `set` (its `spp` must be `opts.spp`).
+pub fn render_eye_set(
+    scene: &Scene,
+    bvh: &Bvh,
+    set: SampleSet,
+    opts: &FrameOptions,
+) -> Result<EyeFrame, VrError> {
+    if set.spp != opts.spp {
+        return Err(VrError::Invalid(format!(
+            "sample set has {} subsamples per sample, options say {}",
+            set.spp, opts.spp
+        )));
+    }
+    let samples_ms = 0.0;
     let t = Instant::now();
     let vis = visibility(opts.visibility, bvh, &set)?;
     let visibility_ms = ms(t);

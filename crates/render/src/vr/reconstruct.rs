@@ -27,11 +27,19 @@ pub fn is_grid(set: &SampleSet) -> bool {
         .all(|s| s.footprint == 1.0 && s.film.x.fract() == 0.5 && s.film.y.fract() == 0.5)
 }
 
+/// True when the set's samples carry more than one colour channel (subpixel rendering); a
+/// set of one channel (e.g. only the green rays of a distorted camera) colours whole pixels.
+pub fn is_per_channel(set: &SampleSet) -> bool {
+    set.samples
+        .first()
+        .is_some_and(|f| set.samples.iter().any(|s| s.channel != f.channel))
+}
+
 /// The display image of `colors` (one per sample of `set`).
 pub fn reconstruct(set: &SampleSet, colors: &[Vec3]) -> Image<Rgb> {
     assert_eq!(colors.len(), set.samples.len());
     let (w, h) = (set.camera.width(), set.camera.height());
-    let per_channel = set.camera.channel_count() > 1;
+    let per_channel = is_per_channel(set);
     let mut img = Image::new(w, h, Rgb::ZERO).expect("camera film size is valid");
     if is_grid(set) {
         for (s, c) in set.samples.iter().zip(colors) {
@@ -116,14 +124,11 @@ fn size_colour(footprint: f32) -> Vec3 {
 pub fn pattern_image(set: &SampleSet) -> Image<Rgb> {
     let (w, h) = (set.camera.width(), set.camera.height());
     let mut img = Image::new(w, h, Rgb::ZERO).expect("camera film size is valid");
-    let per_channel = set.camera.channel_count() > 1;
+    let per_channel = is_per_channel(set);
+    let group = if per_channel { 3 } else { 1 };
     for (i, s) in set.samples.iter().enumerate() {
         let half = 0.5 * s.footprint;
-        let shade = if (i / set.camera.channel_count()) % 2 == 0 {
-            1.0
-        } else {
-            0.6
-        };
+        let shade = if (i / group) % 2 == 0 { 1.0 } else { 0.6 };
         let c = size_colour(s.footprint) * shade;
         let x0 = (s.film.x - half).round().max(0.0) as u32;
         let y0 = (s.film.y - half).round().max(0.0) as u32;
