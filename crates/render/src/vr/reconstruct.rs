@@ -153,3 +153,57 @@ pub fn pattern_image(set: &SampleSet) -> Image<Rgb> {
     }
     img
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec2;
+    use parallax_scene::CameraDesc;
+    use parallax_scene::camera::{Camera, CameraOptions, ModelKind};
+
+    fn set(model: ModelKind) -> SampleSet {
+        let desc = CameraDesc::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0);
+        let cam = Camera::new(model, &desc, 16, 12, &CameraOptions::default()).unwrap();
+        SampleSet::grid(cam, 1)
+    }
+
+    #[test]
+    fn grid_maps_samples_to_pixels_and_channels() {
+        let s = set(ModelKind::Distorted);
+        assert!(is_grid(&s) && is_per_channel(&s));
+        let colors: Vec<Vec3> = (0..s.samples.len())
+            .map(|i| Vec3::splat(i as f32))
+            .collect();
+        let img = reconstruct(&s, &colors);
+        let p = *img.get(3, 2);
+        let i = (2 * 16 + 3) * 3;
+        assert_eq!(p, Vec3::new(i as f32, (i + 1) as f32, (i + 2) as f32));
+    }
+
+    #[test]
+    fn irregular_tent_splat_is_normalised() {
+        let mut s = set(ModelKind::Pinhole);
+        // Coarse samples every 3 pixels with a 3-pixel footprint, off the pixel centres.
+        s.samples.clear();
+        for y in 0..5 {
+            for x in 0..7 {
+                s.samples.push(super::super::Sample {
+                    film: Vec2::new(x as f32 * 3.0 + 0.2, y as f32 * 3.0 + 0.1),
+                    footprint: 3.0,
+                    channel: 0,
+                });
+            }
+        }
+        assert!(!is_grid(&s));
+        let c = Vec3::new(0.25, 0.5, 1.0);
+        let img = reconstruct(&s, &vec![c; s.samples.len()]);
+        // Every pixel some footprint reaches gets exactly the constant colour.
+        let covered = img.data().iter().filter(|p| **p != Vec3::ZERO).count();
+        assert!(covered > 150, "{covered}");
+        for p in img.data().iter().filter(|p| **p != Vec3::ZERO) {
+            assert!((*p - c).abs().max_element() < 1e-5, "{p}");
+        }
+        let pat = pattern_image(&s);
+        assert_eq!((pat.width(), pat.height()), (16, 12));
+    }
+}
