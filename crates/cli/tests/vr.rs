@@ -123,8 +123,11 @@ fn bench_vr_reports_beam_and_foveated_as_unavailable() {
         json.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let rows: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
-    let rows = rows.as_array().unwrap();
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    let u = &v["update"];
+    assert!(u["moving_vertices"].as_u64().unwrap() > 0, "{u}");
+    assert!(u["refit_ms"].as_f64().unwrap() >= 0.0);
+    let rows = v["rows"].as_array().unwrap();
     // 3 schemes x 2 methods x 2 shading modes.
     assert_eq!(rows.len(), 12);
     for r in rows {

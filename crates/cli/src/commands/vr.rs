@@ -340,7 +340,7 @@ pub struct VrBenchArgs {
 }
 
 pub fn bench(a: &VrBenchArgs, quiet: bool) -> Result<()> {
-    use parallax_render::vr::bench::{SCHEMES, VrBenchOptions, markdown, run};
+    use parallax_render::vr::bench::{SCHEMES, VrBenchOptions, markdown, run, update_row};
     for s in &a.schemes {
         if !SCHEMES.contains(&s.as_str()) {
             bail!(
@@ -365,12 +365,29 @@ pub fn bench(a: &VrBenchArgs, quiet: bool) -> Result<()> {
         visibility: a.visibility.clone(),
         repeats: a.repeats,
     };
+    let update = update_row(&scene, a.repeats.max(3))?;
     let rows = run(&scene, &bvh, &head, &opts)?;
     if !quiet {
+        println!(
+            "| scene | vertices | triangles | moving objects | moving vertices | build ms | animate ms | refit ms |"
+        );
+        println!("|---|---|---|---|---|---|---|---|");
+        println!(
+            "| {} | {} | {} | {} | {} | {:.2} | {:.3} | {:.3} |\n",
+            update.scene,
+            update.vertices,
+            update.triangles,
+            update.moving_objects,
+            update.moving_vertices,
+            update.build_ms,
+            update.animate_ms,
+            update.refit_ms
+        );
         print!("{}", markdown(&rows));
     }
     if let Some(p) = &a.json {
-        std::fs::write(p, serde_json::to_string_pretty(&rows)?)
+        let json = serde_json::json!({ "update": update, "rows": rows });
+        std::fs::write(p, serde_json::to_string_pretty(&json)?)
             .with_context(|| format!("writing {}", p.display()))?;
     }
     Ok(())

@@ -17,10 +17,11 @@
 use std::time::Instant;
 
 use parallax_bvh::Bvh;
+use parallax_scene::animation::RigidAnimation;
 use parallax_scene::{CameraDesc, Scene};
 use serde::Serialize;
 
-use super::frame::{Visibility, VrError, visibility};
+use super::frame::{Visibility, VrError, update_scene, visibility};
 use super::presets::{Dof, Preset, eye_cameras};
 use super::resolve::{ShadingMode, resolve};
 use super::shade::{ShadeOptions, VrShader};
@@ -244,6 +245,45 @@ pub fn run(
         }
     }
     Ok(rows)
+}
+
+/// HVVR Table 1: the scene update of one frame — rigid animation of the scene's props (the
+/// "vert xform" column) and the BVH refit (the other columns together), against a full build.
+#[derive(Clone, Debug, Serialize)]
+pub struct UpdateRow {
+    pub scene: String,
+    pub vertices: usize,
+    pub triangles: usize,
+    pub moving_objects: usize,
+    pub moving_vertices: usize,
+    pub build_ms: f64,
+    pub animate_ms: f64,
+    pub refit_ms: f64,
+}
+
+/// Measures [`UpdateRow`] (best of `repeats` updates to t = 1 s, on a copy of the mesh).
+pub fn update_row(scene: &Scene, repeats: u32) -> Result<UpdateRow, VrError> {
+    let mut mesh = scene.mesh.clone();
+    let t = Instant::now();
+    let mut bvh = Bvh::try_build(&mesh)?;
+    let build_ms = t.elapsed().as_secs_f64() * 1e3;
+    let anim = RigidAnimation::for_scene(scene);
+    let (mut animate_ms, mut refit_ms) = (f64::INFINITY, f64::INFINITY);
+    for k in 0..repeats.max(1) {
+        let u = update_scene(&anim, &mut mesh, &mut bvh, 1.0 + k as f32 * 0.1)?;
+        animate_ms = animate_ms.min(u.animate_ms);
+        refit_ms = refit_ms.min(u.refit_ms);
+    }
+    Ok(UpdateRow {
+        scene: scene.name.clone(),
+        vertices: mesh.vertex_count(),
+        triangles: mesh.triangle_count(),
+        moving_objects: anim.tracks.len(),
+        moving_vertices: anim.moving_vertices(&mesh),
+        build_ms,
+        animate_ms,
+        refit_ms,
+    })
 }
 
 /// The rows as a Markdown table.
