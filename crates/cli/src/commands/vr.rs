@@ -94,6 +94,9 @@ pub fn headset(a: &VrArgs) -> Result<HeadsetSpec> {
     let mut spec = a.preset.spec();
     if a.preset == Preset::Custom {
         let opts = a.view.camera_options()?;
+        if a.view.model == ModelKind::ThinLens {
+            bail!("--preset custom: use --dof-aperture / --dof-focus for a thin lens");
+        }
         spec.model = a.view.model;
         if let Some(f) = a.view.fov_y {
             spec.fov_y_deg = f;

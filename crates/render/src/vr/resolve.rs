@@ -101,36 +101,38 @@ pub fn resolve(
         .prim
         .par_chunks(spp)
         .enumerate()
-        .map(|(i, prims)| {
-            let mut color = Vec3::ZERO;
-            let mut shades = 0u32;
-            let misses = prims.iter().filter(|&&p| p == NO_ID).count();
-            match mode {
-                ShadingMode::Msaa => {
-                    let mut groups = [(0u32, 0u32, 0usize); super::samples::MAX_SPP as usize];
-                    let n = group_by_triangle(prims, &dist2, &mut groups);
-                    for &(prim, count, k) in &groups[..n] {
-                        if let Some(ray) = set.subsample_ray(i, k) {
-                            color += shader.shade(&ray, prim) * (count as f32 * inv);
-                            shades += 1;
+        .map_init(
+            || vec![(0u32, 0u32, 0usize); spp],
+            |groups, (i, prims)| {
+                let mut color = Vec3::ZERO;
+                let mut shades = 0u32;
+                let misses = prims.iter().filter(|&&p| p == NO_ID).count();
+                match mode {
+                    ShadingMode::Msaa => {
+                        let n = group_by_triangle(prims, &dist2, groups);
+                        for &(prim, count, k) in &groups[..n] {
+                            if let Some(ray) = set.subsample_ray(i, k) {
+                                color += shader.shade(&ray, prim) * (count as f32 * inv);
+                                shades += 1;
+                            }
+                        }
+                    }
+                    ShadingMode::Ssaa => {
+                        for (k, &prim) in prims.iter().enumerate() {
+                            if prim == NO_ID {
+                                continue;
+                            }
+                            if let Some(ray) = set.subsample_ray(i, k) {
+                                color += shader.shade(&ray, prim) * inv;
+                                shades += 1;
+                            }
                         }
                     }
                 }
-                ShadingMode::Ssaa => {
-                    for (k, &prim) in prims.iter().enumerate() {
-                        if prim == NO_ID {
-                            continue;
-                        }
-                        if let Some(ray) = set.subsample_ray(i, k) {
-                            color += shader.shade(&ray, prim) * inv;
-                            shades += 1;
-                        }
-                    }
-                }
-            }
-            color += bg * (misses as f32 * inv);
-            (color, shades)
-        })
+                color += bg * (misses as f32 * inv);
+                (color, shades)
+            },
+        )
         .collect();
     let shades = per_sample.iter().map(|p| p.1 as u64).sum();
     let nonempty = per_sample.iter().filter(|p| p.1 > 0).count() as u64;
