@@ -9,10 +9,10 @@
 //!   separable tent filter of half-width one footprint, and normalises by the summed weights
 //!   (per channel, so per-channel irregular sets work too). Pixels no footprint reaches stay
 //!   black. (HVVR visualises foveation with nearest-neighbour; the tent gives a smooth image.)
-//! - The **pattern** image colours each sample's footprint by its size (log2 of the footprint,
-//!   blue = one pixel to red = 64 pixels), alternating brightness by sample parity so that
-//!   neighbouring footprints are told apart. Tile ids will replace the size colour once the
-//!   beam hierarchy exists (issue 5 part 2).
+//! - The **pattern** image colours each sample's footprint by the solid angle it covers (log
+//!   scale, see [`pattern_image`]), alternating brightness by sample parity so that neighbouring
+//!   footprints are told apart. Tile ids will replace this colour once the beam hierarchy
+//!   exists (issue 5 part 2).
 
 use glam::Vec3;
 use parallax_core::{Image, NO_ID, Rgb};
@@ -114,22 +114,60 @@ pub fn grid_ids(set: &SampleSet, vis: &VisibilityBuffer) -> Image<u32> {
     img
 }
 
-/// Colour of a footprint size: log2 of the footprint from 0 (blue) to 6 (red).
-fn size_colour(footprint: f32) -> Vec3 {
-    let t = (footprint.max(1.0).log2() / 6.0).clamp(0.0, 1.0);
+/// Ramp from blue (`t = 0`) over green to red (`t = 1`).
+fn ramp(t: f32) -> Vec3 {
+    let t = t.clamp(0.0, 1.0);
     Vec3::new(t, 1.0 - (2.0 * t - 1.0).abs(), 1.0 - t)
 }
 
-/// The sample pattern (module docs): footprints filled with their size colour, centres white.
+/// Solid angle (sr) covered by each sample's footprint: `footprint^2 |dD/dx x dD/dy|` from the
+/// camera's ray differentials at the footprint centre (lens centre); 0 where there is no ray.
+pub fn footprint_solid_angles(set: &SampleSet) -> Vec<f32> {
+    set.samples
+        .iter()
+        .map(|s| {
+            set.camera
+                .generate_ray(s.film, glam::Vec2::splat(0.5), s.channel as usize)
+                .map_or(0.0, |r| {
+                    let d = r.differential;
+                    d.d_dir_dx.cross(d.d_dir_dy).length() * s.footprint * s.footprint
+                })
+        })
+        .collect()
+}
+
+/// The sample pattern (module docs): each footprint filled with a colour for the solid angle it
+/// covers, `log2(solid angle / smallest)` over the set's range (at least one stop) from blue
+/// (smallest) to red (largest) — a lens-distorted or wide-angle grid shows how unevenly it
+/// samples directions, a foveated set its footprint sizes — in a checkerboard of footprint
+/// cells (alternating brightness); centres of footprints wider than two pixels white; samples
+/// without a ray black.
 pub fn pattern_image(set: &SampleSet) -> Image<Rgb> {
     let (w, h) = (set.camera.width(), set.camera.height());
     let mut img = Image::new(w, h, Rgb::ZERO).expect("camera film size is valid");
     let per_channel = is_per_channel(set);
-    let group = if per_channel { 3 } else { 1 };
+    let solid = footprint_solid_angles(set);
+    let min = solid
+        .iter()
+        .copied()
+        .filter(|&a| a > 0.0)
+        .fold(f32::INFINITY, f32::min);
+    let max = solid.iter().copied().fold(0.0f32, f32::max);
+    // Stops from the smallest to the largest footprint (at least one, so a uniform grid is blue).
+    let stops = (max / min).log2().max(1.0);
     for (i, s) in set.samples.iter().enumerate() {
         let half = 0.5 * s.footprint;
-        let shade = if (i / group) % 2 == 0 { 1.0 } else { 0.6 };
-        let c = size_colour(s.footprint) * shade;
+        let cell = (s.film / s.footprint.max(1e-3)).floor();
+        let shade = if (cell.x + cell.y).rem_euclid(2.0) == 0.0 {
+            1.0
+        } else {
+            0.6
+        };
+        let c = if solid[i] > 0.0 {
+            ramp((solid[i] / min).log2() / stops) * shade
+        } else {
+            Vec3::ZERO
+        };
         let x0 = (s.film.x - half).round().max(0.0) as u32;
         let y0 = (s.film.y - half).round().max(0.0) as u32;
         let x1 = ((s.film.x + half).round().max(0.0) as u32).min(w);
