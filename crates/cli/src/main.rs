@@ -34,6 +34,8 @@ enum Command {
     Capture(commands::capture::CaptureArgs),
     /// Render the built-in atrium with several camera models into a folder.
     Demo(commands::demo::DemoArgs),
+    /// One HVVR frame for a headset preset: both eyes, MSAA/SSAA, distortion, DoF.
+    Vr(commands::vr::VrArgs),
     /// Benchmarks that reproduce the papers' and issues' measurements.
     #[command(subcommand)]
     Bench(commands::bench::BenchCommand),
@@ -56,6 +58,7 @@ fn main() -> std::process::ExitCode {
         Command::Info(a) => commands::info::run(&a),
         Command::Capture(a) => commands::capture::run(&a, cli.quiet),
         Command::Demo(a) => commands::demo::run(&a, cli.quiet),
+        Command::Vr(a) => commands::vr::run(&a, cli.quiet),
         Command::Bench(b) => commands::bench::run(&b, cli.quiet),
     };
     match result {

@@ -7,6 +7,7 @@
 //! **Invariant:** a [`Scene`] that a loader or a built-in returns is valid: every index is in
 //! range, every position finite, every material id names a material. Later layers rely on it.
 
+pub mod animation;
 pub mod builtin;
 pub mod camera;
 pub mod error;

@@ -12,6 +12,8 @@ use crate::args::ViewArgs;
 pub enum BenchCommand {
     /// BVH build ms and closest-hit Mrays/s for primary (coherent) and random (incoherent) rays.
     Rays(RaysArgs),
+    /// HVVR Tables 2-6: VR frame stage times, shade counts, Mrays/s vs the per-ray baseline.
+    Vr(super::vr::VrBenchArgs),
 }
 
 #[derive(Args, Debug)]
@@ -32,6 +34,7 @@ pub struct RaysArgs {
 
 pub fn run(cmd: &BenchCommand, quiet: bool) -> Result<()> {
     match cmd {
+        BenchCommand::Vr(a) => super::vr::bench(a, quiet),
         BenchCommand::Rays(a) => {
             let scene = a.view.load_scene()?;
             let camera = a.view.camera(&scene, a.width, a.height)?;

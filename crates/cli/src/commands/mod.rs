@@ -5,3 +5,4 @@ pub mod capture;
 pub mod demo;
 pub mod info;
 pub mod render;
+pub mod vr;

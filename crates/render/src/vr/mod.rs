@@ -14,3 +14,12 @@ pub mod visibility;
 
 pub use samples::{Sample, SampleSet};
 pub use visibility::{VisibilityBuffer, trace_per_ray};
+
+// HVVR around the visibility stage (issue 5 parts 4-6): presets, shading, resolve,
+// reconstruction, the frame and its benchmark.
+pub mod bench;
+pub mod frame;
+pub mod presets;
+pub mod reconstruct;
+pub mod resolve;
+pub mod shade;

@@ -1,0 +1,397 @@
+//! `parallax vr`: one HVVR frame (Hunt et al. 2018) for a headset preset — both eyes rendered
+//! directly into the display's (distorted) sample pattern with MSAA or SSAA, written as
+//! `left.png`, `right.png` and `pattern.png` (the left eye's sample pattern), with stage timings
+//! and shade counts on stdout.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use parallax_bvh::Bvh;
+use parallax_core::image::png::{self, ToneMapping, Tonemap};
+use parallax_render::vr::SampleSet;
+use parallax_render::vr::frame::{
+    EyeFrame, FrameOptions, UpdateTimings, Visibility, render_eye_set, update_scene,
+};
+use parallax_render::vr::presets::{Dof, HeadsetSpec, Preset, eye_cameras};
+use parallax_render::vr::reconstruct::pattern_image;
+use parallax_render::vr::resolve::ShadingMode;
+use parallax_render::vr::shade::ShadeOptions;
+use parallax_scene::animation::RigidAnimation;
+use parallax_scene::camera::{Camera, CameraModel, ModelKind};
+use serde::Serialize;
+
+use crate::args::ViewArgs;
+
+#[derive(Args, Debug)]
+pub struct VrArgs {
+    /// Scene and head pose (`--camera` or `--eye/--target/--up`). `--model`, `--fov-y`,
+    /// `--fov` and `--ipd` apply to `--preset custom` only; the other presets fix them.
+    #[command(flatten)]
+    pub view: ViewArgs,
+    /// Headset: rift-cv1, vive, wide-210x130 (fisheye) or custom (from the camera flags).
+    #[arg(long, default_value = "rift-cv1", value_parser = Preset::parse)]
+    pub preset: Preset,
+    /// Subsamples per pixel: 1, 4, 8, 16 or 32.
+    #[arg(long, default_value_t = 8, value_parser = parse_spp)]
+    pub msaa: u32,
+    /// Shade every subsample (SSAA) instead of once per triangle per pixel (MSAA).
+    #[arg(long)]
+    pub ssaa: bool,
+    /// Foveated sample pattern around `--gaze` (not available in this build yet).
+    #[arg(long)]
+    pub foveated: bool,
+    /// Gaze point in normalised film coordinates x,y in [-1, 1] (0,0 = centre).
+    #[arg(long, num_args = 1..=2, value_delimiter = ',', allow_negative_numbers = true, requires = "foveated")]
+    pub gaze: Option<Vec<f32>>,
+    /// Depth of field: aperture (pupil) diameter in metres, e.g. 0.003. Renders a thin lens.
+    #[arg(long, allow_negative_numbers = true)]
+    pub dof_aperture: Option<f32>,
+    /// Depth of field: focus distance in metres (default: distance from eye to target).
+    #[arg(long, allow_negative_numbers = true, requires = "dof_aperture")]
+    pub dof_focus: Option<f32>,
+    /// Subpixel rendering: one sample per colour channel, each through the lens's distortion of
+    /// its own wavelength (distorted presets). Without it, the green channel's rays colour the
+    /// whole pixel.
+    #[arg(long)]
+    pub subpixel: bool,
+    /// Visibility method: per-ray (BVH per subsample ray) or beam (HVVR's beam caster).
+    #[arg(long, default_value = "per-ray", value_parser = Visibility::parse)]
+    pub visibility: Visibility,
+    /// Per-eye width override (default: the preset's).
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Per-eye height override (default: the preset's).
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Trace shadow rays (HVVR shades without them).
+    #[arg(long)]
+    pub shadows: bool,
+    /// Animate the scene's props to this time (s) and refit the BVH first (HVVR §5.2).
+    #[arg(long)]
+    pub time: Option<f32>,
+    /// Output folder.
+    #[arg(long, default_value = "out/vr")]
+    pub out: PathBuf,
+    /// Write timings and counts as JSON.
+    #[arg(long)]
+    pub stats: Option<PathBuf>,
+}
+
+/// `--msaa` values.
+pub fn parse_spp(s: &str) -> Result<u32, String> {
+    match s.parse::<u32>() {
+        Ok(v @ (1 | 4 | 8 | 16 | 32)) => Ok(v),
+        _ => Err(format!(
+            "samples per pixel must be one of 1, 4, 8, 16, 32, got {s:?}"
+        )),
+    }
+}
+
+/// The headset of the flags: the preset, or `custom` from the camera flags; size overrides.
+pub fn headset(a: &VrArgs) -> Result<HeadsetSpec> {
+    let mut spec = a.preset.spec();
+    if a.preset == Preset::Custom {
+        let opts = a.view.camera_options()?;
+        if a.view.model == ModelKind::ThinLens {
+            bail!("--preset custom: use --dof-aperture / --dof-focus for a thin lens");
+        }
+        spec.model = a.view.model;
+        if let Some(f) = a.view.fov_y {
+            spec.fov_y_deg = f;
+        }
+        spec.fov_deg = opts.fov_deg;
+        spec.ipd = a.view.ipd;
+    }
+    if let Some(w) = a.width {
+        spec.width = w;
+    }
+    if let Some(h) = a.height {
+        spec.height = h;
+    }
+    Ok(spec)
+}
+
+/// The DoF of the flags (focus defaults to the head's target distance).
+fn dof(a: &VrArgs, target_distance: f32) -> Result<Option<Dof>> {
+    let Some(aperture) = a.dof_aperture else {
+        return Ok(None);
+    };
+    let d = Dof {
+        aperture,
+        focus: a.dof_focus.unwrap_or(target_distance),
+    };
+    d.validate().map_err(anyhow::Error::msg)?;
+    Ok(Some(d))
+}
+
+/// The eye sample set: a grid, per colour channel only with `--subpixel`.
+pub fn eye_set(camera: Camera, spp: u32, subpixel: bool) -> SampleSet {
+    let mut set = SampleSet::grid(camera, spp);
+    if !subpixel && set.camera.channel_count() > 1 {
+        set.samples.retain(|s| s.channel == 1);
+    }
+    set
+}
+
+#[derive(Serialize)]
+struct VrStats {
+    scene: String,
+    preset: String,
+    width: u32,
+    height: u32,
+    spp: u32,
+    shading: String,
+    visibility: String,
+    samples: u64,
+    rays: u64,
+    update: Option<UpdateTimings>,
+    build_ms: f64,
+    eyes: Vec<parallax_render::vr::frame::EyeTimings>,
+    shades: u64,
+    shades_per_nonempty_pixel: f64,
+    mrays_per_s: f64,
+}
+
+pub fn run(a: &VrArgs, quiet: bool) -> Result<()> {
+    if let Some(g) = &a.gaze {
+        let [x, y] = match g.as_slice() {
+            [x, y] => [*x, *y],
+            _ => bail!("--gaze expects x,y in [-1, 1]"),
+        };
+        if !(x.abs() <= 1.0 && y.abs() <= 1.0) {
+            bail!("--gaze must be in [-1, 1] x [-1, 1], got {x},{y}");
+        }
+    }
+    if a.foveated {
+        bail!(
+            "--foveated: foveated sample sets are not available in this build (they come with \
+             the beam caster's sample-set constructors)"
+        );
+    }
+    let spec = headset(a)?;
+    if a.subpixel && spec.model != ModelKind::Distorted {
+        bail!(
+            "--subpixel needs a distorted eye model (preset rift-cv1 or vive, or custom with \
+             --model distorted); {} is {}",
+            spec.name,
+            spec.model.name()
+        );
+    }
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    let mut scene = a.view.load_scene()?;
+    let head = a.view.camera_desc(&scene)?;
+    let dof = dof(a, (head.target - head.eye).length())?;
+    if dof.is_some() && a.subpixel {
+        bail!("--subpixel and depth of field do not compose yet (the thin lens is undistorted)");
+    }
+    let cameras = eye_cameras(&spec, &head, dof)?;
+    let t = Instant::now();
+    let mut bvh = Bvh::try_build(&scene.mesh)?;
+    let build_ms = t.elapsed().as_secs_f64() * 1e3;
+    let update = match a.time {
+        Some(time) => {
+            let anim = RigidAnimation::for_scene(&scene);
+            let u = update_scene(&anim, &mut scene.mesh, &mut bvh, time)?;
+            if !quiet {
+                println!(
+                    "animate: {} objects ({} vertices) to t = {time} s in {:.2} ms, refit {:.2} ms",
+                    anim.tracks.len(),
+                    anim.moving_vertices(&scene.mesh),
+                    u.animate_ms,
+                    u.refit_ms
+                );
+            }
+            Some(u)
+        }
+        None => None,
+    };
+    let opts = FrameOptions {
+        spp: a.msaa,
+        mode: if a.ssaa {
+            ShadingMode::Ssaa
+        } else {
+            ShadingMode::Msaa
+        },
+        visibility: a.visibility,
+        shade: ShadeOptions { shadows: a.shadows },
+    };
+    let tm = ToneMapping {
+        exposure: 0.0,
+        tonemap: Tonemap::AcesFilmic,
+    };
+    let mut eyes: Vec<EyeFrame> = Vec::with_capacity(2);
+    for (name, cam) in ["left", "right"].into_iter().zip(cameras) {
+        let t = Instant::now();
+        let set = eye_set(cam, a.msaa, a.subpixel);
+        let samples_ms = t.elapsed().as_secs_f64() * 1e3;
+        let mut eye = render_eye_set(&scene, &bvh, set, &opts)?;
+        eye.timings.samples_ms = samples_ms;
+        let path = a.out.join(format!("{name}.png"));
+        png::write_png(&path, &eye.image, &tm)?;
+        eyes.push(eye);
+    }
+    let pattern = a.out.join("pattern.png");
+    png::write_png(
+        &pattern,
+        &pattern_image(&eyes[0].set),
+        &ToneMapping::default(),
+    )?;
+    let samples: u64 = eyes.iter().map(|e| e.set.samples.len() as u64).sum();
+    let rays: u64 = eyes.iter().map(|e| e.set.ray_count() as u64).sum();
+    let shades: u64 = eyes.iter().map(|e| e.resolved.shades).sum();
+    let nonempty: u64 = eyes.iter().map(|e| e.resolved.nonempty).sum();
+    let vis_ms: f64 = eyes.iter().map(|e| e.timings.visibility_ms).sum();
+    let stats = VrStats {
+        scene: scene.name.clone(),
+        preset: spec.name.clone(),
+        width: eyes[0].set.camera.width(),
+        height: eyes[0].set.camera.height(),
+        spp: a.msaa,
+        shading: opts.mode.name().into(),
+        visibility: a.visibility.name().into(),
+        samples,
+        rays,
+        update,
+        build_ms,
+        eyes: eyes.iter().map(|e| e.timings).collect(),
+        shades,
+        shades_per_nonempty_pixel: shades as f64 / nonempty.max(1) as f64,
+        mrays_per_s: rays as f64 / (vis_ms.max(1e-9) * 1e3),
+    };
+    if let Some(p) = &a.stats {
+        std::fs::write(p, serde_json::to_string_pretty(&stats)?)
+            .with_context(|| format!("writing {}", p.display()))?;
+    }
+    if !quiet {
+        println!(
+            "{}: preset {} ({}), {}x{} per eye, {} {}x, {} visibility, BVH {:.1} ms",
+            stats.scene,
+            spec.name,
+            eyes[0].set.camera.kind().name(),
+            stats.width,
+            stats.height,
+            stats.shading,
+            stats.spp,
+            stats.visibility,
+            build_ms
+        );
+        println!(
+            "| eye | samples | rays | samples ms | visibility ms | shade ms | reconstruct ms | shades | shades/non-empty px |"
+        );
+        println!("|---|---|---|---|---|---|---|---|---|");
+        for (name, e) in ["left", "right"].iter().zip(&eyes) {
+            println!(
+                "| {name} | {} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {} | {:.3} |",
+                e.set.samples.len(),
+                e.set.ray_count(),
+                e.timings.samples_ms,
+                e.timings.visibility_ms,
+                e.timings.shade_ms,
+                e.timings.reconstruct_ms,
+                e.resolved.shades,
+                e.resolved.shades_per_nonempty()
+            );
+        }
+        println!(
+            "both eyes: {rays} rays, {:.2} Mrays/s visibility, {shades} shades ({:.3} per non-empty pixel)",
+            stats.mrays_per_s, stats.shades_per_nonempty_pixel
+        );
+        println!(
+            "wrote {} (left.png, right.png, pattern.png)",
+            a.out.display()
+        );
+    }
+    Ok(())
+}
+
+/// `parallax bench vr` (HVVR Tables 2-6; see `parallax_render::vr::bench`).
+#[derive(Args, Debug)]
+pub struct VrBenchArgs {
+    /// Scene and head pose (atrium, cornell, or e.g. the Sponza / classroom glTF paths).
+    #[command(flatten)]
+    pub view: ViewArgs,
+    /// Both eyes' width (each eye gets half).
+    #[arg(long, default_value_t = 2160)]
+    pub width: u32,
+    /// Height.
+    #[arg(long, default_value_t = 1200)]
+    pub height: u32,
+    /// Subsamples per pixel: comma list of 1, 4, 8, 16, 32 (HVVR Table 2 uses 32).
+    #[arg(long, default_value = "8", value_delimiter = ',', value_parser = parse_spp)]
+    pub msaa: Vec<u32>,
+    /// Schemes: comma list of normal, post-distort, wide, dof-0.5, dof-0.25, dof-0.1, foveated.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "normal,post-distort,wide,dof-0.5,dof-0.25,dof-0.1,foveated"
+    )]
+    pub schemes: Vec<String>,
+    /// Also SSAA rows (HVVR Table 4).
+    #[arg(long)]
+    pub ssaa: bool,
+    /// Visibility methods: comma list of per-ray, beam.
+    #[arg(long, value_delimiter = ',', default_value = "per-ray,beam", value_parser = Visibility::parse)]
+    pub visibility: Vec<Visibility>,
+    /// Timed repetitions (the best is reported).
+    #[arg(long, default_value_t = 1)]
+    pub repeats: u32,
+    /// Write the rows as JSON.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+pub fn bench(a: &VrBenchArgs, quiet: bool) -> Result<()> {
+    use parallax_render::vr::bench::{SCHEMES, VrBenchOptions, markdown, run, update_row};
+    for s in &a.schemes {
+        if !SCHEMES.contains(&s.as_str()) {
+            bail!(
+                "unknown scheme {s:?}; expected one of {}",
+                SCHEMES.join(", ")
+            );
+        }
+    }
+    let scene = a.view.load_scene()?;
+    let head = a.view.camera_desc(&scene)?;
+    let bvh = Bvh::try_build(&scene.mesh)?;
+    let mut shading = vec![ShadingMode::Msaa];
+    if a.ssaa {
+        shading.push(ShadingMode::Ssaa);
+    }
+    let opts = VrBenchOptions {
+        width: a.width,
+        height: a.height,
+        spp: a.msaa.clone(),
+        schemes: a.schemes.clone(),
+        shading,
+        visibility: a.visibility.clone(),
+        repeats: a.repeats,
+    };
+    let update = update_row(&scene, a.repeats.max(3))?;
+    let rows = run(&scene, &bvh, &head, &opts)?;
+    if !quiet {
+        println!(
+            "| scene | vertices | triangles | moving objects | moving vertices | build ms | animate ms | refit ms |"
+        );
+        println!("|---|---|---|---|---|---|---|---|");
+        println!(
+            "| {} | {} | {} | {} | {} | {:.2} | {:.3} | {:.3} |\n",
+            update.scene,
+            update.vertices,
+            update.triangles,
+            update.moving_objects,
+            update.moving_vertices,
+            update.build_ms,
+            update.animate_ms,
+            update.refit_ms
+        );
+        print!("{}", markdown(&rows));
+    }
+    if let Some(p) = &a.json {
+        let json = serde_json::json!({ "update": update, "rows": rows });
+        std::fs::write(p, serde_json::to_string_pretty(&json)?)
+            .with_context(|| format!("writing {}", p.display()))?;
+    }
+    Ok(())
+}

@@ -1,0 +1,195 @@
+//! One HVVR frame (Hunt et al. 2018, §5): scene update (animate + BVH refit, §5.2), then per
+//! eye: sample set -> visibility (the one switch between visibility methods, [`visibility`]) ->
+//! resolve / shade (§5.6) -> reconstruct, with stage timings.
+
+use std::time::Instant;
+
+use parallax_bvh::{Bvh, BvhError};
+use parallax_core::{Image, Rgb};
+use parallax_scene::animation::{AnimationError, RigidAnimation};
+use parallax_scene::camera::Camera;
+use parallax_scene::{Scene, SceneError, TriangleMesh};
+
+use super::reconstruct::reconstruct;
+use super::resolve::{Resolved, ShadingMode, resolve};
+use super::shade::{ShadeOptions, VrShader};
+use super::{SampleSet, VisibilityBuffer, trace_per_ray};
+
+/// Errors of a VR frame.
+#[derive(Debug, thiserror::Error)]
+pub enum VrError {
+    #[error(
+        "the beam caster (--visibility beam) is not available in this build; use --visibility per-ray"
+    )]
+    BeamUnavailable,
+    #[error(
+        "foveated sample sets are not available in this build (they come with the beam caster)"
+    )]
+    FoveatedUnavailable,
+    #[error("{0}")]
+    Scene(#[from] SceneError),
+    #[error("{0}")]
+    Bvh(#[from] BvhError),
+    #[error("{0}")]
+    Animation(#[from] AnimationError),
+    #[error("{0}")]
+    Invalid(String),
+}
+
+/// Which visibility method fills the buffer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Visibility {
+    /// Every subsample ray traced on its own through the BVH (the Table 6 baseline).
+    PerRay,
+    /// HVVR's block / tile beam caster (§5.3-5.5).
+    Beam,
+}
+
+impl Visibility {
+    pub fn name(self) -> &'static str {
+        match self {
+            Visibility::PerRay => "per-ray",
+            Visibility::Beam => "beam",
+        }
+    }
+
+    pub fn parse(s: &str) -> Result<Self, String> {
+        match s {
+            "per-ray" => Ok(Visibility::PerRay),
+            "beam" => Ok(Visibility::Beam),
+            _ => Err(format!(
+                "unknown visibility method {s:?}; expected per-ray or beam"
+            )),
+        }
+    }
+}
+
+/// Visibility of `set` by `method`: the only place the method is chosen.
+pub fn visibility(
+    method: Visibility,
+    bvh: &Bvh,
+    set: &SampleSet,
+) -> Result<VisibilityBuffer, VrError> {
+    let mut out = VisibilityBuffer::new(set);
+    match method {
+        Visibility::PerRay => trace_per_ray(bvh, set, &mut out),
+        Visibility::Beam => return Err(VrError::BeamUnavailable),
+    }
+    Ok(out)
+}
+
+/// Stage times of the scene update (HVVR Table 1's "vert xform" and the refit stages).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct UpdateTimings {
+    pub animate_ms: f64,
+    pub refit_ms: f64,
+}
+
+/// Poses `mesh` at time `t` and refits `bvh` to it (§5.2).
+pub fn update_scene(
+    anim: &RigidAnimation,
+    mesh: &mut TriangleMesh,
+    bvh: &mut Bvh,
+    t: f32,
+) -> Result<UpdateTimings, VrError> {
+    let start = Instant::now();
+    anim.apply(mesh, t)?;
+    let animate_ms = start.elapsed().as_secs_f64() * 1e3;
+    let refit = bvh.refit(mesh)?;
+    Ok(UpdateTimings {
+        animate_ms,
+        refit_ms: refit.as_secs_f64() * 1e3,
+    })
+}
+
+/// How to render a frame.
+#[derive(Clone, Copy, Debug)]
+pub struct FrameOptions {
+    /// Subsamples per sample (1, 4, 8, 16 or 32).
+    pub spp: u32,
+    pub mode: ShadingMode,
+    pub visibility: Visibility,
+    pub shade: ShadeOptions,
+}
+
+/// Stage times of one eye (ms).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct EyeTimings {
+    pub samples_ms: f64,
+    pub visibility_ms: f64,
+    pub shade_ms: f64,
+    pub reconstruct_ms: f64,
+}
+
+/// One rendered eye.
+pub struct EyeFrame {
+    pub set: SampleSet,
+    pub vis: VisibilityBuffer,
+    pub resolved: Resolved,
+    /// Linear display image.
+    pub image: Image<Rgb>,
+    pub timings: EyeTimings,
+}
+
+/// Renders one eye through `camera` on a grid sample set.
+pub fn render_eye(
+    scene: &Scene,
+    bvh: &Bvh,
+    camera: Camera,
+    opts: &FrameOptions,
+) -> Result<EyeFrame, VrError> {
+    if !matches!(opts.spp, 1 | 4 | 8 | 16 | 32) {
+        return Err(VrError::Invalid(format!(
+            "samples per pixel must be 1, 4, 8, 16 or 32, got {}",
+            opts.spp
+        )));
+    }
+    let t = Instant::now();
+    let set = SampleSet::grid(camera, opts.spp);
+    let samples_ms = ms(t);
+    let mut eye = render_eye_set(scene, bvh, set, opts)?;
+    eye.timings.samples_ms = samples_ms;
+    Ok(eye)
+}
+
+/// Renders one eye's sample set `set` (its `spp` must be `opts.spp`).
+pub fn render_eye_set(
+    scene: &Scene,
+    bvh: &Bvh,
+    set: SampleSet,
+    opts: &FrameOptions,
+) -> Result<EyeFrame, VrError> {
+    if set.spp != opts.spp {
+        return Err(VrError::Invalid(format!(
+            "sample set has {} subsamples per sample, options say {}",
+            set.spp, opts.spp
+        )));
+    }
+    let samples_ms = 0.0;
+    let t = Instant::now();
+    let vis = visibility(opts.visibility, bvh, &set)?;
+    let visibility_ms = ms(t);
+    let t = Instant::now();
+    let shader = VrShader::new(scene, bvh, opts.shade);
+    let resolved = resolve(&set, &vis, &shader, opts.mode);
+    let shade_ms = ms(t);
+    let t = Instant::now();
+    let image = reconstruct(&set, &resolved.colors);
+    let reconstruct_ms = ms(t);
+    Ok(EyeFrame {
+        set,
+        vis,
+        resolved,
+        image,
+        timings: EyeTimings {
+            samples_ms,
+            visibility_ms,
+            shade_ms,
+            reconstruct_ms,
+        },
+    })
+}
+
+fn ms(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
