@@ -109,7 +109,13 @@ pub fn reference_from_images(
         )));
     }
     let camera = Pinhole::new(desc, w, h)?;
-    let clean = depth.map(|&d| if d.is_finite() && d > 0.0 { d } else { f32::INFINITY });
+    let clean = depth.map(|&d| {
+        if d.is_finite() && d > 0.0 {
+            d
+        } else {
+            f32::INFINITY
+        }
+    });
     let normals = normals_from_depth(&clean, &camera, DEFAULT_MAX_REL_ERROR)?;
     let mut g = GBuffer::new(w, h)?;
     for y in 0..h {

@@ -11,6 +11,14 @@
 //! same per-pixel random stream as [`crate::reference::render`] with one sample per pixel, so
 //! it reproduces that render wherever rasterized and traced primary visibility agree.
 //!
+//! **Noise.** The reference shading is Monte Carlo (sky visibility, emitter samples): with
+//! per-pixel streams two renders of the same view differ by ~16 dB PSNR at one sample, which
+//! would swamp every view-synthesis error. [`Shading::Fixed`] (the default here) gives every
+//! shading point the same random stream, so shading is a deterministic function of the surface
+//! point, its normal and the view direction — a banded but noise-free image, identical in the
+//! reference and in the ground truth ([`super::score::ground_truth`] uses the same choice).
+//! [`Shading::PerPixel`] reproduces [`crate::reference::render`] at one sample per pixel.
+//!
 //! `T_ref` = capture + shade (+ the tracer build, added by the caller).
 
 use std::time::Instant;
@@ -29,6 +37,27 @@ use serde::Serialize;
 use super::SynthError;
 use crate::reference::shade::Shader;
 use crate::tiles::for_each_pixel;
+
+/// Which random stream a shading point draws from (module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub enum Shading {
+    /// The same stream (of `seed`) for every shading point: noise-free, deterministic.
+    #[default]
+    Fixed,
+    /// The reference renderer's per-pixel streams (`Rng::for_pixel(seed, x, y, layer)`).
+    PerPixel,
+}
+
+impl Shading {
+    /// The stream of pixel `(x, y)`, sample / layer `k`.
+    #[inline]
+    pub fn rng(self, seed: u64, x: u32, y: u32, k: u32) -> Rng {
+        match self {
+            Shading::Fixed => Rng::for_pixel(seed, 0, 0, 0),
+            Shading::PerPixel => Rng::for_pixel(seed, x, y, k),
+        }
+    }
+}
 
 /// Milliseconds of building a reference.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
@@ -73,12 +102,13 @@ impl Reference {
 }
 
 /// Rasterizes `layers` depth layers of `camera`'s view of `scene` and shades them (seed of the
-/// per-pixel streams: `seed`).
+/// random streams: `seed`).
 pub fn capture_reference(
     scene: &Scene,
     bvh: &Bvh,
     camera: &Pinhole,
     layers: usize,
+    shading: Shading,
     seed: u64,
 ) -> Result<Reference, SynthError> {
     let t = Instant::now();
@@ -91,7 +121,7 @@ pub fn capture_reference(
     let colors = gbuffers
         .iter()
         .enumerate()
-        .map(|(k, g)| shade_layer(&shader, camera, g, k as u32, seed))
+        .map(|(k, g)| shade_layer(&shader, camera, g, k as u32, shading, seed))
         .collect();
     let shade_ms = t.elapsed().as_secs_f64() * 1e3;
     let cube = UnitCube::fit_depths(camera, gbuffers.iter().map(|g| &g.depth[..]))?;
@@ -110,7 +140,14 @@ pub fn capture_reference(
 }
 
 /// Shades every covered sample of layer `k` (see the module docs).
-fn shade_layer(shader: &Shader, camera: &Pinhole, g: &GBuffer, k: u32, seed: u64) -> Image<Rgb> {
+fn shade_layer(
+    shader: &Shader,
+    camera: &Pinhole,
+    g: &GBuffer,
+    k: u32,
+    shading: Shading,
+    seed: u64,
+) -> Image<Rgb> {
     let (w, h) = (camera.width, camera.height);
     let env = shader.scene.environment;
     let mut out = vec![env; w as usize * h as usize];
@@ -133,7 +170,7 @@ fn shade_layer(shader: &Shader, camera: &Pinhole, g: &GBuffer, k: u32, seed: u64
                 u: s.barycentrics.x,
                 v: s.barycentrics.y,
             };
-            let mut rng = Rng::for_pixel(seed, x, y, k);
+            let mut rng = shading.rng(seed, x, y, k);
             let mut rays = 0;
             *c = shader.radiance_from_hit(cr.ray, hit, &mut rng, &mut rays);
         },

@@ -49,7 +49,13 @@ impl GridMesh {
         let (w, h) = (reference.width() as usize, reference.height() as usize);
         let covered = |i: usize| g.depth[i].is_finite() && g.depth[i] > 0.0;
         let positions: Vec<Vec3> = (0..w * h)
-            .map(|i| if covered(i) { g.position[i] } else { Vec3::ZERO })
+            .map(|i| {
+                if covered(i) {
+                    g.position[i]
+                } else {
+                    Vec3::ZERO
+                }
+            })
             .collect();
         let keep = |t: [usize; 3]| {
             if !t.iter().all(|&i| covered(i)) {

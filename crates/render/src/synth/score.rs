@@ -5,16 +5,20 @@
 //! errors weigh as they look; PSNR with peak 1 over all three channels, SSIM as the mean of
 //! the per-channel SSIMs (data range 1). The same for every method.
 
+use glam::Vec2;
 use parallax_bvh::Bvh;
 use parallax_core::image::png::{ToneMapping, Tonemap, tonemap_image};
 use parallax_core::metrics::{psnr_rgb, ssim_rgb};
 use parallax_core::{Image, Rgb};
 use parallax_scene::Scene;
-use parallax_scene::camera::{Camera, Pinhole};
+use parallax_scene::camera::{Camera, CameraModel, Pinhole};
 use serde::Serialize;
 
 use super::SynthError;
+use super::layers::Shading;
+use crate::reference::shade::Shader;
 use crate::reference::{self, RenderOptions};
+use crate::tiles::for_each_pixel;
 
 /// The display transform of the scores (and of the PNGs).
 pub const SCORE_TONEMAP: ToneMapping = ToneMapping {
@@ -39,12 +43,41 @@ pub fn score(image: &Image<Rgb>, truth: &Image<Rgb>) -> Result<Score, SynthError
     })
 }
 
-/// The ground truth of a pinhole view: [`reference::render`] with `spp` samples per pixel.
-pub fn ground_truth(scene: &Scene, bvh: &Bvh, camera: &Pinhole, spp: u32, seed: u64) -> Image<Rgb> {
-    let opts = RenderOptions {
-        spp,
-        seed,
-        gbuffer: false,
-    };
-    reference::render(scene, bvh, &Camera::Pinhole(camera.clone()), &opts, &|_| {}).image
+/// The ground truth of a pinhole view: the BVH reference renderer's shading of the
+/// pixel-centre rays with the random streams of `shading` ([`Shading::PerPixel`] is exactly
+/// [`reference::render`] at one sample per pixel).
+pub fn ground_truth(
+    scene: &Scene,
+    bvh: &Bvh,
+    camera: &Pinhole,
+    shading: Shading,
+    seed: u64,
+) -> Image<Rgb> {
+    if shading == Shading::PerPixel {
+        let opts = RenderOptions {
+            spp: 1,
+            seed,
+            gbuffer: false,
+        };
+        let cam = Camera::Pinhole(camera.clone());
+        return reference::render(scene, bvh, &cam, &opts, &|_| {}).image;
+    }
+    let shader = Shader::new(scene, bvh);
+    let (w, h) = (camera.width, camera.height);
+    let mut out = vec![Rgb::ZERO; w as usize * h as usize];
+    for_each_pixel(
+        w,
+        h,
+        &mut out,
+        |x, y, c| {
+            let film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+            if let Some(cr) = camera.generate_ray(film, Vec2::splat(0.5), 1) {
+                let mut rng = shading.rng(seed, x, y, 0);
+                let mut rays = 0;
+                *c = shader.radiance(cr.ray, &mut rng, &mut rays);
+            }
+        },
+        &|_| {},
+    );
+    Image::from_vec(w, h, out).expect("camera size is valid")
 }

@@ -20,7 +20,7 @@ use parallax_scene::{CameraDesc, Scene};
 use serde::Serialize;
 
 use super::SynthError;
-use super::layers::{Reference, capture_reference};
+use super::layers::{Reference, Shading, capture_reference};
 use super::method::{Method, MethodOptions, Synthesizer};
 use super::warp::WarpedView;
 
@@ -36,6 +36,7 @@ pub struct UpsampleOptions {
     pub layers: usize,
     pub method: Method,
     pub method_opts: MethodOptions,
+    pub shading: Shading,
     pub seed: u64,
 }
 
@@ -126,7 +127,8 @@ pub fn upsample(
             ms_syn: 0.0,
         };
         if is_reference {
-            let mut r = capture_reference(scene, bvh, &camera, opts.layers, opts.seed)?;
+            let mut r =
+                capture_reference(scene, bvh, &camera, opts.layers, opts.shading, opts.seed)?;
             let t = Instant::now();
             let s = Synthesizer::build(opts.method, &r, &opts.method_opts)?;
             r.times.build_ms = t.elapsed().as_secs_f64() * 1e3;
