@@ -34,6 +34,10 @@ enum Command {
     Capture(commands::capture::CaptureArgs),
     /// Render the built-in atrium with several camera models into a folder.
     Demo(commands::demo::DemoArgs),
+    /// Stereo warping of a reference view by screen-space ray tracing (Widmer et al. 2015).
+    Warp(commands::warp::WarpArgs),
+    /// 15 -> 60 Hz temporal upsampling by screen-space ray tracing (Widmer et al. 2015).
+    Upsample(commands::upsample::UpsampleArgs),
     /// Benchmarks that reproduce the papers' and issues' measurements.
     #[command(subcommand)]
     Bench(commands::bench::BenchCommand),
@@ -56,6 +60,8 @@ fn main() -> std::process::ExitCode {
         Command::Info(a) => commands::info::run(&a),
         Command::Capture(a) => commands::capture::run(&a, cli.quiet),
         Command::Demo(a) => commands::demo::run(&a, cli.quiet),
+        Command::Warp(a) => commands::warp::run(&a, cli.quiet),
+        Command::Upsample(a) => commands::upsample::run(&a, cli.quiet),
         Command::Bench(b) => commands::bench::run(&b, cli.quiet),
     };
     match result {

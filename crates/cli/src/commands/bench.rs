@@ -12,6 +12,12 @@ use crate::args::ViewArgs;
 pub enum BenchCommand {
     /// BVH build ms and closest-hit Mrays/s for primary (coherent) and random (incoherent) rays.
     Rays(RaysArgs),
+    /// Stereo warping per method and layer count (Widmer et al. 2015, Table 2).
+    Warp(super::bench_synth::WarpBenchArgs),
+    /// 15 -> 60 Hz temporal upsampling per method and layer count (Widmer et al. 2015, Table 3).
+    Upsample(super::bench_synth::UpsampleBenchArgs),
+    /// Quad-tree compression thresholds vs time and PSNR (Widmer et al. 2015, Fig. 14/15).
+    Compression(super::bench_synth::CompressionArgs),
 }
 
 #[derive(Args, Debug)]
@@ -32,6 +38,9 @@ pub struct RaysArgs {
 
 pub fn run(cmd: &BenchCommand, quiet: bool) -> Result<()> {
     match cmd {
+        BenchCommand::Warp(a) => super::bench_synth::warp_bench(a, quiet),
+        BenchCommand::Upsample(a) => super::bench_synth::upsample_bench(a, quiet),
+        BenchCommand::Compression(a) => super::bench_synth::compression_bench(a, quiet),
         BenchCommand::Rays(a) => {
             let scene = a.view.load_scene()?;
             let camera = a.view.camera(&scene, a.width, a.height)?;

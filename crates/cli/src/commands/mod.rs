@@ -1,7 +1,10 @@
 //! One file per subcommand.
 
 pub mod bench;
+pub mod bench_synth;
 pub mod capture;
 pub mod demo;
 pub mod info;
 pub mod render;
+pub mod upsample;
+pub mod warp;
