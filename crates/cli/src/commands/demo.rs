@@ -93,6 +93,7 @@ pub fn run(a: &DemoArgs, quiet: bool) -> Result<()> {
             );
         }
     }
+    super::warp::demo_stereo(&scene, &bvh, &desc, w, h, &a.out, quiet)?;
     if !quiet {
         println!("images in {}", a.out.display());
     }
