@@ -12,7 +12,7 @@ use parallax_render::synth::input::{
 use parallax_render::synth::method::{Method, MethodOptions, Synthesizer};
 use parallax_render::synth::score::ground_truth;
 use parallax_render::synth::stereo::warp_stereo;
-use parallax_render::synth::{HitKind, Shading, capture_reference, score};
+use parallax_render::synth::{Shading, capture_reference, score};
 use parallax_scene::Scene;
 use parallax_scene::camera::{Camera, CameraModel, Pinhole};
 use parallax_screen::TraceResult;
