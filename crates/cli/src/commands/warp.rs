@@ -133,7 +133,9 @@ pub struct WarpArgs {
     /// Output folder.
     #[arg(long, default_value = "out/warp")]
     pub out: PathBuf,
-    /// Instead of a scene: a colour image (EXR R,G,B or PNG) ...
+    /// Instead of a scene: a colour image (EXR R,G,B linear, or PNG sRGB) ... The reference is
+    /// then one layer at the image's size (--width/--height/--layers ignored), posed at
+    /// --eye/--target/--up or the identity pose (origin, looking down -Z), not scored.
     #[arg(long, requires = "depth")]
     pub color: Option<PathBuf>,
     /// ... and its view depth (EXR channel Z, depth, Y or R).
