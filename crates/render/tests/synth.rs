@@ -12,7 +12,9 @@ use parallax_render::synth::input::{
 use parallax_render::synth::method::{Method, MethodOptions, Synthesizer};
 use parallax_render::synth::score::ground_truth;
 use parallax_render::synth::stereo::warp_stereo;
-use parallax_render::synth::{Shading, capture_reference, score};
+use parallax_render::synth::{
+    HiddenLayers, Shading, capture_reference, capture_reference_with, score,
+};
 use parallax_scene::Scene;
 use parallax_scene::camera::{Camera, CameraModel, Pinhole};
 use parallax_screen::TraceResult;
@@ -63,15 +65,13 @@ fn stereo_brute_layers_against_bvh_eye_views() {
         "1 layer: {p1:.2} dB ssim {s1:.4}; 2 layers: {p2:.2} dB ssim {s2:.4} deep {deep2:.4}"
     );
     // Measured at 160x120 (atrium default camera, ipd 0.26): 20.28 dB / 0.846 and
-    // 19.95 dB / 0.839 (1.6% of the pixels answered from layer 1).
+    // 20.73 dB / 0.863 (1.8% of the pixels answered from layer 1; front-facing hidden layers,
+    // see `front_facing_hidden_layers`).
     assert_eq!(deep1, 0.0);
     assert!(deep2 > 0.005 && deep2 < 0.05, "{deep2}");
     assert!(p1 > 19.5 && s1 > 0.83, "{p1} {s1}");
-    assert!(p2 > 19.2 && s2 > 0.82, "{p2} {s2}");
-    // Not better than one layer here: most layer-1 answers are rays that slipped behind
-    // layer 0's pixel planes (see `layer_one_answers_vs_bvh`), where one-layer inpainting
-    // returns the foreground colour that is usually right.
-    assert!((p2 - p1).abs() < 1.0, "{p1} vs {p2}");
+    assert!(p2 > 20.2 && s2 > 0.85, "{p2} {s2}");
+    assert!(p2 > p1 + 0.2, "{p1} vs {p2}");
 }
 
 #[test]
@@ -89,7 +89,11 @@ fn zero_ipd_reproduces_the_reference_exactly() {
         assert_eq!(v.image.data(), r.colors[0].data());
         // A few pixels may answer from layer 1 at the same depth (coincident surfaces in the
         // k-buffer); the colour is the same.
-        let deep = v.kinds.iter().filter(|k| k.layer().unwrap_or(0) != 0).count();
+        let deep = v
+            .kinds
+            .iter()
+            .filter(|k| k.layer().unwrap_or(0) != 0)
+            .count();
         assert!(deep * 100 < v.kinds.len(), "{deep}");
     }
 }
@@ -112,37 +116,44 @@ fn mesh_warp_scores() {
 
 #[test]
 fn layer_one_answers_vs_bvh() {
-    // Diagnostic measurement behind the stereo test's note: primitive agreement with the
-    // BVH G-buffer of the left eye, per answering layer.
+    // Primitive agreement with the BVH G-buffer of the left eye, per answering layer, for
+    // both kinds of hidden layers.
     let (scene, bvh) = atrium();
     let desc = scene.camera(None).unwrap();
     let cam = Pinhole::new(&desc, W, H).unwrap();
-    let mut r = capture_reference(&scene, &bvh, &cam, 2, Shading::Fixed, 0).unwrap();
-    let opts = MethodOptions::default();
-    let tracer = build_tracer(Method::Brute, &r.cube, &r.layers, &opts).unwrap();
-    let sv = warp_stereo(&mut r, &desc, IPD, Method::Brute, &opts).unwrap();
-    let eye = &sv.eyes[0];
-    let g = render_gbuffer(&scene, &bvh, &Camera::Pinhole(eye.clone()));
-    let mut agree = [[0u32; 2]; 2]; // [layer][same, different]
-    for y in 0..H {
-        for x in 0..W {
-            let film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-            let ray = eye.generate_ray(film, Vec2::splat(0.5), 1).unwrap().ray;
-            let res = tracer.trace(&ray, &mut Default::default());
-            if let TraceResult::Hit { layer, pixel, .. } = res {
-                let p = r.layers[layer as usize].get(pixel.x, pixel.y).primitive_id;
-                let l = layer.min(1) as usize;
-                agree[l][(p != g.get(x, y).primitive_id) as usize] += 1;
+    let mut layer1 = Vec::new();
+    for hidden in [HiddenLayers::All, HiddenLayers::FrontFacing] {
+        let mut r =
+            capture_reference_with(&scene, &bvh, &cam, 2, hidden, Shading::Fixed, 0).unwrap();
+        let opts = MethodOptions::default();
+        let tracer = build_tracer(Method::Brute, &r.cube, &r.layers, &opts).unwrap();
+        let sv = warp_stereo(&mut r, &desc, IPD, Method::Brute, &opts).unwrap();
+        let eye = &sv.eyes[0];
+        let g = render_gbuffer(&scene, &bvh, &Camera::Pinhole(eye.clone()));
+        let mut agree = [[0u32; 2]; 2]; // [layer][same, different]
+        for y in 0..H {
+            for x in 0..W {
+                let film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                let ray = eye.generate_ray(film, Vec2::splat(0.5), 1).unwrap().ray;
+                let res = tracer.trace(&ray, &mut Default::default());
+                if let TraceResult::Hit { layer, pixel, .. } = res {
+                    let p = r.layers[layer as usize].get(pixel.x, pixel.y).primitive_id;
+                    let l = layer.min(1) as usize;
+                    agree[l][(p != g.get(x, y).primitive_id) as usize] += 1;
+                }
             }
         }
+        eprintln!(
+            "{hidden:?}: layer 0 same/diff {:?}, layer 1 same/diff {:?}",
+            agree[0], agree[1]
+        );
+        assert!(agree[0][0] > 5 * agree[0][1], "{agree:?}");
+        layer1.push(agree[1]);
     }
-    eprintln!(
-        "layer 0 same/diff {:?}, layer 1 same/diff {:?}",
-        agree[0], agree[1]
-    );
-    // Measured: layer 0 14745 / 2263, layer 1 7 / 302.
-    assert!(agree[0][0] > 6 * agree[0][1], "{agree:?}");
-    assert!(agree[1][0] + agree[1][1] > 0);
+    // Measured: all surfaces: layer 1 7 same / 302 different (back faces behind cracks);
+    // front-facing: 192 / 145.
+    assert!(layer1[0][0] * 10 < layer1[0][1], "{layer1:?}");
+    assert!(layer1[1][0] > layer1[1][1], "{layer1:?}");
 }
 
 #[test]
@@ -212,4 +223,26 @@ fn method_names_and_unavailable_tracers() {
             assert!(e.to_string().contains("not available"), "{e}");
         }
     }
+}
+
+#[test]
+fn front_facing_hidden_layers() {
+    let (scene, bvh) = atrium();
+    let desc = scene.camera(None).unwrap();
+    let cam = Pinhole::new(&desc, W, H).unwrap();
+    let mut scores = Vec::new();
+    for hidden in [HiddenLayers::All, HiddenLayers::FrontFacing] {
+        let mut r =
+            capture_reference_with(&scene, &bvh, &cam, 2, hidden, Shading::Fixed, 0).unwrap();
+        let sv = warp_stereo(&mut r, &desc, IPD, Method::Brute, &MethodOptions::default()).unwrap();
+        let mut p = 0.0;
+        for (eye, v) in sv.eyes.iter().zip(&sv.views) {
+            let truth = ground_truth(&scene, &bvh, eye, Shading::Fixed, 0);
+            p += score(&v.image, &truth).unwrap().psnr / 2.0;
+        }
+        eprintln!("{hidden:?}: {p:.2} dB, deep {:.4}", sv.views[0].frac_deep());
+        scores.push(p);
+    }
+    // Measured: 19.95 dB (all) vs 20.73 dB (front-facing).
+    assert!(scores[1] > scores[0] + 0.4, "{scores:?}");
 }

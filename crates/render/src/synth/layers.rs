@@ -28,7 +28,7 @@ use parallax_bvh::{Bvh, Hit};
 use parallax_core::image::GBuffer;
 use parallax_core::sampling::Rng;
 use parallax_core::{Image, Rgb};
-use parallax_raster::{RasterOptions, View, capture_layers};
+use parallax_raster::{RasterOptions, View, capture_layers, capture_layers_filtered};
 use parallax_scene::Scene;
 use parallax_scene::camera::{CameraModel, Pinhole};
 use parallax_screen::UnitCube;
@@ -101,8 +101,25 @@ impl Reference {
     }
 }
 
-/// Rasterizes `layers` depth layers of `camera`'s view of `scene` and shades them (seed of the
-/// random streams: `seed`).
+/// Which surfaces the layers behind layer 0 hold.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub enum HiddenLayers {
+    /// Every surface along the pixel ray (plain depth peeling / k-buffer): behind a closed
+    /// object's front face comes its own back face.
+    All,
+    /// Only triangles facing the reference eye (geometric normal towards the eye) in layers
+    /// 1.., so the layer behind a solid object is the next front surface (the surface a
+    /// disocclusion reveals). Layer 0 is unfiltered. Assumes consistently wound (outward)
+    /// closed meshes; open, single-sided geometry seen from behind is dropped from layers 1...
+    /// The default: measured on atrium (160x120, ipd 0.26, brute force) two layers score
+    /// 19.95 dB with `All` (below one layer's 20.28 dB: rays slipping through cracks between
+    /// layer-0 pixel planes hit back faces) and 20.73 dB with `FrontFacing`.
+    #[default]
+    FrontFacing,
+}
+
+/// Rasterizes `layers` depth layers of `camera`'s view of `scene` (hidden layers:
+/// [`HiddenLayers::default`]) and shades them (seed of the random streams: `seed`).
 pub fn capture_reference(
     scene: &Scene,
     bvh: &Bvh,
@@ -111,10 +128,63 @@ pub fn capture_reference(
     shading: Shading,
     seed: u64,
 ) -> Result<Reference, SynthError> {
+    capture_reference_with(
+        scene,
+        bvh,
+        camera,
+        layers,
+        HiddenLayers::default(),
+        shading,
+        seed,
+    )
+}
+
+/// [`capture_reference`] with a choice of hidden layers.
+pub fn capture_reference_with(
+    scene: &Scene,
+    bvh: &Bvh,
+    camera: &Pinhole,
+    layers: usize,
+    hidden: HiddenLayers,
+    shading: Shading,
+    seed: u64,
+) -> Result<Reference, SynthError> {
     let t = Instant::now();
     let view = View::from_pinhole(camera)?;
     let capture = capture_layers(scene, &view, &RasterOptions::layers(layers))?;
-    let gbuffers = capture.layers.layers;
+    let mut gbuffers = capture.layers.layers;
+    if hidden == HiddenLayers::FrontFacing && layers > 1 {
+        let eye = camera.frame.position;
+        let mesh = &scene.mesh;
+        let front = |prim: u32| {
+            let [p0, _, _] = mesh.triangle(prim as usize);
+            mesh.geometric_normal(prim as usize).dot(eye - p0) > 0.0
+        };
+        let filtered =
+            capture_layers_filtered(scene, &view, &RasterOptions::layers(layers), Some(&front))?;
+        // Layer k >= 1: the k-th front-facing surface behind layer 0.
+        let behind = filtered.layers.layers;
+        let d0s = gbuffers[0].depth.clone();
+        for k in 1..layers {
+            let mut g = GBuffer::new(camera.width, camera.height)?;
+            for i in 0..g.len() {
+                let d0 = d0s[i];
+                // The j-th front-facing fragment strictly behind layer 0's depth.
+                let mut seen = 0;
+                for b in behind.iter() {
+                    let s = b.sample_at(i);
+                    if s.is_hit() && s.depth > d0 * (1.0 + 1e-4) {
+                        seen += 1;
+                        if seen == k {
+                            g.set_at(i, s);
+                            break;
+                        }
+                    }
+                }
+            }
+            gbuffers[k] = g;
+        }
+    }
     let capture_ms = t.elapsed().as_secs_f64() * 1e3;
     let t = Instant::now();
     let shader = Shader::new(scene, bvh);

@@ -16,7 +16,8 @@ use std::fmt;
 use std::str::FromStr;
 
 use parallax_core::image::GBuffer;
-use parallax_screen::{BruteForcePlanes, LayerPlanes, NormalSource, ScreenTracer, UnitCube};
+pub use parallax_screen::NormalSource;
+use parallax_screen::{BruteForcePlanes, LayerPlanes, ScreenTracer, UnitCube};
 use serde::Serialize;
 
 use parallax_scene::camera::Pinhole;

@@ -30,7 +30,9 @@ pub mod stereo;
 pub mod upsample;
 pub mod warp;
 
-pub use layers::{Reference, ReferenceTimes, Shading, capture_reference};
+pub use layers::{
+    HiddenLayers, Reference, ReferenceTimes, Shading, capture_reference, capture_reference_with,
+};
 pub use method::{Method, MethodOptions, build_tracer};
 pub use score::{Score, score};
 pub use warp::{HitKind, WarpedView, warp_view};
