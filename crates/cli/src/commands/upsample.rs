@@ -67,7 +67,12 @@ pub fn run(a: &UpsampleArgs, quiet: bool) -> Result<()> {
         frames: a.frames as u32,
         fps: 60.0,
         period: 4,
-        layers: a.layers,
+        // The mesh warp uses layer 0 only.
+        layers: if a.method == Method::Mesh {
+            1
+        } else {
+            a.layers
+        },
         method: a.method,
         method_opts: opts,
         shading: a.synth.shading,
@@ -110,7 +115,7 @@ pub fn run(a: &UpsampleArgs, quiet: bool) -> Result<()> {
         println!(
             "{} {} layer(s) {}x{}: {} references, T_ref {:.1} ms; {} synthesised, T_syn {:.1} ms; amortised {:.1} ms/frame",
             a.method,
-            a.layers,
+            uo.layers,
             a.width,
             a.height,
             refs.len(),

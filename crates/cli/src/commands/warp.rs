@@ -204,7 +204,13 @@ pub fn run(a: &WarpArgs, quiet: bool) -> Result<()> {
             let bvh = Bvh::try_build(&scene.mesh)?;
             let desc = a.view.camera_desc(&scene)?;
             let cam = Pinhole::new(&desc, a.width, a.height)?;
-            let r = capture_reference(&scene, &bvh, &cam, a.layers, a.synth.shading, a.synth.seed)?;
+            // The mesh warp uses layer 0 only.
+            let layers = if a.method == Method::Mesh {
+                1
+            } else {
+                a.layers
+            };
+            let r = capture_reference(&scene, &bvh, &cam, layers, a.synth.shading, a.synth.seed)?;
             (r, desc, Some((scene, bvh)))
         }
     };
