@@ -135,23 +135,17 @@ pub fn reference_from_images(
         }
     }
     let cube = UnitCube::fit_depths(&camera, [&g.depth[..]])?;
-    let colors = vec![color.map(|c| *c)];
+    // Uncovered pixels show the background, as in a rendered reference.
+    let shown: Vec<Rgb> = color
+        .data()
+        .iter()
+        .zip(clean.data())
+        .map(|(c, d)| if d.is_finite() { *c } else { background })
+        .collect();
     Ok(Reference {
         camera,
         layers: vec![g],
-        colors: colors
-            .into_iter()
-            .map(|c| {
-                // Uncovered pixels show the background, as in a rendered reference.
-                let data = c
-                    .data()
-                    .iter()
-                    .zip(clean.data())
-                    .map(|(c, d)| if d.is_finite() { *c } else { background })
-                    .collect();
-                Image::from_vec(w, h, data).expect("same size")
-            })
-            .collect(),
+        colors: vec![Image::from_vec(w, h, shown)?],
         cube,
         background,
         times: ReferenceTimes::default(),
