@@ -36,6 +36,10 @@ enum Command {
     Demo(commands::demo::DemoArgs),
     /// One HVVR frame for a headset preset: both eyes, MSAA/SSAA, distortion, DoF.
     Vr(commands::vr::VrArgs),
+    /// Stereo warping of a reference view by screen-space ray tracing (Widmer et al. 2015).
+    Warp(commands::warp::WarpArgs),
+    /// 15 -> 60 Hz temporal upsampling by screen-space ray tracing (Widmer et al. 2015).
+    Upsample(commands::upsample::UpsampleArgs),
     /// Benchmarks that reproduce the papers' and issues' measurements.
     #[command(subcommand)]
     Bench(commands::bench::BenchCommand),
@@ -59,6 +63,8 @@ fn main() -> std::process::ExitCode {
         Command::Capture(a) => commands::capture::run(&a, cli.quiet),
         Command::Demo(a) => commands::demo::run(&a, cli.quiet),
         Command::Vr(a) => commands::vr::run(&a, cli.quiet),
+        Command::Warp(a) => commands::warp::run(&a, cli.quiet),
+        Command::Upsample(a) => commands::upsample::run(&a, cli.quiet),
         Command::Bench(b) => commands::bench::run(&b, cli.quiet),
     };
     match result {

@@ -13,6 +13,7 @@ pub mod brdf;
 pub mod lights;
 pub mod reference;
 pub mod stats;
+pub mod synth;
 pub mod tiles;
 pub mod vr;
 

@@ -14,6 +14,12 @@ pub enum BenchCommand {
     Rays(RaysArgs),
     /// HVVR Tables 2-6: VR frame stage times, shade counts, Mrays/s vs the per-ray baseline.
     Vr(super::vr::VrBenchArgs),
+    /// Stereo warping per method and layer count (Widmer et al. 2015, Table 2).
+    Warp(super::bench_synth::WarpBenchArgs),
+    /// 15 -> 60 Hz temporal upsampling per method and layer count (Widmer et al. 2015, Table 3).
+    Upsample(super::bench_synth::UpsampleBenchArgs),
+    /// Quad-tree compression thresholds vs time and PSNR (Widmer et al. 2015, Fig. 14/15).
+    Compression(super::bench_synth::CompressionArgs),
 }
 
 #[derive(Args, Debug)]
@@ -35,6 +41,9 @@ pub struct RaysArgs {
 pub fn run(cmd: &BenchCommand, quiet: bool) -> Result<()> {
     match cmd {
         BenchCommand::Vr(a) => super::vr::bench(a, quiet),
+        BenchCommand::Warp(a) => super::bench_synth::warp_bench(a, quiet),
+        BenchCommand::Upsample(a) => super::bench_synth::upsample_bench(a, quiet),
+        BenchCommand::Compression(a) => super::bench_synth::compression_bench(a, quiet),
         BenchCommand::Rays(a) => {
             let scene = a.view.load_scene()?;
             let camera = a.view.camera(&scene, a.width, a.height)?;

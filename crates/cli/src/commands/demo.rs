@@ -94,6 +94,7 @@ pub fn run(a: &DemoArgs, quiet: bool) -> Result<()> {
         }
     }
     vr_frame(a, &scene, &bvh, &desc, quiet)?;
+    super::warp::demo_stereo(&scene, &bvh, &desc, w, h, &a.out, quiet)?;
     if !quiet {
         println!("images in {}", a.out.display());
     }

@@ -1,8 +1,11 @@
 //! One file per subcommand.
 
 pub mod bench;
+pub mod bench_synth;
 pub mod capture;
 pub mod demo;
 pub mod info;
 pub mod render;
 pub mod vr;
+pub mod upsample;
+pub mod warp;

@@ -12,7 +12,7 @@
 //! - emission seen directly or through a specular chain.
 
 use glam::{Vec2, Vec3};
-use parallax_bvh::Bvh;
+use parallax_bvh::{Bvh, Hit};
 use parallax_core::Ray;
 use parallax_core::math::Frame;
 use parallax_core::sampling::{Rng, warp};
@@ -48,13 +48,37 @@ impl<'a> Shader<'a> {
     }
 
     /// Radiance arriving along `ray`; `rays` counts every ray traced.
-    pub fn radiance(&self, mut ray: Ray, rng: &mut Rng, rays: &mut u64) -> Vec3 {
+    pub fn radiance(&self, ray: Ray, rng: &mut Rng, rays: &mut u64) -> Vec3 {
+        self.radiance_from(ray, None, rng, rays)
+    }
+
+    /// Radiance arriving along `ray` whose first surface is the known `hit` (not traced, not
+    /// counted): shades a surface found by another visibility method, e.g. a rasterized depth
+    /// layer behind the nearest surface (view synthesis, [`crate::synth`]). Everything after
+    /// the first surface (shadow rays, specular chains) is traced as in [`Self::radiance`].
+    pub fn radiance_from_hit(&self, ray: Ray, hit: Hit, rng: &mut Rng, rays: &mut u64) -> Vec3 {
+        self.radiance_from(ray, Some(hit), rng, rays)
+    }
+
+    fn radiance_from(
+        &self,
+        mut ray: Ray,
+        mut first: Option<Hit>,
+        rng: &mut Rng,
+        rays: &mut u64,
+    ) -> Vec3 {
         let mut throughput = Vec3::ONE;
         let mut radiance = Vec3::ZERO;
         for _ in 0..=MAX_SPECULAR_DEPTH {
-            *rays += 1;
-            let Some(hit) = self.bvh.closest_hit(&ray) else {
-                return radiance + throughput * self.scene.environment;
+            let hit = match first.take() {
+                Some(h) => h,
+                None => {
+                    *rays += 1;
+                    let Some(hit) = self.bvh.closest_hit(&ray) else {
+                        return radiance + throughput * self.scene.environment;
+                    };
+                    hit
+                }
             };
             let s = SurfacePoint::new(self.scene, &ray, &hit);
             let wo = -ray.dir;

@@ -1,0 +1,306 @@
+//! `parallax bench warp | upsample | compression`: the view-synthesis measurements of Widmer
+//! et al. 2015 (Table 2, Table 3, Fig. 14/15). Markdown on stdout, rows as JSON with --json;
+//! methods not available in this build give a row with the error.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result, ensure};
+use clap::Args;
+use parallax_bvh::Bvh;
+use parallax_render::bench::{compression, upsample as up, warp};
+use parallax_render::synth::method::Method;
+use parallax_render::synth::upsample::{default_path, scene_path};
+use serde::Serialize;
+
+use super::warp::SynthArgs;
+use crate::args::ViewArgs;
+use crate::progress;
+
+fn parse_methods(s: &str) -> Result<Vec<Method>> {
+    let m = Method::parse_list(s)?;
+    ensure!(!m.is_empty(), "--method needs at least one method");
+    Ok(m)
+}
+
+fn parse_layers(s: &str) -> Result<Vec<usize>> {
+    let v: Vec<usize> = s
+        .split(',')
+        .map(|t| t.trim().parse::<usize>())
+        .collect::<Result<_, _>>()
+        .with_context(|| format!("--layers expects a comma list of counts, got {s:?}"))?;
+    ensure!(
+        !v.is_empty() && v.iter().all(|&l| (1..=8).contains(&l)),
+        "--layers must be in 1..=8, got {s:?}"
+    );
+    Ok(v)
+}
+
+fn write_json<T: Serialize>(path: &Option<PathBuf>, rows: &T) -> Result<()> {
+    if let Some(p) = path {
+        std::fs::write(p, serde_json::to_string_pretty(rows)?)
+            .with_context(|| format!("writing {}", p.display()))?;
+    }
+    Ok(())
+}
+
+fn cell(v: f64, digits: usize) -> String {
+    if v.is_nan() {
+        "-".into()
+    } else {
+        format!("{v:.digits$}")
+    }
+}
+
+/// A stage reporter on stderr (silent with --quiet).
+fn reporter(quiet: bool) -> impl Fn(&str) {
+    let pb = progress::bar(0, "bench", quiet);
+    move |msg: &str| pb.set_message(msg.to_string())
+}
+
+#[derive(Args, Debug)]
+pub struct WarpBenchArgs {
+    #[command(flatten)]
+    pub view: ViewArgs,
+    #[command(flatten)]
+    pub synth: SynthArgs,
+    #[arg(long, default_value_t = 1600)]
+    pub width: u32,
+    #[arg(long, default_value_t = 900)]
+    pub height: u32,
+    /// Comma list of methods or "all".
+    #[arg(long, default_value = "all")]
+    pub method: String,
+    /// Comma list of layer counts.
+    #[arg(long, default_value = "1,2")]
+    pub layers: String,
+    /// Write the rows as JSON.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+pub fn warp_bench(a: &WarpBenchArgs, quiet: bool) -> Result<()> {
+    let layers = parse_layers(&a.layers)?;
+    let opts = a.synth.method_options()?;
+    ensure!(
+        a.view.ipd.is_finite() && a.view.ipd >= 0.0,
+        "--ipd must be >= 0"
+    );
+    let scene = a.view.load_scene()?;
+    let bvh = Bvh::try_build(&scene.mesh)?;
+    let setup = warp::StereoSetup {
+        desc: a.view.camera_desc(&scene)?,
+        width: a.width,
+        height: a.height,
+        ipd: a.view.ipd,
+        shading: a.synth.shading,
+        seed: a.synth.seed,
+        score: !a.synth.no_score,
+    };
+    let rows = warp::run(
+        &scene,
+        &bvh,
+        &setup,
+        &parse_methods(&a.method)?,
+        &layers,
+        &opts,
+        &reporter(quiet),
+    )?;
+    if !quiet {
+        println!(
+            "| method | layers | T_ref ms | T_eye ms | T_total ms | Mrays/s | nodes/ray | % layer 2+ | PSNR dB | SSIM | note |"
+        );
+        println!("|---|---|---|---|---|---|---|---|---|---|---|");
+        for r in &rows {
+            match &r.error {
+                Some(e) => println!(
+                    "| {} | {} | - | - | - | - | - | - | - | - | {e} |",
+                    r.method, r.layers
+                ),
+                None => println!(
+                    "| {} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {} | {} | |",
+                    r.method,
+                    r.layers,
+                    r.ms_ref,
+                    r.ms_view,
+                    r.ms_total,
+                    r.mrays_per_s,
+                    r.nodes_per_ray,
+                    r.pct_layer2,
+                    cell(r.psnr, 2),
+                    cell(r.ssim, 4)
+                ),
+            }
+        }
+        println!(
+            "{} {}x{}, ipd {}",
+            scene.name, a.width, a.height, a.view.ipd
+        );
+    }
+    write_json(&a.json, &rows)
+}
+
+#[derive(Args, Debug)]
+pub struct UpsampleBenchArgs {
+    #[command(flatten)]
+    pub view: ViewArgs,
+    #[command(flatten)]
+    pub synth: SynthArgs,
+    #[arg(long, default_value_t = 1600)]
+    pub width: u32,
+    #[arg(long, default_value_t = 900)]
+    pub height: u32,
+    /// Output frames at 60 Hz (1..=100000).
+    #[arg(long, default_value_t = 60, allow_negative_numbers = true)]
+    pub frames: i64,
+    /// Comma list of methods or "all".
+    #[arg(long, default_value = "all")]
+    pub method: String,
+    /// Comma list of layer counts.
+    #[arg(long, default_value = "1,2")]
+    pub layers: String,
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+pub fn upsample_bench(a: &UpsampleBenchArgs, quiet: bool) -> Result<()> {
+    ensure!(
+        (1..=100_000).contains(&a.frames),
+        "--frames must be in 1..=100000, got {}",
+        a.frames
+    );
+    let layers = parse_layers(&a.layers)?;
+    let opts = a.synth.method_options()?;
+    let scene = a.view.load_scene()?;
+    let bvh = Bvh::try_build(&scene.mesh)?;
+    let path = if a.view.eye.is_some() || a.view.camera.is_some() {
+        default_path(&a.view.camera_desc(&scene)?)?
+    } else {
+        scene_path(&scene)?
+    };
+    let setup = up::UpsampleSetup {
+        width: a.width,
+        height: a.height,
+        frames: a.frames as u32,
+        shading: a.synth.shading,
+        seed: a.synth.seed,
+        score: !a.synth.no_score,
+    };
+    let rows = up::run(
+        &scene,
+        &bvh,
+        &path,
+        &setup,
+        &parse_methods(&a.method)?,
+        &layers,
+        &opts,
+        &reporter(quiet),
+    )?;
+    if !quiet {
+        println!(
+            "| method | layers | T_ref ms | T_syn ms | T_amt ms | Mrays/s | nodes/ray | % layer 2+ | PSNR dB | SSIM | note |"
+        );
+        println!("|---|---|---|---|---|---|---|---|---|---|---|");
+        for r in &rows {
+            match &r.error {
+                Some(e) => println!(
+                    "| {} | {} | - | - | - | - | - | - | - | - | {e} |",
+                    r.method, r.layers
+                ),
+                None => println!(
+                    "| {} | {} | {:.2} | {:.2} ± {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {} | {} | |",
+                    r.method,
+                    r.layers,
+                    r.ms_ref,
+                    r.ms_view,
+                    r.ms_view_std,
+                    r.ms_amortized,
+                    r.mrays_per_s,
+                    r.nodes_per_ray,
+                    r.pct_layer2,
+                    cell(r.psnr, 2),
+                    cell(r.ssim, 4)
+                ),
+            }
+        }
+        println!(
+            "{} {}x{}, {} frames at 60 Hz, a reference every 4th",
+            scene.name, a.width, a.height, a.frames
+        );
+    }
+    write_json(&a.json, &rows)
+}
+
+#[derive(Args, Debug)]
+pub struct CompressionArgs {
+    #[command(flatten)]
+    pub view: ViewArgs,
+    #[command(flatten)]
+    pub synth: SynthArgs,
+    #[arg(long, default_value_t = 1600)]
+    pub width: u32,
+    #[arg(long, default_value_t = 900)]
+    pub height: u32,
+    /// The method whose compression is swept.
+    #[arg(long, default_value = "quadtree", value_parser = super::warp::parse_method)]
+    pub method: Method,
+    /// Depth layers.
+    #[arg(long, default_value_t = 1)]
+    pub layers: usize,
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+pub fn compression_bench(a: &CompressionArgs, quiet: bool) -> Result<()> {
+    ensure!(
+        (1..=8).contains(&a.layers),
+        "--layers must be in 1..=8, got {}",
+        a.layers
+    );
+    let opts = a.synth.method_options()?;
+    let scene = a.view.load_scene()?;
+    let bvh = Bvh::try_build(&scene.mesh)?;
+    let setup = warp::StereoSetup {
+        desc: a.view.camera_desc(&scene)?,
+        width: a.width,
+        height: a.height,
+        ipd: a.view.ipd,
+        shading: a.synth.shading,
+        seed: a.synth.seed,
+        score: !a.synth.no_score,
+    };
+    let rows = compression::run(
+        &scene,
+        &bvh,
+        &setup,
+        a.method,
+        a.layers,
+        &opts,
+        &reporter(quiet),
+    )?;
+    if !quiet {
+        println!(
+            "| sweep | gamma_norm deg | gamma_dist | adaptive | build ms | T_eye ms | nodes/ray | PSNR dB | SSIM | note |"
+        );
+        println!("|---|---|---|---|---|---|---|---|---|---|");
+        for r in &rows {
+            let note = r.error.clone().unwrap_or_default();
+            println!(
+                "| {} | {:.0} | {:.0e} | {} | {:.2} | {:.2} | {:.2} | {} | {} | {note} |",
+                r.sweep,
+                r.gamma_norm_deg,
+                r.gamma_dist,
+                r.adaptive,
+                r.ms_build,
+                r.ms_view,
+                r.nodes_per_ray,
+                cell(r.psnr, 2),
+                cell(r.ssim, 4)
+            );
+        }
+        println!(
+            "{} {}x{}, {} {} layer(s)",
+            scene.name, a.width, a.height, a.method, a.layers
+        );
+    }
+    write_json(&a.json, &rows)
+}

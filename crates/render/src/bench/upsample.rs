@@ -1,0 +1,179 @@
+//! `parallax bench upsample`: the 15 -> 60 Hz comparison of Widmer et al. 2015, Table 3. Per
+//! method and layer count the camera path is run with a reference every 4th frame
+//! ([`crate::synth::upsample`]); reported: mean `T_ref`, mean and standard deviation of
+//! `T_syn` over the synthesised frames, the amortised frame time `T_amt` (all frame times /
+//! frames), tracing Mrays/s, and the mean PSNR / SSIM of the synthesised frames against the
+//! BVH render of their cameras (optional: one reference render per synthesised frame and
+//! method).
+
+use parallax_bvh::Bvh;
+use parallax_scene::Scene;
+use parallax_scene::path::CameraPath;
+use serde::Serialize;
+
+use crate::synth::SynthError;
+use crate::synth::layers::Shading;
+use crate::synth::method::{Method, MethodOptions};
+use crate::synth::score::{ground_truth, score};
+use crate::synth::upsample::{UpsampleOptions, upsample};
+
+/// One row of Table 3.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct UpsampleRow {
+    pub method: String,
+    pub layers: usize,
+    pub scene: String,
+    pub width: u32,
+    pub height: u32,
+    pub frames: u32,
+    /// Mean `T_ref` of the reference frames.
+    pub ms_ref: f64,
+    /// Mean `T_syn` of the synthesised frames and its standard deviation.
+    pub ms_view: f64,
+    pub ms_view_std: f64,
+    /// Amortised frame time.
+    pub ms_amortized: f64,
+    pub mrays_per_s: f64,
+    pub nodes_per_ray: f64,
+    pub pct_layer2: f64,
+    /// Means over the synthesised frames (NaN when not scored).
+    pub psnr: f64,
+    pub ssim: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
+}
+
+/// Settings of the run.
+#[derive(Clone, Copy, Debug)]
+pub struct UpsampleSetup {
+    pub width: u32,
+    pub height: u32,
+    pub frames: u32,
+    pub shading: Shading,
+    pub seed: u64,
+    pub score: bool,
+}
+
+/// One method and layer count over the path.
+#[allow(clippy::too_many_arguments)]
+pub fn measure(
+    scene: &Scene,
+    bvh: &Bvh,
+    path: &CameraPath,
+    setup: &UpsampleSetup,
+    method: Method,
+    layers: usize,
+    opts: &MethodOptions,
+    progress: &dyn Fn(&str),
+) -> UpsampleRow {
+    let mut row = UpsampleRow {
+        method: method.name().into(),
+        layers,
+        scene: scene.name.clone(),
+        width: setup.width,
+        height: setup.height,
+        frames: setup.frames,
+        psnr: f64::NAN,
+        ssim: f64::NAN,
+        ..UpsampleRow::default()
+    };
+    let uo = UpsampleOptions {
+        frames: setup.frames,
+        fps: 60.0,
+        period: 4,
+        layers,
+        method,
+        method_opts: *opts,
+        shading: setup.shading,
+        seed: setup.seed,
+    };
+    let (mut psnr, mut ssim, mut scored) = (0.0, 0.0, 0u32);
+    let (mut rays, mut nodes, mut deep, mut trace_ms, mut syn) = (0u64, 0.0, 0.0, 0.0, 0u32);
+    let result = upsample(scene, bvh, path, setup.width, setup.height, &uo, &mut |f| {
+        progress(&format!("{method}, {layers} layer(s): frame {}", f.index));
+        if let Some(v) = &f.view {
+            rays += v.stats.rays;
+            nodes += v.nodes_per_ray();
+            deep += v.frac_deep();
+            trace_ms += v.ms;
+            syn += 1;
+            if setup.score {
+                let truth = ground_truth(scene, bvh, &f.camera, setup.shading, setup.seed);
+                let s = score(&v.image, &truth)?;
+                psnr += s.psnr;
+                ssim += s.ssim;
+                scored += 1;
+            }
+        }
+        Ok(())
+    });
+    let times = match result {
+        Ok(t) => t,
+        Err(e) => {
+            row.error = Some(e.to_string());
+            return row;
+        }
+    };
+    let refs: Vec<f64> = times
+        .iter()
+        .filter(|t| t.is_reference)
+        .map(|t| t.ms_ref)
+        .collect();
+    let syns: Vec<f64> = times
+        .iter()
+        .filter(|t| !t.is_reference)
+        .map(|t| t.ms_syn)
+        .collect();
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+    row.ms_ref = mean(&refs);
+    row.ms_view = mean(&syns);
+    row.ms_view_std = (syns.iter().map(|x| (x - row.ms_view).powi(2)).sum::<f64>()
+        / syns.len().max(1) as f64)
+        .sqrt();
+    row.ms_amortized = (refs.iter().sum::<f64>() + syns.iter().sum::<f64>()) / times.len() as f64;
+    row.mrays_per_s = if rays > 0 {
+        rays as f64 / (trace_ms * 1e3)
+    } else {
+        0.0
+    };
+    row.nodes_per_ray = nodes / syn.max(1) as f64;
+    row.pct_layer2 = deep * 100.0 / syn.max(1) as f64;
+    if scored > 0 {
+        row.psnr = psnr / scored as f64;
+        row.ssim = ssim / scored as f64;
+    }
+    row
+}
+
+/// Every method x layer count.
+#[allow(clippy::too_many_arguments)]
+pub fn run(
+    scene: &Scene,
+    bvh: &Bvh,
+    path: &CameraPath,
+    setup: &UpsampleSetup,
+    methods: &[Method],
+    layers: &[usize],
+    opts: &MethodOptions,
+    progress: &dyn Fn(&str),
+) -> Result<Vec<UpsampleRow>, SynthError> {
+    if layers.is_empty() || layers.iter().any(|&l| l == 0 || l > 8) {
+        return Err(SynthError::Invalid(format!(
+            "layers must be in 1..=8, got {layers:?}"
+        )));
+    }
+    if setup.frames == 0 {
+        return Err(SynthError::Invalid("frames must be >= 1".into()));
+    }
+    let mesh_layers = if layers.contains(&1) { 1 } else { layers[0] };
+    let mut rows = Vec::new();
+    for &n in layers {
+        for &m in methods {
+            if m == Method::Mesh && n != mesh_layers {
+                continue;
+            }
+            rows.push(measure(scene, bvh, path, setup, m, n, opts, progress));
+        }
+    }
+    Ok(rows)
+}

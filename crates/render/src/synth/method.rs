@@ -1,0 +1,208 @@
+//! The methods of Widmer et al. 2015, §5.1 and the ONE factory that builds their tracers.
+//!
+//! | name | what | paper |
+//! |---|---|---|
+//! | `quadtree` | adaptive quad-tree of planes / boxes (`parallax_screen::quadtree`) | §3-4, "Our" |
+//! | `dda` | perspective-correct DDA ray marching (McGuire & Mara 2014) | "DDA" |
+//! | `minmax` | min-max pyramid height-field tracing (Tevs et al. 2008) | "Height-field tracing" |
+//! | `hiz` | hierarchical-Z tracing | baseline |
+//! | `mesh` | forward warping of a grid mesh ([`super::mesh_warp`]), not a tracer | "Mesh-based warping" |
+//! | `brute` | every pixel plane of every layer ([`BruteForcePlanes`]), the slow twin | - |
+//!
+//! Only `brute` is constructed in this build; the other tracer arms return
+//! [`SynthError::Unavailable`] until their structures are merged (each arm is one line).
+
+use std::fmt;
+use std::str::FromStr;
+
+use parallax_core::image::GBuffer;
+pub use parallax_screen::NormalSource;
+use parallax_screen::{BruteForcePlanes, LayerPlanes, ScreenTracer, UnitCube};
+use serde::Serialize;
+
+use parallax_scene::camera::Pinhole;
+
+use super::SynthError;
+use super::layers::Reference;
+use super::mesh_warp::GridMesh;
+use super::warp::{WarpedView, warp_view};
+
+/// A view-synthesis method.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    QuadTree,
+    Dda,
+    MinMax,
+    HiZ,
+    Mesh,
+    Brute,
+}
+
+impl Method {
+    /// Every method, fastest-expected first.
+    pub const ALL: [Method; 6] = [
+        Method::QuadTree,
+        Method::Dda,
+        Method::MinMax,
+        Method::HiZ,
+        Method::Mesh,
+        Method::Brute,
+    ];
+
+    /// The CLI name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::QuadTree => "quadtree",
+            Method::Dda => "dda",
+            Method::MinMax => "minmax",
+            Method::HiZ => "hiz",
+            Method::Mesh => "mesh",
+            Method::Brute => "brute",
+        }
+    }
+
+    /// True for methods that trace rays (all but `mesh`).
+    pub fn is_tracer(self) -> bool {
+        self != Method::Mesh
+    }
+
+    /// A comma list of names (`"quadtree,dda"`, or `"all"`).
+    pub fn parse_list(s: &str) -> Result<Vec<Method>, SynthError> {
+        if s.trim() == "all" {
+            return Ok(Method::ALL.to_vec());
+        }
+        s.split(',')
+            .filter(|t| !t.trim().is_empty())
+            .map(|t| t.trim().parse())
+            .collect()
+    }
+}
+
+impl fmt::Display for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Method {
+    type Err = SynthError;
+    fn from_str(s: &str) -> Result<Self, SynthError> {
+        Method::ALL
+            .into_iter()
+            .find(|m| m.name() == s.to_ascii_lowercase())
+            .ok_or_else(|| SynthError::UnknownMethod(s.to_string()))
+    }
+}
+
+/// Options of every method, passed through unchanged to the structure that uses them.
+///
+/// | option | type | default | used by | meaning |
+/// |---|---|---|---|---|
+/// | `normals` | [`NormalSource`] | G-buffer | all tracers | where per-pixel plane normals come from |
+/// | `dda_max_steps` | u32 | 200 | dda | march step bound (paper: 200 stereo, 500 upsampling) |
+/// | `gamma_norm` | f32 (cos) | cos 3° | quadtree | normal-similarity merge threshold (§3.3, §6) |
+/// | `gamma_dist` | f32 | 1e-5 | quadtree | plane-distance merge threshold (§3.3, §6) |
+/// | `adaptive` | bool | false | quadtree | depth-adaptive thresholds (§6, Fig. 15) |
+/// | `max_levels` | Option<u32> | None (full) | quadtree | levels of the tree |
+/// | `inpaint` | bool | false | quadtree | single-layer inpainting traversal (§4.1) |
+/// | `mesh_max_rel_jump` | f32 | inf | mesh | split grid triangles whose depths differ by more than this fraction |
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct MethodOptions {
+    #[serde(skip)]
+    pub normals: NormalSource,
+    pub dda_max_steps: u32,
+    pub gamma_norm: f32,
+    pub gamma_dist: f32,
+    pub adaptive: bool,
+    pub max_levels: Option<u32>,
+    pub inpaint: bool,
+    pub mesh_max_rel_jump: f32,
+}
+
+impl Default for MethodOptions {
+    fn default() -> Self {
+        Self {
+            normals: NormalSource::GBuffer,
+            dda_max_steps: 200,
+            gamma_norm: 3f32.to_radians().cos(),
+            gamma_dist: 1e-5,
+            adaptive: false,
+            max_levels: None,
+            inpaint: false,
+            mesh_max_rel_jump: f32::INFINITY,
+        }
+    }
+}
+
+/// Builds the screen-space tracer of `method` over `layers` (all of the size of `cube`'s
+/// camera). `mesh` is not a tracer: use [`super::mesh_warp`].
+pub fn build_tracer(
+    method: Method,
+    cube: &UnitCube,
+    layers: &[GBuffer],
+    opts: &MethodOptions,
+) -> Result<Box<dyn ScreenTracer>, SynthError> {
+    if layers.is_empty() {
+        return Err(SynthError::Invalid("no layers to trace".into()));
+    }
+    let _ = opts;
+    match method {
+        Method::QuadTree => Err(SynthError::Unavailable(method.name().into())),
+        Method::Dda => Err(SynthError::Unavailable(method.name().into())),
+        Method::MinMax => Err(SynthError::Unavailable(method.name().into())),
+        Method::HiZ => Err(SynthError::Unavailable(method.name().into())),
+        Method::Mesh => Err(SynthError::Invalid(
+            "mesh is a forward warp, not a tracer".into(),
+        )),
+        Method::Brute => Ok(Box::new(brute(cube, layers, opts.normals)?)),
+    }
+}
+
+/// Is `method` constructible in this build?
+pub fn available(method: Method) -> bool {
+    matches!(method, Method::Mesh | Method::Brute)
+}
+
+fn brute(
+    cube: &UnitCube,
+    layers: &[GBuffer],
+    normals: NormalSource,
+) -> Result<BruteForcePlanes, SynthError> {
+    let planes = layers
+        .iter()
+        .map(|g| LayerPlanes::build(cube, g, normals))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(BruteForcePlanes {
+        cube: cube.clone(),
+        layers: planes,
+    })
+}
+
+/// A built method: a screen-space tracer, or the grid mesh of the forward warp.
+pub enum Synthesizer {
+    Tracer(Box<dyn ScreenTracer>),
+    Mesh(GridMesh),
+}
+
+impl Synthesizer {
+    /// Builds `method` over `reference` (the structure build of `T_ref`).
+    pub fn build(
+        method: Method,
+        reference: &Reference,
+        opts: &MethodOptions,
+    ) -> Result<Self, SynthError> {
+        Ok(match method {
+            Method::Mesh => Synthesizer::Mesh(GridMesh::build(reference, opts.mesh_max_rel_jump)?),
+            m => Synthesizer::Tracer(build_tracer(m, &reference.cube, &reference.layers, opts)?),
+        })
+    }
+
+    /// Synthesises `target`'s view of `reference`.
+    pub fn view(&self, reference: &Reference, target: &Pinhole) -> Result<WarpedView, SynthError> {
+        match self {
+            Synthesizer::Tracer(t) => Ok(warp_view(t.as_ref(), reference, target)),
+            Synthesizer::Mesh(m) => m.warp(target),
+        }
+    }
+}
