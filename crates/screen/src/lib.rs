@@ -16,11 +16,13 @@
 
 pub mod brute;
 pub mod planes;
+pub mod quadtree;
 pub mod space;
 pub mod tracer;
 
 pub use brute::{BruteForcePlanes, BruteResult};
 pub use planes::{LayerPlanes, NormalSource};
+pub use quadtree::{LayerMode, QuadTree, QuadTreeOptions, QuadTreeTracer};
 pub use space::{CubeSegment, UnitCube};
 pub use tracer::{ScreenTracer, TraceResult, TraceStats};
 

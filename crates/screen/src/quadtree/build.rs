@@ -1,0 +1,502 @@
+//! One layer's quad-tree: leaves from per-pixel planes (Widmer et al. 2015, §3.2) and
+//! bottom-up adaptive pruning (§3.3).
+//!
+//! **Leaves.** Pixel `(i, j)` with a plane in [`LayerPlanes`] becomes a plane node with the
+//! plane's cube normal and `z_c` = the cube `z` of the pixel's sample (the pixel-centre ray
+//! at the captured view depth, which the plane passes through), flag `O` from the normal
+//! source. Pixels without a plane, and samples in front of the cube's near plane (`z < 0`,
+//! only possible with a caller-made cube narrower than the depths), are empty.
+//!
+//! **Pruning (§3.3).** A parent becomes a plane node iff
+//! 1. all four children are plane nodes;
+//! 2. with the proxy normal `N` = the normalised mean of the (decoded) child normals, every
+//!    child normal satisfies `N·N_i > gamma_norm` (angle below `acos(gamma_norm)`);
+//! 3. the *corner distance* is below `gamma_dist`: for the 16 points `p_ij` = child `i`'s
+//!    plane at its footprint corner `j`, the proxy offset is the least-squares solution of
+//!    §3.3 with `v = (0, 0, 1)`, `c = mean_ij(N·p_ij)`, and the corner distance is
+//!    `max_ij |N·p_ij - c| / |N·v|` — the distance along the reference view direction
+//!    (cube `z` units) between child plane and proxy plane at each child corner.
+//!
+//! Otherwise the parent is an AABB node whose `[min z, max z]` is the union of its children's
+//! ranges; a plane child contributes its plane's `z` at its four footprint corners (a plane
+//! is linear, so that is its exact range over the footprint; the footprint is dilated by the
+//! crack dilation for flagged planes), widened by [`Z_EPS`] and clamped to `[0, 1]` (the
+//! ray never leaves the cube). Boxes are therefore conservative: the traversal never skips a
+//! node holding a plane the ray crosses. Merging is evaluated on the *decoded* children, so
+//! the error bound of condition 3 refers to what the tree actually stores (up to the proxy's
+//! own f16/f32 rounding).
+//!
+//! Every level is built in parallel over rows (rayon).
+
+use glam::Vec3;
+use parallax_core::GBuffer;
+use rayon::prelude::*;
+
+use super::QuadTreeOptions;
+use super::node::{FLAG_CRACK, Node, decode_plane, node_centre, plane_z};
+use crate::{LayerPlanes, ScreenError, UnitCube};
+
+/// Widening of plane z ranges in AABBs (a few f32 ulps at `z = 1`).
+pub const Z_EPS: f32 = 1e-6;
+
+/// One level: a flat row-major array of `w x h` nodes.
+#[derive(Clone, Debug)]
+pub struct Level {
+    pub w: u32,
+    pub h: u32,
+    pub nodes: Vec<Node>,
+}
+
+/// The quad-tree of one captured layer (§3).
+#[derive(Clone, Debug)]
+pub struct QuadTree {
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    pub(crate) wf: f32,
+    pub(crate) hf: f32,
+    /// Level 0 = pixels.
+    pub(crate) levels: Vec<Level>,
+    /// Crack dilation in pixels (traversal side).
+    pub(crate) crack_px: f32,
+}
+
+struct MergeCtx {
+    wf: f32,
+    hf: f32,
+    cos_norm: f32,
+    gamma_dist: f32,
+    adaptive: bool,
+    near: f64,
+    far: f64,
+    crack_px: f32,
+    never: bool,
+}
+
+impl QuadTree {
+    /// Builds the tree of `layer` (captured from `cube.camera`).
+    pub fn build(
+        cube: &UnitCube,
+        layer: &GBuffer,
+        opts: &QuadTreeOptions,
+    ) -> Result<Self, ScreenError> {
+        let planes = LayerPlanes::build(cube, layer, opts.normals)?;
+        Self::from_planes(cube, &planes, &layer.depth, opts)
+    }
+
+    /// Builds the tree from precomputed planes and the layer's view depths.
+    pub fn from_planes(
+        cube: &UnitCube,
+        planes: &LayerPlanes,
+        depth: &[f32],
+        opts: &QuadTreeOptions,
+    ) -> Result<Self, ScreenError> {
+        let (w, h) = (planes.width, planes.height);
+        if (w, h) != (cube.camera.width, cube.camera.height) || depth.len() != planes.normal.len() {
+            return Err(ScreenError::Mismatch(format!(
+                "planes {w}x{h} / {} depths vs camera {}x{}",
+                depth.len(),
+                cube.camera.width,
+                cube.camera.height
+            )));
+        }
+        if !(opts.crack_dilation.is_finite() && opts.crack_dilation >= 0.0) {
+            return Err(ScreenError::InvalidSpace(format!(
+                "crack_dilation must be finite and >= 0, got {}",
+                opts.crack_dilation
+            )));
+        }
+        let full = 32 - (w.max(h) - 1).leading_zeros() + 1; // ceil(log2 max) + 1
+        let nlev = opts.max_levels.clamp(1, full.max(1));
+        let top = nlev - 1;
+        let top_w = w.div_ceil(1 << top);
+        let top_h = h.div_ceil(1 << top);
+        let (wf, hf) = (w as f32, h as f32);
+        let ctx = MergeCtx {
+            wf,
+            hf,
+            cos_norm: opts.gamma_norm,
+            gamma_dist: opts.gamma_dist,
+            adaptive: opts.adaptive,
+            near: cube.near as f64,
+            far: cube.far as f64,
+            crack_px: opts.crack_dilation,
+            never: !(opts.gamma_norm < 1.0 && opts.gamma_dist > 0.0),
+        };
+
+        // Level 0: leaves (§3.2).
+        let (w0, h0) = (top_w << top, top_h << top);
+        let mut leaves = vec![Node::EMPTY; (w0 * h0) as usize];
+        leaves
+            .par_chunks_mut(w0 as usize)
+            .enumerate()
+            .for_each(|(j, row)| {
+                let j = j as u32;
+                if j >= h {
+                    return;
+                }
+                for i in 0..w {
+                    let k = (j * w + i) as usize;
+                    if !planes.covered(k) {
+                        continue;
+                    }
+                    let zs = cube.z_of_depth(depth[k]);
+                    let n = planes.normal[k];
+                    let flags = if planes.flag[k] { FLAG_CRACK } else { 0 };
+                    if let Some(node) = Node::plane(zs, n.x, n.y, flags) {
+                        row[i as usize] = node;
+                    }
+                }
+            });
+        let mut levels = vec![Level {
+            w: w0,
+            h: h0,
+            nodes: leaves,
+        }];
+
+        // Levels 1..: pruning (§3.3).
+        for l in 1..nlev {
+            let child = levels.last().unwrap();
+            let (pw, ph) = (child.w / 2, child.h / 2);
+            let mut nodes = vec![Node::EMPTY; (pw * ph) as usize];
+            nodes
+                .par_chunks_mut(pw as usize)
+                .enumerate()
+                .for_each(|(qy, row)| {
+                    let qy = qy as u32;
+                    for (qx, out) in row.iter_mut().enumerate() {
+                        let qx = qx as u32;
+                        let cl = l - 1;
+                        let mut kids = [Node::EMPTY; 4];
+                        let mut pos = [(0u32, 0u32); 4];
+                        for (c, (kid, p)) in kids.iter_mut().zip(pos.iter_mut()).enumerate() {
+                            let (cx, cy) = (2 * qx + (c as u32 & 1), 2 * qy + (c as u32 >> 1));
+                            *p = (cx, cy);
+                            *kid = child.nodes[(cy * child.w + cx) as usize];
+                        }
+                        *out = ctx.parent(l, qx, qy, cl, &kids, &pos);
+                    }
+                });
+            levels.push(Level {
+                w: pw,
+                h: ph,
+                nodes,
+            });
+        }
+        Ok(Self {
+            width: w,
+            height: h,
+            wf,
+            hf,
+            levels,
+            crack_px: opts.crack_dilation,
+        })
+    }
+
+    /// Number of levels (including the pixel level).
+    pub fn level_count(&self) -> usize {
+        self.levels.len()
+    }
+
+    /// Image size.
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// Node `(qx, qy)` at `level` (`Node::EMPTY` outside the padded grid).
+    pub fn node(&self, level: usize, qx: u32, qy: u32) -> Node {
+        let lv = &self.levels[level];
+        if qx < lv.w && qy < lv.h {
+            lv.nodes[(qy * lv.w + qx) as usize]
+        } else {
+            Node::EMPTY
+        }
+    }
+
+    /// Bytes of the node arrays (all levels, padding included; 8 bytes per node).
+    pub fn bytes(&self) -> usize {
+        self.levels
+            .iter()
+            .map(|l| l.nodes.len() * size_of::<Node>())
+            .sum()
+    }
+
+    /// Nodes reachable by the traversal (non-empty nodes whose ancestors are all AABBs).
+    pub fn node_count(&self) -> usize {
+        self.count().0
+    }
+
+    /// Plane nodes reachable by the traversal (leaves of the pruned tree).
+    pub fn plane_node_count(&self) -> usize {
+        self.count().1
+    }
+
+    fn count(&self) -> (usize, usize) {
+        let top = self.levels.len() - 1;
+        let lv = &self.levels[top];
+        let mut acc = (0, 0);
+        for qy in 0..lv.h {
+            for qx in 0..lv.w {
+                self.count_rec(top, qx, qy, &mut acc);
+            }
+        }
+        acc
+    }
+
+    fn count_rec(&self, l: usize, qx: u32, qy: u32, acc: &mut (usize, usize)) {
+        let n = self.node(l, qx, qy);
+        if n.is_plane() {
+            acc.0 += 1;
+            acc.1 += 1;
+        } else if !n.is_empty() {
+            acc.0 += 1;
+            if l > 0 {
+                for c in 0..4 {
+                    self.count_rec(l - 1, 2 * qx + (c & 1), 2 * qy + (c >> 1), acc);
+                }
+            }
+        }
+    }
+
+    /// The plane node the traversal uses at pixel `(i, j)` (the topmost plane ancestor) with
+    /// its level and position, if any.
+    pub fn effective_node(&self, i: u32, j: u32) -> Option<(Node, u32, u32, u32)> {
+        for l in (0..self.levels.len()).rev() {
+            let (qx, qy) = (i >> l, j >> l);
+            let n = self.node(l, qx, qy);
+            if n.is_plane() {
+                return Some((n, l as u32, qx, qy));
+            }
+            if n.is_empty() {
+                return None;
+            }
+        }
+        None
+    }
+
+    /// The brute-force twin of this tree: per pixel, the decoded plane of its effective
+    /// plane node ([`Self::effective_node`]) in [`LayerPlanes`] form (offset computed by the
+    /// same f32 code as the traversal). With lossless settings these are the quantised pixel
+    /// planes; with lossy settings every pixel of a merged node carries the proxy plane.
+    /// `flag` holds the crack flag `O`.
+    pub fn effective_planes(&self) -> LayerPlanes {
+        let (w, h) = (self.width, self.height);
+        let n = (w * h) as usize;
+        let mut normal = vec![Vec3::ZERO; n];
+        let mut offset = vec![0.0; n];
+        let mut flag = vec![false; n];
+        for j in 0..h {
+            for i in 0..w {
+                if let Some((node, l, qx, qy)) = self.effective_node(i, j) {
+                    let k = (j * w + i) as usize;
+                    let (nn, c) = decode_plane(node, l, qx, qy, self.wf, self.hf);
+                    normal[k] = nn;
+                    offset[k] = c;
+                    flag[k] = node.flags() & FLAG_CRACK != 0;
+                }
+            }
+        }
+        LayerPlanes {
+            width: w,
+            height: h,
+            normal,
+            offset,
+            flag,
+        }
+    }
+
+    /// Marks the pixels of `mask` (`W x H`) unsafe for cascading: every node above an unsafe
+    /// pixel gets [`Node::mark_unsafe`] (plane: flag; AABB: `min z = 0`).
+    pub(crate) fn mark_unsafe(&mut self, mask: &[bool]) {
+        let (w, h) = (self.width, self.height);
+        let mut cur: Vec<bool> = {
+            let lv = &self.levels[0];
+            let mut m = vec![false; lv.nodes.len()];
+            for j in 0..h {
+                for i in 0..w {
+                    m[(j * lv.w + i) as usize] = mask[(j * w + i) as usize];
+                }
+            }
+            m
+        };
+        for l in 0..self.levels.len() {
+            if l > 0 {
+                let (cw, pw, ph) = (self.levels[l - 1].w, self.levels[l].w, self.levels[l].h);
+                let mut next = vec![false; (pw * ph) as usize];
+                for qy in 0..ph {
+                    for qx in 0..pw {
+                        let c = |dx: u32, dy: u32| cur[((2 * qy + dy) * cw + 2 * qx + dx) as usize];
+                        next[(qy * pw + qx) as usize] = c(0, 0) || c(1, 0) || c(0, 1) || c(1, 1);
+                    }
+                }
+                cur = next;
+            }
+            for (node, &m) in self.levels[l].nodes.iter_mut().zip(&cur) {
+                if m {
+                    node.mark_unsafe();
+                }
+            }
+        }
+    }
+}
+
+impl MergeCtx {
+    /// Cube-space footprint of node `(qx, qy)` at `level`, dilated by `dil` pixels.
+    #[inline]
+    fn footprint(&self, level: u32, qx: u32, qy: u32, dil: f32) -> [f32; 4] {
+        let size = (1u32 << level) as f32;
+        [
+            (qx as f32 * size - dil) / self.wf,
+            ((qx + 1) as f32 * size + dil) / self.wf,
+            (qy as f32 * size - dil) / self.hf,
+            ((qy + 1) as f32 * size + dil) / self.hf,
+        ]
+    }
+
+    /// Conservative `[zmin, zmax]` of a node over its footprint.
+    fn zrange(&self, node: Node, level: u32, qx: u32, qy: u32) -> (f32, f32) {
+        if !node.is_plane() {
+            return node.zrange();
+        }
+        let (n, c) = decode_plane(node, level, qx, qy, self.wf, self.hf);
+        let dil = if node.flags() & FLAG_CRACK != 0 {
+            self.crack_px
+        } else {
+            0.0
+        };
+        let [x0, x1, y0, y1] = self.footprint(level, qx, qy, dil);
+        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+        for (x, y) in [(x0, y0), (x1, y0), (x0, y1), (x1, y1)] {
+            let z = plane_z(n, c, x, y);
+            if z.is_nan() {
+                return (0.0, 1.0);
+            }
+            lo = lo.min(z);
+            hi = hi.max(z);
+        }
+        ((lo - Z_EPS).clamp(0.0, 1.0), (hi + Z_EPS).clamp(0.0, 1.0))
+    }
+
+    /// The parent of `kids` (children at level `cl`, positions `pos`, in order
+    /// (0,0), (1,0), (0,1), (1,1)); the parent is `(qx, qy)` at level `l`.
+    fn parent(
+        &self,
+        l: u32,
+        qx: u32,
+        qy: u32,
+        cl: u32,
+        kids: &[Node; 4],
+        pos: &[(u32, u32); 4],
+    ) -> Node {
+        if !self.never
+            && kids.iter().all(|k| k.is_plane())
+            && let Some(p) = self.merge(l, qx, qy, cl, kids, pos)
+        {
+            return p;
+        }
+        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+        for (k, &(cx, cy)) in kids.iter().zip(pos) {
+            let (a, b) = self.zrange(*k, cl, cx, cy);
+            lo = lo.min(a);
+            hi = hi.max(b);
+        }
+        if lo > hi {
+            Node::EMPTY
+        } else {
+            Node::aabb(lo, hi)
+        }
+    }
+
+    /// §3.3: the proxy plane of four plane children, if the three conditions hold.
+    fn merge(
+        &self,
+        l: u32,
+        qx: u32,
+        qy: u32,
+        cl: u32,
+        kids: &[Node; 4],
+        pos: &[(u32, u32); 4],
+    ) -> Option<Node> {
+        let mut planes = [(Vec3::ZERO, 0.0f32); 4];
+        let mut sum = Vec3::ZERO;
+        let mut flags = 0;
+        for (i, (k, &(cx, cy))) in kids.iter().zip(pos).enumerate() {
+            planes[i] = decode_plane(*k, cl, cx, cy, self.wf, self.hf);
+            sum += planes[i].0;
+            flags |= k.flags() & FLAG_CRACK;
+        }
+        let nn = sum.normalize_or_zero();
+        if !(nn.z < -1e-6) {
+            return None;
+        }
+        let min_cos = planes
+            .iter()
+            .map(|p| p.0.dot(nn))
+            .fold(f32::INFINITY, f32::min);
+        // Cheap early reject with the loosest threshold this node could get.
+        let loosest = if self.adaptive {
+            self.cos_thr(1.0)
+        } else {
+            self.cos_norm
+        };
+        if !(min_cos > loosest) {
+            return None;
+        }
+        let mut proj = [0.0f32; 16];
+        let mut m = 0;
+        for (i, &(cx, cy)) in pos.iter().enumerate() {
+            let (n, c) = planes[i];
+            let [x0, x1, y0, y1] = self.footprint(cl, cx, cy, 0.0);
+            for (x, y) in [(x0, y0), (x1, y0), (x0, y1), (x1, y1)] {
+                let z = plane_z(n, c, x, y);
+                if !z.is_finite() {
+                    return None;
+                }
+                proj[m] = nn.dot(Vec3::new(x, y, z));
+                m += 1;
+            }
+        }
+        let c = proj.iter().sum::<f32>() / 16.0;
+        let dmax = proj.iter().map(|p| (p - c).abs()).fold(0.0f32, f32::max) / -nn.z;
+        let (xc, yc) = node_centre(l, qx, qy, self.wf, self.hf);
+        let zc = plane_z(nn, c, xc, yc);
+        let u = if self.adaptive {
+            self.depth_fraction(zc)
+        } else {
+            0.0
+        };
+        if min_cos > self.cos_thr(u) && dmax < self.dist_thr(u) {
+            Node::plane(zc, nn.x, nn.y, flags)
+        } else {
+            None
+        }
+    }
+
+    /// Linear depth fraction `(d - near) / (far - near)` of cube `z`, in `[0, 1]`.
+    fn depth_fraction(&self, z: f32) -> f32 {
+        let (n, f) = (self.near, self.far);
+        let inv_d = 1.0 / n - z as f64 * (1.0 / n - 1.0 / f);
+        if !(inv_d > 0.0) {
+            return 1.0;
+        }
+        (((1.0 / inv_d) - n) / (f - n)).clamp(0.0, 1.0) as f32
+    }
+
+    fn cos_thr(&self, u: f32) -> f32 {
+        if !self.adaptive || self.cos_norm >= 1.0 {
+            return self.cos_norm;
+        }
+        let a0 = self.cos_norm.clamp(-1.0, 1.0).acos();
+        let cap = 25f32.to_radians().max(a0);
+        (a0 * (1.0 + (super::ADAPTIVE_SCALE - 1.0) * u))
+            .min(cap)
+            .cos()
+    }
+
+    fn dist_thr(&self, u: f32) -> f32 {
+        if !self.adaptive {
+            return self.gamma_dist;
+        }
+        let cap = 0.1f32.max(self.gamma_dist);
+        (self.gamma_dist * (1.0 + (super::ADAPTIVE_SCALE - 1.0) * u)).min(cap)
+    }
+}
