@@ -58,6 +58,9 @@ pub struct QuadTree {
     pub(crate) levels: Vec<Level>,
     /// Crack dilation in pixels (traversal side).
     pub(crate) crack_px: f32,
+    /// Per pixel (`W x H`), the trigger depth of unsafe pixels (cascade); empty when the
+    /// layer is the last one.
+    pub(crate) trigger_z: Vec<f32>,
 }
 
 struct MergeCtx {
@@ -189,6 +192,7 @@ impl QuadTree {
             hf,
             levels,
             crack_px: opts.crack_dilation,
+            trigger_z: Vec::new(),
         })
     }
 
@@ -304,35 +308,41 @@ impl QuadTree {
         }
     }
 
-    /// Marks the pixels of `mask` (`W x H`) unsafe for cascading: every node above an unsafe
-    /// pixel gets [`Node::mark_unsafe`] (plane: flag; AABB: `min z = 0`).
-    pub(crate) fn mark_unsafe(&mut self, mask: &[bool]) {
+    /// Marks pixels unsafe for cascading: `tz[k]` (`W x H`) is the cube `z` from which the
+    /// column of pixel `k` belongs to the trigger region (`+inf`: safe). Pixel-level plane
+    /// nodes get [`super::node::FLAG_UNSAFE`] and keep `tz` in [`Self::trigger_z`]; empty
+    /// pixels become AABBs `(tz, -inf)`; every AABB above lowers its `min z` to the minimum
+    /// `tz` below it; merged plane nodes above an unsafe pixel get the flag and trigger on
+    /// footprint entry (conservative).
+    pub(crate) fn mark_unsafe(&mut self, tz: &[f32]) {
         let (w, h) = (self.width, self.height);
-        let mut cur: Vec<bool> = {
+        let mut cur: Vec<f32> = {
             let lv = &self.levels[0];
-            let mut m = vec![false; lv.nodes.len()];
+            let mut m = vec![f32::INFINITY; lv.nodes.len()];
             for j in 0..h {
                 for i in 0..w {
-                    m[(j * lv.w + i) as usize] = mask[(j * w + i) as usize];
+                    m[(j * lv.w + i) as usize] = tz[(j * w + i) as usize];
                 }
             }
             m
         };
+        self.trigger_z = tz.to_vec();
         for l in 0..self.levels.len() {
             if l > 0 {
                 let (cw, pw, ph) = (self.levels[l - 1].w, self.levels[l].w, self.levels[l].h);
-                let mut next = vec![false; (pw * ph) as usize];
+                let mut next = vec![f32::INFINITY; (pw * ph) as usize];
                 for qy in 0..ph {
                     for qx in 0..pw {
                         let c = |dx: u32, dy: u32| cur[((2 * qy + dy) * cw + 2 * qx + dx) as usize];
-                        next[(qy * pw + qx) as usize] = c(0, 0) || c(1, 0) || c(0, 1) || c(1, 1);
+                        next[(qy * pw + qx) as usize] =
+                            c(0, 0).min(c(1, 0)).min(c(0, 1)).min(c(1, 1));
                     }
                 }
                 cur = next;
             }
             for (node, &m) in self.levels[l].nodes.iter_mut().zip(&cur) {
-                if m {
-                    node.mark_unsafe();
+                if m.is_finite() {
+                    node.mark_unsafe(m);
                 }
             }
         }

@@ -23,15 +23,22 @@
 //! layer `j > k` with a plane at `p`, layer `k` has a plane at `p` and at all four footprint
 //! corners `(x, y)` the point `X_j = (x, y, z_j(x, y))` of plane `j` satisfies
 //! `f_k(X_j) <= -1e-6` (a margin above f32 rounding). Otherwise `p` is *unsafe*
-//! ([`super::node::FLAG_UNSAFE`]; an unsafe empty pixel becomes an AABB leaf with
-//! `min z = 0`, and every AABB above an unsafe pixel gets `min z = 0`). The trigger region
-//! `T_k` is `{X in C_p : f_k(X) < 0}` for safe `p` and all of `C_p` for unsafe `p`.
+//! ([`super::node::FLAG_UNSAFE`]) with *trigger depth* `tz_p` = the minimum over deeper
+//! planes of their corner `z`, minus the margin (0 if a deeper plane is seen edge-on,
+//! `N_j.z ≈ 0`). The trigger region is `T_k ∩ C_p = {f_k(X) < 0}` for safe `p` and
+//! `{f_k(X) < 0} ∪ {z >= tz_p}` for unsafe `p` (`{z >= tz_p}` alone where layer `k` is
+//! empty). Storage: `tz` lives in a per-pixel side array read only at unsafe leaves; an
+//! unsafe empty pixel becomes the AABB leaf `(tz, -inf)`; every AABB above lowers its
+//! `min z` to the smallest `tz` below it; a merged plane node above an unsafe pixel triggers
+//! on footprint entry (conservative).
 //!
 //! **Lemma 1.** Every point `X` of a deeper plane `j > k` in `C_p`, and every point behind
-//! it, lies in `T_k` or on layer `k`'s plane. *Proof.* Unsafe: `T_k ⊇ C_p`. Safe: `f_k` is
-//! affine, so on the footprint square `g(x, y) = f_k(x, y, z_j(x, y))` is affine and its
-//! maximum is at a corner, `<= -1e-6 < 0`; `N_k.z <= 0` makes `f_k` non-increasing in `z`,
-//! so points behind plane `j` have `f_k` smaller still. ∎
+//! it, lies in `T_k` or on layer `k`'s plane. *Proof.* Unsafe: plane `j` is affine over the
+//! footprint square, so its `z` there is at least its smallest corner `z >= tz_p`, and points
+//! behind it have larger `z`. Safe: `f_k` is affine, so on the footprint square
+//! `g(x, y) = f_k(x, y, z_j(x, y))` is affine and its maximum is at a corner,
+//! `<= -1e-6 < 0`; `N_k.z <= 0` makes `f_k` non-increasing in `z`, so points behind plane
+//! `j` have `f_k` smaller still. ∎
 //!
 //! **Lemma 2.** If the ray enters `T_k` first at `s_k` (its first point in `T_k`), then no
 //! plane of a layer `j > k` is hit, and no occlusion volume of such a layer is entered,
@@ -117,9 +124,9 @@ impl QuadTreeTracer {
                     break;
                 }
                 let t = Instant::now();
-                let mask = unsafe_mask(&eff, k);
-                unsafe_pixels[k] = mask.iter().filter(|&&m| m).count();
-                trees[k].mark_unsafe(&mask);
+                let tz = trigger_depths(&eff, k);
+                unsafe_pixels[k] = tz.iter().filter(|z| z.is_finite()).count();
+                trees[k].mark_unsafe(&tz);
                 *ms += t.elapsed().as_secs_f64() * 1e3;
             }
         }
@@ -144,18 +151,21 @@ impl QuadTreeTracer {
     }
 
     /// Pixels per layer marked unsafe for cascading (0 for the last layer).
+    /// See the module docs.
     pub fn unsafe_pixels(&self) -> &[usize] {
         &self.unsafe_pixels
     }
 }
 
-/// Unsafe pixels of layer `k` against all deeper layers (module docs, "Trigger region").
-fn unsafe_mask(eff: &[LayerPlanes], k: usize) -> Vec<bool> {
+/// Trigger depths of layer `k` against all deeper layers (module docs, "Trigger region"):
+/// `+inf` for safe pixels, else the minimum over deeper planes of their footprint-corner
+/// `z` minus [`SAFE_MARGIN`] (0 for a deeper plane seen edge-on).
+fn trigger_depths(eff: &[LayerPlanes], k: usize) -> Vec<f32> {
     let pk = &eff[k];
     let (w, h) = (pk.width, pk.height);
     let (wf, hf) = (w as f32, h as f32);
-    let mut mask = vec![false; (w * h) as usize];
-    mask.par_chunks_mut(w as usize)
+    let mut tz = vec![f32::INFINITY; (w * h) as usize];
+    tz.par_chunks_mut(w as usize)
         .enumerate()
         .for_each(|(j, row)| {
             let j = j as u32;
@@ -164,45 +174,53 @@ fn unsafe_mask(eff: &[LayerPlanes], k: usize) -> Vec<bool> {
                 let idx = (j * w + i) as usize;
                 let (x0, x1) = (i as f32 / wf, (i + 1) as f32 / wf);
                 let mut bad = false;
+                let mut front = f32::INFINITY;
                 for pj in &eff[k + 1..] {
                     if !pj.covered(idx) {
                         continue;
                     }
-                    if !pk.covered(idx) {
-                        bad = true;
-                        break;
-                    }
                     let (nj, cj) = (pj.normal[idx], pj.offset[idx]);
                     if !(nj.z < -1e-6) {
                         bad = true;
-                        break;
+                        front = 0.0;
+                        continue;
                     }
                     for (x, y) in [(x0, y0), (x1, y0), (x0, y1), (x1, y1)] {
                         let z = plane_z(nj, cj, x, y);
-                        let f = pk.side(idx, glam::Vec3::new(x, y, z));
+                        front = front.min(z);
+                        let f = if pk.covered(idx) {
+                            pk.side(idx, glam::Vec3::new(x, y, z))
+                        } else {
+                            f32::NAN
+                        };
                         if !(f <= -SAFE_MARGIN) {
                             bad = true;
-                            break;
                         }
                     }
-                    if bad {
-                        break;
-                    }
                 }
-                row[i as usize] = bad;
+                if bad {
+                    let t = front - SAFE_MARGIN;
+                    row[i as usize] = if t > 0.0 { t } else { 0.0 };
+                }
             }
         });
-    mask
+    tz
 }
 
 impl QuadTreeTracer {
     /// Traces `ray` through the layers; see the module docs for the semantics.
     pub fn trace_ray(&self, ray: &Ray, stats: &mut TraceStats) -> TraceResult {
+        self.trace_layers(ray, stats).0
+    }
+
+    /// [`Self::trace_ray`] and the number of layers the ray was traversed in (0 when it
+    /// misses the cube, 1 when layer 0 settled it, ...).
+    pub fn trace_layers(&self, ray: &Ray, stats: &mut TraceStats) -> (TraceResult, usize) {
         let Some(seg) = self.cube.clip_ray(ray) else {
-            return TraceResult::Miss;
+            return (TraceResult::Miss, 0);
         };
         if !(seg.p0.is_finite() && seg.p1.is_finite()) {
-            return TraceResult::Miss;
+            return (TraceResult::Miss, 0);
         }
         let t0 = &self.trees[0];
         let rs = RaySetup::new(&seg, t0.wf, t0.hf);
@@ -217,7 +235,9 @@ impl QuadTreeTracer {
         let mut best_hit: Option<(f32, UVec2, u32)> = None;
         let mut best_ov: Option<(f32, UVec2, u32)> = None;
         let mut inpainted = false;
+        let mut reached = 0;
         for (k, tree) in self.trees.iter().enumerate() {
+            reached = k + 1;
             let last = k + 1 == nl;
             q.want_trigger = !last;
             q.stop_at_ov = last && self.opts.mode == LayerMode::Inpaint;
@@ -255,22 +275,24 @@ impl QuadTreeTracer {
         if !inpainted && let Some((s, pixel, layer)) = best_hit {
             stats.hits += 1;
             let t = seg.world_t(s);
-            return TraceResult::Hit {
+            let r = TraceResult::Hit {
                 layer,
                 pixel,
                 position: ray.at(t),
                 t,
             };
+            return (r, reached);
         }
         if let Some((s, pixel, layer)) = best_ov {
             stats.occlusion_volumes += 1;
-            return TraceResult::OcclusionVolume {
+            let r = TraceResult::OcclusionVolume {
                 layer,
                 pixel,
                 t: seg.world_t(s),
             };
+            return (r, reached);
         }
-        TraceResult::Miss
+        (TraceResult::Miss, reached)
     }
 }
 

@@ -123,12 +123,14 @@ impl Node {
         Vec3::new(nx, ny, nz)
     }
 
-    /// Sets plane flags / lowers an AABB's `zmin` to 0 (see [`super::cascade`]).
-    pub(crate) fn mark_unsafe(&mut self) {
+    /// Sets the plane flag / lowers an AABB's `zmin` to `tz` (see [`super::cascade`]).
+    pub(crate) fn mark_unsafe(&mut self, tz: f32) {
         if self.is_plane() {
             self.a |= FLAG_UNSAFE;
         } else {
-            self.a = 0.0f32.to_bits();
+            let (lo, _) = self.zrange();
+            let z = if tz < lo { tz.max(0.0) } else { lo };
+            self.a = z.to_bits();
         }
     }
 }
@@ -170,7 +172,7 @@ mod tests {
         let nn = n.normal();
         assert!((nn - Vec3::new(0.1, -0.2, -(1.0f32 - 0.05).sqrt())).length() < 1e-3);
         let mut m = n;
-        m.mark_unsafe();
+        m.mark_unsafe(0.5);
         assert_eq!(m.flags(), FLAG_CRACK | FLAG_UNSAFE);
         assert_eq!(m.zc(), n.zc());
         assert!(Node::EMPTY.is_empty() && !Node::EMPTY.is_plane());

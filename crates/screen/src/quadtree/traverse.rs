@@ -81,6 +81,21 @@ impl RaySetup {
         self.o[a] + self.dg[a] * s
     }
 
+    /// First parameter in `[a, b]` where the ray's cube `z >= tz`.
+    #[inline(always)]
+    pub fn z_entry(&self, a: f32, b: f32, tz: f32) -> Option<f32> {
+        let za = self.p0.z + self.d.z * a;
+        if za >= tz {
+            return Some(a);
+        }
+        let zb = self.p0.z + self.d.z * b;
+        if zb >= tz && self.d.z > 0.0 {
+            Some(((tz - self.p0.z) / self.d.z).clamp(a, b))
+        } else {
+            None
+        }
+    }
+
     /// Pixel cell on axis `a` at `s` (boundary ties go along the direction), clamped to
     /// `[lo, hi]`.
     #[inline(always)]
@@ -158,8 +173,14 @@ impl QuadTree {
                 if t_in <= t_out {
                     let (n, c) = decode_plane(node, l as u32, qx, qy, wf, hf);
                     let flags = node.flags();
+                    let mut trig = None;
                     if flags & FLAG_UNSAFE != 0 && q.want_trigger && ev.trigger.is_none() {
-                        ev.trigger = Some(t_in);
+                        trig = if l == 0 {
+                            let tz = self.trigger_z[(qy * w + qx) as usize];
+                            ray.z_entry(t_in, t_out, tz)
+                        } else {
+                            Some(t_in)
+                        };
                     }
                     let f0 = n.dot(ray.p0) - c;
                     let fd = n.dot(ray.d);
@@ -176,6 +197,11 @@ impl QuadTree {
                         } else {
                             ta
                         };
+                        if let Some(t) = trig
+                            && t <= sh
+                        {
+                            ev.trigger = Some(t);
+                        }
                         if sh < q.s_hi || (q.hi_inclusive && sh <= q.s_hi) {
                             let px = self.pixel_in(ray, sh, l, qx, qy);
                             ev.hit = Some((sh, px));
@@ -184,11 +210,15 @@ impl QuadTree {
                     } else if fa < 0.0 && ev.ov.is_none() {
                         ev.ov = Some((t_in, self.pixel_in(ray, t_in, l, qx, qy)));
                         if q.want_trigger && ev.trigger.is_none() {
-                            ev.trigger = Some(t_in);
+                            trig = Some(t_in);
                         }
                         if q.stop_at_ov {
+                            ev.trigger = ev.trigger.or(trig);
                             break;
                         }
+                    }
+                    if ev.trigger.is_none() {
+                        ev.trigger = trig;
                     }
                     need_ext = (q.want_trigger && ev.trigger.is_none()) || ev.ov.is_none();
                 }
@@ -204,8 +234,8 @@ impl QuadTree {
                             // A pixel-level AABB holds no plane: it is an empty pixel marked
                             // unsafe for cascading (its whole column triggers).
                             if q.want_trigger && ev.trigger.is_none() {
-                                ev.trigger = Some(t_in);
-                                need_ext = ev.ov.is_none();
+                                ev.trigger = ray.z_entry(t_in, t_out, zmin);
+                                need_ext = ev.trigger.is_none() || ev.ov.is_none();
                             }
                         } else {
                             descend = true;

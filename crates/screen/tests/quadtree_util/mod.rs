@@ -220,3 +220,19 @@ pub fn twin(qt: &QuadTreeTracer) -> BruteForcePlanes {
 pub fn cube(cam: &Pinhole, layers: &[GBuffer]) -> UnitCube {
     UnitCube::fit_depths(cam, layers.iter().map(|g| &g.depth[..])).unwrap()
 }
+
+/// One ray per pixel of the reference camera moved by `shift` metres along its right axis
+/// (a stereo eye for `shift = ipd / 2`).
+pub fn stereo_rays(cam: &Pinhole, shift: f32) -> Vec<Ray> {
+    let o = cam.frame.position + cam.frame.right() * shift;
+    let mut out = Vec::with_capacity((cam.width * cam.height) as usize);
+    for y in 0..cam.height {
+        for x in 0..cam.width {
+            out.push(Ray::new(
+                o,
+                film_dir(cam, Vec2::new(x as f32 + 0.5, y as f32 + 0.5)),
+            ));
+        }
+    }
+    out
+}
