@@ -29,12 +29,13 @@
 //! Every level is built in parallel over rows (rayon).
 
 use glam::Vec3;
-use parallax_core::GBuffer;
+use parallax_core::{GBuffer, Image};
+use parallax_raster::normals::normals_from_depth;
 use rayon::prelude::*;
 
 use super::QuadTreeOptions;
 use super::node::{FLAG_CRACK, Node, decode_plane, node_centre, plane_z};
-use crate::{LayerPlanes, ScreenError, UnitCube};
+use crate::{LayerPlanes, NormalSource, ScreenError, UnitCube};
 
 /// Widening of plane z ranges in AABBs (a few f32 ulps at `z = 1`).
 pub const Z_EPS: f32 = 1e-6;
@@ -76,14 +77,52 @@ struct MergeCtx {
 }
 
 impl QuadTree {
-    /// Builds the tree of `layer` (captured from `cube.camera`).
+    /// Builds the tree of `layer` (captured from `cube.camera`). The leaves are computed in
+    /// parallel with exactly the arithmetic of [`LayerPlanes::build`] (same per-pixel sample
+    /// point and [`UnitCube::map_plane`]).
     pub fn build(
         cube: &UnitCube,
         layer: &GBuffer,
         opts: &QuadTreeOptions,
     ) -> Result<Self, ScreenError> {
-        let planes = LayerPlanes::build(cube, layer, opts.normals)?;
-        Self::from_planes(cube, &planes, &layer.depth, opts)
+        let cam = &cube.camera;
+        let (w, h) = (layer.width(), layer.height());
+        if (w, h) != (cam.width, cam.height) {
+            return Err(ScreenError::Mismatch(format!(
+                "layer is {w}x{h} but the reference camera is {}x{}",
+                cam.width, cam.height
+            )));
+        }
+        let depth_normals;
+        let (normals, flags): (&[Vec3], Option<&[bool]>) = match opts.normals {
+            NormalSource::GBuffer => (&layer.normal, None),
+            NormalSource::Depth { max_rel_error } => {
+                let depth = Image::from_vec(w, h, layer.depth.clone())?;
+                depth_normals = normals_from_depth(&depth, cam, max_rel_error)?;
+                (
+                    depth_normals.normals.data(),
+                    Some(depth_normals.discontinuity.data()),
+                )
+            }
+        };
+        let depth = &layer.depth;
+        Self::from_leaf_fn(cube, w, h, opts, |k, i, j| {
+            let d = depth[k];
+            if !(d.is_finite() && d > 0.0) || normals[k] == Vec3::ZERO {
+                return Node::EMPTY;
+            }
+            let film = glam::Vec2::new(i as f32 + 0.5, j as f32 + 0.5);
+            let p = cam.frame.position + cam.frame.dir_to_world(cam.camera_dir(film)) * d;
+            let Some((n, _)) = cube.map_plane(p, normals[k]) else {
+                return Node::EMPTY;
+            };
+            let f = if flags.is_some_and(|f| f[k]) {
+                FLAG_CRACK
+            } else {
+                0
+            };
+            Node::plane(cube.z_of_depth(d), n.x, n.y, f).unwrap_or(Node::EMPTY)
+        })
     }
 
     /// Builds the tree from precomputed planes and the layer's view depths.
@@ -102,6 +141,24 @@ impl QuadTree {
                 cube.camera.height
             )));
         }
+        Self::from_leaf_fn(cube, w, h, opts, |k, _, _| {
+            if !planes.covered(k) {
+                return Node::EMPTY;
+            }
+            let n = planes.normal[k];
+            let flags = if planes.flag[k] { FLAG_CRACK } else { 0 };
+            Node::plane(cube.z_of_depth(depth[k]), n.x, n.y, flags).unwrap_or(Node::EMPTY)
+        })
+    }
+
+    /// The tree whose pixel `(i, j)` (index `k`) is the leaf `leaf(k, i, j)`.
+    fn from_leaf_fn(
+        cube: &UnitCube,
+        w: u32,
+        h: u32,
+        opts: &QuadTreeOptions,
+        leaf: impl Fn(usize, u32, u32) -> Node + Sync,
+    ) -> Result<Self, ScreenError> {
         if !(opts.crack_dilation.is_finite() && opts.crack_dilation >= 0.0) {
             return Err(ScreenError::InvalidSpace(format!(
                 "crack_dilation must be finite and >= 0, got {}",
@@ -138,16 +195,7 @@ impl QuadTree {
                     return;
                 }
                 for i in 0..w {
-                    let k = (j * w + i) as usize;
-                    if !planes.covered(k) {
-                        continue;
-                    }
-                    let zs = cube.z_of_depth(depth[k]);
-                    let n = planes.normal[k];
-                    let flags = if planes.flag[k] { FLAG_CRACK } else { 0 };
-                    if let Some(node) = Node::plane(zs, n.x, n.y, flags) {
-                        row[i as usize] = node;
-                    }
+                    row[i as usize] = leaf((j * w + i) as usize, i, j);
                 }
             });
         let mut levels = vec![Level {
@@ -288,17 +336,21 @@ impl QuadTree {
         let mut normal = vec![Vec3::ZERO; n];
         let mut offset = vec![0.0; n];
         let mut flag = vec![false; n];
-        for j in 0..h {
-            for i in 0..w {
-                if let Some((node, l, qx, qy)) = self.effective_node(i, j) {
-                    let k = (j * w + i) as usize;
-                    let (nn, c) = decode_plane(node, l, qx, qy, self.wf, self.hf);
-                    normal[k] = nn;
-                    offset[k] = c;
-                    flag[k] = node.flags() & FLAG_CRACK != 0;
+        normal
+            .par_chunks_mut(w as usize)
+            .zip(offset.par_chunks_mut(w as usize))
+            .zip(flag.par_chunks_mut(w as usize))
+            .enumerate()
+            .for_each(|(j, ((nrow, orow), frow))| {
+                for i in 0..w {
+                    if let Some((node, l, qx, qy)) = self.effective_node(i, j as u32) {
+                        let (nn, c) = decode_plane(node, l, qx, qy, self.wf, self.hf);
+                        nrow[i as usize] = nn;
+                        orow[i as usize] = c;
+                        frow[i as usize] = node.flags() & FLAG_CRACK != 0;
+                    }
                 }
-            }
-        }
+            });
         LayerPlanes {
             width: w,
             height: h,

@@ -117,7 +117,9 @@ pub enum Verdict {
 }
 
 pub fn compare(a: &TraceResult, b: &TraceResult, rel: f32) -> Verdict {
-    let close = |x: f32, y: f32| (x - y).abs() <= rel * x.abs().max(y.abs()).max(1e-3);
+    // Relative tolerance, absolute below t = 1 (unit-length directions: metres; segment
+    // parameters of the two tracers differ by f32 rounding of the footprint bounds).
+    let close = |x: f32, y: f32| (x - y).abs() <= rel * x.abs().max(y.abs()).max(1.0);
     let pix = |p: glam::UVec2, q: glam::UVec2| {
         if p == q {
             Verdict::Equal
