@@ -419,22 +419,21 @@ impl MergeCtx {
         if !node.is_plane() {
             return node.zrange();
         }
-        let (n, c) = decode_plane(node, level, qx, qy, self.wf, self.hf);
+        // A plane is affine over the footprint: its range is z_c ± (|dz/dx| hx + |dz/dy| hy)
+        // around the footprint centre (where the node stores z_c), hx, hy = half extents.
+        let n = node.normal();
         let dil = if node.flags() & FLAG_CRACK != 0 {
             self.crack_px
         } else {
             0.0
         };
-        let [x0, x1, y0, y1] = self.footprint(level, qx, qy, dil);
-        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
-        for (x, y) in [(x0, y0), (x1, y0), (x0, y1), (x1, y1)] {
-            let z = plane_z(n, c, x, y);
-            if z.is_nan() {
-                return (0.0, 1.0);
-            }
-            lo = lo.min(z);
-            hi = hi.max(z);
+        let half = 0.5 * (1u32 << level) as f32 + dil;
+        let spread = (n.x.abs() * half / self.wf + n.y.abs() * half / self.hf) / -n.z;
+        if !spread.is_finite() {
+            return (0.0, 1.0);
         }
+        let zc = node.zc();
+        let (lo, hi) = (zc - spread, zc + spread);
         ((lo - Z_EPS).clamp(0.0, 1.0), (hi + Z_EPS).clamp(0.0, 1.0))
     }
 

@@ -252,9 +252,11 @@ impl QuadTreeTracer {
             {
                 best_ov = Some((s, px, k as u32));
             }
-            if q.stop_at_ov && ev.hit.is_none() && ev.ov.is_some() {
+            if q.stop_at_ov
+                && ev.hit.is_none()
+                && let Some((s, _)) = ev.ov
+            {
                 // Inpaint: the occlusion entry precedes any remaining hit of this layer.
-                let (s, _) = ev.ov.unwrap();
                 let sd = (s - INPAINT_DILATION_PX * rs.s_per_px).max(q.s_lo);
                 let (w, h) = tree.size();
                 let px = UVec2::new(
