@@ -415,7 +415,7 @@ impl MergeCtx {
     }
 
     /// Conservative `[zmin, zmax]` of a node over its footprint.
-    fn zrange(&self, node: Node, level: u32, qx: u32, qy: u32) -> (f32, f32) {
+    fn zrange(&self, node: Node, level: u32) -> (f32, f32) {
         if !node.is_plane() {
             return node.zrange();
         }
@@ -455,8 +455,8 @@ impl MergeCtx {
             return p;
         }
         let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
-        for (k, &(cx, cy)) in kids.iter().zip(pos) {
-            let (a, b) = self.zrange(*k, cl, cx, cy);
+        for k in kids {
+            let (a, b) = self.zrange(*k, cl);
             lo = lo.min(a);
             hi = hi.max(b);
         }
