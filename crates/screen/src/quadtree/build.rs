@@ -312,17 +312,23 @@ impl QuadTree {
     /// The plane node the traversal uses at pixel `(i, j)` (the topmost plane ancestor) with
     /// its level and position, if any.
     pub fn effective_node(&self, i: u32, j: u32) -> Option<(Node, u32, u32, u32)> {
-        for l in (0..self.levels.len()).rev() {
+        // A plane node's descendants are all planes (§3.3 condition 1), so along the path
+        // the planes are exactly levels 0..=L_p: climb from the pixel while the parent is a
+        // plane.
+        let n0 = self.node(0, i, j);
+        if !n0.is_plane() {
+            return None;
+        }
+        let mut best = (n0, 0u32, i, j);
+        for l in 1..self.levels.len() {
             let (qx, qy) = (i >> l, j >> l);
             let n = self.node(l, qx, qy);
-            if n.is_plane() {
-                return Some((n, l as u32, qx, qy));
+            if !n.is_plane() {
+                break;
             }
-            if n.is_empty() {
-                return None;
-            }
+            best = (n, l as u32, qx, qy);
         }
-        None
+        Some(best)
     }
 
     /// The brute-force twin of this tree: per pixel, the decoded plane of its effective
@@ -402,18 +408,6 @@ impl QuadTree {
 }
 
 impl MergeCtx {
-    /// Cube-space footprint of node `(qx, qy)` at `level`, dilated by `dil` pixels.
-    #[inline]
-    fn footprint(&self, level: u32, qx: u32, qy: u32, dil: f32) -> [f32; 4] {
-        let size = (1u32 << level) as f32;
-        [
-            (qx as f32 * size - dil) / self.wf,
-            ((qx + 1) as f32 * size + dil) / self.wf,
-            (qy as f32 * size - dil) / self.hf,
-            ((qy + 1) as f32 * size + dil) / self.hf,
-        ]
-    }
-
     /// Conservative `[zmin, zmax]` of a node over its footprint.
     fn zrange(&self, node: Node, level: u32) -> (f32, f32) {
         if !node.is_plane() {
@@ -480,8 +474,8 @@ impl MergeCtx {
         let mut planes = [(Vec3::ZERO, 0.0f32); 4];
         let mut sum = Vec3::ZERO;
         let mut flags = 0;
-        for (i, (k, &(cx, cy))) in kids.iter().zip(pos).enumerate() {
-            planes[i] = decode_plane(*k, cl, cx, cy, self.wf, self.hf);
+        for (i, k) in kids.iter().enumerate() {
+            planes[i] = (k.normal(), 0.0);
             sum += planes[i].0;
             flags |= k.flags() & FLAG_CRACK;
         }
@@ -502,18 +496,27 @@ impl MergeCtx {
         if !(min_cos > loosest) {
             return None;
         }
+        // Child corners from the stored centre z and the plane gradient (one division per
+        // child): z = z_c + g_x (x - x_c) + g_y (y - y_c) with g = -(N.x, N.y) / N.z.
         let mut proj = [0.0f32; 16];
-        let mut m = 0;
-        for (i, &(cx, cy)) in pos.iter().enumerate() {
-            let (n, c) = planes[i];
-            let [x0, x1, y0, y1] = self.footprint(cl, cx, cy, 0.0);
-            for (x, y) in [(x0, y0), (x1, y0), (x0, y1), (x1, y1)] {
-                let z = plane_z(n, c, x, y);
-                if !z.is_finite() {
-                    return None;
-                }
-                proj[m] = nn.dot(Vec3::new(x, y, z));
-                m += 1;
+        let half = 0.5 * (1u32 << cl) as f32;
+        let (hx, hy) = (half / self.wf, half / self.hf);
+        for (i, (k, &(cx, cy))) in kids.iter().zip(pos).enumerate() {
+            let n = planes[i].0;
+            let inv = -1.0 / n.z;
+            let (gx, gy) = (n.x * inv, n.y * inv);
+            if !(gx.is_finite() && gy.is_finite()) {
+                return None;
+            }
+            let (xc, yc) = node_centre(cl, cx, cy, self.wf, self.hf);
+            let zc = k.zc();
+            for (m, (sx, sy)) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)]
+                .into_iter()
+                .enumerate()
+            {
+                let (dx, dy) = (sx * hx, sy * hy);
+                let p = Vec3::new(xc + dx, yc + dy, zc + gx * dx + gy * dy);
+                proj[4 * i + m] = nn.dot(p);
             }
         }
         let c = proj.iter().sum::<f32>() / 16.0;
