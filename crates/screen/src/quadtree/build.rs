@@ -85,6 +85,19 @@ impl QuadTree {
         layer: &GBuffer,
         opts: &QuadTreeOptions,
     ) -> Result<Self, ScreenError> {
+        Self::build_cascaded(cube, layer, opts, &[])
+    }
+
+    /// [`Self::build`] for a layer followed by the `deeper` layers' effective planes: the
+    /// cascade trigger depths are computed from this layer's pixel planes, pruning never
+    /// merges over an unsafe pixel (so its effective plane is the pixel plane the trigger
+    /// depth was derived from), and the unsafe pixels are marked (see [`super::cascade`]).
+    pub(crate) fn build_cascaded(
+        cube: &UnitCube,
+        layer: &GBuffer,
+        opts: &QuadTreeOptions,
+        deeper: &[LayerPlanes],
+    ) -> Result<Self, ScreenError> {
         let cam = &cube.camera;
         let (w, h) = (layer.width(), layer.height());
         if (w, h) != (cam.width, cam.height) {
@@ -106,7 +119,7 @@ impl QuadTree {
             }
         };
         let depth = &layer.depth;
-        Self::from_leaf_fn(cube, w, h, opts, |k, i, j| {
+        Self::from_leaf_fn(cube, w, h, opts, deeper, |k, i, j| {
             let d = depth[k];
             if !(d.is_finite() && d > 0.0) || normals[k] == Vec3::ZERO {
                 return Node::EMPTY;
@@ -141,7 +154,7 @@ impl QuadTree {
                 cube.camera.height
             )));
         }
-        Self::from_leaf_fn(cube, w, h, opts, |k, _, _| {
+        Self::from_leaf_fn(cube, w, h, opts, &[], |k, _, _| {
             if !planes.covered(k) {
                 return Node::EMPTY;
             }
@@ -157,6 +170,7 @@ impl QuadTree {
         w: u32,
         h: u32,
         opts: &QuadTreeOptions,
+        deeper: &[LayerPlanes],
         leaf: impl Fn(usize, u32, u32) -> Node + Sync,
     ) -> Result<Self, ScreenError> {
         if !(opts.crack_dilation.is_finite() && opts.crack_dilation >= 0.0) {
@@ -203,11 +217,41 @@ impl QuadTree {
             h: h0,
             nodes: leaves,
         }];
+        // Cascade: trigger depths from the pixel planes; no merging over unsafe pixels.
+        let tz = if deeper.is_empty() {
+            Vec::new()
+        } else {
+            let px = leaf_planes(&levels[0], w, h, wf, hf);
+            super::cascade::trigger_depths(&px, deeper)
+        };
+        let mut blocked: Vec<bool> = if tz.is_empty() {
+            Vec::new()
+        } else {
+            let mut b = vec![false; (w0 * h0) as usize];
+            for j in 0..h {
+                for i in 0..w {
+                    b[(j * w0 + i) as usize] = tz[(j * w + i) as usize].is_finite();
+                }
+            }
+            b
+        };
 
         // Levels 1..: pruning (§3.3).
         for l in 1..nlev {
             let child = levels.last().unwrap();
             let (pw, ph) = (child.w / 2, child.h / 2);
+            if !blocked.is_empty() {
+                let cw = child.w;
+                blocked = (0..pw * ph)
+                    .map(|q| {
+                        let (qx, qy) = (q % pw, q / pw);
+                        let c =
+                            |dx: u32, dy: u32| blocked[((2 * qy + dy) * cw + 2 * qx + dx) as usize];
+                        c(0, 0) || c(1, 0) || c(0, 1) || c(1, 1)
+                    })
+                    .collect();
+            }
+            let blocked = &blocked;
             let mut nodes = vec![Node::EMPTY; (pw * ph) as usize];
             nodes
                 .par_chunks_mut(pw as usize)
@@ -216,6 +260,7 @@ impl QuadTree {
                     let qy = qy as u32;
                     for (qx, out) in row.iter_mut().enumerate() {
                         let qx = qx as u32;
+                        let allow = blocked.is_empty() || !blocked[(qy * pw + qx) as usize];
                         let cl = l - 1;
                         let mut kids = [Node::EMPTY; 4];
                         let mut pos = [(0u32, 0u32); 4];
@@ -224,7 +269,7 @@ impl QuadTree {
                             *p = (cx, cy);
                             *kid = child.nodes[(cy * child.w + cx) as usize];
                         }
-                        *out = ctx.parent(l, qx, qy, cl, &kids, &pos);
+                        *out = ctx.parent(l, qx, qy, cl, &kids, &pos, allow);
                     }
                 });
             levels.push(Level {
@@ -233,7 +278,7 @@ impl QuadTree {
                 nodes,
             });
         }
-        Ok(Self {
+        let mut tree = Self {
             width: w,
             height: h,
             wf,
@@ -241,7 +286,11 @@ impl QuadTree {
             levels,
             crack_px: opts.crack_dilation,
             trigger_z: Vec::new(),
-        })
+        };
+        if !tz.is_empty() {
+            tree.mark_unsafe(&tz);
+        }
+        Ok(tree)
     }
 
     /// Number of levels (including the pixel level).
@@ -407,6 +456,38 @@ impl QuadTree {
     }
 }
 
+/// The decoded pixel planes of a level-0 array in [`LayerPlanes`] form.
+fn leaf_planes(level0: &Level, w: u32, h: u32, wf: f32, hf: f32) -> LayerPlanes {
+    let n = (w * h) as usize;
+    let mut normal = vec![Vec3::ZERO; n];
+    let mut offset = vec![0.0; n];
+    let mut flag = vec![false; n];
+    normal
+        .par_chunks_mut(w as usize)
+        .zip(offset.par_chunks_mut(w as usize))
+        .zip(flag.par_chunks_mut(w as usize))
+        .enumerate()
+        .for_each(|(j, ((nrow, orow), frow))| {
+            let j = j as u32;
+            for i in 0..w {
+                let node = level0.nodes[(j * level0.w + i) as usize];
+                if node.is_plane() {
+                    let (nn, c) = decode_plane(node, 0, i, j, wf, hf);
+                    nrow[i as usize] = nn;
+                    orow[i as usize] = c;
+                    frow[i as usize] = node.flags() & FLAG_CRACK != 0;
+                }
+            }
+        });
+    LayerPlanes {
+        width: w,
+        height: h,
+        normal,
+        offset,
+        flag,
+    }
+}
+
 impl MergeCtx {
     /// Conservative `[zmin, zmax]` of a node over its footprint.
     fn zrange(&self, node: Node, level: u32) -> (f32, f32) {
@@ -441,8 +522,10 @@ impl MergeCtx {
         cl: u32,
         kids: &[Node; 4],
         pos: &[(u32, u32); 4],
+        allow_merge: bool,
     ) -> Node {
         if !self.never
+            && allow_merge
             && kids.iter().all(|k| k.is_plane())
             && let Some(p) = self.merge(l, qx, qy, cl, kids, pos)
         {

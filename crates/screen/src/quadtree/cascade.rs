@@ -29,8 +29,11 @@
 //! `{f_k(X) < 0} ∪ {z >= tz_p}` for unsafe `p` (`{z >= tz_p}` alone where layer `k` is
 //! empty). Storage: `tz` lives in a per-pixel side array read only at unsafe leaves; an
 //! unsafe empty pixel becomes the AABB leaf `(tz, -inf)`; every AABB above lowers its
-//! `min z` to the smallest `tz` below it; a merged plane node above an unsafe pixel triggers
-//! on footprint entry (conservative).
+//! `min z` to the smallest `tz` below it. Layers are built deepest first; layer `k`'s
+//! trigger depths are computed from its *pixel* planes against the deeper layers' final
+//! effective planes, and pruning never merges a node containing an unsafe pixel, so the
+//! plane the analysis used is the plane the traversal tests. (A merged plane node flagged
+//! unsafe would trigger on footprint entry; with this rule none occurs.)
 //!
 //! **Lemma 1.** Every point `X` of a deeper plane `j > k` in `C_p`, and every point behind
 //! it, lies in `T_k` or on layer `k`'s plane. *Proof.* Unsafe: plane `j` is affine over the
@@ -106,30 +109,24 @@ impl QuadTreeTracer {
         if layers.is_empty() {
             return Err(ScreenError::Mismatch("no layers".into()));
         }
-        let mut trees = Vec::with_capacity(layers.len());
-        let mut build_ms = Vec::with_capacity(layers.len());
-        for g in layers {
+        // Deepest layer first: each layer's cascade flags need the deeper layers' final
+        // effective planes.
+        let nl = layers.len();
+        let mut trees: Vec<Option<QuadTree>> = vec![None; nl];
+        let mut build_ms = vec![0.0; nl];
+        let mut unsafe_pixels = vec![0; nl];
+        let mut eff: Vec<LayerPlanes> = Vec::new(); // layers k+1.. in order
+        for k in (0..nl).rev() {
             let t = Instant::now();
-            trees.push(QuadTree::build(cube, g, opts)?);
-            build_ms.push(t.elapsed().as_secs_f64() * 1e3);
-        }
-        let mut unsafe_pixels = vec![0; layers.len()];
-        if layers.len() > 1 {
-            let t = Instant::now();
-            let eff: Vec<LayerPlanes> = trees.par_iter().map(|t| t.effective_planes()).collect();
-            let per = t.elapsed().as_secs_f64() * 1e3 / layers.len() as f64;
-            for (k, ms) in build_ms.iter_mut().enumerate() {
-                *ms += per;
-                if k + 1 == layers.len() {
-                    break;
-                }
-                let t = Instant::now();
-                let tz = trigger_depths(&eff, k);
-                unsafe_pixels[k] = tz.iter().filter(|z| z.is_finite()).count();
-                trees[k].mark_unsafe(&tz);
-                *ms += t.elapsed().as_secs_f64() * 1e3;
+            let tree = QuadTree::build_cascaded(cube, &layers[k], opts, &eff)?;
+            if k > 0 {
+                eff.insert(0, tree.effective_planes());
             }
+            build_ms[k] = t.elapsed().as_secs_f64() * 1e3;
+            unsafe_pixels[k] = tree.trigger_z.iter().filter(|z| z.is_finite()).count();
+            trees[k] = Some(tree);
         }
+        let trees: Vec<QuadTree> = trees.into_iter().map(|t| t.unwrap()).collect();
         Ok(Self {
             cube: cube.clone(),
             trees,
@@ -157,11 +154,11 @@ impl QuadTreeTracer {
     }
 }
 
-/// Trigger depths of layer `k` against all deeper layers (module docs, "Trigger region"):
-/// `+inf` for safe pixels, else the minimum over deeper planes of their footprint-corner
-/// `z` minus [`SAFE_MARGIN`] (0 for a deeper plane seen edge-on).
-fn trigger_depths(eff: &[LayerPlanes], k: usize) -> Vec<f32> {
-    let pk = &eff[k];
+/// Trigger depths of a layer's pixel planes `pk` against all `deeper` layers' effective
+/// planes (module docs, "Trigger region"): `+inf` for safe pixels, else the minimum over
+/// deeper planes of their footprint-corner `z` minus [`SAFE_MARGIN`] (0 for a deeper plane
+/// seen edge-on).
+pub(crate) fn trigger_depths(pk: &LayerPlanes, deeper: &[LayerPlanes]) -> Vec<f32> {
     let (w, h) = (pk.width, pk.height);
     let (wf, hf) = (w as f32, h as f32);
     let mut tz = vec![f32::INFINITY; (w * h) as usize];
@@ -175,7 +172,7 @@ fn trigger_depths(eff: &[LayerPlanes], k: usize) -> Vec<f32> {
                 let (x0, x1) = (i as f32 / wf, (i + 1) as f32 / wf);
                 let mut bad = false;
                 let mut front = f32::INFINITY;
-                for pj in &eff[k + 1..] {
+                for pj in deeper {
                     if !pj.covered(idx) {
                         continue;
                     }
