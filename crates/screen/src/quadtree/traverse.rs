@@ -19,6 +19,11 @@
 //!   `findMSB((Qx ^ Qx*) | (Qy ^ Qy*))` levels up, i.e. one level below the last common
 //!   ancestor (Frisken & Perry 2002), capped at the top level.
 //!
+//! Deviation: the traversal starts at the level whose nodes exceed the segment's screen
+//! extent (after checking that no ancestor above is a plane) instead of the root; box tests
+//! only cull, so the result is unchanged and the first few always-passing box tests are
+//! skipped.
+//!
 //! The loop carries a hard bound of `(W + H + 2) (2 levels + 2)` steps (every pixel column
 //! the segment crosses, each reached after at most `levels` descents); hitting it ends the
 //! layer with what was found. Nothing allocates; the hot loop is f32.
@@ -149,9 +154,24 @@ impl QuadTree {
         let crack_s = self.crack_px * ray.s_per_px;
         let mut need_ext = true;
         let mut s = q.s_lo;
-        let mut l = top;
-        let mut qx = ray.cell(0, s, 0, w - 1) >> top;
-        let mut qy = ray.cell(1, s, 0, h - 1) >> top;
+        // Start level: the paper starts at the root. Starting lower is equivalent (box tests
+        // only cull) provided no plane ancestor is skipped: start at the first level whose
+        // nodes exceed the segment's screen extent, or at the topmost plane ancestor.
+        let (cx, cy) = (ray.cell(0, s, 0, w - 1), ray.cell(1, s, 0, h - 1));
+        let ext = ray.dg[0].abs().max(ray.dg[1].abs()) * (q.s_hi - q.s_lo);
+        let mut l = if ext < 1e6 {
+            ((ext + 2.0).log2().ceil() as usize).min(top)
+        } else {
+            top
+        };
+        for a in (l + 1..=top).rev() {
+            if self.node(a, cx >> a, cy >> a).is_plane() {
+                l = a;
+                break;
+            }
+        }
+        let mut qx = cx >> l;
+        let mut qy = cy >> l;
         let mut steps = 0u64;
         loop {
             steps += 1;
