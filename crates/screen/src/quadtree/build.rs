@@ -119,6 +119,7 @@ impl QuadTree {
             }
         };
         let depth = &layer.depth;
+        let mt = cube.cube_to_world.transpose();
         Self::from_leaf_fn(cube, w, h, opts, deeper, |k, i, j| {
             let d = depth[k];
             if !(d.is_finite() && d > 0.0) || normals[k] == Vec3::ZERO {
@@ -126,7 +127,7 @@ impl QuadTree {
             }
             let film = glam::Vec2::new(i as f32 + 0.5, j as f32 + 0.5);
             let p = cam.frame.position + cam.frame.dir_to_world(cam.camera_dir(film)) * d;
-            let Some((n, _)) = cube.map_plane(p, normals[k]) else {
+            let Some(n) = map_normal(&mt, p, normals[k]) else {
                 return Node::EMPTY;
             };
             let f = if flags.is_some_and(|f| f[k]) {
@@ -454,6 +455,23 @@ impl QuadTree {
             }
         }
     }
+}
+
+/// The cube normal of [`UnitCube::map_plane`] with the transposed inverse map `mt`
+/// precomputed (same f64 arithmetic).
+#[inline]
+fn map_normal(mt: &glam::DMat4, p: Vec3, n: Vec3) -> Option<Vec3> {
+    let (p, n) = (p.as_dvec3(), n.as_dvec3());
+    let q = *mt * n.extend(-n.dot(p));
+    let len = q.truncate().length();
+    if !(len.is_finite() && len > 0.0) {
+        return None;
+    }
+    let mut q = q / len;
+    if q.z > 0.0 {
+        q = -q;
+    }
+    Some(q.truncate().as_vec3())
 }
 
 /// The decoded pixel planes of a level-0 array in [`LayerPlanes`] form.

@@ -105,8 +105,10 @@ impl RaySetup {
     /// `[lo, hi]`.
     #[inline(always)]
     fn cell(&self, a: usize, s: f32, lo: u32, hi: u32) -> u32 {
-        let x = self.at(a, s);
-        let mut c = x.floor();
+        let x = self.at(a, s).clamp(-1.0, 1.0e7);
+        // floor without a libm call (x is clamped to the i32 range).
+        let t = x as i32 as f32;
+        let mut c = if t > x { t - 1.0 } else { t };
         if c == x && self.dg[a] < 0.0 {
             c -= 1.0;
         }
@@ -160,7 +162,8 @@ impl QuadTree {
         let (cx, cy) = (ray.cell(0, s, 0, w - 1), ray.cell(1, s, 0, h - 1));
         let ext = ray.dg[0].abs().max(ray.dg[1].abs()) * (q.s_hi - q.s_lo);
         let mut l = if ext < 1e6 {
-            ((ext + 2.0).log2().ceil() as usize).min(top)
+            // ~ceil(log2(ext + 2)) without libm.
+            ((32 - ((ext + 2.0) as u32).leading_zeros()) as usize).min(top)
         } else {
             top
         };
