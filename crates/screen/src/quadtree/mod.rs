@@ -23,6 +23,28 @@
 //! one flat row-major array; the image is padded to a multiple of `2^(levels-1)` with empty
 //! nodes, so non-power-of-two sizes need no special case.
 
+//! **API.** [`QuadTreeTracer::build`] (all layers of a view; `build_ms`, `bytes`,
+//! `unsafe_pixels`, `trace_layers` = result + number of layers traversed) implements
+//! [`crate::ScreenTracer`]; [`QuadTree::build`] builds one layer (`bytes`, `node_count`,
+//! `plane_node_count`, `effective_planes` = its brute-force twin).
+//!
+//! **Deviations from / additions to the paper** (its supplement is not public):
+//! - the plane word stores `z_c` (the plane's `z` at the node centre) instead of an
+//!   `-(P·N)` offset, and two flag bits in its lowest mantissa bits ([`node`]);
+//! - default normals are the G-buffer's ([`QuadTreeOptions::normals`]);
+//! - the distance-adaptive thresholds of §6 are our definition ([`QuadTreeOptions::adaptive`]);
+//! - crack dilation extends flagged planes *backwards along the ray* by
+//!   [`QuadTreeOptions::crack_dilation`] pixels (an extra option field);
+//! - inpainting reports the point [`INPAINT_DILATION_PX`] pixels before the occlusion entry;
+//! - cascading is made exact by trigger depths for "unsafe" pixels and by never merging over
+//!   them ([`cascade`], with the proof);
+//! - the traversal starts at the level matching the segment's screen extent instead of the
+//!   root (same result, [`traverse`]);
+//! - every level is stored in full (pruned subtrees stay in the arrays but are never
+//!   visited), so [`QuadTree::bytes`] is the padded pyramid (8 bytes x ~4/3 x padded
+//!   pixels), while [`QuadTree::node_count`] counts the reachable nodes;
+//! - construction runs on the CPU, in parallel over rows per level (rayon).
+
 pub mod build;
 pub mod cascade;
 pub mod node;
