@@ -34,6 +34,16 @@ use super::build::QuadTree;
 use super::node::{FLAG_CRACK, FLAG_UNSAFE, decode_plane, plane_z};
 use crate::{CubeSegment, TraceStats};
 
+#[inline(always)]
+fn fmax(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
+}
+
+#[inline(always)]
+fn fmin(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
+}
+
 /// A cube segment prepared for traversal (cube and grid units).
 #[derive(Clone, Copy, Debug)]
 pub struct RaySetup {
@@ -188,8 +198,9 @@ impl QuadTree {
             let (x0, y0) = ((qx << l) as f32, (qy << l) as f32);
             let (txi, txo) = ray.slab(0, x0, x0 + size);
             let (tyi, tyo) = ray.slab(1, y0, y0 + size);
-            let t_in = s.max(txi).max(tyi);
-            let t_out = txo.min(tyo).min(q.s_hi);
+            // Plain compares (slab values are never NaN): no NaN-aware min/max in the loop.
+            let t_in = fmax(fmax(s, txi), tyi);
+            let t_out = fmin(fmin(txo, tyo), q.s_hi);
             let mut descend = false;
             if node.is_plane() {
                 stats.plane_tests += 1;
