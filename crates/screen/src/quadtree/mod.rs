@@ -4,6 +4,7 @@
 //! - [`node`]: the 64-bit node of §3.4 (plane / AABB, tag in the sign bit);
 //! - [`build`]: [`QuadTree`], one layer — per-pixel planes as leaves (§3.2) and bottom-up
 //!   adaptive pruning with the three conditions and the least-squares proxy plane (§3.3);
+//! - [`merge`]: one pruning step (proxy plane or conservative AABB);
 //! - [`traverse`]: the stackless traversal of §4 (exact plane hits, child by entry
 //!   quadrant, successor by exit edge, restart `findMSB((Qx^Qx*)|(Qy^Qy*))` levels up —
 //!   Frisken & Perry 2002 — crack dilation, occlusion-volume extrusion, hard step bound);
@@ -47,6 +48,7 @@
 
 pub mod build;
 pub mod cascade;
+pub mod merge;
 pub mod node;
 pub mod traverse;
 
