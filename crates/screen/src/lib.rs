@@ -23,6 +23,7 @@ mod depth_layers;
 pub mod hiz;
 pub mod minmax;
 pub mod planes;
+pub mod quadtree;
 pub mod space;
 pub mod tracer;
 
@@ -31,6 +32,7 @@ pub use dda::{DdaOptions, DdaTracer};
 pub use hiz::{HiZOptions, HiZTracer};
 pub use minmax::{MinMaxOptions, MinMaxTracer};
 pub use planes::{LayerPlanes, NormalSource};
+pub use quadtree::{LayerMode, QuadTree, QuadTreeOptions, QuadTreeTracer};
 pub use space::{CubeSegment, UnitCube};
 pub use tracer::{ScreenTracer, TraceResult, TraceStats};
 

@@ -1,0 +1,217 @@
+//! Quad-tree (Widmer et al. 2015) build and trace speed on atrium at 1600x900, 2 layers:
+//! build ms per layer vs. streaming that layer's depth+normals once, and a stereo eye
+//! (reference camera moved by ipd/2 = 0.0325 m along its right axis, one ray per pixel):
+//! Mrays/s, nodes visited per ray, % of rays reaching layer 2; brute force on a ray subset.
+//!
+//! `CARGO_TARGET_DIR=/work/target-h1 cargo run --release -p parallax-screen --example quadtree_speed`
+
+use std::time::Instant;
+
+use glam::Vec2;
+use parallax_core::Ray;
+use parallax_raster::{RasterOptions, View, capture_layers};
+use parallax_scene::{Scene, camera::Pinhole};
+use parallax_screen::{
+    BruteForcePlanes, LayerMode, LayerPlanes, NormalSource, QuadTreeOptions, QuadTreeTracer,
+    ScreenTracer, TraceResult, TraceStats, UnitCube,
+};
+use rayon::prelude::*;
+
+fn best_of<T>(n: usize, mut f: impl FnMut() -> T) -> (f64, T) {
+    let mut best = f64::INFINITY;
+    let mut out = None;
+    for _ in 0..n {
+        let t = Instant::now();
+        let r = f();
+        best = best.min(t.elapsed().as_secs_f64() * 1e3);
+        out = Some(r);
+    }
+    (best, out.unwrap())
+}
+
+fn main() -> anyhow::Result<()> {
+    let (w, h) = (1600u32, 900u32);
+    let scene = Scene::load("atrium")?;
+    let cam = Pinhole::new(&scene.camera(None)?, w, h)?;
+    let cap = capture_layers(
+        &scene,
+        &View::from_pinhole(&cam)?,
+        &RasterOptions::layers(2),
+    )?;
+    let layers = cap.layers.layers.clone();
+    let cube = UnitCube::fit_depths(&cam, layers.iter().map(|g| &g.depth[..]))?;
+    println!(
+        "atrium {w}x{h}, 2 layers, threads {}, cube near {:.3} far {:.3}",
+        rayon::current_num_threads(),
+        cube.near,
+        cube.far
+    );
+
+    // Rays of the stereo eye.
+    let origin = cam.frame.position + cam.frame.right() * 0.0325;
+    let rays: Vec<Ray> = (0..h)
+        .flat_map(|y| (0..w).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            let film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+            Ray::new(
+                origin,
+                cam.frame.dir_to_world(cam.camera_dir(film)).normalize(),
+            )
+        })
+        .collect();
+
+    let (clip_ms, nseg) = best_of(3, || {
+        rays.iter().filter(|r| cube.clip_ray(r).is_some()).count()
+    });
+    println!(
+        "clip_ray alone: {:.1} Mrays/s ({nseg} segments)",
+        rays.len() as f64 / clip_ms / 1e3
+    );
+
+    // Streaming a layer's depth + normals once.
+    let stream_ms: Vec<f64> = layers
+        .iter()
+        .map(|g| {
+            best_of(5, || {
+                let a: f32 = g.depth.iter().filter(|d| d.is_finite()).sum();
+                let b: f32 = g.normal.iter().map(|n| n.x + n.y + n.z).sum();
+                std::hint::black_box(a + b)
+            })
+            .0
+        })
+        .collect();
+
+    for (label, opts) in [
+        ("default (cos 3 deg, 1e-5)", QuadTreeOptions::default()),
+        ("lossless", QuadTreeOptions::lossless()),
+        (
+            "adaptive",
+            QuadTreeOptions {
+                adaptive: true,
+                ..Default::default()
+            },
+        ),
+    ] {
+        println!("\n## {label}");
+        for nl in [1usize, 2] {
+            let (_, qt) = best_of(3, || {
+                QuadTreeTracer::build(&cube, &layers[..nl], &opts).unwrap()
+            });
+            // best-of-3 build times per layer
+            let mut bms = vec![f64::INFINITY; nl];
+            for _ in 0..3 {
+                let q = QuadTreeTracer::build(&cube, &layers[..nl], &opts)?;
+                for (b, m) in bms.iter_mut().zip(q.build_ms()) {
+                    *b = b.min(m);
+                }
+            }
+            for (k, t) in qt.trees.iter().enumerate() {
+                println!(
+                    "  {nl} layer(s), tree {k}: build {:.2} ms (stream depth+normals {:.2} ms, ratio {:.1}), {} levels, {} nodes, {} plane nodes, {:.1} MB, unsafe px {}",
+                    bms[k],
+                    stream_ms[k],
+                    bms[k] / stream_ms[k],
+                    t.level_count(),
+                    t.node_count(),
+                    t.plane_node_count(),
+                    t.bytes() as f64 / 1e6,
+                    qt.unsafe_pixels()[k],
+                );
+            }
+            // Single thread.
+            let (ms1, (stats, reach2)) = best_of(2, || {
+                let mut s = TraceStats::default();
+                let mut r2 = 0u64;
+                for r in &rays {
+                    s.rays += 1;
+                    let (_, n) = qt.trace_layers(r, &mut s);
+                    r2 += (n >= 2) as u64;
+                }
+                (s, r2)
+            });
+            // All threads.
+            let (msp, _) = best_of(3, || {
+                rays.par_chunks(4096)
+                    .map(|c| {
+                        let mut s = TraceStats::default();
+                        for r in c {
+                            qt.trace(r, &mut s);
+                        }
+                        s.hits
+                    })
+                    .sum::<u64>()
+            });
+            let n = rays.len() as f64;
+            println!(
+                "  {nl} layer(s) stereo eye: 1 thread {:.1} Mrays/s ({ms1:.1} ms), {} threads {:.1} Mrays/s; nodes/ray {:.2}, box tests/ray {:.2}, plane tests/ray {:.2}, hits {:.2}%, occlusion {:.2}%, reach layer 2 {:.2}%",
+                n / ms1 / 1e3,
+                rayon::current_num_threads(),
+                n / msp / 1e3,
+                stats.nodes_visited as f64 / n,
+                stats.box_tests as f64 / n,
+                stats.plane_tests as f64 / n,
+                100.0 * stats.hits as f64 / n,
+                100.0 * stats.occlusion_volumes as f64 / n,
+                100.0 * reach2 as f64 / n,
+            );
+        }
+    }
+
+    // Inpaint mode, 1 layer.
+    let opts = QuadTreeOptions {
+        mode: LayerMode::Inpaint,
+        ..Default::default()
+    };
+    let qt = QuadTreeTracer::build(&cube, &layers[..1], &opts)?;
+    let (ms1, stats) = best_of(2, || {
+        let mut s = TraceStats::default();
+        for r in &rays {
+            qt.trace(r, &mut s);
+        }
+        s
+    });
+    println!(
+        "\n## inpaint, 1 layer: 1 thread {:.1} Mrays/s, nodes/ray {:.2}, occlusion {:.2}%",
+        rays.len() as f64 / ms1 / 1e3,
+        stats.nodes_visited as f64 / rays.len() as f64,
+        100.0 * stats.occlusion_volumes as f64 / rays.len() as f64
+    );
+
+    // Brute force on a subset of the rays (every 101st), and agreement of the default
+    // (lossy) tree with brute force over the original f32 planes.
+    let sub: Vec<Ray> = rays.iter().step_by(101).copied().collect();
+    let planes = LayerPlanes::build(&cube, &layers[0], NormalSource::GBuffer)?;
+    let bf = BruteForcePlanes {
+        cube: cube.clone(),
+        layers: vec![planes],
+    };
+    let (msb, bres) = best_of(1, || {
+        let mut s = TraceStats::default();
+        sub.iter().map(|r| bf.trace(r, &mut s)).collect::<Vec<_>>()
+    });
+    let qt = QuadTreeTracer::build(&cube, &layers[..1], &QuadTreeOptions::default())?;
+    let mut s = TraceStats::default();
+    let mut agree = 0;
+    for (r, b) in sub.iter().zip(&bres) {
+        let a = qt.trace(r, &mut s);
+        let ok = match (a, *b) {
+            (TraceResult::Hit { pixel: p, t, .. }, TraceResult::Hit { pixel: q, t: u, .. }) => {
+                (t - u).abs() <= 1e-3 * u && p.x.abs_diff(q.x) <= 1 && p.y.abs_diff(q.y) <= 1
+            }
+            (TraceResult::Miss, TraceResult::Miss) => true,
+            (
+                TraceResult::OcclusionVolume { pixel: p, .. },
+                TraceResult::OcclusionVolume { pixel: q, .. },
+            ) => p.x.abs_diff(q.x) <= 1 && p.y.abs_diff(q.y) <= 1,
+            _ => false,
+        };
+        agree += ok as usize;
+    }
+    println!(
+        "\n## brute force (1 layer, {} rays): 1 thread {:.3} Mrays/s; default quad-tree agrees with brute force over the original planes on {:.2}% (t within 1e-3, pixel within 1)",
+        sub.len(),
+        sub.len() as f64 / msb / 1e3,
+        100.0 * agree as f64 / sub.len() as f64
+    );
+    Ok(())
+}

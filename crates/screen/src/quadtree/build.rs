@@ -1,0 +1,496 @@
+//! One layer's quad-tree: leaves from per-pixel planes (Widmer et al. 2015, §3.2) and
+//! bottom-up adaptive pruning (§3.3).
+//!
+//! **Leaves.** Pixel `(i, j)` with a plane in [`LayerPlanes`] becomes a plane node with the
+//! plane's cube normal and `z_c` = the cube `z` of the pixel's sample (the pixel-centre ray
+//! at the captured view depth, which the plane passes through), flag `O` from the normal
+//! source. Pixels without a plane, and samples in front of the cube's near plane (`z < 0`,
+//! only possible with a caller-made cube narrower than the depths), are empty.
+//!
+//! **Pruning (§3.3).** A parent becomes a plane node iff
+//! 1. all four children are plane nodes;
+//! 2. with the proxy normal `N` = the normalised mean of the (decoded) child normals, every
+//!    child normal satisfies `N·N_i > gamma_norm` (angle below `acos(gamma_norm)`);
+//! 3. the *corner distance* is below `gamma_dist`: for the 16 points `p_ij` = child `i`'s
+//!    plane at its footprint corner `j`, the proxy offset is the least-squares solution of
+//!    §3.3 with `v = (0, 0, 1)`, `c = mean_ij(N·p_ij)`, and the corner distance is
+//!    `max_ij |N·p_ij - c| / |N·v|` — the distance along the reference view direction
+//!    (cube `z` units) between child plane and proxy plane at each child corner.
+//!
+//! Otherwise the parent is an AABB node whose `[min z, max z]` is the union of its children's
+//! ranges; a plane child contributes its plane's `z` at its four footprint corners (a plane
+//! is linear, so that is its exact range over the footprint; the footprint is dilated by the
+//! crack dilation for flagged planes), widened by [`Z_EPS`] and clamped to `[0, 1]` (the
+//! ray never leaves the cube). Boxes are therefore conservative: the traversal never skips a
+//! node holding a plane the ray crosses. Merging is evaluated on the *decoded* children, so
+//! the error bound of condition 3 refers to what the tree actually stores (up to the proxy's
+//! own f16/f32 rounding).
+//!
+//! Every level is built in parallel over rows (rayon).
+
+use glam::Vec3;
+use parallax_core::{GBuffer, Image};
+use parallax_raster::normals::normals_from_depth;
+use rayon::prelude::*;
+
+use super::QuadTreeOptions;
+use super::merge::MergeCtx;
+use super::node::{FLAG_CRACK, Node, decode_plane};
+use crate::{LayerPlanes, NormalSource, ScreenError, UnitCube};
+
+/// Widening of plane z ranges in AABBs (a few f32 ulps at `z = 1`).
+pub const Z_EPS: f32 = 1e-6;
+
+/// One level: a flat row-major array of `w x h` nodes.
+#[derive(Clone, Debug)]
+pub struct Level {
+    pub w: u32,
+    pub h: u32,
+    pub nodes: Vec<Node>,
+}
+
+/// The quad-tree of one captured layer (§3).
+#[derive(Clone, Debug)]
+pub struct QuadTree {
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    pub(crate) wf: f32,
+    pub(crate) hf: f32,
+    /// Level 0 = pixels.
+    pub(crate) levels: Vec<Level>,
+    /// Crack dilation in pixels (traversal side).
+    pub(crate) crack_px: f32,
+    /// Per pixel (`W x H`), the trigger depth of unsafe pixels (cascade); empty when the
+    /// layer is the last one.
+    pub(crate) trigger_z: Vec<f32>,
+}
+
+impl QuadTree {
+    /// Builds the tree of `layer` (captured from `cube.camera`). The leaves are computed in
+    /// parallel with exactly the arithmetic of [`LayerPlanes::build`] (same per-pixel sample
+    /// point and [`UnitCube::map_plane`]).
+    pub fn build(
+        cube: &UnitCube,
+        layer: &GBuffer,
+        opts: &QuadTreeOptions,
+    ) -> Result<Self, ScreenError> {
+        Self::build_cascaded(cube, layer, opts, &[])
+    }
+
+    /// [`Self::build`] for a layer followed by the `deeper` layers' effective planes: the
+    /// cascade trigger depths are computed from this layer's pixel planes, pruning never
+    /// merges over an unsafe pixel (so its effective plane is the pixel plane the trigger
+    /// depth was derived from), and the unsafe pixels are marked (see [`super::cascade`]).
+    pub(crate) fn build_cascaded(
+        cube: &UnitCube,
+        layer: &GBuffer,
+        opts: &QuadTreeOptions,
+        deeper: &[LayerPlanes],
+    ) -> Result<Self, ScreenError> {
+        let cam = &cube.camera;
+        let (w, h) = (layer.width(), layer.height());
+        if (w, h) != (cam.width, cam.height) {
+            return Err(ScreenError::Mismatch(format!(
+                "layer is {w}x{h} but the reference camera is {}x{}",
+                cam.width, cam.height
+            )));
+        }
+        let depth_normals;
+        let (normals, flags): (&[Vec3], Option<&[bool]>) = match opts.normals {
+            NormalSource::GBuffer => (&layer.normal, None),
+            NormalSource::Depth { max_rel_error } => {
+                let depth = Image::from_vec(w, h, layer.depth.clone())?;
+                depth_normals = normals_from_depth(&depth, cam, max_rel_error)?;
+                (
+                    depth_normals.normals.data(),
+                    Some(depth_normals.discontinuity.data()),
+                )
+            }
+        };
+        let depth = &layer.depth;
+        let mt = cube.cube_to_world.transpose();
+        Self::from_leaf_fn(cube, w, h, opts, deeper, |k, i, j| {
+            let d = depth[k];
+            if !(d.is_finite() && d > 0.0) || normals[k] == Vec3::ZERO {
+                return Node::EMPTY;
+            }
+            let film = glam::Vec2::new(i as f32 + 0.5, j as f32 + 0.5);
+            let p = cam.frame.position + cam.frame.dir_to_world(cam.camera_dir(film)) * d;
+            let Some(n) = map_normal(&mt, p, normals[k]) else {
+                return Node::EMPTY;
+            };
+            let f = if flags.is_some_and(|f| f[k]) {
+                FLAG_CRACK
+            } else {
+                0
+            };
+            Node::plane(cube.z_of_depth(d), n.x, n.y, f).unwrap_or(Node::EMPTY)
+        })
+    }
+
+    /// Builds the tree from precomputed planes and the layer's view depths.
+    pub fn from_planes(
+        cube: &UnitCube,
+        planes: &LayerPlanes,
+        depth: &[f32],
+        opts: &QuadTreeOptions,
+    ) -> Result<Self, ScreenError> {
+        let (w, h) = (planes.width, planes.height);
+        if (w, h) != (cube.camera.width, cube.camera.height) || depth.len() != planes.normal.len() {
+            return Err(ScreenError::Mismatch(format!(
+                "planes {w}x{h} / {} depths vs camera {}x{}",
+                depth.len(),
+                cube.camera.width,
+                cube.camera.height
+            )));
+        }
+        Self::from_leaf_fn(cube, w, h, opts, &[], |k, _, _| {
+            if !planes.covered(k) {
+                return Node::EMPTY;
+            }
+            let n = planes.normal[k];
+            let flags = if planes.flag[k] { FLAG_CRACK } else { 0 };
+            Node::plane(cube.z_of_depth(depth[k]), n.x, n.y, flags).unwrap_or(Node::EMPTY)
+        })
+    }
+
+    /// The tree whose pixel `(i, j)` (index `k`) is the leaf `leaf(k, i, j)`.
+    fn from_leaf_fn(
+        cube: &UnitCube,
+        w: u32,
+        h: u32,
+        opts: &QuadTreeOptions,
+        deeper: &[LayerPlanes],
+        leaf: impl Fn(usize, u32, u32) -> Node + Sync,
+    ) -> Result<Self, ScreenError> {
+        if !(opts.crack_dilation.is_finite() && opts.crack_dilation >= 0.0) {
+            return Err(ScreenError::InvalidSpace(format!(
+                "crack_dilation must be finite and >= 0, got {}",
+                opts.crack_dilation
+            )));
+        }
+        let full = 32 - (w.max(h) - 1).leading_zeros() + 1; // ceil(log2 max) + 1
+        let nlev = opts.max_levels.clamp(1, full.max(1));
+        let top = nlev - 1;
+        let top_w = w.div_ceil(1 << top);
+        let top_h = h.div_ceil(1 << top);
+        let (wf, hf) = (w as f32, h as f32);
+        let ctx = MergeCtx {
+            wf,
+            hf,
+            cos_norm: opts.gamma_norm,
+            gamma_dist: opts.gamma_dist,
+            adaptive: opts.adaptive,
+            near: cube.near as f64,
+            far: cube.far as f64,
+            crack_px: opts.crack_dilation,
+            never: !(opts.gamma_norm < 1.0 && opts.gamma_dist > 0.0),
+        };
+
+        // Level 0: leaves (§3.2).
+        let (w0, h0) = (top_w << top, top_h << top);
+        let mut leaves = vec![Node::EMPTY; (w0 * h0) as usize];
+        leaves
+            .par_chunks_mut(w0 as usize)
+            .enumerate()
+            .for_each(|(j, row)| {
+                let j = j as u32;
+                if j >= h {
+                    return;
+                }
+                for i in 0..w {
+                    row[i as usize] = leaf((j * w + i) as usize, i, j);
+                }
+            });
+        let mut levels = vec![Level {
+            w: w0,
+            h: h0,
+            nodes: leaves,
+        }];
+        // Cascade: trigger depths from the pixel planes; no merging over unsafe pixels.
+        let tz = if deeper.is_empty() {
+            Vec::new()
+        } else {
+            let px = leaf_planes(&levels[0], w, h, wf, hf);
+            super::cascade::trigger_depths(&px, deeper)
+        };
+        let mut blocked: Vec<bool> = if tz.is_empty() {
+            Vec::new()
+        } else {
+            let mut b = vec![false; (w0 * h0) as usize];
+            for j in 0..h {
+                for i in 0..w {
+                    b[(j * w0 + i) as usize] = tz[(j * w + i) as usize].is_finite();
+                }
+            }
+            b
+        };
+
+        // Levels 1..: pruning (§3.3).
+        for l in 1..nlev {
+            let child = levels.last().unwrap();
+            let (pw, ph) = (child.w / 2, child.h / 2);
+            if !blocked.is_empty() {
+                let cw = child.w;
+                blocked = (0..pw * ph)
+                    .map(|q| {
+                        let (qx, qy) = (q % pw, q / pw);
+                        let c =
+                            |dx: u32, dy: u32| blocked[((2 * qy + dy) * cw + 2 * qx + dx) as usize];
+                        c(0, 0) || c(1, 0) || c(0, 1) || c(1, 1)
+                    })
+                    .collect();
+            }
+            let blocked = &blocked;
+            let mut nodes = vec![Node::EMPTY; (pw * ph) as usize];
+            nodes
+                .par_chunks_mut(pw as usize)
+                .enumerate()
+                .for_each(|(qy, row)| {
+                    let qy = qy as u32;
+                    for (qx, out) in row.iter_mut().enumerate() {
+                        let qx = qx as u32;
+                        let allow = blocked.is_empty() || !blocked[(qy * pw + qx) as usize];
+                        let cl = l - 1;
+                        let mut kids = [Node::EMPTY; 4];
+                        let mut pos = [(0u32, 0u32); 4];
+                        for (c, (kid, p)) in kids.iter_mut().zip(pos.iter_mut()).enumerate() {
+                            let (cx, cy) = (2 * qx + (c as u32 & 1), 2 * qy + (c as u32 >> 1));
+                            *p = (cx, cy);
+                            *kid = child.nodes[(cy * child.w + cx) as usize];
+                        }
+                        *out = ctx.parent(l, qx, qy, cl, &kids, &pos, allow);
+                    }
+                });
+            levels.push(Level {
+                w: pw,
+                h: ph,
+                nodes,
+            });
+        }
+        let mut tree = Self {
+            width: w,
+            height: h,
+            wf,
+            hf,
+            levels,
+            crack_px: opts.crack_dilation,
+            trigger_z: Vec::new(),
+        };
+        if !tz.is_empty() {
+            tree.mark_unsafe(&tz);
+        }
+        Ok(tree)
+    }
+
+    /// Number of levels (including the pixel level).
+    pub fn level_count(&self) -> usize {
+        self.levels.len()
+    }
+
+    /// Image size.
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// Node `(qx, qy)` at `level` (`Node::EMPTY` outside the padded grid).
+    pub fn node(&self, level: usize, qx: u32, qy: u32) -> Node {
+        let lv = &self.levels[level];
+        if qx < lv.w && qy < lv.h {
+            lv.nodes[(qy * lv.w + qx) as usize]
+        } else {
+            Node::EMPTY
+        }
+    }
+
+    /// Bytes of the node arrays (all levels, padding included; 8 bytes per node).
+    pub fn bytes(&self) -> usize {
+        self.levels
+            .iter()
+            .map(|l| l.nodes.len() * size_of::<Node>())
+            .sum()
+    }
+
+    /// Nodes reachable by the traversal (non-empty nodes whose ancestors are all AABBs).
+    pub fn node_count(&self) -> usize {
+        self.count().0
+    }
+
+    /// Plane nodes reachable by the traversal (leaves of the pruned tree).
+    pub fn plane_node_count(&self) -> usize {
+        self.count().1
+    }
+
+    fn count(&self) -> (usize, usize) {
+        let top = self.levels.len() - 1;
+        let lv = &self.levels[top];
+        let mut acc = (0, 0);
+        for qy in 0..lv.h {
+            for qx in 0..lv.w {
+                self.count_rec(top, qx, qy, &mut acc);
+            }
+        }
+        acc
+    }
+
+    fn count_rec(&self, l: usize, qx: u32, qy: u32, acc: &mut (usize, usize)) {
+        let n = self.node(l, qx, qy);
+        if n.is_plane() {
+            acc.0 += 1;
+            acc.1 += 1;
+        } else if !n.is_empty() {
+            acc.0 += 1;
+            if l > 0 {
+                for c in 0..4 {
+                    self.count_rec(l - 1, 2 * qx + (c & 1), 2 * qy + (c >> 1), acc);
+                }
+            }
+        }
+    }
+
+    /// The plane node the traversal uses at pixel `(i, j)` (the topmost plane ancestor) with
+    /// its level and position, if any.
+    pub fn effective_node(&self, i: u32, j: u32) -> Option<(Node, u32, u32, u32)> {
+        // A plane node's descendants are all planes (§3.3 condition 1), so along the path
+        // the planes are exactly levels 0..=L_p: climb from the pixel while the parent is a
+        // plane.
+        let n0 = self.node(0, i, j);
+        if !n0.is_plane() {
+            return None;
+        }
+        let mut best = (n0, 0u32, i, j);
+        for l in 1..self.levels.len() {
+            let (qx, qy) = (i >> l, j >> l);
+            let n = self.node(l, qx, qy);
+            if !n.is_plane() {
+                break;
+            }
+            best = (n, l as u32, qx, qy);
+        }
+        Some(best)
+    }
+
+    /// The brute-force twin of this tree: per pixel, the decoded plane of its effective
+    /// plane node ([`Self::effective_node`]) in [`LayerPlanes`] form (offset computed by the
+    /// same f32 code as the traversal). With lossless settings these are the quantised pixel
+    /// planes; with lossy settings every pixel of a merged node carries the proxy plane.
+    /// `flag` holds the crack flag `O`.
+    pub fn effective_planes(&self) -> LayerPlanes {
+        let (w, h) = (self.width, self.height);
+        let n = (w * h) as usize;
+        let mut normal = vec![Vec3::ZERO; n];
+        let mut offset = vec![0.0; n];
+        let mut flag = vec![false; n];
+        normal
+            .par_chunks_mut(w as usize)
+            .zip(offset.par_chunks_mut(w as usize))
+            .zip(flag.par_chunks_mut(w as usize))
+            .enumerate()
+            .for_each(|(j, ((nrow, orow), frow))| {
+                for i in 0..w {
+                    if let Some((node, l, qx, qy)) = self.effective_node(i, j as u32) {
+                        let (nn, c) = decode_plane(node, l, qx, qy, self.wf, self.hf);
+                        nrow[i as usize] = nn;
+                        orow[i as usize] = c;
+                        frow[i as usize] = node.flags() & FLAG_CRACK != 0;
+                    }
+                }
+            });
+        LayerPlanes {
+            width: w,
+            height: h,
+            normal,
+            offset,
+            flag,
+        }
+    }
+
+    /// Marks pixels unsafe for cascading: `tz[k]` (`W x H`) is the cube `z` from which the
+    /// column of pixel `k` belongs to the trigger region (`+inf`: safe). Pixel-level plane
+    /// nodes get [`super::node::FLAG_UNSAFE`] and keep `tz` in [`Self::trigger_z`]; empty
+    /// pixels become AABBs `(tz, -inf)`; every AABB above lowers its `min z` to the minimum
+    /// `tz` below it; merged plane nodes above an unsafe pixel get the flag and trigger on
+    /// footprint entry (conservative).
+    pub(crate) fn mark_unsafe(&mut self, tz: &[f32]) {
+        let (w, h) = (self.width, self.height);
+        let mut cur: Vec<f32> = {
+            let lv = &self.levels[0];
+            let mut m = vec![f32::INFINITY; lv.nodes.len()];
+            for j in 0..h {
+                for i in 0..w {
+                    m[(j * lv.w + i) as usize] = tz[(j * w + i) as usize];
+                }
+            }
+            m
+        };
+        self.trigger_z = tz.to_vec();
+        for l in 0..self.levels.len() {
+            if l > 0 {
+                let (cw, pw, ph) = (self.levels[l - 1].w, self.levels[l].w, self.levels[l].h);
+                let mut next = vec![f32::INFINITY; (pw * ph) as usize];
+                for qy in 0..ph {
+                    for qx in 0..pw {
+                        let c = |dx: u32, dy: u32| cur[((2 * qy + dy) * cw + 2 * qx + dx) as usize];
+                        next[(qy * pw + qx) as usize] =
+                            c(0, 0).min(c(1, 0)).min(c(0, 1)).min(c(1, 1));
+                    }
+                }
+                cur = next;
+            }
+            for (node, &m) in self.levels[l].nodes.iter_mut().zip(&cur) {
+                if m.is_finite() {
+                    node.mark_unsafe(m);
+                }
+            }
+        }
+    }
+}
+
+/// The cube normal of [`UnitCube::map_plane`] with the transposed inverse map `mt`
+/// precomputed (same f64 arithmetic).
+#[inline]
+fn map_normal(mt: &glam::DMat4, p: Vec3, n: Vec3) -> Option<Vec3> {
+    let (p, n) = (p.as_dvec3(), n.as_dvec3());
+    let q = *mt * n.extend(-n.dot(p));
+    let len = q.truncate().length();
+    if !(len.is_finite() && len > 0.0) {
+        return None;
+    }
+    let mut q = q / len;
+    if q.z > 0.0 {
+        q = -q;
+    }
+    Some(q.truncate().as_vec3())
+}
+
+/// The decoded pixel planes of a level-0 array in [`LayerPlanes`] form.
+fn leaf_planes(level0: &Level, w: u32, h: u32, wf: f32, hf: f32) -> LayerPlanes {
+    let n = (w * h) as usize;
+    let mut normal = vec![Vec3::ZERO; n];
+    let mut offset = vec![0.0; n];
+    let mut flag = vec![false; n];
+    normal
+        .par_chunks_mut(w as usize)
+        .zip(offset.par_chunks_mut(w as usize))
+        .zip(flag.par_chunks_mut(w as usize))
+        .enumerate()
+        .for_each(|(j, ((nrow, orow), frow))| {
+            let j = j as u32;
+            for i in 0..w {
+                let node = level0.nodes[(j * level0.w + i) as usize];
+                if node.is_plane() {
+                    let (nn, c) = decode_plane(node, 0, i, j, wf, hf);
+                    nrow[i as usize] = nn;
+                    orow[i as usize] = c;
+                    frow[i as usize] = node.flags() & FLAG_CRACK != 0;
+                }
+            }
+        });
+    LayerPlanes {
+        width: w,
+        height: h,
+        normal,
+        offset,
+        flag,
+    }
+}

@@ -1,0 +1,181 @@
+//! Bottom-up pruning of one quad-tree level (Widmer et al. 2015, §3.3): the proxy plane of
+//! four plane children under the three conditions, or the conservative AABB (see
+//! [`super::build`] for the definitions).
+
+use glam::Vec3;
+
+use super::build::Z_EPS;
+use super::node::{FLAG_CRACK, Node, node_centre, plane_z};
+
+/// Merge settings of one build.
+pub(crate) struct MergeCtx {
+    pub(crate) wf: f32,
+    pub(crate) hf: f32,
+    pub(crate) cos_norm: f32,
+    pub(crate) gamma_dist: f32,
+    pub(crate) adaptive: bool,
+    pub(crate) near: f64,
+    pub(crate) far: f64,
+    pub(crate) crack_px: f32,
+    pub(crate) never: bool,
+}
+
+impl MergeCtx {
+    /// Conservative `[zmin, zmax]` of a node over its footprint.
+    fn zrange(&self, node: Node, level: u32) -> (f32, f32) {
+        if !node.is_plane() {
+            return node.zrange();
+        }
+        // A plane is affine over the footprint: its range is z_c ± (|dz/dx| hx + |dz/dy| hy)
+        // around the footprint centre (where the node stores z_c), hx, hy = half extents.
+        let n = node.normal();
+        let dil = if node.flags() & FLAG_CRACK != 0 {
+            self.crack_px
+        } else {
+            0.0
+        };
+        let half = 0.5 * (1u32 << level) as f32 + dil;
+        let spread = (n.x.abs() * half / self.wf + n.y.abs() * half / self.hf) / -n.z;
+        if !spread.is_finite() {
+            return (0.0, 1.0);
+        }
+        let zc = node.zc();
+        let (lo, hi) = (zc - spread, zc + spread);
+        ((lo - Z_EPS).clamp(0.0, 1.0), (hi + Z_EPS).clamp(0.0, 1.0))
+    }
+
+    /// The parent of `kids` (children at level `cl`, positions `pos`, in order
+    /// (0,0), (1,0), (0,1), (1,1)); the parent is `(qx, qy)` at level `l`.
+    pub(crate) fn parent(
+        &self,
+        l: u32,
+        qx: u32,
+        qy: u32,
+        cl: u32,
+        kids: &[Node; 4],
+        pos: &[(u32, u32); 4],
+        allow_merge: bool,
+    ) -> Node {
+        if !self.never
+            && allow_merge
+            && kids.iter().all(|k| k.is_plane())
+            && let Some(p) = self.merge(l, qx, qy, cl, kids, pos)
+        {
+            return p;
+        }
+        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+        for k in kids {
+            let (a, b) = self.zrange(*k, cl);
+            lo = lo.min(a);
+            hi = hi.max(b);
+        }
+        if lo > hi {
+            Node::EMPTY
+        } else {
+            Node::aabb(lo, hi)
+        }
+    }
+
+    /// §3.3: the proxy plane of four plane children, if the three conditions hold.
+    fn merge(
+        &self,
+        l: u32,
+        qx: u32,
+        qy: u32,
+        cl: u32,
+        kids: &[Node; 4],
+        pos: &[(u32, u32); 4],
+    ) -> Option<Node> {
+        let mut planes = [(Vec3::ZERO, 0.0f32); 4];
+        let mut sum = Vec3::ZERO;
+        let mut flags = 0;
+        for (i, k) in kids.iter().enumerate() {
+            planes[i] = (k.normal(), 0.0);
+            sum += planes[i].0;
+            flags |= k.flags() & FLAG_CRACK;
+        }
+        let nn = sum.normalize_or_zero();
+        if !(nn.z < -1e-6) {
+            return None;
+        }
+        let min_cos = planes
+            .iter()
+            .map(|p| p.0.dot(nn))
+            .fold(f32::INFINITY, f32::min);
+        // Cheap early reject with the loosest threshold this node could get.
+        let loosest = if self.adaptive {
+            self.cos_thr(1.0)
+        } else {
+            self.cos_norm
+        };
+        if !(min_cos > loosest) {
+            return None;
+        }
+        // Child corners from the stored centre z and the plane gradient (one division per
+        // child): z = z_c + g_x (x - x_c) + g_y (y - y_c) with g = -(N.x, N.y) / N.z.
+        let mut proj = [0.0f32; 16];
+        let half = 0.5 * (1u32 << cl) as f32;
+        let (hx, hy) = (half / self.wf, half / self.hf);
+        for (i, (k, &(cx, cy))) in kids.iter().zip(pos).enumerate() {
+            let n = planes[i].0;
+            let inv = -1.0 / n.z;
+            let (gx, gy) = (n.x * inv, n.y * inv);
+            if !(gx.is_finite() && gy.is_finite()) {
+                return None;
+            }
+            let (xc, yc) = node_centre(cl, cx, cy, self.wf, self.hf);
+            let zc = k.zc();
+            for (m, (sx, sy)) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)]
+                .into_iter()
+                .enumerate()
+            {
+                let (dx, dy) = (sx * hx, sy * hy);
+                let p = Vec3::new(xc + dx, yc + dy, zc + gx * dx + gy * dy);
+                proj[4 * i + m] = nn.dot(p);
+            }
+        }
+        let c = proj.iter().sum::<f32>() / 16.0;
+        let dmax = proj.iter().map(|p| (p - c).abs()).fold(0.0f32, f32::max) / -nn.z;
+        let (xc, yc) = node_centre(l, qx, qy, self.wf, self.hf);
+        let zc = plane_z(nn, c, xc, yc);
+        let u = if self.adaptive {
+            self.depth_fraction(zc)
+        } else {
+            0.0
+        };
+        if min_cos > self.cos_thr(u) && dmax < self.dist_thr(u) {
+            Node::plane(zc, nn.x, nn.y, flags)
+        } else {
+            None
+        }
+    }
+
+    /// Linear depth fraction `(d - near) / (far - near)` of cube `z`, in `[0, 1]`.
+    fn depth_fraction(&self, z: f32) -> f32 {
+        let (n, f) = (self.near, self.far);
+        let inv_d = 1.0 / n - z as f64 * (1.0 / n - 1.0 / f);
+        if !(inv_d > 0.0) {
+            return 1.0;
+        }
+        (((1.0 / inv_d) - n) / (f - n)).clamp(0.0, 1.0) as f32
+    }
+
+    fn cos_thr(&self, u: f32) -> f32 {
+        if !self.adaptive || self.cos_norm >= 1.0 {
+            return self.cos_norm;
+        }
+        let a0 = self.cos_norm.clamp(-1.0, 1.0).acos();
+        let cap = 25f32.to_radians().max(a0);
+        (a0 * (1.0 + (super::ADAPTIVE_SCALE - 1.0) * u))
+            .min(cap)
+            .cos()
+    }
+
+    fn dist_thr(&self, u: f32) -> f32 {
+        if !self.adaptive {
+            return self.gamma_dist;
+        }
+        let cap = 0.1f32.max(self.gamma_dist);
+        (self.gamma_dist * (1.0 + (super::ADAPTIVE_SCALE - 1.0) * u)).min(cap)
+    }
+}

@@ -1,0 +1,347 @@
+//! Stackless quad-tree traversal of one layer (Widmer et al. 2015, §4).
+//!
+//! State: the current ray parameter `s` and a node `(level, Qx, Qy)`. Per step:
+//!
+//! - the node's parameter interval `[t_in, t_out]` is the ray's slab interval over the node's
+//!   screen rectangle, clipped to `[s, s_hi]`;
+//! - **plane node**: exact ray-plane test over `[t_in, t_out]` — a sign change of
+//!   `f(s) = N·P(s) - c` is the hit, no refinement (§3.1); both ends behind the plane
+//!   (`f < 0`) is an occlusion-volume entry at `t_in` (§4.1; the same rule as
+//!   [`crate::BruteForcePlanes`]). Planes flagged `O` are tested from `crack_dilation`
+//!   pixels of travel before `t_in` (crack dilation, §3.2);
+//! - **AABB node**: the ray's `z` range over `[t_in, t_out]` against `[min z, max z]`; while
+//!   occlusion information is still wanted the box is **extruded** to `[min z, 1]` (§4.1:
+//!   "we never explicitly create this occlusion volume, but rather extrude a given node during
+//!   intersection testing"). On a hit the traversal descends to the child whose quadrant
+//!   holds the entry point `P(t_in)` (ties broken by the ray direction);
+//! - on a miss the successor at the same level is the neighbour across the exit edge
+//!   (smaller of the two slab exits; both on a tie), and the traversal restarts
+//!   `findMSB((Qx ^ Qx*) | (Qy ^ Qy*))` levels up, i.e. one level below the last common
+//!   ancestor (Frisken & Perry 2002), capped at the top level.
+//!
+//! Deviation: the traversal starts at the level whose nodes exceed the segment's screen
+//! extent (after checking that no ancestor above is a plane) instead of the root; box tests
+//! only cull, so the result is unchanged and the first few always-passing box tests are
+//! skipped.
+//!
+//! The loop carries a hard bound of `(W + H + 2) (2 levels + 2)` steps (every pixel column
+//! the segment crosses, each reached after at most `levels` descents); hitting it ends the
+//! layer with what was found. Nothing allocates; the hot loop is f32.
+
+use glam::{UVec2, Vec3};
+
+use super::build::QuadTree;
+use super::node::{FLAG_CRACK, FLAG_UNSAFE, decode_plane, plane_z};
+use crate::{CubeSegment, TraceStats};
+
+#[inline(always)]
+fn fmax(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
+}
+
+#[inline(always)]
+fn fmin(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
+}
+
+/// A cube segment prepared for traversal (cube and grid units).
+#[derive(Clone, Copy, Debug)]
+pub struct RaySetup {
+    pub p0: Vec3,
+    pub d: Vec3,
+    /// Grid-space origin and direction (`x W`, `y H`).
+    pub o: [f32; 2],
+    pub dg: [f32; 2],
+    inv: [f32; 2],
+    zero: [bool; 2],
+    /// Parameter length of one pixel of screen travel (for dilations).
+    pub s_per_px: f32,
+}
+
+impl RaySetup {
+    pub fn new(seg: &CubeSegment, w: f32, h: f32) -> Self {
+        let d = seg.p1 - seg.p0;
+        let o = [seg.p0.x * w, seg.p0.y * h];
+        let dg = [d.x * w, d.y * h];
+        let speed = dg[0].abs().max(dg[1].abs());
+        Self {
+            p0: seg.p0,
+            d,
+            o,
+            dg,
+            inv: [1.0 / dg[0], 1.0 / dg[1]],
+            zero: [dg[0] == 0.0, dg[1] == 0.0],
+            s_per_px: if speed > 0.0 {
+                1.0 / speed
+            } else {
+                f32::INFINITY
+            },
+        }
+    }
+
+    /// Entry and exit parameters of the slab `[lo, hi]` on axis `a`.
+    #[inline(always)]
+    fn slab(&self, a: usize, lo: f32, hi: f32) -> (f32, f32) {
+        if self.zero[a] {
+            return (f32::NEG_INFINITY, f32::INFINITY);
+        }
+        let t0 = (lo - self.o[a]) * self.inv[a];
+        let t1 = (hi - self.o[a]) * self.inv[a];
+        if self.dg[a] > 0.0 { (t0, t1) } else { (t1, t0) }
+    }
+
+    /// Grid coordinate on axis `a` at `s`.
+    #[inline(always)]
+    pub fn at(&self, a: usize, s: f32) -> f32 {
+        self.o[a] + self.dg[a] * s
+    }
+
+    /// First parameter in `[a, b]` where the ray's cube `z >= tz`.
+    #[inline(always)]
+    pub fn z_entry(&self, a: f32, b: f32, tz: f32) -> Option<f32> {
+        let za = self.p0.z + self.d.z * a;
+        if za >= tz {
+            return Some(a);
+        }
+        let zb = self.p0.z + self.d.z * b;
+        if zb >= tz && self.d.z > 0.0 {
+            Some(((tz - self.p0.z) / self.d.z).clamp(a, b))
+        } else {
+            None
+        }
+    }
+
+    /// Pixel cell on axis `a` at `s` (boundary ties go along the direction), clamped to
+    /// `[lo, hi]`.
+    #[inline(always)]
+    fn cell(&self, a: usize, s: f32, lo: u32, hi: u32) -> u32 {
+        let x = self.at(a, s).clamp(-1.0, 1.0e7);
+        // floor without a libm call (x is clamped to the i32 range).
+        let t = x as i32 as f32;
+        let mut c = if t > x { t - 1.0 } else { t };
+        if c == x && self.dg[a] < 0.0 {
+            c -= 1.0;
+        }
+        (c.max(lo as f32) as u32).min(hi)
+    }
+}
+
+/// What one layer's traversal found, in segment parameters.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LayerEvents {
+    /// First plane hit (`s`, pixel).
+    pub hit: Option<(f32, UVec2)>,
+    /// First entry into the cascade trigger region (see [`super::cascade`]).
+    pub trigger: Option<f32>,
+    /// First occlusion-volume entry (`s`, pixel), brute-force semantics.
+    pub ov: Option<(f32, UVec2)>,
+    /// The step bound was hit.
+    pub truncated: bool,
+}
+
+/// What a layer traversal looks for.
+#[derive(Clone, Copy, Debug)]
+pub struct Query {
+    pub s_lo: f32,
+    pub s_hi: f32,
+    /// Accept a hit at exactly `s_hi`.
+    pub hi_inclusive: bool,
+    pub want_trigger: bool,
+    /// Stop at the first occlusion-volume entry (inpaint mode).
+    pub stop_at_ov: bool,
+}
+
+impl QuadTree {
+    /// Traverses this layer along `ray` over `[q.s_lo, q.s_hi]` (§4); stops at the first hit
+    /// (or, with `stop_at_ov`, the first occlusion-volume entry).
+    pub fn trace_layer(&self, ray: &RaySetup, q: &Query, stats: &mut TraceStats) -> LayerEvents {
+        let mut ev = LayerEvents::default();
+        if !(q.s_lo <= q.s_hi) {
+            return ev;
+        }
+        let top = self.levels.len() - 1;
+        let (w, h) = (self.width, self.height);
+        let (wf, hf) = (self.wf, self.hf);
+        let bound = (w as u64 + h as u64 + 2) * (2 * self.levels.len() as u64 + 2);
+        let crack_s = self.crack_px * ray.s_per_px;
+        let mut need_ext = true;
+        let mut s = q.s_lo;
+        // Start level: the paper starts at the root. Starting lower is equivalent (box tests
+        // only cull) provided no plane ancestor is skipped: start at the first level whose
+        // nodes exceed the segment's screen extent, or at the topmost plane ancestor.
+        let (cx, cy) = (ray.cell(0, s, 0, w - 1), ray.cell(1, s, 0, h - 1));
+        let ext = ray.dg[0].abs().max(ray.dg[1].abs()) * (q.s_hi - q.s_lo);
+        let mut l = if ext < 1e6 {
+            // ~ceil(log2(ext + 2)) without libm.
+            ((32 - ((ext + 2.0) as u32).leading_zeros()) as usize).min(top)
+        } else {
+            top
+        };
+        for a in (l + 1..=top).rev() {
+            if self.node(a, cx >> a, cy >> a).is_plane() {
+                l = a;
+                break;
+            }
+        }
+        let mut qx = cx >> l;
+        let mut qy = cy >> l;
+        let mut steps = 0u64;
+        loop {
+            steps += 1;
+            if steps > bound {
+                ev.truncated = true;
+                break;
+            }
+            let lv = &self.levels[l];
+            let node = lv.nodes[(qy * lv.w + qx) as usize];
+            let size = (1u32 << l) as f32;
+            let (x0, y0) = ((qx << l) as f32, (qy << l) as f32);
+            let (txi, txo) = ray.slab(0, x0, x0 + size);
+            let (tyi, tyo) = ray.slab(1, y0, y0 + size);
+            // Plain compares (slab values are never NaN): no NaN-aware min/max in the loop.
+            let t_in = fmax(fmax(s, txi), tyi);
+            let t_out = fmin(fmin(txo, tyo), q.s_hi);
+            let mut descend = false;
+            if node.is_plane() {
+                stats.plane_tests += 1;
+                if t_in <= t_out {
+                    let (n, c) = decode_plane(node, l as u32, qx, qy, wf, hf);
+                    let flags = node.flags();
+                    let mut trig = None;
+                    if flags & FLAG_UNSAFE != 0 && q.want_trigger && ev.trigger.is_none() {
+                        trig = if l == 0 {
+                            let tz = self.trigger_z[(qy * w + qx) as usize];
+                            ray.z_entry(t_in, t_out, tz)
+                        } else {
+                            Some(t_in)
+                        };
+                    }
+                    let f0 = n.dot(ray.p0) - c;
+                    let fd = n.dot(ray.d);
+                    let ta = if flags & FLAG_CRACK != 0 {
+                        (t_in - crack_s).max(q.s_lo)
+                    } else {
+                        t_in
+                    };
+                    let fa = f0 + fd * ta;
+                    let fb = f0 + fd * t_out;
+                    if (fa <= 0.0) != (fb <= 0.0) || fa == 0.0 || fb == 0.0 {
+                        let sh = if fd != 0.0 {
+                            (-f0 / fd).clamp(ta, t_out)
+                        } else {
+                            ta
+                        };
+                        if let Some(t) = trig
+                            && t <= sh
+                        {
+                            ev.trigger = Some(t);
+                        }
+                        if sh < q.s_hi || (q.hi_inclusive && sh <= q.s_hi) {
+                            let px = self.pixel_in(ray, sh, l, qx, qy);
+                            ev.hit = Some((sh, px));
+                        }
+                        break;
+                    } else if fa < 0.0 && ev.ov.is_none() {
+                        ev.ov = Some((t_in, self.pixel_in(ray, t_in, l, qx, qy)));
+                        if q.want_trigger && ev.trigger.is_none() {
+                            trig = Some(t_in);
+                        }
+                        if q.stop_at_ov {
+                            ev.trigger = ev.trigger.or(trig);
+                            break;
+                        }
+                    }
+                    if ev.trigger.is_none() {
+                        ev.trigger = trig;
+                    }
+                    need_ext = (q.want_trigger && ev.trigger.is_none()) || ev.ov.is_none();
+                }
+            } else {
+                stats.box_tests += 1;
+                if t_in <= t_out {
+                    let za = ray.p0.z + ray.d.z * t_in;
+                    let zb = ray.p0.z + ray.d.z * t_out;
+                    let (zlo, zhi) = if za < zb { (za, zb) } else { (zb, za) };
+                    let (zmin, zmax) = node.zrange();
+                    if zhi >= zmin && (zlo <= zmax || need_ext) {
+                        if l == 0 {
+                            // A pixel-level AABB holds no plane: it is an empty pixel marked
+                            // unsafe for cascading (its whole column triggers).
+                            if q.want_trigger && ev.trigger.is_none() {
+                                ev.trigger = ray.z_entry(t_in, t_out, zmin);
+                                need_ext = ev.trigger.is_none() || ev.ov.is_none();
+                            }
+                        } else {
+                            descend = true;
+                        }
+                    }
+                }
+            }
+            stats.nodes_visited += 1;
+            if descend {
+                s = t_in;
+                l -= 1;
+                let mid_x = ((2 * qx + 1) << l) as f32;
+                let mid_y = ((2 * qy + 1) << l) as f32;
+                let (ex, ey) = (ray.at(0, s), ray.at(1, s));
+                let rx = ex > mid_x || (ex == mid_x && ray.dg[0] >= 0.0);
+                let ry = ey > mid_y || (ey == mid_y && ray.dg[1] >= 0.0);
+                qx = 2 * qx + rx as u32;
+                qy = 2 * qy + ry as u32;
+                continue;
+            }
+            if t_out >= q.s_hi {
+                break;
+            }
+            s = s.max(t_out);
+            // Successor across the exit edge (§4).
+            let (mut nx, mut ny) = (qx, qy);
+            if txo <= tyo {
+                nx = if ray.dg[0] > 0.0 {
+                    qx + 1
+                } else {
+                    qx.wrapping_sub(1)
+                };
+            }
+            if tyo <= txo {
+                ny = if ray.dg[1] > 0.0 {
+                    qy + 1
+                } else {
+                    qy.wrapping_sub(1)
+                };
+            }
+            if nx >= lv.w || ny >= lv.h || (nx << l) >= w || (ny << l) >= h {
+                break;
+            }
+            let diff = (qx ^ nx) | (qy ^ ny);
+            let up = (31 - diff.leading_zeros()) as usize;
+            let nl = (l + up).min(top);
+            let sh = nl - l;
+            qx = nx >> sh;
+            qy = ny >> sh;
+            l = nl;
+        }
+        stats.steps += steps;
+        ev
+    }
+
+    /// The pixel of point `P(s)` inside node `(qx, qy)` at level `l`.
+    #[inline(always)]
+    fn pixel_in(&self, ray: &RaySetup, s: f32, l: usize, qx: u32, qy: u32) -> UVec2 {
+        if l == 0 {
+            return UVec2::new(qx, qy);
+        }
+        let x0 = qx << l;
+        let y0 = qy << l;
+        let x1 = (x0 + (1 << l) - 1).min(self.width - 1);
+        let y1 = (y0 + (1 << l) - 1).min(self.height - 1);
+        UVec2::new(ray.cell(0, s, x0, x1), ray.cell(1, s, y0, y1))
+    }
+
+    /// Cube `z` of the effective plane at pixel `(i, j)` at cube `(x, y)`, if any (tests).
+    pub fn plane_z_at(&self, i: u32, j: u32, x: f32, y: f32) -> Option<f32> {
+        let (node, l, qx, qy) = self.effective_node(i, j)?;
+        let (n, c) = decode_plane(node, l, qx, qy, self.wf, self.hf);
+        Some(plane_z(n, c, x, y))
+    }
+}

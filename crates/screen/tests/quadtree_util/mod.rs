@@ -1,0 +1,240 @@
+//! Shared helpers of the quad-tree tests: synthetic height fields, ray sets, and the
+//! comparison of two trace results.
+#![allow(dead_code)]
+
+use glam::{Vec2, Vec3};
+use parallax_core::{GBuffer, Ray, Rng};
+use parallax_scene::{CameraDesc, camera::Pinhole};
+use parallax_screen::{
+    BruteForcePlanes, QuadTreeTracer, ScreenTracer, TraceResult, TraceStats, UnitCube,
+};
+
+/// A pinhole looking down -Z from the origin.
+pub fn camera(w: u32, h: u32) -> Pinhole {
+    let desc = CameraDesc::new(Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0), Vec3::Y, 60.0);
+    Pinhole::new(&desc, w, h).unwrap()
+}
+
+/// A random height field: smooth patches with depth steps, random tilted normals (facing the
+/// camera), some empty pixels.
+pub fn height_field(cam: &Pinhole, seed: u64, empty_frac: f32) -> GBuffer {
+    let (w, h) = (cam.width, cam.height);
+    let mut g = GBuffer::new(w, h).unwrap();
+    let mut rng = Rng::new(seed, 7);
+    let patches: Vec<(f32, f32, f32, f32, Vec3)> = (0..6)
+        .map(|_| {
+            let tilt = Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, 0.0) * 1.6;
+            (
+                rng.next_f32() * w as f32,
+                rng.next_f32() * h as f32,
+                1.5 + 6.0 * rng.next_f32(),
+                0.02 * (rng.next_f32() - 0.5),
+                (Vec3::Z + tilt).normalize(),
+            )
+        })
+        .collect();
+    for j in 0..h {
+        for i in 0..w {
+            let k = (j * w + i) as usize;
+            if rng.next_f32() < empty_frac {
+                continue;
+            }
+            // Nearest patch centre decides the surface (Voronoi cells: depth steps).
+            let p = patches
+                .iter()
+                .min_by(|a, b| {
+                    let da = (a.0 - i as f32).powi(2) + (a.1 - j as f32).powi(2);
+                    let db = (b.0 - i as f32).powi(2) + (b.1 - j as f32).powi(2);
+                    da.total_cmp(&db)
+                })
+                .unwrap();
+            let d = p.2 * (1.0 + p.3 * (i as f32 - p.0)) + 0.05 * rng.next_f32();
+            let jitter = Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, 0.0) * 0.3;
+            g.depth[k] = d.max(0.5);
+            g.normal[k] = (p.4 + jitter).normalize();
+        }
+    }
+    g
+}
+
+/// World direction through film position `film`.
+pub fn film_dir(cam: &Pinhole, film: Vec2) -> Vec3 {
+    cam.frame.dir_to_world(cam.camera_dir(film)).normalize()
+}
+
+/// Random rays: from eyes displaced up to `spread` metres towards random captured points
+/// (and a few fully random ones).
+pub fn rays(cam: &Pinhole, g: &GBuffer, n: usize, spread: f32, seed: u64) -> Vec<Ray> {
+    let mut rng = Rng::new(seed, 11);
+    let (w, h) = (cam.width, cam.height);
+    let mut out = Vec::with_capacity(n);
+    while out.len() < n {
+        let film = Vec2::new(rng.next_f32() * w as f32, rng.next_f32() * h as f32);
+        let k = ((film.y as u32).min(h - 1) * w + (film.x as u32).min(w - 1)) as usize;
+        let d = if g.depth[k].is_finite() {
+            g.depth[k] * (0.8 + 0.4 * rng.next_f32())
+        } else {
+            5.0 * rng.next_f32() + 0.5
+        };
+        let target = cam.frame.position
+            + film_dir(cam, film) * d / film_dir(cam, film).dot(cam.frame.forward()).max(1e-3);
+        let r = Vec3::new(
+            rng.next_f32() - 0.5,
+            rng.next_f32() - 0.5,
+            rng.next_f32() - 0.5,
+        );
+        let origin = cam.frame.position + cam.frame.dir_to_world(r * 2.0 * spread);
+        let dir = target - origin;
+        if dir.length() > 1e-4 {
+            out.push(Ray::new(origin, dir.normalize()));
+        }
+        if out.len() % 16 == 0 {
+            // A fully random ray from inside the frustum.
+            let film = Vec2::new(rng.next_f32() * w as f32, rng.next_f32() * h as f32);
+            let o = cam.frame.position + film_dir(cam, film) * (0.5 + 4.0 * rng.next_f32());
+            let dir = Vec3::new(
+                rng.next_f32() - 0.5,
+                rng.next_f32() - 0.5,
+                rng.next_f32() - 0.5,
+            );
+            if dir.length() > 1e-3 {
+                out.push(Ray::new(o, dir.normalize()));
+            }
+        }
+    }
+    out
+}
+
+/// How two results compare.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Verdict {
+    /// Same kind, layer, pixel; `t` within tolerance.
+    Equal,
+    /// Same kind and layer, `t` within tolerance, pixels adjacent: the event lies on a
+    /// shared footprint edge/corner where both answers are right.
+    EdgeTie,
+    Differ,
+}
+
+pub fn compare(a: &TraceResult, b: &TraceResult, rel: f32) -> Verdict {
+    // Relative tolerance, absolute below t = 1 (unit-length directions: metres; segment
+    // parameters of the two tracers differ by f32 rounding of the footprint bounds).
+    let close = |x: f32, y: f32| (x - y).abs() <= rel * x.abs().max(y.abs()).max(1.0);
+    let pix = |p: glam::UVec2, q: glam::UVec2| {
+        if p == q {
+            Verdict::Equal
+        } else if p.x.abs_diff(q.x) <= 1 && p.y.abs_diff(q.y) <= 1 {
+            Verdict::EdgeTie
+        } else {
+            Verdict::Differ
+        }
+    };
+    match (*a, *b) {
+        (TraceResult::Miss, TraceResult::Miss) => Verdict::Equal,
+        (
+            TraceResult::Hit {
+                layer: l1,
+                pixel: p1,
+                t: t1,
+                ..
+            },
+            TraceResult::Hit {
+                layer: l2,
+                pixel: p2,
+                t: t2,
+                ..
+            },
+        )
+        | (
+            TraceResult::OcclusionVolume {
+                layer: l1,
+                pixel: p1,
+                t: t1,
+            },
+            TraceResult::OcclusionVolume {
+                layer: l2,
+                pixel: p2,
+                t: t2,
+            },
+        ) if l1 == l2 && close(t1, t2) => pix(p1, p2),
+        _ => Verdict::Differ,
+    }
+}
+
+/// Counts of a comparison run.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Tally {
+    pub equal: usize,
+    pub edge: usize,
+    pub differ: usize,
+    pub hits: usize,
+    pub ovs: usize,
+}
+
+impl Tally {
+    pub fn total(&self) -> usize {
+        self.equal + self.edge + self.differ
+    }
+}
+
+/// Traces `rays` with both tracers; returns the tally and the first difference.
+pub fn run(
+    qt: &QuadTreeTracer,
+    bf: &BruteForcePlanes,
+    rays: &[Ray],
+    rel: f32,
+) -> (Tally, Option<String>, TraceStats) {
+    let mut tally = Tally::default();
+    let mut first = None;
+    let mut stats = TraceStats::default();
+    let mut bstats = TraceStats::default();
+    for (i, r) in rays.iter().enumerate() {
+        let a = qt.trace(r, &mut stats);
+        let b = bf.trace(r, &mut bstats);
+        match a {
+            TraceResult::Hit { .. } => tally.hits += 1,
+            TraceResult::OcclusionVolume { .. } => tally.ovs += 1,
+            _ => {}
+        }
+        match compare(&a, &b, rel) {
+            Verdict::Equal => tally.equal += 1,
+            Verdict::EdgeTie => tally.edge += 1,
+            Verdict::Differ => {
+                tally.differ += 1;
+                if first.is_none() {
+                    first = Some(format!("ray {i} {r:?}: quadtree {a:?} vs brute {b:?}"));
+                }
+            }
+        }
+    }
+    (tally, first, stats)
+}
+
+/// Brute force over the tracer's decoded (effective) planes.
+pub fn twin(qt: &QuadTreeTracer) -> BruteForcePlanes {
+    BruteForcePlanes {
+        cube: qt.cube.clone(),
+        layers: qt.trees.iter().map(|t| t.effective_planes()).collect(),
+    }
+}
+
+/// The fitted cube of some layers.
+pub fn cube(cam: &Pinhole, layers: &[GBuffer]) -> UnitCube {
+    UnitCube::fit_depths(cam, layers.iter().map(|g| &g.depth[..])).unwrap()
+}
+
+/// One ray per pixel of the reference camera moved by `shift` metres along its right axis
+/// (a stereo eye for `shift = ipd / 2`).
+pub fn stereo_rays(cam: &Pinhole, shift: f32) -> Vec<Ray> {
+    let o = cam.frame.position + cam.frame.right() * shift;
+    let mut out = Vec::with_capacity((cam.width * cam.height) as usize);
+    for y in 0..cam.height {
+        for x in 0..cam.width {
+            out.push(Ray::new(
+                o,
+                film_dir(cam, Vec2::new(x as f32 + 0.5, y as f32 + 0.5)),
+            ));
+        }
+    }
+    out
+}
