@@ -116,9 +116,9 @@ fn bad_arguments_fail_cleanly() {
         (&["warp", "--method", "brute", "--layers", "0"], "--layers"),
         (
             &[
-                "warp", "--method", "quadtree", "--width", "16", "--height", "12",
+                "warp", "--method", "dda", "--layers", "3", "--width", "16", "--height", "12",
             ],
-            "not available",
+            "1 or 2 layers",
         ),
         (
             &["upsample", "--method", "brute", "--frames", "-3"],

@@ -206,7 +206,7 @@ fn color_depth_input_round_trip() {
 }
 
 #[test]
-fn method_names_and_unavailable_tracers() {
+fn method_names_and_every_tracer_builds() {
     for m in Method::ALL {
         assert_eq!(m.name().parse::<Method>().unwrap(), m);
     }
@@ -215,14 +215,16 @@ fn method_names_and_unavailable_tracers() {
     let desc = scene.camera(None).unwrap();
     let cam = Pinhole::new(&desc, 16, 12).unwrap();
     let r = capture_reference(&scene, &bvh, &cam, 1, Shading::Fixed, 0).unwrap();
-    for m in [Method::QuadTree, Method::Dda, Method::MinMax, Method::HiZ] {
-        if !parallax_render::synth::method::available(m) {
-            let e = Synthesizer::build(m, &r, &MethodOptions::default())
-                .err()
-                .unwrap();
-            assert!(e.to_string().contains("not available"), "{e}");
-        }
+    for m in Method::ALL {
+        let s = Synthesizer::build(m, &r, &MethodOptions::default());
+        assert!(s.is_ok(), "{m}: {:?}", s.err());
     }
+    // The DDA marches at most two layers: asking for three is an error, not a silent clamp.
+    let r3 = capture_reference(&scene, &bvh, &cam, 3, Shading::Fixed, 0).unwrap();
+    let e = Synthesizer::build(Method::Dda, &r3, &MethodOptions::default())
+        .err()
+        .unwrap();
+    assert!(e.to_string().contains("1 or 2 layers"), "{e}");
 }
 
 #[test]

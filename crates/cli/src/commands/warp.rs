@@ -287,28 +287,17 @@ pub fn run(a: &WarpArgs, quiet: bool) -> Result<()> {
 }
 
 /// `demo`'s stereo pair: the cyclopean view warped to both eyes (ipd 0.065, 2 layers) with
-/// the first available tracer of quadtree, dda, minmax, hiz; with only the brute-force twin
-/// available the pair is warped at a quarter of the size (brute force is O(pixels) per ray).
+/// the quad-tree.
 pub fn demo_stereo(
     scene: &parallax_scene::Scene,
     bvh: &Bvh,
     desc: &parallax_scene::CameraDesc,
-    width: u32,
-    height: u32,
+    w: u32,
+    h: u32,
     out: &Path,
     quiet: bool,
 ) -> Result<()> {
-    use parallax_render::synth::method::available;
-    let fast = [Method::QuadTree, Method::Dda, Method::MinMax, Method::HiZ]
-        .into_iter()
-        .find(|&m| available(m));
-    let (method, w, h) = match fast {
-        Some(m) => (m, width, height),
-        None => (Method::Brute, (width / 4).max(16), (height / 4).max(16)),
-    };
-    if fast.is_none() && !quiet {
-        println!("stereo pair: no fast screen-space tracer in this build; brute force at {w}x{h}");
-    }
+    let method = Method::QuadTree;
     let cam = Pinhole::new(desc, w, h)?;
     let mut r = capture_reference(scene, bvh, &cam, 2, Shading::Fixed, 1)?;
     let sv = warp_stereo(&mut r, desc, 0.065, method, &MethodOptions::default())?;

@@ -9,15 +9,16 @@
 //! | `mesh` | forward warping of a grid mesh ([`super::mesh_warp`]), not a tracer | "Mesh-based warping" |
 //! | `brute` | every pixel plane of every layer ([`BruteForcePlanes`]), the slow twin | - |
 //!
-//! Only `brute` is constructed in this build; the other tracer arms return
-//! [`SynthError::Unavailable`] until their structures are merged (each arm is one line).
 
 use std::fmt;
 use std::str::FromStr;
 
 use parallax_core::image::GBuffer;
 pub use parallax_screen::NormalSource;
-use parallax_screen::{BruteForcePlanes, LayerPlanes, ScreenTracer, UnitCube};
+use parallax_screen::{
+    BruteForcePlanes, DdaOptions, DdaTracer, HiZOptions, HiZTracer, LayerMode, LayerPlanes,
+    MinMaxOptions, MinMaxTracer, QuadTreeOptions, QuadTreeTracer, ScreenTracer, UnitCube,
+};
 use serde::Serialize;
 
 use parallax_scene::camera::Pinhole;
@@ -146,12 +147,36 @@ pub fn build_tracer(
     if layers.is_empty() {
         return Err(SynthError::Invalid("no layers to trace".into()));
     }
-    let _ = opts;
+    let n = layers.len();
     match method {
-        Method::QuadTree => Err(SynthError::Unavailable(method.name().into())),
-        Method::Dda => Err(SynthError::Unavailable(method.name().into())),
-        Method::MinMax => Err(SynthError::Unavailable(method.name().into())),
-        Method::HiZ => Err(SynthError::Unavailable(method.name().into())),
+        Method::QuadTree => Ok(Box::new(QuadTreeTracer::build(
+            cube,
+            layers,
+            &quadtree_options(opts),
+        )?)),
+        Method::Dda => {
+            let o = DdaOptions {
+                max_steps: opts.dda_max_steps,
+                layers: n,
+                ..Default::default()
+            };
+            Ok(Box::new(DdaTracer::new(cube, layers, &o)?))
+        }
+        Method::MinMax => {
+            let o = MinMaxOptions {
+                layers: n,
+                ..Default::default()
+            };
+            Ok(Box::new(MinMaxTracer::new(cube, layers, &o)?))
+        }
+        Method::HiZ => Ok(Box::new(HiZTracer::new(
+            cube,
+            layers,
+            &HiZOptions {
+                layers: n,
+                ..Default::default()
+            },
+        )?)),
         Method::Mesh => Err(SynthError::Invalid(
             "mesh is a forward warp, not a tracer".into(),
         )),
@@ -159,9 +184,22 @@ pub fn build_tracer(
     }
 }
 
-/// Is `method` constructible in this build?
-pub fn available(method: Method) -> bool {
-    matches!(method, Method::Mesh | Method::Brute)
+/// The quad-tree options of `opts` (the quad-tree's own defaults for everything else).
+pub fn quadtree_options(opts: &MethodOptions) -> QuadTreeOptions {
+    let d = QuadTreeOptions::default();
+    QuadTreeOptions {
+        gamma_norm: opts.gamma_norm,
+        gamma_dist: opts.gamma_dist,
+        adaptive: opts.adaptive,
+        max_levels: opts.max_levels.unwrap_or(d.max_levels),
+        normals: opts.normals,
+        mode: if opts.inpaint {
+            LayerMode::Inpaint
+        } else {
+            LayerMode::Cascade
+        },
+        ..d
+    }
 }
 
 fn brute(

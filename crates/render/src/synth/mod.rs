@@ -40,8 +40,6 @@ pub use warp::{HitKind, WarpedView, warp_view};
 /// Errors of view synthesis.
 #[derive(Debug, thiserror::Error)]
 pub enum SynthError {
-    #[error("method {0} not available in this build")]
-    Unavailable(String),
     #[error("unknown method {0:?}; expected quadtree, dda, minmax, hiz, mesh or brute")]
     UnknownMethod(String),
     #[error("invalid argument: {0}")]
