@@ -75,6 +75,7 @@
 //!
 //! [`WatertightRay`]: parallax_core::math::WatertightRay
 
+pub mod beam;
 mod build;
 mod collapse;
 pub mod node;

@@ -108,8 +108,9 @@ impl Beam {
             return false;
         }
         let (u, v) = (d[b] / d[a].abs(), d[c] / d[a].abs());
-        let within =
-            |x: f32, r: [f32; 2]| x >= r[0] - tol * (1.0 + r[0].abs()) && x <= r[1] + tol * (1.0 + r[1].abs());
+        let within = |x: f32, r: [f32; 2]| {
+            x >= r[0] - tol * (1.0 + r[0].abs()) && x <= r[1] + tol * (1.0 + r[1].abs())
+        };
         let o = ray.origin;
         let pad = Vec3::splat(tol) * (Vec3::ONE + self.origin.min.abs().max(self.origin.max.abs()));
         within(u, self.u)
@@ -186,7 +187,12 @@ impl PreparedBeam {
         if beam.everything {
             return p;
         }
-        let o = beam.origin.min.abs().max(beam.origin.max.abs()).max_element();
+        let o = beam
+            .origin
+            .min
+            .abs()
+            .max(beam.origin.max.abs())
+            .max_element();
         let m = scale.abs().max(o) + 1.0;
         for (i, (ca, x, cx, k)) in beam.planes().into_iter().enumerate() {
             let tol = BEAM_TOLERANCE * (ca.abs() + cx.abs()) * m;
@@ -319,9 +325,10 @@ impl BeamBuilder {
         for a in 0..3 {
             self.dmin[a] = self.dmin[a].min(n[a]);
             self.dmax[a] = self.dmax[a].max(n[a]);
-            let inv = 1.0 / d[a].abs();
-            let (u, v) = (d[(a + 1) % 3] * inv, d[(a + 2) % 3] * inv);
-            if inv.is_finite() {
+            let da = d[a].abs();
+            // Division (not a reciprocal) so [`Beam::contains_ray`] reproduces the slopes.
+            let (u, v) = (d[(a + 1) % 3] / da, d[(a + 2) % 3] / da);
+            if da > 0.0 {
                 self.umin[a] = self.umin[a].min(u);
                 self.umax[a] = self.umax[a].max(u);
                 self.vmin[a] = self.vmin[a].min(v);

@@ -8,9 +8,23 @@
 //! - [`visibility`]: the [`VisibilityBuffer`] every visibility method fills — the closest
 //!   triangle of every subsample ray. The beam caster and the per-ray BVH baseline fill the
 //!   same buffer, so they are compared sample by sample, and shading/resolve consumes either.
+//!
+//! The beam caster:
+//! - [`patterns`]: the sample patterns of §2 as [`SampleSet`] constructors;
+//! - [`hierarchy`]: tiles (<= 128 samples) and blocks (<= 64 tiles) with bounding beams (§5);
+//! - [`cast()`]: block cull, tile cull and sample testing (§5.3-5.5), `intersect.rs` for the
+//!   last; the culling itself lives in `parallax_bvh::beam`, the beam in
+//!   `parallax_core::math::Beam`.
 
+pub mod cast;
+pub mod hierarchy;
+pub mod intersect;
+pub mod patterns;
 pub mod samples;
 pub mod visibility;
 
+pub use cast::{CastStats, cast};
+pub use hierarchy::{Block, Hierarchy, HierarchyError, Tile};
+pub use patterns::PatternError;
 pub use samples::{Sample, SampleSet};
 pub use visibility::{VisibilityBuffer, trace_per_ray};

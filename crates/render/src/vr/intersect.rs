@@ -1,0 +1,201 @@
+//! Sample testing (Hunt et al. 2018, §5.5): the subsample rays of a tile against the tile's
+//! triangle list, closest hit with depth test, written to the [`VisibilityBuffer`].
+//!
+//! - Rays are generated just in time per subsample ([`SampleSet::fast_subsample_ray`], the
+//!   same rays bit for bit as [`SampleSet::subsample_ray`]), never stored.
+//! - The triangle list is the tile cull's leaves in near-depth order; a leaf is one (or more)
+//!   SoA block of four triangles of the BVH ([`Tri4`]), tested four at a time with the
+//!   watertight test of Woop et al. 2013 in exactly the f32 operations of the BVH's own leaf
+//!   test (`parallax_bvh` `tri4.rs`; lanes with an exactly-zero edge function fall back to the
+//!   scalar [`WatertightRay::intersect_within`]), and the same tie-break (lower index in
+//!   `Bvh::triangles` on equal `t`): so every hit equals the per-ray BVH traversal's
+//!   ([`super::trace_per_ray`]) whenever the tile list holds the ray's closest triangle.
+//! - **Beyond the paper: front-to-back early exit per ray.** The leaves are sorted by the near
+//!   depth `min s p_a` of their boxes along the tile beam's dominant axis; once a ray's closest
+//!   hit lies at dominant-axis depth `s (o_a + t d_a)` below the next leaf's near depth (with a
+//!   relative slack), no later leaf can hold a hit at `t' <= t`, and the ray stops. HVVR's
+//!   future-work section proposes interleaving exactly this with tile culling.
+//!
+//! Simplifications: no back-face culling (our meshes are two-sided), no near-plane culling
+//! (rays start at `t = 0` like the per-ray baseline), and no tile-corner all-in / all-out
+//! classification (the tile cull's beam/box test plays that role at leaf granularity).
+
+use glam::{Vec3, Vec4};
+use parallax_bvh::Tri4;
+use parallax_bvh::beam::LeafRef;
+use parallax_bvh::node::{leaf_count, leaf_first};
+use parallax_core::NO_ID;
+use parallax_core::math::{PreparedBeam, WatertightRay};
+
+use super::SampleSet;
+
+/// A ray prepared for the 4-triangle test (the shear of Woop et al. 2013, splatted).
+struct Ray4 {
+    wt: WatertightRay,
+    org: [Vec4; 3],
+    k: [usize; 3],
+    sx: Vec4,
+    sy: Vec4,
+    sz: Vec4,
+    t_min: Vec4,
+}
+
+impl Ray4 {
+    #[inline(always)]
+    fn new(wt: WatertightRay) -> Self {
+        let o = wt.origin;
+        Self {
+            org: [Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z)],
+            k: [wt.kx, wt.ky, wt.kz],
+            sx: Vec4::splat(wt.sx),
+            sy: Vec4::splat(wt.sy),
+            sz: Vec4::splat(wt.sz),
+            t_min: Vec4::splat(wt.t_min),
+            wt,
+        }
+    }
+
+    /// `(hit mask, exact mask, t)`: the arithmetic of `parallax_bvh`'s `Tri4Ray::intersect`.
+    #[inline(always)]
+    fn intersect(&self, b: &Tri4, mask: u32, t_lim: f32) -> (u32, u32, Vec4) {
+        let [kx, ky, kz] = self.k;
+        let proj = |v: usize| {
+            let p = &b.p[v];
+            let az = p[kz] - self.org[kz];
+            let x = (p[kx] - self.org[kx]) - self.sx * az;
+            let y = (p[ky] - self.org[ky]) - self.sy * az;
+            (x, y, self.sz * az)
+        };
+        let (ax, ay, az) = proj(0);
+        let (bx, by, bz) = proj(1);
+        let (cx, cy, cz) = proj(2);
+        let u = cx * by - cy * bx;
+        let v = ax * cy - ay * cx;
+        let w = bx * ay - by * ax;
+        let zero = Vec4::ZERO;
+        let exact = (u.cmpeq(zero) | v.cmpeq(zero) | w.cmpeq(zero)).bitmask() & mask;
+        let neg = u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero);
+        let pos = u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero);
+        let det = u + v + w;
+        let t_scaled = u * az + v * bz + w * cz;
+        let inv = Vec4::ONE / det;
+        let t = t_scaled * inv;
+        let ok = (neg & pos).bitmask() ^ 0xF;
+        let nz = det.cmpne(zero).bitmask();
+        let in_range = (t.cmpgt(self.t_min) & t.cmplt(Vec4::splat(t_lim))).bitmask();
+        (ok & nz & in_range & mask & !exact, exact, t)
+    }
+}
+
+/// Keeps `(t, tri)` if it is closer than the best so far, or as close with a lower triangle
+/// index (the BVH's tie-break).
+#[inline(always)]
+fn offer(best_t: &mut f32, best_tri: &mut u32, t: f32, tri: u32) {
+    if *best_tri == u32::MAX || t < *best_t || (t == *best_t && tri < *best_tri) {
+        *best_t = t;
+        *best_tri = tri;
+    }
+}
+
+/// Work counters of a tile.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct TileWork {
+    pub rays: u64,
+    pub leaf_tests: u64,
+}
+
+/// Tests every subsample ray of the tile `samples` against `leaves` (near-depth order) and
+/// writes the closest hits. `prim` / `t` point at the visibility buffer's arrays, indexed
+/// `sample * spp + k`; `beam` is the tile's prepared beam (its dominant axis orders the leaves)
+/// and `scale` the magnitude bound used for the early-exit slack.
+///
+/// # Safety
+/// `prim` and `t` must be valid for `set.ray_count()` elements, and no other thread may write
+/// the entries of these samples (each sample belongs to one tile).
+#[allow(clippy::too_many_arguments)]
+pub unsafe fn test_tile(
+    set: &SampleSet,
+    blocks: &[Tri4],
+    prim_ids: &[u32],
+    samples: &[u32],
+    leaves: &[LeafRef],
+    beam: &PreparedBeam,
+    scale: f32,
+    prim: *mut u32,
+    t: *mut f32,
+) -> TileWork {
+    let spp = set.spp as usize;
+    let mut work = TileWork::default();
+    let a = beam.axis;
+    let s = beam.sign;
+    let slack = 1e-5 * (scale.abs() + 1.0);
+    let ordered = !beam.everything;
+    for &i in samples {
+        let i = i as usize;
+        for k in 0..spp {
+            let (mut best_t, mut best_tri) = (f32::INFINITY, u32::MAX);
+            if let Some(ray) = set.fast_subsample_ray(i, k)
+                && ray.is_valid()
+                && ray.t_min <= ray.t_max
+            {
+                work.rays += 1;
+                let r4 = Ray4::new(WatertightRay::new(&ray));
+                let (oa, da) = (ray.origin[a], ray.dir[a]);
+                for l in leaves {
+                    if ordered && best_tri != u32::MAX && l.near > s * (oa + best_t * da) + slack {
+                        break;
+                    }
+                    work.leaf_tests += 1;
+                    let (first, count) = (leaf_first(l.leaf), leaf_count(l.leaf));
+                    for kb in 0..count.div_ceil(4) {
+                        let b = &blocks[(first + kb) as usize];
+                        let left = count - 4 * kb;
+                        let mask = if left >= 4 { 0xF } else { (1 << left) - 1 };
+                        let limit = if best_tri == u32::MAX {
+                            ray.t_max
+                        } else {
+                            best_t.next_up()
+                        };
+                        let (hit, exact, tv) = r4.intersect(b, mask, limit);
+                        if hit != 0 {
+                            let ta = tv.to_array();
+                            let mut m = hit;
+                            while m != 0 {
+                                let ln = m.trailing_zeros() as usize;
+                                m &= m - 1;
+                                offer(&mut best_t, &mut best_tri, ta[ln], b.tri[ln]);
+                            }
+                        }
+                        let mut m = exact;
+                        while m != 0 {
+                            let ln = m.trailing_zeros() as usize;
+                            m &= m - 1;
+                            let v =
+                                |j: usize| Vec3::new(b.p[j][0][ln], b.p[j][1][ln], b.p[j][2][ln]);
+                            let limit = if best_tri == u32::MAX {
+                                ray.t_max
+                            } else {
+                                best_t.next_up()
+                            };
+                            if let Some(h) = r4.wt.intersect_within(v(0), v(1), v(2), limit) {
+                                offer(&mut best_t, &mut best_tri, h.t, b.tri[ln]);
+                            }
+                        }
+                    }
+                }
+            }
+            let o = i * spp + k;
+            // SAFETY: the caller guarantees exclusive access to this sample's entries.
+            unsafe {
+                if best_tri == u32::MAX {
+                    *prim.add(o) = NO_ID;
+                    *t.add(o) = f32::INFINITY;
+                } else {
+                    *prim.add(o) = prim_ids[best_tri as usize];
+                    *t.add(o) = best_t;
+                }
+            }
+        }
+    }
+    work
+}
