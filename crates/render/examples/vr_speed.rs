@@ -67,7 +67,7 @@ fn main() {
         let ray_rate = n / per_ray.as_secs_f64() / 1e6;
         println!(
             "spp {spp:2}: {:.1} M rays | hierarchy {:.0} ms ({} tiles, {} blocks) | beam {:.1} ms = {:.1} Mrays/s \
-             [cpu ms: block cull {:.1}, tile cull {:.1}, sample test {:.1}; {:.1} entries/block, {:.1} leaves/tile, {:.2} leaf tests/ray] \
+             [cpu ms: block cull {:.1}, tile cull {:.1}, sample test {:.1}; {:.1} entries/block, {:.1} leaves/tile, {:.2} group + {:.2} leaf tests/ray] \
              | per-ray {:.1} ms = {:.1} Mrays/s | speed-up {:.2}x | agreement {:.6}",
             n / 1e6,
             build.as_secs_f64() * 1e3,
@@ -80,6 +80,7 @@ fn main() {
             s.sample_test.as_secs_f64() * 1e3,
             s.entry_points as f64 / s.blocks.max(1) as f64,
             s.tile_leaves as f64 / s.tiles.max(1) as f64,
+            s.group_tests as f64 / s.rays.max(1) as f64,
             s.leaf_tests as f64 / s.rays.max(1) as f64,
             per_ray.as_secs_f64() * 1e3,
             ray_rate,

@@ -14,7 +14,7 @@ use parallax_bvh::beam::{BLOCK_ENTRIES, CullScratch, SimdBeam, block_cull, tile_
 use parallax_core::math::PreparedBeam;
 use rayon::prelude::*;
 
-use super::intersect::test_tile;
+use super::intersect::{LeafGroup, group_leaves, test_tile};
 use super::{Hierarchy, SampleSet, VisibilityBuffer};
 
 /// Per-stage times (summed over threads: CPU time, not wall time) and work counts of a cast.
@@ -31,6 +31,8 @@ pub struct CastStats {
     pub entry_points: u64,
     /// Leaves in the tiles' lists (summed over tiles).
     pub tile_leaves: u64,
+    /// Four-leaf-box slab tests of the sample stage.
+    pub group_tests: u64,
     /// Leaf (4-triangle block) tests of the sample stage.
     pub leaf_tests: u64,
     /// Valid subsample rays cast.
@@ -94,16 +96,15 @@ pub fn cast(
         prim: out.prim.as_mut_ptr(),
         t: out.t.as_mut_ptr(),
     };
-    let counters: [AtomicU64; 8] = Default::default();
+    let counters: [AtomicU64; 9] = Default::default();
     let add = |i: usize, v: u64| {
         counters[i].fetch_add(v, Ordering::Relaxed);
     };
     let blocks_ = bvh.blocks();
     let prim_ids = bvh.prim_ids();
-    hierarchy
-        .blocks
-        .par_iter()
-        .for_each_init(CullScratch::default, |scratch, block| {
+    hierarchy.blocks.par_iter().for_each_init(
+        || (CullScratch::default(), Vec::<LeafGroup>::new()),
+        |(scratch, groups), block| {
             let ptr = ptr;
             if block.rays == 0 {
                 return;
@@ -116,7 +117,8 @@ pub fn cast(
             add(0, (t1 - t0).as_nanos() as u64);
             add(3, entries.len() as u64);
             let (mut cull_ns, mut test_ns) = (0u64, 0u64);
-            let (mut leaves_n, mut leaf_tests, mut rays) = (0u64, 0u64, 0u64);
+            let (mut leaves_n, mut leaf_tests, mut rays, mut group_tests) =
+                (0u64, 0u64, 0u64, 0u64);
             let tiles = &hierarchy.tiles
                 [block.first_tile as usize..(block.first_tile + block.tile_count) as usize];
             for tile in tiles {
@@ -126,6 +128,7 @@ pub fn cast(
                 let a = Instant::now();
                 let tb = PreparedBeam::new(&tile.beam, scale);
                 tile_cull(bvh, &SimdBeam::new(&tb), &entries, scratch);
+                group_leaves(bvh, &scratch.leaves, groups);
                 let b = Instant::now();
                 let samples =
                     &hierarchy.order[tile.start as usize..(tile.start + tile.len) as usize];
@@ -133,15 +136,7 @@ pub fn cast(
                 // sizes checked above), so this tile's entries are written by no other tile.
                 let w = unsafe {
                     test_tile(
-                        set,
-                        blocks_,
-                        prim_ids,
-                        samples,
-                        &scratch.leaves,
-                        &tb,
-                        scale,
-                        ptr.prim,
-                        ptr.t,
+                        set, blocks_, prim_ids, samples, groups, &tb, scale, ptr.prim, ptr.t,
                     )
                 };
                 let c = Instant::now();
@@ -149,6 +144,7 @@ pub fn cast(
                 test_ns += (c - b).as_nanos() as u64;
                 leaves_n += scratch.leaves.len() as u64;
                 leaf_tests += w.leaf_tests;
+                group_tests += w.group_tests;
                 rays += w.rays;
             }
             scratch.entries = entries;
@@ -158,7 +154,9 @@ pub fn cast(
             add(5, leaf_tests);
             add(6, rays);
             add(7, tiles.len() as u64);
-        });
+            add(8, group_tests);
+        },
+    );
     let g = |i: usize| counters[i].load(Ordering::Relaxed);
     CastStats {
         block_cull: Duration::from_nanos(g(0)),
@@ -170,6 +168,7 @@ pub fn cast(
         entry_points: g(3),
         tile_leaves: g(4),
         leaf_tests: g(5),
+        group_tests: g(8),
         rays: g(6),
     }
 }

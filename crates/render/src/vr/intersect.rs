@@ -21,10 +21,13 @@
 //! classification (the tile cull's beam/box test plays that role at leaf granularity).
 
 use glam::{Vec3, Vec4};
+use parallax_bvh::Bvh;
 use parallax_bvh::Tri4;
 use parallax_bvh::beam::LeafRef;
 use parallax_bvh::node::{leaf_count, leaf_first};
+use parallax_core::Aabb;
 use parallax_core::NO_ID;
+use parallax_core::math::ROBUST_FAR_SCALE;
 use parallax_core::math::{PreparedBeam, WatertightRay};
 
 use super::SampleSet;
@@ -97,10 +100,93 @@ fn offer(best_t: &mut f32, best_tri: &mut u32, t: f32, tri: u32) {
     }
 }
 
+/// Four leaves of a tile's list with their boxes in SoA lanes (`[min_x, max_x, min_y, max_y,
+/// min_z, max_z]`, as `Node4`), so a ray tests four leaf boxes with one slab test before it
+/// tests their triangles. Padding lanes hold the empty box (never hit) and leaf `EMPTY`.
+#[derive(Clone, Copy, Debug)]
+pub struct LeafGroup {
+    pub bounds: [Vec4; 6],
+    pub leaf: [u32; 4],
+    /// Smallest near depth of the four leaves (the first one's: lists are sorted).
+    pub near: f32,
+}
+
+/// Packs a near-sorted leaf list into groups of four.
+pub fn group_leaves(bvh: &Bvh, leaves: &[LeafRef], out: &mut Vec<LeafGroup>) {
+    out.clear();
+    let tris = bvh.triangles();
+    for chunk in leaves.chunks(4) {
+        let mut g = LeafGroup {
+            bounds: [
+                Vec4::INFINITY,
+                Vec4::NEG_INFINITY,
+                Vec4::INFINITY,
+                Vec4::NEG_INFINITY,
+                Vec4::INFINITY,
+                Vec4::NEG_INFINITY,
+            ],
+            leaf: [parallax_bvh::node::EMPTY; 4],
+            near: chunk[0].near,
+        };
+        for (l, r) in chunk.iter().enumerate() {
+            let mut b = Aabb::EMPTY;
+            for t in bvh.leaf_triangles(leaf_first(r.leaf), leaf_count(r.leaf)) {
+                b = b.union(tris[t].bounds());
+            }
+            g.bounds[0][l] = b.min.x;
+            g.bounds[1][l] = b.max.x;
+            g.bounds[2][l] = b.min.y;
+            g.bounds[3][l] = b.max.y;
+            g.bounds[4][l] = b.min.z;
+            g.bounds[5][l] = b.max.z;
+            g.leaf[l] = r.leaf;
+            g.near = g.near.min(r.near);
+        }
+        out.push(g);
+    }
+}
+
+/// `a > b ? a : b` per lane (a NaN in `a` gives `b`), as `parallax_bvh`'s `simd.rs`.
+#[inline(always)]
+fn max_or_rhs(a: Vec4, b: Vec4) -> Vec4 {
+    Vec4::select(a.cmpgt(b), a, b)
+}
+
+/// `a < b ? a : b` per lane (a NaN in `a` gives `b`).
+#[inline(always)]
+fn min_or_rhs(a: Vec4, b: Vec4) -> Vec4 {
+    Vec4::select(a.cmplt(b), a, b)
+}
+
+/// The robust slab test of the BVH traversal (Ize 2013 far scaling) on four leaf boxes: the
+/// lanes a ray with closest hit `t_max` so far may still hit something in.
+#[inline(always)]
+fn slab4(
+    g: &LeafGroup,
+    org: &[Vec4; 3],
+    inv: &[Vec4; 3],
+    near: &[usize; 3],
+    t_min: Vec4,
+    t_max: f32,
+) -> u32 {
+    let b = &g.bounds;
+    let tnx = (b[near[0]] - org[0]) * inv[0];
+    let tny = (b[near[1]] - org[1]) * inv[1];
+    let tnz = (b[near[2]] - org[2]) * inv[2];
+    let tfx = (b[near[0] ^ 1] - org[0]) * inv[0];
+    let tfy = (b[near[1] ^ 1] - org[1]) * inv[1];
+    let tfz = (b[near[2] ^ 1] - org[2]) * inv[2];
+    let t_near = max_or_rhs(tnz, max_or_rhs(tny, max_or_rhs(tnx, t_min)));
+    let t_far = min_or_rhs(tfz, min_or_rhs(tfy, min_or_rhs(tfx, Vec4::splat(t_max))));
+    t_near.cmple(t_far * ROBUST_FAR_SCALE).bitmask()
+}
+
 /// Work counters of a tile.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct TileWork {
     pub rays: u64,
+    /// Four-box slab tests against leaf groups.
+    pub group_tests: u64,
     pub leaf_tests: u64,
 }
 
@@ -118,7 +204,7 @@ pub unsafe fn test_tile(
     blocks: &[Tri4],
     prim_ids: &[u32],
     samples: &[u32],
-    leaves: &[LeafRef],
+    groups: &[LeafGroup],
     beam: &PreparedBeam,
     scale: f32,
     prim: *mut u32,
@@ -141,44 +227,66 @@ pub unsafe fn test_tile(
                 work.rays += 1;
                 let r4 = Ray4::new(WatertightRay::new(&ray));
                 let (oa, da) = (ray.origin[a], ray.dir[a]);
-                for l in leaves {
-                    if ordered && best_tri != u32::MAX && l.near > s * (oa + best_t * da) + slack {
+                let inv = ray.dir.recip();
+                let org = [
+                    Vec4::splat(ray.origin.x),
+                    Vec4::splat(ray.origin.y),
+                    Vec4::splat(ray.origin.z),
+                ];
+                let invv = [Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z)];
+                let neg = |x: f32| x.is_sign_negative() as usize;
+                let near = [neg(inv.x), 2 + neg(inv.y), 4 + neg(inv.z)];
+                let t_min4 = Vec4::splat(ray.t_min);
+                for g in groups {
+                    if ordered && best_tri != u32::MAX && g.near > s * (oa + best_t * da) + slack {
                         break;
                     }
-                    work.leaf_tests += 1;
-                    let (first, count) = (leaf_first(l.leaf), leaf_count(l.leaf));
-                    for kb in 0..count.div_ceil(4) {
-                        let b = &blocks[(first + kb) as usize];
-                        let left = count - 4 * kb;
-                        let mask = if left >= 4 { 0xF } else { (1 << left) - 1 };
-                        let limit = if best_tri == u32::MAX {
-                            ray.t_max
-                        } else {
-                            best_t.next_up()
-                        };
-                        let (hit, exact, tv) = r4.intersect(b, mask, limit);
-                        if hit != 0 {
-                            let ta = tv.to_array();
-                            let mut m = hit;
-                            while m != 0 {
-                                let ln = m.trailing_zeros() as usize;
-                                m &= m - 1;
-                                offer(&mut best_t, &mut best_tri, ta[ln], b.tri[ln]);
-                            }
-                        }
-                        let mut m = exact;
-                        while m != 0 {
-                            let ln = m.trailing_zeros() as usize;
-                            m &= m - 1;
-                            let v =
-                                |j: usize| Vec3::new(b.p[j][0][ln], b.p[j][1][ln], b.p[j][2][ln]);
+                    let lim = if best_tri == u32::MAX {
+                        ray.t_max
+                    } else {
+                        best_t
+                    };
+                    work.group_tests += 1;
+                    let mut lanes = slab4(g, &org, &invv, &near, t_min4, lim);
+                    while lanes != 0 {
+                        let l = g.leaf[lanes.trailing_zeros() as usize];
+                        lanes &= lanes - 1;
+                        work.leaf_tests += 1;
+                        let (first, count) = (leaf_first(l), leaf_count(l));
+                        for kb in 0..count.div_ceil(4) {
+                            let b = &blocks[(first + kb) as usize];
+                            let left = count - 4 * kb;
+                            let mask = if left >= 4 { 0xF } else { (1 << left) - 1 };
                             let limit = if best_tri == u32::MAX {
                                 ray.t_max
                             } else {
                                 best_t.next_up()
                             };
-                            if let Some(h) = r4.wt.intersect_within(v(0), v(1), v(2), limit) {
-                                offer(&mut best_t, &mut best_tri, h.t, b.tri[ln]);
+                            let (hit, exact, tv) = r4.intersect(b, mask, limit);
+                            if hit != 0 {
+                                let ta = tv.to_array();
+                                let mut m = hit;
+                                while m != 0 {
+                                    let ln = m.trailing_zeros() as usize;
+                                    m &= m - 1;
+                                    offer(&mut best_t, &mut best_tri, ta[ln], b.tri[ln]);
+                                }
+                            }
+                            let mut m = exact;
+                            while m != 0 {
+                                let ln = m.trailing_zeros() as usize;
+                                m &= m - 1;
+                                let v = |j: usize| {
+                                    Vec3::new(b.p[j][0][ln], b.p[j][1][ln], b.p[j][2][ln])
+                                };
+                                let limit = if best_tri == u32::MAX {
+                                    ray.t_max
+                                } else {
+                                    best_t.next_up()
+                                };
+                                if let Some(h) = r4.wt.intersect_within(v(0), v(1), v(2), limit) {
+                                    offer(&mut best_t, &mut best_tri, h.t, b.tri[ln]);
+                                }
                             }
                         }
                     }
