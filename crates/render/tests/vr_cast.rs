@@ -3,7 +3,7 @@
 
 use glam::Vec2;
 use parallax_bvh::Bvh;
-use parallax_render::vr::{Hierarchy, SampleSet, VisibilityBuffer, cast, trace_per_ray};
+use parallax_render::vr::{Hierarchy, SampleSet, VisibilityBuffer, cast, cast_with, trace_per_ray};
 use parallax_scene::Scene;
 use parallax_scene::camera::{Camera, CameraOptions, ModelKind};
 
@@ -62,6 +62,10 @@ fn beam_caster_equals_per_ray_traversal_for_every_scheme() {
                 let h = Hierarchy::build(&set).unwrap();
                 let mut beam = VisibilityBuffer::new(&set);
                 let stats = cast(&bvh, &set, &h, &mut beam);
+                // The one-ray kernel gives the same buffer as the packet kernel.
+                let mut single = VisibilityBuffer::new(&set);
+                cast_with(&bvh, &set, &h, &mut single, false);
+                assert_eq!(single, beam, "{name} {scheme} spp {spp}: kernels differ");
                 let mut reference = VisibilityBuffer::new(&set);
                 trace_per_ray(&bvh, &set, &mut reference);
                 let agree = beam.agreement(&reference);

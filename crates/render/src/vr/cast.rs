@@ -14,7 +14,7 @@ use parallax_bvh::beam::{BLOCK_ENTRIES, CullScratch, SimdBeam, block_cull, tile_
 use parallax_core::math::PreparedBeam;
 use rayon::prelude::*;
 
-use super::intersect::{LeafGroup, group_leaves, test_tile};
+use super::intersect::{LeafBox, LeafGroup, group_leaves, test_tile};
 use super::{Hierarchy, SampleSet, VisibilityBuffer};
 
 /// Per-stage times (summed over threads: CPU time, not wall time) and work counts of a cast.
@@ -78,6 +78,19 @@ pub fn cast(
     hierarchy: &Hierarchy,
     out: &mut VisibilityBuffer,
 ) -> CastStats {
+    cast_with(bvh, set, hierarchy, out, true)
+}
+
+/// [`cast`] with the choice of sample-test kernel: `packets = true` tests four rays at a time
+/// (`packet.rs`, the default), `false` one ray at a time against groups of four leaf boxes
+/// (`intersect.rs`); both give the same buffer.
+pub fn cast_with(
+    bvh: &Bvh,
+    set: &SampleSet,
+    hierarchy: &Hierarchy,
+    out: &mut VisibilityBuffer,
+    packets: bool,
+) -> CastStats {
     let wall = Instant::now();
     assert!(
         hierarchy.sample_count == set.samples.len()
@@ -103,8 +116,14 @@ pub fn cast(
     let blocks_ = bvh.blocks();
     let prim_ids = bvh.prim_ids();
     hierarchy.blocks.par_iter().for_each_init(
-        || (CullScratch::default(), Vec::<LeafGroup>::new()),
-        |(scratch, groups), block| {
+        || {
+            (
+                CullScratch::default(),
+                Vec::<LeafGroup>::new(),
+                Vec::<LeafBox>::new(),
+            )
+        },
+        |(scratch, groups, boxes), block| {
             let ptr = ptr;
             if block.rays == 0 {
                 return;
@@ -128,7 +147,7 @@ pub fn cast(
                 let a = Instant::now();
                 let tb = PreparedBeam::new(&tile.beam, scale);
                 tile_cull(bvh, &SimdBeam::new(&tb), &entries, scratch);
-                group_leaves(bvh, &scratch.leaves, groups);
+                group_leaves(bvh, &scratch.leaves, groups, boxes);
                 let b = Instant::now();
                 let samples =
                     &hierarchy.order[tile.start as usize..(tile.start + tile.len) as usize];
@@ -136,7 +155,8 @@ pub fn cast(
                 // sizes checked above), so this tile's entries are written by no other tile.
                 let w = unsafe {
                     test_tile(
-                        set, blocks_, prim_ids, samples, groups, &tb, scale, ptr.prim, ptr.t,
+                        set, blocks_, prim_ids, samples, groups, boxes, &tb, scale, packets,
+                        ptr.prim, ptr.t,
                     )
                 };
                 let c = Instant::now();

@@ -31,6 +31,8 @@ use parallax_core::math::ROBUST_FAR_SCALE;
 use parallax_core::math::{PreparedBeam, WatertightRay};
 
 use super::SampleSet;
+use super::packet::{PacketWork, closest4, gen4};
+use parallax_core::Ray;
 
 /// A ray prepared for the 4-triangle test (the shear of Woop et al. 2013, splatted).
 struct Ray4 {
@@ -111,9 +113,23 @@ pub struct LeafGroup {
     pub near: f32,
 }
 
-/// Packs a near-sorted leaf list into groups of four.
-pub fn group_leaves(bvh: &Bvh, leaves: &[LeafRef], out: &mut Vec<LeafGroup>) {
+/// A leaf of a tile's list with the box of its triangles.
+#[derive(Clone, Copy, Debug)]
+pub struct LeafBox {
+    pub bounds: Aabb,
+    pub leaf: u32,
+    pub near: f32,
+}
+
+/// Packs a near-sorted leaf list into groups of four (`out`) and into boxed leaves (`boxes`).
+pub fn group_leaves(
+    bvh: &Bvh,
+    leaves: &[LeafRef],
+    out: &mut Vec<LeafGroup>,
+    boxes: &mut Vec<LeafBox>,
+) {
     out.clear();
+    boxes.clear();
     let tris = bvh.triangles();
     for chunk in leaves.chunks(4) {
         let mut g = LeafGroup {
@@ -141,6 +157,11 @@ pub fn group_leaves(bvh: &Bvh, leaves: &[LeafRef], out: &mut Vec<LeafGroup>) {
             g.bounds[5][l] = b.max.z;
             g.leaf[l] = r.leaf;
             g.near = g.near.min(r.near);
+            boxes.push(LeafBox {
+                bounds: b,
+                leaf: r.leaf,
+                near: r.near,
+            });
         }
         out.push(g);
     }
@@ -198,6 +219,101 @@ pub struct TileWork {
 /// # Safety
 /// `prim` and `t` must be valid for `set.ray_count()` elements, and no other thread may write
 /// the entries of these samples (each sample belongs to one tile).
+/// The closest hit `(t, index in Bvh::triangles)` of one ray (`u32::MAX` = none) against the
+/// tile's leaf groups.
+#[inline(never)]
+pub fn closest_one(
+    ray: &Ray,
+    blocks: &[Tri4],
+    groups: &[LeafGroup],
+    beam: &PreparedBeam,
+    slack: f32,
+    work: &mut TileWork,
+) -> (f32, u32) {
+    let (mut best_t, mut best_tri) = (f32::INFINITY, u32::MAX);
+    if !(ray.is_valid() && ray.t_min <= ray.t_max) {
+        return (best_t, best_tri);
+    }
+    let a = beam.axis;
+    let s = beam.sign;
+    let ordered = !beam.everything;
+    let r4 = Ray4::new(WatertightRay::new(ray));
+    let (oa, da) = (ray.origin[a], ray.dir[a]);
+    let inv = ray.dir.recip();
+    let org = [
+        Vec4::splat(ray.origin.x),
+        Vec4::splat(ray.origin.y),
+        Vec4::splat(ray.origin.z),
+    ];
+    let invv = [Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z)];
+    let neg = |x: f32| x.is_sign_negative() as usize;
+    let near = [neg(inv.x), 2 + neg(inv.y), 4 + neg(inv.z)];
+    let t_min4 = Vec4::splat(ray.t_min);
+    for g in groups {
+        if ordered && best_tri != u32::MAX && g.near > s * (oa + best_t * da) + slack {
+            break;
+        }
+        let lim = if best_tri == u32::MAX {
+            ray.t_max
+        } else {
+            best_t
+        };
+        work.group_tests += 1;
+        let mut lanes = slab4(g, &org, &invv, &near, t_min4, lim);
+        while lanes != 0 {
+            let l = g.leaf[lanes.trailing_zeros() as usize];
+            lanes &= lanes - 1;
+            work.leaf_tests += 1;
+            let (first, count) = (leaf_first(l), leaf_count(l));
+            for kb in 0..count.div_ceil(4) {
+                let b = &blocks[(first + kb) as usize];
+                let left = count - 4 * kb;
+                let mask = if left >= 4 { 0xF } else { (1 << left) - 1 };
+                let limit = if best_tri == u32::MAX {
+                    ray.t_max
+                } else {
+                    best_t.next_up()
+                };
+                let (hit, exact, tv) = r4.intersect(b, mask, limit);
+                if hit != 0 {
+                    let ta = tv.to_array();
+                    let mut m = hit;
+                    while m != 0 {
+                        let ln = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        offer(&mut best_t, &mut best_tri, ta[ln], b.tri[ln]);
+                    }
+                }
+                let mut m = exact;
+                while m != 0 {
+                    let ln = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    let v = |j: usize| Vec3::new(b.p[j][0][ln], b.p[j][1][ln], b.p[j][2][ln]);
+                    let limit = if best_tri == u32::MAX {
+                        ray.t_max
+                    } else {
+                        best_t.next_up()
+                    };
+                    if let Some(h) = r4.wt.intersect_within(v(0), v(1), v(2), limit) {
+                        offer(&mut best_t, &mut best_tri, h.t, b.tri[ln]);
+                    }
+                }
+            }
+        }
+    }
+    (best_t, best_tri)
+}
+
+/// Tests every subsample ray of the tile `samples` against the tile's leaves and writes the
+/// closest hits: packets of four rays ([`super::packet`]) where the four share one watertight
+/// permutation, one ray at a time ([`closest_one`]) otherwise (or always, with `packets =
+/// false`). `prim` / `t` point at the visibility buffer's arrays, indexed `sample * spp + k`;
+/// `beam` is the tile's prepared beam (its dominant axis orders the leaves) and `scale` the
+/// magnitude bound used for the early-exit slack.
+///
+/// # Safety
+/// `prim` and `t` must be valid for `set.ray_count()` elements, and no other thread may write
+/// the entries of these samples (each sample belongs to one tile).
 #[allow(clippy::too_many_arguments)]
 pub unsafe fn test_tile(
     set: &SampleSet,
@@ -205,105 +321,66 @@ pub unsafe fn test_tile(
     prim_ids: &[u32],
     samples: &[u32],
     groups: &[LeafGroup],
+    boxes: &[LeafBox],
     beam: &PreparedBeam,
     scale: f32,
+    packets: bool,
     prim: *mut u32,
     t: *mut f32,
 ) -> TileWork {
     let spp = set.spp as usize;
     let mut work = TileWork::default();
-    let a = beam.axis;
-    let s = beam.sign;
     let slack = 1e-5 * (scale.abs() + 1.0);
-    let ordered = !beam.everything;
-    for &i in samples {
-        let i = i as usize;
-        for k in 0..spp {
-            let (mut best_t, mut best_tri) = (f32::INFINITY, u32::MAX);
-            if let Some(ray) = set.fast_subsample_ray(i, k)
-                && ray.is_valid()
-                && ray.t_min <= ray.t_max
-            {
-                work.rays += 1;
-                let r4 = Ray4::new(WatertightRay::new(&ray));
-                let (oa, da) = (ray.origin[a], ray.dir[a]);
-                let inv = ray.dir.recip();
-                let org = [
-                    Vec4::splat(ray.origin.x),
-                    Vec4::splat(ray.origin.y),
-                    Vec4::splat(ray.origin.z),
-                ];
-                let invv = [Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z)];
-                let neg = |x: f32| x.is_sign_negative() as usize;
-                let near = [neg(inv.x), 2 + neg(inv.y), 4 + neg(inv.z)];
-                let t_min4 = Vec4::splat(ray.t_min);
-                for g in groups {
-                    if ordered && best_tri != u32::MAX && g.near > s * (oa + best_t * da) + slack {
-                        break;
-                    }
-                    let lim = if best_tri == u32::MAX {
-                        ray.t_max
-                    } else {
-                        best_t
-                    };
-                    work.group_tests += 1;
-                    let mut lanes = slab4(g, &org, &invv, &near, t_min4, lim);
-                    while lanes != 0 {
-                        let l = g.leaf[lanes.trailing_zeros() as usize];
-                        lanes &= lanes - 1;
-                        work.leaf_tests += 1;
-                        let (first, count) = (leaf_first(l), leaf_count(l));
-                        for kb in 0..count.div_ceil(4) {
-                            let b = &blocks[(first + kb) as usize];
-                            let left = count - 4 * kb;
-                            let mask = if left >= 4 { 0xF } else { (1 << left) - 1 };
-                            let limit = if best_tri == u32::MAX {
-                                ray.t_max
-                            } else {
-                                best_t.next_up()
-                            };
-                            let (hit, exact, tv) = r4.intersect(b, mask, limit);
-                            if hit != 0 {
-                                let ta = tv.to_array();
-                                let mut m = hit;
-                                while m != 0 {
-                                    let ln = m.trailing_zeros() as usize;
-                                    m &= m - 1;
-                                    offer(&mut best_t, &mut best_tri, ta[ln], b.tri[ln]);
-                                }
-                            }
-                            let mut m = exact;
-                            while m != 0 {
-                                let ln = m.trailing_zeros() as usize;
-                                m &= m - 1;
-                                let v = |j: usize| {
-                                    Vec3::new(b.p[j][0][ln], b.p[j][1][ln], b.p[j][2][ln])
-                                };
-                                let limit = if best_tri == u32::MAX {
-                                    ray.t_max
-                                } else {
-                                    best_t.next_up()
-                                };
-                                if let Some(h) = r4.wt.intersect_within(v(0), v(1), v(2), limit) {
-                                    offer(&mut best_t, &mut best_tri, h.t, b.tri[ln]);
-                                }
-                            }
-                        }
-                    }
+    let write = |o: usize, bt: f32, tri: u32| {
+        // SAFETY: the caller guarantees exclusive access to this sample's entries.
+        unsafe {
+            if tri == u32::MAX {
+                *prim.add(o) = NO_ID;
+                *t.add(o) = f32::INFINITY;
+            } else {
+                *prim.add(o) = prim_ids[tri as usize];
+                *t.add(o) = bt;
+            }
+        }
+    };
+    let mut pairs = [(0u32, 0u32); 4];
+    let mut n = 0;
+    let total = samples.len() * spp;
+    let mut pw = PacketWork::default();
+    for j in 0..total {
+        pairs[n] = (samples[j / spp], (j % spp) as u32);
+        n += 1;
+        if n < 4 && j + 1 < total {
+            continue;
+        }
+        let batch = &pairs[..n];
+        n = 0;
+        let rays = gen4(set, batch);
+        work.rays += rays.valid.count_ones() as u64;
+        let res = if packets {
+            closest4(&rays, blocks, boxes, beam, slack, &mut pw)
+        } else {
+            None
+        };
+        match res {
+            Some(c) => {
+                for (l, &(i, k)) in batch.iter().enumerate() {
+                    write(i as usize * spp + k as usize, c.t[l], c.tri[l]);
                 }
             }
-            let o = i * spp + k;
-            // SAFETY: the caller guarantees exclusive access to this sample's entries.
-            unsafe {
-                if best_tri == u32::MAX {
-                    *prim.add(o) = NO_ID;
-                    *t.add(o) = f32::INFINITY;
-                } else {
-                    *prim.add(o) = prim_ids[best_tri as usize];
-                    *t.add(o) = best_t;
+            None => {
+                for (l, &(i, k)) in batch.iter().enumerate() {
+                    let (bt, tri) = if rays.valid >> l & 1 != 0 {
+                        closest_one(&rays.lane(l), blocks, groups, beam, slack, &mut work)
+                    } else {
+                        (f32::INFINITY, u32::MAX)
+                    };
+                    write(i as usize * spp + k as usize, bt, tri);
                 }
             }
         }
     }
+    work.group_tests += pw.box_tests;
+    work.leaf_tests += pw.tri_tests;
     work
 }

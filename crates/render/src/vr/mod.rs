@@ -19,11 +19,12 @@
 pub mod cast;
 pub mod hierarchy;
 pub mod intersect;
+pub mod packet;
 pub mod patterns;
 pub mod samples;
 pub mod visibility;
 
-pub use cast::{CastStats, cast};
+pub use cast::{CastStats, cast, cast_with};
 pub use hierarchy::{Block, Hierarchy, HierarchyError, Tile};
 pub use patterns::PatternError;
 pub use samples::{Sample, SampleSet};
