@@ -107,6 +107,18 @@ fn median_split(set: &SampleSet, idx: &mut [u32]) -> usize {
     mid
 }
 
+/// Morton (Z-order) code of the pixel containing a film position (16 bits per axis).
+fn morton(f: glam::Vec2) -> u32 {
+    let spread = |v: f32| {
+        let mut x = (v.max(0.0) as u32) & 0xFFFF;
+        x = (x | (x << 8)) & 0x00FF_00FF;
+        x = (x | (x << 4)) & 0x0F0F_0F0F;
+        x = (x | (x << 2)) & 0x3333_3333;
+        (x | (x << 1)) & 0x5555_5555
+    };
+    spread(f.x) | (spread(f.y) << 1)
+}
+
 /// The beam accumulator of the subsample rays of `idx`.
 fn rays_of(set: &SampleSet, idx: &[u32]) -> BeamBuilder {
     let mut b = BeamBuilder::new();
@@ -129,6 +141,9 @@ fn build_tiles(set: &SampleSet, idx: &mut [u32], base: u32, out: &mut Vec<(Tile,
         build_tiles(set, b, base + mid as u32, out);
         return;
     }
+    // Z-order within the tile, so that consecutive samples (the caster's ray packets at low
+    // spp) are neighbours on the film.
+    idx.sort_unstable_by_key(|&i| (morton(set.samples[i as usize].film), i));
     let acc = rays_of(set, idx);
     let beam = match acc.finish() {
         Some(b) => b,

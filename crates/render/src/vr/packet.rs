@@ -132,6 +132,27 @@ pub fn gen4(set: &SampleSet, pairs: &[(u32, u32)]) -> Rays4 {
     r
 }
 
+/// The axis permutation of `WatertightRay::new`: dominant axis `kz`, `kx, ky` swapped when
+/// `d[kz] < 0`.
+#[inline(always)]
+fn permutation(d: Vec3) -> (usize, usize, usize) {
+    let a = d.abs();
+    let kz = if a.x > a.y {
+        if a.x > a.z { 0 } else { 2 }
+    } else if a.y > a.z {
+        1
+    } else {
+        2
+    };
+    let kx = (kz + 1) % 3;
+    let ky = (kx + 1) % 3;
+    if d[kz] < 0.0 {
+        (ky, kx, kz)
+    } else {
+        (kx, ky, kz)
+    }
+}
+
 /// Result of a packet: per lane the closest `(t, index in Bvh::triangles)` (`u32::MAX` = none).
 #[derive(Clone, Copy, Debug)]
 pub struct Closest4 {
@@ -157,45 +178,39 @@ pub fn closest4(
     slack: f32,
     work: &mut PacketWork,
 ) -> Option<Closest4> {
-    // Per-lane watertight set-up; all lanes must share (kx, ky, kz).
-    let mut wts = [None::<WatertightRay>; 4];
-    let mut perm = None;
-    for (l, w) in wts.iter_mut().enumerate() {
-        if rays.valid >> l & 1 == 0 {
-            continue;
-        }
-        let ray = rays.lane(l);
-        if !(ray.is_valid() && ray.t_min <= ray.t_max) {
-            return None;
-        }
-        let wt = WatertightRay::new(&ray);
-        let p = (wt.kx, wt.ky, wt.kz);
-        if *perm.get_or_insert(p) != p {
-            return None;
-        }
-        *w = Some(wt);
-    }
+    // Per-lane watertight set-up (Woop et al. 2013, §3, as `WatertightRay::new`); all lanes
+    // must share (kx, ky, kz). The shear constants are divided lane-wise (the same IEEE
+    // divisions); a scalar `WatertightRay` is only built for the exact-fallback lanes.
+    let valid = rays.valid;
     let mut out = Closest4 {
         t: [f32::INFINITY; 4],
         tri: [u32::MAX; 4],
     };
+    let mut perm = None;
+    for l in 0..4 {
+        if valid >> l & 1 == 0 {
+            continue;
+        }
+        let ray = rays.lane(l);
+        // The packet kernel assumes `Ray::new`'s interval (0, inf); anything else takes the
+        // one-ray path.
+        if !(ray.is_valid() && ray.t_min == 0.0 && ray.t_max == f32::INFINITY) {
+            return None;
+        }
+        let p = permutation(ray.dir);
+        if *perm.get_or_insert(p) != p {
+            return None;
+        }
+    }
     let Some((kx, ky, kz)) = perm else {
         return Some(out);
     };
-    let valid = rays.valid;
-    let lane_f = |f: &dyn Fn(&WatertightRay) -> f32| {
-        let mut v = [0.0f32; 4];
-        for l in 0..4 {
-            if let Some(w) = &wts[l] {
-                v[l] = f(w);
-            }
-        }
-        Vec4::from_array(v)
-    };
-    let sx = lane_f(&|w| w.sx);
-    let sy = lane_f(&|w| w.sy);
-    let sz = lane_f(&|w| w.sz);
-    let t_min = lane_f(&|w| w.t_min);
+    let dkz = rays.d[kz];
+    let sx = rays.d[kx] / dkz;
+    let sy = rays.d[ky] / dkz;
+    let sz = Vec4::ONE / dkz;
+    // `Ray::new`: t in (0, inf) for every ray the generators make.
+    let t_min = Vec4::ZERO;
     let ok_ = rays.o;
     let (okx, oky, okz) = (ok_[kx], ok_[ky], ok_[kz]);
     let inv = [rays.d[0].recip(), rays.d[1].recip(), rays.d[2].recip()];
@@ -281,7 +296,7 @@ pub fn closest4(
             while em != 0 {
                 let l = em.trailing_zeros() as usize;
                 em &= em - 1;
-                let wt = wts[l].as_ref().expect("valid lane");
+                let wt = WatertightRay::new(&rays.lane(l));
                 let vtx = |q: usize| blk.vertex(ln, q);
                 if let Some(hh) = wt.intersect_within(vtx(0), vtx(1), vtx(2), tri_lim[l]) {
                     offer(l, hh.t);
