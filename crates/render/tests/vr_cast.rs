@@ -62,10 +62,15 @@ fn beam_caster_equals_per_ray_traversal_for_every_scheme() {
                 let h = Hierarchy::build(&set).unwrap();
                 let mut beam = VisibilityBuffer::new(&set);
                 let stats = cast(&bvh, &set, &h, &mut beam);
-                // The one-ray kernel gives the same buffer as the packet kernel.
-                let mut single = VisibilityBuffer::new(&set);
-                cast_with(&bvh, &set, &h, &mut single, false);
-                assert_eq!(single, beam, "{name} {scheme} spp {spp}: kernels differ");
+                // The one-ray and 4-lane kernels give the same buffer as the default (8 lanes).
+                for lanes in [1, 4] {
+                    let mut other = VisibilityBuffer::new(&set);
+                    cast_with(&bvh, &set, &h, &mut other, lanes);
+                    assert_eq!(
+                        other, beam,
+                        "{name} {scheme} spp {spp}: {lanes}-lane kernel differs"
+                    );
+                }
                 let mut reference = VisibilityBuffer::new(&set);
                 trace_per_ray(&bvh, &set, &mut reference);
                 let agree = beam.agreement(&reference);

@@ -78,18 +78,18 @@ pub fn cast(
     hierarchy: &Hierarchy,
     out: &mut VisibilityBuffer,
 ) -> CastStats {
-    cast_with(bvh, set, hierarchy, out, true)
+    cast_with(bvh, set, hierarchy, out, 8)
 }
 
-/// [`cast`] with the choice of sample-test kernel: `packets = true` tests four rays at a time
-/// (`packet.rs`, the default), `false` one ray at a time against groups of four leaf boxes
-/// (`intersect.rs`); both give the same buffer.
+/// [`cast`] with the choice of sample-test kernel: `lanes = 8` tests eight rays at a time on
+/// AVX2 (the default; four without AVX2), `4` four rays at a time on SSE (`packet.rs`), `1` one
+/// ray at a time against groups of four leaf boxes (`intersect.rs`); all give the same buffer.
 pub fn cast_with(
     bvh: &Bvh,
     set: &SampleSet,
     hierarchy: &Hierarchy,
     out: &mut VisibilityBuffer,
-    packets: bool,
+    lanes: usize,
 ) -> CastStats {
     let wall = Instant::now();
     assert!(
@@ -155,7 +155,7 @@ pub fn cast_with(
                 // sizes checked above), so this tile's entries are written by no other tile.
                 let w = unsafe {
                     test_tile(
-                        set, blocks_, prim_ids, samples, groups, boxes, &tb, scale, packets,
+                        set, blocks_, prim_ids, samples, groups, boxes, &tb, scale, lanes,
                         ptr.prim, ptr.t,
                     )
                 };

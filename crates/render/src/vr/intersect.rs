@@ -31,7 +31,7 @@ use parallax_core::math::ROBUST_FAR_SCALE;
 use parallax_core::math::{PreparedBeam, WatertightRay};
 
 use super::SampleSet;
-use super::packet::{PacketWork, closest4, gen4};
+use super::packet::run_packets;
 use parallax_core::Ray;
 
 /// A ray prepared for the 4-triangle test (the shear of Woop et al. 2013, splatted).
@@ -305,9 +305,9 @@ pub fn closest_one(
 }
 
 /// Tests every subsample ray of the tile `samples` against the tile's leaves and writes the
-/// closest hits: packets of four rays ([`super::packet`]) where the four share one watertight
-/// permutation, one ray at a time ([`closest_one`]) otherwise (or always, with `packets =
-/// false`). `prim` / `t` point at the visibility buffer's arrays, indexed `sample * spp + k`;
+/// closest hits: packets of `lanes` = 8 (AVX2, if the CPU has it) or 4 rays ([`super::packet`])
+/// where they share one watertight permutation, one ray at a time ([`closest_one`]) otherwise
+/// (or always, with `lanes = 1`). `prim` / `t` point at the visibility buffer's arrays, indexed `sample * spp + k`;
 /// `beam` is the tile's prepared beam (its dominant axis orders the leaves) and `scale` the
 /// magnitude bound used for the early-exit slack.
 ///
@@ -324,7 +324,7 @@ pub unsafe fn test_tile(
     boxes: &[LeafBox],
     beam: &PreparedBeam,
     scale: f32,
-    packets: bool,
+    lanes: usize,
     prim: *mut u32,
     t: *mut f32,
 ) -> TileWork {
@@ -343,43 +343,46 @@ pub unsafe fn test_tile(
             }
         }
     };
-    let mut pairs = [(0u32, 0u32); 4];
-    let mut n = 0;
     let total = samples.len() * spp;
-    let mut pw = PacketWork::default();
-    for j in 0..total {
-        pairs[n] = (samples[j / spp], (j % spp) as u32);
-        n += 1;
-        if n < 4 && j + 1 < total {
-            continue;
-        }
-        let batch = &pairs[..n];
-        n = 0;
-        let rays = gen4(set, batch);
-        work.rays += rays.valid.count_ones() as u64;
-        let res = if packets {
-            closest4(&rays, blocks, boxes, beam, slack, &mut pw)
-        } else {
-            None
-        };
-        match res {
-            Some(c) => {
-                for (l, &(i, k)) in batch.iter().enumerate() {
-                    write(i as usize * spp + k as usize, c.t[l], c.tri[l]);
+    let pair = |j: usize| (samples[j / spp], (j % spp) as u32);
+    let write =
+        |(i, k): (u32, u32), bt: f32, tri: u32| write(i as usize * spp + k as usize, bt, tri);
+    if lanes <= 1 {
+        for j in 0..total {
+            let (i, k) = pair(j);
+            let (bt, tri) = match set.fast_subsample_ray(i as usize, k as usize) {
+                Some(ray) => {
+                    work.rays += 1;
+                    closest_one(&ray, blocks, groups, beam, slack, &mut work)
                 }
-            }
-            None => {
-                for (l, &(i, k)) in batch.iter().enumerate() {
-                    let (bt, tri) = if rays.valid >> l & 1 != 0 {
-                        closest_one(&rays.lane(l), blocks, groups, beam, slack, &mut work)
-                    } else {
-                        (f32::INFINITY, u32::MAX)
-                    };
-                    write(i as usize * spp + k as usize, bt, tri);
-                }
-            }
+                None => (f32::INFINITY, u32::MAX),
+            };
+            write((i, k), bt, tri);
         }
+        return work;
     }
+    let mut single = TileWork::default();
+    let fallback = |r: &Ray| closest_one(r, blocks, groups, beam, slack, &mut single);
+    #[cfg(target_arch = "x86_64")]
+    let (pw, rays) = if lanes == 8 && std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: AVX2 was detected.
+        unsafe {
+            super::packet::run_packets_avx2(
+                set, blocks, boxes, beam, slack, total, pair, write, fallback,
+            )
+        }
+    } else {
+        run_packets::<Vec4>(
+            set, blocks, boxes, beam, slack, total, pair, write, fallback,
+        )
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let (pw, rays) = run_packets::<Vec4>(
+        set, blocks, boxes, beam, slack, total, pair, write, fallback,
+    );
+    work.rays += rays;
+    work.group_tests += single.group_tests;
+    work.leaf_tests += single.leaf_tests;
     work.group_tests += pw.box_tests;
     work.leaf_tests += pw.tri_tests;
     work

@@ -1,7 +1,8 @@
 //! Sample testing four subsample rays at a time (Hunt et al. 2018, §5.5, "threads are mapped 1:1
 //! with pixels or subpixels": SIMD lanes over rays instead of GPU threads).
 //!
-//! A packet is four consecutive subsample rays of a tile. Rays are generated in SIMD for the
+//! A packet is four (SSE, glam `Vec4`) or eight (AVX, behind runtime detection) consecutive
+//! subsample rays of a tile; the kernel is written once over the [`Lanes`] trait. Rays are generated in SIMD for the
 //! pinhole and stereo models (the f32 operations of `Pinhole::generate_ray`, lane by lane:
 //! bit-identical rays) and per lane otherwise. If the four rays share the permutation of the
 //! watertight test (dominant axis and its sign, Woop et al. 2013 §3) — all but a few packets on
@@ -15,7 +16,9 @@
 //! leaf's box (Ize 2013 far scaling; lanes already holding a closer hit skip it), and the packet
 //! stops once every ray has a hit nearer than the next leaf's near depth along the beam axis.
 
-use glam::{Vec2, Vec3, Vec4};
+use std::ops::{Add, Div, Mul, Sub};
+
+use glam::{BVec4A, Vec2, Vec3, Vec4};
 use parallax_bvh::Tri4;
 use parallax_bvh::node::{leaf_count, leaf_first};
 use parallax_core::Ray;
@@ -25,63 +28,215 @@ use parallax_scene::camera::{Camera, Pinhole};
 use super::SampleSet;
 use super::intersect::LeafBox;
 
+/// A vector of `N` f32 lanes: the operations the packet kernel needs, each lane rounding
+/// exactly like scalar f32 (no FMA).
+pub trait Lanes:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self>
+{
+    const N: usize;
+    type M: Copy;
+    fn splat(x: f32) -> Self;
+    fn from_fn(f: impl FnMut(usize) -> f32) -> Self;
+    fn get(self, i: usize) -> f32;
+    fn sqrt(self) -> Self;
+    fn lt(self, o: Self) -> Self::M;
+    fn gt(self, o: Self) -> Self::M;
+    fn le(self, o: Self) -> Self::M;
+    fn eq(self, o: Self) -> Self::M;
+    /// Unordered not-equal (true on NaN), as `cmpneqps`.
+    fn ne(self, o: Self) -> Self::M;
+    fn bits(m: Self::M) -> u32;
+    fn select(m: Self::M, a: Self, b: Self) -> Self;
+}
+
+impl Lanes for Vec4 {
+    const N: usize = 4;
+    type M = BVec4A;
+    #[inline(always)]
+    fn splat(x: f32) -> Self {
+        Vec4::splat(x)
+    }
+    #[inline(always)]
+    fn from_fn(mut f: impl FnMut(usize) -> f32) -> Self {
+        Vec4::new(f(0), f(1), f(2), f(3))
+    }
+    #[inline(always)]
+    fn get(self, i: usize) -> f32 {
+        self[i]
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        Vec4::from_array(self.to_array().map(f32::sqrt))
+    }
+    #[inline(always)]
+    fn lt(self, o: Self) -> BVec4A {
+        self.cmplt(o)
+    }
+    #[inline(always)]
+    fn gt(self, o: Self) -> BVec4A {
+        self.cmpgt(o)
+    }
+    #[inline(always)]
+    fn le(self, o: Self) -> BVec4A {
+        self.cmple(o)
+    }
+    #[inline(always)]
+    fn eq(self, o: Self) -> BVec4A {
+        self.cmpeq(o)
+    }
+    #[inline(always)]
+    fn ne(self, o: Self) -> BVec4A {
+        self.cmpne(o)
+    }
+    #[inline(always)]
+    fn bits(m: BVec4A) -> u32 {
+        m.bitmask()
+    }
+    #[inline(always)]
+    fn select(m: BVec4A, a: Self, b: Self) -> Self {
+        Vec4::select(m, a, b)
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+mod avx {
+    //! Eight lanes on AVX `__m256`. The methods are plain `#[inline(always)]` functions around
+    //! the intrinsics; they are only ever inlined into `#[target_feature(enable = "avx2")]`
+    //! functions entered after runtime detection, where the intrinsics inline too.
+    use std::arch::x86_64::*;
+    use std::ops::{Add, Div, Mul, Sub};
+
+    #[derive(Clone, Copy)]
+    pub struct F8(pub __m256);
+
+    macro_rules! binop {
+        ($tr:ident, $f:ident, $intr:ident) => {
+            impl $tr for F8 {
+                type Output = F8;
+                #[inline(always)]
+                fn $f(self, o: F8) -> F8 {
+                    // SAFETY: only reached inside AVX2 target-feature functions (module docs).
+                    F8(unsafe { $intr(self.0, o.0) })
+                }
+            }
+        };
+    }
+    binop!(Add, add, _mm256_add_ps);
+    binop!(Sub, sub, _mm256_sub_ps);
+    binop!(Mul, mul, _mm256_mul_ps);
+    binop!(Div, div, _mm256_div_ps);
+
+    impl super::Lanes for F8 {
+        const N: usize = 8;
+        type M = F8;
+        #[inline(always)]
+        fn splat(x: f32) -> Self {
+            F8(unsafe { _mm256_set1_ps(x) })
+        }
+        #[inline(always)]
+        fn from_fn(mut f: impl FnMut(usize) -> f32) -> Self {
+            let a = [f(0), f(1), f(2), f(3), f(4), f(5), f(6), f(7)];
+            F8(unsafe { _mm256_loadu_ps(a.as_ptr()) })
+        }
+        #[inline(always)]
+        fn get(self, i: usize) -> f32 {
+            let mut a = [0.0f32; 8];
+            unsafe { _mm256_storeu_ps(a.as_mut_ptr(), self.0) };
+            a[i]
+        }
+        #[inline(always)]
+        fn sqrt(self) -> Self {
+            // vsqrtps is correctly rounded, like f32::sqrt.
+            F8(unsafe { _mm256_sqrt_ps(self.0) })
+        }
+        #[inline(always)]
+        fn lt(self, o: Self) -> F8 {
+            F8(unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn gt(self, o: Self) -> F8 {
+            F8(unsafe { _mm256_cmp_ps::<_CMP_GT_OQ>(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn le(self, o: Self) -> F8 {
+            F8(unsafe { _mm256_cmp_ps::<_CMP_LE_OQ>(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn eq(self, o: Self) -> F8 {
+            F8(unsafe { _mm256_cmp_ps::<_CMP_EQ_OQ>(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn ne(self, o: Self) -> F8 {
+            F8(unsafe { _mm256_cmp_ps::<_CMP_NEQ_UQ>(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn bits(m: F8) -> u32 {
+            unsafe { _mm256_movemask_ps(m.0) as u32 }
+        }
+        #[inline(always)]
+        fn select(m: F8, a: Self, b: Self) -> Self {
+            F8(unsafe { _mm256_blendv_ps(b.0, a.0, m.0) })
+        }
+    }
+}
+
 /// `a > b ? a : b` per lane (NaN in `a` gives `b`).
 #[inline(always)]
-fn max_or_rhs(a: Vec4, b: Vec4) -> Vec4 {
-    Vec4::select(a.cmpgt(b), a, b)
+fn max_or_rhs<L: Lanes>(a: L, b: L) -> L {
+    L::select(a.gt(b), a, b)
 }
 
 /// `a < b ? a : b` per lane (NaN in `a` gives `b`).
 #[inline(always)]
-fn min_or_rhs(a: Vec4, b: Vec4) -> Vec4 {
-    Vec4::select(a.cmplt(b), a, b)
+fn min_or_rhs<L: Lanes>(a: L, b: L) -> L {
+    L::select(a.lt(b), a, b)
 }
 
-/// Four rays in SoA lanes.
-#[derive(Clone, Copy, Debug)]
-pub struct Rays4 {
-    pub o: [Vec4; 3],
-    pub d: [Vec4; 3],
+/// Up to eight rays in SoA lanes.
+#[derive(Clone, Copy)]
+pub struct RaysN<L> {
+    pub o: [L; 3],
+    pub d: [L; 3],
     /// Lanes holding a valid ray.
     pub valid: u32,
 }
 
-impl Rays4 {
+impl<L: Lanes> RaysN<L> {
+    #[inline(always)]
     pub fn lane(&self, l: usize) -> Ray {
         Ray::new(
-            Vec3::new(self.o[0][l], self.o[1][l], self.o[2][l]),
-            Vec3::new(self.d[0][l], self.d[1][l], self.d[2][l]),
+            Vec3::new(self.o[0].get(l), self.o[1].get(l), self.o[2].get(l)),
+            Vec3::new(self.d[0].get(l), self.d[1].get(l), self.d[2].get(l)),
         )
     }
 }
 
-/// `Pinhole::generate_ray` on four film positions (lane-wise the same f32 operations:
+/// `Pinhole::generate_ray` on `N` film positions (lane-wise the same f32 operations:
 /// `camera_dir`, `Vec3::length`, `d / len`, `Mat3 * Vec3`).
 #[inline(always)]
-fn pinhole4(p: &Pinhole, fx: Vec4, fy: Vec4) -> ([Vec4; 3], [Vec4; 3]) {
-    let w = Vec4::splat(p.width as f32);
-    let h = Vec4::splat(p.height as f32);
-    let ndc_x = Vec4::splat(2.0) * fx / w - Vec4::ONE;
-    let ndc_y = Vec4::ONE - Vec4::splat(2.0) * fy / h;
-    let x = (ndc_x + Vec4::splat(p.shift.x)) * Vec4::splat(p.tan_half_x());
-    let y = (ndc_y + Vec4::splat(p.shift.y)) * Vec4::splat(p.tan_half_y);
-    let z = Vec4::splat(-1.0);
-    let len = Vec4::from_array((x * x + y * y + z * z).to_array().map(f32::sqrt));
+fn pinhole_n<L: Lanes>(p: &Pinhole, fx: L, fy: L) -> ([L; 3], [L; 3]) {
+    let w = L::splat(p.width as f32);
+    let h = L::splat(p.height as f32);
+    let one = L::splat(1.0);
+    let ndc_x = L::splat(2.0) * fx / w - one;
+    let ndc_y = one - L::splat(2.0) * fy / h;
+    let x = (ndc_x + L::splat(p.shift.x)) * L::splat(p.tan_half_x());
+    let y = (ndc_y + L::splat(p.shift.y)) * L::splat(p.tan_half_y);
+    let z = L::splat(-1.0);
+    let len = (x * x + y * y + z * z).sqrt();
     let (x, y, z) = (x / len, y / len, z / len);
     let m = &p.frame.basis;
-    let col = |c: Vec3, i: usize| Vec4::splat(c[i]);
-    let mut d = [Vec4::ZERO; 3];
-    for (i, di) in d.iter_mut().enumerate() {
-        *di = col(m.x_axis, i) * x + col(m.y_axis, i) * y + col(m.z_axis, i) * z;
-    }
+    let col = |c: Vec3, i: usize| L::splat(c[i]);
+    let d = [0, 1, 2].map(|i| col(m.x_axis, i) * x + col(m.y_axis, i) * y + col(m.z_axis, i) * z);
     let o = p.frame.position;
-    ([Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z)], d)
+    ([L::splat(o.x), L::splat(o.y), L::splat(o.z)], d)
 }
 
-/// The subsample rays `(sample, k)` of `pairs` (up to four) into lanes.
-pub fn gen4(set: &SampleSet, pairs: &[(u32, u32)]) -> Rays4 {
+/// The subsample rays `(sample, k)` of `pairs` (up to `L::N`) into lanes.
+#[inline(always)]
+fn gen_n<L: Lanes>(set: &SampleSet, pairs: &[(u32, u32)]) -> RaysN<L> {
     let n = pairs.len();
-    let mut film = [Vec2::ZERO; 4];
+    let mut film = [Vec2::ZERO; 8];
     for (l, &(i, k)) in pairs.iter().enumerate() {
         let s = &set.samples[i as usize];
         film[l] = s.film + set.offsets[k as usize] * s.footprint;
@@ -91,12 +246,12 @@ pub fn gen4(set: &SampleSet, pairs: &[(u32, u32)]) -> Rays4 {
         *f = f0;
     }
     let full = (1u32 << n) - 1;
-    let fx = Vec4::new(film[0].x, film[1].x, film[2].x, film[3].x);
-    let fy = Vec4::new(film[0].y, film[1].y, film[2].y, film[3].y);
+    let fx = L::from_fn(|l| film[l].x);
+    let fy = L::from_fn(|l| film[l].y);
     match &set.camera {
         Camera::Pinhole(p) => {
-            let (o, d) = pinhole4(p, fx, fy);
-            return Rays4 { o, d, valid: full };
+            let (o, d) = pinhole_n(p, fx, fy);
+            return RaysN { o, d, valid: full };
         }
         Camera::Stereo(rig) => {
             let w = rig.eye_width() as f32;
@@ -107,29 +262,28 @@ pub fn gen4(set: &SampleSet, pairs: &[(u32, u32)]) -> Rays4 {
                 let (p, fx) = if left {
                     (&rig.eyes[0], fx)
                 } else {
-                    (&rig.eyes[1], fx - Vec4::splat(w))
+                    (&rig.eyes[1], fx - L::splat(w))
                 };
-                let (o, d) = pinhole4(p, fx, fy);
-                return Rays4 { o, d, valid: full };
+                let (o, d) = pinhole_n(p, fx, fy);
+                return RaysN { o, d, valid: full };
             }
         }
         _ => {}
     }
-    let mut r = Rays4 {
-        o: [Vec4::ZERO; 3],
-        d: [Vec4::ZERO; 3],
-        valid: 0,
-    };
+    let mut rays = [None::<Ray>; 8];
+    let mut valid = 0;
     for (l, &(i, k)) in pairs.iter().enumerate() {
-        if let Some(ray) = set.fast_subsample_ray(i as usize, k as usize) {
-            for a in 0..3 {
-                r.o[a][l] = ray.origin[a];
-                r.d[a][l] = ray.dir[a];
-            }
-            r.valid |= 1 << l;
-        }
+        rays[l] = set.fast_subsample_ray(i as usize, k as usize);
+        valid |= (rays[l].is_some() as u32) << l;
     }
-    r
+    let comp = |a: usize, origin: bool| {
+        L::from_fn(|l| rays[l].map_or(0.0, |r| if origin { r.origin[a] } else { r.dir[a] }))
+    };
+    RaysN {
+        o: [comp(0, true), comp(1, true), comp(2, true)],
+        d: [comp(0, false), comp(1, false), comp(2, false)],
+        valid,
+    }
 }
 
 /// The axis permutation of `WatertightRay::new`: dominant axis `kz`, `kx, ky` swapped when
@@ -155,12 +309,12 @@ fn permutation(d: Vec3) -> (usize, usize, usize) {
 
 /// Result of a packet: per lane the closest `(t, index in Bvh::triangles)` (`u32::MAX` = none).
 #[derive(Clone, Copy, Debug)]
-pub struct Closest4 {
-    pub t: [f32; 4],
-    pub tri: [u32; 4],
+pub struct ClosestN {
+    pub t: [f32; 8],
+    pub tri: [u32; 8],
 }
 
-/// Work counters of a packet.
+/// Work counters of the packet kernel.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PacketWork {
     pub box_tests: u64,
@@ -169,25 +323,25 @@ pub struct PacketWork {
 
 /// Tests the packet against the near-sorted `leaves`; `None` when the rays do not share one
 /// watertight permutation (the caller then takes the one-ray path).
-#[inline(never)]
-pub fn closest4(
-    rays: &Rays4,
+#[inline(always)]
+fn closest_n<L: Lanes>(
+    rays: &RaysN<L>,
     blocks: &[Tri4],
     leaves: &[LeafBox],
     beam: &PreparedBeam,
     slack: f32,
     work: &mut PacketWork,
-) -> Option<Closest4> {
+) -> Option<ClosestN> {
     // Per-lane watertight set-up (Woop et al. 2013, §3, as `WatertightRay::new`); all lanes
     // must share (kx, ky, kz). The shear constants are divided lane-wise (the same IEEE
     // divisions); a scalar `WatertightRay` is only built for the exact-fallback lanes.
     let valid = rays.valid;
-    let mut out = Closest4 {
-        t: [f32::INFINITY; 4],
-        tri: [u32::MAX; 4],
+    let mut out = ClosestN {
+        t: [f32::INFINITY; 8],
+        tri: [u32::MAX; 8],
     };
     let mut perm = None;
-    for l in 0..4 {
+    for l in 0..L::N {
         if valid >> l & 1 == 0 {
             continue;
         }
@@ -205,27 +359,23 @@ pub fn closest4(
     let Some((kx, ky, kz)) = perm else {
         return Some(out);
     };
+    let one = L::splat(1.0);
+    let zero = L::splat(0.0);
     let dkz = rays.d[kz];
     let sx = rays.d[kx] / dkz;
     let sy = rays.d[ky] / dkz;
-    let sz = Vec4::ONE / dkz;
-    // `Ray::new`: t in (0, inf) for every ray the generators make.
-    let t_min = Vec4::ZERO;
-    let ok_ = rays.o;
-    let (okx, oky, okz) = (ok_[kx], ok_[ky], ok_[kz]);
-    let inv = [rays.d[0].recip(), rays.d[1].recip(), rays.d[2].recip()];
-    let neg = [
-        inv[0].cmplt(Vec4::ZERO),
-        inv[1].cmplt(Vec4::ZERO),
-        inv[2].cmplt(Vec4::ZERO),
-    ];
+    let sz = one / dkz;
+    let t_min = zero;
+    let (okx, oky, okz) = (rays.o[kx], rays.o[ky], rays.o[kz]);
+    let inv = [one / rays.d[0], one / rays.d[1], one / rays.d[2]];
+    let neg = [inv[0].lt(zero), inv[1].lt(zero), inv[2].lt(zero)];
     let a = beam.axis;
     let (oa, da) = (rays.o[a], rays.d[a]);
-    let s = Vec4::splat(beam.sign);
+    let s = L::splat(beam.sign);
     let ordered = !beam.everything;
     // Per lane: the slab limit (closest t so far) and the triangle limit (next float above it).
-    let mut box_lim = Vec4::INFINITY;
-    let mut tri_lim = Vec4::INFINITY;
+    let mut box_lim = L::splat(f32::INFINITY);
+    let mut tri_lim = L::splat(f32::INFINITY);
     let mut exit_depth = f32::INFINITY;
     let mut hit_lanes = 0u32;
     for lb in leaves {
@@ -235,16 +385,16 @@ pub fn closest4(
         work.box_tests += 1;
         let b = &lb.bounds;
         let slab = |lo: f32, hi: f32, ax: usize| {
-            let t0 = (Vec4::splat(lo) - rays.o[ax]) * inv[ax];
-            let t1 = (Vec4::splat(hi) - rays.o[ax]) * inv[ax];
-            (Vec4::select(neg[ax], t1, t0), Vec4::select(neg[ax], t0, t1))
+            let t0 = (L::splat(lo) - rays.o[ax]) * inv[ax];
+            let t1 = (L::splat(hi) - rays.o[ax]) * inv[ax];
+            (L::select(neg[ax], t1, t0), L::select(neg[ax], t0, t1))
         };
         let (tnx, tfx) = slab(b.min.x, b.max.x, 0);
         let (tny, tfy) = slab(b.min.y, b.max.y, 1);
         let (tnz, tfz) = slab(b.min.z, b.max.z, 2);
         let t_near = max_or_rhs(tnz, max_or_rhs(tny, max_or_rhs(tnx, t_min)));
         let t_far = min_or_rhs(tfz, min_or_rhs(tfy, min_or_rhs(tfx, box_lim)));
-        let m = t_near.cmple(t_far * ROBUST_FAR_SCALE).bitmask() & valid;
+        let m = L::bits(t_near.le(t_far * L::splat(ROBUST_FAR_SCALE))) & valid;
         if m == 0 {
             continue;
         }
@@ -257,9 +407,9 @@ pub fn closest4(
             work.tri_tests += 1;
             let proj = |v: usize| {
                 let p = &blk.p[v];
-                let az = Vec4::splat(p[kz][ln]) - okz;
-                let x = (Vec4::splat(p[kx][ln]) - okx) - sx * az;
-                let y = (Vec4::splat(p[ky][ln]) - oky) - sy * az;
+                let az = L::splat(p[kz][ln]) - okz;
+                let x = (L::splat(p[kx][ln]) - okx) - sx * az;
+                let y = (L::splat(p[ky][ln]) - oky) - sy * az;
                 (x, y, sz * az)
             };
             let (ax, ay, az) = proj(0);
@@ -268,16 +418,15 @@ pub fn closest4(
             let u = cx * by - cy * bx;
             let v = ax * cy - ay * cx;
             let w = bx * ay - by * ax;
-            let zero = Vec4::ZERO;
-            let exact = (u.cmpeq(zero) | v.cmpeq(zero) | w.cmpeq(zero)).bitmask() & m;
-            let negm = u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero);
-            let posm = u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero);
+            let exact = (L::bits(u.eq(zero)) | L::bits(v.eq(zero)) | L::bits(w.eq(zero))) & m;
+            let negm = L::bits(u.lt(zero)) | L::bits(v.lt(zero)) | L::bits(w.lt(zero));
+            let posm = L::bits(u.gt(zero)) | L::bits(v.gt(zero)) | L::bits(w.gt(zero));
             let det = u + v + w;
             let t_scaled = u * az + v * bz + w * cz;
-            let t = t_scaled * (Vec4::ONE / det);
-            let ok = (negm & posm).bitmask() ^ 0xF;
-            let nz = det.cmpne(zero).bitmask();
-            let in_range = (t.cmpgt(t_min) & t.cmplt(tri_lim)).bitmask();
+            let t = t_scaled * (one / det);
+            let ok = !(negm & posm);
+            let nz = L::bits(det.ne(zero));
+            let in_range = L::bits(t.gt(t_min)) & L::bits(t.lt(tri_lim));
             let hit = ok & nz & in_range & m & !exact;
             let mut offer = |l: usize, tl: f32| {
                 if out.tri[l] == u32::MAX || tl < out.t[l] || (tl == out.t[l] && tri < out.tri[l]) {
@@ -290,7 +439,7 @@ pub fn closest4(
             while hm != 0 {
                 let l = hm.trailing_zeros() as usize;
                 hm &= hm - 1;
-                offer(l, t[l]);
+                offer(l, t.get(l));
             }
             let mut em = exact;
             while em != 0 {
@@ -298,33 +447,107 @@ pub fn closest4(
                 em &= em - 1;
                 let wt = WatertightRay::new(&rays.lane(l));
                 let vtx = |q: usize| blk.vertex(ln, q);
-                if let Some(hh) = wt.intersect_within(vtx(0), vtx(1), vtx(2), tri_lim[l]) {
+                if let Some(hh) = wt.intersect_within(vtx(0), vtx(1), vtx(2), tri_lim.get(l)) {
                     offer(l, hh.t);
                 }
             }
             if changed {
-                for l in 0..4 {
+                tri_lim = L::from_fn(|l| {
                     if out.tri[l] != u32::MAX {
-                        tri_lim[l] = out.t[l].next_up();
-                        box_lim[l] = out.t[l];
+                        out.t[l].next_up()
+                    } else {
+                        f32::INFINITY
                     }
-                }
+                });
+                box_lim = L::from_fn(|l| out.t[l]);
             }
         }
         if changed {
             hit_lanes = 0;
-            let bt = Vec4::from_array(out.t);
-            let depth = (s * (oa + bt * da)).to_array();
+            let bt = L::from_fn(|l| out.t[l]);
+            let depth = s * (oa + bt * da);
             exit_depth = f32::NEG_INFINITY;
-            for l in 0..4 {
+            for l in 0..L::N {
                 if valid >> l & 1 != 0 {
                     if out.tri[l] != u32::MAX {
                         hit_lanes |= 1 << l;
                     }
-                    exit_depth = exit_depth.max(depth[l]);
+                    exit_depth = exit_depth.max(depth.get(l));
                 }
             }
         }
     }
     Some(out)
+}
+
+/// Runs every subsample ray `0..total` of a tile (`pair(j)` = its `(sample, k)`) through the
+/// packet kernel with `L::N` lanes; `write(j, t, tri)` stores a result and `fallback(ray)`
+/// answers rays of packets the kernel declines.
+#[inline(always)]
+pub(crate) fn run_packets<L: Lanes>(
+    set: &SampleSet,
+    blocks: &[Tri4],
+    leaves: &[LeafBox],
+    beam: &PreparedBeam,
+    slack: f32,
+    total: usize,
+    pair: impl Fn(usize) -> (u32, u32),
+    mut write: impl FnMut((u32, u32), f32, u32),
+    mut fallback: impl FnMut(&Ray) -> (f32, u32),
+) -> (PacketWork, u64) {
+    let mut pw = PacketWork::default();
+    let mut rays_n = 0u64;
+    let mut pairs = [(0u32, 0u32); 8];
+    let mut j = 0;
+    while j < total {
+        let n = (total - j).min(L::N);
+        for (l, p) in pairs.iter_mut().enumerate().take(n) {
+            *p = pair(j + l);
+        }
+        j += n;
+        let batch = &pairs[..n];
+        let rays = gen_n::<L>(set, batch);
+        rays_n += rays.valid.count_ones() as u64;
+        match closest_n(&rays, blocks, leaves, beam, slack, &mut pw) {
+            Some(c) => {
+                for (l, &p) in batch.iter().enumerate() {
+                    write(p, c.t[l], c.tri[l]);
+                }
+            }
+            None => {
+                for (l, &p) in batch.iter().enumerate() {
+                    let (bt, tri) = if rays.valid >> l & 1 != 0 {
+                        fallback(&rays.lane(l))
+                    } else {
+                        (f32::INFINITY, u32::MAX)
+                    };
+                    write(p, bt, tri);
+                }
+            }
+        }
+    }
+    (pw, rays_n)
+}
+
+/// [`run_packets`] with eight AVX lanes.
+///
+/// # Safety
+/// The CPU must support AVX2 (checked by the caller with `is_x86_feature_detected!`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[allow(clippy::too_many_arguments)]
+pub(crate) unsafe fn run_packets_avx2(
+    set: &SampleSet,
+    blocks: &[Tri4],
+    leaves: &[LeafBox],
+    beam: &PreparedBeam,
+    slack: f32,
+    total: usize,
+    pair: impl Fn(usize) -> (u32, u32),
+    write: impl FnMut((u32, u32), f32, u32),
+    fallback: impl FnMut(&Ray) -> (f32, u32),
+) -> (PacketWork, u64) {
+    run_packets::<avx::F8>(
+        set, blocks, leaves, beam, slack, total, pair, write, fallback,
+    )
 }
