@@ -98,84 +98,96 @@ impl Lanes for Vec4 {
     }
 }
 
-#[cfg(target_arch = "x86_64")]
-mod avx {
-    //! Eight lanes on AVX `__m256`. The methods are plain `#[inline(always)]` functions around
-    //! the intrinsics; they are only ever inlined into `#[target_feature(enable = "avx2")]`
-    //! functions entered after runtime detection, where the intrinsics inline too.
-    use std::arch::x86_64::*;
+mod wide {
+    //! Eight lanes as plain `[f32; 8]` loops. They are only instantiated inside the
+    //! `#[target_feature(enable = "avx2")]` entry point, where LLVM turns each loop into one AVX
+    //! instruction (`vaddps`, `vcmpps`, `vblendvps`, `vmovmskps`, `vsqrtps`, ...). Plain loops
+    //! rather than `std::arch` intrinsics: intrinsics cannot be inlined into the kernel's
+    //! closures, which have no target features of their own. Lane arithmetic is IEEE f32 either
+    //! way (LLVM never contracts to FMA without fast-math).
     use std::ops::{Add, Div, Mul, Sub};
 
     #[derive(Clone, Copy)]
-    pub struct F8(pub __m256);
+    #[repr(C, align(32))]
+    pub struct F8(pub [f32; 8]);
+
+    #[derive(Clone, Copy)]
+    #[repr(C, align(32))]
+    pub struct M8(pub [u32; 8]);
 
     macro_rules! binop {
-        ($tr:ident, $f:ident, $intr:ident) => {
+        ($tr:ident, $f:ident, $op:tt) => {
             impl $tr for F8 {
                 type Output = F8;
                 #[inline(always)]
                 fn $f(self, o: F8) -> F8 {
-                    // SAFETY: only reached inside AVX2 target-feature functions (module docs).
-                    F8(unsafe { $intr(self.0, o.0) })
+                    let mut r = [0.0f32; 8];
+                    for i in 0..8 {
+                        r[i] = self.0[i] $op o.0[i];
+                    }
+                    F8(r)
                 }
             }
         };
     }
-    binop!(Add, add, _mm256_add_ps);
-    binop!(Sub, sub, _mm256_sub_ps);
-    binop!(Mul, mul, _mm256_mul_ps);
-    binop!(Div, div, _mm256_div_ps);
+    binop!(Add, add, +);
+    binop!(Sub, sub, -);
+    binop!(Mul, mul, *);
+    binop!(Div, div, /);
+
+    macro_rules! cmp {
+        ($f:ident, $e:expr) => {
+            #[inline(always)]
+            fn $f(self, o: Self) -> M8 {
+                let mut r = [0u32; 8];
+                for i in 0..8 {
+                    let f: fn(f32, f32) -> bool = $e;
+                    r[i] = if f(self.0[i], o.0[i]) { u32::MAX } else { 0 };
+                }
+                M8(r)
+            }
+        };
+    }
 
     impl super::Lanes for F8 {
         const N: usize = 8;
-        type M = F8;
+        type M = M8;
         #[inline(always)]
         fn splat(x: f32) -> Self {
-            F8(unsafe { _mm256_set1_ps(x) })
+            F8([x; 8])
         }
         #[inline(always)]
         fn from_fn(mut f: impl FnMut(usize) -> f32) -> Self {
-            let a = [f(0), f(1), f(2), f(3), f(4), f(5), f(6), f(7)];
-            F8(unsafe { _mm256_loadu_ps(a.as_ptr()) })
+            F8([f(0), f(1), f(2), f(3), f(4), f(5), f(6), f(7)])
         }
         #[inline(always)]
         fn get(self, i: usize) -> f32 {
-            let mut a = [0.0f32; 8];
-            unsafe { _mm256_storeu_ps(a.as_mut_ptr(), self.0) };
-            a[i]
+            self.0[i]
         }
         #[inline(always)]
         fn sqrt(self) -> Self {
-            // vsqrtps is correctly rounded, like f32::sqrt.
-            F8(unsafe { _mm256_sqrt_ps(self.0) })
+            F8(self.0.map(f32::sqrt))
+        }
+        cmp!(lt, |a, b| a < b);
+        cmp!(gt, |a, b| a > b);
+        cmp!(le, |a, b| a <= b);
+        cmp!(eq, |a, b| a == b);
+        cmp!(ne, |a, b| a != b);
+        #[inline(always)]
+        fn bits(m: M8) -> u32 {
+            let mut b = 0;
+            for i in 0..8 {
+                b |= (m.0[i] >> 31) << i;
+            }
+            b
         }
         #[inline(always)]
-        fn lt(self, o: Self) -> F8 {
-            F8(unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(self.0, o.0) })
-        }
-        #[inline(always)]
-        fn gt(self, o: Self) -> F8 {
-            F8(unsafe { _mm256_cmp_ps::<_CMP_GT_OQ>(self.0, o.0) })
-        }
-        #[inline(always)]
-        fn le(self, o: Self) -> F8 {
-            F8(unsafe { _mm256_cmp_ps::<_CMP_LE_OQ>(self.0, o.0) })
-        }
-        #[inline(always)]
-        fn eq(self, o: Self) -> F8 {
-            F8(unsafe { _mm256_cmp_ps::<_CMP_EQ_OQ>(self.0, o.0) })
-        }
-        #[inline(always)]
-        fn ne(self, o: Self) -> F8 {
-            F8(unsafe { _mm256_cmp_ps::<_CMP_NEQ_UQ>(self.0, o.0) })
-        }
-        #[inline(always)]
-        fn bits(m: F8) -> u32 {
-            unsafe { _mm256_movemask_ps(m.0) as u32 }
-        }
-        #[inline(always)]
-        fn select(m: F8, a: Self, b: Self) -> Self {
-            F8(unsafe { _mm256_blendv_ps(b.0, a.0, m.0) })
+        fn select(m: M8, a: Self, b: Self) -> Self {
+            let mut r = [0.0f32; 8];
+            for i in 0..8 {
+                r[i] = if m.0[i] != 0 { a.0[i] } else { b.0[i] };
+            }
+            F8(r)
         }
     }
 }
@@ -307,6 +319,22 @@ fn permutation(d: Vec3) -> (usize, usize, usize) {
     }
 }
 
+/// A vertex (lane `ln` of a [`Tri4`] vertex row) in each lane's sheared ray frame:
+/// `a = p - o; (a[kx] - sx a[kz], a[ky] - sy a[kz], sz a[kz])` (Woop et al. 2013, §3).
+#[inline(always)]
+fn project<L: Lanes>(
+    p: &[Vec4; 3],
+    ln: usize,
+    (kx, ky, kz): (usize, usize, usize),
+    (okx, oky, okz): (L, L, L),
+    (sx, sy, sz): (L, L, L),
+) -> (L, L, L) {
+    let az = L::splat(p[kz][ln]) - okz;
+    let x = (L::splat(p[kx][ln]) - okx) - sx * az;
+    let y = (L::splat(p[ky][ln]) - oky) - sy * az;
+    (x, y, sz * az)
+}
+
 /// Result of a packet: per lane the closest `(t, index in Bvh::triangles)` (`u32::MAX` = none).
 #[derive(Clone, Copy, Debug)]
 pub struct ClosestN {
@@ -405,13 +433,8 @@ fn closest_n<L: Lanes>(
             let ln = (j % 4) as usize;
             let tri = blk.tri[ln];
             work.tri_tests += 1;
-            let proj = |v: usize| {
-                let p = &blk.p[v];
-                let az = L::splat(p[kz][ln]) - okz;
-                let x = (L::splat(p[kx][ln]) - okx) - sx * az;
-                let y = (L::splat(p[ky][ln]) - oky) - sy * az;
-                (x, y, sz * az)
-            };
+            let proj =
+                |v: usize| project(&blk.p[v], ln, (kx, ky, kz), (okx, oky, okz), (sx, sy, sz));
             let (ax, ay, az) = proj(0);
             let (bx, by, bz) = proj(1);
             let (cx, cy, cz) = proj(2);
@@ -547,7 +570,7 @@ pub(crate) unsafe fn run_packets_avx2(
     write: impl FnMut((u32, u32), f32, u32),
     fallback: impl FnMut(&Ray) -> (f32, u32),
 ) -> (PacketWork, u64) {
-    run_packets::<avx::F8>(
+    run_packets::<wide::F8>(
         set, blocks, leaves, beam, slack, total, pair, write, fallback,
     )
 }
