@@ -104,7 +104,10 @@ impl Beam {
         }
         let (a, b, c) = (self.axis as usize, self.side_axes().0, self.side_axes().1);
         let d = ray.dir;
-        if !(d[a] * self.sign > 0.0) {
+        // Negated so that a NaN component is outside.
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
+        let outside = !(d[a] * self.sign > 0.0);
+        if outside {
             return false;
         }
         let (u, v) = (d[b] / d[a].abs(), d[c] / d[a].abs());

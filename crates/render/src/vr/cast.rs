@@ -128,6 +128,8 @@ pub fn cast_with(
             )
         },
         |(scratch, groups, boxes), block| {
+            // Capture the whole (Send) struct, not its raw-pointer fields.
+            #[allow(clippy::redundant_locals)]
             let ptr = ptr;
             if block.rays == 0 {
                 return;

@@ -182,6 +182,7 @@ mod wide {
             b
         }
         #[inline(always)]
+        #[allow(clippy::needless_range_loop)]
         fn select(m: M8, a: Self, b: Self) -> Self {
             let mut r = [0.0f32; 8];
             for i in 0..8 {
@@ -507,6 +508,7 @@ fn closest_n<L: Lanes>(
 /// packet kernel with `L::N` lanes; `write(j, t, tri)` stores a result and `fallback(ray)`
 /// answers rays of packets the kernel declines.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn run_packets<L: Lanes>(
     set: &SampleSet,
     blocks: &[Tri4],

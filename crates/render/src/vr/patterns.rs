@@ -95,9 +95,12 @@ impl SampleSet {
         slope: f32,
         spp: u32,
     ) -> Result<Self, PatternError> {
-        if !(fovea_radius.is_finite() && fovea_radius >= 0.0 && slope.is_finite() && slope >= 0.0)
-            || !gaze.is_finite()
-        {
+        let ok = fovea_radius.is_finite()
+            && fovea_radius >= 0.0
+            && slope.is_finite()
+            && slope >= 0.0
+            && gaze.is_finite();
+        if !ok {
             return Err(PatternError::BadFoveation {
                 radius: fovea_radius,
                 slope,
