@@ -25,10 +25,12 @@
 //! thin-lens DoF and stereo, spp 1 and 4).
 //!
 //! **Measured** (`cargo run --release -p parallax-render --example vr_speed`, atrium 49k
-//! triangles, stereo 1080 x 1200 per eye, 2 threads on a 2-core VM shared with other jobs, so
-//! absolute rates swing 2x between runs; speed-up = beam / per-ray in the same process, three
-//! runs): spp 1: 2.3-2.8x, spp 8: 2.4-2.8x, spp 16: 2.2-2.7x, spp 32: 3.0-4.8x (best beam rate
-//! 25 Mrays/s at spp 32). The aim of 5x at spp 16 is **not** reached. Where the time
+//! triangles, stereo 1080 x 1200 per eye = 2160 x 1200, 4-lane kernel, 2 threads on a 2-core VM
+//! shared with other jobs (load 1.5-9), so absolute rates swing 3x between runs; speed-up =
+//! beam caster / per-ray `trace_per_ray` on the same rays in the same process; four full runs):
+//! spp 1: 1.6-2.8x, spp 8: 2.4-3.6x, spp 16: 2.2-3.1x (3.3x and 6.1x in two spp-16-only runs at
+//! lower load), spp 32: 2.6-4.8x; best beam rate 26 Mrays/s (spp 16). The aim of 5x at
+//! spp 16 is **not** reliably reached. Where the time
 //! goes: the sample test is ~95% of the caster's CPU time (block cull < 1%, tile cull 2-5%);
 //! per packet of four rays ~6.3 leaf-box slab tests and ~5.2 triangle tests, plus the ray
 //! generation and shear set-up (~17% of the kernel in perf). The per-ray BVH is already cheap
