@@ -33,8 +33,9 @@
 //! spp 16 is **not** reliably reached. Where the time
 //! goes: the sample test is ~95% of the caster's CPU time (block cull < 1%, tile cull 2-5%);
 //! per packet of four rays ~6.3 leaf-box slab tests and ~5.2 triangle tests, plus the ray
-//! generation and shear set-up (~17% of the kernel in perf). The per-ray BVH is already cheap
-//! on these coherent primary rays (~18 nodes per ray). Not yet tried: the AVX2 8-lane kernel
+//! generation and shear set-up (~18% of the packet kernel's perf samples at 1080 x 600). The
+//! per-ray BVH is already cheap on coherent primary rays (the BVH docs measure ~18 nodes per
+//! primary ray on Sponza). Not yet tried: the AVX2 8-lane kernel
 //! as compiled is slower than the 4-lane one (see [`cast_with`]); HVVR's per-tile triangle
 //! set-up (tile-corner all-in / all-out classification, precomputed edge equations shared by
 //! the tile's rays) — our per-ray watertight test recomputes the shear projection of every
