@@ -1,0 +1,200 @@
+//! The beam-culled ray caster (Hunt et al. 2018, §5.3-5.5): per block, block cull (64 entry
+//! points), then per tile, tile cull (leaf list in near-depth order) and sample testing; parallel
+//! over blocks with rayon, with per-thread scratch (no allocation in the hot loop once the
+//! scratch vectors have grown).
+//!
+//! HVVR runs the culling on the CPU and sample testing on the GPU; here all three stages run on
+//! the CPU threads, block after block.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+
+use parallax_bvh::Bvh;
+use parallax_bvh::beam::{BLOCK_ENTRIES, CullScratch, SimdBeam, block_cull, tile_cull};
+use parallax_core::math::PreparedBeam;
+use rayon::prelude::*;
+
+use super::intersect::{LeafBox, LeafGroup, group_leaves, test_tile};
+use super::{Hierarchy, SampleSet, VisibilityBuffer};
+
+/// Per-stage times (summed over threads: CPU time, not wall time) and work counts of a cast.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CastStats {
+    pub block_cull: Duration,
+    pub tile_cull: Duration,
+    pub sample_test: Duration,
+    /// Wall time of the whole cast.
+    pub wall: Duration,
+    pub blocks: u64,
+    pub tiles: u64,
+    /// Entry points handed from block cull to tile cull (summed over blocks).
+    pub entry_points: u64,
+    /// Leaves in the tiles' lists (summed over tiles).
+    pub tile_leaves: u64,
+    /// Four-leaf-box slab tests of the sample stage.
+    pub group_tests: u64,
+    /// Leaf (4-triangle block) tests of the sample stage.
+    pub leaf_tests: u64,
+    /// Valid subsample rays cast.
+    pub rays: u64,
+}
+
+/// Shared output pointers (each sample is written by exactly one tile).
+#[derive(Clone, Copy)]
+struct OutPtr {
+    prim: *mut u32,
+    t: *mut f32,
+}
+// SAFETY: the hierarchy's `order` is a permutation (checked in `cast`), so tiles write disjoint
+// entries.
+unsafe impl Send for OutPtr {}
+unsafe impl Sync for OutPtr {}
+
+/// The magnitude bound of the beam tests' rounding slack: the scene's and the camera's
+/// coordinates.
+fn scene_scale(bvh: &Bvh, h: &Hierarchy) -> f32 {
+    let b = bvh.bounds();
+    let mut m = if b.is_empty() {
+        0.0
+    } else {
+        b.min.abs().max(b.max.abs()).max_element()
+    };
+    for blk in &h.blocks {
+        if !blk.beam.everything && !blk.beam.origin.is_empty() {
+            let o = blk.beam.origin;
+            m = m.max(o.min.abs().max(o.max.abs()).max_element());
+        }
+    }
+    m
+}
+
+/// Casts every subsample ray of `set` (tiles and blocks of `hierarchy`, built for `set`) and
+/// writes the closest hits to `out`: for each subsample the same triangle and `t` as
+/// [`super::trace_per_ray`] (module docs of `intersect.rs`). Panics if `hierarchy` or `out` was
+/// made for another set (a programming error).
+pub fn cast(
+    bvh: &Bvh,
+    set: &SampleSet,
+    hierarchy: &Hierarchy,
+    out: &mut VisibilityBuffer,
+) -> CastStats {
+    cast_with(bvh, set, hierarchy, out, 4)
+}
+
+/// [`cast`] with the choice of sample-test kernel: `lanes = 4` tests four rays at a time on
+/// SSE (`packet.rs`, the default), `8` eight rays at a time on AVX2 (four without AVX2), `1` one
+/// ray at a time against groups of four leaf boxes (`intersect.rs`); all give the same buffer.
+/// Measured (vr_speed, atrium 1080 x 600, spp 8): the 8-lane kernel is *slower* than the
+/// 4-lane one (speed-up over per-ray 1.7-2.0x vs 2.3-2.5x) — LLVM leaves some of the kernel's
+/// closures outside the `avx2` target-feature function, so they run on `[f32; 8]` arrays in
+/// scalar/SSE code; not yet fixed.
+pub fn cast_with(
+    bvh: &Bvh,
+    set: &SampleSet,
+    hierarchy: &Hierarchy,
+    out: &mut VisibilityBuffer,
+    lanes: usize,
+) -> CastStats {
+    let wall = Instant::now();
+    assert!(
+        hierarchy.sample_count == set.samples.len()
+            && hierarchy.spp == set.spp
+            && hierarchy.order.len() == set.samples.len(),
+        "hierarchy built for another sample set"
+    );
+    assert!(
+        out.prim.len() == set.ray_count() && out.t.len() == set.ray_count() && out.spp == set.spp,
+        "visibility buffer made for another sample set"
+    );
+    out.prim.fill(parallax_core::NO_ID);
+    out.t.fill(f32::INFINITY);
+    let scale = scene_scale(bvh, hierarchy);
+    let ptr = OutPtr {
+        prim: out.prim.as_mut_ptr(),
+        t: out.t.as_mut_ptr(),
+    };
+    let counters: [AtomicU64; 9] = Default::default();
+    let add = |i: usize, v: u64| {
+        counters[i].fetch_add(v, Ordering::Relaxed);
+    };
+    let blocks_ = bvh.blocks();
+    let prim_ids = bvh.prim_ids();
+    hierarchy.blocks.par_iter().for_each_init(
+        || {
+            (
+                CullScratch::default(),
+                Vec::<LeafGroup>::new(),
+                Vec::<LeafBox>::new(),
+            )
+        },
+        |(scratch, groups, boxes), block| {
+            // Capture the whole (Send) struct, not its raw-pointer fields.
+            #[allow(clippy::redundant_locals)]
+            let ptr = ptr;
+            if block.rays == 0 {
+                return;
+            }
+            let t0 = Instant::now();
+            let bb = PreparedBeam::new(&block.beam, scale);
+            block_cull(bvh, &SimdBeam::new(&bb), BLOCK_ENTRIES, scratch);
+            let entries = std::mem::take(&mut scratch.entries);
+            let t1 = Instant::now();
+            add(0, (t1 - t0).as_nanos() as u64);
+            add(3, entries.len() as u64);
+            let (mut cull_ns, mut test_ns) = (0u64, 0u64);
+            let (mut leaves_n, mut leaf_tests, mut rays, mut group_tests) =
+                (0u64, 0u64, 0u64, 0u64);
+            let tiles = &hierarchy.tiles
+                [block.first_tile as usize..(block.first_tile + block.tile_count) as usize];
+            for tile in tiles {
+                if tile.rays == 0 {
+                    continue;
+                }
+                let a = Instant::now();
+                let tb = PreparedBeam::new(&tile.beam, scale);
+                tile_cull(bvh, &SimdBeam::new(&tb), &entries, scratch);
+                group_leaves(bvh, &scratch.leaves, groups, boxes);
+                let b = Instant::now();
+                let samples =
+                    &hierarchy.order[tile.start as usize..(tile.start + tile.len) as usize];
+                // SAFETY: `order` is a permutation of the samples (built by `Hierarchy::build`,
+                // sizes checked above), so this tile's entries are written by no other tile.
+                let w = unsafe {
+                    test_tile(
+                        set, blocks_, prim_ids, samples, groups, boxes, &tb, scale, lanes,
+                        ptr.prim, ptr.t,
+                    )
+                };
+                let c = Instant::now();
+                cull_ns += (b - a).as_nanos() as u64;
+                test_ns += (c - b).as_nanos() as u64;
+                leaves_n += scratch.leaves.len() as u64;
+                leaf_tests += w.leaf_tests;
+                group_tests += w.group_tests;
+                rays += w.rays;
+            }
+            scratch.entries = entries;
+            add(1, cull_ns);
+            add(2, test_ns);
+            add(4, leaves_n);
+            add(5, leaf_tests);
+            add(6, rays);
+            add(7, tiles.len() as u64);
+            add(8, group_tests);
+        },
+    );
+    let g = |i: usize| counters[i].load(Ordering::Relaxed);
+    CastStats {
+        block_cull: Duration::from_nanos(g(0)),
+        tile_cull: Duration::from_nanos(g(1)),
+        sample_test: Duration::from_nanos(g(2)),
+        wall: wall.elapsed(),
+        blocks: hierarchy.blocks.len() as u64,
+        tiles: g(7),
+        entry_points: g(3),
+        tile_leaves: g(4),
+        leaf_tests: g(5),
+        group_tests: g(8),
+        rays: g(6),
+    }
+}
