@@ -102,8 +102,8 @@ pub fn run(a: &DemoArgs, quiet: bool) -> Result<()> {
 }
 
 /// The HVVR frame of the demo: both eyes of a Rift CV1 rendered directly into the distorted
-/// display pattern, one ray set per colour channel (subpixel), 8x MSAA, per-ray visibility
-/// (foveated once the beam caster's sample sets are merged).
+/// display pattern, one ray set per colour channel (subpixel), 8x MSAA,
+/// and a foveated pattern around the centre of each eye, visibility by the beam caster.
 fn vr_frame(
     a: &DemoArgs,
     scene: &Scene,
@@ -124,7 +124,7 @@ fn vr_frame(
     let opts = FrameOptions {
         spp: 8,
         mode: ShadingMode::Msaa,
-        visibility: Visibility::PerRay,
+        visibility: Visibility::Beam,
         shade: ShadeOptions::default(),
     };
     let tm = ToneMapping {
@@ -137,7 +137,7 @@ fn vr_frame(
     let mut nonempty = 0u64;
     let [l, r] = eye_cameras(&spec, head, None)?;
     for (name, cam) in [("vr_rift_left", l), ("vr_rift_right", r)] {
-        let set = super::vr::eye_set(cam, opts.spp, true);
+        let set = super::vr::eye_set(cam, opts.spp, true, Some([0.0, 0.0]))?;
         let eye = render_eye_set(scene, bvh, set, &opts)?;
         png::write_png(a.out.join(format!("{name}.png")), &eye.image, &tm)?;
         if name == "vr_rift_left" {
@@ -154,7 +154,7 @@ fn vr_frame(
     let ms = t.elapsed().as_secs_f64() * 1e3;
     if !quiet {
         println!(
-            "| vr_rift_left/right | hvvr rift-cv1 subpixel, 8x MSAA ({:.2} shades/px) | 2x {}x{} | 8 | {:.1} | {:.0} | {} |",
+            "| vr_rift_left/right | hvvr rift-cv1 subpixel foveated, 8x MSAA ({:.2} shades/px) | 2x {}x{} | 8 | {:.1} | {:.0} | {} |",
             shades as f64 / nonempty.max(1) as f64,
             spec.width,
             spec.height,

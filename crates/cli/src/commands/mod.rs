@@ -6,6 +6,6 @@ pub mod capture;
 pub mod demo;
 pub mod info;
 pub mod render;
-pub mod vr;
 pub mod upsample;
+pub mod vr;
 pub mod warp;

@@ -10,7 +10,6 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use parallax_bvh::Bvh;
 use parallax_core::image::png::{self, ToneMapping, Tonemap};
-use parallax_render::vr::SampleSet;
 use parallax_render::vr::frame::{
     EyeFrame, FrameOptions, UpdateTimings, Visibility, render_eye_set, update_scene,
 };
@@ -18,6 +17,7 @@ use parallax_render::vr::presets::{Dof, HeadsetSpec, Preset, eye_cameras};
 use parallax_render::vr::reconstruct::pattern_image;
 use parallax_render::vr::resolve::ShadingMode;
 use parallax_render::vr::shade::ShadeOptions;
+use parallax_render::vr::{Sample, SampleSet};
 use parallax_scene::animation::RigidAnimation;
 use parallax_scene::camera::{Camera, CameraModel, ModelKind};
 use serde::Serialize;
@@ -39,7 +39,7 @@ pub struct VrArgs {
     /// Shade every subsample (SSAA) instead of once per triangle per pixel (MSAA).
     #[arg(long)]
     pub ssaa: bool,
-    /// Foveated sample pattern around `--gaze` (not available in this build yet).
+    /// Foveated sample pattern around `--gaze` (linear acuity model, HVVR §2.3).
     #[arg(long)]
     pub foveated: bool,
     /// Gaze point in normalised film coordinates x,y in [-1, 1] (0,0 = centre).
@@ -126,13 +126,40 @@ fn dof(a: &VrArgs, target_distance: f32) -> Result<Option<Dof>> {
     Ok(Some(d))
 }
 
-/// The eye sample set: a grid, per colour channel only with `--subpixel`.
-pub fn eye_set(camera: Camera, spp: u32, subpixel: bool) -> SampleSet {
-    let mut set = SampleSet::grid(camera, spp);
-    if !subpixel && set.camera.channel_count() > 1 {
+/// The sample set of one eye: the pixel grid, or with `gaze` (normalised film coordinates in
+/// [-1, 1]^2, y up) the foveated pattern around it (fovea and acuity slope of
+/// `parallax_render::vr::bench`); a per-channel (distorted) camera gets its three colour
+/// channels' rays with `subpixel`, else only the green channel's, coloring whole pixels.
+pub fn eye_set(
+    camera: Camera,
+    spp: u32,
+    subpixel: bool,
+    gaze: Option<[f32; 2]>,
+) -> Result<SampleSet> {
+    use parallax_render::vr::bench::{FOVEA_RADIUS_FRACTION, FOVEA_SLOPE};
+    let channels = camera.channel_count() as u8;
+    let mut set = match gaze {
+        None => SampleSet::grid(camera, spp),
+        Some([gx, gy]) => {
+            let (w, h) = (camera.width() as f32, camera.height() as f32);
+            let film = glam::Vec2::new((gx + 1.0) * 0.5 * w, (1.0 - gy) * 0.5 * h);
+            let mut set =
+                SampleSet::foveated(camera, film, FOVEA_RADIUS_FRACTION * h, FOVEA_SLOPE, spp)?;
+            // The pattern is built for channel 0; give a per-channel camera all its channels.
+            if channels > 1 {
+                set.samples = set
+                    .samples
+                    .iter()
+                    .flat_map(|s| (0..channels).map(move |c| Sample { channel: c, ..*s }))
+                    .collect();
+            }
+            set
+        }
+    };
+    if !subpixel && channels > 1 {
         set.samples.retain(|s| s.channel == 1);
     }
-    set
+    Ok(set)
 }
 
 #[derive(Serialize)]
@@ -164,12 +191,11 @@ pub fn run(a: &VrArgs, quiet: bool) -> Result<()> {
             bail!("--gaze must be in [-1, 1] x [-1, 1], got {x},{y}");
         }
     }
-    if a.foveated {
-        bail!(
-            "--foveated: foveated sample sets are not available in this build (they come with \
-             the beam caster's sample-set constructors)"
-        );
-    }
+    let gaze = match (&a.gaze, a.foveated) {
+        (_, false) => None,
+        (None, true) => Some([0.0, 0.0]),
+        (Some(g), true) => Some([g[0], g[1]]),
+    };
     let spec = headset(a)?;
     if a.subpixel && spec.model != ModelKind::Distorted {
         bail!(
@@ -224,7 +250,7 @@ pub fn run(a: &VrArgs, quiet: bool) -> Result<()> {
     let mut eyes: Vec<EyeFrame> = Vec::with_capacity(2);
     for (name, cam) in ["left", "right"].into_iter().zip(cameras) {
         let t = Instant::now();
-        let set = eye_set(cam, a.msaa, a.subpixel);
+        let set = eye_set(cam, a.msaa, a.subpixel, gaze)?;
         let samples_ms = t.elapsed().as_secs_f64() * 1e3;
         let mut eye = render_eye_set(&scene, &bvh, set, &opts)?;
         eye.timings.samples_ms = samples_ms;

@@ -11,7 +11,14 @@
 //! Schemes (Table 5): `normal` (pinhole grid, 90 deg vertical), `post-distort` (rift-cv1,
 //! per-channel subpixel rays: 3 samples per pixel), `wide` (210 x 130 fisheye), `dof-0.5`,
 //! `dof-0.25`, `dof-0.1` (rift-cv1 field of view, 3 mm pupil, focus in metres; thin lens, see
-//! [`super::presets`]), `foveated` (needs the foveated sample sets: unavailable row for now).
+//! [`super::presets`]), `foveated` (pinhole eye, [`SampleSet::foveated`] with the gaze at the
+//! centre, a fovea of [`FOVEA_RADIUS_FRACTION`] of the eye height and footprints growing by
+//! [`FOVEA_SLOPE`] per pixel of eccentricity beyond it).
+//!
+//! The beam caster's hierarchy is built once per sample set outside the timed region (HVVR
+//! builds it once per sample pattern); `ms_traversal` = block + tile cull and `ms_intersect` =
+//! sample test, each as CPU time divided by the thread count (the stages run interleaved over
+//! blocks), and `mrays_per_s` is from the wall time of the whole cast.
 //! Not reproduced: HVVR's "pre-distort" row (a larger pinhole eye buffer resampled afterwards).
 
 use std::time::Instant;
@@ -21,11 +28,11 @@ use parallax_scene::animation::RigidAnimation;
 use parallax_scene::{CameraDesc, Scene};
 use serde::Serialize;
 
-use super::frame::{Visibility, VrError, update_scene, visibility};
+use super::frame::{Visibility, VrError, prepare, update_scene, visibility_prepared};
 use super::presets::{Dof, Preset, eye_cameras};
 use super::resolve::{ShadingMode, resolve};
 use super::shade::{ShadeOptions, VrShader};
-use super::{SampleSet, VisibilityBuffer};
+use super::{CastStats, SampleSet};
 
 /// The sampling schemes of Table 5 we reproduce.
 pub const SCHEMES: &[&str] = &[
@@ -80,6 +87,12 @@ pub struct VrBenchOptions {
     pub repeats: u32,
 }
 
+/// Foveated scheme: fovea radius as a fraction of the eye's film height.
+pub const FOVEA_RADIUS_FRACTION: f32 = 0.125;
+/// Foveated scheme: footprint growth per film pixel of eccentricity beyond the fovea (linear
+/// acuity model, §2.3).
+pub const FOVEA_SLOPE: f32 = 0.02;
+
 /// Eye sample sets of a scheme, or why it cannot be run.
 fn scheme_sets(
     scheme: &str,
@@ -92,7 +105,7 @@ fn scheme_sets(
         "normal" => (Preset::Custom, None),
         "post-distort" => (Preset::RiftCv1, None),
         "wide" => (Preset::Wide210x130, None),
-        "foveated" => return Err(VrError::FoveatedUnavailable),
+        "foveated" => (Preset::Custom, None),
         s => match s.strip_prefix("dof-").and_then(|f| f.parse::<f32>().ok()) {
             Some(focus) => (
                 Preset::RiftCv1,
@@ -113,6 +126,14 @@ fn scheme_sets(
     spec.width = (w / 2).max(1);
     spec.height = h.max(1);
     let [l, r] = eye_cameras(&spec, head, dof)?;
+    if scheme == "foveated" {
+        let fov = |c| {
+            let gaze = glam::Vec2::new(spec.width as f32, spec.height as f32) * 0.5;
+            let radius = FOVEA_RADIUS_FRACTION * spec.height as f32;
+            SampleSet::foveated(c, gaze, radius, FOVEA_SLOPE, spp)
+        };
+        return Ok([fov(l)?, fov(r)?]);
+    }
     Ok([SampleSet::grid(l, spp), SampleSet::grid(r, spp)])
 }
 
@@ -131,8 +152,8 @@ fn best_of<T>(
     Ok((best, out.expect("at least one run")))
 }
 
-/// Runs the benchmark. Errors only on invalid options (unknown scheme, bad spp); methods or
-/// schemes missing from the build give unavailable rows.
+/// Runs the benchmark. Errors on invalid options (unknown scheme, bad spp); a visibility
+/// method that fails on a scheme gives a row with `available = false` and the reason.
 pub fn run(
     scene: &Scene,
     bvh: &Bvh,
@@ -171,30 +192,16 @@ pub fn run(
                 baseline_mrays_per_s: None,
                 threads,
             };
-            let sets = match scheme_sets(scheme, head, opts.width, opts.height, spp) {
-                Ok(s) => s,
-                Err(e @ VrError::FoveatedUnavailable) => {
-                    for &v in &opts.visibility {
-                        for &m in &opts.shading {
-                            rows.push(VrBenchRow {
-                                note: e.to_string(),
-                                ..base(v, m)
-                            });
-                        }
-                    }
-                    continue;
-                }
-                Err(e) => return Err(e),
-            };
+            let sets = scheme_sets(scheme, head, opts.width, opts.height, spp)?;
             let samples: u64 = sets.iter().map(|s| s.samples.len() as u64).sum();
             let rays: u64 = sets.iter().map(|s| s.ray_count() as u64).sum();
             let mut baseline = None;
             for &v in &opts.visibility {
+                let prepared = [prepare(v, &sets[0])?, prepare(v, &sets[1])?];
                 let traced = best_of(opts.repeats, || {
-                    Ok::<[VisibilityBuffer; 2], VrError>([
-                        visibility(v, bvh, &sets[0])?,
-                        visibility(v, bvh, &sets[1])?,
-                    ])
+                    let a = visibility_prepared(v, bvh, &sets[0], prepared[0].as_ref())?;
+                    let b = visibility_prepared(v, bvh, &sets[1], prepared[1].as_ref())?;
+                    Ok::<_, VrError>([a, b])
                 });
                 let (trace_ms, bufs) = match traced {
                     Ok(x) => x,
@@ -212,14 +219,33 @@ pub fn run(
                     }
                 };
                 let mrays = rays as f64 / (trace_ms * 1e3);
+                // Beam stages: CPU time over both eyes / threads (see the module docs).
+                let stage_ms = |f: fn(&CastStats) -> std::time::Duration| {
+                    let cpu: f64 = bufs
+                        .iter()
+                        .filter_map(|(_, s)| s.as_ref())
+                        .map(|s| f(s).as_secs_f64())
+                        .sum();
+                    cpu * 1e3 / threads as f64
+                };
+                let beam = bufs[0].1.is_some();
+                let (ms_trav, ms_isect) = if beam {
+                    (
+                        stage_ms(|s| s.block_cull + s.tile_cull),
+                        Some(stage_ms(|s| s.sample_test)),
+                    )
+                } else {
+                    (trace_ms, None)
+                };
+                let bufs = [&bufs[0].0, &bufs[1].0];
                 if v == Visibility::PerRay {
                     baseline = Some(mrays);
                 }
                 for &m in &opts.shading {
                     let (shade_ms, resolved) = best_of(opts.repeats, || {
                         Ok([
-                            resolve(&sets[0], &bufs[0], &shader, m),
-                            resolve(&sets[1], &bufs[1], &shader, m),
+                            resolve(&sets[0], bufs[0], &shader, m),
+                            resolve(&sets[1], bufs[1], &shader, m),
                         ])
                     })?;
                     let shades: u64 = resolved.iter().map(|r| r.shades).sum();
@@ -233,7 +259,8 @@ pub fn run(
                         } else {
                             String::new()
                         },
-                        ms_traversal: Some(trace_ms),
+                        ms_traversal: Some(ms_trav),
+                        ms_intersect: ms_isect,
                         ms_shade: Some(shade_ms),
                         shades_per_nonempty_pixel: Some(shades as f64 / nonempty.max(1) as f64),
                         mrays_per_s: Some(mrays),

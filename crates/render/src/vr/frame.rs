@@ -13,19 +13,18 @@ use parallax_scene::{Scene, SceneError, TriangleMesh};
 use super::reconstruct::reconstruct;
 use super::resolve::{Resolved, ShadingMode, resolve};
 use super::shade::{ShadeOptions, VrShader};
-use super::{SampleSet, VisibilityBuffer, trace_per_ray};
+use super::{
+    CastStats, Hierarchy, HierarchyError, PatternError, SampleSet, VisibilityBuffer, cast,
+    trace_per_ray,
+};
 
 /// Errors of a VR frame.
 #[derive(Debug, thiserror::Error)]
 pub enum VrError {
-    #[error(
-        "the beam caster (--visibility beam) is not available in this build; use --visibility per-ray"
-    )]
-    BeamUnavailable,
-    #[error(
-        "foveated sample sets are not available in this build (they come with the beam caster)"
-    )]
-    FoveatedUnavailable,
+    #[error("{0}")]
+    Pattern(#[from] PatternError),
+    #[error("{0}")]
+    Hierarchy(#[from] HierarchyError),
     #[error("{0}")]
     Scene(#[from] SceneError),
     #[error("{0}")]
@@ -64,18 +63,46 @@ impl Visibility {
     }
 }
 
-/// Visibility of `set` by `method`: the only place the method is chosen.
+/// What a visibility method precomputes once per sample set: nothing for per-ray tracing,
+/// the tile / block hierarchy with its beams for the beam caster (HVVR builds it once per
+/// sample pattern, not per frame, §5.1).
+pub fn prepare(method: Visibility, set: &SampleSet) -> Result<Option<Hierarchy>, VrError> {
+    Ok(match method {
+        Visibility::PerRay => None,
+        Visibility::Beam => Some(Hierarchy::build(set)?),
+    })
+}
+
+/// Visibility of `set` by `method` with its precomputed `prepared` data (from [`prepare`]; built
+/// here when `None`) and the beam caster's stage statistics: the only place the method is
+/// chosen.
+pub fn visibility_prepared(
+    method: Visibility,
+    bvh: &Bvh,
+    set: &SampleSet,
+    prepared: Option<&Hierarchy>,
+) -> Result<(VisibilityBuffer, Option<CastStats>), VrError> {
+    let mut out = VisibilityBuffer::new(set);
+    let stats = match method {
+        Visibility::PerRay => {
+            trace_per_ray(bvh, set, &mut out);
+            None
+        }
+        Visibility::Beam => match prepared {
+            Some(h) => Some(cast(bvh, set, h, &mut out)),
+            None => Some(cast(bvh, set, &Hierarchy::build(set)?, &mut out)),
+        },
+    };
+    Ok((out, stats))
+}
+
+/// Visibility of `set` by `method` (preparation included).
 pub fn visibility(
     method: Visibility,
     bvh: &Bvh,
     set: &SampleSet,
 ) -> Result<VisibilityBuffer, VrError> {
-    let mut out = VisibilityBuffer::new(set);
-    match method {
-        Visibility::PerRay => trace_per_ray(bvh, set, &mut out),
-        Visibility::Beam => return Err(VrError::BeamUnavailable),
-    }
-    Ok(out)
+    Ok(visibility_prepared(method, bvh, set, None)?.0)
 }
 
 /// Stage times of the scene update (HVVR Table 1's "vert xform" and the refit stages).
