@@ -125,7 +125,7 @@ fn vr_frame(
         spp: 8,
         mode: ShadingMode::Msaa,
         visibility: Visibility::Beam,
-        shade: ShadeOptions::default(),
+        shade: ShadeOptions { shadows: true },
     };
     let tm = ToneMapping {
         exposure: 0.0,
