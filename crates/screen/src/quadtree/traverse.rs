@@ -185,7 +185,9 @@ impl QuadTree {
         }
         let mut qx = cx >> l;
         let mut qy = cy >> l;
+        // Counters live in registers; `stats` is written once at the end.
         let mut steps = 0u64;
+        let (mut n_plane, mut n_box, mut n_visit) = (0u64, 0u64, 0u64);
         loop {
             steps += 1;
             if steps > bound {
@@ -203,7 +205,7 @@ impl QuadTree {
             let t_out = fmin(fmin(txo, tyo), q.s_hi);
             let mut descend = false;
             if node.is_plane() {
-                stats.plane_tests += 1;
+                n_plane += 1;
                 if t_in <= t_out {
                     let (n, c) = decode_plane(node, l as u32, qx, qy, wf, hf);
                     let flags = node.flags();
@@ -257,7 +259,7 @@ impl QuadTree {
                     need_ext = (q.want_trigger && ev.trigger.is_none()) || ev.ov.is_none();
                 }
             } else {
-                stats.box_tests += 1;
+                n_box += 1;
                 if t_in <= t_out {
                     let za = ray.p0.z + ray.d.z * t_in;
                     let zb = ray.p0.z + ray.d.z * t_out;
@@ -277,7 +279,7 @@ impl QuadTree {
                     }
                 }
             }
-            stats.nodes_visited += 1;
+            n_visit += 1;
             if descend {
                 s = t_in;
                 l -= 1;
@@ -322,6 +324,9 @@ impl QuadTree {
             l = nl;
         }
         stats.steps += steps;
+        stats.plane_tests += n_plane;
+        stats.box_tests += n_box;
+        stats.nodes_visited += n_visit;
         ev
     }
 
