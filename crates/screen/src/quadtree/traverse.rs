@@ -154,6 +154,7 @@ pub struct Query {
 impl QuadTree {
     /// Traverses this layer along `ray` over `[q.s_lo, q.s_hi]` (§4); stops at the first hit
     /// (or, with `stop_at_ov`, the first occlusion-volume entry).
+    #[inline]
     pub fn trace_layer(&self, ray: &RaySetup, q: &Query, stats: &mut TraceStats) -> LayerEvents {
         let mut ev = LayerEvents::default();
         if !(q.s_lo <= q.s_hi) {
@@ -186,6 +187,8 @@ impl QuadTree {
         let mut qx = cx >> l;
         let mut qy = cy >> l;
         // Counters live in registers; `stats` is written once at the end.
+        let step_x = if ray.dg[0] > 0.0 { 1u32 } else { u32::MAX };
+        let step_y = if ray.dg[1] > 0.0 { 1u32 } else { u32::MAX };
         let mut steps = 0u64;
         let (mut n_plane, mut n_box, mut n_visit) = (0u64, 0u64, 0u64);
         loop {
@@ -297,21 +300,9 @@ impl QuadTree {
             }
             s = s.max(t_out);
             // Successor across the exit edge (§4).
-            let (mut nx, mut ny) = (qx, qy);
-            if txo <= tyo {
-                nx = if ray.dg[0] > 0.0 {
-                    qx + 1
-                } else {
-                    qx.wrapping_sub(1)
-                };
-            }
-            if tyo <= txo {
-                ny = if ray.dg[1] > 0.0 {
-                    qy + 1
-                } else {
-                    qy.wrapping_sub(1)
-                };
-            }
+            // Branch-free: `step` is +1 or -1 (wrapping) per axis, fixed per ray.
+            let nx = qx.wrapping_add(step_x & 0u32.wrapping_sub((txo <= tyo) as u32));
+            let ny = qy.wrapping_add(step_y & 0u32.wrapping_sub((tyo <= txo) as u32));
             if nx >= lv.w || ny >= lv.h || (nx << l) >= w || (ny << l) >= h {
                 break;
             }
