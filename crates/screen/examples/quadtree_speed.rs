@@ -200,11 +200,12 @@ fn main() -> anyhow::Result<()> {
             }
             for (k, t) in qt.trees.iter().enumerate() {
                 println!(
-                    "  {nl} layer(s), tree {k}: build {:.2} ms (stream depth+normals {:.2} ms, ratio {:.1}), {} levels, {} nodes, {} plane nodes, {:.1} MB, unsafe px {}",
+                    "  {nl} layer(s), tree {k}: build {:.2} ms (stream depth+normals {:.2} ms, ratio {:.1}), {} levels (planes up to level {}), {} nodes, {} plane nodes, {:.1} MB, unsafe px {}",
                     bms[k],
                     stream_ms[k],
                     bms[k] / stream_ms[k],
                     t.level_count(),
+                    t.plane_top(),
                     t.node_count(),
                     t.plane_node_count(),
                     t.bytes() as f64 / 1e6,

@@ -178,7 +178,8 @@ impl QuadTree {
         } else {
             top
         };
-        for a in (l + 1..=top).rev() {
+        // Levels above `plane_top` hold no plane at all (exact shortcut).
+        for a in (l + 1..=top.min(self.plane_top)).rev() {
             if self.node(a, cx >> a, cy >> a).is_plane() {
                 l = a;
                 break;
