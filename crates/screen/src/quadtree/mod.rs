@@ -72,7 +72,8 @@
 //!   no measurable time. Fitting `ns/ray = a + b nodes/ray` to the ipd 0.065 / 0.3 runs
 //!   (noisy, two points) gives a ≈ 150-175 ns fixed per ray (the f64 clip's ~30 ns included)
 //!   and b ≈ 8-16 ns per node for the quad-tree, against a ≈ 50 ns and b ≈ 6 ns per step
-//!   for the DDA: the quad-tree's per-ray set-up, not its per-node work, is the larger handicap on short rays.
+//!   for the DDA: on short rays the quad-tree's per-ray set-up weighs as much as its
+//!   per-node work.
 //! - The baselines' f32 cube clip instead of the f64 [`crate::UnitCube::clip_ray`]
 //!   ([`QuadTreeTracer::with_f32_clip`], default off): the f64 clip costs ~28-30 ns per ray
 //!   alone (measured), yet the f32 clip gained nothing measurable (0.96-1.16x, noise), and it
@@ -80,15 +81,15 @@
 //!   lands on the other side after f32 rounding and hits a different plane than the f64
 //!   brute-force twin. Kept opt-in, off.
 //! - Not the limit: the number of visited nodes (3.6 per ray against the DDA's 12.7 steps),
-//!   node bytes (8, one cache line holds a 4x2 block of a level) or the clip. The remaining
-//!   ~150 ns per ray (~40 ns per visited node against ~10 ns per DDA step) is spread evenly
-//!   over the loop body in `perf annotate` (no line above ~2 %): per node the traversal takes
-//!   3-5 data-dependent branches (plane or box, hit or miss, descend or advance, exit edge x
-//!   or y, level jump) that a DDA step does not, and this VM exposes no hardware counters to
-//!   confirm branch mispredictions as the cause. On the short epipolar segments of a 6.5 cm
-//!   stereo baseline the DDA finishes in ~13 predictable steps, so the quad-tree's lower node
-//!   count does not pay off; at a 30 cm baseline (DDA 54.7 steps per ray, 200 needed) the
-//!   quad-tree (6.6 nodes per ray) is 1.6-1.7x faster than the DDA.
+//!   node bytes (8: a cache line holds 8 nodes of a level row) or the clip alone. Outside
+//!   the start block the samples are spread evenly over the loop body (no line above ~2 %):
+//!   per node the traversal takes 3-5 data-dependent branches (plane or box, hit or miss,
+//!   descend or advance, exit edge x or y, level jump) that a DDA step does not; this VM
+//!   exposes no hardware counters to confirm branch mispredictions as the cause. On the
+//!   short epipolar segments of a 6.5 cm stereo baseline the DDA finishes in ~13
+//!   predictable steps, so the quad-tree's lower node count does not pay off; at a 30 cm
+//!   baseline (DDA 54.7 steps per ray, 200 needed for artifact-free output) the quad-tree
+//!   (6.6 nodes per ray) is 1.6-1.7x faster than the DDA.
 
 pub mod build;
 pub mod cascade;
