@@ -3,7 +3,11 @@
 //! (reference camera moved by ipd/2 = 0.0325 m along its right axis, one ray per pixel):
 //! Mrays/s, nodes visited per ray, % of rays reaching layer 2; brute force on a ray subset.
 //!
-//! `CARGO_TARGET_DIR=/work/target-h1 cargo run --release -p parallax-screen --example quadtree_speed`
+//! Also: the same traces with the opt-in f32 clip ([`QuadTreeTracer::with_f32_clip`]) and
+//! how many results differ from the exact f64 clip.
+//!
+//! `CARGO_TARGET_DIR=/work/target-h6 cargo run --release -p parallax-screen --example quadtree_speed [-- IPD [all]]`
+//! (IPD in metres, default 0.065; `all` also runs the lossless and adaptive trees).
 
 use std::time::Instant;
 
@@ -12,8 +16,9 @@ use parallax_core::Ray;
 use parallax_raster::{RasterOptions, View, capture_layers};
 use parallax_scene::{Scene, camera::Pinhole};
 use parallax_screen::{
-    BruteForcePlanes, LayerMode, LayerPlanes, NormalSource, QuadTreeOptions, QuadTreeTracer,
-    ScreenTracer, TraceResult, TraceStats, UnitCube,
+    BruteForcePlanes, DdaOptions, DdaTracer, HiZOptions, HiZTracer, LayerMode, LayerPlanes,
+    MinMaxOptions, MinMaxTracer, NormalSource, QuadTreeOptions, QuadTreeTracer, ScreenTracer,
+    TraceResult, TraceStats, UnitCube,
 };
 use rayon::prelude::*;
 
@@ -29,8 +34,20 @@ fn best_of<T>(n: usize, mut f: impl FnMut() -> T) -> (f64, T) {
     (best, out.unwrap())
 }
 
+/// CPU time of the calling thread in ns (`/proc/thread-self/schedstat`, first field): on a
+/// shared machine wall-clock time also counts the time the thread waited for a core.
+fn cpu_ns() -> u64 {
+    std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()
+        .and_then(|s| s.split_whitespace().next()?.parse().ok())
+        .unwrap_or(0)
+}
+
 fn main() -> anyhow::Result<()> {
     let (w, h) = (1600u32, 900u32);
+    let args: Vec<String> = std::env::args().collect();
+    let ipd: f32 = args.get(1).map(|a| a.parse()).transpose()?.unwrap_or(0.065);
+    let all = args.get(2).is_some_and(|a| a == "all");
     let scene = Scene::load("atrium")?;
     let cam = Pinhole::new(&scene.camera(None)?, w, h)?;
     let cap = capture_layers(
@@ -48,7 +65,8 @@ fn main() -> anyhow::Result<()> {
     );
 
     // Rays of the stereo eye.
-    let origin = cam.frame.position + cam.frame.right() * 0.0325;
+    let origin = cam.frame.position + cam.frame.right() * (ipd * 0.5);
+    println!("stereo eye offset {:.4} m", ipd * 0.5);
     let rays: Vec<Ray> = (0..h)
         .flat_map(|y| (0..w).map(move |x| (x, y)))
         .map(|(x, y)| {
@@ -60,13 +78,85 @@ fn main() -> anyhow::Result<()> {
         })
         .collect();
 
-    let (clip_ms, nseg) = best_of(3, || {
-        rays.iter().filter(|r| cube.clip_ray(r).is_some()).count()
-    });
-    println!(
-        "clip_ray alone: {:.1} Mrays/s ({nseg} segments)",
-        rays.len() as f64 / clip_ms / 1e3
-    );
+    // Head to head on the same rays, 1 thread, methods interleaved, best of 7 rounds (the
+    // machine is shared: the minimum is the least disturbed run), 1 layer.
+    {
+        let l1 = &layers[..1];
+        let qt = QuadTreeTracer::build(&cube, l1, &QuadTreeOptions::default())?;
+        let qf = qt.clone().with_f32_clip(true);
+        let dda = |n| DdaOptions {
+            layers: 1,
+            max_steps: n,
+            ..Default::default()
+        };
+        let d16 = DdaTracer::new(&cube, l1, &dda(16))?;
+        let d200 = DdaTracer::new(&cube, l1, &dda(200))?;
+        let mm = MinMaxTracer::new(
+            &cube,
+            l1,
+            &MinMaxOptions {
+                layers: 1,
+                ..Default::default()
+            },
+        )?;
+        let hz = HiZTracer::new(
+            &cube,
+            l1,
+            &HiZOptions {
+                layers: 1,
+                ..Default::default()
+            },
+        )?;
+        let methods: [(&str, &dyn ScreenTracer); 6] = [
+            ("quadtree (f64 clip, exact)", &qt),
+            ("quadtree (f32 clip)", &qf),
+            ("dda max_steps 16", &d16),
+            ("dda max_steps 200", &d200),
+            ("minmax", &mm),
+            ("hiz", &hz),
+        ];
+        let mut best = [f64::INFINITY; 6];
+        let mut st = [TraceStats::default(); 6];
+        for _ in 0..7 {
+            for (k, (_, m)) in methods.iter().enumerate() {
+                let t = cpu_ns();
+                let mut s = TraceStats::default();
+                for r in &rays {
+                    m.trace(r, &mut s);
+                }
+                best[k] = best[k].min((cpu_ns() - t) as f64 * 1e-6);
+                st[k] = s;
+            }
+        }
+        let n = rays.len() as f64;
+        println!(
+            "\n## head to head, 1 layer, 1 thread, best of 7 interleaved rounds, thread CPU time"
+        );
+        for (k, (name, _)) in methods.iter().enumerate() {
+            let s = &st[k];
+            let work = if s.nodes_visited > 0 {
+                s.nodes_visited
+            } else {
+                s.steps
+            };
+            println!(
+                "  {name:28} {:6.2} Mrays/s  {:6.2} nodes-or-steps/ray  {:6.1} ns/ray  ratio quadtree/this {:.2}",
+                n / best[k] / 1e3,
+                work as f64 / n,
+                best[k] * 1e6 / n,
+                best[k] / best[0],
+            );
+        }
+    }
+
+    let mut clip_ns = f64::INFINITY;
+    let mut nseg = 0;
+    for _ in 0..7 {
+        let t = cpu_ns();
+        nseg = rays.iter().filter(|r| cube.clip_ray(r).is_some()).count();
+        clip_ns = clip_ns.min((cpu_ns() - t) as f64 / rays.len() as f64);
+    }
+    println!("f64 clip_ray alone: {clip_ns:.1} ns/ray CPU time ({nseg} segments)");
 
     // Streaming a layer's depth + normals once.
     let stream_ms: Vec<f64> = layers
@@ -91,7 +181,10 @@ fn main() -> anyhow::Result<()> {
                 ..Default::default()
             },
         ),
-    ] {
+    ]
+    .into_iter()
+    .take(if all { 3 } else { 1 })
+    {
         println!("\n## {label}");
         for nl in [1usize, 2] {
             let (_, qt) = best_of(3, || {
@@ -107,11 +200,12 @@ fn main() -> anyhow::Result<()> {
             }
             for (k, t) in qt.trees.iter().enumerate() {
                 println!(
-                    "  {nl} layer(s), tree {k}: build {:.2} ms (stream depth+normals {:.2} ms, ratio {:.1}), {} levels, {} nodes, {} plane nodes, {:.1} MB, unsafe px {}",
+                    "  {nl} layer(s), tree {k}: build {:.2} ms (stream depth+normals {:.2} ms, ratio {:.1}), {} levels (planes up to level {}), {} nodes, {} plane nodes, {:.1} MB, unsafe px {}",
                     bms[k],
                     stream_ms[k],
                     bms[k] / stream_ms[k],
                     t.level_count(),
+                    t.plane_top(),
                     t.node_count(),
                     t.plane_node_count(),
                     t.bytes() as f64 / 1e6,
@@ -142,6 +236,27 @@ fn main() -> anyhow::Result<()> {
                     .sum::<u64>()
             });
             let n = rays.len() as f64;
+            // The opt-in f32 clip: speed and disagreement with the exact f64 clip.
+            let qf = qt.clone().with_f32_clip(true);
+            let (msf, _) = best_of(2, || {
+                let mut s = TraceStats::default();
+                for r in &rays {
+                    qf.trace(r, &mut s);
+                }
+                s.hits
+            });
+            let mut ndiff = 0usize;
+            for r in &rays {
+                let mut s = TraceStats::default();
+                if qt.trace(r, &mut s) != qf.trace(r, &mut s) {
+                    ndiff += 1;
+                }
+            }
+            println!(
+                "  {nl} layer(s) f32 clip: 1 thread {:.1} Mrays/s; results not bit-identical to the f64 clip: {ndiff} of {}",
+                n / msf / 1e3,
+                rays.len()
+            );
             println!(
                 "  {nl} layer(s) stereo eye: 1 thread {:.1} Mrays/s ({ms1:.1} ms), {} threads {:.1} Mrays/s; nodes/ray {:.2}, box tests/ray {:.2}, plane tests/ray {:.2}, hits {:.2}%, occlusion {:.2}%, reach layer 2 {:.2}%",
                 n / ms1 / 1e3,

@@ -63,6 +63,10 @@ pub struct QuadTree {
     /// Per pixel (`W x H`), the trigger depth of unsafe pixels (cascade); empty when the
     /// layer is the last one.
     pub(crate) trigger_z: Vec<f32>,
+    /// The highest level holding any plane node (0 when there is none): the traversal's
+    /// plane-ancestor check at the start level skips the levels above it
+    /// ([`super::traverse`]).
+    pub(crate) plane_top: usize,
 }
 
 impl QuadTree {
@@ -276,11 +280,22 @@ impl QuadTree {
             levels,
             crack_px: opts.crack_dilation,
             trigger_z: Vec::new(),
+            plane_top: 0,
         };
+        // Top-down: the small upper levels are scanned first.
+        tree.plane_top = (0..tree.levels.len())
+            .rev()
+            .find(|&l| tree.levels[l].nodes.iter().any(|n| n.is_plane()))
+            .unwrap_or(0);
         if !tz.is_empty() {
             tree.mark_unsafe(&tz);
         }
         Ok(tree)
+    }
+
+    /// The highest level holding a plane node (0 when there is none).
+    pub fn plane_top(&self) -> usize {
+        self.plane_top
     }
 
     /// Number of levels (including the pixel level).

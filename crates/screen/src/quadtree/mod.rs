@@ -46,6 +46,51 @@
 //!   pixels), while [`QuadTree::node_count`] counts the reachable nodes;
 //! - construction runs on the CPU, in parallel over rows per level (rayon).
 
+//!
+//! **Speed: what we tried** (atrium 1600x900, stereo eye 3.25 cm beside the reference eye,
+//! 1 layer, default settings; `examples/quadtree_speed.rs`, which times every method on the
+//! same 1.44 M rays in *thread CPU time*, best of 7 interleaved rounds — wall-clock figures
+//! on the shared 2-core machine varied by 2-3x between identical runs):
+//!
+//! | variant | quad-tree ns/ray | DDA (16 steps) ns/ray | quad-tree / DDA speed |
+//! |---|---|---|---|
+//! | before (commit 9cc0d18) | 204 | 130 | 0.64 |
+//! | after (all changes below) | 178-206 | 128-155 | 0.70-0.75 |
+//!
+//! - `half`'s `f16::to_f32` dispatches at run time (F16C detection) to an out-of-line
+//!   function: two calls per plane test that forced the loop state to be spilled. Replaced by
+//!   the exact branch-free [`node::f16_bits_to_f32`] (bit-identical, tested over all finite
+//!   halves). Gain: within the ±10 % noise.
+//! - Counters of [`crate::TraceStats`] kept in registers and written once per layer; the
+//!   successor across the exit edge computed branch-free; `trace_layer` inlined into the
+//!   cascade loop (its `LayerEvents` result was returned through memory). Gain: within noise.
+//! - Per-ray start: `perf annotate` attributes ~30 % of the tracer's samples to the start
+//!   (the two `cell` floors and the plane-ancestor check, one node load per level above the
+//!   start level, each from a different level array) and ~10 % to `RaySetup::new`'s
+//!   divisions. The ancestor check now stops at [`QuadTree::plane_top`], the highest level
+//!   holding a plane (exact); on atrium planes reach level 7 of 9, so it saves one load and
+//!   no measurable time. Fitting `ns/ray = a + b nodes/ray` to the ipd 0.065 / 0.3 runs
+//!   (noisy, two points) gives a ≈ 150-175 ns fixed per ray (the f64 clip's ~30 ns included)
+//!   and b ≈ 8-16 ns per node for the quad-tree, against a ≈ 50 ns and b ≈ 6 ns per step
+//!   for the DDA: on short rays the quad-tree's per-ray set-up weighs as much as its
+//!   per-node work.
+//! - The baselines' f32 cube clip instead of the f64 [`crate::UnitCube::clip_ray`]
+//!   ([`QuadTreeTracer::with_f32_clip`], default off): the f64 clip costs ~28-30 ns per ray
+//!   alone (measured), yet the f32 clip gained nothing measurable (0.96-1.16x, noise), and it
+//!   is **not exact**: a ray lying exactly on a pixel boundary (test `quadtree_edge.rs`)
+//!   lands on the other side after f32 rounding and hits a different plane than the f64
+//!   brute-force twin. Kept opt-in, off.
+//! - Not the limit: the number of visited nodes (3.6 per ray against the DDA's 12.7 steps),
+//!   node bytes (8: a cache line holds 8 nodes of a level row) or the clip alone. Outside
+//!   the start block the samples are spread evenly over the loop body (no line above ~2 %):
+//!   per node the traversal takes 3-5 data-dependent branches (plane or box, hit or miss,
+//!   descend or advance, exit edge x or y, level jump) that a DDA step does not; this VM
+//!   exposes no hardware counters to confirm branch mispredictions as the cause. On the
+//!   short epipolar segments of a 6.5 cm stereo baseline the DDA finishes in ~13
+//!   predictable steps, so the quad-tree's lower node count does not pay off; at a 30 cm
+//!   baseline (DDA 54.7 steps per ray, 200 needed for artifact-free output) the quad-tree
+//!   (6.6 nodes per ray) is 1.6-1.7x faster than the DDA.
+
 pub mod build;
 pub mod cascade;
 pub mod merge;

@@ -117,8 +117,8 @@ impl Node {
     /// Decoded unit-ish normal of a plane node (`N.z` reconstructed, `<= 0`).
     #[inline(always)]
     pub fn normal(self) -> Vec3 {
-        let nx = f16::from_bits(self.b as u16).to_f32();
-        let ny = f16::from_bits((self.b >> 16) as u16).to_f32();
+        let nx = f16_bits_to_f32(self.b as u16);
+        let ny = f16_bits_to_f32((self.b >> 16) as u16);
         let nz = -(1.0 - nx * nx - ny * ny).max(0.0).sqrt();
         Vec3::new(nx, ny, nz)
     }
@@ -133,6 +133,20 @@ impl Node {
             self.a = z.to_bits();
         }
     }
+}
+
+/// Exact f16 -> f32 conversion of a *finite* half (the stored normal components), branch-free
+/// and inlinable. `half`'s `to_f32` dispatches at run time (F16C detection) to an
+/// out-of-line function; in the traversal loop those two calls per plane test forced the
+/// loop's f32 state to be spilled around them. Shifting the 15 magnitude bits into an f32's
+/// exponent/mantissa field gives the value times `2^-112` (also for subnormal halves and
+/// zero), and the multiplication by `2^112` is exact, so the result equals
+/// `f16::to_f32` bit for bit (checked for all finite halves in the tests below).
+#[inline(always)]
+pub fn f16_bits_to_f32(h: u16) -> f32 {
+    let h = h as u32;
+    let mag = f32::from_bits((h & 0x7fff) << 13) * f32::from_bits(0x7780_0000); // 2^112
+    f32::from_bits(mag.to_bits() | ((h & 0x8000) << 16))
 }
 
 /// Cube-space centre of node `(qx, qy)` at `level` of a `w x h` image.
@@ -162,6 +176,16 @@ pub fn plane_z(n: Vec3, c: f32, x: f32, y: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn f16_decode_matches_half() {
+        for h in 0..=u16::MAX {
+            let r = f16::from_bits(h);
+            if r.is_finite() {
+                assert_eq!(f16_bits_to_f32(h).to_bits(), r.to_f32().to_bits(), "{h:#x}");
+            }
+        }
+    }
 
     #[test]
     fn encode_decode() {

@@ -154,6 +154,7 @@ pub struct Query {
 impl QuadTree {
     /// Traverses this layer along `ray` over `[q.s_lo, q.s_hi]` (§4); stops at the first hit
     /// (or, with `stop_at_ov`, the first occlusion-volume entry).
+    #[inline]
     pub fn trace_layer(&self, ray: &RaySetup, q: &Query, stats: &mut TraceStats) -> LayerEvents {
         let mut ev = LayerEvents::default();
         if !(q.s_lo <= q.s_hi) {
@@ -177,7 +178,8 @@ impl QuadTree {
         } else {
             top
         };
-        for a in (l + 1..=top).rev() {
+        // Levels above `plane_top` hold no plane at all (exact shortcut).
+        for a in (l + 1..=top.min(self.plane_top)).rev() {
             if self.node(a, cx >> a, cy >> a).is_plane() {
                 l = a;
                 break;
@@ -185,7 +187,11 @@ impl QuadTree {
         }
         let mut qx = cx >> l;
         let mut qy = cy >> l;
+        // Counters live in registers; `stats` is written once at the end.
+        let step_x = if ray.dg[0] > 0.0 { 1u32 } else { u32::MAX };
+        let step_y = if ray.dg[1] > 0.0 { 1u32 } else { u32::MAX };
         let mut steps = 0u64;
+        let (mut n_plane, mut n_box, mut n_visit) = (0u64, 0u64, 0u64);
         loop {
             steps += 1;
             if steps > bound {
@@ -203,7 +209,7 @@ impl QuadTree {
             let t_out = fmin(fmin(txo, tyo), q.s_hi);
             let mut descend = false;
             if node.is_plane() {
-                stats.plane_tests += 1;
+                n_plane += 1;
                 if t_in <= t_out {
                     let (n, c) = decode_plane(node, l as u32, qx, qy, wf, hf);
                     let flags = node.flags();
@@ -257,7 +263,7 @@ impl QuadTree {
                     need_ext = (q.want_trigger && ev.trigger.is_none()) || ev.ov.is_none();
                 }
             } else {
-                stats.box_tests += 1;
+                n_box += 1;
                 if t_in <= t_out {
                     let za = ray.p0.z + ray.d.z * t_in;
                     let zb = ray.p0.z + ray.d.z * t_out;
@@ -277,7 +283,7 @@ impl QuadTree {
                     }
                 }
             }
-            stats.nodes_visited += 1;
+            n_visit += 1;
             if descend {
                 s = t_in;
                 l -= 1;
@@ -295,21 +301,9 @@ impl QuadTree {
             }
             s = s.max(t_out);
             // Successor across the exit edge (§4).
-            let (mut nx, mut ny) = (qx, qy);
-            if txo <= tyo {
-                nx = if ray.dg[0] > 0.0 {
-                    qx + 1
-                } else {
-                    qx.wrapping_sub(1)
-                };
-            }
-            if tyo <= txo {
-                ny = if ray.dg[1] > 0.0 {
-                    qy + 1
-                } else {
-                    qy.wrapping_sub(1)
-                };
-            }
+            // Branch-free: `step` is +1 or -1 (wrapping) per axis, fixed per ray.
+            let nx = qx.wrapping_add(step_x & 0u32.wrapping_sub((txo <= tyo) as u32));
+            let ny = qy.wrapping_add(step_y & 0u32.wrapping_sub((tyo <= txo) as u32));
             if nx >= lv.w || ny >= lv.h || (nx << l) >= w || (ny << l) >= h {
                 break;
             }
@@ -322,6 +316,9 @@ impl QuadTree {
             l = nl;
         }
         stats.steps += steps;
+        stats.plane_tests += n_plane;
+        stats.box_tests += n_box;
+        stats.nodes_visited += n_visit;
         ev
     }
 
