@@ -4,6 +4,20 @@
 //! the crossed layer pixel (the single-layer inpainting of §4.1, "fill both with the nearest
 //! background pixels", Fig. 6e — here the crossed pixel itself, not a dilated search).
 //!
+//! **Colour resampling** ([`Resample`], default [`Resample::Bilinear`], the same for every
+//! tracer): a hit lies at a sub-pixel position of the reference image, so its colour is
+//! reconstructed there rather than taken from the nearest pixel centre. The hit position is
+//! projected into the reference film ([`parallax_screen::UnitCube`]) and the 2x2 pixel centres
+//! around it of the hit's layer are blended bilinearly, keeping only the neighbours that are
+//! covered and lie on the hit pixel's surface (within [`SAME_SURFACE_PX`] pixel footprints of
+//! the hit sample's tangent plane, normals within 60°), with the weights renormalised — the
+//! depth-aware ("cross-bilateral") reconstruction filter of image-based rendering, e.g. Mark,
+//! McMillan & Bishop 1997, "Post-Rendering 3D Warping", §4 (reconstruction), and Shade et al.
+//! 1998, "Layered Depth Images", §4 (splatting with depth discontinuity handling), which do
+//! not blend across depth discontinuities. Widmer et al. 2015 do not specify their colour
+//! lookup; nearest is kept as [`Resample::Nearest`] for comparison. Occlusion-volume answers
+//! keep the crossed pixel's colour (nearest).
+//!
 //! Besides colour, every pixel records what its ray found ([`HitKind`], shown like Fig. 6d:
 //! misses red, occlusion volumes blue) and its intersection-test count (box + plane tests, or
 //! steps for structures without tests — Fig. 1c's heatmap). Rows run in parallel (rayon), each
@@ -11,13 +25,28 @@
 
 use std::time::Instant;
 
-use glam::{Vec2, Vec3};
+use glam::{UVec2, Vec2, Vec3};
 use parallax_core::{Image, Rgb};
 use parallax_scene::camera::{CameraModel, Pinhole};
 use parallax_screen::{ScreenTracer, TraceResult, TraceStats};
 use rayon::prelude::*;
 
 use super::layers::Reference;
+
+/// How a hit's colour is read from its layer (module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub enum Resample {
+    /// The hit pixel's colour.
+    Nearest,
+    /// Depth-aware bilinear interpolation at the hit's sub-pixel position (same layer, same
+    /// surface neighbours only, weights renormalised).
+    #[default]
+    Bilinear,
+}
+
+/// Neighbours farther than this many pixel footprints (at the hit's depth) from the hit
+/// sample's tangent plane are another surface and are not blended.
+pub const SAME_SURFACE_PX: f32 = 1.0;
 
 /// What a target pixel's ray found.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -126,8 +155,18 @@ impl WarpedView {
 }
 
 /// Traces every pixel-centre ray of `target` with `tracer` (built over `reference`'s layers)
-/// and fetches colours from `reference`.
+/// and fetches colours from `reference` with [`Resample::default`].
 pub fn warp_view(tracer: &dyn ScreenTracer, reference: &Reference, target: &Pinhole) -> WarpedView {
+    warp_view_with(tracer, reference, target, Resample::default())
+}
+
+/// [`warp_view`] with a choice of colour resampling.
+pub fn warp_view_with(
+    tracer: &dyn ScreenTracer,
+    reference: &Reference,
+    target: &Pinhole,
+    resample: Resample,
+) -> WarpedView {
     let (w, h) = (target.width, target.height);
     let n = w as usize * h as usize;
     let mut image = vec![Vec3::ZERO; n];
@@ -152,7 +191,7 @@ pub fn warp_view(tracer: &dyn ScreenTracer, reference: &Reference, target: &Pinh
                 let tests = s.box_tests + s.plane_tests;
                 wk[x] = (if tests > 0 { tests } else { s.steps }).min(u32::MAX as u64) as u32;
                 total += s;
-                (img[x], kind[x]) = resolve(reference, r);
+                (img[x], kind[x]) = resolve(reference, r, resample);
             }
             total
         })
@@ -169,20 +208,93 @@ pub fn warp_view(tracer: &dyn ScreenTracer, reference: &Reference, target: &Pinh
 
 /// The colour and kind of one trace result.
 #[inline]
-fn resolve(reference: &Reference, r: TraceResult) -> (Rgb, HitKind) {
-    let fetch = |layer: u32, p: glam::UVec2| {
-        reference
-            .colors
-            .get(layer as usize)
-            .filter(|c| p.x < c.width() && p.y < c.height())
-            .map(|c| *c.get(p.x, p.y))
-            .unwrap_or(reference.background)
-    };
+fn resolve(reference: &Reference, r: TraceResult, resample: Resample) -> (Rgb, HitKind) {
     match r {
-        TraceResult::Hit { layer, pixel, .. } => (fetch(layer, pixel), HitKind::Hit(layer as u8)),
+        TraceResult::Hit {
+            layer,
+            pixel,
+            position,
+            ..
+        } => {
+            let c = match resample {
+                Resample::Nearest => fetch(reference, layer, pixel),
+                Resample::Bilinear => bilinear(reference, layer, pixel, position)
+                    .unwrap_or_else(|| fetch(reference, layer, pixel)),
+            };
+            (c, HitKind::Hit(layer as u8))
+        }
         TraceResult::Miss => (reference.background, HitKind::Miss),
-        TraceResult::OcclusionVolume { layer, pixel, .. } => {
-            (fetch(layer, pixel), HitKind::Occlusion(layer as u8))
+        TraceResult::OcclusionVolume { layer, pixel, .. } => (
+            fetch(reference, layer, pixel),
+            HitKind::Occlusion(layer as u8),
+        ),
+    }
+}
+
+/// The colour of one layer pixel (the background outside the image).
+#[inline]
+fn fetch(reference: &Reference, layer: u32, p: UVec2) -> Rgb {
+    reference
+        .colors
+        .get(layer as usize)
+        .filter(|c| p.x < c.width() && p.y < c.height())
+        .map(|c| *c.get(p.x, p.y))
+        .unwrap_or(reference.background)
+}
+
+/// Depth-aware bilinear colour of a hit at world `position` answered by `pixel` of `layer`
+/// (module docs). `None` when the hit pixel is not one of the four neighbours of the
+/// projected position (then the caller takes the nearest colour).
+fn bilinear(reference: &Reference, layer: u32, pixel: UVec2, position: Vec3) -> Option<Rgb> {
+    let g = reference.layers.get(layer as usize)?;
+    let colors = reference.colors.get(layer as usize)?;
+    let (w, h) = (g.width(), g.height());
+    if pixel.x >= w || pixel.y >= h {
+        return None;
+    }
+    let hc = reference.cube.homogeneous(position);
+    if !(hc.w > 0.0) {
+        return None;
+    }
+    let depth = hc.w as f32;
+    // Film position minus the pixel-centre offset: integer values are pixel centres.
+    let fx = (hc.x / hc.w) as f32 * w as f32 - 0.5;
+    let fy = (hc.y / hc.w) as f32 * h as f32 - 0.5;
+    if !(fx.is_finite() && fy.is_finite()) {
+        return None;
+    }
+    let (x0, y0) = (fx.floor(), fy.floor());
+    let (tx, ty) = (fx - x0, fy - y0);
+    let (x0, y0) = (x0 as i64, y0 as i64);
+    let (px, py) = (pixel.x as i64, pixel.y as i64);
+    if !(x0..=x0 + 1).contains(&px) || !(y0..=y0 + 1).contains(&py) {
+        return None;
+    }
+    let hi = g.index(pixel.x, pixel.y);
+    let (p_hit, n_hit) = (g.position[hi], g.normal[hi]);
+    let footprint = depth * 2.0 * reference.camera.tan_half_y / h as f32;
+    let tol = SAME_SURFACE_PX * footprint + 1e-4 * depth;
+    let mut sum = Vec3::ZERO;
+    let mut wsum = 0.0f32;
+    for (dy, wy) in [(0, 1.0 - ty), (1, ty)] {
+        for (dx, wx) in [(0, 1.0 - tx), (1, tx)] {
+            let (x, y) = (x0 + dx, y0 + dy);
+            if x < 0 || y < 0 || x >= w as i64 || y >= h as i64 {
+                continue;
+            }
+            let (x, y) = (x as u32, y as u32);
+            let i = g.index(x, y);
+            let same = i == hi
+                || (g.depth[i].is_finite()
+                    && g.depth[i] > 0.0
+                    && n_hit.dot(g.normal[i]) > 0.5
+                    && n_hit.dot(g.position[i] - p_hit).abs() <= tol);
+            let wgt = wx * wy;
+            if same && wgt > 0.0 {
+                sum += *colors.get(x, y) * wgt;
+                wsum += wgt;
+            }
         }
     }
+    (wsum > 1e-6).then(|| sum / wsum)
 }
