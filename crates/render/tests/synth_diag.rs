@@ -16,7 +16,7 @@ use parallax_render::reference::shade::Shader;
 use parallax_render::synth::method::{Method, MethodOptions, build_tracer};
 use parallax_render::synth::score::{SCORE_TONEMAP, ground_truth};
 use parallax_render::synth::stereo::stereo_eyes;
-use parallax_render::synth::warp::{HitKind, Resample, warp_view_with};
+use parallax_render::synth::warp::{HitKind, Resample, WarpOptions, warp_view_with};
 use parallax_render::synth::{Shading, capture_reference, score};
 use parallax_scene::camera::{Camera, CameraModel, Pinhole};
 use parallax_scene::{CameraDesc, Scene};
@@ -87,8 +87,9 @@ fn diagnose_stereo_warp() {
             score(&t, &truths[0]).unwrap().psnr
         );
     }
-    let g = render_gbuffer(&scene, &bvh, &Camera::Pinhole(eyes[0].clone()));
-    let tm_truth = tonemap_image(&truths[0], &SCORE_TONEMAP);
+    let ei: usize = std::env::var("SYNTH_DIAG_EYE").map_or(0, |s| s.parse().unwrap());
+    let g = render_gbuffer(&scene, &bvh, &Camera::Pinhole(eyes[ei].clone()));
+    let tm_truth = tonemap_image(&truths[ei], &SCORE_TONEMAP);
     let methods: Vec<Method> = std::env::var("SYNTH_DIAG_METHODS")
         .map(|s| Method::parse_list(&s).unwrap())
         .unwrap_or(vec![Method::QuadTree, Method::Brute, Method::Dda]);
@@ -96,21 +97,35 @@ fn diagnose_stereo_warp() {
         let r = capture_reference(&scene, &bvh, &cam, layers, Shading::Fixed, 0).unwrap();
         for &m in &methods {
             let tracer = build_tracer(m, &r.cube, &r.layers, &MethodOptions::default()).unwrap();
-            for rs in [Resample::Nearest, Resample::Bilinear] {
+            let variants = [
+                (Resample::Nearest, false),
+                (Resample::Bilinear, false),
+                (Resample::Bilinear, true),
+            ];
+            for (rs, guard) in variants {
+                if guard && layers == 1 {
+                    continue;
+                }
+                let wo = WarpOptions {
+                    resample: rs,
+                    layer0_guard: guard,
+                };
                 let views: Vec<_> = eyes
                     .iter()
-                    .map(|e| warp_view_with(tracer.as_ref(), &r, e, rs))
+                    .map(|e| warp_view_with(tracer.as_ref(), &r, e, &wo))
                     .collect();
-                let p: f64 = views
+                let pe: Vec<f64> = views
                     .iter()
                     .zip(&truths)
-                    .map(|(v, t)| score(&v.image, t).unwrap().psnr / 2.0)
-                    .sum();
+                    .map(|(v, t)| score(&v.image, t).unwrap().psnr)
+                    .collect();
+                let p = (pe[0] + pe[1]) / 2.0;
                 // Error split of the left eye.
-                let v = &views[0];
+                let v = &views[ei];
                 let tm = tonemap_image(&v.image, &SCORE_TONEMAP);
                 // classes: hit L0 right, hit L0 wrong, hit L1 right, hit L1 wrong, occl, miss
                 let mut se = [0f64; 6];
+                let (mut hx, mut hy) = ([0f64; 16], [0f64; 9]);
                 let mut cnt = [0usize; 6];
                 let mut heat = vec![Vec3::ZERO; (w * h) as usize];
                 for y in 0..h {
@@ -120,7 +135,7 @@ fn diagnose_stereo_warp() {
                         let e2 = e.length_squared() as f64 / 3.0;
                         heat[i] = e;
                         let film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-                        let cr = eyes[0].generate_ray(film, Vec2::splat(0.5), 1).unwrap();
+                        let cr = eyes[ei].generate_ray(film, Vec2::splat(0.5), 1).unwrap();
                         let c = match tracer.trace(&cr.ray, &mut Default::default()) {
                             TraceResult::Hit {
                                 layer, position, ..
@@ -135,6 +150,10 @@ fn diagnose_stereo_warp() {
                             TraceResult::Miss => 5,
                         };
                         debug_assert!(matches!(v.kinds[i], HitKind::Hit(_)) == (c < 4));
+                        if c == 3 {
+                            hx[(x * 16 / w) as usize] += e2;
+                            hy[(y * 9 / h) as usize] += e2;
+                        }
                         se[c] += e2;
                         cnt[c] += 1;
                     }
@@ -153,14 +172,27 @@ fn diagnose_stereo_warp() {
                     })
                     .collect();
                 eprintln!(
-                    "{m} {layers}L {rs:?}: {p:.2} dB | left MSE {:.5} | {}",
+                    "{m} {layers}L {rs:?} guard {guard}: {p:.2} dB (L {:.2} R {:.2}) | left MSE {:.5} | {}",
+                    pe[0],
+                    pe[1],
                     total / n,
                     split.join(", ")
+                );
+                let nrm = |v: &[f64]| -> Vec<u32> {
+                    v.iter().map(|e| (100.0 * e / total) as u32).collect()
+                };
+                eprintln!(
+                    "  L1bad err% by x/16: {:?} by y/9: {:?}",
+                    nrm(&hx),
+                    nrm(&hy)
                 );
                 if let Some(dir) = &out {
                     let img =
                         Image::from_vec(w, h, heat.iter().map(|e| *e * 4.0).collect()).unwrap();
-                    let path = format!("{dir}/{}_{m}_{layers}L_{rs:?}_err.png", scene.name);
+                    let path = format!(
+                        "{dir}/{}_{m}_{layers}L_{rs:?}_{guard}_eye{ei}_err.png",
+                        scene.name
+                    );
                     let lin = ToneMapping {
                         exposure: 0.0,
                         tonemap: Tonemap::Clamp,

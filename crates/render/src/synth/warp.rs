@@ -28,7 +28,7 @@ use std::time::Instant;
 use glam::{UVec2, Vec2, Vec3};
 use parallax_core::{Image, Rgb};
 use parallax_scene::camera::{CameraModel, Pinhole};
-use parallax_screen::{ScreenTracer, TraceResult, TraceStats};
+use parallax_screen::{DdaOptions, DdaTracer, ScreenTracer, TraceResult, TraceStats};
 use rayon::prelude::*;
 
 use super::layers::Reference;
@@ -157,16 +157,44 @@ impl WarpedView {
 /// Traces every pixel-centre ray of `target` with `tracer` (built over `reference`'s layers)
 /// and fetches colours from `reference` with [`Resample::default`].
 pub fn warp_view(tracer: &dyn ScreenTracer, reference: &Reference, target: &Pinhole) -> WarpedView {
-    warp_view_with(tracer, reference, target, Resample::default())
+    warp_view_with(tracer, reference, target, &WarpOptions::default())
 }
 
-/// [`warp_view`] with a choice of colour resampling.
+/// Options of [`warp_view_with`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct WarpOptions {
+    pub resample: Resample,
+    /// Layer-0 crack guard (module docs): re-check answers from layers 1.. against layer 0's
+    /// thin shell.
+    pub layer0_guard: bool,
+}
+
+impl Default for WarpOptions {
+    fn default() -> Self {
+        Self {
+            resample: Resample::default(),
+            layer0_guard: true,
+        }
+    }
+}
+
+/// [`warp_view`] with a choice of colour resampling and crack guard.
 pub fn warp_view_with(
     tracer: &dyn ScreenTracer,
     reference: &Reference,
     target: &Pinhole,
-    resample: Resample,
+    opts: &WarpOptions,
 ) -> WarpedView {
+    let resample = opts.resample;
+    let guard = (opts.layer0_guard && reference.layers.len() > 1)
+        .then(|| {
+            let o = DdaOptions {
+                layers: 1,
+                ..DdaOptions::default()
+            };
+            DdaTracer::new(&reference.cube, &reference.layers[..1], &o).ok()
+        })
+        .flatten();
     let (w, h) = (target.width, target.height);
     let n = w as usize * h as usize;
     let mut image = vec![Vec3::ZERO; n];
@@ -187,7 +215,10 @@ pub fn warp_view_with(
                     continue;
                 };
                 let mut s = TraceStats::default();
-                let r = tracer.trace(&cr.ray, &mut s);
+                let mut r = tracer.trace(&cr.ray, &mut s);
+                if let Some(g) = &guard {
+                    r = guard_deep(reference, g, &cr.ray, r, &mut s);
+                }
                 let tests = s.box_tests + s.plane_tests;
                 wk[x] = (if tests > 0 { tests } else { s.steps }).min(u32::MAX as u64) as u32;
                 total += s;
@@ -205,6 +236,55 @@ pub fn warp_view_with(
         ms,
     }
 }
+
+/// The layer-0 guard of an answer `r` from layer 1 or deeper (module docs): layer 0's
+/// occlusion volume at the entry pixel when the ray enters the reference frustum through a
+/// side face already behind layer 0 (its true surface lies outside the captured view); for a
+/// hit, layer 0's thin-shell hit when the DDA over layer 0 finds one before it; else `r`.
+fn guard_deep(
+    reference: &Reference,
+    guard: &DdaTracer,
+    ray: &parallax_core::Ray,
+    r: TraceResult,
+    stats: &mut TraceStats,
+) -> TraceResult {
+    let deep = match r {
+        TraceResult::Hit { layer, .. } | TraceResult::OcclusionVolume { layer, .. } => layer >= 1,
+        TraceResult::Miss => false,
+    };
+    if !deep {
+        return r;
+    }
+    if let Some(seg) = reference.cube.clip_ray(ray)
+        && seg.p0.z > 1e-4
+    {
+        let g0 = &reference.layers[0];
+        let (w, h) = (g0.width(), g0.height());
+        let px = ((seg.p0.x * w as f32) as u32).min(w - 1);
+        let py = ((seg.p0.y * h as f32) as u32).min(h - 1);
+        let d0 = g0.depth[g0.index(px, py)];
+        if d0.is_finite() && d0 > 0.0 && seg.w0 as f32 > d0 * (1.0 + ENTRY_BEHIND_REL) {
+            return TraceResult::OcclusionVolume {
+                layer: 0,
+                pixel: UVec2::new(px, py),
+                t: seg.t0,
+            };
+        }
+    }
+    let Some(t) = r.hit_t() else {
+        return r;
+    };
+    let r0 = guard.trace(ray, stats);
+    if r0.hit_t().is_some_and(|t0| t0 < t) {
+        r0
+    } else {
+        r
+    }
+}
+
+/// A ray entering the cube through a side face more than this fraction of layer 0's depth
+/// behind layer 0 entered from behind it.
+const ENTRY_BEHIND_REL: f32 = 0.01;
 
 /// The colour and kind of one trace result.
 #[inline]
