@@ -20,9 +20,10 @@
 //!
 //! Result mapping: the hit's depth is the layer depth clamped to the step's ray-depth interval;
 //! `t` and the position are the ray's at that depth. A ray that ends (left the frustum, or ran
-//! out of `max_steps`) without a hit but went more than `z_thickness` behind the deepest used
-//! layer's surface reports [`TraceResult::OcclusionVolume`] at the first such step (the marcher
-//! has no information there); otherwise [`TraceResult::Miss`].
+//! out of `max_steps`) without a hit but went more than `z_thickness` behind the deepest
+//! *covered* layer of the pixel (layer 0 where layer 1 is empty) reports
+//! [`TraceResult::OcclusionVolume`] at the first such step (the marcher has no information
+//! there); otherwise [`TraceResult::Miss`].
 //!
 //! **`z_thickness` default 0.1 m**: a pixel's depth is a point sample, and the surface inside
 //! the pixel (and the neighbours the 1-pixel-wide DDA line skips) lies within a few cm of it
@@ -203,8 +204,19 @@ impl DdaTracer {
                     );
                 }
             }
-            if occ.is_none() && zmin > d[L - 1] + thick {
-                occ = Some(((s - half).max(0.0), (L - 1) as u32, UVec2::new(ix, iy)));
+            // The deepest *covered* layer of the pixel: where layer 1 is empty (nothing
+            // captured behind layer 0) a ray behind layer 0 is in layer 0's occlusion volume.
+            // Testing the empty layer 1 (`+inf`) instead never flagged it, so such rays ended
+            // as misses (environment colour): on the atrium stereo pair (1600x900) that turned
+            // 0.2% of the pixels into misses carrying half of the squared error (2 layers
+            // 26.7 dB against 28.9 dB with 1 layer).
+            let deepest = if L > 1 && !d[L - 1].is_finite() {
+                0
+            } else {
+                L - 1
+            };
+            if occ.is_none() && zmin > d[deepest] + thick {
+                occ = Some(((s - half).max(0.0), deepest as u32, UVec2::new(ix, iy)));
             }
             z_prev = z_next;
             s += ds;

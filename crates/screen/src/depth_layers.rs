@@ -415,7 +415,8 @@ pub(crate) type LayerHit = (f32, u32, UVec2);
 /// Cascade over layers (Widmer et al. 2015, §4.1): layer 0 is traced first; a deeper layer is
 /// traced only when the previous one reported an occlusion-volume entry before its hit (or
 /// without a hit), and only from that entry on. Returns the nearest hit over the traced
-/// layers `(s, layer, pixel)` and the last traced layer's occlusion entry.
+/// layers `(s, layer, pixel)` and the deepest traced layer's occlusion entry (a layer without
+/// one keeps the previous layer's).
 pub(crate) fn cascade(
     layers: usize,
     mut trace_layer: impl FnMut(usize, f32, f32) -> LayerOutcome,
@@ -431,7 +432,12 @@ pub(crate) fn cascade(
         {
             best = Some((s, li as u32, px));
         }
-        occ = r.occlusion.map(|(s, px)| (s, li as u32, px));
+        // A deeper layer that reports no occlusion entry (e.g. empty where the ray passes)
+        // keeps the shallower layer's: the ray is still behind that layer's surface with no
+        // information (replacing it by `None` turned such rays into misses).
+        if let Some((s, px)) = r.occlusion {
+            occ = Some((s, li as u32, px));
+        }
         match (r.occlusion, best) {
             (Some((so, _)), Some((sh, _, _))) if so < sh => start = so,
             (Some((so, _)), None) => start = so,

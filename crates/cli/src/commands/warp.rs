@@ -19,7 +19,7 @@ use parallax_render::synth::method::NormalSource;
 use parallax_render::synth::method::{Method, MethodOptions};
 use parallax_render::synth::score::SCORE_TONEMAP;
 use parallax_render::synth::stereo::warp_stereo;
-use parallax_render::synth::warp::WarpedView;
+use parallax_render::synth::warp::{Resample, WarpOptions, WarpedView};
 use parallax_scene::camera::Pinhole;
 
 use crate::args::ViewArgs;
@@ -57,6 +57,12 @@ pub struct SynthArgs {
     /// (default: never, background triangles stretch over disocclusions).
     #[arg(long)]
     pub mesh_max_rel_jump: Option<f32>,
+    /// Tracers: nearest-pixel colour of a hit instead of depth-aware bilinear resampling.
+    #[arg(long)]
+    pub nearest: bool,
+    /// Tracers: no layer-0 guard of answers from deeper layers.
+    #[arg(long)]
+    pub no_layer0_guard: bool,
     /// Do not render the BVH ground truth (no PSNR / SSIM).
     #[arg(long)]
     pub no_score: bool,
@@ -103,6 +109,14 @@ impl SynthArgs {
             max_levels: None,
             inpaint: self.inpaint,
             mesh_max_rel_jump: jump,
+            warp: WarpOptions {
+                resample: if self.nearest {
+                    Resample::Nearest
+                } else {
+                    Resample::Bilinear
+                },
+                layer0_guard: !self.no_layer0_guard,
+            },
         })
     }
 }

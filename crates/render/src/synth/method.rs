@@ -26,7 +26,7 @@ use parallax_scene::camera::Pinhole;
 use super::SynthError;
 use super::layers::Reference;
 use super::mesh_warp::GridMesh;
-use super::warp::{WarpedView, warp_view};
+use super::warp::{WarpOptions, WarpedView, warp_view_with};
 
 /// A view-synthesis method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
@@ -108,6 +108,7 @@ impl FromStr for Method {
 /// | `max_levels` | Option<u32> | None (full) | quadtree | levels of the tree |
 /// | `inpaint` | bool | false | quadtree | single-layer inpainting traversal (§4.1) |
 /// | `mesh_max_rel_jump` | f32 | inf | mesh | split grid triangles whose depths differ by more than this fraction |
+/// | `warp` | [`WarpOptions`] | bilinear + guard | all tracers | colour resampling and layer-0 guard of [`super::warp`] |
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct MethodOptions {
     #[serde(skip)]
@@ -119,6 +120,7 @@ pub struct MethodOptions {
     pub max_levels: Option<u32>,
     pub inpaint: bool,
     pub mesh_max_rel_jump: f32,
+    pub warp: WarpOptions,
 }
 
 impl Default for MethodOptions {
@@ -132,6 +134,7 @@ impl Default for MethodOptions {
             max_levels: None,
             inpaint: false,
             mesh_max_rel_jump: f32::INFINITY,
+            warp: WarpOptions::default(),
         }
     }
 }
@@ -219,7 +222,7 @@ fn brute(
 
 /// A built method: a screen-space tracer, or the grid mesh of the forward warp.
 pub enum Synthesizer {
-    Tracer(Box<dyn ScreenTracer>),
+    Tracer(Box<dyn ScreenTracer>, WarpOptions),
     Mesh(GridMesh),
 }
 
@@ -232,14 +235,17 @@ impl Synthesizer {
     ) -> Result<Self, SynthError> {
         Ok(match method {
             Method::Mesh => Synthesizer::Mesh(GridMesh::build(reference, opts.mesh_max_rel_jump)?),
-            m => Synthesizer::Tracer(build_tracer(m, &reference.cube, &reference.layers, opts)?),
+            m => Synthesizer::Tracer(
+                build_tracer(m, &reference.cube, &reference.layers, opts)?,
+                opts.warp,
+            ),
         })
     }
 
     /// Synthesises `target`'s view of `reference`.
     pub fn view(&self, reference: &Reference, target: &Pinhole) -> Result<WarpedView, SynthError> {
         match self {
-            Synthesizer::Tracer(t) => Ok(warp_view(t.as_ref(), reference, target)),
+            Synthesizer::Tracer(t, w) => Ok(warp_view_with(t.as_ref(), reference, target, w)),
             Synthesizer::Mesh(m) => m.warp(target),
         }
     }

@@ -6,8 +6,8 @@
 //! pinhole view, every layer sample shaded with the reference renderer's shading so each
 //! layer has a colour image, plus the fitted unit cube (§3.2). A **tracer** built over the
 //! layers ([`method::build_tracer`], the one factory of every screen-space structure) answers
-//! each target pixel's ray; [`warp::warp_view`] turns the answers into colour (hit: the colour
-//! of the hit layer pixel; miss: the environment; occlusion volume: the colour of the crossed
+//! each target pixel's ray; [`warp::warp_view`] turns the answers into colour (hit: the hit
+//! layer's colour resampled depth-aware bilinearly at the hit's sub-pixel position; miss: the environment; occlusion volume: the colour of the crossed
 //! pixel — the single-layer inpainting of §4.1). [`mesh_warp`] forward-warps layer 0 as a
 //! grid mesh instead (§5.1, "one vertex per input image pixel"). Every result is scored
 //! against the BVH reference render of the same camera ([`score`]).

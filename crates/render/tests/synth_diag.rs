@@ -1,0 +1,205 @@
+//! Diagnostics of stereo-warp quality (ignored; run in release):
+//! `SYNTH_DIAG_SCENE=atrium SYNTH_DIAG_OUT=/tmp/x cargo test --release -p parallax-render
+//! --test synth_diag -- --ignored --nocapture`. For every method x layers x resampling it prints
+//! the PSNR and splits the squared error (display values) of the left eye by answer kind and by
+//! whether the answer is the BVH's surface (hit within 1% of the BVH hit's depth). It also
+//! prints the PSNR of the BVH truth shaded with the *reference* eye's view direction (the cost
+//! of view-dependent shading that any reuse of reference shading pays) and writes error heat
+//! maps to `SYNTH_DIAG_OUT` when set.
+
+use glam::{Vec2, Vec3};
+use parallax_bvh::{Bvh, Hit};
+use parallax_core::image::png::{ToneMapping, Tonemap, tonemap_image, write_png};
+use parallax_core::{Image, Ray, Rgb};
+use parallax_render::reference::render_gbuffer;
+use parallax_render::reference::shade::Shader;
+use parallax_render::synth::method::{Method, MethodOptions, build_tracer};
+use parallax_render::synth::score::{SCORE_TONEMAP, ground_truth};
+use parallax_render::synth::stereo::stereo_eyes;
+use parallax_render::synth::warp::{HitKind, Resample, WarpOptions, warp_view_with};
+use parallax_render::synth::{Shading, capture_reference, score};
+use parallax_scene::camera::{Camera, CameraModel, Pinhole};
+use parallax_scene::{CameraDesc, Scene};
+use parallax_screen::TraceResult;
+
+fn setup() -> (Scene, CameraDesc, u32, u32) {
+    let name = std::env::var("SYNTH_DIAG_SCENE").unwrap_or_else(|_| "atrium".into());
+    let w: u32 = std::env::var("SYNTH_DIAG_W").map_or(1600, |s| s.parse().unwrap());
+    let h: u32 = std::env::var("SYNTH_DIAG_H").map_or(900, |s| s.parse().unwrap());
+    let scene = Scene::load(&name).unwrap();
+    let desc = if name.contains("sponza") {
+        CameraDesc::new(
+            Vec3::new(-9.0, 3.5, 0.0),
+            Vec3::new(8.0, 5.0, 0.0),
+            Vec3::Y,
+            60.0,
+        )
+    } else {
+        scene.camera(None).unwrap()
+    };
+    (scene, desc, w, h)
+}
+
+/// The truth shaded with the reference eye's view direction at the eye's BVH hit.
+fn truth_ref_dir(scene: &Scene, bvh: &Bvh, eye: &Pinhole, ref_pos: Vec3) -> Image<Rgb> {
+    let shader = Shader::new(scene, bvh);
+    let (w, h) = (eye.width, eye.height);
+    let mut out = vec![scene.environment; (w * h) as usize];
+    for y in 0..h {
+        for x in 0..w {
+            let film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+            let cr = eye.generate_ray(film, Vec2::splat(0.5), 1).unwrap();
+            let Some(hit) = bvh.closest_hit(&cr.ray) else {
+                continue;
+            };
+            let p = cr.ray.origin + cr.ray.dir * hit.t;
+            let d = p - ref_pos;
+            let ray = Ray::new(ref_pos, d.normalize());
+            let hit2 = Hit {
+                t: d.length(),
+                ..hit
+            };
+            let mut rng = Shading::Fixed.rng(0, x, y, 0);
+            let mut rays = 0;
+            out[(y * w + x) as usize] = shader.radiance_from_hit(ray, hit2, &mut rng, &mut rays);
+        }
+    }
+    Image::from_vec(w, h, out).unwrap()
+}
+
+#[test]
+#[ignore]
+fn diagnose_stereo_warp() {
+    let (scene, desc, w, h) = setup();
+    let bvh = Bvh::try_build(&scene.mesh).unwrap();
+    let ipd = 0.065;
+    let eyes = stereo_eyes(&desc, w, h, ipd).unwrap();
+    let truths: Vec<_> = eyes
+        .iter()
+        .map(|e| ground_truth(&scene, &bvh, e, Shading::Fixed, 0))
+        .collect();
+    let out = std::env::var("SYNTH_DIAG_OUT").ok();
+    let cam = Pinhole::new(&desc, w, h).unwrap();
+    if std::env::var("SYNTH_DIAG_VIEWDEP").is_ok() {
+        let t = truth_ref_dir(&scene, &bvh, &eyes[0], cam.frame.position);
+        eprintln!(
+            "view-dependent shading: truth vs truth shaded from the reference eye: {:.2} dB",
+            score(&t, &truths[0]).unwrap().psnr
+        );
+    }
+    let ei: usize = std::env::var("SYNTH_DIAG_EYE").map_or(0, |s| s.parse().unwrap());
+    let g = render_gbuffer(&scene, &bvh, &Camera::Pinhole(eyes[ei].clone()));
+    let tm_truth = tonemap_image(&truths[ei], &SCORE_TONEMAP);
+    let methods: Vec<Method> = std::env::var("SYNTH_DIAG_METHODS")
+        .map(|s| Method::parse_list(&s).unwrap())
+        .unwrap_or(vec![Method::QuadTree, Method::Brute, Method::Dda]);
+    for layers in [1usize, 2] {
+        let r = capture_reference(&scene, &bvh, &cam, layers, Shading::Fixed, 0).unwrap();
+        for &m in &methods {
+            let tracer = build_tracer(m, &r.cube, &r.layers, &MethodOptions::default()).unwrap();
+            let variants = [
+                (Resample::Nearest, false),
+                (Resample::Bilinear, false),
+                (Resample::Bilinear, true),
+            ];
+            for (rs, guard) in variants {
+                if guard && layers == 1 {
+                    continue;
+                }
+                let wo = WarpOptions {
+                    resample: rs,
+                    layer0_guard: guard,
+                };
+                let views: Vec<_> = eyes
+                    .iter()
+                    .map(|e| warp_view_with(tracer.as_ref(), &r, e, &wo))
+                    .collect();
+                let pe: Vec<f64> = views
+                    .iter()
+                    .zip(&truths)
+                    .map(|(v, t)| score(&v.image, t).unwrap().psnr)
+                    .collect();
+                let p = (pe[0] + pe[1]) / 2.0;
+                // Error split of the left eye.
+                let v = &views[ei];
+                let tm = tonemap_image(&v.image, &SCORE_TONEMAP);
+                // classes: hit L0 right, hit L0 wrong, hit L1 right, hit L1 wrong, occl, miss
+                let mut se = [0f64; 6];
+                let (mut hx, mut hy) = ([0f64; 16], [0f64; 9]);
+                let mut cnt = [0usize; 6];
+                let mut heat = vec![Vec3::ZERO; (w * h) as usize];
+                for y in 0..h {
+                    for x in 0..w {
+                        let i = (y * w + x) as usize;
+                        let e = (tm.data()[i] - tm_truth.data()[i]).abs();
+                        let e2 = e.length_squared() as f64 / 3.0;
+                        heat[i] = e;
+                        let film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                        let cr = eyes[ei].generate_ray(film, Vec2::splat(0.5), 1).unwrap();
+                        let c = match tracer.trace(&cr.ray, &mut Default::default()) {
+                            TraceResult::Hit {
+                                layer, position, ..
+                            } => {
+                                let s = g.get(x, y);
+                                let ok = s.is_hit()
+                                    && (position - s.position).length()
+                                        < 0.01 * (s.position - cr.ray.origin).length();
+                                (layer.min(1) * 2) as usize + (!ok) as usize
+                            }
+                            TraceResult::OcclusionVolume { .. } => 4,
+                            TraceResult::Miss => 5,
+                        };
+                        debug_assert!(matches!(v.kinds[i], HitKind::Hit(_)) == (c < 4));
+                        if c == 3 {
+                            hx[(x * 16 / w) as usize] += e2;
+                            hy[(y * 9 / h) as usize] += e2;
+                        }
+                        se[c] += e2;
+                        cnt[c] += 1;
+                    }
+                }
+                let n = (w * h) as f64;
+                let total: f64 = se.iter().sum();
+                let names = ["L0ok", "L0bad", "L1ok", "L1bad", "occ", "miss"];
+                let split: Vec<String> = (0..6)
+                    .map(|k| {
+                        format!(
+                            "{} {:.2}%px {:.1}%err",
+                            names[k],
+                            100.0 * cnt[k] as f64 / n,
+                            100.0 * se[k] / total
+                        )
+                    })
+                    .collect();
+                eprintln!(
+                    "{m} {layers}L {rs:?} guard {guard}: {p:.2} dB (L {:.2} R {:.2}) | left MSE {:.5} | {}",
+                    pe[0],
+                    pe[1],
+                    total / n,
+                    split.join(", ")
+                );
+                let nrm = |v: &[f64]| -> Vec<u32> {
+                    v.iter().map(|e| (100.0 * e / total) as u32).collect()
+                };
+                eprintln!(
+                    "  L1bad err% by x/16: {:?} by y/9: {:?}",
+                    nrm(&hx),
+                    nrm(&hy)
+                );
+                if let Some(dir) = &out {
+                    let img =
+                        Image::from_vec(w, h, heat.iter().map(|e| *e * 4.0).collect()).unwrap();
+                    let path = format!(
+                        "{dir}/{}_{m}_{layers}L_{rs:?}_{guard}_eye{ei}_err.png",
+                        scene.name
+                    );
+                    let lin = ToneMapping {
+                        exposure: 0.0,
+                        tonemap: Tonemap::Clamp,
+                    };
+                    let _ = write_png(&path, &img, &lin);
+                }
+            }
+        }
+    }
+}
