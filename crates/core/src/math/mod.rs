@@ -10,7 +10,8 @@ mod triangle;
 
 pub use aabb::{Aabb, ROBUST_FAR_SCALE};
 pub use beam::{
-    BEAM_TOLERANCE, Beam, BeamBuilder, BeamTest, MIN_DOMINANT, PreparedBeam, plane_range1, plane_range2,
+    BEAM_TOLERANCE, Beam, BeamBuilder, BeamTest, MIN_DOMINANT, PreparedBeam, plane_range1,
+    plane_range2,
 };
 pub use frame::Frame;
 pub use frustum::{Containment, Frustum};
