@@ -102,7 +102,7 @@ pub use packet::PACKET_SIZE;
 pub use reference::{brute_force_all, brute_force_closest};
 pub use stats::{Counter, NoStats, TraversalStats};
 pub use tri::Tri;
-pub use tri4::Tri4;
+pub use tri4::{Tri4, Tri4Hits, Tri4Ray};
 
 /// A ray-triangle hit: the scene's triangle index, the ray parameter and the barycentrics of the
 /// triangle's vertices 1 and 2 (`P = (1 - u - v) * p0 + u * p1 + v * p2`).

@@ -6,7 +6,7 @@
 //! - The triangle list is the tile cull's leaves in near-depth order; a leaf is one (or more)
 //!   SoA block of four triangles of the BVH ([`Tri4`]), tested four at a time with the
 //!   watertight test of Woop et al. 2013 in exactly the f32 operations of the BVH's own leaf
-//!   test (`parallax_bvh` `tri4.rs`; lanes with an exactly-zero edge function fall back to the
+//!   test (`parallax_bvh::Tri4Ray`, shared; lanes with an exactly-zero edge function fall back to the
 //!   scalar [`WatertightRay::intersect_within`]), and the same tie-break (lower index in
 //!   `Bvh::triangles` on equal `t`): so every hit equals the per-ray BVH traversal's
 //!   ([`super::trace_per_ray`]) whenever the tile list holds the ray's closest triangle.
@@ -22,9 +22,9 @@
 
 use glam::{Vec3, Vec4};
 use parallax_bvh::Bvh;
-use parallax_bvh::Tri4;
 use parallax_bvh::beam::LeafRef;
 use parallax_bvh::node::{leaf_count, leaf_first};
+use parallax_bvh::{Tri4, Tri4Hits, Tri4Ray};
 use parallax_core::Aabb;
 use parallax_core::NO_ID;
 use parallax_core::math::ROBUST_FAR_SCALE;
@@ -33,64 +33,6 @@ use parallax_core::math::{PreparedBeam, WatertightRay};
 use super::SampleSet;
 use super::packet::run_packets;
 use parallax_core::Ray;
-
-/// A ray prepared for the 4-triangle test (the shear of Woop et al. 2013, splatted).
-struct Ray4 {
-    wt: WatertightRay,
-    org: [Vec4; 3],
-    k: [usize; 3],
-    sx: Vec4,
-    sy: Vec4,
-    sz: Vec4,
-    t_min: Vec4,
-}
-
-impl Ray4 {
-    #[inline(always)]
-    fn new(wt: WatertightRay) -> Self {
-        let o = wt.origin;
-        Self {
-            org: [Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z)],
-            k: [wt.kx, wt.ky, wt.kz],
-            sx: Vec4::splat(wt.sx),
-            sy: Vec4::splat(wt.sy),
-            sz: Vec4::splat(wt.sz),
-            t_min: Vec4::splat(wt.t_min),
-            wt,
-        }
-    }
-
-    /// `(hit mask, exact mask, t)`: the arithmetic of `parallax_bvh`'s `Tri4Ray::intersect`.
-    #[inline(always)]
-    fn intersect(&self, b: &Tri4, mask: u32, t_lim: f32) -> (u32, u32, Vec4) {
-        let [kx, ky, kz] = self.k;
-        let proj = |v: usize| {
-            let p = &b.p[v];
-            let az = p[kz] - self.org[kz];
-            let x = (p[kx] - self.org[kx]) - self.sx * az;
-            let y = (p[ky] - self.org[ky]) - self.sy * az;
-            (x, y, self.sz * az)
-        };
-        let (ax, ay, az) = proj(0);
-        let (bx, by, bz) = proj(1);
-        let (cx, cy, cz) = proj(2);
-        let u = cx * by - cy * bx;
-        let v = ax * cy - ay * cx;
-        let w = bx * ay - by * ax;
-        let zero = Vec4::ZERO;
-        let exact = (u.cmpeq(zero) | v.cmpeq(zero) | w.cmpeq(zero)).bitmask() & mask;
-        let neg = u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero);
-        let pos = u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero);
-        let det = u + v + w;
-        let t_scaled = u * az + v * bz + w * cz;
-        let inv = Vec4::ONE / det;
-        let t = t_scaled * inv;
-        let ok = (neg & pos).bitmask() ^ 0xF;
-        let nz = det.cmpne(zero).bitmask();
-        let in_range = (t.cmpgt(self.t_min) & t.cmplt(Vec4::splat(t_lim))).bitmask();
-        (ok & nz & in_range & mask & !exact, exact, t)
-    }
-}
 
 /// Keeps `(t, tri)` if it is closer than the best so far, or as close with a lower triangle
 /// index (the BVH's tie-break).
@@ -237,7 +179,7 @@ pub fn closest_one(
     let a = beam.axis;
     let s = beam.sign;
     let ordered = !beam.everything;
-    let r4 = Ray4::new(WatertightRay::new(ray));
+    let r4 = Tri4Ray::new(WatertightRay::new(ray));
     let (oa, da) = (ray.origin[a], ray.dir[a]);
     let inv = ray.dir.recip();
     let org = [
@@ -274,7 +216,9 @@ pub fn closest_one(
                 } else {
                     best_t.next_up()
                 };
-                let (hit, exact, tv) = r4.intersect(b, mask, limit);
+                let Tri4Hits {
+                    hit, exact, t: tv, ..
+                } = r4.intersect(b, mask, limit);
                 if hit != 0 {
                     let ta = tv.to_array();
                     let mut m = hit;
