@@ -33,7 +33,7 @@ pub use hiz::{HiZOptions, HiZTracer};
 pub use minmax::{MinMaxOptions, MinMaxTracer};
 pub use planes::{LayerPlanes, NormalSource};
 pub use quadtree::{LayerMode, QuadTree, QuadTreeOptions, QuadTreeTracer};
-pub use space::{CubeSegment, UnitCube};
+pub use space::{CubeNear, CubeSegment, UnitCube};
 pub use tracer::{ScreenTracer, TraceResult, TraceStats};
 
 /// Errors of building screen-space structures.

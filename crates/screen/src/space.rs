@@ -40,6 +40,21 @@ use parallax_scene::camera::Pinhole;
 
 use crate::ScreenError;
 
+/// Where [`UnitCube::fit`] puts the cube's near plane, i.e. where every traced ray starts.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub enum CubeNear {
+    /// Half the nearest captured depth (our default): nothing can be hit in front of the
+    /// nearest captured surface, so every tracer starts its rays there — a global empty-space
+    /// skip that shortens screen-space rays (most of all the DDA's march). Not in the paper.
+    #[default]
+    Fitted,
+    /// A camera near plane at this view depth in metres (Widmer et al. 2015, §3.2: the NDC
+    /// cube holds "all potential scene points", i.e. the camera frustum, so rays start at the
+    /// camera's near plane — the setting of their Tables 2-4). Never placed behind half the
+    /// nearest captured depth, so every captured point stays inside the cube.
+    Camera(f32),
+}
+
 /// The unit cube of a pinhole reference view between `near` and `far` view depth.
 #[derive(Clone, Debug, PartialEq)]
 pub struct UnitCube {
@@ -134,9 +149,21 @@ impl UnitCube {
 
     /// The cube with `near = min_depth / 2` and `far = 2 max_depth` over the finite positive
     /// values of `depths` (view depths of the captured layers); errors when there is none.
+    /// Same as [`Self::fit`] with [`CubeNear::Fitted`].
     pub fn fit_depths<'a>(
         camera: &Pinhole,
         depths: impl IntoIterator<Item = &'a [f32]>,
+    ) -> Result<Self, ScreenError> {
+        Self::fit(camera, depths, CubeNear::Fitted)
+    }
+
+    /// The cube around the captured depths with its near plane chosen by `near`
+    /// ([`CubeNear`]) and `far = 2 max_depth`; errors when no depth is finite and positive,
+    /// or when a camera near plane is not finite and positive.
+    pub fn fit<'a>(
+        camera: &Pinhole,
+        depths: impl IntoIterator<Item = &'a [f32]>,
+        near: CubeNear,
     ) -> Result<Self, ScreenError> {
         let (mut lo, mut hi) = (f32::INFINITY, 0.0f32);
         for layer in depths {
@@ -150,7 +177,16 @@ impl UnitCube {
         if !lo.is_finite() {
             return Err(ScreenError::InvalidSpace("no captured depth".into()));
         }
-        Self::new(camera, lo * 0.5, hi * 2.0)
+        let near = match near {
+            CubeNear::Fitted => lo * 0.5,
+            CubeNear::Camera(n) if n.is_finite() && n > 0.0 => n.min(lo * 0.5),
+            CubeNear::Camera(n) => {
+                return Err(ScreenError::InvalidSpace(format!(
+                    "camera near plane {n} must be finite and positive"
+                )));
+            }
+        };
+        Self::new(camera, near, hi * 2.0)
     }
 
     /// World point -> homogeneous cube point (f64).
@@ -280,6 +316,23 @@ mod tests {
             .unwrap()
             .with_shift(Vec2::new(0.1, -0.05));
         UnitCube::new(&cam, 0.5, 20.0).unwrap()
+    }
+
+    #[test]
+    fn fit_places_the_near_plane() {
+        let cam = cube().camera;
+        let depths = [2.0f32, f32::INFINITY, 6.0, 0.0];
+        let fitted = UnitCube::fit(&cam, [&depths[..]], CubeNear::Fitted).unwrap();
+        assert_eq!((fitted.near, fitted.far), (1.0, 12.0));
+        assert_eq!(fitted, UnitCube::fit_depths(&cam, [&depths[..]]).unwrap());
+        let camera = UnitCube::fit(&cam, [&depths[..]], CubeNear::Camera(0.1)).unwrap();
+        assert_eq!((camera.near, camera.far), (0.1, 12.0));
+        // A near plane behind the nearest surface is pulled in front of it.
+        let pulled = UnitCube::fit(&cam, [&depths[..]], CubeNear::Camera(5.0)).unwrap();
+        assert_eq!(pulled.near, 1.0);
+        for bad in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+            assert!(UnitCube::fit(&cam, [&depths[..]], CubeNear::Camera(bad)).is_err());
+        }
     }
 
     #[test]
