@@ -12,14 +12,91 @@
 //! object. Motion is a function of time `t` (seconds), not of the previous frame: frame `t` is
 //! always rest pose × transform(t), so errors never accumulate.
 //!
-//! **Not done: glTF skins (linear blend skinning, the paper's animation).** The glTF loader only
-//! lists skins and animations ([`crate::load::AnimationInfo`]); joint weights, inverse bind
-//! matrices and animation samplers are not loaded, so scenes with skins are animated rigidly
-//! like any other scene file (their skins stay in the bind pose).
+//! glTF files with animation clips are posed by their own animation instead
+//! ([`crate::skin::GltfAnimation`]: node TRS channels, rigid node motion and linear blend
+//! skinning, the paper's animated characters). [`Animation`] is the choice between the two
+//! ([`Animation::for_scene`]), applied the same way ([`Animate`]).
+
+use std::sync::Arc;
 
 use glam::{Affine3A, Mat3, Vec3};
 
+use crate::skin::GltfAnimation;
 use crate::{ObjectRange, Scene, TriangleMesh};
+
+/// Something that poses a mesh at time `t` (seconds) from its rest pose.
+pub trait Animate {
+    fn apply(&self, mesh: &mut TriangleMesh, t: f32) -> Result<(), AnimationError>;
+}
+
+/// The animation of a scene: its glTF clips and skins when the file has any that move
+/// geometry, else the rigid props animation.
+#[derive(Clone, Debug)]
+pub enum Animation {
+    Rigid(RigidAnimation),
+    Gltf(Arc<GltfAnimation>),
+}
+
+impl Animation {
+    /// glTF animation when the scene carries one that moves vertices
+    /// ([`GltfAnimation::is_animated`]), else [`RigidAnimation::for_scene`].
+    pub fn for_scene(scene: &Scene) -> Self {
+        match &scene.gltf_animation {
+            Some(g) if g.is_animated() => Animation::Gltf(g.clone()),
+            _ => Animation::Rigid(RigidAnimation::for_scene(scene)),
+        }
+    }
+
+    /// Poses `mesh` at time `t` from the rest pose.
+    pub fn apply(&self, mesh: &mut TriangleMesh, t: f32) -> Result<(), AnimationError> {
+        match self {
+            Animation::Rigid(a) => a.apply(mesh, t),
+            Animation::Gltf(a) => a.apply(mesh, t),
+        }
+    }
+
+    /// Moving objects: rigid tracks, or glTF instances that move.
+    pub fn moving_objects(&self) -> usize {
+        match self {
+            Animation::Rigid(a) => a.tracks.len(),
+            Animation::Gltf(a) => a.instances.len(),
+        }
+    }
+
+    /// Number of vertices written per frame.
+    pub fn moving_vertices(&self, mesh: &TriangleMesh) -> usize {
+        match self {
+            Animation::Rigid(a) => a.moving_vertices(mesh),
+            Animation::Gltf(a) => a.moving_vertices(),
+        }
+    }
+
+    /// "rigid" or "gltf".
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Animation::Rigid(_) => "rigid",
+            Animation::Gltf(_) => "gltf",
+        }
+    }
+}
+
+impl Animate for Animation {
+    fn apply(&self, mesh: &mut TriangleMesh, t: f32) -> Result<(), AnimationError> {
+        Animation::apply(self, mesh, t)
+    }
+}
+
+impl Animate for RigidAnimation {
+    fn apply(&self, mesh: &mut TriangleMesh, t: f32) -> Result<(), AnimationError> {
+        RigidAnimation::apply(self, mesh, t)
+    }
+}
+
+impl Animate for GltfAnimation {
+    fn apply(&self, mesh: &mut TriangleMesh, t: f32) -> Result<(), AnimationError> {
+        GltfAnimation::apply(self, mesh, t)
+    }
+}
 
 /// Why an animation cannot be made or applied.
 #[derive(Debug, thiserror::Error, PartialEq)]

@@ -11,12 +11,14 @@ pub mod animation;
 pub mod builtin;
 pub mod camera;
 pub mod error;
+pub mod keyframes;
 pub mod light;
 pub mod load;
 pub mod material;
 pub mod mesh;
 pub mod path;
 pub mod scene;
+pub mod skin;
 pub mod texture;
 
 pub use error::{Result, SceneError};

@@ -74,8 +74,11 @@ pub struct Scene {
     pub cameras: Vec<NamedCamera>,
     /// The default camera path (60 frames for the built-ins).
     pub camera_path: Option<CameraPath>,
-    /// glTF skins and animations, parsed for later use (animation issue).
+    /// glTF skins and animations, listed.
     pub animations: Vec<crate::load::AnimationInfo>,
+    /// The glTF node animation and skins that pose `mesh` over time (glTF files with
+    /// animations or skinned meshes; see [`crate::skin`]).
+    pub gltf_animation: Option<std::sync::Arc<crate::skin::GltfAnimation>>,
 }
 
 impl Scene {

@@ -5,8 +5,10 @@
 //! goes through [`super::uri::resolve`] (no file outside the scene folder is read) and every
 //! accessor byte range is checked ([`super::gltf_accessor`]). The default scene's node hierarchy is walked
 //! (glTF 2.0 spec §3.5 "Nodes and hierarchy"): each mesh primitive instance becomes one
-//! [`ObjectRange`] of world-space triangles. Skinning and morph targets are not applied (the
-//! base pose is loaded); skins and animations are only listed in [`Scene::animations`].
+//! [`ObjectRange`] of world-space triangles. Skins and animation clips are loaded into
+//! [`Scene::gltf_animation`] ([`super::gltf_anim`]); skinned primitives are posed in their rest
+//! skeleton pose. Morph targets are not applied. Skins and animations are also listed in
+//! [`Scene::animations`].
 
 use std::path::Path;
 
@@ -15,6 +17,7 @@ use gltf::mesh::{Mode, Semantic};
 
 use super::AnimationInfo;
 use super::gltf_accessor::{read_indices, read_vec};
+use super::gltf_anim::{PrimInstance, load_animation};
 use super::gltf_material::convert_materials;
 use super::gltf_source::{load_buffers, parse_document, split_glb};
 use crate::{CameraDesc, Light, Material, NamedCamera, ObjectRange, Result, Scene, SceneError};
@@ -55,8 +58,20 @@ pub(crate) fn load(path: &Path, bytes: &[u8]) -> Result<Scene> {
             ..Scene::default()
         },
         default_material: None,
+        instances: Vec::new(),
     };
     b.walk()?;
+    let invalid = |message: String| SceneError::Invalid {
+        path: path.to_path_buf(),
+        message,
+    };
+    if let Some(anim) = load_animation(&doc, &buffers, &b.instances, b.scene.mesh.vertex_count())
+        .map_err(invalid)?
+    {
+        anim.apply_rest(&mut b.scene.mesh)
+            .map_err(|e| invalid(e.to_string()))?;
+        b.scene.gltf_animation = Some(std::sync::Arc::new(anim));
+    }
     for a in doc.animations() {
         b.scene.animations.push(AnimationInfo {
             name: a.name().unwrap_or("").to_string(),
@@ -85,6 +100,8 @@ struct Builder<'a> {
     scene: Scene,
     /// Index of the appended default material, once a primitive without material needs it.
     default_material: Option<u32>,
+    /// Every primitive instance emitted, for [`load_animation`].
+    instances: Vec<PrimInstance>,
 }
 
 impl Builder<'_> {
@@ -139,7 +156,7 @@ impl Builder<'_> {
                     } else {
                         base
                     };
-                    self.add_primitive(&mesh, &prim, world, name)?;
+                    self.add_primitive(&mesh, &prim, world, name, node.index())?;
                 }
             }
             if let Some(cam) = node.camera() {
@@ -160,6 +177,7 @@ impl Builder<'_> {
         prim: &gltf::Primitive,
         world: Mat4,
         name: String,
+        node: usize,
     ) -> Result<()> {
         // Points and lines carry no surface: skipped by design.
         if !matches!(
@@ -284,6 +302,14 @@ impl Builder<'_> {
         mesh_out
             .material_ids
             .resize(mesh_out.indices.len(), material);
+        self.instances.push(PrimInstance {
+            node,
+            mesh: mesh.index(),
+            prim: prim.index(),
+            object: mesh_out.objects.len(),
+            first_vertex: v0,
+            vertex_count: n as u32,
+        });
         mesh_out.objects.push(ObjectRange {
             name,
             first_triangle: t0,

@@ -47,7 +47,12 @@ impl Elements<'_> {
 
     /// Scalar element `i` as an unsigned index.
     fn u32(&self, i: usize) -> u32 {
-        let b = self.raw(i, 0);
+        self.uint(i, 0)
+    }
+
+    /// Component `c` of element `i` as an unsigned integer.
+    fn uint(&self, i: usize, c: usize) -> u32 {
+        let b = self.raw(i, c);
         match self.ty {
             DataType::U8 | DataType::I8 => b[0] as u32,
             DataType::U16 | DataType::I16 => u16::from_le_bytes([b[0], b[1]]) as u32,
@@ -233,6 +238,80 @@ pub(crate) fn read_indices(acc: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<
     let mut out = vec![0u32; acc.count()];
     visit(acc, buffers, 1, |i, e, j| out[i] = e.u32(j))
         .map_err(|m| format!("accessor {}: {m}", acc.index()))?;
+    Ok(out)
+}
+
+/// Number of components of an element of `dims`.
+pub(crate) fn components(dims: Dimensions) -> usize {
+    match dims {
+        Dimensions::Scalar => 1,
+        Dimensions::Vec2 => 2,
+        Dimensions::Vec3 => 3,
+        Dimensions::Vec4 | Dimensions::Mat2 => 4,
+        Dimensions::Mat3 => 9,
+        Dimensions::Mat4 => 16,
+    }
+}
+
+/// Reads any float-valued accessor of shape `dims` as `count * components(dims)` floats
+/// (element-major). `accept(ty, normalized)` says which component types the semantic allows
+/// (glTF 2.0 spec §3.7.2.1 for vertex attributes, §3.11 for animation samplers); normalised
+/// integers map to [0, 1] / [-1, 1]. `MAT4` of floats has no column padding; matrices of
+/// smaller types (padded columns) are not supported by this reader.
+pub(crate) fn read_floats(
+    acc: &gltf::Accessor,
+    buffers: &[Vec<u8>],
+    dims: Dimensions,
+    accept: impl Fn(DataType, bool) -> bool,
+) -> Result<Vec<f32>, String> {
+    let n = components(dims);
+    let padded = matches!(dims, Dimensions::Mat2 | Dimensions::Mat3)
+        || (dims == Dimensions::Mat4 && acc.data_type() != DataType::F32);
+    if acc.dimensions() != dims || !accept(acc.data_type(), acc.normalized()) || padded {
+        return Err(format!(
+            "accessor {} is {:?} {:?}{}, not an allowed {dims:?} type here",
+            acc.index(),
+            acc.dimensions(),
+            acc.data_type(),
+            if acc.normalized() { " normalized" } else { "" }
+        ));
+    }
+    precheck(acc, buffers, n)?;
+    let mut out = vec![0.0f32; acc.count() * n];
+    visit(acc, buffers, n, |i, e, j| {
+        for (c, v) in out[i * n..(i + 1) * n].iter_mut().enumerate() {
+            *v = e.f32(j, c);
+        }
+    })
+    .map_err(|m| format!("accessor {}: {m}", acc.index()))?;
+    Ok(out)
+}
+
+/// Reads a `VEC4` of unsigned, not normalised 8/16-bit integers (skin joint indices,
+/// glTF 2.0 spec §3.7.3.3) as `count` quadruples.
+pub(crate) fn read_uvec4(
+    acc: &gltf::Accessor,
+    buffers: &[Vec<u8>],
+) -> Result<Vec<[u32; 4]>, String> {
+    if acc.dimensions() != Dimensions::Vec4
+        || acc.normalized()
+        || !matches!(acc.data_type(), DataType::U8 | DataType::U16)
+    {
+        return Err(format!(
+            "accessor {} is {:?} {:?}, expected VEC4 of unsigned 8/16-bit integers",
+            acc.index(),
+            acc.dimensions(),
+            acc.data_type()
+        ));
+    }
+    precheck(acc, buffers, 4)?;
+    let mut out = vec![[0u32; 4]; acc.count()];
+    visit(acc, buffers, 4, |i, e, j| {
+        for (c, v) in out[i].iter_mut().enumerate() {
+            *v = e.uint(j, c);
+        }
+    })
+    .map_err(|m| format!("accessor {}: {m}", acc.index()))?;
     Ok(out)
 }
 

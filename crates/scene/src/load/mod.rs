@@ -5,7 +5,7 @@
 //!
 //! | extension      | loader        | notes                                                   |
 //! |----------------|---------------|---------------------------------------------------------|
-//! | `.gltf` `.glb` | `gltf.rs`     | node transforms, PBR materials, lights, cameras         |
+//! | `.gltf` `.glb` | `gltf.rs`     | node transforms, PBR materials, lights, cameras, skins and animations (`gltf_anim.rs`) |
 //! | `.obj`         | `obj.rs`      | MTL materials, `map_Kd` textures                        |
 //! | `.ply`         | `ply.rs`      | positions, optional normals, polygon faces; one material |
 //!
@@ -17,6 +17,7 @@ use crate::{Result, Scene, SceneError};
 
 mod gltf;
 mod gltf_accessor;
+mod gltf_anim;
 mod gltf_material;
 mod gltf_source;
 mod image_decode;
