@@ -18,7 +18,7 @@ use parallax_render::vr::reconstruct::pattern_image;
 use parallax_render::vr::resolve::ShadingMode;
 use parallax_render::vr::shade::ShadeOptions;
 use parallax_render::vr::{Sample, SampleSet};
-use parallax_scene::animation::RigidAnimation;
+use parallax_scene::animation::Animation;
 use parallax_scene::camera::{Camera, CameraModel, ModelKind};
 use serde::Serialize;
 
@@ -218,12 +218,13 @@ pub fn run(a: &VrArgs, quiet: bool) -> Result<()> {
     let build_ms = t.elapsed().as_secs_f64() * 1e3;
     let update = match a.time {
         Some(time) => {
-            let anim = RigidAnimation::for_scene(&scene);
+            let anim = Animation::for_scene(&scene);
             let u = update_scene(&anim, &mut scene.mesh, &mut bvh, time)?;
             if !quiet {
                 println!(
-                    "animate: {} objects ({} vertices) to t = {time} s in {:.2} ms, refit {:.2} ms",
-                    anim.tracks.len(),
+                    "animate ({}): {} objects ({} vertices) to t = {time} s in {:.2} ms, refit {:.2} ms",
+                    anim.kind(),
+                    anim.moving_objects(),
                     anim.moving_vertices(&scene.mesh),
                     u.animate_ms,
                     u.refit_ms

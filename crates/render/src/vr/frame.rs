@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use parallax_bvh::{Bvh, BvhError};
 use parallax_core::{Image, Rgb};
-use parallax_scene::animation::{AnimationError, RigidAnimation};
+use parallax_scene::animation::{Animate, AnimationError};
 use parallax_scene::camera::Camera;
 use parallax_scene::{Scene, SceneError, TriangleMesh};
 
@@ -112,9 +112,11 @@ pub struct UpdateTimings {
     pub refit_ms: f64,
 }
 
-/// Poses `mesh` at time `t` and refits `bvh` to it (§5.2).
+/// Poses `mesh` at time `t` and refits `bvh` to it (§5.2). `anim` is the scene's
+/// [`parallax_scene::animation::Animation`] (glTF clips and skins when the file has them, else
+/// the rigid props) or any one kind.
 pub fn update_scene(
-    anim: &RigidAnimation,
+    anim: &impl Animate,
     mesh: &mut TriangleMesh,
     bvh: &mut Bvh,
     t: f32,
