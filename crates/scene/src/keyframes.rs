@@ -115,7 +115,7 @@ impl Sampler {
     /// fraction of the interval; `None` when `t` is outside (clamped by the caller).
     fn locate(&self, t: f32) -> Option<(usize, f32)> {
         let n = self.times.len();
-        if n < 2 || !(t > self.times[0]) || t >= self.times[n - 1] {
+        if n < 2 || t.is_nan() || t <= self.times[0] || t >= self.times[n - 1] {
             return None;
         }
         // First index whose time is > t, minus one: 0 <= k < n - 1.
@@ -202,6 +202,7 @@ mod tests {
         assert_eq!(lin.sample_vec(1.5), Vec4::splat(0.5));
         assert_eq!(lin.sample_vec(3.0), Vec4::splat(2.0));
         assert_eq!(lin.sample_vec(9.0), Vec4::splat(3.0));
+        assert_eq!(lin.sample_vec(f32::NAN), Vec4::ZERO);
         let step = Sampler::new(Interpolation::Step, times, values, false).unwrap();
         assert_eq!(step.sample_vec(1.99), Vec4::ZERO);
         assert_eq!(step.sample_vec(2.0), Vec4::ONE);

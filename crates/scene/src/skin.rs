@@ -135,9 +135,10 @@ fn cofactor(m: Mat3) -> Mat3 {
 }
 
 impl GltfAnimation {
-    /// True when some clip has a channel (the scene has motion to play).
+    /// True when some clip has a channel and some instance can move (the scene has motion to
+    /// play).
     pub fn is_animated(&self) -> bool {
-        self.clips.iter().any(|c| !c.channels.is_empty())
+        !self.instances.is_empty() && self.clips.iter().any(|c| !c.channels.is_empty())
     }
 
     /// The active clip's duration (0 without clips).

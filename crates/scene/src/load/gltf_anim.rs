@@ -42,6 +42,9 @@ pub(crate) fn load_animation(
     instances: &[PrimInstance],
     vertex_count: usize,
 ) -> Result<Option<GltfAnimation>, String> {
+    if doc.animations().len() == 0 && doc.skins().len() == 0 {
+        return Ok(None);
+    }
     let (nodes, order) = hierarchy(doc)?;
     let clips = clips(doc, buffers, &nodes)?;
     let skins = skins(doc, buffers)?;
@@ -83,7 +86,7 @@ pub(crate) fn load_animation(
             Some(acc) => read_vec::<3>(&acc, buffers, false)
                 .map_err(|m| format!("{what}: {m}"))?
                 .into_iter()
-                .map(|v| Vec3::from(v))
+                .map(Vec3::from)
                 .map(|v| if v.is_finite() { v } else { Vec3::ZERO })
                 .collect(),
             None => vec![Vec3::ZERO; n],
@@ -348,7 +351,7 @@ fn binding(
             }
         }
         let sum: f32 = weights[start..].iter().sum();
-        if !(sum > 0.0) || !sum.is_finite() {
+        if sum.is_nan() || sum <= 0.0 || !sum.is_finite() {
             return Err(format!(
                 "{what}: vertex {v} has skin weights summing to {sum}"
             ));
