@@ -17,7 +17,9 @@
 //!
 //! Simplified: morph targets (`weights` channels) are not applied; one clip plays at a time
 //! ([`GltfAnimation::clip`], default the first); a winding flip that an animated negative scale
-//! would need is not applied (the loader's rest-pose winding is kept).
+//! would need is not applied (the loader's rest-pose winding is kept; for a skinned mesh that
+//! winding follows its node's transform, which skinning otherwise ignores). Single-threaded
+//! (`examples/skin_speed.rs`: about 25 ns per 4-influence vertex).
 
 use glam::{Affine3A, Mat3, Mat4, Quat, Vec3, Vec3A, Vec4};
 

@@ -443,3 +443,20 @@ fn malformed_animation_data_is_an_error() {
     doc["meshes"][0]["primitives"][0]["attributes"]["WEIGHTS_0"] = json!(w);
     expect_invalid("short", &b, doc, "do not fit");
 }
+
+/// A skin without animation: the loaded mesh is the skinned rest pose (bone 1 rests turned by
+/// 90 degrees), and the scene falls back to the rigid props animation.
+#[test]
+fn skins_without_clips_load_in_their_rest_pose() {
+    let (b, mut doc) = strip("LINEAR", Weights::F32);
+    doc.as_object_mut().unwrap().remove("animations");
+    doc["nodes"][2]["rotation"] = json!(Quat::from_rotation_z(FRAC_PI_2).to_array());
+    let scene = save_and_load("restpose", &b, doc).unwrap();
+    for v in 0..6 {
+        let (p, n) = expected_vertex(v, FRAC_PI_2);
+        assert!(scene.mesh.positions[v].abs_diff_eq(p, 2e-6), "v={v}");
+        assert!(scene.mesh.normals[v].abs_diff_eq(n, 2e-6), "v={v} normal");
+    }
+    assert!(!scene.gltf_animation.as_ref().unwrap().is_animated());
+    assert_eq!(Animation::for_scene(&scene).kind(), "rigid");
+}
