@@ -68,7 +68,8 @@ pub struct VrArgs {
     /// Trace shadow rays (HVVR shades without them).
     #[arg(long)]
     pub shadows: bool,
-    /// Animate the scene's props to this time (s) and refit the BVH first (HVVR §5.2).
+    /// Animate the scene to this time (s) and refit the BVH first (HVVR §5.2): a glTF file's own
+    /// clips and skins when it has them, else the rigid props.
     #[arg(long)]
     pub time: Option<f32>,
     /// Output folder.
