@@ -107,6 +107,8 @@ pub enum AnimationError {
     VerticesOutOfRange(String),
     #[error("animation made for {expected} vertices applied to a mesh with {given}")]
     WrongMesh { expected: usize, given: usize },
+    #[error("the pose at t = {t} s puts vertex {vertex} at a non-finite position")]
+    NonFinite { t: f32, vertex: usize },
 }
 
 /// Base spin rate of an animated object (rad/s).

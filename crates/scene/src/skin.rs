@@ -202,7 +202,9 @@ impl GltfAnimation {
     }
 
     /// Poses `mesh` at time `t` (seconds, looping over the active clip). `mesh` must be the mesh
-    /// this animation was loaded with (same vertex count).
+    /// this animation was loaded with (same vertex count). A pose that overflows to a
+    /// non-finite vertex is an error ([`AnimationError::NonFinite`]; the mesh is then partly
+    /// posed and must be re-posed before use).
     pub fn apply(&self, mesh: &mut TriangleMesh, t: f32) -> Result<(), AnimationError> {
         self.pose(mesh, Some(t))
     }
@@ -279,6 +281,14 @@ impl GltfAnimation {
                         *n = (c * *ln).normalize_or_zero();
                     }
                 }
+            }
+            // Extreme but finite keyframes or matrices can overflow: never hand a non-finite
+            // vertex to the BVH refit.
+            if let Some(i) = pos.iter().position(|p| !p.is_finite()) {
+                return Err(AnimationError::NonFinite {
+                    t: t.unwrap_or(0.0),
+                    vertex: inst.first_vertex as usize + i,
+                });
             }
         }
         Ok(())

@@ -460,3 +460,65 @@ fn skins_without_clips_load_in_their_rest_pose() {
     assert!(!scene.gltf_animation.as_ref().unwrap().is_animated());
     assert_eq!(Animation::for_scene(&scene).kind(), "rigid");
 }
+
+/// Random byte corruptions of the strip's buffer (weights, joints, matrices, keyframes): loading
+/// and posing return errors or valid meshes, never panic or produce non-finite vertices.
+#[test]
+fn corrupted_animation_buffers_never_panic() {
+    let mut seed = 0x1234_5678u32;
+    let mut next = move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 17;
+        seed ^= seed << 5;
+        seed
+    };
+    let (mut errors, mut loaded) = (0, 0);
+    for interp in ["LINEAR", "CUBICSPLINE", "STEP"] {
+        let (b, doc) = strip(interp, Weights::U8);
+        for _ in 0..100 {
+            let mut c = GltfBuf {
+                bin: b.bin.clone(),
+                views: b.views.clone(),
+                accessors: b.accessors.clone(),
+            };
+            for _ in 0..1 + next() % 4 {
+                let i = next() as usize % c.bin.len();
+                c.bin[i] = next() as u8;
+            }
+            match save_and_load("corrupt", &c, doc.clone()) {
+                Err(_) => errors += 1,
+                Ok(scene) => {
+                    loaded += 1;
+                    let mut mesh = scene.mesh.clone();
+                    for t in [0.3, 1.0, 1.7, f32::NAN] {
+                        if Animation::for_scene(&scene).apply(&mut mesh, t).is_ok() {
+                            assert!(mesh.positions.iter().all(|p| p.is_finite()), "t={t}");
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert!(errors > 0 && loaded > 0, "{errors} errors, {loaded} loaded");
+}
+
+/// Channel targets are not checked by gltf-json's validation (the `gltf` crate unwraps them).
+#[test]
+fn bad_channel_targets_are_parse_errors() {
+    for (target, needle) in [
+        (
+            json!({"node": 9, "path": "rotation"}),
+            "targets node 9 but there are 3",
+        ),
+        (json!({"node": 2, "path": "spin"}), "unknown target path"),
+    ] {
+        let (b, mut doc) = strip("LINEAR", Weights::F32);
+        doc["animations"][0]["channels"][0]["target"] = target;
+        match save_and_load("target", &b, doc) {
+            Err(SceneError::Parse { message, .. }) => {
+                assert!(message.contains(needle), "{message}")
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+}

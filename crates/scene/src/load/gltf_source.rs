@@ -11,7 +11,9 @@ use crate::{Result, SceneError};
 ///
 /// gltf-json 1.4.1's validation hook for primitives indexes `accessors` with the POSITION
 /// accessor index before checking it (a panic on a file whose index is out of range, found by
-/// the corrupted-GLB property test), so that index is checked here first.
+/// the corrupted-GLB property test), so that index is checked here first. Its validation of
+/// animations checks the samplers but not the channel targets (whose node index and path the
+/// `gltf` crate unwraps), so those are checked here too.
 pub(crate) fn parse_document(json: &[u8]) -> std::result::Result<gltf::Document, String> {
     let root: gltf::json::Root =
         serde_json::from_slice(json).map_err(|e| format!("malformed glTF JSON: {e}"))?;
@@ -26,6 +28,22 @@ pub(crate) fn parse_document(json: &[u8]) -> std::result::Result<gltf::Document,
                     "invalid glTF: meshes[{mi}].primitives[{pi}] uses accessor {} but there are {}",
                     a.value(),
                     root.accessors.len()
+                ));
+            }
+        }
+    }
+    for (ai, a) in root.animations.iter().enumerate() {
+        for (ci, c) in a.channels.iter().enumerate() {
+            let node = c.target.node.value();
+            if node >= root.nodes.len() {
+                return Err(format!(
+                    "invalid glTF: animations[{ai}].channels[{ci}] targets node {node} but there are {}",
+                    root.nodes.len()
+                ));
+            }
+            if !matches!(c.target.path, gltf::json::validation::Checked::Valid(_)) {
+                return Err(format!(
+                    "invalid glTF: animations[{ai}].channels[{ci}] has an unknown target path"
                 ));
             }
         }
