@@ -10,7 +10,7 @@ use anyhow::{Context, Result, ensure};
 use clap::Args;
 use parallax_bvh::Bvh;
 use parallax_core::image::png;
-use parallax_render::synth::method::Method;
+use parallax_render::synth::method::{Method, cube_near_name};
 use parallax_render::synth::score::{SCORE_TONEMAP, ground_truth, score};
 use parallax_render::synth::upsample::{UpsampleOptions, default_path, scene_path, upsample};
 
@@ -113,11 +113,12 @@ pub fn run(a: &UpsampleArgs, quiet: bool) -> Result<()> {
         let amt = (refs.iter().sum::<f64>() + syns.iter().sum::<f64>()) / times.len() as f64;
         println!("wrote {} frames to {}", times.len(), a.out.display());
         println!(
-            "{} {} layer(s) {}x{}: {} references, T_ref {:.1} ms; {} synthesised, T_syn {:.1} ms; amortised {:.1} ms/frame",
+            "{} {} layer(s) {}x{}, cube near {}: {} references, T_ref {:.1} ms; {} synthesised, T_syn {:.1} ms; amortised {:.1} ms/frame",
             a.method,
             uo.layers,
             a.width,
             a.height,
+            cube_near_name(uo.method_opts.cube_near),
             refs.len(),
             mean(&refs),
             syns.len(),
