@@ -264,7 +264,7 @@ pub fn upsample_bench(a: &UpsampleBenchArgs, quiet: bool) -> Result<()> {
         a.frames
     );
     let layers = parse_layers(&a.layers)?;
-    let opts = a.synth.method_options()?;
+    let opts = a.synth.upsample_options()?;
     let scene = a.view.load_scene()?;
     let bvh = Bvh::try_build(&scene.mesh)?;
     let path = if a.view.eye.is_some() || a.view.camera.is_some() {

@@ -54,7 +54,7 @@ pub fn run(a: &UpsampleArgs, quiet: bool) -> Result<()> {
         "--layers must be in 1..=8, got {}",
         a.layers
     );
-    let opts = a.synth.method_options()?;
+    let opts = a.synth.upsample_options()?;
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let scene = a.view.load_scene()?;
     let bvh = Bvh::try_build(&scene.mesh)?;

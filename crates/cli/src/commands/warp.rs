@@ -39,9 +39,13 @@ pub struct SynthArgs {
     /// Per-pixel plane normals of the tracers: gbuffer or depth (reconstructed, Widmer's).
     #[arg(long, default_value = "gbuffer")]
     pub normals: String,
-    /// DDA: march step bound (the paper uses 200 for stereo, 500 for upsampling).
-    #[arg(long, default_value_t = 200)]
-    pub dda_max_steps: u32,
+    /// DDA: march step bound. Default for stereo (`warp`, `bench warp | compression`): 260,
+    /// minimal artifact-free at 1600x900 from a 0.1 m camera near plane (measured; --near
+    /// fitted needs only 16); for upsampling (`upsample`, `bench upsample`): 1400 (700
+    /// measured at 800x450, doubled for 1600x900). The paper used 200 / 500 at its
+    /// resolution. Sweep with `bench warp | upsample --dda-sweep`.
+    #[arg(long)]
+    pub dda_max_steps: Option<u32>,
     /// Near plane of the reference's unit cube, where every traced ray starts: `fitted` (half
     /// the nearest captured depth, our global empty-space skip) or a camera near plane in
     /// metres, e.g. `0.1` (Widmer et al. 2015's NDC cube = the camera frustum, the setting of
@@ -89,8 +93,18 @@ fn parse_shading(s: &str) -> Result<Shading, String> {
     }
 }
 
+/// Default DDA max steps of the upsampling commands (see `--dda-max-steps`).
+pub const DDA_MAX_STEPS_UPSAMPLE: u32 = 1400;
+
 impl SynthArgs {
-    /// The method options.
+    /// The method options of temporal upsampling (the upsampling DDA default).
+    pub fn upsample_options(&self) -> Result<MethodOptions> {
+        let mut o = self.method_options()?;
+        o.dda_max_steps = self.dda_max_steps.unwrap_or(DDA_MAX_STEPS_UPSAMPLE);
+        Ok(o)
+    }
+
+    /// The method options (stereo warping defaults).
     pub fn method_options(&self) -> Result<MethodOptions> {
         let normals = match self.normals.as_str() {
             "gbuffer" => NormalSource::GBuffer,
@@ -113,7 +127,9 @@ impl SynthArgs {
         ensure!(jump >= 0.0, "--mesh-max-rel-jump must be >= 0, got {jump}");
         Ok(MethodOptions {
             normals,
-            dda_max_steps: self.dda_max_steps,
+            dda_max_steps: self
+                .dda_max_steps
+                .unwrap_or(MethodOptions::default().dda_max_steps),
             gamma_norm: self.gamma_norm_deg.to_radians().cos(),
             gamma_dist: self.gamma_dist,
             adaptive: self.adaptive,
