@@ -225,3 +225,104 @@ fn bench_upsample_and_compression_rows() {
     assert_eq!(rows.len(), 21);
     assert!(rows.iter().any(|r| r["adaptive"] == true));
 }
+
+#[test]
+fn near_plane_trace_pass_and_dda_sweep() {
+    let d = out_dir("near");
+    let j = d.join("rows.json");
+    let mut args = vec![
+        "bench",
+        "warp",
+        "--method",
+        "dda,brute,mesh",
+        "--layers",
+        "1",
+        "--near",
+        "0.1",
+        "--dda-sweep",
+        "2,200",
+        "--repeats",
+        "2",
+    ];
+    args.extend(TINY);
+    args.extend(["--json", j.to_str().unwrap()]);
+    let o = parallax(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(out.contains("cube near: camera 0.1 m"), "{out}");
+    assert!(out.contains("minimal max steps"), "{out}");
+    let rows = json_rows(&j);
+    // dda x2 (the sweep), brute, mesh.
+    assert_eq!(rows.len(), 4, "{rows:?}");
+    for r in &rows {
+        assert_eq!(r["cube_near"], "camera 0.1 m", "{r}");
+        assert!((r["near_m"].as_f64().unwrap() - 0.1).abs() < 1e-6, "{r}");
+        assert_eq!(r["repeats"], 2);
+        if r["method"] == "mesh" {
+            assert!(r["trace_mrays_per_s"].is_null(), "{r}"); // NaN: no tracer
+        } else {
+            assert!(r["trace_mrays_per_s"].as_f64().unwrap() > 0.0, "{r}");
+            assert!(r["ms_trace"].as_f64().unwrap() > 0.0, "{r}");
+            assert!(r["ms_raygen"].as_f64().unwrap() >= 0.0, "{r}");
+        }
+    }
+    let steps: Vec<_> = rows
+        .iter()
+        .filter(|r| r["method"] == "dda")
+        .map(|r| r["dda_max_steps"].as_u64().unwrap())
+        .collect();
+    assert_eq!(steps, [2, 200]);
+    // Two steps from a 0.1 m near plane cannot reach the surfaces: more misses / occlusion
+    // volumes than with 200.
+    let lost = |k: usize| {
+        let r = &rows[k];
+        r["pct_miss"].as_f64().unwrap() + r["pct_occlusion"].as_f64().unwrap()
+    };
+    assert!(lost(0) > lost(1) + 1.0, "{rows:?}");
+
+    // The other commands take the flag too and record it.
+    let j = d.join("up.json");
+    let mut args = vec![
+        "bench",
+        "upsample",
+        "--method",
+        "brute",
+        "--layers",
+        "1",
+        "--frames",
+        "2",
+        "--near",
+        "0.2",
+        "--no-score",
+    ];
+    args.extend(TINY);
+    args.extend(["--json", j.to_str().unwrap()]);
+    let o = parallax(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(json_rows(&j)[0]["cube_near"], "camera 0.2 m");
+    let mut args = vec![
+        "warp",
+        "--method",
+        "brute",
+        "--layers",
+        "1",
+        "--near",
+        "0.1",
+        "--no-score",
+    ];
+    args.extend(TINY);
+    args.extend(["--out", d.join("w").to_str().unwrap().to_owned().leak()]);
+    let o = parallax(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("cube near camera 0.1 m"),
+        "{}",
+        stdout(&o)
+    );
+    for bad in ["0", "-1", "near"] {
+        let flag = format!("--near={bad}");
+        let o = parallax(&["warp", "--method", "brute", &flag]);
+        assert!(!o.status.success());
+        assert!(stderr(&o).contains("near"), "{}", stderr(&o));
+    }
+}

@@ -8,7 +8,7 @@ use anyhow::{Context, Result, ensure};
 use clap::Args;
 use parallax_bvh::Bvh;
 use parallax_render::bench::{compression, upsample as up, warp};
-use parallax_render::synth::method::Method;
+use parallax_render::synth::method::{Method, cube_near_name};
 use parallax_render::synth::upsample::{default_path, scene_path};
 use serde::Serialize;
 
@@ -33,6 +33,55 @@ fn parse_layers(s: &str) -> Result<Vec<usize>> {
         "--layers must be in 1..=8, got {s:?}"
     );
     Ok(v)
+}
+
+/// `--dda-sweep`: a comma list of DDA max steps (empty: none).
+fn parse_steps(s: &Option<String>) -> Result<Vec<u32>> {
+    let Some(s) = s else {
+        return Ok(Vec::new());
+    };
+    let v: Vec<u32> = s
+        .split(',')
+        .map(|t| t.trim().parse::<u32>())
+        .collect::<Result<_, _>>()
+        .with_context(|| format!("--dda-sweep expects a comma list of step counts, got {s:?}"))?;
+    ensure!(
+        !v.is_empty() && v.iter().all(|&n| (1..=10_000_000).contains(&n)),
+        "--dda-sweep values must be in 1..=10000000, got {s:?}"
+    );
+    Ok(v)
+}
+
+/// Prints the minimal artifact-free DDA max steps of each layer count of a sweep.
+fn print_dda_minimal(sweeps: &[(usize, Vec<(u32, f64, f64, f64)>)]) {
+    for (layers, sweep) in sweeps {
+        if sweep.len() < 2 {
+            continue;
+        }
+        if let Some(n) = warp::dda_minimal_steps(sweep) {
+            let top = sweep.iter().map(|s| s.0).max().unwrap_or(0);
+            println!(
+                "dda {layers} layer(s): minimal max steps equivalent to {top} steps (PSNR within {} dB, at most {}% more misses / occlusion volumes): {n}",
+                warp::DDA_EQUIV_PSNR_DB,
+                warp::DDA_EQUIV_EXTRA_PCT
+            );
+        }
+    }
+}
+
+/// Groups the DDA rows of a sweep per layer count: (max steps, PSNR, % miss, % occlusion).
+fn dda_sweeps<'a>(
+    rows: impl Iterator<Item = (usize, Option<u32>, f64, f64, f64)> + 'a,
+) -> Vec<(usize, Vec<(u32, f64, f64, f64)>)> {
+    let mut out: Vec<(usize, Vec<(u32, f64, f64, f64)>)> = Vec::new();
+    for (l, steps, p, m, o) in rows {
+        let Some(n) = steps else { continue };
+        match out.iter_mut().find(|(k, _)| *k == l) {
+            Some((_, v)) => v.push((n, p, m, o)),
+            None => out.push((l, vec![(n, p, m, o)])),
+        }
+    }
+    out
 }
 
 fn write_json<T: Serialize>(path: &Option<PathBuf>, rows: &T) -> Result<()> {
@@ -73,6 +122,13 @@ pub struct WarpBenchArgs {
     /// Comma list of layer counts.
     #[arg(long, default_value = "1,2")]
     pub layers: String,
+    /// DDA: one row per max-steps value of this comma list (e.g. 8,16,32,64,100000) instead
+    /// of --dda-max-steps, and the minimal artifact-free value is printed (Widmer's tuning).
+    #[arg(long)]
+    pub dda_sweep: Option<String>,
+    /// Timed runs of each eye's warp and trace-only pass; the best is reported.
+    #[arg(long, default_value_t = 1)]
+    pub repeats: u32,
     /// Write the rows as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -95,6 +151,7 @@ pub fn warp_bench(a: &WarpBenchArgs, quiet: bool) -> Result<()> {
         shading: a.synth.shading,
         seed: a.synth.seed,
         score: !a.synth.no_score,
+        repeats: a.repeats.max(1),
     };
     let rows = warp::run(
         &scene,
@@ -103,38 +160,72 @@ pub fn warp_bench(a: &WarpBenchArgs, quiet: bool) -> Result<()> {
         &parse_methods(&a.method)?,
         &layers,
         &opts,
+        &parse_steps(&a.dda_sweep)?,
         &reporter(quiet),
     )?;
     if !quiet {
+        let near = rows.iter().find(|r| r.error.is_none());
         println!(
-            "| method | layers | T_ref ms | T_eye ms | T_total ms | Mrays/s | nodes/ray | % layer 2+ | PSNR dB | SSIM | note |"
+            "{} {}x{}, ipd {}, cube near: {}{}, {} threads, best of {} per eye",
+            scene.name,
+            a.width,
+            a.height,
+            a.view.ipd,
+            cube_near_name(opts.cube_near),
+            near.map_or(String::new(), |r| format!(
+                " ({:.3} m, far {:.1} m)",
+                r.near_m, r.far_m
+            )),
+            rayon::current_num_threads(),
+            setup.repeats
         );
-        println!("|---|---|---|---|---|---|---|---|---|---|---|");
+        println!(
+            "| method | layers | dda steps | T_ref ms | T_eye ms | T_total ms | Mrays/s | trace Mrays/s | trace Mrays/CPU-s | T_trace ms (% T_eye) | raygen ms | nodes/ray | % layer 2+ | % miss | % occl. | PSNR dB | SSIM | note |"
+        );
+        println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
         for r in &rows {
+            let steps = r.dda_max_steps.map_or("-".into(), |n| n.to_string());
             match &r.error {
                 Some(e) => println!(
-                    "| {} | {} | - | - | - | - | - | - | - | - | {e} |",
+                    "| {} | {} | {steps} | - | - | - | - | - | - | - | - | - | - | - | - | - | - | {e} |",
                     r.method, r.layers
                 ),
                 None => println!(
-                    "| {} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {} | {} | |",
+                    "| {} | {} | {steps} | {:.1} | {:.2} | {:.1} | {:.2} | {} | {} | {} | {} | {:.2} | {:.2} | {:.3} | {:.3} | {} | {} | |",
                     r.method,
                     r.layers,
                     r.ms_ref,
                     r.ms_view,
                     r.ms_total,
                     r.mrays_per_s,
+                    cell(r.trace_mrays_per_s, 2),
+                    cell(r.trace_cpu_mrays_per_s, 2),
+                    if r.ms_trace.is_nan() {
+                        "-".into()
+                    } else {
+                        format!("{:.2} ({:.0}%)", r.ms_trace, 100.0 * r.ms_trace / r.ms_view)
+                    },
+                    cell(r.ms_raygen, 2),
                     r.nodes_per_ray,
                     r.pct_layer2,
+                    r.pct_miss,
+                    r.pct_occlusion,
                     cell(r.psnr, 2),
                     cell(r.ssim, 4)
                 ),
             }
         }
-        println!(
-            "{} {}x{}, ipd {}",
-            scene.name, a.width, a.height, a.view.ipd
-        );
+        print_dda_minimal(&dda_sweeps(rows.iter().filter(|r| r.error.is_none()).map(
+            |r| {
+                (
+                    r.layers,
+                    r.dda_max_steps,
+                    r.psnr,
+                    r.pct_miss,
+                    r.pct_occlusion,
+                )
+            },
+        )));
     }
     write_json(&a.json, &rows)
 }
@@ -158,6 +249,10 @@ pub struct UpsampleBenchArgs {
     /// Comma list of layer counts.
     #[arg(long, default_value = "1,2")]
     pub layers: String,
+    /// DDA: one row per max-steps value of this comma list (each re-runs the path) instead
+    /// of --dda-max-steps, and the minimal artifact-free value is printed.
+    #[arg(long)]
+    pub dda_sweep: Option<String>,
     #[arg(long)]
     pub json: Option<PathBuf>,
 }
@@ -169,7 +264,7 @@ pub fn upsample_bench(a: &UpsampleBenchArgs, quiet: bool) -> Result<()> {
         a.frames
     );
     let layers = parse_layers(&a.layers)?;
-    let opts = a.synth.method_options()?;
+    let opts = a.synth.upsample_options()?;
     let scene = a.view.load_scene()?;
     let bvh = Bvh::try_build(&scene.mesh)?;
     let path = if a.view.eye.is_some() || a.view.camera.is_some() {
@@ -193,21 +288,36 @@ pub fn upsample_bench(a: &UpsampleBenchArgs, quiet: bool) -> Result<()> {
         &parse_methods(&a.method)?,
         &layers,
         &opts,
+        &parse_steps(&a.dda_sweep)?,
         &reporter(quiet),
     )?;
     if !quiet {
+        let near = rows.iter().find(|r| r.error.is_none());
         println!(
-            "| method | layers | T_ref ms | T_syn ms | T_amt ms | Mrays/s | nodes/ray | % layer 2+ | PSNR dB | SSIM | note |"
+            "{} {}x{}, {} frames at 60 Hz, a reference every 4th, cube near: {}{}",
+            scene.name,
+            a.width,
+            a.height,
+            a.frames,
+            cube_near_name(opts.cube_near),
+            near.map_or(String::new(), |r| format!(
+                " ({:.3} m, far {:.1} m)",
+                r.near_m, r.far_m
+            )),
         );
-        println!("|---|---|---|---|---|---|---|---|---|---|---|");
+        println!(
+            "| method | layers | dda steps | T_ref ms | T_syn ms | T_amt ms | Mrays/s | nodes/ray | % layer 2+ | % miss | % occl. | PSNR dB | SSIM | note |"
+        );
+        println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
         for r in &rows {
+            let steps = r.dda_max_steps.map_or("-".into(), |n| n.to_string());
             match &r.error {
                 Some(e) => println!(
-                    "| {} | {} | - | - | - | - | - | - | - | - | {e} |",
+                    "| {} | {} | {steps} | - | - | - | - | - | - | - | - | - | - | {e} |",
                     r.method, r.layers
                 ),
                 None => println!(
-                    "| {} | {} | {:.2} | {:.2} ± {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {} | {} | |",
+                    "| {} | {} | {steps} | {:.2} | {:.2} ± {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.3} | {:.3} | {} | {} | |",
                     r.method,
                     r.layers,
                     r.ms_ref,
@@ -217,15 +327,24 @@ pub fn upsample_bench(a: &UpsampleBenchArgs, quiet: bool) -> Result<()> {
                     r.mrays_per_s,
                     r.nodes_per_ray,
                     r.pct_layer2,
+                    r.pct_miss,
+                    r.pct_occlusion,
                     cell(r.psnr, 2),
                     cell(r.ssim, 4)
                 ),
             }
         }
-        println!(
-            "{} {}x{}, {} frames at 60 Hz, a reference every 4th",
-            scene.name, a.width, a.height, a.frames
-        );
+        print_dda_minimal(&dda_sweeps(rows.iter().filter(|r| r.error.is_none()).map(
+            |r| {
+                (
+                    r.layers,
+                    r.dda_max_steps,
+                    r.psnr,
+                    r.pct_miss,
+                    r.pct_occlusion,
+                )
+            },
+        )));
     }
     write_json(&a.json, &rows)
 }
@@ -267,6 +386,7 @@ pub fn compression_bench(a: &CompressionArgs, quiet: bool) -> Result<()> {
         shading: a.synth.shading,
         seed: a.synth.seed,
         score: !a.synth.no_score,
+        repeats: 1,
     };
     let rows = compression::run(
         &scene,
@@ -278,6 +398,16 @@ pub fn compression_bench(a: &CompressionArgs, quiet: bool) -> Result<()> {
         &reporter(quiet),
     )?;
     if !quiet {
+        println!(
+            "{} {}x{}, {} {} layer(s), ipd {}, cube near: {}",
+            scene.name,
+            a.width,
+            a.height,
+            a.method,
+            a.layers,
+            a.view.ipd,
+            cube_near_name(opts.cube_near)
+        );
         println!(
             "| sweep | gamma_norm deg | gamma_dist | adaptive | build ms | T_eye ms | nodes/ray | PSNR dB | SSIM | note |"
         );
@@ -297,10 +427,6 @@ pub fn compression_bench(a: &CompressionArgs, quiet: bool) -> Result<()> {
                 cell(r.ssim, 4)
             );
         }
-        println!(
-            "{} {}x{}, {} {} layer(s)",
-            scene.name, a.width, a.height, a.method, a.layers
-        );
     }
     write_json(&a.json, &rows)
 }

@@ -10,7 +10,7 @@ use anyhow::{Context, Result, ensure};
 use clap::Args;
 use parallax_bvh::Bvh;
 use parallax_core::image::png;
-use parallax_render::synth::method::Method;
+use parallax_render::synth::method::{Method, cube_near_name};
 use parallax_render::synth::score::{SCORE_TONEMAP, ground_truth, score};
 use parallax_render::synth::upsample::{UpsampleOptions, default_path, scene_path, upsample};
 
@@ -54,7 +54,7 @@ pub fn run(a: &UpsampleArgs, quiet: bool) -> Result<()> {
         "--layers must be in 1..=8, got {}",
         a.layers
     );
-    let opts = a.synth.method_options()?;
+    let opts = a.synth.upsample_options()?;
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let scene = a.view.load_scene()?;
     let bvh = Bvh::try_build(&scene.mesh)?;
@@ -113,11 +113,12 @@ pub fn run(a: &UpsampleArgs, quiet: bool) -> Result<()> {
         let amt = (refs.iter().sum::<f64>() + syns.iter().sum::<f64>()) / times.len() as f64;
         println!("wrote {} frames to {}", times.len(), a.out.display());
         println!(
-            "{} {} layer(s) {}x{}: {} references, T_ref {:.1} ms; {} synthesised, T_syn {:.1} ms; amortised {:.1} ms/frame",
+            "{} {} layer(s) {}x{}, cube near {}: {} references, T_ref {:.1} ms; {} synthesised, T_syn {:.1} ms; amortised {:.1} ms/frame",
             a.method,
             uo.layers,
             a.width,
             a.height,
+            cube_near_name(uo.method_opts.cube_near),
             refs.len(),
             mean(&refs),
             syns.len(),

@@ -11,12 +11,13 @@ use parallax_bvh::Bvh;
 use parallax_core::image::png::{self, ToneMapping};
 use parallax_core::{Image, Rgb};
 use parallax_render::bench::warp::{StereoSetup, eye_truths, score_pair};
+use parallax_render::synth::CubeNear;
 use parallax_render::synth::input::{
     Intrinsics, input_desc, read_color, read_depth, reference_from_images,
 };
 use parallax_render::synth::layers::{Shading, capture_reference};
 use parallax_render::synth::method::NormalSource;
-use parallax_render::synth::method::{Method, MethodOptions};
+use parallax_render::synth::method::{Method, MethodOptions, cube_near_name, parse_cube_near};
 use parallax_render::synth::score::SCORE_TONEMAP;
 use parallax_render::synth::stereo::warp_stereo;
 use parallax_render::synth::warp::{Resample, WarpOptions, WarpedView};
@@ -38,9 +39,19 @@ pub struct SynthArgs {
     /// Per-pixel plane normals of the tracers: gbuffer or depth (reconstructed, Widmer's).
     #[arg(long, default_value = "gbuffer")]
     pub normals: String,
-    /// DDA: march step bound (the paper uses 200 for stereo, 500 for upsampling).
-    #[arg(long, default_value_t = 200)]
-    pub dda_max_steps: u32,
+    /// DDA: march step bound. Default for stereo (`warp`, `bench warp | compression`): 260,
+    /// minimal artifact-free at 1600x900 from a 0.1 m camera near plane (measured; --near
+    /// fitted needs only 16); for upsampling (`upsample`, `bench upsample`): 1400 (700
+    /// measured at 800x450, doubled for 1600x900). The paper used 200 / 500 at its
+    /// resolution. Sweep with `bench warp | upsample --dda-sweep`.
+    #[arg(long)]
+    pub dda_max_steps: Option<u32>,
+    /// Near plane of the reference's unit cube, where every traced ray starts: `fitted` (half
+    /// the nearest captured depth, our global empty-space skip) or a camera near plane in
+    /// metres, e.g. `0.1` (Widmer et al. 2015's NDC cube = the camera frustum, the setting of
+    /// their Tables 2-3; `camera` = 0.1).
+    #[arg(long, default_value = "fitted", value_parser = parse_near)]
+    pub near: CubeNear,
     /// Quad-tree: normal threshold gamma_norm as an angle in degrees (cos of it is used).
     #[arg(long, default_value_t = 3.0)]
     pub gamma_norm_deg: f32,
@@ -68,6 +79,10 @@ pub struct SynthArgs {
     pub no_score: bool,
 }
 
+fn parse_near(s: &str) -> Result<CubeNear, String> {
+    parse_cube_near(s).map_err(|e| e.to_string())
+}
+
 fn parse_shading(s: &str) -> Result<Shading, String> {
     match s {
         "fixed" => Ok(Shading::Fixed),
@@ -78,8 +93,18 @@ fn parse_shading(s: &str) -> Result<Shading, String> {
     }
 }
 
+/// Default DDA max steps of the upsampling commands (see `--dda-max-steps`).
+pub const DDA_MAX_STEPS_UPSAMPLE: u32 = 1400;
+
 impl SynthArgs {
-    /// The method options.
+    /// The method options of temporal upsampling (the upsampling DDA default).
+    pub fn upsample_options(&self) -> Result<MethodOptions> {
+        let mut o = self.method_options()?;
+        o.dda_max_steps = self.dda_max_steps.unwrap_or(DDA_MAX_STEPS_UPSAMPLE);
+        Ok(o)
+    }
+
+    /// The method options (stereo warping defaults).
     pub fn method_options(&self) -> Result<MethodOptions> {
         let normals = match self.normals.as_str() {
             "gbuffer" => NormalSource::GBuffer,
@@ -102,7 +127,9 @@ impl SynthArgs {
         ensure!(jump >= 0.0, "--mesh-max-rel-jump must be >= 0, got {jump}");
         Ok(MethodOptions {
             normals,
-            dda_max_steps: self.dda_max_steps,
+            dda_max_steps: self
+                .dda_max_steps
+                .unwrap_or(MethodOptions::default().dda_max_steps),
             gamma_norm: self.gamma_norm_deg.to_radians().cos(),
             gamma_dist: self.gamma_dist,
             adaptive: self.adaptive,
@@ -117,6 +144,7 @@ impl SynthArgs {
                 },
                 layer0_guard: !self.no_layer0_guard,
             },
+            cube_near: self.near,
         })
     }
 }
@@ -251,6 +279,7 @@ pub fn run(a: &WarpArgs, quiet: bool) -> Result<()> {
                 shading: a.synth.shading,
                 seed: a.synth.seed,
                 score: true,
+                repeats: 1,
             };
             let truths = eye_truths(scene, bvh, &setup)?;
             written.push(write_png(&a.out.join("left.bvh.png"), &truths[0])?);
@@ -269,12 +298,14 @@ pub fn run(a: &WarpArgs, quiet: bool) -> Result<()> {
         let ms: f64 = sv.views.iter().map(|v| v.ms).sum();
         let (h, m, o) = sv.views[0].kind_fractions();
         println!(
-            "{} {} layer(s) {}x{} ipd {}: T_ref {:.1} ms (capture {:.1}, shade {:.1}, build {:.1}), T_eye {:.1} ms, {:.2} Mrays/s, left eye hit {:.1}% miss {:.1}% occlusion {:.1}%, {:.2}% from layer 2+",
+            "{} {} layer(s) {}x{} ipd {}, cube near {} ({:.3} m): T_ref {:.1} ms (capture {:.1}, shade {:.1}, build {:.1}), T_eye {:.1} ms, {:.2} Mrays/s, left eye hit {:.1}% miss {:.1}% occlusion {:.1}%, {:.2}% from layer 2+",
             a.method,
             reference.layers.len(),
             reference.width(),
             reference.height(),
             a.view.ipd,
+            cube_near_name(reference.cube_near),
+            reference.cube.near,
             t.total_ms(),
             t.capture_ms,
             t.shade_ms,

@@ -31,6 +31,8 @@ pub struct CompressionRow {
     pub gamma_norm: f32,
     pub gamma_dist: f32,
     pub adaptive: bool,
+    /// The unit cube's near-plane setting (`fitted` or `camera <m> m`).
+    pub cube_near: String,
     pub ms_build: f64,
     pub ms_view: f64,
     pub mrays_per_s: f64,
@@ -108,6 +110,7 @@ pub fn run(
             gamma_norm: opts.gamma_norm,
             gamma_dist: dist,
             adaptive,
+            cube_near: w.cube_near,
             ms_build: w.ms_build,
             ms_view: w.ms_view,
             mrays_per_s: w.mrays_per_s,

@@ -13,7 +13,7 @@ use serde::Serialize;
 
 use crate::synth::SynthError;
 use crate::synth::layers::Shading;
-use crate::synth::method::{Method, MethodOptions};
+use crate::synth::method::{Method, MethodOptions, cube_near_name};
 use crate::synth::score::{ground_truth, score};
 use crate::synth::upsample::{UpsampleOptions, upsample};
 
@@ -26,6 +26,14 @@ pub struct UpsampleRow {
     pub width: u32,
     pub height: u32,
     pub frames: u32,
+    /// The unit cube's near-plane setting (`fitted` or `camera <m> m`) and the first
+    /// reference's cube near / far view depths (metres).
+    pub cube_near: String,
+    pub near_m: f32,
+    pub far_m: f32,
+    /// The DDA's max steps (DDA rows only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dda_max_steps: Option<u32>,
     /// Mean `T_ref` of the reference frames.
     pub ms_ref: f64,
     /// Mean `T_syn` of the synthesised frames and its standard deviation.
@@ -36,6 +44,9 @@ pub struct UpsampleRow {
     pub mrays_per_s: f64,
     pub nodes_per_ray: f64,
     pub pct_layer2: f64,
+    /// % of synthesised pixels that are misses / occlusion-volume answers (mean over frames).
+    pub pct_miss: f64,
+    pub pct_occlusion: f64,
     /// Means over the synthesised frames (NaN when not scored).
     pub psnr: f64,
     pub ssim: f64,
@@ -73,6 +84,8 @@ pub fn measure(
         width: setup.width,
         height: setup.height,
         frames: setup.frames,
+        cube_near: cube_near_name(opts.cube_near),
+        dda_max_steps: (method == Method::Dda).then_some(opts.dda_max_steps),
         psnr: f64::NAN,
         ssim: f64::NAN,
         ..UpsampleRow::default()
@@ -89,9 +102,14 @@ pub fn measure(
     };
     let (mut psnr, mut ssim, mut scored) = (0.0, 0.0, 0u32);
     let (mut rays, mut nodes, mut deep, mut trace_ms, mut syn) = (0u64, 0.0, 0.0, 0.0, 0u32);
+    let (mut miss, mut occ, mut near) = (0.0, 0.0, None);
     let result = upsample(scene, bvh, path, setup.width, setup.height, &uo, &mut |f| {
         progress(&format!("{method}, {layers} layer(s): frame {}", f.index));
+        near.get_or_insert((f.reference.cube.near, f.reference.cube.far));
         if let Some(v) = &f.view {
+            let (_, m, o) = v.kind_fractions();
+            miss += m;
+            occ += o;
             rays += v.stats.rays;
             nodes += v.nodes_per_ray();
             deep += v.frac_deep();
@@ -138,6 +156,9 @@ pub fn measure(
     };
     row.nodes_per_ray = nodes / syn.max(1) as f64;
     row.pct_layer2 = deep * 100.0 / syn.max(1) as f64;
+    row.pct_miss = miss * 100.0 / syn.max(1) as f64;
+    row.pct_occlusion = occ * 100.0 / syn.max(1) as f64;
+    (row.near_m, row.far_m) = near.unwrap_or((f32::NAN, f32::NAN));
     if scored > 0 {
         row.psnr = psnr / scored as f64;
         row.ssim = ssim / scored as f64;
@@ -145,7 +166,8 @@ pub fn measure(
     row
 }
 
-/// Every method x layer count.
+/// Every method x layer count; the DDA once per value of `dda_steps` (once with
+/// `opts.dda_max_steps` when empty; each value re-runs the whole path).
 #[allow(clippy::too_many_arguments)]
 pub fn run(
     scene: &Scene,
@@ -155,6 +177,7 @@ pub fn run(
     methods: &[Method],
     layers: &[usize],
     opts: &MethodOptions,
+    dda_steps: &[u32],
     progress: &dyn Fn(&str),
 ) -> Result<Vec<UpsampleRow>, SynthError> {
     if layers.is_empty() || layers.iter().any(|&l| l == 0 || l > 8) {
@@ -172,7 +195,17 @@ pub fn run(
             if m == Method::Mesh && n != mesh_layers {
                 continue;
             }
-            rows.push(measure(scene, bvh, path, setup, m, n, opts, progress));
+            let steps = match m {
+                Method::Dda if !dda_steps.is_empty() => dda_steps.to_vec(),
+                _ => vec![opts.dda_max_steps],
+            };
+            for st in steps {
+                let o = MethodOptions {
+                    dda_max_steps: st,
+                    ..*opts
+                };
+                rows.push(measure(scene, bvh, path, setup, m, n, &o, progress));
+            }
         }
     }
     Ok(rows)

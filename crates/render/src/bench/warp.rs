@@ -6,6 +6,22 @@
 //!
 //! The mesh warp uses layer 0 only, so it runs once, with `N = 1`. Methods not available in
 //! this build give a row carrying the error instead of numbers.
+//!
+//! **Trace-only throughput.** `mrays_per_s` = eye rays / `T_eye` counts the whole warp loop
+//! (ray generation, the tracer, depth-aware colour resampling, the layer-0 guard), whose
+//! shared part costs every method the same. Each tracer row also runs [`super::trace`]'s
+//! trace-only pass over the same eye rays (`trace_mrays_per_s`, wall clock, same threads as
+//! the warp; `trace_cpu_mrays_per_s`, per CPU-second of the tracing threads, robust on a
+//! loaded machine) and times ray generation alone, so `T_eye` splits into ray generation,
+//! tracing and the rest of the loop (`ms_raygen`, `ms_trace`, `ms_view - ms_raygen -
+//! ms_trace`). Every time is the best of `repeats` runs per eye, averaged over both eyes.
+//!
+//! **Cube near plane** ([`MethodOptions::cube_near`], recorded per row): where every ray
+//! starts. **DDA max steps** can be swept in one run ([`run`]'s `dda_steps`, one `dda` row
+//! per value); [`dda_minimal_steps`] picks the smallest artifact-free value as Widmer et al.
+//! 2015 (§5.1) did.
+
+use std::time::Instant;
 
 use parallax_bvh::Bvh;
 use parallax_core::{Image, Rgb};
@@ -13,11 +29,13 @@ use parallax_scene::camera::Pinhole;
 use parallax_scene::{CameraDesc, Scene};
 use serde::Serialize;
 
+use super::cpu::{ms_between, process_cpu_ns};
+use super::trace::{PassTimes, eye_rays, trace_pass};
 use crate::synth::SynthError;
 use crate::synth::layers::{Reference, Shading, capture_reference};
-use crate::synth::method::{Method, MethodOptions};
+use crate::synth::method::{Method, MethodOptions, Synthesizer, cube_near_name};
 use crate::synth::score::{Score, ground_truth, score};
-use crate::synth::stereo::{StereoViews, stereo_eyes, warp_stereo};
+use crate::synth::stereo::{StereoViews, stereo_eyes};
 
 /// The view and settings of a stereo benchmark.
 #[derive(Clone, Debug)]
@@ -30,6 +48,8 @@ pub struct StereoSetup {
     pub seed: u64,
     /// Score against the BVH eye views (costs two reference renders).
     pub score: bool,
+    /// Timed runs of each eye's warp and trace-only pass (the best is kept), >= 1.
+    pub repeats: u32,
 }
 
 /// One row of Table 2.
@@ -40,6 +60,16 @@ pub struct WarpRow {
     pub scene: String,
     pub width: u32,
     pub height: u32,
+    /// The unit cube's near-plane setting (`fitted` or `camera <m> m`) and the resulting
+    /// near / far view depths of the cube (metres).
+    pub cube_near: String,
+    pub near_m: f32,
+    pub far_m: f32,
+    /// The DDA's max steps (DDA rows only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dda_max_steps: Option<u32>,
+    /// Timed runs per eye (best kept).
+    pub repeats: u32,
     /// `T_ref`: capture + shade + build.
     pub ms_ref: f64,
     pub ms_capture: f64,
@@ -49,8 +79,22 @@ pub struct WarpRow {
     pub ms_view: f64,
     /// `T_ref + 2 T_eye`.
     pub ms_total: f64,
-    /// Eye rays per second of tracing (0 for the mesh warp).
+    /// CPU time of the process per eye during the warp (all threads).
+    pub ms_view_cpu: f64,
+    /// Eye rays per second of the whole warp loop, `rays / T_eye` (0 for the mesh warp).
     pub mrays_per_s: f64,
+    /// Trace-only pass per eye (module docs): wall ms, CPU ms of the tracing threads, CPU
+    /// ms of the process.
+    pub ms_trace: f64,
+    pub ms_trace_cpu: f64,
+    pub ms_trace_process_cpu: f64,
+    /// Generating the eye rays alone, per eye: wall ms and CPU ms of the process.
+    pub ms_raygen: f64,
+    pub ms_raygen_process_cpu: f64,
+    /// Eye rays per wall second of the trace-only pass.
+    pub trace_mrays_per_s: f64,
+    /// Eye rays per CPU second of the tracing threads (one core's throughput).
+    pub trace_cpu_mrays_per_s: f64,
     /// Hierarchy nodes (or steps) per ray.
     pub nodes_per_ray: f64,
     /// Box + plane tests per ray.
@@ -98,7 +142,9 @@ pub fn reference(
     capture_reference(scene, bvh, &cam, layers, setup.shading, setup.seed)
 }
 
-/// Warps `reference` with `method` and fills a row (an error row when the method fails).
+/// Fits `reference`'s cube with `opts.cube_near`, builds `method` over it, warps it to both
+/// eyes (best of `setup.repeats` per eye) and, for tracers, times the trace-only pass and ray
+/// generation over the same eye rays; fills a row (an error row when the method fails).
 pub fn measure(
     scene_name: &str,
     reference: &Reference,
@@ -113,17 +159,63 @@ pub fn measure(
         scene: scene_name.into(),
         width: setup.width,
         height: setup.height,
+        cube_near: cube_near_name(opts.cube_near),
+        dda_max_steps: (method == Method::Dda).then_some(opts.dda_max_steps),
+        repeats: setup.repeats.max(1),
         psnr: f64::NAN,
         ssim: f64::NAN,
+        ms_trace: f64::NAN,
+        ms_trace_cpu: f64::NAN,
+        ms_trace_process_cpu: f64::NAN,
+        ms_raygen: f64::NAN,
+        ms_raygen_process_cpu: f64::NAN,
+        trace_mrays_per_s: f64::NAN,
+        trace_cpu_mrays_per_s: f64::NAN,
         ..WarpRow::default()
     };
     let mut r = reference.clone();
-    let sv = match warp_stereo(&mut r, &setup.desc, setup.ipd, method, opts) {
-        Ok(sv) => sv,
+    let built = (|| {
+        r.fit_cube(opts.cube_near)?;
+        let eyes = stereo_eyes(&setup.desc, r.width(), r.height(), setup.ipd)?;
+        let t = Instant::now();
+        let synth = Synthesizer::build(method, &r, opts)?;
+        r.times.build_ms = t.elapsed().as_secs_f64() * 1e3;
+        Ok::<_, SynthError>((eyes, synth))
+    })();
+    let (eyes, synth) = match built {
+        Ok(v) => v,
         Err(e) => {
             row.error = Some(e.to_string());
             return (row, None);
         }
+    };
+    row.near_m = r.cube.near;
+    row.far_m = r.cube.far;
+    let repeats = setup.repeats.max(1);
+    let mut views = Vec::with_capacity(2);
+    let mut view_cpu = 0.0;
+    for eye in &eyes {
+        let mut best: Option<crate::synth::warp::WarpedView> = None;
+        let mut best_cpu = f64::INFINITY;
+        for _ in 0..repeats {
+            let c0 = process_cpu_ns();
+            let v = match synth.view(&r, eye) {
+                Ok(v) => v,
+                Err(e) => {
+                    row.error = Some(e.to_string());
+                    return (row, None);
+                }
+            };
+            best_cpu = best_cpu.min(ms_between(c0, process_cpu_ns()));
+            let ms = best.as_ref().map_or(f64::INFINITY, |b| b.ms).min(v.ms);
+            best = Some(crate::synth::warp::WarpedView { ms, ..v });
+        }
+        view_cpu += best_cpu * 0.5;
+        views.push(best.expect("repeats >= 1"));
+    }
+    let sv = StereoViews {
+        eyes: eyes.clone(),
+        views: [views.remove(0), views.remove(0)],
     };
     let t = r.times;
     row.ms_capture = t.capture_ms;
@@ -131,6 +223,7 @@ pub fn measure(
     row.ms_build = t.build_ms;
     row.ms_ref = t.total_ms();
     row.ms_view = sv.ms_eye();
+    row.ms_view_cpu = view_cpu;
     row.ms_total = row.ms_ref + 2.0 * row.ms_view;
     let rays: u64 = sv.views.iter().map(|v| v.stats.rays).sum();
     let ms: f64 = sv.views.iter().map(|v| v.ms).sum();
@@ -139,6 +232,41 @@ pub fn measure(
     } else {
         0.0
     };
+    if let Synthesizer::Tracer(tracer, _) = &synth {
+        let (mut gen_t, mut trace_t) = (PassTimes::default(), PassTimes::default());
+        let mut traced = 0u64;
+        for eye in &eyes {
+            let (mut g, mut tr) = (PassTimes::worst(), PassTimes::worst());
+            let mut rays_e = Vec::new();
+            for _ in 0..repeats {
+                let (rs, gt) = eye_rays(eye);
+                g = g.min(gt);
+                rays_e = rs;
+            }
+            let mut stats = Default::default();
+            for _ in 0..repeats {
+                let tt;
+                (stats, tt) = trace_pass(tracer.as_ref(), &rays_e, eye.width);
+                tr = tr.min(tt);
+            }
+            let stats: parallax_screen::TraceStats = stats;
+            traced += stats.rays;
+            for (acc, x) in [(&mut gen_t, g), (&mut trace_t, tr)] {
+                acc.wall_ms += x.wall_ms * 0.5;
+                acc.thread_cpu_ms += x.thread_cpu_ms * 0.5;
+                acc.process_cpu_ms += x.process_cpu_ms * 0.5;
+            }
+        }
+        row.ms_raygen = gen_t.wall_ms;
+        row.ms_raygen_process_cpu = gen_t.process_cpu_ms;
+        row.ms_trace = trace_t.wall_ms;
+        row.ms_trace_cpu = trace_t.thread_cpu_ms;
+        row.ms_trace_process_cpu = trace_t.process_cpu_ms;
+        // Per eye: half the rays of both eyes.
+        let per_eye = traced as f64 * 0.5;
+        row.trace_mrays_per_s = per_eye / (trace_t.wall_ms * 1e3);
+        row.trace_cpu_mrays_per_s = per_eye / (trace_t.thread_cpu_ms * 1e3);
+    }
     row.nodes_per_ray = sv.views.iter().map(|v| v.nodes_per_ray()).sum::<f64>() * 0.5;
     row.tests_per_ray = sv.views.iter().map(|v| v.tests_per_ray()).sum::<f64>() * 0.5;
     row.pct_layer2 = sv.views.iter().map(|v| v.frac_deep()).sum::<f64>() * 50.0;
@@ -154,7 +282,43 @@ pub fn measure(
     (row, Some(sv))
 }
 
-/// Runs every `method` x `layers` (mesh once with one layer). `progress(msg)` reports stages.
+/// PSNR tolerance of [`dda_minimal_steps`]: a max-steps setting is equivalent to the
+/// converged DDA when its PSNR is at most this much lower (dB).
+pub const DDA_EQUIV_PSNR_DB: f64 = 0.05;
+/// Miss / occlusion-volume tolerance of [`dda_minimal_steps`]: at most this many more % of
+/// the pixels may be misses, and as many more occlusion-volume answers, than with the
+/// converged DDA (0.01% = 144 of 1600x900 pixels; capped rays end as one or the other).
+pub const DDA_EQUIV_EXTRA_PCT: f64 = 0.01;
+
+/// Widmer et al. 2015, §5.1: "we used a minimum value [of the DDA's max steps] at which the
+/// DDA method produced results that are artifact-free and equivalent to ours". Over the
+/// `(max_steps, psnr, pct_miss, pct_occlusion)` of a sweep, the converged reference is the
+/// largest `max_steps`; returns the smallest `max_steps` from which on every setting is within
+/// [`DDA_EQUIV_PSNR_DB`] of the reference's PSNR and has at most [`DDA_EQUIV_EXTRA_PCT`] %
+/// more misses and occlusion-volume answers (`None` for an empty sweep).
+pub fn dda_minimal_steps(sweep: &[(u32, f64, f64, f64)]) -> Option<u32> {
+    let mut v = sweep.to_vec();
+    v.sort_by_key(|s| s.0);
+    let &(_, p_ref, m_ref, o_ref) = v.last()?;
+    let ok = |&(_, p, m, o): &(u32, f64, f64, f64)| {
+        (p_ref.is_nan() || p >= p_ref - DDA_EQUIV_PSNR_DB)
+            && m <= m_ref + DDA_EQUIV_EXTRA_PCT
+            && o <= o_ref + DDA_EQUIV_EXTRA_PCT
+    };
+    let mut best = v.last()?.0;
+    for s in v.iter().rev() {
+        if ok(s) {
+            best = s.0;
+        } else {
+            break;
+        }
+    }
+    Some(best)
+}
+
+/// Runs every `method` x `layers` (mesh once with one layer); the DDA once per value of
+/// `dda_steps` (once with `opts.dda_max_steps` when empty). `progress(msg)` reports stages.
+#[allow(clippy::too_many_arguments)]
 pub fn run(
     scene: &Scene,
     bvh: &Bvh,
@@ -162,6 +326,7 @@ pub fn run(
     methods: &[Method],
     layers: &[usize],
     opts: &MethodOptions,
+    dda_steps: &[u32],
     progress: &dyn Fn(&str),
 ) -> Result<Vec<WarpRow>, SynthError> {
     if layers.is_empty() || layers.iter().any(|&l| l == 0 || l > 8) {
@@ -184,8 +349,18 @@ pub fn run(
             if m == Method::Mesh && n != mesh_layers {
                 continue;
             }
-            progress(&format!("{m}, {n} layer(s)"));
-            rows.push(measure(&scene.name, &r, setup, m, opts, truths.as_ref()).0);
+            let steps = match m {
+                Method::Dda if !dda_steps.is_empty() => dda_steps.to_vec(),
+                _ => vec![opts.dda_max_steps],
+            };
+            for st in steps {
+                progress(&format!("{m}, {n} layer(s)"));
+                let o = MethodOptions {
+                    dda_max_steps: st,
+                    ..*opts
+                };
+                rows.push(measure(&scene.name, &r, setup, m, &o, truths.as_ref()).0);
+            }
         }
     }
     Ok(rows)

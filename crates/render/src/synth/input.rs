@@ -20,7 +20,7 @@ use parallax_core::{Image, Rgb};
 use parallax_raster::normals::{DEFAULT_MAX_REL_ERROR, normals_from_depth};
 use parallax_scene::CameraDesc;
 use parallax_scene::camera::Pinhole;
-use parallax_screen::UnitCube;
+use parallax_screen::{CubeNear, UnitCube};
 
 use super::SynthError;
 use super::layers::{Reference, ReferenceTimes};
@@ -93,7 +93,9 @@ pub fn input_desc(
     Ok(desc)
 }
 
-/// A single-layer reference from a colour image and its view depth seen by `desc`'s pinhole.
+/// A single-layer reference from a colour image and its view depth seen by `desc`'s pinhole
+/// (unit cube: [`CubeNear::Fitted`]; [`Reference::fit_cube`] picks another near plane, and
+/// [`super::stereo::warp_stereo`] applies [`super::MethodOptions::cube_near`]).
 pub fn reference_from_images(
     color: Image<Rgb>,
     depth: &Image<f32>,
@@ -147,6 +149,7 @@ pub fn reference_from_images(
         layers: vec![g],
         colors: vec![Image::from_vec(w, h, shown)?],
         cube,
+        cube_near: CubeNear::Fitted,
         background,
         times: ReferenceTimes::default(),
     })

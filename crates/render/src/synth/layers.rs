@@ -31,7 +31,7 @@ use parallax_core::{Image, Rgb};
 use parallax_raster::{RasterOptions, View, capture_layers, capture_layers_filtered};
 use parallax_scene::Scene;
 use parallax_scene::camera::{CameraModel, Pinhole};
-use parallax_screen::UnitCube;
+use parallax_screen::{CubeNear, UnitCube};
 use serde::Serialize;
 
 use super::SynthError;
@@ -85,8 +85,12 @@ pub struct Reference {
     pub layers: Vec<GBuffer>,
     /// Linear colour of every layer sample (environment colour where uncovered).
     pub colors: Vec<Image<Rgb>>,
-    /// The unit cube fitted around the captured depths (§3.2).
+    /// The unit cube around the captured depths (§3.2), its near plane chosen by
+    /// [`Self::cube_near`]; every tracer built over this reference and the warp use it.
     pub cube: UnitCube,
+    /// How [`Self::cube`]'s near plane was placed ([`CubeNear`]; capture fits
+    /// [`CubeNear::Fitted`], [`Self::fit_cube`] changes it).
+    pub cube_near: CubeNear,
     /// Colour of rays that miss everything (the scene's environment).
     pub background: Rgb,
     pub times: ReferenceTimes,
@@ -98,6 +102,21 @@ impl Reference {
     }
     pub fn height(&self) -> u32 {
         self.camera.height
+    }
+
+    /// Refits [`Self::cube`] around the captured depths of every layer with its near plane
+    /// at `near` ([`UnitCube::fit`]): [`CubeNear::Fitted`] starts every ray at half the
+    /// nearest captured depth (our global empty-space skip), [`CubeNear::Camera`] at the
+    /// camera near plane (Widmer et al. 2015, §3.2: the NDC cube is the camera frustum, the
+    /// setting of their Tables 2-3). The far plane (twice the farthest depth) is the same
+    /// for both. A no-op when the cube already has that setting.
+    pub fn fit_cube(&mut self, near: CubeNear) -> Result<(), SynthError> {
+        if near != self.cube_near {
+            self.cube =
+                UnitCube::fit(&self.camera, self.layers.iter().map(|g| &g.depth[..]), near)?;
+            self.cube_near = near;
+        }
+        Ok(())
     }
 }
 
@@ -200,6 +219,7 @@ pub fn capture_reference_with(
         layers: gbuffers,
         colors,
         cube,
+        cube_near: CubeNear::Fitted,
         background: scene.environment,
         times: ReferenceTimes {
             capture_ms,

@@ -16,8 +16,9 @@ use std::str::FromStr;
 use parallax_core::image::GBuffer;
 pub use parallax_screen::NormalSource;
 use parallax_screen::{
-    BruteForcePlanes, DdaOptions, DdaTracer, HiZOptions, HiZTracer, LayerMode, LayerPlanes,
-    MinMaxOptions, MinMaxTracer, QuadTreeOptions, QuadTreeTracer, ScreenTracer, UnitCube,
+    BruteForcePlanes, CubeNear, DdaOptions, DdaTracer, HiZOptions, HiZTracer, LayerMode,
+    LayerPlanes, MinMaxOptions, MinMaxTracer, QuadTreeOptions, QuadTreeTracer, ScreenTracer,
+    UnitCube,
 };
 use serde::Serialize;
 
@@ -101,7 +102,7 @@ impl FromStr for Method {
 /// | option | type | default | used by | meaning |
 /// |---|---|---|---|---|
 /// | `normals` | [`NormalSource`] | G-buffer | all tracers | where per-pixel plane normals come from |
-/// | `dda_max_steps` | u32 | 200 | dda | march step bound (paper: 200 stereo, 500 upsampling) |
+/// | `dda_max_steps` | u32 | 260 | dda | march step bound ([`parallax_screen::DdaOptions`]: minimal artifact-free for 1600x900 stereo from a 0.1 m camera near plane; fitted cube: 16; paper: 200 stereo, 500 upsampling) |
 /// | `gamma_norm` | f32 (cos) | cos 3° | quadtree | normal-similarity merge threshold (§3.3, §6) |
 /// | `gamma_dist` | f32 | 1e-5 | quadtree | plane-distance merge threshold (§3.3, §6) |
 /// | `adaptive` | bool | false | quadtree | depth-adaptive thresholds (§6, Fig. 15) |
@@ -109,6 +110,13 @@ impl FromStr for Method {
 /// | `inpaint` | bool | false | quadtree | single-layer inpainting traversal (§4.1) |
 /// | `mesh_max_rel_jump` | f32 | inf | mesh | split grid triangles whose depths differ by more than this fraction |
 /// | `warp` | [`WarpOptions`] | bilinear + guard | all tracers | colour resampling and layer-0 guard of [`super::warp`] |
+/// | `cube_near` | [`CubeNear`] | fitted | all tracers | near plane of the reference's unit cube, where every ray starts (applied by [`super::stereo::warp_stereo`] and [`super::upsample::upsample`] through [`Reference::fit_cube`]) |
+///
+/// **`cube_near`.** [`CubeNear::Fitted`] (ours) starts rays at half the nearest captured
+/// depth, a global empty-space skip; [`CubeNear::Camera`] at a camera near plane, Widmer et
+/// al.'s NDC cube (§3.2), whose long screen-space rays are why their DDA needed 200 / 500
+/// max steps. The choice does not change what a ray hits (nothing is captured in front of
+/// half the nearest depth), only how far each tracer walks before reaching it.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct MethodOptions {
     #[serde(skip)]
@@ -121,13 +129,14 @@ pub struct MethodOptions {
     pub inpaint: bool,
     pub mesh_max_rel_jump: f32,
     pub warp: WarpOptions,
+    pub cube_near: CubeNear,
 }
 
 impl Default for MethodOptions {
     fn default() -> Self {
         Self {
             normals: NormalSource::GBuffer,
-            dda_max_steps: 200,
+            dda_max_steps: DdaOptions::default().max_steps,
             gamma_norm: 3f32.to_radians().cos(),
             gamma_dist: 1e-5,
             adaptive: false,
@@ -135,6 +144,7 @@ impl Default for MethodOptions {
             inpaint: false,
             mesh_max_rel_jump: f32::INFINITY,
             warp: WarpOptions::default(),
+            cube_near: CubeNear::Fitted,
         }
     }
 }
@@ -227,12 +237,21 @@ pub enum Synthesizer {
 }
 
 impl Synthesizer {
-    /// Builds `method` over `reference` (the structure build of `T_ref`).
+    /// Builds `method` over `reference` (the structure build of `T_ref`). Errors when the
+    /// reference's cube was fitted with another near plane than `opts.cube_near` (call
+    /// [`Reference::fit_cube`] first, as [`super::stereo::warp_stereo`] does).
     pub fn build(
         method: Method,
         reference: &Reference,
         opts: &MethodOptions,
     ) -> Result<Self, SynthError> {
+        if reference.cube_near != opts.cube_near {
+            return Err(SynthError::Invalid(format!(
+                "the reference's cube near plane is {}, the options ask for {}: call Reference::fit_cube",
+                cube_near_name(reference.cube_near),
+                cube_near_name(opts.cube_near)
+            )));
+        }
         Ok(match method {
             Method::Mesh => Synthesizer::Mesh(GridMesh::build(reference, opts.mesh_max_rel_jump)?),
             m => Synthesizer::Tracer(
@@ -248,5 +267,38 @@ impl Synthesizer {
             Synthesizer::Tracer(t, w) => Ok(warp_view_with(t.as_ref(), reference, target, w)),
             Synthesizer::Mesh(m) => m.warp(target),
         }
+    }
+}
+
+/// Parses a cube near-plane setting: `fitted` ([`CubeNear::Fitted`]) or a camera near plane
+/// in metres (`0.1`, [`CubeNear::Camera`], Widmer's setting); `camera` alone means 0.1 m.
+pub fn parse_cube_near(s: &str) -> Result<CubeNear, SynthError> {
+    let t = s.trim().to_ascii_lowercase();
+    let metres = match t.as_str() {
+        "fitted" => return Ok(CubeNear::Fitted),
+        "camera" => 0.1,
+        v => v
+            .strip_prefix("camera:")
+            .unwrap_or(v)
+            .parse::<f32>()
+            .map_err(|_| {
+                SynthError::Invalid(format!(
+                    "near plane {s:?}: expected fitted, camera or a distance in metres"
+                ))
+            })?,
+    };
+    if !(metres.is_finite() && metres > 0.0) {
+        return Err(SynthError::Invalid(format!(
+            "camera near plane must be finite and > 0 m, got {s:?}"
+        )));
+    }
+    Ok(CubeNear::Camera(metres))
+}
+
+/// The label of a cube near-plane setting: `fitted` or `camera <metres> m`.
+pub fn cube_near_name(near: CubeNear) -> String {
+    match near {
+        CubeNear::Fitted => "fitted".into(),
+        CubeNear::Camera(m) => format!("camera {m} m"),
     }
 }

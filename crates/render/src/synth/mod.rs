@@ -33,7 +33,8 @@ pub mod warp;
 pub use layers::{
     HiddenLayers, Reference, ReferenceTimes, Shading, capture_reference, capture_reference_with,
 };
-pub use method::{Method, MethodOptions, build_tracer};
+pub use method::{Method, MethodOptions, build_tracer, cube_near_name, parse_cube_near};
+pub use parallax_screen::CubeNear;
 pub use score::{Score, score};
 pub use warp::{HitKind, WarpedView, warp_view};
 

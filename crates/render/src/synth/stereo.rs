@@ -38,8 +38,9 @@ impl StereoViews {
     }
 }
 
-/// Builds `method` over `reference` (its time goes to `reference.times.build_ms`) and warps
-/// the reference to both eyes of the pose `desc` (the reference's own pose).
+/// Fits `reference`'s cube with `opts.cube_near` ([`Reference::fit_cube`], not timed), builds
+/// `method` over it (its time goes to `reference.times.build_ms`) and warps the reference to
+/// both eyes of the pose `desc` (the reference's own pose).
 pub fn warp_stereo(
     reference: &mut Reference,
     desc: &CameraDesc,
@@ -48,6 +49,7 @@ pub fn warp_stereo(
     opts: &MethodOptions,
 ) -> Result<StereoViews, SynthError> {
     let eyes = stereo_eyes(desc, reference.width(), reference.height(), ipd)?;
+    reference.fit_cube(opts.cube_near)?;
     let t = Instant::now();
     let synth = Synthesizer::build(method, reference, opts)?;
     reference.times.build_ms = t.elapsed().as_secs_f64() * 1e3;

@@ -97,7 +97,7 @@ pub fn scene_path(scene: &Scene) -> Result<CameraPath, SynthError> {
     }
 }
 
-/// Runs the sequence, calling `on_frame` for every frame in order; returns the timings.
+/// Runs the sequence (each reference's cube fitted with `opts.method_opts.cube_near`), calling `on_frame` for every frame in order; returns the timings.
 pub fn upsample(
     scene: &Scene,
     bvh: &Bvh,
@@ -129,6 +129,7 @@ pub fn upsample(
         if is_reference {
             let mut r =
                 capture_reference(scene, bvh, &camera, opts.layers, opts.shading, opts.seed)?;
+            r.fit_cube(opts.method_opts.cube_near)?;
             let t = Instant::now();
             let s = Synthesizer::build(opts.method, &r, &opts.method_opts)?;
             r.times.build_ms = t.elapsed().as_secs_f64() * 1e3;
