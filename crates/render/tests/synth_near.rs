@@ -106,8 +106,9 @@ fn stereo_camera_near_matches_fitted() {
         // dB); min-max and Hi-Z identical but for float noise (>= 43 dB, >= 0.9998); brute 2
         // layers 37.8-40.6 dB, 0.9991-0.9995 (the warp's layer-0 guard marches a DDA over
         // the same cube); quad-tree 33.3-39.0 dB, 0.9983-0.99995, +0.05..+0.2 dB against the
-        // BVH (its gamma_dist merge tolerance is in cube units, so a different cube merges
-        // different planes). The DDA is the exception: it samples one pixel per stride
+        // BVH (a different cube quantises the planes differently — f16 normals, f32 z —
+        // and merges slightly different nodes, although `gamma_dist_scale` keeps the merge
+        // tolerance the same in inverse depth). The DDA is the exception: it samples one pixel per stride
         // counted from the segment's start, so moving the start moves every sample; 2.7% of
         // the answers change (silhouette pixels), 19.5-21.1 dB between the two images, and
         // its PSNR against the BVH moves by -0.35..+0.8 dB either way — sampling noise of a

@@ -104,7 +104,7 @@ impl FromStr for Method {
 /// | `normals` | [`NormalSource`] | G-buffer | all tracers | where per-pixel plane normals come from |
 /// | `dda_max_steps` | u32 | 260 | dda | march step bound ([`parallax_screen::DdaOptions`]: minimal artifact-free for 1600x900 stereo from a 0.1 m camera near plane; fitted cube: 16; paper: 200 stereo, 500 upsampling) |
 /// | `gamma_norm` | f32 (cos) | cos 3° | quadtree | normal-similarity merge threshold (§3.3, §6) |
-/// | `gamma_dist` | f32 | 1e-5 | quadtree | plane-distance merge threshold (§3.3, §6) |
+/// | `gamma_dist` | f32 | 1e-5 | quadtree | plane-distance merge threshold (§3.3, §6), in fitted-cube `z` units whatever `cube_near` is ([`gamma_dist_scale`]) |
 /// | `adaptive` | bool | false | quadtree | depth-adaptive thresholds (§6, Fig. 15) |
 /// | `max_levels` | Option<u32> | None (full) | quadtree | levels of the tree |
 /// | `inpaint` | bool | false | quadtree | single-layer inpainting traversal (§4.1) |
@@ -162,11 +162,11 @@ pub fn build_tracer(
     }
     let n = layers.len();
     match method {
-        Method::QuadTree => Ok(Box::new(QuadTreeTracer::build(
-            cube,
-            layers,
-            &quadtree_options(opts),
-        )?)),
+        Method::QuadTree => {
+            let mut q = quadtree_options(opts);
+            q.gamma_dist *= gamma_dist_scale(cube, layers)?;
+            Ok(Box::new(QuadTreeTracer::build(cube, layers, &q)?))
+        }
         Method::Dda => {
             let o = DdaOptions {
                 max_steps: opts.dda_max_steps,
@@ -197,7 +197,26 @@ pub fn build_tracer(
     }
 }
 
-/// The quad-tree options of `opts` (the quad-tree's own defaults for everything else).
+/// The factor that turns a `gamma_dist` given in units of the **fitted** cube's `z`
+/// ([`CubeNear::Fitted`], where §6's default `1e-5` was tuned: no visible loss against the
+/// lossless tree) into units of `cube`'s `z`. Cube `z` is inverse depth scaled by
+/// `1 / (1/near - 1/far)`, so one `z` unit of a cube with a 0.1 m camera near plane spans
+/// ~16x more inverse depth than one of the atrium's fitted cube: without this factor the
+/// same `gamma_dist` merges planes 16x farther apart in the world, and the two-layer atrium
+/// warp lost 0.7 dB (30.07 -> 29.36). With it, the near plane changes where rays start but
+/// not how much the tree simplifies. `1.0` for the fitted cube.
+pub fn gamma_dist_scale(cube: &UnitCube, layers: &[GBuffer]) -> Result<f32, SynthError> {
+    let fitted = UnitCube::fit(
+        &cube.camera,
+        layers.iter().map(|g| &g.depth[..]),
+        CubeNear::Fitted,
+    )?;
+    let span = |c: &UnitCube| 1.0 / c.near as f64 - 1.0 / c.far as f64;
+    Ok((span(&fitted) / span(cube)) as f32)
+}
+
+/// The quad-tree options of `opts` (the quad-tree's own defaults for everything else;
+/// `gamma_dist` in fitted-cube units, see [`gamma_dist_scale`]).
 pub fn quadtree_options(opts: &MethodOptions) -> QuadTreeOptions {
     let d = QuadTreeOptions::default();
     QuadTreeOptions {
