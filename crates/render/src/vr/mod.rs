@@ -47,12 +47,14 @@ pub mod intersect;
 pub mod packet;
 pub mod patterns;
 pub mod samples;
+pub mod tile_setup;
 pub mod visibility;
 
-pub use cast::{CastStats, cast, cast_with};
+pub use cast::{CastOptions, CastStats, cast, cast_opts, cast_with};
 pub use hierarchy::{Block, Hierarchy, HierarchyError, Tile};
 pub use patterns::PatternError;
 pub use samples::{Sample, SampleSet};
+pub use tile_setup::SampleTest;
 pub use visibility::{VisibilityBuffer, trace_per_ray};
 
 // HVVR around the visibility stage (issue 5 parts 4-6): presets, shading, resolve,
