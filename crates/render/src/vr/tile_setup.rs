@@ -47,8 +47,9 @@ use glam::{Vec3, Vec4};
 use parallax_bvh::Tri4;
 use parallax_bvh::beam::LeafRef;
 use parallax_bvh::node::{leaf_count, leaf_first};
-use parallax_core::NO_ID;
 use parallax_core::math::Beam;
+use parallax_core::math::ROBUST_FAR_SCALE;
+use parallax_core::{Aabb, NO_ID};
 
 use super::SampleSet;
 use super::packet::{ClosestN, Lanes, RaysN, gen_n};
@@ -202,6 +203,9 @@ impl TriSetup {
 pub struct Segment {
     pub end: u32,
     pub near: f32,
+    /// Box of the run's triangles relative to the origin (`min - o`, `max - o`).
+    pub lo: Vec3,
+    pub hi: Vec3,
 }
 
 /// Counts of the corner classification.
@@ -241,6 +245,7 @@ pub fn setup_tile(
     out.segs.clear();
     let corners = BeamCorners::new(beam);
     for r in leaves {
+        let mut bx = Aabb::EMPTY;
         let (first, count) = (leaf_first(r.leaf), leaf_count(r.leaf));
         for j in 0..count {
             let b = &blocks[(first + j / 4) as usize];
@@ -265,12 +270,30 @@ pub fn setup_tile(
                 CornerClass::Partial => out.counts.partial += 1,
             }
             out.tris.push(s);
+            bx = bx.grow(v[0]).grow(v[1]).grow(v[2]);
         }
         let end = out.tris.len() as u32;
         if out.segs.last().map_or(0, |s| s.end) < end {
-            out.segs.push(Segment { end, near: r.near });
+            out.segs.push(Segment {
+                end,
+                near: r.near,
+                lo: bx.min - origin,
+                hi: bx.max - origin,
+            });
         }
     }
+}
+
+/// `a > b ? a : b` per lane (NaN in `a` gives `b`).
+#[inline(always)]
+fn max_or_rhs<L: Lanes>(a: L, b: L) -> L {
+    L::select(a.gt(b), a, b)
+}
+
+/// `a < b ? a : b` per lane (NaN in `a` gives `b`).
+#[inline(always)]
+fn min_or_rhs<L: Lanes>(a: L, b: L) -> L {
+    L::select(a.lt(b), a, b)
 }
 
 /// The closest hit of every lane of `rays` against the set-up list (module docs); `axis` /
@@ -297,6 +320,11 @@ fn closest_setup<L: Lanes>(
     let mut exit_depth = f32::INFINITY;
     let mut start = 0usize;
     let oa = tt.origin[axis];
+    let one = L::splat(1.0);
+    let inv = [one / dx, one / dy, one / dz];
+    let neg = [inv[0].lt(zero), inv[1].lt(zero), inv[2].lt(zero)];
+    let mut box_lim = L::splat(f32::INFINITY);
+    let far = L::splat(ROBUST_FAR_SCALE);
     for seg in &tt.segs {
         if hit_lanes == valid && seg.near > exit_depth + slack {
             break;
@@ -304,6 +332,21 @@ fn closest_setup<L: Lanes>(
         let end = seg.end as usize;
         let tris = &tt.tris[start..end];
         start = end;
+        // The BVH's robust slab test (Ize 2013 far scaling) of the packet on the run's box:
+        // runs no ray of the packet can reach (before its closest hit so far) are skipped.
+        let slab = |lo: f32, hi: f32, ax: usize| {
+            let t0 = L::splat(lo) * inv[ax];
+            let t1 = L::splat(hi) * inv[ax];
+            (L::select(neg[ax], t1, t0), L::select(neg[ax], t0, t1))
+        };
+        let (tnx, tfx) = slab(seg.lo.x, seg.hi.x, 0);
+        let (tny, tfy) = slab(seg.lo.y, seg.hi.y, 1);
+        let (tnz, tfz) = slab(seg.lo.z, seg.hi.z, 2);
+        let t_near = max_or_rhs(tnz, max_or_rhs(tny, max_or_rhs(tnx, zero)));
+        let t_far = min_or_rhs(tfz, min_or_rhs(tfy, min_or_rhs(tfx, box_lim)));
+        if L::bits(t_near.le(t_far * far)) & valid == 0 {
+            continue;
+        }
         *tests += tris.len() as u64;
         let mut changed = false;
         for tr in tris {
@@ -359,6 +402,7 @@ fn closest_setup<L: Lanes>(
                     exit_depth = exit_depth.max(sign * (oa + t * rays.d[axis].get(l)));
                 }
             }
+            box_lim = L::from_fn(|l| 1.0 / best.get(l));
         }
     }
     for l in 0..L::N {
