@@ -2,7 +2,7 @@
 //! stereo rig 1080 x 1200 per eye (film 2160 x 1200), spp 1, 8, 16, 32.
 //!
 //! `cargo run --release -p parallax-render --example vr_speed [-- scene eye_w h spp,spp,.. lanes
-//! setup|watertight]` (defaults: atrium 1080 1200 1,8,16,32 8 setup)
+//! setup|watertight]` (defaults: atrium 1080 1200 1,8,16,32 4 setup)
 //!
 //! Prints per spp: hierarchy build time, the beam caster's wall time and Mrays/s (best of 3),
 //! the per-ray baseline's (best of 2),
@@ -50,7 +50,7 @@ fn main() {
         .map(|s| s.split(',').filter_map(|x| x.parse().ok()).collect())
         .unwrap_or_else(|| vec![1, 8, 16, 32]);
     // Sample-test kernel: 4 = SSE packets (default), 8 = AVX2 packets, 1 = one ray at a time.
-    let lanes: usize = args.get(5).and_then(|s| s.parse().ok()).unwrap_or(8);
+    let lanes: usize = args.get(5).and_then(|s| s.parse().ok()).unwrap_or(4);
     // Sample test: `setup` (HVVR's per-tile triangle set-up, the default) or `watertight`.
     let test = match args.get(6).map(String::as_str) {
         Some("watertight") => SampleTest::Watertight,

@@ -284,6 +284,21 @@ pub fn setup_tile(
     }
 }
 
+/// `n . d` per lane in the scalar order of [`dot3`] (no FMA: plain functions, not closures,
+/// so they are compiled inside the AVX2 entry point).
+#[inline(always)]
+fn dot_n<L: Lanes>(n: [f32; 3], dx: L, dy: L, dz: L) -> L {
+    L::splat(n[0]) * dx + L::splat(n[1]) * dy + L::splat(n[2]) * dz
+}
+
+/// Entry and exit `t` of one slab (`lo`, `hi` relative to the origin).
+#[inline(always)]
+fn slab<L: Lanes>(lo: f32, hi: f32, inv: L, neg: L::M) -> (L, L) {
+    let t0 = L::splat(lo) * inv;
+    let t1 = L::splat(hi) * inv;
+    (L::select(neg, t1, t0), L::select(neg, t0, t1))
+}
+
 /// `a > b ? a : b` per lane (NaN in `a` gives `b`).
 #[inline(always)]
 fn max_or_rhs<L: Lanes>(a: L, b: L) -> L {
@@ -334,14 +349,9 @@ fn closest_setup<L: Lanes>(
         start = end;
         // The BVH's robust slab test (Ize 2013 far scaling) of the packet on the run's box:
         // runs no ray of the packet can reach (before its closest hit so far) are skipped.
-        let slab = |lo: f32, hi: f32, ax: usize| {
-            let t0 = L::splat(lo) * inv[ax];
-            let t1 = L::splat(hi) * inv[ax];
-            (L::select(neg[ax], t1, t0), L::select(neg[ax], t0, t1))
-        };
-        let (tnx, tfx) = slab(seg.lo.x, seg.hi.x, 0);
-        let (tny, tfy) = slab(seg.lo.y, seg.hi.y, 1);
-        let (tnz, tfz) = slab(seg.lo.z, seg.hi.z, 2);
+        let (tnx, tfx) = slab(seg.lo.x, seg.hi.x, inv[0], neg[0]);
+        let (tny, tfy) = slab(seg.lo.y, seg.hi.y, inv[1], neg[1]);
+        let (tnz, tfz) = slab(seg.lo.z, seg.hi.z, inv[2], neg[2]);
         let t_near = max_or_rhs(tnz, max_or_rhs(tny, max_or_rhs(tnx, zero)));
         let t_far = min_or_rhs(tfz, min_or_rhs(tfy, min_or_rhs(tfx, box_lim)));
         if L::bits(t_near.le(t_far * far)) & valid == 0 {
@@ -350,8 +360,7 @@ fn closest_setup<L: Lanes>(
         *tests += tris.len() as u64;
         let mut changed = false;
         for tr in tris {
-            let dot = |n: [f32; 3]| L::splat(n[0]) * dx + L::splat(n[1]) * dy + L::splat(n[2]) * dz;
-            let gd = dot(tr.g);
+            let gd = dot_n(tr.g, dx, dy, dz);
             let ge = gd.ge(best);
             if L::bits(ge) & valid == 0 {
                 continue;
@@ -359,7 +368,9 @@ fn closest_setup<L: Lanes>(
             let inside = if tr.all_in {
                 ge
             } else {
-                let m = dot(tr.n[0]).min(dot(tr.n[1])).min(dot(tr.n[2]));
+                let m = dot_n(tr.n[0], dx, dy, dz)
+                    .min(dot_n(tr.n[1], dx, dy, dz))
+                    .min(dot_n(tr.n[2], dx, dy, dz));
                 L::and(ge, m.ge(zero))
             };
             let ib = L::bits(inside) & valid;
