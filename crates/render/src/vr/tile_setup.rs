@@ -58,6 +58,8 @@
 //! | 16  | 5.02x (7.3)             | 2.53x (5.3)       |
 //! | 32  | 3.86x (7.3)             | 2.30x (5.6)       |
 //!
+//! Interleaved spp-16-only runs at load 7-8: set-up 3.95x (10.4 Mrays/s), watertight 2.10x
+//! (5.7), set-up 4.37x (13.0): the set-up kernel casts 1.8-2.3x faster than the watertight one.
 //! (A spp-16-only pair of runs gave 4.05x for the 4-lane and 3.81x for the 8-lane set-up kernel,
 //! and 3.43x / 4.70x in another pair: the AVX2 8-lane build is no faster — LLVM leaves most of
 //! its `[f32; 8]` lane loops scalar (objdump: ~5x more xmm than ymm instructions), so 4 lanes
