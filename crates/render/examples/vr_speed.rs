@@ -1,7 +1,8 @@
 //! HVVR beam caster vs per-ray BVH traversal (Hunt et al. 2018, Table 5 / 6 workload): atrium,
 //! stereo rig 1080 x 1200 per eye (film 2160 x 1200), spp 1, 8, 16, 32.
 //!
-//! `cargo run --release -p parallax-render --example vr_speed [-- scene eye_w h spp,spp,.. lanes]`
+//! `cargo run --release -p parallax-render --example vr_speed [-- scene eye_w h spp,spp,.. lanes
+//! setup|watertight]` (defaults: atrium 1080 1200 1,8,16,32 4 setup)
 //!
 //! Prints per spp: hierarchy build time, the beam caster's wall time and Mrays/s (best of 3),
 //! the per-ray baseline's (best of 2),
@@ -11,7 +12,9 @@
 use std::time::Instant;
 
 use parallax_bvh::Bvh;
-use parallax_render::vr::{Hierarchy, SampleSet, VisibilityBuffer, cast_with, trace_per_ray};
+use parallax_render::vr::{
+    CastOptions, Hierarchy, SampleSet, SampleTest, VisibilityBuffer, cast_opts, trace_per_ray,
+};
 use parallax_scene::Scene;
 use parallax_scene::camera::{Camera, CameraOptions, ModelKind};
 
@@ -48,6 +51,12 @@ fn main() {
         .unwrap_or_else(|| vec![1, 8, 16, 32]);
     // Sample-test kernel: 4 = SSE packets (default), 8 = AVX2 packets, 1 = one ray at a time.
     let lanes: usize = args.get(5).and_then(|s| s.parse().ok()).unwrap_or(4);
+    // Sample test: `setup` (HVVR's per-tile triangle set-up, the default) or `watertight`.
+    let test = match args.get(6).map(String::as_str) {
+        Some("watertight") => SampleTest::Watertight,
+        _ => SampleTest::TileSetup,
+    };
+    let opts = CastOptions { test, lanes };
     let scene = Scene::load(scene_name).expect("scene");
     let bvh = Bvh::build(&scene.mesh);
     let desc = scene.camera(None).unwrap();
@@ -60,7 +69,7 @@ fn main() {
     )
     .unwrap();
     println!(
-        "{scene_name}: {} triangles, {} nodes; stereo {}x{} per eye (film {}x{}), {} threads, {lanes}-lane sample test",
+        "{scene_name}: {} triangles, {} nodes; stereo {}x{} per eye (film {}x{}), {} threads, {lanes}-lane {test:?} sample test",
         bvh.triangle_count(),
         bvh.node_count(),
         eye_w,
@@ -77,7 +86,7 @@ fn main() {
         let mut beam = VisibilityBuffer::new(&set);
         let mut best = None;
         for _ in 0..3 {
-            let s = cast_with(&bvh, &set, &hier, &mut beam, lanes);
+            let s = cast_opts(&bvh, &set, &hier, &mut beam, opts);
             if best.is_none_or(|b: parallax_render::vr::CastStats| s.wall < b.wall) {
                 best = Some(s);
             }

@@ -15,6 +15,7 @@ use parallax_core::math::PreparedBeam;
 use rayon::prelude::*;
 
 use super::intersect::{LeafBox, LeafGroup, group_leaves, test_tile};
+use super::tile_setup::{SampleTest, TileTris, setup_tile, shared_origin, test_tile_setup};
 use super::{Hierarchy, SampleSet, VisibilityBuffer};
 
 /// Per-stage times (summed over threads: CPU time, not wall time) and work counts of a cast.
@@ -37,6 +38,36 @@ pub struct CastStats {
     pub leaf_tests: u64,
     /// Valid subsample rays cast.
     pub rays: u64,
+    /// Tiles run through the set-up kernel ([`SampleTest::TileSetup`], shared origin).
+    pub setup_tiles: u64,
+    /// Packet-triangle tests of the set-up kernel (one per packet and set-up triangle reached).
+    pub tri_tests: u64,
+    /// Corner classification of the set-up tiles' triangles (§5.5): dropped (all-out or
+    /// edge-on), partial, all-in.
+    pub tris_all_out: u64,
+    pub tris_partial: u64,
+    pub tris_all_in: u64,
+}
+
+/// The caster's sample-test choice: the kernel and the SIMD width of its ray packets (`4` SSE,
+/// `8` AVX2 when detected (else 4), `1` one ray at a time — watertight kernel only; the set-up
+/// kernel treats `1` as `4`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CastOptions {
+    pub test: SampleTest,
+    pub lanes: usize,
+}
+
+impl Default for CastOptions {
+    /// The set-up kernel on 4-lane SSE packets (the 8-lane AVX2 build of the same kernel
+    /// measured no faster: LLVM leaves most of its `[f32; 8]` lane loops scalar; module docs of
+    /// `tile_setup.rs`).
+    fn default() -> Self {
+        CastOptions {
+            test: SampleTest::TileSetup,
+            lanes: 4,
+        }
+    }
 }
 
 /// Shared output pointers (each sample is written by exactly one tile).
@@ -69,20 +100,23 @@ fn scene_scale(bvh: &Bvh, h: &Hierarchy) -> f32 {
 }
 
 /// Casts every subsample ray of `set` (tiles and blocks of `hierarchy`, built for `set`) and
-/// writes the closest hits to `out`: for each subsample the same triangle and `t` as
-/// [`super::trace_per_ray`] (module docs of `intersect.rs`). Panics if `hierarchy` or `out` was
-/// made for another set (a programming error).
+/// writes the closest hits to `out` with the default [`CastOptions`]: for each subsample the
+/// closest triangle of [`super::trace_per_ray`] up to edge cases within float tolerance
+/// (module docs of `tile_setup.rs`). Panics if `hierarchy` or `out` was made for another set (a
+/// programming error).
 pub fn cast(
     bvh: &Bvh,
     set: &SampleSet,
     hierarchy: &Hierarchy,
     out: &mut VisibilityBuffer,
 ) -> CastStats {
-    cast_with(bvh, set, hierarchy, out, 4)
+    cast_opts(bvh, set, hierarchy, out, CastOptions::default())
 }
 
-/// [`cast`] with the choice of sample-test kernel: `lanes = 4` tests four rays at a time on
-/// SSE (`packet.rs`, the default), `8` eight rays at a time on AVX2 (four without AVX2), `1` one
+/// [`cast`] with the exact watertight sample test ([`SampleTest::Watertight`]: the same triangle
+/// and `t`, bit for bit, as [`super::trace_per_ray`], module docs of `intersect.rs`) and the
+/// choice of its kernel: `lanes = 4` tests four rays at a time on
+/// SSE (`packet.rs`), `8` eight rays at a time on AVX2 (four without AVX2), `1` one
 /// ray at a time against groups of four leaf boxes (`intersect.rs`); all give the same buffer.
 /// Measured (vr_speed, atrium 1080 x 600, spp 8): the 8-lane kernel is *slower* than the
 /// 4-lane one (speed-up over per-ray 1.7-2.0x vs 2.3-2.5x) — LLVM leaves some of the kernel's
@@ -95,6 +129,27 @@ pub fn cast_with(
     out: &mut VisibilityBuffer,
     lanes: usize,
 ) -> CastStats {
+    cast_opts(
+        bvh,
+        set,
+        hierarchy,
+        out,
+        CastOptions {
+            test: SampleTest::Watertight,
+            lanes,
+        },
+    )
+}
+
+/// [`cast`] with explicit [`CastOptions`].
+pub fn cast_opts(
+    bvh: &Bvh,
+    set: &SampleSet,
+    hierarchy: &Hierarchy,
+    out: &mut VisibilityBuffer,
+    opts: CastOptions,
+) -> CastStats {
+    let lanes = opts.lanes;
     let wall = Instant::now();
     assert!(
         hierarchy.sample_count == set.samples.len()
@@ -113,7 +168,7 @@ pub fn cast_with(
         prim: out.prim.as_mut_ptr(),
         t: out.t.as_mut_ptr(),
     };
-    let counters: [AtomicU64; 9] = Default::default();
+    let counters: [AtomicU64; 14] = Default::default();
     let add = |i: usize, v: u64| {
         counters[i].fetch_add(v, Ordering::Relaxed);
     };
@@ -125,9 +180,10 @@ pub fn cast_with(
                 CullScratch::default(),
                 Vec::<LeafGroup>::new(),
                 Vec::<LeafBox>::new(),
+                TileTris::default(),
             )
         },
-        |(scratch, groups, boxes), block| {
+        |(scratch, groups, boxes, tt), block| {
             // Capture the whole (Send) struct, not its raw-pointer fields.
             #[allow(clippy::redundant_locals)]
             let ptr = ptr;
@@ -144,6 +200,8 @@ pub fn cast_with(
             let (mut cull_ns, mut test_ns) = (0u64, 0u64);
             let (mut leaves_n, mut leaf_tests, mut rays, mut group_tests) =
                 (0u64, 0u64, 0u64, 0u64);
+            let (mut setup_tiles, mut tri_tests) = (0u64, 0u64);
+            tt.counts = Default::default();
             let tiles = &hierarchy.tiles
                 [block.first_tile as usize..(block.first_tile + block.tile_count) as usize];
             for tile in tiles {
@@ -153,10 +211,32 @@ pub fn cast_with(
                 let a = Instant::now();
                 let tb = PreparedBeam::new(&tile.beam, scale);
                 tile_cull(bvh, &SimdBeam::new(&tb), &entries, scratch);
-                group_leaves(bvh, &scratch.leaves, groups, boxes);
-                let b = Instant::now();
                 let samples =
                     &hierarchy.order[tile.start as usize..(tile.start + tile.len) as usize];
+                let origin = match opts.test {
+                    SampleTest::TileSetup => shared_origin(&tile.beam),
+                    SampleTest::Watertight => None,
+                };
+                if let Some(o) = origin {
+                    setup_tile(blocks_, &scratch.leaves, &tile.beam, o, tt);
+                    let b = Instant::now();
+                    // SAFETY: as below.
+                    let w = unsafe {
+                        test_tile_setup(
+                            set, prim_ids, samples, tt, &tile.beam, scale, lanes, ptr.prim, ptr.t,
+                        )
+                    };
+                    let c = Instant::now();
+                    cull_ns += (b - a).as_nanos() as u64;
+                    test_ns += (c - b).as_nanos() as u64;
+                    leaves_n += scratch.leaves.len() as u64;
+                    rays += w.rays;
+                    tri_tests += w.tri_tests;
+                    setup_tiles += 1;
+                    continue;
+                }
+                group_leaves(bvh, &scratch.leaves, groups, boxes);
+                let b = Instant::now();
                 // SAFETY: `order` is a permutation of the samples (built by `Hierarchy::build`,
                 // sizes checked above), so this tile's entries are written by no other tile.
                 let w = unsafe {
@@ -181,6 +261,11 @@ pub fn cast_with(
             add(6, rays);
             add(7, tiles.len() as u64);
             add(8, group_tests);
+            add(9, setup_tiles);
+            add(10, tri_tests);
+            add(11, tt.counts.all_out);
+            add(12, tt.counts.partial);
+            add(13, tt.counts.all_in);
         },
     );
     let g = |i: usize| counters[i].load(Ordering::Relaxed);
@@ -196,5 +281,10 @@ pub fn cast_with(
         leaf_tests: g(5),
         group_tests: g(8),
         rays: g(6),
+        setup_tiles: g(9),
+        tri_tests: g(10),
+        tris_all_out: g(11),
+        tris_partial: g(12),
+        tris_all_in: g(13),
     }
 }

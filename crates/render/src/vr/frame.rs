@@ -14,8 +14,8 @@ use super::reconstruct::reconstruct;
 use super::resolve::{Resolved, ShadingMode, resolve};
 use super::shade::{ShadeOptions, VrShader};
 use super::{
-    CastStats, Hierarchy, HierarchyError, PatternError, SampleSet, VisibilityBuffer, cast,
-    trace_per_ray,
+    CastOptions, CastStats, Hierarchy, HierarchyError, PatternError, SampleSet, SampleTest,
+    VisibilityBuffer, cast_opts, trace_per_ray,
 };
 
 /// Errors of a VR frame.
@@ -40,8 +40,12 @@ pub enum VrError {
 pub enum Visibility {
     /// Every subsample ray traced on its own through the BVH (the Table 6 baseline).
     PerRay,
-    /// HVVR's block / tile beam caster (§5.3-5.5).
+    /// HVVR's block / tile beam caster (§5.3-5.5) with its default sample test (the per-tile
+    /// triangle set-up, `tile_setup.rs`).
     Beam,
+    /// The beam caster with the exact watertight sample test (`intersect.rs`: bit-identical to
+    /// per-ray traversal).
+    BeamWatertight,
 }
 
 impl Visibility {
@@ -49,6 +53,7 @@ impl Visibility {
         match self {
             Visibility::PerRay => "per-ray",
             Visibility::Beam => "beam",
+            Visibility::BeamWatertight => "beam-watertight",
         }
     }
 
@@ -56,8 +61,9 @@ impl Visibility {
         match s {
             "per-ray" => Ok(Visibility::PerRay),
             "beam" => Ok(Visibility::Beam),
+            "beam-watertight" => Ok(Visibility::BeamWatertight),
             _ => Err(format!(
-                "unknown visibility method {s:?}; expected per-ray or beam"
+                "unknown visibility method {s:?}; expected per-ray or beam (or beam-watertight)"
             )),
         }
     }
@@ -69,7 +75,7 @@ impl Visibility {
 pub fn prepare(method: Visibility, set: &SampleSet) -> Result<Option<Hierarchy>, VrError> {
     Ok(match method {
         Visibility::PerRay => None,
-        Visibility::Beam => Some(Hierarchy::build(set)?),
+        Visibility::Beam | Visibility::BeamWatertight => Some(Hierarchy::build(set)?),
     })
 }
 
@@ -88,10 +94,19 @@ pub fn visibility_prepared(
             trace_per_ray(bvh, set, &mut out);
             None
         }
-        Visibility::Beam => match prepared {
-            Some(h) => Some(cast(bvh, set, h, &mut out)),
-            None => Some(cast(bvh, set, &Hierarchy::build(set)?, &mut out)),
-        },
+        Visibility::Beam | Visibility::BeamWatertight => {
+            let opts = match method {
+                Visibility::BeamWatertight => CastOptions {
+                    test: SampleTest::Watertight,
+                    lanes: 4,
+                },
+                _ => CastOptions::default(),
+            };
+            match prepared {
+                Some(h) => Some(cast_opts(bvh, set, h, &mut out, opts)),
+                None => Some(cast_opts(bvh, set, &Hierarchy::build(set)?, &mut out, opts)),
+            }
+        }
     };
     Ok((out, stats))
 }

@@ -16,9 +16,13 @@
 //!   relative slack), no later leaf can hold a hit at `t' <= t`, and the ray stops. HVVR's
 //!   future-work section proposes interleaving exactly this with tile culling.
 //!
+//! This is the exact kernel ([`super::SampleTest::Watertight`]): for tiles without a shared
+//! ray origin (thin lens) and on request. The default for tiles whose rays share an origin is
+//! HVVR's per-tile triangle set-up with tile-corner all-in / partial / all-out classification
+//! ([`super::tile_setup`]).
+//!
 //! Simplifications: no back-face culling (our meshes are two-sided), no near-plane culling
-//! (rays start at `t = 0` like the per-ray baseline), and no tile-corner all-in / all-out
-//! classification (the tile cull's beam/box test plays that role at leaf granularity).
+//! (rays start at `t = 0` like the per-ray baseline).
 
 use glam::{Vec3, Vec4};
 use parallax_bvh::Bvh;

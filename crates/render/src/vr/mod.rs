@@ -12,34 +12,31 @@
 //! The beam caster:
 //! - [`patterns`]: the sample patterns of §2 as [`SampleSet`] constructors;
 //! - [`hierarchy`]: tiles (<= 128 samples) and blocks (<= 64 tiles) with bounding beams (§5);
-//! - [`cast()`]: block cull, tile cull and sample testing (§5.3-5.5): [`packet`] (four rays
-//!   per SIMD op, the default) and [`intersect`] (one ray at a time, the fallback for packets
-//!   whose rays need different watertight permutations); the culling itself lives in
-//!   `parallax_bvh::beam`, the beam in `parallax_core::math::Beam`.
+//! - [`cast()`]: block cull, tile cull and sample testing (§5.3-5.5). The default sample test
+//!   is HVVR's per-tile triangle set-up ([`tile_setup`], [`SampleTest::TileSetup`]): per tile,
+//!   edge covectors and a `1/t` covector relative to the tiles' shared ray origin, tile-corner
+//!   all-in / partial / all-out classification, then packets of four rays (SSE; eight on AVX2
+//!   as an option) at a few multiply-adds per ray-triangle test. The exact kernels
+//!   ([`SampleTest::Watertight`]: [`packet`], four rays per SIMD op, and [`intersect`], one ray
+//!   at a time) run the BVH's own watertight test; they serve tiles without a shared origin
+//!   (thin lens) and are selectable ([`CastOptions`], `--visibility beam-watertight`). The
+//!   culling itself lives in `parallax_bvh::beam`, the beam in `parallax_core::math::Beam`.
 //!
-//! **Exactness.** Every kernel performs, per subsample ray, the f32 operations of the BVH's own
-//! watertight leaf test with the same tie-break, on rays bit-identical to
-//! [`SampleSet::subsample_ray`], and the culling is conservative, so the caster's buffer equals
+//! **Exactness.** The watertight kernels perform, per subsample ray, the f32 operations of the
+//! BVH's own leaf test with the same tie-break, on rays bit-identical to
+//! [`SampleSet::subsample_ray`], and the culling is conservative, so their buffer equals
 //! [`trace_per_ray`]'s subsample for subsample (tests/vr_cast.rs: agreement 1.0 and equal `t`
 //! on atrium and cornell for grid, per-channel distortion, foveated, 210 x 130 fisheye,
-//! thin-lens DoF and stereo, spp 1 and 4).
+//! thin-lens DoF and stereo, spp 1 and 4). The set-up kernel uses another (equally watertight
+//! on edges) edge function: it agrees on all but edge ties — another triangle at the same `t`
+//! within 1e-5 (shared edges; cornell's coplanar block bottoms on the floor, 0.3% of its
+//! samples at 96 x 64) — and its `t` is within 1e-5 relative (tests/vr_cast.rs).
 //!
-//! **Measured** (`cargo run --release -p parallax-render --example vr_speed`, atrium 49k
-//! triangles, stereo 1080 x 1200 per eye = 2160 x 1200, 4-lane kernel, 2 threads on a 2-core VM
-//! shared with other jobs (load 1.5-9), so absolute rates swing 3x between runs; speed-up =
-//! beam caster / per-ray `trace_per_ray` on the same rays in the same process; four full runs):
-//! spp 1: 1.6-2.8x, spp 8: 2.4-3.6x, spp 16: 2.2-3.1x (3.3x and 6.1x in two spp-16-only runs at
-//! lower load), spp 32: 2.6-4.8x; best beam rate 26 Mrays/s (spp 16). The issue's aim of 5x at
-//! spp 16 is **not** reliably reached. Where the time
-//! goes: the sample test is ~95% of the caster's CPU time (block cull < 1%, tile cull 2-5%);
-//! per packet of four rays ~6.3 leaf-box slab tests and ~5.2 triangle tests, plus the ray
-//! generation and shear set-up (~18% of the packet kernel's perf samples at 1080 x 600). The
-//! per-ray BVH is already cheap on coherent primary rays (the BVH docs measure ~18 nodes per
-//! primary ray on Sponza). Not yet tried: the AVX2 8-lane kernel
-//! as compiled is slower than the 4-lane one (see [`cast_with`]); HVVR's per-tile triangle
-//! set-up (tile-corner all-in / all-out classification, precomputed edge equations shared by
-//! the tile's rays) — our per-ray watertight test recomputes the shear projection of every
-//! vertex for every ray, which is what exactness against the BVH costs.
+//! **Measured** (`vr_speed` example, atrium stereo 540 x 600 per eye, spp 16, 2 threads on the
+//! 2-core VM at load 15 — ratios from one process, noisy): set-up kernel 3.4-4.7x the per-ray
+//! rate, watertight kernel 2.3x in the same conditions (earlier idle-machine figures for the
+//! watertight kernel at 2160 x 1200: 2.5-2.65x). See `tile_setup.rs` for the full table and
+//! what remains (the 8-lane AVX2 build is not yet vectorised well).
 
 pub mod cast;
 pub mod hierarchy;
@@ -47,12 +44,14 @@ pub mod intersect;
 pub mod packet;
 pub mod patterns;
 pub mod samples;
+pub mod tile_setup;
 pub mod visibility;
 
-pub use cast::{CastStats, cast, cast_with};
+pub use cast::{CastOptions, CastStats, cast, cast_opts, cast_with};
 pub use hierarchy::{Block, Hierarchy, HierarchyError, Tile};
 pub use patterns::PatternError;
 pub use samples::{Sample, SampleSet};
+pub use tile_setup::SampleTest;
 pub use visibility::{VisibilityBuffer, trace_per_ray};
 
 // HVVR around the visibility stage (issue 5 parts 4-6): presets, shading, resolve,

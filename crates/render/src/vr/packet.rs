@@ -27,6 +27,7 @@ use parallax_scene::camera::{Camera, Pinhole};
 
 use super::SampleSet;
 use super::intersect::LeafBox;
+pub(crate) use wide::F8;
 
 /// A vector of `N` f32 lanes: the operations the packet kernel needs, each lane rounding
 /// exactly like scalar f32 (no FMA).
@@ -42,6 +43,11 @@ pub trait Lanes:
     fn lt(self, o: Self) -> Self::M;
     fn gt(self, o: Self) -> Self::M;
     fn le(self, o: Self) -> Self::M;
+    fn ge(self, o: Self) -> Self::M;
+    /// Lane minimum (`minps`: the second operand when either is NaN).
+    fn min(self, o: Self) -> Self;
+    /// Lane-wise AND of two masks.
+    fn and(a: Self::M, b: Self::M) -> Self::M;
     fn eq(self, o: Self) -> Self::M;
     /// Unordered not-equal (true on NaN), as `cmpneqps`.
     fn ne(self, o: Self) -> Self::M;
@@ -79,6 +85,18 @@ impl Lanes for Vec4 {
     #[inline(always)]
     fn le(self, o: Self) -> BVec4A {
         self.cmple(o)
+    }
+    #[inline(always)]
+    fn ge(self, o: Self) -> BVec4A {
+        self.cmpge(o)
+    }
+    #[inline(always)]
+    fn min(self, o: Self) -> Self {
+        Vec4::select(self.cmplt(o), self, o)
+    }
+    #[inline(always)]
+    fn and(a: BVec4A, b: BVec4A) -> BVec4A {
+        a & b
     }
     #[inline(always)]
     fn eq(self, o: Self) -> BVec4A {
@@ -171,6 +189,27 @@ mod wide {
         cmp!(lt, |a, b| a < b);
         cmp!(gt, |a, b| a > b);
         cmp!(le, |a, b| a <= b);
+        cmp!(ge, |a, b| a >= b);
+        #[inline(always)]
+        fn min(self, o: Self) -> Self {
+            let mut r = [0.0f32; 8];
+            for i in 0..8 {
+                r[i] = if self.0[i] < o.0[i] {
+                    self.0[i]
+                } else {
+                    o.0[i]
+                };
+            }
+            F8(r)
+        }
+        #[inline(always)]
+        fn and(a: M8, b: M8) -> M8 {
+            let mut r = [0u32; 8];
+            for i in 0..8 {
+                r[i] = a.0[i] & b.0[i];
+            }
+            M8(r)
+        }
         cmp!(eq, |a, b| a == b);
         cmp!(ne, |a, b| a != b);
         #[inline(always)]
@@ -247,7 +286,7 @@ fn pinhole_n<L: Lanes>(p: &Pinhole, fx: L, fy: L) -> ([L; 3], [L; 3]) {
 
 /// The subsample rays `(sample, k)` of `pairs` (up to `L::N`) into lanes.
 #[inline(always)]
-fn gen_n<L: Lanes>(set: &SampleSet, pairs: &[(u32, u32)]) -> RaysN<L> {
+pub(crate) fn gen_n<L: Lanes>(set: &SampleSet, pairs: &[(u32, u32)]) -> RaysN<L> {
     let n = pairs.len();
     let mut film = [Vec2::ZERO; 8];
     for (l, &(i, k)) in pairs.iter().enumerate() {

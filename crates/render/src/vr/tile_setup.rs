@@ -1,0 +1,578 @@
+//! Per-tile triangle set-up and the set-up sample test (Hunt et al. 2018, §5.5, "triangle
+//! setup ... tile-corner classification"): for a tile whose subsample rays share one origin `o`
+//! (pinhole, stereo eye, lens-distorted, foveated, fisheye / wide-FoV models — everything but
+//! the thin lens), every triangle of the tile's list is set up once relative to `o`, so that a
+//! ray-triangle test is a few multiply-adds on the ray direction `d` alone:
+//!
+//! - **Edge covectors** `n_i = (v_i - o) x (v_{i+1} - o)`, `i = 0..2`, oriented by the sign
+//!   of `D = N . (v_0 - o)` (`N = (v_1 - v_0) x (v_2 - v_0)`): the ray `o + t d, t > 0` passes
+//!   through the triangle iff `n_i . d >= 0` for the three edges (for `d = p - o` with `p` of
+//!   barycentrics `b`, `n_i . d = b_{i+2} D`). A shared edge gives bit-for-bit negated covectors
+//!   in its two triangles (the cross product is evaluated without FMA contraction, and
+//!   `a x b = -(b x a)` exactly in IEEE f32; round-to-nearest is sign-symmetric, so the dot
+//!   products are exactly negated too): a ray through the edge passes the edge test of one
+//!   triangle or the other (both when exactly zero), so the test stays **watertight** across
+//!   shared edges and vertices of consistently oriented meshes, like Woop et al.'s.
+//! - **Inverse-distance covector** `g = N / D`, so `1/t = g . d` for any direction (`t` in
+//!   units of `|d|`, the per-ray baseline's units since the rays are the same float rays). The
+//!   closest hit is the largest positive `g . d`; a ray starts with `1/t_max = 0` (rays of
+//!   every camera have `t_min = 0, t_max = inf`), and `t = 1 / (g . d)` is computed once, for
+//!   the winner. Equal `g . d` goes to the lower triangle index (the BVH's tie-break).
+//! - **Tile-corner classification** (§5.5): `n_i . d` is linear in `d`, and the tile beam
+//!   ([`Beam`]) is the cone spanned by its four corner directions `c_k = s e_a + u e_b + v e_c`
+//!   (every subsample ray of the tile satisfies `d / |d_a| = sum_k w_k c_k`, `w_k >= 0`,
+//!   `sum w_k = 1`; the beam's slope bounds are rounded outwards, property-tested in
+//!   tests/vr_beams.rs). With `tol_i = 1e-5 sum_j |n_ij| max_k |c_kj|` (far above the `3 ulp`
+//!   error of a float dot product): if for some edge every corner has `n_i . c_k < -tol_i`, the
+//!   float edge value of every ray of the tile is negative — **all-out**, the triangle is
+//!   dropped; if every corner has `n_i . c_k > tol_i` for all three edges, every ray passes the
+//!   three edge tests — **all-in**, only `g . d` is evaluated. Otherwise partial. So the
+//!   classification never changes the kernel's answer (tests/vr_tile_setup.rs checks both
+//!   directions on random beams and triangles).
+//! - Triangles with `D = 0` (the plane holds `o`: seen edge-on, never hit by a ray from `o`)
+//!   or a non-finite `g` are dropped.
+//!
+//! The sample test then runs packets of 4 (SSE) or 8 (AVX2) rays over the set-up list in the
+//! tile list's near-depth order, leaf by leaf; a triangle whose `g . d` is below every lane's
+//! best so far costs one 3-term dot product; the packet stops once every ray has a hit nearer
+//! than the next leaf's near depth (as the watertight kernel). Beyond the paper (its GPU threads
+//! test every triangle of the tile): before a leaf's set-up triangles, the packet runs the
+//! BVH's robust slab test on the box of the leaf's *kept* triangles and skips the leaf if no
+//! ray can reach it before its closest hit so far (this cut the triangle tests per ray from ~60
+//! to ~1.2 on atrium at 96 x 64).
+//!
+//! **Watertightness at vertices.** Exactly through a shared *vertex* the spoke edge values are
+//! rounding noise around zero and can all share one strict sign, so such a ray can leak
+//! (tests/vr_tile_setup.rs measures 32 of 800 rays aimed exactly at fan centres); Woop et
+//! al.'s test has no such leak. Camera rays hit a vertex exactly with probability ~0.
+//!
+//! **Measured** (`cargo run --release -p parallax-render --example vr_speed -- atrium 540 600
+//! 1,8,16,32 4 setup`, then `... 4 watertight`; stereo 540 x 600 per eye, 2 threads on the 2-core
+//! VM at load average 13-15 from other jobs, so wall times swing ~1.5x; speed-up = beam wall time
+//! vs per-ray `trace_per_ray` wall time in the same process, best of 3 / best of 2):
+//!
+//! | spp | set-up kernel (default) | watertight kernel |
+//! |-----|-------------------------|-------------------|
+//! | 1   | 2.03x (4.8 Mrays/s)     | 1.86x (3.1)       |
+//! | 8   | 3.82x (7.9)             | 2.37x (3.5)       |
+//! | 16  | 5.02x (7.3)             | 2.53x (5.3)       |
+//! | 32  | 3.86x (7.3)             | 2.30x (5.6)       |
+//!
+//! Interleaved spp-16-only runs at load 7-8: set-up 3.95x (10.4 Mrays/s), watertight 2.10x
+//! (5.7), set-up 4.37x (13.0): the set-up kernel casts 1.8-2.3x faster than the watertight one.
+//! (A spp-16-only pair of runs gave 4.05x for the 4-lane and 3.81x for the 8-lane set-up kernel,
+//! and 3.43x / 4.70x in another pair: the AVX2 8-lane build is no faster — LLVM leaves most of
+//! its `[f32; 8]` lane loops scalar (objdump: ~5x more xmm than ymm instructions), so 4 lanes
+//! is the default.) The issue's 5x aim at spp 16 is reached in one of these loaded runs, not
+//! reliably; the full 2160 x 1200 table needs the idle machine. Per 4-ray packet the kernel
+//! does ~1.2 triangle tests per ray (set-up on atrium at 96 x 64); the set-up itself is
+//! counted in the caster's tile-cull time. At 96 x 64 tiles are large: 1-6% of a tile's
+//! triangles are all-out, < 1% all-in, the rest partial (the tile cull's leaf boxes already
+//! hug the beam) — the classification pays more at VR resolutions. Not done: the affine
+//! film-position form of `n . d` for pinhole tiles (the ray generation still normalises every
+//! direction), 4/8 triangles per SIMD op, a vectorised 8-lane build.
+//!
+//! **Exactness.** Not bit-identical to the BVH's watertight test (a different edge function):
+//! hits can differ on edges within float tolerance and `t` by a few ulps; tests/vr_cast.rs
+//! measures agreement with per-ray traversal per scheme (>= 99.99% required). Tiles without a
+//! shared origin (thin lens) take the exact watertight kernel ([`super::intersect`]).
+
+use glam::{Vec3, Vec4};
+use parallax_bvh::Tri4;
+use parallax_bvh::beam::LeafRef;
+use parallax_bvh::node::{leaf_count, leaf_first};
+use parallax_core::math::Beam;
+use parallax_core::math::ROBUST_FAR_SCALE;
+use parallax_core::{Aabb, NO_ID};
+
+use super::SampleSet;
+use super::packet::{ClosestN, Lanes, RaysN, gen_n};
+
+/// Which sample test the caster runs (module docs of `tile_setup.rs` and `intersect.rs`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SampleTest {
+    /// The BVH's watertight test per ray (Woop et al. 2013), bit-identical to per-ray traversal.
+    Watertight,
+    /// HVVR's per-tile triangle set-up with tile-corner classification (this module); tiles
+    /// without a shared ray origin (thin lens) fall back to [`SampleTest::Watertight`].
+    #[default]
+    TileSetup,
+}
+
+/// Relative tolerance of the corner classification (module docs).
+pub const CLASSIFY_TOLERANCE: f32 = 1e-5;
+
+/// A triangle set up for rays from one origin (module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
+pub struct TriSetup {
+    /// Oriented edge covectors.
+    pub n: [[f32; 3]; 3],
+    /// Inverse-distance covector: `1/t = g . d`.
+    pub g: [f32; 3],
+    /// Index in `Bvh::triangles`.
+    pub tri: u32,
+    /// Every ray of the tile passes the three edge tests.
+    pub all_in: bool,
+}
+
+/// `((a_x b_x + a_y b_y) + a_z b_z)` in f32 without contraction: the kernel's evaluation order.
+#[inline(always)]
+pub fn dot3(a: [f32; 3], d: Vec3) -> f32 {
+    a[0] * d.x + a[1] * d.y + a[2] * d.z
+}
+
+/// `a x b` component by component, never contracted (exactly anti-symmetric).
+#[inline(always)]
+fn cross(a: Vec3, b: Vec3) -> Vec3 {
+    Vec3::new(
+        a.y * b.z - a.z * b.y,
+        a.z * b.x - a.x * b.z,
+        a.x * b.y - a.y * b.x,
+    )
+}
+
+/// Corner classification of a triangle against a tile beam (module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CornerClass {
+    AllOut,
+    Partial,
+    AllIn,
+}
+
+/// The four corner directions of a beam and the per-axis magnitude bound of its directions
+/// (`None` for [`Beam::EVERYTHING`] or unbounded slopes: every triangle is partial).
+#[derive(Clone, Copy, Debug)]
+pub struct BeamCorners {
+    pub c: [Vec3; 4],
+    pub cmax: Vec3,
+}
+
+impl BeamCorners {
+    pub fn new(beam: &Beam) -> Option<Self> {
+        if beam.everything {
+            return None;
+        }
+        let (a, (b, c)) = (beam.axis as usize, beam.side_axes());
+        if !(beam.u.iter().chain(&beam.v).all(|x| x.is_finite())) {
+            return None;
+        }
+        let mut cs = [Vec3::ZERO; 4];
+        for (k, corner) in cs.iter_mut().enumerate() {
+            corner[a] = beam.sign;
+            corner[b] = beam.u[k & 1];
+            corner[c] = beam.v[k >> 1];
+        }
+        let mut cmax = Vec3::ZERO;
+        cmax[a] = 1.0;
+        cmax[b] = beam.u[0].abs().max(beam.u[1].abs());
+        cmax[c] = beam.v[0].abs().max(beam.v[1].abs());
+        Some(BeamCorners { c: cs, cmax })
+    }
+
+    /// Classifies oriented edge covectors `n` (module docs).
+    pub fn classify(&self, n: &[[f32; 3]; 3]) -> CornerClass {
+        let mut all_in = true;
+        for e in n {
+            let tol = CLASSIFY_TOLERANCE * dot3(e.map(f32::abs), self.cmax);
+            let (mut out, mut inn) = (true, true);
+            for c in &self.c {
+                let v = dot3(*e, *c);
+                out &= v < -tol;
+                inn &= v > tol;
+            }
+            if out {
+                return CornerClass::AllOut;
+            }
+            all_in &= inn;
+        }
+        if all_in {
+            CornerClass::AllIn
+        } else {
+            CornerClass::Partial
+        }
+    }
+}
+
+impl TriSetup {
+    /// Sets up triangle `(v0, v1, v2)` for rays from `o`; `None` if no ray from `o` can hit it
+    /// (`D = 0`, non-finite values).
+    pub fn new(v: [Vec3; 3], o: Vec3, tri: u32) -> Option<Self> {
+        let a = [v[0] - o, v[1] - o, v[2] - o];
+        let nrm = cross(v[1] - v[0], v[2] - v[0]);
+        let d = nrm.dot(a[0]);
+        if d == 0.0 || !d.is_finite() {
+            return None;
+        }
+        let g = nrm / d;
+        if !g.is_finite() {
+            return None;
+        }
+        let s = if d > 0.0 { 1.0 } else { -1.0 };
+        // Multiplying by +-1 is exact: shared edges keep exactly negated covectors.
+        let n = [0, 1, 2].map(|i| (cross(a[i], a[(i + 1) % 3]) * s).to_array());
+        if !n.iter().flatten().all(|x| x.is_finite()) {
+            return None;
+        }
+        Some(TriSetup {
+            n,
+            g: g.to_array(),
+            tri,
+            all_in: false,
+        })
+    }
+
+    /// The kernel's test of one ray direction: `Some(g . d)` (= `1/t`) if the ray passes the
+    /// three edge tests (skipped when `all_in`) and `g . d > 0`.
+    #[inline]
+    pub fn hit(&self, d: Vec3) -> Option<f32> {
+        let gd = dot3(self.g, d);
+        let inside = self.all_in || self.n.iter().all(|n| dot3(*n, d) >= 0.0);
+        (inside && gd > 0.0).then_some(gd)
+    }
+}
+
+/// A leaf's run of set-up triangles: `tris[previous end..end]`, and its near depth.
+#[derive(Clone, Copy, Debug)]
+pub struct Segment {
+    pub end: u32,
+    pub near: f32,
+    /// Box of the run's triangles relative to the origin (`min - o`, `max - o`).
+    pub lo: Vec3,
+    pub hi: Vec3,
+}
+
+/// Counts of the corner classification.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SetupCounts {
+    pub all_out: u64,
+    pub partial: u64,
+    pub all_in: u64,
+}
+
+/// The set-up triangle list of a tile (per-thread scratch, reused).
+#[derive(Clone, Debug, Default)]
+pub struct TileTris {
+    pub origin: Vec3,
+    pub tris: Vec<TriSetup>,
+    pub segs: Vec<Segment>,
+    pub counts: SetupCounts,
+}
+
+/// The shared origin of a tile's rays, if they have one (the beam's origin box is a point).
+pub fn shared_origin(beam: &Beam) -> Option<Vec3> {
+    (!beam.everything && !beam.origin.is_empty() && beam.origin.min == beam.origin.max)
+        .then_some(beam.origin.min)
+}
+
+/// Sets up every triangle of the tile list `leaves` (near-depth order) for rays from `origin`
+/// within `beam`, dropping all-out triangles (module docs).
+pub fn setup_tile(
+    blocks: &[Tri4],
+    leaves: &[LeafRef],
+    beam: &Beam,
+    origin: Vec3,
+    out: &mut TileTris,
+) {
+    out.origin = origin;
+    out.tris.clear();
+    out.segs.clear();
+    let corners = BeamCorners::new(beam);
+    for r in leaves {
+        let mut bx = Aabb::EMPTY;
+        let (first, count) = (leaf_first(r.leaf), leaf_count(r.leaf));
+        for j in 0..count {
+            let b = &blocks[(first + j / 4) as usize];
+            let ln = (j % 4) as usize;
+            if b.tri[ln] == u32::MAX {
+                continue;
+            }
+            let v = [b.vertex(ln, 0), b.vertex(ln, 1), b.vertex(ln, 2)];
+            let Some(mut s) = TriSetup::new(v, origin, b.tri[ln]) else {
+                out.counts.all_out += 1;
+                continue;
+            };
+            match corners.map_or(CornerClass::Partial, |c| c.classify(&s.n)) {
+                CornerClass::AllOut => {
+                    out.counts.all_out += 1;
+                    continue;
+                }
+                CornerClass::AllIn => {
+                    out.counts.all_in += 1;
+                    s.all_in = true;
+                }
+                CornerClass::Partial => out.counts.partial += 1,
+            }
+            out.tris.push(s);
+            bx = bx.grow(v[0]).grow(v[1]).grow(v[2]);
+        }
+        let end = out.tris.len() as u32;
+        if out.segs.last().map_or(0, |s| s.end) < end {
+            out.segs.push(Segment {
+                end,
+                near: r.near,
+                lo: bx.min - origin,
+                hi: bx.max - origin,
+            });
+        }
+    }
+}
+
+/// `n . d` per lane in the scalar order of [`dot3`] (no FMA: plain functions, not closures,
+/// so they are compiled inside the AVX2 entry point).
+#[inline(always)]
+fn dot_n<L: Lanes>(n: [f32; 3], dx: L, dy: L, dz: L) -> L {
+    L::splat(n[0]) * dx + L::splat(n[1]) * dy + L::splat(n[2]) * dz
+}
+
+/// Entry and exit `t` of one slab (`lo`, `hi` relative to the origin).
+#[inline(always)]
+fn slab<L: Lanes>(lo: f32, hi: f32, inv: L, neg: L::M) -> (L, L) {
+    let t0 = L::splat(lo) * inv;
+    let t1 = L::splat(hi) * inv;
+    (L::select(neg, t1, t0), L::select(neg, t0, t1))
+}
+
+/// `a > b ? a : b` per lane (NaN in `a` gives `b`).
+#[inline(always)]
+fn max_or_rhs<L: Lanes>(a: L, b: L) -> L {
+    L::select(a.gt(b), a, b)
+}
+
+/// `a < b ? a : b` per lane (NaN in `a` gives `b`).
+#[inline(always)]
+fn min_or_rhs<L: Lanes>(a: L, b: L) -> L {
+    L::select(a.lt(b), a, b)
+}
+
+/// The closest hit of every lane of `rays` against the set-up list (module docs); `axis` /
+/// `sign` are the tile beam's dominant axis (the near-depth order), `slack` the early-exit
+/// slack. Counts packet-triangle tests in `tests`.
+#[inline(always)]
+fn closest_setup<L: Lanes>(
+    rays: &RaysN<L>,
+    tt: &TileTris,
+    axis: usize,
+    sign: f32,
+    slack: f32,
+    tests: &mut u64,
+) -> ClosestN {
+    let valid = rays.valid;
+    let zero = L::splat(0.0);
+    let [dx, dy, dz] = rays.d;
+    let mut best = zero;
+    let mut out = ClosestN {
+        t: [f32::INFINITY; 8],
+        tri: [u32::MAX; 8],
+    };
+    let mut hit_lanes = 0u32;
+    let mut exit_depth = f32::INFINITY;
+    let mut start = 0usize;
+    let oa = tt.origin[axis];
+    let one = L::splat(1.0);
+    let inv = [one / dx, one / dy, one / dz];
+    let neg = [inv[0].lt(zero), inv[1].lt(zero), inv[2].lt(zero)];
+    let mut box_lim = L::splat(f32::INFINITY);
+    let far = L::splat(ROBUST_FAR_SCALE);
+    for seg in &tt.segs {
+        if hit_lanes == valid && seg.near > exit_depth + slack {
+            break;
+        }
+        let end = seg.end as usize;
+        let tris = &tt.tris[start..end];
+        start = end;
+        // The BVH's robust slab test (Ize 2013 far scaling) of the packet on the run's box:
+        // runs no ray of the packet can reach (before its closest hit so far) are skipped.
+        let (tnx, tfx) = slab(seg.lo.x, seg.hi.x, inv[0], neg[0]);
+        let (tny, tfy) = slab(seg.lo.y, seg.hi.y, inv[1], neg[1]);
+        let (tnz, tfz) = slab(seg.lo.z, seg.hi.z, inv[2], neg[2]);
+        let t_near = max_or_rhs(tnz, max_or_rhs(tny, max_or_rhs(tnx, zero)));
+        let t_far = min_or_rhs(tfz, min_or_rhs(tfy, min_or_rhs(tfx, box_lim)));
+        if L::bits(t_near.le(t_far * far)) & valid == 0 {
+            continue;
+        }
+        *tests += tris.len() as u64;
+        let mut changed = false;
+        for tr in tris {
+            let gd = dot_n(tr.g, dx, dy, dz);
+            let ge = gd.ge(best);
+            if L::bits(ge) & valid == 0 {
+                continue;
+            }
+            let inside = if tr.all_in {
+                ge
+            } else {
+                let m = dot_n(tr.n[0], dx, dy, dz)
+                    .min(dot_n(tr.n[1], dx, dy, dz))
+                    .min(dot_n(tr.n[2], dx, dy, dz));
+                L::and(ge, m.ge(zero))
+            };
+            let ib = L::bits(inside) & valid;
+            if ib == 0 {
+                continue;
+            }
+            let gt_m = L::and(inside, gd.gt(best));
+            let gt = L::bits(gt_m) & valid;
+            let mut win = gt;
+            // Ties (equal `1/t`, a hit so far): the lower triangle index wins.
+            let mut tie = ib & !gt;
+            while tie != 0 {
+                let l = tie.trailing_zeros() as usize;
+                tie &= tie - 1;
+                if out.tri[l] != u32::MAX && tr.tri < out.tri[l] {
+                    win |= 1 << l;
+                }
+            }
+            if win == 0 {
+                continue;
+            }
+            best = L::select(gt_m, gd, best);
+            let mut w = win;
+            while w != 0 {
+                let l = w.trailing_zeros() as usize;
+                w &= w - 1;
+                out.tri[l] = tr.tri;
+            }
+            changed = true;
+        }
+        if changed {
+            hit_lanes = 0;
+            exit_depth = f32::NEG_INFINITY;
+            for l in 0..L::N {
+                if valid >> l & 1 != 0 {
+                    if out.tri[l] != u32::MAX {
+                        hit_lanes |= 1 << l;
+                    }
+                    let t = 1.0 / best.get(l);
+                    exit_depth = exit_depth.max(sign * (oa + t * rays.d[axis].get(l)));
+                }
+            }
+            box_lim = L::from_fn(|l| 1.0 / best.get(l));
+        }
+    }
+    for l in 0..L::N {
+        if out.tri[l] != u32::MAX {
+            out.t[l] = 1.0 / best.get(l);
+        }
+    }
+    out
+}
+
+/// Runs every subsample ray `0..total` of a tile (`pair(j)` = its `(sample, k)`) through the
+/// set-up kernel with `L::N` lanes; `write(pair, t, tri)` stores a result. Returns
+/// `(packet-triangle tests, rays)`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn run_setup<L: Lanes>(
+    set: &SampleSet,
+    tt: &TileTris,
+    axis: usize,
+    sign: f32,
+    slack: f32,
+    total: usize,
+    pair: impl Fn(usize) -> (u32, u32),
+    mut write: impl FnMut((u32, u32), f32, u32),
+) -> (u64, u64) {
+    let mut tests = 0u64;
+    let mut rays_n = 0u64;
+    let mut pairs = [(0u32, 0u32); 8];
+    let mut j = 0;
+    while j < total {
+        let n = (total - j).min(L::N);
+        for (l, p) in pairs.iter_mut().enumerate().take(n) {
+            *p = pair(j + l);
+        }
+        j += n;
+        let batch = &pairs[..n];
+        let mut rays = gen_n::<L>(set, batch);
+        // Invalid lanes get `d = 0`: `g . d = 0` is never a hit.
+        for l in 0..n {
+            if rays.valid >> l & 1 == 0 {
+                for a in 0..3 {
+                    rays.d[a] = L::from_fn(|i| if i == l { 0.0 } else { rays.d[a].get(i) });
+                }
+            }
+        }
+        rays_n += rays.valid.count_ones() as u64;
+        let c = closest_setup(&rays, tt, axis, sign, slack, &mut tests);
+        for (l, &p) in batch.iter().enumerate() {
+            write(p, c.t[l], c.tri[l]);
+        }
+    }
+    (tests, rays_n)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[allow(clippy::too_many_arguments)]
+unsafe fn run_setup_avx2(
+    set: &SampleSet,
+    tt: &TileTris,
+    axis: usize,
+    sign: f32,
+    slack: f32,
+    total: usize,
+    pair: impl Fn(usize) -> (u32, u32),
+    write: impl FnMut((u32, u32), f32, u32),
+) -> (u64, u64) {
+    run_setup::<super::packet::F8>(set, tt, axis, sign, slack, total, pair, write)
+}
+
+/// Work counters of a set-up tile.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SetupWork {
+    pub rays: u64,
+    /// Packet-triangle tests (one per packet of `lanes` rays and set-up triangle).
+    pub tri_tests: u64,
+}
+
+/// Tests every subsample ray of the tile `samples` against the set-up list `tt` and writes the
+/// closest hits, packets of 8 rays (AVX2, if detected and `lanes == 8`) or 4.
+///
+/// # Safety
+/// As [`super::intersect::test_tile`]: `prim` and `t` valid for `set.ray_count()` elements,
+/// written for these samples by this call only.
+#[allow(clippy::too_many_arguments)]
+pub unsafe fn test_tile_setup(
+    set: &SampleSet,
+    prim_ids: &[u32],
+    samples: &[u32],
+    tt: &TileTris,
+    beam: &Beam,
+    scale: f32,
+    lanes: usize,
+    prim: *mut u32,
+    t: *mut f32,
+) -> SetupWork {
+    let spp = set.spp as usize;
+    let slack = 1e-5 * (scale.abs() + 1.0);
+    let total = samples.len() * spp;
+    let pair = |j: usize| (samples[j / spp], (j % spp) as u32);
+    let write = |(i, k): (u32, u32), bt: f32, tri: u32| {
+        let o = i as usize * spp + k as usize;
+        // SAFETY: the caller guarantees exclusive access to this sample's entries.
+        unsafe {
+            if tri == u32::MAX {
+                *prim.add(o) = NO_ID;
+                *t.add(o) = f32::INFINITY;
+            } else {
+                *prim.add(o) = prim_ids[tri as usize];
+                *t.add(o) = bt;
+            }
+        }
+    };
+    let (axis, sign) = (beam.axis as usize, beam.sign);
+    #[cfg(target_arch = "x86_64")]
+    let (tests, rays) = if lanes == 8 && std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: AVX2 was detected.
+        unsafe { run_setup_avx2(set, tt, axis, sign, slack, total, pair, write) }
+    } else {
+        run_setup::<Vec4>(set, tt, axis, sign, slack, total, pair, write)
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let (tests, rays) = run_setup::<Vec4>(set, tt, axis, sign, slack, total, pair, write);
+    SetupWork {
+        rays,
+        tri_tests: tests,
+    }
+}
