@@ -24,7 +24,7 @@
 use std::time::Instant;
 
 use parallax_bvh::Bvh;
-use parallax_scene::animation::RigidAnimation;
+use parallax_scene::animation::Animation;
 use parallax_scene::{CameraDesc, Scene};
 use serde::Serialize;
 
@@ -294,7 +294,7 @@ pub fn update_row(scene: &Scene, repeats: u32) -> Result<UpdateRow, VrError> {
     let t = Instant::now();
     let mut bvh = Bvh::try_build(&mesh)?;
     let build_ms = t.elapsed().as_secs_f64() * 1e3;
-    let anim = RigidAnimation::for_scene(scene);
+    let anim = Animation::for_scene(scene);
     let (mut animate_ms, mut refit_ms) = (f64::INFINITY, f64::INFINITY);
     for k in 0..repeats.max(1) {
         let u = update_scene(&anim, &mut mesh, &mut bvh, 1.0 + k as f32 * 0.1)?;
@@ -305,7 +305,7 @@ pub fn update_row(scene: &Scene, repeats: u32) -> Result<UpdateRow, VrError> {
         scene: scene.name.clone(),
         vertices: mesh.vertex_count(),
         triangles: mesh.triangle_count(),
-        moving_objects: anim.tracks.len(),
+        moving_objects: anim.moving_objects(),
         moving_vertices: anim.moving_vertices(&mesh),
         build_ms,
         animate_ms,
