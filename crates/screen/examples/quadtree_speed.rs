@@ -22,7 +22,7 @@
 //!
 //! `cd crates/screen && cargo run --release --example quadtree_speed -- [IPD] [--near M] [all]`
 //! (IPD in metres, default 0.065; `all` also runs the lossless and adaptive trees).
-//! `--profile METHOD` (quadtree|dda|minmax|hiz) only traces every 4th ray once with that
+//! `--quick` stops after the head to head. `--profile METHOD` (quadtree|dda|minmax|hiz) only traces every 4th ray once with that
 //! method, for `valgrind --tool=callgrind --toggle-collect=...` instruction counts.
 
 use std::time::Instant;
@@ -102,6 +102,7 @@ fn dda_sweep(cube: &UnitCube, l1: &[parallax_core::GBuffer], rays: &[Ray]) -> an
         100.0 * ARTIFACT_FREE
     );
     let mut chosen = None;
+    let mut prev_fail = 0u32;
     let mut n_steps = 4u32;
     loop {
         let d = DdaTracer::new(cube, l1, &dda_opts(n_steps))?;
@@ -123,8 +124,12 @@ fn dda_sweep(cube: &UnitCube, l1: &[parallax_core::GBuffer], rays: &[Ray]) -> an
             "  max_steps {n_steps:6}: {diff:8} rays differ ({:.4}%), {hit_lost} converged hits lost",
             100.0 * frac
         );
-        if chosen.is_none() && frac <= ARTIFACT_FREE {
-            chosen = Some(n_steps);
+        if chosen.is_none() {
+            if frac <= ARTIFACT_FREE {
+                chosen = Some(n_steps);
+            } else {
+                prev_fail = n_steps;
+            }
         }
         if diff == 0 || n_steps as u64 >= max_used {
             break;
@@ -136,8 +141,28 @@ fn dda_sweep(cube: &UnitCube, l1: &[parallax_core::GBuffer], rays: &[Ray]) -> an
             ((n_steps * 3 / 2) + 7) / 8 * 8
         };
     }
-    let chosen = chosen.unwrap_or(CONVERGED);
-    println!("  minimal artifact-free max_steps: {chosen}");
+    // Bisect between the last failing swept value and the first passing one.
+    let mut chosen = chosen.unwrap_or(CONVERGED);
+    let mut lo = prev_fail;
+    while chosen - lo > 1 {
+        let mid = (lo + chosen) / 2;
+        let d = DdaTracer::new(cube, l1, &dda_opts(mid))?;
+        let diff: u64 = rays
+            .par_iter()
+            .zip(&base)
+            .filter(|(_, b)| b.1 > mid as u64)
+            .map(|(r, b)| {
+                let mut s = TraceStats::default();
+                (d.trace(r, &mut s) != b.0) as u64
+            })
+            .sum();
+        if diff as f64 / n <= ARTIFACT_FREE {
+            chosen = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    println!("  minimal artifact-free max_steps (bisected): {chosen}");
     Ok(chosen)
 }
 
@@ -148,10 +173,12 @@ fn main() -> anyhow::Result<()> {
     let mut all = false;
     let mut near = CubeNear::Fitted;
     let mut profile: Option<String> = None;
+    let mut quick = false;
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
             "all" => all = true,
+            "--quick" => quick = true,
             "--near" => {
                 let v: f32 = it.next().map(|v| v.parse()).transpose()?.unwrap_or(0.1);
                 near = CubeNear::Camera(v);
@@ -287,6 +314,10 @@ fn main() -> anyhow::Result<()> {
                 100.0 * s.hits as f64 / n,
             );
         }
+    }
+
+    if quick {
+        return Ok(());
     }
 
     let mut clip_ns = f64::INFINITY;

@@ -20,9 +20,11 @@
 //!   ancestor (Frisken & Perry 2002), capped at the top level.
 //!
 //! Deviation: the traversal starts at the level whose nodes exceed the segment's screen
-//! extent (after checking that no ancestor above is a plane) instead of the root; box tests
-//! only cull, so the result is unchanged and the first few always-passing box tests are
-//! skipped.
+//! extent, or at the start pixel's effective plane node if that is higher (one load from
+//! the per-pixel plane level stored at build time), instead of the root; box tests only
+//! cull, so the result is unchanged and the first few always-passing box tests are
+//! skipped. Invariant: no ancestor of the current node is a plane (true at the start; a
+//! successor's parent is an ancestor of the node it came from).
 //!
 //! The loop carries a hard bound of `(W + H + 2) (2 levels + 2)` steps (every pixel column
 //! the segment crosses, each reached after at most `levels` descents); hitting it ends the
@@ -54,6 +56,8 @@ pub struct RaySetup {
     pub dg: [f32; 2],
     inv: [f32; 2],
     zero: [bool; 2],
+    /// 1 where the direction is negative on the axis (pixel boundary ties of [`Self::cell`]).
+    tie: [f32; 2],
     /// Parameter length of one pixel of screen travel (for dilations).
     pub s_per_px: f32,
 }
@@ -63,19 +67,19 @@ impl RaySetup {
         let d = seg.p1 - seg.p0;
         let o = [seg.p0.x * w, seg.p0.y * h];
         let dg = [d.x * w, d.y * h];
-        let speed = dg[0].abs().max(dg[1].abs());
+        let inv = [1.0 / dg[0], 1.0 / dg[1]];
         Self {
             p0: seg.p0,
             d,
             o,
             dg,
-            inv: [1.0 / dg[0], 1.0 / dg[1]],
+            inv,
             zero: [dg[0] == 0.0, dg[1] == 0.0],
-            s_per_px: if speed > 0.0 {
-                1.0 / speed
-            } else {
-                f32::INFINITY
-            },
+            tie: [(dg[0] < 0.0) as u32 as f32, (dg[1] < 0.0) as u32 as f32],
+            // `1 / max(|dg|)` without a third division: division is correctly rounded and
+            // monotone, so `1 / max(|a|, |b|) == min(1 / |a|, 1 / |b|)` exactly (`inf` when
+            // both are 0).
+            s_per_px: fmin(inv[0].abs(), inv[1].abs()),
         }
     }
 
@@ -115,14 +119,17 @@ impl RaySetup {
     /// `[lo, hi]`.
     #[inline(always)]
     fn cell(&self, a: usize, s: f32, lo: u32, hi: u32) -> u32 {
-        let x = self.at(a, s).clamp(-1.0, 1.0e7);
-        // floor without a libm call (x is clamped to the i32 range).
+        // Clamp to the i32 range with plain selects (NaN -> -1, then `lo`).
+        let x = self.at(a, s);
+        let x = if x > -1.0 { x } else { -1.0 };
+        let x = if x < 1.0e7 { x } else { 1.0e7 };
+        // floor without a libm call; a boundary tie goes to the lower cell when moving down
+        // the axis (`tie` is 1 or 0, fixed per ray: no branch).
         let t = x as i32 as f32;
-        let mut c = if t > x { t - 1.0 } else { t };
-        if c == x && self.dg[a] < 0.0 {
-            c -= 1.0;
-        }
-        (c.max(lo as f32) as u32).min(hi)
+        let c = if t > x { t - 1.0 } else { t };
+        let c = if c == x { c - self.tie[a] } else { c };
+        let lo = lo as f32;
+        ((if c > lo { c } else { lo }) as u32).min(hi)
     }
 }
 
@@ -178,12 +185,11 @@ impl QuadTree {
         } else {
             top
         };
-        // Levels above `plane_top` hold no plane at all (exact shortcut).
-        for a in (l + 1..=top.min(self.plane_top)).rev() {
-            if self.node(a, cx >> a, cy >> a).is_plane() {
-                l = a;
-                break;
-            }
+        // The topmost plane ancestor of the start pixel, precomputed per pixel at build
+        // time (one load instead of one node load per level above `l`).
+        let pl = self.plane_level[(cy * w + cx) as usize] as usize;
+        if pl > l {
+            l = pl;
         }
         let mut qx = cx >> l;
         let mut qy = cy >> l;
