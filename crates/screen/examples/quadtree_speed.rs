@@ -138,7 +138,7 @@ fn dda_sweep(cube: &UnitCube, l1: &[parallax_core::GBuffer], rays: &[Ray]) -> an
             n_steps + 4
         } else {
             // ~1.5x per step, multiples of 8.
-            ((n_steps * 3 / 2) + 7) / 8 * 8
+            (n_steps * 3 / 2).div_ceil(8) * 8
         };
     }
     // Bisect between the last failing swept value and the first passing one.

@@ -292,11 +292,10 @@ impl UnitCube {
         let h0 = a + b * lo;
         let h1 = a + b * hi;
         // Clamp to [0, 1] (NaN to 0, as `DVec3::clamp` did).
-        let c01 = |v: f64| {
-            // `max`/`min` compile to branch-free code; compares here mispredicted (the
-            // clamps bind on a data-dependent part of the rays).
-            v.max(0.0).min(1.0) as f32
-        };
+        // `max`/`min` compile to branch-free code (compares here mispredicted: the clamps
+        // bind on a data-dependent part of the rays); `f64::clamp` would keep NaN.
+        #[allow(clippy::manual_clamp)]
+        let c01 = |v: f64| v.max(0.0).min(1.0) as f32;
         let point = |h: DVec4| {
             let r = 1.0 / h.w;
             Vec3::new(c01(h.x * r), c01(h.y * r), c01(h.z * r))
