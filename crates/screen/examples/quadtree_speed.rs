@@ -22,7 +22,7 @@
 //!
 //! `cd crates/screen && cargo run --release --example quadtree_speed -- [IPD] [--near M] [all]`
 //! (IPD in metres, default 0.065; `all` also runs the lossless and adaptive trees).
-//! `--quick` stops after the head to head. `--profile METHOD` (quadtree|dda|minmax|hiz) only traces every 4th ray once with that
+//! `--quick` stops after the head to head. `--profile METHOD` (quadtree|dda|minmax|minmax-flat|hiz) only traces every 4th ray once with that
 //! method, for `valgrind --tool=callgrind --toggle-collect=...` instruction counts.
 
 use std::time::Instant;
@@ -226,11 +226,12 @@ fn main() -> anyhow::Result<()> {
                 &QuadTreeOptions::default(),
             )?),
             "dda" => Box::new(DdaTracer::new(&cube, l1, &dda_opts(200))?),
-            "minmax" => Box::new(MinMaxTracer::new(
+            "minmax" | "minmax-flat" => Box::new(MinMaxTracer::new(
                 &cube,
                 l1,
                 &MinMaxOptions {
                     layers: 1,
+                    bilinear: m == "minmax",
                     ..Default::default()
                 },
             )?),

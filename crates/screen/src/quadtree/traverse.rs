@@ -357,7 +357,7 @@ impl QuadTree {
             if t_out >= q.s_hi {
                 break;
             }
-            s = s.max(t_out);
+            s = fmax(s, t_out); // neither is NaN
             // Successor across the exit edge (§4).
             // Branch-free: `step` is +1 or -1 (wrapping) per axis, fixed per ray.
             let nx = qx.wrapping_add(step_x & 0u32.wrapping_sub((txo <= tyo) as u32));
