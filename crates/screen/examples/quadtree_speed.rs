@@ -23,7 +23,7 @@
 //! `cd crates/screen && cargo run --release --example quadtree_speed -- [IPD] [--near M] [all]`
 //! (IPD in metres, default 0.065; `all` also runs the lossless and adaptive trees).
 //! `--quick` stops after the head to head. `--profile METHOD` (quadtree|dda|minmax|minmax-flat|hiz) only traces every 4th ray once with that
-//! method, for `valgrind --tool=callgrind --toggle-collect=...` instruction counts.
+//! method (with `--time`: times it on all rays instead, best of 7, thread CPU time), for `valgrind --tool=callgrind --toggle-collect=...` instruction counts.
 
 use std::time::Instant;
 
@@ -173,6 +173,7 @@ fn main() -> anyhow::Result<()> {
     let mut all = false;
     let mut near = CubeNear::Fitted;
     let mut profile: Option<String> = None;
+    let mut time_only = false;
     let mut quick = false;
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -184,6 +185,7 @@ fn main() -> anyhow::Result<()> {
                 near = CubeNear::Camera(v);
             }
             "--profile" => profile = it.next().cloned(),
+            "--time" => time_only = true,
             v => ipd = v.parse()?,
         }
     }
@@ -245,6 +247,21 @@ fn main() -> anyhow::Result<()> {
             )?),
         };
         let mut s = TraceStats::default();
+        if time_only {
+            // `--time`: best of 7 rounds over all rays, thread CPU time (A/B timing of two
+            // builds run alternately).
+            let mut best = f64::INFINITY;
+            for _ in 0..7 {
+                let t0 = cpu_ns();
+                s = TraceStats::default();
+                for r in &rays {
+                    t.trace(r, &mut s);
+                }
+                best = best.min((cpu_ns() - t0) as f64 / rays.len() as f64);
+            }
+            println!("timed {m}: {best:.1} ns/ray");
+            return Ok(());
+        }
         profile_trace(&*t, &rays, &mut s);
         println!("profiled {m}: {s:?}");
         return Ok(());
