@@ -118,9 +118,45 @@
 //! camera-near cube. What remains is the loop body itself: ~100 instructions per visited
 //! node (slab entry/exit on two axes with per-axis zero checks, level-array indirection
 //! with bounds checks, integer <-> float conversions of the node rectangle, the plane /
-//! box / descend / successor logic) against ~10 for a DDA step; a leaner loop (node
-//! rectangle in f32 carried incrementally, one flat node array with per-level offsets,
-//! unchecked indexing proven by the clamps) is the next step, not done.
+//! box / descend / successor logic) against ~10 for a DDA step. The leaner loop below
+//! took part of that.
+//!
+//! **Session 3b: the leaner loop** ([`traverse`]; results unchanged — all exactness tests
+//! pass — and the visit / step counts are identical). Changes: slab entry/exit without the
+//! per-node zero-direction check and order select (per-ray near/far sides; an axis with
+//! `dg == 0` gets the start pixel's centre as slab origin and `+inf` as reciprocal, which
+//! yields exactly the `(-inf, +inf)` slab — common: a horizontal stereo baseline makes every
+//! epipolar segment horizontal); node loads with `get_unchecked` under a documented,
+//! debug-asserted invariant; one successor bound check (`nx <= (W - 1) >> l` replaces four
+//! compares and two level-array loads); `2^l` from exponent bits; a step budget counting
+//! down and the box-test / visit counters derived at the end (two loop counters fewer);
+//! the box test's `z` interval with min/max and one combined branch. Callgrind
+//! (`--profile quadtree`, every 4th ray; instructions and branch mispredictions per ray):
+//!
+//! | setting | nodes / ray | before (f493b71) | after | MinMax flat | MinMax bilinear | Hi-Z | DDA (200) |
+//! |---|---|---|---|---|---|---|---|
+//! | ipd 0.065, fitted | 3.6 | 1557 / 3.5 | **1512 / 3.2** | 1832 / 12.1 | 1984 / 12.6 | 1509 / 7.7 | 1282 / 1.0 |
+//! | ipd 0.065, near 0.1 | 6.9 | 2038 / 6.4 | **1914 / 3.8** | 2448 / 17.6 | 2596 / 18.1 | 2080 / 10.8 | 12399 / 1.0 |
+//! | ipd 0.3, fitted | 6.6 | 1985 / 6.1 | **1868 / 4.7** | 2176 / 15.3 | 2333 / 16.2 | 1965 / 9.7 | 3964 / 1.1 |
+//! | ipd 0.3, near 0.1 | 9.5 | 2472 / 8.5 | **2270 / 6.3** | 2638 / 18.7 | 2785 / 19.5 | 2383 / 12.9 | 12231 / 1.0 |
+//!
+//! In the loop itself (per-instruction counts, `--dump-instr=yes`, near 0.1, ipd 0.065):
+//! ~126 -> ~105 instructions per step (7.8 steps per ray: 47 common to every node, +20 for
+//! a box test, +34 for a descent, +59 for a successor with its level jump). The rest of a
+//! ray's ~1900 instructions is per ray: the exact f64 cube clip (~280), the start (two
+//! `cell`s, start level), plane decodes (~60 per plane test, `node_centre`'s two
+//! divisions included), hit pixel and result mapping. A lesson: the branch-free descent
+//! child choice (`(ex > mid) | (ex == mid & pos)`) saved instructions and mispredictions
+//! but was ~15 % *slower* in time — it put the choice on the loop's data-dependency chain
+//! (`t_in -> P(t_in) -> child -> next node's slab`), which predicted branches cut; it is
+//! back to short-circuit compares. Time (`quadtree_speed -- IPD [--near 0.1] --profile
+//! quadtree --time`, all 1.44 M rays, thread CPU time, best of 7, the two builds run
+//! alternately, best of 2 runs each; loaded machine, ±10 %): near 0.1: 227 -> 211 ns/ray
+//! (ipd 0.065), 269 -> 244 (ipd 0.3); fitted: 178 -> 183 (ipd 0.065), 214 -> 210 (ipd 0.3)
+//! — a gain of a few percent at most; the per-node work was not the bottleneck it looked
+//! like. MinMax (as implemented: f32 clip, flat mode still bisecting `refine_steps` times
+//! on its flat patch) has 3-5x the quad-tree's mispredictions per ray, which is why its
+//! time ratio to the quad-tree (1.3-1.6x) exceeds its instruction ratio (1.2-1.4x).
 //!
 //! **The cube's near plane decides the head-to-head.** With [`crate::CubeNear::Fitted`]
 //! (our default: near = half the nearest captured depth, a global empty-space skip that

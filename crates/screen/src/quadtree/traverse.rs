@@ -28,7 +28,10 @@
 //!
 //! The loop carries a hard bound of `(W + H + 2) (2 levels + 2)` steps (every pixel column
 //! the segment crosses, each reached after at most `levels` descents); hitting it ends the
-//! layer with what was found. Nothing allocates; the hot loop is f32.
+//! layer with what was found. Nothing allocates; the hot loop is f32. Node loads are
+//! unchecked (`get_unchecked`) under an invariant stated and debug-asserted at the load
+//! (the level index and node coordinates stay inside the padded level arrays), so the
+//! debug-build tests check it on every step.
 
 use glam::{UVec2, Vec3};
 
@@ -107,18 +110,17 @@ impl RaySetup {
     /// every epipolar segment horizontal).
     #[inline(always)]
     fn axis_parallel(&mut self, w: f32, h: f32) {
-        let hi = [w as u32 - 1, h as u32 - 1];
-        for a in 0..2 {
+        for (a, hi) in [(0, w as u32 - 1), (1, h as u32 - 1)] {
             if self.dg[a] == 0.0 {
-                self.so[a] = self.cell(a, 0.0, 0, hi[a]) as f32 + 0.5;
+                self.so[a] = self.cell(a, 0.0, 0, hi) as f32 + 0.5;
                 self.sinv[a] = f32::INFINITY;
             }
         }
     }
 
-    /// [`Self::slab`] of the node rectangle `[x0, x0 + size]` on axis `a`, as (entry, exit):
-    /// the same two products `(side - o) * inv` (the near side is `x0 + size * tie`, exact),
-    /// without branches.
+    /// Entry and exit parameters of the node rectangle `[x0, x0 + size]` on axis `a`: the
+    /// two products `(side - o) * inv` of the former per-node slab (the near side is
+    /// `x0 + size * tie`, exact), without branches.
     #[inline(always)]
     fn slab_fast(&self, a: usize, x0: f32, size: f32) -> (f32, f32) {
         let near = x0 + size * self.tie[a];
