@@ -154,7 +154,10 @@
 //! alternately, best of 2 runs each; loaded machine, ±10 %): near 0.1: 227 -> 211 ns/ray
 //! (ipd 0.065), 269 -> 244 (ipd 0.3); fitted: 178 -> 183 (ipd 0.065), 214 -> 210 (ipd 0.3)
 //! — a gain of a few percent at most; the per-node work was not the bottleneck it looked
-//! like. MinMax (as implemented: f32 clip, flat mode still bisecting `refine_steps` times
+//! like. Head to head after (`quadtree_speed -- 0.065 --near 0.1 --quick`, same process,
+//! interleaved, best of 7): quad-tree 204 ns/ray, 7.2x the minimal artifact-free DDA
+//! (254 steps), 1.69x MinMax bilinear, 1.62x MinMax flat, 1.32x Hi-Z (before: 218 ns/ray,
+//! 6.7x, 1.64x, 1.56x, 1.24x) — the 2x bar against MinMax is still missed. MinMax (as implemented: f32 clip, flat mode still bisecting `refine_steps` times
 //! on its flat patch) has 3-5x the quad-tree's mispredictions per ray, which is why its
 //! time ratio to the quad-tree (1.3-1.6x) exceeds its instruction ratio (1.2-1.4x).
 //!
