@@ -157,7 +157,10 @@
 //! like. Head to head after (`quadtree_speed -- 0.065 --near 0.1 --quick`, same process,
 //! interleaved, best of 7): quad-tree 204 ns/ray, 7.2x the minimal artifact-free DDA
 //! (254 steps), 1.69x MinMax bilinear, 1.62x MinMax flat, 1.32x Hi-Z (before: 218 ns/ray,
-//! 6.7x, 1.64x, 1.56x, 1.24x) — the 2x bar against MinMax is still missed. MinMax (as implemented: f32 clip, flat mode still bisecting `refine_steps` times
+//! 6.7x, 1.64x, 1.56x, 1.24x); at ipd 0.3, near 0.1: 254 ns/ray, 15.7x the minimal DDA
+//! (1159 steps), 1.53x / 1.43x MinMax bilinear / flat, 1.20x Hi-Z (before, run at the
+//! same time: 251 ns/ray, 1.61x / 1.44x, 1.23x: no change). The 2x bar against MinMax is
+//! still missed. MinMax (as implemented: f32 clip, flat mode still bisecting `refine_steps` times
 //! on its flat patch) has 3-5x the quad-tree's mispredictions per ray, which is why its
 //! time ratio to the quad-tree (1.3-1.6x) exceeds its instruction ratio (1.2-1.4x).
 //!
