@@ -1,13 +1,29 @@
 //! Quad-tree (Widmer et al. 2015) build and trace speed on atrium at 1600x900, 2 layers:
 //! build ms per layer vs. streaming that layer's depth+normals once, and a stereo eye
-//! (reference camera moved by ipd/2 = 0.0325 m along its right axis, one ray per pixel):
+//! (reference camera moved by ipd/2 along its right axis, one ray per pixel):
 //! Mrays/s, nodes visited per ray, % of rays reaching layer 2; brute force on a ray subset.
 //!
-//! Also: the same traces with the opt-in f32 clip ([`QuadTreeTracer::with_f32_clip`]) and
-//! how many results differ from the exact f64 clip.
+//! **Head to head** (1 layer, 1 thread, thread CPU time, best of 7 interleaved rounds, the
+//! same rays): quad-tree, the DDA at its minimal artifact-free `max_steps` (below) and at
+//! Widmer's 200, MinMax (Tevs, bilinear patches and the flat setting Widmer timed), Hi-Z.
 //!
-//! `CARGO_TARGET_DIR=/work/target-h6 cargo run --release -p parallax-screen --example quadtree_speed [-- IPD [all]]`
+//! **DDA max-steps sweep.** A DDA capped at `n` steps runs exactly the iterations of the
+//! uncapped one until the cap, so its result differs from the converged DDA
+//! (`max_steps` = 100000) only on rays the cap truncated. For each `n` of a sweep the example
+//! counts the rays whose result (kind, layer, pixel, `t`) is not identical to the converged
+//! one. **Artifact-free** = at most [`ARTIFACT_FREE`] of the rays differ (at 1600x900 that is
+//! at most 144 scattered pixels, below what the PSNR of a warped view resolves: the quality
+//! has stopped changing); the minimal artifact-free `n` is the smallest swept value meeting it.
+//!
+//! **Cube near plane** (`--near M`): by default the unit cube is fitted to the captured
+//! depths (near = half the nearest depth, [`CubeNear::Fitted`], our global empty-space skip);
+//! `--near 0.1` puts it at a 0.1 m camera near plane ([`CubeNear::Camera`]), Widmer's NDC
+//! frustum, so every ray starts at the camera's near plane as in the paper.
+//!
+//! `cd crates/screen && cargo run --release --example quadtree_speed -- [IPD] [--near M] [all]`
 //! (IPD in metres, default 0.065; `all` also runs the lossless and adaptive trees).
+//! `--quick` stops after the head to head. `--profile METHOD` (quadtree|dda|minmax|minmax-flat|hiz) only traces every 4th ray once with that
+//! method (with `--time`: times it on all rays instead, best of 7, thread CPU time), for `valgrind --tool=callgrind --toggle-collect=...` instruction counts.
 
 use std::time::Instant;
 
@@ -16,11 +32,17 @@ use parallax_core::Ray;
 use parallax_raster::{RasterOptions, View, capture_layers};
 use parallax_scene::{Scene, camera::Pinhole};
 use parallax_screen::{
-    BruteForcePlanes, DdaOptions, DdaTracer, HiZOptions, HiZTracer, LayerMode, LayerPlanes,
-    MinMaxOptions, MinMaxTracer, NormalSource, QuadTreeOptions, QuadTreeTracer, ScreenTracer,
-    TraceResult, TraceStats, UnitCube,
+    BruteForcePlanes, CubeNear, DdaOptions, DdaTracer, HiZOptions, HiZTracer, LayerMode,
+    LayerPlanes, MinMaxOptions, MinMaxTracer, NormalSource, QuadTreeOptions, QuadTreeTracer,
+    ScreenTracer, TraceResult, TraceStats, UnitCube,
 };
 use rayon::prelude::*;
+
+/// Largest fraction of rays whose result may differ from the converged DDA for a
+/// `max_steps` value to count as artifact-free (module docs).
+const ARTIFACT_FREE: f64 = 1e-4;
+/// `max_steps` of the converged DDA.
+const CONVERGED: u32 = 100_000;
 
 fn best_of<T>(n: usize, mut f: impl FnMut() -> T) -> (f64, T) {
     let mut best = f64::INFINITY;
@@ -43,11 +65,130 @@ fn cpu_ns() -> u64 {
         .unwrap_or(0)
 }
 
+/// Traces every 4th ray once (the `--profile` mode); a separate function so callgrind can
+/// collect only inside it (`--toggle-collect=*profile_trace*`).
+#[inline(never)]
+fn profile_trace(t: &dyn ScreenTracer, rays: &[Ray], s: &mut TraceStats) {
+    for r in rays.iter().step_by(4) {
+        t.trace(r, s);
+    }
+}
+
+fn dda_opts(n: u32) -> DdaOptions {
+    DdaOptions {
+        layers: 1,
+        max_steps: n,
+        ..Default::default()
+    }
+}
+
+/// The DDA sweep of the module docs: returns the minimal artifact-free `max_steps`.
+fn dda_sweep(cube: &UnitCube, l1: &[parallax_core::GBuffer], rays: &[Ray]) -> anyhow::Result<u32> {
+    let conv = DdaTracer::new(cube, l1, &dda_opts(CONVERGED))?;
+    // Converged result and step count per ray.
+    let base: Vec<(TraceResult, u64)> = rays
+        .par_iter()
+        .map(|r| {
+            let mut s = TraceStats::default();
+            let res = conv.trace(r, &mut s);
+            (res, s.steps)
+        })
+        .collect();
+    let n = rays.len() as f64;
+    let max_used = base.iter().map(|b| b.1).max().unwrap_or(0);
+    let mean = base.iter().map(|b| b.1).sum::<u64>() as f64 / n;
+    println!(
+        "\n## DDA max-steps sweep (1 layer): converged (max_steps {CONVERGED}) takes {mean:.2} steps/ray, at most {max_used}; artifact-free = at most {:.3}% of rays differ from it",
+        100.0 * ARTIFACT_FREE
+    );
+    let mut chosen = None;
+    let mut prev_fail = 0u32;
+    let mut n_steps = 4u32;
+    loop {
+        let d = DdaTracer::new(cube, l1, &dda_opts(n_steps))?;
+        // Rays the cap does not truncate are identical by construction; retrace the rest.
+        let (diff, hit_lost) = rays
+            .par_iter()
+            .zip(&base)
+            .filter(|(_, b)| b.1 > n_steps as u64)
+            .map(|(r, b)| {
+                let mut s = TraceStats::default();
+                let res = d.trace(r, &mut s);
+                let lost = matches!(b.0, TraceResult::Hit { .. })
+                    && !matches!(res, TraceResult::Hit { .. });
+                ((res != b.0) as u64, lost as u64)
+            })
+            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+        let frac = diff as f64 / n;
+        println!(
+            "  max_steps {n_steps:6}: {diff:8} rays differ ({:.4}%), {hit_lost} converged hits lost",
+            100.0 * frac
+        );
+        if chosen.is_none() {
+            if frac <= ARTIFACT_FREE {
+                chosen = Some(n_steps);
+            } else {
+                prev_fail = n_steps;
+            }
+        }
+        if diff == 0 || n_steps as u64 >= max_used {
+            break;
+        }
+        n_steps = if n_steps < 16 {
+            n_steps + 4
+        } else {
+            // ~1.5x per step, multiples of 8.
+            (n_steps * 3 / 2).div_ceil(8) * 8
+        };
+    }
+    // Bisect between the last failing swept value and the first passing one.
+    let mut chosen = chosen.unwrap_or(CONVERGED);
+    let mut lo = prev_fail;
+    while chosen - lo > 1 {
+        let mid = (lo + chosen) / 2;
+        let d = DdaTracer::new(cube, l1, &dda_opts(mid))?;
+        let diff: u64 = rays
+            .par_iter()
+            .zip(&base)
+            .filter(|(_, b)| b.1 > mid as u64)
+            .map(|(r, b)| {
+                let mut s = TraceStats::default();
+                (d.trace(r, &mut s) != b.0) as u64
+            })
+            .sum();
+        if diff as f64 / n <= ARTIFACT_FREE {
+            chosen = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    println!("  minimal artifact-free max_steps (bisected): {chosen}");
+    Ok(chosen)
+}
+
 fn main() -> anyhow::Result<()> {
     let (w, h) = (1600u32, 900u32);
-    let args: Vec<String> = std::env::args().collect();
-    let ipd: f32 = args.get(1).map(|a| a.parse()).transpose()?.unwrap_or(0.065);
-    let all = args.get(2).is_some_and(|a| a == "all");
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let mut ipd = 0.065f32;
+    let mut all = false;
+    let mut near = CubeNear::Fitted;
+    let mut profile: Option<String> = None;
+    let mut time_only = false;
+    let mut quick = false;
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "all" => all = true,
+            "--quick" => quick = true,
+            "--near" => {
+                let v: f32 = it.next().map(|v| v.parse()).transpose()?.unwrap_or(0.1);
+                near = CubeNear::Camera(v);
+            }
+            "--profile" => profile = it.next().cloned(),
+            "--time" => time_only = true,
+            v => ipd = v.parse()?,
+        }
+    }
     let scene = Scene::load("atrium")?;
     let cam = Pinhole::new(&scene.camera(None)?, w, h)?;
     let cap = capture_layers(
@@ -56,9 +197,9 @@ fn main() -> anyhow::Result<()> {
         &RasterOptions::layers(2),
     )?;
     let layers = cap.layers.layers.clone();
-    let cube = UnitCube::fit_depths(&cam, layers.iter().map(|g| &g.depth[..]))?;
+    let cube = UnitCube::fit(&cam, layers.iter().map(|g| &g.depth[..]), near)?;
     println!(
-        "atrium {w}x{h}, 2 layers, threads {}, cube near {:.3} far {:.3}",
+        "atrium {w}x{h}, 2 layers, threads {}, cube {near:?}: near {:.3} far {:.3}",
         rayon::current_num_threads(),
         cube.near,
         cube.far
@@ -66,7 +207,7 @@ fn main() -> anyhow::Result<()> {
 
     // Rays of the stereo eye.
     let origin = cam.frame.position + cam.frame.right() * (ipd * 0.5);
-    println!("stereo eye offset {:.4} m", ipd * 0.5);
+    println!("stereo eye offset {:.4} m (ipd {ipd})", ipd * 0.5);
     let rays: Vec<Ray> = (0..h)
         .flat_map(|y| (0..w).map(move |x| (x, y)))
         .map(|(x, y)| {
@@ -77,28 +218,70 @@ fn main() -> anyhow::Result<()> {
             )
         })
         .collect();
+    let l1 = &layers[..1];
+
+    if let Some(m) = profile {
+        let t: Box<dyn ScreenTracer> = match m.as_str() {
+            "quadtree" => Box::new(QuadTreeTracer::build(
+                &cube,
+                l1,
+                &QuadTreeOptions::default(),
+            )?),
+            "dda" => Box::new(DdaTracer::new(&cube, l1, &dda_opts(200))?),
+            "minmax" | "minmax-flat" => Box::new(MinMaxTracer::new(
+                &cube,
+                l1,
+                &MinMaxOptions {
+                    layers: 1,
+                    bilinear: m == "minmax",
+                    ..Default::default()
+                },
+            )?),
+            _ => Box::new(HiZTracer::new(
+                &cube,
+                l1,
+                &HiZOptions {
+                    layers: 1,
+                    ..Default::default()
+                },
+            )?),
+        };
+        let mut s = TraceStats::default();
+        if time_only {
+            // `--time`: best of 7 rounds over all rays, thread CPU time (A/B timing of two
+            // builds run alternately).
+            let mut best = f64::INFINITY;
+            for _ in 0..7 {
+                let t0 = cpu_ns();
+                s = TraceStats::default();
+                for r in &rays {
+                    t.trace(r, &mut s);
+                }
+                best = best.min((cpu_ns() - t0) as f64 / rays.len() as f64);
+            }
+            println!("timed {m}: {best:.1} ns/ray");
+            return Ok(());
+        }
+        profile_trace(&*t, &rays, &mut s);
+        println!("profiled {m}: {s:?}");
+        return Ok(());
+    }
+
+    let dda_n = dda_sweep(&cube, l1, &rays)?;
 
     // Head to head on the same rays, 1 thread, methods interleaved, best of 7 rounds (the
     // machine is shared: the minimum is the least disturbed run), 1 layer.
     {
-        let l1 = &layers[..1];
         let qt = QuadTreeTracer::build(&cube, l1, &QuadTreeOptions::default())?;
-        let qf = qt.clone().with_f32_clip(true);
-        let dda = |n| DdaOptions {
+        let dmin = DdaTracer::new(&cube, l1, &dda_opts(dda_n))?;
+        let d200 = DdaTracer::new(&cube, l1, &dda_opts(200))?;
+        let mm = |bilinear| MinMaxOptions {
             layers: 1,
-            max_steps: n,
+            bilinear,
             ..Default::default()
         };
-        let d16 = DdaTracer::new(&cube, l1, &dda(16))?;
-        let d200 = DdaTracer::new(&cube, l1, &dda(200))?;
-        let mm = MinMaxTracer::new(
-            &cube,
-            l1,
-            &MinMaxOptions {
-                layers: 1,
-                ..Default::default()
-            },
-        )?;
+        let mmb = MinMaxTracer::new(&cube, l1, &mm(true))?;
+        let mmf = MinMaxTracer::new(&cube, l1, &mm(false))?;
         let hz = HiZTracer::new(
             &cube,
             l1,
@@ -107,12 +290,13 @@ fn main() -> anyhow::Result<()> {
                 ..Default::default()
             },
         )?;
+        let dmin_name = format!("dda max_steps {dda_n} (minimal)");
         let methods: [(&str, &dyn ScreenTracer); 6] = [
-            ("quadtree (f64 clip, exact)", &qt),
-            ("quadtree (f32 clip)", &qf),
-            ("dda max_steps 16", &d16),
+            ("quadtree", &qt),
+            (&dmin_name, &dmin),
             ("dda max_steps 200", &d200),
-            ("minmax", &mm),
+            ("minmax bilinear (Tevs)", &mmb),
+            ("minmax flat (Widmer's)", &mmf),
             ("hiz", &hz),
         ];
         let mut best = [f64::INFINITY; 6];
@@ -130,7 +314,7 @@ fn main() -> anyhow::Result<()> {
         }
         let n = rays.len() as f64;
         println!(
-            "\n## head to head, 1 layer, 1 thread, best of 7 interleaved rounds, thread CPU time"
+            "\n## head to head, 1 layer, 1 thread, best of 7 interleaved rounds, thread CPU time (ipd {ipd}, {near:?})"
         );
         for (k, (name, _)) in methods.iter().enumerate() {
             let s = &st[k];
@@ -140,13 +324,18 @@ fn main() -> anyhow::Result<()> {
                 s.steps
             };
             println!(
-                "  {name:28} {:6.2} Mrays/s  {:6.2} nodes-or-steps/ray  {:6.1} ns/ray  ratio quadtree/this {:.2}",
+                "  {name:32} {:6.2} Mrays/s  {:7.2} nodes-or-steps/ray  {:7.1} ns/ray  speed quadtree/this {:.2}  hits {:.2}%",
                 n / best[k] / 1e3,
                 work as f64 / n,
                 best[k] * 1e6 / n,
                 best[k] / best[0],
+                100.0 * s.hits as f64 / n,
             );
         }
+    }
+
+    if quick {
+        return Ok(());
     }
 
     let mut clip_ns = f64::INFINITY;

@@ -34,7 +34,7 @@
 //! captured depths): a finite far plane keeps the cube bounded, and a near plane not much
 //! smaller than the nearest surface keeps `z` well resolved in f32. Maps are evaluated in f64.
 
-use glam::{DMat4, DVec3, DVec4, Vec3};
+use glam::{DMat4, DVec4, Vec3};
 use parallax_core::Ray;
 use parallax_scene::camera::Pinhole;
 
@@ -247,12 +247,23 @@ impl UnitCube {
 
     /// Clips the world ray to the cube: `None` when no part of `(t_min, t_max)` lies inside
     /// (also for invalid rays). Never panics.
+    ///
+    /// f64 throughout (the f32 version is not exact at pixel boundaries: a ray in the plane
+    /// `y = j/H` can round to the other side). Per-ray cost kept low: the direction skips the
+    /// matrix's translation column, each face is one division and plain compares (no
+    /// NaN-aware `max`/`min`: every value is finite for a valid ray; the branches on the
+    /// sign of `beta` follow the ray direction and predict well), and each end point is
+    /// one reciprocal and three products instead of three divisions (the error, ~1 ulp of
+    /// f64, vanishes in the rounding to f32: a coordinate that is exactly `j/H` in f64 stays
+    /// exactly that in f32).
     pub fn clip_ray(&self, ray: &Ray) -> Option<CubeSegment> {
         if !ray.is_valid() || ray.t_min.is_nan() || ray.t_max.is_nan() {
             return None;
         }
-        let a = self.homogeneous(ray.origin);
-        let b = self.world_to_cube * ray.dir.as_dvec3().extend(0.0);
+        let m = &self.world_to_cube;
+        let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
+        let b = m.x_axis * d.x + m.y_axis * d.y + m.z_axis * d.z;
+        let a = m.x_axis * o.x + m.y_axis * o.y + m.z_axis * o.z + m.w_axis;
         let (mut lo, mut hi) = (ray.t_min.max(0.0) as f64, ray.t_max as f64);
         let (near, far) = (self.near as f64, self.far as f64);
         // Each face: alpha + beta t >= 0.
@@ -265,17 +276,14 @@ impl UnitCube {
             (a.w - a.y, b.w - b.y),
         ];
         for (alpha, beta) in faces {
-            if beta == 0.0 {
-                if alpha < 0.0 {
-                    return None;
-                }
-            } else {
+            if beta > 0.0 {
                 let root = -alpha / beta;
-                if beta > 0.0 {
-                    lo = lo.max(root);
-                } else {
-                    hi = hi.min(root);
-                }
+                lo = if root > lo { root } else { lo };
+            } else if beta < 0.0 {
+                let root = -alpha / beta;
+                hi = if root < hi { root } else { hi };
+            } else if alpha < 0.0 {
+                return None;
             }
         }
         if !(lo < hi && hi.is_finite()) {
@@ -283,14 +291,18 @@ impl UnitCube {
         }
         let h0 = a + b * lo;
         let h1 = a + b * hi;
-        let clampc = |h: DVec4| {
-            (h.truncate() / h.w)
-                .clamp(DVec3::ZERO, DVec3::ONE)
-                .as_vec3()
+        // Clamp to [0, 1] (NaN to 0, as `DVec3::clamp` did).
+        // `max`/`min` compile to branch-free code (compares here mispredicted: the clamps
+        // bind on a data-dependent part of the rays); `f64::clamp` would keep NaN.
+        #[allow(clippy::manual_clamp)]
+        let c01 = |v: f64| v.max(0.0).min(1.0) as f32;
+        let point = |h: DVec4| {
+            let r = 1.0 / h.w;
+            Vec3::new(c01(h.x * r), c01(h.y * r), c01(h.z * r))
         };
         Some(CubeSegment {
-            p0: clampc(h0),
-            p1: clampc(h1),
+            p0: point(h0),
+            p1: point(h1),
             t0: lo as f32,
             t1: hi as f32,
             w0: h0.w,

@@ -63,10 +63,14 @@ pub struct QuadTree {
     /// Per pixel (`W x H`), the trigger depth of unsafe pixels (cascade); empty when the
     /// layer is the last one.
     pub(crate) trigger_z: Vec<f32>,
-    /// The highest level holding any plane node (0 when there is none): the traversal's
-    /// plane-ancestor check at the start level skips the levels above it
-    /// ([`super::traverse`]).
+    /// The highest level holding any plane node (0 when there is none; reported by the
+    /// examples).
     pub(crate) plane_top: usize,
+    /// Per pixel (`W x H`), the level of its effective plane node (the topmost plane
+    /// ancestor, [`Self::effective_node`]); 0 where that is the pixel itself or where the
+    /// pixel has no plane. The traversal's start needs this one load instead of a
+    /// plane-ancestor check over the levels above the start level ([`super::traverse`]).
+    pub(crate) plane_level: Vec<u8>,
 }
 
 impl QuadTree {
@@ -281,6 +285,7 @@ impl QuadTree {
             crack_px: opts.crack_dilation,
             trigger_z: Vec::new(),
             plane_top: 0,
+            plane_level: Vec::new(),
         };
         // Top-down: the small upper levels are scanned first.
         tree.plane_top = (0..tree.levels.len())
@@ -290,6 +295,18 @@ impl QuadTree {
         if !tz.is_empty() {
             tree.mark_unsafe(&tz);
         }
+        // After `mark_unsafe`, which changes flags and AABB ranges but no node kinds.
+        let mut pl = vec![0u8; (w * h) as usize];
+        pl.par_chunks_mut(w as usize)
+            .enumerate()
+            .for_each(|(j, row)| {
+                for (i, v) in row.iter_mut().enumerate() {
+                    if let Some((_, l, _, _)) = tree.effective_node(i as u32, j as u32) {
+                        *v = l as u8;
+                    }
+                }
+            });
+        tree.plane_level = pl;
         Ok(tree)
     }
 

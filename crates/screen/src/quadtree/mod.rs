@@ -43,7 +43,9 @@
 //!   root (same result, [`traverse`]);
 //! - every level is stored in full (pruned subtrees stay in the arrays but are never
 //!   visited), so [`QuadTree::bytes`] is the padded pyramid (8 bytes x ~4/3 x padded
-//!   pixels), while [`QuadTree::node_count`] counts the reachable nodes;
+//!   pixels), while [`QuadTree::node_count`] counts the reachable nodes; a side array of one
+//!   byte per pixel (the level of the pixel's effective plane node, for the traversal's
+//!   start) is not counted there;
 //! - construction runs on the CPU, in parallel over rows per level (rayon).
 
 //!
@@ -84,12 +86,97 @@
 //!   node bytes (8: a cache line holds 8 nodes of a level row) or the clip alone. Outside
 //!   the start block the samples are spread evenly over the loop body (no line above ~2 %):
 //!   per node the traversal takes 3-5 data-dependent branches (plane or box, hit or miss,
-//!   descend or advance, exit edge x or y, level jump) that a DDA step does not; this VM
-//!   exposes no hardware counters to confirm branch mispredictions as the cause. On the
+//!   descend or advance, exit edge x or y, level jump) that a DDA step does not. On the
 //!   short epipolar segments of a 6.5 cm stereo baseline the DDA finishes in ~13
 //!   predictable steps, so the quad-tree's lower node count does not pay off; at a 30 cm
-//!   baseline (DDA 54.7 steps per ray, 200 needed for artifact-free output) the quad-tree
-//!   (6.6 nodes per ray) is 1.6-1.7x faster than the DDA.
+//!   baseline (DDA 54.7 steps per ray) the quad-tree (6.6 nodes per ray) is 1.6-1.7x faster
+//!   than the DDA.
+//!
+//! **Session 3: instruction counts and the cube's near plane.** `valgrind --tool=callgrind
+//! --branch-sim=yes --toggle-collect='*profile_trace*'` on `quadtree_speed -- 0.065
+//! --profile quadtree` (every 4th stereo ray, 360,000 rays; instruction counts are
+//! repeatable on the loaded machine, unlike time): **1754 instructions and 3.6 branch
+//! mispredictions per ray** before (≈ 600 cycles at ~3 IPC: instructions, not
+//! mispredictions, are the cost) — f64 clip ~360, start (two `cell`s, start level,
+//! ancestor check) ~150, cascade/result mapping ~130, the loop ~1100 over 4.6 iterations
+//! (~100-120 instructions per node). Changes, each kept exact (all exactness tests pass):
+//!
+//! | change | instructions / ray | mispredicts / ray |
+//! |---|---|---|
+//! | before | 1754 | 3.57 |
+//! | per-pixel plane level ([`QuadTree`] `plane_level`, one `u8` load replaces the plane-ancestor check over the levels above the start) + `RaySetup` without its third division (`1/max(|a|,|b|) = min(1/|a|,1/|b|)` exactly) + clip: direction without the translation column, one reciprocal per end point instead of three divisions, plain compares | 1638 | 4.17 |
+//! | branch-free `cell` (tie rule as a per-ray `0/1`, select clamps) | (1660; clip clamps as compares mispredicted: +0.9/ray) | 5.10 |
+//! | clip clamps back to branch-free `max`/`min` | **1557 (-11 %)** | **3.53** |
+//!
+//! With the camera-near cube (`-- 0.065 --near 0.1 --profile quadtree`, 6.9 nodes per ray):
+//! 2202 -> 2038 instructions per ray (-7 %), 6.4 mispredicts per ray. For scale, the DDA
+//! on the fitted cube (`--profile dda`, 12.8 steps per ray): 1282 instructions and 1.0
+//! mispredicts per ray.
+//!
+//! Thread CPU time (best of 7 interleaved rounds, same process as the baselines):
+//! quad-tree 200 -> 186 ns/ray at ipd 0.065 (fitted cube), 245 -> 223 ns/ray with the
+//! camera-near cube. What remains is the loop body itself: ~100 instructions per visited
+//! node (slab entry/exit on two axes with per-axis zero checks, level-array indirection
+//! with bounds checks, integer <-> float conversions of the node rectangle, the plane /
+//! box / descend / successor logic) against ~10 for a DDA step. The leaner loop below
+//! took part of that.
+//!
+//! **Session 3b: the leaner loop** ([`traverse`]; results unchanged — all exactness tests
+//! pass — and the visit / step counts are identical). Changes: slab entry/exit without the
+//! per-node zero-direction check and order select (per-ray near/far sides; an axis with
+//! `dg == 0` gets the start pixel's centre as slab origin and `+inf` as reciprocal, which
+//! yields exactly the `(-inf, +inf)` slab — common: a horizontal stereo baseline makes every
+//! epipolar segment horizontal); node loads with `get_unchecked` under a documented,
+//! debug-asserted invariant; one successor bound check (`nx <= (W - 1) >> l` replaces four
+//! compares and two level-array loads); `2^l` from exponent bits; a step budget counting
+//! down and the box-test / visit counters derived at the end (two loop counters fewer);
+//! the box test's `z` interval with min/max and one combined branch. Callgrind
+//! (`--profile quadtree`, every 4th ray; instructions and branch mispredictions per ray):
+//!
+//! | setting | nodes / ray | before (f493b71) | after | MinMax flat | MinMax bilinear | Hi-Z | DDA (200) |
+//! |---|---|---|---|---|---|---|---|
+//! | ipd 0.065, fitted | 3.6 | 1557 / 3.5 | **1512 / 3.2** | 1832 / 12.1 | 1984 / 12.6 | 1509 / 7.7 | 1282 / 1.0 |
+//! | ipd 0.065, near 0.1 | 6.9 | 2038 / 6.4 | **1914 / 3.8** | 2448 / 17.6 | 2596 / 18.1 | 2080 / 10.8 | 12399 / 1.0 |
+//! | ipd 0.3, fitted | 6.6 | 1985 / 6.1 | **1868 / 4.7** | 2176 / 15.3 | 2333 / 16.2 | 1965 / 9.7 | 3964 / 1.1 |
+//! | ipd 0.3, near 0.1 | 9.5 | 2472 / 8.5 | **2270 / 6.3** | 2638 / 18.7 | 2785 / 19.5 | 2383 / 12.9 | 12231 / 1.0 |
+//!
+//! In the loop itself (per-instruction counts, `--dump-instr=yes`, near 0.1, ipd 0.065):
+//! ~126 -> ~105 instructions per step (7.8 steps per ray: 47 common to every node, +20 for
+//! a box test, +34 for a descent, +59 for a successor with its level jump). The rest of a
+//! ray's ~1900 instructions is per ray: the exact f64 cube clip (~280), the start (two
+//! `cell`s, start level), plane decodes (~60 per plane test, `node_centre`'s two
+//! divisions included), hit pixel and result mapping. A lesson: the branch-free descent
+//! child choice (`(ex > mid) | (ex == mid & pos)`) saved instructions and mispredictions
+//! but was ~15 % *slower* in time — it put the choice on the loop's data-dependency chain
+//! (`t_in -> P(t_in) -> child -> next node's slab`), which predicted branches cut; it is
+//! back to short-circuit compares. Time (`quadtree_speed -- IPD [--near 0.1] --profile
+//! quadtree --time`, all 1.44 M rays, thread CPU time, best of 7, the two builds run
+//! alternately, best of 2 runs each; loaded machine, ±10 %): near 0.1: 227 -> 211 ns/ray
+//! (ipd 0.065), 269 -> 244 (ipd 0.3); fitted: 178 -> 183 (ipd 0.065), 214 -> 210 (ipd 0.3)
+//! — a gain of a few percent at most; the per-node work was not the bottleneck it looked
+//! like. Head to head after (`quadtree_speed -- 0.065 --near 0.1 --quick`, same process,
+//! interleaved, best of 7): quad-tree 204 ns/ray, 7.2x the minimal artifact-free DDA
+//! (254 steps), 1.69x MinMax bilinear, 1.62x MinMax flat, 1.32x Hi-Z (before: 218 ns/ray,
+//! 6.7x, 1.64x, 1.56x, 1.24x); at ipd 0.3, near 0.1: 254 ns/ray, 15.7x the minimal DDA
+//! (1159 steps), 1.53x / 1.43x MinMax bilinear / flat, 1.20x Hi-Z (before, run at the
+//! same time: 251 ns/ray, 1.61x / 1.44x, 1.23x: no change). The 2x bar against MinMax is
+//! still missed. MinMax (as implemented: f32 clip, flat mode still bisecting `refine_steps` times
+//! on its flat patch) has 3-5x the quad-tree's mispredictions per ray, which is why its
+//! time ratio to the quad-tree (1.3-1.6x) exceeds its instruction ratio (1.2-1.4x).
+//!
+//! **The cube's near plane decides the head-to-head.** With [`crate::CubeNear::Fitted`]
+//! (our default: near = half the nearest captured depth, a global empty-space skip that
+//! is not in the paper) every stereo ray is a 13-28 px epipolar segment and the DDA needs
+//! only 17 steps (minimal artifact-free, below); with [`crate::CubeNear::Camera`]`(0.1)`
+//! (Widmer's NDC cube = the camera frustum; `quadtree_speed -- 0.065 --near 0.1`) the rays
+//! start at the camera's near plane, the DDA needs 230 steps per ray (254 minimal
+//! artifact-free, 200 loses 87 % of the hits — Widmer tuned 200), and the quad-tree
+//! (6.9 nodes per ray) is **6.6x the DDA** (bar 4x: met in this setting) and 1.6x / 1.5x
+//! Tevs bilinear / flat (bar 2x: missed). "Minimal artifact-free" (`quadtree_speed`
+//! module docs): the smallest `max_steps` whose results differ from the converged DDA
+//! (`max_steps` 100000) on at most 0.01 % of the rays, found by a sweep and bisection; a
+//! capped DDA runs the uncapped one's iterations until the cap, so only truncated rays can
+//! differ.
 
 pub mod build;
 pub mod cascade;

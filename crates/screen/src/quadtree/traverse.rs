@@ -20,13 +20,18 @@
 //!   ancestor (Frisken & Perry 2002), capped at the top level.
 //!
 //! Deviation: the traversal starts at the level whose nodes exceed the segment's screen
-//! extent (after checking that no ancestor above is a plane) instead of the root; box tests
-//! only cull, so the result is unchanged and the first few always-passing box tests are
-//! skipped.
+//! extent, or at the start pixel's effective plane node if that is higher (one load from
+//! the per-pixel plane level stored at build time), instead of the root; box tests only
+//! cull, so the result is unchanged and the first few always-passing box tests are
+//! skipped. Invariant: no ancestor of the current node is a plane (true at the start; a
+//! successor's parent is an ancestor of the node it came from).
 //!
 //! The loop carries a hard bound of `(W + H + 2) (2 levels + 2)` steps (every pixel column
 //! the segment crosses, each reached after at most `levels` descents); hitting it ends the
-//! layer with what was found. Nothing allocates; the hot loop is f32.
+//! layer with what was found. Nothing allocates; the hot loop is f32. Node loads are
+//! unchecked (`get_unchecked`) under an invariant stated and debug-asserted at the load
+//! (the level index and node coordinates stay inside the padded level arrays), so the
+//! debug-build tests check it on every step.
 
 use glam::{UVec2, Vec3};
 
@@ -52,42 +57,78 @@ pub struct RaySetup {
     /// Grid-space origin and direction (`x W`, `y H`).
     pub o: [f32; 2],
     pub dg: [f32; 2],
-    inv: [f32; 2],
-    zero: [bool; 2],
+    /// 1 where the direction is negative on the axis (pixel boundary ties of [`Self::cell`]).
+    tie: [f32; 2],
+    /// Slab origin and reciprocal of the traversal loop: `o` and `inv`, except on an axis
+    /// with `dg == 0`, where they are the start pixel's centre and `+inf` (see
+    /// [`Self::slab_fast`]).
+    so: [f32; 2],
+    sinv: [f32; 2],
+    /// `1 - tie`: the far side of a node rectangle is `x0 + size * far`.
+    far: [f32; 2],
     /// Parameter length of one pixel of screen travel (for dilations).
     pub s_per_px: f32,
 }
 
 impl RaySetup {
+    #[inline(always)]
     pub fn new(seg: &CubeSegment, w: f32, h: f32) -> Self {
         let d = seg.p1 - seg.p0;
         let o = [seg.p0.x * w, seg.p0.y * h];
         let dg = [d.x * w, d.y * h];
-        let speed = dg[0].abs().max(dg[1].abs());
-        Self {
+        let inv = [1.0 / dg[0], 1.0 / dg[1]];
+        let tie = [(dg[0] < 0.0) as u32 as f32, (dg[1] < 0.0) as u32 as f32];
+        let mut r = Self {
             p0: seg.p0,
             d,
             o,
             dg,
-            inv: [1.0 / dg[0], 1.0 / dg[1]],
-            zero: [dg[0] == 0.0, dg[1] == 0.0],
-            s_per_px: if speed > 0.0 {
-                1.0 / speed
-            } else {
-                f32::INFINITY
-            },
+            tie,
+            so: o,
+            sinv: inv,
+            far: [1.0 - tie[0], 1.0 - tie[1]],
+            // `1 / max(|dg|)` without a third division: division is correctly rounded and
+            // monotone, so `1 / max(|a|, |b|) == min(1 / |a|, 1 / |b|)` exactly (`inf` when
+            // both are 0).
+            s_per_px: fmin(inv[0].abs(), inv[1].abs()),
+        };
+        // An axis the ray does not move along: the traversal never leaves the start pixel's
+        // column (row) on it — its pixel is `cell(a, s, ..)` for every `s`, and a descent
+        // picks the child holding it (same tie rule) — so every visited node's slab on it
+        // holds the pixel centre strictly inside: with `so` = that centre and `sinv = +inf`
+        // the slab is exactly `(-inf, +inf)` (a ray parallel to the slab inside it) without
+        // a per-node test. (A node of the padding beyond the image
+        // may miss the centre; it is empty, and the parameters the traversal takes from its
+        // slab — `t_out` and the exit edge — are the same.)
+        if dg[0] == 0.0 || dg[1] == 0.0 {
+            r.axis_parallel(w, h);
+        }
+        r
+    }
+
+    /// The `dg == 0` axes of [`Self::new`] (common: a horizontal stereo baseline makes
+    /// every epipolar segment horizontal).
+    #[inline(always)]
+    fn axis_parallel(&mut self, w: f32, h: f32) {
+        for (a, hi) in [(0, w as u32 - 1), (1, h as u32 - 1)] {
+            if self.dg[a] == 0.0 {
+                self.so[a] = self.cell(a, 0.0, 0, hi) as f32 + 0.5;
+                self.sinv[a] = f32::INFINITY;
+            }
         }
     }
 
-    /// Entry and exit parameters of the slab `[lo, hi]` on axis `a`.
+    /// Entry and exit parameters of the node rectangle `[x0, x0 + size]` on axis `a`: the
+    /// two products `(side - o) * inv` of the former per-node slab (the near side is
+    /// `x0 + size * tie`, exact), without branches.
     #[inline(always)]
-    fn slab(&self, a: usize, lo: f32, hi: f32) -> (f32, f32) {
-        if self.zero[a] {
-            return (f32::NEG_INFINITY, f32::INFINITY);
-        }
-        let t0 = (lo - self.o[a]) * self.inv[a];
-        let t1 = (hi - self.o[a]) * self.inv[a];
-        if self.dg[a] > 0.0 { (t0, t1) } else { (t1, t0) }
+    fn slab_fast(&self, a: usize, x0: f32, size: f32) -> (f32, f32) {
+        let near = x0 + size * self.tie[a];
+        let far = x0 + size * self.far[a];
+        (
+            (near - self.so[a]) * self.sinv[a],
+            (far - self.so[a]) * self.sinv[a],
+        )
     }
 
     /// Grid coordinate on axis `a` at `s`.
@@ -115,14 +156,17 @@ impl RaySetup {
     /// `[lo, hi]`.
     #[inline(always)]
     fn cell(&self, a: usize, s: f32, lo: u32, hi: u32) -> u32 {
-        let x = self.at(a, s).clamp(-1.0, 1.0e7);
-        // floor without a libm call (x is clamped to the i32 range).
+        // Clamp to the i32 range with plain selects (NaN -> -1, then `lo`).
+        let x = self.at(a, s);
+        let x = if x > -1.0 { x } else { -1.0 };
+        let x = if x < 1.0e7 { x } else { 1.0e7 };
+        // floor without a libm call; a boundary tie goes to the lower cell when moving down
+        // the axis (`tie` is 1 or 0, fixed per ray: no branch).
         let t = x as i32 as f32;
-        let mut c = if t > x { t - 1.0 } else { t };
-        if c == x && self.dg[a] < 0.0 {
-            c -= 1.0;
-        }
-        (c.max(lo as f32) as u32).min(hi)
+        let c = if t > x { t - 1.0 } else { t };
+        let c = if c == x { c - self.tie[a] } else { c };
+        let lo = lo as f32;
+        ((if c > lo { c } else { lo }) as u32).min(hi)
     }
 }
 
@@ -178,32 +222,48 @@ impl QuadTree {
         } else {
             top
         };
-        // Levels above `plane_top` hold no plane at all (exact shortcut).
-        for a in (l + 1..=top.min(self.plane_top)).rev() {
-            if self.node(a, cx >> a, cy >> a).is_plane() {
-                l = a;
-                break;
-            }
+        // The topmost plane ancestor of the start pixel, precomputed per pixel at build
+        // time (one load instead of one node load per level above `l`).
+        let pl = self.plane_level[(cy * w + cx) as usize] as usize;
+        if pl > l {
+            l = pl;
         }
         let mut qx = cx >> l;
         let mut qy = cy >> l;
-        // Counters live in registers; `stats` is written once at the end.
+        // Counters live in registers; `stats` is written once at the end. Only the step
+        // budget and the plane tests are counted in the loop; the box tests and visits
+        // follow from them at the end.
         let step_x = if ray.dg[0] > 0.0 { 1u32 } else { u32::MAX };
         let step_y = if ray.dg[1] > 0.0 { 1u32 } else { u32::MAX };
-        let mut steps = 0u64;
-        let (mut n_plane, mut n_box, mut n_visit) = (0u64, 0u64, 0u64);
+        // Descent tie rule (entry point exactly on the mid line): towards the direction.
+        let (pos_x, pos_y) = (ray.dg[0] >= 0.0, ray.dg[1] >= 0.0);
+        // Last column / row index of level-`l` nodes holding image pixels.
+        let (wm, hm) = (w - 1, h - 1);
+        let mut left = bound;
+        let mut n_plane = 0u64;
+        let mut plane_break = false;
+        let levels = self.levels.as_slice();
         loop {
-            steps += 1;
-            if steps > bound {
+            if left == 0 {
                 ev.truncated = true;
                 break;
             }
-            let lv = &self.levels[l];
-            let node = lv.nodes[(qy * lv.w + qx) as usize];
-            let size = (1u32 << l) as f32;
-            let (x0, y0) = ((qx << l) as f32, (qy << l) as f32);
-            let (txi, txo) = ray.slab(0, x0, x0 + size);
-            let (tyi, tyo) = ray.slab(1, y0, y0 + size);
+            left -= 1;
+            // SAFETY (invariant, debug-asserted): `l <= top` and `(qx, qy)` indexes level
+            // `l`, whose `w x h` is the padded image scaled by `2^-l` (`w << l >= W`).
+            // True at the start (`cx <= W - 1`, `l <= top`); kept by a descent (`l >= 1`,
+            // and a child `2 qx + 1 < 2 w` of level `l - 1`) and by a successor (checked
+            // `nx <= (W - 1) >> l < w` below, then `nx >> sh <= (W - 1) >> nl` at level
+            // `nl <= top`).
+            debug_assert!(l <= top);
+            let lv = unsafe { levels.get_unchecked(l) };
+            debug_assert!(qx < lv.w && qy < lv.h);
+            let node = unsafe { *lv.nodes.get_unchecked((qy * lv.w + qx) as usize) };
+            // `2^l` from its exponent bits; node corners are integers below 2^24: exact.
+            let size = f32::from_bits((127 + l as u32) << 23);
+            let (x0, y0) = ((qx << l) as i32 as f32, (qy << l) as i32 as f32);
+            let (txi, txo) = ray.slab_fast(0, x0, size);
+            let (tyi, tyo) = ray.slab_fast(1, y0, size);
             // Plain compares (slab values are never NaN): no NaN-aware min/max in the loop.
             let t_in = fmax(fmax(s, txi), tyi);
             let t_out = fmin(fmin(txo, tyo), q.s_hi);
@@ -246,6 +306,7 @@ impl QuadTree {
                             let px = self.pixel_in(ray, sh, l, qx, qy);
                             ev.hit = Some((sh, px));
                         }
+                        plane_break = true;
                         break;
                     } else if fa < 0.0 && ev.ov.is_none() {
                         ev.ov = Some((t_in, self.pixel_in(ray, t_in, l, qx, qy)));
@@ -254,6 +315,7 @@ impl QuadTree {
                         }
                         if q.stop_at_ov {
                             ev.trigger = ev.trigger.or(trig);
+                            plane_break = true;
                             break;
                         }
                     }
@@ -262,36 +324,36 @@ impl QuadTree {
                     }
                     need_ext = (q.want_trigger && ev.trigger.is_none()) || ev.ov.is_none();
                 }
-            } else {
-                n_box += 1;
-                if t_in <= t_out {
-                    let za = ray.p0.z + ray.d.z * t_in;
-                    let zb = ray.p0.z + ray.d.z * t_out;
-                    let (zlo, zhi) = if za < zb { (za, zb) } else { (zb, za) };
-                    let (zmin, zmax) = node.zrange();
-                    if zhi >= zmin && (zlo <= zmax || need_ext) {
-                        if l == 0 {
-                            // A pixel-level AABB holds no plane: it is an empty pixel marked
-                            // unsafe for cascading (its whole column triggers).
-                            if q.want_trigger && ev.trigger.is_none() {
-                                ev.trigger = ray.z_entry(t_in, t_out, zmin);
-                                need_ext = ev.trigger.is_none() || ev.ov.is_none();
-                            }
-                        } else {
-                            descend = true;
+            } else if t_in <= t_out {
+                let za = ray.p0.z + ray.d.z * t_in;
+                let zb = ray.p0.z + ray.d.z * t_out;
+                let (zlo, zhi) = (fmin(za, zb), fmax(za, zb));
+                let (zmin, zmax) = node.zrange();
+                // One combined branch (hit or miss is data-dependent).
+                if (zhi >= zmin) & ((zlo <= zmax) | need_ext) {
+                    if l == 0 {
+                        // A pixel-level AABB holds no plane: it is an empty pixel marked
+                        // unsafe for cascading (its whole column triggers).
+                        if q.want_trigger && ev.trigger.is_none() {
+                            ev.trigger = ray.z_entry(t_in, t_out, zmin);
+                            need_ext = ev.trigger.is_none() || ev.ov.is_none();
                         }
+                    } else {
+                        descend = true;
                     }
                 }
             }
-            n_visit += 1;
             if descend {
                 s = t_in;
                 l -= 1;
-                let mid_x = ((2 * qx + 1) << l) as f32;
-                let mid_y = ((2 * qy + 1) << l) as f32;
+                // Mid lines `x0 + size / 2`: exact.
+                let half = size * 0.5;
+                let (mid_x, mid_y) = (x0 + half, y0 + half);
                 let (ex, ey) = (ray.at(0, s), ray.at(1, s));
-                let rx = ex > mid_x || (ex == mid_x && ray.dg[0] >= 0.0);
-                let ry = ey > mid_y || (ey == mid_y && ray.dg[1] >= 0.0);
+                // Short-circuit on purpose: predicted branches keep the child choice off
+                // the loop's data-dependency chain (the branch-free form was ~15 % slower).
+                let rx = ex > mid_x || (ex == mid_x && pos_x);
+                let ry = ey > mid_y || (ey == mid_y && pos_y);
                 qx = 2 * qx + rx as u32;
                 qy = 2 * qy + ry as u32;
                 continue;
@@ -299,12 +361,14 @@ impl QuadTree {
             if t_out >= q.s_hi {
                 break;
             }
-            s = s.max(t_out);
+            s = fmax(s, t_out); // neither is NaN
             // Successor across the exit edge (§4).
             // Branch-free: `step` is +1 or -1 (wrapping) per axis, fixed per ray.
             let nx = qx.wrapping_add(step_x & 0u32.wrapping_sub((txo <= tyo) as u32));
             let ny = qy.wrapping_add(step_y & 0u32.wrapping_sub((tyo <= txo) as u32));
-            if nx >= lv.w || ny >= lv.h || (nx << l) >= w || (ny << l) >= h {
+            // Off the image (a wrapped `-1` is `u32::MAX`): `nx << l < W` iff
+            // `nx <= (W - 1) >> l`.
+            if nx > wm >> l || ny > hm >> l {
                 break;
             }
             let diff = (qx ^ nx) | (qy ^ ny);
@@ -315,10 +379,12 @@ impl QuadTree {
             qy = ny >> sh;
             l = nl;
         }
+        let steps = bound - left + ev.truncated as u64;
+        let tested = bound - left;
         stats.steps += steps;
         stats.plane_tests += n_plane;
-        stats.box_tests += n_box;
-        stats.nodes_visited += n_visit;
+        stats.box_tests += tested - n_plane;
+        stats.nodes_visited += tested - plane_break as u64;
         ev
     }
 
