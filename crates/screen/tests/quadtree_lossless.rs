@@ -47,6 +47,13 @@ proptest! {
     }
 }
 
+/// A case proptest found (session 3): a ray almost parallel to a pixel row boundary, whose
+/// occlusion-volume entry `t` the two tracers round differently (see `Verdict::or_same_entry`).
+#[test]
+fn lossless_equals_brute_force_regression_68x41() {
+    check_height_field(68, 41, 174269643855716870, 0.19304094, 1);
+}
+
 #[test]
 fn lossless_equals_brute_force_fixed_sizes() {
     for (w, h) in [(64, 48), (1, 1), (2, 17), (33, 1), (128, 64)] {
