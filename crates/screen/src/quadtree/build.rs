@@ -113,7 +113,7 @@ impl QuadTree {
         };
         let depth = &layer.depth;
         let mt = cube.cube_to_world.transpose();
-        Self::from_leaf_fn(cube, w, h, opts, deeper, |k, i, j| {
+        let leaf = |k: usize, i: u32, j: u32| {
             let d = depth[k];
             if !(d.is_finite() && d > 0.0) || normals[k] == Vec3::ZERO {
                 return Node::EMPTY;
@@ -129,6 +129,32 @@ impl QuadTree {
                 0
             };
             Node::plane(cube.z_of_depth(d), n.x, n.y, f).unwrap_or(Node::EMPTY)
+        };
+        if flags.is_some() {
+            return Self::from_leaf_fn(cube, w, h, opts, deeper, leaf);
+        }
+        // G-buffer normals: the leaves first, then flag `O` from their decoded planes
+        // ([`crate::planes::crack_flags`]).
+        let mut leaves = vec![Node::EMPTY; (w as usize) * (h as usize)];
+        leaves
+            .par_chunks_mut(w as usize)
+            .enumerate()
+            .for_each(|(j, row)| {
+                for (i, n) in row.iter_mut().enumerate() {
+                    *n = leaf(j * w as usize + i, i as u32, j as u32);
+                }
+            });
+        let o = gbuffer_flags(cube, w, h, &leaves);
+        Self::from_leaf_fn(cube, w, h, opts, deeper, |k, _, _| {
+            let n = leaves[k];
+            if o[k] {
+                Node {
+                    a: n.a | FLAG_CRACK,
+                    ..n
+                }
+            } else {
+                n
+            }
         })
     }
 
@@ -167,6 +193,11 @@ impl QuadTree {
         deeper: &[LayerPlanes],
         leaf: impl Fn(usize, u32, u32) -> Node + Sync,
     ) -> Result<Self, ScreenError> {
+        if let Some(c) = std::env::var("PX_CRACK_PX")
+            .ok()
+            .and_then(|v| v.parse().ok())
+        {
+            opts.crack_dilation = c;
         if !(opts.crack_dilation.is_finite() && opts.crack_dilation >= 0.0) {
             return Err(ScreenError::InvalidSpace(format!(
                 "crack_dilation must be finite and >= 0, got {}",
@@ -508,4 +539,20 @@ fn leaf_planes(level0: &Level, w: u32, h: u32, wf: f32, hf: f32) -> LayerPlanes 
         offset,
         flag,
     }
+}
+
+/// Flag `O` of G-buffer leaves: [`crate::planes::crack_flags`] over the decoded leaf planes
+/// (the quantised planes the traversal intersects).
+fn gbuffer_flags(cube: &UnitCube, w: u32, h: u32, leaves: &[Node]) -> Vec<bool> {
+    let gap = std::env::var("PX_CRACK_GAP")
+        .ok()
+        .and_then(|v| v.parse().ok())
+    crate::planes::crack_flags(cube, w, h, crate::planes::CRACK_REL_GAP, |k| {
+        let node = leaves[k];
+        if !node.is_plane() {
+            return None;
+        }
+        let n = node.normal();
+        Some((node.zc(), -n.x / n.z, -n.y / n.z))
+    })
 }
