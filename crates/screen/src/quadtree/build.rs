@@ -193,11 +193,6 @@ impl QuadTree {
         deeper: &[LayerPlanes],
         leaf: impl Fn(usize, u32, u32) -> Node + Sync,
     ) -> Result<Self, ScreenError> {
-        if let Some(c) = std::env::var("PX_CRACK_PX")
-            .ok()
-            .and_then(|v| v.parse().ok())
-        {
-            opts.crack_dilation = c;
         if !(opts.crack_dilation.is_finite() && opts.crack_dilation >= 0.0) {
             return Err(ScreenError::InvalidSpace(format!(
                 "crack_dilation must be finite and >= 0, got {}",
@@ -544,9 +539,6 @@ fn leaf_planes(level0: &Level, w: u32, h: u32, wf: f32, hf: f32) -> LayerPlanes 
 /// Flag `O` of G-buffer leaves: [`crate::planes::crack_flags`] over the decoded leaf planes
 /// (the quantised planes the traversal intersects).
 fn gbuffer_flags(cube: &UnitCube, w: u32, h: u32, leaves: &[Node]) -> Vec<bool> {
-    let gap = std::env::var("PX_CRACK_GAP")
-        .ok()
-        .and_then(|v| v.parse().ok())
     crate::planes::crack_flags(cube, w, h, crate::planes::CRACK_REL_GAP, |k| {
         let node = leaves[k];
         if !node.is_plane() {
