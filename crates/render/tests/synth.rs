@@ -288,8 +288,9 @@ fn warp_table(methods: &[Method]) -> Vec<[[f64; 3]; 2]> {
                 for (k, (resample, layer0_guard)) in variants.into_iter().enumerate() {
                     let wo = WarpOptions {
                         resample,
-                        layer0_guard,
-                    };
+                        ..WarpOptions::default()
+                    }
+                    .with_layer0_guard(layer0_guard);
                     row[l][k] = eyes
                         .iter()
                         .zip(&truths)
@@ -338,5 +339,82 @@ fn bilinear_resampling_and_layers_per_method() {
         // The default (bilinear + guard): two layers above one, both above the mesh warp.
         assert!(row[1][2] > row[0][2] + LAYER_GAIN, "{m}: {row:?}");
         assert!(row[0][2] > mesh + MESH_GAIN, "{m}: {row:?} mesh {mesh}");
+    }
+}
+
+/// Widmer et al. 2015, Fig. 6e: occlusion-volume answers filled with the nearest background
+/// pixel. A red square at 2 m over a blue wall at 6 m seen from 0.3 m to the right: every
+/// occlusion-volume pixel takes the wall's colour with [`OcclusionFill::NearestBackground`],
+/// and the square's (the crossed pixel's) with [`OcclusionFill::Crossed`].
+#[test]
+fn occlusion_fill_takes_nearest_background() {
+    use parallax_core::Image;
+    use parallax_render::synth::warp::{HitKind, OcclusionFill};
+    let (w, h) = (64u32, 48u32);
+    let (red, blue, env) = (
+        glam::Vec3::new(1.0, 0.0, 0.0),
+        glam::Vec3::new(0.0, 0.0, 1.0),
+        glam::Vec3::new(0.0, 1.0, 0.0),
+    );
+    let square = |x: u32, y: u32| (24..40).contains(&x) && (16..32).contains(&y);
+    let mut color = Image::new(w, h, blue).unwrap();
+    let mut depth = Image::new(w, h, 6.0f32).unwrap();
+    for y in 0..h {
+        for x in 0..w {
+            if square(x, y) {
+                *color.get_mut(x, y) = red;
+                *depth.get_mut(x, y) = 2.0;
+            }
+        }
+    }
+    let desc = input_desc(Intrinsics::FovYDeg(60.0), h, None).unwrap();
+    let reference = reference_from_images(color, &depth, &desc, env).unwrap();
+    let eye = glam::Vec3::new(0.3, 0.0, 0.0);
+    let target_desc =
+        parallax_scene::CameraDesc::new(eye, eye + glam::Vec3::NEG_Z, glam::Vec3::Y, 60.0);
+    let target = Pinhole::new(&target_desc, w, h).unwrap();
+    let tracer = build_tracer(
+        Method::Brute,
+        &reference.cube,
+        &reference.layers,
+        &MethodOptions::default(),
+    )
+    .unwrap();
+    let view = |fill| {
+        let wo = WarpOptions {
+            fill,
+            ..WarpOptions::default()
+        };
+        warp_view_with(tracer.as_ref(), &reference, &target, &wo)
+    };
+    let (bg, crossed) = (
+        view(OcclusionFill::NearestBackground),
+        view(OcclusionFill::Crossed),
+    );
+    assert_eq!(bg.kinds, crossed.kinds);
+    let ov: Vec<usize> = (0..bg.kinds.len())
+        .filter(|&i| matches!(bg.kinds[i], HitKind::Occlusion(0)))
+        .collect();
+    let near = |a: glam::Vec3, b: glam::Vec3| (a - b).abs().max_element() < 1e-4;
+    let n_bg = ov
+        .iter()
+        .filter(|&&i| near(bg.image.data()[i], blue))
+        .count();
+    let n_red = ov
+        .iter()
+        .filter(|&&i| near(crossed.image.data()[i], red))
+        .count();
+    eprintln!(
+        "{} occlusion pixels: background fill blue {n_bg}, crossed red {n_red}",
+        ov.len()
+    );
+    assert!(ov.len() >= 16, "{}", ov.len());
+    assert_eq!(n_bg, ov.len());
+    assert!(n_red * 2 > ov.len(), "{n_red} of {}", ov.len());
+    // Everything else is unchanged.
+    for i in 0..bg.kinds.len() {
+        if !matches!(bg.kinds[i], HitKind::Occlusion(_)) {
+            assert_eq!(bg.image.data()[i], crossed.image.data()[i]);
+        }
     }
 }

@@ -108,8 +108,9 @@ fn diagnose_stereo_warp() {
                 }
                 let wo = WarpOptions {
                     resample: rs,
-                    layer0_guard: guard,
-                };
+                    ..WarpOptions::default()
+                }
+                .with_layer0_guard(guard);
                 let views: Vec<_> = eyes
                     .iter()
                     .map(|e| warp_view_with(tracer.as_ref(), &r, e, &wo))

@@ -1,4 +1,5 @@
-//! Flag `O` (Widmer et al. 2015, §3.2) with G-buffer normals ([`parallax_screen::planes`]):
+//! Flag `O` (Widmer et al. 2015, §3.2) with G-buffer normals
+//! ([`NormalSource::GBufferFlagged`], [`parallax_screen::planes::crack_flags`]):
 //! set on both sides of a depth step and next to uncovered pixels, not on a tilted flat
 //! floor; the quad-tree's leaves carry the same flags as [`LayerPlanes`].
 
@@ -58,7 +59,12 @@ fn near_edge(i: u32, j: u32) -> bool {
 fn gbuffer_flags_at_depth_step_not_on_flat_floor() {
     let (cam, g) = scene(None);
     let cube = cube(&cam, std::slice::from_ref(&g));
-    let planes = LayerPlanes::build(&cube, &g, NormalSource::GBuffer).unwrap();
+    let plain = LayerPlanes::build(&cube, &g, NormalSource::GBuffer).unwrap();
+    assert!(
+        plain.flag.iter().all(|f| !f),
+        "plain G-buffer normals flag nothing"
+    );
+    let planes = LayerPlanes::build(&cube, &g, NormalSource::gbuffer_flagged()).unwrap();
     let mut flagged_edge = 0;
     for j in 0..H {
         for i in 0..W {
@@ -93,18 +99,29 @@ fn gbuffer_flags_at_depth_step_not_on_flat_floor() {
     let qt = QuadTreeTracer::build(
         &cube,
         std::slice::from_ref(&g),
-        &QuadTreeOptions::lossless(),
+        &QuadTreeOptions {
+            normals: NormalSource::gbuffer_flagged(),
+            ..QuadTreeOptions::lossless()
+        },
     )
     .unwrap();
     let eff = qt.trees[0].effective_planes();
     assert_eq!(eff.flag, planes.flag);
+
+    // A finite upper gap bound (cracks only) leaves the depth step unflagged.
+    let cracks_only = NormalSource::GBufferFlagged {
+        min_rel_gap: 1e-4,
+        max_rel_gap: 1e-2,
+    };
+    let p2 = LayerPlanes::build(&cube, &g, cracks_only).unwrap();
+    assert!(p2.flag.iter().all(|f| !f));
 }
 
 #[test]
 fn gbuffer_flags_next_to_uncovered_pixel() {
     let (cam, g) = scene(Some((5, 5)));
     let cube = cube(&cam, std::slice::from_ref(&g));
-    let planes = LayerPlanes::build(&cube, &g, NormalSource::GBuffer).unwrap();
+    let planes = LayerPlanes::build(&cube, &g, NormalSource::gbuffer_flagged()).unwrap();
     let f = |i: u32, j: u32| planes.flag[(j * W + i) as usize];
     assert!(!f(5, 5), "an uncovered pixel has no flag");
     for (i, j) in [(4, 5), (6, 5), (5, 4), (5, 6)] {

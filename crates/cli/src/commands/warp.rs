@@ -19,7 +19,7 @@ use parallax_render::synth::method::NormalSource;
 use parallax_render::synth::method::{Method, MethodOptions};
 use parallax_render::synth::score::SCORE_TONEMAP;
 use parallax_render::synth::stereo::warp_stereo;
-use parallax_render::synth::warp::{Resample, WarpOptions, WarpedView};
+use parallax_render::synth::warp::{OcclusionFill, Resample, WarpOptions, WarpedView};
 use parallax_scene::camera::Pinhole;
 
 use crate::args::ViewArgs;
@@ -60,9 +60,19 @@ pub struct SynthArgs {
     /// Tracers: nearest-pixel colour of a hit instead of depth-aware bilinear resampling.
     #[arg(long)]
     pub nearest: bool,
-    /// Tracers: no layer-0 guard of answers from deeper layers.
+    /// Tracers: no layer-0 guard of answers from deeper layers (neither part).
     #[arg(long)]
     pub no_layer0_guard: bool,
+    /// Tracers: no side-entry part (a) of the layer-0 guard.
+    #[arg(long)]
+    pub no_side_entry_guard: bool,
+    /// Tracers: no DDA re-check part (b) of the layer-0 guard.
+    #[arg(long)]
+    pub no_dda_recheck: bool,
+    /// Tracers: colour of occlusion-volume answers: crossed (the reported pixel) or
+    /// background (nearest background pixel along the epipolar line, Widmer Fig. 6e).
+    #[arg(long)]
+    pub ov_fill: Option<String>,
     /// Do not render the BVH ground truth (no PSNR / SSIM).
     #[arg(long)]
     pub no_score: bool,
@@ -115,7 +125,14 @@ impl SynthArgs {
                 } else {
                     Resample::Bilinear
                 },
-                layer0_guard: !self.no_layer0_guard,
+                side_entry_guard: !(self.no_layer0_guard || self.no_side_entry_guard),
+                dda_recheck: !(self.no_layer0_guard || self.no_dda_recheck),
+                fill: match self.ov_fill.as_deref() {
+                    None => WarpOptions::default().fill,
+                    Some("crossed") => OcclusionFill::Crossed,
+                    Some("background") => OcclusionFill::NearestBackground,
+                    Some(o) => bail!("unknown --ov-fill {o:?}; expected crossed or background"),
+                },
             },
         })
     }

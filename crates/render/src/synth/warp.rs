@@ -1,8 +1,8 @@
 //! Warping a reference into a target pinhole view by tracing one ray per target pixel
 //! (Widmer et al. 2015, §5.1): the colour of a pixel is the colour of the layer pixel its ray
 //! hits; a miss takes the environment colour; an occlusion-volume crossing takes the colour of
-//! the crossed layer pixel (the single-layer inpainting of §4.1, "fill both with the nearest
-//! background pixels", Fig. 6e — here the crossed pixel itself, not a dilated search).
+//! the crossed layer pixel (the single-layer inpainting of §4.1) or, with
+//! [`OcclusionFill::NearestBackground`], the nearest background pixel (Fig. 6e, below).
 //!
 //! **Colour resampling** ([`Resample`], default [`Resample::Bilinear`], the same for every
 //! tracer): a hit lies at a sub-pixel position of the reference image, so its colour is
@@ -18,8 +18,9 @@
 //! lookup; nearest is kept as [`Resample::Nearest`] for comparison. Occlusion-volume answers
 //! keep the crossed pixel's colour (nearest).
 //!
-//! **Layer-0 guard** ([`WarpOptions::layer0_guard`], default on, the same for every tracer;
-//! only with 2+ layers): an answer from layer 1 or deeper is re-checked against layer 0.
+//! **Layer-0 guard** (default on, the same for every tracer; only with 2+ layers): an answer
+//! from layer 1 or deeper is re-checked against layer 0, in two separately switchable parts,
+//! [`WarpOptions::side_entry_guard`] (a) and [`WarpOptions::dda_recheck`] (b).
 //! (a) A ray that enters the reference frustum through a side face (not the near plane)
 //! already more than 1% behind layer 0's depth at the entry pixel has its true surface outside
 //! the captured view (the strip of an eye that the cyclopean reference does not see); a deeper
@@ -32,6 +33,22 @@
 //! planes of a layer-0 surface (which a single layer reports as an occlusion volume and
 //! inpaints) otherwise land on the surface behind it (atrium: +0.35 dB with 2 layers). The
 //! guard is our addition, not in Widmer et al. 2015; its DDA work is counted in the stats.
+//! Part (b) is the special case Widmer's own crack handling (flag `O` + crack dilation,
+//! §3.2) should cover; with G-buffer normals we now derive `O` from the planes
+//! ([`parallax_screen::planes::crack_flags`]), but measured on atrium at 1600x900 (ipd
+//! 0.065, quad-tree, 2 layers) (a) + crack dilation scores 29.09-29.47 dB against 29.67 dB for
+//! (a) alone and 30.07 dB for (a) + (b) (none: 29.64 dB), so (b) stays.
+//!
+//! **Occlusion-volume fill** ([`WarpOptions::fill`]). Fig. 6e fills single-layer misses and
+//! occlusion-volume answers "with the nearest background pixels". [`OcclusionFill::Crossed`]
+//! takes the colour of the pixel the tracer reports (for cascade-mode answers the pixel whose
+//! plane the ray passed behind: the occluder's edge, a foreground colour).
+//! [`OcclusionFill::NearestBackground`] ([`background_fill`]) walks from that pixel back along
+//! the ray's screen direction in the reference (the epipolar line: the ray came from in front
+//! of the background on that side of the silhouette) to the first pixel deeper than the
+//! occluder edge by 1% (or uncovered: the environment), at most [`BACKGROUND_SEARCH_PX`]
+//! pixels, else keeps the crossed pixel. Misses keep the environment colour (our misses are
+//! rays that never pass behind a layer: sky, or outside the reference frustum).
 //!
 //! Besides colour, every pixel records what its ray found ([`HitKind`], shown like Fig. 6d:
 //! misses red, occlusion volumes blue) and its intersection-test count (box + plane tests, or
@@ -175,20 +192,49 @@ pub fn warp_view(tracer: &dyn ScreenTracer, reference: &Reference, target: &Pinh
     warp_view_with(tracer, reference, target, &WarpOptions::default())
 }
 
+/// How an occlusion-volume answer is coloured (module docs, "Occlusion-volume fill").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub enum OcclusionFill {
+    /// The colour of the pixel the tracer reports (the crossed pixel).
+    #[default]
+    Crossed,
+    /// The nearest background pixel along the ray's epipolar line (Fig. 6e).
+    NearestBackground,
+}
+
 /// Options of [`warp_view_with`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct WarpOptions {
     pub resample: Resample,
-    /// Layer-0 crack guard (module docs): re-check answers from layers 1.. against layer 0's
-    /// thin shell.
-    pub layer0_guard: bool,
+    /// Layer-0 guard part (a) (module docs): an answer from layer 1.. for a ray entering the
+    /// reference frustum through a side face behind layer 0 becomes layer 0's occlusion
+    /// volume.
+    pub side_entry_guard: bool,
+    /// Layer-0 guard part (b) (module docs): a hit in layer 1.. is replaced by layer 0's
+    /// thin-shell DDA hit when that comes first (rays slipping through layer-0 cracks).
+    pub dda_recheck: bool,
+    /// Colour of occlusion-volume answers.
+    pub fill: OcclusionFill,
+}
+
+impl WarpOptions {
+    /// Both parts of the layer-0 guard on or off.
+    pub fn with_layer0_guard(self, on: bool) -> Self {
+        Self {
+            side_entry_guard: on,
+            dda_recheck: on,
+            ..self
+        }
+    }
 }
 
 impl Default for WarpOptions {
     fn default() -> Self {
         Self {
             resample: Resample::default(),
-            layer0_guard: true,
+            side_entry_guard: true,
+            dda_recheck: true,
+            fill: OcclusionFill::default(),
         }
     }
 }
@@ -201,7 +247,9 @@ pub fn warp_view_with(
     opts: &WarpOptions,
 ) -> WarpedView {
     let resample = opts.resample;
-    let guard = (opts.layer0_guard && reference.layers.len() > 1)
+    let deep = reference.layers.len() > 1;
+    let side_guard = opts.side_entry_guard && deep;
+    let guard = (opts.dda_recheck && deep)
         .then(|| {
             let o = DdaOptions {
                 layers: 1,
@@ -231,13 +279,20 @@ pub fn warp_view_with(
                 };
                 let mut s = TraceStats::default();
                 let mut r = tracer.trace(&cr.ray, &mut s);
-                if let Some(g) = &guard {
-                    r = guard_deep(reference, g, &cr.ray, r, &mut s);
+                if side_guard || guard.is_some() {
+                    r = guard_deep(reference, side_guard, guard.as_ref(), &cr.ray, r, &mut s);
                 }
                 let tests = s.box_tests + s.plane_tests;
                 wk[x] = (if tests > 0 { tests } else { s.steps }).min(u32::MAX as u64) as u32;
                 total += s;
                 (img[x], kind[x]) = resolve(reference, r, resample);
+                if let (OcclusionFill::NearestBackground, HitKind::Occlusion(l)) =
+                    (opts.fill, kind[x])
+                    && let TraceResult::OcclusionVolume { pixel, .. } = r
+                    && let Some(c) = background_fill(reference, l as u32, pixel, &cr.ray)
+                {
+                    img[x] = c;
+                }
             }
             total
         })
@@ -258,7 +313,8 @@ pub fn warp_view_with(
 /// hit, layer 0's thin-shell hit when the DDA over layer 0 finds one before it; else `r`.
 fn guard_deep(
     reference: &Reference,
-    guard: &DdaTracer,
+    side_entry: bool,
+    guard: Option<&DdaTracer>,
     ray: &parallax_core::Ray,
     r: TraceResult,
     stats: &mut TraceStats,
@@ -270,7 +326,8 @@ fn guard_deep(
     if !deep {
         return r;
     }
-    if let Some(seg) = reference.cube.clip_ray(ray)
+    if side_entry
+        && let Some(seg) = reference.cube.clip_ray(ray)
         && seg.p0.z > 1e-4
     {
         let g0 = &reference.layers[0];
@@ -286,7 +343,7 @@ fn guard_deep(
             };
         }
     }
-    let Some(t) = r.hit_t() else {
+    let (Some(guard), Some(t)) = (guard, r.hit_t()) else {
         return r;
     };
     let r0 = guard.trace(ray, stats);
@@ -422,4 +479,73 @@ fn bilinear(reference: &Reference, layer: u32, pixel: UVec2, position: Vec3) -> 
         }
     }
     (wsum > 1e-6).then(|| sum / wsum)
+}
+
+/// Steps of the background search of [`background_fill`] (pixels along the epipolar line).
+pub const BACKGROUND_SEARCH_PX: u32 = 8;
+
+/// A pixel deeper than the occluder edge by more than this fraction of its depth is
+/// background for [`background_fill`].
+const BACKGROUND_REL: f32 = 0.01;
+
+/// Fig. 6e's "nearest background pixel" for an occlusion-volume answer at `pixel` of `layer`
+/// (module docs): the occluder edge depth is the nearer of `pixel` and the next pixel along
+/// the ray's screen direction in the reference; walking back from `pixel` against that
+/// direction one pixel at a time (at most [`BACKGROUND_SEARCH_PX`] steps), the first pixel
+/// that is uncovered or deeper than the edge by [`BACKGROUND_REL`] gives the colour. `None`
+/// when there is none (the caller keeps the crossed pixel's colour).
+fn background_fill(
+    reference: &Reference,
+    layer: u32,
+    pixel: UVec2,
+    ray: &parallax_core::Ray,
+) -> Option<Rgb> {
+    let g = reference.layers.get(layer as usize)?;
+    let colors = reference.colors.get(layer as usize)?;
+    let (w, h) = (g.width(), g.height());
+    if pixel.x >= w || pixel.y >= h {
+        return None;
+    }
+    let seg = reference.cube.clip_ray(ray)?;
+    let d = seg.p1 - seg.p0;
+    let dir = Vec2::new(d.x * w as f32, d.y * h as f32);
+    let len = dir.x.abs().max(dir.y.abs());
+    if !(len > 1e-6 && len.is_finite()) {
+        return None;
+    }
+    // One pixel per step along the major axis.
+    let step = dir / len;
+    let centre = Vec2::new(pixel.x as f32 + 0.5, pixel.y as f32 + 0.5);
+    let at = |p: Vec2| -> Option<usize> {
+        (p.x >= 0.0 && p.y >= 0.0 && p.x < w as f32 && p.y < h as f32)
+            .then(|| g.index(p.x as u32, p.y as u32))
+    };
+    let depth = |i: usize| {
+        let d = g.depth[i];
+        if d.is_finite() && d > 0.0 {
+            d
+        } else {
+            f32::INFINITY
+        }
+    };
+    let mut edge = depth(g.index(pixel.x, pixel.y));
+    if let Some(i) = at(centre + step) {
+        edge = edge.min(depth(i));
+    }
+    if !edge.is_finite() {
+        return None;
+    }
+    let limit = edge * (1.0 + BACKGROUND_REL);
+    for k in 0..=BACKGROUND_SEARCH_PX {
+        let i = at(centre - step * k as f32)?;
+        if depth(i) > limit {
+            let (x, y) = (i as u32 % w, i as u32 / w);
+            return Some(if g.depth[i].is_finite() && g.depth[i] > 0.0 {
+                *colors.get(x, y)
+            } else {
+                reference.background
+            });
+        }
+    }
+    None
 }

@@ -101,7 +101,7 @@ impl QuadTree {
         }
         let depth_normals;
         let (normals, flags): (&[Vec3], Option<&[bool]>) = match opts.normals {
-            NormalSource::GBuffer => (&layer.normal, None),
+            NormalSource::GBuffer | NormalSource::GBufferFlagged { .. } => (&layer.normal, None),
             NormalSource::Depth { max_rel_error } => {
                 let depth = Image::from_vec(w, h, layer.depth.clone())?;
                 depth_normals = normals_from_depth(&depth, cam, max_rel_error)?;
@@ -130,9 +130,13 @@ impl QuadTree {
             };
             Node::plane(cube.z_of_depth(d), n.x, n.y, f).unwrap_or(Node::EMPTY)
         };
-        if flags.is_some() {
+        let NormalSource::GBufferFlagged {
+            min_rel_gap,
+            max_rel_gap,
+        } = opts.normals
+        else {
             return Self::from_leaf_fn(cube, w, h, opts, deeper, leaf);
-        }
+        };
         // G-buffer normals: the leaves first, then flag `O` from their decoded planes
         // ([`crate::planes::crack_flags`]).
         let mut leaves = vec![Node::EMPTY; (w as usize) * (h as usize)];
@@ -144,7 +148,7 @@ impl QuadTree {
                     *n = leaf(j * w as usize + i, i as u32, j as u32);
                 }
             });
-        let o = gbuffer_flags(cube, w, h, &leaves);
+        let o = gbuffer_flags(cube, w, h, &leaves, min_rel_gap, max_rel_gap);
         Self::from_leaf_fn(cube, w, h, opts, deeper, |k, _, _| {
             let n = leaves[k];
             if o[k] {
@@ -538,8 +542,15 @@ fn leaf_planes(level0: &Level, w: u32, h: u32, wf: f32, hf: f32) -> LayerPlanes 
 
 /// Flag `O` of G-buffer leaves: [`crate::planes::crack_flags`] over the decoded leaf planes
 /// (the quantised planes the traversal intersects).
-fn gbuffer_flags(cube: &UnitCube, w: u32, h: u32, leaves: &[Node]) -> Vec<bool> {
-    crate::planes::crack_flags(cube, w, h, crate::planes::CRACK_REL_GAP, |k| {
+fn gbuffer_flags(
+    cube: &UnitCube,
+    w: u32,
+    h: u32,
+    leaves: &[Node],
+    min_rel_gap: f32,
+    max_rel_gap: f32,
+) -> Vec<bool> {
+    crate::planes::crack_flags(cube, w, h, min_rel_gap, max_rel_gap, |k| {
         let node = leaves[k];
         if !node.is_plane() {
             return None;
