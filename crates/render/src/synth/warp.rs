@@ -43,7 +43,8 @@
 //! occlusion-volume answers "with the nearest background pixels". [`OcclusionFill::Crossed`]
 //! takes the colour of the pixel the tracer reports (for cascade-mode answers the pixel whose
 //! plane the ray passed behind: the occluder's edge, a foreground colour).
-//! [`OcclusionFill::NearestBackground`] ([`background_fill`]) walks from that pixel back along
+//! [`OcclusionFill::NearestBackground`] ([`background_fill`], the default; single-layer
+//! references only, as Fig. 6e's "fastest variant") walks from that pixel back along
 //! the ray's screen direction in the reference (the epipolar line: the ray came from in front
 //! of the background on that side of the silhouette) to the first pixel deeper than the
 //! occluder edge by 1% (or uncovered: the environment), at most [`BACKGROUND_SEARCH_PX`]
@@ -196,9 +197,9 @@ pub fn warp_view(tracer: &dyn ScreenTracer, reference: &Reference, target: &Pinh
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub enum OcclusionFill {
     /// The colour of the pixel the tracer reports (the crossed pixel).
-    #[default]
     Crossed,
     /// The nearest background pixel along the ray's epipolar line (Fig. 6e).
+    #[default]
     NearestBackground,
 }
 
@@ -213,7 +214,8 @@ pub struct WarpOptions {
     /// Layer-0 guard part (b) (module docs): a hit in layer 1.. is replaced by layer 0's
     /// thin-shell DDA hit when that comes first (rays slipping through layer-0 cracks).
     pub dda_recheck: bool,
-    /// Colour of occlusion-volume answers.
+    /// Colour of occlusion-volume answers of a single-layer reference (with 2+ layers the
+    /// crossed pixel is always used).
     pub fill: OcclusionFill,
 }
 
@@ -248,6 +250,8 @@ pub fn warp_view_with(
 ) -> WarpedView {
     let resample = opts.resample;
     let deep = reference.layers.len() > 1;
+    // The background fill is the single-layer inpainting of Fig. 6e (module docs).
+    let fill_bg = opts.fill == OcclusionFill::NearestBackground && !deep;
     let side_guard = opts.side_entry_guard && deep;
     let guard = (opts.dda_recheck && deep)
         .then(|| {
@@ -286,8 +290,7 @@ pub fn warp_view_with(
                 wk[x] = (if tests > 0 { tests } else { s.steps }).min(u32::MAX as u64) as u32;
                 total += s;
                 (img[x], kind[x]) = resolve(reference, r, resample);
-                if let (OcclusionFill::NearestBackground, HitKind::Occlusion(l)) =
-                    (opts.fill, kind[x])
+                if let (true, HitKind::Occlusion(l)) = (fill_bg, kind[x])
                     && let TraceResult::OcclusionVolume { pixel, .. } = r
                     && let Some(c) = background_fill(reference, l as u32, pixel, &cr.ray)
                 {
