@@ -35,7 +35,8 @@ pub struct SynthArgs {
     /// Seed of the shading streams.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Per-pixel plane normals of the tracers: gbuffer or depth (reconstructed, Widmer's).
+    /// Per-pixel plane normals of the tracers: gbuffer, gbuffer-flagged (with the crack flag O
+    /// at plane gaps, for the quad-tree's crack dilation) or depth (reconstructed, Widmer's).
     #[arg(long, default_value = "gbuffer")]
     pub normals: String,
     /// DDA: march step bound (the paper uses 200 for stereo, 500 for upsampling).
@@ -93,10 +94,11 @@ impl SynthArgs {
     pub fn method_options(&self) -> Result<MethodOptions> {
         let normals = match self.normals.as_str() {
             "gbuffer" => NormalSource::GBuffer,
+            "gbuffer-flagged" => NormalSource::gbuffer_flagged(),
             "depth" => NormalSource::Depth {
                 max_rel_error: parallax_raster::normals::DEFAULT_MAX_REL_ERROR,
             },
-            o => bail!("unknown --normals {o:?}; expected gbuffer or depth"),
+            o => bail!("unknown --normals {o:?}; expected gbuffer, gbuffer-flagged or depth"),
         };
         ensure!(
             self.gamma_norm_deg.is_finite() && (0.0..=90.0).contains(&self.gamma_norm_deg),
