@@ -18,6 +18,15 @@
 //! lookup; nearest is kept as [`Resample::Nearest`] for comparison. Occlusion-volume answers
 //! keep the crossed pixel's colour (nearest).
 //!
+//! **Visible samples first** (bilinear only): a hit in layer 1 or deeper blends, instead of
+//! its own layer's samples, the layer-0 samples of the 2x2 that lie on its surface when there
+//! are any. Next to a contact edge (floor meeting a column, wall behind attached trim) the
+//! layer-1 sample at a pixel centre lies inside or under the occluder and shades black,
+//! while the eye's ray meets the visible part of the same surface in that pixel's footprint,
+//! which layer 0's neighbours hold. Measured on atrium (800x450, ipd 0.065, quad-tree):
+//! before this, such pixels (0.07% of the image) added more squared error than all layer-1
+//! disocclusion answers removed, and 2 layers scored below 1 layer + background fill.
+//!
 //! **Layer-0 guard** (default on, the same for every tracer; only with 2+ layers): an answer
 //! from layer 1 or deeper is re-checked against layer 0, in two separately switchable parts,
 //! [`WarpOptions::side_entry_guard`] (a) and [`WarpOptions::dda_recheck`] (b).
@@ -463,6 +472,31 @@ fn bilinear(reference: &Reference, layer: u32, pixel: UVec2, position: Vec3) -> 
     let hi = g.index(pixel.x, pixel.y);
     let (p_hit, n_hit) = (g.position[hi], g.normal[hi]);
     let tol = same_surface_tol(reference, depth);
+    // A deeper layer's hit blends the layer-0 samples of its surface when there are any
+    // (module docs, "Visible samples first").
+    if layer >= 1 {
+        let g0 = &reference.layers[0];
+        let c0 = &reference.colors[0];
+        let mut sum = Vec3::ZERO;
+        let mut wsum = 0.0f32;
+        for (dy, wy) in [(0, 1.0 - ty), (1, ty)] {
+            for (dx, wx) in [(0, 1.0 - tx), (1, tx)] {
+                let (x, y) = (x0 + dx, y0 + dy);
+                if x < 0 || y < 0 || x >= w as i64 || y >= h as i64 {
+                    continue;
+                }
+                let (x, y) = (x as u32, y as u32);
+                let wgt = wx * wy;
+                if wgt > 0.0 && same_surface(g0, g0.index(x, y), p_hit, n_hit, tol) {
+                    sum += *c0.get(x, y) * wgt;
+                    wsum += wgt;
+                }
+            }
+        }
+        if wsum > 1e-6 {
+            return Some(sum / wsum);
+        }
+    }
     let mut sum = Vec3::ZERO;
     let mut wsum = 0.0f32;
     for (dy, wy) in [(0, 1.0 - ty), (1, ty)] {
