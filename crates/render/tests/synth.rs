@@ -34,6 +34,9 @@ const FILL_GAIN: f64 = 0.12;
 /// With the background fill one layer comes close to two at this size (measured: 2 layers
 /// -0.02 .. +0.44 dB above one, the DDA lowest): two layers must not fall below one by more.
 const FILL_LAYER_SLACK: f64 = 0.1;
+/// The background fill applied to two-layer occlusion-volume answers loses at most this much
+/// at this size (measured 0.00 .. 0.17 dB).
+const FILL_TWO_LAYER_SLACK: f64 = 0.25;
 
 fn atrium() -> (Scene, Bvh) {
     let scene = Scene::load("atrium").unwrap();
@@ -261,8 +264,9 @@ fn front_facing_hidden_layers() {
         eprintln!("{hidden:?}: {p:.2} dB, deep {:.4}", sv.views[0].frac_deep());
         scores.push(p);
     }
-    // Measured: 20.22 dB (all) vs 20.98 dB (front-facing) (nearest, no guard: 19.95 / 20.73).
-    assert!(scores[1] > scores[0] + 0.4, "{scores:?}");
+    // Measured: 20.75 dB (all) vs 21.15 dB (front-facing) (nearest, no guard: 19.95 / 20.73;
+    // before deeper-layer hits blended layer-0 samples first: 20.22 / 20.98).
+    assert!(scores[1] > scores[0] + 0.3, "{scores:?}");
 }
 
 /// Mean PSNR of both eyes at `W x H` (atrium, ipd `IPD`) for every tracer method x layers x
@@ -321,14 +325,15 @@ fn warp_table(methods: &[Method]) -> Vec<[[f64; 4]; 2]> {
 ///
 /// | method | 1 layer | 2 layers |
 /// |---|---|---|
-/// | brute | 20.28 / 20.44 / 20.44 / 20.71 | 20.73 / 20.91 / 20.98 / 20.98 |
-/// | quadtree | 20.22 / 20.37 / 20.37 / 20.65 | 20.60 / 20.78 / 20.84 / 20.84 |
-/// | dda | 18.48 / 18.82 / 18.82 / 19.17 | 18.61 / 18.96 / 19.33 / 19.33 |
-/// | minmax | 20.38 / 20.56 / 20.56 / 20.81 | 20.52 / 20.70 / 21.25 / 21.25 |
-/// | hiz | 20.36 / 20.54 / 20.54 / 20.79 | 20.49 / 20.68 / 21.24 / 21.24 |
+/// | brute | 20.28 / 20.44 / 20.44 / 20.71 | 20.73 / 21.06 / 21.15 / 21.15 |
+/// | quadtree | 20.22 / 20.37 / 20.37 / 20.65 | 20.60 / 20.94 / 21.06 / 21.06 |
+/// | dda | 18.48 / 18.82 / 18.82 / 19.17 | 18.61 / 18.97 / 19.34 / 19.17 |
+/// | minmax | 20.38 / 20.56 / 20.56 / 20.81 | 20.52 / 20.73 / 21.27 / 21.12 |
+/// | hiz | 20.36 / 20.54 / 20.54 / 20.79 | 20.49 / 20.70 / 21.26 / 21.11 |
 ///
-/// mesh 18.16 dB. Bilinear gains >= 0.14 dB, two layers >= 0.47 dB above one (crossed fill),
-/// one layer >= 0.66 dB above the mesh warp, the background fill >= 0.25 dB for one layer.
+/// mesh 18.16 dB. Bilinear gains >= 0.14 dB, two layers >= 0.52 dB above one (crossed fill),
+/// one layer >= 0.66 dB above the mesh warp, the background fill >= 0.25 dB for one layer;
+/// with two layers it costs up to 0.17 dB at this size (it gains ~0.08 dB at 1600x900).
 #[test]
 fn bilinear_resampling_and_layers_per_method() {
     let methods = [
@@ -350,10 +355,10 @@ fn bilinear_resampling_and_layers_per_method() {
         // mesh warp.
         assert!(row[1][2] > row[0][2] + LAYER_GAIN, "{m}: {row:?}");
         assert!(row[0][2] > mesh + MESH_GAIN, "{m}: {row:?} mesh {mesh}");
-        // The default: the nearest-background fill (single layer only) gains, two layers are
-        // unchanged and stay above one.
+        // The default: the nearest-background fill gains for one layer, costs little for two,
+        // and two layers do not fall below one.
         assert!(row[0][3] > row[0][2] + FILL_GAIN, "{m}: {row:?}");
-        assert_eq!(row[1][3], row[1][2], "{m}: {row:?}");
+        assert!(row[1][3] > row[1][2] - FILL_TWO_LAYER_SLACK, "{m}: {row:?}");
         assert!(row[1][3] > row[0][3] - FILL_LAYER_SLACK, "{m}: {row:?}");
     }
 }
