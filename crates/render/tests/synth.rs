@@ -264,9 +264,10 @@ fn front_facing_hidden_layers() {
         eprintln!("{hidden:?}: {p:.2} dB, deep {:.4}", sv.views[0].frac_deep());
         scores.push(p);
     }
-    // Measured: 20.75 dB (all) vs 21.15 dB (front-facing) (nearest, no guard: 19.95 / 20.73;
-    // before deeper-layer hits blended layer-0 samples first: 20.22 / 20.98).
-    assert!(scores[1] > scores[0] + 0.3, "{scores:?}");
+    // Measured: 21.06 dB (all) vs 21.27 dB (front-facing) (nearest, no guard: 19.95 / 20.73;
+    // before deeper-layer hits blended layer-0 samples first and the guard rejected contact
+    // samples: 20.22 / 20.98).
+    assert!(scores[1] > scores[0] + 0.12, "{scores:?}");
 }
 
 /// Mean PSNR of both eyes at `W x H` (atrium, ipd `IPD`) for every tracer method x layers x
@@ -325,8 +326,8 @@ fn warp_table(methods: &[Method]) -> Vec<[[f64; 4]; 2]> {
 ///
 /// | method | 1 layer | 2 layers |
 /// |---|---|---|
-/// | brute | 20.28 / 20.44 / 20.44 / 20.71 | 20.73 / 21.06 / 21.15 / 21.15 |
-/// | quadtree | 20.22 / 20.37 / 20.37 / 20.65 | 20.60 / 20.94 / 21.06 / 21.06 |
+/// | brute | 20.28 / 20.44 / 20.44 / 20.71 | 20.73 / 21.06 / 21.27 / 21.27 |
+/// | quadtree | 20.22 / 20.37 / 20.37 / 20.65 | 20.60 / 20.94 / 21.18 / 21.18 |
 /// | dda | 18.48 / 18.82 / 18.82 / 19.17 | 18.61 / 18.97 / 19.34 / 19.17 |
 /// | minmax | 20.38 / 20.56 / 20.56 / 20.81 | 20.52 / 20.73 / 21.27 / 21.12 |
 /// | hiz | 20.36 / 20.54 / 20.54 / 20.79 | 20.49 / 20.70 / 21.26 / 21.11 |

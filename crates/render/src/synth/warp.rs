@@ -42,11 +42,14 @@
 //! planes of a layer-0 surface (which a single layer reports as an occlusion volume and
 //! inpaints) otherwise land on the surface behind it (atrium: +0.35 dB with 2 layers). The
 //! guard is our addition, not in Widmer et al. 2015; its DDA work is counted in the stats.
-//! (c) With (b) on, a deeper-layer hit whose reference view depth is more than 0.1% in front
-//! of layer 0's depth at the same pixel is rejected (a layer-k plane extrapolated in front of
-//! layer 0: at 1600x900 on atrium such hits landed up to 10x nearer than their sample): the
-//! answer becomes the layer-0 DDA hit if there is one, else layer 0's occlusion volume at
-//! that pixel. Part (b) is the special case Widmer's own crack handling (flag `O` + crack dilation,
+//! (c) With (b) on, a deeper-layer hit is rejected when its reference view depth is more
+//! than 0.1% in front of layer 0's depth at the same pixel (a layer-k plane extrapolated in
+//! front of layer 0: at 1600x900 on atrium such hits landed up to 10x nearer than their
+//! sample) or when its sample lies less than 1% behind layer 0 there (a contact surface:
+//! floor under a column base, wall behind attached trim, a face buried in another; such
+//! samples lie inside or under the occluder, shade black, and a ray meeting their plane
+//! meets the visible surface beside it in truth). The answer becomes the layer-0 DDA hit if
+//! there is one, else layer 0's occlusion volume at that pixel (then filled). Part (b) is the special case Widmer's own crack handling (flag `O` + crack dilation,
 //! §3.2) should cover; with G-buffer normals we now derive `O` from the planes
 //! ([`parallax_screen::planes::crack_flags`]), but measured on atrium at 1600x900 (ipd
 //! 0.065, quad-tree, 2 layers) (a) + crack dilation scores 29.09-29.47 dB against 29.67 dB for
@@ -375,7 +378,11 @@ fn guard_deep(
             let g0 = &reference.layers[0];
             let d0 = g0.depth[g0.index(pixel.x, pixel.y)];
             let dh = reference.cube.homogeneous(position).w as f32;
-            d0.is_finite() && d0 > 0.0 && dh < d0 * (1.0 - IN_FRONT_REL)
+            let gk = &reference.layers[layer as usize];
+            let dk = gk.depth[gk.index(pixel.x, pixel.y)];
+            d0.is_finite()
+                && d0 > 0.0
+                && (dh < d0 * (1.0 - IN_FRONT_REL) || dk < d0 * (1.0 + CONTACT_REL))
         }
         _ => false,
     };
@@ -429,6 +436,10 @@ fn same_surface(g: &parallax_core::GBuffer, i: usize, p: Vec3, n: Vec3, tol: f32
 /// A deeper-layer hit more than this fraction of layer 0's depth in front of layer 0 (same
 /// pixel) is rejected by the DDA recheck (guard part c, module docs).
 const IN_FRONT_REL: f32 = 0.001;
+
+/// A deeper-layer sample less than this fraction of layer 0's depth behind layer 0 is a
+/// contact surface (guard part c, module docs).
+const CONTACT_REL: f32 = 0.01;
 
 /// A ray entering the cube through a side face more than this fraction of layer 0's depth
 /// behind layer 0 entered from behind it.
