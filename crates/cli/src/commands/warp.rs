@@ -67,7 +67,7 @@ pub struct SynthArgs {
     /// Tracers: no side-entry part (a) of the layer-0 guard.
     #[arg(long)]
     pub no_side_entry_guard: bool,
-    /// Tracers: no DDA re-check part (b) of the layer-0 guard.
+    /// Tracers: no DDA re-check parts (b) and (c) of the layer-0 guard.
     #[arg(long)]
     pub no_dda_recheck: bool,
     /// Tracers: colour of occlusion-volume answers: crossed (the reported pixel) or
