@@ -108,8 +108,9 @@ fn diagnose_stereo_warp() {
                 }
                 let wo = WarpOptions {
                     resample: rs,
-                    layer0_guard: guard,
-                };
+                    ..WarpOptions::default()
+                }
+                .with_layer0_guard(guard);
                 let views: Vec<_> = eyes
                     .iter()
                     .map(|e| warp_view_with(tracer.as_ref(), &r, e, &wo))
@@ -200,6 +201,130 @@ fn diagnose_stereo_warp() {
                     let _ = write_png(&path, &img, &lin);
                 }
             }
+        }
+    }
+}
+
+/// 1 layer + background fill against 2 layers (defaults), per pixel of the left eye: the
+/// squared-error difference (2L - 1L, tone-mapped display values) summed by the class of the
+/// 2-layer answer (raw tracer answer -> final answer after the layer-0 guard) and the 1-layer
+/// answer. Same env vars as [`diagnose_stereo_warp`].
+#[test]
+#[ignore]
+fn diagnose_one_vs_two_layers() {
+    use std::collections::BTreeMap;
+    let (scene, desc, w, h) = setup();
+    let bvh = Bvh::try_build(&scene.mesh).unwrap();
+    let eyes = stereo_eyes(&desc, w, h, 0.065).unwrap();
+    let cam = Pinhole::new(&desc, w, h).unwrap();
+    let m = Method::QuadTree;
+    let r1 = capture_reference(&scene, &bvh, &cam, 1, Shading::Fixed, 0).unwrap();
+    let r2 = capture_reference(&scene, &bvh, &cam, 2, Shading::Fixed, 0).unwrap();
+    let t1 = build_tracer(m, &r1.cube, &r1.layers, &MethodOptions::default()).unwrap();
+    let t2 = build_tracer(m, &r2.cube, &r2.layers, &MethodOptions::default()).unwrap();
+    let wo = WarpOptions::default();
+    let name = |k: HitKind| match k {
+        HitKind::Hit(l) => format!("H{l}"),
+        HitKind::Occlusion(l) => format!("O{l}"),
+        HitKind::Miss => "M".into(),
+    };
+    let raw = |r: TraceResult| match r {
+        TraceResult::Hit { layer, .. } => format!("H{layer}"),
+        TraceResult::OcclusionVolume { layer, .. } => format!("O{layer}"),
+        TraceResult::Miss => "M".into(),
+    };
+    for (ei, eye) in eyes.iter().enumerate() {
+        let truth = ground_truth(&scene, &bvh, eye, Shading::Fixed, 0);
+        let g = render_gbuffer(&scene, &bvh, &Camera::Pinhole(eye.clone()));
+        let v1 = warp_view_with(t1.as_ref(), &r1, eye, &wo);
+        let v2 = warp_view_with(t2.as_ref(), &r2, eye, &wo);
+        let p1 = score(&v1.image, &truth).unwrap().psnr;
+        let p2 = score(&v2.image, &truth).unwrap().psnr;
+        let tt = tonemap_image(&truth, &SCORE_TONEMAP);
+        let a = tonemap_image(&v1.image, &SCORE_TONEMAP);
+        let b = tonemap_image(&v2.image, &SCORE_TONEMAP);
+        // class -> (count, se1, se2)
+        let mut cls: BTreeMap<String, (usize, f64, f64)> = BTreeMap::new();
+        let (mut s1, mut s2) = (0f64, 0f64);
+        for y in 0..h {
+            for x in 0..w {
+                let i = (y * w + x) as usize;
+                let e1 = (a.data()[i] - tt.data()[i]).length_squared() as f64 / 3.0;
+                let e2 = (b.data()[i] - tt.data()[i]).length_squared() as f64 / 3.0;
+                s1 += e1;
+                s2 += e2;
+                let film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                let cr = eye.generate_ray(film, Vec2::splat(0.5), 1).unwrap();
+                let rr = t2.trace(&cr.ray, &mut Default::default());
+                let mut ok = String::new();
+                if let TraceResult::Hit { position, .. } = rr {
+                    let s = g.get(x, y);
+                    let good = s.is_hit()
+                        && (position - s.position).length()
+                            < 0.01 * (s.position - cr.ray.origin).length();
+                    ok = if good { "+" } else { "-" }.into();
+                }
+                let key = format!(
+                    "2L {}{ok}->{} | 1L {}",
+                    raw(rr),
+                    name(v2.kinds[i]),
+                    name(v1.kinds[i])
+                );
+                if std::env::var("SYNTH_DIAG_DUMP").is_ok()
+                    && key.starts_with(&std::env::var("SYNTH_DIAG_DUMP").unwrap())
+                    && e2 > 0.05
+                    && (x + y) % 7 == 0
+                {
+                    let r1r = t1.trace(&cr.ray, &mut Default::default());
+                    let s = g.get(x, y);
+                    if let TraceResult::Hit {
+                        pixel, position, ..
+                    } = rr
+                    {
+                        let l1 = r2.layers[1].get(pixel.x, pixel.y);
+                        let l0 = r2.layers[0].get(pixel.x, pixel.y);
+                        eprintln!(
+                            "   hitdepth {:.3} px {x},{y} truth {:?} 1L {:?} 2L {:?} | L1 px {pixel} prim {} d {:.3} c {:?} | L0 there prim {} d {:.3} c {:?} | bvh prim {} | 2Lpos {position} bvh {} | 1L {:?}",
+                            r2.cube.homogeneous(position).w,
+                            tt.data()[i],
+                            a.data()[i],
+                            b.data()[i],
+                            l1.primitive_id,
+                            l1.depth,
+                            r2.colors[1].get(pixel.x, pixel.y),
+                            l0.primitive_id,
+                            l0.depth,
+                            r2.colors[0].get(pixel.x, pixel.y),
+                            s.primitive_id,
+                            s.position,
+                            r1r
+                        );
+                    }
+                }
+                let e = cls.entry(key).or_default();
+                e.0 += 1;
+                e.1 += e1;
+                e.2 += e2;
+            }
+        }
+        let n = (w * h) as f64;
+        eprintln!(
+            "eye {ei}: 1L+fill {p1:.2} dB, 2L {p2:.2} dB; MSE 1L {:.6} 2L {:.6} (diff {:.6})",
+            s1 / n,
+            s2 / n,
+            (s2 - s1) / n
+        );
+        let mut rows: Vec<_> = cls.into_iter().collect();
+        rows.sort_by(|x, y| ((y.1.2 - y.1.1).abs()).total_cmp(&(x.1.2 - x.1.1).abs()));
+        for (k, (c, e1, e2)) in rows.iter().take(18) {
+            eprintln!(
+                "  {k:28} {:6.2}%px  se1 {:9.2} se2 {:9.2}  d {:+9.2} ({:+.1}% of total diff)",
+                100.0 * *c as f64 / n,
+                e1,
+                e2,
+                e2 - e1,
+                100.0 * (e2 - e1) / (s2 - s1)
+            );
         }
     }
 }

@@ -51,7 +51,7 @@ fn check_synthetic(w: u32, h: u32, seed: u64, mode_lossy: bool) {
     let g2 = behind(&g1, seed + 2);
     let layers = vec![g0, g1, g2];
     let cube = cube(&cam, &layers);
-    let opts = if mode_lossy {
+    let opts = exact(if mode_lossy {
         QuadTreeOptions {
             gamma_dist: 1e-3,
             gamma_norm: 20f32.to_radians().cos(),
@@ -59,7 +59,7 @@ fn check_synthetic(w: u32, h: u32, seed: u64, mode_lossy: bool) {
         }
     } else {
         QuadTreeOptions::lossless()
-    };
+    });
     let qt = QuadTreeTracer::build(&cube, &layers, &opts).unwrap();
     let bf = twin(&qt);
     let rays = rays(&cam, &layers[0], 300, 0.5, seed ^ 3);
@@ -95,7 +95,8 @@ fn cascade_equals_brute_force_on_two_layer_captures() {
     for (name, w, h) in [("atrium", 160, 90), ("cornell", 96, 72)] {
         let (cam, layers) = capture(name, w, h);
         let cube = cube(&cam, &layers);
-        let qt = QuadTreeTracer::build(&cube, &layers, &QuadTreeOptions::lossless()).unwrap();
+        let qt =
+            QuadTreeTracer::build(&cube, &layers, &exact(QuadTreeOptions::lossless())).unwrap();
         let bf = twin(&qt);
         for (spread, seed) in [(0.0325, 1u64), (0.5, 2)] {
             let rays = rays(&cam, &layers[0], 1500, spread, seed);
@@ -134,10 +135,10 @@ fn inpaint_stops_at_first_event() {
     let (cam, layers) = capture("atrium", 160, 90);
     let layers = vec![layers[0].clone()];
     let cube = cube(&cam, &layers);
-    let opts = QuadTreeOptions {
+    let opts = exact(QuadTreeOptions {
         mode: LayerMode::Inpaint,
         ..QuadTreeOptions::lossless()
-    };
+    });
     let qt = QuadTreeTracer::build(&cube, &layers, &opts).unwrap();
     let bf = twin(&qt);
     let rays = rays(&cam, &layers[0], 1500, 0.5, 5);

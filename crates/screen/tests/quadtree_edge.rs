@@ -84,10 +84,10 @@ fn check(layers: &[GBuffer], w: u32, h: u32, mode: LayerMode) {
     let cam = camera(w, h);
     let cube = UnitCube::fit_depths(&cam, layers.iter().map(|g| &g.depth[..]))
         .unwrap_or_else(|_| UnitCube::new(&cam, 0.25, 30.0).unwrap());
-    let opts = QuadTreeOptions {
+    let opts = exact(QuadTreeOptions {
         mode,
         ..QuadTreeOptions::lossless()
-    };
+    });
     let qt = QuadTreeTracer::build(&cube, layers, &opts).unwrap();
     let bf = twin(&qt);
     let levels = qt.trees[0].level_count() as u64;

@@ -16,10 +16,10 @@ fn check_height_field(w: u32, h: u32, seed: u64, empty: f32, max_levels: u32) {
     let cam = camera(w, h);
     let g = height_field(&cam, seed, empty);
     let cube = cube(&cam, std::slice::from_ref(&g));
-    let opts = QuadTreeOptions {
+    let opts = exact(QuadTreeOptions {
         max_levels,
         ..QuadTreeOptions::lossless()
-    };
+    });
     let qt = QuadTreeTracer::build(&cube, std::slice::from_ref(&g), &opts).unwrap();
     assert_eq!(
         qt.trees[0].plane_node_count(),
@@ -78,7 +78,8 @@ fn lossless_equals_brute_force_on_captures() {
     for (name, w, h) in [("cornell", 96, 72), ("atrium", 160, 90)] {
         let (cam, layers) = captured(name, w, h, 1);
         let cube = cube(&cam, &layers);
-        let qt = QuadTreeTracer::build(&cube, &layers, &QuadTreeOptions::lossless()).unwrap();
+        let qt =
+            QuadTreeTracer::build(&cube, &layers, &exact(QuadTreeOptions::lossless())).unwrap();
         let bf = twin(&qt);
         let rays = rays(&cam, &layers[0], 1500, 0.2, 9);
         let (t, first, stats) = run(&qt, &bf, &rays, REL);

@@ -33,7 +33,8 @@ fn lossy_tree_equals_its_twin_and_mostly_the_original_planes() {
             cube: cube.clone(),
             layers: vec![LayerPlanes::build(&cube, &layers[0], NormalSource::GBuffer).unwrap()],
         };
-        let lossless = QuadTreeTracer::build(&cube, &layers, &QuadTreeOptions::lossless()).unwrap();
+        let lossless =
+            QuadTreeTracer::build(&cube, &layers, &exact(QuadTreeOptions::lossless())).unwrap();
         for (label, opts) in [
             ("default", QuadTreeOptions::default()),
             (
@@ -52,7 +53,7 @@ fn lossy_tree_equals_its_twin_and_mostly_the_original_planes() {
                 },
             ),
         ] {
-            let qt = QuadTreeTracer::build(&cube, &layers, &opts).unwrap();
+            let qt = QuadTreeTracer::build(&cube, &layers, &exact(opts)).unwrap();
             let t0 = &qt.trees[0];
             assert!(
                 t0.node_count() < lossless.trees[0].node_count(),

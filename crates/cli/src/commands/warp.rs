@@ -20,7 +20,7 @@ use parallax_render::synth::method::NormalSource;
 use parallax_render::synth::method::{Method, MethodOptions, cube_near_name, parse_cube_near};
 use parallax_render::synth::score::SCORE_TONEMAP;
 use parallax_render::synth::stereo::warp_stereo;
-use parallax_render::synth::warp::{Resample, WarpOptions, WarpedView};
+use parallax_render::synth::warp::{OcclusionFill, Resample, WarpOptions, WarpedView};
 use parallax_scene::camera::Pinhole;
 
 use crate::args::ViewArgs;
@@ -36,7 +36,8 @@ pub struct SynthArgs {
     /// Seed of the shading streams.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Per-pixel plane normals of the tracers: gbuffer or depth (reconstructed, Widmer's).
+    /// Per-pixel plane normals of the tracers: gbuffer, gbuffer-flagged (with the crack flag O
+    /// at plane gaps, for the quad-tree's crack dilation) or depth (reconstructed, Widmer's).
     #[arg(long, default_value = "gbuffer")]
     pub normals: String,
     /// DDA: march step bound. Default for stereo (`warp`, `bench warp | compression`): 260,
@@ -71,9 +72,19 @@ pub struct SynthArgs {
     /// Tracers: nearest-pixel colour of a hit instead of depth-aware bilinear resampling.
     #[arg(long)]
     pub nearest: bool,
-    /// Tracers: no layer-0 guard of answers from deeper layers.
+    /// Tracers: no layer-0 guard of answers from deeper layers (neither part).
     #[arg(long)]
     pub no_layer0_guard: bool,
+    /// Tracers: no side-entry part (a) of the layer-0 guard.
+    #[arg(long)]
+    pub no_side_entry_guard: bool,
+    /// Tracers: no DDA re-check parts (b) and (c) of the layer-0 guard.
+    #[arg(long)]
+    pub no_dda_recheck: bool,
+    /// Tracers: colour of occlusion-volume answers: crossed (the reported pixel) or
+    /// background (nearest background pixel along the epipolar line, Widmer Fig. 6e).
+    #[arg(long)]
+    pub ov_fill: Option<String>,
     /// Do not render the BVH ground truth (no PSNR / SSIM).
     #[arg(long)]
     pub no_score: bool,
@@ -108,10 +119,11 @@ impl SynthArgs {
     pub fn method_options(&self) -> Result<MethodOptions> {
         let normals = match self.normals.as_str() {
             "gbuffer" => NormalSource::GBuffer,
+            "gbuffer-flagged" => NormalSource::gbuffer_flagged(),
             "depth" => NormalSource::Depth {
                 max_rel_error: parallax_raster::normals::DEFAULT_MAX_REL_ERROR,
             },
-            o => bail!("unknown --normals {o:?}; expected gbuffer or depth"),
+            o => bail!("unknown --normals {o:?}; expected gbuffer, gbuffer-flagged or depth"),
         };
         ensure!(
             self.gamma_norm_deg.is_finite() && (0.0..=90.0).contains(&self.gamma_norm_deg),
@@ -142,7 +154,14 @@ impl SynthArgs {
                 } else {
                     Resample::Bilinear
                 },
-                layer0_guard: !self.no_layer0_guard,
+                side_entry_guard: !(self.no_layer0_guard || self.no_side_entry_guard),
+                dda_recheck: !(self.no_layer0_guard || self.no_dda_recheck),
+                fill: match self.ov_fill.as_deref() {
+                    None => WarpOptions::default().fill,
+                    Some("crossed") => OcclusionFill::Crossed,
+                    Some("background") => OcclusionFill::NearestBackground,
+                    Some(o) => bail!("unknown --ov-fill {o:?}; expected crossed or background"),
+                },
             },
             cube_near: self.near,
         })

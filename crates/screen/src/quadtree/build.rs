@@ -105,7 +105,7 @@ impl QuadTree {
         }
         let depth_normals;
         let (normals, flags): (&[Vec3], Option<&[bool]>) = match opts.normals {
-            NormalSource::GBuffer => (&layer.normal, None),
+            NormalSource::GBuffer | NormalSource::GBufferFlagged { .. } => (&layer.normal, None),
             NormalSource::Depth { max_rel_error } => {
                 let depth = Image::from_vec(w, h, layer.depth.clone())?;
                 depth_normals = normals_from_depth(&depth, cam, max_rel_error)?;
@@ -117,7 +117,7 @@ impl QuadTree {
         };
         let depth = &layer.depth;
         let mt = cube.cube_to_world.transpose();
-        Self::from_leaf_fn(cube, w, h, opts, deeper, |k, i, j| {
+        let leaf = |k: usize, i: u32, j: u32| {
             let d = depth[k];
             if !(d.is_finite() && d > 0.0) || normals[k] == Vec3::ZERO {
                 return Node::EMPTY;
@@ -133,6 +133,36 @@ impl QuadTree {
                 0
             };
             Node::plane(cube.z_of_depth(d), n.x, n.y, f).unwrap_or(Node::EMPTY)
+        };
+        let NormalSource::GBufferFlagged {
+            min_rel_gap,
+            max_rel_gap,
+        } = opts.normals
+        else {
+            return Self::from_leaf_fn(cube, w, h, opts, deeper, leaf);
+        };
+        // G-buffer normals: the leaves first, then flag `O` from their decoded planes
+        // ([`crate::planes::crack_flags`]).
+        let mut leaves = vec![Node::EMPTY; (w as usize) * (h as usize)];
+        leaves
+            .par_chunks_mut(w as usize)
+            .enumerate()
+            .for_each(|(j, row)| {
+                for (i, n) in row.iter_mut().enumerate() {
+                    *n = leaf(j * w as usize + i, i as u32, j as u32);
+                }
+            });
+        let o = gbuffer_flags(cube, w, h, &leaves, min_rel_gap, max_rel_gap);
+        Self::from_leaf_fn(cube, w, h, opts, deeper, |k, _, _| {
+            let n = leaves[k];
+            if o[k] {
+                Node {
+                    a: n.a | FLAG_CRACK,
+                    ..n
+                }
+            } else {
+                n
+            }
         })
     }
 
@@ -525,4 +555,24 @@ fn leaf_planes(level0: &Level, w: u32, h: u32, wf: f32, hf: f32) -> LayerPlanes 
         offset,
         flag,
     }
+}
+
+/// Flag `O` of G-buffer leaves: [`crate::planes::crack_flags`] over the decoded leaf planes
+/// (the quantised planes the traversal intersects).
+fn gbuffer_flags(
+    cube: &UnitCube,
+    w: u32,
+    h: u32,
+    leaves: &[Node],
+    min_rel_gap: f32,
+    max_rel_gap: f32,
+) -> Vec<bool> {
+    crate::planes::crack_flags(cube, w, h, min_rel_gap, max_rel_gap, |k| {
+        let node = leaves[k];
+        if !node.is_plane() {
+            return None;
+        }
+        let n = node.normal();
+        Some((node.zc(), -n.x / n.z, -n.y / n.z))
+    })
 }

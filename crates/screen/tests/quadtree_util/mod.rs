@@ -6,7 +6,8 @@ use glam::{Vec2, Vec3};
 use parallax_core::{GBuffer, Ray, Rng};
 use parallax_scene::{CameraDesc, camera::Pinhole};
 use parallax_screen::{
-    BruteForcePlanes, QuadTreeTracer, ScreenTracer, TraceResult, TraceStats, UnitCube,
+    BruteForcePlanes, QuadTreeOptions, QuadTreeTracer, ScreenTracer, TraceResult, TraceStats,
+    UnitCube,
 };
 
 /// A pinhole looking down -Z from the origin.
@@ -285,4 +286,14 @@ pub fn stereo_rays(cam: &Pinhole, shift: f32) -> Vec<Ray> {
         }
     }
     out
+}
+
+/// `opts` without crack dilation: the brute-force twin ([`twin`]) tests every plane over its
+/// own footprint only, so exact agreement needs `crack_dilation = 0` (G-buffer planes carry
+/// the flag `O` at depth steps and cracks, [`parallax_screen::planes::crack_flags`]).
+pub fn exact(opts: QuadTreeOptions) -> QuadTreeOptions {
+    QuadTreeOptions {
+        crack_dilation: 0.0,
+        ..opts
+    }
 }
