@@ -109,7 +109,7 @@ impl FromStr for Method {
 /// | `max_levels` | Option<u32> | None (full) | quadtree | levels of the tree |
 /// | `inpaint` | bool | false | quadtree | single-layer inpainting traversal (§4.1) |
 /// | `mesh_max_rel_jump` | f32 | inf | mesh | split grid triangles whose depths differ by more than this fraction |
-/// | `warp` | [`WarpOptions`] | bilinear + guard | all tracers | colour resampling and layer-0 guard of [`super::warp`] |
+/// | `warp` | [`WarpOptions`] | bilinear + layer-0 guard (a)+(b)+(c) + nearest-background fill | all tracers | colour resampling and layer-0 guard of [`super::warp`] |
 /// | `cube_near` | [`CubeNear`] | fitted | all tracers | near plane of the reference's unit cube, where every ray starts (applied by [`super::stereo::warp_stereo`] and [`super::upsample::upsample`] through [`Reference::fit_cube`]) |
 ///
 /// **`cube_near`.** [`CubeNear::Fitted`] (ours) starts rays at half the nearest captured

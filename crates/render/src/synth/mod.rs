@@ -7,8 +7,8 @@
 //! layer has a colour image, plus the fitted unit cube (§3.2). A **tracer** built over the
 //! layers ([`method::build_tracer`], the one factory of every screen-space structure) answers
 //! each target pixel's ray; [`warp::warp_view`] turns the answers into colour (hit: the hit
-//! layer's colour resampled depth-aware bilinearly at the hit's sub-pixel position; miss: the environment; occlusion volume: the colour of the crossed
-//! pixel — the single-layer inpainting of §4.1). [`mesh_warp`] forward-warps layer 0 as a
+//! layer's colour resampled depth-aware bilinearly at the hit's sub-pixel position; miss: the environment; occlusion volume: the nearest background pixel
+//! behind the crossed occluder edge — the inpainting of §4.1 / Fig. 6e). [`mesh_warp`] forward-warps layer 0 as a
 //! grid mesh instead (§5.1, "one vertex per input image pixel"). Every result is scored
 //! against the BVH reference render of the same camera ([`score`]).
 //!

@@ -70,7 +70,7 @@
 //! dilated occlusion volume of §4.1 — with the pixel under that point, which is the pixel the
 //! ray crossed just before passing behind the silhouette (the background side).
 //!
-//! **Crack dilation** (flag `O`, depth normals only) intersects flagged planes slightly
+//! **Crack dilation** (flag `O`: depth normals or `NormalSource::GBufferFlagged`) intersects flagged planes slightly
 //! outside their footprints; it is a deliberate deviation from the brute-force planes (set
 //! `crack_dilation = 0` for exact agreement), and Lemma 1 does not account for it.
 

@@ -228,7 +228,8 @@ pub struct QuadTreeOptions {
     /// Per-pixel normals. Default [`NormalSource::GBuffer`]: Widmer reconstructs normals from
     /// depth but notes (§3.2, §6 "Limitations") that G-buffer normals are more precise and
     /// avoid the cracks between unaligned planes; exact normals also make coplanar pixels
-    /// merge. With `Depth { .. }` the flag `O` drives [`Self::crack_dilation`].
+    /// merge. With `Depth { .. }` or `GBufferFlagged { .. }` the flag `O` drives
+    /// [`Self::crack_dilation`]; plain `GBuffer` flags none (measured worse, see `planes.rs`).
     pub normals: NormalSource,
     /// Occlusion handling across layers. Default [`LayerMode::Cascade`] (exact).
     pub mode: LayerMode,
