@@ -182,3 +182,9 @@ fn inpaint_stops_at_first_event() {
     );
     assert!(ov > 0 && hit > 0);
 }
+
+/// A case proptest found (session 3).
+#[test]
+fn cascade_regression_47x28() {
+    check_synthetic(47, 28, 3129365413543782575, false);
+}

@@ -297,6 +297,17 @@ impl QuadTree {
                         } else {
                             ta
                         };
+                        // A ray already behind the plane where it enters the footprint
+                        // (crossing it from behind, a hit of the two-sided plane) is in
+                        // the trigger region `{f < 0}` from `t_in` on: deeper layers must
+                        // be traced from there (cascade.rs, Lemma 2). Found by proptest.
+                        if trig.is_none()
+                            && q.want_trigger
+                            && ev.trigger.is_none()
+                            && f0 + fd * t_in < 0.0
+                        {
+                            trig = Some(t_in);
+                        }
                         if let Some(t) = trig
                             && t <= sh
                         {
