@@ -560,19 +560,8 @@ pub(crate) fn run_packets<L: Lanes>(
     mut fallback: impl FnMut(&Ray) -> (f32, u32),
 ) -> (PacketWork, u64) {
     let mut pw = PacketWork::default();
-    let mut rays_n = 0u64;
-    let mut pairs = [(0u32, 0u32); 8];
-    let mut j = 0;
-    while j < total {
-        let n = (total - j).min(L::N);
-        for (l, p) in pairs.iter_mut().enumerate().take(n) {
-            *p = pair(j + l);
-        }
-        j += n;
-        let batch = &pairs[..n];
-        let rays = gen_n::<L>(set, batch);
-        rays_n += rays.valid.count_ones() as u64;
-        match closest_n(&rays, blocks, leaves, beam, slack, &mut pw) {
+    let rays_n = for_each_packet::<L>(set, total, pair, |batch, rays| {
+        match closest_n(rays, blocks, leaves, beam, slack, &mut pw) {
             Some(c) => {
                 for (l, &p) in batch.iter().enumerate() {
                     write(p, c.t[l], c.tri[l]);
@@ -589,8 +578,35 @@ pub(crate) fn run_packets<L: Lanes>(
                 }
             }
         }
-    }
+    });
     (pw, rays_n)
+}
+
+/// Cuts subsample rays `0..total` of a tile (`pair(j)` = its `(sample, k)`) into packets of
+/// `L::N` lanes (the last one partial), generates each packet's rays and hands both to `f`.
+/// Returns the number of valid rays.
+#[inline(always)]
+pub(crate) fn for_each_packet<L: Lanes>(
+    set: &SampleSet,
+    total: usize,
+    pair: impl Fn(usize) -> (u32, u32),
+    mut f: impl FnMut(&[(u32, u32)], &RaysN<L>),
+) -> u64 {
+    let mut rays_n = 0u64;
+    let mut pairs = [(0u32, 0u32); 8];
+    let mut j = 0;
+    while j < total {
+        let n = (total - j).min(L::N);
+        for (l, p) in pairs.iter_mut().enumerate().take(n) {
+            *p = pair(j + l);
+        }
+        j += n;
+        let batch = &pairs[..n];
+        let rays = gen_n::<L>(set, batch);
+        rays_n += rays.valid.count_ones() as u64;
+        f(batch, &rays);
+    }
+    rays_n
 }
 
 /// [`run_packets`] with eight AVX lanes.

@@ -86,7 +86,7 @@ use parallax_core::math::ROBUST_FAR_SCALE;
 use parallax_core::{Aabb, NO_ID};
 
 use super::SampleSet;
-use super::packet::{ClosestN, Lanes, RaysN, gen_n};
+use super::packet::{ClosestN, Lanes, RaysN, for_each_packet};
 
 /// Which sample test the caster runs (module docs of `tile_setup.rs` and `intersect.rs`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -474,31 +474,21 @@ fn run_setup<L: Lanes>(
     mut write: impl FnMut((u32, u32), f32, u32),
 ) -> (u64, u64) {
     let mut tests = 0u64;
-    let mut rays_n = 0u64;
-    let mut pairs = [(0u32, 0u32); 8];
-    let mut j = 0;
-    while j < total {
-        let n = (total - j).min(L::N);
-        for (l, p) in pairs.iter_mut().enumerate().take(n) {
-            *p = pair(j + l);
-        }
-        j += n;
-        let batch = &pairs[..n];
-        let mut rays = gen_n::<L>(set, batch);
+    let rays_n = for_each_packet::<L>(set, total, pair, |batch, rays| {
+        let mut rays = *rays;
         // Invalid lanes get `d = 0`: `g . d = 0` is never a hit.
-        for l in 0..n {
+        for l in 0..batch.len() {
             if rays.valid >> l & 1 == 0 {
                 for a in 0..3 {
                     rays.d[a] = L::from_fn(|i| if i == l { 0.0 } else { rays.d[a].get(i) });
                 }
             }
         }
-        rays_n += rays.valid.count_ones() as u64;
         let c = closest_setup(&rays, tt, axis, sign, slack, &mut tests);
         for (l, &p) in batch.iter().enumerate() {
             write(p, c.t[l], c.tri[l]);
         }
-    }
+    });
     (tests, rays_n)
 }
 
