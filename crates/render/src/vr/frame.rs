@@ -89,9 +89,26 @@ pub fn visibility_prepared(
     prepared: Option<&Hierarchy>,
 ) -> Result<(VisibilityBuffer, Option<CastStats>), VrError> {
     let mut out = VisibilityBuffer::new(set);
-    let stats = match method {
+    let stats = visibility_into(method, bvh, set, prepared, &mut out)?;
+    Ok((out, stats))
+}
+
+/// [`visibility_prepared`] into a buffer made for `set` ([`VisibilityBuffer::new`]) and reused
+/// frame after frame, as a renderer would: every entry is overwritten, nothing is allocated.
+pub fn visibility_into(
+    method: Visibility,
+    bvh: &Bvh,
+    set: &SampleSet,
+    prepared: Option<&Hierarchy>,
+    out: &mut VisibilityBuffer,
+) -> Result<Option<CastStats>, VrError> {
+    assert!(
+        out.prim.len() == set.ray_count() && out.t.len() == set.ray_count() && out.spp == set.spp,
+        "visibility buffer made for another sample set"
+    );
+    Ok(match method {
         Visibility::PerRay => {
-            trace_per_ray(bvh, set, &mut out);
+            trace_per_ray(bvh, set, out);
             None
         }
         Visibility::Beam | Visibility::BeamWatertight => {
@@ -103,12 +120,11 @@ pub fn visibility_prepared(
                 _ => CastOptions::default(),
             };
             match prepared {
-                Some(h) => Some(cast_opts(bvh, set, h, &mut out, opts)),
-                None => Some(cast_opts(bvh, set, &Hierarchy::build(set)?, &mut out, opts)),
+                Some(h) => Some(cast_opts(bvh, set, h, out, opts)),
+                None => Some(cast_opts(bvh, set, &Hierarchy::build(set)?, out, opts)),
             }
         }
-    };
-    Ok((out, stats))
+    })
 }
 
 /// Visibility of `set` by `method` (preparation included).
