@@ -51,12 +51,9 @@ fn random_rays(scene: &Scene, n: usize) -> Vec<Ray> {
         .collect()
 }
 
-/// Nanoseconds this thread has run on a CPU (Linux `/proc/thread-self/schedstat`), so that a
-/// single-threaded measurement on a loaded machine is not diluted by other processes.
-fn thread_cpu_ns() -> Option<u64> {
-    let s = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
-    s.split_whitespace().next()?.parse().ok()
-}
+// Nanoseconds this thread has run on a CPU, so that a single-threaded measurement on a loaded
+// machine is not diluted by other processes.
+use parallax_core::cpu_time::thread_cpu_ns;
 
 /// Best of `reps` runs, in Mrays/s of wall time and (single-threaded) of this thread's CPU time.
 fn mrays(rays: &[Ray], reps: usize, f: impl Fn(&[Ray]) -> usize) -> (f64, usize, f64) {

@@ -21,8 +21,7 @@ fn v3(s: &str) -> Vec3 {
 }
 
 fn thread_cpu_ns() -> u64 {
-    let s = std::fs::read_to_string("/proc/thread-self/schedstat").unwrap();
-    s.split_whitespace().next().unwrap().parse().unwrap()
+    parallax_core::cpu_time::thread_cpu_ns().expect("thread CPU clock (Linux)")
 }
 
 /// Best of `reps` in Mrays/s of this thread's CPU time, and the checksum of the last run.

@@ -7,6 +7,7 @@
 //!
 //! **Invariant:** nothing in this crate knows about scenes, cameras or acceleration structures.
 
+pub mod cpu_time;
 pub mod error;
 pub mod image;
 pub mod math;

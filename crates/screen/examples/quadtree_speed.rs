@@ -56,13 +56,10 @@ fn best_of<T>(n: usize, mut f: impl FnMut() -> T) -> (f64, T) {
     (best, out.unwrap())
 }
 
-/// CPU time of the calling thread in ns (`/proc/thread-self/schedstat`, first field): on a
-/// shared machine wall-clock time also counts the time the thread waited for a core.
+/// CPU time of the calling thread in ns: on a shared machine wall-clock time also counts the
+/// time the thread waited for a core.
 fn cpu_ns() -> u64 {
-    std::fs::read_to_string("/proc/thread-self/schedstat")
-        .ok()
-        .and_then(|s| s.split_whitespace().next()?.parse().ok())
-        .unwrap_or(0)
+    parallax_core::cpu_time::thread_cpu_ns().unwrap_or(0)
 }
 
 /// Traces every 4th ray once (the `--profile` mode); a separate function so callgrind can

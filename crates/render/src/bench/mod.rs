@@ -2,7 +2,6 @@
 //! on any scene and camera, and returns rows that the CLI prints as a Markdown table and JSON.
 
 pub mod compression;
-pub mod cpu;
 pub mod rays;
 pub mod trace;
 pub mod upsample;

@@ -14,7 +14,7 @@ use parallax_scene::camera::{CameraModel, Pinhole};
 use parallax_screen::{ScreenTracer, TraceStats};
 use rayon::prelude::*;
 
-use super::cpu::{ms_between, process_cpu_ns, thread_cpu_ns};
+use parallax_core::cpu_time::{ms_between, process_cpu_ns, thread_cpu_ns};
 
 /// Times of one pass (milliseconds).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

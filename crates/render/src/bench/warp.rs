@@ -29,13 +29,13 @@ use parallax_scene::camera::Pinhole;
 use parallax_scene::{CameraDesc, Scene};
 use serde::Serialize;
 
-use super::cpu::{ms_between, process_cpu_ns};
 use super::trace::{PassTimes, eye_rays, trace_pass};
 use crate::synth::SynthError;
 use crate::synth::layers::{Reference, Shading, capture_reference};
 use crate::synth::method::{Method, MethodOptions, Synthesizer, cube_near_name};
 use crate::synth::score::{Score, ground_truth, score};
 use crate::synth::stereo::{StereoViews, stereo_eyes};
+use parallax_core::cpu_time::{ms_between, process_cpu_ns};
 
 /// The view and settings of a stereo benchmark.
 #[derive(Clone, Debug)]
