@@ -328,3 +328,205 @@ fn diagnose_one_vs_two_layers() {
         }
     }
 }
+
+/// Where 2 layers are worse (or better) than 1 layer, per pixel, for each method of
+/// `SYNTH_DIAG_METHODS` (default quadtree,brute) on the fitted cube (as `bench warp`), ipd
+/// `SYNTH_DIAG_IPD` (default 0.065). Each pixel whose 2-layer answer differs from its 1-layer
+/// answer is classed by: final 2-layer kind, 1-layer kind, whether the 2-layer hit is the BVH
+/// surface (`+`/`-`), the layer-1 sample's gap behind layer 0 at its pixel (`gap<1%`,
+/// `gap<5%`, `gap>5%`), whether its geometric normal faces the target eye (`front`/`back`),
+/// and whether the 1-layer answer was already good (`1Lok`: squared error < 1e-3). Prints
+/// the squared-error change per class (2L - 1L, summed over both eyes).
+#[test]
+#[ignore]
+fn diagnose_worse_pixels() {
+    use std::collections::BTreeMap;
+    let (scene, desc, w, h) = setup();
+    let bvh = Bvh::try_build(&scene.mesh).unwrap();
+    let ipd: f32 = std::env::var("SYNTH_DIAG_IPD").map_or(0.065, |s| s.parse().unwrap());
+    let eyes = stereo_eyes(&desc, w, h, ipd).unwrap();
+    let cam = Pinhole::new(&desc, w, h).unwrap();
+    let methods: Vec<Method> = std::env::var("SYNTH_DIAG_METHODS")
+        .map(|s| Method::parse_list(&s).unwrap())
+        .unwrap_or(vec![Method::QuadTree, Method::Brute]);
+    let mo = MethodOptions::default();
+    let mut r1 = capture_reference(&scene, &bvh, &cam, 1, Shading::Fixed, 0).unwrap();
+    let mut r2 = capture_reference(&scene, &bvh, &cam, 2, Shading::Fixed, 0).unwrap();
+    r1.fit_cube(mo.cube_near).unwrap();
+    r2.fit_cube(mo.cube_near).unwrap();
+    let truths: Vec<_> = eyes
+        .iter()
+        .map(|e| ground_truth(&scene, &bvh, e, Shading::Fixed, 0))
+        .collect();
+    let gts: Vec<_> = eyes
+        .iter()
+        .map(|e| render_gbuffer(&scene, &bvh, &Camera::Pinhole(e.clone())))
+        .collect();
+    let wo = mo.warp;
+    let name = |k: HitKind| match k {
+        HitKind::Hit(l) => format!("H{l}"),
+        HitKind::Occlusion(l) => format!("O{l}"),
+        HitKind::Miss => "M".into(),
+    };
+    let dump = std::env::var("SYNTH_DIAG_DUMP").ok();
+    for &m in &methods {
+        let t1 = build_tracer(m, &r1.cube, &r1.layers, &mo).unwrap();
+        let t2 = build_tracer(m, &r2.cube, &r2.layers, &mo).unwrap();
+        let mut cls: BTreeMap<String, (usize, f64, f64)> = BTreeMap::new();
+        let (mut s1, mut s2, mut p) = (0f64, 0f64, [0f64; 4]);
+        for (ei, eye) in eyes.iter().enumerate() {
+            let v1 = warp_view_with(t1.as_ref(), &r1, eye, &wo);
+            let v2 = warp_view_with(t2.as_ref(), &r2, eye, &wo);
+            p[ei] = score(&v1.image, &truths[ei]).unwrap().psnr;
+            p[2 + ei] = score(&v2.image, &truths[ei]).unwrap().psnr;
+            let tt = tonemap_image(&truths[ei], &SCORE_TONEMAP);
+            let a = tonemap_image(&v1.image, &SCORE_TONEMAP);
+            let b = tonemap_image(&v2.image, &SCORE_TONEMAP);
+            let org = eye.frame.position;
+            for y in 0..h {
+                for x in 0..w {
+                    let i = (y * w + x) as usize;
+                    let e1 = (a.data()[i] - tt.data()[i]).length_squared() as f64 / 3.0;
+                    let e2 = (b.data()[i] - tt.data()[i]).length_squared() as f64 / 3.0;
+                    s1 += e1;
+                    s2 += e2;
+                    if (e2 - e1).abs() < 1e-9 {
+                        continue;
+                    }
+                    let mut key = format!("{} | 1L {}", name(v2.kinds[i]), name(v1.kinds[i]));
+                    let film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                    let cr = eye.generate_ray(film, Vec2::splat(0.5), 1).unwrap();
+                    let rr = t2.trace(&cr.ray, &mut Default::default());
+                    if let (
+                        HitKind::Hit(1),
+                        TraceResult::Hit {
+                            pixel, position, ..
+                        },
+                    ) = (v2.kinds[i], rr)
+                    {
+                        let s = gts[ei].get(x, y);
+                        let good = s.is_hit()
+                            && (position - s.position).length()
+                                < 0.01 * (s.position - org).length();
+                        let l0 = r2.layers[0].get(pixel.x, pixel.y);
+                        let l1 = r2.layers[1].get(pixel.x, pixel.y);
+                        let gap = (l1.depth - l0.depth) / l0.depth;
+                        let tri = scene.mesh.geometric_normal(l1.primitive_id as usize);
+                        let _front = tri.dot(org - l1.position) > 0.0;
+                        let dh = r2.cube.homogeneous(position).w as f32;
+                        let mut mid0 = false;
+                        let mut mid1 = false;
+                        for dy in -1i32..=1 {
+                            for dx in -1i32..=1 {
+                                let (nx, ny) = (pixel.x as i32 + dx, pixel.y as i32 + dy);
+                                if nx < 0 || ny < 0 || nx >= w as i32 || ny >= h as i32 {
+                                    continue;
+                                }
+                                for (k, flag) in [(0usize, &mut mid0), (1, &mut mid1)] {
+                                    let dn = r2.layers[k].get(nx as u32, ny as u32).depth;
+                                    let _ = dh;
+                                    if k == 0
+                                        && !(dn.is_finite()
+                                            && (dn - l0.depth).abs() < 0.05 * l0.depth)
+                                    {
+                                        *flag = true;
+                                    }
+                                }
+                            }
+                        }
+                        let front = !(mid0 || mid1);
+                        key += &format!(
+                            " {} {} {}",
+                            if good { "+" } else { "-" },
+                            if gap < 0.01 {
+                                "gap<1%"
+                            } else if gap < 0.05 {
+                                "gap<5%"
+                            } else {
+                                "gap>5%"
+                            },
+                            if mid0 { "L0edge" } else { "L0interior" }
+                        );
+                        if let Some(d) = &dump
+                            && key.contains(d.as_str())
+                            && e2 - e1 > 0.02
+                        {
+                            eprintln!(
+                                "   eye{ei} px {x},{y} truth {:.2?} 1L {:.2?} 2L {:.2?} | L1 px {pixel} d0 {:.3} d1 {:.3} prim {} c1 {:.2?} | bvh prim {} d {:.3} refcos {:.3} eyecos {:.3} | 1L {:?}",
+                                tt.data()[i],
+                                a.data()[i],
+                                b.data()[i],
+                                l0.depth,
+                                l1.depth,
+                                l1.primitive_id,
+                                r2.colors[1].get(pixel.x, pixel.y),
+                                s.primitive_id,
+                                (s.position - org).length(),
+                                scene
+                                    .mesh
+                                    .geometric_normal(s.primitive_id as usize)
+                                    .dot((cam.frame.position - s.position).normalize()),
+                                scene
+                                    .mesh
+                                    .geometric_normal(s.primitive_id as usize)
+                                    .dot((org - s.position).normalize()),
+                                v1.kinds[i]
+                            );
+                            let hc = r2.cube.homogeneous(position);
+                            let fx = (hc.x / hc.w) as f32 * w as f32 - pixel.x as f32;
+                            let fy = (hc.y / hc.w) as f32 * h as f32 - pixel.y as f32;
+                            let nb: Vec<String> = [(-1i32, 0i32), (1, 0), (0, -1), (0, 1)]
+                                .iter()
+                                .map(|(dx, dy)| {
+                                    let (nx, ny) = (
+                                        (pixel.x as i32 + dx).clamp(0, w as i32 - 1) as u32,
+                                        (pixel.y as i32 + dy).clamp(0, h as i32 - 1) as u32,
+                                    );
+                                    format!(
+                                        "{:.2}/{:.2}",
+                                        r2.layers[0].get(nx, ny).depth,
+                                        r2.layers[1].get(nx, ny).depth
+                                    )
+                                })
+                                .collect();
+                            eprintln!(
+                                "      sub ({fx:.2},{fy:.2}) hit d {:.3} nb d0/d1 L,R,U,D {nb:?}",
+                                hc.w
+                            );
+                        }
+                    }
+                    key += if e1 < 1e-3 { " 1Lok" } else { " 1Lbad" };
+                    let e = cls.entry(key).or_default();
+                    e.0 += 1;
+                    e.1 += e1;
+                    e.2 += e2;
+                }
+            }
+        }
+        let n = 2.0 * (w * h) as f64;
+        eprintln!(
+            "{m} ipd {ipd} {w}x{h}: 1L {:.3}/{:.3} dB, 2L {:.3}/{:.3} dB; MSE diff {:+.3e}",
+            p[0],
+            p[1],
+            p[2],
+            p[3],
+            (s2 - s1) / n
+        );
+        let mut rows: Vec<_> = cls.into_iter().collect();
+        rows.sort_by(|x, y| ((y.1.2 - y.1.1).abs()).total_cmp(&(x.1.2 - x.1.1).abs()));
+        let (gain, loss): (f64, f64) = rows.iter().fold((0.0, 0.0), |(g, l), r| {
+            let d = r.1.2 - r.1.1;
+            if d < 0.0 { (g + d, l) } else { (g, l + d) }
+        });
+        eprintln!("  classes: gains {gain:+.2}, losses {loss:+.2} (summed se)");
+        for (k, (c, e1, e2)) in rows.iter().take(14) {
+            eprintln!(
+                "  {k:40} {:6} px  se1 {:8.2} se2 {:8.2}  d {:+8.2}",
+                c,
+                e1,
+                e2,
+                e2 - e1
+            );
+        }
+    }
+}

@@ -162,6 +162,7 @@ impl SynthArgs {
                     Some("background") => OcclusionFill::NearestBackground,
                     Some(o) => bail!("unknown --ov-fill {o:?}; expected crossed or background"),
                 },
+                ..WarpOptions::default()
             },
             cube_near: self.near,
         })
