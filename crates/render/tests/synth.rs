@@ -31,12 +31,13 @@ const LAYER_GAIN: f64 = 0.25;
 const MESH_GAIN: f64 = 0.3;
 /// Single-layer gain of the nearest-background occlusion fill (measured >= 0.25 dB).
 const FILL_GAIN: f64 = 0.12;
-/// With the background fill one layer comes close to two at this size (measured: 2 layers
-/// -0.02 .. +0.44 dB above one, the DDA lowest): two layers must not fall below one by more.
-const FILL_LAYER_SLACK: f64 = 0.1;
+/// With the background fill (defaults) two layers score above one at this size by at least this
+/// much (measured +0.18 .. +0.50 dB, the DDA lowest).
+const FILL_LAYER_GAIN: f64 = 0.08;
 /// The background fill applied to two-layer occlusion-volume answers loses at most this much
-/// at this size (measured 0.00 .. 0.17 dB).
-const FILL_TWO_LAYER_SLACK: f64 = 0.25;
+/// at this size (measured -0.01 .. +0.01 dB: deeper-layer occlusion volumes take layer 0's
+/// background; before that up to 0.17 dB).
+const FILL_TWO_LAYER_SLACK: f64 = 0.1;
 
 fn atrium() -> (Scene, Bvh) {
     let scene = Scene::load("atrium").unwrap();
@@ -328,16 +329,17 @@ fn warp_table(methods: &[Method]) -> Vec<[[f64; 4]; 2]> {
 /// |---|---|---|
 /// | brute | 20.28 / 20.44 / 20.44 / 20.71 | 20.73 / 21.06 / 21.23 / 21.23 |
 /// | quadtree | 20.22 / 20.37 / 20.37 / 20.65 | 20.60 / 20.94 / 21.15 / 21.15 |
-/// | dda | 18.48 / 18.82 / 18.82 / 19.17 | 18.61 / 18.97 / 19.34 / 19.18 |
-/// | minmax | 20.38 / 20.56 / 20.56 / 20.81 | 20.52 / 20.73 / 21.24 / 21.08 |
-/// | hiz | 20.36 / 20.54 / 20.54 / 20.79 | 20.49 / 20.70 / 21.23 / 21.08 |
+/// | dda | 18.48 / 18.82 / 18.82 / 19.17 | 18.61 / 18.97 / 19.34 / 19.35 |
+/// | minmax | 20.38 / 20.56 / 20.56 / 20.81 | 20.52 / 20.73 / 21.24 / 21.24 |
+/// | hiz | 20.36 / 20.54 / 20.54 / 20.79 | 20.49 / 20.70 / 21.23 / 21.23 |
 ///
 /// (With guard parts (d), (e) of `warp.rs`; before them the guarded 2-layer columns were
 /// 0.03-0.04 dB higher at this size, see `two_layers_beat_one_layer`.)
 ///
 /// mesh 18.16 dB. Bilinear gains >= 0.14 dB, two layers >= 0.52 dB above one (crossed fill),
 /// one layer >= 0.66 dB above the mesh warp, the background fill >= 0.25 dB for one layer;
-/// with two layers it costs up to 0.17 dB at this size (it gains ~0.08 dB at 1600x900).
+/// with two layers it changes little (-0.01 .. +0.01 dB), and two layers stay >= 0.18 dB above
+/// one with the defaults.
 #[test]
 fn bilinear_resampling_and_layers_per_method() {
     let methods = [
@@ -360,10 +362,10 @@ fn bilinear_resampling_and_layers_per_method() {
         assert!(row[1][2] > row[0][2] + LAYER_GAIN, "{m}: {row:?}");
         assert!(row[0][2] > mesh + MESH_GAIN, "{m}: {row:?} mesh {mesh}");
         // The default: the nearest-background fill gains for one layer, costs little for two,
-        // and two layers do not fall below one.
+        // and two layers score above one.
         assert!(row[0][3] > row[0][2] + FILL_GAIN, "{m}: {row:?}");
         assert!(row[1][3] > row[1][2] - FILL_TWO_LAYER_SLACK, "{m}: {row:?}");
-        assert!(row[1][3] > row[0][3] - FILL_LAYER_SLACK, "{m}: {row:?}");
+        assert!(row[1][3] > row[0][3] + FILL_LAYER_GAIN, "{m}: {row:?}");
     }
 }
 

@@ -97,7 +97,14 @@
 //! the ray's screen direction in the reference (the epipolar line: the ray came from in front
 //! of the background on that side of the silhouette) to the first pixel deeper than the
 //! occluder edge by 1% (or uncovered: the environment), at most [`BACKGROUND_SEARCH_PX`]
-//! pixels, else keeps the crossed pixel. Misses keep the environment colour (our misses are
+//! pixels, else keeps the crossed pixel. An occlusion volume of layer 1 or deeper (the ray
+//! passed behind that layer too; the per-pixel tracers min-max, Hi-Z and DDA report them) is
+//! filled from layer 0's nearest background first (the visible background a single layer
+//! would give), from its own layer only when layer 0 has none: hidden-layer samples next to
+//! their own silhouettes are often dark contact or enclosed surfaces. Measured at 800x450,
+//! ipd 0.065 (2 layers): min-max atrium 27.875 -> 27.929 dB, Sponza 29.689 -> 29.760 dB; DDA
+//! 27.843 -> 27.901, 29.606 -> 29.646 dB (quad-tree and brute force report none). Ours.
+//! Misses keep the environment colour (our misses are
 //! rays that never pass behind a layer: sky, or outside the reference frustum).
 //!
 //! Besides colour, every pixel records what its ray found ([`HitKind`], shown like Fig. 6d:
@@ -358,7 +365,8 @@ pub fn warp_view_with(
                 (img[x], kind[x]) = resolve(reference, r, resample);
                 if let (true, HitKind::Occlusion(l)) = (fill_bg, kind[x])
                     && let TraceResult::OcclusionVolume { pixel, .. } = r
-                    && let Some(c) = background_fill(reference, l as u32, pixel, &cr.ray)
+                    && let Some(c) = background_fill(reference, 0, pixel, &cr.ray)
+                        .or_else(|| background_fill(reference, l as u32, pixel, &cr.ray))
                 {
                     img[x] = c;
                 }
