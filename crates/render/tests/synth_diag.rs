@@ -334,7 +334,7 @@ fn diagnose_one_vs_two_layers() {
 /// `SYNTH_DIAG_IPD` (default 0.065). Each pixel whose 2-layer answer differs from its 1-layer
 /// answer is classed by: final 2-layer kind, 1-layer kind, whether the 2-layer hit is the BVH
 /// surface (`+`/`-`), the layer-1 sample's gap behind layer 0 at its pixel (`gap<1%`,
-/// `gap<5%`, `gap>5%`), whether its geometric normal faces the target eye (`front`/`back`),
+/// `gap<5%`, `gap>5%`), whether layer 0 has a depth edge (> 5%) in the 3x3 around that pixel (`L0edge`/`L0interior`),
 /// and whether the 1-layer answer was already good (`1Lok`: squared error < 1e-3). Prints
 /// the squared-error change per class (2L - 1L, summed over both eyes).
 #[test]
@@ -411,8 +411,6 @@ fn diagnose_worse_pixels() {
                         let l0 = r2.layers[0].get(pixel.x, pixel.y);
                         let l1 = r2.layers[1].get(pixel.x, pixel.y);
                         let gap = (l1.depth - l0.depth) / l0.depth;
-                        let tri = scene.mesh.geometric_normal(l1.primitive_id as usize);
-                        let _front = tri.dot(org - l1.position) > 0.0;
                         let dh = r2.cube.homogeneous(position).w as f32;
                         let mut mid0 = false;
                         let mut mid1 = false;
@@ -434,7 +432,6 @@ fn diagnose_worse_pixels() {
                                 }
                             }
                         }
-                        let front = !(mid0 || mid1);
                         key += &format!(
                             " {} {} {}",
                             if good { "+" } else { "-" },
