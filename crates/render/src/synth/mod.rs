@@ -22,6 +22,7 @@
 //! - [`score`]: PSNR / SSIM against the BVH ground truth.
 
 pub mod input;
+mod guard;
 pub mod layers;
 pub mod mesh_warp;
 pub mod method;
