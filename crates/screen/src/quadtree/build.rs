@@ -117,6 +117,7 @@ impl QuadTree {
         };
         let depth = &layer.depth;
         let mt = cube.cube_to_world.transpose();
+        let (wf, hf) = (w as f32, h as f32);
         let leaf = |k: usize, i: u32, j: u32| {
             let d = depth[k];
             if !(d.is_finite() && d > 0.0) || normals[k] == Vec3::ZERO {
@@ -124,7 +125,7 @@ impl QuadTree {
             }
             let film = glam::Vec2::new(i as f32 + 0.5, j as f32 + 0.5);
             let p = cam.frame.position + cam.frame.dir_to_world(cam.camera_dir(film)) * d;
-            let Some(n) = map_normal(&mt, p, normals[k]) else {
+            let Some((gx, gy)) = map_gradient(&mt, p, normals[k]) else {
                 return Node::EMPTY;
             };
             let f = if flags.is_some_and(|f| f[k]) {
@@ -132,7 +133,8 @@ impl QuadTree {
             } else {
                 0
             };
-            Node::plane(cube.z_of_depth(d), n.x, n.y, f).unwrap_or(Node::EMPTY)
+            Node::plane_with_gradient(cube.z_of_depth(d), gx, gy, 0, wf, hf, f)
+                .unwrap_or(Node::EMPTY)
         };
         let NormalSource::GBufferFlagged {
             min_rel_gap,
@@ -188,7 +190,11 @@ impl QuadTree {
             }
             let n = planes.normal[k];
             let flags = if planes.flag[k] { FLAG_CRACK } else { 0 };
-            Node::plane(cube.z_of_depth(depth[k]), n.x, n.y, flags).unwrap_or(Node::EMPTY)
+            // Gradient of the plane `n·P = c`: `-(n.x, n.y) / n.z` (`n.z <= 0`).
+            let (gx, gy) = (n.x / -n.z, n.y / -n.z);
+            let (wf, hf) = (w as f32, h as f32);
+            Node::plane_with_gradient(cube.z_of_depth(depth[k]), gx, gy, 0, wf, hf, flags)
+                .unwrap_or(Node::EMPTY)
         })
     }
 
@@ -508,21 +514,25 @@ impl QuadTree {
     }
 }
 
-/// The cube normal of [`UnitCube::map_plane`] with the transposed inverse map `mt`
-/// precomputed (same f64 arithmetic).
+/// The cube gradient `(dz/dx, dz/dy)` of the plane of [`UnitCube::map_plane`] with the
+/// transposed inverse map `mt` precomputed, in f64 from the unnormalised cube covector `q`
+/// (`-(q.x, q.y) / q.z`, infinite for a plane vertical in the cube; the node clamps it).
+/// `None` when degenerate (also when the plane is vertical *and* parallel to `x` or `y`
+/// with a zero numerator, `0 / 0`).
 #[inline]
-fn map_normal(mt: &glam::DMat4, p: Vec3, n: Vec3) -> Option<Vec3> {
+fn map_gradient(mt: &glam::DMat4, p: Vec3, n: Vec3) -> Option<(f32, f32)> {
     let (p, n) = (p.as_dvec3(), n.as_dvec3());
     let q = *mt * n.extend(-n.dot(p));
     let len = q.truncate().length();
     if !(len.is_finite() && len > 0.0) {
         return None;
     }
-    let mut q = q / len;
-    if q.z > 0.0 {
-        q = -q;
-    }
-    Some(q.truncate().as_vec3())
+    // Orientation-free: the gradient is the same for q and -q.
+    let g = |a: f64| {
+        let v = a / -q.z;
+        if v.is_nan() { None } else { Some(v as f32) }
+    };
+    Some((g(q.x)?, g(q.y)?))
 }
 
 /// The decoded pixel planes of a level-0 array in [`LayerPlanes`] form.
@@ -572,7 +582,7 @@ fn gbuffer_flags(
         if !node.is_plane() {
             return None;
         }
-        let n = node.normal();
-        Some((node.zc(), -n.x / n.z, -n.y / n.z))
+        let (gx, gy) = node.gradient(0, w as f32, h as f32);
+        Some((node.zc(), gx, gy))
     })
 }
