@@ -2,9 +2,10 @@
 //! bottom-up adaptive pruning (§3.3).
 //!
 //! **Leaves.** Pixel `(i, j)` with a plane in [`LayerPlanes`] becomes a plane node with the
-//! plane's cube normal and `z_c` = the cube `z` of the pixel's sample (the pixel-centre ray
-//! at the captured view depth, which the plane passes through), flag `O` from the normal
-//! source. Pixels without a plane, and samples in front of the cube's near plane (`z < 0`,
+//! plane's cube gradient (computed in f64 from the mapped plane, stored as f16 slopes across
+//! the footprint, [`super::node`]) and `z_c` = the cube `z` of the pixel's sample (the
+//! pixel-centre ray at the captured view depth, which the plane passes through), flag `O`
+//! from the normal source. Pixels without a plane, and samples in front of the cube's near plane (`z < 0`,
 //! only possible with a caller-made cube narrower than the depths), are empty.
 //!
 //! **Pruning (§3.3).** A parent becomes a plane node iff
