@@ -19,9 +19,10 @@
 //! We store `z_c` rather than the paper's `-(P·N)` offset because `z_c` is positive for every
 //! point inside the cube (so the sign bit is free for the tag, as §3.4 requires) and it is
 //! well conditioned, while `N·P` has no fixed sign. The decoded plane is
-//! `N·P = c` with the unit normal `N = (g_x, g_y, -1) / |(g_x, g_y, -1)|` and
-//! `c = N·(x_c, y_c, z_c)`, evaluated in f32 by [`decode_plane`] — the *same* function
-//! builds the brute-force twin of a tree ([`super::QuadTree::effective_planes`]).
+//! `N·P = c` with `N = (g_x, g_y, -1)` scaled by a power of two to near unit length
+//! ([`Node::test_normal`]: no square root) and `c = N·(x_c, y_c, z_c)`, evaluated in f32 by
+//! [`decode_plane`] — the *same* function builds the brute-force twin of a tree
+//! ([`super::QuadTree::effective_planes`]).
 //!
 //! **Why slopes, not the paper's `N.x, N.y`** (Fig. 3 stores `N.x`, `N.y` as f16 and
 //! implies `N.z`; the format — an f32 word with the sign tag plus two f16 — is unchanged).
@@ -44,8 +45,10 @@
 //! node's footprint (`2^l`) keeps that bound level-independent: a merged node of 256 pixels
 //! is not coarser than a leaf. A slope beyond `±65504` per footprint (the plane crosses the
 //! whole cube depth within `1/65504` of its footprint) is clamped: the plane's footprint
-//! crossing moves by at most `2^l / 65504` pixels. Decoding costs two multiplications, a
-//! square root and a division (the paper's needs a square root).
+//! crossing moves by at most `2^l / 65504` pixels. Decoding needs no square root (the
+//! paper's `N.z` does): the test normal is scaled by a power of two ([`Node::test_normal`]).
+//! A unit normal with a square root and a division cost the traversal ~17 % time (callgrind
+//! +1 % instructions: the latency sat on the plane test's dependency chain).
 
 use glam::Vec3;
 use half::f16;
@@ -164,8 +167,12 @@ impl Node {
     #[inline(always)]
     pub fn gradient(self, level: u32, w: f32, h: f32) -> (f32, f32) {
         let (ex, ey) = self.increments();
-        let inv_size = f32::from_bits((127 - level) << 23); // 2^-level, exact
-        (ex * (w * inv_size), ey * (h * inv_size))
+        // `w 2^-level` exactly, by lowering the exponent (w >= 1, level < 32: stays normal).
+        let (ws, hs) = (
+            f32::from_bits(w.to_bits() - (level << 23)),
+            f32::from_bits(h.to_bits() - (level << 23)),
+        );
+        (ex * ws, ey * hs)
     }
 
     /// Decoded unit normal of a plane node at `level` (`N.z < 0`, towards the eye):
@@ -175,6 +182,24 @@ impl Node {
         let (gx, gy) = self.gradient(level, w, h);
         let r = 1.0 / (1.0 + gx * gx + gy * gy).sqrt();
         Vec3::new(gx * r, gy * r, -r)
+    }
+
+    /// The plane-test normal of [`decode_plane`]: `(g_x, g_y, -1)` scaled by the power of
+    /// two `2^-floor(log2 max(1, |g_x|, |g_y|))`, so `|N|` is in `[1, 2 sqrt 3)` — near
+    /// unit, which keeps the f32 plane test `N·P - c` and the cascade's margin
+    /// ([`super::cascade`]) at the scale they had with unit normals — without a square root
+    /// or a division (exact scaling: exponent bits only). Same direction as
+    /// [`Self::normal`].
+    #[inline(always)]
+    pub fn test_normal(self, level: u32, w: f32, h: f32) -> Vec3 {
+        let (gx, gy) = self.gradient(level, w, h);
+        // max(1, |gx|, |gy|) with plain compares (`maxss`; never NaN: |g| <= 65504 W).
+        let (ax, ay) = (gx.abs(), gy.abs());
+        let m = if ax > ay { ax } else { ay };
+        let m = if m > 1.0 { m } else { 1.0 };
+        // 2^-e for m in [2^e, 2^(e+1)): exponent field 127 - e = 254 - (127 + e).
+        let s = f32::from_bits(0x7f00_0000 - (m.to_bits() & 0x7f80_0000));
+        Vec3::new(gx * s, gy * s, -s)
     }
 
     /// Sets the plane flag / lowers an AABB's `zmin` to `tz` (see [`super::cascade`]).
@@ -213,11 +238,12 @@ pub fn node_centre(level: u32, qx: u32, qy: u32, w: f32, h: f32) -> (f32, f32) {
     )
 }
 
-/// Decoded plane `(N, c)` with `N·P = c` of a plane node at `level`, `(qx, qy)` (unit `N`
-/// from the stored slopes, module docs).
+/// Decoded plane `(N, c)` with `N·P = c` of a plane node at `level`, `(qx, qy)`: `N` =
+/// [`Node::test_normal`] from the stored slopes (not unit length: `|N|` in `[1, 2 sqrt 3)`,
+/// module docs), `c = N·(x_c, y_c, z_c)` in f32.
 #[inline(always)]
 pub fn decode_plane(node: Node, level: u32, qx: u32, qy: u32, w: f32, h: f32) -> (Vec3, f32) {
-    let n = node.normal(level, w, h);
+    let n = node.test_normal(level, w, h);
     let (xc, yc) = node_centre(level, qx, qy, w, h);
     (n, n.dot(Vec3::new(xc, yc, node.zc())))
 }
@@ -290,6 +316,27 @@ mod tests {
         assert!(v.normal(0, 800.0, 450.0).is_finite());
         let f = Node::plane_with_gradient(0.5, 0.0, -0.0, 3, 800.0, 450.0, 0).unwrap();
         assert_eq!(f.normal(3, 800.0, 450.0), Vec3::new(0.0, 0.0, -1.0));
+        assert_eq!(f.test_normal(3, 800.0, 450.0), Vec3::new(0.0, 0.0, -1.0));
+    }
+
+    /// The test normal is `(g, -1)` times an exact power of two, of near unit length.
+    #[test]
+    fn test_normal_is_a_scaled_gradient() {
+        for e in -30..=30 {
+            for (a, b) in [(1.0f32, 0.3f32), (-0.2, 1.0), (0.7, -0.7)] {
+                let g = 10f32.powf(e as f32 / 4.0);
+                let n = Node::plane(0.6, a * g, b * g, 0).unwrap();
+                let (gx, gy) = n.gradient(2, 640.0, 360.0);
+                let t = n.test_normal(2, 640.0, 360.0);
+                let s = -t.z;
+                assert_eq!(s, f32::from_bits(s.to_bits() & 0x7f80_0000), "power of two");
+                assert_eq!((t.x, t.y), (gx * s, gy * s));
+                let len = t.length();
+                assert!(len >= 1.0 && len < 2.0 * 3f32.sqrt(), "{len}");
+                let u = n.normal(2, 640.0, 360.0);
+                assert!((t / len - u).length() < 1e-5, "{t} {u}");
+            }
+        }
     }
 
     /// Encoding error bound of the module docs: the exact plane's points at the footprint
@@ -322,7 +369,8 @@ mod tests {
                     for (sx, sy) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)] {
                         let (x, y) = (xc as f64 + sx * hx, yc as f64 + sy * hy);
                         let z = zc as f64 + gx * sx * hx + gy * sy * hy;
-                        let dist = (nn.as_dvec3().dot(glam::DVec3::new(x, y, z)) - c as f64).abs();
+                        let dist = (nn.as_dvec3().dot(glam::DVec3::new(x, y, z)) - c as f64).abs()
+                            / nn.as_dvec3().length();
                         assert!(dist <= bound, "level {level} g {gx}: {dist} > {bound}");
                         worst = worst.max(dist / bound);
                     }
