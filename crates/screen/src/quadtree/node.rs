@@ -214,18 +214,26 @@ impl Node {
     }
 }
 
-/// Exact f16 -> f32 conversion of a *finite* half (the stored normal components), branch-free
-/// and inlinable. `half`'s `to_f32` dispatches at run time (F16C detection) to an
-/// out-of-line function; in the traversal loop those two calls per plane test forced the
-/// loop's f32 state to be spilled around them. Shifting the 15 magnitude bits into an f32's
-/// exponent/mantissa field gives the value times `2^-112` (also for subnormal halves and
-/// zero), and the multiplication by `2^112` is exact, so the result equals
-/// `f16::to_f32` bit for bit (checked for all finite halves in the tests below).
+/// Exact f16 -> f32 conversion of a *finite* half (the stored slopes), branch-free and
+/// inlinable. `half`'s `to_f32` dispatches at run time (F16C detection) to an out-of-line
+/// function; in the traversal loop those two calls per plane test forced the loop's f32
+/// state to be spilled around them. A normal half is its bits shifted into an f32's
+/// exponent/mantissa field with the exponent rebiased by an integer add (`+112 << 23`); a
+/// subnormal half (or zero) is its 10-bit mantissa, converted from an integer, times `2^-24`
+/// — both exact, and a mask selects one, so the result equals `f16::to_f32` bit for bit
+/// (checked for all finite halves in the tests below). No f32 **subnormal** appears on the
+/// way: the former decode (shift, then multiply by `2^112`) made one out of every subnormal
+/// half, and a multiplication with a subnormal operand takes a slow microcode assist —
+/// rare for the paper's `N.x, N.y`, common for the slopes of fronto-parallel surfaces
+/// (~10 % of the traversal's time on atrium; examples `quadtree_speed.rs --time`).
 #[inline(always)]
 pub fn f16_bits_to_f32(h: u16) -> f32 {
     let h = h as u32;
-    let mag = f32::from_bits((h & 0x7fff) << 13) * f32::from_bits(0x7780_0000); // 2^112
-    f32::from_bits(mag.to_bits() | ((h & 0x8000) << 16))
+    let mag = h & 0x7fff;
+    let normal = (mag << 13) + 0x3800_0000; // exponent field + (127 - 15)
+    let sub = (mag as f32 * f32::from_bits(0x3380_0000)).to_bits(); // * 2^-24
+    let is_sub = 0u32.wrapping_sub((mag < 0x400) as u32);
+    f32::from_bits((sub & is_sub) | (normal & !is_sub) | ((h & 0x8000) << 16))
 }
 
 /// Cube-space centre of node `(qx, qy)` at `level` of a `w x h` image.
