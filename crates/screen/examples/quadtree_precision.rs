@@ -5,8 +5,20 @@
 //! and the encoding error of every decoded pixel plane against the exact plane.
 //!
 //! `cd crates/screen && cargo run --release --example quadtree_precision -- [W H] [--scene S
-//! --eye x,y,z --target x,y,z --fov-y deg] [--near M]` (default atrium 800x450, both cubes;
-//! `--near M` = only fitted and camera `M`).
+//! --eye x,y,z --target x,y,z --fov-y deg] [--near M]` (default atrium 800x450, the fitted
+//! cube and the camera cube `M` = 0.1 m). Sponza: `--scene
+//! ../../../shared/scenes/sponza_dabrovic/sponza_dabrovic.glb --eye -9,3.5,0 --target 8,5,0`.
+//!
+//! Measured (atrium 800x450, 720,000 stereo rays; rays whose answer differs in kind / in
+//! pixel from brute force over the exact f32 planes):
+//!
+//! | node | fitted cube | camera cube 0.1 m | decoded planes vertical in the cube |
+//! |---|---|---|---|
+//! | paper's f16 `N.x, N.y`, implied `N.z` | 9 / 117 | 103 (99 miss -> hit) / 358 | 10 / 2 |
+//! | f16 slopes ([`parallax_screen::quadtree::node`]) | 0 / 0 | 2 / 8 | 0 / 0 |
+//!
+//! (Brute force over the exact f32 planes itself equals an f64 brute force over f64
+//! planes on every ray here.)
 
 use glam::{DVec3, UVec2, Vec2, Vec3};
 use parallax_core::Ray;
