@@ -115,7 +115,7 @@ impl Node {
     /// footprint (module docs; clamped to `±65504`); `None` unless `z_c` is finite and
     /// `>= 0` and the increments are not NaN.
     pub fn plane(zc: f32, dzx: f32, dzy: f32, flags: u32) -> Option<Node> {
-        if !(zc.is_finite() && zc >= 0.0 && !dzx.is_nan() && !dzy.is_nan()) {
+        if !(zc.is_finite() && zc >= 0.0) || dzx.is_nan() || dzy.is_nan() {
             return None;
         }
         // Round to a 21-bit mantissa (may carry into the exponent: still correct).
