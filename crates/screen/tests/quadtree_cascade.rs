@@ -9,7 +9,8 @@ use parallax_core::{GBuffer, Rng};
 use parallax_raster::{RasterOptions, View, capture_layers};
 use parallax_scene::{Scene, camera::Pinhole};
 use parallax_screen::{
-    BruteForcePlanes, LayerMode, QuadTreeOptions, QuadTreeTracer, TraceResult, TraceStats,
+    BruteForcePlanes, LayerMode, QuadTreeOptions, QuadTreeTracer, ScreenTracer, TraceResult,
+    TraceStats,
 };
 use proptest::prelude::*;
 use quadtree_util::*;
@@ -187,4 +188,71 @@ fn inpaint_stops_at_first_event() {
 #[test]
 fn cascade_regression_47x28() {
     check_synthetic(47, 28, 3129365413543782575, false);
+}
+
+/// A case proptest found (session 4, lossy): ray 76 crosses layer 0's plane at pixel
+/// (23, 26) 1.0e-6 px before (f64) entering its footprint; brute force's f32 boundary
+/// `27/45` puts the crossing inside (a hit at the entry), the traversal's grid-unit entry
+/// puts it outside (an occlusion entry). Both answers are the same point within 1e-5 px:
+/// an edge tie ([`Verdict::or_same_entry`]). The rule is narrow: the same answers with the
+/// hit moved 0.01 px along the ray, or given another pixel or layer, still differ.
+#[test]
+fn cascade_regression_24x45_hit_vs_entry() {
+    let (w, h, seed) = (24u32, 45u32, 6201883681859096247u64);
+    check_synthetic(w, h, seed, true);
+    let cam = camera(w, h);
+    let g0 = height_field(&cam, seed, 0.05);
+    let g1 = behind(&g0, seed + 1);
+    let g2 = behind(&g1, seed + 2);
+    let layers = vec![g0, g1, g2];
+    let cube = cube(&cam, &layers);
+    let opts = exact(QuadTreeOptions {
+        gamma_dist: 1e-3,
+        gamma_norm: 20f32.to_radians().cos(),
+        ..Default::default()
+    });
+    let qt = QuadTreeTracer::build(&cube, &layers, &opts).unwrap();
+    let bf = twin(&qt);
+    let r = rays(&cam, &layers[0], 300, 0.5, seed ^ 3)[76];
+    let mut s = TraceStats::default();
+    let a = qt.trace(&r, &mut s);
+    let b = bf.trace(&r, &mut s);
+    let (TraceResult::OcclusionVolume { layer, pixel, t }, TraceResult::Hit { t: th, .. }) = (a, b)
+    else {
+        panic!("the case changed: {a:?} vs {b:?}");
+    };
+    assert_eq!((layer, pixel), (0, glam::UVec2::new(23, 26)));
+    assert_eq!(compare(&a, &b, REL), Verdict::Differ);
+    assert_eq!(a_vs_b(&a, &b, &r, &bf), Verdict::EdgeTie);
+    assert_eq!(a_vs_b(&b, &a, &r, &bf), Verdict::EdgeTie);
+    // Narrowness: 0.01 px of travel further (segment: ~3.5 px over ~14 m), another pixel,
+    // another layer.
+    let moved = |dt: f32| match b {
+        TraceResult::Hit { layer, pixel, .. } => TraceResult::Hit {
+            layer,
+            pixel,
+            position: r.at(th + dt),
+            t: th + dt,
+        },
+        _ => unreachable!(),
+    };
+    assert_eq!(a_vs_b(&a, &moved(0.04), &r, &bf), Verdict::Differ);
+    assert_eq!(a_vs_b(&a, &moved(-0.04), &r, &bf), Verdict::Differ);
+    let other_pixel = TraceResult::OcclusionVolume {
+        layer,
+        pixel: glam::UVec2::new(23, 27),
+        t,
+    };
+    assert_eq!(a_vs_b(&other_pixel, &b, &r, &bf), Verdict::Differ);
+    let other_layer = TraceResult::OcclusionVolume { layer: 1, pixel, t };
+    assert_eq!(a_vs_b(&other_layer, &b, &r, &bf), Verdict::Differ);
+}
+
+fn a_vs_b(
+    a: &TraceResult,
+    b: &TraceResult,
+    r: &parallax_core::Ray,
+    bf: &BruteForcePlanes,
+) -> Verdict {
+    compare(a, b, REL).or_same_entry(a, b, r, &bf.cube)
 }

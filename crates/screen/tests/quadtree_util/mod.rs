@@ -163,13 +163,26 @@ pub fn compare(a: &TraceResult, b: &TraceResult, rel: f32) -> Verdict {
 }
 
 impl Verdict {
-    /// An occlusion-volume answer's `t` is where the ray enters the pixel footprint, i.e.
-    /// crosses a pixel boundary line. For a ray almost parallel to that line in screen
-    /// space the crossing is ill-conditioned in `t` (a 1-ulp difference in the grid
-    /// coordinate moves it far along the ray; found by proptest: a ray gaining 0.037 px in
-    /// y over its whole segment, the two tracers' `t` 3e-4 apart). Two OV answers of the
-    /// same layer and pixel whose entry points lie within 1e-3 px of each other *on the
-    /// screen* are the same entry computed with different rounding: [`Verdict::EdgeTie`].
+    /// Two f32 roundings of the same footprint entry (the two tracers compute a pixel's
+    /// boundary crossing differently: brute force as `(j / H - p0.y) / d.y` in cube units,
+    /// where `j / H` itself is rounded, the traversal as `(j - p0.y H) / (d.y H)` in grid
+    /// units). Turns a [`Verdict::Differ`] into [`Verdict::EdgeTie`] in two cases, both
+    /// same layer and same pixel, the two answers' points within 1e-3 px on the screen:
+    ///
+    /// - **two occlusion-volume entries.** The entry `t` is where the ray crosses a pixel
+    ///   boundary line; for a ray almost parallel to that line in screen space the
+    ///   crossing is ill-conditioned in `t` (a 1-ulp difference in the grid coordinate
+    ///   moves it far along the ray; found by proptest: a ray gaining 0.037 px in y over
+    ///   its whole segment, the two tracers' `t` 3e-4 apart), so `t` is not compared.
+    /// - **an occlusion-volume entry and a hit** whose `t` agree within [`ENTRY_TIE_REL`]
+    ///   and whose hit point lies within 1e-3 px of the pixel's footprint boundary: the ray
+    ///   crosses the plane exactly where it enters the footprint, and whether the crossing
+    ///   falls just inside (a hit at the entry) or just outside (entering behind the
+    ///   plane: an occlusion entry) is decided by the rounding of the entry. Found by
+    ///   proptest (cascade test, 24x45): the plane root lies 1.0e-6 px outside pixel
+    ///   (23, 26) in f64; brute force's bound `27/45` rounded to f32 is 1.07e-6 px further
+    ///   out, so its footprint holds the root (hit); the traversal's entry is 3e-7 px
+    ///   inside (occlusion entry). Any `t` or pixel mismatch stays [`Verdict::Differ`].
     pub fn or_same_entry(
         self,
         a: &TraceResult,
@@ -177,38 +190,82 @@ impl Verdict {
         ray: &Ray,
         cube: &parallax_screen::UnitCube,
     ) -> Verdict {
-        let (
-            Verdict::Differ,
-            TraceResult::OcclusionVolume {
-                layer: l1,
-                pixel: p1,
-                t: t1,
-            },
-            TraceResult::OcclusionVolume {
-                layer: l2,
-                pixel: p2,
-                t: t2,
-            },
-        ) = (self, *a, *b)
-        else {
+        if self != Verdict::Differ {
             return self;
-        };
-        let grid = |t: f32| {
-            cube.to_cube(ray.at(t)).map(|c| {
-                glam::Vec2::new(
-                    c.x * cube.camera.width as f32,
-                    c.y * cube.camera.height as f32,
-                )
-            })
-        };
-        match (grid(t1), grid(t2)) {
-            (Some(g1), Some(g2)) if l1 == l2 && p1 == p2 && g1.distance(g2) <= 1e-3 => {
-                Verdict::EdgeTie
-            }
-            _ => self,
         }
+        let (w, h) = (cube.camera.width as f32, cube.camera.height as f32);
+        let grid = |t: f32| {
+            cube.to_cube(ray.at(t))
+                .map(|c| glam::Vec2::new(c.x * w, c.y * h))
+        };
+        let same_point = |t1: f32, t2: f32| match (grid(t1), grid(t2)) {
+            (Some(g1), Some(g2)) => g1.distance(g2) <= ENTRY_TIE_PX,
+            _ => false,
+        };
+        use TraceResult::{Hit, OcclusionVolume as Ov};
+        let tie = match (*a, *b) {
+            (
+                Ov {
+                    layer: l1,
+                    pixel: p1,
+                    t: t1,
+                },
+                Ov {
+                    layer: l2,
+                    pixel: p2,
+                    t: t2,
+                },
+            ) => l1 == l2 && p1 == p2 && same_point(t1, t2),
+            (
+                Hit {
+                    layer: l1,
+                    pixel: p1,
+                    t: t1,
+                    ..
+                },
+                Ov {
+                    layer: l2,
+                    pixel: p2,
+                    t: t2,
+                },
+            )
+            | (
+                Ov {
+                    layer: l2,
+                    pixel: p2,
+                    t: t2,
+                },
+                Hit {
+                    layer: l1,
+                    pixel: p1,
+                    t: t1,
+                    ..
+                },
+            ) => {
+                // Signed distance (px) of the hit point to the footprint's edges: the
+                // smallest of the four margins, negative outside.
+                let on_boundary = grid(t1).is_some_and(|g| {
+                    let p = p1.as_vec2();
+                    (g - p).min(p + 1.0 - g).min_element().abs() <= ENTRY_TIE_PX
+                });
+                l1 == l2
+                    && p1 == p2
+                    && (t1 - t2).abs() <= ENTRY_TIE_REL * t1.abs().max(t2.abs()).max(1.0)
+                    && on_boundary
+                    && same_point(t1, t2)
+            }
+            _ => false,
+        };
+        if tie { Verdict::EdgeTie } else { self }
     }
 }
+
+/// Screen distance (px) within which two answers of [`Verdict::or_same_entry`] are the
+/// same footprint entry.
+pub const ENTRY_TIE_PX: f32 = 1e-3;
+/// Relative `t` tolerance of a hit-vs-occlusion-entry tie ([`Verdict::or_same_entry`]; the
+/// `REL` of the tests).
+pub const ENTRY_TIE_REL: f32 = 1e-4;
 
 /// Counts of a comparison run.
 #[derive(Clone, Copy, Debug, Default)]
