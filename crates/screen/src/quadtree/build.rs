@@ -87,9 +87,11 @@ impl QuadTree {
     }
 
     /// [`Self::build`] for a layer followed by the `deeper` layers' effective planes: the
-    /// cascade trigger depths are computed from this layer's pixel planes, pruning never
+    /// cascade trigger depths are computed from this layer's effective planes, pruning never
     /// merges over an unsafe pixel (so its effective plane is the pixel plane the trigger
-    /// depth was derived from), and the unsafe pixels are marked (see [`super::cascade`]).
+    /// depth was derived from; a pixel that only a merged proxy plane makes unsafe is
+    /// blocked and the levels rebuilt, to a fixed point), and the unsafe pixels are marked
+    /// (see [`super::cascade`]).
     pub(crate) fn build_cascaded(
         cube: &UnitCube,
         layer: &GBuffer,
@@ -247,82 +249,61 @@ impl QuadTree {
                     row[i as usize] = leaf((j * w + i) as usize, i, j);
                 }
             });
-        let mut levels = vec![Level {
+        let level0 = Level {
             w: w0,
             h: h0,
             nodes: leaves,
-        }];
+        };
         // Cascade: trigger depths from the pixel planes; no merging over unsafe pixels.
         let tz = if deeper.is_empty() {
             Vec::new()
         } else {
-            let px = leaf_planes(&levels[0], w, h, wf, hf);
+            let px = leaf_planes(&level0, w, h, wf, hf);
             super::cascade::trigger_depths(&px, deeper)
         };
-        let mut blocked: Vec<bool> = if tz.is_empty() {
-            Vec::new()
-        } else {
-            let mut b = vec![false; (w0 * h0) as usize];
-            for j in 0..h {
-                for i in 0..w {
-                    b[(j * w0 + i) as usize] = tz[(j * w + i) as usize].is_finite();
-                }
-            }
-            b
-        };
-
-        // Levels 1..: pruning (§3.3).
-        for l in 1..nlev {
-            let child = levels.last().unwrap();
-            let (pw, ph) = (child.w / 2, child.h / 2);
-            if !blocked.is_empty() {
-                let cw = child.w;
-                blocked = (0..pw * ph)
-                    .map(|q| {
-                        let (qx, qy) = (q % pw, q / pw);
-                        let c =
-                            |dx: u32, dy: u32| blocked[((2 * qy + dy) * cw + 2 * qx + dx) as usize];
-                        c(0, 0) || c(1, 0) || c(0, 1) || c(1, 1)
-                    })
-                    .collect();
-            }
-            let blocked = &blocked;
-            let mut nodes = vec![Node::EMPTY; (pw * ph) as usize];
-            nodes
-                .par_chunks_mut(pw as usize)
-                .enumerate()
-                .for_each(|(qy, row)| {
-                    let qy = qy as u32;
-                    for (qx, out) in row.iter_mut().enumerate() {
-                        let qx = qx as u32;
-                        let allow = blocked.is_empty() || !blocked[(qy * pw + qx) as usize];
-                        let cl = l - 1;
-                        let mut kids = [Node::EMPTY; 4];
-                        let mut pos = [(0u32, 0u32); 4];
-                        for (c, (kid, p)) in kids.iter_mut().zip(pos.iter_mut()).enumerate() {
-                            let (cx, cy) = (2 * qx + (c as u32 & 1), 2 * qy + (c as u32 >> 1));
-                            *p = (cx, cy);
-                            *kid = child.nodes[(cy * child.w + cx) as usize];
-                        }
-                        *out = ctx.parent(l, qx, qy, cl, &kids, &pos, allow);
-                    }
-                });
-            levels.push(Level {
-                w: pw,
-                h: ph,
-                nodes,
-            });
-        }
+        // Pixels (`W x H`) no node may merge over. Seeded with the pixel-plane analysis,
+        // then grown to a fixed point: a merged proxy plane deviates from its pixels' own
+        // planes by up to the merge tolerance (§3.3, `gamma_dist`, far above the safety
+        // margin), so a pixel safe against its own plane can be unsafe against the proxy
+        // the traversal tests (a deeper plane in front of it: found by proptest,
+        // `quadtree_cascade.rs`). Such pixels are blocked too and the levels rebuilt; the
+        // set only grows, so this ends (in practice after one extra pass, or none).
+        let mut blocked_px: Vec<bool> = tz.iter().map(|z| z.is_finite()).collect();
         let mut tree = Self {
             width: w,
             height: h,
             wf,
             hf,
-            levels,
+            levels: Vec::new(),
             crack_px: opts.crack_dilation,
             trigger_z: Vec::new(),
             plane_top: 0,
             plane_level: Vec::new(),
+        };
+        let mut first = Some(level0);
+        let tz = loop {
+            // Level 0 is never changed by pruning: reuse it on a rebuild.
+            let l0 = first
+                .take()
+                .unwrap_or_else(|| std::mem::take(&mut tree.levels).swap_remove(0));
+            tree.levels = prune(&ctx, l0, nlev, &blocked_px, w, h);
+            if deeper.is_empty() || ctx.never {
+                // No merging: the effective planes are the pixel planes.
+                break tz;
+            }
+            let tz_eff = super::cascade::trigger_depths(&tree.effective_planes(), deeper);
+            let mut grew = false;
+            for (b, z) in blocked_px.iter_mut().zip(&tz_eff) {
+                if z.is_finite() && !*b {
+                    *b = true;
+                    grew = true;
+                }
+            }
+            if !grew {
+                // Every unsafe pixel is blocked, i.e. its effective plane is its pixel
+                // plane, and `tz_eff` was computed from the planes the traversal tests.
+                break tz_eff;
+            }
         };
         // Top-down: the small upper levels are scanned first.
         tree.plane_top = (0..tree.levels.len())
@@ -534,6 +515,72 @@ fn map_gradient(mt: &glam::DMat4, p: Vec3, n: Vec3) -> Option<(f32, f32)> {
         if v.is_nan() { None } else { Some(v as f32) }
     };
     Some((g(q.x)?, g(q.y)?))
+}
+
+/// Levels `0..nlev` of a tree: `level0` and the levels built from it by pruning (§3.3),
+/// never merging a node that contains a pixel marked in `blocked` (`W x H`; empty: none).
+fn prune(
+    ctx: &MergeCtx,
+    level0: Level,
+    nlev: u32,
+    blocked_px: &[bool],
+    w: u32,
+    h: u32,
+) -> Vec<Level> {
+    let (w0, h0) = (level0.w, level0.h);
+    let mut blocked: Vec<bool> = if blocked_px.is_empty() {
+        Vec::new()
+    } else {
+        let mut b = vec![false; (w0 * h0) as usize];
+        for j in 0..h {
+            for i in 0..w {
+                b[(j * w0 + i) as usize] = blocked_px[(j * w + i) as usize];
+            }
+        }
+        b
+    };
+    let mut levels = vec![level0];
+    for l in 1..nlev {
+        let child = levels.last().unwrap();
+        let (pw, ph) = (child.w / 2, child.h / 2);
+        if !blocked.is_empty() {
+            let cw = child.w;
+            blocked = (0..pw * ph)
+                .map(|q| {
+                    let (qx, qy) = (q % pw, q / pw);
+                    let c = |dx: u32, dy: u32| blocked[((2 * qy + dy) * cw + 2 * qx + dx) as usize];
+                    c(0, 0) || c(1, 0) || c(0, 1) || c(1, 1)
+                })
+                .collect();
+        }
+        let blocked = &blocked;
+        let mut nodes = vec![Node::EMPTY; (pw * ph) as usize];
+        nodes
+            .par_chunks_mut(pw as usize)
+            .enumerate()
+            .for_each(|(qy, row)| {
+                let qy = qy as u32;
+                for (qx, out) in row.iter_mut().enumerate() {
+                    let qx = qx as u32;
+                    let allow = blocked.is_empty() || !blocked[(qy * pw + qx) as usize];
+                    let cl = l - 1;
+                    let mut kids = [Node::EMPTY; 4];
+                    let mut pos = [(0u32, 0u32); 4];
+                    for (c, (kid, p)) in kids.iter_mut().zip(pos.iter_mut()).enumerate() {
+                        let (cx, cy) = (2 * qx + (c as u32 & 1), 2 * qy + (c as u32 >> 1));
+                        *p = (cx, cy);
+                        *kid = child.nodes[(cy * child.w + cx) as usize];
+                    }
+                    *out = ctx.parent(l, qx, qy, cl, &kids, &pos, allow);
+                }
+            });
+        levels.push(Level {
+            w: pw,
+            h: ph,
+            nodes,
+        });
+    }
+    levels
 }
 
 /// The decoded pixel planes of a level-0 array in [`LayerPlanes`] form.
