@@ -92,3 +92,12 @@ fn lossless_equals_brute_force_on_captures() {
         assert!(t.hits > t.total() / 3, "{t:?}");
     }
 }
+
+/// A case proptest found (session 4): a ray crosses the plane of pixel (36, 18) 9.3e-7 px
+/// (f64) before leaving its footprint through `x = 37`; brute force's f32 bound `37/88`
+/// ends the footprint just before the crossing (no hit there, a later hit at (37, 19)), the
+/// traversal's exit lies past it (a hit). See `Verdict::or_boundary_crossing`.
+#[test]
+fn lossless_equals_brute_force_regression_88x26() {
+    check_height_field(88, 26, 10959061550737753857, 0.14931929, 1);
+}

@@ -163,26 +163,13 @@ pub fn compare(a: &TraceResult, b: &TraceResult, rel: f32) -> Verdict {
 }
 
 impl Verdict {
-    /// Two f32 roundings of the same footprint entry (the two tracers compute a pixel's
-    /// boundary crossing differently: brute force as `(j / H - p0.y) / d.y` in cube units,
-    /// where `j / H` itself is rounded, the traversal as `(j - p0.y H) / (d.y H)` in grid
-    /// units). Turns a [`Verdict::Differ`] into [`Verdict::EdgeTie`] in two cases, both
-    /// same layer and same pixel, the two answers' points within 1e-3 px on the screen:
-    ///
-    /// - **two occlusion-volume entries.** The entry `t` is where the ray crosses a pixel
-    ///   boundary line; for a ray almost parallel to that line in screen space the
-    ///   crossing is ill-conditioned in `t` (a 1-ulp difference in the grid coordinate
-    ///   moves it far along the ray; found by proptest: a ray gaining 0.037 px in y over
-    ///   its whole segment, the two tracers' `t` 3e-4 apart), so `t` is not compared.
-    /// - **an occlusion-volume entry and a hit** whose `t` agree within [`ENTRY_TIE_REL`]
-    ///   and whose hit point lies within 1e-3 px of the pixel's footprint boundary: the ray
-    ///   crosses the plane exactly where it enters the footprint, and whether the crossing
-    ///   falls just inside (a hit at the entry) or just outside (entering behind the
-    ///   plane: an occlusion entry) is decided by the rounding of the entry. Found by
-    ///   proptest (cascade test, 24x45): the plane root lies 1.0e-6 px outside pixel
-    ///   (23, 26) in f64; brute force's bound `27/45` rounded to f32 is 1.07e-6 px further
-    ///   out, so its footprint holds the root (hit); the traversal's entry is 3e-7 px
-    ///   inside (occlusion entry). Any `t` or pixel mismatch stays [`Verdict::Differ`].
+    /// An occlusion-volume answer's `t` is where the ray enters the pixel footprint, i.e.
+    /// crosses a pixel boundary line. For a ray almost parallel to that line in screen
+    /// space the crossing is ill-conditioned in `t` (a 1-ulp difference in the grid
+    /// coordinate moves it far along the ray; found by proptest: a ray gaining 0.037 px in
+    /// y over its whole segment, the two tracers' `t` 3e-4 apart). Two OV answers of the
+    /// same layer and pixel whose entry points lie within 1e-3 px of each other *on the
+    /// screen* are the same entry computed with different rounding: [`Verdict::EdgeTie`].
     pub fn or_same_entry(
         self,
         a: &TraceResult,
@@ -190,82 +177,143 @@ impl Verdict {
         ray: &Ray,
         cube: &parallax_screen::UnitCube,
     ) -> Verdict {
+        let (
+            Verdict::Differ,
+            TraceResult::OcclusionVolume {
+                layer: l1,
+                pixel: p1,
+                t: t1,
+            },
+            TraceResult::OcclusionVolume {
+                layer: l2,
+                pixel: p2,
+                t: t2,
+            },
+        ) = (self, *a, *b)
+        else {
+            return self;
+        };
+        let grid = |t: f32| {
+            cube.to_cube(ray.at(t)).map(|c| {
+                glam::Vec2::new(
+                    c.x * cube.camera.width as f32,
+                    c.y * cube.camera.height as f32,
+                )
+            })
+        };
+        match (grid(t1), grid(t2)) {
+            (Some(g1), Some(g2)) if l1 == l2 && p1 == p2 && g1.distance(g2) <= 1e-3 => {
+                Verdict::EdgeTie
+            }
+            _ => self,
+        }
+    }
+
+    /// A plane crossing exactly at a footprint boundary, classified differently by the two
+    /// tracers. The footprint's entry and exit are computed with different f32 rounding
+    /// (brute force: `(i / W - p0.x) / d.x` in cube units, `i / W` itself rounded; the
+    /// traversal: `(i - o.x) r` in grid units with `r` the rounded reciprocal of the
+    /// direction), so when the ray crosses a pixel's plane within ~1e-6 px of a footprint
+    /// edge, one tracer sees the crossing inside (a **hit**) and the other just outside: at
+    /// the entry the ray then enters **behind** the plane (an occlusion-volume entry), at the
+    /// exit it leaves still in front (nothing at that pixel). Both are right up to rounding,
+    /// and the difference can change the final answer entirely (a later hit elsewhere; in a
+    /// cascade a deeper layer's crossing becomes the closest hit, or not). Found by
+    /// proptest: cascade 24x45 (the plane root 1.0e-6 px outside the entry in f64, brute
+    /// force's bound `27/45` rounded 1.07e-6 px further out: a hit), cascade 53x41 (layer
+    /// 1's root 3.7e-7 px outside the entry, the traversal's entry one ulp earlier: a layer-1
+    /// hit beating layer 0's), lossless 88x26 (the root 9.3e-7 px inside the exit, brute
+    /// force's bound `37/88` rounded just before it: brute force's hit is a pixel later).
+    ///
+    /// Turns [`Verdict::Differ`] into [`Verdict::EdgeTie`] only when the answer of one
+    /// tracer *is* the other's with that single crossing reclassified:
+    /// - quad-tree `a` = Hit at `(layer, pixel, t)`, a crossing of that pixel's plane on its
+    ///   footprint boundary ([`crossing_on_boundary`]), and brute force has no hit before
+    ///   `t`: counted as a hit, brute force's closest hit is exactly `a`;
+    /// - brute force `b` = such a Hit: brute force over the planes without that pixel's
+    ///   plane, with an occlusion entry at the crossing added, must equal `a`
+    ///   ([`compare`] and [`Verdict::or_same_entry`]).
+    pub fn or_boundary_crossing(
+        self,
+        a: &TraceResult,
+        b: &TraceResult,
+        ray: &Ray,
+        bf: &BruteForcePlanes,
+        rel: f32,
+    ) -> Verdict {
         if self != Verdict::Differ {
             return self;
         }
-        let (w, h) = (cube.camera.width as f32, cube.camera.height as f32);
-        let grid = |t: f32| {
-            cube.to_cube(ray.at(t))
-                .map(|c| glam::Vec2::new(c.x * w, c.y * h))
-        };
-        let same_point = |t1: f32, t2: f32| match (grid(t1), grid(t2)) {
-            (Some(g1), Some(g2)) => g1.distance(g2) <= ENTRY_TIE_PX,
-            _ => false,
-        };
-        use TraceResult::{Hit, OcclusionVolume as Ov};
-        let tie = match (*a, *b) {
-            (
-                Ov {
-                    layer: l1,
-                    pixel: p1,
-                    t: t1,
+        let detail = bf.trace_detailed(ray, &mut TraceStats::default());
+        if let TraceResult::Hit {
+            layer, pixel, t, ..
+        } = *a
+            && crossing_on_boundary(bf, ray, layer, pixel, t)
+            && detail.hit.is_none_or(|h| h.t >= t)
+        {
+            return Verdict::EdgeTie;
+        }
+        if let TraceResult::Hit {
+            layer, pixel, t, ..
+        } = *b
+            && crossing_on_boundary(bf, ray, layer, pixel, t)
+        {
+            let mut without = bf.clone();
+            let k = (pixel.y * bf.cube.camera.width + pixel.x) as usize;
+            without.layers[layer as usize].normal[k] = Vec3::ZERO;
+            let r = without.trace_detailed(ray, &mut TraceStats::default());
+            let expected = match (r.hit, r.occlusion) {
+                (Some(h), _) => TraceResult::Hit {
+                    layer: h.layer,
+                    pixel: h.pixel,
+                    position: ray.at(h.t),
+                    t: h.t,
                 },
-                Ov {
-                    layer: l2,
-                    pixel: p2,
-                    t: t2,
+                (None, Some(o)) if (o.t, o.layer) < (t, layer) => TraceResult::OcclusionVolume {
+                    layer: o.layer,
+                    pixel: o.pixel,
+                    t: o.t,
                 },
-            ) => l1 == l2 && p1 == p2 && same_point(t1, t2),
-            (
-                Hit {
-                    layer: l1,
-                    pixel: p1,
-                    t: t1,
-                    ..
-                },
-                Ov {
-                    layer: l2,
-                    pixel: p2,
-                    t: t2,
-                },
-            )
-            | (
-                Ov {
-                    layer: l2,
-                    pixel: p2,
-                    t: t2,
-                },
-                Hit {
-                    layer: l1,
-                    pixel: p1,
-                    t: t1,
-                    ..
-                },
-            ) => {
-                // Signed distance (px) of the hit point to the footprint's edges: the
-                // smallest of the four margins, negative outside.
-                let on_boundary = grid(t1).is_some_and(|g| {
-                    let p = p1.as_vec2();
-                    (g - p).min(p + 1.0 - g).min_element().abs() <= ENTRY_TIE_PX
-                });
-                l1 == l2
-                    && p1 == p2
-                    && (t1 - t2).abs() <= ENTRY_TIE_REL * t1.abs().max(t2.abs()).max(1.0)
-                    && on_boundary
-                    && same_point(t1, t2)
+                _ => TraceResult::OcclusionVolume { layer, pixel, t },
+            };
+            if compare(a, &expected, rel).or_same_entry(a, &expected, ray, &bf.cube)
+                != Verdict::Differ
+            {
+                return Verdict::EdgeTie;
             }
-            _ => false,
-        };
-        if tie { Verdict::EdgeTie } else { self }
+        }
+        self
     }
 }
 
-/// Screen distance (px) within which two answers of [`Verdict::or_same_entry`] are the
-/// same footprint entry.
-pub const ENTRY_TIE_PX: f32 = 1e-3;
-/// Relative `t` tolerance of a hit-vs-occlusion-entry tie ([`Verdict::or_same_entry`]; the
-/// `REL` of the tests).
-pub const ENTRY_TIE_REL: f32 = 1e-4;
+/// Screen distance (px) of a crossing from a footprint boundary for
+/// [`Verdict::or_boundary_crossing`].
+pub const BOUNDARY_TIE_PX: f32 = 1e-3;
+
+/// True when the ray at `t` lies within [`BOUNDARY_TIE_PX`] of the footprint boundary of
+/// `pixel` (inside or out) and on that pixel's plane of `layer` (`|N·X - c| <= 1e-5 |N|`,
+/// cube units: the world-to-cube round trip of the point).
+pub fn crossing_on_boundary(
+    bf: &BruteForcePlanes,
+    ray: &Ray,
+    layer: u32,
+    pixel: glam::UVec2,
+    t: f32,
+) -> bool {
+    let cam = &bf.cube.camera;
+    let Some(x) = bf.cube.to_cube(ray.at(t)) else {
+        return false;
+    };
+    let Some(planes) = bf.layers.get(layer as usize) else {
+        return false;
+    };
+    let g = Vec2::new(x.x * cam.width as f32, x.y * cam.height as f32);
+    let p = pixel.as_vec2();
+    // Signed distance to the footprint's edges: the smallest of the four margins.
+    let on_edge = (g - p).min(p + 1.0 - g).min_element().abs() <= BOUNDARY_TIE_PX;
+    let k = (pixel.y * cam.width + pixel.x) as usize;
+    on_edge && planes.covered(k) && planes.side(k, x).abs() <= 1e-5 * planes.normal[k].length()
+}
 
 /// Counts of a comparison run.
 #[derive(Clone, Copy, Debug, Default)]
@@ -302,7 +350,10 @@ pub fn run(
             TraceResult::OcclusionVolume { .. } => tally.ovs += 1,
             _ => {}
         }
-        match compare(&a, &b, rel).or_same_entry(&a, &b, r, &bf.cube) {
+        match compare(&a, &b, rel)
+            .or_same_entry(&a, &b, r, &bf.cube)
+            .or_boundary_crossing(&a, &b, r, bf, rel)
+        {
             Verdict::Equal => tally.equal += 1,
             Verdict::EdgeTie => tally.edge += 1,
             Verdict::Differ => {
