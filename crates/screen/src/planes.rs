@@ -33,7 +33,7 @@
 //! is a depth discontinuity, as for depth normals); the image border is not an edge. A real
 //! depth step fails the test on both of its sides, and so do the unaligned neighbours §6
 //! ("Limitations") blames for the cracks rays slip through; planes that join (a flat floor,
-//! up to the f16 normal rounding) are not flagged. Defaults [`CRACK_REL_GAP`] and
+//! up to the f16 slope rounding of the quad-tree's nodes) are not flagged. Defaults [`CRACK_REL_GAP`] and
 //! [`CRACK_MAX_GAP`]; a finite upper bound `max_rel_gap` restricts the flag to small gaps
 //! (cracks proper) and leaves real depth steps and edges to uncovered pixels unflagged.
 //!
@@ -181,8 +181,9 @@ impl LayerPlanes {
 }
 
 /// Default threshold of [`crack_flags`] (relative inverse-depth gap at a shared footprint
-/// edge). Flat surfaces stay below it: the f16 normals of the quad-tree move a plane by
-/// ~1e-7 in cube `z` over a pixel ([`crate::quadtree::node`]), and smooth curvature of radius
+/// edge). Flat surfaces stay below it: the f16 slopes of the quad-tree's nodes move a
+/// plane's `z` at a footprint corner by at most `2^-12` of its own `z` spread over the
+/// footprint plus ~1e-7 ([`crate::quadtree::node`]), and smooth curvature of radius
 /// `r` at depth `d` with pixel footprint `s` opens gaps of about `s^2 / (8 r d)`.
 pub const CRACK_REL_GAP: f32 = 1e-3;
 

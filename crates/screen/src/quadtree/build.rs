@@ -2,9 +2,10 @@
 //! bottom-up adaptive pruning (§3.3).
 //!
 //! **Leaves.** Pixel `(i, j)` with a plane in [`LayerPlanes`] becomes a plane node with the
-//! plane's cube normal and `z_c` = the cube `z` of the pixel's sample (the pixel-centre ray
-//! at the captured view depth, which the plane passes through), flag `O` from the normal
-//! source. Pixels without a plane, and samples in front of the cube's near plane (`z < 0`,
+//! plane's cube gradient (computed in f64 from the mapped plane, stored as f16 slopes across
+//! the footprint, [`super::node`]) and `z_c` = the cube `z` of the pixel's sample (the
+//! pixel-centre ray at the captured view depth, which the plane passes through), flag `O`
+//! from the normal source. Pixels without a plane, and samples in front of the cube's near plane (`z < 0`,
 //! only possible with a caller-made cube narrower than the depths), are empty.
 //!
 //! **Pruning (§3.3).** A parent becomes a plane node iff
@@ -86,9 +87,11 @@ impl QuadTree {
     }
 
     /// [`Self::build`] for a layer followed by the `deeper` layers' effective planes: the
-    /// cascade trigger depths are computed from this layer's pixel planes, pruning never
+    /// cascade trigger depths are computed from this layer's effective planes, pruning never
     /// merges over an unsafe pixel (so its effective plane is the pixel plane the trigger
-    /// depth was derived from), and the unsafe pixels are marked (see [`super::cascade`]).
+    /// depth was derived from; a pixel that only a merged proxy plane makes unsafe is
+    /// blocked and the levels rebuilt, to a fixed point), and the unsafe pixels are marked
+    /// (see [`super::cascade`]).
     pub(crate) fn build_cascaded(
         cube: &UnitCube,
         layer: &GBuffer,
@@ -117,6 +120,7 @@ impl QuadTree {
         };
         let depth = &layer.depth;
         let mt = cube.cube_to_world.transpose();
+        let (wf, hf) = (w as f32, h as f32);
         let leaf = |k: usize, i: u32, j: u32| {
             let d = depth[k];
             if !(d.is_finite() && d > 0.0) || normals[k] == Vec3::ZERO {
@@ -124,7 +128,7 @@ impl QuadTree {
             }
             let film = glam::Vec2::new(i as f32 + 0.5, j as f32 + 0.5);
             let p = cam.frame.position + cam.frame.dir_to_world(cam.camera_dir(film)) * d;
-            let Some(n) = map_normal(&mt, p, normals[k]) else {
+            let Some((gx, gy)) = map_gradient(&mt, p, normals[k]) else {
                 return Node::EMPTY;
             };
             let f = if flags.is_some_and(|f| f[k]) {
@@ -132,7 +136,8 @@ impl QuadTree {
             } else {
                 0
             };
-            Node::plane(cube.z_of_depth(d), n.x, n.y, f).unwrap_or(Node::EMPTY)
+            Node::plane_with_gradient(cube.z_of_depth(d), gx, gy, 0, wf, hf, f)
+                .unwrap_or(Node::EMPTY)
         };
         let NormalSource::GBufferFlagged {
             min_rel_gap,
@@ -188,7 +193,11 @@ impl QuadTree {
             }
             let n = planes.normal[k];
             let flags = if planes.flag[k] { FLAG_CRACK } else { 0 };
-            Node::plane(cube.z_of_depth(depth[k]), n.x, n.y, flags).unwrap_or(Node::EMPTY)
+            // Gradient of the plane `n·P = c`: `-(n.x, n.y) / n.z` (`n.z <= 0`).
+            let (gx, gy) = (n.x / -n.z, n.y / -n.z);
+            let (wf, hf) = (w as f32, h as f32);
+            Node::plane_with_gradient(cube.z_of_depth(depth[k]), gx, gy, 0, wf, hf, flags)
+                .unwrap_or(Node::EMPTY)
         })
     }
 
@@ -240,82 +249,61 @@ impl QuadTree {
                     row[i as usize] = leaf((j * w + i) as usize, i, j);
                 }
             });
-        let mut levels = vec![Level {
+        let level0 = Level {
             w: w0,
             h: h0,
             nodes: leaves,
-        }];
+        };
         // Cascade: trigger depths from the pixel planes; no merging over unsafe pixels.
         let tz = if deeper.is_empty() {
             Vec::new()
         } else {
-            let px = leaf_planes(&levels[0], w, h, wf, hf);
+            let px = leaf_planes(&level0, w, h, wf, hf);
             super::cascade::trigger_depths(&px, deeper)
         };
-        let mut blocked: Vec<bool> = if tz.is_empty() {
-            Vec::new()
-        } else {
-            let mut b = vec![false; (w0 * h0) as usize];
-            for j in 0..h {
-                for i in 0..w {
-                    b[(j * w0 + i) as usize] = tz[(j * w + i) as usize].is_finite();
-                }
-            }
-            b
-        };
-
-        // Levels 1..: pruning (§3.3).
-        for l in 1..nlev {
-            let child = levels.last().unwrap();
-            let (pw, ph) = (child.w / 2, child.h / 2);
-            if !blocked.is_empty() {
-                let cw = child.w;
-                blocked = (0..pw * ph)
-                    .map(|q| {
-                        let (qx, qy) = (q % pw, q / pw);
-                        let c =
-                            |dx: u32, dy: u32| blocked[((2 * qy + dy) * cw + 2 * qx + dx) as usize];
-                        c(0, 0) || c(1, 0) || c(0, 1) || c(1, 1)
-                    })
-                    .collect();
-            }
-            let blocked = &blocked;
-            let mut nodes = vec![Node::EMPTY; (pw * ph) as usize];
-            nodes
-                .par_chunks_mut(pw as usize)
-                .enumerate()
-                .for_each(|(qy, row)| {
-                    let qy = qy as u32;
-                    for (qx, out) in row.iter_mut().enumerate() {
-                        let qx = qx as u32;
-                        let allow = blocked.is_empty() || !blocked[(qy * pw + qx) as usize];
-                        let cl = l - 1;
-                        let mut kids = [Node::EMPTY; 4];
-                        let mut pos = [(0u32, 0u32); 4];
-                        for (c, (kid, p)) in kids.iter_mut().zip(pos.iter_mut()).enumerate() {
-                            let (cx, cy) = (2 * qx + (c as u32 & 1), 2 * qy + (c as u32 >> 1));
-                            *p = (cx, cy);
-                            *kid = child.nodes[(cy * child.w + cx) as usize];
-                        }
-                        *out = ctx.parent(l, qx, qy, cl, &kids, &pos, allow);
-                    }
-                });
-            levels.push(Level {
-                w: pw,
-                h: ph,
-                nodes,
-            });
-        }
+        // Pixels (`W x H`) no node may merge over. Seeded with the pixel-plane analysis,
+        // then grown to a fixed point: a merged proxy plane deviates from its pixels' own
+        // planes by up to the merge tolerance (§3.3, `gamma_dist`, far above the safety
+        // margin), so a pixel safe against its own plane can be unsafe against the proxy
+        // the traversal tests (a deeper plane in front of it: found by proptest,
+        // `quadtree_cascade.rs`). Such pixels are blocked too and the levels rebuilt; the
+        // set only grows, so this ends (in practice after one extra pass, or none).
+        let mut blocked_px: Vec<bool> = tz.iter().map(|z| z.is_finite()).collect();
         let mut tree = Self {
             width: w,
             height: h,
             wf,
             hf,
-            levels,
+            levels: Vec::new(),
             crack_px: opts.crack_dilation,
             trigger_z: Vec::new(),
             plane_top: 0,
             plane_level: Vec::new(),
+        };
+        let mut first = Some(level0);
+        let tz = loop {
+            // Level 0 is never changed by pruning: reuse it on a rebuild.
+            let l0 = first
+                .take()
+                .unwrap_or_else(|| std::mem::take(&mut tree.levels).swap_remove(0));
+            tree.levels = prune(&ctx, l0, nlev, &blocked_px, w, h);
+            if deeper.is_empty() || ctx.never {
+                // No merging: the effective planes are the pixel planes.
+                break tz;
+            }
+            let tz_eff = super::cascade::trigger_depths(&tree.effective_planes(), deeper);
+            let mut grew = false;
+            for (b, z) in blocked_px.iter_mut().zip(&tz_eff) {
+                if z.is_finite() && !*b {
+                    *b = true;
+                    grew = true;
+                }
+            }
+            if !grew {
+                // Every unsafe pixel is blocked, i.e. its effective plane is its pixel
+                // plane, and `tz_eff` was computed from the planes the traversal tests.
+                break tz_eff;
+            }
         };
         // Top-down: the small upper levels are scanned first.
         tree.plane_top = (0..tree.levels.len())
@@ -508,21 +496,91 @@ impl QuadTree {
     }
 }
 
-/// The cube normal of [`UnitCube::map_plane`] with the transposed inverse map `mt`
-/// precomputed (same f64 arithmetic).
+/// The cube gradient `(dz/dx, dz/dy)` of the plane of [`UnitCube::map_plane`] with the
+/// transposed inverse map `mt` precomputed, in f64 from the unnormalised cube covector `q`
+/// (`-(q.x, q.y) / q.z`, infinite for a plane vertical in the cube; the node clamps it).
+/// `None` when degenerate (also when the plane is vertical *and* parallel to `x` or `y`
+/// with a zero numerator, `0 / 0`).
 #[inline]
-fn map_normal(mt: &glam::DMat4, p: Vec3, n: Vec3) -> Option<Vec3> {
+fn map_gradient(mt: &glam::DMat4, p: Vec3, n: Vec3) -> Option<(f32, f32)> {
     let (p, n) = (p.as_dvec3(), n.as_dvec3());
     let q = *mt * n.extend(-n.dot(p));
     let len = q.truncate().length();
     if !(len.is_finite() && len > 0.0) {
         return None;
     }
-    let mut q = q / len;
-    if q.z > 0.0 {
-        q = -q;
+    // Orientation-free: the gradient is the same for q and -q.
+    let g = |a: f64| {
+        let v = a / -q.z;
+        if v.is_nan() { None } else { Some(v as f32) }
+    };
+    Some((g(q.x)?, g(q.y)?))
+}
+
+/// Levels `0..nlev` of a tree: `level0` and the levels built from it by pruning (§3.3),
+/// never merging a node that contains a pixel marked in `blocked` (`W x H`; empty: none).
+fn prune(
+    ctx: &MergeCtx,
+    level0: Level,
+    nlev: u32,
+    blocked_px: &[bool],
+    w: u32,
+    h: u32,
+) -> Vec<Level> {
+    let (w0, h0) = (level0.w, level0.h);
+    let mut blocked: Vec<bool> = if blocked_px.is_empty() {
+        Vec::new()
+    } else {
+        let mut b = vec![false; (w0 * h0) as usize];
+        for j in 0..h {
+            for i in 0..w {
+                b[(j * w0 + i) as usize] = blocked_px[(j * w + i) as usize];
+            }
+        }
+        b
+    };
+    let mut levels = vec![level0];
+    for l in 1..nlev {
+        let child = levels.last().unwrap();
+        let (pw, ph) = (child.w / 2, child.h / 2);
+        if !blocked.is_empty() {
+            let cw = child.w;
+            blocked = (0..pw * ph)
+                .map(|q| {
+                    let (qx, qy) = (q % pw, q / pw);
+                    let c = |dx: u32, dy: u32| blocked[((2 * qy + dy) * cw + 2 * qx + dx) as usize];
+                    c(0, 0) || c(1, 0) || c(0, 1) || c(1, 1)
+                })
+                .collect();
+        }
+        let blocked = &blocked;
+        let mut nodes = vec![Node::EMPTY; (pw * ph) as usize];
+        nodes
+            .par_chunks_mut(pw as usize)
+            .enumerate()
+            .for_each(|(qy, row)| {
+                let qy = qy as u32;
+                for (qx, out) in row.iter_mut().enumerate() {
+                    let qx = qx as u32;
+                    let allow = blocked.is_empty() || !blocked[(qy * pw + qx) as usize];
+                    let cl = l - 1;
+                    let mut kids = [Node::EMPTY; 4];
+                    let mut pos = [(0u32, 0u32); 4];
+                    for (c, (kid, p)) in kids.iter_mut().zip(pos.iter_mut()).enumerate() {
+                        let (cx, cy) = (2 * qx + (c as u32 & 1), 2 * qy + (c as u32 >> 1));
+                        *p = (cx, cy);
+                        *kid = child.nodes[(cy * child.w + cx) as usize];
+                    }
+                    *out = ctx.parent(l, qx, qy, cl, &kids, &pos, allow);
+                }
+            });
+        levels.push(Level {
+            w: pw,
+            h: ph,
+            nodes,
+        });
     }
-    Some(q.truncate().as_vec3())
+    levels
 }
 
 /// The decoded pixel planes of a level-0 array in [`LayerPlanes`] form.
@@ -572,7 +630,7 @@ fn gbuffer_flags(
         if !node.is_plane() {
             return None;
         }
-        let n = node.normal();
-        Some((node.zc(), -n.x / n.z, -n.y / n.z))
+        let (gx, gy) = node.gradient(0, w as f32, h as f32);
+        Some((node.zc(), gx, gy))
     })
 }

@@ -30,9 +30,12 @@
 //! empty). Storage: `tz` lives in a per-pixel side array read only at unsafe leaves; an
 //! unsafe empty pixel becomes the AABB leaf `(tz, -inf)`; every AABB above lowers its
 //! `min z` to the smallest `tz` below it. Layers are built deepest first; layer `k`'s
-//! trigger depths are computed from its *pixel* planes against the deeper layers' final
+//! trigger depths are computed from its *effective* planes against the deeper layers' final
 //! effective planes, and pruning never merges a node containing an unsafe pixel, so the
-//! plane the analysis used is the plane the traversal tests. (A merged plane node flagged
+//! plane the analysis used is the plane the traversal tests. (A merged proxy plane deviates
+//! from its pixels' planes by up to `gamma_dist`, so a pixel safe against its own plane can
+//! be unsafe against the proxy: the build blocks such pixels from merging and rebuilds, to
+//! a fixed point, [`QuadTree::build`](super::QuadTree).) (A merged plane node flagged
 //! unsafe would trigger on footprint entry; with this rule none occurs.)
 //!
 //! **Lemma 1.** Every point `X` of a deeper plane `j > k` in `C_p`, and every point behind

@@ -28,14 +28,14 @@ impl MergeCtx {
         }
         // A plane is affine over the footprint: its range is z_c ± (|dz/dx| hx + |dz/dy| hy)
         // around the footprint centre (where the node stores z_c), hx, hy = half extents.
-        let n = node.normal();
+        let (gx, gy) = node.gradient(level, self.wf, self.hf);
         let dil = if node.flags() & FLAG_CRACK != 0 {
             self.crack_px
         } else {
             0.0
         };
         let half = 0.5 * (1u32 << level) as f32 + dil;
-        let spread = (n.x.abs() * half / self.wf + n.y.abs() * half / self.hf) / -n.z;
+        let spread = gx.abs() * half / self.wf + gy.abs() * half / self.hf;
         if !spread.is_finite() {
             return (0.0, 1.0);
         }
@@ -90,7 +90,7 @@ impl MergeCtx {
         let mut sum = Vec3::ZERO;
         let mut flags = 0;
         for (i, k) in kids.iter().enumerate() {
-            planes[i] = (k.normal(), 0.0);
+            planes[i] = (k.normal(cl, self.wf, self.hf), 0.0);
             sum += planes[i].0;
             flags |= k.flags() & FLAG_CRACK;
         }
@@ -111,18 +111,13 @@ impl MergeCtx {
         if !(min_cos > loosest) {
             return None;
         }
-        // Child corners from the stored centre z and the plane gradient (one division per
-        // child): z = z_c + g_x (x - x_c) + g_y (y - y_c) with g = -(N.x, N.y) / N.z.
+        // Child corners from the stored centre z and the decoded plane gradient:
+        // z = z_c + g_x (x - x_c) + g_y (y - y_c).
         let mut proj = [0.0f32; 16];
         let half = 0.5 * (1u32 << cl) as f32;
         let (hx, hy) = (half / self.wf, half / self.hf);
         for (i, (k, &(cx, cy))) in kids.iter().zip(pos).enumerate() {
-            let n = planes[i].0;
-            let inv = -1.0 / n.z;
-            let (gx, gy) = (n.x * inv, n.y * inv);
-            if !(gx.is_finite() && gy.is_finite()) {
-                return None;
-            }
+            let (gx, gy) = k.gradient(cl, self.wf, self.hf);
             let (xc, yc) = node_centre(cl, cx, cy, self.wf, self.hf);
             let zc = k.zc();
             for (m, (sx, sy)) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)]
@@ -144,7 +139,8 @@ impl MergeCtx {
             0.0
         };
         if min_cos > self.cos_thr(u) && dmax < self.dist_thr(u) {
-            Node::plane(zc, nn.x, nn.y, flags)
+            let inv = -1.0 / nn.z; // nn.z < -1e-6 (checked above)
+            Node::plane_with_gradient(zc, nn.x * inv, nn.y * inv, l, self.wf, self.hf, flags)
         } else {
             None
         }

@@ -32,6 +32,9 @@
 //! **Deviations from / additions to the paper** (its supplement is not public):
 //! - the plane word stores `z_c` (the plane's `z` at the node centre) instead of an
 //!   `-(P·N)` offset, and two flag bits in its lowest mantissa bits ([`node`]);
+//! - the two f16 of a plane node are the plane's `z` slopes across the node's footprint
+//!   instead of `N.x`, `N.y`: reconstructing `N.z` made grazing planes vertical in the cube
+//!   ([`node`], measured there);
 //! - default normals are the G-buffer's ([`QuadTreeOptions::normals`]);
 //! - the distance-adaptive thresholds of §6 are our definition ([`QuadTreeOptions::adaptive`]);
 //! - crack dilation extends flagged planes *backwards along the ray* by

@@ -11,24 +11,63 @@
 //!   of P_origin, as its 2D coordinates are known from the node position"). The two lowest
 //!   mantissa bits of `a` carry flags ([`FLAG_CRACK`] = the paper's `O`, [`FLAG_UNSAFE`] =
 //!   the cascade flag of [`super::cascade`]), so `z_c` is rounded to a 21-bit mantissa
-//!   (relative error `<= 2^-22`, about `2.4e-7`). `b` = `N.x` (f16, low half) and `N.y`
-//!   (f16, high half) of the unit cube normal; `N.z = -sqrt(max(0, 1 - N.x² - N.y²))`
-//!   (normals face the eye, `N.z <= 0`).
+//!   (relative error `<= 2^-22`, about `2.4e-7`). `b` = two f16: the plane's **z increments
+//!   across the node's footprint**, `dz_x = g_x 2^l / W` (low half) and `dz_y = g_y 2^l / H`
+//!   (high half), where `g = (dz/dx, dz/dy) = -(N.x, N.y) / N.z` is the cube-space gradient
+//!   of the plane (`z = z_c + g·((x, y) - centre)`), clamped to `±65504` (the f16 maximum).
 //!
 //! We store `z_c` rather than the paper's `-(P·N)` offset because `z_c` is positive for every
 //! point inside the cube (so the sign bit is free for the tag, as §3.4 requires) and it is
 //! well conditioned, while `N·P` has no fixed sign. The decoded plane is
-//! `N·P = c` with `c = N·(x_c, y_c, z_c)` evaluated in f32 by [`decode_plane`] — the *same*
-//! function builds the brute-force twin of a tree ([`super::QuadTree::effective_planes`]).
+//! `N·P = c` with `N = (g_x, g_y, -1)` scaled by a power of two to near unit length
+//! ([`Node::test_normal`]: no square root) and `c = N·(x_c, y_c, z_c)`, evaluated in f32 by
+//! [`decode_plane`] — the *same* function builds the brute-force twin of a tree
+//! ([`super::QuadTree::effective_planes`]).
 //!
-//! **Precision.** f16 normals have 11 significant bits: near a fronto-parallel normal
-//! (`N.x, N.y` small) the absolute error is tiny, at grazing normals it is up to `2^-11`
-//! and `N.z` (reconstructed) is ill-conditioned — a plane whose normal is nearly
-//! perpendicular to the view direction is tilted by up to a few 1e-4 rad. Over a pixel
-//! footprint (`1/W` in cube `x`) that moves the plane by ~1e-7 in `z`, the same order as
-//! the `z_c` rounding. Consequence: hits on the quantised planes equal brute force over the
-//! *decoded* planes (what the tests check), and differ from brute force over the original
-//! f32 planes by those rounding amounts.
+//! **Why slopes, not the paper's `N.x, N.y`** (Fig. 3 stores `N.x`, `N.y` as f16 and
+//! implies `N.z`; the format — an f32 word with the sign tag plus two f16 — is unchanged).
+//! Reconstructing `N.z = -sqrt(1 - N.x² - N.y²)` is ill-conditioned exactly where it
+//! matters: a surface seen nearly edge-on has a cube normal nearly perpendicular to `z`
+//! (`|N.z|` small), `dN.z = (N.x dN.x + N.y dN.y) / N.z`, and f16 rounds `N.x` near 1 to a
+//! step of `2^-11`. On atrium at 800x450 the exact normal `(0.99999, 0.00056, -0.0041)`
+//! decoded to `(1, 0.00056, 0)`: a plane vertical in the cube, i.e. a wall through the whole
+//! cube depth in front of its pixel's real surface. In the camera-near cube
+//! ([`crate::CubeNear::Camera`]) every ray starts at the camera's near plane and crosses
+//! those walls in front of the scene: 99 of 720,000 stereo rays turned from miss into a
+//! spurious hit and 358 hit another pixel than brute force over the exact planes (examples
+//! `quadtree_precision.rs`), costing 0.4 dB of warp PSNR at 800x450. The slope encoding has no
+//! cancellation: every f16 rounding is relative (`<= 2^-11` of the increment, or `2^-25`
+//! absolute below the f16 normal range), so the decoded plane's `z` at a footprint corner
+//! is off by at most `2^-11 (|dz_x| + |dz_y|) / 2 + 2^-25` plus the `z_c` rounding — a
+//! fraction `2^-12` of the plane's own `z` spread over its footprint (as a distance: that
+//! times `|N.z|`, plus a few f32 ulps of decoding; tests below and
+//! `tests/quadtree_precision.rs` on atrium in both cubes). Scaling by the
+//! node's footprint (`2^l`) keeps that bound level-independent: a merged node of 256 pixels
+//! is not coarser than a leaf. A slope beyond `±65504` per footprint (the plane crosses the
+//! whole cube depth within `1/65504` of its footprint) is clamped: the plane's footprint
+//! crossing moves by at most `2^l / 65504` pixels. Decoding needs no square root (the
+//! paper's `N.z` does): the test normal is scaled by a power of two ([`Node::test_normal`]).
+//!
+//! **Measured** (`parallax bench warp --method quadtree|brute --layers 1,2`, 1600x900, ipd
+//! 0.065, G-buffer normals; Sponza: `--scene ../shared/scenes/sponza_dabrovic/
+//! sponza_dabrovic.glb --eye=-9,3.5,0 --target 8,5,0 --fov-y 60`; camera cube `--near 0.1`).
+//! PSNR in dB against the BVH; the quad-tree with default settings (lossless:
+//! `--gamma-norm-deg 0 --gamma-dist 0`, same figures to 0.001 dB):
+//!
+//! | scene, cube, layers | brute force | quad-tree, `N.x, N.y` node | quad-tree, slope node |
+//! |---|---|---|---|
+//! | atrium, fitted, 1 / 2 | 30.495 / 30.500 | 30.427 / 30.432 | 30.495 / 30.499 |
+//! | atrium, camera 0.1, 1 / 2 | 30.495 / 30.507 | 30.172 / 30.134 | 30.493 / 30.504 |
+//! | Sponza, fitted, 1 / 2 | 32.200 / 32.179 | 31.959 / 31.938 | 32.200 / 32.178 |
+//! | Sponza, camera 0.1, 1 / 2 | 32.144 / 32.114 | 32.103 / 32.075 | 32.144 / 32.114 |
+//!
+//! (More grazing planes decode wrongly in the fitted cube, where `z` is not squeezed —
+//! Sponza at 800x450: 21 vertical planes fitted, 2 camera — but in the camera cube the rays
+//! start at 0.1 m and cross the walls' extensions in front of the scene; atrium's open sky
+//! turned misses into spurious hits there.) Speed: callgrind instructions per stereo ray
+//! (`examples/quadtree_speed.rs -- 0.065 [--near 0.1] --profile quadtree`) 1527 -> 1544
+//! fitted, 1942 -> 1955 camera cube; thread CPU time on par (best of 7, alternating runs of
+//! the two builds: 171 / 203 ns per ray before, 171 / 206 after, ±3 %).
 
 use glam::Vec3;
 use half::f16;
@@ -42,6 +81,8 @@ pub const FLAG_CRACK: u32 = 1;
 pub const FLAG_UNSAFE: u32 = 2;
 const FLAG_MASK: u32 = 3;
 const SIGN: u32 = 0x8000_0000;
+/// Largest finite f16.
+const F16_MAX: f32 = 65504.0;
 
 /// One quad-tree node: 64 bits.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -70,20 +111,37 @@ impl Node {
         }
     }
 
-    /// A plane node; `None` unless `z_c` is finite and `>= 0` and the normal components
-    /// are finite.
-    pub fn plane(zc: f32, nx: f32, ny: f32, flags: u32) -> Option<Node> {
-        if !(zc.is_finite() && zc >= 0.0 && nx.is_finite() && ny.is_finite()) {
+    /// A plane node from `z_c` and the plane's z increments `dzx`, `dzy` across the node's
+    /// footprint (module docs; clamped to `±65504`); `None` unless `z_c` is finite and
+    /// `>= 0` and the increments are not NaN.
+    pub fn plane(zc: f32, dzx: f32, dzy: f32, flags: u32) -> Option<Node> {
+        if !(zc.is_finite() && zc >= 0.0) || dzx.is_nan() || dzy.is_nan() {
             return None;
         }
         // Round to a 21-bit mantissa (may carry into the exponent: still correct).
         let bits = (zc.to_bits() + 2) & !FLAG_MASK;
-        let hx = f16::from_f32(nx).to_bits() as u32;
-        let hy = f16::from_f32(ny).to_bits() as u32;
+        let hx = f16::from_f32(dzx.clamp(-F16_MAX, F16_MAX)).to_bits() as u32;
+        let hy = f16::from_f32(dzy.clamp(-F16_MAX, F16_MAX)).to_bits() as u32;
         Some(Node {
             a: SIGN | bits | (flags & FLAG_MASK),
             b: hx | (hy << 16),
         })
+    }
+
+    /// A plane node at `level` of a `w x h` image from `z_c` and the plane's cube gradient
+    /// `(gx, gy) = (dz/dx, dz/dy)` (may be infinite: clamped; `None` for NaN).
+    pub fn plane_with_gradient(
+        zc: f32,
+        gx: f32,
+        gy: f32,
+        level: u32,
+        w: f32,
+        h: f32,
+        flags: u32,
+    ) -> Option<Node> {
+        let size = (1u32 << level) as f32;
+        // `inf * size / w` stays infinite and is clamped; a zero gradient stays exactly 0.
+        Node::plane(zc, gx * (size / w), gy * (size / h), flags)
     }
 
     #[inline(always)]
@@ -114,13 +172,53 @@ impl Node {
         f32::from_bits(self.a & !(SIGN | FLAG_MASK))
     }
 
-    /// Decoded unit-ish normal of a plane node (`N.z` reconstructed, `<= 0`).
+    /// The stored z increments `(dz_x, dz_y)` across the node's footprint (module docs).
     #[inline(always)]
-    pub fn normal(self) -> Vec3 {
-        let nx = f16_bits_to_f32(self.b as u16);
-        let ny = f16_bits_to_f32((self.b >> 16) as u16);
-        let nz = -(1.0 - nx * nx - ny * ny).max(0.0).sqrt();
-        Vec3::new(nx, ny, nz)
+    pub fn increments(self) -> (f32, f32) {
+        (
+            f16_bits_to_f32(self.b as u16),
+            f16_bits_to_f32((self.b >> 16) as u16),
+        )
+    }
+
+    /// Decoded cube gradient `(dz/dx, dz/dy)` of a plane node at `level` of a `w x h`
+    /// image (the increments times `w / 2^l`, `h / 2^l`; `2^-l` is exact).
+    #[inline(always)]
+    pub fn gradient(self, level: u32, w: f32, h: f32) -> (f32, f32) {
+        let (ex, ey) = self.increments();
+        // `w 2^-level` exactly, by lowering the exponent (w >= 1, level < 32: stays normal).
+        let (ws, hs) = (
+            f32::from_bits(w.to_bits() - (level << 23)),
+            f32::from_bits(h.to_bits() - (level << 23)),
+        );
+        (ex * ws, ey * hs)
+    }
+
+    /// Decoded unit normal of a plane node at `level` (`N.z < 0`, towards the eye):
+    /// `(g_x, g_y, -1)` normalised.
+    #[inline(always)]
+    pub fn normal(self, level: u32, w: f32, h: f32) -> Vec3 {
+        let (gx, gy) = self.gradient(level, w, h);
+        let r = 1.0 / (1.0 + gx * gx + gy * gy).sqrt();
+        Vec3::new(gx * r, gy * r, -r)
+    }
+
+    /// The plane-test normal of [`decode_plane`]: `(g_x, g_y, -1)` scaled by the power of
+    /// two `2^-floor(log2 max(1, |g_x|, |g_y|))`, so `|N|` is in `[1, 2 sqrt 3)` — near
+    /// unit, which keeps the f32 plane test `N·P - c` and the cascade's margin
+    /// ([`super::cascade`]) at the scale they had with unit normals — without a square root
+    /// or a division (exact scaling: exponent bits only). Same direction as
+    /// [`Self::normal`].
+    #[inline(always)]
+    pub fn test_normal(self, level: u32, w: f32, h: f32) -> Vec3 {
+        let (gx, gy) = self.gradient(level, w, h);
+        // max(1, |gx|, |gy|) with plain compares (`maxss`; never NaN: |g| <= 65504 W).
+        let (ax, ay) = (gx.abs(), gy.abs());
+        let m = if ax > ay { ax } else { ay };
+        let m = if m > 1.0 { m } else { 1.0 };
+        // 2^-e for m in [2^e, 2^(e+1)): exponent field 127 - e = 254 - (127 + e).
+        let s = f32::from_bits(0x7f00_0000 - (m.to_bits() & 0x7f80_0000));
+        Vec3::new(gx * s, gy * s, -s)
     }
 
     /// Sets the plane flag / lowers an AABB's `zmin` to `tz` (see [`super::cascade`]).
@@ -135,18 +233,26 @@ impl Node {
     }
 }
 
-/// Exact f16 -> f32 conversion of a *finite* half (the stored normal components), branch-free
-/// and inlinable. `half`'s `to_f32` dispatches at run time (F16C detection) to an
-/// out-of-line function; in the traversal loop those two calls per plane test forced the
-/// loop's f32 state to be spilled around them. Shifting the 15 magnitude bits into an f32's
-/// exponent/mantissa field gives the value times `2^-112` (also for subnormal halves and
-/// zero), and the multiplication by `2^112` is exact, so the result equals
-/// `f16::to_f32` bit for bit (checked for all finite halves in the tests below).
+/// Exact f16 -> f32 conversion of a *finite* half (the stored slopes), branch-free and
+/// inlinable. `half`'s `to_f32` dispatches at run time (F16C detection) to an out-of-line
+/// function; in the traversal loop those two calls per plane test forced the loop's f32
+/// state to be spilled around them. A normal half is its bits shifted into an f32's
+/// exponent/mantissa field with the exponent rebiased by an integer add (`+112 << 23`); a
+/// subnormal half (or zero) is its 10-bit mantissa, converted from an integer, times `2^-24`
+/// — both exact, and a mask selects one, so the result equals `f16::to_f32` bit for bit
+/// (checked for all finite halves in the tests below). No f32 **subnormal** appears on the
+/// way: the former decode (shift, then multiply by `2^112`) made one out of every subnormal
+/// half, and a multiplication with a subnormal operand takes a slow microcode assist —
+/// rare for the paper's `N.x, N.y`, common for the slopes of fronto-parallel surfaces
+/// (~10 % of the traversal's time on atrium; examples `quadtree_speed.rs --time`).
 #[inline(always)]
 pub fn f16_bits_to_f32(h: u16) -> f32 {
     let h = h as u32;
-    let mag = f32::from_bits((h & 0x7fff) << 13) * f32::from_bits(0x7780_0000); // 2^112
-    f32::from_bits(mag.to_bits() | ((h & 0x8000) << 16))
+    let mag = h & 0x7fff;
+    let normal = (mag << 13) + 0x3800_0000; // exponent field + (127 - 15)
+    let sub = (mag as f32 * f32::from_bits(0x3380_0000)).to_bits(); // * 2^-24
+    let is_sub = 0u32.wrapping_sub((mag < 0x400) as u32);
+    f32::from_bits((sub & is_sub) | (normal & !is_sub) | ((h & 0x8000) << 16))
 }
 
 /// Cube-space centre of node `(qx, qy)` at `level` of a `w x h` image.
@@ -159,10 +265,12 @@ pub fn node_centre(level: u32, qx: u32, qy: u32, w: f32, h: f32) -> (f32, f32) {
     )
 }
 
-/// Decoded plane `(N, c)` with `N·P = c` of a plane node at `level`, `(qx, qy)`.
+/// Decoded plane `(N, c)` with `N·P = c` of a plane node at `level`, `(qx, qy)`: `N` =
+/// [`Node::test_normal`] from the stored slopes (not unit length: `|N|` in `[1, 2 sqrt 3)`,
+/// module docs), `c = N·(x_c, y_c, z_c)` in f32.
 #[inline(always)]
 pub fn decode_plane(node: Node, level: u32, qx: u32, qy: u32, w: f32, h: f32) -> (Vec3, f32) {
-    let n = node.normal();
+    let n = node.test_normal(level, w, h);
     let (xc, yc) = node_centre(level, qx, qy, w, h);
     (n, n.dot(Vec3::new(xc, yc, node.zc())))
 }
@@ -193,8 +301,15 @@ mod tests {
         assert!(n.is_plane() && !n.is_empty());
         assert!((n.zc() - 0.75).abs() < 1e-6);
         assert_eq!(n.flags(), FLAG_CRACK);
-        let nn = n.normal();
-        assert!((nn - Vec3::new(0.1, -0.2, -(1.0f32 - 0.05).sqrt())).length() < 1e-3);
+        // Level 1 of a 64 x 32 image: gradient = increments * (32, 16).
+        let (gx, gy) = n.gradient(1, 64.0, 32.0);
+        assert!(
+            (gx - 3.2).abs() < 2e-3 && (gy + 3.2).abs() < 2e-3,
+            "{gx} {gy}"
+        );
+        let nn = n.normal(1, 64.0, 32.0);
+        let want = Vec3::new(3.2, -3.2, -1.0).normalize();
+        assert!((nn - want).length() < 1e-3 && (nn.length() - 1.0).abs() < 1e-6);
         let mut m = n;
         m.mark_unsafe(0.5);
         assert_eq!(m.flags(), FLAG_CRACK | FLAG_UNSAFE);
@@ -203,7 +318,92 @@ mod tests {
         let b = Node::aabb(-0.5, 0.9);
         assert!(!b.is_plane() && b.zrange() == (0.0, 0.9));
         assert!(Node::plane(-0.1, 0.0, 0.0, 0).is_none());
+        assert!(Node::plane(0.5, f32::NAN, 0.0, 0).is_none());
         assert!(Node::plane(0.0, 0.0, 0.0, 0).unwrap().is_plane());
         assert_eq!(size_of::<Node>(), 8);
+    }
+
+    /// The grazing plane of the module docs (atrium, 800x450, camera-near cube): the paper's
+    /// `N.x, N.y` encoding made it vertical; the slopes keep its gradient to `2^-11`.
+    #[test]
+    fn grazing_plane_keeps_its_slope() {
+        let exact = Vec3::new(0.999_991_4, 0.000_558_165, -0.004_102_197);
+        let (gx, gy) = (-exact.x / exact.z, -exact.y / exact.z);
+        let n = Node::plane_with_gradient(0.98, gx, gy, 0, 800.0, 450.0, 0).unwrap();
+        let (dx, dy) = n.gradient(0, 800.0, 450.0);
+        assert!(((dx - gx) / gx).abs() < 4.9e-4 && ((dy - gy) / gy).abs() < 4.9e-4);
+        let nn = n.normal(0, 800.0, 450.0);
+        assert!(((nn.z - exact.z) / exact.z).abs() < 1e-3, "{nn} vs {exact}");
+        // The paper's encoding: N.x rounds to 1 in f16 and N.z to 0.
+        let hx = f16::from_f32(exact.x).to_f32();
+        assert_eq!(hx, 1.0);
+        // Vertical and steeper-than-f16 planes clamp; a flat one stays exactly flat.
+        let v = Node::plane_with_gradient(0.5, f32::INFINITY, -1e9, 0, 800.0, 450.0, 0).unwrap();
+        assert_eq!(v.increments(), (65504.0, -65504.0));
+        assert!(v.normal(0, 800.0, 450.0).is_finite());
+        let f = Node::plane_with_gradient(0.5, 0.0, -0.0, 3, 800.0, 450.0, 0).unwrap();
+        assert_eq!(f.normal(3, 800.0, 450.0), Vec3::new(0.0, 0.0, -1.0));
+        assert_eq!(f.test_normal(3, 800.0, 450.0), Vec3::new(0.0, 0.0, -1.0));
+    }
+
+    /// The test normal is `(g, -1)` times an exact power of two, of near unit length.
+    #[test]
+    fn test_normal_is_a_scaled_gradient() {
+        for e in -30..=30 {
+            for (a, b) in [(1.0f32, 0.3f32), (-0.2, 1.0), (0.7, -0.7)] {
+                let g = 10f32.powf(e as f32 / 4.0);
+                let n = Node::plane(0.6, a * g, b * g, 0).unwrap();
+                let (gx, gy) = n.gradient(2, 640.0, 360.0);
+                let t = n.test_normal(2, 640.0, 360.0);
+                let s = -t.z;
+                assert_eq!(s, f32::from_bits(s.to_bits() & 0x7f80_0000), "power of two");
+                assert_eq!((t.x, t.y), (gx * s, gy * s));
+                let len = t.length();
+                assert!(len >= 1.0 && len < 2.0 * 3f32.sqrt(), "{len}");
+                let u = n.normal(2, 640.0, 360.0);
+                assert!((t / len - u).length() < 1e-5, "{t} {u}");
+            }
+        }
+    }
+
+    /// Encoding error bound of the module docs: the exact plane's points at the footprint
+    /// corners lie within `2^-11 (|dz_x| + |dz_y|) / 2 + 2^-25` in cube `z` of the decoded
+    /// plane (`z_c` is exact here), i.e. within that times `|N.z|` in distance — plus the
+    /// f32 rounding of decoding (`c`, normalisation: a few ulps of distance). Measured as
+    /// the distance `|N·X - c|` of the decoded unit-normal plane, which stays well
+    /// conditioned for planes steep in the cube (where `z` along the plane is not), over
+    /// slopes from 1e-9 to 1e4 per footprint at every level.
+    #[test]
+    fn corner_error_bound() {
+        let (w, h) = (1600.0f32, 900.0f32);
+        let mut worst = 0.0f64;
+        for level in 0..9u32 {
+            for e in -90..=40 {
+                for sign in [-1.0f64, 1.0] {
+                    let size = (1u32 << level) as f64;
+                    // Increments per footprint from ~1e-9 to ~1e4.
+                    let ex = sign * 10f64.powf(e as f64 / 10.0) * 1.2345;
+                    let (gx, gy) = (ex * w as f64 / size, -0.37 * ex * h as f64 / size);
+                    let zc = 0.75f32; // exact in 21 bits
+                    let n = Node::plane_with_gradient(zc, gx as f32, gy as f32, level, w, h, 0)
+                        .unwrap();
+                    let (xc, yc) = node_centre(level, 3, 2, w, h);
+                    let (nn, c) = decode_plane(n, level, 3, 2, w, h);
+                    let (hx, hy) = (0.5 * size / w as f64, 0.5 * size / h as f64);
+                    let nz = 1.0 / (1.0 + gx * gx + gy * gy).sqrt();
+                    let bound_z = (gx.abs() * hx + gy.abs() * hy) * 2f64.powi(-11) + 2f64.powi(-25);
+                    let bound = bound_z * nz + 4.0 * f32::EPSILON as f64;
+                    for (sx, sy) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)] {
+                        let (x, y) = (xc as f64 + sx * hx, yc as f64 + sy * hy);
+                        let z = zc as f64 + gx * sx * hx + gy * sy * hy;
+                        let dist = (nn.as_dvec3().dot(glam::DVec3::new(x, y, z)) - c as f64).abs()
+                            / nn.as_dvec3().length();
+                        assert!(dist <= bound, "level {level} g {gx}: {dist} > {bound}");
+                        worst = worst.max(dist / bound);
+                    }
+                }
+            }
+        }
+        assert!(worst > 0.01, "the bound is not vacuous: {worst}");
     }
 }
