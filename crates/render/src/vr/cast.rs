@@ -47,6 +47,20 @@ pub struct CastStats {
     pub tris_all_out: u64,
     pub tris_partial: u64,
     pub tris_all_in: u64,
+    /// Ray-triangle tests of the set-up kernel (valid rays of its packet-triangle tests).
+    pub setup_pair_tests: u64,
+    /// Watertight tests the set-up kernel ran inside its uncertainty band (edge value within
+    /// the bound, or `1/t` within the depth band of the best so far), per ray and triangle.
+    pub setup_exact_tests: u64,
+    /// Watertight tests of the set-up kernel's winners (one per hit ray whose winner was not
+    /// already decided exactly), for their bit-exact `t`.
+    pub setup_final_tests: u64,
+    /// Rays re-decided by an exact scan of the tile's list because the watertight test
+    /// contradicted a certain decision (a bound violation; expected 0).
+    pub setup_rescues: u64,
+    /// Of `setup_exact_tests`: those for an edge value within the band (the rest are depth
+    /// comparisons within the depth band, including the best's own watertight `t`).
+    pub setup_edge_band: u64,
 }
 
 /// The caster's sample-test choice: the kernel and the SIMD width of its ray packets (`4` SSE,
@@ -168,7 +182,7 @@ pub fn cast_opts(
         prim: out.prim.as_mut_ptr(),
         t: out.t.as_mut_ptr(),
     };
-    let counters: [AtomicU64; 14] = Default::default();
+    let counters: [AtomicU64; 19] = Default::default();
     let add = |i: usize, v: u64| {
         counters[i].fetch_add(v, Ordering::Relaxed);
     };
@@ -201,6 +215,9 @@ pub fn cast_opts(
             let (mut leaves_n, mut leaf_tests, mut rays, mut group_tests) =
                 (0u64, 0u64, 0u64, 0u64);
             let (mut setup_tiles, mut tri_tests) = (0u64, 0u64);
+            let (mut pair_tests, mut exact_tests, mut final_tests, mut rescues) =
+                (0u64, 0u64, 0u64, 0u64);
+            let mut edge_band = 0u64;
             tt.counts = Default::default();
             let tiles = &hierarchy.tiles
                 [block.first_tile as usize..(block.first_tile + block.tile_count) as usize];
@@ -223,7 +240,8 @@ pub fn cast_opts(
                     // SAFETY: as below.
                     let w = unsafe {
                         test_tile_setup(
-                            set, prim_ids, samples, tt, &tile.beam, scale, lanes, ptr.prim, ptr.t,
+                            set, blocks_, prim_ids, samples, tt, &tile.beam, scale, lanes,
+                            ptr.prim, ptr.t,
                         )
                     };
                     let c = Instant::now();
@@ -232,6 +250,11 @@ pub fn cast_opts(
                     leaves_n += scratch.leaves.len() as u64;
                     rays += w.rays;
                     tri_tests += w.tri_tests;
+                    pair_tests += w.pair_tests;
+                    exact_tests += w.exact_tests;
+                    final_tests += w.final_tests;
+                    rescues += w.rescues;
+                    edge_band += w.edge_band;
                     setup_tiles += 1;
                     continue;
                 }
@@ -266,6 +289,11 @@ pub fn cast_opts(
             add(11, tt.counts.all_out);
             add(12, tt.counts.partial);
             add(13, tt.counts.all_in);
+            add(14, pair_tests);
+            add(15, exact_tests);
+            add(16, final_tests);
+            add(17, rescues);
+            add(18, edge_band);
         },
     );
     let g = |i: usize| counters[i].load(Ordering::Relaxed);
@@ -286,5 +314,10 @@ pub fn cast_opts(
         tris_all_out: g(11),
         tris_partial: g(12),
         tris_all_in: g(13),
+        setup_pair_tests: g(14),
+        setup_exact_tests: g(15),
+        setup_final_tests: g(16),
+        setup_rescues: g(17),
+        setup_edge_band: g(18),
     }
 }

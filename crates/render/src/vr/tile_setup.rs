@@ -83,7 +83,8 @@ use parallax_bvh::beam::LeafRef;
 use parallax_bvh::node::{leaf_count, leaf_first};
 use parallax_core::math::Beam;
 use parallax_core::math::ROBUST_FAR_SCALE;
-use parallax_core::{Aabb, NO_ID};
+use parallax_core::math::WatertightRay;
+use parallax_core::{Aabb, NO_ID, Ray};
 
 use super::SampleSet;
 use super::packet::{ClosestN, Lanes, RaysN, for_each_packet};
@@ -93,14 +94,22 @@ use super::packet::{ClosestN, Lanes, RaysN, for_each_packet};
 pub enum SampleTest {
     /// The BVH's watertight test per ray (Woop et al. 2013), bit-identical to per-ray traversal.
     Watertight,
-    /// HVVR's per-tile triangle set-up with tile-corner classification (this module); tiles
-    /// without a shared ray origin (thin lens) fall back to [`SampleTest::Watertight`].
+    /// HVVR's per-tile triangle set-up with tile-corner classification (this module), exact
+    /// through its uncertainty band; tiles without a shared ray origin (thin lens) fall back
+    /// to [`SampleTest::Watertight`].
     #[default]
     TileSetup,
 }
 
-/// Relative tolerance of the corner classification (module docs).
-pub const CLASSIFY_TOLERANCE: f32 = 1e-5;
+/// Unit roundoff of f32 (`2^-24`): `fl(x op y) = (x op y)(1 + δ)`, `|δ| <= U`.
+const U: f32 = f32::EPSILON * 0.5;
+const SQRT3: f32 = 1.732_051;
+/// A triangle whose depth band [`TriSetup::rho`] exceeds this is ill-conditioned (seen almost
+/// edge-on, or its plane passes near the origin): its depth is always decided exactly.
+pub const RHO_MAX: f32 = 0.05;
+/// Relative band of a best `1/t` that came from an exact Woop `t` (`fl(1/t)`: one rounding,
+/// doubled).
+const RHO_EXACT: f32 = 2.0 * U;
 
 /// A triangle set up for rays from one origin (module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -112,7 +121,14 @@ pub struct TriSetup {
     pub g: [f32; 3],
     /// Index in `Bvh::triangles`.
     pub tri: u32,
-    /// Every ray of the tile passes the three edge tests.
+    /// Where the vertices are: `4 * block + lane` in `Bvh::blocks` (the exact test reads them).
+    pub src: u32,
+    /// Edge uncertainty per unit `|d|_inf`: `|fl(n_i . d) - e_i(d)| + |Woop's u_i - e_i(d)|
+    /// <= bound |d|_inf` for every ray of the tile (module docs, "exact band").
+    pub bound: f32,
+    /// Relative depth band: `|g . d - 1/t_woop| <= rho g . d` (first order, doubled).
+    pub rho: f32,
+    /// Every ray of the tile certainly passes the three edge tests.
     pub all_in: bool,
 }
 
@@ -122,7 +138,7 @@ pub fn dot3(a: [f32; 3], d: Vec3) -> f32 {
     a[0] * d.x + a[1] * d.y + a[2] * d.z
 }
 
-/// `a x b` component by component, never contracted (exactly anti-symmetric).
+/// `a x b` component by component, never contracted.
 #[inline(always)]
 fn cross(a: Vec3, b: Vec3) -> Vec3 {
     Vec3::new(
@@ -132,12 +148,51 @@ fn cross(a: Vec3, b: Vec3) -> Vec3 {
     )
 }
 
+fn l1(v: Vec3) -> f32 {
+    v.abs().element_sum()
+}
+
 /// Corner classification of a triangle against a tile beam (module docs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CornerClass {
     AllOut,
     Partial,
     AllIn,
+}
+
+/// A cone of unit directions holding every ray of a tile: `|d/|d| - centre| <= radius`.
+#[derive(Clone, Copy, Debug)]
+pub struct Cone {
+    pub centre: Vec3,
+    pub radius: f32,
+}
+
+impl Cone {
+    /// Every direction (`|d̂ - 0| = 1`; the vertex distance bound becomes `|a|`, module docs).
+    pub const ANY: Cone = Cone {
+        centre: Vec3::ZERO,
+        radius: 1.0,
+    };
+
+    /// The cone of a beam's corners: centre = normalised sum of the unit corners, radius = the
+    /// largest chord to a corner. Over a geodesically convex spherical quadrilateral within the
+    /// hemisphere around the centre, the chord to the centre is largest at a corner; otherwise
+    /// [`Cone::ANY`].
+    pub fn of(corners: Option<&BeamCorners>) -> Cone {
+        let Some(c) = corners else {
+            return Cone::ANY;
+        };
+        let u = c.c.map(|x| x.normalize_or_zero());
+        let centre = (u[0] + u[1] + u[2] + u[3]).normalize_or_zero();
+        if centre == Vec3::ZERO || u.iter().any(|x| x.dot(centre) <= 0.1) {
+            return Cone::ANY;
+        }
+        let r = u.iter().map(|x| (*x - centre).length()).fold(0.0, f32::max);
+        Cone {
+            centre,
+            radius: r * 1.001 + 1e-6,
+        }
+    }
 }
 
 /// The four corner directions of a beam and the per-axis magnitude bound of its directions
@@ -170,11 +225,17 @@ impl BeamCorners {
         Some(BeamCorners { c: cs, cmax })
     }
 
-    /// Classifies oriented edge covectors `n` (module docs).
-    pub fn classify(&self, n: &[[f32; 3]; 3]) -> CornerClass {
+    /// Classifies a set-up triangle (module docs): all-in only if every ray of the beam is
+    /// certainly inside (edge values above the band), all-out only if one edge is certainly
+    /// negative for every ray.
+    pub fn classify(&self, s: &TriSetup) -> CornerClass {
+        // Every ray satisfies d / |d_a| = sum_k w_k c_k, so |d|_inf <= |d_a| cm and the real
+        // edge value is |d_a| sum_k w_k e(c_k); fl(n . c_k) is within the set-up part of the
+        // band times cm plus its own dot rounding (3.1 U sum |n_j| cmax_j) of e(c_k).
+        let cm = self.cmax.max_element();
         let mut all_in = true;
-        for e in n {
-            let tol = CLASSIFY_TOLERANCE * dot3(e.map(f32::abs), self.cmax);
+        for e in &s.n {
+            let tol = s.bound * cm + 3.1 * U * dot3(e.map(f32::abs), self.cmax);
             let (mut out, mut inn) = (true, true);
             for c in &self.c {
                 let v = dot3(*e, *c);
@@ -194,12 +255,26 @@ impl BeamCorners {
     }
 }
 
+/// Ray-triangle decision of the set-up edge test for one direction (module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EdgeClass {
+    /// Every edge value above the band: the watertight test certainly finds the ray inside.
+    In,
+    /// An edge value below minus the band: the watertight test certainly rejects the ray.
+    Out,
+    /// Within the band: decide with the watertight test.
+    Unsure,
+}
+
 impl TriSetup {
-    /// Sets up triangle `(v0, v1, v2)` for rays from `o`; `None` if no ray from `o` can hit it
-    /// (`D = 0`, non-finite values).
-    pub fn new(v: [Vec3; 3], o: Vec3, tri: u32) -> Option<Self> {
+    /// Sets up triangle `(v0, v1, v2)` (at `src` = `4 * block + lane`) for rays from `o` within
+    /// `cone`; `None` if no ray from `o` can hit it (`D = 0`, non-finite values).
+    pub fn new(v: [Vec3; 3], o: Vec3, tri: u32, src: u32, cone: &Cone) -> Option<Self> {
+        // The same rounded `a_i = v_i - o` as the watertight test's projection.
         let a = [v[0] - o, v[1] - o, v[2] - o];
-        let nrm = cross(v[1] - v[0], v[2] - v[0]);
+        // Edges of the rounded triangle: e_i = fl(a_{i+1} - a_i) (relative error U each).
+        let e = [a[1] - a[0], a[2] - a[1], a[0] - a[2]];
+        let nrm = cross(e[0], -e[2]);
         let d = nrm.dot(a[0]);
         if d == 0.0 || !d.is_finite() {
             return None;
@@ -209,27 +284,115 @@ impl TriSetup {
             return None;
         }
         let s = if d > 0.0 { 1.0 } else { -1.0 };
-        // Multiplying by +-1 is exact: shared edges keep exactly negated covectors.
-        let n = [0, 1, 2].map(|i| (cross(a[i], a[(i + 1) % 3]) * s).to_array());
+        // n_i = a_i x (a_{i+1} - a_i) = a_i x a_{i+1} in exact arithmetic; the short edge
+        // keeps the rounding error relative to |a| |e_i| instead of |a|^2.
+        let n = [0, 1, 2].map(|i| (cross(a[i], e[i]) * s).to_array());
         if !n.iter().flatten().all(|x| x.is_finite()) {
             return None;
         }
+        // Distance of each vertex from any ray of the cone (module docs) and the bound on the
+        // watertight test's projected coordinates |x'|, |y'| <= sqrt 3 dist.
+        let psi = a.map(|ai| {
+            SQRT3 * (cross(ai, cone.centre).length() + ai.length() * cone.radius) * 1.001
+        });
+        let amax = a.map(|ai| ai.abs().max_element());
+        // Error of a projected coordinate: U |sx a_kz| (product) + U |sx| |a_kz| (sx itself)
+        // + U |x'| (subtraction), |sx| <= 1.
+        let ep = [0, 1, 2].map(|i| U * (2.02 * amax[i] + 1.01 * psi[i]));
+        let mut bound = 0.0f32;
+        let mut wsum = 0.0f32;
+        for i in 0..3 {
+            let (b, c) = (i, (i + 1) % 3);
+            // Watertight edge function u = c'x b'y - c'y b'x: input errors plus three
+            // roundings, in u units; times |d_kz| = |d|_inf in e units.
+            let w = 2.0 * (ep[c] * psi[b] + ep[b] * psi[c]) + 4.04 * U * psi[b] * psi[c];
+            // Set-up value: n from e_i (U), two products and a difference (about 3U of
+            // |a| (x) |e|), the dot product (3U): 6.1 U |a_i|_1 |e_i|_1 |d|_inf.
+            let p = 6.1 * U * l1(a[i]) * l1(e[i]);
+            bound = bound.max(w + p);
+            wsum += w;
+        }
+        // Safety factor 2 over the first-order analysis (second-order terms, the 1.01s).
+        let bound = 2.0 * bound;
+        // Depth band. g . d: D and N . d lose U |N| |a| / |D| (kappa: 1 / sine of the grazing
+        // angle, for every ray through the triangle) each, N itself 3U sigma (sigma = sliver
+        // factor |e0| |e2| / |N|). Woop's t = sum u_i z_i / sum u_i moves by
+        // sqrt 3 Lambda sum |du_i| / |D| (Lambda = longest edge) plus 7U of rounding.
+        let nl = nrm.length();
+        let amax2 = a.iter().map(|x| x.length()).fold(0.0, f32::max);
+        let kappa = nl * amax2 / d.abs();
+        let sigma = e[0].length() * e[2].length() / nl;
+        let lambda = e.iter().map(|x| x.length()).fold(0.0, f32::max);
+        let rho = 2.0 * (SQRT3 * lambda * wsum / d.abs() + 14.0 * U * sigma * kappa + 11.0 * U);
+        let rho = if rho.is_finite() && rho <= RHO_MAX {
+            rho
+        } else {
+            f32::INFINITY
+        };
         Some(TriSetup {
             n,
             g: g.to_array(),
             tri,
+            src,
+            bound: if bound.is_finite() {
+                bound
+            } else {
+                f32::INFINITY
+            },
+            rho,
             all_in: false,
         })
     }
 
-    /// The kernel's test of one ray direction: `Some(g . d)` (= `1/t`) if the ray passes the
-    /// three edge tests (skipped when `all_in`) and `g . d > 0`.
+    /// The set-up edge test of one ray direction `d` with the band (module docs).
     #[inline]
-    pub fn hit(&self, d: Vec3) -> Option<f32> {
-        let gd = dot3(self.g, d);
-        let inside = self.all_in || self.n.iter().all(|n| dot3(*n, d) >= 0.0);
-        (inside && gd > 0.0).then_some(gd)
+    pub fn edge_class(&self, d: Vec3) -> EdgeClass {
+        if self.all_in {
+            return EdgeClass::In;
+        }
+        let b = self.bound * d.abs().max_element();
+        let m = self
+            .n
+            .iter()
+            .map(|n| dot3(*n, d))
+            .fold(f32::INFINITY, f32::min);
+        if m > b {
+            EdgeClass::In
+        } else if m < -b {
+            EdgeClass::Out
+        } else {
+            EdgeClass::Unsure
+        }
     }
+}
+
+/// The watertight test (the BVH's, `WatertightRay::intersect_within`) of set-up triangle `src`.
+#[inline(never)]
+pub fn exact_t(wt: &WatertightRay, blocks: &[Tri4], src: u32) -> Option<f32> {
+    let b = &blocks[(src >> 2) as usize];
+    let ln = (src & 3) as usize;
+    wt.intersect_within(
+        b.vertex(ln, 0),
+        b.vertex(ln, 1),
+        b.vertex(ln, 2),
+        f32::INFINITY,
+    )
+    .map(|h| h.t)
+}
+
+/// The closest hit `(t, set-up index)` of `ray` over every triangle of `tris` with the
+/// watertight test alone, the BVH's tie-break (the rescue path; also the tests' reference).
+pub fn exact_closest(ray: &Ray, blocks: &[Tri4], tris: &[TriSetup]) -> (f32, u32) {
+    let wt = WatertightRay::new(ray);
+    let (mut bt, mut bi) = (f32::INFINITY, u32::MAX);
+    for (i, tr) in tris.iter().enumerate() {
+        if let Some(t) = exact_t(&wt, blocks, tr.src)
+            && (bi == u32::MAX || t < bt || (t == bt && tr.tri < tris[bi as usize].tri))
+        {
+            (bt, bi) = (t, i as u32);
+        }
+    }
+    (bt, bi)
 }
 
 /// A leaf's run of set-up triangles: `tris[previous end..end]`, and its near depth.
@@ -278,21 +441,23 @@ pub fn setup_tile(
     out.tris.clear();
     out.segs.clear();
     let corners = BeamCorners::new(beam);
+    let cone = Cone::of(corners.as_ref());
     for r in leaves {
         let mut bx = Aabb::EMPTY;
         let (first, count) = (leaf_first(r.leaf), leaf_count(r.leaf));
         for j in 0..count {
-            let b = &blocks[(first + j / 4) as usize];
+            let bi = first + j / 4;
+            let b = &blocks[bi as usize];
             let ln = (j % 4) as usize;
             if b.tri[ln] == u32::MAX {
                 continue;
             }
             let v = [b.vertex(ln, 0), b.vertex(ln, 1), b.vertex(ln, 2)];
-            let Some(mut s) = TriSetup::new(v, origin, b.tri[ln]) else {
+            let Some(mut s) = TriSetup::new(v, origin, b.tri[ln], 4 * bi + ln as u32, &cone) else {
                 out.counts.all_out += 1;
                 continue;
             };
-            match corners.map_or(CornerClass::Partial, |c| c.classify(&s.n)) {
+            match corners.map_or(CornerClass::Partial, |c| c.classify(&s)) {
                 CornerClass::AllOut => {
                     out.counts.all_out += 1;
                     continue;
@@ -345,26 +510,68 @@ fn min_or_rhs<L: Lanes>(a: L, b: L) -> L {
     L::select(a.lt(b), a, b)
 }
 
+/// Work counters of the set-up kernel.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SetupWork {
+    pub rays: u64,
+    /// Packet-triangle tests (one per packet of `lanes` rays and set-up triangle).
+    pub tri_tests: u64,
+    /// Ray-triangle tests (valid lanes of the packet-triangle tests).
+    pub pair_tests: u64,
+    /// Watertight tests run in the band (edge or depth uncertain), per ray and triangle.
+    pub exact_tests: u64,
+    /// Watertight tests of winners for their bit-exact `t`.
+    pub final_tests: u64,
+    /// Of `exact_tests`: edge value within the band (the rest: depth band).
+    pub edge_band: u64,
+    /// Rays re-decided by the exact scan (a certain decision contradicted; expected 0).
+    pub rescues: u64,
+}
+
+/// Per-lane state of the best hit so far: `1/t` (lanes), its band, and the triangle.
+struct BestN<L> {
+    gd: L,
+    rho: L,
+    tri: [u32; 8],
+    /// Index in the tile's set-up list.
+    idx: [u32; 8],
+    /// The exact watertight `t`, when known (NaN otherwise).
+    t: [f32; 8],
+}
+
+/// `x` with lane `l` replaced by `v`.
+#[inline(always)]
+fn set_lane<L: Lanes>(x: L, l: usize, v: f32) -> L {
+    L::from_fn(|i| if i == l { v } else { x.get(i) })
+}
+
 /// The closest hit of every lane of `rays` against the set-up list (module docs); `axis` /
 /// `sign` are the tile beam's dominant axis (the near-depth order), `slack` the early-exit
-/// slack. Counts packet-triangle tests in `tests`.
+/// slack. Returns per lane the closest triangle and its watertight `t`.
 #[inline(always)]
 fn closest_setup<L: Lanes>(
     rays: &RaysN<L>,
+    blocks: &[Tri4],
     tt: &TileTris,
     axis: usize,
     sign: f32,
     slack: f32,
-    tests: &mut u64,
+    work: &mut SetupWork,
 ) -> ClosestN {
     let valid = rays.valid;
     let zero = L::splat(0.0);
     let [dx, dy, dz] = rays.d;
-    let mut best = zero;
-    let mut out = ClosestN {
-        t: [f32::INFINITY; 8],
+    let mut best = BestN {
+        gd: zero,
+        rho: zero,
         tri: [u32::MAX; 8],
+        idx: [u32::MAX; 8],
+        t: [f32::NAN; 8],
     };
+    let mut wts: [Option<WatertightRay>; 8] = [None; 8];
+    // Lanes whose best so far was contradicted by the watertight test (a bound violation,
+    // expected never): re-decided by the exact scan at the end.
+    let mut suspect = 0u32;
     let mut hit_lanes = 0u32;
     let mut exit_depth = f32::INFINITY;
     let mut start = 0usize;
@@ -374,11 +581,22 @@ fn closest_setup<L: Lanes>(
     let neg = [inv[0].lt(zero), inv[1].lt(zero), inv[2].lt(zero)];
     let mut box_lim = L::splat(f32::INFINITY);
     let far = L::splat(ROBUST_FAR_SCALE);
+    let abs = |x: L| L::select(x.lt(zero), zero - x, x);
+    let dinf_l = max_or_rhs(abs(dx), max_or_rhs(abs(dy), abs(dz)));
+    let mut dinf = 0.0f32;
+    for l in 0..L::N {
+        if valid >> l & 1 != 0 {
+            dinf = dinf.max(dinf_l.get(l));
+        }
+    }
+    let k = L::splat(1.5);
+    let lanes = valid.count_ones() as u64;
     for seg in &tt.segs {
         if hit_lanes == valid && seg.near > exit_depth + slack {
             break;
         }
         let end = seg.end as usize;
+        let first = start;
         let tris = &tt.tris[start..end];
         start = end;
         // The BVH's robust slab test (Ize 2013 far scaling) of the packet on the run's box:
@@ -391,80 +609,142 @@ fn closest_setup<L: Lanes>(
         if L::bits(t_near.le(t_far * far)) & valid == 0 {
             continue;
         }
-        *tests += tris.len() as u64;
+        work.tri_tests += tris.len() as u64;
+        work.pair_tests += tris.len() as u64 * lanes;
         let mut changed = false;
-        for tr in tris {
+        for (j, tr) in tris.iter().enumerate() {
             let gd = dot_n(tr.g, dx, dy, dz);
-            let ge = gd.ge(best);
-            if L::bits(ge) & valid == 0 {
+            // The depth band around the best 1/t: below `lo` certainly farther, above `hi`
+            // certainly nearer (rho of both triangles; 1.5 covers the first-order quotient).
+            let (lo, hi) = if tr.rho <= RHO_MAX {
+                let w = best.gd * ((best.rho + L::splat(tr.rho)) * k);
+                (best.gd - w, best.gd + w)
+            } else {
+                (L::splat(f32::NEG_INFINITY), L::splat(f32::INFINITY))
+            };
+            let cand = gd.ge(lo);
+            if L::bits(cand) & valid == 0 {
                 continue;
             }
-            let inside = if tr.all_in {
-                ge
+            let (inside, unsure) = if tr.all_in {
+                (cand, 0)
             } else {
                 let m = dot_n(tr.n[0], dx, dy, dz)
                     .min(dot_n(tr.n[1], dx, dy, dz))
                     .min(dot_n(tr.n[2], dx, dy, dz));
-                L::and(ge, m.ge(zero))
+                let b = L::splat(tr.bound * dinf);
+                let inn = m.gt(b);
+                let uns = L::bits(L::and(cand, m.ge(zero - b))) & !L::bits(inn);
+                (L::and(cand, inn), uns & valid)
             };
-            let ib = L::bits(inside) & valid;
-            if ib == 0 {
+            let win_m = L::and(inside, gd.gt(hi));
+            let win = L::bits(win_m) & valid;
+            let slow = ((L::bits(inside) & valid) & !win) | unsure;
+            work.edge_band += unsure.count_ones() as u64;
+            if win | slow == 0 {
                 continue;
-            }
-            let gt_m = L::and(inside, gd.gt(best));
-            let gt = L::bits(gt_m) & valid;
-            let mut win = gt;
-            // Ties (equal `1/t`, a hit so far): the lower triangle index wins.
-            let mut tie = ib & !gt;
-            while tie != 0 {
-                let l = tie.trailing_zeros() as usize;
-                tie &= tie - 1;
-                if out.tri[l] != u32::MAX && tr.tri < out.tri[l] {
-                    win |= 1 << l;
-                }
-            }
-            if win == 0 {
-                continue;
-            }
-            best = L::select(gt_m, gd, best);
-            let mut w = win;
-            while w != 0 {
-                let l = w.trailing_zeros() as usize;
-                w &= w - 1;
-                out.tri[l] = tr.tri;
             }
             changed = true;
+            if win != 0 {
+                best.gd = L::select(win_m, gd, best.gd);
+                best.rho = L::select(win_m, L::splat(tr.rho), best.rho);
+                let mut w = win;
+                while w != 0 {
+                    let l = w.trailing_zeros() as usize;
+                    w &= w - 1;
+                    best.tri[l] = tr.tri;
+                    best.idx[l] = (first + j) as u32;
+                    best.t[l] = f32::NAN;
+                }
+            }
+            let mut s = slow;
+            while s != 0 {
+                let l = s.trailing_zeros() as usize;
+                s &= s - 1;
+                let wt = wts[l].get_or_insert_with(|| WatertightRay::new(&rays.lane(l)));
+                work.exact_tests += 1;
+                let Some(tc) = exact_t(wt, blocks, tr.src) else {
+                    continue;
+                };
+                let better = if best.tri[l] == u32::MAX {
+                    true
+                } else {
+                    if best.t[l].is_nan() {
+                        work.exact_tests += 1;
+                        let bsrc = tt.tris[best.idx[l] as usize].src;
+                        // A certain inside decision the watertight test rejects would be a
+                        // bound violation: the candidate replaces it and the ray is suspect.
+                        best.t[l] = exact_t(wt, blocks, bsrc).unwrap_or(f32::NAN);
+                        if best.t[l].is_nan() {
+                            suspect |= 1 << l;
+                        }
+                    }
+                    let bt = best.t[l];
+                    bt.is_nan() || tc < bt || (tc == bt && tr.tri < best.tri[l])
+                };
+                if better {
+                    best.gd = set_lane(best.gd, l, 1.0 / tc);
+                    best.rho = set_lane(best.rho, l, RHO_EXACT);
+                    best.tri[l] = tr.tri;
+                    best.idx[l] = (first + j) as u32;
+                    best.t[l] = tc;
+                }
+            }
         }
         if changed {
             hit_lanes = 0;
             exit_depth = f32::NEG_INFINITY;
+            // Upper bound of the exact t of every lane's best: 1 / (g.d (1 - 2 rho)).
+            let lim = best.gd - best.gd * (best.rho + best.rho);
+            let t_up = L::select(lim.gt(zero), one / lim, L::splat(f32::INFINITY));
             for l in 0..L::N {
                 if valid >> l & 1 != 0 {
-                    if out.tri[l] != u32::MAX {
+                    if best.tri[l] != u32::MAX {
                         hit_lanes |= 1 << l;
                     }
-                    let t = 1.0 / best.get(l);
+                    let t = t_up.get(l);
                     exit_depth = exit_depth.max(sign * (oa + t * rays.d[axis].get(l)));
                 }
             }
-            box_lim = L::from_fn(|l| 1.0 / best.get(l));
+            box_lim = t_up;
         }
     }
+    let mut out = ClosestN {
+        t: [f32::INFINITY; 8],
+        tri: [u32::MAX; 8],
+    };
     for l in 0..L::N {
-        if out.tri[l] != u32::MAX {
-            out.t[l] = 1.0 / best.get(l);
+        if valid >> l & 1 == 0 || best.tri[l] == u32::MAX {
+            continue;
         }
+        let mut t = best.t[l];
+        if t.is_nan() {
+            let wt = wts[l].get_or_insert_with(|| WatertightRay::new(&rays.lane(l)));
+            work.final_tests += 1;
+            t = exact_t(wt, blocks, tt.tris[best.idx[l] as usize].src).unwrap_or(f32::NAN);
+        }
+        if t.is_nan() || suspect >> l & 1 != 0 {
+            work.rescues += 1;
+            let (et, ei) = exact_closest(&rays.lane(l), blocks, &tt.tris);
+            if ei != u32::MAX {
+                out.t[l] = et;
+                out.tri[l] = tt.tris[ei as usize].tri;
+            }
+            continue;
+        }
+        out.t[l] = t;
+        out.tri[l] = best.tri[l];
     }
     out
 }
 
 /// Runs every subsample ray `0..total` of a tile (`pair(j)` = its `(sample, k)`) through the
-/// set-up kernel with `L::N` lanes; `write(pair, t, tri)` stores a result. Returns
-/// `(packet-triangle tests, rays)`.
+/// set-up kernel with `L::N` lanes; `write(pair, t, tri)` stores a result.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn run_setup<L: Lanes>(
     set: &SampleSet,
+    blocks: &[Tri4],
     tt: &TileTris,
     axis: usize,
     sign: f32,
@@ -472,8 +752,8 @@ fn run_setup<L: Lanes>(
     total: usize,
     pair: impl Fn(usize) -> (u32, u32),
     mut write: impl FnMut((u32, u32), f32, u32),
-) -> (u64, u64) {
-    let mut tests = 0u64;
+) -> SetupWork {
+    let mut work = SetupWork::default();
     let rays_n = for_each_packet::<L>(set, total, pair, |batch, rays| {
         let mut rays = *rays;
         // Invalid lanes get `d = 0`: `g . d = 0` is never a hit.
@@ -484,12 +764,13 @@ fn run_setup<L: Lanes>(
                 }
             }
         }
-        let c = closest_setup(&rays, tt, axis, sign, slack, &mut tests);
+        let c = closest_setup(&rays, blocks, tt, axis, sign, slack, &mut work);
         for (l, &p) in batch.iter().enumerate() {
             write(p, c.t[l], c.tri[l]);
         }
     });
-    (tests, rays_n)
+    work.rays = rays_n;
+    work
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -497,6 +778,7 @@ fn run_setup<L: Lanes>(
 #[allow(clippy::too_many_arguments)]
 unsafe fn run_setup_avx2(
     set: &SampleSet,
+    blocks: &[Tri4],
     tt: &TileTris,
     axis: usize,
     sign: f32,
@@ -504,20 +786,13 @@ unsafe fn run_setup_avx2(
     total: usize,
     pair: impl Fn(usize) -> (u32, u32),
     write: impl FnMut((u32, u32), f32, u32),
-) -> (u64, u64) {
-    run_setup::<super::packet::F8>(set, tt, axis, sign, slack, total, pair, write)
+) -> SetupWork {
+    run_setup::<super::packet::F8>(set, blocks, tt, axis, sign, slack, total, pair, write)
 }
 
-/// Work counters of a set-up tile.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct SetupWork {
-    pub rays: u64,
-    /// Packet-triangle tests (one per packet of `lanes` rays and set-up triangle).
-    pub tri_tests: u64,
-}
-
-/// Tests every subsample ray of the tile `samples` against the set-up list `tt` and writes the
-/// closest hits, packets of 8 rays (AVX2, if detected and `lanes == 8`) or 4.
+/// Tests every subsample ray of the tile `samples` against the set-up list `tt` (built from
+/// `blocks`) and writes the closest hits, packets of 8 rays (AVX2, if detected and
+/// `lanes == 8`) or 4.
 ///
 /// # Safety
 /// As [`super::intersect::test_tile`]: `prim` and `t` valid for `set.ray_count()` elements,
@@ -525,6 +800,7 @@ pub struct SetupWork {
 #[allow(clippy::too_many_arguments)]
 pub unsafe fn test_tile_setup(
     set: &SampleSet,
+    blocks: &[Tri4],
     prim_ids: &[u32],
     samples: &[u32],
     tt: &TileTris,
@@ -553,16 +829,13 @@ pub unsafe fn test_tile_setup(
     };
     let (axis, sign) = (beam.axis as usize, beam.sign);
     #[cfg(target_arch = "x86_64")]
-    let (tests, rays) = if lanes == 8 && std::arch::is_x86_feature_detected!("avx2") {
+    let work = if lanes == 8 && std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: AVX2 was detected.
-        unsafe { run_setup_avx2(set, tt, axis, sign, slack, total, pair, write) }
+        unsafe { run_setup_avx2(set, blocks, tt, axis, sign, slack, total, pair, write) }
     } else {
-        run_setup::<Vec4>(set, tt, axis, sign, slack, total, pair, write)
+        run_setup::<Vec4>(set, blocks, tt, axis, sign, slack, total, pair, write)
     };
     #[cfg(not(target_arch = "x86_64"))]
-    let (tests, rays) = run_setup::<Vec4>(set, tt, axis, sign, slack, total, pair, write);
-    SetupWork {
-        rays,
-        tri_tests: tests,
-    }
+    let work = run_setup::<Vec4>(set, blocks, tt, axis, sign, slack, total, pair, write);
+    work
 }
