@@ -2,7 +2,7 @@
 //! loaded machine: interleaved rounds, best of each).
 //!
 //! `cargo run --release -p parallax-render --example vr_cast_cpu [-- scene eye_w h spp rounds
-//! setup|watertight]` (defaults: atrium 540 600 16 5 setup; stereo rig, film 2 eye_w x h).
+//! setup|watertight [beam-only]]` (defaults: atrium 540 600 16 5 setup; stereo rig, film 2 eye_w x h).
 
 use parallax_bvh::Bvh;
 use parallax_core::cpu_time::{ms_between, thread_cpu_ns};
@@ -24,6 +24,8 @@ fn main() {
         "watertight" => SampleTest::Watertight,
         _ => SampleTest::TileSetup,
     };
+    // `beam-only` as the 7th argument skips the per-ray baseline (for instruction counts).
+    let beam_only = arg(7, "") == "beam-only";
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
@@ -50,7 +52,9 @@ fn main() {
             let a = thread_cpu_ns();
             cast_opts(&bvh, &set, &hier, &mut beam, opts);
             let b = thread_cpu_ns();
-            trace_per_ray(&bvh, &set, &mut reference);
+            if !beam_only {
+                trace_per_ray(&bvh, &set, &mut reference);
+            }
             let c = thread_cpu_ns();
             best_beam = best_beam.min(ms_between(a, b));
             best_ray = best_ray.min(ms_between(b, c));

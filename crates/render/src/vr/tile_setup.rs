@@ -87,7 +87,7 @@ use parallax_core::math::WatertightRay;
 use parallax_core::{Aabb, NO_ID, Ray};
 
 use super::SampleSet;
-use super::packet::{ClosestN, Lanes, RaysN, for_each_packet};
+use super::packet::{ClosestN, Lanes, RaysN, for_each_packet, permutation};
 
 /// Which sample test the caster runs (module docs of `tile_setup.rs` and `intersect.rs`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -568,7 +568,6 @@ fn closest_setup<L: Lanes>(
         idx: [u32::MAX; 8],
         t: [f32::NAN; 8],
     };
-    let mut wts: [Option<WatertightRay>; 8] = [None; 8];
     // Lanes whose best so far was contradicted by the watertight test (a bound violation,
     // expected never): re-decided by the exact scan at the end.
     let mut suspect = 0u32;
@@ -583,13 +582,15 @@ fn closest_setup<L: Lanes>(
     let far = L::splat(ROBUST_FAR_SCALE);
     let abs = |x: L| L::select(x.lt(zero), zero - x, x);
     let dinf_l = max_or_rhs(abs(dx), max_or_rhs(abs(dy), abs(dz)));
+    // (Invalid lanes have d = 0.)
     let mut dinf = 0.0f32;
     for l in 0..L::N {
-        if valid >> l & 1 != 0 {
-            dinf = dinf.max(dinf_l.get(l));
-        }
+        dinf = dinf.max(dinf_l.get(l));
     }
     let k = L::splat(1.5);
+    // Band of the best so far: gk = 1.5 g.d, lo_b / hi_b = g.d -+ gk rho_b (per triangle the
+    // band widens by gk rho_c).
+    let (mut gk, mut lo_b, mut hi_b) = (zero, zero, zero);
     let lanes = valid.count_ones() as u64;
     for seg in &tt.segs {
         if hit_lanes == valid && seg.near > exit_depth + slack {
@@ -616,14 +617,16 @@ fn closest_setup<L: Lanes>(
             let gd = dot_n(tr.g, dx, dy, dz);
             // The depth band around the best 1/t: below `lo` certainly farther, above `hi`
             // certainly nearer (rho of both triangles; 1.5 covers the first-order quotient).
-            let (lo, hi) = if tr.rho <= RHO_MAX {
-                let w = best.gd * ((best.rho + L::splat(tr.rho)) * k);
-                (best.gd - w, best.gd + w)
+            let well = tr.rho <= RHO_MAX;
+            let c = gk * L::splat(tr.rho);
+            let lo = if well {
+                lo_b - c
             } else {
-                (L::splat(f32::NEG_INFINITY), L::splat(f32::INFINITY))
+                L::splat(f32::NEG_INFINITY)
             };
             let cand = gd.ge(lo);
-            if L::bits(cand) & valid == 0 {
+            let cand_bits = L::bits(cand) & valid;
+            if cand_bits == 0 {
                 continue;
             }
             let (inside, unsure) = if tr.all_in {
@@ -633,17 +636,28 @@ fn closest_setup<L: Lanes>(
                     .min(dot_n(tr.n[1], dx, dy, dz))
                     .min(dot_n(tr.n[2], dx, dy, dz));
                 let b = L::splat(tr.bound * dinf);
-                let inn = m.gt(b);
-                let uns = L::bits(L::and(cand, m.ge(zero - b))) & !L::bits(inn);
-                (L::and(cand, inn), uns & valid)
+                let inn = L::and(cand, m.gt(b));
+                let rest = cand_bits & !L::bits(inn);
+                let uns = if rest != 0 {
+                    L::bits(m.ge(zero - b)) & rest
+                } else {
+                    0
+                };
+                (inn, uns)
+            };
+            let in_bits = L::bits(inside) & valid;
+            if in_bits | unsure == 0 {
+                continue;
+            }
+            let hi = if well {
+                hi_b + c
+            } else {
+                L::splat(f32::INFINITY)
             };
             let win_m = L::and(inside, gd.gt(hi));
             let win = L::bits(win_m) & valid;
-            let slow = ((L::bits(inside) & valid) & !win) | unsure;
+            let slow = (in_bits & !win) | unsure;
             work.edge_band += unsure.count_ones() as u64;
-            if win | slow == 0 {
-                continue;
-            }
             changed = true;
             if win != 0 {
                 best.gd = L::select(win_m, gd, best.gd);
@@ -661,7 +675,7 @@ fn closest_setup<L: Lanes>(
             while s != 0 {
                 let l = s.trailing_zeros() as usize;
                 s &= s - 1;
-                let wt = wts[l].get_or_insert_with(|| WatertightRay::new(&rays.lane(l)));
+                let wt = &WatertightRay::new(&rays.lane(l));
                 work.exact_tests += 1;
                 let Some(tc) = exact_t(wt, blocks, tr.src) else {
                     continue;
@@ -690,6 +704,9 @@ fn closest_setup<L: Lanes>(
                     best.t[l] = tc;
                 }
             }
+            gk = best.gd * k;
+            lo_b = best.gd - gk * best.rho;
+            hi_b = best.gd + gk * best.rho;
         }
         if changed {
             hit_lanes = 0;
@@ -713,13 +730,37 @@ fn closest_setup<L: Lanes>(
         t: [f32::INFINITY; 8],
         tri: [u32::MAX; 8],
     };
+    // The winners' watertight t, lane-wise in one pass when the lanes share a permutation.
+    let mut need = 0u32;
+    for l in 0..L::N {
+        if valid >> l & 1 != 0 && best.tri[l] != u32::MAX && best.t[l].is_nan() {
+            need |= 1 << l;
+        }
+    }
+    if need != 0 {
+        work.final_tests += need.count_ones() as u64;
+        let done = final_t_lanes(rays, blocks, tt, &best.idx, need, &mut best.t);
+        // Lanes left (another permutation, an exactly-zero edge function): scalar.
+        let mut m = need & !done;
+        while m != 0 {
+            let l = m.trailing_zeros() as usize;
+            m &= m - 1;
+            let wt = &WatertightRay::new(&rays.lane(l));
+            best.t[l] =
+                exact_t(wt, blocks, tt.tris[best.idx[l] as usize].src).unwrap_or(f32::INFINITY);
+        }
+    }
     for l in 0..L::N {
         if valid >> l & 1 == 0 || best.tri[l] == u32::MAX {
             continue;
         }
         let mut t = best.t[l];
+        // (+inf: the watertight test rejected the winner.)
+        if t == f32::INFINITY {
+            t = f32::NAN;
+        }
         if t.is_nan() {
-            let wt = wts[l].get_or_insert_with(|| WatertightRay::new(&rays.lane(l)));
+            let wt = &WatertightRay::new(&rays.lane(l));
             work.final_tests += 1;
             t = exact_t(wt, blocks, tt.tris[best.idx[l] as usize].src).unwrap_or(f32::NAN);
         }
@@ -736,6 +777,114 @@ fn closest_setup<L: Lanes>(
         out.tri[l] = best.tri[l];
     }
     out
+}
+
+/// The watertight test of each lane of `need` against its own winner (`idx` into the set-up
+/// list), lane-wise in exactly the f32 operations of `WatertightRay::intersect_within` (as
+/// the packet kernel of `packet.rs`: the same rays, shear constants divided lane-wise).
+/// Writes `t[l]` (+inf for a rejected winner) and returns the lanes done; lanes with an
+/// exactly-zero edge function, or all when the lanes do not share one permutation, are left
+/// to the scalar test.
+#[inline(always)]
+fn final_t_lanes<L: Lanes>(
+    rays: &RaysN<L>,
+    blocks: &[Tri4],
+    tt: &TileTris,
+    idx: &[u32; 8],
+    need: u32,
+    t: &mut [f32; 8],
+) -> u32 {
+    let first = need.trailing_zeros() as usize;
+    let lane_dir = |l: usize| Vec3::new(rays.d[0].get(l), rays.d[1].get(l), rays.d[2].get(l));
+    let perm = permutation(lane_dir(first));
+    let mut m = need;
+    while m != 0 {
+        let l = m.trailing_zeros() as usize;
+        m &= m - 1;
+        if permutation(lane_dir(l)) != perm {
+            return 0;
+        }
+    }
+    let (kx, ky, kz) = perm;
+    // Lanes outside `need` repeat the first lane's triangle (results ignored).
+    let mut srcs = [0u32; 8];
+    let mut same = true;
+    let s0 = tt.tris[idx[first] as usize].src;
+    for (l, s) in srcs.iter_mut().enumerate().take(L::N) {
+        *s = if need >> l & 1 != 0 {
+            tt.tris[idx[l] as usize].src
+        } else {
+            s0
+        };
+        same &= *s == s0;
+    }
+    // Usually every lane (subsamples of one pixel) has the same winner: splat its vertices.
+    let mut p = [[L::splat(0.0); 3]; 3];
+    if same {
+        let b = &blocks[(s0 >> 2) as usize];
+        let ln = (s0 & 3) as usize;
+        for (v, pv) in p.iter_mut().enumerate() {
+            for (k, pk) in pv.iter_mut().enumerate() {
+                *pk = L::splat(b.p[v][k][ln]);
+            }
+        }
+    } else {
+        let mut raw = [[[0.0f32; 8]; 3]; 3];
+        for (l, &s) in srcs.iter().enumerate().take(L::N) {
+            let b = &blocks[(s >> 2) as usize];
+            let ln = (s & 3) as usize;
+            for v in 0..3 {
+                for k in 0..3 {
+                    raw[v][k][l] = b.p[v][k][ln];
+                }
+            }
+        }
+        for v in 0..3 {
+            for k in 0..3 {
+                p[v][k] = L::from_fn(|l| raw[v][k][l]);
+            }
+        }
+    }
+    let coord = |v: usize, k: usize| p[v][k];
+    let one = L::splat(1.0);
+    let zero = L::splat(0.0);
+    let dkz = rays.d[kz];
+    let sx = rays.d[kx] / dkz;
+    let sy = rays.d[ky] / dkz;
+    let sz = one / dkz;
+    let (okx, oky, okz) = (rays.o[kx], rays.o[ky], rays.o[kz]);
+    let proj = |v: usize| {
+        let az = coord(v, kz) - okz;
+        let x = (coord(v, kx) - okx) - sx * az;
+        let y = (coord(v, ky) - oky) - sy * az;
+        (x, y, sz * az)
+    };
+    let (ax, ay, az) = proj(0);
+    let (bx, by, bz) = proj(1);
+    let (cx, cy, cz) = proj(2);
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    let exact = L::bits(u.eq(zero)) | L::bits(v.eq(zero)) | L::bits(w.eq(zero));
+    let negm = L::bits(u.lt(zero)) | L::bits(v.lt(zero)) | L::bits(w.lt(zero));
+    let posm = L::bits(u.gt(zero)) | L::bits(v.gt(zero)) | L::bits(w.gt(zero));
+    let det = u + v + w;
+    let t_scaled = u * az + v * bz + w * cz;
+    let tv = t_scaled * (one / det);
+    let ok = !(negm & posm) & L::bits(det.ne(zero)) & L::bits(tv.gt(zero));
+    let ok = ok & L::bits(tv.lt(L::splat(f32::INFINITY)));
+    let done = need & !exact;
+    let mut m = done;
+    while m != 0 {
+        let l = m.trailing_zeros() as usize;
+        m &= m - 1;
+        t[l] = if ok >> l & 1 != 0 {
+            tv.get(l)
+        } else {
+            f32::INFINITY
+        };
+    }
+    done
 }
 
 /// Runs every subsample ray `0..total` of a tile (`pair(j)` = its `(sample, k)`) through the
