@@ -420,6 +420,11 @@ pub struct TileTris {
     pub tris: Vec<TriSetup>,
     pub segs: Vec<Segment>,
     pub counts: SetupCounts,
+    /// The largest depth band `rho` of the list's well-conditioned triangles.
+    pub rho_max: f32,
+    /// The watertight permutation `(kx, ky, kz)` shared by every ray of the tile, when the
+    /// beam's slopes are below 1 (`|d_a|` strictly dominant, sign fixed).
+    pub perm: Option<(usize, usize, usize)>,
 }
 
 /// The shared origin of a tile's rays, if they have one (the beam's origin box is a point).
@@ -440,8 +445,18 @@ pub fn setup_tile(
     out.origin = origin;
     out.tris.clear();
     out.segs.clear();
+    out.rho_max = 0.0;
     let corners = BeamCorners::new(beam);
     let cone = Cone::of(corners.as_ref());
+    out.perm = corners.and_then(|c| {
+        // Float division is monotone and x / x = 1: slopes below 1 mean |d_b| < |d_a|.
+        let (a, (b, cc)) = (beam.axis as usize, beam.side_axes());
+        (c.cmax[b] < 1.0 && c.cmax[cc] < 1.0).then(|| {
+            let mut d = Vec3::ZERO;
+            d[a] = beam.sign;
+            permutation(d)
+        })
+    });
     for r in leaves {
         let mut bx = Aabb::EMPTY;
         let (first, count) = (leaf_first(r.leaf), leaf_count(r.leaf));
@@ -467,6 +482,9 @@ pub fn setup_tile(
                     s.all_in = true;
                 }
                 CornerClass::Partial => out.counts.partial += 1,
+            }
+            if s.rho <= RHO_MAX {
+                out.rho_max = out.rho_max.max(s.rho);
             }
             out.tris.push(s);
             bx = bx.grow(v[0]).grow(v[1]).grow(v[2]);
@@ -590,7 +608,8 @@ fn closest_setup<L: Lanes>(
     let k = L::splat(1.5);
     // Band of the best so far: gk = 1.5 g.d, lo_b / hi_b = g.d -+ gk rho_b (per triangle the
     // band widens by gk rho_c).
-    let (mut gk, mut lo_b, mut hi_b) = (zero, zero, zero);
+    let (mut gk, mut lo_b, mut hi_b, mut lo_t) = (zero, zero, zero, zero);
+    let rho_t = L::splat(tt.rho_max);
     let lanes = valid.count_ones() as u64;
     for seg in &tt.segs {
         if hit_lanes == valid && seg.near > exit_depth + slack {
@@ -618,9 +637,10 @@ fn closest_setup<L: Lanes>(
             // The depth band around the best 1/t: below `lo` certainly farther, above `hi`
             // certainly nearer (rho of both triangles; 1.5 covers the first-order quotient).
             let well = tr.rho <= RHO_MAX;
-            let c = gk * L::splat(tr.rho);
+            // Reject test against the tile-wide band (rho_c <= the tile's largest rho): one
+            // compare, as without the band.
             let lo = if well {
-                lo_b - c
+                lo_t
             } else {
                 L::splat(f32::NEG_INFINITY)
             };
@@ -645,17 +665,26 @@ fn closest_setup<L: Lanes>(
                 };
                 (inn, uns)
             };
-            let in_bits = L::bits(inside) & valid;
+            let mut in_bits = L::bits(inside) & valid;
+            let mut unsure = unsure;
             if in_bits | unsure == 0 {
                 continue;
             }
-            let hi = if well {
-                hi_b + c
+            // This triangle's own band: certainly farther below `lo`, nearer above `hi`.
+            let (lo, hi) = if well {
+                let c = gk * L::splat(tr.rho);
+                (lo_b - c, hi_b + c)
             } else {
-                L::splat(f32::INFINITY)
+                (L::splat(f32::NEG_INFINITY), L::splat(f32::INFINITY))
             };
+            let near = L::bits(gd.ge(lo));
+            in_bits &= near;
+            unsure &= near;
+            if in_bits | unsure == 0 {
+                continue;
+            }
             let win_m = L::and(inside, gd.gt(hi));
-            let win = L::bits(win_m) & valid;
+            let win = L::bits(win_m) & in_bits;
             let slow = (in_bits & !win) | unsure;
             work.edge_band += unsure.count_ones() as u64;
             changed = true;
@@ -707,12 +736,14 @@ fn closest_setup<L: Lanes>(
             gk = best.gd * k;
             lo_b = best.gd - gk * best.rho;
             hi_b = best.gd + gk * best.rho;
+            lo_t = lo_b - gk * rho_t;
         }
         if changed {
             hit_lanes = 0;
             exit_depth = f32::NEG_INFINITY;
-            // Upper bound of the exact t of every lane's best: 1 / (g.d (1 - 2 rho)).
-            let lim = best.gd - best.gd * (best.rho + best.rho);
+            // Upper bound of the exact t of every lane's best: 1/t >= g.d (1 - rho), so
+            // t <= 1 / (g.d (1 - rho - 8U)) (8U: the roundings of this bound).
+            let lim = best.gd - best.gd * (best.rho + L::splat(8.0 * U));
             let t_up = L::select(lim.gt(zero), one / lim, L::splat(f32::INFINITY));
             for l in 0..L::N {
                 if valid >> l & 1 != 0 {
@@ -796,15 +827,21 @@ fn final_t_lanes<L: Lanes>(
 ) -> u32 {
     let first = need.trailing_zeros() as usize;
     let lane_dir = |l: usize| Vec3::new(rays.d[0].get(l), rays.d[1].get(l), rays.d[2].get(l));
-    let perm = permutation(lane_dir(first));
-    let mut m = need;
-    while m != 0 {
-        let l = m.trailing_zeros() as usize;
-        m &= m - 1;
-        if permutation(lane_dir(l)) != perm {
-            return 0;
+    let perm = match tt.perm {
+        Some(p) => p,
+        None => {
+            let perm = permutation(lane_dir(first));
+            let mut m = need;
+            while m != 0 {
+                let l = m.trailing_zeros() as usize;
+                m &= m - 1;
+                if permutation(lane_dir(l)) != perm {
+                    return 0;
+                }
+            }
+            perm
         }
-    }
+    };
     let (kx, ky, kz) = perm;
     // Lanes outside `need` repeat the first lane's triangle (results ignored).
     let mut srcs = [0u32; 8];
