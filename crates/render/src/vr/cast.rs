@@ -115,8 +115,8 @@ fn scene_scale(bvh: &Bvh, h: &Hierarchy) -> f32 {
 
 /// Casts every subsample ray of `set` (tiles and blocks of `hierarchy`, built for `set`) and
 /// writes the closest hits to `out` with the default [`CastOptions`]: for each subsample the
-/// closest triangle of [`super::trace_per_ray`] up to edge cases within float tolerance
-/// (module docs of `tile_setup.rs`). Panics if `hierarchy` or `out` was made for another set (a
+/// closest triangle and `t` of [`super::trace_per_ray`] (the set-up kernel's exact band,
+/// module docs of `tile_setup.rs`). Panics if `hierarchy` or `out` was made for another set (a
 /// programming error).
 pub fn cast(
     bvh: &Bvh,

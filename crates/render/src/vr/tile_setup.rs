@@ -4,31 +4,72 @@
 //! the thin lens), every triangle of the tile's list is set up once relative to `o`, so that a
 //! ray-triangle test is a few multiply-adds on the ray direction `d` alone:
 //!
-//! - **Edge covectors** `n_i = (v_i - o) x (v_{i+1} - o)`, `i = 0..2`, oriented by the sign
-//!   of `D = N . (v_0 - o)` (`N = (v_1 - v_0) x (v_2 - v_0)`): the ray `o + t d, t > 0` passes
-//!   through the triangle iff `n_i . d >= 0` for the three edges (for `d = p - o` with `p` of
-//!   barycentrics `b`, `n_i . d = b_{i+2} D`). A shared edge gives bit-for-bit negated covectors
-//!   in its two triangles (the cross product is evaluated without FMA contraction, and
-//!   `a x b = -(b x a)` exactly in IEEE f32; round-to-nearest is sign-symmetric, so the dot
-//!   products are exactly negated too): a ray through the edge passes the edge test of one
-//!   triangle or the other (both when exactly zero), so the test stays **watertight** across
-//!   shared edges and vertices of consistently oriented meshes, like Woop et al.'s.
+//! - **Edge covectors** `n_i = a_i x (a_{i+1} - a_i)` (`= a_i x a_{i+1}` exactly; `a_i = v_i - o`
+//!   rounded, the very `a_i` of the watertight test's projection), `i = 0..2`, oriented by the
+//!   sign of `D = N . a_0` (`N = (a_1 - a_0) x (a_2 - a_0)`): the ray `o + t d, t > 0` passes
+//!   through the triangle iff `e_i(d) = n_i . d >= 0` for the three edges (for `d = p - o` with
+//!   `p` of barycentrics `b`, `n_i . d = b_{i+2} D`). The short-edge form keeps the rounding
+//!   error relative to `|a_i| |a_{i+1} - a_i|` instead of `|a_i|^2` (HVVR's `a_i x a_{i+1}`
+//!   cancels for distant triangles). Watertightness no longer rests on bit-negated covectors
+//!   but on the exact band below.
 //! - **Inverse-distance covector** `g = N / D`, so `1/t = g . d` for any direction (`t` in
 //!   units of `|d|`, the per-ray baseline's units since the rays are the same float rays). The
-//!   closest hit is the largest positive `g . d`; a ray starts with `1/t_max = 0` (rays of
-//!   every camera have `t_min = 0, t_max = inf`), and `t = 1 / (g . d)` is computed once, for
-//!   the winner. Equal `g . d` goes to the lower triangle index (the BVH's tie-break).
+//!   closest hit is the largest positive `g . d` (rays of every camera have `t_min = 0,
+//!   t_max = inf`).
 //! - **Tile-corner classification** (§5.5): `n_i . d` is linear in `d`, and the tile beam
 //!   ([`Beam`]) is the cone spanned by its four corner directions `c_k = s e_a + u e_b + v e_c`
 //!   (every subsample ray of the tile satisfies `d / |d_a| = sum_k w_k c_k`, `w_k >= 0`,
 //!   `sum w_k = 1`; the beam's slope bounds are rounded outwards, property-tested in
-//!   tests/vr_beams.rs). With `tol_i = 1e-5 sum_j |n_ij| max_k |c_kj|` (far above the `3 ulp`
-//!   error of a float dot product): if for some edge every corner has `n_i . c_k < -tol_i`, the
-//!   float edge value of every ray of the tile is negative — **all-out**, the triangle is
-//!   dropped; if every corner has `n_i . c_k > tol_i` for all three edges, every ray passes the
-//!   three edge tests — **all-in**, only `g . d` is evaluated. Otherwise partial. So the
-//!   classification never changes the kernel's answer (tests/vr_tile_setup.rs checks both
-//!   directions on random beams and triangles).
+//!   tests/vr_beams.rs). With `tol_i = bound cm + 3.1 U sum_j |n_ij| max_k |c_kj|` (`cm` the
+//!   largest corner coordinate, `bound` the edge band below, `U = 2^-24`): if for some edge
+//!   every corner has `n_i . c_k < -tol_i`, every ray of the tile has a real edge value below
+//!   minus the watertight test's error — **all-out**, dropped; if every corner has
+//!   `n_i . c_k > tol_i` for all three edges, every ray is certainly inside — **all-in**, only
+//!   `g . d` is evaluated. Otherwise partial. So an all-in / all-out classification implies
+//!   the per-ray band decision, which implies the watertight test's (tests/vr_tile_setup.rs
+//!   checks both against the watertight test on random beams and triangles).
+//!
+//! **Beyond HVVR: the exact band.** HVVR's set-up test decides with float signs, so it
+//! disagrees with a per-ray watertight test on edges, leaks at shared vertices, and orders
+//! overlapping coplanar faces by rounding noise. Ours uses the set-up values as a fast filter
+//! with a conservative uncertainty band and decides everything inside the band with the BVH's
+//! own watertight test (`WatertightRay::intersect_within`, Woop et al. 2013), so every hit
+//! and `t` equal per-ray traversal bit for bit:
+//!
+//! - **Edge band** `bound |d|_inf` per triangle and tile (`TriSetup::bound`): forward error
+//!   analysis of (1) our `fl(n_i . d)` against the real `e_i(d)` of the rounded `a_i`:
+//!   `6.1 U |a_i|_1 |a_{i+1} - a_i|_1 |d|_inf` (edge subtraction, two products and a
+//!   difference, the dot product); (2) the watertight test's edge function `u_i` (in `e`
+//!   units: `e = |d_kz| u` exactly, the shear has determinant `1 / d_kz`) against `e_i(d)`:
+//!   its projected coordinates are bounded by `psi = sqrt 3 (|a x c| + |a| r)` for every ray
+//!   of the tile's cone (centre `c`, chord radius `r`, [`Cone`]), each carries
+//!   `U (2.02 |a|_inf + 1.01 psi)` of error (shear product, rounded `d_kx / d_kz`,
+//!   subtraction), and `u = c'x b'y - c'y b'x` adds `4.04 U psi_b psi_c`. Doubled for
+//!   second-order terms. A ray with every edge value above the band is certainly inside
+//!   (the watertight test sees three same-sign edge functions, and `t > 0`: all real values
+//!   positive means the plane is crossed at `t > 0`), one edge below minus the band is
+//!   certainly outside; otherwise the watertight test decides.
+//! - **Depth band** `rho` (`TriSetup::rho`, relative): `g . d` loses `~14 U sigma kappa`
+//!   (`kappa = |N| max |a| / |D|` = 1 / sine of the grazing angle for every ray through the
+//!   triangle, `sigma` the sliver factor of `N`), the watertight `t = sum u_i z_i / sum u_i`
+//!   moves by at most `sqrt 3 Lambda sum |du_i| / |D|` (`Lambda` the longest edge) plus `7U`.
+//!   First order, doubled. A certain-inside candidate replaces the best only if `g . d` is
+//!   above the best's band (`1.5 (rho_best + rho_cand)`); inside that band both watertight
+//!   `t` are compared with the BVH's rule (`t` smaller, or equal and lower triangle index).
+//!   Triangles with `rho > 0.05` (seen nearly edge-on, or their plane nearly through `o`)
+//!   always take the watertight test.
+//! - The winner's `t` is always the watertight test's (lane-wise in one pass per packet,
+//!   [`final_t_lanes`]), so the same triangle gives the same `t` bit for bit. A winner the
+//!   watertight test rejects (a violated bound; never observed) sends the ray through an exact
+//!   scan of the tile's list (`CastStats::setup_rescues`, asserted 0 in the tests).
+//! - The early exit and the leaf box test use the upper bound `1 / (g . d (1 - rho))` of the
+//!   best's watertight `t`.
+//!
+//! Caveat: the band analysis is first-order forward error analysis with a factor 2, not a
+//! machine-checked proof; the tests compare every subsample of every scheme with per-ray
+//! traversal and assert that no certain decision is ever contradicted (`setup_rescues`, the
+//! fan and property tests). A camera exactly on a triangle's plane (`D = 0`: dropped here)
+//! could get a `t ~ 0` hit from the watertight test.
 //! - Triangles with `D = 0` (the plane holds `o`: seen edge-on, never hit by a ray from `o`)
 //!   or a non-finite `g` are dropped.
 //!
@@ -41,12 +82,23 @@
 //! ray can reach it before its closest hit so far (this cut the triangle tests per ray from ~60
 //! to ~1.2 on atrium at 96 x 64).
 //!
-//! **Watertightness at vertices.** Exactly through a shared *vertex* the spoke edge values are
-//! rounding noise around zero and can all share one strict sign, so such a ray can leak
-//! (tests/vr_tile_setup.rs measures 32 of 800 rays aimed exactly at fan centres); Woop et
-//! al.'s test has no such leak. Camera rays hit a vertex exactly with probability ~0.
+//! **Watertightness at vertices.** With float signs alone, rays exactly through a shared
+//! vertex leaked (all spoke values rounding noise of one sign: 32 of 800 fan-centre rays with
+//! HVVR's covectors, 19 with ours); with the band they are decided by the watertight test,
+//! which gives the vertex to exactly one triangle of the fan (tests/vr_tile_setup.rs asserts
+//! it for every ray).
 //!
-//! **Measured** (`cargo run --release -p parallax-render --example vr_speed -- atrium 540 600
+//! **Cost of exactness** (`cargo run --release -p parallax-render --example vr_cast_cpu --
+//! atrium 540 300 16 4 setup beam-only`, one thread, thread CPU time, best of 4, interleaved
+//! with the pre-band binary; 2-core VM under load): 290-314 ms without the band, 405-440 ms
+//! with it (+35-45%); of the difference ~60 ms is the winners' watertight `t` (one lane-wise
+//! test per packet), the rest the heavier set-up (`TriSetup::new`, ~4% of the kernel), the
+//! band tests and bookkeeping. Band (watertight) tests are 1.7-2% of the ray-triangle tests
+//! on atrium (edge band 0.1-0.2%, the rest depth ties — mostly overlapping coplanar faces
+//! with bit-identical `g`, ~60% of them, which no float filter can order), 0.2-2% on cornell
+//! (tests/vr_cast.rs prints them per scheme).
+//!
+//! **Measured before the exact band** (`cargo run --release -p parallax-render --example vr_speed -- atrium 540 600
 //! 1,8,16,32 4 setup`, then `... 4 watertight`; stereo 540 x 600 per eye, 2 threads on the 2-core
 //! VM at load average 13-15 from other jobs, so wall times swing ~1.5x; speed-up = beam wall time
 //! vs per-ray `trace_per_ray` wall time in the same process, best of 3 / best of 2):
@@ -72,10 +124,10 @@
 //! film-position form of `n . d` for pinhole tiles (the ray generation still normalises every
 //! direction), 4/8 triangles per SIMD op, a vectorised 8-lane build.
 //!
-//! **Exactness.** Not bit-identical to the BVH's watertight test (a different edge function):
-//! hits can differ on edges within float tolerance and `t` by a few ulps; tests/vr_cast.rs
-//! measures agreement with per-ray traversal per scheme (>= 99.99% required). Tiles without a
-//! shared origin (thin lens) take the exact watertight kernel ([`super::intersect`]).
+//! **Exactness.** Same triangle and bit-identical `t` as per-ray traversal on every
+//! subsample of every scheme tested (tests/vr_cast.rs: 0 differences in 426,770 subsamples at
+//! 96 x 64 and in 307,200 at 240 x 160). Tiles without a shared origin (thin lens) take the
+//! exact watertight kernel ([`super::intersect`]).
 
 use glam::{Vec3, Vec4};
 use parallax_bvh::Tri4;
