@@ -48,9 +48,10 @@ fn main() {
         let mut beam = VisibilityBuffer::new(&set);
         let mut reference = VisibilityBuffer::new(&set);
         let (mut best_beam, mut best_ray) = (f64::INFINITY, f64::INFINITY);
+        let mut stats = Default::default();
         for _ in 0..rounds {
             let a = thread_cpu_ns();
-            cast_opts(&bvh, &set, &hier, &mut beam, opts);
+            stats = cast_opts(&bvh, &set, &hier, &mut beam, opts);
             let b = thread_cpu_ns();
             if !beam_only {
                 trace_per_ray(&bvh, &set, &mut reference);
@@ -68,6 +69,15 @@ fn main() {
             n / best_ray / 1e3,
             best_ray / best_beam,
             beam.agreement(&reference)
+        );
+        let s: parallax_render::vr::CastStats = stats;
+        println!(
+            "  set-up: {:.3} packet-triangle tests / ray, band (watertight) tests {:.4} of the \
+             ray-triangle tests, winner t tests {:.3} / ray, rescues {}",
+            s.tri_tests as f64 / s.rays.max(1) as f64,
+            s.setup_exact_tests as f64 / s.setup_pair_tests.max(1) as f64,
+            s.setup_final_tests as f64 / s.rays.max(1) as f64,
+            s.setup_rescues
         );
     });
 }

@@ -251,8 +251,10 @@ fn check_setup(bvh: &Bvh, set: &SampleSet, label: &str) -> (usize, usize, f64) {
 /// band against the watertight kernel and per-ray traversal, every scheme, spp 1 and 4, atrium
 /// and cornell (its blocks stand on the floor with coplanar bottom faces, decided by 1-ulp
 /// differences of t): >= 99.99% of subsamples agree (in fact all, printed), equal triangles
-/// have bit-identical t, the 4- and 8-lane kernels agree; the band's watertight tests stay
-/// below 1% of the ray-triangle tests.
+/// have bit-identical t, the 4- and 8-lane kernels agree. The band's watertight tests are
+/// measured (printed) and bounded at 5% of the ray-triangle tests: 0.2-2.9% here, most of
+/// them depth ties between overlapping coplanar faces (bit-identical `1/t` covectors, which
+/// only the exact test can order); the edge band alone is ~0.2%.
 #[test]
 fn tile_setup_kernel_agrees_with_watertight_kernel_for_every_scheme() {
     let (mut total, mut diffs) = (0, 0);
@@ -264,7 +266,7 @@ fn tile_setup_kernel_agrees_with_watertight_kernel_for_every_scheme() {
                 let (n, d, band) = check_setup(&bvh, &set, &format!("{name} {scheme} spp {spp}"));
                 total += n;
                 diffs += d;
-                assert!(band < 0.03, "{name} {scheme} spp {spp}: band {band}");
+                assert!(band < 0.05, "{name} {scheme} spp {spp}: band {band}");
             }
         }
     }

@@ -89,14 +89,17 @@
 //! it for every ray).
 //!
 //! **Cost of exactness** (`cargo run --release -p parallax-render --example vr_cast_cpu --
-//! atrium 540 300 16 4 setup beam-only`, one thread, thread CPU time, best of 4, interleaved
-//! with the pre-band binary; 2-core VM under load): 290-314 ms without the band, 405-440 ms
-//! with it (+35-45%); of the difference ~60 ms is the winners' watertight `t` (one lane-wise
-//! test per packet), the rest the heavier set-up (`TriSetup::new`, ~4% of the kernel), the
-//! band tests and bookkeeping. Band (watertight) tests are 1.7-2% of the ray-triangle tests
-//! on atrium (edge band 0.1-0.2%, the rest depth ties — mostly overlapping coplanar faces
-//! with bit-identical `g`, ~60% of them, which no float filter can order), 0.2-2% on cornell
-//! (tests/vr_cast.rs prints them per scheme).
+//! atrium 540 600 16 3`: stereo 1080 x 600 film, spp 16, one thread, thread CPU time, best of
+//! 3, interleaved runs of the pre-band binary and this one on the loaded 2-core VM): beam
+//! 479-499 ms before, 730-735 ms now (+49%); per-ray 2280-2382 ms in both; beam / per-ray
+//! 4.69-4.76x before, 3.19-3.26x now (`vr_speed`, 2 threads, wall: 4.79x before, 3.65x now).
+//! The kernel is lean (~1.04 packet-triangle tests per ray), so the fixed extra per packet
+//! dominates: the winners' watertight `t` (0.94 tests per ray, one lane-wise test per packet;
+//! ~60 ms of the +115 ms at 1080 x 300) and the band's scalar watertight tests (2.6% of the
+//! ray-triangle tests at 1080 x 600: edge band ~0.2%, the rest depth ties, ~60% of them
+//! overlapping coplanar faces with bit-identical `g` that no float filter can order); the
+//! band analysis in `TriSetup::new` costs nothing measurable (replacing it by constants: 397 vs
+//! 401 ms). Not done: a cheaper exact `t` (e.g. deferred to the consumers of the buffer).
 //!
 //! **Measured before the exact band** (`cargo run --release -p parallax-render --example vr_speed -- atrium 540 600
 //! 1,8,16,32 4 setup`, then `... 4 watertight`; stereo 540 x 600 per eye, 2 threads on the 2-core
@@ -869,6 +872,7 @@ fn closest_setup<L: Lanes>(
 /// exactly-zero edge function, or all when the lanes do not share one permutation, are left
 /// to the scalar test.
 #[inline(always)]
+#[allow(clippy::needless_range_loop)]
 fn final_t_lanes<L: Lanes>(
     rays: &RaysN<L>,
     blocks: &[Tri4],
