@@ -4,8 +4,8 @@
 use glam::Vec2;
 use parallax_bvh::Bvh;
 use parallax_render::vr::{
-    CastOptions, Hierarchy, SampleSet, SampleTest, VisibilityBuffer, cast, cast_opts, cast_with,
-    trace_per_ray,
+    CastOptions, Hierarchy, SampleSet, SampleTest, SetupExactness, VisibilityBuffer, cast,
+    cast_opts, cast_with, trace_per_ray,
 };
 use parallax_scene::Scene;
 use parallax_scene::camera::{Camera, CameraOptions, ModelKind};
@@ -167,51 +167,83 @@ fn mismatches(a: &VisibilityBuffer, b: &VisibilityBuffer) -> (usize, usize) {
     (prim, t)
 }
 
-/// Checks the default (set-up) kernel on `set` against the watertight kernel and per-ray
-/// traversal: the same triangle on every subsample (>= 99.99% required; every difference is
-/// printed), the same `t` bit for bit on the same triangle, the 4- and 8-lane kernels give
-/// the same buffer. Returns `(samples, differences, exact-fallback fraction)`.
-fn check_setup(bvh: &Bvh, set: &SampleSet, label: &str) -> (usize, usize, f64) {
+/// What [`check_setup`] measured.
+#[derive(Default)]
+struct Checked {
+    samples: usize,
+    /// Subsamples whose triangle differs from per-ray traversal.
+    diffs: usize,
+    /// Fraction of the ray-triangle tests decided by the watertight test (band).
+    band: f64,
+}
+
+/// Checks the set-up kernel with `exactness` on `set` against the watertight kernel and
+/// per-ray traversal (every difference printed); the 4- and 8-lane kernels give the same
+/// buffer, no certain decision is contradicted (`setup_rescues`).
+///
+/// - [`SetupExactness::Full`]: the same triangle on every subsample, the same `t` bit for bit.
+/// - [`SetupExactness::Edges`] (the default): >= 99.99% of subsamples agree (unless
+///   `coplanar_overlaps`), never hit vs miss,
+///   every difference is a depth tie (`|t_a - t_b| <= 1e-5 t`), and on equal triangles `t`
+///   (`1 / (g . d)`) is within 1e-5 relative of the watertight `t`.
+fn check_setup(
+    bvh: &Bvh,
+    set: &SampleSet,
+    label: &str,
+    exactness: SetupExactness,
+    coplanar_overlaps: bool,
+) -> Checked {
     let h = Hierarchy::build(set).unwrap();
     let mut exact = VisibilityBuffer::new(set);
     cast_with(bvh, set, &h, &mut exact, 4);
+    let opts = CastOptions {
+        exactness,
+        ..CastOptions::default()
+    };
     let mut setup = VisibilityBuffer::new(set);
-    let stats = cast(bvh, set, &h, &mut setup);
+    let stats = cast_opts(bvh, set, &h, &mut setup, opts);
     assert_eq!(CastOptions::default().test, SampleTest::TileSetup);
+    assert_eq!(CastOptions::default().exactness, SetupExactness::Edges);
+    if exactness == SetupExactness::Edges {
+        let mut dflt = VisibilityBuffer::new(set);
+        cast(bvh, set, &h, &mut dflt);
+        assert_eq!(dflt, setup, "{label}: the default is Edges");
+    }
     for lanes in [4, 8] {
         let mut other = VisibilityBuffer::new(set);
-        let opts = CastOptions {
-            test: SampleTest::TileSetup,
-            lanes,
-        };
-        cast_opts(bvh, set, &h, &mut other, opts);
+        cast_opts(bvh, set, &h, &mut other, CastOptions { lanes, ..opts });
         assert_eq!(other, setup, "{label}: {lanes} lanes");
     }
     let mut reference = VisibilityBuffer::new(set);
     trace_per_ray(bvh, set, &mut reference);
     let (diff_ref, t_ref) = mismatches(&setup, &reference);
     let (diff_wt, t_wt) = mismatches(&setup, &exact);
+    let mut worst_t = 0.0f32;
     for j in 0..setup.prim.len() {
+        let (a, b) = (setup.t[j], reference.t[j]);
         if setup.prim[j] != reference.prim[j] {
             eprintln!(
-                "  {label} diff {j}: setup {} t {} | per-ray {} t {} | watertight {} t {}",
-                setup.prim[j],
-                setup.t[j],
-                reference.prim[j],
-                reference.t[j],
-                exact.prim[j],
-                exact.t[j]
+                "  {label} diff {j}: setup {} t {a} | per-ray {} t {b} | watertight {} t {}",
+                setup.prim[j], reference.prim[j], exact.prim[j], exact.t[j]
             );
+            assert!(
+                a.is_finite() && b.is_finite(),
+                "{label} sample {j}: hit vs miss ({a} vs {b})"
+            );
+        }
+        if a.is_finite() || b.is_finite() {
+            worst_t = worst_t.max((a - b).abs() / a.max(b));
         }
     }
     let n = setup.prim.len();
     let tris = stats.tris_all_out + stats.tris_partial + stats.tris_all_in;
     let band = stats.setup_exact_tests as f64 / stats.setup_pair_tests.max(1) as f64;
     eprintln!(
-        "{label}: set-up tiles {}/{}, {n} samples, differences from per-ray {diff_ref}, from the \
-         watertight kernel {diff_wt}; triangles all-out {:.3} partial {:.3} all-in {:.3}; \
-         {:.2} packet tests / ray; band (watertight) tests {} of {} ray-triangle tests = {:.5}, \
-         (edge band {}), winner t tests {}, rescues {}",
+        "{label} {exactness:?}: set-up tiles {}/{}, {n} samples, differences from per-ray \
+         {diff_ref}, from the watertight kernel {diff_wt}, largest relative t difference \
+         {worst_t:.2e}; triangles all-out {:.3} partial {:.3} all-in {:.3}; {:.2} packet tests \
+         / ray; band (watertight) tests {} of {} ray-triangle tests = {:.5} (edge band {}), \
+         winner t tests {}, rescues {}",
         stats.setup_tiles,
         stats.tiles,
         stats.tris_all_out as f64 / tris.max(1) as f64,
@@ -227,50 +259,84 @@ fn check_setup(bvh: &Bvh, set: &SampleSet, label: &str) -> (usize, usize, f64) {
     );
     let hits = reference.prim.iter().filter(|&&p| p != u32::MAX).count();
     assert!(hits > n / 50, "{label}: scene not in view");
+    // (A scene with coplanar overlapping faces, `coplanar_overlaps`, may have more depth ties
+    // under `Edges`: counted by the caller.)
     assert!(
-        diff_ref as f64 <= 1e-4 * n as f64,
+        coplanar_overlaps || diff_ref as f64 <= 1e-4 * n as f64,
         "{label}: {diff_ref} of {n} samples differ from per-ray traversal"
-    );
-    // Same triangle => the same watertight arithmetic => the same t, bit for bit.
-    assert_eq!(
-        t_ref, 0,
-        "{label}: equal triangles with different t (per-ray)"
-    );
-    assert_eq!(
-        t_wt, 0,
-        "{label}: equal triangles with different t (watertight kernel)"
     );
     assert_eq!(
         stats.setup_rescues, 0,
         "{label}: a certain decision was contradicted"
     );
-    (n, diff_ref, band)
+    match exactness {
+        SetupExactness::Full => {
+            assert_eq!(diff_ref, 0, "{label}: Full differs from per-ray traversal");
+            // Same triangle => the same watertight arithmetic => the same t, bit for bit.
+            assert_eq!(
+                t_ref, 0,
+                "{label}: equal triangles with different t (per-ray)"
+            );
+            assert_eq!(
+                t_wt, 0,
+                "{label}: equal triangles with different t (watertight kernel)"
+            );
+        }
+        SetupExactness::Edges => {
+            // Depth ties only: both hit (asserted above), at t equal within float tolerance.
+            assert!(worst_t <= 1e-5, "{label}: relative t difference {worst_t}");
+        }
+    }
+    Checked {
+        samples: n,
+        diffs: diff_ref,
+        band,
+    }
 }
 
-/// HVVR's per-tile triangle set-up (`tile_setup.rs`, the default sample test) with its exact
-/// band against the watertight kernel and per-ray traversal, every scheme, spp 1 and 4, atrium
-/// and cornell (its blocks stand on the floor with coplanar bottom faces, decided by 1-ulp
-/// differences of t): >= 99.99% of subsamples agree (in fact all, printed), equal triangles
-/// have bit-identical t, the 4- and 8-lane kernels agree. The band's watertight tests are
-/// measured (printed) and bounded at 5% of the ray-triangle tests: 0.2-2.9% here, most of
-/// them depth ties between overlapping coplanar faces (bit-identical `1/t` covectors, which
-/// only the exact test can order); the edge band alone is ~0.2%.
+/// HVVR's per-tile triangle set-up (`tile_setup.rs`, the default sample test), both
+/// exactness settings, against the watertight kernel and per-ray traversal, every scheme, spp
+/// 1 and 4, atrium and cornell.
+///
+/// - `Full`: 0 differences, bit-identical `t`. Its band's watertight tests are measured
+///   (printed) and bounded at 5% of the ray-triangle tests: 0.2-2.9% here, most of them depth
+///   ties between overlapping coplanar faces (bit-identical `1/t` covectors, which only the
+///   exact test can order); the edge band alone is ~0.2%.
+/// - `Edges` (default): exact coverage, depth by `1/t`. The differences are depth ties: on
+///   cornell the blocks stand on the floor and their bottom faces overlap the floor
+///   coplanarly, so both faces give the same `1/t` up to rounding and HVVR's `1/t` order
+///   (ties to the lower index) may pick the other face than the watertight `t`; on atrium
+///   triangles meeting at the hit point (a ray through a shared edge hits both faces at the
+///   same depth). Counted and printed per scene; bounded by the 99.99% agreement.
 #[test]
 fn tile_setup_kernel_agrees_with_watertight_kernel_for_every_scheme() {
-    let (mut total, mut diffs) = (0, 0);
-    for name in ["atrium", "cornell"] {
-        let scene = Scene::load(name).unwrap();
-        let bvh = Bvh::build(&scene.mesh);
-        for spp in [1, 4] {
-            for (scheme, set) in schemes(&scene, spp) {
-                let (n, d, band) = check_setup(&bvh, &set, &format!("{name} {scheme} spp {spp}"));
-                total += n;
-                diffs += d;
-                assert!(band < 0.05, "{name} {scheme} spp {spp}: band {band}");
+    for exactness in [SetupExactness::Edges, SetupExactness::Full] {
+        for name in ["atrium", "cornell"] {
+            let scene = Scene::load(name).unwrap();
+            let bvh = Bvh::build(&scene.mesh);
+            let (mut total, mut diffs) = (0, 0);
+            for spp in [1, 4] {
+                for (scheme, set) in schemes(&scene, spp) {
+                    let label = format!("{name} {scheme} spp {spp}");
+                    let c = check_setup(&bvh, &set, &label, exactness, name == "cornell");
+                    total += c.samples;
+                    diffs += c.diffs;
+                    assert!(c.band < 0.05, "{label}: band {}", c.band);
+                }
+            }
+            eprintln!(
+                "{name} {exactness:?}: {diffs} of {total} subsamples differ from per-ray \
+                 traversal (depth ties)"
+            );
+            if name == "atrium" || exactness == SetupExactness::Full {
+                assert!(diffs as f64 <= 1e-4 * total as f64);
+            } else {
+                // Cornell's coplanar overlaps: depth ties (asserted per sample), a few per
+                // thousand subsamples where the blocks meet the floor.
+                assert!(diffs as f64 <= 5e-3 * total as f64, "{diffs} of {total}");
             }
         }
     }
-    eprintln!("set-up kernel: {diffs} of {total} subsamples differ from per-ray traversal");
 }
 
 /// The same at a larger image (atrium, 240 x 160, grid and stereo, 4 spp).
@@ -281,6 +347,14 @@ fn tile_setup_kernel_agrees_at_a_larger_size() {
     let grid = SampleSet::grid(camera(&scene, ModelKind::Pinhole, 240, 160), 4);
     let stereo = SampleSet::grid(camera(&scene, ModelKind::Stereo, 120, 160), 4);
     for (label, set) in [("grid", grid), ("stereo", stereo)] {
-        check_setup(&bvh, &set, &format!("atrium 240x160 {label} spp 4"));
+        for exactness in [SetupExactness::Edges, SetupExactness::Full] {
+            check_setup(
+                &bvh,
+                &set,
+                &format!("atrium 240x160 {label} spp 4"),
+                exactness,
+                false,
+            );
+        }
     }
 }

@@ -15,7 +15,9 @@ use parallax_core::math::PreparedBeam;
 use rayon::prelude::*;
 
 use super::intersect::{LeafBox, LeafGroup, group_leaves, test_tile};
-use super::tile_setup::{SampleTest, TileTris, setup_tile, shared_origin, test_tile_setup};
+use super::tile_setup::{
+    SampleTest, SetupExactness, TileTris, setup_tile, shared_origin, test_tile_setup,
+};
 use super::{Hierarchy, SampleSet, VisibilityBuffer};
 
 /// Per-stage times (summed over threads: CPU time, not wall time) and work counts of a cast.
@@ -70,6 +72,9 @@ pub struct CastStats {
 pub struct CastOptions {
     pub test: SampleTest,
     pub lanes: usize,
+    /// How exactly the set-up kernel reproduces per-ray traversal (ignored by the watertight
+    /// kernel, which is always exact).
+    pub exactness: SetupExactness,
 }
 
 impl Default for CastOptions {
@@ -80,6 +85,7 @@ impl Default for CastOptions {
         CastOptions {
             test: SampleTest::TileSetup,
             lanes: 4,
+            exactness: SetupExactness::Edges,
         }
     }
 }
@@ -151,6 +157,7 @@ pub fn cast_with(
         CastOptions {
             test: SampleTest::Watertight,
             lanes,
+            exactness: SetupExactness::Full,
         },
     )
 }
@@ -240,8 +247,17 @@ pub fn cast_opts(
                     // SAFETY: as below.
                     let w = unsafe {
                         test_tile_setup(
-                            set, blocks_, prim_ids, samples, tt, &tile.beam, scale, lanes,
-                            ptr.prim, ptr.t,
+                            set,
+                            blocks_,
+                            prim_ids,
+                            samples,
+                            tt,
+                            &tile.beam,
+                            scale,
+                            lanes,
+                            opts.exactness,
+                            ptr.prim,
+                            ptr.t,
                         )
                     };
                     let c = Instant::now();

@@ -116,6 +116,7 @@ pub fn visibility_into(
                 Visibility::BeamWatertight => CastOptions {
                     test: SampleTest::Watertight,
                     lanes: 4,
+                    ..CastOptions::default()
                 },
                 _ => CastOptions::default(),
             };

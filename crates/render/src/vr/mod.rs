@@ -45,6 +45,7 @@ pub mod intersect;
 pub mod packet;
 pub mod patterns;
 pub mod samples;
+pub mod setup_edges;
 pub mod tile_setup;
 pub mod visibility;
 
@@ -52,7 +53,7 @@ pub use cast::{CastOptions, CastStats, cast, cast_opts, cast_with};
 pub use hierarchy::{Block, Hierarchy, HierarchyError, Tile};
 pub use patterns::PatternError;
 pub use samples::{Sample, SampleSet};
-pub use tile_setup::SampleTest;
+pub use tile_setup::{SampleTest, SetupExactness};
 pub use visibility::{VisibilityBuffer, trace_per_ray};
 
 // HVVR around the visibility stage (issue 5 parts 4-6): presets, shading, resolve,

@@ -156,6 +156,21 @@ pub enum SampleTest {
     TileSetup,
 }
 
+/// How exactly the set-up kernel ([`SampleTest::TileSetup`]) reproduces per-ray traversal
+/// (module docs, "cost of exactness").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SetupExactness {
+    /// Exact coverage (the edge band: no vertex hole, shared edges decided by the watertight
+    /// test), depth by the largest `1/t = g . d` with `t = 1 / (g . d)` (HVVR §5.5): equal to
+    /// per-ray traversal up to depth ties within float tolerance (`setup_edges.rs`). The
+    /// default: it keeps the set-up kernel's speed (module docs).
+    #[default]
+    Edges,
+    /// Edge and depth bands, the winner's `t` by the watertight test: the same triangle and
+    /// `t`, bit for bit, as per-ray traversal (module docs, "exact band"), ~1.5x slower.
+    Full,
+}
+
 /// Unit roundoff of f32 (`2^-24`): `fl(x op y) = (x op y)(1 + δ)`, `|δ| <= U`.
 const U: f32 = f32::EPSILON * 0.5;
 const SQRT3: f32 = 1.732_051;
@@ -347,8 +362,10 @@ impl TriSetup {
         }
         // Distance of each vertex from any ray of the cone (module docs) and the bound on the
         // watertight test's projected coordinates |x'|, |y'| <= sqrt 3 dist.
+        // (x + y <= sqrt(2 (x^2 + y^2)): one square root per vertex instead of two.)
         let psi = a.map(|ai| {
-            SQRT3 * (cross(ai, cone.centre).length() + ai.length() * cone.radius) * 1.001
+            let (x, y) = (cross(ai, cone.centre), ai * cone.radius);
+            SQRT3 * (2.0 * (x.length_squared() + y.length_squared())).sqrt() * 1.001
         });
         let amax = a.map(|ai| ai.abs().max_element());
         // Error of a projected coordinate: U |sx a_kz| (product) + U |sx| |a_kz| (sx itself)
@@ -373,12 +390,17 @@ impl TriSetup {
         // angle, for every ray through the triangle) each, N itself 3U sigma (sigma = sliver
         // factor |e0| |e2| / |N|). Woop's t = sum u_i z_i / sum u_i moves by
         // sqrt 3 Lambda sum |du_i| / |D| (Lambda = longest edge) plus 7U of rounding.
-        let nl = nrm.length();
-        let amax2 = a.iter().map(|x| x.length()).fold(0.0, f32::max);
-        let kappa = nl * amax2 / d.abs();
-        let sigma = e[0].length() * e[2].length() / nl;
-        let lambda = e.iter().map(|x| x.length()).fold(0.0, f32::max);
-        let rho = 2.0 * (SQRT3 * lambda * wsum / d.abs() + 14.0 * U * sigma * kappa + 11.0 * U);
+        // (sigma kappa = max |a| |e0| |e2| / |D|: two square roots in all.)
+        let amax_sq = a.iter().map(|x| x.length_squared()).fold(0.0, f32::max);
+        let sigma_kappa =
+            (amax_sq * e[0].length_squared() * e[2].length_squared()).sqrt() * 1.001 / d.abs();
+        let lambda = e
+            .iter()
+            .map(|x| x.length_squared())
+            .fold(0.0, f32::max)
+            .sqrt()
+            * 1.001;
+        let rho = 2.0 * (SQRT3 * lambda * wsum / d.abs() + 14.0 * U * sigma_kappa + 11.0 * U);
         let rho = if rho.is_finite() && rho <= RHO_MAX {
             rho
         } else {
@@ -559,13 +581,13 @@ pub fn setup_tile(
 /// `n . d` per lane in the scalar order of [`dot3`] (no FMA: plain functions, not closures,
 /// so they are compiled inside the AVX2 entry point).
 #[inline(always)]
-fn dot_n<L: Lanes>(n: [f32; 3], dx: L, dy: L, dz: L) -> L {
+pub(super) fn dot_n<L: Lanes>(n: [f32; 3], dx: L, dy: L, dz: L) -> L {
     L::splat(n[0]) * dx + L::splat(n[1]) * dy + L::splat(n[2]) * dz
 }
 
 /// Entry and exit `t` of one slab (`lo`, `hi` relative to the origin).
 #[inline(always)]
-fn slab<L: Lanes>(lo: f32, hi: f32, inv: L, neg: L::M) -> (L, L) {
+pub(super) fn slab<L: Lanes>(lo: f32, hi: f32, inv: L, neg: L::M) -> (L, L) {
     let t0 = L::splat(lo) * inv;
     let t1 = L::splat(hi) * inv;
     (L::select(neg, t1, t0), L::select(neg, t0, t1))
@@ -573,13 +595,13 @@ fn slab<L: Lanes>(lo: f32, hi: f32, inv: L, neg: L::M) -> (L, L) {
 
 /// `a > b ? a : b` per lane (NaN in `a` gives `b`).
 #[inline(always)]
-fn max_or_rhs<L: Lanes>(a: L, b: L) -> L {
+pub(super) fn max_or_rhs<L: Lanes>(a: L, b: L) -> L {
     L::select(a.gt(b), a, b)
 }
 
 /// `a < b ? a : b` per lane (NaN in `a` gives `b`).
 #[inline(always)]
-fn min_or_rhs<L: Lanes>(a: L, b: L) -> L {
+pub(super) fn min_or_rhs<L: Lanes>(a: L, b: L) -> L {
     L::select(a.lt(b), a, b)
 }
 
@@ -984,7 +1006,7 @@ fn final_t_lanes<L: Lanes>(
 /// set-up kernel with `L::N` lanes; `write(pair, t, tri)` stores a result.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn run_setup<L: Lanes>(
+fn run_setup<L: Lanes, const FULL: bool>(
     set: &SampleSet,
     blocks: &[Tri4],
     tt: &TileTris,
@@ -1006,7 +1028,11 @@ fn run_setup<L: Lanes>(
                 }
             }
         }
-        let c = closest_setup(&rays, blocks, tt, axis, sign, slack, &mut work);
+        let c = if FULL {
+            closest_setup(&rays, blocks, tt, axis, sign, slack, &mut work)
+        } else {
+            super::setup_edges::closest_edges(&rays, blocks, tt, axis, sign, slack, &mut work)
+        };
         for (l, &p) in batch.iter().enumerate() {
             write(p, c.t[l], c.tri[l]);
         }
@@ -1018,7 +1044,7 @@ fn run_setup<L: Lanes>(
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[allow(clippy::too_many_arguments)]
-unsafe fn run_setup_avx2(
+unsafe fn run_setup_avx2<const FULL: bool>(
     set: &SampleSet,
     blocks: &[Tri4],
     tt: &TileTris,
@@ -1029,7 +1055,7 @@ unsafe fn run_setup_avx2(
     pair: impl Fn(usize) -> (u32, u32),
     write: impl FnMut((u32, u32), f32, u32),
 ) -> SetupWork {
-    run_setup::<super::packet::F8>(set, blocks, tt, axis, sign, slack, total, pair, write)
+    run_setup::<super::packet::F8, FULL>(set, blocks, tt, axis, sign, slack, total, pair, write)
 }
 
 /// Tests every subsample ray of the tile `samples` against the set-up list `tt` (built from
@@ -1049,6 +1075,7 @@ pub unsafe fn test_tile_setup(
     beam: &Beam,
     scale: f32,
     lanes: usize,
+    exactness: SetupExactness,
     prim: *mut u32,
     t: *mut f32,
 ) -> SetupWork {
@@ -1071,13 +1098,26 @@ pub unsafe fn test_tile_setup(
     };
     let (axis, sign) = (beam.axis as usize, beam.sign);
     #[cfg(target_arch = "x86_64")]
-    let work = if lanes == 8 && std::arch::is_x86_feature_detected!("avx2") {
+    if lanes == 8 && std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: AVX2 was detected.
-        unsafe { run_setup_avx2(set, blocks, tt, axis, sign, slack, total, pair, write) }
-    } else {
-        run_setup::<Vec4>(set, blocks, tt, axis, sign, slack, total, pair, write)
+        return unsafe {
+            match exactness {
+                SetupExactness::Edges => {
+                    run_setup_avx2::<false>(set, blocks, tt, axis, sign, slack, total, pair, write)
+                }
+                SetupExactness::Full => {
+                    run_setup_avx2::<true>(set, blocks, tt, axis, sign, slack, total, pair, write)
+                }
+            }
+        };
+    }
+    let work = match exactness {
+        SetupExactness::Edges => {
+            run_setup::<Vec4, false>(set, blocks, tt, axis, sign, slack, total, pair, write)
+        }
+        SetupExactness::Full => {
+            run_setup::<Vec4, true>(set, blocks, tt, axis, sign, slack, total, pair, write)
+        }
     };
-    #[cfg(not(target_arch = "x86_64"))]
-    let work = run_setup::<Vec4>(set, blocks, tt, axis, sign, slack, total, pair, write);
     work
 }
