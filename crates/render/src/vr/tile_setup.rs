@@ -298,6 +298,7 @@ impl BeamCorners {
     /// Classifies a set-up triangle (module docs): all-in only if every ray of the beam is
     /// certainly inside (edge values above the band), all-out only if one edge is certainly
     /// negative for every ray.
+    #[inline(always)]
     pub fn classify(&self, s: &TriSetup) -> CornerClass {
         // Every ray satisfies d / |d_a| = sum_k w_k c_k, so |d|_inf <= |d_a| cm and the real
         // edge value is |d_a| sum_k w_k e(c_k); fl(n . c_k) is within the set-up part of the
@@ -305,7 +306,8 @@ impl BeamCorners {
         let cm = self.cmax.max_element();
         let mut all_in = true;
         for e in &s.n {
-            let tol = s.bound * cm + 3.1 * U * dot3(e.map(f32::abs), self.cmax);
+            let tol =
+                s.bound * cm + 3.1 * U * dot3([e[0].abs(), e[1].abs(), e[2].abs()], self.cmax);
             let (mut out, mut inn) = (true, true);
             for c in &self.c {
                 let v = dot3(*e, *c);
@@ -339,6 +341,7 @@ pub enum EdgeClass {
 impl TriSetup {
     /// Sets up triangle `(v0, v1, v2)` (at `src` = `4 * block + lane`) for rays from `o` within
     /// `cone`; `None` if no ray from `o` can hit it (`D = 0`, non-finite values).
+    #[inline(always)]
     pub fn new(v: [Vec3; 3], o: Vec3, tri: u32, src: u32, cone: &Cone) -> Option<Self> {
         // The same rounded `a_i = v_i - o` as the watertight test's projection.
         let a = [v[0] - o, v[1] - o, v[2] - o];
@@ -356,21 +359,31 @@ impl TriSetup {
         let s = if d > 0.0 { 1.0 } else { -1.0 };
         // n_i = a_i x (a_{i+1} - a_i) = a_i x a_{i+1} in exact arithmetic; the short edge
         // keeps the rounding error relative to |a| |e_i| instead of |a|^2.
-        let n = [0, 1, 2].map(|i| (cross(a[i], e[i]) * s).to_array());
+        let n = [
+            (cross(a[0], e[0]) * s).to_array(),
+            (cross(a[1], e[1]) * s).to_array(),
+            (cross(a[2], e[2]) * s).to_array(),
+        ];
         if !n.iter().flatten().all(|x| x.is_finite()) {
             return None;
         }
         // Distance of each vertex from any ray of the cone (module docs) and the bound on the
         // watertight test's projected coordinates |x'|, |y'| <= sqrt 3 dist.
         // (x + y <= sqrt(2 (x^2 + y^2)): one square root per vertex instead of two.)
-        let psi = a.map(|ai| {
+        let psi_of = |ai: Vec3| {
             let (x, y) = (cross(ai, cone.centre), ai * cone.radius);
             SQRT3 * (2.0 * (x.length_squared() + y.length_squared())).sqrt() * 1.001
-        });
-        let amax = a.map(|ai| ai.abs().max_element());
+        };
+        let psi = [psi_of(a[0]), psi_of(a[1]), psi_of(a[2])];
+        let amax = [
+            a[0].abs().max_element(),
+            a[1].abs().max_element(),
+            a[2].abs().max_element(),
+        ];
         // Error of a projected coordinate: U |sx a_kz| (product) + U |sx| |a_kz| (sx itself)
         // + U |x'| (subtraction), |sx| <= 1.
-        let ep = [0, 1, 2].map(|i| U * (2.02 * amax[i] + 1.01 * psi[i]));
+        let ep_of = |i: usize| U * (2.02 * amax[i] + 1.01 * psi[i]);
+        let ep = [ep_of(0), ep_of(1), ep_of(2)];
         let mut bound = 0.0f32;
         let mut wsum = 0.0f32;
         for i in 0..3 {
