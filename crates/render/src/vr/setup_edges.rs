@@ -18,7 +18,8 @@
 //!   >= 99.99% agreement, every difference within 1e-5 relative in `t`, never hit vs miss).
 //! - Ill-conditioned triangles (`rho > RHO_MAX`: seen nearly edge-on, or their plane nearly
 //!   through the origin, where `g . d` may even have the wrong sign) take the watertight
-//!   test for coverage and depth (`t` exact), so they cannot turn a hit into a miss.
+//!   test for coverage and depth (their `1/t` is the watertight `t`'s), so they cannot turn
+//!   a hit into a miss.
 //!
 //! [`super::SetupExactness::Full`] (`tile_setup.rs`) adds the depth band and the watertight
 //! `t` of every winner: bit-identical to per-ray traversal, at ~1.5x the cost of this kernel
@@ -54,8 +55,6 @@ pub(super) fn closest_edges<L: Lanes>(
         t: [f32::INFINITY; 8],
         tri: [u32::MAX; 8],
     };
-    // The watertight t of a lane whose best came from an ill-conditioned triangle (else NaN).
-    let mut exact = [f32::NAN; 8];
     let mut hit_lanes = 0u32;
     let mut exit_depth = f32::INFINITY;
     let mut start = 0usize;
@@ -96,9 +95,8 @@ pub(super) fn closest_edges<L: Lanes>(
             let gd = dot_n(tr.g, dx, dy, dz);
             if tr.rho > RHO_MAX {
                 // Ill-conditioned: the watertight test decides coverage and depth.
-                changed |= ill_conditioned(
-                    rays, blocks, tr, valid, dinf, &mut best, &mut out, &mut exact, work,
-                );
+                changed |=
+                    ill_conditioned(rays, blocks, tr, valid, dinf, &mut best, &mut out, work);
                 continue;
             }
             let ge = gd.ge(best);
@@ -123,8 +121,10 @@ pub(super) fn closest_edges<L: Lanes>(
                 };
                 let mut extra = 0u32;
                 // Within the edge band: the watertight test decides coverage (~0.2% of pairs).
-                work.edge_band += unsure.count_ones() as u64;
-                work.exact_tests += unsure.count_ones() as u64;
+                if unsure != 0 {
+                    work.edge_band += unsure.count_ones() as u64;
+                    work.exact_tests += unsure.count_ones() as u64;
+                }
                 while unsure != 0 {
                     let l = unsure.trailing_zeros() as usize;
                     unsure &= unsure - 1;
@@ -170,7 +170,6 @@ pub(super) fn closest_edges<L: Lanes>(
                 let l = w.trailing_zeros() as usize;
                 w &= w - 1;
                 out.tri[l] = tr.tri;
-                exact[l] = f32::NAN;
             }
             changed = true;
         }
@@ -191,11 +190,7 @@ pub(super) fn closest_edges<L: Lanes>(
     }
     for l in 0..L::N {
         if valid >> l & 1 != 0 && out.tri[l] != u32::MAX {
-            out.t[l] = if exact[l].is_nan() {
-                1.0 / best.get(l)
-            } else {
-                exact[l]
-            };
+            out.t[l] = 1.0 / best.get(l);
         }
     }
     out
@@ -214,7 +209,6 @@ fn ill_conditioned<L: Lanes>(
     dinf: f32,
     best: &mut L,
     out: &mut ClosestN,
-    exact: &mut [f32; 8],
     work: &mut SetupWork,
 ) -> bool {
     let [dx, dy, dz] = rays.d;
@@ -239,7 +233,6 @@ fn ill_conditioned<L: Lanes>(
         if g > b || (g == b && out.tri[l] != u32::MAX && tr.tri < out.tri[l]) {
             *best = L::from_fn(|i| if i == l { g } else { best.get(i) });
             out.tri[l] = tr.tri;
-            exact[l] = tc;
             changed = true;
         }
     }
