@@ -30,7 +30,7 @@ proptest! {
     #[test]
     fn corner_classification_is_conservative(
         o in prop::array::uniform3(-50.0f32..50.0),
-        axis in (0.0f32..6.28, 0.0f32..3.14),
+        axis in (0.0f32..std::f32::consts::TAU, 0.0f32..std::f32::consts::PI),
         spread in 0.001f32..0.3,
         seed in any::<u64>(),
     ) {
@@ -177,7 +177,10 @@ fn set_up_edge_test_with_exact_band_is_watertight_on_fans() {
     for _ in 0..400 {
         let o = Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 20.0;
         let dist = 0.5 + 50.0 * next();
-        let dir = unit(next() * 6.28, next() * 3.14);
+        let dir = unit(
+            next() * std::f32::consts::TAU,
+            next() * std::f32::consts::PI,
+        );
         let c = o + dir * dist;
         let (t1, t2) = dir.any_orthonormal_pair();
         let n = 3 + (next() * 6.0) as usize;

@@ -121,8 +121,9 @@ fn scene_scale(bvh: &Bvh, h: &Hierarchy) -> f32 {
 
 /// Casts every subsample ray of `set` (tiles and blocks of `hierarchy`, built for `set`) and
 /// writes the closest hits to `out` with the default [`CastOptions`]: for each subsample the
-/// closest triangle and `t` of [`super::trace_per_ray`] (the set-up kernel's exact band,
-/// module docs of `tile_setup.rs`). Panics if `hierarchy` or `out` was made for another set (a
+/// closest triangle of [`super::trace_per_ray`] up to depth ties within float tolerance, and
+/// its `t` within ~1e-5 relative (the set-up kernel with [`SetupExactness::Edges`], module
+/// docs of `tile_setup.rs`; [`SetupExactness::Full`] is bit-identical). Panics if `hierarchy` or `out` was made for another set (a
 /// programming error).
 pub fn cast(
     bvh: &Bvh,

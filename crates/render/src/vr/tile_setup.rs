@@ -34,7 +34,8 @@
 //! overlapping coplanar faces by rounding noise. Ours uses the set-up values as a fast filter
 //! with a conservative uncertainty band and decides everything inside the band with the BVH's
 //! own watertight test (`WatertightRay::intersect_within`, Woop et al. 2013), so every hit
-//! and `t` equal per-ray traversal bit for bit:
+//! and `t` equal per-ray traversal bit for bit ([`SetupExactness::Full`]; the default
+//! [`SetupExactness::Edges`] keeps only the edge band, below):
 //!
 //! - **Edge band** `bound |d|_inf` per triangle and tile (`TriSetup::bound`): forward error
 //!   analysis of (1) our `fl(n_i . d)` against the real `e_i(d)` of the rounded `a_i`:
@@ -88,18 +89,41 @@
 //! which gives the vertex to exactly one triangle of the fan (tests/vr_tile_setup.rs asserts
 //! it for every ray).
 //!
+//! **Two settings, [`SetupExactness`]** (in [`super::CastOptions`]; CLI `--visibility beam`
+//! vs `beam-exact`):
+//!
+//! - **`Edges` (default)**: the edge band only (`setup_edges.rs`): coverage is exact (no
+//!   vertex hole, shared edges decided by the watertight test), depth is HVVR's largest
+//!   `1/t = g . d` with `t = 1 / (g . d)` for the winner. Differences from per-ray traversal
+//!   are depth ties only (`t` equal within ~1e-5 relative, never hit vs miss): 0 on atrium in
+//!   every test, 47 of 213,385 subsamples on cornell (coplanar overlapping faces).
+//! - **`Full`**: the edge band, the depth band and the winner's watertight `t` (below):
+//!   bit-identical to per-ray traversal.
+//!
+//! Edges is the default because Full's extra cost buys only the order of depth ties at equal
+//! `t` (within float tolerance, which the done-when allows) and bit-exact `t`, while
+//! it costs ~30% of the beam cast, measured below; Edges keeps most of the speed of the kernel
+//! without any band.
+//!
 //! **Cost of exactness** (`cargo run --release -p parallax-render --example vr_cast_cpu --
-//! atrium 540 600 16 3`: stereo 1080 x 600 film, spp 16, one thread, thread CPU time, best of
-//! 3, interleaved runs of the pre-band binary and this one on the loaded 2-core VM): beam
-//! 479-499 ms before, 730-735 ms now (+49%); per-ray 2280-2382 ms in both; beam / per-ray
-//! 4.69-4.76x before, 3.19-3.26x now (`vr_speed`, 2 threads, wall: 4.79x before, 3.65x now).
-//! The kernel is lean (~1.04 packet-triangle tests per ray), so the fixed extra per packet
-//! dominates: the winners' watertight `t` (0.94 tests per ray, one lane-wise test per packet;
-//! ~60 ms of the +115 ms at 1080 x 300) and the band's scalar watertight tests (2.6% of the
-//! ray-triangle tests at 1080 x 600: edge band ~0.2%, the rest depth ties, ~60% of them
-//! overlapping coplanar faces with bit-identical `g` that no float filter can order); the
-//! band analysis in `TriSetup::new` costs nothing measurable (replacing it by constants: 397 vs
-//! 401 ms). Not done: a cheaper exact `t` (e.g. deferred to the consumers of the buffer).
+//! SCENE 540 600 16 3 MODE`: stereo 1080 x 600 film, spp 16, one thread, thread CPU time,
+//! best of 3; runs of the pre-band binary (commit fd42ce8, the same example) and of this one,
+//! alternating, two rounds each, on the loaded 2-core VM; beam Mrays/s and beam / per-ray
+//! ratio, best round):
+//!
+//! COST_TABLE
+//!
+//! Where Edges' extra time over the pre-band kernel goes (perf samples, atrium 1080 x 300):
+//! more than half the band analysis in `TriSetup::new` (per triangle and tile: replacing it by
+//! constants saved ~10 ms of ~205 ms at 1080 x 300; cutting it from 15 to 5 square roots and
+//! inlining it saved a few ms), the rest spread over the kernel
+//! (a second compare for packets with a candidate lane not certainly inside, the larger
+//! `TriSetup`); the edge band's watertight tests themselves (0.12% of the ray-triangle tests)
+//! are negligible. Full adds the winners' watertight `t` (0.89 tests per ray, one lane-wise
+//! test per packet) and the depth band's scalar watertight tests (2.3% of the ray-triangle
+//! tests on atrium, ~60% of them overlapping coplanar faces with bit-identical `g` that no
+//! float filter can order). Not done: a cheaper exact `t` (e.g. deferred to the consumers of
+//! the buffer), the band analysis computed lazily for the triangles a packet reaches.
 //!
 //! **Measured before the exact band** (`cargo run --release -p parallax-render --example vr_speed -- atrium 540 600
 //! 1,8,16,32 4 setup`, then `... 4 watertight`; stereo 540 x 600 per eye, 2 threads on the 2-core
@@ -127,9 +151,11 @@
 //! film-position form of `n . d` for pinhole tiles (the ray generation still normalises every
 //! direction), 4/8 triangles per SIMD op, a vectorised 8-lane build.
 //!
-//! **Exactness.** Same triangle and bit-identical `t` as per-ray traversal on every
+//! **Exactness.** `Full`: same triangle and bit-identical `t` as per-ray traversal on every
 //! subsample of every scheme tested (tests/vr_cast.rs: 0 differences in 426,770 subsamples at
-//! 96 x 64 and in 307,200 at 240 x 160). Tiles without a shared origin (thin lens) take the
+//! 96 x 64 and in 307,200 at 240 x 160). `Edges` (default): the same tests find 0
+//! differences on atrium (96 x 64 and 240 x 160) and 47 of 213,385 on cornell, all depth
+//! ties (both hit, `t` within 1e-5 relative; `t` itself within ~1e-5 of the watertight `t`). Tiles without a shared origin (thin lens) take the
 //! exact watertight kernel ([`super::intersect`]).
 
 use glam::{Vec3, Vec4};
@@ -1124,13 +1150,12 @@ pub unsafe fn test_tile_setup(
             }
         };
     }
-    let work = match exactness {
+    match exactness {
         SetupExactness::Edges => {
             run_setup::<Vec4, false>(set, blocks, tt, axis, sign, slack, total, pair, write)
         }
         SetupExactness::Full => {
             run_setup::<Vec4, true>(set, blocks, tt, axis, sign, slack, total, pair, write)
         }
-    };
-    work
+    }
 }
