@@ -243,7 +243,8 @@ pub fn cast_opts(
                     SampleTest::Watertight => None,
                 };
                 if let Some(o) = origin {
-                    setup_tile(blocks_, &scratch.leaves, &tile.beam, o, tt);
+                    let lazy = opts.exactness == SetupExactness::Edges;
+                    setup_tile(blocks_, &scratch.leaves, &tile.beam, o, lazy, tt);
                     let b = Instant::now();
                     // SAFETY: as below.
                     let w = unsafe {

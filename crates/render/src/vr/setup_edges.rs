@@ -41,7 +41,7 @@ use super::tile_setup::{
 pub(super) fn closest_edges<L: Lanes>(
     rays: &RaysN<L>,
     blocks: &[Tri4],
-    tt: &TileTris,
+    tt: &mut TileTris,
     axis: usize,
     sign: f32,
     slack: f32,
@@ -72,12 +72,13 @@ pub(super) fn closest_edges<L: Lanes>(
         dinf = dinf.max(dinf_l.get(l));
     }
     let lanes = valid.count_ones() as u64;
-    for seg in &tt.segs {
+    for si in 0..tt.segs.len() {
+        let seg = tt.segs[si];
         if hit_lanes == valid && seg.near > exit_depth + slack {
             break;
         }
         let end = seg.end as usize;
-        let tris = &tt.tris[start..end];
+        let first = start;
         start = end;
         // The BVH's robust slab test (Ize 2013 far scaling) of the packet on the run's box.
         let (tnx, tfx) = slab(seg.lo.x, seg.hi.x, inv[0], neg[0]);
@@ -88,10 +89,14 @@ pub(super) fn closest_edges<L: Lanes>(
         if L::bits(t_near.le(t_far * far)) & valid == 0 {
             continue;
         }
-        work.tri_tests += tris.len() as u64;
-        work.pair_tests += tris.len() as u64 * lanes;
+        work.tri_tests += (end - first) as u64;
+        work.pair_tests += (end - first) as u64 * lanes;
         let mut changed = false;
-        for tr in tris {
+        for j in first..end {
+            if tt.tris[j].rho.is_nan() {
+                tt.refine(j, blocks);
+            }
+            let tr = &tt.tris[j];
             let gd = dot_n(tr.g, dx, dy, dz);
             if tr.rho > RHO_MAX {
                 // Ill-conditioned: the watertight test decides coverage and depth.

@@ -369,6 +369,23 @@ impl TriSetup {
     /// `cone`; `None` if no ray from `o` can hit it (`D = 0`, non-finite values).
     #[inline(always)]
     pub fn new(v: [Vec3; 3], o: Vec3, tri: u32, src: u32, cone: &Cone) -> Option<Self> {
+        Self::new_with(v, o, tri, src, cone, false)
+    }
+
+    /// [`TriSetup::new`], or with `lazy` a cheap set-up for [`SetupExactness::Edges`]: a
+    /// crude edge band `bound >= ` the one of `new` (from `max |a_i|_1` alone: enough for a
+    /// conservative corner classification) and `rho = NaN`, to be replaced by `new`'s band
+    /// when a packet first reaches the triangle (`TileTris::refine`), so triangles dropped
+    /// by the classification or never reached skip the band analysis.
+    #[inline(always)]
+    pub fn new_with(
+        v: [Vec3; 3],
+        o: Vec3,
+        tri: u32,
+        src: u32,
+        cone: &Cone,
+        lazy: bool,
+    ) -> Option<Self> {
         // The same rounded `a_i = v_i - o` as the watertight test's projection.
         let a = [v[0] - o, v[1] - o, v[2] - o];
         // Edges of the rounded triangle: e_i = fl(a_{i+1} - a_i) (relative error U each).
@@ -392,6 +409,29 @@ impl TriSetup {
         ];
         if !n.iter().flatten().all(|x| x.is_finite()) {
             return None;
+        }
+        if lazy {
+            // psi_i <= sqrt 3 sqrt 2 |a_i| sqrt(1 + r^2) <= 2.45 (1 + r) A (A = max |a_i|_1,
+            // |c| = 1), amax_i <= A, |e_i|_1 <= 2A: every term of the band below at most.
+            let aa = l1(a[0]).max(l1(a[1])).max(l1(a[2]));
+            let pp = SQRT3 * 1.4143 * aa * (1.0 + cone.radius) * 1.01;
+            let ep = U * (2.02 * aa + 1.01 * pp);
+            let w = 2.0 * (2.0 * ep * pp) + 4.04 * U * pp * pp;
+            let p = 6.1 * U * aa * (2.0 * aa) * 1.01;
+            let bound = 2.0 * (w + p) * 1.01;
+            return Some(TriSetup {
+                n,
+                g: g.to_array(),
+                tri,
+                src,
+                bound: if bound.is_finite() {
+                    bound
+                } else {
+                    f32::INFINITY
+                },
+                rho: f32::NAN,
+                all_in: false,
+            });
         }
         // Distance of each vertex from any ray of the cone (module docs) and the bound on the
         // watertight test's projected coordinates |x'|, |y'| <= sqrt 3 dist.
@@ -541,6 +581,34 @@ pub struct TileTris {
     /// The watertight permutation `(kx, ky, kz)` shared by every ray of the tile, when the
     /// beam's slopes are below 1 (`|d_a|` strictly dominant, sign fixed).
     pub perm: Option<(usize, usize, usize)>,
+    /// The cone of the tile's rays (for the lazy band, [`TileTris::refine`]).
+    pub cone: Cone,
+}
+
+impl Default for Cone {
+    fn default() -> Self {
+        Cone::ANY
+    }
+}
+
+impl TileTris {
+    /// Replaces the lazy set-up `tris[j]` (`rho` NaN, [`TriSetup::new_with`]) by the band of
+    /// [`TriSetup::new`] (the same `n`, `g`: the same arithmetic), keeping its classification.
+    #[inline(never)]
+    pub fn refine(&mut self, j: usize, blocks: &[Tri4]) {
+        let s = &mut self.tris[j];
+        let b = &blocks[(s.src >> 2) as usize];
+        let ln = (s.src & 3) as usize;
+        let v = [b.vertex(ln, 0), b.vertex(ln, 1), b.vertex(ln, 2)];
+        match TriSetup::new(v, self.origin, s.tri, s.src, &self.cone) {
+            Some(e) => {
+                s.bound = e.bound;
+                s.rho = e.rho;
+            }
+            // (Never: the same checks passed in the lazy set-up.)
+            None => s.rho = f32::INFINITY,
+        }
+    }
 }
 
 /// The shared origin of a tile's rays, if they have one (the beam's origin box is a point).
@@ -556,6 +624,7 @@ pub fn setup_tile(
     leaves: &[LeafRef],
     beam: &Beam,
     origin: Vec3,
+    lazy: bool,
     out: &mut TileTris,
 ) {
     out.origin = origin;
@@ -564,6 +633,7 @@ pub fn setup_tile(
     out.rho_max = 0.0;
     let corners = BeamCorners::new(beam);
     let cone = Cone::of(corners.as_ref());
+    out.cone = cone;
     out.perm = corners.and_then(|c| {
         // Float division is monotone and x / x = 1: slopes below 1 mean |d_b| < |d_a|.
         let (a, (b, cc)) = (beam.axis as usize, beam.side_axes());
@@ -584,7 +654,9 @@ pub fn setup_tile(
                 continue;
             }
             let v = [b.vertex(ln, 0), b.vertex(ln, 1), b.vertex(ln, 2)];
-            let Some(mut s) = TriSetup::new(v, origin, b.tri[ln], 4 * bi + ln as u32, &cone) else {
+            let Some(mut s) =
+                TriSetup::new_with(v, origin, b.tri[ln], 4 * bi + ln as u32, &cone, lazy)
+            else {
                 out.counts.all_out += 1;
                 continue;
             };
@@ -1048,7 +1120,7 @@ fn final_t_lanes<L: Lanes>(
 fn run_setup<L: Lanes, const FULL: bool>(
     set: &SampleSet,
     blocks: &[Tri4],
-    tt: &TileTris,
+    tt: &mut TileTris,
     axis: usize,
     sign: f32,
     slack: f32,
@@ -1068,7 +1140,7 @@ fn run_setup<L: Lanes, const FULL: bool>(
             }
         }
         let c = if FULL {
-            closest_setup(&rays, blocks, tt, axis, sign, slack, &mut work)
+            closest_setup(&rays, blocks, &*tt, axis, sign, slack, &mut work)
         } else {
             super::setup_edges::closest_edges(&rays, blocks, tt, axis, sign, slack, &mut work)
         };
@@ -1086,7 +1158,7 @@ fn run_setup<L: Lanes, const FULL: bool>(
 unsafe fn run_setup_avx2<const FULL: bool>(
     set: &SampleSet,
     blocks: &[Tri4],
-    tt: &TileTris,
+    tt: &mut TileTris,
     axis: usize,
     sign: f32,
     slack: f32,
@@ -1110,7 +1182,7 @@ pub unsafe fn test_tile_setup(
     blocks: &[Tri4],
     prim_ids: &[u32],
     samples: &[u32],
-    tt: &TileTris,
+    tt: &mut TileTris,
     beam: &Beam,
     scale: f32,
     lanes: usize,
