@@ -47,7 +47,7 @@ pub enum Visibility {
     /// per-ray traversal).
     BeamWatertight,
     /// The beam caster's set-up test with [`SetupExactness::Full`] (bit-identical to per-ray
-    /// traversal, ~1.3x the default set-up test's time; `tile_setup.rs`).
+    /// traversal, 10-25% slower than the default set-up test; `tile_setup.rs`).
     BeamExact,
 }
 

@@ -34,9 +34,10 @@
 //! exact coverage (no vertex hole, no hit-vs-miss difference), depth by HVVR's largest `1/t`
 //! with `t = 1 / (g . d)`, so the only differences from per-ray traversal are depth ties
 //! within float tolerance (0 on atrium, 47 of 213,385 subsamples on cornell's coplanar
-//! overlapping faces) — at ~8% over the kernel without a band; `Full` also bands the depth
+//! overlapping faces) — at 0-15% over the kernel without a band; `Full` also bands the depth
 //! and takes every winner's `t` from the watertight test: 0 differing subsamples and
-//! bit-identical `t` for every scheme (`--visibility beam-exact`), ~30% slower than `Edges`.
+//! bit-identical `t` for every scheme (`--visibility beam-exact`), 10-25% slower than `Edges`
+//! (`tile_setup.rs`, "cost of exactness").
 //!
 //! **Measured** before the exact band (`vr_speed` example, atrium stereo 540 x 600 per eye, spp 16, 2 threads on the
 //! 2-core VM at load 15 — ratios from one process, noisy): set-up kernel 3.4-4.7x the per-ray

@@ -16,6 +16,10 @@
 //!   the watertight `t`: these *depth ties* (overlapping coplanar faces, triangles meeting at
 //!   the hit point) are the only differences from per-ray traversal (tests/vr_cast.rs:
 //!   >= 99.99% agreement, every difference within 1e-5 relative in `t`, never hit vs miss).
+//! - **Lazy band.** The tile's triangles are set up with a crude conservative band (enough
+//!   for the corner classification); a triangle's full band (and its depth condition `rho`)
+//!   is computed when a packet first reaches it (`TileTris::refine`), so triangles dropped
+//!   all-out or never reached skip the band analysis.
 //! - Ill-conditioned triangles (`rho > RHO_MAX`: seen nearly edge-on, or their plane nearly
 //!   through the origin, where `g . d` may even have the wrong sign) take the watertight
 //!   test for coverage and depth (their `1/t` is the watertight `t`'s), so they cannot turn

@@ -102,8 +102,8 @@
 //!
 //! Edges is the default because Full's extra cost buys only the order of depth ties at equal
 //! `t` (within float tolerance, which the done-when allows) and bit-exact `t`, while
-//! it costs ~30% of the beam cast, measured below; Edges keeps most of the speed of the kernel
-//! without any band.
+//! it costs 10-25% of the beam cast (measured below); Edges keeps most of the speed of the
+//! kernel without any band (0-15% slower in these noisy runs).
 //!
 //! **Cost of exactness** (`cargo run --release -p parallax-render --example vr_cast_cpu --
 //! SCENE 540 600 16 3 MODE`: stereo 1080 x 600 film, spp 16, one thread, thread CPU time,
@@ -111,19 +111,38 @@
 //! alternating, two rounds each, on the loaded 2-core VM; beam Mrays/s and beam / per-ray
 //! ratio, best round):
 //!
-//! COST_TABLE
+//! | scene (`SCENE`)  | pre-band (fd42ce8)   | Edges (default)      | Full                 |
+//! |------------------|----------------------|----------------------|----------------------|
+//! | atrium           | 18.2 Mrays/s, 4.19x  | 18.7 Mrays/s, 4.20x  | 15.5 Mrays/s, 3.47x  |
+//! | Sponza           | 43.2 Mrays/s, 5.24x  | 37.2 Mrays/s, 4.58x  | 31.5 Mrays/s, 3.83x  |
+//! | classroom        | 36.9 Mrays/s, 2.61x  | 31.9 Mrays/s, 2.17x  | 30.8 Mrays/s, 2.09x  |
+//!
+//! (Sponza: `../shared/scenes/sponza_dabrovic/sponza_dabrovic.glb`, classroom:
+//! `../shared/scenes/japanese_classroom/japanese_classroom.glb`, from the repository root,
+//! each with `Scene::camera(None)`; `MODE` = `edges` or `full`, the pre-band binary ignores
+//! it.) The machine's load rose during this run (atrium pre-band 569-597 ms, against 461-476
+//! ms an hour earlier), so single figures swing ~10%: an earlier, quieter run of the
+//! eager-band Edges kernel gave atrium 4.78-4.80x pre-band, 4.32-4.37x Edges, 3.37-3.45x Full;
+//! Sponza 5.12-5.45x, 4.45-4.53x, 3.17-3.78x; classroom 2.43x, 2.10x, 2.06x. perf samples of
+//! the lazy Edges kernel against the pre-band one on classroom at 1080 x 300 (6 rounds)
+//! found no difference beyond noise (sample stage 4134 vs 4226 samples, set-up 348 vs 389).
+//! Watertight fallbacks (of the ray-triangle tests): Edges 0.12% (atrium, classroom) and
+//! 0.03% (Sponza), all edge band; Full 2.27% / 0.05% / 0.31% plus the winners' `t` (0.89 /
+//! 0.42 / 0.06 tests per ray). The lead re-measures on the idle machine.
 //!
 //! Where Edges' extra time over the pre-band kernel goes (perf samples, atrium 1080 x 300):
-//! more than half the band analysis in `TriSetup::new` (per triangle and tile: replacing it by
-//! constants saved ~10 ms of ~205 ms at 1080 x 300; cutting it from 15 to 5 square roots and
-//! inlining it saved a few ms), the rest spread over the kernel
-//! (a second compare for packets with a candidate lane not certainly inside, the larger
-//! `TriSetup`); the edge band's watertight tests themselves (0.12% of the ray-triangle tests)
-//! are negligible. Full adds the winners' watertight `t` (0.89 tests per ray, one lane-wise
-//! test per packet) and the depth band's scalar watertight tests (2.3% of the ray-triangle
-//! tests on atrium, ~60% of them overlapping coplanar faces with bit-identical `g` that no
-//! float filter can order). Not done: a cheaper exact `t` (e.g. deferred to the consumers of
-//! the buffer), the band analysis computed lazily for the triangles a packet reaches.
+//! more than half was the band analysis in `TriSetup::new` (per triangle and tile: replacing
+//! it by constants saved ~10 ms of ~205 ms at 1080 x 300), so Edges sets triangles up
+//! lazily: the corner classification uses a crude conservative band (from `max |a_i|_1`
+//! alone, a few flops) and the full band is computed when a packet first reaches the
+//! triangle (`TileTris::refine`; all-out and unreached triangles never pay it); the rest is
+//! spread over the kernel (a second compare for packets with a candidate lane not certainly
+//! inside, the larger `TriSetup`). The edge band's watertight tests themselves (0.12% of the
+//! ray-triangle tests on atrium) are negligible. Full adds the winners' watertight `t` (0.89
+//! tests per ray, one lane-wise test per packet) and the depth band's scalar watertight tests
+//! (2.3% of the ray-triangle tests on atrium, ~60% of them overlapping coplanar faces with
+//! bit-identical `g` that no float filter can order). Not done: a cheaper exact `t` for Full
+//! (e.g. deferred to the consumers of the buffer), a vectorised band analysis.
 //!
 //! **Measured before the exact band** (`cargo run --release -p parallax-render --example vr_speed -- atrium 540 600
 //! 1,8,16,32 4 setup`, then `... 4 watertight`; stereo 540 x 600 per eye, 2 threads on the 2-core
