@@ -128,7 +128,11 @@
 //! found no difference beyond noise (sample stage 4134 vs 4226 samples, set-up 348 vs 389).
 //! Watertight fallbacks (of the ray-triangle tests): Edges 0.12% (atrium, classroom) and
 //! 0.03% (Sponza), all edge band; Full 2.27% / 0.05% / 0.31% plus the winners' `t` (0.89 /
-//! 0.42 / 0.06 tests per ray). The lead re-measures on the idle machine.
+//! 0.42 / 0.06 tests per ray). A later, quieter atrium run (load ~3, the final code, same
+//! command, pre-band / Edges alternating twice, then Full and pre-band once): pre-band
+//! 460-493 ms (21.0-22.5 Mrays/s, 4.63-4.95x), Edges 521-524 ms (19.8-19.9 Mrays/s,
+//! 4.31-4.39x), Full 658 ms (15.8 Mrays/s, 3.41x): Edges costs ~6-12% on atrium, Full ~40%.
+//! The lead re-measures on the idle machine.
 //!
 //! Where Edges' extra time over the pre-band kernel goes (perf samples, atrium 1080 x 300):
 //! more than half was the band analysis in `TriSetup::new` (per triangle and tile: replacing
