@@ -47,7 +47,7 @@ pub enum Visibility {
     /// per-ray traversal).
     BeamWatertight,
     /// The beam caster's set-up test with [`SetupExactness::Full`] (bit-identical to per-ray
-    /// traversal, 10-25% slower than the default set-up test; `tile_setup.rs`).
+    /// traversal, up to ~25% slower than the default set-up test; `tile_setup.rs`).
     BeamExact,
 }
 

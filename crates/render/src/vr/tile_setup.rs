@@ -102,7 +102,7 @@
 //!
 //! Edges is the default because Full's extra cost buys only the order of depth ties at equal
 //! `t` (within float tolerance, which the done-when allows) and bit-exact `t`, while
-//! it costs 10-25% of the beam cast (measured below); Edges keeps most of the speed of the
+//! it costs up to ~25% more beam-cast time (measured below; classroom ~3%); Edges keeps most of the speed of the
 //! kernel without any band (0-15% slower in these noisy runs).
 //!
 //! **Cost of exactness** (`cargo run --release -p parallax-render --example vr_cast_cpu --
