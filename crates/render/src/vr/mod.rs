@@ -36,8 +36,8 @@
 //! within float tolerance (0 on atrium, 47 of 213,385 subsamples on cornell's coplanar
 //! overlapping faces) — at 0-15% over the kernel without a band; `Full` also bands the depth
 //! and takes every winner's `t` from the watertight test: 0 differing subsamples and
-//! bit-identical `t` for every scheme (`--visibility beam-exact`), up to ~25% slower than `Edges`
-//! (`tile_setup.rs`, "cost of exactness").
+//! bit-identical `t` for every scheme (`--visibility beam-exact`), up to ~25% slower than
+//! `Edges` (`tile_setup.rs`, "cost of exactness").
 //!
 //! **Measured** before the exact band (`vr_speed` example, atrium stereo 540 x 600 per eye, spp 16, 2 threads on the
 //! 2-core VM at load 15 — ratios from one process, noisy): set-up kernel 3.4-4.7x the per-ray

@@ -102,8 +102,9 @@
 //!
 //! Edges is the default because Full's extra cost buys only the order of depth ties at equal
 //! `t` (within float tolerance, which the done-when allows) and bit-exact `t`, while
-//! it costs up to ~25% more beam-cast time (measured below; classroom ~3%); Edges keeps most of the speed of the
-//! kernel without any band (0-15% slower in these noisy runs).
+//! it costs up to ~25% more beam-cast time (measured below; classroom ~3%); Edges keeps
+//! most of the speed of the kernel without any band (~6-12% slower on atrium, up to ~15% on
+//! the other scenes in these noisy runs).
 //!
 //! **Cost of exactness** (`cargo run --release -p parallax-render --example vr_cast_cpu --
 //! SCENE 540 600 16 3 MODE`: stereo 1080 x 600 film, spp 16, one thread, thread CPU time,
