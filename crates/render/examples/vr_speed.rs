@@ -56,7 +56,11 @@ fn main() {
         Some("watertight") => SampleTest::Watertight,
         _ => SampleTest::TileSetup,
     };
-    let opts = CastOptions { test, lanes };
+    let opts = CastOptions {
+        test,
+        lanes,
+        ..CastOptions::default()
+    };
     let scene = Scene::load(scene_name).expect("scene");
     let bvh = Bvh::build(&scene.mesh);
     let desc = scene.camera(None).unwrap();

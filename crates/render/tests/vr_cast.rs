@@ -4,8 +4,8 @@
 use glam::Vec2;
 use parallax_bvh::Bvh;
 use parallax_render::vr::{
-    CastOptions, Hierarchy, SampleSet, SampleTest, VisibilityBuffer, cast, cast_opts, cast_with,
-    trace_per_ray,
+    CastOptions, Hierarchy, SampleSet, SampleTest, SetupExactness, VisibilityBuffer, cast,
+    cast_opts, cast_with, trace_per_ray,
 };
 use parallax_scene::Scene;
 use parallax_scene::camera::{Camera, CameraOptions, ModelKind};
@@ -154,110 +154,207 @@ fn wrong_cameras_are_refused() {
     assert!(SampleSet::foveated(pin, Vec2::ZERO, -1.0, 0.1, 1).is_err());
 }
 
-/// `(agreement, max relative t difference on equal triangles)` of two buffers.
-fn compare(a: &VisibilityBuffer, b: &VisibilityBuffer) -> (f64, f32) {
-    let mut max_rel = 0.0f32;
-    for ((p, q), (s, t)) in a.prim.iter().zip(&b.prim).zip(a.t.iter().zip(&b.t)) {
-        if p == q && *p != u32::MAX {
-            max_rel = max_rel.max((s - t).abs() / t.abs().max(1e-6));
-        }
-    }
-    (a.agreement(b), max_rel)
-}
-
-/// `(edge ties, other differences)`: differing triangles at `t` equal within 1e-5 relative,
-/// and every other difference (hit vs miss, or another depth).
-fn differences(a: &VisibilityBuffer, b: &VisibilityBuffer) -> (usize, usize) {
-    let (mut ties, mut others) = (0, 0);
-    for ((p, q), (s, t)) in a.prim.iter().zip(&b.prim).zip(a.t.iter().zip(&b.t)) {
+/// `(differing samples, equal triangles with different t bits)` of two buffers.
+fn mismatches(a: &VisibilityBuffer, b: &VisibilityBuffer) -> (usize, usize) {
+    let (mut prim, mut t) = (0, 0);
+    for ((p, q), (s, u)) in a.prim.iter().zip(&b.prim).zip(a.t.iter().zip(&b.t)) {
         if p != q {
-            if (s - t).abs() <= 1e-5 * t.abs() {
-                ties += 1;
-            } else {
-                others += 1;
-            }
+            prim += 1;
+        } else if s.to_bits() != u.to_bits() {
+            t += 1;
         }
     }
-    (ties, others)
+    (prim, t)
 }
 
-/// HVVR's per-tile triangle set-up (`tile_setup.rs`, the default sample test) against the exact
-/// watertight kernel and per-ray traversal: >= 99.99% of subsamples agree for every scheme (the
-/// rest on edges), equal triangles have equal `t` within 1e-5 relative, and the 4- and 8-lane
-/// set-up kernels give the same buffer.
+/// What [`check_setup`] measured.
+#[derive(Default)]
+struct Checked {
+    samples: usize,
+    /// Subsamples whose triangle differs from per-ray traversal.
+    diffs: usize,
+    /// Fraction of the ray-triangle tests decided by the watertight test (band).
+    band: f64,
+}
+
+/// Checks the set-up kernel with `exactness` on `set` against the watertight kernel and
+/// per-ray traversal (every difference printed); the 4- and 8-lane kernels give the same
+/// buffer, no certain decision is contradicted (`setup_rescues`).
+///
+/// - [`SetupExactness::Full`]: the same triangle on every subsample, the same `t` bit for bit.
+/// - [`SetupExactness::Edges`] (the default): >= 99.99% of subsamples agree (unless
+///   `coplanar_overlaps`), never hit vs miss,
+///   every difference is a depth tie (`|t_a - t_b| <= 1e-5 t`), and on equal triangles `t`
+///   (`1 / (g . d)`) is within 1e-5 relative of the watertight `t`.
+fn check_setup(
+    bvh: &Bvh,
+    set: &SampleSet,
+    label: &str,
+    exactness: SetupExactness,
+    coplanar_overlaps: bool,
+) -> Checked {
+    let h = Hierarchy::build(set).unwrap();
+    let mut exact = VisibilityBuffer::new(set);
+    cast_with(bvh, set, &h, &mut exact, 4);
+    let opts = CastOptions {
+        exactness,
+        ..CastOptions::default()
+    };
+    let mut setup = VisibilityBuffer::new(set);
+    let stats = cast_opts(bvh, set, &h, &mut setup, opts);
+    assert_eq!(CastOptions::default().test, SampleTest::TileSetup);
+    assert_eq!(CastOptions::default().exactness, SetupExactness::Edges);
+    if exactness == SetupExactness::Edges {
+        let mut dflt = VisibilityBuffer::new(set);
+        cast(bvh, set, &h, &mut dflt);
+        assert_eq!(dflt, setup, "{label}: the default is Edges");
+    }
+    for lanes in [4, 8] {
+        let mut other = VisibilityBuffer::new(set);
+        cast_opts(bvh, set, &h, &mut other, CastOptions { lanes, ..opts });
+        assert_eq!(other, setup, "{label}: {lanes} lanes");
+    }
+    let mut reference = VisibilityBuffer::new(set);
+    trace_per_ray(bvh, set, &mut reference);
+    let (diff_ref, t_ref) = mismatches(&setup, &reference);
+    let (diff_wt, t_wt) = mismatches(&setup, &exact);
+    let mut worst_t = 0.0f32;
+    for j in 0..setup.prim.len() {
+        let (a, b) = (setup.t[j], reference.t[j]);
+        if setup.prim[j] != reference.prim[j] {
+            eprintln!(
+                "  {label} diff {j}: setup {} t {a} | per-ray {} t {b} | watertight {} t {}",
+                setup.prim[j], reference.prim[j], exact.prim[j], exact.t[j]
+            );
+            assert!(
+                a.is_finite() && b.is_finite(),
+                "{label} sample {j}: hit vs miss ({a} vs {b})"
+            );
+        }
+        if a.is_finite() || b.is_finite() {
+            worst_t = worst_t.max((a - b).abs() / a.max(b));
+        }
+    }
+    let n = setup.prim.len();
+    let tris = stats.tris_all_out + stats.tris_partial + stats.tris_all_in;
+    let band = stats.setup_exact_tests as f64 / stats.setup_pair_tests.max(1) as f64;
+    eprintln!(
+        "{label} {exactness:?}: set-up tiles {}/{}, {n} samples, differences from per-ray \
+         {diff_ref}, from the watertight kernel {diff_wt}, largest relative t difference \
+         {worst_t:.2e}; triangles all-out {:.3} partial {:.3} all-in {:.3}; {:.2} packet tests \
+         / ray; band (watertight) tests {} of {} ray-triangle tests = {:.5} (edge band {}), \
+         winner t tests {}, rescues {}",
+        stats.setup_tiles,
+        stats.tiles,
+        stats.tris_all_out as f64 / tris.max(1) as f64,
+        stats.tris_partial as f64 / tris.max(1) as f64,
+        stats.tris_all_in as f64 / tris.max(1) as f64,
+        stats.tri_tests as f64 / stats.rays.max(1) as f64,
+        stats.setup_exact_tests,
+        stats.setup_pair_tests,
+        band,
+        stats.setup_edge_band,
+        stats.setup_final_tests,
+        stats.setup_rescues,
+    );
+    let hits = reference.prim.iter().filter(|&&p| p != u32::MAX).count();
+    assert!(hits > n / 50, "{label}: scene not in view");
+    // (A scene with coplanar overlapping faces, `coplanar_overlaps`, may have more depth ties
+    // under `Edges`: counted by the caller.)
+    assert!(
+        coplanar_overlaps || diff_ref as f64 <= 1e-4 * n as f64,
+        "{label}: {diff_ref} of {n} samples differ from per-ray traversal"
+    );
+    assert_eq!(
+        stats.setup_rescues, 0,
+        "{label}: a certain decision was contradicted"
+    );
+    match exactness {
+        SetupExactness::Full => {
+            assert_eq!(diff_ref, 0, "{label}: Full differs from per-ray traversal");
+            // Same triangle => the same watertight arithmetic => the same t, bit for bit.
+            assert_eq!(
+                t_ref, 0,
+                "{label}: equal triangles with different t (per-ray)"
+            );
+            assert_eq!(
+                t_wt, 0,
+                "{label}: equal triangles with different t (watertight kernel)"
+            );
+        }
+        SetupExactness::Edges => {
+            // Depth ties only: both hit (asserted above), at t equal within float tolerance.
+            assert!(worst_t <= 1e-5, "{label}: relative t difference {worst_t}");
+        }
+    }
+    Checked {
+        samples: n,
+        diffs: diff_ref,
+        band,
+    }
+}
+
+/// HVVR's per-tile triangle set-up (`tile_setup.rs`, the default sample test), both
+/// exactness settings, against the watertight kernel and per-ray traversal, every scheme, spp
+/// 1 and 4, atrium and cornell.
+///
+/// - `Full`: 0 differences, bit-identical `t`. Its band's watertight tests are measured
+///   (printed) and bounded at 5% of the ray-triangle tests: 0.2-2.9% here, most of them depth
+///   ties between overlapping coplanar faces (bit-identical `1/t` covectors, which only the
+///   exact test can order); the edge band alone is ~0.2%.
+/// - `Edges` (default): exact coverage, depth by `1/t`. The differences are depth ties: on
+///   cornell the blocks stand on the floor and their bottom faces overlap the floor
+///   coplanarly, so both faces give the same `1/t` up to rounding and HVVR's `1/t` order
+///   (ties to the lower index) may pick the other face than the watertight `t`; on atrium
+///   triangles meeting at the hit point (a ray through a shared edge hits both faces at the
+///   same depth). Counted and printed per scene; bounded by the 99.99% agreement.
 #[test]
 fn tile_setup_kernel_agrees_with_watertight_kernel_for_every_scheme() {
-    for name in ["atrium", "cornell"] {
-        let scene = Scene::load(name).unwrap();
-        let bvh = Bvh::build(&scene.mesh);
-        for spp in [1, 4] {
-            for (scheme, set) in schemes(&scene, spp) {
-                let h = Hierarchy::build(&set).unwrap();
-                let mut exact = VisibilityBuffer::new(&set);
-                cast_with(&bvh, &set, &h, &mut exact, 4);
-                let mut setup = VisibilityBuffer::new(&set);
-                let stats = cast(&bvh, &set, &h, &mut setup);
-                assert_eq!(CastOptions::default().test, SampleTest::TileSetup);
-                for lanes in [4, 8] {
-                    let mut other = VisibilityBuffer::new(&set);
-                    let opts = CastOptions {
-                        test: SampleTest::TileSetup,
-                        lanes,
-                    };
-                    cast_opts(&bvh, &set, &h, &mut other, opts);
-                    assert_eq!(other, setup, "{name} {scheme} spp {spp}: {lanes} lanes");
+    for exactness in [SetupExactness::Edges, SetupExactness::Full] {
+        for name in ["atrium", "cornell"] {
+            let scene = Scene::load(name).unwrap();
+            let bvh = Bvh::build(&scene.mesh);
+            let (mut total, mut diffs) = (0, 0);
+            for spp in [1, 4] {
+                for (scheme, set) in schemes(&scene, spp) {
+                    let label = format!("{name} {scheme} spp {spp}");
+                    let c = check_setup(&bvh, &set, &label, exactness, name == "cornell");
+                    total += c.samples;
+                    diffs += c.diffs;
+                    assert!(c.band < 0.05, "{label}: band {}", c.band);
                 }
-                let mut reference = VisibilityBuffer::new(&set);
-                trace_per_ray(&bvh, &set, &mut reference);
-                let (agree, rel) = compare(&setup, &exact);
-                if std::env::var("VR_DIAG").is_ok() {
-                    for j in 0..setup.prim.len() {
-                        if setup.prim[j] != exact.prim[j] {
-                            eprintln!(
-                                "  diff {j}: setup {} t {} | exact {} t {}",
-                                setup.prim[j], setup.t[j], exact.prim[j], exact.t[j]
-                            );
-                        }
-                    }
-                }
-                let (agree_ref, rel_ref) = compare(&setup, &reference);
-                let tris = stats.tris_all_out + stats.tris_partial + stats.tris_all_in;
-                eprintln!(
-                    "{name} {scheme} spp {spp}: set-up tiles {}/{}, agreement with watertight \
-                     {agree:.6} (t rel {rel:.2e}), with per-ray {agree_ref:.6}; triangles all-out \
-                     {:.3} partial {:.3} all-in {:.3}; {:.2} packet tests / ray",
-                    stats.setup_tiles,
-                    stats.tiles,
-                    stats.tris_all_out as f64 / tris.max(1) as f64,
-                    stats.tris_partial as f64 / tris.max(1) as f64,
-                    stats.tris_all_in as f64 / tris.max(1) as f64,
-                    stats.tri_tests as f64 / stats.rays.max(1) as f64,
-                );
-                if scheme == "thinlens" && spp > 1 {
-                    // (At spp 1 every ray starts at the lens centre: one origin.)
-                    assert_eq!(stats.setup_tiles, 0, "thin-lens tiles share no origin");
-                    assert_eq!(setup, exact);
-                } else {
-                    // Every tile with a beam shares its origin (EVERYTHING tiles, if any, not).
-                    assert!(stats.setup_tiles * 10 >= stats.tiles * 9, "{name} {scheme}");
-                }
-                // Every difference but 0.01% of the samples must be a tie: another triangle
-                // hit at the same `t` (1e-5 relative) — a shared edge, or coplanar overlapping
-                // faces (cornell's blocks stand on the floor with coplanar bottom faces: 0.3%
-                // of its samples, decided by 1-ulp differences of `t` in either kernel).
-                let (ties, others) = differences(&setup, &reference);
-                let n = setup.prim.len() as f64;
-                assert!(agree >= 0.99, "{name} {scheme} spp {spp}: {agree}");
-                assert!(agree_ref >= 0.99, "{name} {scheme} spp {spp}: {agree_ref}");
-                assert!(
-                    others as f64 <= 1e-4 * n,
-                    "{name} {scheme} spp {spp}: {others} non-edge differences ({ties} edge ties)"
-                );
-                assert!(
-                    rel <= 1e-5 && rel_ref <= 1e-5,
-                    "{name} {scheme}: t {rel} {rel_ref}"
-                );
             }
+            eprintln!(
+                "{name} {exactness:?}: {diffs} of {total} subsamples differ from per-ray \
+                 traversal (depth ties)"
+            );
+            if name == "atrium" || exactness == SetupExactness::Full {
+                assert!(diffs as f64 <= 1e-4 * total as f64);
+            } else {
+                // Cornell's coplanar overlaps: depth ties (asserted per sample), a few per
+                // thousand subsamples where the blocks meet the floor.
+                assert!(diffs as f64 <= 5e-3 * total as f64, "{diffs} of {total}");
+            }
+        }
+    }
+}
+
+/// The same at a larger image (atrium, 240 x 160, grid and stereo, 4 spp).
+#[test]
+fn tile_setup_kernel_agrees_at_a_larger_size() {
+    let scene = Scene::load("atrium").unwrap();
+    let bvh = Bvh::build(&scene.mesh);
+    let grid = SampleSet::grid(camera(&scene, ModelKind::Pinhole, 240, 160), 4);
+    let stereo = SampleSet::grid(camera(&scene, ModelKind::Stereo, 120, 160), 4);
+    for (label, set) in [("grid", grid), ("stereo", stereo)] {
+        for exactness in [SetupExactness::Edges, SetupExactness::Full] {
+            check_setup(
+                &bvh,
+                &set,
+                &format!("atrium 240x160 {label} spp 4"),
+                exactness,
+                false,
+            );
         }
     }
 }

@@ -56,7 +56,7 @@ pub struct VrArgs {
     /// whole pixel.
     #[arg(long)]
     pub subpixel: bool,
-    /// Visibility method: per-ray (BVH per subsample ray), beam (HVVR's beam caster) or beam-watertight (beam caster with the exact watertight sample test).
+    /// Visibility method: per-ray (BVH per subsample ray), beam (HVVR's beam caster), beam-watertight (beam caster with the exact watertight sample test) or beam-exact (the default set-up test with its full exact band: bit-identical to per-ray).
     #[arg(long, default_value = "per-ray", value_parser = Visibility::parse)]
     pub visibility: Visibility,
     /// Per-eye width override (default: the preset's).
@@ -359,7 +359,7 @@ pub struct VrBenchArgs {
     /// Also SSAA rows (HVVR Table 4).
     #[arg(long)]
     pub ssaa: bool,
-    /// Visibility methods: comma list of per-ray, beam, beam-watertight.
+    /// Visibility methods: comma list of per-ray, beam, beam-watertight, beam-exact.
     #[arg(long, value_delimiter = ',', default_value = "per-ray,beam", value_parser = Visibility::parse)]
     pub visibility: Vec<Visibility>,
     /// Timed repetitions (the best is reported).

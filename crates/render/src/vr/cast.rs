@@ -15,7 +15,9 @@ use parallax_core::math::PreparedBeam;
 use rayon::prelude::*;
 
 use super::intersect::{LeafBox, LeafGroup, group_leaves, test_tile};
-use super::tile_setup::{SampleTest, TileTris, setup_tile, shared_origin, test_tile_setup};
+use super::tile_setup::{
+    SampleTest, SetupExactness, TileTris, setup_tile, shared_origin, test_tile_setup,
+};
 use super::{Hierarchy, SampleSet, VisibilityBuffer};
 
 /// Per-stage times (summed over threads: CPU time, not wall time) and work counts of a cast.
@@ -47,6 +49,20 @@ pub struct CastStats {
     pub tris_all_out: u64,
     pub tris_partial: u64,
     pub tris_all_in: u64,
+    /// Ray-triangle tests of the set-up kernel (valid rays of its packet-triangle tests).
+    pub setup_pair_tests: u64,
+    /// Watertight tests the set-up kernel ran inside its uncertainty band (edge value within
+    /// the bound, or `1/t` within the depth band of the best so far), per ray and triangle.
+    pub setup_exact_tests: u64,
+    /// Watertight tests of the set-up kernel's winners (one per hit ray whose winner was not
+    /// already decided exactly), for their bit-exact `t`.
+    pub setup_final_tests: u64,
+    /// Rays re-decided by an exact scan of the tile's list because the watertight test
+    /// contradicted a certain decision (a bound violation; expected 0).
+    pub setup_rescues: u64,
+    /// Of `setup_exact_tests`: those for an edge value within the band (the rest are depth
+    /// comparisons within the depth band, including the best's own watertight `t`).
+    pub setup_edge_band: u64,
 }
 
 /// The caster's sample-test choice: the kernel and the SIMD width of its ray packets (`4` SSE,
@@ -56,6 +72,9 @@ pub struct CastStats {
 pub struct CastOptions {
     pub test: SampleTest,
     pub lanes: usize,
+    /// How exactly the set-up kernel reproduces per-ray traversal (ignored by the watertight
+    /// kernel, which is always exact).
+    pub exactness: SetupExactness,
 }
 
 impl Default for CastOptions {
@@ -66,6 +85,7 @@ impl Default for CastOptions {
         CastOptions {
             test: SampleTest::TileSetup,
             lanes: 4,
+            exactness: SetupExactness::Edges,
         }
     }
 }
@@ -101,8 +121,9 @@ fn scene_scale(bvh: &Bvh, h: &Hierarchy) -> f32 {
 
 /// Casts every subsample ray of `set` (tiles and blocks of `hierarchy`, built for `set`) and
 /// writes the closest hits to `out` with the default [`CastOptions`]: for each subsample the
-/// closest triangle of [`super::trace_per_ray`] up to edge cases within float tolerance
-/// (module docs of `tile_setup.rs`). Panics if `hierarchy` or `out` was made for another set (a
+/// closest triangle of [`super::trace_per_ray`] up to depth ties within float tolerance, and
+/// its `t` within ~1e-5 relative (the set-up kernel with [`SetupExactness::Edges`], module
+/// docs of `tile_setup.rs`; [`SetupExactness::Full`] is bit-identical). Panics if `hierarchy` or `out` was made for another set (a
 /// programming error).
 pub fn cast(
     bvh: &Bvh,
@@ -137,6 +158,7 @@ pub fn cast_with(
         CastOptions {
             test: SampleTest::Watertight,
             lanes,
+            exactness: SetupExactness::Full,
         },
     )
 }
@@ -168,7 +190,7 @@ pub fn cast_opts(
         prim: out.prim.as_mut_ptr(),
         t: out.t.as_mut_ptr(),
     };
-    let counters: [AtomicU64; 14] = Default::default();
+    let counters: [AtomicU64; 19] = Default::default();
     let add = |i: usize, v: u64| {
         counters[i].fetch_add(v, Ordering::Relaxed);
     };
@@ -201,6 +223,9 @@ pub fn cast_opts(
             let (mut leaves_n, mut leaf_tests, mut rays, mut group_tests) =
                 (0u64, 0u64, 0u64, 0u64);
             let (mut setup_tiles, mut tri_tests) = (0u64, 0u64);
+            let (mut pair_tests, mut exact_tests, mut final_tests, mut rescues) =
+                (0u64, 0u64, 0u64, 0u64);
+            let mut edge_band = 0u64;
             tt.counts = Default::default();
             let tiles = &hierarchy.tiles
                 [block.first_tile as usize..(block.first_tile + block.tile_count) as usize];
@@ -218,12 +243,23 @@ pub fn cast_opts(
                     SampleTest::Watertight => None,
                 };
                 if let Some(o) = origin {
-                    setup_tile(blocks_, &scratch.leaves, &tile.beam, o, tt);
+                    let lazy = opts.exactness == SetupExactness::Edges;
+                    setup_tile(blocks_, &scratch.leaves, &tile.beam, o, lazy, tt);
                     let b = Instant::now();
                     // SAFETY: as below.
                     let w = unsafe {
                         test_tile_setup(
-                            set, prim_ids, samples, tt, &tile.beam, scale, lanes, ptr.prim, ptr.t,
+                            set,
+                            blocks_,
+                            prim_ids,
+                            samples,
+                            tt,
+                            &tile.beam,
+                            scale,
+                            lanes,
+                            opts.exactness,
+                            ptr.prim,
+                            ptr.t,
                         )
                     };
                     let c = Instant::now();
@@ -232,6 +268,11 @@ pub fn cast_opts(
                     leaves_n += scratch.leaves.len() as u64;
                     rays += w.rays;
                     tri_tests += w.tri_tests;
+                    pair_tests += w.pair_tests;
+                    exact_tests += w.exact_tests;
+                    final_tests += w.final_tests;
+                    rescues += w.rescues;
+                    edge_band += w.edge_band;
                     setup_tiles += 1;
                     continue;
                 }
@@ -266,6 +307,11 @@ pub fn cast_opts(
             add(11, tt.counts.all_out);
             add(12, tt.counts.partial);
             add(13, tt.counts.all_in);
+            add(14, pair_tests);
+            add(15, exact_tests);
+            add(16, final_tests);
+            add(17, rescues);
+            add(18, edge_band);
         },
     );
     let g = |i: usize| counters[i].load(Ordering::Relaxed);
@@ -286,5 +332,10 @@ pub fn cast_opts(
         tris_all_out: g(11),
         tris_partial: g(12),
         tris_all_in: g(13),
+        setup_pair_tests: g(14),
+        setup_exact_tests: g(15),
+        setup_final_tests: g(16),
+        setup_rescues: g(17),
+        setup_edge_band: g(18),
     }
 }

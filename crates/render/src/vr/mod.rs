@@ -27,12 +27,19 @@
 //! [`SampleSet::subsample_ray`], and the culling is conservative, so their buffer equals
 //! [`trace_per_ray`]'s subsample for subsample (tests/vr_cast.rs: agreement 1.0 and equal `t`
 //! on atrium and cornell for grid, per-channel distortion, foveated, 210 x 130 fisheye,
-//! thin-lens DoF and stereo, spp 1 and 4). The set-up kernel uses another (equally watertight
-//! on edges) edge function: it agrees on all but edge ties — another triangle at the same `t`
-//! within 1e-5 (shared edges; cornell's coplanar block bottoms on the floor, 0.3% of its
-//! samples at 96 x 64) — and its `t` is within 1e-5 relative (tests/vr_cast.rs).
+//! thin-lens DoF and stereo, spp 1 and 4). The set-up kernel uses its float edge and depth
+//! values as a filter with a conservative uncertainty band and decides inside the band with
+//! the same watertight test (`tile_setup.rs`, "exact band"), in two settings
+//! ([`SetupExactness`] in [`CastOptions`]): the default `Edges` bands only the edge values —
+//! exact coverage (no vertex hole, no hit-vs-miss difference), depth by HVVR's largest `1/t`
+//! with `t = 1 / (g . d)`, so the only differences from per-ray traversal are depth ties
+//! within float tolerance (0 on atrium, 47 of 213,385 subsamples on cornell's coplanar
+//! overlapping faces) — at 0-15% over the kernel without a band; `Full` also bands the depth
+//! and takes every winner's `t` from the watertight test: 0 differing subsamples and
+//! bit-identical `t` for every scheme (`--visibility beam-exact`), up to ~25% slower than
+//! `Edges` (`tile_setup.rs`, "cost of exactness").
 //!
-//! **Measured** (`vr_speed` example, atrium stereo 540 x 600 per eye, spp 16, 2 threads on the
+//! **Measured** before the exact band (`vr_speed` example, atrium stereo 540 x 600 per eye, spp 16, 2 threads on the
 //! 2-core VM at load 15 — ratios from one process, noisy): set-up kernel 3.4-4.7x the per-ray
 //! rate, watertight kernel 2.3x in the same conditions (earlier idle-machine figures for the
 //! watertight kernel at 2160 x 1200: 2.5-2.65x). See `tile_setup.rs` for the full table and
@@ -44,6 +51,7 @@ pub mod intersect;
 pub mod packet;
 pub mod patterns;
 pub mod samples;
+pub mod setup_edges;
 pub mod tile_setup;
 pub mod visibility;
 
@@ -51,7 +59,7 @@ pub use cast::{CastOptions, CastStats, cast, cast_opts, cast_with};
 pub use hierarchy::{Block, Hierarchy, HierarchyError, Tile};
 pub use patterns::PatternError;
 pub use samples::{Sample, SampleSet};
-pub use tile_setup::SampleTest;
+pub use tile_setup::{SampleTest, SetupExactness};
 pub use visibility::{VisibilityBuffer, trace_per_ray};
 
 // HVVR around the visibility stage (issue 5 parts 4-6): presets, shading, resolve,

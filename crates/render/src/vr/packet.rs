@@ -341,7 +341,7 @@ pub(crate) fn gen_n<L: Lanes>(set: &SampleSet, pairs: &[(u32, u32)]) -> RaysN<L>
 /// The axis permutation of `WatertightRay::new`: dominant axis `kz`, `kx, ky` swapped when
 /// `d[kz] < 0`.
 #[inline(always)]
-fn permutation(d: Vec3) -> (usize, usize, usize) {
+pub(crate) fn permutation(d: Vec3) -> (usize, usize, usize) {
     let a = d.abs();
     let kz = if a.x > a.y {
         if a.x > a.z { 0 } else { 2 }

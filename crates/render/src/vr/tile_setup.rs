@@ -4,31 +4,73 @@
 //! the thin lens), every triangle of the tile's list is set up once relative to `o`, so that a
 //! ray-triangle test is a few multiply-adds on the ray direction `d` alone:
 //!
-//! - **Edge covectors** `n_i = (v_i - o) x (v_{i+1} - o)`, `i = 0..2`, oriented by the sign
-//!   of `D = N . (v_0 - o)` (`N = (v_1 - v_0) x (v_2 - v_0)`): the ray `o + t d, t > 0` passes
-//!   through the triangle iff `n_i . d >= 0` for the three edges (for `d = p - o` with `p` of
-//!   barycentrics `b`, `n_i . d = b_{i+2} D`). A shared edge gives bit-for-bit negated covectors
-//!   in its two triangles (the cross product is evaluated without FMA contraction, and
-//!   `a x b = -(b x a)` exactly in IEEE f32; round-to-nearest is sign-symmetric, so the dot
-//!   products are exactly negated too): a ray through the edge passes the edge test of one
-//!   triangle or the other (both when exactly zero), so the test stays **watertight** across
-//!   shared edges and vertices of consistently oriented meshes, like Woop et al.'s.
+//! - **Edge covectors** `n_i = a_i x (a_{i+1} - a_i)` (`= a_i x a_{i+1}` exactly; `a_i = v_i - o`
+//!   rounded, the very `a_i` of the watertight test's projection), `i = 0..2`, oriented by the
+//!   sign of `D = N . a_0` (`N = (a_1 - a_0) x (a_2 - a_0)`): the ray `o + t d, t > 0` passes
+//!   through the triangle iff `e_i(d) = n_i . d >= 0` for the three edges (for `d = p - o` with
+//!   `p` of barycentrics `b`, `n_i . d = b_{i+2} D`). The short-edge form keeps the rounding
+//!   error relative to `|a_i| |a_{i+1} - a_i|` instead of `|a_i|^2` (HVVR's `a_i x a_{i+1}`
+//!   cancels for distant triangles). Watertightness no longer rests on bit-negated covectors
+//!   but on the exact band below.
 //! - **Inverse-distance covector** `g = N / D`, so `1/t = g . d` for any direction (`t` in
 //!   units of `|d|`, the per-ray baseline's units since the rays are the same float rays). The
-//!   closest hit is the largest positive `g . d`; a ray starts with `1/t_max = 0` (rays of
-//!   every camera have `t_min = 0, t_max = inf`), and `t = 1 / (g . d)` is computed once, for
-//!   the winner. Equal `g . d` goes to the lower triangle index (the BVH's tie-break).
+//!   closest hit is the largest positive `g . d` (rays of every camera have `t_min = 0,
+//!   t_max = inf`).
 //! - **Tile-corner classification** (§5.5): `n_i . d` is linear in `d`, and the tile beam
 //!   ([`Beam`]) is the cone spanned by its four corner directions `c_k = s e_a + u e_b + v e_c`
 //!   (every subsample ray of the tile satisfies `d / |d_a| = sum_k w_k c_k`, `w_k >= 0`,
 //!   `sum w_k = 1`; the beam's slope bounds are rounded outwards, property-tested in
-//!   tests/vr_beams.rs). With `tol_i = 1e-5 sum_j |n_ij| max_k |c_kj|` (far above the `3 ulp`
-//!   error of a float dot product): if for some edge every corner has `n_i . c_k < -tol_i`, the
-//!   float edge value of every ray of the tile is negative — **all-out**, the triangle is
-//!   dropped; if every corner has `n_i . c_k > tol_i` for all three edges, every ray passes the
-//!   three edge tests — **all-in**, only `g . d` is evaluated. Otherwise partial. So the
-//!   classification never changes the kernel's answer (tests/vr_tile_setup.rs checks both
-//!   directions on random beams and triangles).
+//!   tests/vr_beams.rs). With `tol_i = bound cm + 3.1 U sum_j |n_ij| max_k |c_kj|` (`cm` the
+//!   largest corner coordinate, `bound` the edge band below, `U = 2^-24`): if for some edge
+//!   every corner has `n_i . c_k < -tol_i`, every ray of the tile has a real edge value below
+//!   minus the watertight test's error — **all-out**, dropped; if every corner has
+//!   `n_i . c_k > tol_i` for all three edges, every ray is certainly inside — **all-in**, only
+//!   `g . d` is evaluated. Otherwise partial. So an all-in / all-out classification implies
+//!   the per-ray band decision, which implies the watertight test's (tests/vr_tile_setup.rs
+//!   checks both against the watertight test on random beams and triangles).
+//!
+//! **Beyond HVVR: the exact band.** HVVR's set-up test decides with float signs, so it
+//! disagrees with a per-ray watertight test on edges, leaks at shared vertices, and orders
+//! overlapping coplanar faces by rounding noise. Ours uses the set-up values as a fast filter
+//! with a conservative uncertainty band and decides everything inside the band with the BVH's
+//! own watertight test (`WatertightRay::intersect_within`, Woop et al. 2013), so every hit
+//! and `t` equal per-ray traversal bit for bit ([`SetupExactness::Full`]; the default
+//! [`SetupExactness::Edges`] keeps only the edge band, below):
+//!
+//! - **Edge band** `bound |d|_inf` per triangle and tile (`TriSetup::bound`): forward error
+//!   analysis of (1) our `fl(n_i . d)` against the real `e_i(d)` of the rounded `a_i`:
+//!   `6.1 U |a_i|_1 |a_{i+1} - a_i|_1 |d|_inf` (edge subtraction, two products and a
+//!   difference, the dot product); (2) the watertight test's edge function `u_i` (in `e`
+//!   units: `e = |d_kz| u` exactly, the shear has determinant `1 / d_kz`) against `e_i(d)`:
+//!   its projected coordinates are bounded by `psi = sqrt 3 (|a x c| + |a| r)` for every ray
+//!   of the tile's cone (centre `c`, chord radius `r`, [`Cone`]), each carries
+//!   `U (2.02 |a|_inf + 1.01 psi)` of error (shear product, rounded `d_kx / d_kz`,
+//!   subtraction), and `u = c'x b'y - c'y b'x` adds `4.04 U psi_b psi_c`. Doubled for
+//!   second-order terms. A ray with every edge value above the band is certainly inside
+//!   (the watertight test sees three same-sign edge functions, and `t > 0`: all real values
+//!   positive means the plane is crossed at `t > 0`), one edge below minus the band is
+//!   certainly outside; otherwise the watertight test decides.
+//! - **Depth band** `rho` (`TriSetup::rho`, relative): `g . d` loses `~14 U sigma kappa`
+//!   (`kappa = |N| max |a| / |D|` = 1 / sine of the grazing angle for every ray through the
+//!   triangle, `sigma` the sliver factor of `N`), the watertight `t = sum u_i z_i / sum u_i`
+//!   moves by at most `sqrt 3 Lambda sum |du_i| / |D|` (`Lambda` the longest edge) plus `7U`.
+//!   First order, doubled. A certain-inside candidate replaces the best only if `g . d` is
+//!   above the best's band (`1.5 (rho_best + rho_cand)`); inside that band both watertight
+//!   `t` are compared with the BVH's rule (`t` smaller, or equal and lower triangle index).
+//!   Triangles with `rho > 0.05` (seen nearly edge-on, or their plane nearly through `o`)
+//!   always take the watertight test.
+//! - The winner's `t` is always the watertight test's (lane-wise in one pass per packet,
+//!   [`final_t_lanes`]), so the same triangle gives the same `t` bit for bit. A winner the
+//!   watertight test rejects (a violated bound; never observed) sends the ray through an exact
+//!   scan of the tile's list (`CastStats::setup_rescues`, asserted 0 in the tests).
+//! - The early exit and the leaf box test use the upper bound `1 / (g . d (1 - rho))` of the
+//!   best's watertight `t`.
+//!
+//! Caveat: the band analysis is first-order forward error analysis with a factor 2, not a
+//! machine-checked proof; the tests compare every subsample of every scheme with per-ray
+//! traversal and assert that no certain decision is ever contradicted (`setup_rescues`, the
+//! fan and property tests). A camera exactly on a triangle's plane (`D = 0`: dropped here)
+//! could get a `t ~ 0` hit from the watertight test.
 //! - Triangles with `D = 0` (the plane holds `o`: seen edge-on, never hit by a ray from `o`)
 //!   or a non-finite `g` are dropped.
 //!
@@ -41,12 +83,73 @@
 //! ray can reach it before its closest hit so far (this cut the triangle tests per ray from ~60
 //! to ~1.2 on atrium at 96 x 64).
 //!
-//! **Watertightness at vertices.** Exactly through a shared *vertex* the spoke edge values are
-//! rounding noise around zero and can all share one strict sign, so such a ray can leak
-//! (tests/vr_tile_setup.rs measures 32 of 800 rays aimed exactly at fan centres); Woop et
-//! al.'s test has no such leak. Camera rays hit a vertex exactly with probability ~0.
+//! **Watertightness at vertices.** With float signs alone, rays exactly through a shared
+//! vertex leaked (all spoke values rounding noise of one sign: 32 of 800 fan-centre rays with
+//! HVVR's covectors, 19 with ours); with the band they are decided by the watertight test,
+//! which gives the vertex to exactly one triangle of the fan (tests/vr_tile_setup.rs asserts
+//! it for every ray).
 //!
-//! **Measured** (`cargo run --release -p parallax-render --example vr_speed -- atrium 540 600
+//! **Two settings, [`SetupExactness`]** (in [`super::CastOptions`]; CLI `--visibility beam`
+//! vs `beam-exact`):
+//!
+//! - **`Edges` (default)**: the edge band only (`setup_edges.rs`): coverage is exact (no
+//!   vertex hole, shared edges decided by the watertight test), depth is HVVR's largest
+//!   `1/t = g . d` with `t = 1 / (g . d)` for the winner. Differences from per-ray traversal
+//!   are depth ties only (`t` equal within ~1e-5 relative, never hit vs miss): 0 on atrium in
+//!   every test, 47 of 213,385 subsamples on cornell (coplanar overlapping faces).
+//! - **`Full`**: the edge band, the depth band and the winner's watertight `t` (below):
+//!   bit-identical to per-ray traversal.
+//!
+//! Edges is the default because Full's extra cost buys only the order of depth ties at equal
+//! `t` (within float tolerance, which the done-when allows) and bit-exact `t`, while
+//! it costs up to ~25% more beam-cast time (measured below; classroom ~3%); Edges keeps
+//! most of the speed of the kernel without any band (~6-12% slower on atrium, up to ~15% on
+//! the other scenes in these noisy runs).
+//!
+//! **Cost of exactness** (`cargo run --release -p parallax-render --example vr_cast_cpu --
+//! SCENE 540 600 16 3 MODE`: stereo 1080 x 600 film, spp 16, one thread, thread CPU time,
+//! best of 3; runs of the pre-band binary (commit fd42ce8, the same example) and of this one,
+//! alternating, two rounds each, on the loaded 2-core VM; beam Mrays/s and beam / per-ray
+//! ratio, best round):
+//!
+//! | scene (`SCENE`)  | pre-band (fd42ce8)   | Edges (default)      | Full                 |
+//! |------------------|----------------------|----------------------|----------------------|
+//! | atrium           | 18.2 Mrays/s, 4.19x  | 18.7 Mrays/s, 4.20x  | 15.5 Mrays/s, 3.47x  |
+//! | Sponza           | 43.2 Mrays/s, 5.24x  | 37.2 Mrays/s, 4.58x  | 31.5 Mrays/s, 3.83x  |
+//! | classroom        | 36.9 Mrays/s, 2.61x  | 31.9 Mrays/s, 2.17x  | 30.8 Mrays/s, 2.09x  |
+//!
+//! (Sponza: `../shared/scenes/sponza_dabrovic/sponza_dabrovic.glb`, classroom:
+//! `../shared/scenes/japanese_classroom/japanese_classroom.glb`, from the repository root,
+//! each with `Scene::camera(None)`; `MODE` = `edges` or `full`, the pre-band binary ignores
+//! it.) The machine's load rose during this run (atrium pre-band 569-597 ms, against 461-476
+//! ms an hour earlier), so single figures swing ~10%: an earlier, quieter run of the
+//! eager-band Edges kernel gave atrium 4.78-4.80x pre-band, 4.32-4.37x Edges, 3.37-3.45x Full;
+//! Sponza 5.12-5.45x, 4.45-4.53x, 3.17-3.78x; classroom 2.43x, 2.10x, 2.06x. perf samples of
+//! the lazy Edges kernel against the pre-band one on classroom at 1080 x 300 (6 rounds)
+//! found no difference beyond noise (sample stage 4134 vs 4226 samples, set-up 348 vs 389).
+//! Watertight fallbacks (of the ray-triangle tests): Edges 0.12% (atrium, classroom) and
+//! 0.03% (Sponza), all edge band; Full 2.27% / 0.05% / 0.31% plus the winners' `t` (0.89 /
+//! 0.42 / 0.06 tests per ray). A later, quieter atrium run (load ~3, the final code, same
+//! command, pre-band / Edges alternating twice, then Full and pre-band once): pre-band
+//! 460-493 ms (21.0-22.5 Mrays/s, 4.63-4.95x), Edges 521-524 ms (19.8-19.9 Mrays/s,
+//! 4.31-4.39x), Full 658 ms (15.8 Mrays/s, 3.41x): Edges costs ~6-12% on atrium, Full ~40%.
+//! The lead re-measures on the idle machine.
+//!
+//! Where Edges' extra time over the pre-band kernel goes (perf samples, atrium 1080 x 300):
+//! more than half was the band analysis in `TriSetup::new` (per triangle and tile: replacing
+//! it by constants saved ~10 ms of ~205 ms at 1080 x 300), so Edges sets triangles up
+//! lazily: the corner classification uses a crude conservative band (from `max |a_i|_1`
+//! alone, a few flops) and the full band is computed when a packet first reaches the
+//! triangle (`TileTris::refine`; all-out and unreached triangles never pay it); the rest is
+//! spread over the kernel (a second compare for packets with a candidate lane not certainly
+//! inside, the larger `TriSetup`). The edge band's watertight tests themselves (0.12% of the
+//! ray-triangle tests on atrium) are negligible. Full adds the winners' watertight `t` (0.89
+//! tests per ray, one lane-wise test per packet) and the depth band's scalar watertight tests
+//! (2.3% of the ray-triangle tests on atrium, ~60% of them overlapping coplanar faces with
+//! bit-identical `g` that no float filter can order). Not done: a cheaper exact `t` for Full
+//! (e.g. deferred to the consumers of the buffer), a vectorised band analysis.
+//!
+//! **Measured before the exact band** (`cargo run --release -p parallax-render --example vr_speed -- atrium 540 600
 //! 1,8,16,32 4 setup`, then `... 4 watertight`; stereo 540 x 600 per eye, 2 threads on the 2-core
 //! VM at load average 13-15 from other jobs, so wall times swing ~1.5x; speed-up = beam wall time
 //! vs per-ray `trace_per_ray` wall time in the same process, best of 3 / best of 2):
@@ -72,10 +175,12 @@
 //! film-position form of `n . d` for pinhole tiles (the ray generation still normalises every
 //! direction), 4/8 triangles per SIMD op, a vectorised 8-lane build.
 //!
-//! **Exactness.** Not bit-identical to the BVH's watertight test (a different edge function):
-//! hits can differ on edges within float tolerance and `t` by a few ulps; tests/vr_cast.rs
-//! measures agreement with per-ray traversal per scheme (>= 99.99% required). Tiles without a
-//! shared origin (thin lens) take the exact watertight kernel ([`super::intersect`]).
+//! **Exactness.** `Full`: same triangle and bit-identical `t` as per-ray traversal on every
+//! subsample of every scheme tested (tests/vr_cast.rs: 0 differences in 426,770 subsamples at
+//! 96 x 64 and in 307,200 at 240 x 160). `Edges` (default): the same tests find 0
+//! differences on atrium (96 x 64 and 240 x 160) and 47 of 213,385 on cornell, all depth
+//! ties (both hit, `t` within 1e-5 relative; `t` itself within ~1e-5 of the watertight `t`). Tiles without a shared origin (thin lens) take the
+//! exact watertight kernel ([`super::intersect`]).
 
 use glam::{Vec3, Vec4};
 use parallax_bvh::Tri4;
@@ -83,24 +188,48 @@ use parallax_bvh::beam::LeafRef;
 use parallax_bvh::node::{leaf_count, leaf_first};
 use parallax_core::math::Beam;
 use parallax_core::math::ROBUST_FAR_SCALE;
-use parallax_core::{Aabb, NO_ID};
+use parallax_core::math::WatertightRay;
+use parallax_core::{Aabb, NO_ID, Ray};
 
 use super::SampleSet;
-use super::packet::{ClosestN, Lanes, RaysN, for_each_packet};
+use super::packet::{ClosestN, Lanes, RaysN, for_each_packet, permutation};
 
 /// Which sample test the caster runs (module docs of `tile_setup.rs` and `intersect.rs`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum SampleTest {
     /// The BVH's watertight test per ray (Woop et al. 2013), bit-identical to per-ray traversal.
     Watertight,
-    /// HVVR's per-tile triangle set-up with tile-corner classification (this module); tiles
-    /// without a shared ray origin (thin lens) fall back to [`SampleTest::Watertight`].
+    /// HVVR's per-tile triangle set-up with tile-corner classification (this module), exact
+    /// through its uncertainty band; tiles without a shared ray origin (thin lens) fall back
+    /// to [`SampleTest::Watertight`].
     #[default]
     TileSetup,
 }
 
-/// Relative tolerance of the corner classification (module docs).
-pub const CLASSIFY_TOLERANCE: f32 = 1e-5;
+/// How exactly the set-up kernel ([`SampleTest::TileSetup`]) reproduces per-ray traversal
+/// (module docs, "cost of exactness").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SetupExactness {
+    /// Exact coverage (the edge band: no vertex hole, shared edges decided by the watertight
+    /// test), depth by the largest `1/t = g . d` with `t = 1 / (g . d)` (HVVR §5.5): equal to
+    /// per-ray traversal up to depth ties within float tolerance (`setup_edges.rs`). The
+    /// default: it keeps the set-up kernel's speed (module docs).
+    #[default]
+    Edges,
+    /// Edge and depth bands, the winner's `t` by the watertight test: the same triangle and
+    /// `t`, bit for bit, as per-ray traversal (module docs, "exact band"), ~1.5x slower.
+    Full,
+}
+
+/// Unit roundoff of f32 (`2^-24`): `fl(x op y) = (x op y)(1 + δ)`, `|δ| <= U`.
+const U: f32 = f32::EPSILON * 0.5;
+const SQRT3: f32 = 1.732_051;
+/// A triangle whose depth band [`TriSetup::rho`] exceeds this is ill-conditioned (seen almost
+/// edge-on, or its plane passes near the origin): its depth is always decided exactly.
+pub const RHO_MAX: f32 = 0.05;
+/// Relative band of a best `1/t` that came from an exact Woop `t` (`fl(1/t)`: one rounding,
+/// doubled).
+const RHO_EXACT: f32 = 2.0 * U;
 
 /// A triangle set up for rays from one origin (module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -112,7 +241,14 @@ pub struct TriSetup {
     pub g: [f32; 3],
     /// Index in `Bvh::triangles`.
     pub tri: u32,
-    /// Every ray of the tile passes the three edge tests.
+    /// Where the vertices are: `4 * block + lane` in `Bvh::blocks` (the exact test reads them).
+    pub src: u32,
+    /// Edge uncertainty per unit `|d|_inf`: `|fl(n_i . d) - e_i(d)| + |Woop's u_i - e_i(d)|
+    /// <= bound |d|_inf` for every ray of the tile (module docs, "exact band").
+    pub bound: f32,
+    /// Relative depth band: `|g . d - 1/t_woop| <= rho g . d` (first order, doubled).
+    pub rho: f32,
+    /// Every ray of the tile certainly passes the three edge tests.
     pub all_in: bool,
 }
 
@@ -122,7 +258,7 @@ pub fn dot3(a: [f32; 3], d: Vec3) -> f32 {
     a[0] * d.x + a[1] * d.y + a[2] * d.z
 }
 
-/// `a x b` component by component, never contracted (exactly anti-symmetric).
+/// `a x b` component by component, never contracted.
 #[inline(always)]
 fn cross(a: Vec3, b: Vec3) -> Vec3 {
     Vec3::new(
@@ -132,12 +268,51 @@ fn cross(a: Vec3, b: Vec3) -> Vec3 {
     )
 }
 
+fn l1(v: Vec3) -> f32 {
+    v.abs().element_sum()
+}
+
 /// Corner classification of a triangle against a tile beam (module docs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CornerClass {
     AllOut,
     Partial,
     AllIn,
+}
+
+/// A cone of unit directions holding every ray of a tile: `|d/|d| - centre| <= radius`.
+#[derive(Clone, Copy, Debug)]
+pub struct Cone {
+    pub centre: Vec3,
+    pub radius: f32,
+}
+
+impl Cone {
+    /// Every direction (`|d̂ - 0| = 1`; the vertex distance bound becomes `|a|`, module docs).
+    pub const ANY: Cone = Cone {
+        centre: Vec3::ZERO,
+        radius: 1.0,
+    };
+
+    /// The cone of a beam's corners: centre = normalised sum of the unit corners, radius = the
+    /// largest chord to a corner. Over a geodesically convex spherical quadrilateral within the
+    /// hemisphere around the centre, the chord to the centre is largest at a corner; otherwise
+    /// [`Cone::ANY`].
+    pub fn of(corners: Option<&BeamCorners>) -> Cone {
+        let Some(c) = corners else {
+            return Cone::ANY;
+        };
+        let u = c.c.map(|x| x.normalize_or_zero());
+        let centre = (u[0] + u[1] + u[2] + u[3]).normalize_or_zero();
+        if centre == Vec3::ZERO || u.iter().any(|x| x.dot(centre) <= 0.1) {
+            return Cone::ANY;
+        }
+        let r = u.iter().map(|x| (*x - centre).length()).fold(0.0, f32::max);
+        Cone {
+            centre,
+            radius: r * 1.001 + 1e-6,
+        }
+    }
 }
 
 /// The four corner directions of a beam and the per-axis magnitude bound of its directions
@@ -170,11 +345,19 @@ impl BeamCorners {
         Some(BeamCorners { c: cs, cmax })
     }
 
-    /// Classifies oriented edge covectors `n` (module docs).
-    pub fn classify(&self, n: &[[f32; 3]; 3]) -> CornerClass {
+    /// Classifies a set-up triangle (module docs): all-in only if every ray of the beam is
+    /// certainly inside (edge values above the band), all-out only if one edge is certainly
+    /// negative for every ray.
+    #[inline(always)]
+    pub fn classify(&self, s: &TriSetup) -> CornerClass {
+        // Every ray satisfies d / |d_a| = sum_k w_k c_k, so |d|_inf <= |d_a| cm and the real
+        // edge value is |d_a| sum_k w_k e(c_k); fl(n . c_k) is within the set-up part of the
+        // band times cm plus its own dot rounding (3.1 U sum |n_j| cmax_j) of e(c_k).
+        let cm = self.cmax.max_element();
         let mut all_in = true;
-        for e in n {
-            let tol = CLASSIFY_TOLERANCE * dot3(e.map(f32::abs), self.cmax);
+        for e in &s.n {
+            let tol =
+                s.bound * cm + 3.1 * U * dot3([e[0].abs(), e[1].abs(), e[2].abs()], self.cmax);
             let (mut out, mut inn) = (true, true);
             for c in &self.c {
                 let v = dot3(*e, *c);
@@ -194,12 +377,44 @@ impl BeamCorners {
     }
 }
 
+/// Ray-triangle decision of the set-up edge test for one direction (module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EdgeClass {
+    /// Every edge value above the band: the watertight test certainly finds the ray inside.
+    In,
+    /// An edge value below minus the band: the watertight test certainly rejects the ray.
+    Out,
+    /// Within the band: decide with the watertight test.
+    Unsure,
+}
+
 impl TriSetup {
-    /// Sets up triangle `(v0, v1, v2)` for rays from `o`; `None` if no ray from `o` can hit it
-    /// (`D = 0`, non-finite values).
-    pub fn new(v: [Vec3; 3], o: Vec3, tri: u32) -> Option<Self> {
+    /// Sets up triangle `(v0, v1, v2)` (at `src` = `4 * block + lane`) for rays from `o` within
+    /// `cone`; `None` if no ray from `o` can hit it (`D = 0`, non-finite values).
+    #[inline(always)]
+    pub fn new(v: [Vec3; 3], o: Vec3, tri: u32, src: u32, cone: &Cone) -> Option<Self> {
+        Self::new_with(v, o, tri, src, cone, false)
+    }
+
+    /// [`TriSetup::new`], or with `lazy` a cheap set-up for [`SetupExactness::Edges`]: a
+    /// crude edge band `bound >= ` the one of `new` (from `max |a_i|_1` alone: enough for a
+    /// conservative corner classification) and `rho = NaN`, to be replaced by `new`'s band
+    /// when a packet first reaches the triangle (`TileTris::refine`), so triangles dropped
+    /// by the classification or never reached skip the band analysis.
+    #[inline(always)]
+    pub fn new_with(
+        v: [Vec3; 3],
+        o: Vec3,
+        tri: u32,
+        src: u32,
+        cone: &Cone,
+        lazy: bool,
+    ) -> Option<Self> {
+        // The same rounded `a_i = v_i - o` as the watertight test's projection.
         let a = [v[0] - o, v[1] - o, v[2] - o];
-        let nrm = cross(v[1] - v[0], v[2] - v[0]);
+        // Edges of the rounded triangle: e_i = fl(a_{i+1} - a_i) (relative error U each).
+        let e = [a[1] - a[0], a[2] - a[1], a[0] - a[2]];
+        let nrm = cross(e[0], -e[2]);
         let d = nrm.dot(a[0]);
         if d == 0.0 || !d.is_finite() {
             return None;
@@ -209,27 +424,155 @@ impl TriSetup {
             return None;
         }
         let s = if d > 0.0 { 1.0 } else { -1.0 };
-        // Multiplying by +-1 is exact: shared edges keep exactly negated covectors.
-        let n = [0, 1, 2].map(|i| (cross(a[i], a[(i + 1) % 3]) * s).to_array());
+        // n_i = a_i x (a_{i+1} - a_i) = a_i x a_{i+1} in exact arithmetic; the short edge
+        // keeps the rounding error relative to |a| |e_i| instead of |a|^2.
+        let n = [
+            (cross(a[0], e[0]) * s).to_array(),
+            (cross(a[1], e[1]) * s).to_array(),
+            (cross(a[2], e[2]) * s).to_array(),
+        ];
         if !n.iter().flatten().all(|x| x.is_finite()) {
             return None;
         }
+        if lazy {
+            // psi_i <= sqrt 3 sqrt 2 |a_i| sqrt(1 + r^2) <= 2.45 (1 + r) A (A = max |a_i|_1,
+            // |c| = 1), amax_i <= A, |e_i|_1 <= 2A: every term of the band below at most.
+            let aa = l1(a[0]).max(l1(a[1])).max(l1(a[2]));
+            let pp = SQRT3 * 1.4143 * aa * (1.0 + cone.radius) * 1.01;
+            let ep = U * (2.02 * aa + 1.01 * pp);
+            let w = 2.0 * (2.0 * ep * pp) + 4.04 * U * pp * pp;
+            let p = 6.1 * U * aa * (2.0 * aa) * 1.01;
+            let bound = 2.0 * (w + p) * 1.01;
+            return Some(TriSetup {
+                n,
+                g: g.to_array(),
+                tri,
+                src,
+                bound: if bound.is_finite() {
+                    bound
+                } else {
+                    f32::INFINITY
+                },
+                rho: f32::NAN,
+                all_in: false,
+            });
+        }
+        // Distance of each vertex from any ray of the cone (module docs) and the bound on the
+        // watertight test's projected coordinates |x'|, |y'| <= sqrt 3 dist.
+        // (x + y <= sqrt(2 (x^2 + y^2)): one square root per vertex instead of two.)
+        let psi_of = |ai: Vec3| {
+            let (x, y) = (cross(ai, cone.centre), ai * cone.radius);
+            SQRT3 * (2.0 * (x.length_squared() + y.length_squared())).sqrt() * 1.001
+        };
+        let psi = [psi_of(a[0]), psi_of(a[1]), psi_of(a[2])];
+        let amax = [
+            a[0].abs().max_element(),
+            a[1].abs().max_element(),
+            a[2].abs().max_element(),
+        ];
+        // Error of a projected coordinate: U |sx a_kz| (product) + U |sx| |a_kz| (sx itself)
+        // + U |x'| (subtraction), |sx| <= 1.
+        let ep_of = |i: usize| U * (2.02 * amax[i] + 1.01 * psi[i]);
+        let ep = [ep_of(0), ep_of(1), ep_of(2)];
+        let mut bound = 0.0f32;
+        let mut wsum = 0.0f32;
+        for i in 0..3 {
+            let (b, c) = (i, (i + 1) % 3);
+            // Watertight edge function u = c'x b'y - c'y b'x: input errors plus three
+            // roundings, in u units; times |d_kz| = |d|_inf in e units.
+            let w = 2.0 * (ep[c] * psi[b] + ep[b] * psi[c]) + 4.04 * U * psi[b] * psi[c];
+            // Set-up value: n from e_i (U), two products and a difference (about 3U of
+            // |a| (x) |e|), the dot product (3U): 6.1 U |a_i|_1 |e_i|_1 |d|_inf.
+            let p = 6.1 * U * l1(a[i]) * l1(e[i]);
+            bound = bound.max(w + p);
+            wsum += w;
+        }
+        // Safety factor 2 over the first-order analysis (second-order terms, the 1.01s).
+        let bound = 2.0 * bound;
+        // Depth band. g . d: D and N . d lose U |N| |a| / |D| (kappa: 1 / sine of the grazing
+        // angle, for every ray through the triangle) each, N itself 3U sigma (sigma = sliver
+        // factor |e0| |e2| / |N|). Woop's t = sum u_i z_i / sum u_i moves by
+        // sqrt 3 Lambda sum |du_i| / |D| (Lambda = longest edge) plus 7U of rounding.
+        // (sigma kappa = max |a| |e0| |e2| / |D|: two square roots in all.)
+        let amax_sq = a.iter().map(|x| x.length_squared()).fold(0.0, f32::max);
+        let sigma_kappa =
+            (amax_sq * e[0].length_squared() * e[2].length_squared()).sqrt() * 1.001 / d.abs();
+        let lambda = e
+            .iter()
+            .map(|x| x.length_squared())
+            .fold(0.0, f32::max)
+            .sqrt()
+            * 1.001;
+        let rho = 2.0 * (SQRT3 * lambda * wsum / d.abs() + 14.0 * U * sigma_kappa + 11.0 * U);
+        let rho = if rho.is_finite() && rho <= RHO_MAX {
+            rho
+        } else {
+            f32::INFINITY
+        };
         Some(TriSetup {
             n,
             g: g.to_array(),
             tri,
+            src,
+            bound: if bound.is_finite() {
+                bound
+            } else {
+                f32::INFINITY
+            },
+            rho,
             all_in: false,
         })
     }
 
-    /// The kernel's test of one ray direction: `Some(g . d)` (= `1/t`) if the ray passes the
-    /// three edge tests (skipped when `all_in`) and `g . d > 0`.
+    /// The set-up edge test of one ray direction `d` with the band (module docs).
     #[inline]
-    pub fn hit(&self, d: Vec3) -> Option<f32> {
-        let gd = dot3(self.g, d);
-        let inside = self.all_in || self.n.iter().all(|n| dot3(*n, d) >= 0.0);
-        (inside && gd > 0.0).then_some(gd)
+    pub fn edge_class(&self, d: Vec3) -> EdgeClass {
+        if self.all_in {
+            return EdgeClass::In;
+        }
+        let b = self.bound * d.abs().max_element();
+        let m = self
+            .n
+            .iter()
+            .map(|n| dot3(*n, d))
+            .fold(f32::INFINITY, f32::min);
+        if m > b {
+            EdgeClass::In
+        } else if m < -b {
+            EdgeClass::Out
+        } else {
+            EdgeClass::Unsure
+        }
     }
+}
+
+/// The watertight test (the BVH's, `WatertightRay::intersect_within`) of set-up triangle `src`.
+#[inline(never)]
+pub fn exact_t(wt: &WatertightRay, blocks: &[Tri4], src: u32) -> Option<f32> {
+    let b = &blocks[(src >> 2) as usize];
+    let ln = (src & 3) as usize;
+    wt.intersect_within(
+        b.vertex(ln, 0),
+        b.vertex(ln, 1),
+        b.vertex(ln, 2),
+        f32::INFINITY,
+    )
+    .map(|h| h.t)
+}
+
+/// The closest hit `(t, set-up index)` of `ray` over every triangle of `tris` with the
+/// watertight test alone, the BVH's tie-break (the rescue path; also the tests' reference).
+pub fn exact_closest(ray: &Ray, blocks: &[Tri4], tris: &[TriSetup]) -> (f32, u32) {
+    let wt = WatertightRay::new(ray);
+    let (mut bt, mut bi) = (f32::INFINITY, u32::MAX);
+    for (i, tr) in tris.iter().enumerate() {
+        if let Some(t) = exact_t(&wt, blocks, tr.src)
+            && (bi == u32::MAX || t < bt || (t == bt && tr.tri < tris[bi as usize].tri))
+        {
+            (bt, bi) = (t, i as u32);
+        }
+    }
+    (bt, bi)
 }
 
 /// A leaf's run of set-up triangles: `tris[previous end..end]`, and its near depth.
@@ -257,6 +600,39 @@ pub struct TileTris {
     pub tris: Vec<TriSetup>,
     pub segs: Vec<Segment>,
     pub counts: SetupCounts,
+    /// The largest depth band `rho` of the list's well-conditioned triangles.
+    pub rho_max: f32,
+    /// The watertight permutation `(kx, ky, kz)` shared by every ray of the tile, when the
+    /// beam's slopes are below 1 (`|d_a|` strictly dominant, sign fixed).
+    pub perm: Option<(usize, usize, usize)>,
+    /// The cone of the tile's rays (for the lazy band, [`TileTris::refine`]).
+    pub cone: Cone,
+}
+
+impl Default for Cone {
+    fn default() -> Self {
+        Cone::ANY
+    }
+}
+
+impl TileTris {
+    /// Replaces the lazy set-up `tris[j]` (`rho` NaN, [`TriSetup::new_with`]) by the band of
+    /// [`TriSetup::new`] (the same `n`, `g`: the same arithmetic), keeping its classification.
+    #[inline(never)]
+    pub fn refine(&mut self, j: usize, blocks: &[Tri4]) {
+        let s = &mut self.tris[j];
+        let b = &blocks[(s.src >> 2) as usize];
+        let ln = (s.src & 3) as usize;
+        let v = [b.vertex(ln, 0), b.vertex(ln, 1), b.vertex(ln, 2)];
+        match TriSetup::new(v, self.origin, s.tri, s.src, &self.cone) {
+            Some(e) => {
+                s.bound = e.bound;
+                s.rho = e.rho;
+            }
+            // (Never: the same checks passed in the lazy set-up.)
+            None => s.rho = f32::INFINITY,
+        }
+    }
 }
 
 /// The shared origin of a tile's rays, if they have one (the beam's origin box is a point).
@@ -272,27 +648,43 @@ pub fn setup_tile(
     leaves: &[LeafRef],
     beam: &Beam,
     origin: Vec3,
+    lazy: bool,
     out: &mut TileTris,
 ) {
     out.origin = origin;
     out.tris.clear();
     out.segs.clear();
+    out.rho_max = 0.0;
     let corners = BeamCorners::new(beam);
+    let cone = Cone::of(corners.as_ref());
+    out.cone = cone;
+    out.perm = corners.and_then(|c| {
+        // Float division is monotone and x / x = 1: slopes below 1 mean |d_b| < |d_a|.
+        let (a, (b, cc)) = (beam.axis as usize, beam.side_axes());
+        (c.cmax[b] < 1.0 && c.cmax[cc] < 1.0).then(|| {
+            let mut d = Vec3::ZERO;
+            d[a] = beam.sign;
+            permutation(d)
+        })
+    });
     for r in leaves {
         let mut bx = Aabb::EMPTY;
         let (first, count) = (leaf_first(r.leaf), leaf_count(r.leaf));
         for j in 0..count {
-            let b = &blocks[(first + j / 4) as usize];
+            let bi = first + j / 4;
+            let b = &blocks[bi as usize];
             let ln = (j % 4) as usize;
             if b.tri[ln] == u32::MAX {
                 continue;
             }
             let v = [b.vertex(ln, 0), b.vertex(ln, 1), b.vertex(ln, 2)];
-            let Some(mut s) = TriSetup::new(v, origin, b.tri[ln]) else {
+            let Some(mut s) =
+                TriSetup::new_with(v, origin, b.tri[ln], 4 * bi + ln as u32, &cone, lazy)
+            else {
                 out.counts.all_out += 1;
                 continue;
             };
-            match corners.map_or(CornerClass::Partial, |c| c.classify(&s.n)) {
+            match corners.map_or(CornerClass::Partial, |c| c.classify(&s)) {
                 CornerClass::AllOut => {
                     out.counts.all_out += 1;
                     continue;
@@ -302,6 +694,9 @@ pub fn setup_tile(
                     s.all_in = true;
                 }
                 CornerClass::Partial => out.counts.partial += 1,
+            }
+            if s.rho <= RHO_MAX {
+                out.rho_max = out.rho_max.max(s.rho);
             }
             out.tris.push(s);
             bx = bx.grow(v[0]).grow(v[1]).grow(v[2]);
@@ -321,13 +716,13 @@ pub fn setup_tile(
 /// `n . d` per lane in the scalar order of [`dot3`] (no FMA: plain functions, not closures,
 /// so they are compiled inside the AVX2 entry point).
 #[inline(always)]
-fn dot_n<L: Lanes>(n: [f32; 3], dx: L, dy: L, dz: L) -> L {
+pub(super) fn dot_n<L: Lanes>(n: [f32; 3], dx: L, dy: L, dz: L) -> L {
     L::splat(n[0]) * dx + L::splat(n[1]) * dy + L::splat(n[2]) * dz
 }
 
 /// Entry and exit `t` of one slab (`lo`, `hi` relative to the origin).
 #[inline(always)]
-fn slab<L: Lanes>(lo: f32, hi: f32, inv: L, neg: L::M) -> (L, L) {
+pub(super) fn slab<L: Lanes>(lo: f32, hi: f32, inv: L, neg: L::M) -> (L, L) {
     let t0 = L::splat(lo) * inv;
     let t1 = L::splat(hi) * inv;
     (L::select(neg, t1, t0), L::select(neg, t0, t1))
@@ -335,36 +730,77 @@ fn slab<L: Lanes>(lo: f32, hi: f32, inv: L, neg: L::M) -> (L, L) {
 
 /// `a > b ? a : b` per lane (NaN in `a` gives `b`).
 #[inline(always)]
-fn max_or_rhs<L: Lanes>(a: L, b: L) -> L {
+pub(super) fn max_or_rhs<L: Lanes>(a: L, b: L) -> L {
     L::select(a.gt(b), a, b)
 }
 
 /// `a < b ? a : b` per lane (NaN in `a` gives `b`).
 #[inline(always)]
-fn min_or_rhs<L: Lanes>(a: L, b: L) -> L {
+pub(super) fn min_or_rhs<L: Lanes>(a: L, b: L) -> L {
     L::select(a.lt(b), a, b)
+}
+
+/// Work counters of the set-up kernel.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SetupWork {
+    pub rays: u64,
+    /// Packet-triangle tests (one per packet of `lanes` rays and set-up triangle).
+    pub tri_tests: u64,
+    /// Ray-triangle tests (valid lanes of the packet-triangle tests).
+    pub pair_tests: u64,
+    /// Watertight tests run in the band (edge or depth uncertain), per ray and triangle.
+    pub exact_tests: u64,
+    /// Watertight tests of winners for their bit-exact `t`.
+    pub final_tests: u64,
+    /// Of `exact_tests`: edge value within the band (the rest: depth band).
+    pub edge_band: u64,
+    /// Rays re-decided by the exact scan (a certain decision contradicted; expected 0).
+    pub rescues: u64,
+}
+
+/// Per-lane state of the best hit so far: `1/t` (lanes), its band, and the triangle.
+struct BestN<L> {
+    gd: L,
+    rho: L,
+    tri: [u32; 8],
+    /// Index in the tile's set-up list.
+    idx: [u32; 8],
+    /// The exact watertight `t`, when known (NaN otherwise).
+    t: [f32; 8],
+}
+
+/// `x` with lane `l` replaced by `v`.
+#[inline(always)]
+fn set_lane<L: Lanes>(x: L, l: usize, v: f32) -> L {
+    L::from_fn(|i| if i == l { v } else { x.get(i) })
 }
 
 /// The closest hit of every lane of `rays` against the set-up list (module docs); `axis` /
 /// `sign` are the tile beam's dominant axis (the near-depth order), `slack` the early-exit
-/// slack. Counts packet-triangle tests in `tests`.
+/// slack. Returns per lane the closest triangle and its watertight `t`.
 #[inline(always)]
 fn closest_setup<L: Lanes>(
     rays: &RaysN<L>,
+    blocks: &[Tri4],
     tt: &TileTris,
     axis: usize,
     sign: f32,
     slack: f32,
-    tests: &mut u64,
+    work: &mut SetupWork,
 ) -> ClosestN {
     let valid = rays.valid;
     let zero = L::splat(0.0);
     let [dx, dy, dz] = rays.d;
-    let mut best = zero;
-    let mut out = ClosestN {
-        t: [f32::INFINITY; 8],
+    let mut best = BestN {
+        gd: zero,
+        rho: zero,
         tri: [u32::MAX; 8],
+        idx: [u32::MAX; 8],
+        t: [f32::NAN; 8],
     };
+    // Lanes whose best so far was contradicted by the watertight test (a bound violation,
+    // expected never): re-decided by the exact scan at the end.
+    let mut suspect = 0u32;
     let mut hit_lanes = 0u32;
     let mut exit_depth = f32::INFINITY;
     let mut start = 0usize;
@@ -374,11 +810,25 @@ fn closest_setup<L: Lanes>(
     let neg = [inv[0].lt(zero), inv[1].lt(zero), inv[2].lt(zero)];
     let mut box_lim = L::splat(f32::INFINITY);
     let far = L::splat(ROBUST_FAR_SCALE);
+    let abs = |x: L| L::select(x.lt(zero), zero - x, x);
+    let dinf_l = max_or_rhs(abs(dx), max_or_rhs(abs(dy), abs(dz)));
+    // (Invalid lanes have d = 0.)
+    let mut dinf = 0.0f32;
+    for l in 0..L::N {
+        dinf = dinf.max(dinf_l.get(l));
+    }
+    let k = L::splat(1.5);
+    // Band of the best so far: gk = 1.5 g.d, lo_b / hi_b = g.d -+ gk rho_b (per triangle the
+    // band widens by gk rho_c).
+    let (mut gk, mut lo_b, mut hi_b, mut lo_t) = (zero, zero, zero, zero);
+    let rho_t = L::splat(tt.rho_max);
+    let lanes = valid.count_ones() as u64;
     for seg in &tt.segs {
         if hit_lanes == valid && seg.near > exit_depth + slack {
             break;
         }
         let end = seg.end as usize;
+        let first = start;
         let tris = &tt.tris[start..end];
         start = end;
         // The BVH's robust slab test (Ize 2013 far scaling) of the packet on the run's box:
@@ -391,89 +841,318 @@ fn closest_setup<L: Lanes>(
         if L::bits(t_near.le(t_far * far)) & valid == 0 {
             continue;
         }
-        *tests += tris.len() as u64;
+        work.tri_tests += tris.len() as u64;
+        work.pair_tests += tris.len() as u64 * lanes;
         let mut changed = false;
-        for tr in tris {
+        for (j, tr) in tris.iter().enumerate() {
             let gd = dot_n(tr.g, dx, dy, dz);
-            let ge = gd.ge(best);
-            if L::bits(ge) & valid == 0 {
+            // The depth band around the best 1/t: below `lo` certainly farther, above `hi`
+            // certainly nearer (rho of both triangles; 1.5 covers the first-order quotient).
+            let well = tr.rho <= RHO_MAX;
+            // Reject test against the tile-wide band (rho_c <= the tile's largest rho): one
+            // compare, as without the band.
+            let lo = if well {
+                lo_t
+            } else {
+                L::splat(f32::NEG_INFINITY)
+            };
+            let cand = gd.ge(lo);
+            let cand_bits = L::bits(cand) & valid;
+            if cand_bits == 0 {
                 continue;
             }
-            let inside = if tr.all_in {
-                ge
+            let (inside, unsure) = if tr.all_in {
+                (cand, 0)
             } else {
                 let m = dot_n(tr.n[0], dx, dy, dz)
                     .min(dot_n(tr.n[1], dx, dy, dz))
                     .min(dot_n(tr.n[2], dx, dy, dz));
-                L::and(ge, m.ge(zero))
+                let b = L::splat(tr.bound * dinf);
+                let inn = L::and(cand, m.gt(b));
+                let rest = cand_bits & !L::bits(inn);
+                let uns = if rest != 0 {
+                    L::bits(m.ge(zero - b)) & rest
+                } else {
+                    0
+                };
+                (inn, uns)
             };
-            let ib = L::bits(inside) & valid;
-            if ib == 0 {
+            let mut in_bits = L::bits(inside) & valid;
+            let mut unsure = unsure;
+            if in_bits | unsure == 0 {
                 continue;
             }
-            let gt_m = L::and(inside, gd.gt(best));
-            let gt = L::bits(gt_m) & valid;
-            let mut win = gt;
-            // Ties (equal `1/t`, a hit so far): the lower triangle index wins.
-            let mut tie = ib & !gt;
-            while tie != 0 {
-                let l = tie.trailing_zeros() as usize;
-                tie &= tie - 1;
-                if out.tri[l] != u32::MAX && tr.tri < out.tri[l] {
-                    win |= 1 << l;
+            // This triangle's own band: certainly farther below `lo`, nearer above `hi`.
+            let (lo, hi) = if well {
+                let c = gk * L::splat(tr.rho);
+                (lo_b - c, hi_b + c)
+            } else {
+                (L::splat(f32::NEG_INFINITY), L::splat(f32::INFINITY))
+            };
+            let near = L::bits(gd.ge(lo));
+            in_bits &= near;
+            unsure &= near;
+            if in_bits | unsure == 0 {
+                continue;
+            }
+            let win_m = L::and(inside, gd.gt(hi));
+            let win = L::bits(win_m) & in_bits;
+            let slow = (in_bits & !win) | unsure;
+            work.edge_band += unsure.count_ones() as u64;
+            changed = true;
+            if win != 0 {
+                best.gd = L::select(win_m, gd, best.gd);
+                best.rho = L::select(win_m, L::splat(tr.rho), best.rho);
+                let mut w = win;
+                while w != 0 {
+                    let l = w.trailing_zeros() as usize;
+                    w &= w - 1;
+                    best.tri[l] = tr.tri;
+                    best.idx[l] = (first + j) as u32;
+                    best.t[l] = f32::NAN;
                 }
             }
-            if win == 0 {
-                continue;
+            let mut s = slow;
+            while s != 0 {
+                let l = s.trailing_zeros() as usize;
+                s &= s - 1;
+                let wt = &WatertightRay::new(&rays.lane(l));
+                work.exact_tests += 1;
+                let Some(tc) = exact_t(wt, blocks, tr.src) else {
+                    continue;
+                };
+                let better = if best.tri[l] == u32::MAX {
+                    true
+                } else {
+                    if best.t[l].is_nan() {
+                        work.exact_tests += 1;
+                        let bsrc = tt.tris[best.idx[l] as usize].src;
+                        // A certain inside decision the watertight test rejects would be a
+                        // bound violation: the candidate replaces it and the ray is suspect.
+                        best.t[l] = exact_t(wt, blocks, bsrc).unwrap_or(f32::NAN);
+                        if best.t[l].is_nan() {
+                            suspect |= 1 << l;
+                        }
+                    }
+                    let bt = best.t[l];
+                    bt.is_nan() || tc < bt || (tc == bt && tr.tri < best.tri[l])
+                };
+                if better {
+                    best.gd = set_lane(best.gd, l, 1.0 / tc);
+                    best.rho = set_lane(best.rho, l, RHO_EXACT);
+                    best.tri[l] = tr.tri;
+                    best.idx[l] = (first + j) as u32;
+                    best.t[l] = tc;
+                }
             }
-            best = L::select(gt_m, gd, best);
-            let mut w = win;
-            while w != 0 {
-                let l = w.trailing_zeros() as usize;
-                w &= w - 1;
-                out.tri[l] = tr.tri;
-            }
-            changed = true;
+            gk = best.gd * k;
+            lo_b = best.gd - gk * best.rho;
+            hi_b = best.gd + gk * best.rho;
+            lo_t = lo_b - gk * rho_t;
         }
         if changed {
             hit_lanes = 0;
             exit_depth = f32::NEG_INFINITY;
+            // Upper bound of the exact t of every lane's best: 1/t >= g.d (1 - rho), so
+            // t <= 1 / (g.d (1 - rho - 8U)) (8U: the roundings of this bound).
+            let lim = best.gd - best.gd * (best.rho + L::splat(8.0 * U));
+            let t_up = L::select(lim.gt(zero), one / lim, L::splat(f32::INFINITY));
             for l in 0..L::N {
                 if valid >> l & 1 != 0 {
-                    if out.tri[l] != u32::MAX {
+                    if best.tri[l] != u32::MAX {
                         hit_lanes |= 1 << l;
                     }
-                    let t = 1.0 / best.get(l);
+                    let t = t_up.get(l);
                     exit_depth = exit_depth.max(sign * (oa + t * rays.d[axis].get(l)));
                 }
             }
-            box_lim = L::from_fn(|l| 1.0 / best.get(l));
+            box_lim = t_up;
+        }
+    }
+    let mut out = ClosestN {
+        t: [f32::INFINITY; 8],
+        tri: [u32::MAX; 8],
+    };
+    // The winners' watertight t, lane-wise in one pass when the lanes share a permutation.
+    let mut need = 0u32;
+    for l in 0..L::N {
+        if valid >> l & 1 != 0 && best.tri[l] != u32::MAX && best.t[l].is_nan() {
+            need |= 1 << l;
+        }
+    }
+    if need != 0 {
+        work.final_tests += need.count_ones() as u64;
+        let done = final_t_lanes(rays, blocks, tt, &best.idx, need, &mut best.t);
+        // Lanes left (another permutation, an exactly-zero edge function): scalar.
+        let mut m = need & !done;
+        while m != 0 {
+            let l = m.trailing_zeros() as usize;
+            m &= m - 1;
+            let wt = &WatertightRay::new(&rays.lane(l));
+            best.t[l] =
+                exact_t(wt, blocks, tt.tris[best.idx[l] as usize].src).unwrap_or(f32::INFINITY);
         }
     }
     for l in 0..L::N {
-        if out.tri[l] != u32::MAX {
-            out.t[l] = 1.0 / best.get(l);
+        if valid >> l & 1 == 0 || best.tri[l] == u32::MAX {
+            continue;
         }
+        let mut t = best.t[l];
+        // (+inf: the watertight test rejected the winner.)
+        if t == f32::INFINITY {
+            t = f32::NAN;
+        }
+        if t.is_nan() {
+            let wt = &WatertightRay::new(&rays.lane(l));
+            work.final_tests += 1;
+            t = exact_t(wt, blocks, tt.tris[best.idx[l] as usize].src).unwrap_or(f32::NAN);
+        }
+        if t.is_nan() || suspect >> l & 1 != 0 {
+            work.rescues += 1;
+            let (et, ei) = exact_closest(&rays.lane(l), blocks, &tt.tris);
+            if ei != u32::MAX {
+                out.t[l] = et;
+                out.tri[l] = tt.tris[ei as usize].tri;
+            }
+            continue;
+        }
+        out.t[l] = t;
+        out.tri[l] = best.tri[l];
     }
     out
 }
 
+/// The watertight test of each lane of `need` against its own winner (`idx` into the set-up
+/// list), lane-wise in exactly the f32 operations of `WatertightRay::intersect_within` (as
+/// the packet kernel of `packet.rs`: the same rays, shear constants divided lane-wise).
+/// Writes `t[l]` (+inf for a rejected winner) and returns the lanes done; lanes with an
+/// exactly-zero edge function, or all when the lanes do not share one permutation, are left
+/// to the scalar test.
+#[inline(always)]
+#[allow(clippy::needless_range_loop)]
+fn final_t_lanes<L: Lanes>(
+    rays: &RaysN<L>,
+    blocks: &[Tri4],
+    tt: &TileTris,
+    idx: &[u32; 8],
+    need: u32,
+    t: &mut [f32; 8],
+) -> u32 {
+    let first = need.trailing_zeros() as usize;
+    let lane_dir = |l: usize| Vec3::new(rays.d[0].get(l), rays.d[1].get(l), rays.d[2].get(l));
+    let perm = match tt.perm {
+        Some(p) => p,
+        None => {
+            let perm = permutation(lane_dir(first));
+            let mut m = need;
+            while m != 0 {
+                let l = m.trailing_zeros() as usize;
+                m &= m - 1;
+                if permutation(lane_dir(l)) != perm {
+                    return 0;
+                }
+            }
+            perm
+        }
+    };
+    let (kx, ky, kz) = perm;
+    // Lanes outside `need` repeat the first lane's triangle (results ignored).
+    let mut srcs = [0u32; 8];
+    let mut same = true;
+    let s0 = tt.tris[idx[first] as usize].src;
+    for (l, s) in srcs.iter_mut().enumerate().take(L::N) {
+        *s = if need >> l & 1 != 0 {
+            tt.tris[idx[l] as usize].src
+        } else {
+            s0
+        };
+        same &= *s == s0;
+    }
+    // Usually every lane (subsamples of one pixel) has the same winner: splat its vertices.
+    let mut p = [[L::splat(0.0); 3]; 3];
+    if same {
+        let b = &blocks[(s0 >> 2) as usize];
+        let ln = (s0 & 3) as usize;
+        for (v, pv) in p.iter_mut().enumerate() {
+            for (k, pk) in pv.iter_mut().enumerate() {
+                *pk = L::splat(b.p[v][k][ln]);
+            }
+        }
+    } else {
+        let mut raw = [[[0.0f32; 8]; 3]; 3];
+        for (l, &s) in srcs.iter().enumerate().take(L::N) {
+            let b = &blocks[(s >> 2) as usize];
+            let ln = (s & 3) as usize;
+            for v in 0..3 {
+                for k in 0..3 {
+                    raw[v][k][l] = b.p[v][k][ln];
+                }
+            }
+        }
+        for v in 0..3 {
+            for k in 0..3 {
+                p[v][k] = L::from_fn(|l| raw[v][k][l]);
+            }
+        }
+    }
+    let coord = |v: usize, k: usize| p[v][k];
+    let one = L::splat(1.0);
+    let zero = L::splat(0.0);
+    let dkz = rays.d[kz];
+    let sx = rays.d[kx] / dkz;
+    let sy = rays.d[ky] / dkz;
+    let sz = one / dkz;
+    let (okx, oky, okz) = (rays.o[kx], rays.o[ky], rays.o[kz]);
+    let proj = |v: usize| {
+        let az = coord(v, kz) - okz;
+        let x = (coord(v, kx) - okx) - sx * az;
+        let y = (coord(v, ky) - oky) - sy * az;
+        (x, y, sz * az)
+    };
+    let (ax, ay, az) = proj(0);
+    let (bx, by, bz) = proj(1);
+    let (cx, cy, cz) = proj(2);
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    let exact = L::bits(u.eq(zero)) | L::bits(v.eq(zero)) | L::bits(w.eq(zero));
+    let negm = L::bits(u.lt(zero)) | L::bits(v.lt(zero)) | L::bits(w.lt(zero));
+    let posm = L::bits(u.gt(zero)) | L::bits(v.gt(zero)) | L::bits(w.gt(zero));
+    let det = u + v + w;
+    let t_scaled = u * az + v * bz + w * cz;
+    let tv = t_scaled * (one / det);
+    let ok = !(negm & posm) & L::bits(det.ne(zero)) & L::bits(tv.gt(zero));
+    let ok = ok & L::bits(tv.lt(L::splat(f32::INFINITY)));
+    let done = need & !exact;
+    let mut m = done;
+    while m != 0 {
+        let l = m.trailing_zeros() as usize;
+        m &= m - 1;
+        t[l] = if ok >> l & 1 != 0 {
+            tv.get(l)
+        } else {
+            f32::INFINITY
+        };
+    }
+    done
+}
+
 /// Runs every subsample ray `0..total` of a tile (`pair(j)` = its `(sample, k)`) through the
-/// set-up kernel with `L::N` lanes; `write(pair, t, tri)` stores a result. Returns
-/// `(packet-triangle tests, rays)`.
+/// set-up kernel with `L::N` lanes; `write(pair, t, tri)` stores a result.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn run_setup<L: Lanes>(
+fn run_setup<L: Lanes, const FULL: bool>(
     set: &SampleSet,
-    tt: &TileTris,
+    blocks: &[Tri4],
+    tt: &mut TileTris,
     axis: usize,
     sign: f32,
     slack: f32,
     total: usize,
     pair: impl Fn(usize) -> (u32, u32),
     mut write: impl FnMut((u32, u32), f32, u32),
-) -> (u64, u64) {
-    let mut tests = 0u64;
+) -> SetupWork {
+    let mut work = SetupWork::default();
     let rays_n = for_each_packet::<L>(set, total, pair, |batch, rays| {
         let mut rays = *rays;
         // Invalid lanes get `d = 0`: `g . d = 0` is never a hit.
@@ -484,40 +1163,39 @@ fn run_setup<L: Lanes>(
                 }
             }
         }
-        let c = closest_setup(&rays, tt, axis, sign, slack, &mut tests);
+        let c = if FULL {
+            closest_setup(&rays, blocks, &*tt, axis, sign, slack, &mut work)
+        } else {
+            super::setup_edges::closest_edges(&rays, blocks, tt, axis, sign, slack, &mut work)
+        };
         for (l, &p) in batch.iter().enumerate() {
             write(p, c.t[l], c.tri[l]);
         }
     });
-    (tests, rays_n)
+    work.rays = rays_n;
+    work
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[allow(clippy::too_many_arguments)]
-unsafe fn run_setup_avx2(
+unsafe fn run_setup_avx2<const FULL: bool>(
     set: &SampleSet,
-    tt: &TileTris,
+    blocks: &[Tri4],
+    tt: &mut TileTris,
     axis: usize,
     sign: f32,
     slack: f32,
     total: usize,
     pair: impl Fn(usize) -> (u32, u32),
     write: impl FnMut((u32, u32), f32, u32),
-) -> (u64, u64) {
-    run_setup::<super::packet::F8>(set, tt, axis, sign, slack, total, pair, write)
+) -> SetupWork {
+    run_setup::<super::packet::F8, FULL>(set, blocks, tt, axis, sign, slack, total, pair, write)
 }
 
-/// Work counters of a set-up tile.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct SetupWork {
-    pub rays: u64,
-    /// Packet-triangle tests (one per packet of `lanes` rays and set-up triangle).
-    pub tri_tests: u64,
-}
-
-/// Tests every subsample ray of the tile `samples` against the set-up list `tt` and writes the
-/// closest hits, packets of 8 rays (AVX2, if detected and `lanes == 8`) or 4.
+/// Tests every subsample ray of the tile `samples` against the set-up list `tt` (built from
+/// `blocks`) and writes the closest hits, packets of 8 rays (AVX2, if detected and
+/// `lanes == 8`) or 4.
 ///
 /// # Safety
 /// As [`super::intersect::test_tile`]: `prim` and `t` valid for `set.ray_count()` elements,
@@ -525,12 +1203,14 @@ pub struct SetupWork {
 #[allow(clippy::too_many_arguments)]
 pub unsafe fn test_tile_setup(
     set: &SampleSet,
+    blocks: &[Tri4],
     prim_ids: &[u32],
     samples: &[u32],
-    tt: &TileTris,
+    tt: &mut TileTris,
     beam: &Beam,
     scale: f32,
     lanes: usize,
+    exactness: SetupExactness,
     prim: *mut u32,
     t: *mut f32,
 ) -> SetupWork {
@@ -553,16 +1233,25 @@ pub unsafe fn test_tile_setup(
     };
     let (axis, sign) = (beam.axis as usize, beam.sign);
     #[cfg(target_arch = "x86_64")]
-    let (tests, rays) = if lanes == 8 && std::arch::is_x86_feature_detected!("avx2") {
+    if lanes == 8 && std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: AVX2 was detected.
-        unsafe { run_setup_avx2(set, tt, axis, sign, slack, total, pair, write) }
-    } else {
-        run_setup::<Vec4>(set, tt, axis, sign, slack, total, pair, write)
-    };
-    #[cfg(not(target_arch = "x86_64"))]
-    let (tests, rays) = run_setup::<Vec4>(set, tt, axis, sign, slack, total, pair, write);
-    SetupWork {
-        rays,
-        tri_tests: tests,
+        return unsafe {
+            match exactness {
+                SetupExactness::Edges => {
+                    run_setup_avx2::<false>(set, blocks, tt, axis, sign, slack, total, pair, write)
+                }
+                SetupExactness::Full => {
+                    run_setup_avx2::<true>(set, blocks, tt, axis, sign, slack, total, pair, write)
+                }
+            }
+        };
+    }
+    match exactness {
+        SetupExactness::Edges => {
+            run_setup::<Vec4, false>(set, blocks, tt, axis, sign, slack, total, pair, write)
+        }
+        SetupExactness::Full => {
+            run_setup::<Vec4, true>(set, blocks, tt, axis, sign, slack, total, pair, write)
+        }
     }
 }
