@@ -52,6 +52,7 @@ pub mod packet;
 pub mod patterns;
 pub mod samples;
 pub mod setup_edges;
+pub mod setup_full;
 pub mod tile_setup;
 pub mod visibility;
 
