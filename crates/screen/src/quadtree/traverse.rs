@@ -33,7 +33,7 @@
 //! (the level index and node coordinates stay inside the padded level arrays), so the
 //! debug-build tests check it on every step.
 
-use glam::{UVec2, Vec3};
+use glam::{UVec2, Vec3, Vec4};
 
 use super::build::QuadTree;
 use super::node::{FLAG_CRACK, FLAG_UNSAFE, decode_plane, plane_z};
@@ -64,8 +64,12 @@ pub struct RaySetup {
     /// [`Self::slab_fast`]).
     so: [f32; 2],
     sinv: [f32; 2],
-    /// `1 - tie`: the far side of a node rectangle is `x0 + size * far`.
-    far: [f32; 2],
+    /// The slab of both axes as one 4-lane operation (`x` near, `y` near, `x` far, `y`
+    /// far; [`Self::slabs`]): per-lane sides `[tie_x, tie_y, 1 - tie_x, 1 - tie_y]`, origins
+    /// `[so_x, so_y, so_x, so_y]` and reciprocals likewise.
+    side4: Vec4,
+    so4: Vec4,
+    sinv4: Vec4,
     /// Parameter length of one pixel of screen travel (for dilations).
     pub s_per_px: f32,
 }
@@ -86,7 +90,9 @@ impl RaySetup {
             tie,
             so: o,
             sinv: inv,
-            far: [1.0 - tie[0], 1.0 - tie[1]],
+            side4: Vec4::new(tie[0], tie[1], 1.0 - tie[0], 1.0 - tie[1]),
+            so4: Vec4::ZERO,
+            sinv4: Vec4::ZERO,
             // `1 / max(|dg|)` without a third division: division is correctly rounded and
             // monotone, so `1 / max(|a|, |b|) == min(1 / |a|, 1 / |b|)` exactly (`inf` when
             // both are 0).
@@ -103,6 +109,8 @@ impl RaySetup {
         if dg[0] == 0.0 || dg[1] == 0.0 {
             r.axis_parallel(w, h);
         }
+        r.so4 = Vec4::new(r.so[0], r.so[1], r.so[0], r.so[1]);
+        r.sinv4 = Vec4::new(r.sinv[0], r.sinv[1], r.sinv[0], r.sinv[1]);
         r
     }
 
@@ -118,17 +126,14 @@ impl RaySetup {
         }
     }
 
-    /// Entry and exit parameters of the node rectangle `[x0, x0 + size]` on axis `a`: the
-    /// two products `(side - o) * inv` of the former per-node slab (the near side is
-    /// `x0 + size * tie`, exact), without branches.
+    /// Entry and exit parameters `(x in, y in, x out, y out)` of the node rectangle
+    /// `[x0, x0 + size] x [y0, y0 + size]`: per axis the two products `(side - o) * inv`
+    /// of the slab test (the near side is `x0 + size * tie`, exact), without branches, both
+    /// axes in one 4-lane operation (each lane the same IEEE operations as the scalar form).
     #[inline(always)]
-    fn slab_fast(&self, a: usize, x0: f32, size: f32) -> (f32, f32) {
-        let near = x0 + size * self.tie[a];
-        let far = x0 + size * self.far[a];
-        (
-            (near - self.so[a]) * self.sinv[a],
-            (far - self.so[a]) * self.sinv[a],
-        )
+    fn slabs(&self, x0: f32, y0: f32, size: f32) -> Vec4 {
+        let side = Vec4::new(x0, y0, x0, y0) + self.side4 * size;
+        (side - self.so4) * self.sinv4
     }
 
     /// Grid coordinate on axis `a` at `s`.
@@ -162,7 +167,9 @@ impl RaySetup {
         let x = if x < 1.0e7 { x } else { 1.0e7 };
         // floor without a libm call; a boundary tie goes to the lower cell when moving down
         // the axis (`tie` is 1 or 0, fixed per ray: no branch).
-        let t = x as i32 as f32;
+        // SAFETY: `x` is in `[-1, 1e7]` (not NaN) after the selects above, so it truncates to
+        // an in-range `i32` (no saturation code needed, unlike `as`).
+        let t = unsafe { x.to_int_unchecked::<i32>() } as f32;
         let c = if t > x { t - 1.0 } else { t };
         let c = if c == x { c - self.tie[a] } else { c };
         let lo = lo as f32;
@@ -262,8 +269,8 @@ impl QuadTree {
             // `2^l` from its exponent bits; node corners are integers below 2^24: exact.
             let size = f32::from_bits((127 + l as u32) << 23);
             let (x0, y0) = ((qx << l) as i32 as f32, (qy << l) as i32 as f32);
-            let (txi, txo) = ray.slab_fast(0, x0, size);
-            let (tyi, tyo) = ray.slab_fast(1, y0, size);
+            let t4 = ray.slabs(x0, y0, size);
+            let (txi, tyi, txo, tyo) = (t4.x, t4.y, t4.z, t4.w);
             // Plain compares (slab values are never NaN): no NaN-aware min/max in the loop.
             let t_in = fmax(fmax(s, txi), tyi);
             let t_out = fmin(fmin(txo, tyo), q.s_hi);
