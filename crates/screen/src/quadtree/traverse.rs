@@ -291,7 +291,9 @@ impl QuadTree {
                     let (n, c) = decode_plane(node, l as u32, qx, qy, wf, hf);
                     let flags = node.flags();
                     let mut trig = None;
-                    if flags & FLAG_UNSAFE != 0 && q.want_trigger && ev.trigger.is_none() {
+                    // `want_trigger` first: fixed per layer, it keeps the data-dependent flag
+                    // test (mispredicted ~0.2 times per ray) out of single-layer traces.
+                    if q.want_trigger && flags & FLAG_UNSAFE != 0 && ev.trigger.is_none() {
                         trig = if l == 0 {
                             let tz = self.trigger_z[(qy * w + qx) as usize];
                             ray.z_entry(t_in, t_out, tz)
