@@ -76,6 +76,8 @@ pub struct RaySetup {
     /// descent in [`QuadTree::trace_layer`]).
     par: [bool; 2],
     floor_o: [u32; 2],
+    /// On a `par` axis: the pixel `cell(a, s, 0, W - 1)` (the same for every finite `s`).
+    pcell: [u32; 2],
 }
 
 impl RaySetup {
@@ -103,6 +105,7 @@ impl RaySetup {
             s_per_px: fmin(inv[0].abs(), inv[1].abs()),
             par: [false; 2],
             floor_o: [0; 2],
+            pcell: [0; 2],
         };
         // An axis the ray does not move along: the traversal never leaves the start pixel's
         // column (row) on it — its pixel is `cell(a, s, ..)` for every `s`, and a descent
@@ -126,7 +129,8 @@ impl RaySetup {
     fn axis_parallel(&mut self, w: f32, h: f32) {
         for (a, hi) in [(0, w as u32 - 1), (1, h as u32 - 1)] {
             if self.dg[a] == 0.0 {
-                self.so[a] = self.cell(a, 0.0, 0, hi) as f32 + 0.5;
+                self.pcell[a] = self.cell(a, 0.0, 0, hi);
+                self.so[a] = self.pcell[a] as f32 + 0.5;
                 self.sinv[a] = f32::INFINITY;
                 self.par[a] = true;
                 // `floor(o)` for `o >= 0` (saturating: NaN and negatives to 0, which keeps
@@ -164,6 +168,31 @@ impl RaySetup {
             Some(((tz - self.p0.z) / self.d.z).clamp(a, b))
         } else {
             None
+        }
+    }
+
+    /// [`Self::cell`]`(a, s, 0, hi)`, from [`Self::pcell`] on an axis the ray does not move
+    /// along (`o + 0 s = o`: the same value for every finite `s`).
+    #[inline(always)]
+    fn start_cell(&self, a: usize, s: f32, hi: u32) -> u32 {
+        if self.par[a] {
+            debug_assert_eq!(self.pcell[a], self.cell(a, s, 0, hi));
+            self.pcell[a]
+        } else {
+            self.cell(a, s, 0, hi)
+        }
+    }
+
+    /// [`Self::cell`]`(a, s, lo, hi)` for `0 <= lo <= hi <= W - 1`: on a `par` axis the
+    /// nested clamp `clamp(clamp(c, 0, W - 1), lo, hi) = clamp(c, lo, hi)` of `pcell`.
+    #[inline(always)]
+    fn cell_in(&self, a: usize, s: f32, lo: u32, hi: u32) -> u32 {
+        if self.par[a] {
+            let c = self.pcell[a].max(lo).min(hi);
+            debug_assert_eq!(c, self.cell(a, s, lo, hi));
+            c
+        } else {
+            self.cell(a, s, lo, hi)
         }
     }
 
@@ -231,7 +260,7 @@ impl QuadTree {
         // Start level: the paper starts at the root. Starting lower is equivalent (box tests
         // only cull) provided no plane ancestor is skipped: start at the first level whose
         // nodes exceed the segment's screen extent, or at the topmost plane ancestor.
-        let (cx, cy) = (ray.cell(0, s, 0, w - 1), ray.cell(1, s, 0, h - 1));
+        let (cx, cy) = (ray.start_cell(0, s, w - 1), ray.start_cell(1, s, h - 1));
         let ext = ray.dg[0].abs().max(ray.dg[1].abs()) * (q.s_hi - q.s_lo);
         let mut l = if ext < 1e6 {
             // ~ceil(log2(ext + 2)) without libm.
@@ -414,10 +443,24 @@ impl QuadTree {
                 break;
             }
             s = fmax(s, t_out); // neither is NaN
-            // Successor across the exit edge (§4).
-            // Branch-free: `step` is +1 or -1 (wrapping) per axis, fixed per ray.
-            let nx = qx.wrapping_add(step_x & 0u32.wrapping_sub((txo <= tyo) as u32));
-            let ny = qy.wrapping_add(step_y & 0u32.wrapping_sub((tyo <= txo) as u32));
+            // Successor across the exit edge (§4). `step` is +1 or -1 (wrapping) per axis,
+            // fixed per ray. A ray moving along one axis only (`par` on the other: its slab
+            // there is `(-inf, +inf)`, so it exits across the moving axis) takes a predicted
+            // branch: the next node's index then does not wait for the slab arithmetic (the
+            // branch-free form puts `txo <= tyo` on the loop's data-dependency chain). The
+            // guard keeps the result identical in every case (`txo < tyo` is exactly the
+            // case where the branch-free form steps in x only).
+            let (nx, ny) = if ray.par[1] && txo < tyo {
+                (qx.wrapping_add(step_x), qy)
+            } else if ray.par[0] && tyo < txo {
+                (qx, qy.wrapping_add(step_y))
+            } else {
+                // General rays: branch-free (the exit axis is data-dependent).
+                (
+                    qx.wrapping_add(step_x & 0u32.wrapping_sub((txo <= tyo) as u32)),
+                    qy.wrapping_add(step_y & 0u32.wrapping_sub((tyo <= txo) as u32)),
+                )
+            };
             // Off the image (a wrapped `-1` is `u32::MAX`): `nx << l < W` iff
             // `nx <= (W - 1) >> l`.
             if nx > wm >> l || ny > hm >> l {
@@ -450,7 +493,7 @@ impl QuadTree {
         let y0 = qy << l;
         let x1 = (x0 + (1 << l) - 1).min(self.width - 1);
         let y1 = (y0 + (1 << l) - 1).min(self.height - 1);
-        UVec2::new(ray.cell(0, s, x0, x1), ray.cell(1, s, y0, y1))
+        UVec2::new(ray.cell_in(0, s, x0, x1), ray.cell_in(1, s, y0, y1))
     }
 
     /// Cube `z` of the effective plane at pixel `(i, j)` at cube `(x, y)`, if any (tests).
