@@ -216,6 +216,13 @@ impl RaySetup {
     }
 }
 
+/// The identity, out of line: keeps `if pl > l { l = pl }` a branch (see its use).
+#[cold]
+#[inline(never)]
+fn raise_level(pl: usize) -> usize {
+    pl
+}
+
 /// What one layer's traversal found, in segment parameters.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct LayerEvents {
@@ -272,7 +279,9 @@ impl QuadTree {
         // time (one load instead of one node load per level above `l`).
         let pl = self.plane_level[(cy * w + cx) as usize] as usize;
         if pl > l {
-            l = pl;
+            // A real (predicted) branch, not a select: the start node's index then need not
+            // wait for this load.
+            l = raise_level(pl);
         }
         let mut qx = cx >> l;
         let mut qy = cy >> l;
