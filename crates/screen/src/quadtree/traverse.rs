@@ -251,7 +251,7 @@ pub struct Query {
 impl QuadTree {
     /// Traverses this layer along `ray` over `[q.s_lo, q.s_hi]` (§4); stops at the first hit
     /// (or, with `stop_at_ov`, the first occlusion-volume entry).
-    #[inline]
+    #[inline(always)]
     pub fn trace_layer(&self, ray: &RaySetup, q: &Query, stats: &mut TraceStats) -> LayerEvents {
         let mut ev = LayerEvents::default();
         if !(q.s_lo <= q.s_hi) {
