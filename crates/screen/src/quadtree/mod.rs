@@ -177,6 +177,51 @@
 //! (`max_steps` 100000) on at most 0.01 % of the rays, found by a sweep and bisection; a
 //! capped DDA runs the uncapped one's iterations until the cap, so only truncated rays can
 //! differ.
+//!
+//! **Session 4: latency, not instructions.** Results unchanged throughout (all exactness
+//! tests pass; the traversal statistics — visits, box / plane tests, steps, hits — are
+//! identical to the last digit). Instructions per ray: `valgrind --tool=callgrind
+//! --toggle-collect='*profile_trace*' quadtree_speed 0.065 [--near 0.1] --profile quadtree`
+//! (every 4th ray). Time: `quadtree_speed 0.065 [--near 0.1] --profile quadtree --time`
+//! (all rays, thread CPU time, best of 7), builds run alternately, best of 5 runs each,
+//! loaded machine (±5 %):
+//!
+//! | change | instr/ray camera | ns/ray camera | ns/ray fitted |
+//! |---|---|---|---|
+//! | before (fd42ce8) | 1942 | ~201 | ~150 |
+//! | both axes' slabs as one 4-lane op (`RaySetup::slabs`; no per-axis `tie`/`far` loads), no finiteness check after the f64 clip (it clamps to [0, 1]), `cell` truncation without saturation code | 1768 | ~197 | |
+//! | descent on an axis the ray does not move along: integer test on `floor(o)` instead of a data-dependent float branch | 1802 | ~195 | |
+//! | **successor of a ray moving along one axis only: a predicted branch for the exit edge**; start / hit pixel on the other axis from the per-ray cell | 1814 | **~178** | ~150 |
+//! | raising the start level to the plane ancestor: a (cold) branch instead of a select on the `plane_level` load | 1826 | ~176 | ~145 |
+//! | one layer in cascade mode: the layer traversal inlined with a fixed query | 1671 | ~169 | ~141 |
+//!
+//! The lesson: on these rays the CPU runs ~3 instructions per cycle and the time was set by
+//! dependency chains, not by the instruction count (the first row's -9 % instructions
+//! gained ~2 %). The branch-free successor (session 3) put `txo <= tyo` — node index ->
+//! int-to-float corner -> slab products -> compare — on the chain to the *next* node's
+//! index, ~30 cycles per successor; with a predicted branch the next index (and its node
+//! load) is known at once and the loop runs ahead speculatively. Stereo rays of a
+//! horizontal baseline have `dg.y == 0` exactly, so the branch never mispredicts there;
+//! rays moving along both axes keep the branch-free form (their exit axis is
+//! data-dependent). Tried and dropped (slower or no gain, within noise): a 1-layer fast
+//! path *before* the chain fixes (+5 % time: spills), per-axis slabs with a sign branch
+//! (+2 % instructions), node-centre divisions replaced by a multiplication (timing only:
+//! no gain, so the plane decode's latency is not the limit), carrying the node corner as
+//! floats across descents (+4 %: a select on the chain), `#[inline]` on
+//! `UnitCube::clip_ray` (no gain).
+//!
+//! Head to head after (`cd crates/screen && cargo run --release --example quadtree_speed
+//! -- 0.065 --near 0.1 --quick`, same process, interleaved, best of 7, loaded machine):
+//! quad-tree 169.0 ns/ray (6.85 nodes), **1.95x MinMax flat** (328.8 ns), 2.04x MinMax
+//! bilinear, 7.69x the minimal artifact-free DDA (254 steps), 6.23x DDA 200, 1.58x Hi-Z;
+//! fitted cube (`-- 0.065 --quick`): 142.0 ns/ray (3.61 nodes), 1.73x MinMax flat, 1.85x
+//! bilinear, 1.34x Hi-Z, 0.90x the DDA (17 steps). Where the remaining ~169 ns go (camera
+//! cube, 1671 instructions): the exact f64 clip ~280 instructions and ~25 ns (its chain of
+//! two dependent f64 divisions feeds the start), ray set-up and start ~190, result mapping
+//! ~60, the loop ~100 instructions per visited node (7.8 steps), plane tests ~100 each
+//! (1.4 per ray); about 3 branch mispredictions per ray remain (callgrind's model: node
+//! type 1.3, box hit 1.2, plane hit 0.4), each resolved only after the node load and the
+//! slab or plane arithmetic.
 
 pub mod build;
 pub mod cascade;

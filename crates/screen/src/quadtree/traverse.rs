@@ -26,6 +26,13 @@
 //! skipped. Invariant: no ancestor of the current node is a plane (true at the start; a
 //! successor's parent is an ancestor of the node it came from).
 //!
+//! Implementation (same results as the plain form of §4): both axes' slabs are one 4-lane
+//! operation; on an axis the ray does not move along (`dg == 0`, e.g. every epipolar
+//! segment of a horizontal stereo baseline) the descent's child and the successor's exit
+//! edge come from per-ray integers and a predicted branch, so the next node's index never
+//! waits for the slab arithmetic (session 4 in [`super`]: that dependency chain, not the
+//! instruction count, set the time).
+//!
 //! The loop carries a hard bound of `(W + H + 2) (2 levels + 2)` steps (every pixel column
 //! the segment crosses, each reached after at most `levels` descents); hitting it ends the
 //! layer with what was found. Nothing allocates; the hot loop is f32. Node loads are
