@@ -223,7 +223,8 @@ impl RaySetup {
     }
 }
 
-/// The identity, out of line: keeps `if pl > l { l = pl }` a branch (see its use).
+/// The identity, out of line: keeps `if pl > l { l = pl }` a branch instead of a select
+/// (see its uses).
 #[cold]
 #[inline(never)]
 fn raise_level(pl: usize) -> usize {
@@ -484,7 +485,12 @@ impl QuadTree {
             }
             let diff = (qx ^ nx) | (qy ^ ny);
             let up = (31 - diff.leading_zeros()) as usize;
-            let nl = (l + up).min(top);
+            // Capped at the top level: a (cold) branch, not a select on the chain to the
+            // next node index.
+            let mut nl = l + up;
+            if nl > top {
+                nl = raise_level(top);
+            }
             let sh = nl - l;
             qx = nx >> sh;
             qy = ny >> sh;
