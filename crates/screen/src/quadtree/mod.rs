@@ -194,6 +194,12 @@
 //! | **successor of a ray moving along one axis only: a predicted branch for the exit edge**; start / hit pixel on the other axis from the per-ray cell | 1814 | **~178** | ~150 |
 //! | raising the start level to the plane ancestor: a (cold) branch instead of a select on the `plane_level` load | 1826 | ~176 | ~145 |
 //! | one layer in cascade mode: the layer traversal inlined with a fixed query | 1671 | ~169 | ~141 |
+//! | the successor's top-level cap: a (cold) branch instead of a select | 1692 | ~163 | ~139 |
+//!
+//! Fitted cube, instructions per ray: 1527 before, 1300 after. The cascade (both layers,
+//! `--profile quadtree2`, which takes the general multi-layer path): camera cube 2103 ->
+//! 1990 instructions and ~218 -> ~197 ns/ray, fitted cube ~175 -> ~153 ns/ray (same
+//! timing protocol).
 //!
 //! The lesson: on these rays the CPU runs ~3 instructions per cycle and the time was set by
 //! dependency chains, not by the instruction count (the first row's -9 % instructions
@@ -212,11 +218,13 @@
 //!
 //! Head to head after (`cd crates/screen && cargo run --release --example quadtree_speed
 //! -- 0.065 --near 0.1 --quick`, same process, interleaved, best of 7, loaded machine):
-//! quad-tree 169.0 ns/ray (6.85 nodes), **1.95x MinMax flat** (328.8 ns), 2.04x MinMax
-//! bilinear, 7.69x the minimal artifact-free DDA (254 steps), 6.23x DDA 200, 1.58x Hi-Z;
-//! fitted cube (`-- 0.065 --quick`): 142.0 ns/ray (3.61 nodes), 1.73x MinMax flat, 1.85x
-//! bilinear, 1.34x Hi-Z, 0.90x the DDA (17 steps). Where the remaining ~169 ns go (camera
-//! cube, 1671 instructions): the exact f64 clip ~280 instructions and ~25 ns (its chain of
+//! quad-tree 164.5 ns/ray (6.85 nodes), **1.98x MinMax flat** (325.7 ns), 2.08x MinMax
+//! bilinear, 8.04x the minimal artifact-free DDA (254 steps), 6.51x DDA 200, 1.62x Hi-Z
+//! (before: 1.56x, 6.46x, 1.28x from 200 / 311 / 1292 / 256 ns); fitted cube (`-- 0.065
+//! --quick`): 141.6 ns/ray (3.61 nodes), 1.74x MinMax flat, 1.89x bilinear, 1.35x Hi-Z,
+//! 0.93x the DDA (17 steps). The 2x bar against MinMax flat is at the edge in the camera
+//! cube (1.95-2.0x over runs) and missed in the fitted cube. Where the remaining ~165 ns go
+//! (camera cube, ~1690 instructions): the exact f64 clip ~280 instructions and ~25 ns (its chain of
 //! two dependent f64 divisions feeds the start), ray set-up and start ~190, result mapping
 //! ~60, the loop ~100 instructions per visited node (7.8 steps), plane tests ~100 each
 //! (1.4 per ray); about 3 branch mispredictions per ray remain (callgrind's model: node
