@@ -230,6 +230,47 @@
 //! (1.4 per ray); about 3 branch mispredictions per ray remain (callgrind's model: node
 //! type 1.3, box hit 1.2, plane hit 0.4), each resolved only after the node load and the
 //! slab or plane arithmetic.
+//!
+//! **Session 5: the per-ray fixed cost.** Results unchanged (all tests pass, debug build
+//! included; traversal statistics identical to the last digit). Instructions per ray as in
+//! session 4 (callgrind, every 4th ray); time `quadtree_speed 0.065 [--near 0.1] --profile
+//! quadtree --time` (all rays, thread CPU time, best of 7), the builds run alternately,
+//! best of 3-5 runs each, loaded machine (±5 %):
+//!
+//! | change | instr/ray camera | ns/ray camera | instr/ray fitted | ns/ray fitted |
+//! |---|---|---|---|---|
+//! | before (435d5c5) | 1692 | ~162 | 1315 | ~137 |
+//! | the start pixel from `s = 0` with an integer tie rule and clamps (`RaySetup::cell0`: ~15 cycles of latency to the start node's index instead of ~45) *alone* | 1653 | ~196 (!) | 1282 | ~150 |
+//! | `raise_level` returns `black_box(pl)` *alone* | 1689 | ~166 | | |
+//! | **both** (9f0bda3) | **1678** | **~157** | **1298** | **~132** |
+//!
+//! The second row is the lesson: with fewer instructions and a shorter start chain the
+//! loop got ~4 ns slower per visited node, because LLVM had inferred that the cold
+//! `raise_level` returns its argument and folded the successor's top-level cap back into a
+//! `cmov` on the chain to the next node index (session 4 had made it a branch for exactly
+//! that reason). Any edit of the inlined traversal can flip that, so `raise_level` now hides
+//! its identity behind `black_box`; after an edit, check that the traversal loop of
+//! `trace_layers` holds no `cmov` after the `bsr` of the level jump (objdump).
+//!
+//! Tried and dropped (results identical each time, measured slower): the f64 clip with all
+//! six face divisions unconditional (three packed SSE2 divisions) and the faces folded by
+//! selects — bit-identical to the branching form (checked on 20,000 random and edge rays),
+//! but +70 instructions per ray (spills) and ~+2 % time; moving the multi-layer cascade
+//! path out of line (`#[inline(never)]`, -21 instructions per ray) — +25 % time, the same
+//! `cmov` fold as above. Measured and not pursued: with the camera cube the clip's entry
+//! point has `W == near` exactly for 78 % of the rays and the exit `W == far` for 75 % (60 %
+//! both), so a branch to a precomputed `1 / near` would skip the second division of the
+//! clip's chain only for ~60 % of the rays while mispredicting for ~25 %: no net gain
+//! expected. An f32 clip with an error bound and an f64 fallback cannot return the f64
+//! clip's bits (its end points and `t` are roundings of f64 values), and the brute-force
+//! twin and the example's statistics need exactly those, so it was not attempted.
+//!
+//! Head to head after (`cd crates/screen && cargo run --release --example quadtree_speed
+//! -- 0.065 --near 0.1 --quick`, same process, interleaved, best of 7, loaded machine):
+//! quad-tree 158.1 ns/ray, **2.07x MinMax flat** (327.7 ns), 2.17x MinMax bilinear, 1.68x
+//! Hi-Z, 8.34x the minimal artifact-free DDA (254 steps); fitted cube (`-- 0.065 --quick`,
+//! second run; the first, disturbed, gave 169 ns): 132.4 ns/ray, 1.86x MinMax flat, 2.01x
+//! bilinear, 1.43x Hi-Z, 0.98x the DDA (17 steps).
 
 pub mod build;
 pub mod cascade;
