@@ -199,6 +199,7 @@ impl RaySetup {
     /// the tie rule and the clamps are integer operations — ~15 cycles of latency instead
     /// of ~45 for the general form's float selects; otherwise the general form.
     #[inline(always)]
+    #[allow(clippy::manual_range_contains)]
     fn cell0(&self, a: usize, hi: u32) -> u32 {
         let x = self.o[a];
         if x >= 0.0 && x < 1.0e7 {
