@@ -22,7 +22,7 @@
 //!
 //! `cd crates/screen && cargo run --release --example quadtree_speed -- [IPD] [--near M] [all]`
 //! (IPD in metres, default 0.065; `all` also runs the lossless and adaptive trees).
-//! `--quick` stops after the head to head. `--profile METHOD` (quadtree|dda|minmax|minmax-flat|hiz) only traces every 4th ray once with that
+//! `--quick` stops after the head to head. `--profile METHOD` (quadtree|quadtree2 (2 layers, cascade)|dda|minmax|minmax-flat|hiz) only traces every 4th ray once with that
 //! method (with `--time`: times it on all rays instead, best of 7, thread CPU time), for `valgrind --tool=callgrind --toggle-collect=...` instruction counts.
 
 use std::time::Instant;
@@ -222,6 +222,12 @@ fn main() -> anyhow::Result<()> {
             "quadtree" => Box::new(QuadTreeTracer::build(
                 &cube,
                 l1,
+                &QuadTreeOptions::default(),
+            )?),
+            // Both layers: the cascade (§4.1).
+            "quadtree2" => Box::new(QuadTreeTracer::build(
+                &cube,
+                &layers[..2],
                 &QuadTreeOptions::default(),
             )?),
             "dda" => Box::new(DdaTracer::new(&cube, l1, &dda_opts(200))?),

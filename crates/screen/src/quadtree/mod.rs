@@ -180,6 +180,100 @@
 //! (`max_steps` 100000) on at most 0.01 % of the rays, found by a sweep and bisection; a
 //! capped DDA runs the uncapped one's iterations until the cap, so only truncated rays can
 //! differ.
+//!
+//! **Session 4: latency, not instructions.** Results unchanged throughout (all exactness
+//! tests pass; the traversal statistics — visits, box / plane tests, steps, hits — are
+//! identical to the last digit). Instructions per ray: `valgrind --tool=callgrind
+//! --toggle-collect='*profile_trace*' quadtree_speed 0.065 [--near 0.1] --profile quadtree`
+//! (every 4th ray). Time: `quadtree_speed 0.065 [--near 0.1] --profile quadtree --time`
+//! (all rays, thread CPU time, best of 7), builds run alternately, best of 5 runs each,
+//! loaded machine (±5 %):
+//!
+//! | change | instr/ray camera | ns/ray camera | ns/ray fitted |
+//! |---|---|---|---|
+//! | before (fd42ce8) | 1942 | ~201 | ~150 |
+//! | both axes' slabs as one 4-lane op (`RaySetup::slabs`; no per-axis `tie`/`far` loads), no finiteness check after the f64 clip (it clamps to [0, 1]), `cell` truncation without saturation code | 1768 | ~197 | |
+//! | descent on an axis the ray does not move along: integer test on `floor(o)` instead of a data-dependent float branch | 1802 | ~195 | |
+//! | **successor of a ray moving along one axis only: a predicted branch for the exit edge**; start / hit pixel on the other axis from the per-ray cell | 1814 | **~178** | ~150 |
+//! | raising the start level to the plane ancestor: a (cold) branch instead of a select on the `plane_level` load | 1826 | ~176 | ~145 |
+//! | one layer in cascade mode: the layer traversal inlined with a fixed query | 1671 | ~169 | ~141 |
+//! | the successor's top-level cap: a (cold) branch instead of a select | 1692 | ~163 | ~139 |
+//!
+//! Fitted cube, instructions per ray: 1527 before, 1300 after. The cascade (both layers,
+//! `--profile quadtree2`, which takes the general multi-layer path): camera cube 2103 ->
+//! 1990 instructions and ~218 -> ~197 ns/ray, fitted cube ~175 -> ~153 ns/ray (same
+//! timing protocol).
+//!
+//! The lesson: on these rays the CPU runs ~3 instructions per cycle and the time was set by
+//! dependency chains, not by the instruction count (the first row's -9 % instructions
+//! gained ~2 %). The branch-free successor (session 3) put `txo <= tyo` — node index ->
+//! int-to-float corner -> slab products -> compare — on the chain to the *next* node's
+//! index, ~30 cycles per successor; with a predicted branch the next index (and its node
+//! load) is known at once and the loop runs ahead speculatively. Stereo rays of a
+//! horizontal baseline have `dg.y == 0` exactly, so the branch never mispredicts there;
+//! rays moving along both axes keep the branch-free form (their exit axis is
+//! data-dependent). Tried and dropped (slower or no gain, within noise): a 1-layer fast
+//! path *before* the chain fixes (+5 % time: spills), per-axis slabs with a sign branch
+//! (+2 % instructions), node-centre divisions replaced by a multiplication (timing only:
+//! no gain, so the plane decode's latency is not the limit), carrying the node corner as
+//! floats across descents (+4 %: a select on the chain), `#[inline]` on
+//! `UnitCube::clip_ray` (no gain).
+//!
+//! Head to head after (`cd crates/screen && cargo run --release --example quadtree_speed
+//! -- 0.065 --near 0.1 --quick`, same process, interleaved, best of 7, loaded machine):
+//! quad-tree 164.5 ns/ray (6.85 nodes), **1.98x MinMax flat** (325.7 ns), 2.08x MinMax
+//! bilinear, 8.04x the minimal artifact-free DDA (254 steps), 6.51x DDA 200, 1.62x Hi-Z
+//! (before: 1.56x, 6.46x, 1.28x from 200 / 311 / 1292 / 256 ns); fitted cube (`-- 0.065
+//! --quick`): 141.6 ns/ray (3.61 nodes), 1.74x MinMax flat, 1.89x bilinear, 1.35x Hi-Z,
+//! 0.93x the DDA (17 steps). The 2x bar against MinMax flat is at the edge in the camera
+//! cube (1.95-2.0x over runs) and missed in the fitted cube. Where the remaining ~165 ns go
+//! (camera cube, ~1690 instructions): the exact f64 clip ~280 instructions and ~25 ns (its chain of
+//! two dependent f64 divisions feeds the start), ray set-up and start ~190, result mapping
+//! ~60, the loop ~100 instructions per visited node (7.8 steps), plane tests ~100 each
+//! (1.4 per ray); about 3 branch mispredictions per ray remain (callgrind's model: node
+//! type 1.3, box hit 1.2, plane hit 0.4), each resolved only after the node load and the
+//! slab or plane arithmetic.
+//!
+//! **Session 5: the per-ray fixed cost.** Results unchanged (all tests pass, debug build
+//! included; traversal statistics identical to the last digit). Instructions per ray as in
+//! session 4 (callgrind, every 4th ray); time `quadtree_speed 0.065 [--near 0.1] --profile
+//! quadtree --time` (all rays, thread CPU time, best of 7), the builds run alternately,
+//! best of 3-5 runs each, loaded machine (±5 %):
+//!
+//! | change | instr/ray camera | ns/ray camera | instr/ray fitted | ns/ray fitted |
+//! |---|---|---|---|---|
+//! | before (435d5c5) | 1692 | ~162 | 1315 | ~137 |
+//! | the start pixel from `s = 0` with an integer tie rule and clamps (`RaySetup::cell0`: ~15 cycles of latency to the start node's index instead of ~45) *alone* | 1653 | ~196 (!) | 1282 | ~150 |
+//! | `raise_level` returns `black_box(pl)` *alone* | 1689 | ~166 | | |
+//! | **both** (9f0bda3) | **1678** | **~157** | **1298** | **~132** |
+//!
+//! The second row is the lesson: with fewer instructions and a shorter start chain the
+//! loop got ~4 ns slower per visited node, because LLVM had inferred that the cold
+//! `raise_level` returns its argument and folded the successor's top-level cap back into a
+//! `cmov` on the chain to the next node index (session 4 had made it a branch for exactly
+//! that reason). Any edit of the inlined traversal can flip that, so `raise_level` now hides
+//! its identity behind `black_box`; after an edit, check that the traversal loop of
+//! `trace_layers` holds no `cmov` after the `bsr` of the level jump (objdump).
+//!
+//! Tried and dropped (results identical each time, measured slower): the f64 clip with all
+//! six face divisions unconditional (three packed SSE2 divisions) and the faces folded by
+//! selects — bit-identical to the branching form (checked on 20,000 random and edge rays),
+//! but +70 instructions per ray (spills) and ~+2 % time; moving the multi-layer cascade
+//! path out of line (`#[inline(never)]`, -21 instructions per ray) — +25 % time, the same
+//! `cmov` fold as above. Measured and not pursued: with the camera cube the clip's entry
+//! point has `W == near` exactly for 78 % of the rays and the exit `W == far` for 75 % (60 %
+//! both), so a branch to a precomputed `1 / near` would skip the second division of the
+//! clip's chain only for ~60 % of the rays while mispredicting for ~25 %: no net gain
+//! expected. An f32 clip with an error bound and an f64 fallback cannot return the f64
+//! clip's bits (its end points and `t` are roundings of f64 values), and the brute-force
+//! twin and the example's statistics need exactly those, so it was not attempted.
+//!
+//! Head to head after (`cd crates/screen && cargo run --release --example quadtree_speed
+//! -- 0.065 --near 0.1 --quick`, same process, interleaved, best of 7, loaded machine):
+//! quad-tree 158.1 ns/ray, **2.07x MinMax flat** (327.7 ns), 2.17x MinMax bilinear, 1.68x
+//! Hi-Z, 8.34x the minimal artifact-free DDA (254 steps); fitted cube (`-- 0.065 --quick`,
+//! second run; the first, disturbed, gave 169 ns): 132.4 ns/ray, 1.86x MinMax flat, 2.01x
+//! bilinear, 1.43x Hi-Z, 0.98x the DDA (17 steps).
 
 pub mod build;
 pub mod cascade;

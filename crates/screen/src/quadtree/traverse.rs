@@ -26,6 +26,13 @@
 //! skipped. Invariant: no ancestor of the current node is a plane (true at the start; a
 //! successor's parent is an ancestor of the node it came from).
 //!
+//! Implementation (same results as the plain form of §4): both axes' slabs are one 4-lane
+//! operation; on an axis the ray does not move along (`dg == 0`, e.g. every epipolar
+//! segment of a horizontal stereo baseline) the descent's child and the successor's exit
+//! edge come from per-ray integers and a predicted branch, so the next node's index never
+//! waits for the slab arithmetic (session 4 in [`super`]: that dependency chain, not the
+//! instruction count, set the time).
+//!
 //! The loop carries a hard bound of `(W + H + 2) (2 levels + 2)` steps (every pixel column
 //! the segment crosses, each reached after at most `levels` descents); hitting it ends the
 //! layer with what was found. Nothing allocates; the hot loop is f32. Node loads are
@@ -33,7 +40,7 @@
 //! (the level index and node coordinates stay inside the padded level arrays), so the
 //! debug-build tests check it on every step.
 
-use glam::{UVec2, Vec3};
+use glam::{UVec2, Vec3, Vec4};
 
 use super::build::QuadTree;
 use super::node::{FLAG_CRACK, FLAG_UNSAFE, decode_plane, plane_z};
@@ -64,10 +71,20 @@ pub struct RaySetup {
     /// [`Self::slab_fast`]).
     so: [f32; 2],
     sinv: [f32; 2],
-    /// `1 - tie`: the far side of a node rectangle is `x0 + size * far`.
-    far: [f32; 2],
+    /// The slab of both axes as one 4-lane operation (`x` near, `y` near, `x` far, `y`
+    /// far; [`Self::slabs`]): per-lane sides `[tie_x, tie_y, 1 - tie_x, 1 - tie_y]`, origins
+    /// `[so_x, so_y, so_x, so_y]` and reciprocals likewise.
+    side4: Vec4,
+    so4: Vec4,
+    sinv4: Vec4,
     /// Parameter length of one pixel of screen travel (for dilations).
     pub s_per_px: f32,
+    /// Per axis: the ray does not move along it (`dg == 0`), and then `floor(o)` (see the
+    /// descent in [`QuadTree::trace_layer`]).
+    par: [bool; 2],
+    floor_o: [u32; 2],
+    /// On a `par` axis: the pixel `cell(a, s, 0, W - 1)` (the same for every finite `s`).
+    pcell: [u32; 2],
 }
 
 impl RaySetup {
@@ -86,11 +103,16 @@ impl RaySetup {
             tie,
             so: o,
             sinv: inv,
-            far: [1.0 - tie[0], 1.0 - tie[1]],
+            side4: Vec4::new(tie[0], tie[1], 1.0 - tie[0], 1.0 - tie[1]),
+            so4: Vec4::ZERO,
+            sinv4: Vec4::ZERO,
             // `1 / max(|dg|)` without a third division: division is correctly rounded and
             // monotone, so `1 / max(|a|, |b|) == min(1 / |a|, 1 / |b|)` exactly (`inf` when
             // both are 0).
             s_per_px: fmin(inv[0].abs(), inv[1].abs()),
+            par: [false; 2],
+            floor_o: [0; 2],
+            pcell: [0; 2],
         };
         // An axis the ray does not move along: the traversal never leaves the start pixel's
         // column (row) on it — its pixel is `cell(a, s, ..)` for every `s`, and a descent
@@ -103,6 +125,8 @@ impl RaySetup {
         if dg[0] == 0.0 || dg[1] == 0.0 {
             r.axis_parallel(w, h);
         }
+        r.so4 = Vec4::new(r.so[0], r.so[1], r.so[0], r.so[1]);
+        r.sinv4 = Vec4::new(r.sinv[0], r.sinv[1], r.sinv[0], r.sinv[1]);
         r
     }
 
@@ -112,23 +136,25 @@ impl RaySetup {
     fn axis_parallel(&mut self, w: f32, h: f32) {
         for (a, hi) in [(0, w as u32 - 1), (1, h as u32 - 1)] {
             if self.dg[a] == 0.0 {
-                self.so[a] = self.cell(a, 0.0, 0, hi) as f32 + 0.5;
+                self.pcell[a] = self.cell0(a, hi);
+                self.so[a] = self.pcell[a] as f32 + 0.5;
                 self.sinv[a] = f32::INFINITY;
+                self.par[a] = true;
+                // `floor(o)` for `o >= 0` (saturating: NaN and negatives to 0, which keeps
+                // the descent test below: `o < 0` is below every mid line `m >= 1`).
+                self.floor_o[a] = self.o[a] as u32;
             }
         }
     }
 
-    /// Entry and exit parameters of the node rectangle `[x0, x0 + size]` on axis `a`: the
-    /// two products `(side - o) * inv` of the former per-node slab (the near side is
-    /// `x0 + size * tie`, exact), without branches.
+    /// Entry and exit parameters `(x in, y in, x out, y out)` of the node rectangle
+    /// `[x0, x0 + size] x [y0, y0 + size]`: per axis the two products `(side - o) * inv`
+    /// of the slab test (the near side is `x0 + size * tie`, exact), without branches, both
+    /// axes in one 4-lane operation (each lane the same IEEE operations as the scalar form).
     #[inline(always)]
-    fn slab_fast(&self, a: usize, x0: f32, size: f32) -> (f32, f32) {
-        let near = x0 + size * self.tie[a];
-        let far = x0 + size * self.far[a];
-        (
-            (near - self.so[a]) * self.sinv[a],
-            (far - self.so[a]) * self.sinv[a],
-        )
+    fn slabs(&self, x0: f32, y0: f32, size: f32) -> Vec4 {
+        let side = Vec4::new(x0, y0, x0, y0) + self.side4 * size;
+        (side - self.so4) * self.sinv4
     }
 
     /// Grid coordinate on axis `a` at `s`.
@@ -152,6 +178,55 @@ impl RaySetup {
         }
     }
 
+    /// [`Self::cell`]`(a, s, 0, hi)`, from [`Self::pcell`] on an axis the ray does not move
+    /// along (`o + 0 s = o`: the same value for every finite `s`).
+    #[inline(always)]
+    fn start_cell(&self, a: usize, s: f32, hi: u32) -> u32 {
+        if self.par[a] {
+            debug_assert_eq!(self.pcell[a], self.cell(a, s, 0, hi));
+            self.pcell[a]
+        } else if s == 0.0 {
+            // `o + dg * 0 = o` (`dg` finite; a signed zero floors the same).
+            self.cell0(a, hi)
+        } else {
+            self.cell(a, s, 0, hi)
+        }
+    }
+
+    /// [`Self::cell`]`(a, 0, 0, hi)` (the start pixel of a ray from the segment's start),
+    /// with a short dependency chain: it feeds the start node's index. For `0 <= o < 1e7`
+    /// (always, with the f64 clip: `p0` is in `[0, 1]`) the floor is the truncation, and
+    /// the tie rule and the clamps are integer operations — ~15 cycles of latency instead
+    /// of ~45 for the general form's float selects; otherwise the general form.
+    #[inline(always)]
+    #[allow(clippy::manual_range_contains)]
+    fn cell0(&self, a: usize, hi: u32) -> u32 {
+        let x = self.o[a];
+        if x >= 0.0 && x < 1.0e7 {
+            // SAFETY: `0 <= x < 1e7`, so it truncates to an in-range `i32`.
+            let t = unsafe { x.to_int_unchecked::<i32>() };
+            let t = t - ((t as f32 == x) & (self.dg[a] < 0.0)) as i32;
+            let c = (t.max(0) as u32).min(hi);
+            debug_assert_eq!(c, self.cell(a, 0.0, 0, hi));
+            c
+        } else {
+            self.cell(a, 0.0, 0, hi)
+        }
+    }
+
+    /// [`Self::cell`]`(a, s, lo, hi)` for `0 <= lo <= hi <= W - 1`: on a `par` axis the
+    /// nested clamp `clamp(clamp(c, 0, W - 1), lo, hi) = clamp(c, lo, hi)` of `pcell`.
+    #[inline(always)]
+    fn cell_in(&self, a: usize, s: f32, lo: u32, hi: u32) -> u32 {
+        if self.par[a] {
+            let c = self.pcell[a].max(lo).min(hi);
+            debug_assert_eq!(c, self.cell(a, s, lo, hi));
+            c
+        } else {
+            self.cell(a, s, lo, hi)
+        }
+    }
+
     /// Pixel cell on axis `a` at `s` (boundary ties go along the direction), clamped to
     /// `[lo, hi]`.
     #[inline(always)]
@@ -162,12 +237,25 @@ impl RaySetup {
         let x = if x < 1.0e7 { x } else { 1.0e7 };
         // floor without a libm call; a boundary tie goes to the lower cell when moving down
         // the axis (`tie` is 1 or 0, fixed per ray: no branch).
-        let t = x as i32 as f32;
+        // SAFETY: `x` is in `[-1, 1e7]` (not NaN) after the selects above, so it truncates to
+        // an in-range `i32` (no saturation code needed, unlike `as`).
+        let t = unsafe { x.to_int_unchecked::<i32>() } as f32;
         let c = if t > x { t - 1.0 } else { t };
         let c = if c == x { c - self.tie[a] } else { c };
         let lo = lo as f32;
         ((if c > lo { c } else { lo }) as u32).min(hi)
     }
+}
+
+/// The identity, out of line: keeps `if pl > l { l = pl }` a branch instead of a select
+/// (see its uses). `black_box` hides that it returns its argument: otherwise LLVM may
+/// still infer it (a `returned` argument) and fold the branch back into a `cmov` on the
+/// loop's chain to the next node index — which happened after an unrelated edit of the
+/// start and cost ~4 ns per visited node (~20 % on the camera cube).
+#[cold]
+#[inline(never)]
+fn raise_level(pl: usize) -> usize {
+    std::hint::black_box(pl)
 }
 
 /// What one layer's traversal found, in segment parameters.
@@ -198,7 +286,7 @@ pub struct Query {
 impl QuadTree {
     /// Traverses this layer along `ray` over `[q.s_lo, q.s_hi]` (§4); stops at the first hit
     /// (or, with `stop_at_ov`, the first occlusion-volume entry).
-    #[inline]
+    #[inline(always)]
     pub fn trace_layer(&self, ray: &RaySetup, q: &Query, stats: &mut TraceStats) -> LayerEvents {
         let mut ev = LayerEvents::default();
         if !(q.s_lo <= q.s_hi) {
@@ -214,7 +302,7 @@ impl QuadTree {
         // Start level: the paper starts at the root. Starting lower is equivalent (box tests
         // only cull) provided no plane ancestor is skipped: start at the first level whose
         // nodes exceed the segment's screen extent, or at the topmost plane ancestor.
-        let (cx, cy) = (ray.cell(0, s, 0, w - 1), ray.cell(1, s, 0, h - 1));
+        let (cx, cy) = (ray.start_cell(0, s, w - 1), ray.start_cell(1, s, h - 1));
         let ext = ray.dg[0].abs().max(ray.dg[1].abs()) * (q.s_hi - q.s_lo);
         let mut l = if ext < 1e6 {
             // ~ceil(log2(ext + 2)) without libm.
@@ -226,7 +314,9 @@ impl QuadTree {
         // time (one load instead of one node load per level above `l`).
         let pl = self.plane_level[(cy * w + cx) as usize] as usize;
         if pl > l {
-            l = pl;
+            // A real (predicted) branch, not a select: the start node's index then need not
+            // wait for this load.
+            l = raise_level(pl);
         }
         let mut qx = cx >> l;
         let mut qy = cy >> l;
@@ -262,8 +352,8 @@ impl QuadTree {
             // `2^l` from its exponent bits; node corners are integers below 2^24: exact.
             let size = f32::from_bits((127 + l as u32) << 23);
             let (x0, y0) = ((qx << l) as i32 as f32, (qy << l) as i32 as f32);
-            let (txi, txo) = ray.slab_fast(0, x0, size);
-            let (tyi, tyo) = ray.slab_fast(1, y0, size);
+            let t4 = ray.slabs(x0, y0, size);
+            let (txi, tyi, txo, tyo) = (t4.x, t4.y, t4.z, t4.w);
             // Plain compares (slab values are never NaN): no NaN-aware min/max in the loop.
             let t_in = fmax(fmax(s, txi), tyi);
             let t_out = fmin(fmin(txo, tyo), q.s_hi);
@@ -274,7 +364,9 @@ impl QuadTree {
                     let (n, c) = decode_plane(node, l as u32, qx, qy, wf, hf);
                     let flags = node.flags();
                     let mut trig = None;
-                    if flags & FLAG_UNSAFE != 0 && q.want_trigger && ev.trigger.is_none() {
+                    // `want_trigger` first: fixed per layer, it keeps the data-dependent flag
+                    // test (mispredicted ~0.2 times per ray) out of single-layer traces.
+                    if q.want_trigger && flags & FLAG_UNSAFE != 0 && ev.trigger.is_none() {
                         trig = if l == 0 {
                             let tz = self.trigger_z[(qy * w + qx) as usize];
                             ray.z_entry(t_in, t_out, tz)
@@ -360,11 +452,33 @@ impl QuadTree {
                 // Mid lines `x0 + size / 2`: exact.
                 let half = size * 0.5;
                 let (mid_x, mid_y) = (x0 + half, y0 + half);
-                let (ex, ey) = (ray.at(0, s), ray.at(1, s));
                 // Short-circuit on purpose: predicted branches keep the child choice off
                 // the loop's data-dependency chain (the branch-free form was ~15 % slower).
-                let rx = ex > mid_x || (ex == mid_x && pos_x);
-                let ry = ey > mid_y || (ey == mid_y && pos_y);
+                // On an axis the ray does not move along (`par`, per ray: a predicted
+                // branch) the entry coordinate is the constant `o` (`o + 0 * s`, `s`
+                // finite), and the comparison with the integer mid line
+                // `m = (2 q + 1) 2^l` (`l` is now the child level) is `o >= m` (`pos` holds
+                // for `dg = ±0`) <=> `floor(o) >= m` <=> `floor(o) >> l > 2 q`: an integer
+                // test instead of a data-dependent branch (that branch mispredicted ~1.1
+                // times per ray on horizontal stereo rays: the row's side is random).
+                let rx = if ray.par[0] {
+                    (ray.floor_o[0] >> l) > 2 * qx
+                } else {
+                    let ex = ray.at(0, s);
+                    ex > mid_x || (ex == mid_x && pos_x)
+                };
+                let ry = if ray.par[1] {
+                    (ray.floor_o[1] >> l) > 2 * qy
+                } else {
+                    let ey = ray.at(1, s);
+                    ey > mid_y || (ey == mid_y && pos_y)
+                };
+                // The float comparison it replaces, on every descent of the debug-build tests.
+                debug_assert!({
+                    let (ex, ey) = (ray.at(0, s), ray.at(1, s));
+                    rx == (ex > mid_x || (ex == mid_x && pos_x))
+                        && ry == (ey > mid_y || (ey == mid_y && pos_y))
+                });
                 qx = 2 * qx + rx as u32;
                 qy = 2 * qy + ry as u32;
                 continue;
@@ -373,10 +487,24 @@ impl QuadTree {
                 break;
             }
             s = fmax(s, t_out); // neither is NaN
-            // Successor across the exit edge (§4).
-            // Branch-free: `step` is +1 or -1 (wrapping) per axis, fixed per ray.
-            let nx = qx.wrapping_add(step_x & 0u32.wrapping_sub((txo <= tyo) as u32));
-            let ny = qy.wrapping_add(step_y & 0u32.wrapping_sub((tyo <= txo) as u32));
+            // Successor across the exit edge (§4). `step` is +1 or -1 (wrapping) per axis,
+            // fixed per ray. A ray moving along one axis only (`par` on the other: its slab
+            // there is `(-inf, +inf)`, so it exits across the moving axis) takes a predicted
+            // branch: the next node's index then does not wait for the slab arithmetic (the
+            // branch-free form puts `txo <= tyo` on the loop's data-dependency chain). The
+            // guard keeps the result identical in every case (`txo < tyo` is exactly the
+            // case where the branch-free form steps in x only).
+            let (nx, ny) = if ray.par[1] && txo < tyo {
+                (qx.wrapping_add(step_x), qy)
+            } else if ray.par[0] && tyo < txo {
+                (qx, qy.wrapping_add(step_y))
+            } else {
+                // General rays: branch-free (the exit axis is data-dependent).
+                (
+                    qx.wrapping_add(step_x & 0u32.wrapping_sub((txo <= tyo) as u32)),
+                    qy.wrapping_add(step_y & 0u32.wrapping_sub((tyo <= txo) as u32)),
+                )
+            };
             // Off the image (a wrapped `-1` is `u32::MAX`): `nx << l < W` iff
             // `nx <= (W - 1) >> l`.
             if nx > wm >> l || ny > hm >> l {
@@ -384,7 +512,12 @@ impl QuadTree {
             }
             let diff = (qx ^ nx) | (qy ^ ny);
             let up = (31 - diff.leading_zeros()) as usize;
-            let nl = (l + up).min(top);
+            // Capped at the top level: a (cold) branch, not a select on the chain to the
+            // next node index.
+            let mut nl = l + up;
+            if nl > top {
+                nl = raise_level(top);
+            }
             let sh = nl - l;
             qx = nx >> sh;
             qy = ny >> sh;
@@ -409,7 +542,7 @@ impl QuadTree {
         let y0 = qy << l;
         let x1 = (x0 + (1 << l) - 1).min(self.width - 1);
         let y1 = (y0 + (1 << l) - 1).min(self.height - 1);
-        UVec2::new(ray.cell(0, s, x0, x1), ray.cell(1, s, y0, y1))
+        UVec2::new(ray.cell_in(0, s, x0, x1), ray.cell_in(1, s, y0, y1))
     }
 
     /// Cube `z` of the effective plane at pixel `(i, j)` at cube `(x, y)`, if any (tests).
