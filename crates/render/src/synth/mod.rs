@@ -21,8 +21,8 @@
 //! - [`input`]: a colour + depth image pair as a single-layer reference;
 //! - [`score`]: PSNR / SSIM against the BVH ground truth.
 
-pub mod input;
 mod guard;
+pub mod input;
 pub mod layers;
 pub mod mesh_warp;
 pub mod method;
