@@ -56,8 +56,8 @@ pub struct VrArgs {
     /// whole pixel.
     #[arg(long)]
     pub subpixel: bool,
-    /// Visibility method: per-ray (BVH per subsample ray), beam (HVVR's beam caster), beam-watertight (beam caster with the exact watertight sample test) or beam-exact (the default set-up test with its full exact band: bit-identical to per-ray).
-    #[arg(long, default_value = "per-ray", value_parser = Visibility::parse)]
+    /// Visibility method: beam (HVVR's beam caster, the default), beam-exact (its set-up test with the full exact band: bit-identical to per-ray), beam-watertight (beam caster with the BVH's watertight sample test) or per-ray (BVH per subsample ray, the baseline).
+    #[arg(long, default_value = "beam", value_parser = Visibility::parse)]
     pub visibility: Visibility,
     /// Per-eye width override (default: the preset's).
     #[arg(long)]
