@@ -234,13 +234,13 @@ mod wide {
 
 /// `a > b ? a : b` per lane (NaN in `a` gives `b`).
 #[inline(always)]
-fn max_or_rhs<L: Lanes>(a: L, b: L) -> L {
+pub(super) fn max_or_rhs<L: Lanes>(a: L, b: L) -> L {
     L::select(a.gt(b), a, b)
 }
 
 /// `a < b ? a : b` per lane (NaN in `a` gives `b`).
 #[inline(always)]
-fn min_or_rhs<L: Lanes>(a: L, b: L) -> L {
+pub(super) fn min_or_rhs<L: Lanes>(a: L, b: L) -> L {
     L::select(a.lt(b), a, b)
 }
 

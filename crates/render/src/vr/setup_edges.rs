@@ -30,12 +30,10 @@
 //! (measured figures in `tile_setup.rs`).
 
 use parallax_bvh::Tri4;
-use parallax_core::math::{ROBUST_FAR_SCALE, WatertightRay};
+use parallax_core::math::WatertightRay;
 
 use super::packet::{ClosestN, Lanes, RaysN};
-use super::tile_setup::{
-    RHO_MAX, SetupWork, TileTris, dot_n, exact_t, max_or_rhs, min_or_rhs, slab,
-};
+use super::tile_setup::{PacketSlab, RHO_MAX, SetupWork, TileTris, dot_n, exact_t};
 
 /// The closest hit of every lane of `rays` against the set-up list (module docs); `axis` /
 /// `sign` are the tile beam's dominant axis (the near-depth order), `slack` the early-exit
@@ -63,18 +61,10 @@ pub(super) fn closest_edges<L: Lanes>(
     let mut exit_depth = f32::INFINITY;
     let mut start = 0usize;
     let oa = tt.origin[axis];
-    let one = L::splat(1.0);
-    let inv = [one / dx, one / dy, one / dz];
-    let neg = [inv[0].lt(zero), inv[1].lt(zero), inv[2].lt(zero)];
     let mut box_lim = L::splat(f32::INFINITY);
-    let far = L::splat(ROBUST_FAR_SCALE);
-    let abs = |x: L| L::select(x.lt(zero), zero - x, x);
-    let dinf_l = max_or_rhs(abs(dx), max_or_rhs(abs(dy), abs(dz)));
-    // (Invalid lanes have d = 0.)
-    let mut dinf = 0.0f32;
-    for l in 0..L::N {
-        dinf = dinf.max(dinf_l.get(l));
-    }
+    let one = L::splat(1.0);
+    let packet = PacketSlab::new(rays.d);
+    let dinf = packet.dinf;
     let lanes = valid.count_ones() as u64;
     for si in 0..tt.segs.len() {
         let seg = tt.segs[si];
@@ -85,12 +75,7 @@ pub(super) fn closest_edges<L: Lanes>(
         let first = start;
         start = end;
         // The BVH's robust slab test (Ize 2013 far scaling) of the packet on the run's box.
-        let (tnx, tfx) = slab(seg.lo.x, seg.hi.x, inv[0], neg[0]);
-        let (tny, tfy) = slab(seg.lo.y, seg.hi.y, inv[1], neg[1]);
-        let (tnz, tfz) = slab(seg.lo.z, seg.hi.z, inv[2], neg[2]);
-        let t_near = max_or_rhs(tnz, max_or_rhs(tny, max_or_rhs(tnx, zero)));
-        let t_far = min_or_rhs(tfz, min_or_rhs(tfy, min_or_rhs(tfx, box_lim)));
-        if L::bits(t_near.le(t_far * far)) & valid == 0 {
+        if !packet.reaches(&seg, box_lim, valid) {
             continue;
         }
         work.tri_tests += (end - first) as u64;

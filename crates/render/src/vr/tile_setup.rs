@@ -187,11 +187,11 @@ use parallax_bvh::Tri4;
 use parallax_bvh::beam::LeafRef;
 use parallax_bvh::node::{leaf_count, leaf_first};
 use parallax_core::math::Beam;
-use parallax_core::math::WatertightRay;
+use parallax_core::math::{ROBUST_FAR_SCALE, WatertightRay};
 use parallax_core::{Aabb, NO_ID, Ray};
 
 use super::SampleSet;
-use super::packet::{Lanes, for_each_packet, permutation};
+use super::packet::{Lanes, for_each_packet, max_or_rhs, min_or_rhs, permutation};
 
 /// Which sample test the caster runs (module docs of `tile_setup.rs` and `intersect.rs`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -727,16 +727,42 @@ pub(super) fn slab<L: Lanes>(lo: f32, hi: f32, inv: L, neg: L::M) -> (L, L) {
     (L::select(neg, t1, t0), L::select(neg, t0, t1))
 }
 
-/// `a > b ? a : b` per lane (NaN in `a` gives `b`).
-#[inline(always)]
-pub(super) fn max_or_rhs<L: Lanes>(a: L, b: L) -> L {
-    L::select(a.gt(b), a, b)
+/// Per-packet constants of the set-up kernels (`setup_edges.rs`, `setup_full.rs`): reciprocal
+/// directions and their signs for the BVH's robust slab test, and the packet's largest
+/// `|d|_inf` over its lanes (the scale of the edge band; invalid lanes have `d = 0`).
+pub(super) struct PacketSlab<L: Lanes> {
+    inv: [L; 3],
+    neg: [L::M; 3],
+    pub dinf: f32,
 }
 
-/// `a < b ? a : b` per lane (NaN in `a` gives `b`).
-#[inline(always)]
-pub(super) fn min_or_rhs<L: Lanes>(a: L, b: L) -> L {
-    L::select(a.lt(b), a, b)
+impl<L: Lanes> PacketSlab<L> {
+    #[inline(always)]
+    pub(super) fn new([dx, dy, dz]: [L; 3]) -> Self {
+        let (zero, one) = (L::splat(0.0), L::splat(1.0));
+        let inv = [one / dx, one / dy, one / dz];
+        let neg = [inv[0].lt(zero), inv[1].lt(zero), inv[2].lt(zero)];
+        let abs = |x: L| L::select(x.lt(zero), zero - x, x);
+        let dinf_l = max_or_rhs(abs(dx), max_or_rhs(abs(dy), abs(dz)));
+        let mut dinf = 0.0f32;
+        for l in 0..L::N {
+            dinf = dinf.max(dinf_l.get(l));
+        }
+        Self { inv, neg, dinf }
+    }
+
+    /// The BVH's robust slab test (Ize 2013 far scaling) of the packet on a run's box: true
+    /// when a lane of `valid` reaches the box before `box_lim` (its closest hit so far).
+    #[inline(always)]
+    pub(super) fn reaches(&self, seg: &Segment, box_lim: L, valid: u32) -> bool {
+        let (inv, neg) = (&self.inv, &self.neg);
+        let (tnx, tfx) = slab(seg.lo.x, seg.hi.x, inv[0], neg[0]);
+        let (tny, tfy) = slab(seg.lo.y, seg.hi.y, inv[1], neg[1]);
+        let (tnz, tfz) = slab(seg.lo.z, seg.hi.z, inv[2], neg[2]);
+        let t_near = max_or_rhs(tnz, max_or_rhs(tny, max_or_rhs(tnx, L::splat(0.0))));
+        let t_far = min_or_rhs(tfz, min_or_rhs(tfy, min_or_rhs(tfx, box_lim)));
+        L::bits(t_near.le(t_far * L::splat(ROBUST_FAR_SCALE))) & valid != 0
+    }
 }
 
 /// Work counters of the set-up kernel.
