@@ -5,7 +5,7 @@
 mod quadtree_util;
 
 use glam::Vec3;
-use parallax_core::{GBuffer, Rng};
+use parallax_core::{GBuffer, Ray, Rng};
 use parallax_raster::{RasterOptions, View, capture_layers};
 use parallax_scene::{Scene, camera::Pinhole};
 use parallax_screen::{
@@ -45,7 +45,14 @@ fn reach(qt: &QuadTreeTracer, rays: &[parallax_core::Ray]) -> Vec<usize> {
     n
 }
 
-fn check_synthetic(w: u32, h: u32, seed: u64, mode_lossy: bool) {
+/// The synthetic three-layer case `(w, h, seed)`: the quad-tree (lossy or lossless merging,
+/// exact otherwise), its brute-force twin, and the 300 test rays.
+fn synthetic(
+    w: u32,
+    h: u32,
+    seed: u64,
+    mode_lossy: bool,
+) -> (QuadTreeTracer, BruteForcePlanes, Vec<Ray>) {
     let cam = camera(w, h);
     let g0 = height_field(&cam, seed, 0.05);
     let g1 = behind(&g0, seed + 1);
@@ -64,6 +71,11 @@ fn check_synthetic(w: u32, h: u32, seed: u64, mode_lossy: bool) {
     let qt = QuadTreeTracer::build(&cube, &layers, &opts).unwrap();
     let bf = twin(&qt);
     let rays = rays(&cam, &layers[0], 300, 0.5, seed ^ 3);
+    (qt, bf, rays)
+}
+
+fn check_synthetic(w: u32, h: u32, seed: u64, mode_lossy: bool) {
+    let (qt, bf, rays) = synthetic(w, h, seed, mode_lossy);
     let (t, first, _) = run(&qt, &bf, &rays, REL);
     assert_eq!(t.differ, 0, "{w}x{h} seed {seed}: {t:?} first: {first:?}");
     assert!(t.edge * 50 <= t.total(), "{t:?}");
@@ -201,20 +213,8 @@ fn cascade_regression_47x28() {
 fn cascade_regression_24x45_hit_vs_entry() {
     let (w, h, seed) = (24u32, 45u32, 6201883681859096247u64);
     check_synthetic(w, h, seed, true);
-    let cam = camera(w, h);
-    let g0 = height_field(&cam, seed, 0.05);
-    let g1 = behind(&g0, seed + 1);
-    let g2 = behind(&g1, seed + 2);
-    let layers = vec![g0, g1, g2];
-    let cube = cube(&cam, &layers);
-    let opts = exact(QuadTreeOptions {
-        gamma_dist: 1e-3,
-        gamma_norm: 20f32.to_radians().cos(),
-        ..Default::default()
-    });
-    let qt = QuadTreeTracer::build(&cube, &layers, &opts).unwrap();
-    let bf = twin(&qt);
-    let r = rays(&cam, &layers[0], 300, 0.5, seed ^ 3)[76];
+    let (qt, bf, rays) = synthetic(w, h, seed, true);
+    let r = rays[76];
     let mut s = TraceStats::default();
     let a = qt.trace(&r, &mut s);
     let b = bf.trace(&r, &mut s);
@@ -281,20 +281,8 @@ fn cascade_regression_56x32_proxy_plane() {
 fn cascade_regression_53x41_hidden_boundary_crossing() {
     let (w, h, seed) = (53u32, 41u32, 12274103234209209180u64);
     check_synthetic(w, h, seed, true);
-    let cam = camera(w, h);
-    let g0 = height_field(&cam, seed, 0.05);
-    let g1 = behind(&g0, seed + 1);
-    let g2 = behind(&g1, seed + 2);
-    let layers = vec![g0, g1, g2];
-    let cube = cube(&cam, &layers);
-    let opts = exact(QuadTreeOptions {
-        gamma_dist: 1e-3,
-        gamma_norm: 20f32.to_radians().cos(),
-        ..Default::default()
-    });
-    let qt = QuadTreeTracer::build(&cube, &layers, &opts).unwrap();
-    let bf = twin(&qt);
-    let r = rays(&cam, &layers[0], 300, 0.5, seed ^ 3)[260];
+    let (qt, bf, rays) = synthetic(w, h, seed, true);
+    let r = rays[260];
     let mut s = TraceStats::default();
     let (a, b) = (qt.trace(&r, &mut s), bf.trace(&r, &mut s));
     let (

@@ -60,7 +60,7 @@
 //! (27.881 -> 27.879); at 160x120, ipd 0.26 (`tests/synth.rs`) 0.03 dB (21.185 -> 21.152;
 //! without the plane-crossing condition 0.05 dB). Ours, not in Widmer et al. 2015.
 
-use glam::{UVec2, Vec2};
+use glam::{UVec2, Vec2, Vec3};
 use parallax_screen::{DdaTracer, ScreenTracer, TraceResult, TraceStats};
 
 use super::layers::Reference;
@@ -166,6 +166,20 @@ const CONTACT_REL: f32 = 0.01;
 /// behind layer 0 entered from behind it.
 const ENTRY_BEHIND_REL: f32 = 0.01;
 
+/// `(layer, pixel, position, t)` of a hit in layer 1 or deeper; `None` for anything else.
+#[inline]
+fn deep_hit(r: TraceResult) -> Option<(u32, UVec2, Vec3, f32)> {
+    match r {
+        TraceResult::Hit {
+            layer,
+            pixel,
+            position,
+            t,
+        } if layer >= 1 => Some((layer, pixel, position, t)),
+        _ => None,
+    }
+}
+
 /// Layer-0 guard part (d) (module docs): a hit `r` in layer 1 or deeper is kept only when the
 /// ray reached it by passing behind a layer-0 silhouette. The ray's screen path in the
 /// reference is walked back from the hit, one pixel at a time, while the ray lies behind layer
@@ -181,19 +195,9 @@ pub(super) fn silhouette_guard(
     ray: &parallax_core::Ray,
     r: TraceResult,
 ) -> TraceResult {
-    let TraceResult::Hit {
-        layer,
-        pixel,
-        position,
-        t,
-        ..
-    } = r
-    else {
+    let Some((_, pixel, position, t)) = deep_hit(r) else {
         return r;
     };
-    if layer == 0 {
-        return r;
-    }
     let Some(g0) = reference.layers.first() else {
         return r;
     };
@@ -281,19 +285,9 @@ pub(super) fn nearer_neighbour_guard(
     ray: &parallax_core::Ray,
     r: TraceResult,
 ) -> TraceResult {
-    let TraceResult::Hit {
-        layer,
-        pixel,
-        position,
-        t,
-        ..
-    } = r
-    else {
+    let Some((layer, pixel, position, t)) = deep_hit(r) else {
         return r;
     };
-    if layer == 0 {
-        return r;
-    }
     let g0 = &reference.layers[0];
     let (w, h) = (g0.width() as i64, g0.height() as i64);
     let d0 = g0.depth[g0.index(pixel.x, pixel.y)];
