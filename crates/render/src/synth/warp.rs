@@ -424,41 +424,41 @@ fn bilinear(reference: &Reference, layer: u32, pixel: UVec2, position: Vec3) -> 
     // A deeper layer's hit blends the layer-0 samples of its surface when there are any
     // (module docs, "Visible samples first").
     if layer >= 1 {
-        let g0 = &reference.layers[0];
-        let c0 = &reference.colors[0];
-        let mut sum = Vec3::ZERO;
-        let mut wsum = 0.0f32;
-        for (dy, wy) in [(0, 1.0 - ty), (1, ty)] {
-            for (dx, wx) in [(0, 1.0 - tx), (1, tx)] {
-                let (x, y) = (x0 + dx, y0 + dy);
-                if x < 0 || y < 0 || x >= w as i64 || y >= h as i64 {
-                    continue;
-                }
-                let (x, y) = (x as u32, y as u32);
-                let wgt = wx * wy;
-                if wgt > 0.0 && same_surface(g0, g0.index(x, y), p_hit, n_hit, tol) {
-                    sum += *c0.get(x, y) * wgt;
-                    wsum += wgt;
-                }
-            }
-        }
-        if wsum > 1e-6 {
-            return Some(sum / wsum);
+        let (g0, c0) = (&reference.layers[0], &reference.colors[0]);
+        let visible = blend_cell(c0, (x0, y0), (tx, ty), |i| {
+            same_surface(g0, i, p_hit, n_hit, tol)
+        });
+        if visible.is_some() {
+            return visible;
         }
     }
+    blend_cell(colors, (x0, y0), (tx, ty), |i| {
+        i == hi || same_surface(g, i, p_hit, n_hit, tol)
+    })
+}
+
+/// The bilinear blend of the 2x2 cell at `(x0, y0)` with fractions `(tx, ty)` over the
+/// in-image pixels whose index `keep` accepts, weights renormalised; `None` when they carry
+/// no weight.
+fn blend_cell(
+    colors: &Image<Rgb>,
+    (x0, y0): (i64, i64),
+    (tx, ty): (f32, f32),
+    keep: impl Fn(usize) -> bool,
+) -> Option<Rgb> {
+    let (w, h) = (colors.width() as i64, colors.height() as i64);
     let mut sum = Vec3::ZERO;
     let mut wsum = 0.0f32;
     for (dy, wy) in [(0, 1.0 - ty), (1, ty)] {
         for (dx, wx) in [(0, 1.0 - tx), (1, tx)] {
             let (x, y) = (x0 + dx, y0 + dy);
-            if x < 0 || y < 0 || x >= w as i64 || y >= h as i64 {
+            if x < 0 || y < 0 || x >= w || y >= h {
                 continue;
             }
             let (x, y) = (x as u32, y as u32);
-            let i = g.index(x, y);
-            let same = i == hi || same_surface(g, i, p_hit, n_hit, tol);
             let wgt = wx * wy;
-            if same && wgt > 0.0 {
+            // (A layer's colours and G-buffer share its size and row-major index.)
+            if wgt > 0.0 && keep(colors.index(x, y)) {
                 sum += *colors.get(x, y) * wgt;
                 wsum += wgt;
             }
