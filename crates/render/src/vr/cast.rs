@@ -6,7 +6,6 @@
 //! HVVR runs the culling on the CPU and sample testing on the GPU; here all three stages run on
 //! the CPU threads, block after block.
 
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 use parallax_bvh::Bvh;
@@ -16,7 +15,8 @@ use rayon::prelude::*;
 
 use super::intersect::{LeafBox, LeafGroup, group_leaves, test_tile};
 use super::tile_setup::{
-    SampleTest, SetupExactness, TileTris, setup_tile, shared_origin, test_tile_setup,
+    SampleTest, SetupCounts, SetupExactness, SetupWork, TileTris, setup_tile, shared_origin,
+    test_tile_setup,
 };
 use super::{Hierarchy, SampleSet, VisibilityBuffer};
 
@@ -190,13 +190,9 @@ pub fn cast_opts(
         prim: out.prim.as_mut_ptr(),
         t: out.t.as_mut_ptr(),
     };
-    let counters: [AtomicU64; 19] = Default::default();
-    let add = |i: usize, v: u64| {
-        counters[i].fetch_add(v, Ordering::Relaxed);
-    };
     let blocks_ = bvh.blocks();
     let prim_ids = bvh.prim_ids();
-    hierarchy.blocks.par_iter().for_each_init(
+    let tally = hierarchy.blocks.par_iter().map_init(
         || {
             (
                 CullScratch::default(),
@@ -209,23 +205,17 @@ pub fn cast_opts(
             // Capture the whole (Send) struct, not its raw-pointer fields.
             #[allow(clippy::redundant_locals)]
             let ptr = ptr;
+            let mut tally = Tally::default();
             if block.rays == 0 {
-                return;
+                return tally;
             }
             let t0 = Instant::now();
             let bb = PreparedBeam::new(&block.beam, scale);
             block_cull(bvh, &SimdBeam::new(&bb), BLOCK_ENTRIES, scratch);
             let entries = std::mem::take(&mut scratch.entries);
             let t1 = Instant::now();
-            add(0, (t1 - t0).as_nanos() as u64);
-            add(3, entries.len() as u64);
-            let (mut cull_ns, mut test_ns) = (0u64, 0u64);
-            let (mut leaves_n, mut leaf_tests, mut rays, mut group_tests) =
-                (0u64, 0u64, 0u64, 0u64);
-            let (mut setup_tiles, mut tri_tests) = (0u64, 0u64);
-            let (mut pair_tests, mut exact_tests, mut final_tests, mut rescues) =
-                (0u64, 0u64, 0u64, 0u64);
-            let mut edge_band = 0u64;
+            tally.block_ns = (t1 - t0).as_nanos() as u64;
+            tally.entry_points = entries.len() as u64;
             tt.counts = Default::default();
             let tiles = &hierarchy.tiles
                 [block.first_tile as usize..(block.first_tile + block.tile_count) as usize];
@@ -263,17 +253,12 @@ pub fn cast_opts(
                         )
                     };
                     let c = Instant::now();
-                    cull_ns += (b - a).as_nanos() as u64;
-                    test_ns += (c - b).as_nanos() as u64;
-                    leaves_n += scratch.leaves.len() as u64;
-                    rays += w.rays;
-                    tri_tests += w.tri_tests;
-                    pair_tests += w.pair_tests;
-                    exact_tests += w.exact_tests;
-                    final_tests += w.final_tests;
-                    rescues += w.rescues;
-                    edge_band += w.edge_band;
-                    setup_tiles += 1;
+                    tally.tile_ns += (b - a).as_nanos() as u64;
+                    tally.test_ns += (c - b).as_nanos() as u64;
+                    tally.tile_leaves += scratch.leaves.len() as u64;
+                    tally.rays += w.rays;
+                    tally.setup.add(&w);
+                    tally.setup_tiles += 1;
                     continue;
                 }
                 group_leaves(bvh, &scratch.leaves, groups, boxes);
@@ -287,55 +272,78 @@ pub fn cast_opts(
                     )
                 };
                 let c = Instant::now();
-                cull_ns += (b - a).as_nanos() as u64;
-                test_ns += (c - b).as_nanos() as u64;
-                leaves_n += scratch.leaves.len() as u64;
-                leaf_tests += w.leaf_tests;
-                group_tests += w.group_tests;
-                rays += w.rays;
+                tally.tile_ns += (b - a).as_nanos() as u64;
+                tally.test_ns += (c - b).as_nanos() as u64;
+                tally.tile_leaves += scratch.leaves.len() as u64;
+                tally.leaf_tests += w.leaf_tests;
+                tally.group_tests += w.group_tests;
+                tally.rays += w.rays;
             }
             scratch.entries = entries;
-            add(1, cull_ns);
-            add(2, test_ns);
-            add(4, leaves_n);
-            add(5, leaf_tests);
-            add(6, rays);
-            add(7, tiles.len() as u64);
-            add(8, group_tests);
-            add(9, setup_tiles);
-            add(10, tri_tests);
-            add(11, tt.counts.all_out);
-            add(12, tt.counts.partial);
-            add(13, tt.counts.all_in);
-            add(14, pair_tests);
-            add(15, exact_tests);
-            add(16, final_tests);
-            add(17, rescues);
-            add(18, edge_band);
+            tally.tiles = tiles.len() as u64;
+            tally.corners = tt.counts;
+            tally
         },
     );
-    let g = |i: usize| counters[i].load(Ordering::Relaxed);
+    let t = tally.reduce(Tally::default, Tally::sum);
     CastStats {
-        block_cull: Duration::from_nanos(g(0)),
-        tile_cull: Duration::from_nanos(g(1)),
-        sample_test: Duration::from_nanos(g(2)),
+        block_cull: Duration::from_nanos(t.block_ns),
+        tile_cull: Duration::from_nanos(t.tile_ns),
+        sample_test: Duration::from_nanos(t.test_ns),
         wall: wall.elapsed(),
         blocks: hierarchy.blocks.len() as u64,
-        tiles: g(7),
-        entry_points: g(3),
-        tile_leaves: g(4),
-        leaf_tests: g(5),
-        group_tests: g(8),
-        rays: g(6),
-        setup_tiles: g(9),
-        tri_tests: g(10),
-        tris_all_out: g(11),
-        tris_partial: g(12),
-        tris_all_in: g(13),
-        setup_pair_tests: g(14),
-        setup_exact_tests: g(15),
-        setup_final_tests: g(16),
-        setup_rescues: g(17),
-        setup_edge_band: g(18),
+        tiles: t.tiles,
+        entry_points: t.entry_points,
+        tile_leaves: t.tile_leaves,
+        leaf_tests: t.leaf_tests,
+        group_tests: t.group_tests,
+        rays: t.rays,
+        setup_tiles: t.setup_tiles,
+        tri_tests: t.setup.tri_tests,
+        tris_all_out: t.corners.all_out,
+        tris_partial: t.corners.partial,
+        tris_all_in: t.corners.all_in,
+        setup_pair_tests: t.setup.pair_tests,
+        setup_exact_tests: t.setup.exact_tests,
+        setup_final_tests: t.setup.final_tests,
+        setup_rescues: t.setup.rescues,
+        setup_edge_band: t.setup.edge_band,
+    }
+}
+
+/// One block's counters in [`cast_opts`], summed over blocks (rayon map / reduce).
+#[derive(Clone, Copy, Default)]
+struct Tally {
+    block_ns: u64,
+    tile_ns: u64,
+    test_ns: u64,
+    tiles: u64,
+    entry_points: u64,
+    tile_leaves: u64,
+    leaf_tests: u64,
+    group_tests: u64,
+    rays: u64,
+    setup_tiles: u64,
+    setup: SetupWork,
+    corners: SetupCounts,
+}
+
+impl Tally {
+    fn sum(mut self, o: Self) -> Self {
+        self.block_ns += o.block_ns;
+        self.tile_ns += o.tile_ns;
+        self.test_ns += o.test_ns;
+        self.tiles += o.tiles;
+        self.entry_points += o.entry_points;
+        self.tile_leaves += o.tile_leaves;
+        self.leaf_tests += o.leaf_tests;
+        self.group_tests += o.group_tests;
+        self.rays += o.rays;
+        self.setup_tiles += o.setup_tiles;
+        self.setup.add(&o.setup);
+        self.corners.all_out += o.corners.all_out;
+        self.corners.partial += o.corners.partial;
+        self.corners.all_in += o.corners.all_in;
+        self
     }
 }

@@ -783,6 +783,19 @@ pub struct SetupWork {
     pub rescues: u64,
 }
 
+impl SetupWork {
+    /// Adds `o`'s counters to these.
+    pub fn add(&mut self, o: &Self) {
+        self.rays += o.rays;
+        self.tri_tests += o.tri_tests;
+        self.pair_tests += o.pair_tests;
+        self.exact_tests += o.exact_tests;
+        self.final_tests += o.final_tests;
+        self.edge_band += o.edge_band;
+        self.rescues += o.rescues;
+    }
+}
+
 /// Runs every subsample ray `0..total` of a tile (`pair(j)` = its `(sample, k)`) through the
 /// set-up kernel with `L::N` lanes; `write(pair, t, tri)` stores a result.
 #[inline(always)]
