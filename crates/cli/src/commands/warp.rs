@@ -56,7 +56,7 @@ pub struct SynthArgs {
     /// Quad-tree: normal threshold gamma_norm as an angle in degrees (cos of it is used).
     #[arg(long, default_value_t = 3.0)]
     pub gamma_norm_deg: f32,
-    /// Quad-tree: plane-distance threshold gamma_dist.
+    /// Quad-tree: plane-distance threshold gamma_dist, in z units of Widmer's NDC cube (the camera frustum from a 0.1 m near plane, where the paper states its 1e-5), rescaled to the cube in use.
     #[arg(long, default_value_t = 1e-5)]
     pub gamma_dist: f32,
     /// Quad-tree: depth-adaptive thresholds (§6).
