@@ -1,7 +1,7 @@
 //! [`HiZTracer`]: Hi-Z screen-space tracing, Uludag 2014, "Hi-Z Screen-Space Cone-Traced
 //! Reflections" (GPU Pro 5): a min-depth pyramid and the cell-crossing loop that moves the ray
 //! to a cell's min plane and goes a level down on a potential hit, and to the cell's exit and a
-//! level up otherwise ([`traverse`] with one bound per cell).
+//! level up otherwise (`depth_layers::traverse` with one bound per cell).
 //!
 //! Per layer, in the unit cube of the reference view: level 0 holds each pixel's cube `z`
 //! (flat per-pixel heights, as Uludag's depth buffer), level `l` the min over `2 x 2` cells;

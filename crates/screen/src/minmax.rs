@@ -15,14 +15,14 @@
 //!   of the back of its `z_thickness` shell; level `l` reduces `2 x 2` cells. Empty pixels
 //!   (no surface) have no height: both bounds `+inf` (never descended, and a cell containing
 //!   one never counts as "entirely in front of the ray").
-//! - **Traversal** ([`traverse`]): the iterative version (Tevs §4.2, the one Widmer timed):
+//! - **Traversal** (`depth_layers::traverse`): the iterative version (Tevs §4.2, the one Widmer timed):
 //!   descend when the ray's `z` range over the cell overlaps `[min, max]`, else step to the
 //!   cell exit and go up a level; rays moving away first jump to the cell's min plane.
 //! - **Refinement** (Tevs §4.3): at a pixel where `f(s) = z_ray(s) - patch(x(s), y(s))`
 //!   changes sign across the footprint, `refine_steps` bisection steps and a final secant
 //!   step give the hit. A ray entering the footprint from the side at most `z_thickness`
 //!   behind the patch hits its wall; farther behind it is in the occlusion volume
-//!   (thin-shell semantics, [`crate::depth_layers`]).
+//!   (thin-shell semantics, `depth_layers.rs`).
 //! - **Layers** (Widmer §4.1): each layer is its own height field; the next layer is traced
 //!   only for rays that went behind the previous one (cascade), from that point on.
 //!

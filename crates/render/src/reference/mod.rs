@@ -5,7 +5,7 @@
 //! - [`shade`]: direct lighting with shadow rays (analytic lights, emissive triangles by
 //!   next-event estimation, the constant environment by cosine-sampled visibility), GGX
 //!   specular, and mirror / glass chains;
-//! - [`render`]: both, over screen tiles with rayon; images are bit-identical for any thread
+//! - [`render()`]: both, over screen tiles with rayon; images are bit-identical for any thread
 //!   count because every pixel draws from its own seeded random stream.
 
 pub mod gbuffer;

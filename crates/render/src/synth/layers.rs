@@ -8,7 +8,7 @@
 //! the hit the sample's primitive and barycentrics, so hidden layers get the colour the
 //! reference eye would see if the surfaces in front were removed (view-dependent terms seen
 //! from the reference eye, as a rasterizer's deferred shading would give). Layer 0 uses the
-//! same per-pixel random stream as [`crate::reference::render`] with one sample per pixel, so
+//! same per-pixel random stream as [`crate::reference::render()`] with one sample per pixel, so
 //! it reproduces that render wherever rasterized and traced primary visibility agree.
 //!
 //! **Noise.** The reference shading is Monte Carlo (sky visibility, emitter samples): with
@@ -17,7 +17,7 @@
 //! shading point the same random stream, so shading is a deterministic function of the surface
 //! point, its normal and the view direction — a banded but noise-free image, identical in the
 //! reference and in the ground truth ([`super::score::ground_truth`] uses the same choice).
-//! [`Shading::PerPixel`] reproduces [`crate::reference::render`] at one sample per pixel.
+//! [`Shading::PerPixel`] reproduces [`crate::reference::render()`] at one sample per pixel.
 //!
 //! `T_ref` = capture + shade (+ the tracer build, added by the caller).
 

@@ -106,7 +106,7 @@ impl FromStr for Method {
 /// | `gamma_norm` | f32 (cos) | cos 3° | quadtree | normal-similarity merge threshold (§3.3, §6) |
 /// | `gamma_dist` | f32 | 1e-5 | quadtree | plane-distance merge threshold (§3.3, §6), in `z` units of Widmer's NDC cube (0.1 m camera near plane) whatever `cube_near` is ([`gamma_dist_scale`]) |
 /// | `adaptive` | bool | false | quadtree | depth-adaptive thresholds (§6, Fig. 15) |
-/// | `max_levels` | Option<u32> | None (full) | quadtree | levels of the tree |
+/// | `max_levels` | `Option<u32>` | None (full) | quadtree | levels of the tree |
 /// | `inpaint` | bool | false | quadtree | single-layer inpainting traversal (§4.1) |
 /// | `mesh_max_rel_jump` | f32 | inf | mesh | split grid triangles whose depths differ by more than this fraction |
 /// | `warp` | [`WarpOptions`] | bilinear + layer-0 guard (a)+(b)+(c) + nearest-background fill | all tracers | colour resampling and layer-0 guard of [`super::warp`] |

@@ -10,7 +10,7 @@
 //! layer's colour resampled depth-aware bilinearly at the hit's sub-pixel position; miss: the environment; occlusion volume: the nearest background pixel
 //! behind the crossed occluder edge — the inpainting of §4.1 / Fig. 6e). [`mesh_warp`] forward-warps layer 0 as a
 //! grid mesh instead (§5.1, "one vertex per input image pixel"). Every result is scored
-//! against the BVH reference render of the same camera ([`score`]).
+//! against the BVH reference render of the same camera ([`score()`](score::score)).
 //!
 //! - [`method`]: `Method` (quadtree | dda | minmax | hiz | mesh | brute) and the factory;
 //! - [`layers`]: reference capture + shading (`T_ref`);
@@ -19,7 +19,7 @@
 //! - [`upsample`]: 15 -> 60 Hz along a camera path (Table 3);
 //! - [`mesh_warp`]: the forward-warping baseline;
 //! - [`input`]: a colour + depth image pair as a single-layer reference;
-//! - [`score`]: PSNR / SSIM against the BVH ground truth.
+//! - [`score`](mod@score): PSNR / SSIM against the BVH ground truth.
 
 mod guard;
 pub mod input;

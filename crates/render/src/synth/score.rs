@@ -45,7 +45,7 @@ pub fn score(image: &Image<Rgb>, truth: &Image<Rgb>) -> Result<Score, SynthError
 
 /// The ground truth of a pinhole view: the BVH reference renderer's shading of the
 /// pixel-centre rays with the random streams of `shading` ([`Shading::PerPixel`] is exactly
-/// [`reference::render`] at one sample per pixel).
+/// [`crate::reference::render()`] at one sample per pixel).
 pub fn ground_truth(
     scene: &Scene,
     bvh: &Bvh,

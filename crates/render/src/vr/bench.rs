@@ -2,7 +2,7 @@
 //! (visibility, shading) of both eyes per sampling scheme and samples per pixel, shade samples
 //! per non-empty pixel for MSAA and SSAA, and ray throughput against the per-ray BVH baseline.
 //!
-//! Every scheme is run with each visibility method through [`frame::visibility`]; a method not
+//! Every scheme is run with each visibility method through [`frame::visibility()`](super::frame::visibility); a method not
 //! in the build (the beam caster, until merged) gives a row with `available = false` and the
 //! reason, not an error. Per-ray visibility fuses traversal and intersection, so its
 //! `ms_traversal` is the whole trace and `ms_intersect` is `None`. Times are the best of

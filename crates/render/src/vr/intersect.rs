@@ -1,5 +1,5 @@
 //! Sample testing (Hunt et al. 2018, §5.5): the subsample rays of a tile against the tile's
-//! triangle list, closest hit with depth test, written to the [`VisibilityBuffer`].
+//! triangle list, closest hit with depth test, written to the [`VisibilityBuffer`](super::visibility::VisibilityBuffer).
 //!
 //! - Rays are generated just in time per subsample ([`SampleSet::fast_subsample_ray`], the
 //!   same rays bit for bit as [`SampleSet::subsample_ray`]), never stored.

@@ -60,7 +60,7 @@
 //!   Triangles with `rho > 0.05` (seen nearly edge-on, or their plane nearly through `o`)
 //!   always take the watertight test.
 //! - The winner's `t` is always the watertight test's (lane-wise in one pass per packet,
-//!   [`final_t_lanes`]), so the same triangle gives the same `t` bit for bit. A winner the
+//!   `setup_full::final_t_lanes`), so the same triangle gives the same `t` bit for bit. A winner the
 //!   watertight test rejects (a violated bound; never observed) sends the ray through an exact
 //!   scan of the tile's list (`CastStats::setup_rescues`, asserted 0 in the tests).
 //! - The early exit and the leaf box test use the upper bound `1 / (g . d (1 - rho))` of the

@@ -68,7 +68,7 @@ pub struct RaySetup {
     tie: [f32; 2],
     /// Slab origin and reciprocal of the traversal loop: `o` and `inv`, except on an axis
     /// with `dg == 0`, where they are the start pixel's centre and `+inf` (see
-    /// [`Self::slab_fast`]).
+    /// [`Self::slabs`]).
     so: [f32; 2],
     sinv: [f32; 2],
     /// The slab of both axes as one 4-lane operation (`x` near, `y` near, `x` far, `y`
