@@ -24,8 +24,16 @@ fn setup(scene: &Scene) -> StereoSetup {
     }
 }
 
-/// Everything of a row but the times (bit-exact: NaN equals NaN).
+/// Everything of a row but the times: bit-exact for tracers (NaN equals NaN); the mesh warp
+/// (rasterized in parallel, ulp-level run-to-run differences) to 9 significant digits.
 fn results(r: &WarpRow) -> String {
+    let f = |v: f64| {
+        if r.method == "mesh" {
+            format!("{v:.8e}")
+        } else {
+            v.to_bits().to_string()
+        }
+    };
     format!(
         "{} {} {:?} {:?} {} {} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?}",
         r.method,
@@ -36,13 +44,13 @@ fn results(r: &WarpRow) -> String {
         r.repeats,
         r.near_m.to_bits(),
         r.far_m.to_bits(),
-        r.nodes_per_ray.to_bits(),
-        r.tests_per_ray.to_bits(),
-        r.pct_layer2.to_bits(),
-        r.pct_miss.to_bits(),
-        r.pct_occlusion.to_bits(),
-        r.psnr.to_bits(),
-        r.ssim.to_bits(),
+        f(r.nodes_per_ray),
+        f(r.tests_per_ray),
+        f(r.pct_layer2),
+        f(r.pct_miss),
+        f(r.pct_occlusion),
+        f(r.psnr),
+        f(r.ssim),
     )
 }
 
@@ -85,6 +93,14 @@ fn interleaved_rounds_equal_each_method_alone() {
         for k in 0..2 {
             let d = direct.view(&fitted, &eyes[k]).unwrap();
             for w in [&v.views[k], &va.views[k]] {
+                if *m == Method::Mesh {
+                    let diff = w.image.data().iter().zip(d.image.data());
+                    let max = diff
+                        .map(|(a, b)| (*a - *b).abs().max_element())
+                        .fold(0.0, f32::max);
+                    assert!(max < 1e-4, "mesh eye {k}: {max}");
+                    continue;
+                }
                 assert_eq!(w.image.data(), d.image.data(), "{m} eye {k}");
                 assert_eq!(w.kinds, d.kinds);
                 assert_eq!(w.work, d.work);
