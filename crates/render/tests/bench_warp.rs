@@ -90,8 +90,8 @@ fn interleaved_rounds_equal_each_method_alone() {
         let (v, va) = (views.as_ref().unwrap(), alone_views.as_ref().unwrap());
         // The views equal those of the method built and run directly.
         let direct = Synthesizer::build(*m, &fitted, o).unwrap();
-        for k in 0..2 {
-            let d = direct.view(&fitted, &eyes[k]).unwrap();
+        for (k, eye) in eyes.iter().enumerate() {
+            let d = direct.view(&fitted, eye).unwrap();
             for w in [&v.views[k], &va.views[k]] {
                 if *m == Method::Mesh {
                     let diff = w.image.data().iter().zip(d.image.data());
