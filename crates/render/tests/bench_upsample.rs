@@ -9,7 +9,8 @@ use parallax_render::synth::upsample::scene_path;
 use parallax_scene::Scene;
 
 /// Everything of a row but the times: bit-exact for tracers; the mesh warp (rasterized
-/// in parallel, ulp-level run-to-run differences) to 9 significant digits.
+/// in parallel, ulp-level run-to-run differences) and PSNR / SSIM (a parallel f64 sum, whose
+/// order varies from run to run) to 9 significant digits.
 fn results(r: &UpsampleRow) -> String {
     let nums = [
         r.near_m as f64,
@@ -24,7 +25,11 @@ fn results(r: &UpsampleRow) -> String {
     let nums: Vec<String> = if r.method == "mesh" {
         nums.iter().map(|v| format!("{v:.8e}")).collect()
     } else {
-        nums.iter().map(|v| v.to_bits().to_string()).collect()
+        let (exact, score) = nums.split_at(6);
+        let exact = exact.iter().map(|v| v.to_bits().to_string());
+        exact
+            .chain(score.iter().map(|v| format!("{v:.8e}")))
+            .collect()
     };
     format!(
         "{} {} {:?} {:?} {} {} {:?}",

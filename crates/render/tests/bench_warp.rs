@@ -25,7 +25,8 @@ fn setup(scene: &Scene) -> StereoSetup {
 }
 
 /// Everything of a row but the times: bit-exact for tracers (NaN equals NaN); the mesh warp
-/// (rasterized in parallel, ulp-level run-to-run differences) to 9 significant digits.
+/// (rasterized in parallel, ulp-level run-to-run differences) and PSNR / SSIM (a parallel f64
+/// sum, whose order varies from run to run) to 9 significant digits.
 fn results(r: &WarpRow) -> String {
     let f = |v: f64| {
         if r.method == "mesh" {
@@ -34,6 +35,7 @@ fn results(r: &WarpRow) -> String {
             v.to_bits().to_string()
         }
     };
+    let score = |v: f64| format!("{v:.8e}");
     format!(
         "{} {} {:?} {:?} {} {} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?}",
         r.method,
@@ -49,8 +51,8 @@ fn results(r: &WarpRow) -> String {
         f(r.pct_layer2),
         f(r.pct_miss),
         f(r.pct_occlusion),
-        f(r.psnr),
-        f(r.ssim),
+        score(r.psnr),
+        score(r.ssim),
     )
 }
 
