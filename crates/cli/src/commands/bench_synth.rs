@@ -126,7 +126,8 @@ pub struct WarpBenchArgs {
     /// of --dda-max-steps, and the minimal artifact-free value is printed (Widmer's tuning).
     #[arg(long)]
     pub dda_sweep: Option<String>,
-    /// Timed runs of each eye's warp and trace-only pass; the best is reported.
+    /// Rounds: each runs every method's warp and trace-only pass of both eyes once
+    /// (interleaved); the best round of each method is reported.
     #[arg(long, default_value_t = 1)]
     pub repeats: u32,
     /// Write the rows as JSON.
@@ -166,7 +167,7 @@ pub fn warp_bench(a: &WarpBenchArgs, quiet: bool) -> Result<()> {
     if !quiet {
         let near = rows.iter().find(|r| r.error.is_none());
         println!(
-            "{} {}x{}, ipd {}, cube near: {}{}, {} threads, best of {} per eye",
+            "{} {}x{}, ipd {}, cube near: {}{}, {} threads, best of {} interleaved rounds per eye",
             scene.name,
             a.width,
             a.height,
@@ -215,6 +216,7 @@ pub fn warp_bench(a: &WarpBenchArgs, quiet: bool) -> Result<()> {
                 ),
             }
         }
+        print_ratios(&rows);
         print_dda_minimal(&dda_sweeps(rows.iter().filter(|r| r.error.is_none()).map(
             |r| {
                 (
@@ -228,6 +230,52 @@ pub fn warp_bench(a: &WarpBenchArgs, quiet: bool) -> Result<()> {
         )));
     }
     write_json(&a.json, &rows)
+}
+
+/// The quad-tree's throughput ratios to every other method of the same layer count (the
+/// rounds are interleaved, so these compare like with like): whole warp (by `T_eye`, the
+/// same pixels), trace-only Mrays/s (wall) and trace-only Mrays per CPU-second.
+fn print_ratios(rows: &[warp::WarpRow]) {
+    let ok = |r: &&warp::WarpRow| r.error.is_none();
+    for qt in rows.iter().filter(ok).filter(|r| r.method == "quadtree") {
+        let mut parts = Vec::new();
+        for o in rows
+            .iter()
+            .filter(ok)
+            .filter(|o| o.layers == qt.layers && o.method != "quadtree")
+        {
+            let ratio = |a: f64, b: f64| {
+                let x = a / b;
+                if x.is_finite() {
+                    format!("{x:.2}x")
+                } else {
+                    "-".into()
+                }
+            };
+            let name = match o.dda_max_steps {
+                Some(n) => format!("{} ({n} steps)", o.method),
+                None => o.method.clone(),
+            };
+            // Whole warp by T_eye (the same pixels; the mesh warp counts no rays).
+            let warp = ratio(o.ms_view, qt.ms_view);
+            parts.push(if o.trace_mrays_per_s.is_nan() {
+                format!("/ {name}: warp {warp}")
+            } else {
+                format!(
+                    "/ {name}: warp {warp}, trace {}, trace CPU {}",
+                    ratio(qt.trace_mrays_per_s, o.trace_mrays_per_s),
+                    ratio(qt.trace_cpu_mrays_per_s, o.trace_cpu_mrays_per_s)
+                )
+            });
+        }
+        if !parts.is_empty() {
+            println!(
+                "ratios, {} layer(s), quadtree speed {}",
+                qt.layers,
+                parts.join("; ")
+            );
+        }
+    }
 }
 
 #[derive(Args, Debug)]

@@ -8,12 +8,12 @@
 
 use std::time::Instant;
 
-use glam::Vec2;
 use parallax_core::Ray;
-use parallax_scene::camera::{CameraModel, Pinhole};
+use parallax_scene::camera::Pinhole;
 use parallax_screen::{ScreenTracer, TraceStats};
 use rayon::prelude::*;
 
+use crate::synth::warp::PixelRays;
 use parallax_core::cpu_time::{ms_between, process_cpu_ns, thread_cpu_ns};
 
 /// Times of one pass (milliseconds).
@@ -74,19 +74,13 @@ fn timed_rows<T: Send>(
     (out, times)
 }
 
-/// The warp's eye rays of `target` (row-major, `None` where the camera gives no ray), and
-/// the time to generate them.
+/// The warp's eye rays of `target` (row-major, [`PixelRays`], bit-identical to the warp's;
+/// never `None` for a pinhole), and the time to generate them.
 pub fn eye_rays(target: &Pinhole) -> (Vec<Option<Ray>>, PassTimes) {
-    let w = target.width as usize;
+    let pixel_rays = PixelRays::new(target);
     let gen_row = |y: usize| -> Vec<Option<Ray>> {
-        (0..w)
-            .map(|x| {
-                let film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-                target
-                    .generate_ray(film, Vec2::splat(0.5), 1)
-                    .map(|c| c.ray)
-            })
-            .collect()
+        let row = pixel_rays.row(y as u32);
+        (0..target.width).map(|x| Some(row.ray(x))).collect()
     };
     // Timed without keeping the rows (the warp writes into preallocated images).
     let (_, times) = timed_rows(

@@ -3,10 +3,16 @@
 //! ([`crate::synth::upsample`]); reported: mean `T_ref`, mean and standard deviation of
 //! `T_syn` over the synthesised frames, the amortised frame time `T_amt` (all frame times /
 //! frames), tracing Mrays/s, and the mean PSNR / SSIM of the synthesised frames against the
-//! BVH render of their cameras (optional: one reference render per synthesised frame and
-//! method).
+//! BVH render of their cameras (optional: one reference render per synthesised frame).
+//!
+//! The methods of one layer count run **interleaved** ([`measure_interleaved`]): each
+//! reference is captured once, and each synthesised frame is warped by every method in turn,
+//! so a disturbance of the shared machine hits every method alike (before, each method ran
+//! the whole path in its own block). `T_ref` of a method = the shared capture + shading + its
+//! own structure build.
 
 use parallax_bvh::Bvh;
+use parallax_core::{Image, Rgb};
 use parallax_scene::Scene;
 use parallax_scene::path::CameraPath;
 use serde::Serialize;
@@ -15,7 +21,7 @@ use crate::synth::SynthError;
 use crate::synth::layers::Shading;
 use crate::synth::method::{Method, MethodOptions, cube_near_name};
 use crate::synth::score::{ground_truth, score};
-use crate::synth::upsample::{UpsampleOptions, upsample};
+use crate::synth::upsample::{FrameTimes, UpsampleOptions, upsample_interleaved};
 
 /// One row of Table 3.
 #[derive(Clone, Debug, Default, Serialize)]
@@ -65,7 +71,7 @@ pub struct UpsampleSetup {
     pub score: bool,
 }
 
-/// One method and layer count over the path.
+/// One method and layer count over the path ([`measure_interleaved`] with one method).
 #[allow(clippy::too_many_arguments)]
 pub fn measure(
     scene: &Scene,
@@ -77,61 +83,130 @@ pub fn measure(
     opts: &MethodOptions,
     progress: &dyn Fn(&str),
 ) -> UpsampleRow {
-    let mut row = UpsampleRow {
-        method: method.name().into(),
+    measure_interleaved(
+        scene,
+        bvh,
+        path,
+        setup,
+        &[(method, *opts)],
         layers,
-        scene: scene.name.clone(),
-        width: setup.width,
-        height: setup.height,
-        frames: setup.frames,
-        cube_near: cube_near_name(opts.cube_near),
-        dda_max_steps: (method == Method::Dda).then_some(opts.dda_max_steps),
-        psnr: f64::NAN,
-        ssim: f64::NAN,
-        ..UpsampleRow::default()
-    };
+        progress,
+    )
+    .pop()
+    .expect("one row per method")
+}
+
+/// Sums over the synthesised frames of one method.
+#[derive(Default)]
+struct Acc {
+    psnr: f64,
+    ssim: f64,
+    scored: u32,
+    rays: u64,
+    nodes: f64,
+    deep: f64,
+    trace_ms: f64,
+    syn: u32,
+    miss: f64,
+    occ: f64,
+    near: Option<(f32, f32)>,
+}
+
+/// Every `(method, options)` of `entries` with `layers` layers over the path, interleaved
+/// ([`upsample_interleaved`]: one capture per reference frame, every synthesised frame run by
+/// every method in turn, so a disturbance of the machine hits all methods alike; the BVH
+/// ground truth of a frame is rendered once for all methods). Rows in the order of
+/// `entries`, each equal but for the times to [`measure`]-ing the method alone.
+pub fn measure_interleaved(
+    scene: &Scene,
+    bvh: &Bvh,
+    path: &CameraPath,
+    setup: &UpsampleSetup,
+    entries: &[(Method, MethodOptions)],
+    layers: usize,
+    progress: &dyn Fn(&str),
+) -> Vec<UpsampleRow> {
     let uo = UpsampleOptions {
         frames: setup.frames,
         fps: 60.0,
         period: 4,
         layers,
-        method,
-        method_opts: *opts,
+        method: entries.first().map_or(Method::QuadTree, |e| e.0),
+        method_opts: entries.first().map_or_else(MethodOptions::default, |e| e.1),
         shading: setup.shading,
         seed: setup.seed,
     };
-    let (mut psnr, mut ssim, mut scored) = (0.0, 0.0, 0u32);
-    let (mut rays, mut nodes, mut deep, mut trace_ms, mut syn) = (0u64, 0.0, 0.0, 0.0, 0u32);
-    let (mut miss, mut occ, mut near) = (0.0, 0.0, None);
-    let result = upsample(scene, bvh, path, setup.width, setup.height, &uo, &mut |f| {
-        progress(&format!("{method}, {layers} layer(s): frame {}", f.index));
-        near.get_or_insert((f.reference.cube.near, f.reference.cube.far));
-        if let Some(v) = &f.view {
-            let (_, m, o) = v.kind_fractions();
-            miss += m;
-            occ += o;
-            rays += v.stats.rays;
-            nodes += v.nodes_per_ray();
-            deep += v.frac_deep();
-            trace_ms += v.ms;
-            syn += 1;
-            if setup.score {
-                let truth = ground_truth(scene, bvh, &f.camera, setup.shading, setup.seed);
-                let s = score(&v.image, &truth)?;
-                psnr += s.psnr;
-                ssim += s.ssim;
-                scored += 1;
+    let mut accs: Vec<Acc> = entries.iter().map(|_| Acc::default()).collect();
+    let mut truth: Option<(u32, Image<Rgb>)> = None;
+    let results = upsample_interleaved(
+        scene,
+        bvh,
+        path,
+        setup.width,
+        setup.height,
+        &uo,
+        entries,
+        &mut |k, f| {
+            progress(&format!(
+                "{}, {layers} layer(s): frame {}",
+                entries[k].0, f.index
+            ));
+            let a = &mut accs[k];
+            a.near
+                .get_or_insert((f.reference.cube.near, f.reference.cube.far));
+            if let Some(v) = &f.view {
+                let (_, m, o) = v.kind_fractions();
+                a.miss += m;
+                a.occ += o;
+                a.rays += v.stats.rays;
+                a.nodes += v.nodes_per_ray();
+                a.deep += v.frac_deep();
+                a.trace_ms += v.ms;
+                a.syn += 1;
+                if setup.score {
+                    if truth.as_ref().is_none_or(|(i, _)| *i != f.index) {
+                        let t = ground_truth(scene, bvh, &f.camera, setup.shading, setup.seed);
+                        truth = Some((f.index, t));
+                    }
+                    let (_, t) = truth.as_ref().expect("just rendered");
+                    let s = score(&v.image, t)?;
+                    a.psnr += s.psnr;
+                    a.ssim += s.ssim;
+                    a.scored += 1;
+                }
             }
-        }
-        Ok(())
-    });
-    let times = match result {
-        Ok(t) => t,
-        Err(e) => {
-            row.error = Some(e.to_string());
-            return row;
-        }
-    };
+            Ok(())
+        },
+    );
+    entries
+        .iter()
+        .zip(results)
+        .zip(accs)
+        .map(|(((method, opts), result), a)| {
+            let mut row = UpsampleRow {
+                method: method.name().into(),
+                layers,
+                scene: scene.name.clone(),
+                width: setup.width,
+                height: setup.height,
+                frames: setup.frames,
+                cube_near: cube_near_name(opts.cube_near),
+                dda_max_steps: (*method == Method::Dda).then_some(opts.dda_max_steps),
+                psnr: f64::NAN,
+                ssim: f64::NAN,
+                ..UpsampleRow::default()
+            };
+            match result {
+                Ok(times) => finish(&mut row, &times, &a),
+                Err(e) => row.error = Some(e.to_string()),
+            }
+            row
+        })
+        .collect()
+}
+
+/// Fills the numbers of a row from its frame times and sums.
+fn finish(row: &mut UpsampleRow, times: &[FrameTimes], a: &Acc) {
     let refs: Vec<f64> = times
         .iter()
         .filter(|t| t.is_reference)
@@ -149,25 +224,26 @@ pub fn measure(
         / syns.len().max(1) as f64)
         .sqrt();
     row.ms_amortized = (refs.iter().sum::<f64>() + syns.iter().sum::<f64>()) / times.len() as f64;
-    row.mrays_per_s = if rays > 0 {
-        rays as f64 / (trace_ms * 1e3)
+    row.mrays_per_s = if a.rays > 0 {
+        a.rays as f64 / (a.trace_ms * 1e3)
     } else {
         0.0
     };
-    row.nodes_per_ray = nodes / syn.max(1) as f64;
-    row.pct_layer2 = deep * 100.0 / syn.max(1) as f64;
-    row.pct_miss = miss * 100.0 / syn.max(1) as f64;
-    row.pct_occlusion = occ * 100.0 / syn.max(1) as f64;
-    (row.near_m, row.far_m) = near.unwrap_or((f32::NAN, f32::NAN));
-    if scored > 0 {
-        row.psnr = psnr / scored as f64;
-        row.ssim = ssim / scored as f64;
+    let syn = a.syn.max(1) as f64;
+    row.nodes_per_ray = a.nodes / syn;
+    row.pct_layer2 = a.deep * 100.0 / syn;
+    row.pct_miss = a.miss * 100.0 / syn;
+    row.pct_occlusion = a.occ * 100.0 / syn;
+    (row.near_m, row.far_m) = a.near.unwrap_or((f32::NAN, f32::NAN));
+    if a.scored > 0 {
+        row.psnr = a.psnr / a.scored as f64;
+        row.ssim = a.ssim / a.scored as f64;
     }
-    row
 }
 
 /// Every method x layer count; the DDA once per value of `dda_steps` (once with
-/// `opts.dda_max_steps` when empty; each value re-runs the whole path).
+/// `opts.dda_max_steps` when empty). The methods of one layer count run interleaved
+/// ([`measure_interleaved`]).
 #[allow(clippy::too_many_arguments)]
 pub fn run(
     scene: &Scene,
@@ -191,6 +267,7 @@ pub fn run(
     let mesh_layers = if layers.contains(&1) { 1 } else { layers[0] };
     let mut rows = Vec::new();
     for &n in layers {
+        let mut entries = Vec::new();
         for &m in methods {
             if m == Method::Mesh && n != mesh_layers {
                 continue;
@@ -204,9 +281,12 @@ pub fn run(
                     dda_max_steps: st,
                     ..*opts
                 };
-                rows.push(measure(scene, bvh, path, setup, m, n, &o, progress));
+                entries.push((m, o));
             }
         }
+        rows.extend(measure_interleaved(
+            scene, bvh, path, setup, &entries, n, progress,
+        ));
     }
     Ok(rows)
 }

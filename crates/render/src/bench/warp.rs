@@ -14,7 +14,16 @@
 //! the warp; `trace_cpu_mrays_per_s`, per CPU-second of the tracing threads, robust on a
 //! loaded machine) and times ray generation alone, so `T_eye` splits into ray generation,
 //! tracing and the rest of the loop (`ms_raygen`, `ms_trace`, `ms_view - ms_raygen -
-//! ms_trace`). Every time is the best of `repeats` runs per eye, averaged over both eyes.
+//! ms_trace`). Every time is the best of `repeats` rounds per eye, averaged over both eyes.
+//!
+//! **Interleaved rounds** ([`measure_interleaved`]). All methods of one layer count are built
+//! first; then each of the `repeats` rounds runs every method once (the whole warp of both
+//! eyes, then ray generation, then the trace-only pass of both eyes), round-robin, and every
+//! time column keeps per method the best of the rounds: the standard way to compare on a
+//! shared machine (a disturbance during one method's block of repeats skewed the quad-tree /
+//! min-max trace-only ratio from 2.28x to 1.54x between two runs of the same setting). The
+//! eye rays are generated once per eye and traced by every tracer (identical rays). With
+//! `--quiet` off, the CLI prints the quad-tree's ratios to the other methods.
 //!
 //! **Cube near plane** ([`MethodOptions::cube_near`], recorded per row): where every ray
 //! starts. **DDA max steps** can be swept in one run ([`run`]'s `dda_steps`, one `dda` row
@@ -24,17 +33,19 @@
 use std::time::Instant;
 
 use parallax_bvh::Bvh;
-use parallax_core::{Image, Rgb};
+use parallax_core::{Image, Ray, Rgb};
 use parallax_scene::camera::Pinhole;
 use parallax_scene::{CameraDesc, Scene};
+use parallax_screen::{CubeNear, ScreenTracer};
 use serde::Serialize;
 
 use super::trace::{PassTimes, eye_rays, trace_pass};
 use crate::synth::SynthError;
-use crate::synth::layers::{Reference, Shading, capture_reference};
+use crate::synth::layers::{Reference, ReferenceTimes, Shading, capture_reference};
 use crate::synth::method::{Method, MethodOptions, Synthesizer, cube_near_name};
 use crate::synth::score::{Score, ground_truth, score};
 use crate::synth::stereo::{StereoViews, stereo_eyes};
+use crate::synth::warp::WarpedView;
 use parallax_core::cpu_time::{ms_between, process_cpu_ns};
 
 /// The view and settings of a stereo benchmark.
@@ -145,6 +156,7 @@ pub fn reference(
 /// Fits `reference`'s cube with `opts.cube_near`, builds `method` over it, warps it to both
 /// eyes (best of `setup.repeats` per eye) and, for tracers, times the trace-only pass and ray
 /// generation over the same eye rays; fills a row (an error row when the method fails).
+/// [`measure_interleaved`] with one method.
 pub fn measure(
     scene_name: &str,
     reference: &Reference,
@@ -153,77 +165,236 @@ pub fn measure(
     opts: &MethodOptions,
     truths: Option<&[Image<Rgb>; 2]>,
 ) -> (WarpRow, Option<StereoViews>) {
-    let mut row = WarpRow {
-        method: method.name().into(),
-        layers: reference.layers.len(),
-        scene: scene_name.into(),
-        width: setup.width,
-        height: setup.height,
-        cube_near: cube_near_name(opts.cube_near),
-        dda_max_steps: (method == Method::Dda).then_some(opts.dda_max_steps),
-        repeats: setup.repeats.max(1),
-        psnr: f64::NAN,
-        ssim: f64::NAN,
-        ms_trace: f64::NAN,
-        ms_trace_cpu: f64::NAN,
-        ms_trace_process_cpu: f64::NAN,
-        ms_raygen: f64::NAN,
-        ms_raygen_process_cpu: f64::NAN,
-        trace_mrays_per_s: f64::NAN,
-        trace_cpu_mrays_per_s: f64::NAN,
-        ..WarpRow::default()
-    };
-    let mut r = reference.clone();
-    let built = (|| {
-        r.fit_cube(opts.cube_near)?;
-        let eyes = stereo_eyes(&setup.desc, r.width(), r.height(), setup.ipd)?;
-        let t = Instant::now();
-        let synth = Synthesizer::build(method, &r, opts)?;
-        r.times.build_ms = t.elapsed().as_secs_f64() * 1e3;
-        Ok::<_, SynthError>((eyes, synth))
-    })();
-    let (eyes, synth) = match built {
-        Ok(v) => v,
-        Err(e) => {
-            row.error = Some(e.to_string());
-            return (row, None);
+    measure_interleaved(
+        scene_name,
+        reference,
+        setup,
+        &[(method, *opts)],
+        truths,
+        &|_| {},
+    )
+    .pop()
+    .expect("one row per method")
+}
+
+/// One method of [`measure_interleaved`].
+struct Entrant {
+    row: WarpRow,
+    /// Index of its fitted reference.
+    r: usize,
+    synth: Option<Synthesizer>,
+    build_ms: f64,
+    /// The first view of each eye (warps are deterministic), `ms` lowered to the best round.
+    views: [Option<WarpedView>; 2],
+    /// Best process CPU ms of each eye's warp.
+    view_cpu: [f64; 2],
+    /// Best trace-only pass of each eye, and the rays it traced.
+    trace: [PassTimes; 2],
+    traced: [u64; 2],
+}
+
+impl Entrant {
+    fn tracer(&self) -> Option<&dyn ScreenTracer> {
+        match &self.synth {
+            Some(Synthesizer::Tracer(t, _)) => Some(t.as_ref()),
+            _ => None,
         }
-    };
-    row.near_m = r.cube.near;
-    row.far_m = r.cube.far;
-    let repeats = setup.repeats.max(1);
-    let mut views = Vec::with_capacity(2);
-    let mut view_cpu = 0.0;
-    for eye in &eyes {
-        let mut best: Option<crate::synth::warp::WarpedView> = None;
-        let mut best_cpu = f64::INFINITY;
-        for _ in 0..repeats {
-            let c0 = process_cpu_ns();
-            let v = match synth.view(&r, eye) {
-                Ok(v) => v,
-                Err(e) => {
-                    row.error = Some(e.to_string());
-                    return (row, None);
-                }
-            };
-            best_cpu = best_cpu.min(ms_between(c0, process_cpu_ns()));
-            let ms = best.as_ref().map_or(f64::INFINITY, |b| b.ms).min(v.ms);
-            best = Some(crate::synth::warp::WarpedView { ms, ..v });
-        }
-        view_cpu += best_cpu * 0.5;
-        views.push(best.expect("repeats >= 1"));
     }
+
+    /// Makes this an error row and stops measuring it.
+    fn fail(&mut self, e: impl ToString) {
+        self.row.error = Some(e.to_string());
+        self.synth = None;
+        self.views = [None, None];
+    }
+}
+
+/// Measures every `(method, options)` of `entries` over `reference` (module docs, "Interleaved
+/// rounds"): every method is built first (its reference's cube fitted with its
+/// `cube_near`), then each of `setup.repeats` rounds runs every method once: the whole warp
+/// of both eyes for every method, ray generation of both eyes once (the rays of the first
+/// round are shared by every tracer), then the trace-only pass of both eyes for every
+/// tracer. Every time column keeps per method the best (minimum) of the rounds, so a
+/// disturbance of the machine during one round hits every method alike instead of skewing
+/// one method's block. Rows in the order of `entries`, with the stereo views of the
+/// methods that produced numbers; images, kinds, work and stats are those of
+/// [`measure`]-ing each method alone.
+pub fn measure_interleaved(
+    scene_name: &str,
+    reference: &Reference,
+    setup: &StereoSetup,
+    entries: &[(Method, MethodOptions)],
+    truths: Option<&[Image<Rgb>; 2]>,
+    progress: &dyn Fn(&str),
+) -> Vec<(WarpRow, Option<StereoViews>)> {
+    let repeats = setup.repeats.max(1);
+    let n_layers = reference.layers.len();
+    let eyes = stereo_eyes(
+        &setup.desc,
+        reference.width(),
+        reference.height(),
+        setup.ipd,
+    );
+    // One fitted reference per cube near plane (a run shares one).
+    let mut refs: Vec<(CubeNear, Result<Reference, String>)> = Vec::new();
+    let mut ents: Vec<Entrant> = Vec::with_capacity(entries.len());
+    for (method, opts) in entries {
+        progress(&format!("build {method}, {n_layers} layer(s)"));
+        let mut e = Entrant {
+            row: WarpRow {
+                method: method.name().into(),
+                layers: n_layers,
+                scene: scene_name.into(),
+                width: setup.width,
+                height: setup.height,
+                cube_near: cube_near_name(opts.cube_near),
+                dda_max_steps: (*method == Method::Dda).then_some(opts.dda_max_steps),
+                repeats,
+                psnr: f64::NAN,
+                ssim: f64::NAN,
+                ms_trace: f64::NAN,
+                ms_trace_cpu: f64::NAN,
+                ms_trace_process_cpu: f64::NAN,
+                ms_raygen: f64::NAN,
+                ms_raygen_process_cpu: f64::NAN,
+                trace_mrays_per_s: f64::NAN,
+                trace_cpu_mrays_per_s: f64::NAN,
+                ..WarpRow::default()
+            },
+            r: 0,
+            synth: None,
+            build_ms: 0.0,
+            views: [None, None],
+            view_cpu: [f64::INFINITY; 2],
+            trace: [PassTimes::worst(); 2],
+            traced: [0; 2],
+        };
+        let k = match refs.iter().position(|(near, _)| *near == opts.cube_near) {
+            Some(k) => k,
+            None => {
+                let mut r = reference.clone();
+                let fitted = r.fit_cube(opts.cube_near).map(|_| r);
+                refs.push((opts.cube_near, fitted.map_err(|e| e.to_string())));
+                refs.len() - 1
+            }
+        };
+        e.r = k;
+        let built = match (&refs[k].1, &eyes) {
+            (Err(err), _) => Err(err.clone()),
+            (_, Err(err)) => Err(err.to_string()),
+            (Ok(r), Ok(_)) => {
+                let t = Instant::now();
+                let s = Synthesizer::build(*method, r, opts).map_err(|e| e.to_string());
+                e.build_ms = t.elapsed().as_secs_f64() * 1e3;
+                s
+            }
+        };
+        match built {
+            Ok(s) => e.synth = Some(s),
+            Err(err) => e.row.error = Some(err),
+        }
+        ents.push(e);
+    }
+    let Ok(eyes) = eyes else {
+        return ents.into_iter().map(|e| (e.row, None)).collect();
+    };
+    let mut gen_t = [PassTimes::worst(); 2];
+    let mut rays: [Vec<Option<Ray>>; 2] = [Vec::new(), Vec::new()];
+    for round in 0..repeats {
+        let tag = |m: &str, what: &str| {
+            format!(
+                "round {}/{repeats}: {m} {what}, {n_layers} layer(s)",
+                round + 1
+            )
+        };
+        for e in &mut ents {
+            let Some(synth) = &e.synth else { continue };
+            progress(&tag(&e.row.method, "warp"));
+            let Ok(r) = &refs[e.r].1 else { continue };
+            let mut failed = None;
+            for (k, eye) in eyes.iter().enumerate() {
+                let c0 = process_cpu_ns();
+                let v = match synth.view(r, eye) {
+                    Ok(v) => v,
+                    Err(err) => {
+                        failed = Some(err);
+                        break;
+                    }
+                };
+                e.view_cpu[k] = e.view_cpu[k].min(ms_between(c0, process_cpu_ns()));
+                match &mut e.views[k] {
+                    Some(best) => best.ms = best.ms.min(v.ms),
+                    slot => *slot = Some(v),
+                }
+            }
+            if let Some(err) = failed {
+                e.fail(err);
+            }
+        }
+        if !ents.iter().any(|e| e.tracer().is_some()) {
+            continue;
+        }
+        progress(&tag("eye", "rays"));
+        for (k, eye) in eyes.iter().enumerate() {
+            let (rs, g) = eye_rays(eye);
+            gen_t[k] = gen_t[k].min(g);
+            if round == 0 {
+                rays[k] = rs;
+            }
+        }
+        for e in &mut ents {
+            let Some(tracer) = e.tracer() else { continue };
+            progress(&tag(&e.row.method, "trace-only"));
+            let out = [0, 1].map(|k| trace_pass(tracer, &rays[k], eyes[k].width));
+            for (k, (stats, t)) in out.into_iter().enumerate() {
+                e.trace[k] = e.trace[k].min(t);
+                e.traced[k] = stats.rays;
+            }
+        }
+    }
+    drop(rays);
+    ents.into_iter()
+        .map(|e| {
+            let r = refs[e.r].1.as_ref().ok();
+            finish(e, r, &eyes, gen_t, truths)
+        })
+        .collect()
+}
+
+/// The row of a measured entrant (the arithmetic of the per-method measurement before the
+/// rounds were interleaved, so the numbers compare across versions).
+fn finish(
+    mut e: Entrant,
+    r: Option<&Reference>,
+    eyes: &[Pinhole; 2],
+    gen_t: [PassTimes; 2],
+    truths: Option<&[Image<Rgb>; 2]>,
+) -> (WarpRow, Option<StereoViews>) {
+    let mut row = std::mem::take(&mut e.row);
+    if let Some(r) = r {
+        row.near_m = r.cube.near;
+        row.far_m = r.cube.far;
+    }
+    let (Some(r), [Some(_), Some(_)]) = (r, &e.views) else {
+        return (row, None);
+    };
+    let [Some(v0), Some(v1)] = std::mem::take(&mut e.views) else {
+        unreachable!("checked above")
+    };
     let sv = StereoViews {
         eyes: eyes.clone(),
-        views: [views.remove(0), views.remove(0)],
+        views: [v0, v1],
     };
-    let t = r.times;
+    let t = ReferenceTimes {
+        build_ms: e.build_ms,
+        ..r.times
+    };
     row.ms_capture = t.capture_ms;
     row.ms_shade = t.shade_ms;
     row.ms_build = t.build_ms;
     row.ms_ref = t.total_ms();
     row.ms_view = sv.ms_eye();
-    row.ms_view_cpu = view_cpu;
+    row.ms_view_cpu = e.view_cpu[0] * 0.5 + e.view_cpu[1] * 0.5;
     row.ms_total = row.ms_ref + 2.0 * row.ms_view;
     let rays: u64 = sv.views.iter().map(|v| v.stats.rays).sum();
     let ms: f64 = sv.views.iter().map(|v| v.ms).sum();
@@ -232,40 +403,17 @@ pub fn measure(
     } else {
         0.0
     };
-    if let Synthesizer::Tracer(tracer, _) = &synth {
-        let (mut gen_t, mut trace_t) = (PassTimes::default(), PassTimes::default());
-        let mut traced = 0u64;
-        for eye in &eyes {
-            let (mut g, mut tr) = (PassTimes::worst(), PassTimes::worst());
-            let mut rays_e = Vec::new();
-            for _ in 0..repeats {
-                let (rs, gt) = eye_rays(eye);
-                g = g.min(gt);
-                rays_e = rs;
-            }
-            let mut stats = Default::default();
-            for _ in 0..repeats {
-                let tt;
-                (stats, tt) = trace_pass(tracer.as_ref(), &rays_e, eye.width);
-                tr = tr.min(tt);
-            }
-            let stats: parallax_screen::TraceStats = stats;
-            traced += stats.rays;
-            for (acc, x) in [(&mut gen_t, g), (&mut trace_t, tr)] {
-                acc.wall_ms += x.wall_ms * 0.5;
-                acc.thread_cpu_ms += x.thread_cpu_ms * 0.5;
-                acc.process_cpu_ms += x.process_cpu_ms * 0.5;
-            }
-        }
-        row.ms_raygen = gen_t.wall_ms;
-        row.ms_raygen_process_cpu = gen_t.process_cpu_ms;
-        row.ms_trace = trace_t.wall_ms;
-        row.ms_trace_cpu = trace_t.thread_cpu_ms;
-        row.ms_trace_process_cpu = trace_t.process_cpu_ms;
+    if e.tracer().is_some() {
+        let half = |f: fn(&PassTimes) -> f64, t: &[PassTimes; 2]| f(&t[0]) * 0.5 + f(&t[1]) * 0.5;
+        row.ms_raygen = half(|t| t.wall_ms, &gen_t);
+        row.ms_raygen_process_cpu = half(|t| t.process_cpu_ms, &gen_t);
+        row.ms_trace = half(|t| t.wall_ms, &e.trace);
+        row.ms_trace_cpu = half(|t| t.thread_cpu_ms, &e.trace);
+        row.ms_trace_process_cpu = half(|t| t.process_cpu_ms, &e.trace);
         // Per eye: half the rays of both eyes.
-        let per_eye = traced as f64 * 0.5;
-        row.trace_mrays_per_s = per_eye / (trace_t.wall_ms * 1e3);
-        row.trace_cpu_mrays_per_s = per_eye / (trace_t.thread_cpu_ms * 1e3);
+        let per_eye = (e.traced[0] + e.traced[1]) as f64 * 0.5;
+        row.trace_mrays_per_s = per_eye / (row.ms_trace * 1e3);
+        row.trace_cpu_mrays_per_s = per_eye / (row.ms_trace_cpu * 1e3);
     }
     row.nodes_per_ray = sv.views.iter().map(|v| v.nodes_per_ray()).sum::<f64>() * 0.5;
     row.tests_per_ray = sv.views.iter().map(|v| v.tests_per_ray()).sum::<f64>() * 0.5;
@@ -345,6 +493,7 @@ pub fn run(
     for &n in layers {
         progress(&format!("reference, {n} layer(s)"));
         let r = reference(scene, bvh, setup, n)?;
+        let mut entries = Vec::new();
         for &m in methods {
             if m == Method::Mesh && n != mesh_layers {
                 continue;
@@ -354,14 +503,16 @@ pub fn run(
                 _ => vec![opts.dda_max_steps],
             };
             for st in steps {
-                progress(&format!("{m}, {n} layer(s)"));
                 let o = MethodOptions {
                     dda_max_steps: st,
                     ..*opts
                 };
-                rows.push(measure(&scene.name, &r, setup, m, &o, truths.as_ref()).0);
+                entries.push((m, o));
             }
         }
+        let measured =
+            measure_interleaved(&scene.name, &r, setup, &entries, truths.as_ref(), progress);
+        rows.extend(measured.into_iter().map(|(row, _)| row));
     }
     Ok(rows)
 }

@@ -26,6 +26,7 @@ pub mod input;
 pub mod layers;
 pub mod mesh_warp;
 pub mod method;
+mod resolve;
 pub mod score;
 pub mod stereo;
 pub mod upsample;

@@ -107,51 +107,184 @@ pub fn upsample(
     opts: &UpsampleOptions,
     on_frame: &mut dyn FnMut(&UpsampleFrame) -> Result<(), SynthError>,
 ) -> Result<Vec<FrameTimes>, SynthError> {
+    let methods = [(opts.method, opts.method_opts)];
+    upsample_interleaved(
+        scene,
+        bvh,
+        path,
+        width,
+        height,
+        opts,
+        &methods,
+        &mut |_, f| on_frame(f),
+    )
+    .pop()
+    .expect("one result per method")
+}
+
+/// [`upsample`] of several `(method, options)` at once (`opts.method` and
+/// `opts.method_opts` are ignored), interleaved: every reference is captured once and every
+/// method is built over it (its cube fitted with the method's `cube_near`), then each
+/// synthesised frame is run by every method in turn, so a disturbance of the machine hits all
+/// methods alike. `on_frame(k, frame)` is called for method `k` and every frame, in frame
+/// order. Returns per method its timings (`T_ref` = the shared capture and shading + its
+/// own build) or its first error (a capture error fails every method); a failed method is
+/// not run further. Each method's views equal those of [`upsample`] alone. The frames'
+/// `reference.times.build_ms` is 0 (references are shared; each method's build time is in
+/// its `ms_ref`).
+#[allow(clippy::too_many_arguments)]
+pub fn upsample_interleaved(
+    scene: &Scene,
+    bvh: &Bvh,
+    path: &CameraPath,
+    width: u32,
+    height: u32,
+    opts: &UpsampleOptions,
+    methods: &[(Method, MethodOptions)],
+    on_frame: &mut dyn FnMut(usize, &UpsampleFrame) -> Result<(), SynthError>,
+) -> Vec<Result<Vec<FrameTimes>, SynthError>> {
     if opts.frames == 0 || opts.period == 0 || !(opts.fps > 0.0) {
-        return Err(SynthError::Invalid(format!(
+        let msg = format!(
             "need frames >= 1, period >= 1, fps > 0 (got {}, {}, {})",
             opts.frames, opts.period, opts.fps
-        )));
+        );
+        return methods
+            .iter()
+            .map(|_| Err(SynthError::Invalid(msg.clone())))
+            .collect();
     }
     let t0 = path.keys[0].time;
-    let mut times = Vec::with_capacity(opts.frames as usize);
-    let mut current: Option<(Reference, Synthesizer)> = None;
+    let mut out: Vec<Result<Vec<FrameTimes>, SynthError>> = methods
+        .iter()
+        .map(|_| Ok(Vec::with_capacity(opts.frames as usize)))
+        .collect();
+    // Per method: the index of its fitted reference and its structure.
+    let mut current: Vec<Option<(usize, Synthesizer)>> = methods.iter().map(|_| None).collect();
+    let mut refs: Vec<Reference> = Vec::new();
     for i in 0..opts.frames {
-        let desc = path.at(t0 + i as f32 / opts.fps);
-        let camera = Pinhole::new(&desc, width, height)?;
-        let is_reference = i % opts.period == 0;
-        let mut ft = FrameTimes {
-            index: i,
-            is_reference,
-            ms_ref: 0.0,
-            ms_syn: 0.0,
-        };
-        if is_reference {
-            let mut r =
-                capture_reference(scene, bvh, &camera, opts.layers, opts.shading, opts.seed)?;
-            r.fit_cube(opts.method_opts.cube_near)?;
-            let t = Instant::now();
-            let s = Synthesizer::build(opts.method, &r, &opts.method_opts)?;
-            r.times.build_ms = t.elapsed().as_secs_f64() * 1e3;
-            ft.ms_ref = r.times.total_ms();
-            current = Some((r, s));
+        if out.iter().all(Result::is_err) {
+            break;
         }
-        let (reference, synth) = current.as_ref().expect("frame 0 is a reference");
-        let view = if is_reference {
-            None
-        } else {
-            let v = synth.view(reference, &camera)?;
-            ft.ms_syn = v.ms;
-            Some(v)
+        let desc = path.at(t0 + i as f32 / opts.fps);
+        let camera = match Pinhole::new(&desc, width, height) {
+            Ok(c) => c,
+            Err(e) => {
+                fail_all(&mut out, e.into());
+                break;
+            }
         };
-        on_frame(&UpsampleFrame {
-            index: i,
-            camera,
-            reference,
-            is_reference,
-            view,
-        })?;
-        times.push(ft);
+        let is_reference = i % opts.period == 0;
+        if is_reference {
+            refs.clear();
+            let r = match capture_reference(
+                scene,
+                bvh,
+                &camera,
+                opts.layers,
+                opts.shading,
+                opts.seed,
+            ) {
+                Ok(r) => r,
+                Err(e) => {
+                    fail_all(&mut out, e);
+                    break;
+                }
+            };
+            for (k, (method, mo)) in methods.iter().enumerate() {
+                current[k] = None;
+                if out[k].is_err() {
+                    continue;
+                }
+                let built = (|| {
+                    let j = match refs.iter().position(|f| f.cube_near == mo.cube_near) {
+                        Some(j) => j,
+                        None => {
+                            let mut f = r.clone();
+                            f.fit_cube(mo.cube_near)?;
+                            refs.push(f);
+                            refs.len() - 1
+                        }
+                    };
+                    let t = Instant::now();
+                    let s = Synthesizer::build(*method, &refs[j], mo)?;
+                    Ok::<_, SynthError>((j, s, t.elapsed().as_secs_f64() * 1e3))
+                })();
+                match built {
+                    Ok((j, s, build_ms)) => {
+                        current[k] = Some((j, s));
+                        let mut t = refs[j].times;
+                        t.build_ms = build_ms;
+                        let ft = FrameTimes {
+                            index: i,
+                            is_reference,
+                            ms_ref: t.total_ms(),
+                            ms_syn: 0.0,
+                        };
+                        let frame = UpsampleFrame {
+                            index: i,
+                            camera: camera.clone(),
+                            reference: &refs[j],
+                            is_reference,
+                            view: None,
+                        };
+                        push_or_fail(&mut out[k], ft, on_frame(k, &frame));
+                    }
+                    Err(e) => out[k] = Err(e),
+                }
+            }
+            continue;
+        }
+        for (k, cur) in current.iter().enumerate() {
+            let (Some((j, synth)), true) = (cur, out[k].is_ok()) else {
+                continue;
+            };
+            let reference = &refs[*j];
+            let v = match synth.view(reference, &camera) {
+                Ok(v) => v,
+                Err(e) => {
+                    out[k] = Err(e);
+                    continue;
+                }
+            };
+            let ft = FrameTimes {
+                index: i,
+                is_reference,
+                ms_ref: 0.0,
+                ms_syn: v.ms,
+            };
+            let frame = UpsampleFrame {
+                index: i,
+                camera: camera.clone(),
+                reference,
+                is_reference,
+                view: Some(v),
+            };
+            push_or_fail(&mut out[k], ft, on_frame(k, &frame));
+        }
     }
-    Ok(times)
+    out
+}
+
+/// Records a frame's times, or the callback's error.
+fn push_or_fail(
+    out: &mut Result<Vec<FrameTimes>, SynthError>,
+    ft: FrameTimes,
+    done: Result<(), SynthError>,
+) {
+    match (done, &mut *out) {
+        (Ok(()), Ok(v)) => v.push(ft),
+        (Err(e), _) => *out = Err(e),
+        _ => {}
+    }
+}
+
+/// Fails every method still running: the first with `e`, the others with its message.
+fn fail_all(out: &mut [Result<Vec<FrameTimes>, SynthError>], e: SynthError) {
+    let msg = e.to_string();
+    let mut first = Some(e);
+    for o in out.iter_mut().filter(|o| o.is_ok()) {
+        *o = Err(first
+            .take()
+            .unwrap_or_else(|| SynthError::Invalid(msg.clone())));
+    }
 }
