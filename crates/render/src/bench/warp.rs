@@ -2,7 +2,7 @@
 //! scene and view. A cyclopean reference with `N` layers is captured and shaded once per `N`
 //! (`T_ref` = capture + shade + the method's structure build), every method warps it to both
 //! eyes (`T_eye` = mean per eye, `T_total = T_ref + 2 T_eye`), and both eyes are scored
-//! against the BVH reference render of the eye cameras ([`crate::synth::score`]).
+//! against the BVH reference render of the eye cameras ([`crate::synth::score`](mod@crate::synth::score)).
 //!
 //! The mesh warp uses layer 0 only, so it runs once, with `N = 1`. Methods not available in
 //! this build give a row carrying the error instead of numbers.

@@ -35,7 +35,7 @@
 //! occlusion-volume answers "with the nearest background pixels". [`OcclusionFill::Crossed`]
 //! takes the colour of the pixel the tracer reports (for cascade-mode answers the pixel whose
 //! plane the ray passed behind: the occluder's edge, a foreground colour).
-//! [`OcclusionFill::NearestBackground`] ([`background_fill`], the default; Fig. 6e shows it
+//! [`OcclusionFill::NearestBackground`] (`background_fill`, the default; Fig. 6e shows it
 //! for single-layer references, we also apply it to the occlusion-volume answers left with
 //! 2 layers: +0.08 dB on atrium and Sponza at 1600x900, -0.00..0.17 dB at 160x120 in
 //! `tests/synth.rs`) walks from that pixel back along
@@ -448,11 +448,11 @@ pub(super) fn same_surface(
         && n.dot(g.position[i] - p).abs() <= tol
 }
 
-/// Steps of the background search of [`background_fill`] (pixels along the epipolar line).
+/// Steps of the background search of `background_fill` (pixels along the epipolar line).
 pub const BACKGROUND_SEARCH_PX: u32 = 8;
 
 /// A pixel deeper than the occluder edge by more than this fraction of its depth is
-/// background for [`background_fill`].
+/// background for `background_fill`.
 const BACKGROUND_REL: f32 = 0.01;
 
 /// Fig. 6e's "nearest background pixel" for an occlusion-volume answer at `pixel` of `layer`
