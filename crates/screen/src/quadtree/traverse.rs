@@ -43,7 +43,7 @@
 use glam::{UVec2, Vec3, Vec4};
 
 use super::build::{QuadTree, Z_SKIP_MARGIN};
-use super::node::{FLAG_CRACK, FLAG_UNSAFE, decode_plane, plane_z};
+use super::node::{FLAG_CRACK, FLAG_UNSAFE, decode_plane, decode_plane_unscaled, plane_z};
 use crate::{CubeSegment, TraceStats};
 
 #[inline(always)]
@@ -317,7 +317,9 @@ impl QuadTree {
         // no trigger region, so the traversal starts where the ray's `z` reaches it
         // (`QuadTree::z_floor`; the boxes the skipped part crossed would all have been
         // culled). `q.s_lo` stays the floor of crack dilation and inpainting.
-        if ray.d.z > 0.0 {
+        // `z_floor > 0` first (fixed per tree, predicted): with a floor of 0 (e.g. a plane
+        // steep in the cube near the top level) the start does not wait for the division.
+        if self.z_floor > 0.0 && ray.d.z > 0.0 {
             s = fmax(s, (self.z_floor - ray.p0.z) / ray.d.z);
             if !(s <= q.s_hi) {
                 return ev;
@@ -386,7 +388,8 @@ impl QuadTree {
             if node.is_plane() {
                 n_plane += 1;
                 if t_in <= t_out {
-                    let (n, c) = decode_plane(node, l as u32, qx, qy, wf, hf);
+                    // Unscaled normal: the same signs and root bit for bit (node.rs).
+                    let (n, c) = decode_plane_unscaled(node, l as u32, qx, qy, wf, hf);
                     let flags = node.flags();
                     let mut trig = None;
                     // `want_trigger` first: fixed per layer, it keeps the data-dependent flag
