@@ -326,13 +326,17 @@ impl QuadTree {
             }
         }
         // Start level: the paper starts at the root. Starting lower is equivalent (box tests
-        // only cull) provided no plane ancestor is skipped: start at the first level whose
-        // nodes exceed the segment's screen extent, or at the topmost plane ancestor.
+        // only cull) provided no plane ancestor is skipped: start one level below the first
+        // level whose nodes exceed the segment's screen extent, or at the topmost plane
+        // ancestor.
         let (cx, cy) = (ray.start_cell(0, s, w - 1), ray.start_cell(1, s, h - 1));
         let ext = ray.dg[0].abs().max(ray.dg[1].abs()) * (q.s_hi - s);
         let mut l = if ext < 1e6 {
-            // ~ceil(log2(ext + 2)) without libm.
-            ((32 - ((ext + 2.0) as u32).leading_zeros()) as usize).min(top)
+            // ~ceil(log2(ext + 2)) without libm, one level lower: measured fewer visits
+            // (the z-entry descent below skips the start box's front part anyway).
+            ((32 - ((ext + 2.0) as u32).leading_zeros()) as usize)
+                .saturating_sub(1)
+                .min(top)
         } else {
             top
         };
