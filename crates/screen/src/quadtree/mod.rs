@@ -297,7 +297,9 @@
 //! drop by a quarter but the time hardly moves: the fitted cube's ~120 ns are mostly the
 //! per-ray fixed part. Measured there: tracing pre-clipped segments (the f64
 //! `UnitCube::clip_ray` taken out of the timed loop) saves ~38 ns/ray, the result mapping
-//! (`world_t`) ~3 ns.
+//! (`world_t`) ~3 ns. The fitted cube's floor of 0 comes from one steep plane: at every
+//! level from 3 to 8 exactly one node has `zmin < 0.05` (median 0.56-0.76), and a floor
+//! of 0.5 there (not exact; timing only) would give ~113 instead of ~119 ns/ray.
 //!
 //! Tried and dropped (measured): a shared f32 clip for the quad-tree and brute force
 //! (`UnitCube` with an eye-relative f32 matrix, faces as two 4-lane divisions and a
@@ -311,7 +313,12 @@
 //! on it (+5 % time, again), a cheaper float form of the ray validity test (-12
 //! instructions, no time), the f16 decode's subnormal branch by a magic subtraction
 //! instead of an integer conversion (+1.5 ns), starting two levels below the extent level
-//! (slower on the camera cube).
+//! (slower on the camera cube), and a per-ray floor: a table of floors over every
+//! rectangle of top-level nodes (`(c r)^2` entries), looked up for the segment's bounding
+//! box — exact (same bits), visits 2.14 -> 1.09 (camera) and 2.54 -> 1.46 (fitted) per
+//! ray, but ~+14 ns/ray on both cubes: the lookup (conversions, clamps, index, load) and
+//! the division sit on the chain to the start node, and the fitted cube's rays then leave
+//! the `s = 0` fast path of the start pixel.
 //!
 //! Head to head after (`cd crates/screen && cargo run --release --example quadtree_speed
 //! -- 0.065 [--near 0.1] --quick`, same process, interleaved, best of 7, loaded machine):
