@@ -291,6 +291,7 @@
 //! | **`z` slabs** ([`traverse`]): start where the ray's `z` reaches the top level's lower bound ([`QuadTree::z_floor`]), descend from a box's `z` entry; visits 6.7 -> 2.1 / 3.6 -> 2.7 per ray | 1130 | **~125** | 1175 | ~128 |
 //! | plane test with the unscaled normal `(g_x, g_y, -1)` (bit-identical: power-of-two scaling commutes with rounding) | 1146 | ~120 | 1183 | ~122 |
 //! | start one level below the extent level | 1175 | ~118 | 1189 | ~119 |
+//! | `ScreenTracer::trace` inlines the traversal (no call and no copy of the returned pair) | 1165 | ~115 | 1180 | ~118 |
 //!
 //! In the fitted cube the top-level floor is 0 (a plane steep in the cube near the top
 //! level spans the whole depth range), so only the descent rule acts there; its visits
@@ -322,10 +323,10 @@
 //!
 //! Head to head after (`cd crates/screen && cargo run --release --example quadtree_speed
 //! -- 0.065 [--near 0.1] --quick`, same process, interleaved, best of 7, loaded machine):
-//! camera cube 117.5 ns/ray (2.14 nodes), **2.78x MinMax flat** (326.7 ns), 2.93x MinMax
-//! bilinear, 2.26x Hi-Z, 11.2x the minimal artifact-free DDA (254 steps); fitted cube
-//! 121.5 ns/ray (2.54 nodes), **2.00x MinMax flat** (243.3 ns), 2.23x bilinear, 1.54x
-//! Hi-Z, 1.07x the DDA (17 steps). Before (same protocol, first run of this session):
+//! camera cube 117.4 ns/ray (2.14 nodes), **2.79x MinMax flat** (327.2 ns), 2.96x MinMax
+//! bilinear, 2.28x Hi-Z, 11.3x the minimal artifact-free DDA (254 steps); fitted cube
+//! 119.7 ns/ray (2.54 nodes), **2.02x MinMax flat** (242.1 ns), 2.18x bilinear, 1.58x
+//! Hi-Z, 1.08x the DDA (17 steps). Before (same protocol, first run of this session):
 //! 167.5 ns, 2.04x flat (camera); the fitted cube was at 1.86-1.90x. `parallax bench warp`
 //! (trace CPU Mrays/s, `--near 0.1`, 1 layer): atrium quad-tree 4.91 -> 7.27 (MinMax 2.80:
 //! 2.6x), Sponza 7.65 -> 11.78 (MinMax 5.80-6.39: ~1.9-2.0x; single noisy runs).
