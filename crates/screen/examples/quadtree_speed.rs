@@ -24,6 +24,10 @@
 //! (IPD in metres, default 0.065; `all` also runs the lossless and adaptive trees).
 //! `--quick` stops after the head to head. `--profile METHOD` (quadtree|quadtree2 (2 layers, cascade)|dda|minmax|minmax-flat|hiz) only traces every 4th ray once with that
 //! method (with `--time`: times it on all rays instead, best of 7, thread CPU time), for `valgrind --tool=callgrind --toggle-collect=...` instruction counts.
+//! With `--profile METHOD`, `--dump FILE` writes every ray's result (kind, layer, pixel,
+//! `t` and position bits) and `--check FILE` counts the rays whose result differs from such
+//! a dump: the bit-identity check of two builds (run `--dump` with the old binary).
+//! `--f32-clip` (with `--profile quadtree`) traces with [`QuadTreeTracer::with_f32_clip`].
 
 use std::time::Instant;
 
