@@ -24,6 +24,10 @@
 //! (IPD in metres, default 0.065; `all` also runs the lossless and adaptive trees).
 //! `--quick` stops after the head to head. `--profile METHOD` (quadtree|quadtree2 (2 layers, cascade)|dda|minmax|minmax-flat|hiz) only traces every 4th ray once with that
 //! method (with `--time`: times it on all rays instead, best of 7, thread CPU time), for `valgrind --tool=callgrind --toggle-collect=...` instruction counts.
+//! With `--profile METHOD`, `--dump FILE` writes every ray's result (kind, layer, pixel,
+//! `t` and position bits) and `--check FILE` counts the rays whose result differs from such
+//! a dump: the bit-identity check of two builds (run `--dump` with the old binary).
+//! `--f32-clip` (with `--profile quadtree`) traces with [`QuadTreeTracer::with_f32_clip`].
 
 use std::time::Instant;
 
@@ -69,6 +73,35 @@ fn profile_trace(t: &dyn ScreenTracer, rays: &[Ray], s: &mut TraceStats) {
     for r in rays.iter().step_by(4) {
         t.trace(r, s);
     }
+}
+
+/// A result as 32 bytes (kind, layer, pixel, `t` and position bits) for `--dump`/`--check`.
+fn result_bits(r: &TraceResult) -> [u8; 32] {
+    let (kind, layer, px, t, p) = match *r {
+        TraceResult::Miss => (0u32, 0, glam::UVec2::ZERO, 0.0f32, glam::Vec3::ZERO),
+        TraceResult::Hit {
+            layer,
+            pixel,
+            position,
+            t,
+        } => (1, layer, pixel, t, position),
+        TraceResult::OcclusionVolume { layer, pixel, t } => (2, layer, pixel, t, glam::Vec3::ZERO),
+    };
+    let words = [
+        kind,
+        layer,
+        px.x,
+        px.y,
+        t.to_bits(),
+        p.x.to_bits(),
+        p.y.to_bits(),
+        p.z.to_bits(),
+    ];
+    let mut out = [0u8; 32];
+    for (k, w) in words.iter().enumerate() {
+        out[4 * k..4 * k + 4].copy_from_slice(&w.to_le_bytes());
+    }
+    out
 }
 
 fn dda_opts(n: u32) -> DdaOptions {
@@ -172,6 +205,9 @@ fn main() -> anyhow::Result<()> {
     let mut profile: Option<String> = None;
     let mut time_only = false;
     let mut quick = false;
+    let mut f32_clip = false;
+    let mut dump: Option<String> = None;
+    let mut check = false;
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
@@ -183,6 +219,12 @@ fn main() -> anyhow::Result<()> {
             }
             "--profile" => profile = it.next().cloned(),
             "--time" => time_only = true,
+            "--f32-clip" => f32_clip = true,
+            "--dump" => dump = it.next().cloned(),
+            "--check" => {
+                dump = it.next().cloned();
+                check = true;
+            }
             v => ipd = v.parse()?,
         }
     }
@@ -219,11 +261,10 @@ fn main() -> anyhow::Result<()> {
 
     if let Some(m) = profile {
         let t: Box<dyn ScreenTracer> = match m.as_str() {
-            "quadtree" => Box::new(QuadTreeTracer::build(
-                &cube,
-                l1,
-                &QuadTreeOptions::default(),
-            )?),
+            "quadtree" => Box::new(
+                QuadTreeTracer::build(&cube, l1, &QuadTreeOptions::default())?
+                    .with_f32_clip(f32_clip),
+            ),
             // Both layers: the cascade (§4.1).
             "quadtree2" => Box::new(QuadTreeTracer::build(
                 &cube,
@@ -250,6 +291,33 @@ fn main() -> anyhow::Result<()> {
             )?),
         };
         let mut s = TraceStats::default();
+        if let Some(path) = &dump {
+            // `--dump FILE`: every ray's result as bits; `--check FILE`: count the rays
+            // whose result differs from such a dump (bit-identity of two builds).
+            let mut out = Vec::with_capacity(rays.len() * 32);
+            for r in &rays {
+                out.extend_from_slice(&result_bits(&t.trace(r, &mut s)));
+            }
+            if check {
+                let old = std::fs::read(path)?;
+                let diff = old
+                    .chunks(32)
+                    .zip(out.chunks(32))
+                    .filter(|(a, b)| a != b)
+                    .count();
+                println!("{m}: {s:?}");
+                println!(
+                    "{m}: {diff} of {} results differ from {path} ({} rays there)",
+                    rays.len(),
+                    old.len() / 32
+                );
+            } else {
+                std::fs::write(path, &out)?;
+                println!("{m}: {s:?}");
+                println!("{m}: wrote {} results to {path}", rays.len());
+            }
+            return Ok(());
+        }
         if time_only {
             // `--time`: best of 7 rounds over all rays, thread CPU time (A/B timing of two
             // builds run alternately).

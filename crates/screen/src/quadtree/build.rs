@@ -72,7 +72,18 @@ pub struct QuadTree {
     /// pixel has no plane. The traversal's start needs this one load instead of a
     /// plane-ancestor check over the levels above the start level ([`super::traverse`]).
     pub(crate) plane_level: Vec<u8>,
+    /// Cube `z` below which the ray meets nothing of this tree: the smallest lower `z` bound
+    /// of the top-level nodes (conservative AABB ranges, the footprint range of a plane node
+    /// there, every trigger depth) minus [`Z_SKIP_MARGIN`]. The traversal starts where the
+    /// ray's `z` reaches it — the `z` slab of the ray against the root box ([`super::traverse`]).
+    pub(crate) z_floor: f32,
 }
+
+/// Margin of [`QuadTree::z_floor`] in cube `z`: before the traversal's start the ray is at
+/// least this far in front of every plane (in `z` at the same `x, y`), so the f32 plane
+/// tests there, which the original start from the segment's beginning would have done, are
+/// far from a sign change.
+pub const Z_SKIP_MARGIN: f32 = 1e-3;
 
 impl QuadTree {
     /// Builds the tree of `layer` (captured from `cube.camera`). The leaves are computed in
@@ -279,6 +290,7 @@ impl QuadTree {
             trigger_z: Vec::new(),
             plane_top: 0,
             plane_level: Vec::new(),
+            z_floor: 0.0,
         };
         let mut first = Some(level0);
         let tz = loop {
@@ -325,6 +337,25 @@ impl QuadTree {
                 }
             });
         tree.plane_level = pl;
+        // After `mark_unsafe` (it lowers AABB ranges to trigger depths).
+        let top = tree.levels.len() - 1;
+        let zlo = tree.levels[top]
+            .nodes
+            .iter()
+            .map(|&n| {
+                if n.is_plane() {
+                    ctx.zrange(n, top as u32).0
+                } else {
+                    n.zrange().0
+                }
+            })
+            .chain(tree.trigger_z.iter().copied().filter(|z| z.is_finite()))
+            .fold(f32::INFINITY, f32::min);
+        tree.z_floor = if zlo - Z_SKIP_MARGIN > 0.0 {
+            zlo - Z_SKIP_MARGIN
+        } else {
+            0.0
+        };
         Ok(tree)
     }
 

@@ -233,6 +233,13 @@ impl QuadTreeTracer {
     /// [`Self::trace_ray`] and the number of layers the ray was traversed in (0 when it
     /// misses the cube, 1 when layer 0 settled it, ...).
     pub fn trace_layers(&self, ray: &Ray, stats: &mut TraceStats) -> (TraceResult, usize) {
+        self.trace_impl(ray, stats)
+    }
+
+    /// [`Self::trace_layers`], inlined into [`ScreenTracer::trace`] too (no call and no
+    /// copy of the returned pair per ray).
+    #[inline(always)]
+    fn trace_impl(&self, ray: &Ray, stats: &mut TraceStats) -> (TraceResult, usize) {
         let seg = if self.f32_clip {
             // f32 rounding can lose a segment that only grazes a face, so when the f32 clip
             // finds nothing the f64 clip decides.
@@ -365,6 +372,6 @@ impl QuadTreeTracer {
 impl ScreenTracer for QuadTreeTracer {
     fn trace(&self, ray: &Ray, stats: &mut TraceStats) -> TraceResult {
         stats.rays += 1;
-        self.trace_ray(ray, stats)
+        self.trace_impl(ray, stats).0
     }
 }

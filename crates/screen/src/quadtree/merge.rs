@@ -22,7 +22,7 @@ pub(crate) struct MergeCtx {
 
 impl MergeCtx {
     /// Conservative `[zmin, zmax]` of a node over its footprint.
-    fn zrange(&self, node: Node, level: u32) -> (f32, f32) {
+    pub(crate) fn zrange(&self, node: Node, level: u32) -> (f32, f32) {
         if !node.is_plane() {
             return node.zrange();
         }

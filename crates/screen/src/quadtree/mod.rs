@@ -274,6 +274,62 @@
 //! Hi-Z, 8.34x the minimal artifact-free DDA (254 steps); fitted cube (`-- 0.065 --quick`,
 //! second run; the first, disturbed, gave 169 ns): 132.4 ns/ray, 1.86x MinMax flat, 2.01x
 //! bilinear, 1.43x Hi-Z, 0.98x the DDA (17 steps).
+//!
+//! **Session 6: skip what the `z` slabs exclude.** Every result bit-identical (all kinds,
+//! layers, pixels, `t` and position bits of all 1.44 M stereo rays, atrium, ipd 0.065 and
+//! 0.3, both cubes, 1 and 2 layers: `quadtree_speed IPD [--near 0.1] --profile
+//! quadtree[2] --dump FILE` with the old build, `--check FILE` with the new; `parallax
+//! bench warp` PSNR / SSIM identical to 6 digits on atrium (1 and 2 layers) and Sponza).
+//! Instructions per ray as in session 4 (callgrind, every 4th ray); time `quadtree_speed
+//! 0.065 [--near 0.1] --profile quadtree --time` (all rays, thread CPU time, best of 7),
+//! builds run alternately, best of 3 runs each, loaded machine (±3 %):
+//!
+//! | change | instr/ray camera | ns/ray camera | instr/ray fitted | ns/ray fitted |
+//! |---|---|---|---|---|
+//! | before (a395804) | 1652 | ~157 | 1291 | ~127 |
+//! | hit pixel `cell` in integers (the float floor/tie/clamp chain), `f32::clamp` (an out-of-line call per hit) inlined | 1611 | ~157 | 1259 | |
+//! | **`z` slabs** ([`traverse`]): start where the ray's `z` reaches the top level's lower bound ([`QuadTree::z_floor`]), descend from a box's `z` entry; visits 6.7 -> 2.1 / 3.6 -> 2.7 per ray | 1130 | **~125** | 1175 | ~128 |
+//! | plane test with the unscaled normal `(g_x, g_y, -1)` (bit-identical: power-of-two scaling commutes with rounding) | 1146 | ~120 | 1183 | ~122 |
+//! | start one level below the extent level | 1175 | ~118 | 1189 | ~119 |
+//! | `ScreenTracer::trace` inlines the traversal (no call and no copy of the returned pair) | 1165 | ~115 | 1180 | ~118 |
+//!
+//! In the fitted cube the top-level floor is 0 (a plane steep in the cube near the top
+//! level spans the whole depth range), so only the descent rule acts there; its visits
+//! drop by a quarter but the time hardly moves: the fitted cube's ~120 ns are mostly the
+//! per-ray fixed part. Measured there: tracing pre-clipped segments (the f64
+//! `UnitCube::clip_ray` taken out of the timed loop) saves ~38 ns/ray, the result mapping
+//! (`world_t`) ~3 ns. The fitted cube's floor of 0 comes from one steep plane: at every
+//! level from 3 to 8 exactly one node has `zmin < 0.05` (median 0.56-0.76), and a floor
+//! of 0.5 there (not exact; timing only) would give ~113 instead of ~119 ns/ray.
+//!
+//! Tried and dropped (measured): a shared f32 clip for the quad-tree and brute force
+//! (`UnitCube` with an eye-relative f32 matrix, faces as two 4-lane divisions and a
+//! horizontal max / min, the exit point as `p0 + d` with a cancellation-free `d` so that
+//! horizontal stereo rays keep `d.y == 0` exactly): only -2..-3 ns/ray (~225 instead of
+//! ~280 instructions: glam's lane construction), results changed by ulps, and the
+//! regression test `cascade_regression_24x45_hit_vs_entry`, pinned to an f64 rounding case,
+//! lost its case — not worth it; an f32 clip that rounds the two ends' `y` separately
+//! loses that exact horizontality and the traversal's one-axis fast path (+27 ns/ray). The
+//! f64 clip rewritten over named scalars (LLVM compiled it to the same code), `#[inline]`
+//! on it (+5 % time, again), a cheaper float form of the ray validity test (-12
+//! instructions, no time), the f16 decode's subnormal branch by a magic subtraction
+//! instead of an integer conversion (+1.5 ns), starting two levels below the extent level
+//! (slower on the camera cube), and a per-ray floor: a table of floors over every
+//! rectangle of top-level nodes (`(c r)^2` entries), looked up for the segment's bounding
+//! box — exact (same bits), visits 2.14 -> 1.09 (camera) and 2.54 -> 1.46 (fitted) per
+//! ray, but ~+14 ns/ray on both cubes: the lookup (conversions, clamps, index, load) and
+//! the division sit on the chain to the start node, and the fitted cube's rays then leave
+//! the `s = 0` fast path of the start pixel.
+//!
+//! Head to head after (`cd crates/screen && cargo run --release --example quadtree_speed
+//! -- 0.065 [--near 0.1] --quick`, same process, interleaved, best of 7, loaded machine):
+//! camera cube 117.4 ns/ray (2.14 nodes), **2.79x MinMax flat** (327.2 ns), 2.96x MinMax
+//! bilinear, 2.28x Hi-Z, 11.3x the minimal artifact-free DDA (254 steps); fitted cube
+//! 119.7 ns/ray (2.54 nodes), **2.02x MinMax flat** (242.1 ns), 2.18x bilinear, 1.58x
+//! Hi-Z, 1.08x the DDA (17 steps). Before (same protocol, first run of this session):
+//! 167.5 ns, 2.04x flat (camera); the fitted cube was at 1.86-1.90x. `parallax bench warp`
+//! (trace CPU Mrays/s, `--near 0.1`, 1 layer): atrium quad-tree 4.91 -> 7.27 (MinMax 2.80:
+//! 2.6x), Sponza 7.65 -> 11.78 (MinMax 5.80-6.39: ~1.9-2.0x; single noisy runs).
 
 pub mod build;
 pub mod cascade;
