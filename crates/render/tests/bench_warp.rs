@@ -37,7 +37,7 @@ fn results(r: &WarpRow) -> String {
     };
     let score = |v: f64| format!("{v:.8e}");
     format!(
-        "{} {} {:?} {:?} {} {} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?}",
+        "{} {} {:?} {:?} {} {} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?}",
         r.method,
         r.layers,
         r.dda_max_steps,
@@ -51,6 +51,7 @@ fn results(r: &WarpRow) -> String {
         f(r.pct_layer2),
         f(r.pct_miss),
         f(r.pct_occlusion),
+        f(r.pct_truncated),
         score(r.psnr),
         score(r.ssim),
     )
@@ -130,6 +131,17 @@ fn interleaved_rounds_equal_each_method_alone() {
     // are not mixed up.
     let lost = |k: usize| together[k].0.pct_miss + together[k].0.pct_occlusion;
     assert!(lost(1) > lost(3) + 1.0, "{} vs {}", lost(1), lost(3));
+    // The rays the 4-step DDA lost are the ones it reports as truncated; 300 steps and the
+    // hierarchies (whose bounds are safety bounds) truncate none.
+    let truncated: Vec<f64> = together.iter().map(|(row, _)| row.pct_truncated).collect();
+    assert!(truncated[1] > 50.0, "{truncated:?}");
+    assert!(
+        together
+            .iter()
+            .enumerate()
+            .all(|(k, (row, _))| k == 1 || row.pct_truncated == 0.0),
+        "{truncated:?}"
+    );
 }
 
 #[test]

@@ -239,6 +239,7 @@ impl DdaTracer {
             s += ds;
         }
         stats.steps += steps as u64;
+        stats.truncated += (s - half < 1.0) as u64;
         finish(ray, pr, None, occ, stats)
     }
 }

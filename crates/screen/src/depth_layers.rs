@@ -305,106 +305,110 @@ pub(crate) fn traverse<const N: usize>(
     let extent = d.x.abs().max(d.y.abs()) * (s_end - s_start);
     let mut level = (32 - (extent.max(0.0) as u32).leading_zeros()).min(top);
     let mut s = s_start;
-    for _ in 0..max_steps {
-        stats.steps += 1;
-        stats.nodes_visited += 1;
-        let (cx, cy) = (ix >> level, iy >> level);
-        let size = (1u32 << level) as f32;
-        let sx = if d.x > 0.0 {
-            ((cx + 1) as f32 * size - o.x) * inv.x
-        } else if d.x < 0.0 {
-            (cx as f32 * size - o.x) * inv.x
-        } else {
-            f32::INFINITY
-        };
-        let sy = if d.y > 0.0 {
-            ((cy + 1) as f32 * size - o.y) * inv.y
-        } else if d.y < 0.0 {
-            (cy as f32 * size - o.y) * inv.y
-        } else {
-            f32::INFINITY
-        };
-        let se = sx.min(sy).min(s_end).max(s);
-        let (za, zb) = (o.z + d.z * s, o.z + d.z * se);
-        let (zlo, zhi) = if za <= zb { (za, zb) } else { (zb, za) };
-        let b = pyr.cell(level, cx, cy);
-        stats.box_tests += 1;
-        let overlaps = zhi >= b[0] && (N == 1 || zlo <= b[N - 1]);
-        if overlaps {
-            if level == 0 {
-                stats.plane_tests += 1;
-                match leaf(ix, iy, s, se) {
-                    Leaf::Hit(sh) => {
-                        out.hit = Some((sh, UVec2::new(ix, iy)));
-                        return out;
+    // Every `break` below ends the segment; running out of iterations is a truncation.
+    'walk: {
+        for _ in 0..max_steps {
+            stats.steps += 1;
+            stats.nodes_visited += 1;
+            let (cx, cy) = (ix >> level, iy >> level);
+            let size = (1u32 << level) as f32;
+            let sx = if d.x > 0.0 {
+                ((cx + 1) as f32 * size - o.x) * inv.x
+            } else if d.x < 0.0 {
+                (cx as f32 * size - o.x) * inv.x
+            } else {
+                f32::INFINITY
+            };
+            let sy = if d.y > 0.0 {
+                ((cy + 1) as f32 * size - o.y) * inv.y
+            } else if d.y < 0.0 {
+                (cy as f32 * size - o.y) * inv.y
+            } else {
+                f32::INFINITY
+            };
+            let se = sx.min(sy).min(s_end).max(s);
+            let (za, zb) = (o.z + d.z * s, o.z + d.z * se);
+            let (zlo, zhi) = if za <= zb { (za, zb) } else { (zb, za) };
+            let b = pyr.cell(level, cx, cy);
+            stats.box_tests += 1;
+            let overlaps = zhi >= b[0] && (N == 1 || zlo <= b[N - 1]);
+            if overlaps {
+                if level == 0 {
+                    stats.plane_tests += 1;
+                    match leaf(ix, iy, s, se) {
+                        Leaf::Hit(sh) => {
+                            out.hit = Some((sh, UVec2::new(ix, iy)));
+                            return out;
+                        }
+                        Leaf::Occluded(so) => {
+                            if out.occlusion.is_none() {
+                                out.occlusion = Some((so, UVec2::new(ix, iy)));
+                            }
+                        }
+                        Leaf::Nothing => {}
                     }
-                    Leaf::Occluded(so) => {
-                        if out.occlusion.is_none() {
-                            out.occlusion = Some((so, UVec2::new(ix, iy)));
+                } else {
+                    if d.z > 0.0 && za < b[0] {
+                        // Nothing in this cell is nearer than its min plane: skip to it.
+                        let sm = ((b[0] - o.z) * inv.z).clamp(s, se);
+                        if sm > s {
+                            s = sm;
+                            let q = ray.at(s);
+                            let (x0, y0) = (cx << level, cy << level);
+                            let m = (1u32 << level) - 1;
+                            ix = (q.x.max(0.0) as u32).clamp(x0, (x0 + m).min(w - 1));
+                            iy = (q.y.max(0.0) as u32).clamp(y0, (y0 + m).min(h - 1));
                         }
                     }
-                    Leaf::Nothing => {}
+                    level -= 1;
+                    continue;
                 }
-            } else {
-                if d.z > 0.0 && za < b[0] {
-                    // Nothing in this cell is nearer than its min plane: skip to it.
-                    let sm = ((b[0] - o.z) * inv.z).clamp(s, se);
-                    if sm > s {
-                        s = sm;
-                        let q = ray.at(s);
-                        let (x0, y0) = (cx << level, cy << level);
-                        let m = (1u32 << level) - 1;
-                        ix = (q.x.max(0.0) as u32).clamp(x0, (x0 + m).min(w - 1));
-                        iy = (q.y.max(0.0) as u32).clamp(y0, (y0 + m).min(h - 1));
+            } else if N == 2 && zlo > b[N - 1] && out.occlusion.is_none() {
+                out.occlusion = Some((s, UVec2::new(ix, iy)));
+            }
+            // Advance to the cell exit.
+            if se >= s_end {
+                break 'walk;
+            }
+            s = se;
+            let q = ray.at(s);
+            let (x0, y0) = (cx << level, cy << level);
+            let m = (1u32 << level) - 1;
+            let step_x = sx <= sy;
+            let step_y = sy <= sx;
+            if step_x {
+                if d.x > 0.0 {
+                    ix = (cx + 1) << level;
+                    if ix >= w {
+                        break 'walk;
                     }
-                }
-                level -= 1;
-                continue;
-            }
-        } else if N == 2 && zlo > b[N - 1] && out.occlusion.is_none() {
-            out.occlusion = Some((s, UVec2::new(ix, iy)));
-        }
-        // Advance to the cell exit.
-        if se >= s_end {
-            break;
-        }
-        s = se;
-        let q = ray.at(s);
-        let (x0, y0) = (cx << level, cy << level);
-        let m = (1u32 << level) - 1;
-        let step_x = sx <= sy;
-        let step_y = sy <= sx;
-        if step_x {
-            if d.x > 0.0 {
-                ix = (cx + 1) << level;
-                if ix >= w {
-                    break;
+                } else {
+                    if x0 == 0 {
+                        break 'walk;
+                    }
+                    ix = x0 - 1;
                 }
             } else {
-                if x0 == 0 {
-                    break;
-                }
-                ix = x0 - 1;
+                ix = (q.x.max(0.0) as u32).clamp(x0, (x0 + m).min(w - 1));
             }
-        } else {
-            ix = (q.x.max(0.0) as u32).clamp(x0, (x0 + m).min(w - 1));
-        }
-        if step_y {
-            if d.y > 0.0 {
-                iy = (cy + 1) << level;
-                if iy >= h {
-                    break;
+            if step_y {
+                if d.y > 0.0 {
+                    iy = (cy + 1) << level;
+                    if iy >= h {
+                        break 'walk;
+                    }
+                } else {
+                    if y0 == 0 {
+                        break 'walk;
+                    }
+                    iy = y0 - 1;
                 }
             } else {
-                if y0 == 0 {
-                    break;
-                }
-                iy = y0 - 1;
+                iy = (q.y.max(0.0) as u32).clamp(y0, (y0 + m).min(h - 1));
             }
-        } else {
-            iy = (q.y.max(0.0) as u32).clamp(y0, (y0 + m).min(h - 1));
+            level = (level + 1).min(top);
         }
-        level = (level + 1).min(top);
+        stats.truncated += 1;
     }
     out
 }

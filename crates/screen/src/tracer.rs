@@ -64,6 +64,10 @@ pub struct TraceStats {
     pub hits: u64,
     /// Rays that returned [`TraceResult::OcclusionVolume`].
     pub occlusion_volumes: u64,
+    /// Traversals (per ray and layer) that ran out of their step bound before the end of
+    /// the ray's segment and answered with what they had found: for the DDA, whose
+    /// `max_steps` is a tuned cap, a sign that the cap is too small for the view.
+    pub truncated: u64,
 }
 
 impl AddAssign for TraceStats {
@@ -75,6 +79,7 @@ impl AddAssign for TraceStats {
         self.steps += o.steps;
         self.hits += o.hits;
         self.occlusion_volumes += o.occlusion_volumes;
+        self.truncated += o.truncated;
     }
 }
 

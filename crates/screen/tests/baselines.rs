@@ -5,8 +5,8 @@ use glam::{Vec2, Vec3};
 use parallax_core::{GBuffer, Ray};
 use parallax_scene::{CameraDesc, camera::Pinhole};
 use parallax_screen::{
-    DdaOptions, DdaTracer, HiZOptions, HiZTracer, MinMaxOptions, MinMaxTracer, TraceResult,
-    TraceStats, UnitCube,
+    DdaOptions, DdaTracer, HiZOptions, HiZTracer, MinMaxOptions, MinMaxTracer, ScreenTracer,
+    TraceResult, TraceStats, UnitCube,
 };
 
 mod baselines_util;
@@ -265,7 +265,48 @@ fn degenerate_and_random_rays_terminate() {
         assert_eq!(stats.rays, n);
         // Every baseline bounds its loop: at most max_steps per layer per ray.
         assert!(stats.steps <= n * 2 * 2000, "{name}: {stats:?}");
+        // Segments inside a small image are shorter than any default step bound.
+        assert_eq!(stats.truncated, 0, "{name}: {stats:?}");
         eprintln!("{name}: random rays {stats:?}");
+    }
+}
+
+/// A DDA whose `max_steps` cannot reach the surface reports the rays it gave up on
+/// ([`TraceStats::truncated`]): a cap too small for the view is visible, not a silent miss.
+#[test]
+fn dda_counts_rays_that_run_out_of_steps() {
+    let cam = synth_camera();
+    let layers = [synth_layer(|_, _| 3.0)];
+    let cube = UnitCube::new(&cam, 0.5, 10.0).unwrap();
+    let eye = cam.frame.position + cam.frame.right() * 0.2;
+    for (steps, want) in [(1u32, true), (10_000, false)] {
+        let o = DdaOptions {
+            max_steps: steps,
+            layers: 1,
+            ..Default::default()
+        };
+        let dda = DdaTracer::new(&cube, &layers, &o).unwrap();
+        let mut stats = TraceStats::default();
+        let mut hits = 0;
+        for y in 0..SH {
+            for x in 0..SW {
+                let r = Ray::new(eye, pixel_dir(&cam, x, y));
+                hits += dda.trace(&r, &mut stats).hit_t().is_some() as u64;
+            }
+        }
+        let n = (SW * SH) as u64;
+        if want {
+            // Most rays give up early (a hit is never a truncation; a few short segments at
+            // the image border end within the one step).
+            assert!(stats.truncated + hits <= n, "{stats:?}");
+            assert!(stats.truncated > n / 2, "{stats:?}");
+        } else {
+            // Converged: no ray gives up, nearly all hit the plane (the rest enter through
+            // the image border behind it or leave the reference frustum: the eye is off
+            // the reference camera).
+            assert_eq!(stats.truncated, 0, "{stats:?}");
+            assert!(hits > n * 9 / 10, "{stats:?}");
+        }
     }
 }
 

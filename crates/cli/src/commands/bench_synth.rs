@@ -192,7 +192,7 @@ pub fn warp_bench(a: &WarpBenchArgs, quiet: bool) -> Result<()> {
                     r.method, r.layers
                 ),
                 None => println!(
-                    "| {} | {} | {steps} | {:.1} | {:.2} | {:.1} | {:.2} | {} | {} | {} | {} | {:.2} | {:.2} | {:.3} | {:.3} | {} | {} | |",
+                    "| {} | {} | {steps} | {:.1} | {:.2} | {:.1} | {:.2} | {} | {} | {} | {} | {:.2} | {:.2} | {:.3} | {:.3} | {} | {} | {} |",
                     r.method,
                     r.layers,
                     r.ms_ref,
@@ -212,7 +212,8 @@ pub fn warp_bench(a: &WarpBenchArgs, quiet: bool) -> Result<()> {
                     r.pct_miss,
                     r.pct_occlusion,
                     cell(r.psnr, 2),
-                    cell(r.ssim, 4)
+                    cell(r.ssim, 4),
+                    truncation_note(&r.method, r.pct_truncated)
                 ),
             }
         }
@@ -230,6 +231,20 @@ pub fn warp_bench(a: &WarpBenchArgs, quiet: bool) -> Result<()> {
         )));
     }
     write_json(&a.json, &rows)
+}
+
+/// The note of a row some of whose rays ran out of their traversal's step bound (they end
+/// as misses or occlusion volumes: a DDA `max_steps` too small for the view).
+fn truncation_note(method: &str, pct: f64) -> String {
+    if !(pct > 0.0) {
+        return String::new();
+    }
+    let hint = if method == "dda" {
+        ": raise --dda-max-steps (--dda-sweep finds the minimal artifact-free value)"
+    } else {
+        ""
+    };
+    format!("{pct:.2}% of rays hit the step bound{hint}")
 }
 
 /// The quad-tree's throughput ratios to every other method of the same layer count (the
@@ -365,7 +380,7 @@ pub fn upsample_bench(a: &UpsampleBenchArgs, quiet: bool) -> Result<()> {
                     r.method, r.layers
                 ),
                 None => println!(
-                    "| {} | {} | {steps} | {:.2} | {:.2} ± {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.3} | {:.3} | {} | {} | |",
+                    "| {} | {} | {steps} | {:.2} | {:.2} ± {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.3} | {:.3} | {} | {} | {} |",
                     r.method,
                     r.layers,
                     r.ms_ref,
@@ -378,7 +393,8 @@ pub fn upsample_bench(a: &UpsampleBenchArgs, quiet: bool) -> Result<()> {
                     r.pct_miss,
                     r.pct_occlusion,
                     cell(r.psnr, 2),
-                    cell(r.ssim, 4)
+                    cell(r.ssim, 4),
+                    truncation_note(&r.method, r.pct_truncated)
                 ),
             }
         }

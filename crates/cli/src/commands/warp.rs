@@ -348,6 +348,17 @@ pub fn run(a: &WarpArgs, quiet: bool) -> Result<()> {
             );
         }
     }
+    let truncated = sv.views[0].pct_truncated().max(sv.views[1].pct_truncated());
+    if truncated > 0.0 {
+        eprintln!(
+            "warning: {truncated:.2}% of an eye's rays hit the traversal's step bound and ended as misses or occlusion volumes{}",
+            if a.method == Method::Dda {
+                "; raise --dda-max-steps (`parallax bench warp --dda-sweep ...` finds the minimal artifact-free value)"
+            } else {
+                ""
+            }
+        );
+    }
     Ok(())
 }
 

@@ -53,6 +53,8 @@ pub struct UpsampleRow {
     /// % of synthesised pixels that are misses / occlusion-volume answers (mean over frames).
     pub pct_miss: f64,
     pub pct_occlusion: f64,
+    /// % of synthesised rays whose traversal ran out of its step bound (mean over frames).
+    pub pct_truncated: f64,
     /// Means over the synthesised frames (NaN when not scored).
     pub psnr: f64,
     pub ssim: f64,
@@ -109,6 +111,7 @@ struct Acc {
     syn: u32,
     miss: f64,
     occ: f64,
+    truncated: f64,
     near: Option<(f32, f32)>,
 }
 
@@ -158,6 +161,7 @@ pub fn measure_interleaved(
                 let (_, m, o) = v.kind_fractions();
                 a.miss += m;
                 a.occ += o;
+                a.truncated += v.pct_truncated();
                 a.rays += v.stats.rays;
                 a.nodes += v.nodes_per_ray();
                 a.deep += v.frac_deep();
@@ -234,6 +238,7 @@ fn finish(row: &mut UpsampleRow, times: &[FrameTimes], a: &Acc) {
     row.pct_layer2 = a.deep * 100.0 / syn;
     row.pct_miss = a.miss * 100.0 / syn;
     row.pct_occlusion = a.occ * 100.0 / syn;
+    row.pct_truncated = a.truncated / syn;
     (row.near_m, row.far_m) = a.near.unwrap_or((f32::NAN, f32::NAN));
     if a.scored > 0 {
         row.psnr = a.psnr / a.scored as f64;

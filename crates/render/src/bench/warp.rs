@@ -114,6 +114,9 @@ pub struct WarpRow {
     pub pct_layer2: f64,
     pub pct_miss: f64,
     pub pct_occlusion: f64,
+    /// % of rays whose traversal ran out of its step bound (a DDA `max_steps` too small for
+    /// the view: those rays end as misses or occlusion volumes).
+    pub pct_truncated: f64,
     /// Mean over both eyes (NaN when not scored).
     pub psnr: f64,
     pub ssim: f64,
@@ -421,6 +424,7 @@ fn finish(
     let fr: Vec<_> = sv.views.iter().map(|v| v.kind_fractions()).collect();
     row.pct_miss = (fr[0].1 + fr[1].1) * 50.0;
     row.pct_occlusion = (fr[0].2 + fr[1].2) * 50.0;
+    row.pct_truncated = sv.views.iter().map(|v| v.pct_truncated()).sum::<f64>() * 0.5;
     if let Some(tr) = truths {
         match score_pair(&sv, tr) {
             Ok(s) => (row.psnr, row.ssim) = (s.psnr, s.ssim),

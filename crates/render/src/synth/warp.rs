@@ -185,6 +185,12 @@ impl WarpedView {
         (img, m)
     }
 
+    /// % of rays whose traversal ran out of its step bound ([`TraceStats::truncated`]; the
+    /// layer-0 guard's DDA included).
+    pub fn pct_truncated(&self) -> f64 {
+        100.0 * self.stats.truncated as f64 / self.stats.rays.max(1) as f64
+    }
+
     /// Mean intersection tests (box + plane) per ray.
     pub fn tests_per_ray(&self) -> f64 {
         let s = &self.stats;

@@ -589,6 +589,7 @@ impl QuadTree {
         stats.plane_tests += n_plane;
         stats.box_tests += tested - n_plane;
         stats.nodes_visited += tested - plane_break as u64;
+        stats.truncated += ev.truncated as u64;
         ev
     }
 
