@@ -409,6 +409,14 @@ impl QuadTree {
         // the image's edge), so only image nodes count, as before.
         self.z_floor = floor(zn.iter().copied().fold(f32::INFINITY, f32::min));
         let (tw_, th_) = (tw as usize, th as usize);
+        if self.z_floor <= 0.0 {
+            // Measured on atrium's fitted cube (global floor 0): regional floors there cut
+            // the visits by ~40 % but cost ~12 % time (the lookup and the division on the
+            // chain to the start node, which a floor of 0 skips): none.
+            self.z_floor_dir = Vec::new();
+            self.z_floor_rect = Vec::new();
+            return;
+        }
         self.z_floor_tw = tw;
         self.z_floor_th = th;
         let mut dir = vec![0.0; 2 * tw_ * th_];

@@ -57,7 +57,8 @@
 //! cubes, 1 and 2 layers); Japanese classroom (camera cube; one near top-level node made
 //! the global floor 0.504) 5.73 -> 2.69 nodes/ray, quad-tree / min-max trace CPU 1.82x ->
 //! 2.21x (1 layer), 1.77x -> 2.01x (2 layers); atrium ~+3 % ns/ray (the lookup) with the
-//! same visits. Without the 0.05 threshold atrium's camera cube visits drop 2.1 -> 1.1 per
+//! same visits. No regional floors where the global floor is 0 (atrium's fitted cube: they
+//! cut its visits by ~40 % but cost ~12 % time). Without the 0.05 threshold atrium's camera cube visits drop 2.1 -> 1.1 per
 //! ray but the time rises ~8 % (the longer chain to the start node).
 //!
 //! **Plane test with the unscaled normal** `(g_x, g_y, -1)`
@@ -366,7 +367,10 @@ impl QuadTree {
         // branch (not a select), so the start does not wait for the table load where the
         // regional floor is the global one.
         let mut zf = self.z_floor;
-        if ray.d.z > 0.0 && (ray.par[1] || !self.z_floor_rect.is_empty()) {
+        if !self.z_floor_dir.is_empty()
+            && ray.d.z > 0.0
+            && (ray.par[1] || !self.z_floor_rect.is_empty())
+        {
             let fr = self.region_floor(ray, q);
             if fr > zf {
                 // `black_box`: keeps this a branch (not a `max` on the chain), without the
