@@ -77,7 +77,28 @@ pub struct QuadTree {
     /// there, every trigger depth) minus [`Z_SKIP_MARGIN`]. The traversal starts where the
     /// ray's `z` reaches it — the `z` slab of the ray against the root box ([`super::traverse`]).
     pub(crate) z_floor: f32,
+    /// Regional floors (session 7): per rectangle of top-level nodes holding image pixels
+    /// (`tw x th` of them; rows `r0 <= r1`, columns `c0 <= c1`), the floor of
+    /// [`Self::z_floor`] taken over those nodes only (their lower `z` bound and the trigger
+    /// depths of their pixels), at `((r0 th + r1) tw + c0) tw + c1`; `z_floor` itself where
+    /// that is less than [`Z_REGION_MIN_GAIN`] above it (so every entry is `>= z_floor`). Empty (the global floor only) when the table would exceed
+    /// [`Z_FLOOR_TABLE_MAX`] entries.
+    pub(crate) z_floor_rect: Vec<f32>,
+    /// Directional regional floors for rays moving along `x` only: per top-level node
+    /// `(c, r)` holding image pixels, at `2 (r tw + c) + back`, the floor over the nodes
+    /// `c..tw` of row `r` (`back = 0`) or `0..=c` (`back = 1`).
+    pub(crate) z_floor_dir: Vec<f32>,
+    pub(crate) z_floor_tw: u32,
+    pub(crate) z_floor_th: u32,
 }
+
+/// Smallest gain in cube `z` over [`QuadTree::z_floor`] for which a regional floor
+/// ([`QuadTree::z_floor_dir`]) is used.
+pub const Z_REGION_MIN_GAIN: f32 = 0.05;
+
+/// Largest [`QuadTree::z_floor_rect`] (`tw^2 th^2` entries; 4096 is e.g. 8 x 8 top-level
+/// nodes).
+pub const Z_FLOOR_TABLE_MAX: usize = 4096;
 
 /// Margin of [`QuadTree::z_floor`] in cube `z`: before the traversal's start the ray is at
 /// least this far in front of every plane (in `z` at the same `x, y`), so the f32 plane
@@ -291,6 +312,10 @@ impl QuadTree {
             plane_top: 0,
             plane_level: Vec::new(),
             z_floor: 0.0,
+            z_floor_rect: Vec::new(),
+            z_floor_dir: Vec::new(),
+            z_floor_tw: 0,
+            z_floor_th: 0,
         };
         let mut first = Some(level0);
         let tz = loop {
@@ -338,25 +363,112 @@ impl QuadTree {
             });
         tree.plane_level = pl;
         // After `mark_unsafe` (it lowers AABB ranges to trigger depths).
-        let top = tree.levels.len() - 1;
-        let zlo = tree.levels[top]
-            .nodes
-            .iter()
-            .map(|&n| {
-                if n.is_plane() {
+        tree.set_z_floors(&ctx);
+        Ok(tree)
+    }
+
+    /// [`Self::z_floor`] and the regional table [`Self::z_floor_rect`]: per top-level node
+    /// holding image pixels its lower `z` bound (AABB range, or the footprint range of a
+    /// plane node) and the trigger depths of its pixels; the floors subtract
+    /// [`Z_SKIP_MARGIN`] and are clamped to 0.
+    fn set_z_floors(&mut self, ctx: &MergeCtx) {
+        let top = self.levels.len() - 1;
+        let (w, h) = (self.width, self.height);
+        let (tw, th) = (((w - 1) >> top) + 1, ((h - 1) >> top) + 1);
+        let lv = &self.levels[top];
+        let mut zn = vec![f32::INFINITY; (tw * th) as usize];
+        for qy in 0..th {
+            for qx in 0..tw {
+                let n = lv.nodes[(qy * lv.w + qx) as usize];
+                zn[(qy * tw + qx) as usize] = if n.is_plane() {
                     ctx.zrange(n, top as u32).0
                 } else {
                     n.zrange().0
+                };
+            }
+        }
+        if !self.trigger_z.is_empty() {
+            for j in 0..h {
+                for i in 0..w {
+                    let z = self.trigger_z[(j * w + i) as usize];
+                    let k = ((j >> top) * tw + (i >> top)) as usize;
+                    if z.is_finite() && z < zn[k] {
+                        zn[k] = z;
+                    }
                 }
-            })
-            .chain(tree.trigger_z.iter().copied().filter(|z| z.is_finite()))
-            .fold(f32::INFINITY, f32::min);
-        tree.z_floor = if zlo - Z_SKIP_MARGIN > 0.0 {
-            zlo - Z_SKIP_MARGIN
-        } else {
-            0.0
+            }
+        }
+        let floor = |z: f32| {
+            if z - Z_SKIP_MARGIN > 0.0 {
+                z - Z_SKIP_MARGIN
+            } else {
+                0.0
+            }
         };
-        Ok(tree)
+        // Nodes of the padding beyond the image are never visited (the traversal stops at
+        // the image's edge), so only image nodes count, as before.
+        self.z_floor = floor(zn.iter().copied().fold(f32::INFINITY, f32::min));
+        let (tw_, th_) = (tw as usize, th as usize);
+        if self.z_floor <= 0.0 {
+            // Measured on atrium's fitted cube (global floor 0): regional floors there cut
+            // the visits by ~40 % but cost ~12 % time (the lookup and the division on the
+            // chain to the start node, which a floor of 0 skips): none.
+            self.z_floor_dir = Vec::new();
+            self.z_floor_rect = Vec::new();
+            return;
+        }
+        self.z_floor_tw = tw;
+        self.z_floor_th = th;
+        let mut dir = vec![0.0; 2 * tw_ * th_];
+        for r in 0..th_ {
+            let row = &zn[r * tw_..(r + 1) * tw_];
+            let mut m = f32::INFINITY;
+            for c in (0..tw_).rev() {
+                m = m.min(row[c]);
+                dir[2 * (r * tw_ + c)] = floor(m);
+            }
+            let mut m = f32::INFINITY;
+            for c in 0..tw_ {
+                m = m.min(row[c]);
+                dir[2 * (r * tw_ + c) + 1] = floor(m);
+            }
+        }
+        // A regional floor only a little above the global one skips little and costs the
+        // taken branch's longer chain to the start node (measured on atrium): keep the
+        // global floor there.
+        for f in &mut dir {
+            if *f < self.z_floor + Z_REGION_MIN_GAIN {
+                *f = self.z_floor;
+            }
+        }
+        self.z_floor_dir = dir;
+        if tw_ * tw_ * th_ * th_ > Z_FLOOR_TABLE_MAX {
+            self.z_floor_rect = Vec::new();
+            return;
+        }
+        let mut rect = vec![f32::INFINITY; tw_ * tw_ * th_ * th_];
+        for r0 in 0..th_ {
+            for r1 in r0..th_ {
+                for c0 in 0..tw_ {
+                    let mut m = f32::INFINITY;
+                    for c1 in c0..tw_ {
+                        for r in r0..=r1 {
+                            m = m.min(zn[r * tw_ + c1]);
+                        }
+                        let f = floor(m);
+                        rect[((r0 * th_ + r1) * tw_ + c0) * tw_ + c1] =
+                            if f < self.z_floor + Z_REGION_MIN_GAIN {
+                                self.z_floor
+                            } else {
+                                f
+                            };
+                    }
+                }
+            }
+        }
+        self.z_floor_rect = rect;
+        self.z_floor_tw = tw;
+        self.z_floor_th = th;
     }
 
     /// The highest level holding a plane node (0 when there is none).

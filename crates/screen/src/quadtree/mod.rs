@@ -293,6 +293,14 @@
 //! | start one level below the extent level | 1175 | ~118 | 1189 | ~119 |
 //! | `ScreenTracer::trace` inlines the traversal (no call and no copy of the returned pair) | 1165 | ~115 | 1180 | ~118 |
 //!
+//! Session 7, **regional `z` floors** ([`traverse`]): the start's floor over only the
+//! top-level nodes the segment can cross (row and direction for `x`-only rays, rectangle
+//! otherwise), when at least 0.05 above the global floor and the global floor is > 0.
+//! Bit-identical (`--check`, atrium, both cubes, 1 and 2 layers). Japanese classroom
+//! (`parallax bench warp`, camera cube 0.1 m, see the session 7 report): 5.73 -> 2.69
+//! nodes/ray, quad-tree / min-max trace CPU 1.82x -> 2.10x (1 layer), 1.77x -> 2.03x
+//! (2 layers); atrium unchanged visits, ~+3 % ns/ray on the camera cube (the lookup).
+//!
 //! In the fitted cube the top-level floor is 0 (a plane steep in the cube near the top
 //! level spans the whole depth range), so only the descent rule acts there; its visits
 //! drop by a quarter but the time hardly moves: the fitted cube's ~120 ns are mostly the

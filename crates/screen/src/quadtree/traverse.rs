@@ -43,6 +43,24 @@
 //! visits per ray 6.7 -> 2.1 (camera cube), 3.6 -> 2.5 (fitted cube, where a plane steep
 //! in the cube near the top makes the floor 0 and only the descent rule applies).
 //!
+//! **Regional floor** (session 7): the same argument holds for the floor over just the
+//! top-level nodes the segment can cross: for a ray moving along `x` only (a horizontal
+//! stereo baseline) the nodes of its row from its start column on in its direction
+//! ([`QuadTree::z_floor_dir`], indexed by integers known at the ray's setup), otherwise the
+//! rectangle of top-level nodes spanned by its pixels at `s_lo` and `s_hi`
+//! ([`QuadTree::z_floor_rect`], a `tw^2 th^2` table of range minima). The skipped part
+//! only passes over (and only dilated plane tests of) those nodes, all above it by the
+//! margin. A regional floor less than `Z_REGION_MIN_GAIN = 0.05` above the global one is
+//! stored as the global one, and the traversal takes the regional value in a predicted
+//! branch: where it equals the global floor (all of atrium's rays) the start does not wait
+//! for the table load. Measured: bit-identical (`quadtree_speed --check`, atrium, both
+//! cubes, 1 and 2 layers); Japanese classroom (camera cube; one near top-level node made
+//! the global floor 0.504) 5.73 -> 2.69 nodes/ray, quad-tree / min-max trace CPU 1.82x ->
+//! 2.21x (1 layer), 1.77x -> 2.01x (2 layers); atrium ~+3 % ns/ray (the lookup) with the
+//! same visits. No regional floors where the global floor is 0 (atrium's fitted cube: they
+//! cut its visits by ~40 % but cost ~12 % time). Without the 0.05 threshold atrium's camera cube visits drop 2.1 -> 1.1 per
+//! ray but the time rises ~8 % (the longer chain to the start node).
+//!
 //! **Plane test with the unscaled normal** `(g_x, g_y, -1)`
 //! ([`super::node::decode_plane_unscaled`]): the traversal uses only signs of `f` and the
 //! root `-f(0) / f'`, which a power-of-two scale of the normal leaves bit-identical (the
@@ -342,8 +360,26 @@ impl QuadTree {
         // culled). `q.s_lo` stays the floor of crack dilation and inpainting.
         // `z_floor > 0` first (fixed per tree, predicted): with a floor of 0 (e.g. a plane
         // steep in the cube near the top level) the start does not wait for the division.
-        if self.z_floor > 0.0 && ray.d.z > 0.0 {
-            s = fmax(s, (self.z_floor - ray.p0.z) / ray.d.z);
+        //
+        // Regional floor: the floor over the rectangle of top-level nodes spanned by the
+        // segment's pixels at `s_lo` and `s_hi` (it holds every node the traversal can visit;
+        // `QuadTree::z_floor_rect`). Kept only when above the global floor: a predicted
+        // branch (not a select), so the start does not wait for the table load where the
+        // regional floor is the global one.
+        let mut zf = self.z_floor;
+        if !self.z_floor_dir.is_empty()
+            && ray.d.z > 0.0
+            && (ray.par[1] || !self.z_floor_rect.is_empty())
+        {
+            let fr = self.region_floor(ray, q);
+            if fr > zf {
+                // `black_box`: keeps this a branch (not a `max` on the chain), without the
+                // call of [`raise_level`] (which made LLVM keep values around it in memory).
+                zf = std::hint::black_box(fr);
+            }
+        }
+        if zf > 0.0 && ray.d.z > 0.0 {
+            s = fmax(s, (zf - ray.p0.z) / ray.d.z);
             if !(s <= q.s_hi) {
                 return ev;
             }
@@ -591,6 +627,41 @@ impl QuadTree {
         stats.nodes_visited += tested - plane_break as u64;
         stats.truncated += ev.truncated as u64;
         ev
+    }
+
+    /// The regional `z` floor of a ray over `[q.s_lo, q.s_hi]`: the entry of
+    /// [`Self::z_floor_rect`] for the rectangle of top-level nodes spanned by the pixels at
+    /// both ends (the segment is straight, so every image pixel it crosses lies in that
+    /// rectangle; clamping to the image keeps that). Needs a non-empty table.
+    #[inline(always)]
+    fn region_floor(&self, ray: &RaySetup, q: &Query) -> f32 {
+        let top = self.levels.len() - 1;
+        let (wm, hm) = (self.width - 1, self.height - 1);
+        let (tw, th) = (self.z_floor_tw, self.z_floor_th);
+        if ray.par[1] {
+            // Moving along `x` only (a horizontal stereo baseline): the row's nodes from the
+            // start column on in the ray's direction, from integers known at the ray's setup
+            // (no cell at `s_hi` on the chain to the start node).
+            let r = ray.pcell[1] >> top;
+            let c = ray.start_cell(0, q.s_lo, wm) >> top;
+            let k = (2 * (r * tw + c) + (ray.dg[0] < 0.0) as u32) as usize;
+            debug_assert!(r < th && c < tw && k < self.z_floor_dir.len());
+            // SAFETY: `r <= (H - 1) >> top < th`, `c <= (W - 1) >> top < tw`: `k < 2 tw th`,
+            // the table's length (debug-asserted).
+            return unsafe { *self.z_floor_dir.get_unchecked(k) };
+        }
+        let xa = ray.start_cell(0, q.s_lo, wm) >> top;
+        let ya = ray.start_cell(1, q.s_lo, hm) >> top;
+        let xb = ray.cell_in(0, q.s_hi, 0, wm) >> top;
+        let yb = ray.cell_in(1, q.s_hi, 0, hm) >> top;
+        let (c0, c1) = (xa.min(xb), xa.max(xb));
+        let (r0, r1) = (ya.min(yb), ya.max(yb));
+        debug_assert!(c1 < tw && r1 < th);
+        let k = (((r0 * th + r1) * tw + c0) * tw + c1) as usize;
+        debug_assert!(k < self.z_floor_rect.len());
+        // SAFETY: `c0 <= c1 <= (W - 1) >> top < tw` and likewise rows, so `k < tw^2 th^2`,
+        // the table's length (debug-asserted).
+        unsafe { *self.z_floor_rect.get_unchecked(k) }
     }
 
     /// The pixel of point `P(s)` inside node `(qx, qy)` at level `l`.
