@@ -77,7 +77,7 @@ pub struct QuadTree {
     /// there, every trigger depth) minus [`Z_SKIP_MARGIN`]. The traversal starts where the
     /// ray's `z` reaches it — the `z` slab of the ray against the root box ([`super::traverse`]).
     pub(crate) z_floor: f32,
-    /// Regional floors (session 7): per rectangle of top-level nodes holding image pixels
+    /// Regional floors (session 6, second part): per rectangle of top-level nodes holding image pixels
     /// (`tw x th` of them; rows `r0 <= r1`, columns `c0 <= c1`), the floor of
     /// [`Self::z_floor`] taken over those nodes only (their lower `z` bound and the trigger
     /// depths of their pixels), at `((r0 th + r1) tw + c0) tw + c1`; `z_floor` itself where
@@ -92,15 +92,15 @@ pub struct QuadTree {
     pub(crate) z_floor_th: u32,
 }
 
-/// Smallest gain in cube `z` over [`QuadTree::z_floor`] for which a regional floor
-/// ([`QuadTree::z_floor_dir`]) is used.
+/// Smallest gain in cube `z` over `QuadTree::z_floor` for which a regional floor
+/// (`QuadTree::z_floor_dir`) is used.
 pub const Z_REGION_MIN_GAIN: f32 = 0.05;
 
-/// Largest [`QuadTree::z_floor_rect`] (`tw^2 th^2` entries; 4096 is e.g. 8 x 8 top-level
+/// Largest `QuadTree::z_floor_rect` (`tw^2 th^2` entries; 4096 is e.g. 8 x 8 top-level
 /// nodes).
 pub const Z_FLOOR_TABLE_MAX: usize = 4096;
 
-/// Margin of [`QuadTree::z_floor`] in cube `z`: before the traversal's start the ray is at
+/// Margin of `QuadTree::z_floor` in cube `z`: before the traversal's start the ray is at
 /// least this far in front of every plane (in `z` at the same `x, y`), so the f32 plane
 /// tests there, which the original start from the segment's beginning would have done, are
 /// far from a sign change.

@@ -288,16 +288,16 @@
 //! |---|---|---|---|---|
 //! | before (a395804) | 1652 | ~157 | 1291 | ~127 |
 //! | hit pixel `cell` in integers (the float floor/tie/clamp chain), `f32::clamp` (an out-of-line call per hit) inlined | 1611 | ~157 | 1259 | |
-//! | **`z` slabs** ([`traverse`]): start where the ray's `z` reaches the top level's lower bound ([`QuadTree::z_floor`]), descend from a box's `z` entry; visits 6.7 -> 2.1 / 3.6 -> 2.7 per ray | 1130 | **~125** | 1175 | ~128 |
+//! | **`z` slabs** ([`traverse`]): start where the ray's `z` reaches the top level's lower bound (`QuadTree::z_floor`), descend from a box's `z` entry; visits 6.7 -> 2.1 / 3.6 -> 2.7 per ray | 1130 | **~125** | 1175 | ~128 |
 //! | plane test with the unscaled normal `(g_x, g_y, -1)` (bit-identical: power-of-two scaling commutes with rounding) | 1146 | ~120 | 1183 | ~122 |
 //! | start one level below the extent level | 1175 | ~118 | 1189 | ~119 |
 //! | `ScreenTracer::trace` inlines the traversal (no call and no copy of the returned pair) | 1165 | ~115 | 1180 | ~118 |
 //!
-//! Session 7, **regional `z` floors** ([`traverse`]): the start's floor over only the
+//! Session 6 (second part), **regional `z` floors** ([`traverse`]): the start's floor over only the
 //! top-level nodes the segment can cross (row and direction for `x`-only rays, rectangle
 //! otherwise), when at least 0.05 above the global floor and the global floor is > 0.
 //! Bit-identical (`--check`, atrium, both cubes, 1 and 2 layers). Japanese classroom
-//! (`parallax bench warp`, camera cube 0.1 m, see the session 7 report): 5.73 -> 2.69
+//! (`parallax bench warp`, camera cube 0.1 m, see the session notes of issue 4): 5.73 -> 2.69
 //! nodes/ray, quad-tree / min-max trace CPU 1.82x -> 2.10x (1 layer), 1.77x -> 2.03x
 //! (2 layers); atrium unchanged visits, ~+3 % ns/ray on the camera cube (the lookup).
 //!

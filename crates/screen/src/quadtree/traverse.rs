@@ -28,7 +28,7 @@
 //!
 //! **`z` slabs** (session 6; the ray against a box in 3D, where the plain form tests the
 //! box's `z` range over the node's `xy` interval): the traversal starts where the ray's
-//! cube `z` reaches [`QuadTree::z_floor`] — the smallest lower bound of the top-level
+//! cube `z` reaches `QuadTree::z_floor` — the smallest lower bound of the top-level
 //! nodes (the root box's `z` slab) minus a margin of `Z_SKIP_MARGIN = 1e-3` — and a
 //! descent into a box starts at the ray's entry into the box's `[zmin, ..]` slab (minus
 //! the same margin) instead of its `xy` entry. Exact: box ranges are conservative over
@@ -43,12 +43,12 @@
 //! visits per ray 6.7 -> 2.1 (camera cube), 3.6 -> 2.5 (fitted cube, where a plane steep
 //! in the cube near the top makes the floor 0 and only the descent rule applies).
 //!
-//! **Regional floor** (session 7): the same argument holds for the floor over just the
+//! **Regional floor** (session 6, second part): the same argument holds for the floor over just the
 //! top-level nodes the segment can cross: for a ray moving along `x` only (a horizontal
 //! stereo baseline) the nodes of its row from its start column on in its direction
-//! ([`QuadTree::z_floor_dir`], indexed by integers known at the ray's setup), otherwise the
+//! (`QuadTree::z_floor_dir`, indexed by integers known at the ray's setup), otherwise the
 //! rectangle of top-level nodes spanned by its pixels at `s_lo` and `s_hi`
-//! ([`QuadTree::z_floor_rect`], a `tw^2 th^2` table of range minima). The skipped part
+//! (`QuadTree::z_floor_rect`, a `tw^2 th^2` table of range minima). The skipped part
 //! only passes over (and only dilated plane tests of) those nodes, all above it by the
 //! margin. A regional floor less than `Z_REGION_MIN_GAIN = 0.05` above the global one is
 //! stored as the global one, and the traversal takes the regional value in a predicted
