@@ -52,7 +52,7 @@ fn interleaved_rows_equal_each_method_alone() {
         seed: 0,
         score: true,
     };
-    let methods = [Method::Brute, Method::Mesh, Method::Dda, Method::MinMax];
+    let methods = bench_util::SWEEP_METHODS;
     let opts = MethodOptions::default();
     let rows = run(
         &scene,
@@ -66,11 +66,11 @@ fn interleaved_rows_equal_each_method_alone() {
         &|_| {},
     )
     .unwrap();
-    let names: Vec<_> = rows
-        .iter()
-        .map(|r| (r.method.as_str(), r.layers, r.dda_max_steps))
-        .collect();
-    bench_util::assert_sweep_order(&names, [2, 300]);
+    bench_util::assert_sweep_order(
+        rows.iter()
+            .map(|r| (r.method.as_str(), r.layers, r.dda_max_steps)),
+        [2, 300],
+    );
     for row in &rows {
         let m: Method = row.method.parse().unwrap();
         let o = MethodOptions {

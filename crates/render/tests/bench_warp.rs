@@ -154,7 +154,7 @@ fn run_rows_in_order_with_errors_and_sweep() {
         score: false,
         ..setup(&scene)
     };
-    let methods = [Method::Brute, Method::Mesh, Method::Dda, Method::MinMax];
+    let methods = bench_util::SWEEP_METHODS;
     let rows = run(
         &scene,
         &bvh,
@@ -166,11 +166,11 @@ fn run_rows_in_order_with_errors_and_sweep() {
         &|_| {},
     )
     .unwrap();
-    let names: Vec<_> = rows
-        .iter()
-        .map(|r| (r.method.as_str(), r.layers, r.dda_max_steps))
-        .collect();
-    bench_util::assert_sweep_order(&names, [3, 40]);
+    bench_util::assert_sweep_order(
+        rows.iter()
+            .map(|r| (r.method.as_str(), r.layers, r.dda_max_steps)),
+        [3, 40],
+    );
     // Each row's results are those of measuring the method alone on its reference.
     for n in [1, 2] {
         let r = reference(&scene, &bvh, &s, n).unwrap();

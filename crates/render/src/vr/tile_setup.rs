@@ -433,7 +433,7 @@ impl TriSetup {
         if !n.iter().flatten().all(|x| x.is_finite()) {
             return None;
         }
-        if lazy {
+        let (bound, rho) = if lazy {
             // psi_i <= sqrt 3 sqrt 2 |a_i| sqrt(1 + r^2) <= 2.45 (1 + r) A (A = max |a_i|_1,
             // |c| = 1), amax_i <= A, |e_i|_1 <= 2A: every term of the band below at most.
             let aa = l1(a[0]).max(l1(a[1])).max(l1(a[2]));
@@ -441,72 +441,61 @@ impl TriSetup {
             let ep = U * (2.02 * aa + 1.01 * pp);
             let w = 2.0 * (2.0 * ep * pp) + 4.04 * U * pp * pp;
             let p = 6.1 * U * aa * (2.0 * aa) * 1.01;
-            let bound = 2.0 * (w + p) * 1.01;
-            return Some(TriSetup {
-                n,
-                g: g.to_array(),
-                tri,
-                src,
-                bound: if bound.is_finite() {
-                    bound
-                } else {
-                    f32::INFINITY
-                },
-                rho: f32::NAN,
-                all_in: false,
-            });
-        }
-        // Distance of each vertex from any ray of the cone (module docs) and the bound on the
-        // watertight test's projected coordinates |x'|, |y'| <= sqrt 3 dist.
-        // (x + y <= sqrt(2 (x^2 + y^2)): one square root per vertex instead of two.)
-        let psi_of = |ai: Vec3| {
-            let (x, y) = (cross(ai, cone.centre), ai * cone.radius);
-            SQRT3 * (2.0 * (x.length_squared() + y.length_squared())).sqrt() * 1.001
-        };
-        let psi = [psi_of(a[0]), psi_of(a[1]), psi_of(a[2])];
-        let amax = [
-            a[0].abs().max_element(),
-            a[1].abs().max_element(),
-            a[2].abs().max_element(),
-        ];
-        // Error of a projected coordinate: U |sx a_kz| (product) + U |sx| |a_kz| (sx itself)
-        // + U |x'| (subtraction), |sx| <= 1.
-        let ep_of = |i: usize| U * (2.02 * amax[i] + 1.01 * psi[i]);
-        let ep = [ep_of(0), ep_of(1), ep_of(2)];
-        let mut bound = 0.0f32;
-        let mut wsum = 0.0f32;
-        for i in 0..3 {
-            let (b, c) = (i, (i + 1) % 3);
-            // Watertight edge function u = c'x b'y - c'y b'x: input errors plus three
-            // roundings, in u units; times |d_kz| = |d|_inf in e units.
-            let w = 2.0 * (ep[c] * psi[b] + ep[b] * psi[c]) + 4.04 * U * psi[b] * psi[c];
-            // Set-up value: n from e_i (U), two products and a difference (about 3U of
-            // |a| (x) |e|), the dot product (3U): 6.1 U |a_i|_1 |e_i|_1 |d|_inf.
-            let p = 6.1 * U * l1(a[i]) * l1(e[i]);
-            bound = bound.max(w + p);
-            wsum += w;
-        }
-        // Safety factor 2 over the first-order analysis (second-order terms, the 1.01s).
-        let bound = 2.0 * bound;
-        // Depth band. g . d: D and N . d lose U |N| |a| / |D| (kappa: 1 / sine of the grazing
-        // angle, for every ray through the triangle) each, N itself 3U sigma (sigma = sliver
-        // factor |e0| |e2| / |N|). Woop's t = sum u_i z_i / sum u_i moves by
-        // sqrt 3 Lambda sum |du_i| / |D| (Lambda = longest edge) plus 7U of rounding.
-        // (sigma kappa = max |a| |e0| |e2| / |D|: two square roots in all.)
-        let amax_sq = a.iter().map(|x| x.length_squared()).fold(0.0, f32::max);
-        let sigma_kappa =
-            (amax_sq * e[0].length_squared() * e[2].length_squared()).sqrt() * 1.001 / d.abs();
-        let lambda = e
-            .iter()
-            .map(|x| x.length_squared())
-            .fold(0.0, f32::max)
-            .sqrt()
-            * 1.001;
-        let rho = 2.0 * (SQRT3 * lambda * wsum / d.abs() + 14.0 * U * sigma_kappa + 11.0 * U);
-        let rho = if rho.is_finite() && rho <= RHO_MAX {
-            rho
+            (2.0 * (w + p) * 1.01, f32::NAN)
         } else {
-            f32::INFINITY
+            // Distance of each vertex from any ray of the cone (module docs) and the bound on the
+            // watertight test's projected coordinates |x'|, |y'| <= sqrt 3 dist.
+            // (x + y <= sqrt(2 (x^2 + y^2)): one square root per vertex instead of two.)
+            let psi_of = |ai: Vec3| {
+                let (x, y) = (cross(ai, cone.centre), ai * cone.radius);
+                SQRT3 * (2.0 * (x.length_squared() + y.length_squared())).sqrt() * 1.001
+            };
+            let psi = [psi_of(a[0]), psi_of(a[1]), psi_of(a[2])];
+            let amax = [
+                a[0].abs().max_element(),
+                a[1].abs().max_element(),
+                a[2].abs().max_element(),
+            ];
+            // Error of a projected coordinate: U |sx a_kz| (product) + U |sx| |a_kz| (sx itself)
+            // + U |x'| (subtraction), |sx| <= 1.
+            let ep_of = |i: usize| U * (2.02 * amax[i] + 1.01 * psi[i]);
+            let ep = [ep_of(0), ep_of(1), ep_of(2)];
+            let mut bound = 0.0f32;
+            let mut wsum = 0.0f32;
+            for i in 0..3 {
+                let (b, c) = (i, (i + 1) % 3);
+                // Watertight edge function u = c'x b'y - c'y b'x: input errors plus three
+                // roundings, in u units; times |d_kz| = |d|_inf in e units.
+                let w = 2.0 * (ep[c] * psi[b] + ep[b] * psi[c]) + 4.04 * U * psi[b] * psi[c];
+                // Set-up value: n from e_i (U), two products and a difference (about 3U of
+                // |a| (x) |e|), the dot product (3U): 6.1 U |a_i|_1 |e_i|_1 |d|_inf.
+                let p = 6.1 * U * l1(a[i]) * l1(e[i]);
+                bound = bound.max(w + p);
+                wsum += w;
+            }
+            // Safety factor 2 over the first-order analysis (second-order terms, the 1.01s).
+            let bound = 2.0 * bound;
+            // Depth band. g . d: D and N . d lose U |N| |a| / |D| (kappa: 1 / sine of the grazing
+            // angle, for every ray through the triangle) each, N itself 3U sigma (sigma = sliver
+            // factor |e0| |e2| / |N|). Woop's t = sum u_i z_i / sum u_i moves by
+            // sqrt 3 Lambda sum |du_i| / |D| (Lambda = longest edge) plus 7U of rounding.
+            // (sigma kappa = max |a| |e0| |e2| / |D|: two square roots in all.)
+            let amax_sq = a.iter().map(|x| x.length_squared()).fold(0.0, f32::max);
+            let sigma_kappa =
+                (amax_sq * e[0].length_squared() * e[2].length_squared()).sqrt() * 1.001 / d.abs();
+            let lambda = e
+                .iter()
+                .map(|x| x.length_squared())
+                .fold(0.0, f32::max)
+                .sqrt()
+                * 1.001;
+            let rho = 2.0 * (SQRT3 * lambda * wsum / d.abs() + 14.0 * U * sigma_kappa + 11.0 * U);
+            let rho = if rho.is_finite() && rho <= RHO_MAX {
+                rho
+            } else {
+                f32::INFINITY
+            };
+            (bound, rho)
         };
         Some(TriSetup {
             n,

@@ -1,10 +1,19 @@
 //! Shared checks of the `bench warp` / `bench upsample` tests.
 
-/// Asserts the row order of `run` over methods brute, mesh, dda, minmax at 1 and 2 layers
+use parallax_render::synth::method::Method;
+
+/// The methods of the sweep tests, in the order [`assert_sweep_order`] expects.
+pub const SWEEP_METHODS: [Method; 4] = [Method::Brute, Method::Mesh, Method::Dda, Method::MinMax];
+
+/// Asserts the row order of `run` over [`SWEEP_METHODS`] at 1 and 2 layers
 /// with a DDA sweep of `steps`: per layer count the methods in order, the DDA once per
 /// sweep value, the mesh warp only with one layer. `rows` are `(method, layers, dda steps)`.
-pub fn assert_sweep_order(rows: &[(&str, usize, Option<u32>)], steps: [u32; 2]) {
+pub fn assert_sweep_order<'a>(
+    rows: impl IntoIterator<Item = (&'a str, usize, Option<u32>)>,
+    steps: [u32; 2],
+) {
     let [a, b] = steps;
+    let rows: Vec<_> = rows.into_iter().collect();
     assert_eq!(
         rows,
         [
