@@ -89,6 +89,7 @@ mod stats;
 mod traverse;
 mod tri;
 mod tri4;
+mod world;
 
 use std::fmt;
 use std::time::{Duration, Instant};

@@ -2,8 +2,12 @@
 
 use glam::{Vec2, Vec3};
 use parallax_bvh::Hit;
-use parallax_core::Ray;
+use parallax_core::{HitSurface, NO_ID, Ray, WorldHit};
 use parallax_scene::{Material, Scene};
+
+/// The material of sampled hits whose capture kept no material id: rough, non-metallic.
+static SAMPLED_DEFAULT: std::sync::LazyLock<Material> =
+    std::sync::LazyLock::new(|| Material::diffuse("sampled", Vec3::ONE));
 
 /// The surface seen by a ray.
 #[derive(Clone, Copy, Debug)]
@@ -23,7 +27,56 @@ pub struct SurfacePoint<'a> {
 
 impl<'a> SurfacePoint<'a> {
     pub fn new(scene: &'a Scene, ray: &Ray, hit: &Hit) -> Self {
-        let prim = hit.prim as usize;
+        Self::on_triangle(scene, ray, hit.prim, hit.t, Vec2::new(hit.u, hit.v))
+    }
+
+    /// The surface of a world-space tracer's hit (the fetch pass of DIRT §4.2): exact hits
+    /// read normals, material and texture from the scene by primitive and barycentrics;
+    /// sampled hits take the stored sample's normal, albedo and material (the primitive's
+    /// material where the sample has none but knows its primitive).
+    pub fn from_world_hit(scene: &'a Scene, ray: &Ray, hit: &WorldHit) -> Self {
+        match hit.surface {
+            HitSurface::Exact => Self::on_triangle(scene, ray, hit.prim, hit.t, hit.barycentrics),
+            HitSurface::Sampled(sample) => {
+                let n = sample.normal.normalize_or(-ray.dir.normalize_or_zero());
+                let front_face = n.dot(ray.dir) < 0.0;
+                let n = if front_face { n } else { -n };
+                // The sample's material, else its primitive's, else a rough diffuse default.
+                let id = match sample.material_id {
+                    NO_ID => scene
+                        .mesh
+                        .material_ids
+                        .get(hit.prim as usize)
+                        .copied()
+                        .unwrap_or(NO_ID),
+                    id => id,
+                };
+                let (material, material_id) = match scene.materials.get(id as usize) {
+                    Some(m) => (m, id),
+                    None => (&*SAMPLED_DEFAULT, NO_ID),
+                };
+                Self {
+                    position: hit.position,
+                    geometric_normal: n,
+                    shading_normal: n,
+                    uv: Vec2::ZERO,
+                    albedo: sample.albedo,
+                    material,
+                    material_id,
+                    front_face,
+                }
+            }
+        }
+    }
+
+    fn on_triangle(scene: &'a Scene, ray: &Ray, prim: u32, t: f32, bary: Vec2) -> Self {
+        let prim = prim as usize;
+        let hit = Hit {
+            prim: prim as u32,
+            t,
+            u: bary.x,
+            v: bary.y,
+        };
         let mesh = &scene.mesh;
         let position = ray.at(hit.t);
         let ng = mesh.geometric_normal(prim);
@@ -64,5 +117,49 @@ impl<'a> SurfacePoint<'a> {
             -1.0
         };
         self.position + self.geometric_normal * (scale * side)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use parallax_bvh::Bvh;
+    use parallax_core::{SampledSurface, WorldStats, WorldTracer};
+
+    use super::*;
+
+    #[test]
+    fn world_hits_fetch_the_scene_or_the_sample() {
+        let scene = Scene::load("cornell").unwrap();
+        let bvh = Bvh::build(&scene.mesh);
+        let cam = &scene.cameras[0].desc;
+        let ray = Ray::new(cam.eye, (cam.target - cam.eye).normalize());
+        let direct = SurfacePoint::new(&scene, &ray, &bvh.closest_hit(&ray).unwrap());
+        let hit = WorldTracer::closest_hit(&bvh, &ray, &mut WorldStats::default()).unwrap();
+        let fetched = SurfacePoint::from_world_hit(&scene, &ray, &hit);
+        assert_eq!(fetched.position, direct.position);
+        assert_eq!(fetched.shading_normal, direct.shading_normal);
+        assert_eq!(fetched.material_id, direct.material_id);
+        // A sampled hit without a material id takes its primitive's material; the normal is
+        // turned to face the ray.
+        let sampled = WorldHit {
+            surface: HitSurface::Sampled(SampledSurface {
+                normal: -direct.geometric_normal,
+                albedo: Vec3::new(0.1, 0.2, 0.3),
+                material_id: NO_ID,
+            }),
+            ..hit
+        };
+        let s = SurfacePoint::from_world_hit(&scene, &ray, &sampled);
+        assert_eq!(s.material_id, direct.material_id);
+        assert_eq!(s.albedo, Vec3::new(0.1, 0.2, 0.3));
+        assert!(s.geometric_normal.dot(ray.dir) < 0.0);
+        let unknown = WorldHit {
+            prim: NO_ID,
+            ..sampled
+        };
+        assert_eq!(
+            SurfacePoint::from_world_hit(&scene, &ray, &unknown).material_id,
+            NO_ID
+        );
     }
 }
