@@ -19,8 +19,8 @@
 //!   rays traverse together, SIMD over rays at inner nodes (AVX2 behind runtime detection, SSE
 //!   / portable twin), each ray's answer exactly its single-ray answer.
 //! - **Refit** ([`Bvh::refit`], `refit.rs`): new vertex positions, same topology (HVVR §5.2).
-//! - **Beam culling** ([`beam`]): HVVR's block and tile culling (§5.3-5.4) — a bounding beam of
-//!   many rays walks the tree to entry points and then to a tile's leaf list.
+//! - **Beam culling** lives with HVVR in `parallax-vr` (`parallax_vr::beam`): it walks these
+//!   nodes (public in [`node`]) with a bounding beam of many rays.
 //! - **Reference** ([`brute_force_closest`], [`brute_force_all`]): every triangle, same test.
 //!
 //! **Why our own BVH and not a crate (e.g. obvhs, bvh):** the HVVR beam traversal that follows
@@ -77,7 +77,6 @@
 //!
 //! [`WatertightRay`]: parallax_core::math::WatertightRay
 
-pub mod beam;
 mod build;
 mod collapse;
 pub mod node;

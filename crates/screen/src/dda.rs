@@ -49,7 +49,7 @@
 //! pixels at 500 steps and converges at 700 (156 steps per ray on average, some lines span
 //! the screen); the CLI's upsampling default is 1400 (doubled for 1600x900, not measured
 //! there). Larger ipd and higher resolution need more too: sweep them.
-//! The warp's layer-0 guard (`render::synth::warp`) does not use it: its DDA marches every
+//! The warp's layer-0 guard (`parallax_synth::warp`) does not use it: its DDA marches every
 //! segment to its end (`max(W, H) + 2` steps).
 
 use std::time::Instant;

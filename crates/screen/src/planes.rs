@@ -38,7 +38,7 @@
 //! (cracks proper) and leaves real depth steps and edges to uncovered pixels unflagged.
 //!
 //! **Measured** (quad-tree, 2 layers, atrium 1600x900, ipd 0.065, side-entry guard on, DDA
-//! re-check off — `render::synth::warp`): crack dilation on these flags scored 29.33 dB
+//! re-check off — `parallax_synth::warp`): crack dilation on these flags scored 29.33 dB
 //! (every edge, dilation 0.5 px), 29.44-29.47 dB (gaps in `(1e-5 or 1e-4, 3e-3..1e-1]`, 0.5 px),
 //! 29.09 dB (1 px), against 29.67 dB without flags and 30.07 dB with the warp's DDA
 //! re-check; with the re-check on as well, every-edge flags lost 0.37 dB (29.70). The flags

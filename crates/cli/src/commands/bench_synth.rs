@@ -7,9 +7,9 @@ use std::path::PathBuf;
 use anyhow::{Context, Result, ensure};
 use clap::Args;
 use parallax_bvh::Bvh;
-use parallax_render::bench::{compression, upsample as up, warp};
-use parallax_render::synth::method::{Method, cube_near_name};
-use parallax_render::synth::upsample::{default_path, scene_path};
+use parallax_synth::bench::{compression, upsample as up, warp};
+use parallax_synth::method::{Method, cube_near_name};
+use parallax_synth::upsample::{default_path, scene_path};
 use serde::Serialize;
 
 use super::warp::SynthArgs;

@@ -112,11 +112,11 @@ fn vr_frame(
     quiet: bool,
 ) -> Result<()> {
     use parallax_core::image::png::{self, ToneMapping, Tonemap};
-    use parallax_render::vr::frame::{FrameOptions, Visibility, render_eye_set};
-    use parallax_render::vr::presets::{Preset, eye_cameras};
-    use parallax_render::vr::reconstruct::pattern_image;
-    use parallax_render::vr::resolve::ShadingMode;
-    use parallax_render::vr::shade::ShadeOptions;
+    use parallax_vr::frame::{FrameOptions, Visibility, render_eye_set};
+    use parallax_vr::presets::{Preset, eye_cameras};
+    use parallax_vr::reconstruct::pattern_image;
+    use parallax_vr::resolve::ShadingMode;
+    use parallax_vr::shade::ShadeOptions;
 
     let mut spec = Preset::RiftCv1.spec();
     spec.width = (a.width / 2).max(1);

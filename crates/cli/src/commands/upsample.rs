@@ -10,9 +10,9 @@ use anyhow::{Context, Result, ensure};
 use clap::Args;
 use parallax_bvh::Bvh;
 use parallax_core::image::png;
-use parallax_render::synth::method::{Method, cube_near_name};
-use parallax_render::synth::score::{SCORE_TONEMAP, ground_truth, score};
-use parallax_render::synth::upsample::{UpsampleOptions, default_path, scene_path, upsample};
+use parallax_render::score::{SCORE_TONEMAP, ground_truth, score};
+use parallax_synth::method::{Method, cube_near_name};
+use parallax_synth::upsample::{UpsampleOptions, default_path, scene_path, upsample};
 
 use super::warp::{SynthArgs, parse_method};
 use crate::args::ViewArgs;

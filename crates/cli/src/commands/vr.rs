@@ -10,16 +10,16 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use parallax_bvh::Bvh;
 use parallax_core::image::png::{self, ToneMapping, Tonemap};
-use parallax_render::vr::frame::{
-    EyeFrame, FrameOptions, UpdateTimings, Visibility, render_eye_set, update_scene,
-};
-use parallax_render::vr::presets::{Dof, HeadsetSpec, Preset, eye_cameras};
-use parallax_render::vr::reconstruct::pattern_image;
-use parallax_render::vr::resolve::ShadingMode;
-use parallax_render::vr::shade::ShadeOptions;
-use parallax_render::vr::{Sample, SampleSet};
 use parallax_scene::animation::Animation;
 use parallax_scene::camera::{Camera, CameraModel, ModelKind};
+use parallax_vr::frame::{
+    EyeFrame, FrameOptions, UpdateTimings, Visibility, render_eye_set, update_scene,
+};
+use parallax_vr::presets::{Dof, HeadsetSpec, Preset, eye_cameras};
+use parallax_vr::reconstruct::pattern_image;
+use parallax_vr::resolve::ShadingMode;
+use parallax_vr::shade::ShadeOptions;
+use parallax_vr::{Sample, SampleSet};
 use serde::Serialize;
 
 use crate::args::ViewArgs;
@@ -129,7 +129,7 @@ fn dof(a: &VrArgs, target_distance: f32) -> Result<Option<Dof>> {
 
 /// The sample set of one eye: the pixel grid, or with `gaze` (normalised film coordinates in
 /// [-1, 1]^2, y up) the foveated pattern around it (fovea and acuity slope of
-/// `parallax_render::vr::bench`); a per-channel (distorted) camera gets its three colour
+/// `parallax_vr::bench`); a per-channel (distorted) camera gets its three colour
 /// channels' rays with `subpixel`, else only the green channel's, coloring whole pixels.
 pub fn eye_set(
     camera: Camera,
@@ -137,7 +137,7 @@ pub fn eye_set(
     subpixel: bool,
     gaze: Option<[f32; 2]>,
 ) -> Result<SampleSet> {
-    use parallax_render::vr::bench::{FOVEA_RADIUS_FRACTION, FOVEA_SLOPE};
+    use parallax_vr::bench::{FOVEA_RADIUS_FRACTION, FOVEA_SLOPE};
     let channels = camera.channel_count() as u8;
     let mut set = match gaze {
         None => SampleSet::grid(camera, spp),
@@ -176,7 +176,7 @@ struct VrStats {
     rays: u64,
     update: Option<UpdateTimings>,
     build_ms: f64,
-    eyes: Vec<parallax_render::vr::frame::EyeTimings>,
+    eyes: Vec<parallax_vr::frame::EyeTimings>,
     shades: u64,
     shades_per_nonempty_pixel: f64,
     mrays_per_s: f64,
@@ -334,7 +334,7 @@ pub fn run(a: &VrArgs, quiet: bool) -> Result<()> {
     Ok(())
 }
 
-/// `parallax bench vr` (HVVR Tables 2-6; see `parallax_render::vr::bench`).
+/// `parallax bench vr` (HVVR Tables 2-6; see `parallax_vr::bench`).
 #[derive(Args, Debug)]
 pub struct VrBenchArgs {
     /// Scene and head pose (atrium, cornell, or e.g. the Sponza / classroom glTF paths).
@@ -371,7 +371,7 @@ pub struct VrBenchArgs {
 }
 
 pub fn bench(a: &VrBenchArgs, quiet: bool) -> Result<()> {
-    use parallax_render::vr::bench::{SCHEMES, VrBenchOptions, markdown, run, update_row};
+    use parallax_vr::bench::{SCHEMES, VrBenchOptions, markdown, run, update_row};
     for s in &a.schemes {
         if !SCHEMES.contains(&s.as_str()) {
             bail!(

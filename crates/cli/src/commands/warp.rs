@@ -10,18 +10,18 @@ use clap::Args;
 use parallax_bvh::Bvh;
 use parallax_core::image::png::{self, ToneMapping};
 use parallax_core::{Image, Rgb};
-use parallax_render::bench::warp::{StereoSetup, eye_truths, score_pair};
-use parallax_render::synth::CubeNear;
-use parallax_render::synth::input::{
+use parallax_render::score::SCORE_TONEMAP;
+use parallax_scene::camera::Pinhole;
+use parallax_synth::CubeNear;
+use parallax_synth::bench::warp::{StereoSetup, eye_truths, score_pair};
+use parallax_synth::input::{
     Intrinsics, input_desc, read_color, read_depth, reference_from_images,
 };
-use parallax_render::synth::layers::{Shading, capture_reference};
-use parallax_render::synth::method::NormalSource;
-use parallax_render::synth::method::{Method, MethodOptions, cube_near_name, parse_cube_near};
-use parallax_render::synth::score::SCORE_TONEMAP;
-use parallax_render::synth::stereo::warp_stereo;
-use parallax_render::synth::warp::{OcclusionFill, Resample, WarpOptions, WarpedView};
-use parallax_scene::camera::Pinhole;
+use parallax_synth::method::NormalSource;
+use parallax_synth::method::{Method, MethodOptions, cube_near_name, parse_cube_near};
+use parallax_synth::stereo::warp_stereo;
+use parallax_synth::warp::{OcclusionFill, Resample, WarpOptions, WarpedView};
+use parallax_synth::{Shading, capture_reference};
 
 use crate::args::ViewArgs;
 use crate::progress;

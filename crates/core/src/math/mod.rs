@@ -1,7 +1,6 @@
 //! Geometry on glam: rays, boxes, planes, frusta and the watertight ray-triangle test.
 
 mod aabb;
-mod beam;
 mod frame;
 mod frustum;
 mod plane;
@@ -9,10 +8,6 @@ mod ray;
 mod triangle;
 
 pub use aabb::{Aabb, ROBUST_FAR_SCALE};
-pub use beam::{
-    BEAM_TOLERANCE, Beam, BeamBuilder, BeamTest, MIN_DOMINANT, PreparedBeam, plane_range1,
-    plane_range2,
-};
 pub use frame::Frame;
 pub use frustum::{Containment, Frustum};
 pub use plane::Plane;

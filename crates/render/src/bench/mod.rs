@@ -1,8 +1,5 @@
-//! Benchmarks behind `parallax bench ...`: each reproduces a measurement of a paper or an issue
-//! on any scene and camera, and returns rows that the CLI prints as a Markdown table and JSON.
+//! Benchmarks behind `parallax bench rays`: rows that the CLI prints as a Markdown table and
+//! JSON. The technique crates keep their own benches (`parallax_synth::bench`,
+//! `parallax_vr::bench`) and reuse [`rays::make_rays`]'s camera rays where they apply.
 
-pub mod compression;
 pub mod rays;
-pub mod trace;
-pub mod upsample;
-pub mod warp;

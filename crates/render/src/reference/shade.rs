@@ -54,7 +54,7 @@ impl<'a> Shader<'a> {
 
     /// Radiance arriving along `ray` whose first surface is the known `hit` (not traced, not
     /// counted): shades a surface found by another visibility method, e.g. a rasterized depth
-    /// layer behind the nearest surface (view synthesis, [`crate::synth`]). Everything after
+    /// layer behind the nearest surface (view synthesis, `parallax_synth`). Everything after
     /// the first surface (shadow rays, specular chains) is traced as in [`Self::radiance`].
     pub fn radiance_from_hit(&self, ray: Ray, hit: Hit, rng: &mut Rng, rays: &mut u64) -> Vec3 {
         self.radiance_from(ray, Some(hit), rng, rays)

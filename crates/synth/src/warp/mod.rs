@@ -1,0 +1,533 @@
+//! Warping a reference into a target pinhole view by tracing one ray per target pixel
+//! (Widmer et al. 2015, §5.1): the colour of a pixel is the colour of the layer pixel its ray
+//! hits; a miss takes the environment colour; an occlusion-volume crossing takes the colour of
+//! the crossed layer pixel (the single-layer inpainting of §4.1) or, with
+//! [`OcclusionFill::NearestBackground`], the nearest background pixel (Fig. 6e, below).
+//!
+//! **Colour resampling** ([`Resample`], default [`Resample::Bilinear`], the same for every
+//! tracer): a hit lies at a sub-pixel position of the reference image, so its colour is
+//! reconstructed there rather than taken from the nearest pixel centre. The hit position is
+//! projected into the reference film ([`parallax_screen::UnitCube`]) and the 2x2 pixel centres
+//! around it of the hit's layer are blended bilinearly, keeping only the neighbours that are
+//! covered and lie on the hit pixel's surface (within [`SAME_SURFACE_PX`] pixel footprints of
+//! the hit sample's tangent plane, normals within 60°), with the weights renormalised — the
+//! depth-aware ("cross-bilateral") reconstruction filter of image-based rendering, e.g. Mark,
+//! McMillan & Bishop 1997, "Post-Rendering 3D Warping", §4 (reconstruction), and Shade et al.
+//! 1998, "Layered Depth Images", §4 (splatting with depth discontinuity handling), which do
+//! not blend across depth discontinuities. Widmer et al. 2015 do not specify their colour
+//! lookup; nearest is kept as [`Resample::Nearest`] for comparison. Occlusion-volume answers
+//! keep the crossed pixel's colour (nearest).
+//!
+//! **Visible samples first** (bilinear only): a hit in layer 1 or deeper blends, instead of
+//! its own layer's samples, the layer-0 samples of the 2x2 that lie on its surface when there
+//! are any. Next to a contact edge (floor meeting a column, wall behind attached trim) the
+//! layer-1 sample at a pixel centre lies inside or under the occluder and shades black,
+//! while the eye's ray meets the visible part of the same surface in that pixel's footprint,
+//! which layer 0's neighbours hold. Measured on atrium (800x450, ipd 0.065, quad-tree):
+//! before this, such pixels (0.07% of the image) added more squared error than all layer-1
+//! disocclusion answers removed, and 2 layers scored below 1 layer + background fill.
+//!
+//! **Layer-0 guard** (default on, only with 2+ layers; ours, not in Widmer et al. 2015): an
+//! answer from layer 1 or deeper is re-checked against layer 0 in five switchable parts (a)-(e),
+//! [`WarpOptions`]; what each does and what it measured are in `synth/guard.rs`.
+//!
+//! **Occlusion-volume fill** ([`WarpOptions::fill`]). Fig. 6e fills single-layer misses and
+//! occlusion-volume answers "with the nearest background pixels". [`OcclusionFill::Crossed`]
+//! takes the colour of the pixel the tracer reports (for cascade-mode answers the pixel whose
+//! plane the ray passed behind: the occluder's edge, a foreground colour).
+//! [`OcclusionFill::NearestBackground`] (`background_fill`, the default; Fig. 6e shows it
+//! for single-layer references, we also apply it to the occlusion-volume answers left with
+//! 2 layers: +0.08 dB on atrium and Sponza at 1600x900, -0.00..0.17 dB at 160x120 in
+//! `tests/synth.rs`) walks from that pixel back along
+//! the ray's screen direction in the reference (the epipolar line: the ray came from in front
+//! of the background on that side of the silhouette) to the first pixel deeper than the
+//! occluder edge by 1% (or uncovered: the environment), at most [`BACKGROUND_SEARCH_PX`]
+//! pixels, else keeps the crossed pixel. An occlusion volume of layer 1 or deeper (the ray
+//! passed behind that layer too; the per-pixel tracers min-max, Hi-Z and DDA report them) is
+//! filled from layer 0's nearest background first (the visible background a single layer
+//! would give), from its own layer only when layer 0 has none: hidden-layer samples next to
+//! their own silhouettes are often dark contact or enclosed surfaces. Measured at 800x450,
+//! ipd 0.065 (2 layers): min-max atrium 27.875 -> 27.929 dB, Sponza 29.689 -> 29.760 dB; DDA
+//! 27.843 -> 27.901, 29.606 -> 29.646 dB (quad-tree and brute force report none). Ours.
+//! Misses keep the environment colour (our misses are
+//! rays that never pass behind a layer: sky, or outside the reference frustum).
+//!
+//! **The per-pixel loop** (shared by every tracer, so its cost dilutes their speed ratios): per
+//! chunk of 64 pixels of a row (`WARP_CHUNK`), pass 1 generates each pixel's ray ([`PixelRays`]:
+//! the per-warp and per-row constants hoisted, no ray differentials), traces it and applies
+//! the layer-0 guard; pass 2 colours the chunk's answers (`synth/resolve.rs`: flat per-layer
+//! slices, no per-pixel lookups, an inline floor) and fills occlusion volumes. In pass 2 the
+//! short, latency-bound colour lookups of neighbouring pixels overlap in the out-of-order
+//! core instead of each waiting behind a whole trace. Output bit-identical to the one-pass
+//! loop with `generate_ray` it replaced (same operations, same order). Measured at 1600x900
+//! on atrium (1 layer, 0.1 m camera near plane, one thread, `bench warp` interleaved rounds):
+//! the quad-tree's `T_eye` went from ~500 to ~420-440 ms, its `T_eye - T_trace - T_raygen`
+//! from ~180 to ~110-130 ms and ray generation from ~30 to ~10 ms (the chunk size, 16 to a
+//! whole row, made no measurable difference).
+//!
+//! Besides colour, every pixel records what its ray found ([`HitKind`], shown like Fig. 6d:
+//! misses red, occlusion volumes blue) and its intersection-test count (box + plane tests, or
+//! steps for structures without tests — Fig. 1c's heatmap). Rows run in parallel (rayon), each
+//! with its own [`TraceStats`], summed at the end.
+
+use std::time::Instant;
+
+use glam::{Mat3, UVec2, Vec2, Vec3};
+use parallax_core::{Image, Ray, Rgb};
+use parallax_scene::camera::Pinhole;
+use parallax_screen::{DdaOptions, DdaTracer, ScreenTracer, TraceResult, TraceStats};
+use rayon::prelude::*;
+
+mod guard;
+mod resolve;
+
+use crate::layers::Reference;
+use guard::{guard_deep, nearer_neighbour_guard, silhouette_guard};
+use resolve::Resolver;
+
+/// How a hit's colour is read from its layer (module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub enum Resample {
+    /// The hit pixel's colour.
+    Nearest,
+    /// Depth-aware bilinear interpolation at the hit's sub-pixel position (same layer, same
+    /// surface neighbours only, weights renormalised).
+    #[default]
+    Bilinear,
+}
+
+/// Neighbours farther than this many pixel footprints (at the hit's depth) from the hit
+/// sample's tangent plane are another surface and are not blended.
+pub const SAME_SURFACE_PX: f32 = 1.0;
+
+/// What a target pixel's ray found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HitKind {
+    /// A captured surface of this layer.
+    Hit(u8),
+    /// Nothing: left the reference frustum (environment colour).
+    Miss,
+    /// An occlusion volume of this layer (inpainted).
+    Occlusion(u8),
+}
+
+impl HitKind {
+    /// The layer the answer came from (`None` for a miss).
+    pub fn layer(self) -> Option<u8> {
+        match self {
+            HitKind::Hit(l) | HitKind::Occlusion(l) => Some(l),
+            HitKind::Miss => None,
+        }
+    }
+}
+
+/// A synthesised view.
+#[derive(Clone, Debug)]
+pub struct WarpedView {
+    pub image: Image<Rgb>,
+    /// Per pixel, row-major.
+    pub kinds: Vec<HitKind>,
+    /// Intersection tests per pixel (0 for the mesh warp).
+    pub work: Vec<u32>,
+    pub stats: TraceStats,
+    /// Wall-clock milliseconds of the synthesis (tracing + colour fetch).
+    pub ms: f64,
+}
+
+impl WarpedView {
+    /// Fraction of pixels whose answer came from layer 1 or deeper (the paper's "rays into
+    /// the second layer", measured on the final answer).
+    pub fn frac_deep(&self) -> f64 {
+        let n = self
+            .kinds
+            .iter()
+            .filter(|k| k.layer().is_some_and(|l| l >= 1))
+            .count();
+        n as f64 / self.kinds.len().max(1) as f64
+    }
+
+    /// Fractions of (hits, misses, occlusion volumes).
+    pub fn kind_fractions(&self) -> (f64, f64, f64) {
+        let n = self.kinds.len().max(1) as f64;
+        let c = |f: fn(&HitKind) -> bool| self.kinds.iter().filter(|k| f(k)).count() as f64 / n;
+        (
+            c(|k| matches!(k, HitKind::Hit(_))),
+            c(|k| matches!(k, HitKind::Miss)),
+            c(|k| matches!(k, HitKind::Occlusion(_))),
+        )
+    }
+
+    /// Fig. 6d: hits keep their colour, misses red, occlusion-volume crossings blue.
+    pub fn hit_type_image(&self) -> Image<Rgb> {
+        let data = self
+            .image
+            .data()
+            .iter()
+            .zip(&self.kinds)
+            .map(|(c, k)| match k {
+                HitKind::Hit(_) => *c,
+                HitKind::Miss => Vec3::new(1.0, 0.0, 0.0),
+                HitKind::Occlusion(_) => Vec3::new(0.0, 0.0, 1.0),
+            })
+            .collect();
+        Image::from_vec(self.image.width(), self.image.height(), data).expect("same size")
+    }
+
+    /// Fig. 1c: intersection tests per ray, black = 0, white = `max` (the largest count when
+    /// `None`). Returns the image and the scale used.
+    pub fn heatmap(&self, max: Option<u32>) -> (Image<Rgb>, u32) {
+        let m = max
+            .unwrap_or_else(|| self.work.iter().copied().max().unwrap_or(0))
+            .max(1);
+        let data = self
+            .work
+            .iter()
+            .map(|&w| Vec3::splat((w as f32 / m as f32).min(1.0)))
+            .collect();
+        let img = Image::from_vec(self.image.width(), self.image.height(), data).expect("size");
+        (img, m)
+    }
+
+    /// % of rays whose traversal ran out of its step bound ([`TraceStats::truncated`]; the
+    /// layer-0 guard's DDA included).
+    pub fn pct_truncated(&self) -> f64 {
+        100.0 * self.stats.truncated as f64 / self.stats.rays.max(1) as f64
+    }
+
+    /// Mean intersection tests (box + plane) per ray.
+    pub fn tests_per_ray(&self) -> f64 {
+        let s = &self.stats;
+        (s.box_tests + s.plane_tests) as f64 / s.rays.max(1) as f64
+    }
+
+    /// Mean hierarchy nodes visited per ray (steps for flat structures).
+    pub fn nodes_per_ray(&self) -> f64 {
+        let s = &self.stats;
+        let n = if s.nodes_visited > 0 {
+            s.nodes_visited
+        } else {
+            s.steps
+        };
+        n as f64 / s.rays.max(1) as f64
+    }
+}
+
+/// Traces every pixel-centre ray of `target` with `tracer` (built over `reference`'s layers)
+/// and fetches colours from `reference` with [`Resample::default`].
+pub fn warp_view(tracer: &dyn ScreenTracer, reference: &Reference, target: &Pinhole) -> WarpedView {
+    warp_view_with(tracer, reference, target, &WarpOptions::default())
+}
+
+/// How an occlusion-volume answer is coloured (module docs, "Occlusion-volume fill").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub enum OcclusionFill {
+    /// The colour of the pixel the tracer reports (the crossed pixel).
+    Crossed,
+    /// The nearest background pixel along the ray's epipolar line (Fig. 6e).
+    #[default]
+    NearestBackground,
+}
+
+/// Options of [`warp_view_with`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct WarpOptions {
+    pub resample: Resample,
+    /// Layer-0 guard part (a) (module docs): an answer from layer 1.. for a ray entering the
+    /// reference frustum through a side face behind layer 0 becomes layer 0's occlusion
+    /// volume.
+    pub side_entry_guard: bool,
+    /// Layer-0 guard part (b) (module docs): a hit in layer 1.. is replaced by layer 0's
+    /// thin-shell DDA hit when that comes first (rays slipping through layer-0 cracks).
+    pub dda_recheck: bool,
+    /// Colour of occlusion-volume answers (any layer count).
+    pub fill: OcclusionFill,
+    /// Layer-0 guard part (d) (module docs): a hit in layer 1.. is kept only when the ray
+    /// passed behind a layer-0 silhouette to reach it.
+    pub silhouette_check: bool,
+    /// Layer-0 guard part (e) (module docs): a hit in layer 1.. is rejected when a layer-0
+    /// sample of another surface in its bilinear cell lies between layer 0 and the hit.
+    pub nearer_neighbour_check: bool,
+}
+
+impl WarpOptions {
+    /// Both parts of the layer-0 guard on or off.
+    pub fn with_layer0_guard(self, on: bool) -> Self {
+        Self {
+            side_entry_guard: on,
+            dda_recheck: on,
+            silhouette_check: on,
+            nearer_neighbour_check: on,
+            ..self
+        }
+    }
+}
+
+impl Default for WarpOptions {
+    fn default() -> Self {
+        Self {
+            resample: Resample::default(),
+            side_entry_guard: true,
+            dda_recheck: true,
+            fill: OcclusionFill::default(),
+            silhouette_check: true,
+            nearer_neighbour_check: true,
+        }
+    }
+}
+
+/// Pixels of a row traced before their colours are looked up (module docs, "The per-pixel
+/// loop"); the answers live on the stack (64 x 32 B).
+const WARP_CHUNK: usize = 64;
+
+/// [`warp_view`] with a choice of colour resampling and crack guard.
+pub fn warp_view_with(
+    tracer: &dyn ScreenTracer,
+    reference: &Reference,
+    target: &Pinhole,
+    opts: &WarpOptions,
+) -> WarpedView {
+    let resample = opts.resample;
+    let deep = reference.layers.len() > 1;
+    // The background fill of Fig. 6e, for every layer count (module docs).
+    let fill_bg = opts.fill == OcclusionFill::NearestBackground;
+    let side_guard = opts.side_entry_guard && deep;
+    let silhouette = opts.silhouette_check && deep;
+    let nearer = opts.nearer_neighbour_check && deep;
+    let guard = (opts.dda_recheck && deep)
+        .then(|| {
+            // Never truncated: a segment clipped to the reference image crosses at most
+            // `max(W, H) + 1` pixel columns / rows along its major axis (stride 1), so this
+            // bound lets every re-check march to its end. The stereo default (260, tuned for
+            // atrium) gave up on 0.8% of the classroom's rays at 1600x900.
+            let d = DdaOptions::default();
+            let o = DdaOptions {
+                layers: 1,
+                max_steps: reference.width().max(reference.height()) + 2,
+                ..d
+            };
+            DdaTracer::new(&reference.cube, &reference.layers[..1], &o).ok()
+        })
+        .flatten();
+    let (w, h) = (target.width, target.height);
+    let n = w as usize * h as usize;
+    let mut image = vec![Vec3::ZERO; n];
+    let mut kinds = vec![HitKind::Miss; n];
+    let mut work = vec![0u32; n];
+    let rays = PixelRays::new(target);
+    let resolver = Resolver::new(reference, resample);
+    let start = Instant::now();
+    let stats = image
+        .par_chunks_mut(w as usize)
+        .zip(kinds.par_chunks_mut(w as usize))
+        .zip(work.par_chunks_mut(w as usize))
+        .enumerate()
+        .map(|(y, ((img, kind), wk))| {
+            let mut total = TraceStats::default();
+            let row = rays.row(y as u32);
+            let mut answers = [TraceResult::Miss; WARP_CHUNK];
+            let chunks = img
+                .chunks_mut(WARP_CHUNK)
+                .zip(kind.chunks_mut(WARP_CHUNK))
+                .zip(wk.chunks_mut(WARP_CHUNK));
+            for (c, ((img, kind), wk)) in chunks.enumerate() {
+                let x0 = (c * WARP_CHUNK) as u32;
+                // Pass 1: trace the chunk (and guard the answers).
+                for ((x, wk), answer) in (x0..).zip(wk.iter_mut()).zip(&mut answers) {
+                    let ray = row.ray(x);
+                    let mut s = TraceStats::default();
+                    let mut r = tracer.trace(&ray, &mut s);
+                    if side_guard || guard.is_some() {
+                        r = guard_deep(reference, side_guard, guard.as_ref(), &ray, r, &mut s);
+                    }
+                    if silhouette {
+                        r = silhouette_guard(reference, &ray, r);
+                    }
+                    if nearer {
+                        r = nearer_neighbour_guard(reference, &ray, r);
+                    }
+                    let tests = s.box_tests + s.plane_tests;
+                    *wk = (if tests > 0 { tests } else { s.steps }).min(u32::MAX as u64) as u32;
+                    total += s;
+                    *answer = r;
+                }
+                // Pass 2: colour the answers.
+                for ((x, (img, kind)), &r) in (x0..).zip(img.iter_mut().zip(kind)).zip(&answers) {
+                    (*img, *kind) = resolver.resolve(r);
+                    if let (true, HitKind::Occlusion(l)) = (fill_bg, *kind)
+                        && let TraceResult::OcclusionVolume { pixel, .. } = r
+                    {
+                        let ray = row.ray(x);
+                        if let Some(c) = background_fill(reference, 0, pixel, &ray)
+                            .or_else(|| background_fill(reference, l as u32, pixel, &ray))
+                        {
+                            *img = c;
+                        }
+                    }
+                }
+            }
+            total
+        })
+        .reduce(TraceStats::default, |a, b| a + b);
+    let ms = start.elapsed().as_secs_f64() * 1e3;
+    WarpedView {
+        image: Image::from_vec(w, h, image).expect("camera size is valid"),
+        kinds,
+        work,
+        stats,
+        ms,
+    }
+}
+
+/// The warp's eye ray through each pixel centre of a target pinhole, with the per-warp and
+/// per-row constants hoisted: bit-identical to `target.generate_ray(centre, ..).ray` (the same
+/// operations in the same order), without the ray differentials and the `Option` the warp
+/// does not use. Shared by the warp and `bench`'s trace-only pass (identical rays).
+#[derive(Clone, Copy, Debug)]
+pub struct PixelRays {
+    origin: Vec3,
+    basis: Mat3,
+    width: f32,
+    height: f32,
+    tan_half_x: f32,
+    tan_half_y: f32,
+    shift: Vec2,
+}
+
+/// [`PixelRays`] of one row.
+#[derive(Clone, Copy, Debug)]
+pub struct RowRays<'a> {
+    rays: &'a PixelRays,
+    /// `(ndc_y + shift.y) * tan_half_y` of the row.
+    dir_y: f32,
+}
+
+impl PixelRays {
+    pub fn new(target: &Pinhole) -> Self {
+        Self {
+            origin: target.frame.position,
+            basis: target.frame.basis,
+            width: target.width as f32,
+            height: target.height as f32,
+            tan_half_x: target.tan_half_x(),
+            tan_half_y: target.tan_half_y,
+            shift: target.shift,
+        }
+    }
+
+    /// The rays of row `y`.
+    #[inline]
+    pub fn row(&self, y: u32) -> RowRays<'_> {
+        // Pinhole::camera_dir's y.
+        let ndc_y = 1.0 - 2.0 * (y as f32 + 0.5) / self.height;
+        RowRays {
+            rays: self,
+            dir_y: (ndc_y + self.shift.y) * self.tan_half_y,
+        }
+    }
+}
+
+impl RowRays<'_> {
+    /// The ray through the centre of pixel `x` of the row.
+    #[inline(always)]
+    pub fn ray(&self, x: u32) -> Ray {
+        let p = self.rays;
+        // Pinhole::camera_dir, then generate_ray's normalisation and rotation.
+        let ndc_x = 2.0 * (x as f32 + 0.5) / p.width - 1.0;
+        let d = Vec3::new((ndc_x + p.shift.x) * p.tan_half_x, self.dir_y, -1.0);
+        let len = d.length();
+        Ray::new(p.origin, p.basis * (d / len))
+    }
+}
+
+/// Distance from a tangent plane under which a neighbour at view depth `depth` is the same
+/// surface ([`SAME_SURFACE_PX`] pixel footprints + 0.01% of the depth).
+#[inline]
+pub(super) fn same_surface_tol(reference: &Reference, depth: f32) -> f32 {
+    let footprint = depth * 2.0 * reference.camera.tan_half_y / reference.height() as f32;
+    SAME_SURFACE_PX * footprint + 1e-4 * depth
+}
+
+/// True when sample `i` of `g` is covered and lies on the surface through `p` with normal `n`
+/// (within `tol` of the plane, normals within 60°).
+#[inline]
+pub(super) fn same_surface(
+    g: &parallax_core::GBuffer,
+    i: usize,
+    p: Vec3,
+    n: Vec3,
+    tol: f32,
+) -> bool {
+    g.depth[i].is_finite()
+        && g.depth[i] > 0.0
+        && n.dot(g.normal[i]) > 0.5
+        && n.dot(g.position[i] - p).abs() <= tol
+}
+
+/// Steps of the background search of `background_fill` (pixels along the epipolar line).
+pub const BACKGROUND_SEARCH_PX: u32 = 8;
+
+/// A pixel deeper than the occluder edge by more than this fraction of its depth is
+/// background for `background_fill`.
+const BACKGROUND_REL: f32 = 0.01;
+
+/// Fig. 6e's "nearest background pixel" for an occlusion-volume answer at `pixel` of `layer`
+/// (module docs): the occluder edge depth is the nearer of `pixel` and the next pixel along
+/// the ray's screen direction in the reference; walking back from `pixel` against that
+/// direction one pixel at a time (at most [`BACKGROUND_SEARCH_PX`] steps), the first pixel
+/// that is uncovered or deeper than the edge by [`BACKGROUND_REL`] gives the colour. `None`
+/// when there is none (the caller keeps the crossed pixel's colour).
+fn background_fill(
+    reference: &Reference,
+    layer: u32,
+    pixel: UVec2,
+    ray: &parallax_core::Ray,
+) -> Option<Rgb> {
+    let g = reference.layers.get(layer as usize)?;
+    let colors = reference.colors.get(layer as usize)?;
+    let (w, h) = (g.width(), g.height());
+    if pixel.x >= w || pixel.y >= h {
+        return None;
+    }
+    let seg = reference.cube.clip_ray(ray)?;
+    let d = seg.p1 - seg.p0;
+    let dir = Vec2::new(d.x * w as f32, d.y * h as f32);
+    let len = dir.x.abs().max(dir.y.abs());
+    if !(len > 1e-6 && len.is_finite()) {
+        return None;
+    }
+    // One pixel per step along the major axis.
+    let step = dir / len;
+    let centre = Vec2::new(pixel.x as f32 + 0.5, pixel.y as f32 + 0.5);
+    let at = |p: Vec2| -> Option<usize> {
+        (p.x >= 0.0 && p.y >= 0.0 && p.x < w as f32 && p.y < h as f32)
+            .then(|| g.index(p.x as u32, p.y as u32))
+    };
+    let depth = |i: usize| {
+        let d = g.depth[i];
+        if d.is_finite() && d > 0.0 {
+            d
+        } else {
+            f32::INFINITY
+        }
+    };
+    let mut edge = depth(g.index(pixel.x, pixel.y));
+    if let Some(i) = at(centre + step) {
+        edge = edge.min(depth(i));
+    }
+    if !edge.is_finite() {
+        return None;
+    }
+    let limit = edge * (1.0 + BACKGROUND_REL);
+    for k in 0..=BACKGROUND_SEARCH_PX {
+        let i = at(centre - step * k as f32)?;
+        if depth(i) > limit {
+            let (x, y) = (i as u32 % w, i as u32 / w);
+            return Some(if g.depth[i].is_finite() && g.depth[i] > 0.0 {
+                *colors.get(x, y)
+            } else {
+                reference.background
+            });
+        }
+    }
+    None
+}

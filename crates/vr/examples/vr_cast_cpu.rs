@@ -1,0 +1,110 @@
+//! Thread CPU time of the beam caster vs per-ray BVH traversal on one thread (stable on a
+//! loaded machine: interleaved rounds, best of each).
+//!
+//! `cargo run --release -p parallax-render --example vr_cast_cpu [-- scene eye_w h spp rounds
+//! edges|full|watertight [beam-only]]` (defaults: atrium 540 600 16 5 edges; stereo rig, film
+//! 2 eye_w x h; `scene` a built-in name or a model path, e.g.
+//! `../shared/scenes/sponza_dabrovic/sponza_dabrovic.glb` from the repository root; `edges` =
+//! the set-up kernel with [`SetupExactness::Edges`] (default), `full` = with
+//! [`SetupExactness::Full`], `watertight` = the watertight kernel).
+
+use parallax_bvh::Bvh;
+use parallax_core::cpu_time::{ms_between, thread_cpu_ns};
+use parallax_scene::Scene;
+use parallax_scene::camera::{Camera, CameraOptions, ModelKind};
+use parallax_vr::{
+    CastOptions, Hierarchy, SampleSet, SampleTest, SetupExactness, VisibilityBuffer, cast_opts,
+    trace_per_ray,
+};
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let arg = |i: usize, d: &str| args.get(i).cloned().unwrap_or_else(|| d.to_string());
+    let scene_name = arg(1, "atrium");
+    let eye_w: u32 = arg(2, "540").parse().unwrap();
+    let h: u32 = arg(3, "600").parse().unwrap();
+    let spp: u32 = arg(4, "16").parse().unwrap();
+    let rounds: usize = arg(5, "5").parse().unwrap();
+    let mode = arg(6, "edges");
+    let (test, exactness) = match mode.as_str() {
+        "watertight" => (SampleTest::Watertight, SetupExactness::Full),
+        "full" => (SampleTest::TileSetup, SetupExactness::Full),
+        "edges" | "setup" => (SampleTest::TileSetup, SetupExactness::Edges),
+        m => panic!("unknown mode {m:?}: edges, full or watertight"),
+    };
+    // `beam-only` as the 7th argument skips the per-ray baseline (for instruction counts).
+    let beam_only = arg(7, "") == "beam-only";
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    pool.install(|| {
+        let scene = Scene::load(&scene_name).expect("scene");
+        let bvh = Bvh::build(&scene.mesh);
+        let desc = scene.camera(None).unwrap();
+        let cam = Camera::new(
+            ModelKind::Stereo,
+            &desc,
+            eye_w,
+            h,
+            &CameraOptions::default(),
+        )
+        .unwrap();
+        let set = SampleSet::grid(cam, spp);
+        let hier = Hierarchy::build(&set).unwrap();
+        let opts = CastOptions {
+            test,
+            lanes: 4,
+            exactness,
+        };
+        let mut beam = VisibilityBuffer::new(&set);
+        let mut reference = VisibilityBuffer::new(&set);
+        let (mut best_beam, mut best_ray) = (f64::INFINITY, f64::INFINITY);
+        let mut stats = Default::default();
+        for _ in 0..rounds {
+            let a = thread_cpu_ns();
+            stats = cast_opts(&bvh, &set, &hier, &mut beam, opts);
+            let b = thread_cpu_ns();
+            if !beam_only {
+                trace_per_ray(&bvh, &set, &mut reference);
+            }
+            let c = thread_cpu_ns();
+            best_beam = best_beam.min(ms_between(a, b));
+            best_ray = best_ray.min(ms_between(b, c));
+        }
+        let n = set.ray_count() as f64;
+        println!(
+            "{scene_name} {}x{h} spp {spp} {mode}: beam {best_beam:.1} ms = {:.2} Mrays/s, per-ray \
+             {best_ray:.1} ms = {:.2} Mrays/s, ratio {:.3}x, agreement {:.6} (thread CPU, best of {rounds})",
+            2 * eye_w,
+            n / best_beam / 1e3,
+            n / best_ray / 1e3,
+            best_ray / best_beam,
+            beam.agreement(&reference)
+        );
+        let tris = (stats.tris_all_out + stats.tris_partial + stats.tris_all_in).max(1) as f64;
+        println!(
+            "  set-up triangles: all-out {:.4} partial {:.4} all-in {:.4} of {tris}, packet-triangle tests / ray {:.4}",
+            stats.tris_all_out as f64 / tris,
+            stats.tris_partial as f64 / tris,
+            stats.tris_all_in as f64 / tris,
+            stats.tri_tests as f64 / stats.rays.max(1) as f64
+        );
+        println!(
+            "  last round: block cull {:.1} ms, tile cull + set-up {:.1} ms, sample test {:.1} ms",
+            stats.block_cull.as_secs_f64() * 1e3,
+            stats.tile_cull.as_secs_f64() * 1e3,
+            stats.sample_test.as_secs_f64() * 1e3
+        );
+        let s: parallax_vr::CastStats = stats;
+        println!(
+            "  set-up: {:.3} packet-triangle tests / ray, band (watertight) tests {:.4} of the \
+             ray-triangle tests (edge band {:.4}), winner t tests {:.3} / ray, rescues {}",
+            s.tri_tests as f64 / s.rays.max(1) as f64,
+            s.setup_exact_tests as f64 / s.setup_pair_tests.max(1) as f64,
+            s.setup_edge_band as f64 / s.setup_pair_tests.max(1) as f64,
+            s.setup_final_tests as f64 / s.rays.max(1) as f64,
+            s.setup_rescues
+        );
+    });
+}

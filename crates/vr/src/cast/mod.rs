@@ -1,0 +1,353 @@
+//! The beam-culled ray caster (Hunt et al. 2018, §5.3-5.5): per block, block cull (64 entry
+//! points), then per tile, tile cull (leaf list in near-depth order) and sample testing; parallel
+//! over blocks with rayon, with per-thread scratch (no allocation in the hot loop once the
+//! scratch vectors have grown).
+//!
+//! HVVR runs the culling on the CPU and sample testing on the GPU; here all three stages run on
+//! the CPU threads, block after block.
+
+pub mod intersect;
+pub mod packet;
+pub mod setup;
+
+use std::time::{Duration, Instant};
+
+use crate::beam::PreparedBeam;
+use crate::beam::{BLOCK_ENTRIES, CullScratch, SimdBeam, block_cull, tile_cull};
+use parallax_bvh::Bvh;
+use rayon::prelude::*;
+
+use crate::cast::intersect::{LeafBox, LeafGroup, group_leaves, test_tile};
+use crate::cast::setup::{
+    SampleTest, SetupCounts, SetupExactness, SetupWork, TileTris, setup_tile, shared_origin,
+    test_tile_setup,
+};
+use crate::{Hierarchy, SampleSet, VisibilityBuffer};
+
+/// Per-stage times (summed over threads: CPU time, not wall time) and work counts of a cast.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CastStats {
+    pub block_cull: Duration,
+    pub tile_cull: Duration,
+    pub sample_test: Duration,
+    /// Wall time of the whole cast.
+    pub wall: Duration,
+    pub blocks: u64,
+    pub tiles: u64,
+    /// Entry points handed from block cull to tile cull (summed over blocks).
+    pub entry_points: u64,
+    /// Leaves in the tiles' lists (summed over tiles).
+    pub tile_leaves: u64,
+    /// Four-leaf-box slab tests of the sample stage.
+    pub group_tests: u64,
+    /// Leaf (4-triangle block) tests of the sample stage.
+    pub leaf_tests: u64,
+    /// Valid subsample rays cast.
+    pub rays: u64,
+    /// Tiles run through the set-up kernel ([`SampleTest::TileSetup`], shared origin).
+    pub setup_tiles: u64,
+    /// Packet-triangle tests of the set-up kernel (one per packet and set-up triangle reached).
+    pub tri_tests: u64,
+    /// Corner classification of the set-up tiles' triangles (§5.5): dropped (all-out or
+    /// edge-on), partial, all-in.
+    pub tris_all_out: u64,
+    pub tris_partial: u64,
+    pub tris_all_in: u64,
+    /// Ray-triangle tests of the set-up kernel (valid rays of its packet-triangle tests).
+    pub setup_pair_tests: u64,
+    /// Watertight tests the set-up kernel ran inside its uncertainty band (edge value within
+    /// the bound, or `1/t` within the depth band of the best so far), per ray and triangle.
+    pub setup_exact_tests: u64,
+    /// Watertight tests of the set-up kernel's winners (one per hit ray whose winner was not
+    /// already decided exactly), for their bit-exact `t`.
+    pub setup_final_tests: u64,
+    /// Rays re-decided by an exact scan of the tile's list because the watertight test
+    /// contradicted a certain decision (a bound violation; expected 0).
+    pub setup_rescues: u64,
+    /// Of `setup_exact_tests`: those for an edge value within the band (the rest are depth
+    /// comparisons within the depth band, including the best's own watertight `t`).
+    pub setup_edge_band: u64,
+}
+
+/// The caster's sample-test choice: the kernel and the SIMD width of its ray packets (`4` SSE,
+/// `8` AVX2 when detected (else 4), `1` one ray at a time — watertight kernel only; the set-up
+/// kernel treats `1` as `4`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CastOptions {
+    pub test: SampleTest,
+    pub lanes: usize,
+    /// How exactly the set-up kernel reproduces per-ray traversal (ignored by the watertight
+    /// kernel, which is always exact).
+    pub exactness: SetupExactness,
+}
+
+impl Default for CastOptions {
+    /// The set-up kernel on 4-lane SSE packets (the 8-lane AVX2 build of the same kernel
+    /// measured no faster: LLVM leaves most of its `[f32; 8]` lane loops scalar; module docs of
+    /// `cast/setup/mod.rs`).
+    fn default() -> Self {
+        CastOptions {
+            test: SampleTest::TileSetup,
+            lanes: 4,
+            exactness: SetupExactness::Edges,
+        }
+    }
+}
+
+/// Shared output pointers (each sample is written by exactly one tile).
+#[derive(Clone, Copy)]
+struct OutPtr {
+    prim: *mut u32,
+    t: *mut f32,
+}
+// SAFETY: the hierarchy's `order` is a permutation (checked in `cast`), so tiles write disjoint
+// entries.
+unsafe impl Send for OutPtr {}
+unsafe impl Sync for OutPtr {}
+
+/// The magnitude bound of the beam tests' rounding slack: the scene's and the camera's
+/// coordinates.
+fn scene_scale(bvh: &Bvh, h: &Hierarchy) -> f32 {
+    let b = bvh.bounds();
+    let mut m = if b.is_empty() {
+        0.0
+    } else {
+        b.min.abs().max(b.max.abs()).max_element()
+    };
+    for blk in &h.blocks {
+        if !blk.beam.everything && !blk.beam.origin.is_empty() {
+            let o = blk.beam.origin;
+            m = m.max(o.min.abs().max(o.max.abs()).max_element());
+        }
+    }
+    m
+}
+
+/// Casts every subsample ray of `set` (tiles and blocks of `hierarchy`, built for `set`) and
+/// writes the closest hits to `out` with the default [`CastOptions`]: for each subsample the
+/// closest triangle of [`crate::trace_per_ray`] up to depth ties within float tolerance, and
+/// its `t` within ~1e-5 relative (the set-up kernel with [`SetupExactness::Edges`], module
+/// docs of `cast/setup/mod.rs`; [`SetupExactness::Full`] is bit-identical). Panics if `hierarchy` or `out` was made for another set (a
+/// programming error).
+pub fn cast(
+    bvh: &Bvh,
+    set: &SampleSet,
+    hierarchy: &Hierarchy,
+    out: &mut VisibilityBuffer,
+) -> CastStats {
+    cast_opts(bvh, set, hierarchy, out, CastOptions::default())
+}
+
+/// [`cast`] with the exact watertight sample test ([`SampleTest::Watertight`]: the same triangle
+/// and `t`, bit for bit, as [`crate::trace_per_ray`], module docs of `cast/intersect.rs`) and the
+/// choice of its kernel: `lanes = 4` tests four rays at a time on
+/// SSE (`packet.rs`), `8` eight rays at a time on AVX2 (four without AVX2), `1` one
+/// ray at a time against groups of four leaf boxes (`intersect.rs`); all give the same buffer.
+/// Measured (vr_speed, atrium 1080 x 600, spp 8): the 8-lane kernel is *slower* than the
+/// 4-lane one (speed-up over per-ray 1.7-2.0x vs 2.3-2.5x) — LLVM leaves some of the kernel's
+/// closures outside the `avx2` target-feature function, so they run on `[f32; 8]` arrays in
+/// scalar/SSE code; not yet fixed.
+pub fn cast_with(
+    bvh: &Bvh,
+    set: &SampleSet,
+    hierarchy: &Hierarchy,
+    out: &mut VisibilityBuffer,
+    lanes: usize,
+) -> CastStats {
+    cast_opts(
+        bvh,
+        set,
+        hierarchy,
+        out,
+        CastOptions {
+            test: SampleTest::Watertight,
+            lanes,
+            exactness: SetupExactness::Full,
+        },
+    )
+}
+
+/// [`cast`] with explicit [`CastOptions`].
+pub fn cast_opts(
+    bvh: &Bvh,
+    set: &SampleSet,
+    hierarchy: &Hierarchy,
+    out: &mut VisibilityBuffer,
+    opts: CastOptions,
+) -> CastStats {
+    let lanes = opts.lanes;
+    let wall = Instant::now();
+    assert!(
+        hierarchy.sample_count == set.samples.len()
+            && hierarchy.spp == set.spp
+            && hierarchy.order.len() == set.samples.len(),
+        "hierarchy built for another sample set"
+    );
+    assert!(
+        out.prim.len() == set.ray_count() && out.t.len() == set.ray_count() && out.spp == set.spp,
+        "visibility buffer made for another sample set"
+    );
+    out.prim.fill(parallax_core::NO_ID);
+    out.t.fill(f32::INFINITY);
+    let scale = scene_scale(bvh, hierarchy);
+    let ptr = OutPtr {
+        prim: out.prim.as_mut_ptr(),
+        t: out.t.as_mut_ptr(),
+    };
+    let blocks_ = bvh.blocks();
+    let prim_ids = bvh.prim_ids();
+    let tally = hierarchy.blocks.par_iter().map_init(
+        || {
+            (
+                CullScratch::default(),
+                Vec::<LeafGroup>::new(),
+                Vec::<LeafBox>::new(),
+                TileTris::default(),
+            )
+        },
+        |(scratch, groups, boxes, tt), block| {
+            // Capture the whole (Send) struct, not its raw-pointer fields.
+            #[allow(clippy::redundant_locals)]
+            let ptr = ptr;
+            let mut tally = Tally::default();
+            if block.rays == 0 {
+                return tally;
+            }
+            let t0 = Instant::now();
+            let bb = PreparedBeam::new(&block.beam, scale);
+            block_cull(bvh, &SimdBeam::new(&bb), BLOCK_ENTRIES, scratch);
+            let entries = std::mem::take(&mut scratch.entries);
+            let t1 = Instant::now();
+            tally.block_ns = (t1 - t0).as_nanos() as u64;
+            tally.entry_points = entries.len() as u64;
+            tt.counts = Default::default();
+            let tiles = &hierarchy.tiles
+                [block.first_tile as usize..(block.first_tile + block.tile_count) as usize];
+            for tile in tiles {
+                if tile.rays == 0 {
+                    continue;
+                }
+                let a = Instant::now();
+                let tb = PreparedBeam::new(&tile.beam, scale);
+                tile_cull(bvh, &SimdBeam::new(&tb), &entries, scratch);
+                let samples =
+                    &hierarchy.order[tile.start as usize..(tile.start + tile.len) as usize];
+                let origin = match opts.test {
+                    SampleTest::TileSetup => shared_origin(&tile.beam),
+                    SampleTest::Watertight => None,
+                };
+                if let Some(o) = origin {
+                    let lazy = opts.exactness == SetupExactness::Edges;
+                    setup_tile(blocks_, &scratch.leaves, &tile.beam, o, lazy, tt);
+                    let b = Instant::now();
+                    // SAFETY: as below.
+                    let w = unsafe {
+                        test_tile_setup(
+                            set,
+                            blocks_,
+                            prim_ids,
+                            samples,
+                            tt,
+                            &tile.beam,
+                            scale,
+                            lanes,
+                            opts.exactness,
+                            ptr.prim,
+                            ptr.t,
+                        )
+                    };
+                    let c = Instant::now();
+                    tally.tile_ns += (b - a).as_nanos() as u64;
+                    tally.test_ns += (c - b).as_nanos() as u64;
+                    tally.tile_leaves += scratch.leaves.len() as u64;
+                    tally.rays += w.rays;
+                    tally.setup.add(&w);
+                    tally.setup_tiles += 1;
+                    continue;
+                }
+                group_leaves(bvh, &scratch.leaves, groups, boxes);
+                let b = Instant::now();
+                // SAFETY: `order` is a permutation of the samples (built by `Hierarchy::build`,
+                // sizes checked above), so this tile's entries are written by no other tile.
+                let w = unsafe {
+                    test_tile(
+                        set, blocks_, prim_ids, samples, groups, boxes, &tb, scale, lanes,
+                        ptr.prim, ptr.t,
+                    )
+                };
+                let c = Instant::now();
+                tally.tile_ns += (b - a).as_nanos() as u64;
+                tally.test_ns += (c - b).as_nanos() as u64;
+                tally.tile_leaves += scratch.leaves.len() as u64;
+                tally.leaf_tests += w.leaf_tests;
+                tally.group_tests += w.group_tests;
+                tally.rays += w.rays;
+            }
+            scratch.entries = entries;
+            tally.tiles = tiles.len() as u64;
+            tally.corners = tt.counts;
+            tally
+        },
+    );
+    let t = tally.reduce(Tally::default, Tally::sum);
+    CastStats {
+        block_cull: Duration::from_nanos(t.block_ns),
+        tile_cull: Duration::from_nanos(t.tile_ns),
+        sample_test: Duration::from_nanos(t.test_ns),
+        wall: wall.elapsed(),
+        blocks: hierarchy.blocks.len() as u64,
+        tiles: t.tiles,
+        entry_points: t.entry_points,
+        tile_leaves: t.tile_leaves,
+        leaf_tests: t.leaf_tests,
+        group_tests: t.group_tests,
+        rays: t.rays,
+        setup_tiles: t.setup_tiles,
+        tri_tests: t.setup.tri_tests,
+        tris_all_out: t.corners.all_out,
+        tris_partial: t.corners.partial,
+        tris_all_in: t.corners.all_in,
+        setup_pair_tests: t.setup.pair_tests,
+        setup_exact_tests: t.setup.exact_tests,
+        setup_final_tests: t.setup.final_tests,
+        setup_rescues: t.setup.rescues,
+        setup_edge_band: t.setup.edge_band,
+    }
+}
+
+/// One block's counters in [`cast_opts`], summed over blocks (rayon map / reduce).
+#[derive(Clone, Copy, Default)]
+struct Tally {
+    block_ns: u64,
+    tile_ns: u64,
+    test_ns: u64,
+    tiles: u64,
+    entry_points: u64,
+    tile_leaves: u64,
+    leaf_tests: u64,
+    group_tests: u64,
+    rays: u64,
+    setup_tiles: u64,
+    setup: SetupWork,
+    corners: SetupCounts,
+}
+
+impl Tally {
+    fn sum(mut self, o: Self) -> Self {
+        self.block_ns += o.block_ns;
+        self.tile_ns += o.tile_ns;
+        self.test_ns += o.test_ns;
+        self.tiles += o.tiles;
+        self.entry_points += o.entry_points;
+        self.tile_leaves += o.tile_leaves;
+        self.leaf_tests += o.leaf_tests;
+        self.group_tests += o.group_tests;
+        self.rays += o.rays;
+        self.setup_tiles += o.setup_tiles;
+        self.setup.add(&o.setup);
+        self.corners.all_out += o.corners.all_out;
+        self.corners.partial += o.corners.partial;
+        self.corners.all_in += o.corners.all_in;
+        self
+    }
+}

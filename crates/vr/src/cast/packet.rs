@@ -1,0 +1,634 @@
+//! Sample testing four subsample rays at a time (Hunt et al. 2018, §5.5, "threads are mapped 1:1
+//! with pixels or subpixels": SIMD lanes over rays instead of GPU threads).
+//!
+//! A packet is four (SSE, glam `Vec4`) or eight (AVX, behind runtime detection) consecutive
+//! subsample rays of a tile; the kernel is written once over the [`Lanes`] trait. Rays are generated in SIMD for the
+//! pinhole and stereo models (the f32 operations of `Pinhole::generate_ray`, lane by lane:
+//! bit-identical rays) and per lane otherwise. If the four rays share the permutation of the
+//! watertight test (dominant axis and its sign, Woop et al. 2013 §3) — all but a few packets on
+//! the diagonals of the image — each triangle is tested against the four rays with the exact f32
+//! operations of `WatertightRay::intersect_within` per lane (vertex coordinates splatted, ray
+//! constants per lane; exactly-zero edge functions fall back to the scalar test), so every hit
+//! equals the per-ray BVH answer. Otherwise the packet's rays take the one-ray path
+//! ([`crate::cast::intersect`]).
+//!
+//! Per leaf (near-depth order), the four rays first run the robust slab test of the BVH on the
+//! leaf's box (Ize 2013 far scaling; lanes already holding a closer hit skip it), and the packet
+//! stops once every ray has a hit nearer than the next leaf's near depth along the beam axis.
+
+use std::ops::{Add, Div, Mul, Sub};
+
+use crate::beam::PreparedBeam;
+use glam::{BVec4A, Vec2, Vec3, Vec4};
+use parallax_bvh::Tri4;
+use parallax_bvh::node::{leaf_count, leaf_first};
+use parallax_core::Ray;
+use parallax_core::math::{ROBUST_FAR_SCALE, WatertightRay};
+use parallax_scene::camera::{Camera, Pinhole};
+
+use crate::SampleSet;
+use crate::cast::intersect::LeafBox;
+pub(crate) use wide::F8;
+
+/// A vector of `N` f32 lanes: the operations the packet kernel needs, each lane rounding
+/// exactly like scalar f32 (no FMA).
+pub trait Lanes:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self>
+{
+    const N: usize;
+    type M: Copy;
+    fn splat(x: f32) -> Self;
+    fn from_fn(f: impl FnMut(usize) -> f32) -> Self;
+    fn get(self, i: usize) -> f32;
+    fn sqrt(self) -> Self;
+    fn lt(self, o: Self) -> Self::M;
+    fn gt(self, o: Self) -> Self::M;
+    fn le(self, o: Self) -> Self::M;
+    fn ge(self, o: Self) -> Self::M;
+    /// Lane minimum (`minps`: the second operand when either is NaN).
+    fn min(self, o: Self) -> Self;
+    /// Lane-wise AND of two masks.
+    fn and(a: Self::M, b: Self::M) -> Self::M;
+    fn eq(self, o: Self) -> Self::M;
+    /// Unordered not-equal (true on NaN), as `cmpneqps`.
+    fn ne(self, o: Self) -> Self::M;
+    fn bits(m: Self::M) -> u32;
+    fn select(m: Self::M, a: Self, b: Self) -> Self;
+}
+
+impl Lanes for Vec4 {
+    const N: usize = 4;
+    type M = BVec4A;
+    #[inline(always)]
+    fn splat(x: f32) -> Self {
+        Vec4::splat(x)
+    }
+    #[inline(always)]
+    fn from_fn(mut f: impl FnMut(usize) -> f32) -> Self {
+        Vec4::new(f(0), f(1), f(2), f(3))
+    }
+    #[inline(always)]
+    fn get(self, i: usize) -> f32 {
+        self[i]
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        Vec4::from_array(self.to_array().map(f32::sqrt))
+    }
+    #[inline(always)]
+    fn lt(self, o: Self) -> BVec4A {
+        self.cmplt(o)
+    }
+    #[inline(always)]
+    fn gt(self, o: Self) -> BVec4A {
+        self.cmpgt(o)
+    }
+    #[inline(always)]
+    fn le(self, o: Self) -> BVec4A {
+        self.cmple(o)
+    }
+    #[inline(always)]
+    fn ge(self, o: Self) -> BVec4A {
+        self.cmpge(o)
+    }
+    #[inline(always)]
+    fn min(self, o: Self) -> Self {
+        Vec4::select(self.cmplt(o), self, o)
+    }
+    #[inline(always)]
+    fn and(a: BVec4A, b: BVec4A) -> BVec4A {
+        a & b
+    }
+    #[inline(always)]
+    fn eq(self, o: Self) -> BVec4A {
+        self.cmpeq(o)
+    }
+    #[inline(always)]
+    fn ne(self, o: Self) -> BVec4A {
+        self.cmpne(o)
+    }
+    #[inline(always)]
+    fn bits(m: BVec4A) -> u32 {
+        m.bitmask()
+    }
+    #[inline(always)]
+    fn select(m: BVec4A, a: Self, b: Self) -> Self {
+        Vec4::select(m, a, b)
+    }
+}
+
+mod wide {
+    //! Eight lanes as plain `[f32; 8]` loops. They are only instantiated inside the
+    //! `#[target_feature(enable = "avx2")]` entry point, where LLVM turns each loop into one AVX
+    //! instruction (`vaddps`, `vcmpps`, `vblendvps`, `vmovmskps`, `vsqrtps`, ...). Plain loops
+    //! rather than `std::arch` intrinsics: intrinsics cannot be inlined into the kernel's
+    //! closures, which have no target features of their own. Lane arithmetic is IEEE f32 either
+    //! way (LLVM never contracts to FMA without fast-math).
+    use std::ops::{Add, Div, Mul, Sub};
+
+    #[derive(Clone, Copy)]
+    #[repr(C, align(32))]
+    pub struct F8(pub [f32; 8]);
+
+    #[derive(Clone, Copy)]
+    #[repr(C, align(32))]
+    pub struct M8(pub [u32; 8]);
+
+    macro_rules! binop {
+        ($tr:ident, $f:ident, $op:tt) => {
+            impl $tr for F8 {
+                type Output = F8;
+                #[inline(always)]
+                fn $f(self, o: F8) -> F8 {
+                    let mut r = [0.0f32; 8];
+                    for i in 0..8 {
+                        r[i] = self.0[i] $op o.0[i];
+                    }
+                    F8(r)
+                }
+            }
+        };
+    }
+    binop!(Add, add, +);
+    binop!(Sub, sub, -);
+    binop!(Mul, mul, *);
+    binop!(Div, div, /);
+
+    macro_rules! cmp {
+        ($f:ident, $e:expr) => {
+            #[inline(always)]
+            fn $f(self, o: Self) -> M8 {
+                let mut r = [0u32; 8];
+                for i in 0..8 {
+                    let f: fn(f32, f32) -> bool = $e;
+                    r[i] = if f(self.0[i], o.0[i]) { u32::MAX } else { 0 };
+                }
+                M8(r)
+            }
+        };
+    }
+
+    impl super::Lanes for F8 {
+        const N: usize = 8;
+        type M = M8;
+        #[inline(always)]
+        fn splat(x: f32) -> Self {
+            F8([x; 8])
+        }
+        #[inline(always)]
+        fn from_fn(mut f: impl FnMut(usize) -> f32) -> Self {
+            F8([f(0), f(1), f(2), f(3), f(4), f(5), f(6), f(7)])
+        }
+        #[inline(always)]
+        fn get(self, i: usize) -> f32 {
+            self.0[i]
+        }
+        #[inline(always)]
+        fn sqrt(self) -> Self {
+            F8(self.0.map(f32::sqrt))
+        }
+        cmp!(lt, |a, b| a < b);
+        cmp!(gt, |a, b| a > b);
+        cmp!(le, |a, b| a <= b);
+        cmp!(ge, |a, b| a >= b);
+        #[inline(always)]
+        fn min(self, o: Self) -> Self {
+            let mut r = [0.0f32; 8];
+            for i in 0..8 {
+                r[i] = if self.0[i] < o.0[i] {
+                    self.0[i]
+                } else {
+                    o.0[i]
+                };
+            }
+            F8(r)
+        }
+        #[inline(always)]
+        fn and(a: M8, b: M8) -> M8 {
+            let mut r = [0u32; 8];
+            for i in 0..8 {
+                r[i] = a.0[i] & b.0[i];
+            }
+            M8(r)
+        }
+        cmp!(eq, |a, b| a == b);
+        cmp!(ne, |a, b| a != b);
+        #[inline(always)]
+        fn bits(m: M8) -> u32 {
+            let mut b = 0;
+            for i in 0..8 {
+                b |= (m.0[i] >> 31) << i;
+            }
+            b
+        }
+        #[inline(always)]
+        #[allow(clippy::needless_range_loop)]
+        fn select(m: M8, a: Self, b: Self) -> Self {
+            let mut r = [0.0f32; 8];
+            for i in 0..8 {
+                r[i] = if m.0[i] != 0 { a.0[i] } else { b.0[i] };
+            }
+            F8(r)
+        }
+    }
+}
+
+/// `a > b ? a : b` per lane (NaN in `a` gives `b`).
+#[inline(always)]
+pub(super) fn max_or_rhs<L: Lanes>(a: L, b: L) -> L {
+    L::select(a.gt(b), a, b)
+}
+
+/// `a < b ? a : b` per lane (NaN in `a` gives `b`).
+#[inline(always)]
+pub(super) fn min_or_rhs<L: Lanes>(a: L, b: L) -> L {
+    L::select(a.lt(b), a, b)
+}
+
+/// Up to eight rays in SoA lanes.
+#[derive(Clone, Copy)]
+pub struct RaysN<L> {
+    pub o: [L; 3],
+    pub d: [L; 3],
+    /// Lanes holding a valid ray.
+    pub valid: u32,
+}
+
+impl<L: Lanes> RaysN<L> {
+    #[inline(always)]
+    pub fn lane(&self, l: usize) -> Ray {
+        Ray::new(
+            Vec3::new(self.o[0].get(l), self.o[1].get(l), self.o[2].get(l)),
+            Vec3::new(self.d[0].get(l), self.d[1].get(l), self.d[2].get(l)),
+        )
+    }
+}
+
+/// `Pinhole::generate_ray` on `N` film positions (lane-wise the same f32 operations:
+/// `camera_dir`, `Vec3::length`, `d / len`, `Mat3 * Vec3`).
+#[inline(always)]
+fn pinhole_n<L: Lanes>(p: &Pinhole, fx: L, fy: L) -> ([L; 3], [L; 3]) {
+    let w = L::splat(p.width as f32);
+    let h = L::splat(p.height as f32);
+    let one = L::splat(1.0);
+    let ndc_x = L::splat(2.0) * fx / w - one;
+    let ndc_y = one - L::splat(2.0) * fy / h;
+    let x = (ndc_x + L::splat(p.shift.x)) * L::splat(p.tan_half_x());
+    let y = (ndc_y + L::splat(p.shift.y)) * L::splat(p.tan_half_y);
+    let z = L::splat(-1.0);
+    let len = (x * x + y * y + z * z).sqrt();
+    let (x, y, z) = (x / len, y / len, z / len);
+    let m = &p.frame.basis;
+    let col = |c: Vec3, i: usize| L::splat(c[i]);
+    let d = [0, 1, 2].map(|i| col(m.x_axis, i) * x + col(m.y_axis, i) * y + col(m.z_axis, i) * z);
+    let o = p.frame.position;
+    ([L::splat(o.x), L::splat(o.y), L::splat(o.z)], d)
+}
+
+/// The subsample rays `(sample, k)` of `pairs` (up to `L::N`) into lanes.
+#[inline(always)]
+pub(crate) fn gen_n<L: Lanes>(set: &SampleSet, pairs: &[(u32, u32)]) -> RaysN<L> {
+    let n = pairs.len();
+    let mut film = [Vec2::ZERO; 8];
+    for (l, &(i, k)) in pairs.iter().enumerate() {
+        let s = &set.samples[i as usize];
+        film[l] = s.film + set.offsets[k as usize] * s.footprint;
+    }
+    let f0 = film[0];
+    for f in film.iter_mut().skip(n) {
+        *f = f0;
+    }
+    let full = (1u32 << n) - 1;
+    let fx = L::from_fn(|l| film[l].x);
+    let fy = L::from_fn(|l| film[l].y);
+    match &set.camera {
+        Camera::Pinhole(p) => {
+            let (o, d) = pinhole_n(p, fx, fy);
+            return RaysN { o, d, valid: full };
+        }
+        Camera::Stereo(rig) => {
+            let w = rig.eye_width() as f32;
+            let inside = film[..n].iter().all(|f| f.x >= 0.0 && f.x <= 2.0 * w);
+            let left = film[..n].iter().all(|f| f.x < w);
+            let right = film[..n].iter().all(|f| f.x >= w);
+            if inside && (left || right) {
+                let (p, fx) = if left {
+                    (&rig.eyes[0], fx)
+                } else {
+                    (&rig.eyes[1], fx - L::splat(w))
+                };
+                let (o, d) = pinhole_n(p, fx, fy);
+                return RaysN { o, d, valid: full };
+            }
+        }
+        _ => {}
+    }
+    let mut rays = [None::<Ray>; 8];
+    let mut valid = 0;
+    for (l, &(i, k)) in pairs.iter().enumerate() {
+        rays[l] = set.fast_subsample_ray(i as usize, k as usize);
+        valid |= (rays[l].is_some() as u32) << l;
+    }
+    let comp = |a: usize, origin: bool| {
+        L::from_fn(|l| rays[l].map_or(0.0, |r| if origin { r.origin[a] } else { r.dir[a] }))
+    };
+    RaysN {
+        o: [comp(0, true), comp(1, true), comp(2, true)],
+        d: [comp(0, false), comp(1, false), comp(2, false)],
+        valid,
+    }
+}
+
+/// The axis permutation of `WatertightRay::new`: dominant axis `kz`, `kx, ky` swapped when
+/// `d[kz] < 0`.
+#[inline(always)]
+pub(crate) fn permutation(d: Vec3) -> (usize, usize, usize) {
+    let a = d.abs();
+    let kz = if a.x > a.y {
+        if a.x > a.z { 0 } else { 2 }
+    } else if a.y > a.z {
+        1
+    } else {
+        2
+    };
+    let kx = (kz + 1) % 3;
+    let ky = (kx + 1) % 3;
+    if d[kz] < 0.0 {
+        (ky, kx, kz)
+    } else {
+        (kx, ky, kz)
+    }
+}
+
+/// A vertex (lane `ln` of a [`Tri4`] vertex row) in each lane's sheared ray frame:
+/// `a = p - o; (a[kx] - sx a[kz], a[ky] - sy a[kz], sz a[kz])` (Woop et al. 2013, §3).
+#[inline(always)]
+fn project<L: Lanes>(
+    p: &[Vec4; 3],
+    ln: usize,
+    (kx, ky, kz): (usize, usize, usize),
+    (okx, oky, okz): (L, L, L),
+    (sx, sy, sz): (L, L, L),
+) -> (L, L, L) {
+    let az = L::splat(p[kz][ln]) - okz;
+    let x = (L::splat(p[kx][ln]) - okx) - sx * az;
+    let y = (L::splat(p[ky][ln]) - oky) - sy * az;
+    (x, y, sz * az)
+}
+
+/// Result of a packet: per lane the closest `(t, index in Bvh::triangles)` (`u32::MAX` = none).
+#[derive(Clone, Copy, Debug)]
+pub struct ClosestN {
+    pub t: [f32; 8],
+    pub tri: [u32; 8],
+}
+
+/// Work counters of the packet kernel.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PacketWork {
+    pub box_tests: u64,
+    pub tri_tests: u64,
+}
+
+/// Tests the packet against the near-sorted `leaves`; `None` when the rays do not share one
+/// watertight permutation (the caller then takes the one-ray path).
+#[inline(always)]
+fn closest_n<L: Lanes>(
+    rays: &RaysN<L>,
+    blocks: &[Tri4],
+    leaves: &[LeafBox],
+    beam: &PreparedBeam,
+    slack: f32,
+    work: &mut PacketWork,
+) -> Option<ClosestN> {
+    // Per-lane watertight set-up (Woop et al. 2013, §3, as `WatertightRay::new`); all lanes
+    // must share (kx, ky, kz). The shear constants are divided lane-wise (the same IEEE
+    // divisions); a scalar `WatertightRay` is only built for the exact-fallback lanes.
+    let valid = rays.valid;
+    let mut out = ClosestN {
+        t: [f32::INFINITY; 8],
+        tri: [u32::MAX; 8],
+    };
+    let mut perm = None;
+    for l in 0..L::N {
+        if valid >> l & 1 == 0 {
+            continue;
+        }
+        let ray = rays.lane(l);
+        // The packet kernel assumes `Ray::new`'s interval (0, inf); anything else takes the
+        // one-ray path.
+        if !(ray.is_valid() && ray.t_min == 0.0 && ray.t_max == f32::INFINITY) {
+            return None;
+        }
+        let p = permutation(ray.dir);
+        if *perm.get_or_insert(p) != p {
+            return None;
+        }
+    }
+    let Some((kx, ky, kz)) = perm else {
+        return Some(out);
+    };
+    let one = L::splat(1.0);
+    let zero = L::splat(0.0);
+    let dkz = rays.d[kz];
+    let sx = rays.d[kx] / dkz;
+    let sy = rays.d[ky] / dkz;
+    let sz = one / dkz;
+    let t_min = zero;
+    let (okx, oky, okz) = (rays.o[kx], rays.o[ky], rays.o[kz]);
+    let inv = [one / rays.d[0], one / rays.d[1], one / rays.d[2]];
+    let neg = [inv[0].lt(zero), inv[1].lt(zero), inv[2].lt(zero)];
+    let a = beam.axis;
+    let (oa, da) = (rays.o[a], rays.d[a]);
+    let s = L::splat(beam.sign);
+    let ordered = !beam.everything;
+    // Per lane: the slab limit (closest t so far) and the triangle limit (next float above it).
+    let mut box_lim = L::splat(f32::INFINITY);
+    let mut tri_lim = L::splat(f32::INFINITY);
+    let mut exit_depth = f32::INFINITY;
+    let mut hit_lanes = 0u32;
+    for lb in leaves {
+        if ordered && hit_lanes == valid && lb.near > exit_depth + slack {
+            break;
+        }
+        work.box_tests += 1;
+        let b = &lb.bounds;
+        let slab = |lo: f32, hi: f32, ax: usize| {
+            let t0 = (L::splat(lo) - rays.o[ax]) * inv[ax];
+            let t1 = (L::splat(hi) - rays.o[ax]) * inv[ax];
+            (L::select(neg[ax], t1, t0), L::select(neg[ax], t0, t1))
+        };
+        let (tnx, tfx) = slab(b.min.x, b.max.x, 0);
+        let (tny, tfy) = slab(b.min.y, b.max.y, 1);
+        let (tnz, tfz) = slab(b.min.z, b.max.z, 2);
+        let t_near = max_or_rhs(tnz, max_or_rhs(tny, max_or_rhs(tnx, t_min)));
+        let t_far = min_or_rhs(tfz, min_or_rhs(tfy, min_or_rhs(tfx, box_lim)));
+        let m = L::bits(t_near.le(t_far * L::splat(ROBUST_FAR_SCALE))) & valid;
+        if m == 0 {
+            continue;
+        }
+        let (first, count) = (leaf_first(lb.leaf), leaf_count(lb.leaf));
+        let mut changed = false;
+        for j in 0..count {
+            let blk = &blocks[(first + j / 4) as usize];
+            let ln = (j % 4) as usize;
+            let tri = blk.tri[ln];
+            work.tri_tests += 1;
+            let proj =
+                |v: usize| project(&blk.p[v], ln, (kx, ky, kz), (okx, oky, okz), (sx, sy, sz));
+            let (ax, ay, az) = proj(0);
+            let (bx, by, bz) = proj(1);
+            let (cx, cy, cz) = proj(2);
+            let u = cx * by - cy * bx;
+            let v = ax * cy - ay * cx;
+            let w = bx * ay - by * ax;
+            let exact = (L::bits(u.eq(zero)) | L::bits(v.eq(zero)) | L::bits(w.eq(zero))) & m;
+            let negm = L::bits(u.lt(zero)) | L::bits(v.lt(zero)) | L::bits(w.lt(zero));
+            let posm = L::bits(u.gt(zero)) | L::bits(v.gt(zero)) | L::bits(w.gt(zero));
+            let det = u + v + w;
+            let t_scaled = u * az + v * bz + w * cz;
+            let t = t_scaled * (one / det);
+            let ok = !(negm & posm);
+            let nz = L::bits(det.ne(zero));
+            let in_range = L::bits(t.gt(t_min)) & L::bits(t.lt(tri_lim));
+            let hit = ok & nz & in_range & m & !exact;
+            let mut offer = |l: usize, tl: f32| {
+                if out.tri[l] == u32::MAX || tl < out.t[l] || (tl == out.t[l] && tri < out.tri[l]) {
+                    out.t[l] = tl;
+                    out.tri[l] = tri;
+                    changed = true;
+                }
+            };
+            let mut hm = hit;
+            while hm != 0 {
+                let l = hm.trailing_zeros() as usize;
+                hm &= hm - 1;
+                offer(l, t.get(l));
+            }
+            let mut em = exact;
+            while em != 0 {
+                let l = em.trailing_zeros() as usize;
+                em &= em - 1;
+                let wt = WatertightRay::new(&rays.lane(l));
+                let vtx = |q: usize| blk.vertex(ln, q);
+                if let Some(hh) = wt.intersect_within(vtx(0), vtx(1), vtx(2), tri_lim.get(l)) {
+                    offer(l, hh.t);
+                }
+            }
+            if changed {
+                tri_lim = L::from_fn(|l| {
+                    if out.tri[l] != u32::MAX {
+                        out.t[l].next_up()
+                    } else {
+                        f32::INFINITY
+                    }
+                });
+                box_lim = L::from_fn(|l| out.t[l]);
+            }
+        }
+        if changed {
+            hit_lanes = 0;
+            let bt = L::from_fn(|l| out.t[l]);
+            let depth = s * (oa + bt * da);
+            exit_depth = f32::NEG_INFINITY;
+            for l in 0..L::N {
+                if valid >> l & 1 != 0 {
+                    if out.tri[l] != u32::MAX {
+                        hit_lanes |= 1 << l;
+                    }
+                    exit_depth = exit_depth.max(depth.get(l));
+                }
+            }
+        }
+    }
+    Some(out)
+}
+
+/// Runs every subsample ray `0..total` of a tile (`pair(j)` = its `(sample, k)`) through the
+/// packet kernel with `L::N` lanes; `write(j, t, tri)` stores a result and `fallback(ray)`
+/// answers rays of packets the kernel declines.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn run_packets<L: Lanes>(
+    set: &SampleSet,
+    blocks: &[Tri4],
+    leaves: &[LeafBox],
+    beam: &PreparedBeam,
+    slack: f32,
+    total: usize,
+    pair: impl Fn(usize) -> (u32, u32),
+    mut write: impl FnMut((u32, u32), f32, u32),
+    mut fallback: impl FnMut(&Ray) -> (f32, u32),
+) -> (PacketWork, u64) {
+    let mut pw = PacketWork::default();
+    let rays_n = for_each_packet::<L>(set, total, pair, |batch, rays| {
+        match closest_n(rays, blocks, leaves, beam, slack, &mut pw) {
+            Some(c) => {
+                for (l, &p) in batch.iter().enumerate() {
+                    write(p, c.t[l], c.tri[l]);
+                }
+            }
+            None => {
+                for (l, &p) in batch.iter().enumerate() {
+                    let (bt, tri) = if rays.valid >> l & 1 != 0 {
+                        fallback(&rays.lane(l))
+                    } else {
+                        (f32::INFINITY, u32::MAX)
+                    };
+                    write(p, bt, tri);
+                }
+            }
+        }
+    });
+    (pw, rays_n)
+}
+
+/// Cuts subsample rays `0..total` of a tile (`pair(j)` = its `(sample, k)`) into packets of
+/// `L::N` lanes (the last one partial), generates each packet's rays and hands both to `f`.
+/// Returns the number of valid rays.
+#[inline(always)]
+pub(crate) fn for_each_packet<L: Lanes>(
+    set: &SampleSet,
+    total: usize,
+    pair: impl Fn(usize) -> (u32, u32),
+    mut f: impl FnMut(&[(u32, u32)], &RaysN<L>),
+) -> u64 {
+    let mut rays_n = 0u64;
+    let mut pairs = [(0u32, 0u32); 8];
+    let mut j = 0;
+    while j < total {
+        let n = (total - j).min(L::N);
+        for (l, p) in pairs.iter_mut().enumerate().take(n) {
+            *p = pair(j + l);
+        }
+        j += n;
+        let batch = &pairs[..n];
+        let rays = gen_n::<L>(set, batch);
+        rays_n += rays.valid.count_ones() as u64;
+        f(batch, &rays);
+    }
+    rays_n
+}
+
+/// [`run_packets`] with eight AVX lanes.
+///
+/// # Safety
+/// The CPU must support AVX2 (checked by the caller with `is_x86_feature_detected!`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[allow(clippy::too_many_arguments)]
+pub(crate) unsafe fn run_packets_avx2(
+    set: &SampleSet,
+    blocks: &[Tri4],
+    leaves: &[LeafBox],
+    beam: &PreparedBeam,
+    slack: f32,
+    total: usize,
+    pair: impl Fn(usize) -> (u32, u32),
+    write: impl FnMut((u32, u32), f32, u32),
+    fallback: impl FnMut(&Ray) -> (f32, u32),
+) -> (PacketWork, u64) {
+    run_packets::<wide::F8>(
+        set, blocks, leaves, beam, slack, total, pair, write, fallback,
+    )
+}

@@ -1,0 +1,234 @@
+//! The set-up sample test with exact coverage only ([`crate::SetupExactness::Edges`], the
+//! default): HVVR's per-tile set-up test (Hunt et al. 2018, §5.5, `cast/setup/mod.rs`) with the
+//! edge uncertainty band of `cast/setup/mod.rs` ("exact band") and HVVR's own depth rule.
+//!
+//! - **Coverage exact.** A (ray, triangle) pair whose smallest edge value lies within the
+//!   band `TriSetup::bound |d|_inf` is decided by the BVH's watertight test (Woop et al.
+//!   2013); outside the band the float sign is certain. So coverage equals per-ray
+//!   traversal's: no vertex hole, every shared edge given to the triangle(s) the watertight
+//!   test gives it. The common path adds one compare (`m > bound`) to HVVR's sign test; the
+//!   second compare (`m >= -bound`) runs only for packets with a candidate lane not certainly
+//!   inside.
+//! - **Depth by `1/t = g . d`** as HVVR (§5.5) and the kernel before the band: the largest
+//!   `g . d` wins, equal values go to the lower triangle index; the winner's `t` is
+//!   `1 / (g . d)`. Candidates whose `1/t` differ by less than the float error of `g . d`
+//!   (relative `rho`, ~1e-6 for well-conditioned triangles) can be ordered differently from
+//!   the watertight `t`: these *depth ties* (overlapping coplanar faces, triangles meeting at
+//!   the hit point) are the only differences from per-ray traversal (tests/cast.rs:
+//!   >= 99.99% agreement, every difference within 1e-5 relative in `t`, never hit vs miss).
+//! - **Lazy band.** The tile's triangles are set up with a crude conservative band (enough
+//!   for the corner classification); a triangle's full band (and its depth condition `rho`)
+//!   is computed when a packet first reaches it (`TileTris::refine`), so triangles dropped
+//!   all-out or never reached skip the band analysis.
+//! - Ill-conditioned triangles (`rho > RHO_MAX`: seen nearly edge-on, or their plane nearly
+//!   through the origin, where `g . d` may even have the wrong sign) take the watertight
+//!   test for coverage and depth (their `1/t` is the watertight `t`'s), so they cannot turn
+//!   a hit into a miss.
+//!
+//! [`crate::SetupExactness::Full`] (`cast/setup/mod.rs`) adds the depth band and the watertight
+//! `t` of every winner: bit-identical to per-ray traversal, at ~1.5x the cost of this kernel
+//! (measured figures in `cast/setup/mod.rs`).
+
+use parallax_bvh::Tri4;
+use parallax_core::math::WatertightRay;
+
+use crate::cast::packet::{ClosestN, Lanes, RaysN};
+use crate::cast::setup::{PacketSlab, RHO_MAX, SetupWork, TileTris, dot_n, exact_t};
+
+/// The closest hit of every lane of `rays` against the set-up list (module docs); `axis` /
+/// `sign` are the tile beam's dominant axis (the near-depth order), `slack` the early-exit
+/// slack.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(super) fn closest_edges<L: Lanes>(
+    rays: &RaysN<L>,
+    blocks: &[Tri4],
+    tt: &mut TileTris,
+    axis: usize,
+    sign: f32,
+    slack: f32,
+    work: &mut SetupWork,
+) -> ClosestN {
+    let valid = rays.valid;
+    let zero = L::splat(0.0);
+    let [dx, dy, dz] = rays.d;
+    let mut best = zero;
+    let mut out = ClosestN {
+        t: [f32::INFINITY; 8],
+        tri: [u32::MAX; 8],
+    };
+    let mut hit_lanes = 0u32;
+    let mut exit_depth = f32::INFINITY;
+    let mut start = 0usize;
+    let oa = tt.origin[axis];
+    let mut box_lim = L::splat(f32::INFINITY);
+    let one = L::splat(1.0);
+    let packet = PacketSlab::new(rays.d);
+    let dinf = packet.dinf;
+    let lanes = valid.count_ones() as u64;
+    for si in 0..tt.segs.len() {
+        let seg = tt.segs[si];
+        if hit_lanes == valid && seg.near > exit_depth + slack {
+            break;
+        }
+        let end = seg.end as usize;
+        let first = start;
+        start = end;
+        // The BVH's robust slab test (Ize 2013 far scaling) of the packet on the run's box.
+        if !packet.reaches(&seg, box_lim, valid) {
+            continue;
+        }
+        work.tri_tests += (end - first) as u64;
+        work.pair_tests += (end - first) as u64 * lanes;
+        let mut changed = false;
+        for j in first..end {
+            if tt.tris[j].rho.is_nan() {
+                tt.refine(j, blocks);
+            }
+            let tr = &tt.tris[j];
+            let gd = dot_n(tr.g, dx, dy, dz);
+            if tr.rho > RHO_MAX {
+                // Ill-conditioned: the watertight test decides coverage and depth.
+                changed |=
+                    ill_conditioned(rays, blocks, tr, valid, dinf, &mut best, &mut out, work);
+                continue;
+            }
+            let ge = gd.ge(best);
+            let cand = L::bits(ge) & valid;
+            if cand == 0 {
+                continue;
+            }
+            // Certainly inside (a mask), plus the band's lanes the watertight test accepts.
+            let (inn_m, extra) = if tr.all_in {
+                (ge, 0)
+            } else {
+                let m = dot_n(tr.n[0], dx, dy, dz)
+                    .min(dot_n(tr.n[1], dx, dy, dz))
+                    .min(dot_n(tr.n[2], dx, dy, dz));
+                let b = L::splat(tr.bound * dinf);
+                let inn_m = L::and(ge, m.gt(b));
+                let rest = cand & !L::bits(inn_m);
+                let mut unsure = if rest != 0 {
+                    L::bits(m.ge(zero - b)) & rest
+                } else {
+                    0
+                };
+                let mut extra = 0u32;
+                // Within the edge band: the watertight test decides coverage (~0.2% of pairs).
+                if unsure != 0 {
+                    work.edge_band += unsure.count_ones() as u64;
+                    work.exact_tests += unsure.count_ones() as u64;
+                }
+                while unsure != 0 {
+                    let l = unsure.trailing_zeros() as usize;
+                    unsure &= unsure - 1;
+                    let wt = &WatertightRay::new(&rays.lane(l));
+                    if exact_t(wt, blocks, tr.src).is_some() {
+                        extra |= 1 << l;
+                    }
+                }
+                (inn_m, extra)
+            };
+            let ib = (L::bits(inn_m) & valid) | extra;
+            if ib == 0 {
+                continue;
+            }
+            let gt_m = L::and(inn_m, gd.gt(best));
+            let gt = L::bits(gt_m) & valid;
+            let mut win = gt | (extra & L::bits(gd.gt(best)));
+            // Ties (equal `1/t`, a hit so far): the lower triangle index wins.
+            let mut tie = ib & !win;
+            while tie != 0 {
+                let l = tie.trailing_zeros() as usize;
+                tie &= tie - 1;
+                if out.tri[l] != u32::MAX && tr.tri < out.tri[l] {
+                    win |= 1 << l;
+                }
+            }
+            if win == 0 {
+                continue;
+            }
+            best = if win == gt {
+                L::select(gt_m, gd, best)
+            } else {
+                L::from_fn(|l| {
+                    if win >> l & 1 != 0 {
+                        gd.get(l)
+                    } else {
+                        best.get(l)
+                    }
+                })
+            };
+            let mut w = win;
+            while w != 0 {
+                let l = w.trailing_zeros() as usize;
+                w &= w - 1;
+                out.tri[l] = tr.tri;
+            }
+            changed = true;
+        }
+        if changed {
+            hit_lanes = 0;
+            exit_depth = f32::NEG_INFINITY;
+            for l in 0..L::N {
+                if valid >> l & 1 != 0 {
+                    if out.tri[l] != u32::MAX {
+                        hit_lanes |= 1 << l;
+                    }
+                    let t = 1.0 / best.get(l);
+                    exit_depth = exit_depth.max(sign * (oa + t * rays.d[axis].get(l)));
+                }
+            }
+            box_lim = one / best;
+        }
+    }
+    for l in 0..L::N {
+        if valid >> l & 1 != 0 && out.tri[l] != u32::MAX {
+            out.t[l] = 1.0 / best.get(l);
+        }
+    }
+    out
+}
+
+/// An ill-conditioned triangle (`rho > RHO_MAX`) against every lane: certainly-out lanes
+/// (edge value below minus the band) skip it, the others take the watertight test, whose
+/// `t` is compared as `1/t` with the lane's best. Returns whether a lane's best changed.
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn ill_conditioned<L: Lanes>(
+    rays: &RaysN<L>,
+    blocks: &[Tri4],
+    tr: &crate::cast::setup::TriSetup,
+    valid: u32,
+    dinf: f32,
+    best: &mut L,
+    out: &mut ClosestN,
+    work: &mut SetupWork,
+) -> bool {
+    let [dx, dy, dz] = rays.d;
+    let mut maybe = valid;
+    if !tr.all_in {
+        let m = dot_n(tr.n[0], dx, dy, dz)
+            .min(dot_n(tr.n[1], dx, dy, dz))
+            .min(dot_n(tr.n[2], dx, dy, dz));
+        maybe &= L::bits(m.ge(L::splat(-tr.bound * dinf)));
+    }
+    let mut changed = false;
+    while maybe != 0 {
+        let l = maybe.trailing_zeros() as usize;
+        maybe &= maybe - 1;
+        work.exact_tests += 1;
+        let wt = &WatertightRay::new(&rays.lane(l));
+        let Some(tc) = exact_t(wt, blocks, tr.src) else {
+            continue;
+        };
+        let g = 1.0 / tc;
+        let b = best.get(l);
+        if g > b || (g == b && out.tri[l] != u32::MAX && tr.tri < out.tri[l]) {
+            *best = L::from_fn(|i| if i == l { g } else { best.get(i) });
+            out.tri[l] = tr.tri;
+            changed = true;
+        }
+    }
+    changed
+}

@@ -1,0 +1,274 @@
+//! The two-level sample hierarchy of HVVR (Hunt et al. 2018, §5, Fig. 4): samples grouped into
+//! tiles of at most [`TILE_SAMPLES`] = 128 samples, tiles into blocks of at most
+//! [`BLOCK_TILES`] = 64 tiles, each with a bounding beam over *every* subsample ray of its
+//! samples (all `spp` footprint offsets and lens positions).
+//!
+//! **Grouping** (§5: "a top-down divisive algorithm", used by HVVR for foveated sets; we use it
+//! for every set so that irregular sets work like grids): samples are first separated by colour
+//! channel (§5: per-channel grids are "tiled and blocked separately") and by view (stereo eye,
+//! cube face: a beam never spans two centres of projection). Each group is split recursively at
+//! the median film position along x when the x extent is at least twice the y extent, else
+//! along y, into blocks of at most 128 x 64 = 8192 samples, and each block likewise into tiles of
+//! at most 128 samples; on a grid this gives 16 x 8 pixel tiles and 128 x 64 pixel blocks
+//! (HVVR's sizes) wherever the film divides evenly.
+//!
+//! **Beams** ([`crate::beam::BeamBuilder`]): the dominant-axis beam of the tile's actual
+//! subsample rays (generated once here, exactly as the caster generates them), so a beam holds
+//! every ray the caster casts — a superset of HVVR's "entire footprint" bound only where it
+//! matters. A block's beam bounds the union of its tiles' rays. A tile or block that no axis
+//! bounds (directions over more than a hemisphere, e.g. a 210-degree fisheye block at the rim)
+//! is split in two and retried; a single sample that cannot be bounded gets the safe
+//! [`Beam::EVERYTHING`].
+
+use crate::beam::{Beam, BeamBuilder};
+use parallax_scene::camera::Camera;
+use rayon::prelude::*;
+
+use crate::SampleSet;
+
+/// Most samples per tile (HVVR: 16 x 8 pixels).
+pub const TILE_SAMPLES: usize = 128;
+/// Most tiles per block (HVVR: 8 x 8 tiles).
+pub const BLOCK_TILES: usize = 64;
+
+/// Why a hierarchy could not be built.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum HierarchyError {
+    #[error("sample set has {0} samples; the hierarchy indexes at most 2^31")]
+    TooManySamples(usize),
+    #[error("sample set has spp {spp} but {offsets} offsets and {lens} lens samples")]
+    BadTables {
+        spp: u32,
+        offsets: usize,
+        lens: usize,
+    },
+    #[error("sample {index} has a non-finite film position or footprint")]
+    BadSample { index: usize },
+}
+
+/// A tile: `len` samples `order[start..start + len]`, `rays` valid subsample rays among them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tile {
+    pub start: u32,
+    pub len: u32,
+    pub rays: u32,
+    pub beam: Beam,
+}
+
+/// A block: tiles `first_tile..first_tile + tile_count`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Block {
+    pub first_tile: u32,
+    pub tile_count: u32,
+    pub rays: u32,
+    pub beam: Beam,
+}
+
+/// Tiles and blocks of a [`SampleSet`] (module docs).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Hierarchy {
+    /// A permutation of the sample indices, tile after tile.
+    pub order: Vec<u32>,
+    pub tiles: Vec<Tile>,
+    pub blocks: Vec<Block>,
+    /// The set it was built for: sample count and spp (checked by the caster).
+    pub sample_count: usize,
+    pub spp: u32,
+}
+
+/// The view (stereo eye, cube face) a film position belongs to.
+fn view_of(camera: &Camera, x: f32) -> u32 {
+    match camera {
+        Camera::Stereo(r) => (x >= r.eye_width() as f32) as u32,
+        Camera::Cube(c) => ((x / c.face_size() as f32).floor().max(0.0) as u32).min(5),
+        _ => 0,
+    }
+}
+
+/// Splits `idx` at its median along the wider film axis (x if `ext_x >= 2 ext_y`); returns the
+/// split point.
+fn median_split(set: &SampleSet, idx: &mut [u32]) -> usize {
+    let (mut lo, mut hi) = (glam::Vec2::INFINITY, glam::Vec2::NEG_INFINITY);
+    for &i in idx.iter() {
+        let f = set.samples[i as usize].film;
+        lo = lo.min(f);
+        hi = hi.max(f);
+    }
+    let e = hi - lo;
+    let axis = if e.x >= 2.0 * e.y { 0 } else { 1 };
+    let mid = idx.len() / 2;
+    idx.select_nth_unstable_by(mid, |&a, &b| {
+        let (fa, fb) = (set.samples[a as usize].film, set.samples[b as usize].film);
+        fa[axis]
+            .total_cmp(&fb[axis])
+            .then(fa[1 - axis].total_cmp(&fb[1 - axis]))
+            .then(a.cmp(&b))
+    });
+    mid
+}
+
+/// Morton (Z-order) code of the pixel containing a film position (16 bits per axis).
+fn morton(f: glam::Vec2) -> u32 {
+    let spread = |v: f32| {
+        let mut x = (v.max(0.0) as u32) & 0xFFFF;
+        x = (x | (x << 8)) & 0x00FF_00FF;
+        x = (x | (x << 4)) & 0x0F0F_0F0F;
+        x = (x | (x << 2)) & 0x3333_3333;
+        (x | (x << 1)) & 0x5555_5555
+    };
+    spread(f.x) | (spread(f.y) << 1)
+}
+
+/// The beam accumulator of the subsample rays of `idx`.
+fn rays_of(set: &SampleSet, idx: &[u32]) -> BeamBuilder {
+    let mut b = BeamBuilder::new();
+    for &i in idx {
+        for k in 0..set.spp as usize {
+            if let Some(r) = set.fast_subsample_ray(i as usize, k) {
+                b.add(&r);
+            }
+        }
+    }
+    b
+}
+
+/// Tiles of one block's samples (`idx`, at offset `base` of the order array).
+fn build_tiles(set: &SampleSet, idx: &mut [u32], base: u32, out: &mut Vec<(Tile, BeamBuilder)>) {
+    if idx.len() > TILE_SAMPLES {
+        let mid = median_split(set, idx);
+        let (a, b) = idx.split_at_mut(mid);
+        build_tiles(set, a, base, out);
+        build_tiles(set, b, base + mid as u32, out);
+        return;
+    }
+    // Z-order within the tile, so that consecutive samples (the caster's ray packets at low
+    // spp) are neighbours on the film.
+    idx.sort_unstable_by_key(|&i| (morton(set.samples[i as usize].film), i));
+    let acc = rays_of(set, idx);
+    let beam = match acc.finish() {
+        Some(b) => b,
+        None if acc.count() == 0 || idx.len() == 1 => Beam::EVERYTHING,
+        None => {
+            let mid = median_split(set, idx);
+            let (a, b) = idx.split_at_mut(mid);
+            build_tiles(set, a, base, out);
+            build_tiles(set, b, base + mid as u32, out);
+            return;
+        }
+    };
+    out.push((
+        Tile {
+            start: base,
+            len: idx.len() as u32,
+            rays: acc.count(),
+            beam,
+        },
+        acc,
+    ));
+}
+
+/// Blocks (each with its tiles) of `idx`: split further while a block has too many tiles or no
+/// bounding beam.
+fn build_blocks(set: &SampleSet, idx: &mut [u32], base: u32) -> Vec<(Vec<Tile>, Block)> {
+    let mut tiles = Vec::new();
+    if idx.len() <= TILE_SAMPLES * BLOCK_TILES {
+        build_tiles(set, idx, base, &mut tiles);
+        let mut acc = BeamBuilder::new();
+        for (_, a) in &tiles {
+            acc.merge(a);
+        }
+        let beam = acc.finish();
+        if tiles.len() <= BLOCK_TILES && (beam.is_some() || tiles.len() == 1 || acc.count() == 0) {
+            let block = Block {
+                first_tile: 0,
+                tile_count: tiles.len() as u32,
+                rays: acc.count(),
+                beam: beam.unwrap_or(Beam::EVERYTHING),
+            };
+            return vec![(tiles.into_iter().map(|(t, _)| t).collect(), block)];
+        }
+    }
+    let mid = median_split(set, idx);
+    let (a, b) = idx.split_at_mut(mid);
+    let (mut x, y) = rayon::join(
+        || build_blocks(set, a, base),
+        || build_blocks(set, b, base + mid as u32),
+    );
+    x.extend(y);
+    x
+}
+
+impl Hierarchy {
+    /// Groups the samples of `set` into tiles and blocks with their beams (module docs). Works
+    /// for every camera model (beams come from the rays themselves); errors on sets the caster
+    /// cannot index.
+    pub fn build(set: &SampleSet) -> Result<Self, HierarchyError> {
+        let n = set.samples.len();
+        if n >= 1 << 31 {
+            return Err(HierarchyError::TooManySamples(n));
+        }
+        if set.spp == 0
+            || set.offsets.len() != set.spp as usize
+            || set.lens.len() != set.spp as usize
+        {
+            return Err(HierarchyError::BadTables {
+                spp: set.spp,
+                offsets: set.offsets.len(),
+                lens: set.lens.len(),
+            });
+        }
+        if let Some(index) = set
+            .samples
+            .iter()
+            .position(|s| !(s.film.is_finite() && s.footprint.is_finite()))
+        {
+            return Err(HierarchyError::BadSample { index });
+        }
+        // Group by (channel, view), then split each group.
+        let key = |i: u32| {
+            let s = &set.samples[i as usize];
+            s.channel as u32 * 8 + view_of(&set.camera, s.film.x)
+        };
+        let mut order: Vec<u32> = (0..n as u32).collect();
+        order.sort_by_key(|&i| key(i));
+        let mut groups = Vec::new();
+        let mut start = 0;
+        while start < n {
+            let k = key(order[start]);
+            let mut end = start;
+            while end < n && key(order[end]) == k {
+                end += 1;
+            }
+            groups.push((start, end));
+            start = end;
+        }
+        let mut slices: Vec<(u32, &mut [u32])> = Vec::new();
+        let mut rest: &mut [u32] = &mut order;
+        let mut done = 0;
+        for &(s, e) in &groups {
+            let (head, tail) = rest.split_at_mut(e - done);
+            debug_assert_eq!(s, done);
+            slices.push((s as u32, head));
+            rest = tail;
+            done = e;
+        }
+        let parts: Vec<Vec<(Vec<Tile>, Block)>> = slices
+            .into_par_iter()
+            .map(|(base, idx)| build_blocks(set, idx, base))
+            .collect();
+        let mut tiles = Vec::new();
+        let mut blocks = Vec::new();
+        for (t, mut b) in parts.into_iter().flatten() {
+            b.first_tile = tiles.len() as u32;
+            tiles.extend(t);
+            blocks.push(b);
+        }
+        Ok(Hierarchy {
+            order,
+            tiles,
+            blocks,
+            sample_count: n,
+            spp: set.spp,
+        })
+    }
+}
