@@ -40,6 +40,8 @@ enum Command {
     Warp(commands::warp::WarpArgs),
     /// 15 -> 60 Hz temporal upsampling by screen-space ray tracing (Widmer et al. 2015).
     Upsample(commands::upsample::UpsampleArgs),
+    /// Path-traced render (unidirectional, NEE + MIS) through any world-space tracer.
+    Path(commands::path::PathArgs),
     /// Benchmarks that reproduce the papers' and issues' measurements.
     #[command(subcommand)]
     Bench(commands::bench::BenchCommand),
@@ -65,6 +67,7 @@ fn main() -> std::process::ExitCode {
         Command::Vr(a) => commands::vr::run(&a, cli.quiet),
         Command::Warp(a) => commands::warp::run(&a, cli.quiet),
         Command::Upsample(a) => commands::upsample::run(&a, cli.quiet),
+        Command::Path(a) => commands::path::run(&a, cli.quiet),
         Command::Bench(b) => commands::bench::run(&b, cli.quiet),
     };
     match result {

@@ -18,6 +18,7 @@
 
 pub mod bench;
 pub mod brdf;
+pub mod bsdf;
 pub mod lights;
 pub mod reference;
 pub mod score;

@@ -19,6 +19,8 @@ pub struct EmitterSampler {
 /// A point sampled on an emitter.
 #[derive(Clone, Copy, Debug)]
 pub struct EmitterSample {
+    /// Scene triangle the point lies on.
+    pub prim: u32,
     pub position: Vec3,
     pub normal: Vec3,
     pub radiance: Vec3,
@@ -68,6 +70,15 @@ impl EmitterSampler {
         self.triangles.is_empty()
     }
 
+    /// The area density with which [`Self::sample`] picks a point on scene triangle `prim`
+    /// (choice probability / area), `None` when `prim` is not an emitter. The MIS weight of a
+    /// BSDF-sampled ray that hits an emitter needs it.
+    pub fn pdf_area(&self, prim: u32) -> Option<f32> {
+        // `triangles` is in increasing scene order (built by one pass over the triangles).
+        let k = self.triangles.binary_search(&prim).ok()?;
+        Some(self.pmf[k] / self.areas[k])
+    }
+
     /// Picks an emitter by power and a uniform point on it (`u` in [0,1)^3).
     pub fn sample(&self, scene: &Scene, u_pick: f32, u_tri: Vec2) -> Option<EmitterSample> {
         if self.is_empty() {
@@ -86,6 +97,7 @@ impl EmitterSampler {
         let normal = scene.mesh.geometric_normal(tri);
         let radiance = scene.materials[scene.mesh.material_ids[tri] as usize].emissive;
         Some(EmitterSample {
+            prim: tri as u32,
             position,
             normal,
             radiance,
@@ -138,5 +150,35 @@ pub fn analytic_light_at(light: &Light, p: Vec3) -> Option<(Vec3, f32, Vec3)> {
             let wi = -direction.normalize_or_zero();
             (wi != Vec3::ZERO).then_some((wi, f32::INFINITY, irradiance))
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sampled_points_report_the_area_pdf_of_their_triangle() {
+        let scene = Scene::load("cornell").unwrap();
+        let e = EmitterSampler::new(&scene);
+        assert!(!e.is_empty());
+        let mut total = 0.0;
+        for &t in &e.triangles {
+            let [a, b, c] = scene.mesh.triangle(t as usize);
+            total += e.pdf_area(t).unwrap() * 0.5 * (b - a).cross(c - a).length();
+        }
+        assert!(
+            (total - 1.0).abs() < 1e-5,
+            "choice probabilities sum to {total}"
+        );
+        for i in 0..16 {
+            let u = (i as f32 + 0.5) / 16.0;
+            let s = e.sample(&scene, u, Vec2::new(u, 1.0 - u)).unwrap();
+            assert_eq!(Some(s.pdf_area), e.pdf_area(s.prim));
+        }
+        let not_emitter = (0..scene.mesh.triangle_count() as u32)
+            .find(|t| !e.triangles.contains(t))
+            .unwrap();
+        assert_eq!(e.pdf_area(not_emitter), None);
     }
 }

@@ -23,7 +23,7 @@ pub mod texture;
 
 pub use error::{Result, SceneError};
 pub use light::Light;
-pub use material::{Material, MaterialKind};
+pub use material::{AlphaMode, Material, MaterialKind};
 pub use mesh::{ObjectRange, TriangleMesh};
 pub use path::{CameraKey, CameraPath};
 pub use scene::{CameraDesc, NamedCamera, Scene};

@@ -79,6 +79,9 @@ pub struct Scene {
     /// The glTF node animation and skins that pose `mesh` over time (glTF files with
     /// animations or skinned meshes; see [`crate::skin`]).
     pub gltf_animation: Option<std::sync::Arc<crate::skin::GltfAnimation>>,
+    /// True when [`Scene::add_default_lighting_if_unlit`] gave the scene its lights (the file
+    /// carried none), so that renderers can say so.
+    pub default_lighting: bool,
 }
 
 impl Scene {
@@ -156,6 +159,7 @@ impl Scene {
     /// it visible in `parallax info`. Scenes with any light are left as they are.
     pub fn add_default_lighting_if_unlit(&mut self) {
         if self.is_unlit() {
+            self.default_lighting = true;
             self.environment = Vec3::splat(0.5);
             let direction = Vec3::new(0.3, -1.0, 0.2).normalize();
             self.lights.push(Light::Directional {
@@ -194,7 +198,7 @@ mod tests {
         };
         assert!(s.is_unlit());
         s.add_default_lighting_if_unlit();
-        assert!(!s.is_unlit());
+        assert!(!s.is_unlit() && s.default_lighting);
         assert_eq!(s.lights.len(), 1);
         s.add_default_lighting_if_unlit();
         assert_eq!(s.lights.len(), 1, "a lit scene is left as it is");
@@ -205,6 +209,6 @@ mod tests {
             ..Scene::default()
         };
         e.add_default_lighting_if_unlit();
-        assert!(e.lights.is_empty() && e.environment == Vec3::ZERO);
+        assert!(e.lights.is_empty() && e.environment == Vec3::ZERO && !e.default_lighting);
     }
 }

@@ -23,8 +23,12 @@ pub struct Texture {
 }
 
 impl Texture {
+    #[inline]
     fn wrap(mode: WrapMode, i: i64, n: u32) -> u32 {
         let n = n as i64;
+        if (0..n).contains(&i) {
+            return i as u32; // every mode maps the texture's own texels to themselves
+        }
         match mode {
             WrapMode::Repeat => i.rem_euclid(n) as u32,
             WrapMode::ClampToEdge => i.clamp(0, n - 1) as u32,
@@ -35,13 +39,14 @@ impl Texture {
         }
     }
 
-    fn texel(&self, x: i64, y: i64) -> Vec3 {
-        let x = Self::wrap(self.wrap_s, x, self.width);
-        let y = Self::wrap(self.wrap_t, y, self.height);
+    #[inline]
+    fn at(&self, x: u32, y: u32) -> Vec3 {
         self.texels[y as usize * self.width as usize + x as usize]
     }
 
     /// Bilinear lookup; `uv = (0, 0)` is the top-left corner of the image (glTF convention).
+    /// Texel centres sit at half-integer positions (`uv * size - 0.5`, as Mitsuba 3's bitmap
+    /// and OpenGL filter); the four taps are wrapped once per axis.
     pub fn sample(&self, uv: Vec2) -> Vec3 {
         if !uv.is_finite() {
             return Vec3::ZERO;
@@ -50,9 +55,18 @@ impl Texture {
         let y = uv.y * self.height as f32 - 0.5;
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
-        let (x0, y0) = (x0 as i64, y0 as i64);
-        let a = self.texel(x0, y0).lerp(self.texel(x0 + 1, y0), fx);
-        let b = self.texel(x0, y0 + 1).lerp(self.texel(x0 + 1, y0 + 1), fx);
+        // Far-out coordinates saturate in the cast; wrapping keeps them in range.
+        let (ix, iy) = (x0 as i64, y0 as i64);
+        let (xa, xb) = (
+            Self::wrap(self.wrap_s, ix, self.width),
+            Self::wrap(self.wrap_s, ix + 1, self.width),
+        );
+        let (ya, yb) = (
+            Self::wrap(self.wrap_t, iy, self.height),
+            Self::wrap(self.wrap_t, iy + 1, self.height),
+        );
+        let a = self.at(xa, ya).lerp(self.at(xb, ya), fx);
+        let b = self.at(xa, yb).lerp(self.at(xb, yb), fx);
         a.lerp(b, fy)
     }
 }

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use glam::{Mat4, Quat, Vec3};
 use parallax_scene::load::load_file;
 use parallax_scene::texture::srgb_to_linear;
-use parallax_scene::{Light, MaterialKind, Scene, SceneError, WrapMode};
+use parallax_scene::{AlphaMode, Light, MaterialKind, Scene, SceneError, WrapMode};
 use serde_json::{Value, json};
 
 fn scenes() -> PathBuf {
@@ -401,8 +401,11 @@ fn hierarchy_gltf() -> (Value, Vec<u8>) {
             {"name": "red", "pbrMetallicRoughness": {"baseColorFactor": [1, 0, 0, 1],
               "metallicFactor": 0.25, "roughnessFactor": 0.75},
              "emissiveFactor": [1, 1, 1],
-             "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 5.0}}},
-            {"name": "glass", "extras": {"mitsuba_bsdf": "dielectric"}}
+             "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 5.0}},
+             "alphaMode": "MASK", "alphaCutoff": 0.3},
+            {"name": "glass", "extras": {"mitsuba_bsdf": "dielectric"}, "alphaMode": "BLEND",
+             "pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 0.1]},
+             "extensions": {"KHR_materials_transmission": {"transmissionFactor": 0.8}}}
         ],
         "animations": [{"name": "bob", "samplers": [{"input": 4, "output": 5}],
                         "channels": [{"sampler": 0, "target": {"node": 2, "path": "translation"}}]}],
@@ -466,6 +469,14 @@ fn node_transforms_materials_cameras_and_lights() {
     );
     assert_eq!(red.emissive, Vec3::splat(5.0));
     assert_eq!(s.materials[1].kind, MaterialKind::Dielectric { ior: 1.5 });
+    assert_eq!(red.alpha_mode, AlphaMode::Mask { cutoff: 0.3 });
+    let glass = &s.materials[1];
+    assert_eq!(
+        (glass.alpha_mode, glass.alpha, glass.transmission),
+        (AlphaMode::Blend, 0.1, 0.8)
+    );
+    assert!(glass.is_glass() && !red.is_glass());
+    assert_eq!(s.materials[2].alpha_mode, AlphaMode::Opaque);
     // Camera at the node, looking down its -Z.
     let cam = s.camera(Some("main")).unwrap();
     assert!(cam.eye.abs_diff_eq(Vec3::new(10.0, 0.0, 5.0), 1e-6));

@@ -20,6 +20,8 @@ pub enum BenchCommand {
     Upsample(super::bench_synth::UpsampleBenchArgs),
     /// Quad-tree compression thresholds vs time and PSNR (Widmer et al. 2015, Fig. 14/15).
     Compression(super::bench_synth::CompressionArgs),
+    /// Path tracer: paths/s, Mrays/s per bounce, RMSE vs a high-spp reference at equal time.
+    Path(super::path::PathBenchArgs),
 }
 
 #[derive(Args, Debug)]
@@ -44,6 +46,7 @@ pub fn run(cmd: &BenchCommand, quiet: bool) -> Result<()> {
         BenchCommand::Warp(a) => super::bench_synth::warp_bench(a, quiet),
         BenchCommand::Upsample(a) => super::bench_synth::upsample_bench(a, quiet),
         BenchCommand::Compression(a) => super::bench_synth::compression_bench(a, quiet),
+        BenchCommand::Path(a) => super::path::bench(a, quiet),
         BenchCommand::Rays(a) => {
             let scene = a.view.load_scene()?;
             let camera = a.view.camera(&scene, a.width, a.height)?;

@@ -93,6 +93,7 @@ pub fn run(a: &DemoArgs, quiet: bool) -> Result<()> {
             );
         }
     }
+    super::path::demo_view(&scene, &desc, w, h, &a.out, quiet)?;
     vr_frame(a, &scene, &bvh, &desc, quiet)?;
     super::warp::demo_stereo(&scene, &bvh, &desc, w, h, &a.out, quiet)?;
     if !quiet {

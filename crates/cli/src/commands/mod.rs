@@ -5,6 +5,7 @@ pub mod bench_synth;
 pub mod capture;
 pub mod demo;
 pub mod info;
+pub mod path;
 pub mod render;
 pub mod upsample;
 pub mod vr;

@@ -82,7 +82,12 @@ impl<'a> SurfacePoint<'a> {
         let ng = mesh.geometric_normal(prim);
         let front_face = ng.dot(ray.dir) < 0.0;
         let flip = if front_face { 1.0 } else { -1.0 };
-        let mut ns = mesh.shading_normal(prim, hit.u, hit.v) * flip;
+        // `TriangleMesh::shading_normal` with the geometric normal computed once.
+        let [i0, i1, i2] = mesh.indices[prim];
+        let n = mesh.normals[i0 as usize] * (1.0 - hit.u - hit.v)
+            + mesh.normals[i1 as usize] * hit.u
+            + mesh.normals[i2 as usize] * hit.v;
+        let mut ns = n.normalize_or(ng) * flip;
         // Keep the shading normal in the hemisphere of the geometric one (no black facets).
         if ns.dot(ng * flip) <= 0.0 {
             ns = ng * flip;

@@ -2,15 +2,18 @@
 //!
 //! | glTF                                       | parallax                                  |
 //! |--------------------------------------------|-------------------------------------------|
-//! | `pbrMetallicRoughness.baseColorFactor`     | `base_color` (linear RGB; alpha ignored)  |
+//! | `pbrMetallicRoughness.baseColorFactor`     | `base_color` (linear RGB), `alpha`        |
 //! | `pbrMetallicRoughness.baseColorTexture`    | `base_color_texture` (sRGB -> linear)     |
 //! | `metallicFactor`, `roughnessFactor`        | `metallic`, `roughness`                   |
 //! | `emissiveFactor` x `KHR_materials_emissive_strength` | `emissive`                      |
 //! | `extras.mitsuba_bsdf` = `*dielectric`      | `MaterialKind::Dielectric` (ior from `KHR_materials_ior`, default 1.5) |
 //! | `extras.mitsuba_bsdf` = `*conductor`       | `metallic = 1` (roughness kept)           |
+//! | `alphaMode`, `alphaCutoff`                 | `alpha_mode` (`Mask { cutoff }`, default 0.5) |
+//! | `KHR_materials_transmission.transmissionFactor` | `transmission`                       |
 //!
-//! Not used: metallic-roughness, normal, occlusion and emissive textures, texture transforms,
-//! texture coordinate sets other than 0, alpha modes.
+//! Not used: metallic-roughness, normal, occlusion, emissive and transmission textures, the
+//! alpha channel of base-colour textures, texture transforms, texture coordinate sets other
+//! than 0.
 
 use std::path::Path;
 
@@ -19,7 +22,7 @@ use gltf::texture::WrappingMode;
 
 use super::image_decode::decode_texture;
 use super::uri::{Resolved, resolve};
-use crate::{Material, MaterialKind, Result, SceneError, Texture, WrapMode};
+use crate::{AlphaMode, Material, MaterialKind, Result, SceneError, Texture, WrapMode};
 
 /// Converts all materials of `doc` (in document order) and the textures they use as base colour.
 pub(crate) fn convert_materials(
@@ -34,7 +37,7 @@ pub(crate) fn convert_materials(
     let mut materials = Vec::with_capacity(doc.materials().len());
     for m in doc.materials() {
         let pbr = m.pbr_metallic_roughness();
-        let [r, g, b, _] = pbr.base_color_factor();
+        let [r, g, b, a] = pbr.base_color_factor();
         let mut mat = Material {
             name: m
                 .name()
@@ -46,6 +49,17 @@ pub(crate) fn convert_materials(
             roughness: pbr.roughness_factor().clamp(0.0, 1.0),
             metallic: pbr.metallic_factor().clamp(0.0, 1.0),
             emissive: Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0),
+            alpha_mode: match m.alpha_mode() {
+                gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+                gltf::material::AlphaMode::Mask => AlphaMode::Mask {
+                    cutoff: m.alpha_cutoff().unwrap_or(0.5),
+                },
+                gltf::material::AlphaMode::Blend => AlphaMode::Blend,
+            },
+            alpha: a.clamp(0.0, 1.0),
+            transmission: m
+                .transmission()
+                .map_or(0.0, |t| t.transmission_factor().clamp(0.0, 1.0)),
         };
         if let Some(info) = pbr.base_color_texture() {
             let t = info.texture();
@@ -65,7 +79,12 @@ pub(crate) fn convert_materials(
             Some(b) if b.ends_with("conductor") => mat.metallic = 1.0,
             _ => {}
         }
-        if !(mat.base_color.is_finite() && mat.emissive.is_finite() && mat.roughness.is_finite()) {
+        if !(mat.base_color.is_finite()
+            && mat.emissive.is_finite()
+            && mat.roughness.is_finite()
+            && mat.alpha.is_finite()
+            && mat.transmission.is_finite())
+        {
             return Err(SceneError::Invalid {
                 path: path.to_path_buf(),
                 message: format!("material {:?} has non-finite factors", mat.name),

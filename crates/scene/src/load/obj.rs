@@ -193,6 +193,7 @@ fn convert_material(m: &tobj::Material) -> Material {
         roughness,
         metallic: 0.0,
         emissive: m.emissive.map(Vec3::from).unwrap_or(Vec3::ZERO),
+        ..Material::default()
     };
     match m.illumination_model {
         Some(3 | 5) => {

@@ -1,0 +1,136 @@
+//! Options of a path-traced render.
+//!
+//! | name | type | default | meaning |
+//! |---|---|---|---|
+//! | `spp` | u32 | 16 | samples (paths) per pixel; with a time budget, the most that are taken |
+//! | `time_budget` | `Option<f64>` | none | seconds: render whole passes until the budget is spent |
+//! | `seed` | u64 | 0 | seed of the per-pixel random streams |
+//! | `max_depth` | u32 | 16 | longest path in segments, as Mitsuba 3's `max_depth` (1 = emitters seen directly, 2 = direct light) |
+//! | `rr_depth` | u32 | 5 | depth from which Russian roulette may end a path (Mitsuba 3's `rr_depth`) |
+//! | `materials` | [`MaterialMode`] | `AsIs` | the scene's materials, or every opaque surface Lambertian |
+//! | `tile` | u32 | 32 | edge of the square pixel tiles one wavefront covers |
+
+use parallax_render::bsdf::MaterialMode;
+
+use crate::error::{PathError, Result};
+
+/// Most samples per pixel one render takes.
+pub const MAX_SPP: u32 = 1 << 20;
+/// Longest path (segments) accepted by `max_depth`.
+pub const MAX_DEPTH: u32 = 1024;
+/// Tile edges accepted (pixels).
+pub const TILE_RANGE: std::ops::RangeInclusive<u32> = 1..=256;
+
+/// See the module table.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PathOptions {
+    pub spp: u32,
+    pub time_budget: Option<f64>,
+    pub seed: u64,
+    pub max_depth: u32,
+    pub rr_depth: u32,
+    pub materials: MaterialMode,
+    pub tile: u32,
+}
+
+impl Default for PathOptions {
+    fn default() -> Self {
+        Self {
+            spp: 16,
+            time_budget: None,
+            seed: 0,
+            max_depth: 16,
+            rr_depth: 5,
+            materials: MaterialMode::AsIs,
+            tile: 32,
+        }
+    }
+}
+
+impl PathOptions {
+    /// Checks every range; the message names the CLI flag.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |m: String| Err(PathError::Option(m));
+        if !(1..=MAX_SPP).contains(&self.spp) {
+            return bad(format!("--spp must be in 1..={MAX_SPP}, got {}", self.spp));
+        }
+        if let Some(t) = self.time_budget
+            && !(t.is_finite() && t > 0.0)
+        {
+            return bad(format!(
+                "--time-budget must be a positive number of seconds, got {t}"
+            ));
+        }
+        if !(1..=MAX_DEPTH).contains(&self.max_depth) {
+            return bad(format!(
+                "--max-depth must be in 1..={MAX_DEPTH}, got {}",
+                self.max_depth
+            ));
+        }
+        if self.rr_depth == 0 {
+            return bad("--rr-depth must be at least 1".into());
+        }
+        if !TILE_RANGE.contains(&self.tile) {
+            return bad(format!(
+                "tile edge must be in {}..={}, got {}",
+                TILE_RANGE.start(),
+                TILE_RANGE.end(),
+                self.tile
+            ));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranges_are_checked_with_the_flag_named() {
+        assert!(PathOptions::default().validate().is_ok());
+        let err = |o: PathOptions| o.validate().unwrap_err().to_string();
+        assert!(
+            err(PathOptions {
+                spp: 0,
+                ..Default::default()
+            })
+            .contains("--spp")
+        );
+        assert!(
+            err(PathOptions {
+                time_budget: Some(0.0),
+                ..Default::default()
+            })
+            .contains("--time-budget")
+        );
+        assert!(
+            err(PathOptions {
+                time_budget: Some(f64::NAN),
+                ..Default::default()
+            })
+            .contains("--time-budget")
+        );
+        assert!(
+            err(PathOptions {
+                max_depth: 0,
+                ..Default::default()
+            })
+            .contains("--max-depth")
+        );
+        assert!(
+            err(PathOptions {
+                rr_depth: 0,
+                ..Default::default()
+            })
+            .contains("--rr-depth")
+        );
+        assert!(
+            err(PathOptions {
+                tile: 0,
+                ..Default::default()
+            })
+            .contains("tile")
+        );
+    }
+}
