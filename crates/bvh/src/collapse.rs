@@ -16,6 +16,35 @@ use crate::node::{ChildRef, Node4};
 use crate::tri::Tri;
 use crate::tri4::{Tri4, blocks_for};
 
+/// The children of a `W`-wide node whose binary children are `start`: repeatedly replaces the
+/// inner child of largest surface area by its two children, until there are `W` children or
+/// only leaves (module docs). Returns the children (the first `len` are set) and `len`.
+pub(crate) fn open_largest<'a, const W: usize>(
+    start: &[&'a BNode],
+) -> ([Option<&'a BNode>; W], usize) {
+    let mut kids: [Option<&BNode>; W] = [None; W];
+    for (k, s) in kids.iter_mut().zip(start) {
+        *k = Some(s);
+    }
+    let mut len = start.len();
+    while len < W {
+        let pick = (0..len)
+            .filter(|&i| matches!(kids[i], Some(BNode::Inner { .. })))
+            .max_by(|&a, &b| {
+                let area = |i: usize| kids[i].map_or(0.0, |k| k.bounds().surface_area());
+                area(a).total_cmp(&area(b))
+            });
+        let Some(i) = pick else { break };
+        let Some(BNode::Inner { children, .. }) = kids[i] else {
+            unreachable!()
+        };
+        kids[i] = Some(&children[0]);
+        kids[len] = Some(&children[1]);
+        len += 1;
+    }
+    (kids, len)
+}
+
 pub(crate) struct Collapsed {
     pub nodes: Vec<Node4>,
     pub tris: Vec<Tri>,
@@ -24,6 +53,9 @@ pub(crate) struct Collapsed {
     pub blocks: Vec<Tri4>,
     /// Depth of the deepest wide node (root = 1).
     pub depth: u32,
+    /// The first block of each binary leaf, indexed by the leaf's first reference (`start`):
+    /// the 8-wide collapse (`collapse8.rs`) points its leaves at the same blocks.
+    pub leaf_blocks: Vec<u32>,
 }
 
 /// Collapses `root` (built over `refs`) into 4-wide nodes; `corners(id)` gives a triangle's
@@ -39,6 +71,7 @@ pub(crate) fn collapse(
         prim_ids: Vec::with_capacity(refs.len()),
         blocks: Vec::with_capacity(refs.len() / 2),
         depth: 0,
+        leaf_blocks: vec![u32::MAX; refs.len()],
     };
     let mut ctx = Ctx {
         out: &mut out,
@@ -66,27 +99,7 @@ impl<F: Fn(u32) -> [Vec3; 3]> Ctx<'_, F> {
         self.out.nodes.push(Node4::EMPTY);
         self.out.depth = self.out.depth.max(depth);
 
-        let mut kids: [Option<&BNode>; 4] = [None; 4];
-        for (k, s) in kids.iter_mut().zip(start) {
-            *k = Some(s);
-        }
-        let mut len = start.len();
-        while len < 4 {
-            // Open the inner child of largest surface area.
-            let pick = (0..len)
-                .filter(|&i| matches!(kids[i], Some(BNode::Inner { .. })))
-                .max_by(|&a, &b| {
-                    let area = |i: usize| kids[i].map_or(0.0, |k| k.bounds().surface_area());
-                    area(a).total_cmp(&area(b))
-                });
-            let Some(i) = pick else { break };
-            let Some(BNode::Inner { children, .. }) = kids[i] else {
-                unreachable!()
-            };
-            kids[i] = Some(&children[0]);
-            kids[len] = Some(&children[1]);
-            len += 1;
-        }
+        let (kids, len) = open_largest::<4>(start);
 
         // Leaves first (HVVR §5), then inner children, each group in build order.
         let mut lane = 0;
@@ -94,6 +107,7 @@ impl<F: Fn(u32) -> [Vec3; 3]> Ctx<'_, F> {
         for k in kids[..len].iter().flatten() {
             if let BNode::Leaf { start, count, .. } = k {
                 let first = self.out.blocks.len() as u32;
+                self.out.leaf_blocks[*start as usize] = first;
                 self.out
                     .blocks
                     .extend((0..blocks_for(*count)).map(|_| Tri4::EMPTY));

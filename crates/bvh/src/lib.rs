@@ -79,13 +79,18 @@
 
 mod build;
 mod collapse;
+mod collapse8;
+mod lanes16;
 pub mod node;
+pub mod node8;
 mod packet;
+mod packet8;
 mod reference;
 mod refit;
 mod simd;
 mod stats;
 mod traverse;
+mod traverse8;
 mod tri;
 mod tri4;
 mod world;
@@ -98,7 +103,8 @@ use parallax_scene::TriangleMesh;
 use rayon::prelude::*;
 
 pub use node::{ChildRef, Node4};
-pub use packet::PACKET_SIZE;
+pub use node8::Node8;
+pub use packet8::PACKET_SIZE;
 pub use reference::{brute_force_all, brute_force_closest};
 pub use stats::{Counter, NoStats, TraversalStats};
 pub use tri::Tri;
@@ -193,6 +199,8 @@ impl std::error::Error for BvhError {}
 #[derive(Clone, Debug)]
 pub struct Bvh {
     nodes: Vec<Node4>,
+    /// The 8-wide traversal tree over the same leaves (`node8.rs`).
+    nodes8: Vec<Node8>,
     tris: Vec<Tri>,
     prim_ids: Vec<u32>,
     blocks: Vec<tri4::Tri4>,
@@ -238,6 +246,7 @@ impl Bvh {
         if n == 0 {
             return Ok(Bvh {
                 nodes: Vec::new(),
+                nodes8: Vec::new(),
                 tris: Vec::new(),
                 prim_ids: Vec::new(),
                 blocks: Vec::new(),
@@ -260,16 +269,20 @@ impl Bvh {
             .collect();
         let root = build::build_binary(&mut refs, &opts);
         let c = collapse::collapse(&root, &refs, |id| mesh.triangle(id as usize));
+        let c8 = collapse8::collapse8(&root, &c.leaf_blocks, c.nodes.len() / 2 + 1);
         // The binary tree is freed here, inside the timed build.
         drop(root);
         assert!(
-            3 * c.depth as usize + 1 < traverse::STACK_SIZE,
-            "BVH depth {} exceeds the traversal stack",
-            c.depth
+            3 * c.depth as usize + 1 < traverse::STACK_SIZE
+                && 7 * c8.depth as usize + 1 < traverse8::STACK8_SIZE,
+            "BVH depth {} / {} exceeds the traversal stack",
+            c.depth,
+            c8.depth
         );
         let bounds = c.nodes[0].bounds();
         Ok(Bvh {
             nodes: c.nodes,
+            nodes8: c8.nodes,
             tris: c.tris,
             prim_ids: c.prim_ids,
             blocks: c.blocks,
@@ -284,6 +297,11 @@ impl Bvh {
         self.nodes.len()
     }
 
+    /// The 8-wide traversal tree, root first, in depth-first preorder (layout in [`node8`]).
+    pub fn nodes8(&self) -> &[Node8] {
+        &self.nodes8
+    }
+
     /// Number of triangles indexed.
     pub fn triangle_count(&self) -> usize {
         self.tris.len()
@@ -293,6 +311,7 @@ impl Bvh {
     /// map, in bytes.
     pub fn bytes(&self) -> usize {
         self.nodes.len() * size_of::<Node4>()
+            + self.nodes8.len() * size_of::<Node8>()
             + self.tris.len() * size_of::<Tri>()
             + self.blocks.len() * size_of::<Tri4>()
             + self.prim_ids.len() * size_of::<u32>()

@@ -35,8 +35,8 @@ use crate::traverse::{Best, STACK_SIZE};
 use crate::tri4::Tri4Ray;
 use crate::{Bvh, Hit};
 
-/// Rays per packet traversal ([`Bvh::closest_hit_packet`] splits longer slices).
-pub const PACKET_SIZE: usize = 16;
+/// Rays per packet traversal ([`Bvh::closest_hit_packet4`] splits longer slices).
+const PACKET_SIZE: usize = 16;
 const GROUPS: usize = PACKET_SIZE / 4;
 
 #[derive(Clone, Copy)]
@@ -190,11 +190,12 @@ impl PacketBoxes {
 }
 
 impl Bvh {
-    /// Closest hits of up to [`PACKET_SIZE`] coherent rays traced together (longer slices are
-    /// split into packets of [`PACKET_SIZE`]); `out[i]` is exactly [`Bvh::closest_hit`] of
+    /// The packet traversal of the 4-wide tree (the predecessor of [`Bvh::closest_hit_packet`],
+    /// kept as its twin): up to 16 coherent rays traced together (longer slices are
+    /// split into packets of 16); `out[i]` is exactly [`Bvh::closest_hit`] of
     /// `rays[i]`. Fast when the rays are coherent (e.g. the primary rays of a 4x4 pixel tile);
     /// incoherent rays are better traced one by one. Panics if `out` is shorter than `rays`.
-    pub fn closest_hit_packet(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+    pub fn closest_hit_packet4(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
         assert!(out.len() >= rays.len(), "closest_hit_packet: out too short");
         for (r, o) in rays.chunks(PACKET_SIZE).zip(out.chunks_mut(PACKET_SIZE)) {
             self.packet16(r, o);
@@ -218,9 +219,9 @@ impl Bvh {
         self.packet16_impl::<true>(rays, out)
     }
 
-    /// [`Self::closest_hit_packet`] with the portable (SSE / scalar) node test even where AVX2
+    /// [`Self::closest_hit_packet4`] with the portable (SSE / scalar) node test even where AVX2
     /// exists: the twin the tests hold the AVX2 path against.
-    pub fn closest_hit_packet_portable(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+    pub fn closest_hit_packet4_portable(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
         assert!(out.len() >= rays.len(), "closest_hit_packet: out too short");
         for (r, o) in rays.chunks(PACKET_SIZE).zip(out.chunks_mut(PACKET_SIZE)) {
             self.packet16_impl::<false>(r, o);

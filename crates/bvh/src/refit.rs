@@ -55,6 +55,12 @@ impl Bvh {
 
         // Leaf lanes, in parallel over nodes.
         let blocks = &self.blocks;
+        let leaf_bounds = |first: u32, count: u32| {
+            let start = blocks[first as usize].tri[0] as usize;
+            tris[start..start + count as usize]
+                .iter()
+                .fold(Aabb::EMPTY, |b, t| b.union(t.bounds()))
+        };
         self.nodes
             .par_iter_mut()
             .with_min_len(256)
@@ -65,11 +71,7 @@ impl Bvh {
                         continue;
                     }
                     if let ChildRef::Leaf { first, count } = ChildRef::decode(c) {
-                        let start = blocks[first as usize].tri[0] as usize;
-                        let b = tris[start..start + count as usize]
-                            .iter()
-                            .fold(Aabb::EMPTY, |b, t| b.union(t.bounds()));
-                        node.set_child_bounds(lane, b);
+                        node.set_child_bounds(lane, leaf_bounds(first, count));
                     }
                 }
             });
@@ -78,6 +80,30 @@ impl Bvh {
             let (head, tail) = self.nodes.split_at_mut(i + 1);
             let node = &mut head[i];
             for lane in 0..4 {
+                if let ChildRef::Inner(c) = ChildRef::decode(node.child[lane]) {
+                    node.set_child_bounds(lane, tail[c as usize - i - 1].bounds());
+                }
+            }
+        }
+        // The 8-wide tree: the same two passes.
+        self.nodes8
+            .par_iter_mut()
+            .with_min_len(128)
+            .for_each(|node| {
+                for lane in 0..8 {
+                    let c = node.child[lane];
+                    if c == EMPTY {
+                        continue;
+                    }
+                    if let ChildRef::Leaf { first, count } = ChildRef::decode(c) {
+                        node.set_child_bounds(lane, leaf_bounds(first, count));
+                    }
+                }
+            });
+        for i in (0..self.nodes8.len()).rev() {
+            let (head, tail) = self.nodes8.split_at_mut(i + 1);
+            let node = &mut head[i];
+            for lane in 0..8 {
                 if let ChildRef::Inner(c) = ChildRef::decode(node.child[lane]) {
                     node.set_child_bounds(lane, tail[c as usize - i - 1].bounds());
                 }

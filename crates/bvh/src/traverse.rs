@@ -301,6 +301,67 @@ impl Bvh {
         }
     }
 
+    /// Whether any triangle of a leaf is hit by one ray in `(t_min, t_max)` (SIMD blocks,
+    /// exact-zero lanes by the scalar test).
+    #[inline(always)]
+    pub(crate) fn leaf_any<C: Counter>(
+        &self,
+        r4: &Tri4Ray,
+        first: u32,
+        count: u32,
+        t_max: f32,
+        stats: &mut C,
+    ) -> bool {
+        for k in 0..blocks_for(count) {
+            let b = &self.blocks[(first + k) as usize];
+            let mask = lane_mask(count, k);
+            let h = r4.intersect(b, mask, t_max);
+            for l in 0..4 {
+                if mask >> l & 1 != 0 {
+                    stats.triangle(h.hit >> l & 1 != 0);
+                }
+            }
+            if h.hit != 0 {
+                return true;
+            }
+            let mut m = h.exact;
+            while m != 0 {
+                let l = m.trailing_zeros() as usize;
+                m &= m - 1;
+                let (p0, p1, p2) = (b.vertex(l, 0), b.vertex(l, 1), b.vertex(l, 2));
+                if r4.wt.intersect_within(p0, p1, p2, t_max).is_some() {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+
+    /// Every hit of one ray with a leaf's triangles, appended to `out` (scalar test).
+    #[inline(always)]
+    pub(crate) fn leaf_all<C: Counter>(
+        &self,
+        wt: &WatertightRay,
+        first: u32,
+        count: u32,
+        out: &mut Vec<Hit>,
+        stats: &mut C,
+    ) {
+        for i in self.leaf_triangles(first, count) {
+            let tri = &self.tris[i];
+            let h = wt.intersect(tri.p0, tri.p1, tri.p2);
+            stats.triangle(h.is_some());
+            if let Some(h) = h {
+                out.push(Hit {
+                    prim: self.prim_ids[i],
+                    t: h.t,
+                    u: h.u,
+                    v: h.v,
+                });
+            }
+        }
+    }
+
     #[inline(always)]
     fn any_impl<C: Counter, const SIMD: bool>(&self, ray: &Ray, stats: &mut C) -> bool {
         stats.ray();
@@ -311,43 +372,18 @@ impl Bvh {
         let r4 = Tri4Ray::new(WatertightRay::new(ray));
         let mut found = false;
         self.traverse::<C, false>(&rb, ray.t_max, stats, |first, count, t_max, stats| {
-            if SIMD {
-                for k in 0..blocks_for(count) {
-                    let b = &self.blocks[(first + k) as usize];
-                    let mask = lane_mask(count, k);
-                    let h = r4.intersect(b, mask, *t_max);
-                    for l in 0..4 {
-                        if mask >> l & 1 != 0 {
-                            stats.triangle(h.hit >> l & 1 != 0);
-                        }
-                    }
-                    if h.hit != 0 {
-                        found = true;
-                        return true;
-                    }
-                    let mut m = h.exact;
-                    while m != 0 {
-                        let l = m.trailing_zeros() as usize;
-                        m &= m - 1;
-                        let (p0, p1, p2) = (b.vertex(l, 0), b.vertex(l, 1), b.vertex(l, 2));
-                        if r4.wt.intersect_within(p0, p1, p2, *t_max).is_some() {
-                            found = true;
-                            return true;
-                        }
-                    }
-                }
-                false
+            found = if SIMD {
+                self.leaf_any(&r4, first, count, *t_max, stats)
             } else {
-                for tri in &self.tris[self.leaf_triangles(first, count)] {
-                    let h = r4.wt.intersect_within(tri.p0, tri.p1, tri.p2, *t_max);
-                    stats.triangle(h.is_some());
-                    if h.is_some() {
-                        found = true;
-                        return true;
-                    }
-                }
-                false
-            }
+                self.tris[self.leaf_triangles(first, count)]
+                    .iter()
+                    .any(|tri| {
+                        let h = r4.wt.intersect_within(tri.p0, tri.p1, tri.p2, *t_max);
+                        stats.triangle(h.is_some());
+                        h.is_some()
+                    })
+            };
+            found
         });
         found
     }
@@ -362,69 +398,43 @@ impl Bvh {
         let rb = RayBoxes::new(ray);
         let wt = WatertightRay::new(ray);
         self.traverse::<C, false>(&rb, ray.t_max, stats, |first, count, _, stats| {
-            for i in self.leaf_triangles(first, count) {
-                let tri = &self.tris[i];
-                let h = wt.intersect(tri.p0, tri.p1, tri.p2);
-                stats.triangle(h.is_some());
-                if let Some(h) = h {
-                    out.push(Hit {
-                        prim: self.prim_ids[i],
-                        t: h.t,
-                        u: h.u,
-                        v: h.v,
-                    });
-                }
-            }
+            self.leaf_all(&wt, first, count, out, stats);
             false
         });
         sort_hits(out);
     }
 
-    /// The closest intersection with `ray` in `(t_min, t_max)`, or `None`. Both faces of a
-    /// triangle are hit. Invalid rays (non-finite, zero direction) hit nothing.
-    /// Exact ties in `t` go to the lower index in [`Bvh::triangles`].
-    pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
+    /// [`Bvh::closest_hit`] over the 4-wide tree (the twin of the 8-wide traversal; same
+    /// answer bit for bit: both return the lexicographic minimum of `(t, index)`).
+    pub fn closest_hit4(&self, ray: &Ray) -> Option<Hit> {
         self.closest_impl::<_, true>(ray, &mut NoStats)
     }
 
-    /// [`Self::closest_hit`], adding the work done to `stats`.
-    pub fn closest_hit_with_stats(&self, ray: &Ray, stats: &mut TraversalStats) -> Option<Hit> {
+    /// [`Self::closest_hit4`], adding the work done (in 4-wide nodes) to `stats`.
+    pub fn closest_hit4_with_stats(&self, ray: &Ray, stats: &mut TraversalStats) -> Option<Hit> {
         self.closest_impl::<_, true>(ray, stats)
     }
 
-    /// [`Self::closest_hit`] with the scalar triangle test on each leaf triangle instead of the
-    /// 4-wide one: the slow twin the tests hold the SIMD leaf test against (same answer, bit
-    /// for bit).
+    /// [`Self::closest_hit4`] with the scalar triangle test on each leaf triangle instead of
+    /// the 4-wide one: the slow twin the tests hold the SIMD leaf test against (same answer,
+    /// bit for bit).
     pub fn closest_hit_scalar(&self, ray: &Ray) -> Option<Hit> {
         self.closest_impl::<_, false>(ray, &mut NoStats)
     }
 
-    /// Whether anything intersects `ray` in `(t_min, t_max)` (occlusion / shadow rays). Stops
-    /// at the first hit found, in no particular order.
-    pub fn any_hit(&self, ray: &Ray) -> bool {
+    /// [`Bvh::any_hit`] over the 4-wide tree.
+    pub fn any_hit4(&self, ray: &Ray) -> bool {
         self.any_impl::<_, true>(ray, &mut NoStats)
     }
 
-    /// [`Self::any_hit`], adding the work done to `stats`.
-    pub fn any_hit_with_stats(&self, ray: &Ray, stats: &mut TraversalStats) -> bool {
-        self.any_impl::<_, true>(ray, stats)
-    }
-
-    /// [`Self::any_hit`] with the scalar triangle test (the slow twin kept for tests).
+    /// [`Self::any_hit4`] with the scalar triangle test (the slow twin kept for tests).
     pub fn any_hit_scalar(&self, ray: &Ray) -> bool {
         self.any_impl::<_, false>(ray, &mut NoStats)
     }
 
-    /// Every intersection with `ray` in `(t_min, t_max)`, sorted by `t` (ties by primitive).
-    /// `out` is cleared first; it only allocates when it must grow. With the watertight test's
-    /// tie-break, a ray through a shared edge or vertex of a closed mesh is reported once.
-    pub fn all_hits(&self, ray: &Ray, out: &mut Vec<Hit>) {
+    /// [`Bvh::all_hits`] over the 4-wide tree.
+    pub fn all_hits4(&self, ray: &Ray, out: &mut Vec<Hit>) {
         self.all_impl(ray, out, &mut NoStats)
-    }
-
-    /// [`Self::all_hits`], adding the work done to `stats`.
-    pub fn all_hits_with_stats(&self, ray: &Ray, out: &mut Vec<Hit>, stats: &mut TraversalStats) {
-        self.all_impl(ray, out, stats)
     }
 }
 

@@ -1,8 +1,11 @@
-//! The packet traversal against single rays: `closest_hit_packet` returns exactly
-//! `closest_hit` for every ray (prim, t, u, v bit for bit), for camera rays grouped in 4x4 and
-//! 4x2 pixel tiles on the built-in scenes and Sponza, for partially filled packets, packets
-//! with invalid rays (inactive lanes), packets of incoherent rays, and slices longer than one
-//! packet; both the AVX2 node test (where the CPU has it) and the portable one.
+//! The packet traversals against single rays: `closest_hit_packet` (8-wide tree, AVX-512 lanes
+//! where the CPU has them, and its portable twin) and `closest_hit_packet4` (4-wide tree, AVX2
+//! and portable) return exactly `closest_hit` for every ray (prim, t, u, v bit for bit), for
+//! camera rays grouped in 4x4, 4x2 and 3x3 pixel tiles and one pixel's 16 subsamples on the
+//! built-in scenes and Sponza (interval culling and the SIMD-over-rays triangle test), for
+//! partially filled packets, packets with invalid rays (inactive lanes), packets of incoherent
+//! rays (mixed signs and axis permutations), rays through shared vertices from one origin
+//! (exact lanes), and slices longer than one packet.
 
 mod common;
 
@@ -53,14 +56,43 @@ fn check_packet(bvh: &Bvh, packet: &[Ray], what: &str) -> usize {
     // The portable (SSE / scalar) node test, the twin of the AVX2 one.
     let mut portable = vec![None; packet.len()];
     bvh.closest_hit_packet_portable(packet, &mut portable);
+    let mut four = vec![None; packet.len()];
+    bvh.closest_hit_packet4(packet, &mut four);
+    let mut four_portable = vec![None; packet.len()];
+    bvh.closest_hit_packet4_portable(packet, &mut four_portable);
     let mut hits = 0;
-    for ((r, o), p) in packet.iter().zip(&out).zip(&portable) {
+    for (i, r) in packet.iter().enumerate() {
         let single = bvh.closest_hit(r);
-        assert_eq!(bits(*o), bits(single), "{what}: {r:?}");
-        assert_eq!(bits(*p), bits(single), "{what}, portable: {r:?}");
+        assert_eq!(bits(out[i]), bits(single), "{what}: {r:?}");
+        assert_eq!(bits(portable[i]), bits(single), "{what}, portable: {r:?}");
+        assert_eq!(bits(four[i]), bits(single), "{what}, 4-wide: {r:?}");
+        assert_eq!(
+            bits(four_portable[i]),
+            bits(single),
+            "{what}, 4-wide portable: {r:?}"
+        );
         hits += single.is_some() as usize;
     }
     hits
+}
+
+/// Each pixel's 16 subsample rays (a 4x4 grid of offsets within the pixel), pixel by pixel.
+fn pixel_subsamples(scene: &Scene, w: u32, h: u32) -> Vec<Vec<Ray>> {
+    let cam = Pinhole::new(&scene.camera(None).unwrap(), w, h).unwrap();
+    let mut out = Vec::new();
+    for y in 0..h {
+        for x in 0..w {
+            let p: Vec<Ray> = (0..16)
+                .filter_map(|k| {
+                    let o = Vec2::new((k % 4) as f32 + 0.5, (k / 4) as f32 + 0.5) / 4.0;
+                    let film = Vec2::new(x as f32, y as f32) + o;
+                    cam.generate_ray(film, Vec2::splat(0.5), 0).map(|c| c.ray)
+                })
+                .collect();
+            out.push(p);
+        }
+    }
+    out
 }
 
 fn check_scene(scene: &Scene, w: u32, h: u32) {
@@ -70,6 +102,9 @@ fn check_scene(scene: &Scene, w: u32, h: u32) {
         for p in tiles(scene, w, h, tw, th) {
             hits += check_packet(&bvh, &p, &scene.name);
         }
+    }
+    for p in pixel_subsamples(scene, w / 2, h / 2) {
+        hits += check_packet(&bvh, &p, &scene.name);
     }
     assert!(hits > 0, "{}", scene.name);
 }
@@ -120,6 +155,13 @@ fn inactive_lanes_incoherent_rays_and_long_slices() {
             })
             .collect();
         check_packet(&bvh, &rays, "grid vertex");
+    }
+    // One origin, rays at 16 neighbouring vertices (one axis permutation: the SIMD-over-rays
+    // triangle test, with exactly-zero edge functions at the vertices).
+    let o = Vec3::new(0.1, 3.0, 0.2);
+    for chunk in grid.positions.chunks(PACKET_SIZE) {
+        let rays: Vec<Ray> = chunk.iter().map(|p| Ray::new(o, *p - o)).collect();
+        check_packet(&bvh, &rays, "grid vertices, one origin");
     }
     // An empty BVH and an empty slice.
     let empty = Bvh::build(&mesh_from(Vec::new(), Vec::new()));

@@ -251,6 +251,37 @@ fn structure_invariants_and_stats() {
             }
         }
     }
+    // The 8-wide tree: the same leaves (each triangle once), children after parents.
+    let mut seen8 = vec![0u32; bvh.triangles().len()];
+    for (i, n) in bvh.nodes8().iter().enumerate() {
+        assert!((1..=8).contains(&n.num_children));
+        for lane in 0..8 {
+            let b = n.child_bounds(lane);
+            if lane >= n.num_children as usize {
+                assert!(b.is_empty() && n.child[lane] == parallax_bvh::node::EMPTY);
+                continue;
+            }
+            match parallax_bvh::ChildRef::decode(n.child[lane]) {
+                parallax_bvh::ChildRef::Inner(c) => {
+                    assert!(c as usize > i);
+                    assert_eq!(bvh.nodes8()[c as usize].bounds(), b);
+                }
+                parallax_bvh::ChildRef::Leaf { first, count } => {
+                    for t in bvh.leaf_triangles(first, count) {
+                        seen8[t] += 1;
+                        let tb = bvh.triangles()[t].bounds();
+                        assert!(b.contains(tb.min) && b.contains(tb.max));
+                    }
+                }
+            }
+        }
+    }
+    assert!(seen8.iter().all(|&c| c == 1));
+    assert_eq!(bvh.nodes8()[0].bounds(), mesh.bounds());
+    assert!(
+        bvh.nodes8().len() * 3 < bvh.node_count() * 2,
+        "8-wide is not wider"
+    );
     assert_eq!(bvh.bounds(), mesh.bounds());
     assert!(bvh.bytes() >= bvh.node_count() * 128 + 3000 * 40);
     // A 4-wide tree over 3000 triangles in leaves of <= 4 needs at least 250 nodes; SAH trees
@@ -270,7 +301,13 @@ fn structure_invariants_and_stats() {
         assert_eq!(bvh.any_hit_with_stats(r, &mut any), bvh.any_hit(r));
     }
     assert_eq!(s.rays, 1000);
-    assert!(s.box_tests >= s.nodes_visited && s.box_tests <= 4 * s.nodes_visited);
+    assert!(s.box_tests >= s.nodes_visited && s.box_tests <= 8 * s.nodes_visited);
+    let mut s4 = TraversalStats::default();
+    for r in &rays {
+        assert_eq!(bvh.closest_hit4_with_stats(r, &mut s4), bvh.closest_hit(r));
+    }
+    assert!(s4.box_tests >= s4.nodes_visited && s4.box_tests <= 4 * s4.nodes_visited);
+    assert!(s.nodes_visited < s4.nodes_visited, "{s:?} vs {s4:?}");
     // Culling works: far fewer triangle tests than brute force (3000 per ray), and an any-hit
     // query does no more work than a closest-hit query.
     assert!(s.per_ray(s.triangle_tests) < 150.0, "{s:?}");

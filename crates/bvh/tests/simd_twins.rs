@@ -1,6 +1,8 @@
-//! Every fast path against its slow twin, bit for bit: the 4-wide SIMD leaf test
-//! ([`Bvh::closest_hit`], [`Bvh::any_hit`]) against the scalar per-triangle test
-//! ([`Bvh::closest_hit_scalar`], [`Bvh::any_hit_scalar`]), on rays that hit interiors and on
+//! Every fast path against its slow twin, bit for bit: the 8-wide traversal with the AVX2 node
+//! test ([`Bvh::closest_hit`], [`Bvh::any_hit`], [`Bvh::all_hits`]) against its portable
+//! node test ([`Bvh::closest_hit8_portable`], [`Bvh::any_hit8_portable`]) and the 4-wide tree
+//! ([`Bvh::closest_hit4`], ...), and the 4-wide SIMD leaf test against the scalar
+//! per-triangle test ([`Bvh::closest_hit_scalar`], [`Bvh::any_hit_scalar`]), on rays that hit interiors and on
 //! rays aimed exactly at shared vertices and edges (where the SIMD lanes fall back to the
 //! scalar double-precision test and its tie-break), with leaves of 1, 4 and 15 triangles.
 
@@ -38,18 +40,42 @@ fn rays_for(mesh: &TriangleMesh, seed: u64, cap: usize) -> Vec<Ray> {
 /// Asserts the twins agree on every ray; returns how many rays hit.
 fn check_twins(bvh: &Bvh, rays: &[Ray], what: &str) -> usize {
     let mut hits = 0;
+    let bits = |h: Option<parallax_bvh::Hit>| {
+        // Bit-identical t, u, v (PartialEq on f32 would accept -0.0 == 0.0).
+        h.map(|h| (h.prim, h.t.to_bits(), h.u.to_bits(), h.v.to_bits()))
+    };
+    let (mut all8, mut all4) = (Vec::new(), Vec::new());
     for r in rays {
         let fast = bvh.closest_hit(r);
         let slow = bvh.closest_hit_scalar(r);
-        assert_eq!(fast, slow, "{what}: closest hit differs for {r:?}");
-        // Bit-identical t, u, v (PartialEq on f32 would accept -0.0 == 0.0).
-        if let (Some(a), Some(b)) = (fast, slow) {
-            assert_eq!(
-                [a.t.to_bits(), a.u.to_bits(), a.v.to_bits()],
-                [b.t.to_bits(), b.u.to_bits(), b.v.to_bits()],
-                "{what}: {r:?}"
-            );
-        }
+        assert_eq!(
+            bits(fast),
+            bits(slow),
+            "{what}: closest hit differs for {r:?}"
+        );
+        assert_eq!(
+            bits(fast),
+            bits(bvh.closest_hit4(r)),
+            "{what}: 4-wide, {r:?}"
+        );
+        assert_eq!(
+            bits(fast),
+            bits(bvh.closest_hit8_portable(r)),
+            "{what}: portable, {r:?}"
+        );
+        assert_eq!(
+            bvh.any_hit(r),
+            bvh.any_hit4(r),
+            "{what}: any hit 4-wide, {r:?}"
+        );
+        assert_eq!(
+            bvh.any_hit(r),
+            bvh.any_hit8_portable(r),
+            "{what}: any hit, {r:?}"
+        );
+        bvh.all_hits(r, &mut all8);
+        bvh.all_hits4(r, &mut all4);
+        assert_eq!(all8, all4, "{what}: all hits, {r:?}");
         assert_eq!(
             bvh.any_hit(r),
             bvh.any_hit_scalar(r),

@@ -35,9 +35,47 @@ pub struct RaysArgs {
     /// Timed repetitions per mode (the best is reported).
     #[arg(long, default_value_t = 3)]
     pub repeats: u32,
+    /// Leave out the 16-subsamples-per-pixel (MSAA packet) mode.
+    #[arg(long)]
+    pub no_msaa: bool,
+    /// Embree's build quality for the traced scene: low, medium or high.
+    #[arg(long, default_value = "high", value_parser = parse_quality)]
+    pub embree_quality: parallax_embree::Quality,
     /// Write the rows as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
+}
+
+fn parse_quality(s: &str) -> Result<parallax_embree::Quality, String> {
+    s.parse()
+        .map_err(|e: parallax_embree::EmbreeError| e.to_string())
+}
+
+fn print_rays(rows: &[rays::RaysRow], embree_missing: Option<&str>) {
+    println!(
+        "| scene | mode | method | rays | build ms | trace ms | Mrays/s | vs Embree best \
+         | same prim | hit rate | threads |"
+    );
+    println!("|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    for r in rows {
+        let vs = r.vs_embree_best.map_or("-".into(), |v| format!("{v:.2}x"));
+        println!(
+            "| {} | {} | {} | {} | {:.1} | {:.1} | {:.2} | {vs} | {:.4}% | {:.3} | {} |",
+            r.scene,
+            r.mode,
+            r.method,
+            r.rays,
+            r.build_ms,
+            r.trace_ms,
+            r.mrays_per_s,
+            100.0 * r.same_prim,
+            r.hit_rate,
+            r.threads
+        );
+    }
+    if let Some(why) = embree_missing {
+        println!("\nNo Embree rows: {why}");
+    }
 }
 
 pub fn run(cmd: &BenchCommand, quiet: bool) -> Result<()> {
@@ -50,25 +88,15 @@ pub fn run(cmd: &BenchCommand, quiet: bool) -> Result<()> {
         BenchCommand::Rays(a) => {
             let scene = a.view.load_scene()?;
             let camera = a.view.camera(&scene, a.width, a.height)?;
-            let rows = rays::run(&scene, &camera, a.repeats)?;
+            let opts = rays::RaysOptions {
+                repeats: a.repeats,
+                msaa: !a.no_msaa,
+                embree_quality: a.embree_quality,
+            };
+            let report = rays::run(&scene, &camera, &opts)?;
+            let rows = report.rows;
             if !quiet {
-                println!(
-                    "| scene | mode | rays | build ms | trace ms | Mrays/s | hit rate | threads |"
-                );
-                println!("|---|---|---|---|---|---|---|---|");
-                for r in &rows {
-                    println!(
-                        "| {} | {} | {} | {:.1} | {:.1} | {:.2} | {:.3} | {} |",
-                        r.scene,
-                        r.mode,
-                        r.rays,
-                        r.build_ms,
-                        r.trace_ms,
-                        r.mrays_per_s,
-                        r.hit_rate,
-                        r.threads
-                    );
-                }
+                print_rays(&rows, report.embree_missing.as_deref());
             }
             if let Some(p) = &a.json {
                 std::fs::write(p, serde_json::to_string_pretty(&rows)?)

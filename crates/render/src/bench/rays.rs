@@ -1,56 +1,235 @@
-//! `parallax bench rays`: BVH build time and closest-hit throughput for coherent primary rays
-//! and incoherent (diffuse-bounce) rays.
+//! `parallax bench rays`: BVH build time and closest-hit throughput of parallax's BVH against
+//! Embree 3 (when built with the `embree` feature, [`parallax_embree`]) on the *same* rays, in
+//! the same process.
 //!
-//! Rays are generated up front and only traversal is timed, on all rayon threads; each mode is
-//! run `repeats` times and the best run is reported (least disturbed by other processes).
+//! Ray sets ("modes"), generated up front (only tracing is timed):
+//! - `primary`: one ray per pixel centre, pixels in 4x4 tiles (tile after tile in scanline
+//!   order, scanline order within a tile), so 16 consecutive rays are one tile: the packets of
+//!   the packet methods (8 consecutive rays: half a tile, 4x2 pixels).
+//! - `msaa16`: 16 subsample rays per pixel (the Sobol' (0,2) offsets of HVVR's sample sets,
+//!   Hunt et al. 2018 §5.1), a pixel's 16 subsamples consecutive: a packet is one pixel
+//!   (MSAA-style packets). Traced in bands of rows so memory stays bounded.
+//! - `random`: a cosine-distributed bounce ray from each primary hit (incoherent), packets of
+//!   16 consecutive rays (neighbouring pixels' bounces).
+//!
+//! Methods ([`Method`]): parallax's single rays and 16-ray packets, Embree's `rtcIntersect1`,
+//! `rtcIntersect8`, `rtcIntersect16` and `rtcIntersect1M` streams. Timing: rounds of all
+//! methods in turn (round robin, so a burst of load from other processes hurts one run of each
+//! method, not all runs of one), best round per method and band, on all rayon threads, over
+//! chunks of [`CHUNK`] rays. Every method's answers are compared with parallax's single-ray
+//! answers (same primitive, or both miss): parallax's packets must agree exactly, Embree on
+//! almost every ray (its test is not watertight, so at a shared edge it may report the
+//! neighbour).
+//!
+//! | option ([`RaysOptions`]) | type | default | meaning |
+//! |---|---|---|---|
+//! | `repeats` | u32 | 3 | timed rounds per band (the best counts) |
+//! | `msaa` | bool | true | include the `msaa16` mode |
+//! | `embree_quality` | [`Quality`] | `High` | Embree's build quality for the traced scene |
 
 use std::time::Instant;
 
 use glam::Vec2;
-use parallax_bvh::{Bvh, BvhError};
+use parallax_bvh::{Bvh, BvhError, PACKET_SIZE};
 use parallax_core::Ray;
+use parallax_core::cpu_time::{ms_between, process_cpu_ns};
 use parallax_core::math::Frame;
+use parallax_core::sampling::lowdisc::sobol_2d;
 use parallax_core::sampling::{Rng, warp};
+use parallax_embree::{EmbreeHit, EmbreeScene, Options, Quality};
 use parallax_scene::Scene;
 use parallax_scene::camera::{Camera, CameraModel};
 use rayon::prelude::*;
 use serde::Serialize;
 
-/// One row of the rays benchmark.
+/// Rays per parallel work item (a multiple of every packet width).
+pub const CHUNK: usize = 1024;
+/// Subsamples per pixel of the `msaa16` mode.
+pub const MSAA_SPP: u32 = 16;
+/// Rows per band of the `msaa16` mode (bounds its memory to ~45 rows x width x 16 rays).
+const MSAA_BAND_ROWS: u32 = 45;
+
+/// Bench options (table in the module docs).
+#[derive(Clone, Copy, Debug)]
+pub struct RaysOptions {
+    pub repeats: u32,
+    pub msaa: bool,
+    pub embree_quality: Quality,
+}
+
+impl Default for RaysOptions {
+    fn default() -> Self {
+        Self {
+            repeats: 3,
+            msaa: true,
+            embree_quality: Quality::High,
+        }
+    }
+}
+
+/// One row of the rays benchmark: a build, or one method on one ray set.
 #[derive(Clone, Debug, Serialize)]
 pub struct RaysRow {
-    /// "primary" (one ray per pixel centre), "primary_packet" (the same rays in 4x4 pixel
-    /// tiles, traced with `Bvh::closest_hit_packet`) or "random" (cosine-distributed bounce
-    /// rays from the primary hit points).
+    /// `build`, `primary`, `msaa16` or `random` (module docs).
     pub mode: String,
+    /// e.g. `bvh single`, `bvh packet16`, `embree rtcIntersect16`, `embree build high`.
+    pub method: String,
     pub scene: String,
     pub rays: u64,
+    /// Build of the structure the method traces (ms, wall).
     pub build_ms: f64,
+    /// Best round, summed over bands (ms, wall).
     pub trace_ms: f64,
+    /// CPU time of the process in that round (ms, all threads).
+    pub trace_cpu_ms: f64,
     pub mrays_per_s: f64,
+    /// Throughput over the best Embree method of the same mode (None without Embree).
+    pub vs_embree_best: Option<f64>,
+    /// Fraction of rays whose closest primitive (or miss) equals parallax's single-ray answer.
+    pub same_prim: f64,
     /// Fraction of rays that hit geometry.
     pub hit_rate: f64,
     pub threads: usize,
 }
 
-/// The rays of both modes for `camera`'s view.
-pub fn make_rays(bvh: &Bvh, scene: &Scene, camera: &Camera) -> (Vec<Ray>, Vec<Ray>) {
+/// The outcome of [`run`]: the rows, and why Embree is missing when it is.
+#[derive(Clone, Debug)]
+pub struct RaysReport {
+    pub rows: Vec<RaysRow>,
+    /// `None` when Embree ran; else the reason (e.g. [`parallax_embree::ENABLE_HINT`]).
+    pub embree_missing: Option<String>,
+}
+
+/// A method's answer for one ray: (primitive, t), `None` for a miss.
+type Answer = Option<(u32, f32)>;
+
+/// The traced methods.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Method {
+    BvhSingle,
+    BvhPacket16,
+    EmbreeIntersect1,
+    EmbreeIntersect8,
+    EmbreeIntersect16,
+    EmbreeStream,
+}
+
+impl Method {
+    pub const ALL: [Method; 6] = [
+        Method::BvhSingle,
+        Method::BvhPacket16,
+        Method::EmbreeIntersect1,
+        Method::EmbreeIntersect8,
+        Method::EmbreeIntersect16,
+        Method::EmbreeStream,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::BvhSingle => "bvh single",
+            Method::BvhPacket16 => "bvh packet16",
+            Method::EmbreeIntersect1 => "embree rtcIntersect1",
+            Method::EmbreeIntersect8 => "embree rtcIntersect8",
+            Method::EmbreeIntersect16 => "embree rtcIntersect16",
+            Method::EmbreeStream => "embree rtcIntersect1M",
+        }
+    }
+
+    pub fn is_embree(self) -> bool {
+        !matches!(self, Method::BvhSingle | Method::BvhPacket16)
+    }
+
+    /// Traces `rays` (one chunk) into `out`; `coherent` picks Embree's stream context flag.
+    fn trace(
+        self,
+        bvh: &Bvh,
+        emb: Option<&EmbreeScene>,
+        rays: &[Ray],
+        coherent: bool,
+        out: &mut [Answer],
+    ) {
+        let ph = |h: Option<parallax_bvh::Hit>| h.map(|h| (h.prim, h.t));
+        match self {
+            Method::BvhSingle => {
+                for (r, o) in rays.iter().zip(out) {
+                    *o = ph(bvh.closest_hit(r));
+                }
+            }
+            Method::BvhPacket16 => {
+                let mut tmp = [None; PACKET_SIZE];
+                for (p, o) in rays.chunks(PACKET_SIZE).zip(out.chunks_mut(PACKET_SIZE)) {
+                    bvh.closest_hit_packet(p, &mut tmp);
+                    for (o, h) in o.iter_mut().zip(tmp) {
+                        *o = ph(h);
+                    }
+                }
+            }
+            _ => {
+                let emb = emb.expect("Embree method without an Embree scene");
+                let mut tmp = [None::<EmbreeHit>; CHUNK];
+                let tmp = &mut tmp[..rays.len()];
+                match self {
+                    Method::EmbreeIntersect1 => emb.closest_hits(rays, tmp),
+                    Method::EmbreeIntersect8 => emb.closest_hit_packets(rays, 8, tmp),
+                    Method::EmbreeIntersect16 => emb.closest_hit_packets(rays, 16, tmp),
+                    _ => emb.closest_hit_stream(rays, coherent, tmp),
+                }
+                for (o, h) in out.iter_mut().zip(tmp.iter()) {
+                    *o = h.map(|h| (h.prim, h.t));
+                }
+            }
+        }
+    }
+}
+
+/// Primary rays through pixel centres in 4x4 tiles (module docs); pixels without a ray (outside
+/// a fisheye's circle) are skipped, which shortens their tile's packet.
+pub fn primary_tiled(camera: &Camera) -> Vec<Ray> {
     let (w, h) = (camera.width(), camera.height());
-    let primary: Vec<Ray> = (0..h)
-        .into_par_iter()
-        .flat_map_iter(|y| {
-            (0..w).filter_map(move |x| {
-                camera
-                    .generate_ray(
-                        Vec2::new(x as f32 + 0.5, y as f32 + 0.5),
-                        Vec2::splat(0.5),
-                        1,
-                    )
-                    .map(|r| r.ray)
+    let tiles: Vec<(u32, u32)> = (0..h.div_ceil(4))
+        .flat_map(|ty| (0..w.div_ceil(4)).map(move |tx| (4 * tx, 4 * ty)))
+        .collect();
+    tiles
+        .par_iter()
+        .flat_map_iter(|&(x0, y0)| {
+            (y0..(y0 + 4).min(h)).flat_map(move |y| {
+                (x0..(x0 + 4).min(w)).filter_map(move |x| {
+                    let film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                    camera
+                        .generate_ray(film, Vec2::splat(0.5), 1)
+                        .map(|r| r.ray)
+                })
             })
         })
+        .collect()
+}
+
+/// The `msaa16` rays of rows `y0..y1`: each pixel's 16 subsample rays, consecutive.
+pub fn msaa_band(camera: &Camera, y0: u32, y1: u32) -> Vec<Ray> {
+    let offsets: Vec<Vec2> = (0..MSAA_SPP)
+        .map(|k| sobol_2d(k, 0x9e37_79b9) - Vec2::splat(0.5))
         .collect();
-    let random: Vec<Ray> = primary
+    let w = camera.width();
+    (y0..y1)
+        .into_par_iter()
+        .flat_map_iter(|y| {
+            let offsets = &offsets;
+            (0..w).flat_map(move |x| {
+                offsets.iter().filter_map(move |o| {
+                    let film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + *o;
+                    camera
+                        .generate_ray(film, Vec2::splat(0.5), 1)
+                        .map(|r| r.ray)
+                })
+            })
+        })
+        .collect()
+}
+
+/// Cosine-distributed bounce rays from the closest hits of `primary` (misses give no ray),
+/// seeded per ray index.
+pub fn bounce_rays(bvh: &Bvh, scene: &Scene, primary: &[Ray]) -> Vec<Ray> {
+    primary
         .par_iter()
         .enumerate()
         .filter_map(|(i, r)| {
@@ -65,110 +244,182 @@ pub fn make_rays(bvh: &Bvh, scene: &Scene, camera: &Camera) -> (Vec<Ray>, Vec<Ra
             let scale = 1e-4 * p.abs().max_element().max(1.0);
             Some(Ray::new(p + n * scale, dir))
         })
-        .collect();
-    (primary, random)
+        .collect()
 }
 
-/// Times closest-hit queries over `rays` (best of `repeats`); returns (ms, hits).
-pub fn time_closest(bvh: &Bvh, rays: &[Ray], repeats: u32) -> (f64, u64) {
-    let mut best = f64::INFINITY;
-    let mut hits = 0;
+/// Per-method results accumulated over the bands of one mode.
+#[derive(Clone, Copy, Default)]
+struct Acc {
+    ms: f64,
+    cpu_ms: f64,
+    same: u64,
+    hits: u64,
+}
+
+/// Times every method on one band of rays (interleaved rounds, best round) and counts its
+/// agreement with parallax's single rays.
+fn time_band(
+    methods: &[Method],
+    bvh: &Bvh,
+    emb: Option<&EmbreeScene>,
+    rays: &[Ray],
+    coherent: bool,
+    repeats: u32,
+    acc: &mut [Acc],
+) {
+    let mut outs: Vec<Vec<Answer>> = methods.iter().map(|_| vec![None; rays.len()]).collect();
+    let mut best = vec![(f64::INFINITY, f64::INFINITY); methods.len()];
     for _ in 0..repeats.max(1) {
-        let t = Instant::now();
-        hits = rays
-            .par_chunks(1024)
-            .map(|c| c.iter().filter(|r| bvh.closest_hit(r).is_some()).count() as u64)
-            .sum();
-        best = best.min(t.elapsed().as_secs_f64() * 1e3);
+        for ((m, out), b) in methods.iter().zip(&mut outs).zip(&mut best) {
+            let (c0, t0) = (process_cpu_ns(), Instant::now());
+            rays.par_chunks(CHUNK)
+                .zip(out.par_chunks_mut(CHUNK))
+                .for_each(|(r, o)| m.trace(bvh, emb, r, coherent, o));
+            let wall = t0.elapsed().as_secs_f64() * 1e3;
+            let cpu = ms_between(c0, process_cpu_ns());
+            if wall < b.0 {
+                *b = (wall, cpu);
+            }
+        }
     }
-    (best, hits)
+    // Method 0 is parallax's single rays, the reference.
+    let reference = &outs[0];
+    for ((out, b), a) in outs.iter().zip(&best).zip(acc) {
+        a.ms += b.0;
+        a.cpu_ms += b.1;
+        a.same += out
+            .par_iter()
+            .zip(reference)
+            .filter(|(x, y)| x.map(|h| h.0) == y.map(|h| h.0))
+            .count() as u64;
+        a.hits += out.par_iter().filter(|x| x.is_some()).count() as u64;
+    }
 }
 
-/// The primary rays of [`make_rays`] regrouped into `tile x tile` pixel tiles, tile after tile
-/// in scanline order: `(rays, packet lengths)`; a packet holds at most
-/// [`parallax_bvh::PACKET_SIZE`] rays (edge tiles and pixels without a ray make it shorter).
-pub fn primary_tiles(camera: &Camera, tile: u32) -> (Vec<Ray>, Vec<u32>) {
-    let (w, h) = (camera.width(), camera.height());
-    let tile = tile.clamp(1, 4);
-    let mut rays = Vec::with_capacity((w * h) as usize);
-    let mut lens = Vec::new();
-    for ty in (0..h).step_by(tile as usize) {
-        for tx in (0..w).step_by(tile as usize) {
-            let start = rays.len();
-            for y in ty..(ty + tile).min(h) {
-                for x in tx..(tx + tile).min(w) {
-                    let film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-                    if let Some(r) = camera.generate_ray(film, Vec2::splat(0.5), 1) {
-                        rays.push(r.ray);
+/// Builds the BVH (and Embree's scenes when available), then measures every mode.
+pub fn run(scene: &Scene, camera: &Camera, opts: &RaysOptions) -> Result<RaysReport, BvhError> {
+    let threads = rayon::current_num_threads();
+    let mut rows = Vec::new();
+    let row = |mode: &str, method: &str, build_ms: f64| RaysRow {
+        mode: mode.into(),
+        method: method.into(),
+        scene: scene.name.clone(),
+        rays: 0,
+        build_ms,
+        trace_ms: 0.0,
+        trace_cpu_ms: 0.0,
+        mrays_per_s: 0.0,
+        vs_embree_best: None,
+        same_prim: 1.0,
+        hit_rate: 0.0,
+        threads,
+    };
+    // Builds: each twice, the faster counts (the first Embree device also starts its threads).
+    let mut bvh_ms = f64::INFINITY;
+    let mut bvh = None;
+    for _ in 0..2 {
+        let t = Instant::now();
+        bvh = Some(Bvh::try_build(&scene.mesh)?);
+        bvh_ms = bvh_ms.min(t.elapsed().as_secs_f64() * 1e3);
+    }
+    let bvh = bvh.expect("built");
+    rows.push(row("build", "bvh", bvh_ms));
+    let mut embree = None;
+    let mut embree_missing = None;
+    let mut embree_ms = 0.0;
+    for q in [Quality::Low, Quality::Medium, Quality::High] {
+        let mut best = f64::INFINITY;
+        for _ in 0..2 {
+            let t = Instant::now();
+            match EmbreeScene::new(
+                &scene.mesh,
+                Options {
+                    quality: q,
+                    robust: false,
+                },
+            ) {
+                Ok(s) => {
+                    best = best.min(t.elapsed().as_secs_f64() * 1e3);
+                    if q == opts.embree_quality {
+                        embree = Some(s);
                     }
                 }
-            }
-            if rays.len() > start {
-                lens.push((rays.len() - start) as u32);
+                Err(e) => {
+                    embree_missing = Some(e.to_string());
+                    break;
+                }
             }
         }
+        if embree_missing.is_some() {
+            break;
+        }
+        if q == opts.embree_quality {
+            embree_ms = best;
+        }
+        rows.push(row("build", &format!("embree {}", q.name()), best));
     }
-    (rays, lens)
-}
+    let methods: Vec<Method> = Method::ALL
+        .into_iter()
+        .filter(|m| embree.is_some() || !m.is_embree())
+        .collect();
 
-/// Times packet closest-hit queries over the tiles of [`primary_tiles`] (best of `repeats`);
-/// returns (ms, hits).
-pub fn time_closest_packets(bvh: &Bvh, rays: &[Ray], lens: &[u32], repeats: u32) -> (f64, u64) {
-    let mut starts = Vec::with_capacity(lens.len());
-    let mut s = 0usize;
-    for &l in lens {
-        starts.push(s);
-        s += l as usize;
+    let primary = primary_tiled(camera);
+    let random = bounce_rays(&bvh, scene, &primary);
+    let mut modes: Vec<(&str, bool)> = vec![("primary", true)];
+    if opts.msaa {
+        modes.push(("msaa16", true));
     }
-    let mut best = f64::INFINITY;
-    let mut hits = 0;
-    for _ in 0..repeats.max(1) {
-        let t = Instant::now();
-        hits = starts
-            .par_iter()
-            .zip(lens)
-            .with_min_len(64)
-            .map(|(&s, &l)| {
-                let mut out = [None; parallax_bvh::PACKET_SIZE];
-                let p = &rays[s..s + l as usize];
-                bvh.closest_hit_packet(p, &mut out);
-                out[..p.len()].iter().filter(|h| h.is_some()).count() as u64
-            })
-            .sum();
-        best = best.min(t.elapsed().as_secs_f64() * 1e3);
-    }
-    (best, hits)
-}
-
-/// Builds the BVH and measures the modes.
-pub fn run(scene: &Scene, camera: &Camera, repeats: u32) -> Result<Vec<RaysRow>, BvhError> {
-    let t = Instant::now();
-    let bvh = Bvh::try_build(&scene.mesh)?;
-    let build_ms = t.elapsed().as_secs_f64() * 1e3;
-    let (primary, random) = make_rays(&bvh, scene, camera);
-    let (tiled, lens) = primary_tiles(camera, 4);
-    let threads = rayon::current_num_threads();
-    Ok([
-        ("primary", primary, None),
-        ("primary_packet", tiled, Some(lens)),
-        ("random", random, None),
-    ]
-    .into_iter()
-    .map(|(mode, rays, lens)| {
-        let (ms, hits) = match &lens {
-            Some(l) => time_closest_packets(&bvh, &rays, l, repeats),
-            None => time_closest(&bvh, &rays, repeats),
+    modes.push(("random", false));
+    for (mode, coherent) in modes {
+        let mut acc = vec![Acc::default(); methods.len()];
+        let mut n = 0u64;
+        let mut band = |rays: &[Ray], acc: &mut [Acc]| {
+            time_band(
+                &methods,
+                &bvh,
+                embree.as_ref(),
+                rays,
+                coherent,
+                opts.repeats,
+                acc,
+            );
+            rays.len() as u64
         };
-        RaysRow {
-            mode: mode.into(),
-            scene: scene.name.clone(),
-            rays: rays.len() as u64,
-            build_ms,
-            trace_ms: ms,
-            mrays_per_s: rays.len() as f64 / (ms * 1e3),
-            hit_rate: hits as f64 / rays.len().max(1) as f64,
-            threads,
+        match mode {
+            "primary" => n += band(&primary, &mut acc),
+            "random" => n += band(&random, &mut acc),
+            _ => {
+                for y0 in (0..camera.height()).step_by(MSAA_BAND_ROWS as usize) {
+                    let y1 = (y0 + MSAA_BAND_ROWS).min(camera.height());
+                    n += band(&msaa_band(camera, y0, y1), &mut acc);
+                }
+            }
         }
+        let mrays = |a: &Acc| n as f64 / (a.ms * 1e3);
+        let best_embree = methods
+            .iter()
+            .zip(&acc)
+            .filter(|(m, _)| m.is_embree())
+            .map(|(_, a)| mrays(a))
+            .fold(None, |b: Option<f64>, x| Some(b.map_or(x, |b| b.max(x))));
+        for (m, a) in methods.iter().zip(&acc) {
+            let mut r = row(
+                mode,
+                m.name(),
+                if m.is_embree() { embree_ms } else { bvh_ms },
+            );
+            r.rays = n;
+            r.trace_ms = a.ms;
+            r.trace_cpu_ms = a.cpu_ms;
+            r.mrays_per_s = mrays(a);
+            r.vs_embree_best = best_embree.map(|b| mrays(a) / b);
+            r.same_prim = a.same as f64 / n.max(1) as f64;
+            r.hit_rate = a.hits as f64 / n.max(1) as f64;
+            rows.push(r);
+        }
+    }
+    Ok(RaysReport {
+        rows,
+        embree_missing,
     })
-    .collect())
 }

@@ -1,0 +1,72 @@
+//! Collapsing the binary build tree into the 8-wide layout of [`crate::node8`], the same way as
+//! the 4-wide collapse (`collapse.rs`: open the inner child of largest surface area until the
+//! node has eight children; Wald, Benthin & Boulos 2008), in depth-first preorder, leaf
+//! children first. Leaves are the binary tree's leaves, so they reuse the blocks of triangles
+//! the 4-wide collapse laid out (`Collapsed::leaf_blocks` maps a leaf to its first block), and
+//! both trees answer every query from the same triangle array.
+
+use crate::build::BNode;
+use crate::collapse::open_largest;
+use crate::node::ChildRef;
+use crate::node8::Node8;
+
+/// The 8-wide tree: nodes (root first) and the depth of the deepest node (root = 1).
+pub(crate) struct Collapsed8 {
+    pub nodes: Vec<Node8>,
+    pub depth: u32,
+}
+
+/// Collapses `root` into 8-wide nodes; `leaf_blocks[start]` is the first block of the binary
+/// leaf whose references start at `start`.
+pub(crate) fn collapse8(root: &BNode, leaf_blocks: &[u32], node_hint: usize) -> Collapsed8 {
+    let mut out = Collapsed8 {
+        nodes: Vec::with_capacity(node_hint),
+        depth: 0,
+    };
+    match root {
+        BNode::Leaf { .. } => emit(&mut out, leaf_blocks, &[root], 1),
+        BNode::Inner { children, .. } => {
+            emit(&mut out, leaf_blocks, &[&children[0], &children[1]], 1)
+        }
+    };
+    out
+}
+
+fn emit(out: &mut Collapsed8, leaf_blocks: &[u32], start: &[&BNode], depth: u32) -> u32 {
+    let index = out.nodes.len();
+    out.nodes.push(Node8::EMPTY);
+    out.depth = out.depth.max(depth);
+    let (kids, len) = open_largest::<8>(start);
+    let mut node = Node8::EMPTY;
+    let mut lane = 0;
+    for k in kids[..len].iter().flatten() {
+        if let BNode::Leaf {
+            bounds,
+            start,
+            count,
+        } = k
+        {
+            let first = leaf_blocks[*start as usize];
+            debug_assert_ne!(first, u32::MAX, "leaf without blocks");
+            node.child[lane] = ChildRef::Leaf {
+                first,
+                count: *count,
+            }
+            .encode();
+            node.set_child_bounds(lane, *bounds);
+            lane += 1;
+        }
+    }
+    out.nodes[index] = node;
+    for k in kids[..len].iter().flatten() {
+        if let BNode::Inner { children, bounds } = k {
+            let child = emit(out, leaf_blocks, &[&children[0], &children[1]], depth + 1);
+            let n = &mut out.nodes[index];
+            n.child[lane] = ChildRef::Inner(child).encode();
+            n.set_child_bounds(lane, *bounds);
+            lane += 1;
+        }
+    }
+    out.nodes[index].num_children = lane as u32;
+    index as u32
+}

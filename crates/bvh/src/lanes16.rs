@@ -1,0 +1,375 @@
+//! Sixteen f32 lanes, one per ray of a packet: the vector operations the packet traversal
+//! (`packet8.rs`) is written in, for AVX-512 (one 512-bit register, behind runtime detection)
+//! and a portable twin (four glam `Vec4`s: SSE2 on x86_64, scalar elsewhere).
+//!
+//! Each operation is the same IEEE operation on every lane in both versions, so the two give
+//! bit-identical results: `max(a, b)` / `min(a, b)` return `b` when either is NaN (`maxps` /
+//! `minps` semantics, see `simd.rs`); comparisons are ordered (false on NaN) except `ne`
+//! (true on NaN, as `cmpneq`); no fused multiply-add. A value of an implementing type is a
+//! token: the AVX-512 one can only be made by [`Avx512::new`], which is `unsafe` and requires
+//! AVX-512F, so the safe methods below never run where the instructions do not exist.
+
+use glam::{BVec4A, Vec4};
+
+/// Sixteen values aligned for one 512-bit load.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(64))]
+pub(crate) struct F16(pub [f32; 16]);
+
+/// Sixteen u32 values (triangle indices) aligned for one 512-bit load.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(64))]
+pub(crate) struct U16(pub [u32; 16]);
+
+/// The lane operations (module docs). Masks are `u32` with bit `i` = lane `i`.
+pub(crate) trait Lanes16: Copy {
+    type V: Copy;
+    fn splat(self, x: f32) -> Self::V;
+    fn load(self, a: &F16) -> Self::V;
+    fn store(self, v: Self::V, a: &mut F16);
+    fn add(self, a: Self::V, b: Self::V) -> Self::V;
+    fn sub(self, a: Self::V, b: Self::V) -> Self::V;
+    fn mul(self, a: Self::V, b: Self::V) -> Self::V;
+    fn div(self, a: Self::V, b: Self::V) -> Self::V;
+    /// `a > b ? a : b` (NaN in either gives `b`).
+    fn max(self, a: Self::V, b: Self::V) -> Self::V;
+    /// `a < b ? a : b` (NaN in either gives `b`).
+    fn min(self, a: Self::V, b: Self::V) -> Self::V;
+    fn le(self, a: Self::V, b: Self::V) -> u32;
+    fn lt(self, a: Self::V, b: Self::V) -> u32;
+    fn gt(self, a: Self::V, b: Self::V) -> u32;
+    fn eq(self, a: Self::V, b: Self::V) -> u32;
+    fn ne(self, a: Self::V, b: Self::V) -> u32;
+    /// `m ? a : b` per lane.
+    fn select(self, m: u32, a: Self::V, b: Self::V) -> Self::V;
+    /// Lanes `i` of `m` with `idx[i] > x` (unsigned).
+    fn gt_u32(self, m: u32, idx: &U16, x: u32) -> u32;
+    /// The minimum of the lanes `m` of `v` (+inf when `m` is empty; no NaN in those lanes).
+    fn hmin(self, m: u32, v: Self::V) -> f32;
+    /// The maximum of the lanes `m` of `v` (-inf when `m` is empty; no NaN in those lanes).
+    fn hmax(self, m: u32, v: Self::V) -> f32;
+    /// Writes `x` into the lanes `m` of `a`.
+    fn store_u32_masked(self, m: u32, a: &mut U16, x: u32);
+}
+
+/// The portable twin.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Portable16;
+
+#[inline(always)]
+fn bits4(m: u32) -> BVec4A {
+    BVec4A::new(m & 1 != 0, m & 2 != 0, m & 4 != 0, m & 8 != 0)
+}
+
+macro_rules! per4 {
+    ($a:ident, $b:ident, $f:expr) => {{
+        let f = $f;
+        [
+            f($a[0], $b[0]),
+            f($a[1], $b[1]),
+            f($a[2], $b[2]),
+            f($a[3], $b[3]),
+        ]
+    }};
+}
+
+macro_rules! cmp4 {
+    ($a:ident, $b:ident, $f:expr) => {{
+        let f = $f;
+        let mut m = 0u32;
+        for g in 0..4 {
+            m |= f($a[g], $b[g]) << (4 * g);
+        }
+        m
+    }};
+}
+
+impl Lanes16 for Portable16 {
+    type V = [Vec4; 4];
+    #[inline(always)]
+    fn splat(self, x: f32) -> [Vec4; 4] {
+        [Vec4::splat(x); 4]
+    }
+    #[inline(always)]
+    fn load(self, a: &F16) -> [Vec4; 4] {
+        std::array::from_fn(|g| Vec4::from_slice(&a.0[4 * g..4 * g + 4]))
+    }
+    #[inline(always)]
+    fn store(self, v: [Vec4; 4], a: &mut F16) {
+        for g in 0..4 {
+            v[g].write_to_slice(&mut a.0[4 * g..4 * g + 4]);
+        }
+    }
+    #[inline(always)]
+    fn add(self, a: [Vec4; 4], b: [Vec4; 4]) -> [Vec4; 4] {
+        per4!(a, b, |x, y| x + y)
+    }
+    #[inline(always)]
+    fn sub(self, a: [Vec4; 4], b: [Vec4; 4]) -> [Vec4; 4] {
+        per4!(a, b, |x, y| x - y)
+    }
+    #[inline(always)]
+    fn mul(self, a: [Vec4; 4], b: [Vec4; 4]) -> [Vec4; 4] {
+        per4!(a, b, |x, y| x * y)
+    }
+    #[inline(always)]
+    fn div(self, a: [Vec4; 4], b: [Vec4; 4]) -> [Vec4; 4] {
+        per4!(a, b, |x, y| x / y)
+    }
+    #[inline(always)]
+    fn max(self, a: [Vec4; 4], b: [Vec4; 4]) -> [Vec4; 4] {
+        per4!(a, b, crate::simd::max_or_rhs)
+    }
+    #[inline(always)]
+    fn min(self, a: [Vec4; 4], b: [Vec4; 4]) -> [Vec4; 4] {
+        per4!(a, b, crate::simd::min_or_rhs)
+    }
+    #[inline(always)]
+    fn le(self, a: [Vec4; 4], b: [Vec4; 4]) -> u32 {
+        cmp4!(a, b, |x: Vec4, y| x.cmple(y).bitmask())
+    }
+    #[inline(always)]
+    fn lt(self, a: [Vec4; 4], b: [Vec4; 4]) -> u32 {
+        cmp4!(a, b, |x: Vec4, y| x.cmplt(y).bitmask())
+    }
+    #[inline(always)]
+    fn gt(self, a: [Vec4; 4], b: [Vec4; 4]) -> u32 {
+        cmp4!(a, b, |x: Vec4, y| x.cmpgt(y).bitmask())
+    }
+    #[inline(always)]
+    fn eq(self, a: [Vec4; 4], b: [Vec4; 4]) -> u32 {
+        cmp4!(a, b, |x: Vec4, y| x.cmpeq(y).bitmask())
+    }
+    #[inline(always)]
+    fn ne(self, a: [Vec4; 4], b: [Vec4; 4]) -> u32 {
+        cmp4!(a, b, |x: Vec4, y| x.cmpne(y).bitmask())
+    }
+    #[inline(always)]
+    fn select(self, m: u32, a: [Vec4; 4], b: [Vec4; 4]) -> [Vec4; 4] {
+        std::array::from_fn(|g| Vec4::select(bits4(m >> (4 * g)), a[g], b[g]))
+    }
+    #[inline(always)]
+    fn gt_u32(self, m: u32, idx: &U16, x: u32) -> u32 {
+        let mut out = 0;
+        for i in 0..16 {
+            out |= ((m >> i & 1 != 0 && idx.0[i] > x) as u32) << i;
+        }
+        out
+    }
+    #[inline(always)]
+    fn hmin(self, m: u32, v: [Vec4; 4]) -> f32 {
+        let mut a = F16([0.0; 16]);
+        self.store(v, &mut a);
+        (0..16)
+            .filter(|i| m >> i & 1 != 0)
+            .fold(f32::INFINITY, |b, i| b.min(a.0[i]))
+    }
+    #[inline(always)]
+    fn hmax(self, m: u32, v: [Vec4; 4]) -> f32 {
+        let mut a = F16([0.0; 16]);
+        self.store(v, &mut a);
+        (0..16)
+            .filter(|i| m >> i & 1 != 0)
+            .fold(f32::NEG_INFINITY, |b, i| b.max(a.0[i]))
+    }
+    #[inline(always)]
+    fn store_u32_masked(self, m: u32, a: &mut U16, x: u32) {
+        for i in 0..16 {
+            if m >> i & 1 != 0 {
+                a.0[i] = x;
+            }
+        }
+    }
+}
+
+/// AVX-512F lanes (a token: see the module docs).
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Avx512(());
+
+#[cfg(target_arch = "x86_64")]
+impl Avx512 {
+    /// # Safety
+    /// The CPU must support AVX-512F.
+    #[inline(always)]
+    pub unsafe fn new() -> Self {
+        Avx512(())
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+mod avx512 {
+    use std::arch::x86_64::*;
+
+    use super::{Avx512, F16, Lanes16, U16};
+
+    // SAFETY (every method): a value of `Avx512` exists only where AVX-512F was detected
+    // (`Avx512::new`); loads and stores are of 64-byte aligned `F16` / `U16`.
+    impl Lanes16 for Avx512 {
+        type V = __m512;
+        #[inline(always)]
+        fn splat(self, x: f32) -> __m512 {
+            unsafe { _mm512_set1_ps(x) }
+        }
+        #[inline(always)]
+        fn load(self, a: &F16) -> __m512 {
+            unsafe { _mm512_load_ps(a.0.as_ptr()) }
+        }
+        #[inline(always)]
+        fn store(self, v: __m512, a: &mut F16) {
+            unsafe { _mm512_store_ps(a.0.as_mut_ptr(), v) }
+        }
+        #[inline(always)]
+        fn add(self, a: __m512, b: __m512) -> __m512 {
+            unsafe { _mm512_add_ps(a, b) }
+        }
+        #[inline(always)]
+        fn sub(self, a: __m512, b: __m512) -> __m512 {
+            unsafe { _mm512_sub_ps(a, b) }
+        }
+        #[inline(always)]
+        fn mul(self, a: __m512, b: __m512) -> __m512 {
+            unsafe { _mm512_mul_ps(a, b) }
+        }
+        #[inline(always)]
+        fn div(self, a: __m512, b: __m512) -> __m512 {
+            unsafe { _mm512_div_ps(a, b) }
+        }
+        #[inline(always)]
+        fn max(self, a: __m512, b: __m512) -> __m512 {
+            // VMAXPS: "If only one value is a NaN ... the second operand ... is returned";
+            // both NaN: the second too.
+            unsafe { _mm512_max_ps(a, b) }
+        }
+        #[inline(always)]
+        fn min(self, a: __m512, b: __m512) -> __m512 {
+            unsafe { _mm512_min_ps(a, b) }
+        }
+        #[inline(always)]
+        fn le(self, a: __m512, b: __m512) -> u32 {
+            unsafe { _mm512_cmp_ps_mask::<_CMP_LE_OQ>(a, b) as u32 }
+        }
+        #[inline(always)]
+        fn lt(self, a: __m512, b: __m512) -> u32 {
+            unsafe { _mm512_cmp_ps_mask::<_CMP_LT_OQ>(a, b) as u32 }
+        }
+        #[inline(always)]
+        fn gt(self, a: __m512, b: __m512) -> u32 {
+            unsafe { _mm512_cmp_ps_mask::<_CMP_GT_OQ>(a, b) as u32 }
+        }
+        #[inline(always)]
+        fn eq(self, a: __m512, b: __m512) -> u32 {
+            unsafe { _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(a, b) as u32 }
+        }
+        #[inline(always)]
+        fn ne(self, a: __m512, b: __m512) -> u32 {
+            unsafe { _mm512_cmp_ps_mask::<_CMP_NEQ_UQ>(a, b) as u32 }
+        }
+        #[inline(always)]
+        fn select(self, m: u32, a: __m512, b: __m512) -> __m512 {
+            unsafe { _mm512_mask_blend_ps(m as __mmask16, b, a) }
+        }
+        #[inline(always)]
+        fn gt_u32(self, m: u32, idx: &U16, x: u32) -> u32 {
+            unsafe {
+                let v = _mm512_load_si512(idx.0.as_ptr() as *const _);
+                _mm512_mask_cmpgt_epu32_mask(m as __mmask16, v, _mm512_set1_epi32(x as i32)) as u32
+            }
+        }
+        #[inline(always)]
+        fn hmin(self, m: u32, v: __m512) -> f32 {
+            // The masked reduction fills unused lanes with `f32::MAX`, not +inf.
+            let inf = unsafe { _mm512_set1_ps(f32::INFINITY) };
+            unsafe { _mm512_reduce_min_ps(_mm512_mask_blend_ps(m as __mmask16, inf, v)) }
+        }
+        #[inline(always)]
+        fn hmax(self, m: u32, v: __m512) -> f32 {
+            let ninf = unsafe { _mm512_set1_ps(f32::NEG_INFINITY) };
+            unsafe { _mm512_reduce_max_ps(_mm512_mask_blend_ps(m as __mmask16, ninf, v)) }
+        }
+        #[inline(always)]
+        fn store_u32_masked(self, m: u32, a: &mut U16, x: u32) {
+            unsafe {
+                let p = a.0.as_mut_ptr() as *mut _;
+                let v = _mm512_mask_mov_epi32(
+                    _mm512_load_si512(p as *const _),
+                    m as __mmask16,
+                    _mm512_set1_epi32(x as i32),
+                );
+                _mm512_store_si512(p, v)
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The AVX-512 lanes equal the portable ones bit for bit, NaN rules included.
+    #[test]
+    fn avx512_lanes_equal_portable_lanes() {
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx512f") {
+            // SAFETY: detected.
+            unsafe { check(Avx512::new()) };
+        }
+        check(Portable16);
+        fn check<L: Lanes16>(l: L) {
+            let vals = [
+                0.0,
+                -0.0,
+                1.0,
+                -1.5,
+                f32::NAN,
+                f32::INFINITY,
+                -f32::INFINITY,
+                3.0e-39,
+                7.25,
+                -2.0,
+                f32::NAN,
+                1e30,
+                0.5,
+                -0.0,
+                2.0,
+                1.0,
+            ];
+            let a = F16(vals);
+            let mut bv = vals;
+            bv.rotate_left(3);
+            let b = F16(bv);
+            let p = Portable16;
+            let (x, y) = (l.load(&a), l.load(&b));
+            let (px, py) = (p.load(&a), p.load(&b));
+            let same = |v: L::V, w: [Vec4; 4]| {
+                let (mut o, mut q) = (F16([0.0; 16]), F16([0.0; 16]));
+                l.store(v, &mut o);
+                p.store(w, &mut q);
+                assert_eq!(o.0.map(f32::to_bits), q.0.map(f32::to_bits));
+            };
+            same(l.add(x, y), p.add(px, py));
+            same(l.sub(x, y), p.sub(px, py));
+            same(l.mul(x, y), p.mul(px, py));
+            same(l.div(x, y), p.div(px, py));
+            same(l.max(x, y), p.max(px, py));
+            same(l.min(x, y), p.min(px, py));
+            same(l.select(0xA5C3, x, y), p.select(0xA5C3, px, py));
+            assert_eq!(l.le(x, y), p.le(px, py));
+            assert_eq!(l.lt(x, y), p.lt(px, py));
+            assert_eq!(l.gt(x, y), p.gt(px, py));
+            assert_eq!(l.eq(x, y), p.eq(px, py));
+            assert_eq!(l.ne(x, y), p.ne(px, py));
+            let idx = U16(std::array::from_fn(|i| (i as u32 * 7) % 11));
+            assert_eq!(l.gt_u32(0xFFF0, &idx, 5), p.gt_u32(0xFFF0, &idx, 5));
+            // Lanes without NaN or zeros (the sign of a zero minimum is unspecified).
+            for m in [0, 0xDBEC, 0x000C, 0x0800] {
+                assert_eq!(l.hmin(m, x).to_bits(), p.hmin(m, px).to_bits(), "{m:x}");
+                assert_eq!(l.hmax(m, x).to_bits(), p.hmax(m, px).to_bits(), "{m:x}");
+            }
+            let (mut u, mut w) = (idx, idx);
+            l.store_u32_masked(0x0F0F, &mut u, 99);
+            p.store_u32_masked(0x0F0F, &mut w, 99);
+            assert_eq!(u, w);
+        }
+    }
+}

@@ -1,0 +1,503 @@
+//! Packet traversal of the 8-wide tree: up to [`PACKET_SIZE`] = 16 coherent rays walk the tree
+//! together, one SIMD lane per ray (AVX-512: one register per 16 rays; the portable twin on
+//! four `Vec4`s, `lanes16.rs`). Wald, Slusallek, Benthin & Wagner 2001 (packets), Reshetov,
+//! Soupikov & Hurley 2005 and Wald et al. 2007 (interval / frustum culling of whole packets),
+//! in the wide-node form of Embree's `rtcIntersect16` (Wald et al. 2014, §4.2).
+//!
+//! - **Interval culling** (packets whose rays share the direction signs and have finite
+//!   `1 / dir`, e.g. a pixel tile's or one pixel's camera rays): per axis the packet's origins
+//!   span `[o_lo, o_hi]` and its `1 / dir` `[inv_lo, inv_hi]`; a lower bound of every ray's
+//!   near-plane distance `fl(fl(p - o) * inv)` is the same expression at one corner of that
+//!   box (the exact product is bilinear, so its extremes are at corners, and rounding is
+//!   monotone), and likewise an upper bound of the far-plane distances. One 8-lane test of
+//!   those bounds culls the children that no ray of the packet can enter, before any per-ray
+//!   work; its near bound also orders the children.
+//! - **Per-ray node test** for the remaining children: the single-ray slab test of
+//!   `traverse8.rs`, lane for lane (the same IEEE operations, near / far plane selected by the
+//!   sign of each ray's `1 / dir`), so each ray's box test is exactly as conservative as its
+//!   single-ray test.
+//! - **Leaves**: when all rays share the axis permutation of the watertight test (Woop,
+//!   Benthin & Wald 2013, §3), each triangle is tested against the 16 rays at once with the
+//!   operations of `tri4.rs` lane for lane (lanes with an exactly-zero edge function fall back
+//!   to the scalar double-precision test); otherwise each active ray runs its 4-triangle test.
+//!
+//! **Invariant:** every ray's answer equals [`Bvh::closest_hit`] exactly (prim, t, u, v): the
+//! node tests only cull conservatively, and each ray keeps the lexicographic minimum of
+//! `(t, triangle index)` over the hits it finds (ties at `t` kept by inclusive culling), which
+//! is what the single-ray traversal returns whatever the order. `tests/packets.rs` checks it.
+
+use std::mem::MaybeUninit;
+
+use glam::Vec4;
+use parallax_core::Ray;
+use parallax_core::math::{ROBUST_FAR_SCALE, WatertightRay};
+
+use crate::lanes16::{F16, Lanes16, Portable16, U16};
+use crate::node::{is_leaf, leaf_count, leaf_first};
+use crate::node8::Node8;
+use crate::stats::NoStats;
+use crate::traverse::Best;
+use crate::traverse8::STACK8_SIZE;
+use crate::tri4::{Tri4Ray, blocks_for, lane_mask};
+use crate::{Bvh, Hit};
+
+/// Rays per packet ([`Bvh::closest_hit_packet`] splits longer slices).
+pub const PACKET_SIZE: usize = 16;
+
+#[derive(Clone, Copy)]
+struct Entry {
+    child: u32,
+    mask: u32,
+    t: f32,
+}
+
+/// The packet's interval bounds, as 8-lane splats for the node's rows (module docs).
+struct Interval {
+    /// Per axis: the origin to subtract for the near / far row, and `(inv if d >= 0, inv if
+    /// d < 0)` for the near / far row.
+    o_near: [Vec4; 3],
+    o_far: [Vec4; 3],
+    inv_near: [(Vec4, Vec4); 3],
+    inv_far: [(Vec4, Vec4); 3],
+    /// Byte offsets of the near / far rows (`32 * (2 axis + sign)`).
+    near: [usize; 3],
+    far: [usize; 3],
+    t_min: Vec4,
+    /// The largest `t_max` of the packet's rays (refreshed after each leaf).
+    t_max: f32,
+}
+
+impl Interval {
+    /// The children (bit mask) that some ray of the packet may enter, and a lower bound of
+    /// their entry distances.
+    #[inline(always)]
+    fn test(&self, node: &Node8) -> (u32, [f32; 8]) {
+        let base = node.bounds.as_ptr() as *const u8;
+        let mut mask = 0;
+        let mut t = [0.0f32; 8];
+        let neg = |d: Vec4, (pos, negv): (Vec4, Vec4)| Vec4::select(d.cmplt(Vec4::ZERO), negv, pos);
+        for h in 0..2 {
+            // SAFETY: offsets are `32 * i + 16 * h`, `i < 6`, inside `bounds`.
+            let b = |off: usize| unsafe {
+                Vec4::from_slice(std::slice::from_raw_parts(
+                    base.add(off + 16 * h) as *const f32,
+                    4,
+                ))
+            };
+            let mut t_near = self.t_min;
+            let mut t_far = Vec4::splat(self.t_max);
+            for a in 0..3 {
+                let dn = b(self.near[a]) - self.o_near[a];
+                t_near = t_near.max(dn * neg(dn, self.inv_near[a]));
+                let df = b(self.far[a]) - self.o_far[a];
+                t_far = t_far.min(df * neg(df, self.inv_far[a]));
+            }
+            let hit = t_near.cmple(t_far * ROBUST_FAR_SCALE);
+            mask |= hit.bitmask() << (4 * h);
+            t[4 * h..4 * h + 4].copy_from_slice(&t_near.to_array());
+        }
+        (mask, t)
+    }
+}
+
+/// A packet's rays in SoA form, with each ray's closest hit so far.
+struct Packet {
+    valid: u32,
+    org: [F16; 3],
+    inv: [F16; 3],
+    /// Lanes whose `1 / dir` is negative, per axis.
+    neg: [u32; 3],
+    t_min: F16,
+    /// The closest hit so far (or the ray's `t_max`).
+    t_max: F16,
+    best_tri: U16,
+    best_u: F16,
+    best_v: F16,
+    /// The shear of the watertight test, per ray, and the common axis permutation if any.
+    sx: F16,
+    sy: F16,
+    sz: F16,
+    perm: Option<[usize; 3]>,
+    wt: [MaybeUninit<Tri4Ray>; PACKET_SIZE],
+    interval: Option<Interval>,
+}
+
+impl Packet {
+    fn new(rays: &[Ray], valid: u32) -> Self {
+        let z = F16([0.0; 16]);
+        let mut p = Packet {
+            valid,
+            org: [z; 3],
+            inv: [F16([1.0; 16]); 3],
+            neg: [0; 3],
+            t_min: z,
+            t_max: F16([f32::NEG_INFINITY; 16]),
+            best_tri: U16([u32::MAX; 16]),
+            best_u: z,
+            best_v: z,
+            sx: z,
+            sy: z,
+            sz: z,
+            perm: None,
+            wt: [MaybeUninit::uninit(); PACKET_SIZE],
+            interval: None,
+        };
+        let mut perm = None;
+        let mut same_perm = true;
+        let mut finite = true;
+        for (i, r) in rays.iter().enumerate() {
+            if valid >> i & 1 == 0 {
+                continue;
+            }
+            let iv = r.dir.recip();
+            for a in 0..3 {
+                p.org[a].0[i] = r.origin[a];
+                p.inv[a].0[i] = iv[a];
+                p.neg[a] |= ((iv[a] < 0.0) as u32) << i;
+            }
+            finite &= iv.is_finite();
+            p.t_min.0[i] = r.t_min;
+            p.t_max.0[i] = r.t_max;
+            let wt = WatertightRay::new(r);
+            let k = [wt.kx, wt.ky, wt.kz];
+            same_perm &= *perm.get_or_insert(k) == k;
+            p.sx.0[i] = wt.sx;
+            p.sy.0[i] = wt.sy;
+            p.sz.0[i] = wt.sz;
+            p.wt[i] = MaybeUninit::new(Tri4Ray::new(wt));
+        }
+        p.perm = perm.filter(|_| same_perm);
+        let uniform = (0..3).all(|a| p.neg[a] == 0 || p.neg[a] == valid);
+        if uniform && finite {
+            p.interval = Some(p.interval(rays));
+        }
+        p
+    }
+
+    fn interval(&self, rays: &[Ray]) -> Interval {
+        let lanes = || (0..rays.len()).filter(|&i| self.valid >> i & 1 != 0);
+        let fold = |f: &dyn Fn(usize) -> f32, max: bool| {
+            lanes().map(f).fold(
+                if max {
+                    f32::NEG_INFINITY
+                } else {
+                    f32::INFINITY
+                },
+                |a, x| {
+                    if max { a.max(x) } else { a.min(x) }
+                },
+            )
+        };
+        let mut iv = Interval {
+            o_near: [Vec4::ZERO; 3],
+            o_far: [Vec4::ZERO; 3],
+            inv_near: [(Vec4::ZERO, Vec4::ZERO); 3],
+            inv_far: [(Vec4::ZERO, Vec4::ZERO); 3],
+            near: [0; 3],
+            far: [0; 3],
+            t_min: Vec4::splat(fold(&|i| self.t_min.0[i], false)),
+            t_max: fold(&|i| self.t_max.0[i], true),
+        };
+        for a in 0..3 {
+            let o_lo = fold(&|i| self.org[a].0[i], false);
+            let o_hi = fold(&|i| self.org[a].0[i], true);
+            let i_lo = Vec4::splat(fold(&|i| self.inv[a].0[i], false));
+            let i_hi = Vec4::splat(fold(&|i| self.inv[a].0[i], true));
+            let negative = self.neg[a] != 0;
+            // Near row: the min of `d * inv` over the box; far row: the max (module docs).
+            let (on, of) = if negative { (o_lo, o_hi) } else { (o_hi, o_lo) };
+            iv.o_near[a] = Vec4::splat(on);
+            iv.o_far[a] = Vec4::splat(of);
+            iv.inv_near[a] = (i_lo, i_hi);
+            iv.inv_far[a] = (i_hi, i_lo);
+            let s = negative as usize;
+            iv.near[a] = 32 * (2 * a + s);
+            iv.far[a] = 32 * (2 * a + 1 - s);
+        }
+        iv
+    }
+
+    /// Per-ray slab test of child `c` of `node` for the rays of `mask`: the rays that enter it,
+    /// and the smallest entry distance among them.
+    #[inline(always)]
+    fn test_child<L: Lanes16>(&self, l: L, node: &Node8, c: usize, mask: u32) -> (u32, f32) {
+        let b = &node.bounds;
+        let mut t_near = l.load(&self.t_min);
+        let mut t_far = l.load(&self.t_max);
+        let mut tn = [t_near; 3];
+        let mut tf = [t_far; 3];
+        for a in 0..3 {
+            let (o, inv) = (l.load(&self.org[a]), l.load(&self.inv[a]));
+            let t0 = l.mul(l.sub(l.splat(b[2 * a][c]), o), inv);
+            let t1 = l.mul(l.sub(l.splat(b[2 * a + 1][c]), o), inv);
+            tn[a] = l.select(self.neg[a], t1, t0);
+            tf[a] = l.select(self.neg[a], t0, t1);
+        }
+        // The single-ray order: max(tnz, max(tny, max(tnx, t_min))), likewise for t_far.
+        for a in 0..3 {
+            t_near = l.max(tn[a], t_near);
+            t_far = l.min(tf[a], t_far);
+        }
+        let t_far = l.mul(t_far, l.splat(ROBUST_FAR_SCALE));
+        let hit = l.le(t_near, t_far) & mask;
+        (
+            hit,
+            if hit != 0 {
+                l.hmin(hit, t_near)
+            } else {
+                f32::INFINITY
+            },
+        )
+    }
+
+    /// Rays of `mask` that have not yet found a hit nearer than `t`.
+    #[inline(always)]
+    fn not_beyond<L: Lanes16>(&self, l: L, mask: u32, t: f32) -> u32 {
+        let bound = l.mul(l.load(&self.t_max), l.splat(ROBUST_FAR_SCALE));
+        l.le(l.splat(t), bound) & mask
+    }
+
+    /// The watertight test of one triangle against the rays of `mask` (all sharing the axis
+    /// permutation `k`), keeping each ray's lexicographically smallest `(t, index)`.
+    #[inline(always)]
+    fn triangle<L: Lanes16>(&mut self, l: L, k: [usize; 3], p: [[f32; 3]; 3], tri: u32, mask: u32) {
+        let [kx, ky, kz] = k;
+        let org = [
+            l.load(&self.org[0]),
+            l.load(&self.org[1]),
+            l.load(&self.org[2]),
+        ];
+        let (sx, sy, sz) = (l.load(&self.sx), l.load(&self.sy), l.load(&self.sz));
+        // Per vertex: a = p - o; (a[kx] - sx a[kz], a[ky] - sy a[kz], sz a[kz]) (`tri4.rs`).
+        let proj = |v: [f32; 3]| {
+            let az = l.sub(l.splat(v[kz]), org[kz]);
+            let x = l.sub(l.sub(l.splat(v[kx]), org[kx]), l.mul(sx, az));
+            let y = l.sub(l.sub(l.splat(v[ky]), org[ky]), l.mul(sy, az));
+            (x, y, l.mul(sz, az))
+        };
+        let (ax, ay, az) = proj(p[0]);
+        let (bx, by, bz) = proj(p[1]);
+        let (cx, cy, cz) = proj(p[2]);
+        let u = l.sub(l.mul(cx, by), l.mul(cy, bx));
+        let v = l.sub(l.mul(ax, cy), l.mul(ay, cx));
+        let w = l.sub(l.mul(bx, ay), l.mul(by, ax));
+        let zero = l.splat(0.0);
+        let exact = (l.eq(u, zero) | l.eq(v, zero) | l.eq(w, zero)) & mask;
+        let neg = l.lt(u, zero) | l.lt(v, zero) | l.lt(w, zero);
+        let pos = l.gt(u, zero) | l.gt(v, zero) | l.gt(w, zero);
+        let inside = !(neg & pos) & mask & !exact;
+        if inside != 0 {
+            let det = l.add(l.add(u, v), w);
+            let t_scaled = l.add(l.add(l.mul(u, az), l.mul(v, bz)), l.mul(w, cz));
+            let inv = l.div(l.splat(1.0), det);
+            let t = l.mul(t_scaled, inv);
+            let t_cur = l.load(&self.t_max);
+            // Rays with a hit already (`best_tri != u32::MAX`) also take a tie at `t_cur`
+            // with a lower index (`Best::limit` / `Best::offer`).
+            let has_hit = inside & !l.gt_u32(inside, &self.best_tri, u32::MAX - 1);
+            let closer = l.lt(t, t_cur) | (l.eq(t, t_cur) & l.gt_u32(has_hit, &self.best_tri, tri));
+            let acc = inside & l.ne(det, zero) & l.gt(t, l.load(&self.t_min)) & closer;
+            if acc != 0 {
+                let t_new = l.select(acc, t, t_cur);
+                l.store(t_new, &mut self.t_max);
+                let bu = l.select(acc, l.mul(v, inv), l.load(&self.best_u));
+                l.store(bu, &mut self.best_u);
+                let bv = l.select(acc, l.mul(w, inv), l.load(&self.best_v));
+                l.store(bv, &mut self.best_v);
+                l.store_u32_masked(acc, &mut self.best_tri, tri);
+            }
+        }
+        let mut m = exact;
+        while m != 0 {
+            let i = m.trailing_zeros() as usize;
+            m &= m - 1;
+            let mut best = self.best(i);
+            let mut t_max = self.t_max.0[i];
+            // SAFETY: rays of the mask are valid, and valid rays were initialised.
+            let wt = unsafe { &self.wt[i].assume_init_ref().wt };
+            let v3 = |q: [f32; 3]| glam::Vec3::from_array(q);
+            if let Some(h) = wt.intersect_within(v3(p[0]), v3(p[1]), v3(p[2]), best.limit(t_max)) {
+                best.offer(h.t, tri, h.u, h.v, &mut t_max);
+            }
+            self.set_best(i, best, t_max);
+        }
+    }
+
+    #[inline(always)]
+    fn best(&self, i: usize) -> Best {
+        Best {
+            t: if self.best_tri.0[i] == u32::MAX {
+                f32::INFINITY
+            } else {
+                self.t_max.0[i]
+            },
+            tri: self.best_tri.0[i],
+            u: self.best_u.0[i],
+            v: self.best_v.0[i],
+        }
+    }
+
+    #[inline(always)]
+    fn set_best(&mut self, i: usize, b: Best, t_max: f32) {
+        self.t_max.0[i] = t_max;
+        self.best_tri.0[i] = b.tri;
+        self.best_u.0[i] = b.u;
+        self.best_v.0[i] = b.v;
+    }
+}
+
+impl Bvh {
+    /// Closest hits of up to [`PACKET_SIZE`] coherent rays traced together (longer slices are
+    /// split into packets of [`PACKET_SIZE`]); `out[i]` is exactly [`Bvh::closest_hit`] of
+    /// `rays[i]`. Fast when the rays are coherent (a pixel tile's or one pixel's camera rays);
+    /// incoherent rays are better traced one by one. Uses AVX-512 where the CPU has it.
+    /// Panics if `out` is shorter than `rays`.
+    pub fn closest_hit_packet(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+        assert!(out.len() >= rays.len(), "closest_hit_packet: out too short");
+        for (r, o) in rays.chunks(PACKET_SIZE).zip(out.chunks_mut(PACKET_SIZE)) {
+            #[cfg(target_arch = "x86_64")]
+            if use_avx512() {
+                // SAFETY: AVX-512F was detected.
+                unsafe { self.packet8_avx512(r, o) };
+                continue;
+            }
+            self.packet8(Portable16, r, o);
+        }
+    }
+
+    /// [`Self::closest_hit_packet`] with the portable lanes even where AVX-512 exists: the
+    /// twin the tests hold the AVX-512 path against.
+    pub fn closest_hit_packet_portable(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+        assert!(out.len() >= rays.len(), "closest_hit_packet: out too short");
+        for (r, o) in rays.chunks(PACKET_SIZE).zip(out.chunks_mut(PACKET_SIZE)) {
+            self.packet8(Portable16, r, o);
+        }
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    unsafe fn packet8_avx512(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+        // SAFETY: AVX-512F is enabled for this function (the caller detected it).
+        self.packet8(unsafe { crate::lanes16::Avx512::new() }, rays, out)
+    }
+
+    #[inline(always)]
+    fn packet8<L: Lanes16>(&self, l: L, rays: &[Ray], out: &mut [Option<Hit>]) {
+        let mut valid = 0u32;
+        for (i, r) in rays.iter().enumerate() {
+            out[i] = None;
+            if r.is_valid() && r.t_min <= r.t_max {
+                valid |= 1 << i;
+            }
+        }
+        if self.nodes8.is_empty() || valid == 0 {
+            return;
+        }
+        let mut p = Packet::new(rays, valid);
+        let mut stack = [MaybeUninit::<Entry>::uninit(); STACK8_SIZE];
+        let mut sp = 0usize;
+        let mut cur = 0u32;
+        let mut mask = valid;
+        loop {
+            if !is_leaf(cur) {
+                let node = &self.nodes8[cur as usize];
+                let cand = match &p.interval {
+                    Some(iv) => iv.test(node).0,
+                    None => (1u32 << node.num_children) - 1,
+                };
+                let mut kid = [Entry {
+                    child: 0,
+                    mask: 0,
+                    t: 0.0,
+                }; 8];
+                let mut n = 0;
+                let mut m = cand;
+                while m != 0 {
+                    let c = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    let (hits, t) = p.test_child(l, node, c, mask);
+                    if hits != 0 {
+                        let e = Entry {
+                            child: node.child[c],
+                            mask: hits,
+                            t,
+                        };
+                        // Insertion, far to near.
+                        let mut j = n;
+                        while j > 0 && kid[j - 1].t < e.t {
+                            kid[j] = kid[j - 1];
+                            j -= 1;
+                        }
+                        kid[j] = e;
+                        n += 1;
+                    }
+                }
+                if n != 0 {
+                    for e in &kid[..n - 1] {
+                        stack[sp] = MaybeUninit::new(*e);
+                        sp += 1;
+                    }
+                    cur = kid[n - 1].child;
+                    mask = kid[n - 1].mask;
+                    continue;
+                }
+            } else {
+                self.packet_leaf(l, &mut p, leaf_first(cur), leaf_count(cur), mask);
+                if let Some(iv) = &mut p.interval {
+                    iv.t_max = l.hmax(p.valid, l.load(&p.t_max));
+                }
+            }
+            loop {
+                if sp == 0 {
+                    for (i, o) in out.iter_mut().enumerate().take(rays.len()) {
+                        *o = p.best(i).hit(&self.prim_ids);
+                    }
+                    return;
+                }
+                sp -= 1;
+                // SAFETY: entries below `sp` were written by the pushes above.
+                let e = unsafe { stack[sp].assume_init() };
+                let m = p.not_beyond(l, e.mask, e.t);
+                if m != 0 {
+                    cur = e.child;
+                    mask = m;
+                    break;
+                }
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn packet_leaf<L: Lanes16>(&self, l: L, p: &mut Packet, first: u32, count: u32, mask: u32) {
+        if let Some(k) = p.perm {
+            for kb in 0..blocks_for(count) {
+                let b = &self.blocks[(first + kb) as usize];
+                let lanes = lane_mask(count, kb);
+                for j in 0..4 {
+                    if lanes >> j & 1 != 0 {
+                        let v = |q: usize| [b.p[q][0][j], b.p[q][1][j], b.p[q][2][j]];
+                        p.triangle(l, k, [v(0), v(1), v(2)], b.tri[j], mask);
+                    }
+                }
+            }
+            return;
+        }
+        let mut m = mask;
+        while m != 0 {
+            let i = m.trailing_zeros() as usize;
+            m &= m - 1;
+            let mut best = p.best(i);
+            let mut t_max = p.t_max.0[i];
+            // SAFETY: rays of the mask are valid, and valid rays were initialised.
+            let r4 = unsafe { p.wt[i].assume_init_ref() };
+            self.leaf_closest(r4, first, count, &mut t_max, &mut best, &mut NoStats);
+            p.set_best(i, best, t_max);
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[inline]
+fn use_avx512() -> bool {
+    std::is_x86_feature_detected!("avx512f")
+}

@@ -1,0 +1,455 @@
+//! Single-ray traversal of the 8-wide tree ([`crate::node8`]): closest hit, any hit, all hits.
+//!
+//! The loop is that of `traverse.rs` (explicit stack of `t_bits << 32 | child` keys, nearest
+//! child first, pops culled against the closest hit; Wald et al. 2014 §4), with one 8-lane slab
+//! test per node: AVX2 (one 256-bit register per plane row) behind runtime detection, and a
+//! portable twin on two 4-lane halves (glam `Vec4`: SSE2 on x86_64) that the tests hold the
+//! AVX2 path against. Both compute, lane by lane, the same IEEE operations as the 4-wide test:
+//!
+//! ```text
+//! t_near = max(t_min, (near_x - o_x) * inv_x, (near_y - o_y) * inv_y, (near_z - o_z) * inv_z)
+//! t_far  = min(t_max, (far_x - o_x) * inv_x, ...) * (1 + 2 gamma(3))     (Ize 2013, robust)
+//! hit    = t_near <= t_far
+//! ```
+//!
+//! (`vmaxps` / `vminps` return the second operand when one is NaN, exactly as `maxps` /
+//! `minps`, so a ray on a slab plane with a zero direction component is handled as in
+//! `simd.rs`). No FMA: `(b - o) * inv` rounds twice, each a relative error, which the far
+//! scaling covers; Embree's `b * inv - o * inv` has an absolute error in `o * inv` that it does
+//! not (notes: docs/notes/bvh.md). Leaves are the shared 4-triangle blocks (`tri4.rs`).
+//!
+//! **Invariant:** every query returns exactly what its 4-wide twin returns
+//! ([`Bvh::closest_hit4`], ...): the node test only culls (conservatively), and the closest hit
+//! is the lexicographic minimum of `(t, triangle index)` whatever the visiting order.
+
+use std::mem::MaybeUninit;
+
+use glam::Vec4;
+use parallax_core::Ray;
+use parallax_core::math::{ROBUST_FAR_SCALE, WatertightRay};
+
+use crate::node::{is_leaf, leaf_count, leaf_first};
+use crate::node8::Node8;
+use crate::simd::{max_or_rhs, min_or_rhs};
+use crate::stats::{Counter, NoStats, TraversalStats};
+use crate::traverse::{Best, sort_hits};
+use crate::tri4::Tri4Ray;
+use crate::{Bvh, Hit};
+
+/// Stack entries of the 8-wide traversal: a node pushes at most 7, and the build checks
+/// `7 * depth8 < STACK8_SIZE`.
+pub(crate) const STACK8_SIZE: usize = 576;
+
+/// A ray prepared for the 8-lane slab test.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RayBoxes8 {
+    org: [f32; 3],
+    inv: [f32; 3],
+    /// Byte offsets into `Node8::bounds` of the near / far plane rows (`32 * (2 axis + sign)`).
+    near: [usize; 3],
+    far: [usize; 3],
+    t_min: f32,
+}
+
+impl RayBoxes8 {
+    #[inline(always)]
+    pub fn new(ray: &Ray) -> Self {
+        // 1 / ±0 = ±inf; 0 * inf = NaN is ignored by the min / max order (module docs).
+        let inv = ray.dir.recip();
+        let neg = |x: f32| x.is_sign_negative() as usize;
+        let (sx, sy, sz) = (neg(inv.x), neg(inv.y), neg(inv.z));
+        Self {
+            org: ray.origin.to_array(),
+            inv: inv.to_array(),
+            near: [32 * sx, 32 * (2 + sy), 32 * (4 + sz)],
+            far: [32 * (1 - sx), 32 * (3 - sy), 32 * (5 - sz)],
+            t_min: ray.t_min,
+        }
+    }
+}
+
+/// An 8-lane slab test: the hit mask (bit i = lane i) and the entry distances (all-ones bits in
+/// missed lanes, so their keys sort last).
+pub(crate) trait NodeTest8 {
+    fn test(&self, node: &Node8, t_max: f32) -> (u32, [f32; 8]);
+}
+
+/// The portable twin: two 4-lane halves.
+pub(crate) struct Portable8(RayBoxes8);
+
+impl NodeTest8 for Portable8 {
+    #[inline(always)]
+    fn test(&self, node: &Node8, t_max: f32) -> (u32, [f32; 8]) {
+        let rb = &self.0;
+        let base = node.bounds.as_ptr() as *const u8;
+        let mut mask = 0;
+        let mut t = [0.0f32; 8];
+        for h in 0..2 {
+            // SAFETY: offsets are `32 * i + 16 * h` with `i < 6`, inside `bounds: [[f32; 8]; 6]`.
+            let b = |off: usize| unsafe {
+                Vec4::from_slice(std::slice::from_raw_parts(
+                    base.add(off + 16 * h) as *const f32,
+                    4,
+                ))
+            };
+            let o = rb.org.map(Vec4::splat);
+            let i = rb.inv.map(Vec4::splat);
+            let tnx = (b(rb.near[0]) - o[0]) * i[0];
+            let tny = (b(rb.near[1]) - o[1]) * i[1];
+            let tnz = (b(rb.near[2]) - o[2]) * i[2];
+            let tfx = (b(rb.far[0]) - o[0]) * i[0];
+            let tfy = (b(rb.far[1]) - o[1]) * i[1];
+            let tfz = (b(rb.far[2]) - o[2]) * i[2];
+            let t_near = max_or_rhs(tnz, max_or_rhs(tny, max_or_rhs(tnx, Vec4::splat(rb.t_min))));
+            let t_far = min_or_rhs(tfz, min_or_rhs(tfy, min_or_rhs(tfx, Vec4::splat(t_max))));
+            let t_far = t_far * ROBUST_FAR_SCALE;
+            let hit = t_near.cmple(t_far);
+            let t_near = Vec4::select(hit, t_near, Vec4::splat(f32::from_bits(u32::MAX)));
+            mask |= hit.bitmask() << (4 * h);
+            t[4 * h..4 * h + 4].copy_from_slice(&t_near.to_array());
+        }
+        (mask, t)
+    }
+}
+
+/// The AVX2 node test (construct only after detecting AVX2).
+#[cfg(target_arch = "x86_64")]
+pub(crate) struct Avx2Boxes8 {
+    rb: RayBoxes8,
+    org: [std::arch::x86_64::__m256; 3],
+    inv: [std::arch::x86_64::__m256; 3],
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Avx2Boxes8 {
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[inline(always)]
+    pub unsafe fn new(rb: RayBoxes8) -> Self {
+        use std::arch::x86_64::*;
+        // SAFETY: AVX is available (caller).
+        unsafe {
+            Self {
+                org: rb.org.map(|x| _mm256_set1_ps(x)),
+                inv: rb.inv.map(|x| _mm256_set1_ps(x)),
+                rb,
+            }
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl NodeTest8 for Avx2Boxes8 {
+    #[inline(always)]
+    fn test(&self, node: &Node8, t_max: f32) -> (u32, [f32; 8]) {
+        use std::arch::x86_64::*;
+        let rb = &self.rb;
+        let base = node.bounds.as_ptr() as *const u8;
+        // SAFETY: a value of this type exists only where AVX2 was detected (`new`); loads are
+        // 32-byte aligned rows of the 64-byte aligned node at offsets `32 * i`, `i < 6`.
+        unsafe {
+            let b = |off: usize| _mm256_load_ps(base.add(off) as *const f32);
+            let (o, i) = (&self.org, &self.inv);
+            let tnx = _mm256_mul_ps(_mm256_sub_ps(b(rb.near[0]), o[0]), i[0]);
+            let tny = _mm256_mul_ps(_mm256_sub_ps(b(rb.near[1]), o[1]), i[1]);
+            let tnz = _mm256_mul_ps(_mm256_sub_ps(b(rb.near[2]), o[2]), i[2]);
+            let tfx = _mm256_mul_ps(_mm256_sub_ps(b(rb.far[0]), o[0]), i[0]);
+            let tfy = _mm256_mul_ps(_mm256_sub_ps(b(rb.far[1]), o[1]), i[1]);
+            let tfz = _mm256_mul_ps(_mm256_sub_ps(b(rb.far[2]), o[2]), i[2]);
+            let t_near = _mm256_max_ps(
+                tnz,
+                _mm256_max_ps(tny, _mm256_max_ps(tnx, _mm256_set1_ps(rb.t_min))),
+            );
+            let t_far = _mm256_min_ps(
+                tfz,
+                _mm256_min_ps(tfy, _mm256_min_ps(tfx, _mm256_set1_ps(t_max))),
+            );
+            let t_far = _mm256_mul_ps(t_far, _mm256_set1_ps(ROBUST_FAR_SCALE));
+            let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(t_near, t_far);
+            let t_near = _mm256_or_ps(
+                t_near,
+                _mm256_andnot_ps(hit, _mm256_castsi256_ps(_mm256_set1_epi32(-1))),
+            );
+            let mut t = [0.0f32; 8];
+            _mm256_storeu_ps(t.as_mut_ptr(), t_near);
+            (_mm256_movemask_ps(hit) as u32, t)
+        }
+    }
+}
+
+#[inline(always)]
+fn ray_ok(ray: &Ray) -> bool {
+    ray.is_valid() && ray.t_min <= ray.t_max
+}
+
+impl Bvh {
+    /// The 8-wide traversal kernel (the 4-wide `traverse` with eight lanes): `leaf(first,
+    /// count, t_max, stats)` tests a leaf, may shrink `t_max`, returns `true` to stop. With
+    /// `ORDERED`, hit children are visited near-to-far (insertion sort of the hit lanes' keys),
+    /// otherwise in lane order.
+    #[inline(always)]
+    fn traverse8<C: Counter, T: NodeTest8, const ORDERED: bool>(
+        &self,
+        nt: &T,
+        mut t_max: f32,
+        stats: &mut C,
+        mut leaf: impl FnMut(u32, u32, &mut f32, &mut C) -> bool,
+    ) {
+        let mut stack = [MaybeUninit::<u64>::uninit(); STACK8_SIZE];
+        let mut sp = 0usize;
+        let mut cur = 0u32;
+        let nodes = self.nodes8.as_ptr();
+        loop {
+            if !is_leaf(cur) {
+                debug_assert!((cur as usize) < self.nodes8.len());
+                // SAFETY: inner child references index the node array (build invariant).
+                let node = unsafe { &*nodes.add(cur as usize) };
+                stats.node(node.num_children);
+                let (mask, t) = nt.test(node, t_max);
+                if mask != 0 {
+                    let key = |c: usize| (t[c].to_bits() as u64) << 32 | node.child[c] as u64;
+                    let rest = mask & (mask - 1);
+                    if rest == 0 {
+                        cur = node.child[mask.trailing_zeros() as usize];
+                        continue;
+                    }
+                    // SAFETY (pushes below): a node pushes at most 7 entries and
+                    // `7 * depth8 < STACK8_SIZE` (checked at build).
+                    if !ORDERED {
+                        let mut m = rest;
+                        while m != 0 {
+                            let c = m.trailing_zeros() as usize;
+                            m &= m - 1;
+                            unsafe { *stack.get_unchecked_mut(sp) = MaybeUninit::new(key(c)) };
+                            sp += 1;
+                        }
+                        cur = node.child[mask.trailing_zeros() as usize];
+                        continue;
+                    }
+                    if rest & (rest - 1) == 0 {
+                        let (a, b) = (
+                            key(mask.trailing_zeros() as usize),
+                            key(rest.trailing_zeros() as usize),
+                        );
+                        unsafe { *stack.get_unchecked_mut(sp) = MaybeUninit::new(a.max(b)) };
+                        sp += 1;
+                        cur = a.min(b) as u32;
+                        continue;
+                    }
+                    // Three or more: insertion sort, far to near, then push all but the nearest.
+                    let mut ks = [0u64; 8];
+                    let mut n = 0;
+                    let mut m = mask;
+                    while m != 0 {
+                        let k = key(m.trailing_zeros() as usize);
+                        m &= m - 1;
+                        let mut j = n;
+                        while j > 0 && ks[j - 1] < k {
+                            ks[j] = ks[j - 1];
+                            j -= 1;
+                        }
+                        ks[j] = k;
+                        n += 1;
+                    }
+                    for &k in &ks[..n - 1] {
+                        unsafe { *stack.get_unchecked_mut(sp) = MaybeUninit::new(k) };
+                        sp += 1;
+                    }
+                    cur = ks[n - 1] as u32;
+                    continue;
+                }
+            } else {
+                stats.leaf();
+                if leaf(leaf_first(cur), leaf_count(cur), &mut t_max, stats) {
+                    return;
+                }
+            }
+            loop {
+                if sp == 0 {
+                    return;
+                }
+                sp -= 1;
+                // SAFETY: entries below `sp` were written by the pushes above.
+                let e = unsafe { stack.get_unchecked(sp).assume_init() };
+                if f32::from_bits((e >> 32) as u32) <= t_max * ROBUST_FAR_SCALE {
+                    cur = e as u32;
+                    break;
+                }
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn closest8<C: Counter, T: NodeTest8>(&self, nt: &T, ray: &Ray, stats: &mut C) -> Option<Hit> {
+        let r4 = Tri4Ray::new(WatertightRay::new(ray));
+        let mut best = Best::new();
+        self.traverse8::<C, T, true>(nt, ray.t_max, stats, |first, count, t_max, stats| {
+            self.leaf_closest(&r4, first, count, t_max, &mut best, stats);
+            false
+        });
+        best.hit(&self.prim_ids)
+    }
+
+    #[inline(always)]
+    fn any8<C: Counter, T: NodeTest8>(&self, nt: &T, ray: &Ray, stats: &mut C) -> bool {
+        let r4 = Tri4Ray::new(WatertightRay::new(ray));
+        let mut found = false;
+        self.traverse8::<C, T, false>(nt, ray.t_max, stats, |first, count, t_max, stats| {
+            found = self.leaf_any(&r4, first, count, *t_max, stats);
+            found
+        });
+        found
+    }
+
+    #[inline(always)]
+    fn all8<C: Counter, T: NodeTest8>(&self, nt: &T, ray: &Ray, out: &mut Vec<Hit>, stats: &mut C) {
+        let wt = WatertightRay::new(ray);
+        self.traverse8::<C, T, false>(nt, ray.t_max, stats, |first, count, _, stats| {
+            self.leaf_all(&wt, first, count, out, stats);
+            false
+        });
+        sort_hits(out);
+    }
+}
+
+impl Bvh {
+    #[inline]
+    fn closest_hit8<C: Counter>(&self, ray: &Ray, stats: &mut C) -> Option<Hit> {
+        stats.ray();
+        if self.nodes8.is_empty() || !ray_ok(ray) {
+            return None;
+        }
+        let rb = RayBoxes8::new(ray);
+        #[cfg(target_arch = "x86_64")]
+        if use_avx2() {
+            // SAFETY: AVX2 was detected.
+            return unsafe { self.closest8_avx2(rb, ray, stats) };
+        }
+        self.closest8(&Portable8(rb), ray, stats)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn closest8_avx2<C: Counter>(
+        &self,
+        rb: RayBoxes8,
+        ray: &Ray,
+        stats: &mut C,
+    ) -> Option<Hit> {
+        // SAFETY: AVX2 is enabled for this function (the caller detected it).
+        let nt = unsafe { Avx2Boxes8::new(rb) };
+        self.closest8(&nt, ray, stats)
+    }
+
+    #[inline]
+    fn any_hit8<C: Counter>(&self, ray: &Ray, stats: &mut C) -> bool {
+        stats.ray();
+        if self.nodes8.is_empty() || !ray_ok(ray) {
+            return false;
+        }
+        let rb = RayBoxes8::new(ray);
+        #[cfg(target_arch = "x86_64")]
+        if use_avx2() {
+            // SAFETY: AVX2 was detected.
+            return unsafe { self.any8_avx2(rb, ray, stats) };
+        }
+        self.any8(&Portable8(rb), ray, stats)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn any8_avx2<C: Counter>(&self, rb: RayBoxes8, ray: &Ray, stats: &mut C) -> bool {
+        // SAFETY: AVX2 is enabled for this function (the caller detected it).
+        let nt = unsafe { Avx2Boxes8::new(rb) };
+        self.any8(&nt, ray, stats)
+    }
+
+    #[inline]
+    fn all_hits8<C: Counter>(&self, ray: &Ray, out: &mut Vec<Hit>, stats: &mut C) {
+        out.clear();
+        stats.ray();
+        if self.nodes8.is_empty() || !ray_ok(ray) {
+            return;
+        }
+        let rb = RayBoxes8::new(ray);
+        #[cfg(target_arch = "x86_64")]
+        if use_avx2() {
+            // SAFETY: AVX2 was detected.
+            return unsafe { self.all8_avx2(rb, ray, out, stats) };
+        }
+        self.all8(&Portable8(rb), ray, out, stats)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn all8_avx2<C: Counter>(
+        &self,
+        rb: RayBoxes8,
+        ray: &Ray,
+        out: &mut Vec<Hit>,
+        s: &mut C,
+    ) {
+        // SAFETY: AVX2 is enabled for this function (the caller detected it).
+        let nt = unsafe { Avx2Boxes8::new(rb) };
+        self.all8(&nt, ray, out, s)
+    }
+
+    /// The closest intersection with `ray` in `(t_min, t_max)`, or `None`. Both faces of a
+    /// triangle are hit. Invalid rays (non-finite, zero direction) hit nothing. Exact ties in
+    /// `t` go to the lower index in [`Bvh::triangles`]. Traverses the 8-wide tree (AVX2 node
+    /// test where the CPU has it).
+    pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
+        self.closest_hit8(ray, &mut NoStats)
+    }
+
+    /// [`Self::closest_hit`], adding the work done (8-wide nodes) to `stats`.
+    pub fn closest_hit_with_stats(&self, ray: &Ray, stats: &mut TraversalStats) -> Option<Hit> {
+        self.closest_hit8(ray, stats)
+    }
+
+    /// [`Self::closest_hit`] with the portable node test even where AVX2 exists: the twin the
+    /// tests hold the AVX2 path against.
+    pub fn closest_hit8_portable(&self, ray: &Ray) -> Option<Hit> {
+        if self.nodes8.is_empty() || !ray_ok(ray) {
+            return None;
+        }
+        self.closest8(&Portable8(RayBoxes8::new(ray)), ray, &mut NoStats)
+    }
+
+    /// Whether anything intersects `ray` in `(t_min, t_max)` (occlusion / shadow rays). Stops
+    /// at the first hit found, in no particular order.
+    pub fn any_hit(&self, ray: &Ray) -> bool {
+        self.any_hit8(ray, &mut NoStats)
+    }
+
+    /// [`Self::any_hit`], adding the work done to `stats`.
+    pub fn any_hit_with_stats(&self, ray: &Ray, stats: &mut TraversalStats) -> bool {
+        self.any_hit8(ray, stats)
+    }
+
+    /// [`Self::any_hit`] with the portable node test (the twin of the AVX2 path).
+    pub fn any_hit8_portable(&self, ray: &Ray) -> bool {
+        if self.nodes8.is_empty() || !ray_ok(ray) {
+            return false;
+        }
+        self.any8(&Portable8(RayBoxes8::new(ray)), ray, &mut NoStats)
+    }
+
+    /// Every intersection with `ray` in `(t_min, t_max)`, sorted by `t` (ties by primitive).
+    /// `out` is cleared first; it only allocates when it must grow. With the watertight test's
+    /// tie-break, a ray through a shared edge or vertex of a closed mesh is reported once.
+    pub fn all_hits(&self, ray: &Ray, out: &mut Vec<Hit>) {
+        self.all_hits8(ray, out, &mut NoStats)
+    }
+
+    /// [`Self::all_hits`], adding the work done to `stats`.
+    pub fn all_hits_with_stats(&self, ray: &Ray, out: &mut Vec<Hit>, stats: &mut TraversalStats) {
+        self.all_hits8(ray, out, stats)
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[inline]
+pub(crate) fn use_avx2() -> bool {
+    std::is_x86_feature_detected!("avx2")
+}
