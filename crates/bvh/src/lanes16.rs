@@ -11,6 +11,8 @@
 
 use glam::{BVec4A, Vec4};
 
+use crate::traverse8::{NodeTest8, Portable8, RayBoxes8};
+
 /// Sixteen values aligned for one 512-bit load.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(64))]
@@ -24,6 +26,9 @@ pub(crate) struct U16(pub [u32; 16]);
 /// The lane operations (module docs). Masks are `u32` with bit `i` = lane `i`.
 pub(crate) trait Lanes16: Copy {
     type V: Copy;
+    /// The single-ray node test of the same ISA (for rays the packet hands over).
+    type Single: NodeTest8;
+    fn single(self, rb: RayBoxes8) -> Self::Single;
     fn splat(self, x: f32) -> Self::V;
     fn load(self, a: &F16) -> Self::V;
     fn store(self, v: Self::V, a: &mut F16);
@@ -86,6 +91,11 @@ macro_rules! cmp4 {
 
 impl Lanes16 for Portable16 {
     type V = [Vec4; 4];
+    type Single = Portable8;
+    #[inline(always)]
+    fn single(self, rb: RayBoxes8) -> Portable8 {
+        Portable8(rb)
+    }
     #[inline(always)]
     fn splat(self, x: f32) -> [Vec4; 4] {
         [Vec4::splat(x); 4]
@@ -190,7 +200,7 @@ pub(crate) struct Avx512(());
 #[cfg(target_arch = "x86_64")]
 impl Avx512 {
     /// # Safety
-    /// The CPU must support AVX-512F.
+    /// The CPU must support AVX-512F and AVX2.
     #[inline(always)]
     pub unsafe fn new() -> Self {
         Avx512(())
@@ -207,6 +217,12 @@ mod avx512 {
     // (`Avx512::new`); loads and stores are of 64-byte aligned `F16` / `U16`.
     impl Lanes16 for Avx512 {
         type V = __m512;
+        type Single = crate::traverse8::Avx2Boxes8;
+        #[inline(always)]
+        fn single(self, rb: crate::traverse8::RayBoxes8) -> Self::Single {
+            // SAFETY: AVX-512F and AVX2 were detected (`Avx512::new`).
+            unsafe { crate::traverse8::Avx2Boxes8::new(rb) }
+        }
         #[inline(always)]
         fn splat(self, x: f32) -> __m512 {
             unsafe { _mm512_set1_ps(x) }

@@ -37,12 +37,17 @@ use crate::node::{is_leaf, leaf_count, leaf_first};
 use crate::node8::Node8;
 use crate::stats::NoStats;
 use crate::traverse::Best;
-use crate::traverse8::STACK8_SIZE;
+use crate::traverse8::{RayBoxes8, STACK8_SIZE};
 use crate::tri4::{Tri4Ray, blocks_for, lane_mask};
 use crate::{Bvh, Hit};
 
 /// Rays per packet ([`Bvh::closest_hit_packet`] splits longer slices).
 pub const PACKET_SIZE: usize = 16;
+
+/// A subtree entered by at most this many rays of a packet is traversed ray by ray.
+const SINGLE_RAYS_BELOW: u32 = 2;
+/// A leaf entered by at most this many rays is tested ray by ray (4 triangles per test).
+const PER_RAY_LEAF_BELOW: u32 = 4;
 
 #[derive(Clone, Copy)]
 struct Entry {
@@ -118,11 +123,12 @@ struct Packet {
     sy: F16,
     sz: F16,
     perm: Option<[usize; 3]>,
-    wt: [MaybeUninit<Tri4Ray>; PACKET_SIZE],
+    wt: [MaybeUninit<WatertightRay>; PACKET_SIZE],
     interval: Option<Interval>,
 }
 
 impl Packet {
+    #[inline(always)]
     fn new(rays: &[Ray], valid: u32) -> Self {
         let z = F16([0.0; 16]);
         let mut p = Packet {
@@ -145,6 +151,8 @@ impl Packet {
         let mut perm = None;
         let mut same_perm = true;
         let mut finite = true;
+        let (mut lo, mut hi) = ([f32::INFINITY; 6], [f32::NEG_INFINITY; 6]);
+        let (mut t_lo, mut t_hi) = (f32::INFINITY, f32::NEG_INFINITY);
         for (i, r) in rays.iter().enumerate() {
             if valid >> i & 1 == 0 {
                 continue;
@@ -156,6 +164,18 @@ impl Packet {
                 p.neg[a] |= ((iv[a] < 0.0) as u32) << i;
             }
             finite &= iv.is_finite();
+            for (a, x) in r
+                .origin
+                .to_array()
+                .into_iter()
+                .chain(iv.to_array())
+                .enumerate()
+            {
+                lo[a] = lo[a].min(x);
+                hi[a] = hi[a].max(x);
+            }
+            t_lo = t_lo.min(r.t_min);
+            t_hi = t_hi.max(r.t_max);
             p.t_min.0[i] = r.t_min;
             p.t_max.0[i] = r.t_max;
             let wt = WatertightRay::new(r);
@@ -164,30 +184,20 @@ impl Packet {
             p.sx.0[i] = wt.sx;
             p.sy.0[i] = wt.sy;
             p.sz.0[i] = wt.sz;
-            p.wt[i] = MaybeUninit::new(Tri4Ray::new(wt));
+            p.wt[i] = MaybeUninit::new(wt);
         }
         p.perm = perm.filter(|_| same_perm);
         let uniform = (0..3).all(|a| p.neg[a] == 0 || p.neg[a] == valid);
         if uniform && finite {
-            p.interval = Some(p.interval(rays));
+            p.interval = Some(p.interval(lo, hi, t_lo, t_hi));
         }
         p
     }
 
-    fn interval(&self, rays: &[Ray]) -> Interval {
-        let lanes = || (0..rays.len()).filter(|&i| self.valid >> i & 1 != 0);
-        let fold = |f: &dyn Fn(usize) -> f32, max: bool| {
-            lanes().map(f).fold(
-                if max {
-                    f32::NEG_INFINITY
-                } else {
-                    f32::INFINITY
-                },
-                |a, x| {
-                    if max { a.max(x) } else { a.min(x) }
-                },
-            )
-        };
+    /// The interval bounds from the per-axis ranges `lo` / `hi` of the valid rays' origins
+    /// (axes 0..3) and `1 / dir` (axes 3..6), and their `t_min` / `t_max` ranges.
+    #[inline(always)]
+    fn interval(&self, lo: [f32; 6], hi: [f32; 6], t_min: f32, t_max: f32) -> Interval {
         let mut iv = Interval {
             o_near: [Vec4::ZERO; 3],
             o_far: [Vec4::ZERO; 3],
@@ -195,17 +205,18 @@ impl Packet {
             inv_far: [(Vec4::ZERO, Vec4::ZERO); 3],
             near: [0; 3],
             far: [0; 3],
-            t_min: Vec4::splat(fold(&|i| self.t_min.0[i], false)),
-            t_max: fold(&|i| self.t_max.0[i], true),
+            t_min: Vec4::splat(t_min),
+            t_max,
         };
         for a in 0..3 {
-            let o_lo = fold(&|i| self.org[a].0[i], false);
-            let o_hi = fold(&|i| self.org[a].0[i], true);
-            let i_lo = Vec4::splat(fold(&|i| self.inv[a].0[i], false));
-            let i_hi = Vec4::splat(fold(&|i| self.inv[a].0[i], true));
+            let (i_lo, i_hi) = (Vec4::splat(lo[3 + a]), Vec4::splat(hi[3 + a]));
             let negative = self.neg[a] != 0;
             // Near row: the min of `d * inv` over the box; far row: the max (module docs).
-            let (on, of) = if negative { (o_lo, o_hi) } else { (o_hi, o_lo) };
+            let (on, of) = if negative {
+                (lo[a], hi[a])
+            } else {
+                (hi[a], lo[a])
+            };
             iv.o_near[a] = Vec4::splat(on);
             iv.o_far[a] = Vec4::splat(of);
             iv.inv_near[a] = (i_lo, i_hi);
@@ -218,9 +229,16 @@ impl Packet {
     }
 
     /// Per-ray slab test of child `c` of `node` for the rays of `mask`: the rays that enter it,
-    /// and the smallest entry distance among them.
+    /// and (with `entry`) the smallest entry distance among them (+inf without).
     #[inline(always)]
-    fn test_child<L: Lanes16>(&self, l: L, node: &Node8, c: usize, mask: u32) -> (u32, f32) {
+    fn test_child<L: Lanes16>(
+        &self,
+        l: L,
+        node: &Node8,
+        c: usize,
+        mask: u32,
+        entry: bool,
+    ) -> (u32, f32) {
         let b = &node.bounds;
         let mut t_near = l.load(&self.t_min);
         let mut t_far = l.load(&self.t_max);
@@ -240,14 +258,12 @@ impl Packet {
         }
         let t_far = l.mul(t_far, l.splat(ROBUST_FAR_SCALE));
         let hit = l.le(t_near, t_far) & mask;
-        (
-            hit,
-            if hit != 0 {
-                l.hmin(hit, t_near)
-            } else {
-                f32::INFINITY
-            },
-        )
+        let t = if entry && hit != 0 {
+            l.hmin(hit, t_near)
+        } else {
+            f32::INFINITY
+        };
+        (hit, t)
     }
 
     /// Rays of `mask` that have not yet found a hit nearer than `t`.
@@ -257,27 +273,31 @@ impl Packet {
         l.le(l.splat(t), bound) & mask
     }
 
+    /// A vertex in each ray's sheared frame: `a = v - o; (a[kx] - sx a[kz], a[ky] - sy a[kz],
+    /// sz a[kz])`, the operations of `tri4.rs`. (A method, not a closure: closures do not
+    /// inherit the caller's target features, so their intrinsics would not inline.)
+    #[inline(always)]
+    fn project<L: Lanes16>(&self, l: L, k: [usize; 3], v: [f32; 3]) -> (L::V, L::V, L::V) {
+        let [kx, ky, kz] = k;
+        let az = l.sub(l.splat(v[kz]), l.load(&self.org[kz]));
+        let x = l.sub(
+            l.sub(l.splat(v[kx]), l.load(&self.org[kx])),
+            l.mul(l.load(&self.sx), az),
+        );
+        let y = l.sub(
+            l.sub(l.splat(v[ky]), l.load(&self.org[ky])),
+            l.mul(l.load(&self.sy), az),
+        );
+        (x, y, l.mul(l.load(&self.sz), az))
+    }
+
     /// The watertight test of one triangle against the rays of `mask` (all sharing the axis
     /// permutation `k`), keeping each ray's lexicographically smallest `(t, index)`.
     #[inline(always)]
     fn triangle<L: Lanes16>(&mut self, l: L, k: [usize; 3], p: [[f32; 3]; 3], tri: u32, mask: u32) {
-        let [kx, ky, kz] = k;
-        let org = [
-            l.load(&self.org[0]),
-            l.load(&self.org[1]),
-            l.load(&self.org[2]),
-        ];
-        let (sx, sy, sz) = (l.load(&self.sx), l.load(&self.sy), l.load(&self.sz));
-        // Per vertex: a = p - o; (a[kx] - sx a[kz], a[ky] - sy a[kz], sz a[kz]) (`tri4.rs`).
-        let proj = |v: [f32; 3]| {
-            let az = l.sub(l.splat(v[kz]), org[kz]);
-            let x = l.sub(l.sub(l.splat(v[kx]), org[kx]), l.mul(sx, az));
-            let y = l.sub(l.sub(l.splat(v[ky]), org[ky]), l.mul(sy, az));
-            (x, y, l.mul(sz, az))
-        };
-        let (ax, ay, az) = proj(p[0]);
-        let (bx, by, bz) = proj(p[1]);
-        let (cx, cy, cz) = proj(p[2]);
+        let (ax, ay, az) = self.project(l, k, p[0]);
+        let (bx, by, bz) = self.project(l, k, p[1]);
+        let (cx, cy, cz) = self.project(l, k, p[2]);
         let u = l.sub(l.mul(cx, by), l.mul(cy, bx));
         let v = l.sub(l.mul(ax, cy), l.mul(ay, cx));
         let w = l.sub(l.mul(bx, ay), l.mul(by, ax));
@@ -314,13 +334,25 @@ impl Packet {
             let mut best = self.best(i);
             let mut t_max = self.t_max.0[i];
             // SAFETY: rays of the mask are valid, and valid rays were initialised.
-            let wt = unsafe { &self.wt[i].assume_init_ref().wt };
+            let wt = unsafe { self.wt[i].assume_init_ref() };
             let v3 = |q: [f32; 3]| glam::Vec3::from_array(q);
             if let Some(h) = wt.intersect_within(v3(p[0]), v3(p[1]), v3(p[2]), best.limit(t_max)) {
                 best.offer(h.t, tri, h.u, h.v, &mut t_max);
             }
             self.set_best(i, best, t_max);
         }
+    }
+
+    /// Ray `i` finishes the subtree `root` alone (its closest hit so far carried over).
+    #[inline(always)]
+    fn single_ray<L: Lanes16>(&mut self, bvh: &Bvh, l: L, rays: &[Ray], i: usize, root: u32) {
+        let mut best = self.best(i);
+        let mut t_max = self.t_max.0[i];
+        // SAFETY: rays of a mask are valid, and valid rays were initialised.
+        let r4 = Tri4Ray::new(unsafe { *self.wt[i].assume_init_ref() });
+        let nt = l.single(RayBoxes8::new(&rays[i]));
+        bvh.closest8_from(&nt, &r4, root, &mut t_max, &mut best, &mut NoStats);
+        self.set_best(i, best, t_max);
     }
 
     #[inline(always)]
@@ -375,9 +407,9 @@ impl Bvh {
     }
 
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f")]
+    #[target_feature(enable = "avx512f,avx2")]
     unsafe fn packet8_avx512(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
-        // SAFETY: AVX-512F is enabled for this function (the caller detected it).
+        // SAFETY: AVX-512F and AVX2 are enabled for this function (the caller detected them).
         self.packet8(unsafe { crate::lanes16::Avx512::new() }, rays, out)
     }
 
@@ -399,12 +431,28 @@ impl Bvh {
         let mut cur = 0u32;
         let mut mask = valid;
         loop {
-            if !is_leaf(cur) {
+            if mask.count_ones() <= SINGLE_RAYS_BELOW {
+                // Few rays left in this subtree: each finishes it alone (the single-ray loop is
+                // cheaper than a mostly empty packet; Embree's hybrid traversal, Benthin et al.
+                // 2012).
+                let mut m = mask;
+                while m != 0 {
+                    let i = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    p.single_ray(self, l, rays, i, cur);
+                }
+                if let Some(iv) = &mut p.interval {
+                    iv.t_max = l.hmax(p.valid, l.load(&p.t_max));
+                }
+            } else if !is_leaf(cur) {
                 let node = &self.nodes8[cur as usize];
-                let cand = match &p.interval {
-                    Some(iv) => iv.test(node).0,
-                    None => (1u32 << node.num_children) - 1,
+                // With interval bounds, their entry bound orders the children and culls pops
+                // (it is below every ray's entry distance); else the rays' smallest entry.
+                let (cand, t_ia) = match &p.interval {
+                    Some(iv) => iv.test(node),
+                    None => ((1u32 << node.num_children) - 1, [0.0; 8]),
                 };
+                let ia = p.interval.is_some();
                 let mut kid = [Entry {
                     child: 0,
                     mask: 0,
@@ -415,8 +463,9 @@ impl Bvh {
                 while m != 0 {
                     let c = m.trailing_zeros() as usize;
                     m &= m - 1;
-                    let (hits, t) = p.test_child(l, node, c, mask);
+                    let (hits, t) = p.test_child(l, node, c, mask, !ia);
                     if hits != 0 {
+                        let t = if ia { t_ia[c] } else { t };
                         let e = Entry {
                             child: node.child[c],
                             mask: hits,
@@ -469,7 +518,7 @@ impl Bvh {
 
     #[inline(always)]
     fn packet_leaf<L: Lanes16>(&self, l: L, p: &mut Packet, first: u32, count: u32, mask: u32) {
-        if let Some(k) = p.perm {
+        if let Some(k) = p.perm.filter(|_| mask.count_ones() > PER_RAY_LEAF_BELOW) {
             for kb in 0..blocks_for(count) {
                 let b = &self.blocks[(first + kb) as usize];
                 let lanes = lane_mask(count, kb);
@@ -489,8 +538,8 @@ impl Bvh {
             let mut best = p.best(i);
             let mut t_max = p.t_max.0[i];
             // SAFETY: rays of the mask are valid, and valid rays were initialised.
-            let r4 = unsafe { p.wt[i].assume_init_ref() };
-            self.leaf_closest(r4, first, count, &mut t_max, &mut best, &mut NoStats);
+            let r4 = Tri4Ray::new(unsafe { *p.wt[i].assume_init_ref() });
+            self.leaf_closest(&r4, first, count, &mut t_max, &mut best, &mut NoStats);
             p.set_best(i, best, t_max);
         }
     }
@@ -499,5 +548,5 @@ impl Bvh {
 #[cfg(target_arch = "x86_64")]
 #[inline]
 fn use_avx512() -> bool {
-    std::is_x86_feature_detected!("avx512f")
+    std::is_x86_feature_detected!("avx512f") && std::is_x86_feature_detected!("avx2")
 }

@@ -75,7 +75,7 @@ pub(crate) trait NodeTest8 {
 }
 
 /// The portable twin: two 4-lane halves.
-pub(crate) struct Portable8(RayBoxes8);
+pub(crate) struct Portable8(pub RayBoxes8);
 
 impl NodeTest8 for Portable8 {
     #[inline(always)]
@@ -129,9 +129,11 @@ impl Avx2Boxes8 {
         use std::arch::x86_64::*;
         // SAFETY: AVX is available (caller).
         unsafe {
+            let [ox, oy, oz] = rb.org;
+            let [ix, iy, iz] = rb.inv;
             Self {
-                org: rb.org.map(|x| _mm256_set1_ps(x)),
-                inv: rb.inv.map(|x| _mm256_set1_ps(x)),
+                org: [_mm256_set1_ps(ox), _mm256_set1_ps(oy), _mm256_set1_ps(oz)],
+                inv: [_mm256_set1_ps(ix), _mm256_set1_ps(iy), _mm256_set1_ps(iz)],
                 rb,
             }
         }
@@ -148,14 +150,19 @@ impl NodeTest8 for Avx2Boxes8 {
         // SAFETY: a value of this type exists only where AVX2 was detected (`new`); loads are
         // 32-byte aligned rows of the 64-byte aligned node at offsets `32 * i`, `i < 6`.
         unsafe {
-            let b = |off: usize| _mm256_load_ps(base.add(off) as *const f32);
+            // A macro, not a closure: closures do not inherit the caller's target features.
+            macro_rules! b {
+                ($off:expr) => {
+                    _mm256_load_ps(base.add($off) as *const f32)
+                };
+            }
             let (o, i) = (&self.org, &self.inv);
-            let tnx = _mm256_mul_ps(_mm256_sub_ps(b(rb.near[0]), o[0]), i[0]);
-            let tny = _mm256_mul_ps(_mm256_sub_ps(b(rb.near[1]), o[1]), i[1]);
-            let tnz = _mm256_mul_ps(_mm256_sub_ps(b(rb.near[2]), o[2]), i[2]);
-            let tfx = _mm256_mul_ps(_mm256_sub_ps(b(rb.far[0]), o[0]), i[0]);
-            let tfy = _mm256_mul_ps(_mm256_sub_ps(b(rb.far[1]), o[1]), i[1]);
-            let tfz = _mm256_mul_ps(_mm256_sub_ps(b(rb.far[2]), o[2]), i[2]);
+            let tnx = _mm256_mul_ps(_mm256_sub_ps(b!(rb.near[0]), o[0]), i[0]);
+            let tny = _mm256_mul_ps(_mm256_sub_ps(b!(rb.near[1]), o[1]), i[1]);
+            let tnz = _mm256_mul_ps(_mm256_sub_ps(b!(rb.near[2]), o[2]), i[2]);
+            let tfx = _mm256_mul_ps(_mm256_sub_ps(b!(rb.far[0]), o[0]), i[0]);
+            let tfy = _mm256_mul_ps(_mm256_sub_ps(b!(rb.far[1]), o[1]), i[1]);
+            let tfz = _mm256_mul_ps(_mm256_sub_ps(b!(rb.far[2]), o[2]), i[2]);
             let t_near = _mm256_max_ps(
                 tnz,
                 _mm256_max_ps(tny, _mm256_max_ps(tnx, _mm256_set1_ps(rb.t_min))),
@@ -177,12 +184,42 @@ impl NodeTest8 for Avx2Boxes8 {
     }
 }
 
+/// Whether the traversal prefetches the blocks of hit leaf children (notes: docs/notes/bvh.md).
+const PREFETCH_LEAVES: bool = true;
+
 #[inline(always)]
 fn ray_ok(ray: &Ray) -> bool {
     ray.is_valid() && ray.t_min <= ray.t_max
 }
 
 impl Bvh {
+    /// Prefetches the first two cache lines of the triangle block of each hit leaf lane.
+    #[inline(always)]
+    fn prefetch_leaves(&self, node: &Node8, mask: u32) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+            let mut m = mask;
+            while m != 0 {
+                let c = m.trailing_zeros() as usize;
+                m &= m - 1;
+                let r = node.child[c];
+                if !is_leaf(r) {
+                    break;
+                }
+                let b = self.blocks.as_ptr().wrapping_add(leaf_first(r) as usize) as *const i8;
+                // SAFETY: prefetches never fault; the address is only a hint.
+                unsafe {
+                    _mm_prefetch::<_MM_HINT_T0>(b);
+                    _mm_prefetch::<_MM_HINT_T0>(b.wrapping_add(64));
+                    _mm_prefetch::<_MM_HINT_T0>(b.wrapping_add(128));
+                }
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = (node, mask);
+    }
+
     /// The 8-wide traversal kernel (the 4-wide `traverse` with eight lanes): `leaf(first,
     /// count, t_max, stats)` tests a leaf, may shrink `t_max`, returns `true` to stop. With
     /// `ORDERED`, hit children are visited near-to-far (insertion sort of the hit lanes' keys),
@@ -191,13 +228,14 @@ impl Bvh {
     fn traverse8<C: Counter, T: NodeTest8, const ORDERED: bool>(
         &self,
         nt: &T,
+        root: u32,
         mut t_max: f32,
         stats: &mut C,
         mut leaf: impl FnMut(u32, u32, &mut f32, &mut C) -> bool,
     ) {
         let mut stack = [MaybeUninit::<u64>::uninit(); STACK8_SIZE];
         let mut sp = 0usize;
-        let mut cur = 0u32;
+        let mut cur = root;
         let nodes = self.nodes8.as_ptr();
         loop {
             if !is_leaf(cur) {
@@ -208,6 +246,12 @@ impl Bvh {
                 let (mask, t) = nt.test(node, t_max);
                 if mask != 0 {
                     let key = |c: usize| (t[c].to_bits() as u64) << 32 | node.child[c] as u64;
+                    // Leaf children come first (`node8.rs`): start the loads of the hit leaves'
+                    // triangle blocks now, so their misses overlap the work until they are
+                    // tested.
+                    if PREFETCH_LEAVES {
+                        self.prefetch_leaves(node, mask);
+                    }
                     let rest = mask & (mask - 1);
                     if rest == 0 {
                         cur = node.child[mask.trailing_zeros() as usize];
@@ -283,18 +327,38 @@ impl Bvh {
     fn closest8<C: Counter, T: NodeTest8>(&self, nt: &T, ray: &Ray, stats: &mut C) -> Option<Hit> {
         let r4 = Tri4Ray::new(WatertightRay::new(ray));
         let mut best = Best::new();
-        self.traverse8::<C, T, true>(nt, ray.t_max, stats, |first, count, t_max, stats| {
-            self.leaf_closest(&r4, first, count, t_max, &mut best, stats);
+        let mut t_max = ray.t_max;
+        self.closest8_from(nt, &r4, 0, &mut t_max, &mut best, stats);
+        best.hit(&self.prim_ids)
+    }
+
+    /// The closest-hit traversal of the subtree `root` (an inner node or a leaf reference),
+    /// continuing from the closest hit `best` at `t_max` (the packet traversal hands rays over
+    /// to it when few remain active).
+    #[inline(always)]
+    pub(crate) fn closest8_from<C: Counter, T: NodeTest8>(
+        &self,
+        nt: &T,
+        r4: &Tri4Ray,
+        root: u32,
+        t_max: &mut f32,
+        best: &mut Best,
+        stats: &mut C,
+    ) {
+        let mut t_cur = *t_max;
+        self.traverse8::<C, T, true>(nt, root, *t_max, stats, |first, count, t, stats| {
+            self.leaf_closest(r4, first, count, t, best, stats);
+            t_cur = *t;
             false
         });
-        best.hit(&self.prim_ids)
+        *t_max = t_cur;
     }
 
     #[inline(always)]
     fn any8<C: Counter, T: NodeTest8>(&self, nt: &T, ray: &Ray, stats: &mut C) -> bool {
         let r4 = Tri4Ray::new(WatertightRay::new(ray));
         let mut found = false;
-        self.traverse8::<C, T, false>(nt, ray.t_max, stats, |first, count, t_max, stats| {
+        self.traverse8::<C, T, false>(nt, 0, ray.t_max, stats, |first, count, t_max, stats| {
             found = self.leaf_any(&r4, first, count, *t_max, stats);
             found
         });
@@ -304,7 +368,7 @@ impl Bvh {
     #[inline(always)]
     fn all8<C: Counter, T: NodeTest8>(&self, nt: &T, ray: &Ray, out: &mut Vec<Hit>, stats: &mut C) {
         let wt = WatertightRay::new(ray);
-        self.traverse8::<C, T, false>(nt, ray.t_max, stats, |first, count, _, stats| {
+        self.traverse8::<C, T, false>(nt, 0, ray.t_max, stats, |first, count, _, stats| {
             self.leaf_all(&wt, first, count, out, stats);
             false
         });

@@ -147,11 +147,21 @@ impl Tri4Ray {
         let exact = (u.cmpeq(zero) | v.cmpeq(zero) | w.cmpeq(zero)).bitmask() & mask;
         let neg = u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero);
         let pos = u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero);
+        let ok = (neg & pos).bitmask() ^ 0xF;
+        if ok & mask & !exact == 0 {
+            // No lane can hit: skip the division (the common case).
+            return Tri4Hits {
+                hit: 0,
+                exact,
+                t: zero,
+                u: zero,
+                v: zero,
+            };
+        }
         let det = u + v + w;
         let t_scaled = u * az + v * bz + w * cz;
         let inv = Vec4::ONE / det;
         let t = t_scaled * inv;
-        let ok = (neg & pos).bitmask() ^ 0xF;
         let nz = det.cmpne(zero).bitmask();
         let in_range = (t.cmpgt(self.t_min) & t.cmplt(Vec4::splat(t_lim))).bitmask();
         Tri4Hits {

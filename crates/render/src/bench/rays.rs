@@ -108,6 +108,9 @@ type Answer = Option<(u32, f32)>;
 pub enum Method {
     BvhSingle,
     BvhPacket16,
+    /// The 4-wide tree's single rays and packets (the predecessors, for reference).
+    BvhSingle4,
+    BvhPacket4,
     EmbreeIntersect1,
     EmbreeIntersect8,
     EmbreeIntersect16,
@@ -115,9 +118,11 @@ pub enum Method {
 }
 
 impl Method {
-    pub const ALL: [Method; 6] = [
+    pub const ALL: [Method; 8] = [
         Method::BvhSingle,
         Method::BvhPacket16,
+        Method::BvhSingle4,
+        Method::BvhPacket4,
         Method::EmbreeIntersect1,
         Method::EmbreeIntersect8,
         Method::EmbreeIntersect16,
@@ -128,6 +133,8 @@ impl Method {
         match self {
             Method::BvhSingle => "bvh single",
             Method::BvhPacket16 => "bvh packet16",
+            Method::BvhSingle4 => "bvh4 single",
+            Method::BvhPacket4 => "bvh4 packet16",
             Method::EmbreeIntersect1 => "embree rtcIntersect1",
             Method::EmbreeIntersect8 => "embree rtcIntersect8",
             Method::EmbreeIntersect16 => "embree rtcIntersect16",
@@ -136,7 +143,10 @@ impl Method {
     }
 
     pub fn is_embree(self) -> bool {
-        !matches!(self, Method::BvhSingle | Method::BvhPacket16)
+        !matches!(
+            self,
+            Method::BvhSingle | Method::BvhPacket16 | Method::BvhSingle4 | Method::BvhPacket4
+        )
     }
 
     /// Traces `rays` (one chunk) into `out`; `coherent` picks Embree's stream context flag.
@@ -155,10 +165,19 @@ impl Method {
                     *o = ph(bvh.closest_hit(r));
                 }
             }
-            Method::BvhPacket16 => {
+            Method::BvhSingle4 => {
+                for (r, o) in rays.iter().zip(out) {
+                    *o = ph(bvh.closest_hit4(r));
+                }
+            }
+            Method::BvhPacket16 | Method::BvhPacket4 => {
                 let mut tmp = [None; PACKET_SIZE];
                 for (p, o) in rays.chunks(PACKET_SIZE).zip(out.chunks_mut(PACKET_SIZE)) {
-                    bvh.closest_hit_packet(p, &mut tmp);
+                    if self == Method::BvhPacket16 {
+                        bvh.closest_hit_packet(p, &mut tmp);
+                    } else {
+                        bvh.closest_hit_packet4(p, &mut tmp);
+                    }
                     for (o, h) in o.iter_mut().zip(tmp) {
                         *o = ph(h);
                     }
@@ -373,7 +392,7 @@ pub fn run(scene: &Scene, camera: &Camera, opts: &RaysOptions) -> Result<RaysRep
     for (mode, coherent) in modes {
         let mut acc = vec![Acc::default(); methods.len()];
         let mut n = 0u64;
-        let mut band = |rays: &[Ray], acc: &mut [Acc]| {
+        let band = |rays: &[Ray], acc: &mut [Acc]| {
             time_band(
                 &methods,
                 &bvh,

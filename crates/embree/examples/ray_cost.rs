@@ -1,0 +1,149 @@
+//! One traversal method over one ray set, once, on one thread: the harness for instruction and
+//! cache-miss counts per ray (`valgrind --tool=callgrind --cache-sim=yes
+//! --toggle-collect='*trace_all*'`), parallax's BVH and Embree on the same rays.
+//!
+//! ```text
+//! cargo build --release -p parallax-embree --features embree --example ray_cost
+//! target/release/examples/ray_cost SCENE EYE TARGET FOV_Y METHOD MODE [WIDTH HEIGHT]
+//!   METHOD: bvh | bvh4 | packet | packet4 | embree1 | embree16 | stats (work counters)
+//!   MODE:   primary (pixel centres, 4x4 tiles) | random (cosine bounces from the primary hits)
+//! e.g. ray_cost ../shared/scenes/sponza_dabrovic/sponza_dabrovic.glb -9,3.5,0 8,5,0 60 bvh primary
+//! ```
+//!
+//! Under valgrind the CPU model has no AVX-512, so both sides run their AVX2 kernels there.
+
+use glam::{Vec2, Vec3};
+use parallax_bvh::{Bvh, TraversalStats};
+use parallax_core::Ray;
+use parallax_core::math::Frame;
+use parallax_core::sampling::{Rng, warp};
+use parallax_embree::{EmbreeScene, Options};
+use parallax_scene::camera::{CameraModel, Pinhole};
+use parallax_scene::{CameraDesc, Scene};
+
+fn v3(s: &str) -> Vec3 {
+    let v: Vec<f32> = s.split(',').map(|x| x.parse().expect("number")).collect();
+    Vec3::new(v[0], v[1], v[2])
+}
+
+#[inline(never)]
+fn trace_all(rays: &[Ray], f: &mut dyn FnMut(&[Ray]) -> usize, chunk: usize) -> usize {
+    rays.chunks(chunk).map(f).sum()
+}
+
+fn main() {
+    let a: Vec<String> = std::env::args().collect();
+    if a.len() < 7 {
+        eprintln!("usage: ray_cost SCENE EYE TARGET FOV_Y METHOD MODE [WIDTH HEIGHT]");
+        std::process::exit(2);
+    }
+    let scene = Scene::load(&a[1]).expect("scene");
+    let desc = CameraDesc::new(v3(&a[2]), v3(&a[3]), Vec3::Y, a[4].parse().unwrap());
+    let (method, mode) = (a[5].as_str(), a[6].as_str());
+    let w: u32 = a.get(7).map_or(1280, |s| s.parse().unwrap());
+    let h: u32 = a.get(8).map_or(720, |s| s.parse().unwrap());
+    let bvh = Bvh::build(&scene.mesh);
+    let cam = Pinhole::new(&desc, w, h).unwrap();
+    let mut rays: Vec<Ray> = Vec::new();
+    for ty in (0..h).step_by(4) {
+        for tx in (0..w).step_by(4) {
+            for y in ty..(ty + 4).min(h) {
+                for x in tx..(tx + 4).min(w) {
+                    let f = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                    rays.push(cam.generate_ray(f, Vec2::splat(0.5), 1).unwrap().ray);
+                }
+            }
+        }
+    }
+    if mode == "random" {
+        // The bounce rays of `parallax bench rays` (render::bench::rays::bounce_rays).
+        rays = rays
+            .iter()
+            .enumerate()
+            .filter_map(|(i, r)| {
+                let hit = bvh.closest_hit(r)?;
+                let p = r.at(hit.t);
+                let mut n = scene.mesh.geometric_normal(hit.prim as usize);
+                if n.dot(r.dir) > 0.0 {
+                    n = -n;
+                }
+                let mut rng = Rng::for_pixel(7, i as u32, 0, 0);
+                let d = Frame::from_normal(n).to_world(warp::cosine_hemisphere(rng.next_vec2()));
+                Some(Ray::new(p + n * 1e-4 * p.abs().max_element().max(1.0), d))
+            })
+            .collect();
+    }
+    if method == "stats" {
+        let (mut s8, mut s4) = (TraversalStats::default(), TraversalStats::default());
+        for r in &rays {
+            bvh.closest_hit_with_stats(r, &mut s8);
+            bvh.closest_hit4_with_stats(r, &mut s4);
+        }
+        for (name, s) in [("8-wide", s8), ("4-wide", s4)] {
+            println!(
+                "{name}: per ray {:.2} nodes, {:.2} boxes, {:.2} leaves, {:.2} triangles",
+                s.per_ray(s.nodes_visited),
+                s.per_ray(s.box_tests),
+                s.per_ray(s.leaves_visited),
+                s.per_ray(s.triangle_tests)
+            );
+        }
+        return;
+    }
+    let emb = EmbreeScene::new(&scene.mesh, Options::default()).expect("embree");
+    if method.contains(',') {
+        // Interleaved rounds of several methods, best thread-CPU time each (robust to load).
+        let methods: Vec<&str> = method.split(',').collect();
+        let mut best = vec![u64::MAX; methods.len()];
+        for _ in 0..7 {
+            for (m, b) in methods.iter().zip(&mut best) {
+                let mut f = tracer(m, &bvh, &emb);
+                let c0 = parallax_core::cpu_time::thread_cpu_ns().unwrap();
+                std::hint::black_box(trace_all(&rays, &mut *f, 16));
+                *b = (*b).min(parallax_core::cpu_time::thread_cpu_ns().unwrap() - c0);
+            }
+        }
+        for (m, b) in methods.iter().zip(&best) {
+            let mr = rays.len() as f64 / (*b as f64 * 1e-3);
+            println!(
+                "{mode:8} {m:10} {:8.1} ms {mr:6.2} Mrays/s (1 thread, best of 7)",
+                *b as f64 * 1e-6
+            );
+        }
+        return;
+    }
+    let mut f = tracer(method, &bvh, &emb);
+    let hits = trace_all(&rays, &mut *f, 16);
+    println!("{method} {mode}: {} rays, {hits} hits", rays.len());
+}
+
+/// The tracer of `method` over one chunk of at most 16 rays; returns the hits.
+fn tracer<'a>(
+    method: &str,
+    bvh: &'a Bvh,
+    e: &'a EmbreeScene,
+) -> Box<dyn FnMut(&[Ray]) -> usize + 'a> {
+    let mut hb = vec![None; 16];
+    let mut he = vec![None; 16];
+    match method {
+        "bvh" => Box::new(|c| c.iter().filter(|r| bvh.closest_hit(r).is_some()).count()),
+        "bvh4" => Box::new(|c| c.iter().filter(|r| bvh.closest_hit4(r).is_some()).count()),
+        "packet" => Box::new(move |c| {
+            bvh.closest_hit_packet(c, &mut hb);
+            hb[..c.len()].iter().filter(|h| h.is_some()).count()
+        }),
+        "packet4" => Box::new(move |c| {
+            bvh.closest_hit_packet4(c, &mut hb);
+            hb[..c.len()].iter().filter(|h| h.is_some()).count()
+        }),
+        "embree1" => Box::new(move |c| {
+            e.closest_hits(c, &mut he);
+            he[..c.len()].iter().filter(|h| h.is_some()).count()
+        }),
+        "embree16" => Box::new(move |c| {
+            e.closest_hit_packets(c, 16, &mut he);
+            he[..c.len()].iter().filter(|h| h.is_some()).count()
+        }),
+        m => panic!("unknown method {m}"),
+    }
+}
