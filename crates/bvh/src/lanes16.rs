@@ -26,6 +26,8 @@ pub(crate) struct U16(pub [u32; 16]);
 /// The lane operations (module docs). Masks are `u32` with bit `i` = lane `i`.
 pub(crate) trait Lanes16: Copy {
     type V: Copy;
+    /// Whether a value of this type proves AVX2 (256-bit ops for the 8-lane interval test).
+    const AVX2: bool;
     /// The single-ray node test of the same ISA (for rays the packet hands over).
     type Single: NodeTest8;
     fn single(self, rb: RayBoxes8) -> Self::Single;
@@ -91,6 +93,7 @@ macro_rules! cmp4 {
 
 impl Lanes16 for Portable16 {
     type V = [Vec4; 4];
+    const AVX2: bool = false;
     type Single = Portable8;
     #[inline(always)]
     fn single(self, rb: RayBoxes8) -> Portable8 {
@@ -217,6 +220,7 @@ mod avx512 {
     // (`Avx512::new`); loads and stores are of 64-byte aligned `F16` / `U16`.
     impl Lanes16 for Avx512 {
         type V = __m512;
+        const AVX2: bool = true;
         type Single = crate::traverse8::Avx2Boxes8;
         #[inline(always)]
         fn single(self, rb: crate::traverse8::RayBoxes8) -> Self::Single {

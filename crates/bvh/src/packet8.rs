@@ -46,6 +46,7 @@ pub const PACKET_SIZE: usize = 16;
 
 /// A subtree entered by at most this many rays of a packet is traversed ray by ray.
 const SINGLE_RAYS_BELOW: u32 = 2;
+const PURE_INTERVAL: bool = true;
 /// A leaf entered by at most this many rays is tested ray by ray (4 triangles per test).
 const PER_RAY_LEAF_BELOW: u32 = 4;
 
@@ -103,6 +104,50 @@ impl Interval {
         }
         (mask, t)
     }
+
+    /// [`Self::test`] with 256-bit registers (the same operations lane for lane).
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn test_avx2(&self, node: &Node8) -> (u32, [f32; 8]) {
+        use std::arch::x86_64::*;
+        let base = node.bounds.as_ptr() as *const u8;
+        // SAFETY: AVX2 (caller); rows are 32-byte aligned at offsets `32 * i`, `i < 6`.
+        unsafe {
+            // Macros, not closures: closures do not inherit the caller's target features.
+            macro_rules! s {
+                ($v:expr) => {
+                    _mm256_set1_ps($v.x)
+                };
+            }
+            let zero = _mm256_setzero_ps();
+            let mut t_near = s!(self.t_min);
+            let mut t_far = _mm256_set1_ps(self.t_max);
+            for a in 0..3 {
+                let dn = _mm256_sub_ps(
+                    _mm256_load_ps(base.add(self.near[a]) as *const f32),
+                    s!(self.o_near[a]),
+                );
+                let (pos, neg) = self.inv_near[a];
+                let f = _mm256_blendv_ps(s!(pos), s!(neg), _mm256_cmp_ps::<_CMP_LT_OQ>(dn, zero));
+                t_near = _mm256_max_ps(t_near, _mm256_mul_ps(dn, f));
+                let df = _mm256_sub_ps(
+                    _mm256_load_ps(base.add(self.far[a]) as *const f32),
+                    s!(self.o_far[a]),
+                );
+                let (pos, neg) = self.inv_far[a];
+                let f = _mm256_blendv_ps(s!(pos), s!(neg), _mm256_cmp_ps::<_CMP_LT_OQ>(df, zero));
+                t_far = _mm256_min_ps(t_far, _mm256_mul_ps(df, f));
+            }
+            let far = _mm256_mul_ps(t_far, _mm256_set1_ps(ROBUST_FAR_SCALE));
+            let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(t_near, far);
+            let mut t = [0.0f32; 8];
+            _mm256_storeu_ps(t.as_mut_ptr(), t_near);
+            (_mm256_movemask_ps(hit) as u32, t)
+        }
+    }
 }
 
 /// A packet's rays in SoA form, with each ray's closest hit so far.
@@ -123,13 +168,16 @@ struct Packet {
     sy: F16,
     sz: F16,
     perm: Option<[usize; 3]>,
-    wt: [MaybeUninit<WatertightRay>; PACKET_SIZE],
     interval: Option<Interval>,
 }
 
 impl Packet {
+    /// The packet's SoA form. The per-ray values are the single ray's, bit for bit: `1 / dir`
+    /// as `Vec3::recip`, and the shear `d[kx] / d[kz]`, `d[ky] / d[kz]`, `1 / d[kz]` of
+    /// `WatertightRay::new` (computed here in SIMD when all rays share the axis permutation;
+    /// otherwise rays build their `WatertightRay` where they need it).
     #[inline(always)]
-    fn new(rays: &[Ray], valid: u32) -> Self {
+    fn new<L: Lanes16>(l: L, rays: &[Ray], valid: u32) -> Self {
         let z = F16([0.0; 16]);
         let mut p = Packet {
             valid,
@@ -145,50 +193,55 @@ impl Packet {
             sy: z,
             sz: z,
             perm: None,
-            wt: [MaybeUninit::uninit(); PACKET_SIZE],
             interval: None,
         };
-        let mut perm = None;
-        let mut same_perm = true;
-        let mut finite = true;
-        let (mut lo, mut hi) = ([f32::INFINITY; 6], [f32::NEG_INFINITY; 6]);
-        let (mut t_lo, mut t_hi) = (f32::INFINITY, f32::NEG_INFINITY);
+        let mut dir = [F16([1.0; 16]); 3];
+        // The permutation as a code `2 kz + swapped` (one byte compare per ray).
+        let (mut code_and, mut code_or) = (u32::MAX, 0u32);
         for (i, r) in rays.iter().enumerate() {
             if valid >> i & 1 == 0 {
                 continue;
             }
-            let iv = r.dir.recip();
             for a in 0..3 {
                 p.org[a].0[i] = r.origin[a];
-                p.inv[a].0[i] = iv[a];
-                p.neg[a] |= ((iv[a] < 0.0) as u32) << i;
+                dir[a].0[i] = r.dir[a];
             }
-            finite &= iv.is_finite();
-            for (a, x) in r
-                .origin
-                .to_array()
-                .into_iter()
-                .chain(iv.to_array())
-                .enumerate()
-            {
-                lo[a] = lo[a].min(x);
-                hi[a] = hi[a].max(x);
-            }
-            t_lo = t_lo.min(r.t_min);
-            t_hi = t_hi.max(r.t_max);
             p.t_min.0[i] = r.t_min;
             p.t_max.0[i] = r.t_max;
-            let wt = WatertightRay::new(r);
-            let k = [wt.kx, wt.ky, wt.kz];
-            same_perm &= *perm.get_or_insert(k) == k;
-            p.sx.0[i] = wt.sx;
-            p.sy.0[i] = wt.sy;
-            p.sz.0[i] = wt.sz;
-            p.wt[i] = MaybeUninit::new(wt);
+            let c = watertight_code(r.dir);
+            code_and &= c;
+            code_or |= c;
         }
-        p.perm = perm.filter(|_| same_perm);
+        let one = l.splat(1.0);
+        let mut finite = valid;
+        let d = [l.load(&dir[0]), l.load(&dir[1]), l.load(&dir[2])];
+        for a in 0..3 {
+            let inv = l.div(one, d[a]);
+            l.store(inv, &mut p.inv[a]);
+            p.neg[a] = l.lt(inv, l.splat(0.0)) & valid;
+            finite &= l.lt(inv, l.splat(f32::INFINITY)) & l.gt(inv, l.splat(f32::NEG_INFINITY));
+        }
+        if code_and == code_or {
+            let [kx, ky, kz] = axes_of_code(code_or);
+            let (dx, dy, dz) = (d[kx], d[ky], d[kz]);
+            l.store(l.div(dx, dz), &mut p.sx);
+            l.store(l.div(dy, dz), &mut p.sy);
+            l.store(l.div(one, dz), &mut p.sz);
+            p.perm = Some([kx, ky, kz]);
+        }
         let uniform = (0..3).all(|a| p.neg[a] == 0 || p.neg[a] == valid);
-        if uniform && finite {
+        if uniform && finite == valid {
+            let mut lo = [0.0; 6];
+            let mut hi = [0.0; 6];
+            for a in 0..3 {
+                let (o, inv) = (l.load(&p.org[a]), l.load(&p.inv[a]));
+                lo[a] = l.hmin(valid, o);
+                hi[a] = l.hmax(valid, o);
+                lo[3 + a] = l.hmin(valid, inv);
+                hi[3 + a] = l.hmax(valid, inv);
+            }
+            let t_lo = l.hmin(valid, l.load(&p.t_min));
+            let t_hi = l.hmax(valid, l.load(&p.t_max));
             p.interval = Some(p.interval(lo, hi, t_lo, t_hi));
         }
         p
@@ -294,7 +347,15 @@ impl Packet {
     /// The watertight test of one triangle against the rays of `mask` (all sharing the axis
     /// permutation `k`), keeping each ray's lexicographically smallest `(t, index)`.
     #[inline(always)]
-    fn triangle<L: Lanes16>(&mut self, l: L, k: [usize; 3], p: [[f32; 3]; 3], tri: u32, mask: u32) {
+    fn triangle<L: Lanes16>(
+        &mut self,
+        l: L,
+        rays: &[Ray],
+        k: [usize; 3],
+        p: [[f32; 3]; 3],
+        tri: u32,
+        mask: u32,
+    ) {
         let (ax, ay, az) = self.project(l, k, p[0]);
         let (bx, by, bz) = self.project(l, k, p[1]);
         let (cx, cy, cz) = self.project(l, k, p[2]);
@@ -334,7 +395,7 @@ impl Packet {
             let mut best = self.best(i);
             let mut t_max = self.t_max.0[i];
             // SAFETY: rays of the mask are valid, and valid rays were initialised.
-            let wt = unsafe { self.wt[i].assume_init_ref() };
+            let wt = WatertightRay::new(&rays[i]);
             let v3 = |q: [f32; 3]| glam::Vec3::from_array(q);
             if let Some(h) = wt.intersect_within(v3(p[0]), v3(p[1]), v3(p[2]), best.limit(t_max)) {
                 best.offer(h.t, tri, h.u, h.v, &mut t_max);
@@ -349,7 +410,7 @@ impl Packet {
         let mut best = self.best(i);
         let mut t_max = self.t_max.0[i];
         // SAFETY: rays of a mask are valid, and valid rays were initialised.
-        let r4 = Tri4Ray::new(unsafe { *self.wt[i].assume_init_ref() });
+        let r4 = Tri4Ray::new(WatertightRay::new(&rays[i]));
         let nt = l.single(RayBoxes8::new(&rays[i]));
         bvh.closest8_from(&nt, &r4, root, &mut t_max, &mut best, &mut NoStats);
         self.set_best(i, best, t_max);
@@ -425,7 +486,7 @@ impl Bvh {
         if self.nodes8.is_empty() || valid == 0 {
             return;
         }
-        let mut p = Packet::new(rays, valid);
+        let mut p = Packet::new(l, rays, valid);
         let mut stack = [MaybeUninit::<Entry>::uninit(); STACK8_SIZE];
         let mut sp = 0usize;
         let mut cur = 0u32;
@@ -449,6 +510,9 @@ impl Bvh {
                 // With interval bounds, their entry bound orders the children and culls pops
                 // (it is below every ray's entry distance); else the rays' smallest entry.
                 let (cand, t_ia) = match &p.interval {
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: `L::AVX2` holds only for lanes made after detecting AVX2.
+                    Some(iv) if L::AVX2 => unsafe { iv.test_avx2(node) },
                     Some(iv) => iv.test(node),
                     None => ((1u32 << node.num_children) - 1, [0.0; 8]),
                 };
@@ -463,7 +527,11 @@ impl Bvh {
                 while m != 0 {
                     let c = m.trailing_zeros() as usize;
                     m &= m - 1;
-                    let (hits, t) = p.test_child(l, node, c, mask, !ia);
+                    let (hits, t) = if ia && PURE_INTERVAL {
+                        (mask, t_ia[c])
+                    } else {
+                        p.test_child(l, node, c, mask, !ia)
+                    };
                     if hits != 0 {
                         let t = if ia { t_ia[c] } else { t };
                         let e = Entry {
@@ -491,7 +559,7 @@ impl Bvh {
                     continue;
                 }
             } else {
-                self.packet_leaf(l, &mut p, leaf_first(cur), leaf_count(cur), mask);
+                self.packet_leaf(l, &mut p, rays, leaf_first(cur), leaf_count(cur), mask);
                 if let Some(iv) = &mut p.interval {
                     iv.t_max = l.hmax(p.valid, l.load(&p.t_max));
                 }
@@ -517,7 +585,15 @@ impl Bvh {
     }
 
     #[inline(always)]
-    fn packet_leaf<L: Lanes16>(&self, l: L, p: &mut Packet, first: u32, count: u32, mask: u32) {
+    fn packet_leaf<L: Lanes16>(
+        &self,
+        l: L,
+        p: &mut Packet,
+        rays: &[Ray],
+        first: u32,
+        count: u32,
+        mask: u32,
+    ) {
         if let Some(k) = p.perm.filter(|_| mask.count_ones() > PER_RAY_LEAF_BELOW) {
             for kb in 0..blocks_for(count) {
                 let b = &self.blocks[(first + kb) as usize];
@@ -525,7 +601,7 @@ impl Bvh {
                 for j in 0..4 {
                     if lanes >> j & 1 != 0 {
                         let v = |q: usize| [b.p[q][0][j], b.p[q][1][j], b.p[q][2][j]];
-                        p.triangle(l, k, [v(0), v(1), v(2)], b.tri[j], mask);
+                        p.triangle(l, rays, k, [v(0), v(1), v(2)], b.tri[j], mask);
                     }
                 }
             }
@@ -538,10 +614,37 @@ impl Bvh {
             let mut best = p.best(i);
             let mut t_max = p.t_max.0[i];
             // SAFETY: rays of the mask are valid, and valid rays were initialised.
-            let r4 = Tri4Ray::new(unsafe { *p.wt[i].assume_init_ref() });
+            let r4 = Tri4Ray::new(WatertightRay::new(&rays[i]));
             self.leaf_closest(&r4, first, count, &mut t_max, &mut best, &mut NoStats);
             p.set_best(i, best, t_max);
         }
+    }
+}
+
+/// The axis permutation of `WatertightRay::new` for direction `d` as a code `2 kz + swapped`
+/// (the same comparisons: `kz` the dominant axis, `kx, ky` swapped when `d[kz] < 0`).
+#[inline(always)]
+fn watertight_code(d: glam::Vec3) -> u32 {
+    let a = d.abs();
+    let kz = if a.x > a.y {
+        if a.x > a.z { 0 } else { 2 }
+    } else if a.y > a.z {
+        1
+    } else {
+        2
+    };
+    2 * kz + (d[kz as usize] < 0.0) as u32
+}
+
+/// `[kx, ky, kz]` of a [`watertight_code`].
+#[inline(always)]
+fn axes_of_code(code: u32) -> [usize; 3] {
+    let kz = (code / 2) as usize;
+    let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
+    if code & 1 != 0 {
+        [ky, kx, kz]
+    } else {
+        [kx, ky, kz]
     }
 }
 
@@ -549,4 +652,33 @@ impl Bvh {
 #[inline]
 fn use_avx512() -> bool {
     std::is_x86_feature_detected!("avx512f") && std::is_x86_feature_detected!("avx2")
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+    use parallax_core::Ray;
+    use parallax_core::math::WatertightRay;
+
+    #[test]
+    fn axes_match_the_watertight_ray() {
+        let mut s = 1u32;
+        let mut r = || {
+            s = s.wrapping_mul(747796405).wrapping_add(2891336453);
+            (s >> 8) as f32 / (1 << 23) as f32 - 1.0
+        };
+        let mut dirs: Vec<Vec3> = (0..2000).map(|_| Vec3::new(r(), r(), r())).collect();
+        // Ties between components and zeros.
+        dirs.extend([
+            Vec3::ONE,
+            -Vec3::ONE,
+            Vec3::new(1.0, -1.0, 0.0),
+            Vec3::new(0.0, 0.0, -2.0),
+        ]);
+        for d in dirs {
+            let wt = WatertightRay::new(&Ray::new(Vec3::ZERO, d));
+            let axes = super::axes_of_code(super::watertight_code(d));
+            assert_eq!(axes, [wt.kx, wt.ky, wt.kz], "{d:?}");
+        }
+    }
 }
