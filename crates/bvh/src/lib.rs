@@ -2,78 +2,46 @@
 //! every image-space result of parallax is scored against.
 //!
 //! - **Build** ([`Bvh::build`]): binned SAH over triangle centroids (Wald 2007), parallel with
-//!   rayon, producing a binary tree that is collapsed into 4-wide nodes by opening the children
-//!   of largest surface area (Wald, Benthin & Boulos 2008; Ernst & Greiner 2008). `build.rs`,
-//!   `collapse.rs`.
-//! - **Layout** ([`Node4`], `node.rs`): 128-byte SoA nodes (`min_x[4], max_x[4], ...`), in
-//!   depth-first preorder with leaf children first and triangles in traversal order, as HVVR
-//!   (Hunt et al. 2018, §5) lays out its 4-wide BVH for beam traversal and linear refit.
-//! - **Traversal** (`traverse.rs`): single rays, explicit fixed-size stack, one 4-wide SIMD slab
-//!   test per node with the robust far scaling of Ize 2013, children near-to-far, and the
-//!   watertight triangle test of Woop, Benthin & Wald 2013 ([`WatertightRay`]), run on four
-//!   leaf triangles at once (SoA blocks [`Tri4`], `tri4.rs`; lanes with an exactly-zero edge
-//!   function fall back to the scalar test): closest hit, any hit, all hits. `_with_stats`
-//!   variants count the work ([`TraversalStats`]); `closest_hit_scalar` / `any_hit_scalar`
-//!   are the per-triangle scalar twins. Closest-hit ties in `t` go to the lower triangle index.
-//! - **Packets** ([`Bvh::closest_hit_packet`], `packet.rs`): up to [`PACKET_SIZE`] = 16 coherent
-//!   rays traverse together, SIMD over rays at inner nodes (AVX2 behind runtime detection, SSE
-//!   / portable twin), each ray's answer exactly its single-ray answer.
-//! - **Refit** ([`Bvh::refit`], `refit.rs`): new vertex positions, same topology (HVVR §5.2).
-//! - **Beam culling** lives with HVVR in `parallax-vr` (`parallax_vr::beam`): it walks these
-//!   nodes (public in [`node`]) with a bounding beam of many rays.
+//!   rayon, producing a binary tree that is collapsed twice by opening the children of largest
+//!   surface area (Wald, Benthin & Boulos 2008; Ernst & Greiner 2008): into 4-wide nodes
+//!   (`collapse.rs`) and into 8-wide nodes (`collapse8.rs`) over the same leaves.
+//! - **Layouts**: [`Node4`] (`node.rs`), 128-byte SoA nodes in depth-first preorder with leaf
+//!   children first and triangles in traversal order, as HVVR (Hunt et al. 2018, §5) lays out
+//!   its 4-wide BVH for beam traversal and linear refit; [`Node8`] (`node8.rs`), 256-byte SoA
+//!   nodes (Embree's `BVH8`, Wald et al. 2014 §3.1), the tree the ray queries traverse.
+//! - **Traversal** (`traverse8.rs`): single rays over the 8-wide tree, explicit fixed-size
+//!   stack, one 8-lane slab test per node (AVX2 behind runtime detection, portable twin) with
+//!   the robust far scaling of Ize 2013, children near-to-far, and the watertight triangle test
+//!   of Woop, Benthin & Wald 2013 ([`WatertightRay`]) on four leaf triangles at once (SoA blocks
+//!   [`Tri4`], `tri4.rs`; lanes with an exactly-zero edge function fall back to the scalar
+//!   test): closest hit, any hit, all hits. `traverse.rs` is the same loop over the 4-wide tree
+//!   ([`Bvh::closest_hit4`], ...), kept as the twin; `closest_hit_scalar` / `any_hit_scalar` use
+//!   the per-triangle scalar test. `_with_stats` variants count the work ([`TraversalStats`]).
+//!   Closest-hit ties in `t` go to the lower triangle index.
+//! - **Packets** ([`Bvh::closest_hit_packet`], `packet8.rs`): up to [`PACKET_SIZE`] = 16
+//!   coherent rays traverse the 8-wide tree together, one SIMD lane per ray (AVX-512 behind
+//!   runtime detection, portable twin, `lanes16.rs`), with interval culling of whole packets
+//!   and a SIMD-over-rays triangle test; each ray's answer is exactly its single-ray answer.
+//!   `packet.rs` is the 4-wide predecessor ([`Bvh::closest_hit_packet4`]).
+//! - **Refit** ([`Bvh::refit`], `refit.rs`): new vertex positions, same topology (HVVR §5.2),
+//!   both trees.
+//! - **Beam culling** lives with HVVR in `parallax-vr` (`parallax_vr::beam`): it walks the
+//!   4-wide nodes (public in [`node`]) with a bounding beam of many rays.
 //! - **Reference** ([`brute_force_closest`], [`brute_force_all`]): every triangle, same test.
 //!
-//! **Why our own BVH and not a crate (e.g. obvhs, bvh):** the HVVR beam traversal that follows
-//! needs this exact node layout (SoA 4-wide boxes it can test against a beam's planes), control
-//! over the traversal order and the stack (entry-point search stops part-way and resumes from a
-//! saved stack, HVVR §5.3-5.4), and the preorder layout for linear refit. A general-purpose crate
-//! hides those.
+//! **Why our own BVH and not a crate (e.g. obvhs, bvh):** the HVVR beam traversal needs this
+//! exact node layout (SoA 4-wide boxes it can test against a beam's planes), control over the
+//! traversal order and the stack (entry-point search stops part-way and resumes from a saved
+//! stack, HVVR §5.3-5.4), the preorder layout for linear refit, and exact (watertight, robust)
+//! answers that equal brute force; a general-purpose crate hides those.
 //!
 //! **Invariant:** for any ray, [`Bvh::closest_hit`] returns a hit at the same `t` as
 //! [`brute_force_closest`] (the same triangle unless two are hit at the same `t`), and
 //! [`Bvh::all_hits`] the same set as [`brute_force_all`]: the BVH only culls, never decides.
+//! Every fast path (8-wide AVX2, 16-lane AVX-512 packets, the 4-wide tree) returns bit for bit
+//! what its twin returns (`tests/simd_twins.rs`, `tests/packets.rs`).
 //!
-//! **Measured / what we tried** (release, `examples/bvh_throughput.rs`, Sponza 66k triangles, a
-//! 2-core VM shared with other jobs, load 3-7, so absolute numbers are noisy): build 115-160 ms
-//! (2 threads), refit 1.6-3 ms; closest hit ~9 Mrays/s coherent (1024x768 camera grid, 2.3
-//! nodes/ray) and ~1.35 Mrays/s random (origins in the bounds, 12 nodes + 4.8 triangles/ray),
-//! any hit ~9 / ~2.8 Mrays/s; 2 threads gave 1.0-1.4x (the machine was loaded). Profiles of the
-//! random rays are dominated by cache misses on node and triangle loads. Tried: a 64-entry
-//! instead of a 256-entry stack (the zeroed stack array costs a 2 KB memset per ray) — no
-//! measurable difference, kept 256 for the depth bound. Not yet measured: a plain binary-BVH
-//! traversal for comparison, compressed (quantised) nodes, and per-node bin counts for small
-//! build nodes (the fixed 3 x 32-bin array is re-zeroed per node and shows in build profiles).
-//!
-//! **Measured, SIMD leaves and packets** (release, single thread, loaded 2-core VM, best of 5;
-//! `examples/trace_stats.rs` on Sponza 1280x720 from (-9, 3.5, 0) towards (8, 5, 0), fov 60:
-//! 17.7 nodes, 69 boxes, 2.2 leaves and 5.4 triangles per ray). The 4-wide leaf test gave
-//! only +4-12% over the scalar per-triangle test (3.0 -> 3.3 Mrays/s): with ~5 triangles per
-//! ray the time is in the inner nodes. perf on the single-ray loop shows the slab test with the
-//! ray's values spilled to the stack and node-load stalls, ~60 cycles per node. Packets of 16
-//! rays (4x4 tiles) with an SSE node test (4 groups of 4 rays) were only 1.1x single rays
-//! (3.7 Mrays/s, compute-bound on the 16-ray x 4-child slab tests); the same loop on two AVX2
-//! halves gave 7.3 Mrays/s (2.2x single rays). Embree's `rtcIntersect16` is still ~3x that:
-//! it uses AVX-512 (one register per 16 rays) and an 8-wide BVH. Not yet tried: an AVX-512
-//! node test, SIMD-over-rays leaf tests for packets sharing one axis permutation, frustum
-//! culling of whole packets, and 8-wide nodes for single rays.
-//!
-//! **Measured, single-ray loop** (`examples/single_ray.rs`: thread CPU time, best of 8, Sponza
-//! view above, A/B runs interleaved on the loaded 2-core VM, so +-10% noise per run; closest
-//! hit Mrays/s primary / shadow / random 300k, before -> after): 2.8-3.4 / 3.4-4.2 / 1.7-2.2
-//! -> 3.3-3.8 / 4.5-5.0 / 2.0-2.4; any hit primary 4.0-5.1 -> 5.0-5.8. What helped: stack
-//! entries as `u64` keys `t_bits << 32 | child` with a branch-free 5-comparator sorting network
-//! for 3-4 hit children (was an insertion sort through memory), unchecked node and stack
-//! access, `t_max` starting the far accumulator (one `min` less per node), near/far planes as
-//! byte offsets (no shift per load). Tried and dropped (no gain beyond noise): compiling the
-//! loop with AVX2 behind runtime detection (VEX encodings; primary was ~8% slower), prefetching
-//! hit inner children (neutral to slightly worse, the Sponza nodes stay cached), the sorting
-//! network for 2 children too (branch-free 2-4 path; neutral), near-to-far order for any hit
-//! (neutral). Not done on purpose: Embree's `t = box * inv - org * inv` with FMA: the rounding
-//! of `org * inv` is an absolute error of `eps |org * inv|`, not relative to `t`, so Ize's
-//! relative far scaling no longer makes the test conservative (Embree's default mode is not
-//! robust either). Found on the way: culling against the bare closest-hit `t` let the visit
-//! order change the answer (a triangle on a box face hit 1 ulp below the box's computed entry
-//! distance); slab tests and pops now compare against `t_max * (1 + 2 gamma(3))`.
+//! Measurements and what was tried and dropped: `docs/notes/bvh.md`.
 //!
 //! [`WatertightRay`]: parallax_core::math::WatertightRay
 
@@ -195,7 +163,8 @@ impl fmt::Display for BvhError {
 
 impl std::error::Error for BvhError {}
 
-/// A 4-wide bounding volume hierarchy over a [`TriangleMesh`] (see the crate docs).
+/// A bounding volume hierarchy over a [`TriangleMesh`]: a 4-wide and an 8-wide tree over the
+/// same leaves (see the crate docs).
 #[derive(Clone, Debug)]
 pub struct Bvh {
     nodes: Vec<Node4>,

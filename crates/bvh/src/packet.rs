@@ -1,4 +1,5 @@
-//! Packet traversal for coherent rays: up to [`PACKET_SIZE`] rays walk the tree together, SIMD
+//! Packet traversal of the 4-wide tree (the predecessor of `packet8.rs`, kept as its twin and
+//! for comparison in `bench rays`): up to 16 rays walk the tree together, SIMD
 //! over the rays at inner nodes (Wald, Slusallek, Benthin & Wagner 2001, "Interactive Rendering
 //! with Coherent Ray Tracing"; the wide-node form of Embree's `rtcIntersect16`, Wald et al.
 //! 2014, §4.2).
@@ -20,7 +21,7 @@
 //! for the tie-break by inclusive culling), and a ray's box tests here are conservative exactly
 //! when its single-ray box tests are. `tests/packets.rs` checks it.
 //!
-//! **Measured / what we tried**: see the crate docs.
+//! **Measured / what we tried**: `docs/notes/bvh.md`.
 
 use std::mem::MaybeUninit;
 

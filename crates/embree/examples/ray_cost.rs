@@ -5,7 +5,8 @@
 //! ```text
 //! cargo build --release -p parallax-embree --features embree --example ray_cost
 //! target/release/examples/ray_cost SCENE EYE TARGET FOV_Y METHOD MODE [WIDTH HEIGHT]
-//!   METHOD: bvh | bvh4 | packet | packet4 | embree1 | embree16 | stats (work counters)
+//!   METHOD: bvh | bvh4 | packet | packet4 | embree1 | embree16 | stats (work counters) |
+//!           build (build times) | a comma-separated list (interleaved A/B, best of 7)
 //!   MODE:   primary (pixel centres, 4x4 tiles) | random (cosine bounces from the primary hits)
 //! e.g. ray_cost ../shared/scenes/sponza_dabrovic/sponza_dabrovic.glb -9,3.5,0 8,5,0 60 bvh primary
 //! ```
@@ -72,6 +73,20 @@ fn main() {
                 Some(Ray::new(p + n * 1e-4 * p.abs().max_element().max(1.0), d))
             })
             .collect();
+    }
+    if method == "build" {
+        // Builds interleaved, best of 5 wall times (all threads).
+        let (mut ours, mut theirs) = (f64::INFINITY, f64::INFINITY);
+        for _ in 0..5 {
+            let t = std::time::Instant::now();
+            std::hint::black_box(Bvh::build(&scene.mesh));
+            ours = ours.min(t.elapsed().as_secs_f64() * 1e3);
+            let t = std::time::Instant::now();
+            std::hint::black_box(EmbreeScene::new(&scene.mesh, Options::default()).unwrap());
+            theirs = theirs.min(t.elapsed().as_secs_f64() * 1e3);
+        }
+        println!("build: parallax {ours:.1} ms, Embree high {theirs:.1} ms (best of 5)");
+        return;
     }
     if method == "stats" {
         let (mut s8, mut s4) = (TraversalStats::default(), TraversalStats::default());
