@@ -208,7 +208,6 @@ fn bench_rays_writes_json_rows() {
     let o = parallax(&[
         "bench",
         "rays",
-        "--quiet",
         "--scene",
         "cornell",
         "--width",
@@ -221,21 +220,46 @@ fn bench_rays_writes_json_rows() {
         j.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    // Without the `embree` feature the bench says how to get Embree's rows.
+    assert_eq!(
+        !parallax_embree::ENABLED,
+        out.contains("--features embree"),
+        "{out}"
+    );
     let rows: serde_json::Value = serde_json::from_slice(&std::fs::read(&j).unwrap()).unwrap();
     let rows = rows.as_array().unwrap();
-    let modes: Vec<&str> = rows.iter().map(|r| r["mode"].as_str().unwrap()).collect();
-    assert_eq!(modes, ["primary", "primary_packet", "random"]);
-    for r in rows {
+    let has = |mode: &str, method: &str| {
+        rows.iter()
+            .any(|r| r["mode"] == mode && r["method"] == method)
+    };
+    assert!(has("build", "bvh"));
+    for mode in ["primary", "msaa16", "random"] {
+        for method in ["bvh single", "bvh packet16", "bvh4 single", "bvh4 packet16"] {
+            assert!(has(mode, method), "no {mode} / {method} row");
+        }
+        assert_eq!(parallax_embree::ENABLED, has(mode, "embree rtcIntersect16"));
+    }
+    for r in rows.iter().filter(|r| r["mode"] != "build") {
         for k in [
             "mode",
+            "method",
             "scene",
             "rays",
             "build_ms",
+            "trace_ms",
             "mrays_per_s",
+            "same_prim",
+            "same_t",
+            "hit_rate",
             "threads",
         ] {
             assert!(r.get(k).is_some(), "row lacks {k}: {r}");
         }
         assert!(r["mrays_per_s"].as_f64().unwrap() > 0.0);
+        // Every parallax method returns exactly the single-ray answers.
+        if r["method"].as_str().unwrap().starts_with("bvh") {
+            assert_eq!(r["same_prim"].as_f64(), Some(1.0), "{r}");
+        }
     }
 }

@@ -54,13 +54,13 @@ fn parse_quality(s: &str) -> Result<parallax_embree::Quality, String> {
 fn print_rays(rows: &[rays::RaysRow], embree_missing: Option<&str>) {
     println!(
         "| scene | mode | method | rays | build ms | trace ms | Mrays/s | vs Embree best \
-         | same prim | hit rate | threads |"
+         | same prim | same t | hit rate | threads |"
     );
-    println!("|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!("|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for r in rows {
         let vs = r.vs_embree_best.map_or("-".into(), |v| format!("{v:.2}x"));
         println!(
-            "| {} | {} | {} | {} | {:.1} | {:.1} | {:.2} | {vs} | {:.4}% | {:.3} | {} |",
+            "| {} | {} | {} | {} | {:.1} | {:.1} | {:.2} | {vs} | {:.4}% | {:.4}% | {:.3} | {} |",
             r.scene,
             r.mode,
             r.method,
@@ -69,6 +69,7 @@ fn print_rays(rows: &[rays::RaysRow], embree_missing: Option<&str>) {
             r.trace_ms,
             r.mrays_per_s,
             100.0 * r.same_prim,
+            100.0 * r.same_t,
             r.hit_rate,
             r.threads
         );

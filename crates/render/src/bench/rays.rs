@@ -87,6 +87,9 @@ pub struct RaysRow {
     pub vs_embree_best: Option<f64>,
     /// Fraction of rays whose closest primitive (or miss) equals parallax's single-ray answer.
     pub same_prim: f64,
+    /// Fraction of rays with the same primitive, or a hit at the same distance (within 1e-5
+    /// relative: another triangle at the same point, e.g. a shared edge or a coplanar copy).
+    pub same_t: f64,
     /// Fraction of rays that hit geometry.
     pub hit_rate: f64,
     pub threads: usize,
@@ -272,6 +275,7 @@ struct Acc {
     ms: f64,
     cpu_ms: f64,
     same: u64,
+    same_t: u64,
     hits: u64,
 }
 
@@ -311,6 +315,17 @@ fn time_band(
             .zip(reference)
             .filter(|(x, y)| x.map(|h| h.0) == y.map(|h| h.0))
             .count() as u64;
+        a.same_t += out
+            .par_iter()
+            .zip(reference)
+            .filter(|(x, y)| match (x, y) {
+                (None, None) => true,
+                (Some(a), Some(b)) => {
+                    a.0 == b.0 || (a.1 - b.1).abs() <= 1e-5 * a.1.abs().max(b.1.abs())
+                }
+                _ => false,
+            })
+            .count() as u64;
         a.hits += out.par_iter().filter(|x| x.is_some()).count() as u64;
     }
 }
@@ -330,6 +345,7 @@ pub fn run(scene: &Scene, camera: &Camera, opts: &RaysOptions) -> Result<RaysRep
         mrays_per_s: 0.0,
         vs_embree_best: None,
         same_prim: 1.0,
+        same_t: 1.0,
         hit_rate: 0.0,
         threads,
     };
@@ -433,6 +449,7 @@ pub fn run(scene: &Scene, camera: &Camera, opts: &RaysOptions) -> Result<RaysRep
             r.mrays_per_s = mrays(a);
             r.vs_embree_best = best_embree.map(|b| mrays(a) / b);
             r.same_prim = a.same as f64 / n.max(1) as f64;
+            r.same_t = a.same_t as f64 / n.max(1) as f64;
             r.hit_rate = a.hits as f64 / n.max(1) as f64;
             rows.push(r);
         }
