@@ -28,6 +28,7 @@
 mod disabled;
 #[cfg(feature = "embree")]
 mod enabled;
+#[cfg_attr(not(feature = "embree"), allow(dead_code))]
 mod mxcsr;
 
 #[cfg(not(feature = "embree"))]
