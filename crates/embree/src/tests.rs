@@ -1,5 +1,4 @@
-use glam::{Vec2, Vec3};
-use parallax_core::Ray;
+use glam::Vec3;
 use parallax_scene::TriangleMesh;
 
 use crate::{EmbreeError, EmbreeScene, Options};
@@ -44,6 +43,8 @@ fn without_the_feature_the_constructor_says_how_to_enable_it() {
 #[cfg(feature = "embree")]
 mod with_embree {
     use super::*;
+    use glam::Vec2;
+    use parallax_core::Ray;
     use crate::{EmbreeHit, Quality};
     use parallax_bvh::Bvh;
     use parallax_scene::camera::{CameraModel, Pinhole};
