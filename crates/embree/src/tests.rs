@@ -43,10 +43,10 @@ fn without_the_feature_the_constructor_says_how_to_enable_it() {
 #[cfg(feature = "embree")]
 mod with_embree {
     use super::*;
-    use glam::Vec2;
-    use parallax_core::Ray;
     use crate::{EmbreeHit, Quality};
+    use glam::Vec2;
     use parallax_bvh::Bvh;
+    use parallax_core::Ray;
     use parallax_scene::camera::{CameraModel, Pinhole};
 
     fn closest(s: &EmbreeScene, r: Ray) -> Option<EmbreeHit> {
