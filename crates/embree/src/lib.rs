@@ -54,7 +54,7 @@ pub struct EmbreeHit {
     pub v: f32,
 }
 
-/// Largest packet [`EmbreeScene::closest_hit_packet16`] takes.
+/// Widest packet [`EmbreeScene::closest_hit_packets`] traces.
 pub const MAX_PACKET: usize = 16;
 
 /// Embree's BVH build quality (`RTCBuildQuality`).
