@@ -55,7 +55,6 @@ mod packet;
 mod packet8;
 mod reference;
 mod refit;
-mod simd;
 mod stats;
 mod traverse;
 mod traverse8;

@@ -30,11 +30,11 @@ use parallax_core::Ray;
 use parallax_core::math::{ROBUST_FAR_SCALE, WatertightRay};
 
 use crate::node::{is_leaf, leaf_count, leaf_first};
-use crate::simd::{max_or_rhs, min_or_rhs};
 use crate::stats::NoStats;
 use crate::traverse::{Best, STACK_SIZE};
 use crate::tri4::Tri4Ray;
 use crate::{Bvh, Hit};
+use parallax_core::simd::{max_or_rhs, min_or_rhs};
 
 /// Rays per packet traversal ([`Bvh::closest_hit_packet4`] splits longer slices).
 const PACKET_SIZE: usize = 16;

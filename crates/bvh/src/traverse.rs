@@ -19,10 +19,10 @@ use parallax_core::math::ROBUST_FAR_SCALE;
 use parallax_core::math::WatertightRay;
 
 use crate::node::{Node4, is_leaf, leaf_count, leaf_first};
-use crate::simd::{max_or_rhs, min_or_rhs};
 use crate::stats::{Counter, NoStats, TraversalStats};
 use crate::tri4::{Tri4Ray, blocks_for, lane_mask};
 use crate::{Bvh, Hit};
+use parallax_core::simd::{max_or_rhs, min_or_rhs};
 
 /// Traversal stack entries.
 pub(crate) const STACK_SIZE: usize = 256;

@@ -3,7 +3,7 @@
 //! Maths on [glam] (rays, boxes, planes, frusta, the watertight ray-triangle test), sampling
 //! (seeded per-pixel random streams, low-discrepancy points, warps to disks, hemispheres and
 //! BRDF lobes), images ([`Image`], layered G-buffers, PNG/EXR IO) and image metrics
-//! (RMSE, PSNR, SSIM), and the world-space tracer interface ([`WorldTracer`]) that every
+//! (RMSE, PSNR, SSIM), SIMD lanes with one NaN rule ([`simd`]), and the world-space tracer interface ([`WorldTracer`]) that every
 //! structure answering world-space rays implements.
 //!
 //! **Invariant:** nothing in this crate knows about scenes, cameras or acceleration structures.
@@ -14,6 +14,7 @@ pub mod image;
 pub mod math;
 pub mod metrics;
 pub mod sampling;
+pub mod simd;
 pub mod world;
 
 pub use error::{CoreError, Result};

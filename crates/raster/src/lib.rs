@@ -14,6 +14,7 @@
 
 pub mod capture;
 pub mod dirt;
+pub mod error;
 pub mod ldc;
 pub mod normals;
 pub mod raster;

@@ -98,18 +98,7 @@ impl Animate for GltfAnimation {
     }
 }
 
-/// Why an animation cannot be made or applied.
-#[derive(Debug, thiserror::Error, PartialEq)]
-pub enum AnimationError {
-    #[error("animated object {index} out of range ({count} objects)")]
-    NoSuchObject { index: usize, count: usize },
-    #[error("object {0:?} has vertices beyond the mesh")]
-    VerticesOutOfRange(String),
-    #[error("animation made for {expected} vertices applied to a mesh with {given}")]
-    WrongMesh { expected: usize, given: usize },
-    #[error("the pose at t = {t} s puts vertex {vertex} at a non-finite position")]
-    NonFinite { t: f32, vertex: usize },
-}
+pub use crate::error::AnimationError;
 
 /// Base spin rate of an animated object (rad/s).
 pub const SPIN_RAD_PER_S: f32 = 0.8;

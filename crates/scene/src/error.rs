@@ -31,3 +31,16 @@ pub enum SceneError {
 }
 
 pub type Result<T, E = SceneError> = std::result::Result<T, E>;
+
+/// Why an animation cannot be made or applied.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum AnimationError {
+    #[error("animated object {index} out of range ({count} objects)")]
+    NoSuchObject { index: usize, count: usize },
+    #[error("object {0:?} has vertices beyond the mesh")]
+    VerticesOutOfRange(String),
+    #[error("animation made for {expected} vertices applied to a mesh with {given}")]
+    WrongMesh { expected: usize, given: usize },
+    #[error("the pose at t = {t} s puts vertex {vertex} at a non-finite position")]
+    NonFinite { t: f32, vertex: usize },
+}

@@ -10,6 +10,7 @@
 pub mod animation;
 pub mod builtin;
 pub mod camera;
+pub mod camera_desc;
 pub mod error;
 pub mod keyframes;
 pub mod light;
@@ -21,10 +22,11 @@ pub mod scene;
 pub mod skin;
 pub mod texture;
 
+pub use camera_desc::{CameraDesc, NamedCamera};
 pub use error::{Result, SceneError};
 pub use light::Light;
 pub use material::{AlphaMode, Material, MaterialKind};
 pub use mesh::{ObjectRange, TriangleMesh};
 pub use path::{CameraKey, CameraPath};
-pub use scene::{CameraDesc, NamedCamera, Scene};
+pub use scene::{AnimationInfo, Scene};
 pub use texture::{Texture, WrapMode};

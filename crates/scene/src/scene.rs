@@ -1,63 +1,19 @@
-//! The scene: geometry, materials, lights, cameras.
-
-use std::path::Path;
+//! The scene: geometry, materials, lights, cameras. Loading ([`Scene::load`]) lives in
+//! [`crate::load`], so that this file depends on no loader.
 
 use glam::Vec3;
 use parallax_core::Aabb;
 
+use crate::camera_desc::{CameraDesc, NamedCamera};
 use crate::{CameraPath, Light, Material, Result, SceneError, Texture, TriangleMesh};
 
-/// A look-at camera pose with a vertical field of view: what `--eye --target --up --fov-y`
-/// and the named cameras of a scene describe. Camera models are built from it.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CameraDesc {
-    pub eye: Vec3,
-    pub target: Vec3,
-    pub up: Vec3,
-    /// Vertical field of view in degrees (pinhole-like models).
-    pub fov_y_deg: f32,
-}
-
-impl CameraDesc {
-    pub fn new(eye: Vec3, target: Vec3, up: Vec3, fov_y_deg: f32) -> Self {
-        Self {
-            eye,
-            target,
-            up,
-            fov_y_deg,
-        }
-    }
-
-    /// Checks the pose: finite, target distinct from eye, up not parallel to the view direction,
-    /// field of view in (0, 180).
-    pub fn validate(&self) -> Result<()> {
-        let bad = |m: &str| Err(SceneError::Camera(m.to_string()));
-        if !(self.eye.is_finite() && self.target.is_finite() && self.up.is_finite()) {
-            return bad("eye, target and up must be finite");
-        }
-        let f = self.target - self.eye;
-        if f.length_squared() <= 1e-20 {
-            return bad("target must differ from eye");
-        }
-        if f.normalize()
-            .cross(self.up.normalize_or_zero())
-            .length_squared()
-            < 1e-10
-        {
-            return bad("up must not be parallel to the view direction");
-        }
-        if !(self.fov_y_deg > 0.0 && self.fov_y_deg < 180.0) {
-            return bad("fov-y must be in (0, 180) degrees");
-        }
-        Ok(())
-    }
-}
-
-/// A camera the scene file or built-in scene names.
-#[derive(Clone, Debug, PartialEq)]
-pub struct NamedCamera {
+/// A glTF animation or skin, parsed for later use (listed by `parallax info`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct AnimationInfo {
     pub name: String,
-    pub desc: CameraDesc,
+    /// Number of channels (animation) or joints (skin).
+    pub channels: usize,
+    pub is_skin: bool,
 }
 
 /// Everything that is rendered. Geometry is one world-space [`TriangleMesh`].
@@ -75,7 +31,7 @@ pub struct Scene {
     /// The default camera path (60 frames for the built-ins).
     pub camera_path: Option<CameraPath>,
     /// glTF skins and animations, listed.
-    pub animations: Vec<crate::load::AnimationInfo>,
+    pub animations: Vec<AnimationInfo>,
     /// The glTF node animation and skins that pose `mesh` over time (glTF files with
     /// animations or skinned meshes; see [`crate::skin`]).
     pub gltf_animation: Option<std::sync::Arc<crate::skin::GltfAnimation>>,
@@ -85,21 +41,6 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// A built-in scene by name, or a scene file (.gltf, .glb, .obj, .ply) by path.
-    pub fn load(name_or_path: &str) -> Result<Scene> {
-        if let Some(scene) = crate::builtin::by_name(name_or_path) {
-            return Ok(scene);
-        }
-        let path = Path::new(name_or_path);
-        if path.extension().is_none() && !path.exists() {
-            return Err(SceneError::UnknownScene {
-                name: name_or_path.to_string(),
-                known: crate::builtin::NAMES.join(", "),
-            });
-        }
-        crate::load::load_file(path)
-    }
-
     /// Bounds of all geometry.
     pub fn bounds(&self) -> Aabb {
         self.mesh.bounds()

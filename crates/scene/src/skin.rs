@@ -24,7 +24,7 @@
 use glam::{Affine3A, Mat3, Mat4, Quat, Vec3, Vec3A, Vec4};
 
 use crate::TriangleMesh;
-use crate::animation::AnimationError;
+use crate::error::AnimationError;
 use crate::keyframes::Sampler;
 
 /// A node's rest local transform.

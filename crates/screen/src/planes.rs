@@ -77,6 +77,19 @@ impl NormalSource {
     }
 }
 
+/// The size of `layer`, which must be the reference camera's.
+pub(crate) fn layer_size(cube: &UnitCube, layer: &GBuffer) -> Result<(u32, u32), ScreenError> {
+    let cam = &cube.camera;
+    let (w, h) = (layer.width(), layer.height());
+    if (w, h) != (cam.width, cam.height) {
+        return Err(ScreenError::Mismatch(format!(
+            "layer is {w}x{h} but the reference camera is {}x{}",
+            cam.width, cam.height
+        )));
+    }
+    Ok((w, h))
+}
+
 /// The per-pixel cube planes of one layer.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LayerPlanes {
@@ -95,13 +108,7 @@ impl LayerPlanes {
         source: NormalSource,
     ) -> Result<Self, ScreenError> {
         let cam = &cube.camera;
-        let (w, h) = (layer.width(), layer.height());
-        if (w, h) != (cam.width, cam.height) {
-            return Err(ScreenError::Mismatch(format!(
-                "layer is {w}x{h} but the reference camera is {}x{}",
-                cam.width, cam.height
-            )));
-        }
+        let (w, h) = layer_size(cube, layer)?;
         let (normals, depth_flag) = match source {
             NormalSource::GBuffer => (layer.normal.clone(), Some(vec![false; layer.depth.len()])),
             NormalSource::GBufferFlagged { .. } => (layer.normal.clone(), None),

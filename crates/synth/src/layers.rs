@@ -38,6 +38,19 @@ use crate::SynthError;
 use parallax_render::reference::shade::Shader;
 use parallax_render::tiles::for_each_pixel;
 
+/// The most depth layers the view-synthesis commands and benches capture per reference.
+pub const MAX_LAYERS: usize = 8;
+
+/// Checks a list of layer counts: not empty, each in `1..=MAX_LAYERS`.
+pub fn check_layers(layers: &[usize]) -> Result<(), SynthError> {
+    if layers.is_empty() || layers.iter().any(|&l| l == 0 || l > MAX_LAYERS) {
+        return Err(SynthError::Invalid(format!(
+            "layers must be in 1..={MAX_LAYERS}, got {layers:?}"
+        )));
+    }
+    Ok(())
+}
+
 /// Milliseconds of building a reference.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct ReferenceTimes {

@@ -18,12 +18,122 @@
 //! ray; at a shared vertex the same rule (a rotated top-left fill rule) gives the vertex to
 //! exactly one triangle of the fan.
 //!
+//! **One definition, every width.** The arithmetic of the test — the axis permutation
+//! ([`watertight_permutation`]), the shear of a vertex ([`shear_vertex`]), the edge functions
+//! ([`edge_functions`]) and the scaled distance ([`scaled_distance`]) — is written once, generic
+//! over [`Lanes`]: the scalar [`WatertightRay::intersect_within`] runs it on `f32`, and the SIMD
+//! kernels (the BVH's four triangles per ray, HVVR's four or eight rays per triangle) run it on
+//! `Vec4` / `F8` through [`watertight_lanes`]. Lanes round exactly like scalar f32, so every lane
+//! computes bit-identical `u, v, w, t`; lanes with an exactly-zero edge function are reported for
+//! the scalar test, which alone holds the double-precision recompute and the tie-break.
+//!
 //! [`intersect_triangle_moller`] (Möller & Trumbore 1997) is kept as the simple, non-watertight
 //! twin used by tests and benchmarks.
+//!
+//! [`F8`]: crate::simd::F8
 
 use glam::{DVec2, Vec3};
 
 use super::Ray;
+use crate::simd::Lanes;
+
+/// Woop et al. 2013, §3: the dominant axis `kz` of `d`, and `kx, ky` the next two, swapped when
+/// `d[kz] < 0` so that the winding is kept. Returns `[kx, ky, kz]`.
+#[inline(always)]
+pub fn watertight_permutation(d: Vec3) -> [usize; 3] {
+    let a = d.abs();
+    let kz = if a.x > a.y {
+        if a.x > a.z { 0 } else { 2 }
+    } else if a.y > a.z {
+        1
+    } else {
+        2
+    };
+    let kx = (kz + 1) % 3;
+    let ky = (kx + 1) % 3;
+    if d[kz] < 0.0 {
+        [ky, kx, kz]
+    } else {
+        [kx, ky, kz]
+    }
+}
+
+/// Woop et al. 2013, §3: a vertex in the ray's sheared frame, where the ray is the +z axis.
+/// `p` and `o` are the vertex and the ray origin in permuted order (`[p[kx], p[ky], p[kz]]`),
+/// `shear = [sx, sy, sz]`:
+///
+/// ```text
+/// a = p - o;  (a[kx] - sx a[kz], a[ky] - sy a[kz], sz a[kz])
+/// ```
+///
+/// Every triangle sharing a vertex gets bit-identical coordinates.
+#[inline(always)]
+pub fn shear_vertex<L: Lanes>(p: [L; 3], o: [L; 3], shear: [L; 3]) -> [L; 3] {
+    let az = p[2] - o[2];
+    let x = (p[0] - o[0]) - shear[0] * az;
+    let y = (p[1] - o[1]) - shear[1] * az;
+    [x, y, shear[2] * az]
+}
+
+/// The 2-D edge functions (cross products) of edges C->B, A->C and B->A of the sheared vertices
+/// at the origin: `[u, v, w]`, `u = Cx By - Cy Bx`, `v = Ax Cy - Ay Cx`, `w = Bx Ay - By Ax`.
+/// The ray is inside iff all three are `>= 0` or all `<= 0`.
+#[inline(always)]
+pub fn edge_functions<L: Lanes>(a: [L; 3], b: [L; 3], c: [L; 3]) -> [L; 3] {
+    [
+        c[0] * b[1] - c[1] * b[0],
+        a[0] * c[1] - a[1] * c[0],
+        b[0] * a[1] - b[1] * a[0],
+    ]
+}
+
+/// `(det, t det)` of edge functions `e` and the sheared vertices' `z`:
+/// `det = (u + v) + w`, `t det = (u Az + v Bz) + w Cz`.
+#[inline(always)]
+pub fn scaled_distance<L: Lanes>(e: [L; 3], az: L, bz: L, cz: L) -> (L, L) {
+    let det = e[0] + e[1] + e[2];
+    (det, e[0] * az + e[1] * bz + e[2] * cz)
+}
+
+/// Lane-wise outcome of the watertight test ([`watertight_lanes`]).
+#[derive(Clone, Copy, Debug)]
+pub struct WatertightLanes<L> {
+    /// Lanes with an edge function exactly `0.0`: only the scalar test decides them.
+    pub exact: u32,
+    /// Lanes that are inside (no two edge functions of opposite sign) with `det != 0` (their
+    /// `t` may still be out of range). Meaningless for `exact` lanes.
+    pub inside: u32,
+    /// `t = (t det) * (1 / det)`.
+    pub t: L,
+    /// `1 / det` (barycentrics of vertices 1 and 2: `v / det`, `w / det`).
+    pub inv_det: L,
+    /// The edge functions `[u, v, w]`.
+    pub e: [L; 3],
+}
+
+/// The watertight test of three sheared vertices (per lane: [`shear_vertex`], then
+/// [`edge_functions`] and [`scaled_distance`]) with the decisions as bit masks; the same f32
+/// operations as [`WatertightRay::intersect_within`] in every lane.
+#[inline(always)]
+pub fn watertight_lanes<L: Lanes>(a: [L; 3], b: [L; 3], c: [L; 3]) -> WatertightLanes<L> {
+    let e = edge_functions(a, b, c);
+    let zero = L::splat(0.0);
+    let [u, v, w] = e;
+    let exact = L::bits(L::or(L::or(u.eq(zero), v.eq(zero)), w.eq(zero)));
+    let neg = L::or(L::or(u.lt(zero), v.lt(zero)), w.lt(zero));
+    let pos = L::or(L::or(u.gt(zero), v.gt(zero)), w.gt(zero));
+    let (det, t_scaled) = scaled_distance(e, a[2], b[2], c[2]);
+    let inv_det = L::splat(1.0) / det;
+    let mixed = L::bits(L::and(neg, pos));
+    let all = (1u32 << L::N) - 1;
+    WatertightLanes {
+        exact,
+        inside: !mixed & L::bits(det.ne(zero)) & all,
+        t: t_scaled * inv_det,
+        inv_det,
+        e,
+    }
+}
 
 /// A ray prepared for the watertight test: the permutation and shear of Woop et al. 2013, §3.
 #[derive(Clone, Copy, Debug)]
@@ -54,19 +164,7 @@ impl WatertightRay {
     #[inline]
     pub fn new(ray: &Ray) -> Self {
         let d = ray.dir;
-        let a = d.abs();
-        let kz = if a.x > a.y {
-            if a.x > a.z { 0 } else { 2 }
-        } else if a.y > a.z {
-            1
-        } else {
-            2
-        };
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
-        if d[kz] < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
+        let [kx, ky, kz] = watertight_permutation(d);
         Self {
             origin: ray.origin,
             kx,
@@ -80,17 +178,16 @@ impl WatertightRay {
         }
     }
 
-    /// Projects a vertex into the ray's sheared frame: `(x, y, z)` where the ray is the +z axis.
-    /// Every triangle sharing a vertex gets bit-identical projected coordinates.
+    /// Projects a vertex into the ray's sheared frame ([`shear_vertex`]).
     #[inline(always)]
     fn project(&self, p: Vec3) -> Vec3 {
-        let a = p - self.origin;
-        let az = a[self.kz];
-        Vec3::new(
-            a[self.kx] - self.sx * az,
-            a[self.ky] - self.sy * az,
-            self.sz * az,
-        )
+        let (o, k) = (self.origin, [self.kx, self.ky, self.kz]);
+        let [x, y, z] = shear_vertex(
+            k.map(|i| p[i]),
+            k.map(|i| o[i]),
+            [self.sx, self.sy, self.sz],
+        );
+        Vec3::new(x, y, z)
     }
 
     /// The watertight test against triangle `(p0, p1, p2)`, for `t` in `(t_min, t_max)`.
@@ -113,9 +210,7 @@ impl WatertightRay {
         let b = self.project(p1);
         let c = self.project(p2);
         // Edge functions (2-D cross products) of edges C->B, A->C and B->A at the origin.
-        let mut u = c.x * b.y - c.y * b.x;
-        let mut v = a.x * c.y - a.y * c.x;
-        let mut w = b.x * a.y - b.y * a.x;
+        let [mut u, mut v, mut w] = edge_functions(a.to_array(), b.to_array(), c.to_array());
         if u == 0.0 || v == 0.0 || w == 0.0 {
             // Woop et al. 2013, §4.1: products of floats are exact in f64, so the signs are too.
             let (ad, bd, cd) = (
@@ -154,11 +249,10 @@ impl WatertightRay {
         } else if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
             return None;
         }
-        let det = u + v + w;
+        let (det, t_scaled) = scaled_distance([u, v, w], a.z, b.z, c.z);
         if det == 0.0 {
             return None;
         }
-        let t_scaled = u * a.z + v * b.z + w * c.z;
         let inv = 1.0 / det;
         let t = t_scaled * inv;
         if !(t > self.t_min && t < t_max) {
@@ -284,6 +378,79 @@ mod tests {
                 assert_eq!(n, 1, "fan of {k}, d = {d}");
             }
         }
+    }
+
+    /// The lane form ([`watertight_lanes`], as the BVH's `Tri4Ray` and HVVR's packet kernels run
+    /// it) against the scalar test, lane by lane: the same hits and bit-identical `t`, `u`, `v`
+    /// wherever no edge function is exactly zero (those lanes go to the scalar test).
+    fn lanes_match_scalar<L: Lanes>() {
+        let mut state = 777u32;
+        let mut rnd = || {
+            state = state.wrapping_mul(747796405).wrapping_add(2891336453);
+            (state >> 8) as f32 / (1 << 24) as f32
+        };
+        let mut hits = 0;
+        for _ in 0..500 {
+            let o = Vec3::new(rnd(), rnd(), rnd()) * 4.0 - 2.0;
+            let d = (Vec3::new(rnd(), rnd(), rnd()) * 2.0 - 1.0).normalize();
+            let wt = WatertightRay::new(&Ray::new(o, d));
+            // Triangles around points of the ray (about half are hit), of both orientations.
+            let tris: Vec<[Vec3; 3]> = (0..L::N)
+                .map(|_| {
+                    let q = o + d * (0.5 + 3.0 * rnd());
+                    std::array::from_fn(|_| q + Vec3::new(rnd(), rnd(), rnd()) - 0.5)
+                })
+                .collect();
+            let k = [wt.kx, wt.ky, wt.kz];
+            let vertex = |v: usize| k.map(|a| L::from_fn(|l| tris[l][v][a]));
+            let (ol, shear) = (
+                k.map(|a| L::splat(wt.origin[a])),
+                [wt.sx, wt.sy, wt.sz].map(L::splat),
+            );
+            let r = watertight_lanes(
+                shear_vertex(vertex(0), ol, shear),
+                shear_vertex(vertex(1), ol, shear),
+                shear_vertex(vertex(2), ol, shear),
+            );
+            for (l, p) in tris.iter().enumerate() {
+                if r.exact >> l & 1 == 1 {
+                    continue;
+                }
+                let t = r.t.get(l);
+                let lane_hit = r.inside >> l & 1 == 1 && t > wt.t_min && t < wt.t_max;
+                let scalar = wt.intersect(p[0], p[1], p[2]);
+                assert_eq!(lane_hit, scalar.is_some(), "lane {l}");
+                if let Some(h) = scalar {
+                    hits += 1;
+                    let inv = r.inv_det.get(l);
+                    assert_eq!(h.t.to_bits(), t.to_bits());
+                    assert_eq!(h.u.to_bits(), (r.e[1].get(l) * inv).to_bits());
+                    assert_eq!(h.v.to_bits(), (r.e[2].get(l) * inv).to_bits());
+                }
+            }
+        }
+        assert!(
+            hits * 5 > 500 * L::N,
+            "only {hits} hits: the test would not see a difference"
+        );
+    }
+
+    #[test]
+    fn lanes_equal_the_scalar_test() {
+        lanes_match_scalar::<f32>();
+        lanes_match_scalar::<glam::Vec4>();
+        lanes_match_scalar::<crate::simd::F8>();
+    }
+
+    #[test]
+    fn permutation_keeps_the_dominant_axis_last() {
+        assert_eq!(watertight_permutation(Vec3::new(0.1, -0.2, 1.0)), [0, 1, 2]);
+        assert_eq!(
+            watertight_permutation(Vec3::new(0.1, -0.2, -1.0)),
+            [1, 0, 2]
+        );
+        assert_eq!(watertight_permutation(Vec3::new(3.0, -0.2, 1.0)), [1, 2, 0]);
+        assert_eq!(watertight_permutation(Vec3::new(0.0, -3.0, 1.0)), [0, 2, 1]);
     }
 
     #[test]

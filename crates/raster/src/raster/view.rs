@@ -19,7 +19,7 @@
 use glam::{DMat4, DVec4, Mat4, Vec3};
 use parallax_scene::camera::{Camera, CubeMap, Eye, Orthographic, Pinhole};
 
-use super::RasterError;
+use crate::error::RasterError;
 
 /// The projection kind, with what resolving a fragment needs (the direction of the viewing ray).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -19,8 +19,8 @@ use std::f32::consts::FRAC_PI_2;
 
 use glam::{Affine3A, Quat, Vec3};
 
+use super::cameras::{named, path};
 use super::shapes::{MeshBuilder, with_normals};
-use super::{named, path};
 use crate::{Light, Material, MaterialKind, Scene};
 
 const STONE: u32 = 0;

@@ -14,8 +14,8 @@
 
 use glam::{Affine3A, Quat, Vec2, Vec3};
 
+use super::cameras::{named, path};
 use super::shapes::MeshBuilder;
-use super::{named, path};
 use crate::{Material, MaterialKind, Scene};
 
 const WHITE: u32 = 0;

@@ -21,8 +21,8 @@
 use glam::Vec3;
 use parallax_core::math::Frame;
 
+use super::cameras::{named, path};
 use super::shapes::MeshBuilder;
-use super::{named, path};
 use crate::{Light, Material, Scene};
 
 const GROUND: u32 = 0;

@@ -12,13 +12,12 @@
 //! two triangles with opposite orientation); other objects (light quads) are open surfaces.
 
 mod atrium;
+mod cameras;
 mod cornell;
 mod foliage;
 pub mod shapes;
 
-use glam::Vec3;
-
-use crate::{CameraDesc, CameraKey, CameraPath, NamedCamera, Scene};
+use crate::Scene;
 
 /// Names of the built-in scenes.
 pub const NAMES: &[&str] = &["atrium", "cornell", "foliage"];
@@ -45,29 +44,4 @@ pub fn describe(name: &str) -> &'static str {
         }
         _ => "",
     }
-}
-
-/// Frames of every built-in default camera path.
-pub(crate) const PATH_FRAMES: u32 = 60;
-/// Frame rate of every built-in default camera path.
-pub(crate) const PATH_FPS: f32 = 30.0;
-
-/// A named look-at camera with +Y up.
-pub(crate) fn named(name: &str, eye: Vec3, target: Vec3, fov_y_deg: f32) -> NamedCamera {
-    NamedCamera {
-        name: name.to_string(),
-        desc: CameraDesc::new(eye, target, Vec3::Y, fov_y_deg),
-    }
-}
-
-/// A 60-frame, 30 fps path through `(time, eye, target)` keys with +Y up and a fixed FoV.
-pub(crate) fn path(keys: &[(f32, Vec3, Vec3)], fov_y_deg: f32) -> CameraPath {
-    let keys = keys
-        .iter()
-        .map(|&(time, eye, target)| CameraKey {
-            time,
-            camera: CameraDesc::new(eye, target, Vec3::Y, fov_y_deg),
-        })
-        .collect();
-    CameraPath::new(keys, PATH_FPS, PATH_FRAMES)
 }

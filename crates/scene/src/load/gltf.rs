@@ -52,7 +52,7 @@ pub(crate) fn load(path: &Path, bytes: &[u8]) -> Result<Scene> {
         doc: &doc,
         buffers: &buffers,
         scene: Scene {
-            name: super::file_stem(path),
+            name: super::uri::file_stem(path),
             materials,
             textures,
             ..Scene::default()

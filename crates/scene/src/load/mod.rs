@@ -13,7 +13,7 @@
 
 use std::path::Path;
 
-use crate::{Result, Scene, SceneError};
+use crate::{Result, Scene, SceneError, builtin};
 
 mod gltf;
 mod gltf_accessor;
@@ -25,13 +25,23 @@ mod obj;
 mod ply;
 mod uri;
 
-/// A glTF animation or skin, parsed for later use (the animation issue).
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct AnimationInfo {
-    pub name: String,
-    /// Number of channels (animation) or joints (skin).
-    pub channels: usize,
-    pub is_skin: bool,
+pub use crate::scene::AnimationInfo;
+
+impl Scene {
+    /// A built-in scene by name, or a scene file (.gltf, .glb, .obj, .ply) by path.
+    pub fn load(name_or_path: &str) -> Result<Scene> {
+        if let Some(scene) = builtin::by_name(name_or_path) {
+            return Ok(scene);
+        }
+        let path = Path::new(name_or_path);
+        if path.extension().is_none() && !path.exists() {
+            return Err(SceneError::UnknownScene {
+                name: name_or_path.to_string(),
+                known: builtin::NAMES.join(", "),
+            });
+        }
+        load_file(path)
+    }
 }
 
 /// Loads a scene file by extension (case-insensitive): `.gltf`, `.glb`, `.obj` or `.ply`.
@@ -57,11 +67,4 @@ fn read(path: &Path) -> Result<Vec<u8>> {
         path: path.to_path_buf(),
         source,
     })
-}
-
-/// The scene name: the file name without its extension.
-fn file_stem(path: &Path) -> String {
-    path.file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default()
 }

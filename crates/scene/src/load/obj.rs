@@ -67,7 +67,7 @@ pub(crate) fn load(path: &Path) -> Result<Scene> {
     let mtl = mtl.unwrap_or_default();
 
     let mut scene = Scene {
-        name: super::file_stem(path),
+        name: super::uri::file_stem(path),
         ..Scene::default()
     };
     let mut texture_of: HashMap<PathBuf, u32> = HashMap::new();

@@ -185,7 +185,7 @@ fn build(path: &Path, verts: &[Vertex], faces: &[Face], has_normals: bool) -> Re
         return Err(invalid("no faces (point clouds are not supported)".into()));
     }
     mesh.material_ids = vec![0; mesh.indices.len()];
-    let name = super::file_stem(path);
+    let name = super::uri::file_stem(path);
     mesh.objects.push(ObjectRange {
         name: name.clone(),
         first_triangle: 0,

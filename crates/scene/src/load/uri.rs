@@ -228,3 +228,10 @@ mod tests {
         }
     }
 }
+
+/// The scene name of a scene file: its file name without the extension.
+pub(crate) fn file_stem(path: &Path) -> String {
+    path.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}

@@ -21,7 +21,7 @@
 //! Otherwise the parent is an AABB node whose `[min z, max z]` is the union of its children's
 //! ranges; a plane child contributes its plane's `z` at its four footprint corners (a plane
 //! is linear, so that is its exact range over the footprint; the footprint is dilated by the
-//! crack dilation for flagged planes), widened by [`Z_EPS`] and clamped to `[0, 1]` (the
+//! crack dilation for flagged planes), widened by [`Z_EPS`](super::tree::Z_EPS) and clamped to `[0, 1]` (the
 //! ray never leaves the cube). Boxes are therefore conservative: the traversal never skips a
 //! node holding a plane the ray crosses. Merging is evaluated on the *decoded* children, so
 //! the error bound of condition 3 refers to what the tree actually stores (up to the proxy's
@@ -36,75 +36,12 @@ use rayon::prelude::*;
 
 use super::QuadTreeOptions;
 use super::merge::MergeCtx;
-use super::node::{FLAG_CRACK, Node, decode_plane};
+use super::node::{FLAG_CRACK, Node};
+use super::tree::{
+    Level, QuadTree, Z_FLOOR_TABLE_MAX, Z_REGION_MIN_GAIN, Z_SKIP_MARGIN, decoded_planes,
+};
+use crate::planes::layer_size;
 use crate::{LayerPlanes, NormalSource, ScreenError, UnitCube};
-
-/// Widening of plane z ranges in AABBs (a few f32 ulps at `z = 1`).
-pub const Z_EPS: f32 = 1e-6;
-
-/// One level: a flat row-major array of `w x h` nodes.
-#[derive(Clone, Debug)]
-pub struct Level {
-    pub w: u32,
-    pub h: u32,
-    pub nodes: Vec<Node>,
-}
-
-/// The quad-tree of one captured layer (§3).
-#[derive(Clone, Debug)]
-pub struct QuadTree {
-    pub(crate) width: u32,
-    pub(crate) height: u32,
-    pub(crate) wf: f32,
-    pub(crate) hf: f32,
-    /// Level 0 = pixels.
-    pub(crate) levels: Vec<Level>,
-    /// Crack dilation in pixels (traversal side).
-    pub(crate) crack_px: f32,
-    /// Per pixel (`W x H`), the trigger depth of unsafe pixels (cascade); empty when the
-    /// layer is the last one.
-    pub(crate) trigger_z: Vec<f32>,
-    /// The highest level holding any plane node (0 when there is none; reported by the
-    /// examples).
-    pub(crate) plane_top: usize,
-    /// Per pixel (`W x H`), the level of its effective plane node (the topmost plane
-    /// ancestor, [`Self::effective_node`]); 0 where that is the pixel itself or where the
-    /// pixel has no plane. The traversal's start needs this one load instead of a
-    /// plane-ancestor check over the levels above the start level ([`super::traverse`]).
-    pub(crate) plane_level: Vec<u8>,
-    /// Cube `z` below which the ray meets nothing of this tree: the smallest lower `z` bound
-    /// of the top-level nodes (conservative AABB ranges, the footprint range of a plane node
-    /// there, every trigger depth) minus [`Z_SKIP_MARGIN`]. The traversal starts where the
-    /// ray's `z` reaches it — the `z` slab of the ray against the root box ([`super::traverse`]).
-    pub(crate) z_floor: f32,
-    /// Regional floors (session 6, second part): per rectangle of top-level nodes holding image pixels
-    /// (`tw x th` of them; rows `r0 <= r1`, columns `c0 <= c1`), the floor of
-    /// [`Self::z_floor`] taken over those nodes only (their lower `z` bound and the trigger
-    /// depths of their pixels), at `((r0 th + r1) tw + c0) tw + c1`; `z_floor` itself where
-    /// that is less than [`Z_REGION_MIN_GAIN`] above it (so every entry is `>= z_floor`). Empty (the global floor only) when the table would exceed
-    /// [`Z_FLOOR_TABLE_MAX`] entries.
-    pub(crate) z_floor_rect: Vec<f32>,
-    /// Directional regional floors for rays moving along `x` only: per top-level node
-    /// `(c, r)` holding image pixels, at `2 (r tw + c) + back`, the floor over the nodes
-    /// `c..tw` of row `r` (`back = 0`) or `0..=c` (`back = 1`).
-    pub(crate) z_floor_dir: Vec<f32>,
-    pub(crate) z_floor_tw: u32,
-    pub(crate) z_floor_th: u32,
-}
-
-/// Smallest gain in cube `z` over `QuadTree::z_floor` for which a regional floor
-/// (`QuadTree::z_floor_dir`) is used.
-pub const Z_REGION_MIN_GAIN: f32 = 0.05;
-
-/// Largest `QuadTree::z_floor_rect` (`tw^2 th^2` entries; 4096 is e.g. 8 x 8 top-level
-/// nodes).
-pub const Z_FLOOR_TABLE_MAX: usize = 4096;
-
-/// Margin of `QuadTree::z_floor` in cube `z`: before the traversal's start the ray is at
-/// least this far in front of every plane (in `z` at the same `x, y`), so the f32 plane
-/// tests there, which the original start from the segment's beginning would have done, are
-/// far from a sign change.
-pub const Z_SKIP_MARGIN: f32 = 1e-3;
 
 impl QuadTree {
     /// Builds the tree of `layer` (captured from `cube.camera`). The leaves are computed in
@@ -131,13 +68,7 @@ impl QuadTree {
         deeper: &[LayerPlanes],
     ) -> Result<Self, ScreenError> {
         let cam = &cube.camera;
-        let (w, h) = (layer.width(), layer.height());
-        if (w, h) != (cam.width, cam.height) {
-            return Err(ScreenError::Mismatch(format!(
-                "layer is {w}x{h} but the reference camera is {}x{}",
-                cam.width, cam.height
-            )));
-        }
+        let (w, h) = layer_size(cube, layer)?;
         let depth_normals;
         let (normals, flags): (&[Vec3], Option<&[bool]>) = match opts.normals {
             NormalSource::GBuffer | NormalSource::GBufferFlagged { .. } => (&layer.normal, None),
@@ -471,133 +402,6 @@ impl QuadTree {
         self.z_floor_th = th;
     }
 
-    /// The highest level holding a plane node (0 when there is none).
-    pub fn plane_top(&self) -> usize {
-        self.plane_top
-    }
-
-    /// Number of levels (including the pixel level).
-    pub fn level_count(&self) -> usize {
-        self.levels.len()
-    }
-
-    /// Image size.
-    pub fn size(&self) -> (u32, u32) {
-        (self.width, self.height)
-    }
-
-    /// Node `(qx, qy)` at `level` (`Node::EMPTY` outside the padded grid).
-    pub fn node(&self, level: usize, qx: u32, qy: u32) -> Node {
-        let lv = &self.levels[level];
-        if qx < lv.w && qy < lv.h {
-            lv.nodes[(qy * lv.w + qx) as usize]
-        } else {
-            Node::EMPTY
-        }
-    }
-
-    /// Bytes of the node arrays (all levels, padding included; 8 bytes per node).
-    pub fn bytes(&self) -> usize {
-        self.levels
-            .iter()
-            .map(|l| l.nodes.len() * size_of::<Node>())
-            .sum()
-    }
-
-    /// Nodes reachable by the traversal (non-empty nodes whose ancestors are all AABBs).
-    pub fn node_count(&self) -> usize {
-        self.count().0
-    }
-
-    /// Plane nodes reachable by the traversal (leaves of the pruned tree).
-    pub fn plane_node_count(&self) -> usize {
-        self.count().1
-    }
-
-    fn count(&self) -> (usize, usize) {
-        let top = self.levels.len() - 1;
-        let lv = &self.levels[top];
-        let mut acc = (0, 0);
-        for qy in 0..lv.h {
-            for qx in 0..lv.w {
-                self.count_rec(top, qx, qy, &mut acc);
-            }
-        }
-        acc
-    }
-
-    fn count_rec(&self, l: usize, qx: u32, qy: u32, acc: &mut (usize, usize)) {
-        let n = self.node(l, qx, qy);
-        if n.is_plane() {
-            acc.0 += 1;
-            acc.1 += 1;
-        } else if !n.is_empty() {
-            acc.0 += 1;
-            if l > 0 {
-                for c in 0..4 {
-                    self.count_rec(l - 1, 2 * qx + (c & 1), 2 * qy + (c >> 1), acc);
-                }
-            }
-        }
-    }
-
-    /// The plane node the traversal uses at pixel `(i, j)` (the topmost plane ancestor) with
-    /// its level and position, if any.
-    pub fn effective_node(&self, i: u32, j: u32) -> Option<(Node, u32, u32, u32)> {
-        // A plane node's descendants are all planes (§3.3 condition 1), so along the path
-        // the planes are exactly levels 0..=L_p: climb from the pixel while the parent is a
-        // plane.
-        let n0 = self.node(0, i, j);
-        if !n0.is_plane() {
-            return None;
-        }
-        let mut best = (n0, 0u32, i, j);
-        for l in 1..self.levels.len() {
-            let (qx, qy) = (i >> l, j >> l);
-            let n = self.node(l, qx, qy);
-            if !n.is_plane() {
-                break;
-            }
-            best = (n, l as u32, qx, qy);
-        }
-        Some(best)
-    }
-
-    /// The brute-force twin of this tree: per pixel, the decoded plane of its effective
-    /// plane node ([`Self::effective_node`]) in [`LayerPlanes`] form (offset computed by the
-    /// same f32 code as the traversal). With lossless settings these are the quantised pixel
-    /// planes; with lossy settings every pixel of a merged node carries the proxy plane.
-    /// `flag` holds the crack flag `O`.
-    pub fn effective_planes(&self) -> LayerPlanes {
-        let (w, h) = (self.width, self.height);
-        let n = (w * h) as usize;
-        let mut normal = vec![Vec3::ZERO; n];
-        let mut offset = vec![0.0; n];
-        let mut flag = vec![false; n];
-        normal
-            .par_chunks_mut(w as usize)
-            .zip(offset.par_chunks_mut(w as usize))
-            .zip(flag.par_chunks_mut(w as usize))
-            .enumerate()
-            .for_each(|(j, ((nrow, orow), frow))| {
-                for i in 0..w {
-                    if let Some((node, l, qx, qy)) = self.effective_node(i, j as u32) {
-                        let (nn, c) = decode_plane(node, l, qx, qy, self.wf, self.hf);
-                        nrow[i as usize] = nn;
-                        orow[i as usize] = c;
-                        frow[i as usize] = node.flags() & FLAG_CRACK != 0;
-                    }
-                }
-            });
-        LayerPlanes {
-            width: w,
-            height: h,
-            normal,
-            offset,
-            flag,
-        }
-    }
-
     /// Marks pixels unsafe for cascading: `tz[k]` (`W x H`) is the cube `z` from which the
     /// column of pixel `k` belongs to the trigger region (`+inf`: safe). Pixel-level plane
     /// nodes get [`super::node::FLAG_UNSAFE`] and keep `tz` in [`Self::trigger_z`]; empty
@@ -728,34 +532,10 @@ fn prune(
 
 /// The decoded pixel planes of a level-0 array in [`LayerPlanes`] form.
 fn leaf_planes(level0: &Level, w: u32, h: u32, wf: f32, hf: f32) -> LayerPlanes {
-    let n = (w * h) as usize;
-    let mut normal = vec![Vec3::ZERO; n];
-    let mut offset = vec![0.0; n];
-    let mut flag = vec![false; n];
-    normal
-        .par_chunks_mut(w as usize)
-        .zip(offset.par_chunks_mut(w as usize))
-        .zip(flag.par_chunks_mut(w as usize))
-        .enumerate()
-        .for_each(|(j, ((nrow, orow), frow))| {
-            let j = j as u32;
-            for i in 0..w {
-                let node = level0.nodes[(j * level0.w + i) as usize];
-                if node.is_plane() {
-                    let (nn, c) = decode_plane(node, 0, i, j, wf, hf);
-                    nrow[i as usize] = nn;
-                    orow[i as usize] = c;
-                    frow[i as usize] = node.flags() & FLAG_CRACK != 0;
-                }
-            }
-        });
-    LayerPlanes {
-        width: w,
-        height: h,
-        normal,
-        offset,
-        flag,
-    }
+    decoded_planes(w, h, wf, hf, |i, j| {
+        let node = level0.nodes[(j * level0.w + i) as usize];
+        node.is_plane().then_some((node, 0, i, j))
+    })
 }
 
 /// Flag `O` of G-buffer leaves: [`crate::planes::crack_flags`] over the decoded leaf planes

@@ -83,9 +83,9 @@ use glam::UVec2;
 use parallax_core::{GBuffer, Ray};
 use rayon::prelude::*;
 
-use super::build::QuadTree;
 use super::node::plane_z;
 use super::traverse::{Query, RaySetup};
+use super::tree::QuadTree;
 use super::{INPAINT_DILATION_PX, LayerMode, QuadTreeOptions};
 use crate::depth_layers::{Clip, PixelRay};
 use crate::{LayerPlanes, ScreenError, ScreenTracer, TraceResult, TraceStats, UnitCube};

@@ -4,8 +4,8 @@
 
 use glam::Vec3;
 
-use super::build::Z_EPS;
 use super::node::{FLAG_CRACK, Node, node_centre, plane_z};
+use super::tree::Z_EPS;
 
 /// Merge settings of one build.
 pub(crate) struct MergeCtx {

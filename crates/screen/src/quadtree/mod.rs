@@ -344,10 +344,11 @@ pub mod cascade;
 pub mod merge;
 pub mod node;
 pub mod traverse;
+pub mod tree;
 
-pub use build::QuadTree;
 pub use cascade::QuadTreeTracer;
 pub use node::Node;
+pub use tree::QuadTree;
 
 use crate::NormalSource;
 

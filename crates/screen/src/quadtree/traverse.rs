@@ -83,8 +83,8 @@
 
 use glam::{UVec2, Vec3, Vec4};
 
-use super::build::{QuadTree, Z_SKIP_MARGIN};
 use super::node::{FLAG_CRACK, FLAG_UNSAFE, decode_plane, decode_plane_unscaled, plane_z};
+use super::tree::{QuadTree, Z_SKIP_MARGIN};
 use crate::{CubeSegment, TraceStats};
 
 #[inline(always)]

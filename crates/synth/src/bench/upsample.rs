@@ -17,7 +17,9 @@ use parallax_scene::Scene;
 use parallax_scene::path::CameraPath;
 use serde::Serialize;
 
+use super::{mesh_layers, method_entries};
 use crate::SynthError;
+use crate::layers::check_layers;
 use crate::method::{Method, MethodOptions, cube_near_name};
 use crate::upsample::{FrameTimes, UpsampleOptions, upsample_interleaved};
 use parallax_render::score::Shading;
@@ -261,34 +263,14 @@ pub fn run(
     dda_steps: &[u32],
     progress: &dyn Fn(&str),
 ) -> Result<Vec<UpsampleRow>, SynthError> {
-    if layers.is_empty() || layers.iter().any(|&l| l == 0 || l > 8) {
-        return Err(SynthError::Invalid(format!(
-            "layers must be in 1..=8, got {layers:?}"
-        )));
-    }
+    check_layers(layers)?;
     if setup.frames == 0 {
         return Err(SynthError::Invalid("frames must be >= 1".into()));
     }
-    let mesh_layers = if layers.contains(&1) { 1 } else { layers[0] };
+    let mesh_layers = mesh_layers(layers);
     let mut rows = Vec::new();
     for &n in layers {
-        let mut entries = Vec::new();
-        for &m in methods {
-            if m == Method::Mesh && n != mesh_layers {
-                continue;
-            }
-            let steps = match m {
-                Method::Dda if !dda_steps.is_empty() => dda_steps.to_vec(),
-                _ => vec![opts.dda_max_steps],
-            };
-            for st in steps {
-                let o = MethodOptions {
-                    dda_max_steps: st,
-                    ..*opts
-                };
-                entries.push((m, o));
-            }
-        }
+        let entries = method_entries(methods, n, mesh_layers, opts, dda_steps);
         rows.extend(measure_interleaved(
             scene, bvh, path, setup, &entries, n, progress,
         ));

@@ -40,7 +40,9 @@ use parallax_screen::{CubeNear, ScreenTracer};
 use serde::Serialize;
 
 use super::trace::{PassTimes, eye_rays, trace_pass};
+use super::{mesh_layers, method_entries};
 use crate::SynthError;
+use crate::layers::check_layers;
 use crate::layers::{Reference, ReferenceTimes, capture_reference};
 use crate::method::{Method, MethodOptions, Synthesizer, cube_near_name};
 use crate::stereo::{StereoViews, stereo_eyes};
@@ -482,39 +484,19 @@ pub fn run(
     dda_steps: &[u32],
     progress: &dyn Fn(&str),
 ) -> Result<Vec<WarpRow>, SynthError> {
-    if layers.is_empty() || layers.iter().any(|&l| l == 0 || l > 8) {
-        return Err(SynthError::Invalid(format!(
-            "layers must be in 1..=8, got {layers:?}"
-        )));
-    }
+    check_layers(layers)?;
     let truths = if setup.score {
         progress("BVH eye views");
         Some(eye_truths(scene, bvh, setup)?)
     } else {
         None
     };
-    let mesh_layers = if layers.contains(&1) { 1 } else { layers[0] };
+    let mesh_layers = mesh_layers(layers);
     let mut rows = Vec::new();
     for &n in layers {
         progress(&format!("reference, {n} layer(s)"));
         let r = reference(scene, bvh, setup, n)?;
-        let mut entries = Vec::new();
-        for &m in methods {
-            if m == Method::Mesh && n != mesh_layers {
-                continue;
-            }
-            let steps = match m {
-                Method::Dda if !dda_steps.is_empty() => dda_steps.to_vec(),
-                _ => vec![opts.dda_max_steps],
-            };
-            for st in steps {
-                let o = MethodOptions {
-                    dda_max_steps: st,
-                    ..*opts
-                };
-                entries.push((m, o));
-            }
-        }
+        let entries = method_entries(methods, n, mesh_layers, opts, dda_steps);
         let measured =
             measure_interleaved(&scene.name, &r, setup, &entries, truths.as_ref(), progress);
         rows.extend(measured.into_iter().map(|(row, _)| row));

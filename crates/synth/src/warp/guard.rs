@@ -63,7 +63,7 @@
 use glam::{UVec2, Vec2, Vec3};
 use parallax_screen::{DdaTracer, ScreenTracer, TraceResult, TraceStats};
 
-use super::{same_surface, same_surface_tol};
+use super::hit::{same_surface, same_surface_tol};
 use crate::layers::Reference;
 
 /// The layer-0 guard of an answer `r` from layer 1 or deeper (module docs): layer 0's

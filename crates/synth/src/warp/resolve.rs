@@ -14,7 +14,7 @@ use glam::{UVec2, Vec3};
 use parallax_core::Rgb;
 use parallax_screen::{TraceResult, UnitCube};
 
-use super::{HitKind, Resample, SAME_SURFACE_PX};
+use super::hit::{HitKind, Resample, SAME_SURFACE_PX};
 use crate::layers::Reference;
 
 /// One layer as flat row-major slices (colours and G-buffer share size and index).
@@ -235,15 +235,14 @@ mod tests {
 
     use glam::Vec2;
     use parallax_core::{GBuffer, Image};
-    use parallax_scene::camera::{CameraModel, Pinhole};
+    use parallax_scene::camera::{CameraModel, Eye, Pinhole, StereoRig};
     use parallax_scene::{CameraDesc, Scene};
-    use parallax_screen::ScreenTracer;
+    use parallax_screen::{BruteForcePlanes, LayerPlanes, NormalSource, ScreenTracer};
 
     use super::*;
-    use crate::method::{Method, MethodOptions, build_tracer};
-    use crate::stereo::stereo_eyes;
-    use crate::warp::{same_surface, same_surface_tol};
-    use crate::{Shading, capture_reference};
+    use crate::layers::capture_reference;
+    use crate::warp::hit::{same_surface, same_surface_tol};
+    use parallax_render::score::Shading;
 
     fn twin_resolve(reference: &Reference, r: TraceResult, resample: Resample) -> (Rgb, HitKind) {
         match r {
@@ -400,9 +399,16 @@ mod tests {
         let desc: CameraDesc = scene.camera(None).unwrap();
         let cam = Pinhole::new(&desc, 96, 64).unwrap();
         let r = capture_reference(&scene, &bvh, &cam, 2, Shading::Fixed, 0).unwrap();
-        let tracer: Box<dyn ScreenTracer> =
-            build_tracer(Method::Brute, &r.cube, &r.layers, &MethodOptions::default()).unwrap();
-        let eyes = stereo_eyes(&desc, 96, 64, 0.5).unwrap();
+        // The brute-force tracer and the stereo eyes as `method::build_tracer(Method::Brute)`
+        // and `stereo::stereo_eyes` make them (MethodOptions::default normals: the G-buffer's).
+        let tracer = BruteForcePlanes {
+            cube: r.cube.clone(),
+            layers: (r.layers.iter())
+                .map(|g| LayerPlanes::build(&r.cube, g, NormalSource::GBuffer).unwrap())
+                .collect(),
+        };
+        let rig = StereoRig::new(&desc, 96, 64, 0.5).unwrap();
+        let eyes = [rig.eye(Eye::Left).clone(), rig.eye(Eye::Right).clone()];
         let (mut n, mut deep, mut blended) = (0, 0, 0);
         for resample in [Resample::Bilinear, Resample::Nearest] {
             let fast = Resolver::new(&r, resample);

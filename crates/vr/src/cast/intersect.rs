@@ -24,20 +24,17 @@
 //! Simplifications: no back-face culling (our meshes are two-sided), no near-plane culling
 //! (rays start at `t = 0` like the per-ray baseline).
 
-use crate::beam::LeafRef;
-use crate::beam::PreparedBeam;
 use glam::{Vec3, Vec4};
-use parallax_bvh::Bvh;
 use parallax_bvh::node::{leaf_count, leaf_first};
 use parallax_bvh::{Tri4, Tri4Hits, Tri4Ray};
-use parallax_core::Aabb;
-use parallax_core::NO_ID;
-use parallax_core::math::ROBUST_FAR_SCALE;
-use parallax_core::math::WatertightRay;
+use parallax_core::math::{ROBUST_FAR_SCALE, WatertightRay};
+use parallax_core::simd::{max_or_rhs, min_or_rhs};
+use parallax_core::{NO_ID, Ray};
 
 use crate::SampleSet;
+use crate::beam::PreparedBeam;
+use crate::cast::leaves::{LeafBox, LeafGroup};
 use crate::cast::packet::run_packets;
-use parallax_core::Ray;
 
 /// Keeps `(t, tri)` if it is closer than the best so far, or as close with a lower triangle
 /// index (the BVH's tie-break).
@@ -47,83 +44,6 @@ fn offer(best_t: &mut f32, best_tri: &mut u32, t: f32, tri: u32) {
         *best_t = t;
         *best_tri = tri;
     }
-}
-
-/// Four leaves of a tile's list with their boxes in SoA lanes (`[min_x, max_x, min_y, max_y,
-/// min_z, max_z]`, as `Node4`), so a ray tests four leaf boxes with one slab test before it
-/// tests their triangles. Padding lanes hold the empty box (never hit) and leaf `EMPTY`.
-#[derive(Clone, Copy, Debug)]
-pub struct LeafGroup {
-    pub bounds: [Vec4; 6],
-    pub leaf: [u32; 4],
-    /// Smallest near depth of the four leaves (the first one's: lists are sorted).
-    pub near: f32,
-}
-
-/// A leaf of a tile's list with the box of its triangles.
-#[derive(Clone, Copy, Debug)]
-pub struct LeafBox {
-    pub bounds: Aabb,
-    pub leaf: u32,
-    pub near: f32,
-}
-
-/// Packs a near-sorted leaf list into groups of four (`out`) and into boxed leaves (`boxes`).
-pub fn group_leaves(
-    bvh: &Bvh,
-    leaves: &[LeafRef],
-    out: &mut Vec<LeafGroup>,
-    boxes: &mut Vec<LeafBox>,
-) {
-    out.clear();
-    boxes.clear();
-    let tris = bvh.triangles();
-    for chunk in leaves.chunks(4) {
-        let mut g = LeafGroup {
-            bounds: [
-                Vec4::INFINITY,
-                Vec4::NEG_INFINITY,
-                Vec4::INFINITY,
-                Vec4::NEG_INFINITY,
-                Vec4::INFINITY,
-                Vec4::NEG_INFINITY,
-            ],
-            leaf: [parallax_bvh::node::EMPTY; 4],
-            near: chunk[0].near,
-        };
-        for (l, r) in chunk.iter().enumerate() {
-            let mut b = Aabb::EMPTY;
-            for t in bvh.leaf_triangles(leaf_first(r.leaf), leaf_count(r.leaf)) {
-                b = b.union(tris[t].bounds());
-            }
-            g.bounds[0][l] = b.min.x;
-            g.bounds[1][l] = b.max.x;
-            g.bounds[2][l] = b.min.y;
-            g.bounds[3][l] = b.max.y;
-            g.bounds[4][l] = b.min.z;
-            g.bounds[5][l] = b.max.z;
-            g.leaf[l] = r.leaf;
-            g.near = g.near.min(r.near);
-            boxes.push(LeafBox {
-                bounds: b,
-                leaf: r.leaf,
-                near: r.near,
-            });
-        }
-        out.push(g);
-    }
-}
-
-/// `a > b ? a : b` per lane (a NaN in `a` gives `b`), as `parallax_bvh`'s `simd.rs`.
-#[inline(always)]
-fn max_or_rhs(a: Vec4, b: Vec4) -> Vec4 {
-    Vec4::select(a.cmpgt(b), a, b)
-}
-
-/// `a < b ? a : b` per lane (a NaN in `a` gives `b`).
-#[inline(always)]
-fn min_or_rhs(a: Vec4, b: Vec4) -> Vec4 {
-    Vec4::select(a.cmplt(b), a, b)
 }
 
 /// The robust slab test of the BVH traversal (Ize 2013 far scaling) on four leaf boxes: the

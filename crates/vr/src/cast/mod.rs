@@ -7,6 +7,7 @@
 //! the CPU threads, block after block.
 
 pub mod intersect;
+pub mod leaves;
 pub mod packet;
 pub mod setup;
 
@@ -17,7 +18,8 @@ use crate::beam::{BLOCK_ENTRIES, CullScratch, SimdBeam, block_cull, tile_cull};
 use parallax_bvh::Bvh;
 use rayon::prelude::*;
 
-use crate::cast::intersect::{LeafBox, LeafGroup, group_leaves, test_tile};
+use crate::cast::intersect::test_tile;
+use crate::cast::leaves::{LeafBox, LeafGroup, group_leaves};
 use crate::cast::setup::{
     SampleTest, SetupCounts, SetupExactness, SetupWork, TileTris, setup_tile, shared_origin,
     test_tile_setup,

@@ -16,235 +16,19 @@
 //! leaf's box (Ize 2013 far scaling; lanes already holding a closer hit skip it), and the packet
 //! stops once every ray has a hit nearer than the next leaf's near depth along the beam axis.
 
-use std::ops::{Add, Div, Mul, Sub};
-
-use crate::beam::PreparedBeam;
-use glam::{BVec4A, Vec2, Vec3, Vec4};
+use glam::{Vec2, Vec3};
 use parallax_bvh::Tri4;
 use parallax_bvh::node::{leaf_count, leaf_first};
 use parallax_core::Ray;
-use parallax_core::math::{ROBUST_FAR_SCALE, WatertightRay};
+use parallax_core::math::{
+    ROBUST_FAR_SCALE, WatertightRay, shear_vertex, watertight_lanes, watertight_permutation,
+};
+use parallax_core::simd::{F8, Lanes, max_or_rhs, min_or_rhs};
 use parallax_scene::camera::{Camera, Pinhole};
 
 use crate::SampleSet;
-use crate::cast::intersect::LeafBox;
-pub(crate) use wide::F8;
-
-/// A vector of `N` f32 lanes: the operations the packet kernel needs, each lane rounding
-/// exactly like scalar f32 (no FMA).
-pub trait Lanes:
-    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self>
-{
-    const N: usize;
-    type M: Copy;
-    fn splat(x: f32) -> Self;
-    fn from_fn(f: impl FnMut(usize) -> f32) -> Self;
-    fn get(self, i: usize) -> f32;
-    fn sqrt(self) -> Self;
-    fn lt(self, o: Self) -> Self::M;
-    fn gt(self, o: Self) -> Self::M;
-    fn le(self, o: Self) -> Self::M;
-    fn ge(self, o: Self) -> Self::M;
-    /// Lane minimum (`minps`: the second operand when either is NaN).
-    fn min(self, o: Self) -> Self;
-    /// Lane-wise AND of two masks.
-    fn and(a: Self::M, b: Self::M) -> Self::M;
-    fn eq(self, o: Self) -> Self::M;
-    /// Unordered not-equal (true on NaN), as `cmpneqps`.
-    fn ne(self, o: Self) -> Self::M;
-    fn bits(m: Self::M) -> u32;
-    fn select(m: Self::M, a: Self, b: Self) -> Self;
-}
-
-impl Lanes for Vec4 {
-    const N: usize = 4;
-    type M = BVec4A;
-    #[inline(always)]
-    fn splat(x: f32) -> Self {
-        Vec4::splat(x)
-    }
-    #[inline(always)]
-    fn from_fn(mut f: impl FnMut(usize) -> f32) -> Self {
-        Vec4::new(f(0), f(1), f(2), f(3))
-    }
-    #[inline(always)]
-    fn get(self, i: usize) -> f32 {
-        self[i]
-    }
-    #[inline(always)]
-    fn sqrt(self) -> Self {
-        Vec4::from_array(self.to_array().map(f32::sqrt))
-    }
-    #[inline(always)]
-    fn lt(self, o: Self) -> BVec4A {
-        self.cmplt(o)
-    }
-    #[inline(always)]
-    fn gt(self, o: Self) -> BVec4A {
-        self.cmpgt(o)
-    }
-    #[inline(always)]
-    fn le(self, o: Self) -> BVec4A {
-        self.cmple(o)
-    }
-    #[inline(always)]
-    fn ge(self, o: Self) -> BVec4A {
-        self.cmpge(o)
-    }
-    #[inline(always)]
-    fn min(self, o: Self) -> Self {
-        Vec4::select(self.cmplt(o), self, o)
-    }
-    #[inline(always)]
-    fn and(a: BVec4A, b: BVec4A) -> BVec4A {
-        a & b
-    }
-    #[inline(always)]
-    fn eq(self, o: Self) -> BVec4A {
-        self.cmpeq(o)
-    }
-    #[inline(always)]
-    fn ne(self, o: Self) -> BVec4A {
-        self.cmpne(o)
-    }
-    #[inline(always)]
-    fn bits(m: BVec4A) -> u32 {
-        m.bitmask()
-    }
-    #[inline(always)]
-    fn select(m: BVec4A, a: Self, b: Self) -> Self {
-        Vec4::select(m, a, b)
-    }
-}
-
-mod wide {
-    //! Eight lanes as plain `[f32; 8]` loops. They are only instantiated inside the
-    //! `#[target_feature(enable = "avx2")]` entry point, where LLVM turns each loop into one AVX
-    //! instruction (`vaddps`, `vcmpps`, `vblendvps`, `vmovmskps`, `vsqrtps`, ...). Plain loops
-    //! rather than `std::arch` intrinsics: intrinsics cannot be inlined into the kernel's
-    //! closures, which have no target features of their own. Lane arithmetic is IEEE f32 either
-    //! way (LLVM never contracts to FMA without fast-math).
-    use std::ops::{Add, Div, Mul, Sub};
-
-    #[derive(Clone, Copy)]
-    #[repr(C, align(32))]
-    pub struct F8(pub [f32; 8]);
-
-    #[derive(Clone, Copy)]
-    #[repr(C, align(32))]
-    pub struct M8(pub [u32; 8]);
-
-    macro_rules! binop {
-        ($tr:ident, $f:ident, $op:tt) => {
-            impl $tr for F8 {
-                type Output = F8;
-                #[inline(always)]
-                fn $f(self, o: F8) -> F8 {
-                    let mut r = [0.0f32; 8];
-                    for i in 0..8 {
-                        r[i] = self.0[i] $op o.0[i];
-                    }
-                    F8(r)
-                }
-            }
-        };
-    }
-    binop!(Add, add, +);
-    binop!(Sub, sub, -);
-    binop!(Mul, mul, *);
-    binop!(Div, div, /);
-
-    macro_rules! cmp {
-        ($f:ident, $e:expr) => {
-            #[inline(always)]
-            fn $f(self, o: Self) -> M8 {
-                let mut r = [0u32; 8];
-                for i in 0..8 {
-                    let f: fn(f32, f32) -> bool = $e;
-                    r[i] = if f(self.0[i], o.0[i]) { u32::MAX } else { 0 };
-                }
-                M8(r)
-            }
-        };
-    }
-
-    impl super::Lanes for F8 {
-        const N: usize = 8;
-        type M = M8;
-        #[inline(always)]
-        fn splat(x: f32) -> Self {
-            F8([x; 8])
-        }
-        #[inline(always)]
-        fn from_fn(mut f: impl FnMut(usize) -> f32) -> Self {
-            F8([f(0), f(1), f(2), f(3), f(4), f(5), f(6), f(7)])
-        }
-        #[inline(always)]
-        fn get(self, i: usize) -> f32 {
-            self.0[i]
-        }
-        #[inline(always)]
-        fn sqrt(self) -> Self {
-            F8(self.0.map(f32::sqrt))
-        }
-        cmp!(lt, |a, b| a < b);
-        cmp!(gt, |a, b| a > b);
-        cmp!(le, |a, b| a <= b);
-        cmp!(ge, |a, b| a >= b);
-        #[inline(always)]
-        fn min(self, o: Self) -> Self {
-            let mut r = [0.0f32; 8];
-            for i in 0..8 {
-                r[i] = if self.0[i] < o.0[i] {
-                    self.0[i]
-                } else {
-                    o.0[i]
-                };
-            }
-            F8(r)
-        }
-        #[inline(always)]
-        fn and(a: M8, b: M8) -> M8 {
-            let mut r = [0u32; 8];
-            for i in 0..8 {
-                r[i] = a.0[i] & b.0[i];
-            }
-            M8(r)
-        }
-        cmp!(eq, |a, b| a == b);
-        cmp!(ne, |a, b| a != b);
-        #[inline(always)]
-        fn bits(m: M8) -> u32 {
-            let mut b = 0;
-            for i in 0..8 {
-                b |= (m.0[i] >> 31) << i;
-            }
-            b
-        }
-        #[inline(always)]
-        #[allow(clippy::needless_range_loop)]
-        fn select(m: M8, a: Self, b: Self) -> Self {
-            let mut r = [0.0f32; 8];
-            for i in 0..8 {
-                r[i] = if m.0[i] != 0 { a.0[i] } else { b.0[i] };
-            }
-            F8(r)
-        }
-    }
-}
-
-/// `a > b ? a : b` per lane (NaN in `a` gives `b`).
-#[inline(always)]
-pub(super) fn max_or_rhs<L: Lanes>(a: L, b: L) -> L {
-    L::select(a.gt(b), a, b)
-}
-
-/// `a < b ? a : b` per lane (NaN in `a` gives `b`).
-#[inline(always)]
-pub(super) fn min_or_rhs<L: Lanes>(a: L, b: L) -> L {
-    L::select(a.lt(b), a, b)
-}
-
+use crate::beam::PreparedBeam;
+use crate::cast::leaves::LeafBox;
 /// Up to eight rays in SoA lanes.
 #[derive(Clone, Copy)]
 pub struct RaysN<L> {
@@ -339,43 +123,6 @@ pub(crate) fn gen_n<L: Lanes>(set: &SampleSet, pairs: &[(u32, u32)]) -> RaysN<L>
     }
 }
 
-/// The axis permutation of `WatertightRay::new`: dominant axis `kz`, `kx, ky` swapped when
-/// `d[kz] < 0`.
-#[inline(always)]
-pub(crate) fn permutation(d: Vec3) -> (usize, usize, usize) {
-    let a = d.abs();
-    let kz = if a.x > a.y {
-        if a.x > a.z { 0 } else { 2 }
-    } else if a.y > a.z {
-        1
-    } else {
-        2
-    };
-    let kx = (kz + 1) % 3;
-    let ky = (kx + 1) % 3;
-    if d[kz] < 0.0 {
-        (ky, kx, kz)
-    } else {
-        (kx, ky, kz)
-    }
-}
-
-/// A vertex (lane `ln` of a [`Tri4`] vertex row) in each lane's sheared ray frame:
-/// `a = p - o; (a[kx] - sx a[kz], a[ky] - sy a[kz], sz a[kz])` (Woop et al. 2013, §3).
-#[inline(always)]
-fn project<L: Lanes>(
-    p: &[Vec4; 3],
-    ln: usize,
-    (kx, ky, kz): (usize, usize, usize),
-    (okx, oky, okz): (L, L, L),
-    (sx, sy, sz): (L, L, L),
-) -> (L, L, L) {
-    let az = L::splat(p[kz][ln]) - okz;
-    let x = (L::splat(p[kx][ln]) - okx) - sx * az;
-    let y = (L::splat(p[ky][ln]) - oky) - sy * az;
-    (x, y, sz * az)
-}
-
 /// Result of a packet: per lane the closest `(t, index in Bvh::triangles)` (`u32::MAX` = none).
 #[derive(Clone, Copy, Debug)]
 pub struct ClosestN {
@@ -420,12 +167,12 @@ fn closest_n<L: Lanes>(
         if !(ray.is_valid() && ray.t_min == 0.0 && ray.t_max == f32::INFINITY) {
             return None;
         }
-        let p = permutation(ray.dir);
+        let p = watertight_permutation(ray.dir);
         if *perm.get_or_insert(p) != p {
             return None;
         }
     }
-    let Some((kx, ky, kz)) = perm else {
+    let Some([kx, ky, kz]) = perm else {
         return Some(out);
     };
     let one = L::splat(1.0);
@@ -474,24 +221,16 @@ fn closest_n<L: Lanes>(
             let ln = (j % 4) as usize;
             let tri = blk.tri[ln];
             work.tri_tests += 1;
-            let proj =
-                |v: usize| project(&blk.p[v], ln, (kx, ky, kz), (okx, oky, okz), (sx, sy, sz));
-            let (ax, ay, az) = proj(0);
-            let (bx, by, bz) = proj(1);
-            let (cx, cy, cz) = proj(2);
-            let u = cx * by - cy * bx;
-            let v = ax * cy - ay * cx;
-            let w = bx * ay - by * ax;
-            let exact = (L::bits(u.eq(zero)) | L::bits(v.eq(zero)) | L::bits(w.eq(zero))) & m;
-            let negm = L::bits(u.lt(zero)) | L::bits(v.lt(zero)) | L::bits(w.lt(zero));
-            let posm = L::bits(u.gt(zero)) | L::bits(v.gt(zero)) | L::bits(w.gt(zero));
-            let det = u + v + w;
-            let t_scaled = u * az + v * bz + w * cz;
-            let t = t_scaled * (one / det);
-            let ok = !(negm & posm);
-            let nz = L::bits(det.ne(zero));
+            let proj = |v: usize| {
+                let p = &blk.p[v];
+                let at = |k: usize| L::splat(p[k][ln]);
+                shear_vertex([at(kx), at(ky), at(kz)], [okx, oky, okz], [sx, sy, sz])
+            };
+            let r = watertight_lanes(proj(0), proj(1), proj(2));
+            let exact = r.exact & m;
+            let t = r.t;
             let in_range = L::bits(t.gt(t_min)) & L::bits(t.lt(tri_lim));
-            let hit = ok & nz & in_range & m & !exact;
+            let hit = r.inside & in_range & m & !exact;
             let mut offer = |l: usize, tl: f32| {
                 if out.tri[l] == u32::MAX || tl < out.t[l] || (tl == out.t[l] && tri < out.tri[l]) {
                     out.t[l] = tl;
@@ -628,7 +367,7 @@ pub(crate) unsafe fn run_packets_avx2(
     write: impl FnMut((u32, u32), f32, u32),
     fallback: impl FnMut(&Ray) -> (f32, u32),
 ) -> (PacketWork, u64) {
-    run_packets::<wide::F8>(
+    run_packets::<F8>(
         set, blocks, leaves, beam, slack, total, pair, write, fallback,
     )
 }

@@ -31,9 +31,11 @@
 
 use parallax_bvh::Tri4;
 use parallax_core::math::WatertightRay;
+use parallax_core::simd::Lanes;
 
-use crate::cast::packet::{ClosestN, Lanes, RaysN};
-use crate::cast::setup::{PacketSlab, RHO_MAX, SetupWork, TileTris, dot_n, exact_t};
+use super::kernel::{PacketSlab, SetupWork, dot_n, edge_band, min_edge};
+use super::tri::{RHO_MAX, TileTris, exact_t};
+use crate::cast::packet::{ClosestN, RaysN};
 
 /// The closest hit of every lane of `rays` against the set-up list (module docs); `axis` /
 /// `sign` are the tile beam's dominant axis (the near-depth order), `slack` the early-exit
@@ -99,36 +101,21 @@ pub(super) fn closest_edges<L: Lanes>(
                 continue;
             }
             // Certainly inside (a mask), plus the band's lanes the watertight test accepts.
-            let (inn_m, extra) = if tr.all_in {
-                (ge, 0)
-            } else {
-                let m = dot_n(tr.n[0], dx, dy, dz)
-                    .min(dot_n(tr.n[1], dx, dy, dz))
-                    .min(dot_n(tr.n[2], dx, dy, dz));
-                let b = L::splat(tr.bound * dinf);
-                let inn_m = L::and(ge, m.gt(b));
-                let rest = cand & !L::bits(inn_m);
-                let mut unsure = if rest != 0 {
-                    L::bits(m.ge(zero - b)) & rest
-                } else {
-                    0
-                };
-                let mut extra = 0u32;
-                // Within the edge band: the watertight test decides coverage (~0.2% of pairs).
-                if unsure != 0 {
-                    work.edge_band += unsure.count_ones() as u64;
-                    work.exact_tests += unsure.count_ones() as u64;
+            let (inn_m, mut unsure) = edge_band(tr, rays.d, dinf, ge, cand);
+            let mut extra = 0u32;
+            // Within the edge band: the watertight test decides coverage (~0.2% of pairs).
+            if unsure != 0 {
+                work.edge_band += unsure.count_ones() as u64;
+                work.exact_tests += unsure.count_ones() as u64;
+            }
+            while unsure != 0 {
+                let l = unsure.trailing_zeros() as usize;
+                unsure &= unsure - 1;
+                let wt = &WatertightRay::new(&rays.lane(l));
+                if exact_t(wt, blocks, tr.src).is_some() {
+                    extra |= 1 << l;
                 }
-                while unsure != 0 {
-                    let l = unsure.trailing_zeros() as usize;
-                    unsure &= unsure - 1;
-                    let wt = &WatertightRay::new(&rays.lane(l));
-                    if exact_t(wt, blocks, tr.src).is_some() {
-                        extra |= 1 << l;
-                    }
-                }
-                (inn_m, extra)
-            };
+            }
             let ib = (L::bits(inn_m) & valid) | extra;
             if ib == 0 {
                 continue;
@@ -205,12 +192,9 @@ fn ill_conditioned<L: Lanes>(
     out: &mut ClosestN,
     work: &mut SetupWork,
 ) -> bool {
-    let [dx, dy, dz] = rays.d;
     let mut maybe = valid;
     if !tr.all_in {
-        let m = dot_n(tr.n[0], dx, dy, dz)
-            .min(dot_n(tr.n[1], dx, dy, dz))
-            .min(dot_n(tr.n[2], dx, dy, dz));
+        let m = min_edge(&tr.n, rays.d);
         maybe &= L::bits(m.ge(L::splat(-tr.bound * dinf)));
     }
     let mut changed = false;

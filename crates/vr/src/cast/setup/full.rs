@@ -9,12 +9,12 @@
 
 use glam::Vec3;
 use parallax_bvh::Tri4;
-use parallax_core::math::WatertightRay;
+use parallax_core::math::{WatertightRay, shear_vertex, watertight_lanes, watertight_permutation};
+use parallax_core::simd::Lanes;
 
-use crate::cast::packet::{ClosestN, Lanes, RaysN, permutation};
-use crate::cast::setup::{
-    PacketSlab, RHO_EXACT, RHO_MAX, SetupWork, TileTris, U, dot_n, exact_closest, exact_t,
-};
+use super::kernel::{PacketSlab, SetupWork, dot_n, edge_band};
+use super::tri::{RHO_EXACT, RHO_MAX, TileTris, U, exact_closest, exact_t};
+use crate::cast::packet::{ClosestN, RaysN};
 
 /// Per-lane state of the best hit so far: `1/t` (lanes), its band, and the triangle.
 struct BestN<L> {
@@ -106,22 +106,7 @@ pub(super) fn closest_full<L: Lanes>(
             if cand_bits == 0 {
                 continue;
             }
-            let (inside, unsure) = if tr.all_in {
-                (cand, 0)
-            } else {
-                let m = dot_n(tr.n[0], dx, dy, dz)
-                    .min(dot_n(tr.n[1], dx, dy, dz))
-                    .min(dot_n(tr.n[2], dx, dy, dz));
-                let b = L::splat(tr.bound * dinf);
-                let inn = L::and(cand, m.gt(b));
-                let rest = cand_bits & !L::bits(inn);
-                let uns = if rest != 0 {
-                    L::bits(m.ge(zero - b)) & rest
-                } else {
-                    0
-                };
-                (inn, uns)
-            };
+            let (inside, unsure) = edge_band(tr, rays.d, dinf, cand, cand_bits);
             let mut in_bits = L::bits(inside) & valid;
             let mut unsure = unsure;
             if in_bits | unsure == 0 {
@@ -288,19 +273,19 @@ fn final_t_lanes<L: Lanes>(
     let perm = match tt.perm {
         Some(p) => p,
         None => {
-            let perm = permutation(lane_dir(first));
+            let perm = watertight_permutation(lane_dir(first));
             let mut m = need;
             while m != 0 {
                 let l = m.trailing_zeros() as usize;
                 m &= m - 1;
-                if permutation(lane_dir(l)) != perm {
+                if watertight_permutation(lane_dir(l)) != perm {
                     return 0;
                 }
             }
             perm
         }
     };
-    let (kx, ky, kz) = perm;
+    let [kx, ky, kz] = perm;
     // Lanes outside `need` repeat the first lane's triangle (results ignored).
     let mut srcs = [0u32; 8];
     let mut same = true;
@@ -340,33 +325,14 @@ fn final_t_lanes<L: Lanes>(
             }
         }
     }
-    let coord = |v: usize, k: usize| p[v][k];
     let one = L::splat(1.0);
-    let zero = L::splat(0.0);
     let dkz = rays.d[kz];
-    let sx = rays.d[kx] / dkz;
-    let sy = rays.d[ky] / dkz;
-    let sz = one / dkz;
-    let (okx, oky, okz) = (rays.o[kx], rays.o[ky], rays.o[kz]);
-    let proj = |v: usize| {
-        let az = coord(v, kz) - okz;
-        let x = (coord(v, kx) - okx) - sx * az;
-        let y = (coord(v, ky) - oky) - sy * az;
-        (x, y, sz * az)
-    };
-    let (ax, ay, az) = proj(0);
-    let (bx, by, bz) = proj(1);
-    let (cx, cy, cz) = proj(2);
-    let u = cx * by - cy * bx;
-    let v = ax * cy - ay * cx;
-    let w = bx * ay - by * ax;
-    let exact = L::bits(u.eq(zero)) | L::bits(v.eq(zero)) | L::bits(w.eq(zero));
-    let negm = L::bits(u.lt(zero)) | L::bits(v.lt(zero)) | L::bits(w.lt(zero));
-    let posm = L::bits(u.gt(zero)) | L::bits(v.gt(zero)) | L::bits(w.gt(zero));
-    let det = u + v + w;
-    let t_scaled = u * az + v * bz + w * cz;
-    let tv = t_scaled * (one / det);
-    let ok = !(negm & posm) & L::bits(det.ne(zero)) & L::bits(tv.gt(zero));
+    let shear = [rays.d[kx] / dkz, rays.d[ky] / dkz, one / dkz];
+    let o = [rays.o[kx], rays.o[ky], rays.o[kz]];
+    let proj = |v: usize| shear_vertex([p[v][kx], p[v][ky], p[v][kz]], o, shear);
+    let r = watertight_lanes(proj(0), proj(1), proj(2));
+    let (exact, tv) = (r.exact, r.t);
+    let ok = r.inside & L::bits(tv.gt(L::splat(0.0)));
     let ok = ok & L::bits(tv.lt(L::splat(f32::INFINITY)));
     let done = need & !exact;
     let mut m = done;

@@ -1,0 +1,127 @@
+//! What both set-up kernels ([`super::edges`], [`super::full`]) run per packet: the edge dot
+//! products in the scalar order of [`super::tri::dot3`], the BVH's robust slab test of a packet
+//! on a run's box ([`PacketSlab`]), and the work counters ([`SetupWork`]).
+
+use parallax_core::math::ROBUST_FAR_SCALE;
+use parallax_core::simd::{Lanes, max_or_rhs, min_or_rhs};
+
+use super::tri::{Segment, TriSetup};
+
+/// `n . d` per lane in the scalar order of [`dot3`] (no FMA: plain functions, not closures,
+/// so they are compiled inside the AVX2 entry point).
+#[inline(always)]
+pub(super) fn dot_n<L: Lanes>(n: [f32; 3], dx: L, dy: L, dz: L) -> L {
+    L::splat(n[0]) * dx + L::splat(n[1]) * dy + L::splat(n[2]) * dz
+}
+
+/// The smallest of a set-up triangle's three edge values `n_i . d` per lane ([`dot_n`]).
+#[inline(always)]
+pub(super) fn min_edge<L: Lanes>(n: &[[f32; 3]; 3], [dx, dy, dz]: [L; 3]) -> L {
+    dot_n(n[0], dx, dy, dz)
+        .min_or_rhs(dot_n(n[1], dx, dy, dz))
+        .min_or_rhs(dot_n(n[2], dx, dy, dz))
+}
+
+/// The edge test of the lanes `cand` (mask; `cand_bits` = its bits within the valid lanes)
+/// against `tr` (module docs of [`super`], "exact band"): the mask of lanes certainly inside
+/// (every edge value above the band `bound |d|_inf`, with `dinf` the packet's `|d|_inf`) and the
+/// bits of the lanes within the band, which only the watertight test decides.
+#[inline(always)]
+pub(super) fn edge_band<L: Lanes>(
+    tr: &TriSetup,
+    d: [L; 3],
+    dinf: f32,
+    cand: L::M,
+    cand_bits: u32,
+) -> (L::M, u32) {
+    if tr.all_in {
+        return (cand, 0);
+    }
+    let m = min_edge(&tr.n, d);
+    let b = L::splat(tr.bound * dinf);
+    let inside = L::and(cand, m.gt(b));
+    let rest = cand_bits & !L::bits(inside);
+    let unsure = if rest != 0 {
+        L::bits(m.ge(L::splat(0.0) - b)) & rest
+    } else {
+        0
+    };
+    (inside, unsure)
+}
+
+/// Entry and exit `t` of one slab (`lo`, `hi` relative to the origin).
+#[inline(always)]
+pub(super) fn slab<L: Lanes>(lo: f32, hi: f32, inv: L, neg: L::M) -> (L, L) {
+    let t0 = L::splat(lo) * inv;
+    let t1 = L::splat(hi) * inv;
+    (L::select(neg, t1, t0), L::select(neg, t0, t1))
+}
+
+/// Per-packet constants of the set-up kernels (`cast/setup/edges.rs`, `cast/setup/full.rs`): reciprocal
+/// directions and their signs for the BVH's robust slab test, and the packet's largest
+/// `|d|_inf` over its lanes (the scale of the edge band; invalid lanes have `d = 0`).
+pub(super) struct PacketSlab<L: Lanes> {
+    inv: [L; 3],
+    neg: [L::M; 3],
+    pub dinf: f32,
+}
+
+impl<L: Lanes> PacketSlab<L> {
+    #[inline(always)]
+    pub(super) fn new([dx, dy, dz]: [L; 3]) -> Self {
+        let (zero, one) = (L::splat(0.0), L::splat(1.0));
+        let inv = [one / dx, one / dy, one / dz];
+        let neg = [inv[0].lt(zero), inv[1].lt(zero), inv[2].lt(zero)];
+        let abs = |x: L| L::select(x.lt(zero), zero - x, x);
+        let dinf_l = max_or_rhs(abs(dx), max_or_rhs(abs(dy), abs(dz)));
+        let mut dinf = 0.0f32;
+        for l in 0..L::N {
+            dinf = dinf.max(dinf_l.get(l));
+        }
+        Self { inv, neg, dinf }
+    }
+
+    /// The BVH's robust slab test (Ize 2013 far scaling) of the packet on a run's box: true
+    /// when a lane of `valid` reaches the box before `box_lim` (its closest hit so far).
+    #[inline(always)]
+    pub(super) fn reaches(&self, seg: &Segment, box_lim: L, valid: u32) -> bool {
+        let (inv, neg) = (&self.inv, &self.neg);
+        let (tnx, tfx) = slab(seg.lo.x, seg.hi.x, inv[0], neg[0]);
+        let (tny, tfy) = slab(seg.lo.y, seg.hi.y, inv[1], neg[1]);
+        let (tnz, tfz) = slab(seg.lo.z, seg.hi.z, inv[2], neg[2]);
+        let t_near = max_or_rhs(tnz, max_or_rhs(tny, max_or_rhs(tnx, L::splat(0.0))));
+        let t_far = min_or_rhs(tfz, min_or_rhs(tfy, min_or_rhs(tfx, box_lim)));
+        L::bits(t_near.le(t_far * L::splat(ROBUST_FAR_SCALE))) & valid != 0
+    }
+}
+
+/// Work counters of the set-up kernel.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SetupWork {
+    pub rays: u64,
+    /// Packet-triangle tests (one per packet of `lanes` rays and set-up triangle).
+    pub tri_tests: u64,
+    /// Ray-triangle tests (valid lanes of the packet-triangle tests).
+    pub pair_tests: u64,
+    /// Watertight tests run in the band (edge or depth uncertain), per ray and triangle.
+    pub exact_tests: u64,
+    /// Watertight tests of winners for their bit-exact `t`.
+    pub final_tests: u64,
+    /// Of `exact_tests`: edge value within the band (the rest: depth band).
+    pub edge_band: u64,
+    /// Rays re-decided by the exact scan (a certain decision contradicted; expected 0).
+    pub rescues: u64,
+}
+
+impl SetupWork {
+    /// Adds `o`'s counters to these.
+    pub fn add(&mut self, o: &Self) {
+        self.rays += o.rays;
+        self.tri_tests += o.tri_tests;
+        self.pair_tests += o.pair_tests;
+        self.exact_tests += o.exact_tests;
+        self.final_tests += o.final_tests;
+        self.edge_band += o.edge_band;
+        self.rescues += o.rescues;
+    }
+}
