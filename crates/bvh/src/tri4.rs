@@ -24,7 +24,7 @@
 //! x86_64 and plain scalar f32 elsewhere (the portable fallback, same arithmetic).
 
 use glam::{Vec3, Vec4};
-use parallax_core::math::WatertightRay;
+use parallax_core::math::{WatertightRay, shear_vertex, watertight_lanes};
 
 use crate::tri::Tri;
 
@@ -130,26 +130,18 @@ impl Tri4Ray {
     #[inline(always)]
     pub fn intersect(&self, b: &Tri4, mask: u32, t_lim: f32) -> Tri4Hits {
         let [kx, ky, kz] = self.k;
+        let o = [self.org[kx], self.org[ky], self.org[kz]];
+        let shear = [self.sx, self.sy, self.sz];
         let proj = |v: usize| {
             let p = &b.p[v];
-            let az = p[kz] - self.org[kz];
-            let x = (p[kx] - self.org[kx]) - self.sx * az;
-            let y = (p[ky] - self.org[ky]) - self.sy * az;
-            (x, y, self.sz * az)
+            shear_vertex([p[kx], p[ky], p[kz]], o, shear)
         };
-        let (ax, ay, az) = proj(0);
-        let (bx, by, bz) = proj(1);
-        let (cx, cy, cz) = proj(2);
-        let u = cx * by - cy * bx;
-        let v = ax * cy - ay * cx;
-        let w = bx * ay - by * ax;
-        let zero = Vec4::ZERO;
-        let exact = (u.cmpeq(zero) | v.cmpeq(zero) | w.cmpeq(zero)).bitmask() & mask;
-        let neg = u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero);
-        let pos = u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero);
-        let ok = (neg & pos).bitmask() ^ 0xF;
-        if ok & mask & !exact == 0 {
+        let (va, vb, vc) = (proj(0), proj(1), proj(2));
+        let r = watertight_lanes(va, vb, vc);
+        let exact = r.exact & mask;
+        if r.same_sign & mask & !exact == 0 {
             // No lane can hit: skip the division (the common case).
+            let zero = Vec4::ZERO;
             return Tri4Hits {
                 hit: 0,
                 exact,
@@ -158,18 +150,14 @@ impl Tri4Ray {
                 v: zero,
             };
         }
-        let det = u + v + w;
-        let t_scaled = u * az + v * bz + w * cz;
-        let inv = Vec4::ONE / det;
-        let t = t_scaled * inv;
-        let nz = det.cmpne(zero).bitmask();
-        let in_range = (t.cmpgt(self.t_min) & t.cmplt(Vec4::splat(t_lim))).bitmask();
+        let d = r.distance(va[2], vb[2], vc[2]);
+        let in_range = (d.t.cmpgt(self.t_min) & d.t.cmplt(Vec4::splat(t_lim))).bitmask();
         Tri4Hits {
-            hit: ok & nz & in_range & mask & !exact,
+            hit: r.same_sign & d.nonzero & in_range & mask & !exact,
             exact,
-            t,
-            u: v * inv,
-            v: w * inv,
+            t: d.t,
+            u: r.e[1] * d.inv_det,
+            v: r.e[2] * d.inv_det,
         }
     }
 }

@@ -25,31 +25,19 @@
 //! [`TraceResult::OcclusionVolume`] at the first such step (the marcher has no information
 //! there); otherwise [`TraceResult::Miss`].
 //!
-//! **`z_thickness` default 0.1 m**: a pixel's depth is a point sample, and the surface inside
-//! the pixel (and the neighbours the 1-pixel-wide DDA line skips) lies within a few cm of it
-//! at the scale of the built-in rooms; 0.1 m catches those while still letting rays pass
-//! behind thin objects. Measured (`examples/baselines_speed.rs`, atrium 1600x900, stereo eye):
-//! agreement with the BVH within one footprint is 0.9461 at 0.01 m and 0.9467 from 0.03 m to
-//! 1 m, while rays wrongly stopped behind thin objects grow with the thickness (hits per ray
-//! 0.939 -> 0.943 against the BVH's 0.948, occlusion volumes 0.0097 -> 0.0057 per ray).
+//! **Parameters** ([`DdaOptions`]):
 //!
-//! **`max_steps` default 260**, tuned as Widmer et al. 2015 (§5.1) tuned theirs: the minimal
-//! value at which the DDA's output is artifact-free and equivalent to the converged DDA (PSNR
-//! within 0.05 dB of 100000 steps, at most 0.01% more misses / occlusion volumes;
-//! `parallax bench warp --dda-sweep ...`), in **their setting**: rays start at the camera
-//! near plane (0.1 m; `CubeNear::Camera`), stereo warping at 1600x900, ipd 0.065, one layer.
-//! Atrium: 240 steps lose 85% of the rays (they run out of steps and end as misses), 260 are
-//! converged (230 steps per ray on average: every eye ray's screen line starts ~250 px from
-//! its hit, `ipd/2 / (near tan_half_x) * W/2`). At 800x450 the same setting needs 128
-//! (lines halve). Widmer's 200 (stereo) / 500 (upsampling) were for their resolution.
-//! With our fitted cube (`CubeNear::Fitted`, rays start at half the nearest captured depth)
-//! the lines are 13-28 px and 12 (800x450) / 16 (1600x900) steps suffice; there a larger cap
-//! costs nothing, since every ray stops at its hit long before. Longer reprojections need
-//! more: temporal upsampling (atrium path, 800x450, camera near plane) loses 7.5% of the
-//! pixels at 500 steps and converges at 700 (156 steps per ray on average, some lines span
-//! the screen); the CLI's upsampling default is 1400 (doubled for 1600x900, not measured
-//! there). Larger ipd and higher resolution need more too: sweep them.
-//! The warp's layer-0 guard (`parallax_synth::warp`) does not use it: its DDA marches every
+//! | name | type | default | meaning |
+//! |---|---|---|---|
+//! | `stride` | f32 | 1 | pixels per step along the major axis (>= 1) |
+//! | `jitter` | f32 | 0 | fraction of a stride by which the first sample is offset |
+//! | `z_thickness` | f32 | 0.1 m | thickness ascribed to each depth sample: catches the surface within a pixel and the neighbours the 1-pixel line skips, still lets rays pass behind thin objects |
+//! | `max_steps` | u32 | 260 | step bound: minimal artifact-free value for stereo warping at 1600x900 from a 0.1 m camera near plane, tuned as Widmer et al. 2015 (§5.1) tuned theirs (200 stereo / 500 upsampling at their resolution); longer reprojections need more (`parallax bench warp \| upsample --dda-sweep`) |
+//! | `max_distance` | f32 | inf | world distance bound along the ray |
+//! | `layers` | usize | 2 | layers marched together: 1 or 2 |
+//!
+//! How both defaults were measured (and what the fitted cube and upsampling need):
+//! `docs/notes/screen.md`. The warp's layer-0 guard (`parallax_synth::warp`) does not use it: its DDA marches every
 //! segment to its end (`max(W, H) + 2` steps).
 
 use std::time::Instant;

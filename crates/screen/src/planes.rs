@@ -37,13 +37,9 @@
 //! [`CRACK_MAX_GAP`]; a finite upper bound `max_rel_gap` restricts the flag to small gaps
 //! (cracks proper) and leaves real depth steps and edges to uncovered pixels unflagged.
 //!
-//! **Measured** (quad-tree, 2 layers, atrium 1600x900, ipd 0.065, side-entry guard on, DDA
-//! re-check off — `parallax_synth::warp`): crack dilation on these flags scored 29.33 dB
-//! (every edge, dilation 0.5 px), 29.44-29.47 dB (gaps in `(1e-5 or 1e-4, 3e-3..1e-1]`, 0.5 px),
-//! 29.09 dB (1 px), against 29.67 dB without flags and 30.07 dB with the warp's DDA
-//! re-check; with the re-check on as well, every-edge flags lost 0.37 dB (29.70). The flags
-//! do catch rays (layer-2 share 0.62% -> 0.32-0.44%), but the dilated planes also stop rays
-//! that legitimately pass behind an edge. So G-buffer flags are opt-in.
+//! G-buffer flags are opt-in ([`NormalSource::GBufferFlagged`]): crack dilation on them stops
+//! rays that legitimately pass behind an edge and scored below the warp's DDA re-check
+//! (`docs/notes/screen.md`).
 
 use glam::Vec3;
 use parallax_core::{GBuffer, Image};
@@ -55,7 +51,7 @@ use crate::{ScreenError, UnitCube};
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum NormalSource {
     /// The G-buffer's shading normals; `O` is false everywhere (the default: crack dilation
-    /// with [`NormalSource::GBufferFlagged`] measured worse, module docs).
+    /// with [`NormalSource::GBufferFlagged`] scored worse, module docs).
     GBuffer,
     /// The G-buffer's shading normals with `O` from [`crack_flags`]: set where a 4-neighbour's
     /// plane misses this pixel's plane at their shared footprint edge by a relative gap in

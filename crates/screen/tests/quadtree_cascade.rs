@@ -196,13 +196,13 @@ fn inpaint_stops_at_first_event() {
     assert!(ov > 0 && hit > 0);
 }
 
-/// A case proptest found (session 3).
+/// A case proptest found.
 #[test]
 fn cascade_regression_47x28() {
     check_synthetic(47, 28, 3129365413543782575, false);
 }
 
-/// A case proptest found (session 4, lossy): ray 76 crosses layer 0's plane at pixel
+/// A case proptest found (lossy settings): ray 76 crosses layer 0's plane at pixel
 /// (23, 26) 1.0e-6 px before (f64) entering its footprint; brute force's f32 boundary
 /// `27/45` puts the crossing inside (a hit at the entry), the traversal's grid-unit entry
 /// puts it outside (an occlusion entry). Both answers are the same point within 1e-5 px:
@@ -260,7 +260,7 @@ fn a_vs_b(
         .or_boundary_crossing(a, b, r, bf, REL)
 }
 
-/// A case proptest found (session 4, lossy): layer 1's plane at pixel (5, 18) lies behind
+/// A case proptest found (lossy settings): layer 1's plane at pixel (5, 18) lies behind
 /// layer 0's *pixel* plane (pixel safe, merged) but in front of the merged level-1 proxy
 /// plane the traversal tests (up to `gamma_dist` away), so the cascade never traced layer 1
 /// and returned layer 0's hit 0.0056 m behind brute force's layer-1 hit. Fixed in the build:
@@ -270,7 +270,7 @@ fn cascade_regression_56x32_proxy_plane() {
     check_synthetic(56, 32, 2410601268783673479, true);
 }
 
-/// A case proptest found (session 4, lossy): ray 260 crosses layer 1's plane at pixel
+/// A case proptest found (lossy settings): ray 260 crosses layer 1's plane at pixel
 /// (7, 11) 3.7e-7 px (f64) before entering its footprint. The traversal's entry (reciprocal
 /// of the direction) is one ulp earlier and finds the crossing inside: a layer-1 hit at the
 /// entry, closer than layer 0's hit; brute force enters behind the plane (an occlusion

@@ -47,7 +47,7 @@ proptest! {
     }
 }
 
-/// A case proptest found (session 3): a ray almost parallel to a pixel row boundary, whose
+/// A case proptest found: a ray almost parallel to a pixel row boundary, whose
 /// occlusion-volume entry `t` the two tracers round differently (see `Verdict::or_same_entry`).
 #[test]
 fn lossless_equals_brute_force_regression_68x41() {
@@ -93,7 +93,7 @@ fn lossless_equals_brute_force_on_captures() {
     }
 }
 
-/// A case proptest found (session 4): a ray crosses the plane of pixel (36, 18) 9.3e-7 px
+/// A case proptest found: a ray crosses the plane of pixel (36, 18) 9.3e-7 px
 /// (f64) before leaving its footprint through `x = 37`; brute force's f32 bound `37/88`
 /// ends the footprint just before the crossing (no hit there, a later hit at (37, 19)), the
 /// traversal's exit lies past it (a hit). See `Verdict::or_boundary_crossing`.
@@ -102,7 +102,7 @@ fn lossless_equals_brute_force_regression_88x26() {
     check_height_field(88, 26, 10959061550737753857, 0.14931929, 1);
 }
 
-/// A case proptest found (session 4): a ray leaves the cube through the image's right edge
+/// A case proptest found: a ray leaves the cube through the image's right edge
 /// and crosses the plane of pixel (71, 14) 6.4e-8 px before it (f64); brute force's `f` at
 /// the segment end is exactly 0 (a hit), the traversal's footprint exit is one ulp earlier
 /// (a miss). See `Verdict::or_boundary_crossing`.

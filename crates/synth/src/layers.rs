@@ -122,9 +122,8 @@ pub enum HiddenLayers {
     /// 1.., so the layer behind a solid object is the next front surface (the surface a
     /// disocclusion reveals). Layer 0 is unfiltered. Assumes consistently wound (outward)
     /// closed meshes; open, single-sided geometry seen from behind is dropped from layers 1...
-    /// The default: measured on atrium (160x120, ipd 0.26, brute force) two layers score
-    /// 19.95 dB with `All` (below one layer's 20.28 dB: rays slipping through cracks between
-    /// layer-0 pixel planes hit back faces) and 20.73 dB with `FrontFacing`.
+    /// The default: with `All`, rays slipping through cracks between layer-0 pixel planes hit
+    /// back faces, and two layers score below one (`docs/notes/synth.md`).
     #[default]
     FrontFacing,
 }

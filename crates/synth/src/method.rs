@@ -211,11 +211,7 @@ pub const CAMERA_NEAR_M: f32 = 0.1;
 /// plane changes where rays start but not how much the tree simplifies. `1.0` for the NDC
 /// cube itself.
 ///
-/// Until session 5 the unit was the fitted cube's `z` (16x stricter), chosen when the
-/// paper's literal tolerance cost 0.7 dB on the two-layer atrium warp. That loss was the
-/// plane-precision bug fixed in session 4: at 1600x900, ipd 0.065 the two units now give the
-/// same PSNR to 3 decimals on atrium and Sponza (1 and 2 layers, both cubes; atrium camera
-/// cube 1 layer: 30.493 -> 30.515 dB) with 10-30% fewer nodes visited per ray.
+/// (Why NDC-cube units: `docs/notes/synth.md`.)
 pub fn gamma_dist_scale(cube: &UnitCube, layers: &[GBuffer]) -> Result<f32, SynthError> {
     let ndc = UnitCube::fit(
         &cube.camera,

@@ -2,9 +2,9 @@
 //! (visibility, shading) of both eyes per sampling scheme and samples per pixel, shade samples
 //! per non-empty pixel for MSAA and SSAA, and ray throughput against the per-ray BVH baseline.
 //!
-//! Every scheme is run with each visibility method through [`frame::visibility()`](crate::frame::visibility); a method not
-//! in the build (the beam caster, until merged) gives a row with `available = false` and the
-//! reason, not an error. Per-ray visibility fuses traversal and intersection, so its
+//! Every scheme is run with each visibility method through
+//! [`frame::visibility()`](crate::frame::visibility); a method that cannot run gives a row with
+//! `available = false` and the reason, not an error. Per-ray visibility fuses traversal and intersection, so its
 //! `ms_traversal` is the whole trace and `ms_intersect` is `None`. Times are the best of
 //! `repeats` runs (least disturbed by other processes); the frame is both eyes.
 //!
@@ -19,9 +19,8 @@
 //! builds it once per sample pattern); `ms_traversal` = block + tile cull and `ms_intersect` =
 //! sample test, each as CPU time divided by the thread count (the stages run interleaved over
 //! blocks), and `mrays_per_s` is from the wall time of the whole cast into a visibility buffer
-//! allocated once and reused by every method and repeat (per-ray and beam alike; allocating
-//! and paging in the ~10 bytes per ray of a fresh buffer inside the timed region cost ~20% of
-//! the beam caster's 16-spp wall time on atrium).
+//! allocated once and reused by every method and repeat (per-ray and beam alike: paging in a
+//! fresh buffer inside the timed region would be timed too, `docs/notes/vr.md`).
 //! Not reproduced: HVVR's "pre-distort" row (a larger pinhole eye buffer resampled afterwards).
 
 use std::time::Instant;

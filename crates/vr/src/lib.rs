@@ -1,55 +1,60 @@
-//! HVVR (Hunt et al. 2018, "Hierarchical Visibility for Virtual Reality"): primary visibility by
-//! ray casting that shares traversal across thousands of coherent rays (issue 5).
+//! parallax-vr: HVVR (Hunt et al. 2018, "Hierarchical Visibility for Virtual Reality") —
+//! primary visibility for headsets by ray casting that shares traversal across thousands of
+//! coherent rays, then resolve, shading and reconstruction of the frame.
 //!
-//! The seam between the stages:
-//! - [`samples`]: a [`SampleSet`] — any sample pattern a headset needs (grid, per-channel lens
-//!   distortion, foveated, wide FoV, depth of field); every sample owns `spp` subsample rays
-//!   generated just in time from its film position and footprint (§5.1, §5.5);
-//! - [`visibility`]: the [`VisibilityBuffer`] every visibility method fills — the closest
-//!   triangle of every subsample ray. The beam caster and the per-ray BVH baseline fill the
-//!   same buffer, so they are compared sample by sample, and shading/resolve consumes either.
+//! **Where things are** (one frame, [`frame`], top to bottom):
 //!
-//! The beam caster:
-//! - [`patterns`]: the sample patterns of §2 as [`SampleSet`] constructors;
-//! - [`hierarchy`]: tiles (<= 128 samples) and blocks (<= 64 tiles) with bounding beams (§5);
-//! - [`cast()`]: block cull, tile cull and sample testing (§5.3-5.5). The default sample test
-//!   is HVVR's per-tile triangle set-up ([`cast::setup`], [`SampleTest::TileSetup`]): per tile,
-//!   edge covectors and a `1/t` covector relative to the tiles' shared ray origin, tile-corner
-//!   all-in / partial / all-out classification, then packets of four rays (SSE; eight on AVX2
-//!   as an option) at a few multiply-adds per ray-triangle test. The exact kernels
-//!   ([`SampleTest::Watertight`]: [`cast::packet`], four rays per SIMD op, and [`cast::intersect`], one ray
-//!   at a time) run the BVH's own watertight test; they serve tiles without a shared origin
-//!   (thin lens) and are selectable ([`CastOptions`], `--visibility beam-watertight`). The
-//!   culling and the beam itself live in [`beam`].
+//! | stage | module | paper |
+//! |---|---|---|
+//! | headset presets and eye cameras | [`presets`] | §2, Table 5 |
+//! | sample sets: every sample's `spp` subsample rays, just in time | [`samples`], [`patterns`] (grid, per-channel distortion, foveated, wide FoV, depth of field) | §2, §5.1 |
+//! | tiles (<= 128 samples) and blocks (<= 64 tiles) with bounding beams | [`hierarchy`] | §5, Fig. 4 |
+//! | the beam, its box test, block cull and tile cull over the BVH | [`beam`] | §5.3-5.4 |
+//! | sample tests: per-tile triangle set-up (default) or the watertight kernels | [`cast`](mod@cast) ([`cast::setup`], [`cast::packet`], [`cast::intersect`]) | §5.5 |
+//! | the visibility buffer, and the per-ray BVH baseline that fills the same buffer | [`visibility`] | §5.5 |
+//! | MSAA / SSAA resolve, shading, reconstruction onto the display grid | [`resolve`], [`shade`], [`reconstruct`] | §5.6, §2.1-2.3 |
+//! | scene update (animation + BVH refit) and one frame | [`frame`] | §5.2 |
+//! | `parallax bench vr` (Tables 1-6) | [`bench`](mod@bench) | §6 |
 //!
-//! **Exactness.** The watertight kernels perform, per subsample ray, the f32 operations of the
-//! BVH's own leaf test with the same tie-break, on rays bit-identical to
-//! [`SampleSet::subsample_ray`], and the culling is conservative, so their buffer equals
-//! [`trace_per_ray`]'s subsample for subsample (tests/cast.rs: agreement 1.0 and equal `t`
-//! on atrium and cornell for grid, per-channel distortion, foveated, 210 x 130 fisheye,
-//! thin-lens DoF and stereo, spp 1 and 4). The set-up kernel uses its float edge and depth
-//! values as a filter with a conservative uncertainty band and decides inside the band with
-//! the same watertight test (`cast/setup/mod.rs`, "exact band"), in two settings
-//! ([`SetupExactness`] in [`CastOptions`]): the default `Edges` bands only the edge values —
-//! exact coverage (no vertex hole, no hit-vs-miss difference), depth by HVVR's largest `1/t`
-//! with `t = 1 / (g . d)`, so the only differences from per-ray traversal are depth ties
-//! within float tolerance (0 on atrium, 47 of 213,385 subsamples on cornell's coplanar
-//! overlapping faces) — at 0-15% over the kernel without a band; `Full` also bands the depth
-//! and takes every winner's `t` from the watertight test: 0 differing subsamples and
-//! bit-identical `t` for every scheme (`--visibility beam-exact`), up to ~25% slower than
-//! `Edges` (`cast/setup/mod.rs`, "cost of exactness").
+//! **The seam:** every visibility method fills a [`VisibilityBuffer`] (the closest triangle
+//! of every subsample ray); the beam caster ([`cast()`]) and the per-ray BVH traversal
+//! ([`trace_per_ray`]) fill the same buffer from the same rays, so they are compared
+//! subsample by subsample, and resolve and shading consume either.
 //!
-//! **Measured** before the exact band (`vr_speed` example, atrium stereo 540 x 600 per eye, spp 16, 2 threads on the
-//! 2-core VM at load 15 — ratios from one process, noisy): set-up kernel 3.4-4.7x the per-ray
-//! rate, watertight kernel 2.3x in the same conditions (earlier idle-machine figures for the
-//! watertight kernel at 2160 x 1200: 2.5-2.65x). See `cast/setup/mod.rs` for the full table and
-//! what remains (the 8-lane AVX2 build is not yet vectorised well).
+//! **Invariants.**
+//! - The watertight kernels ([`SampleTest::Watertight`]) perform, per subsample ray, the f32
+//!   operations of the BVH's own leaf test with the same tie-break, on rays bit-identical to
+//!   [`SampleSet::subsample_ray`], and the culling is conservative: their buffer equals
+//!   [`trace_per_ray`]'s, subsample for subsample (`tests/cast.rs`).
+//! - The set-up kernel ([`SampleTest::TileSetup`], the default for tiles with a shared ray
+//!   origin) decides everything inside a conservative uncertainty band with the same
+//!   watertight test ([`cast::setup`], "exact band"): with [`SetupExactness::Edges`] (default)
+//!   the coverage is exact and the only differences from per-ray traversal are depth ties
+//!   within float tolerance; with [`SetupExactness::Full`] (`--visibility beam-exact`) the
+//!   buffer is bit-identical.
+//! - Images do not depend on the thread count (tiles write only their own samples).
+//!
+//! **Parameters** ([`CastOptions`]):
+//!
+//! | name | type | default | meaning |
+//! |---|---|---|---|
+//! | `test` | [`SampleTest`] | `TileSetup` | the sample test (tiles without a shared origin, e.g. thin lens, always take the watertight kernel) |
+//! | `lanes` | usize | 4 | rays per SIMD packet: 4 (SSE), 8 (AVX2 if detected), 1 (one ray against four leaf boxes) |
+//! | `exactness` | [`SetupExactness`] | `Edges` | how exactly the set-up kernel reproduces per-ray traversal |
+//!
+//! Measurements and what was tried: `docs/notes/vr.md`.
 
 pub mod beam;
+pub mod bench;
 pub mod cast;
+pub mod frame;
 pub mod hierarchy;
 pub mod patterns;
+pub mod presets;
+pub mod reconstruct;
+pub mod resolve;
 pub mod samples;
+pub mod shade;
 pub mod visibility;
 
 pub use cast::setup::{SampleTest, SetupExactness};
@@ -58,12 +63,3 @@ pub use hierarchy::{Block, Hierarchy, HierarchyError, Tile};
 pub use patterns::PatternError;
 pub use samples::{Sample, SampleSet};
 pub use visibility::{VisibilityBuffer, trace_per_ray};
-
-// HVVR around the visibility stage (issue 5 parts 4-6): presets, shading, resolve,
-// reconstruction, the frame and its benchmark.
-pub mod bench;
-pub mod frame;
-pub mod presets;
-pub mod reconstruct;
-pub mod resolve;
-pub mod shade;

@@ -13,6 +13,7 @@ pub use frustum::{Containment, Frustum};
 pub use plane::Plane;
 pub use ray::{Ray, RayDifferential};
 pub use triangle::{
-    TriangleHit, WatertightLanes, WatertightRay, edge_functions, intersect_triangle_moller,
-    scaled_distance, shear_vertex, watertight_lanes, watertight_permutation,
+    LaneDistance, TriangleHit, WatertightLanes, WatertightRay, edge_functions,
+    intersect_triangle_moller, scaled_distance, shear_vertex, watertight_lanes,
+    watertight_permutation,
 };

@@ -23,7 +23,7 @@
 //! ([`edge_functions`]) and the scaled distance ([`scaled_distance`]) — is written once, generic
 //! over [`Lanes`]: the scalar [`WatertightRay::intersect_within`] runs it on `f32`, and the SIMD
 //! kernels (the BVH's four triangles per ray, HVVR's four or eight rays per triangle) run it on
-//! `Vec4` / `F8` through [`watertight_lanes`]. Lanes round exactly like scalar f32, so every lane
+//! `Vec4` / `F8` through [`watertight_lanes`] and [`WatertightLanes::distance`]. Lanes round exactly like scalar f32, so every lane
 //! computes bit-identical `u, v, w, t`; lanes with an exactly-zero edge function are reported for
 //! the scalar test, which alone holds the double-precision recompute and the tie-break.
 //!
@@ -95,25 +95,33 @@ pub fn scaled_distance<L: Lanes>(e: [L; 3], az: L, bz: L, cz: L) -> (L, L) {
     (det, e[0] * az + e[1] * bz + e[2] * cz)
 }
 
-/// Lane-wise outcome of the watertight test ([`watertight_lanes`]).
+/// Lane-wise edge functions of the watertight test and their decisions ([`watertight_lanes`]).
 #[derive(Clone, Copy, Debug)]
 pub struct WatertightLanes<L> {
+    /// The edge functions `[u, v, w]`.
+    pub e: [L; 3],
     /// Lanes with an edge function exactly `0.0`: only the scalar test decides them.
     pub exact: u32,
-    /// Lanes that are inside (no two edge functions of opposite sign) with `det != 0` (their
-    /// `t` may still be out of range). Meaningless for `exact` lanes.
-    pub inside: u32,
+    /// Lanes where no two edge functions have opposite signs (the ray is inside if also
+    /// `det != 0`). Meaningless for `exact` lanes.
+    pub same_sign: u32,
+}
+
+/// The distance part of the lane test ([`WatertightLanes::distance`]).
+#[derive(Clone, Copy, Debug)]
+pub struct LaneDistance<L> {
     /// `t = (t det) * (1 / det)`.
     pub t: L,
     /// `1 / det` (barycentrics of vertices 1 and 2: `v / det`, `w / det`).
     pub inv_det: L,
-    /// The edge functions `[u, v, w]`.
-    pub e: [L; 3],
+    /// Lanes with `det != 0`.
+    pub nonzero: u32,
 }
 
-/// The watertight test of three sheared vertices (per lane: [`shear_vertex`], then
-/// [`edge_functions`] and [`scaled_distance`]) with the decisions as bit masks; the same f32
-/// operations as [`WatertightRay::intersect_within`] in every lane.
+/// The watertight test's edge functions of three sheared vertices ([`shear_vertex`]) with their
+/// sign decisions as bit masks, per lane the same f32 operations as
+/// [`WatertightRay::intersect_within`]. The distance follows with
+/// [`WatertightLanes::distance`] (a caller may skip it when no lane can hit).
 #[inline(always)]
 pub fn watertight_lanes<L: Lanes>(a: [L; 3], b: [L; 3], c: [L; 3]) -> WatertightLanes<L> {
     let e = edge_functions(a, b, c);
@@ -122,16 +130,25 @@ pub fn watertight_lanes<L: Lanes>(a: [L; 3], b: [L; 3], c: [L; 3]) -> Watertight
     let exact = L::bits(L::or(L::or(u.eq(zero), v.eq(zero)), w.eq(zero)));
     let neg = L::or(L::or(u.lt(zero), v.lt(zero)), w.lt(zero));
     let pos = L::or(L::or(u.gt(zero), v.gt(zero)), w.gt(zero));
-    let (det, t_scaled) = scaled_distance(e, a[2], b[2], c[2]);
-    let inv_det = L::splat(1.0) / det;
-    let mixed = L::bits(L::and(neg, pos));
     let all = (1u32 << L::N) - 1;
     WatertightLanes {
-        exact,
-        inside: !mixed & L::bits(det.ne(zero)) & all,
-        t: t_scaled * inv_det,
-        inv_det,
         e,
+        exact,
+        same_sign: !L::bits(L::and(neg, pos)) & all,
+    }
+}
+
+impl<L: Lanes> WatertightLanes<L> {
+    /// [`scaled_distance`] of the sheared vertices' `z`, then `t` with one division per lane.
+    #[inline(always)]
+    pub fn distance(&self, az: L, bz: L, cz: L) -> LaneDistance<L> {
+        let (det, t_scaled) = scaled_distance(self.e, az, bz, cz);
+        let inv_det = L::splat(1.0) / det;
+        LaneDistance {
+            t: t_scaled * inv_det,
+            inv_det,
+            nonzero: L::bits(det.ne(L::splat(0.0))),
+        }
     }
 }
 
@@ -407,22 +424,21 @@ mod tests {
                 k.map(|a| L::splat(wt.origin[a])),
                 [wt.sx, wt.sy, wt.sz].map(L::splat),
             );
-            let r = watertight_lanes(
-                shear_vertex(vertex(0), ol, shear),
-                shear_vertex(vertex(1), ol, shear),
-                shear_vertex(vertex(2), ol, shear),
-            );
+            let [a, b, c] = [0, 1, 2].map(|v| shear_vertex(vertex(v), ol, shear));
+            let r = watertight_lanes(a, b, c);
+            let dist = r.distance(a[2], b[2], c[2]);
             for (l, p) in tris.iter().enumerate() {
                 if r.exact >> l & 1 == 1 {
                     continue;
                 }
-                let t = r.t.get(l);
-                let lane_hit = r.inside >> l & 1 == 1 && t > wt.t_min && t < wt.t_max;
+                let t = dist.t.get(l);
+                let inside = r.same_sign & dist.nonzero;
+                let lane_hit = inside >> l & 1 == 1 && t > wt.t_min && t < wt.t_max;
                 let scalar = wt.intersect(p[0], p[1], p[2]);
                 assert_eq!(lane_hit, scalar.is_some(), "lane {l}");
                 if let Some(h) = scalar {
                     hits += 1;
-                    let inv = r.inv_det.get(l);
+                    let inv = dist.inv_det.get(l);
                     assert_eq!(h.t.to_bits(), t.to_bits());
                     assert_eq!(h.u.to_bits(), (r.e[1].get(l) * inv).to_bits());
                     assert_eq!(h.v.to_bits(), (r.e[2].get(l) * inv).to_bits());

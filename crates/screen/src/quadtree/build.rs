@@ -341,9 +341,9 @@ impl QuadTree {
         self.z_floor = floor(zn.iter().copied().fold(f32::INFINITY, f32::min));
         let (tw_, th_) = (tw as usize, th as usize);
         if self.z_floor <= 0.0 {
-            // Measured on atrium's fitted cube (global floor 0): regional floors there cut
-            // the visits by ~40 % but cost ~12 % time (the lookup and the division on the
-            // chain to the start node, which a floor of 0 skips): none.
+            // A global floor of 0: regional floors would cost more time (the lookup and the
+            // division on the chain to the start node) than their saved visits
+            // (docs/notes/quadtree.md, regional floors): none.
             self.z_floor_dir = Vec::new();
             self.z_floor_rect = Vec::new();
             return;
@@ -365,7 +365,7 @@ impl QuadTree {
             }
         }
         // A regional floor only a little above the global one skips little and costs the
-        // taken branch's longer chain to the start node (measured on atrium): keep the
+        // taken branch's longer chain to the start node (docs/notes/quadtree.md): keep the
         // global floor there.
         for f in &mut dir {
             if *f < self.z_floor + Z_REGION_MIN_GAIN {

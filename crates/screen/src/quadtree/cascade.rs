@@ -146,11 +146,11 @@ impl QuadTreeTracer {
     }
 
     /// Clip rays to the cube with the baselines' f32 clip instead of the f64
-    /// [`UnitCube::clip_ray`] (default off). Faster per ray, but **not exact**: a ray lying
-    /// exactly on a pixel boundary (test `quadtree_edge.rs`, a ray in the plane `y = 1/2`)
-    /// can land on the other side of it after f32 rounding and hit a different plane than
-    /// [`crate::BruteForcePlanes`], which clips in f64. Measured gain: module docs of
-    /// [`super`], "what we tried".
+    /// [`UnitCube::clip_ray`] (default off). **Not exact**: a ray lying exactly on a pixel
+    /// boundary (test `quadtree_edge.rs`, a ray in the plane `y = 1/2`) can land on the other
+    /// side of it after f32 rounding and hit a different plane than
+    /// [`crate::BruteForcePlanes`], which clips in f64; and no measurable gain
+    /// (`docs/notes/quadtree.md`, "what we tried first").
     pub fn with_f32_clip(mut self, on: bool) -> Self {
         self.f32_clip = on;
         self

@@ -48,26 +48,7 @@
 //! crossing moves by at most `2^l / 65504` pixels. Decoding needs no square root (the
 //! paper's `N.z` does): the test normal is scaled by a power of two ([`Node::test_normal`]).
 //!
-//! **Measured** (`parallax bench warp --method quadtree|brute --layers 1,2`, 1600x900, ipd
-//! 0.065, G-buffer normals; Sponza: `--scene ../shared/scenes/sponza_dabrovic/
-//! sponza_dabrovic.glb --eye=-9,3.5,0 --target 8,5,0 --fov-y 60`; camera cube `--near 0.1`).
-//! PSNR in dB against the BVH; the quad-tree with default settings (lossless:
-//! `--gamma-norm-deg 0 --gamma-dist 0`, same figures to 0.001 dB):
-//!
-//! | scene, cube, layers | brute force | quad-tree, `N.x, N.y` node | quad-tree, slope node |
-//! |---|---|---|---|
-//! | atrium, fitted, 1 / 2 | 30.495 / 30.500 | 30.427 / 30.432 | 30.495 / 30.499 |
-//! | atrium, camera 0.1, 1 / 2 | 30.495 / 30.507 | 30.172 / 30.134 | 30.493 / 30.504 |
-//! | Sponza, fitted, 1 / 2 | 32.200 / 32.179 | 31.959 / 31.938 | 32.200 / 32.178 |
-//! | Sponza, camera 0.1, 1 / 2 | 32.144 / 32.114 | 32.103 / 32.075 | 32.144 / 32.114 |
-//!
-//! (More grazing planes decode wrongly in the fitted cube, where `z` is not squeezed —
-//! Sponza at 800x450: 21 vertical planes fitted, 2 camera — but in the camera cube the rays
-//! start at 0.1 m and cross the walls' extensions in front of the scene; atrium's open sky
-//! turned misses into spurious hits there.) Speed: callgrind instructions per stereo ray
-//! (`examples/quadtree_speed.rs -- 0.065 [--near 0.1] --profile quadtree`) 1527 -> 1544
-//! fitted, 1942 -> 1955 camera cube; thread CPU time on par (best of 7, alternating runs of
-//! the two builds: 171 / 203 ns per ray before, 171 / 206 after, ±3 %).
+//! Measurements of the slope encoding against `N.x, N.y`: `docs/notes/quadtree.md`.
 
 use glam::Vec3;
 use half::f16;

@@ -26,8 +26,8 @@
 //! tests are skipped. Invariant: no ancestor of the current node is a plane (true at the
 //! start; a successor's parent is an ancestor of the node it came from).
 //!
-//! **`z` slabs** (session 6; the ray against a box in 3D, where the plain form tests the
-//! box's `z` range over the node's `xy` interval): the traversal starts where the ray's
+//! **`z` slabs** (the ray against a box in 3D, where the plain form tests the box's `z`
+//! range over the node's `xy` interval): the traversal starts where the ray's
 //! cube `z` reaches `QuadTree::z_floor` — the smallest lower bound of the top-level
 //! nodes (the root box's `z` slab) minus a margin of `Z_SKIP_MARGIN = 1e-3` — and a
 //! descent into a box starts at the ray's entry into the box's `[zmin, ..]` slab (minus
@@ -38,12 +38,10 @@
 //! entry there, and the f32 plane tests the plain form would have made there are far from
 //! a sign change (and a node straddling the new start gets the same sign-change decision
 //! and the same root: the root is past the start). `q.s_lo` stays the floor of crack
-//! dilation and inpainting. Measured: every result bit-identical on 1.44 M stereo rays
-//! (atrium, ipd 0.065 and 0.3, both cubes, 1 and 2 layers; `quadtree_speed --check`);
-//! visits per ray 6.7 -> 2.1 (camera cube), 3.6 -> 2.5 (fitted cube, where a plane steep
-//! in the cube near the top makes the floor 0 and only the descent rule applies).
+//! dilation and inpainting. (Where a plane steep in the cube near the top level makes the
+//! floor 0, only the descent rule applies.)
 //!
-//! **Regional floor** (session 6, second part): the same argument holds for the floor over just the
+//! **Regional floor**: the same argument holds for the floor over just the
 //! top-level nodes the segment can cross: for a ray moving along `x` only (a horizontal
 //! stereo baseline) the nodes of its row from its start column on in its direction
 //! (`QuadTree::z_floor_dir`, indexed by integers known at the ray's setup), otherwise the
@@ -53,13 +51,8 @@
 //! margin. A regional floor less than `Z_REGION_MIN_GAIN = 0.05` above the global one is
 //! stored as the global one, and the traversal takes the regional value in a predicted
 //! branch: where it equals the global floor (all of atrium's rays) the start does not wait
-//! for the table load. Measured: bit-identical (`quadtree_speed --check`, atrium, both
-//! cubes, 1 and 2 layers); Japanese classroom (camera cube; one near top-level node made
-//! the global floor 0.504) 5.73 -> 2.69 nodes/ray, quad-tree / min-max trace CPU 1.82x ->
-//! 2.21x (1 layer), 1.77x -> 2.01x (2 layers); atrium ~+3 % ns/ray (the lookup) with the
-//! same visits. No regional floors where the global floor is 0 (atrium's fitted cube: they
-//! cut its visits by ~40 % but cost ~12 % time). Without the 0.05 threshold atrium's camera cube visits drop 2.1 -> 1.1 per
-//! ray but the time rises ~8 % (the longer chain to the start node).
+//! for the table load. There are no regional floors where the global floor is 0 (they cost
+//! more time than their saved visits there).
 //!
 //! **Plane test with the unscaled normal** `(g_x, g_y, -1)`
 //! ([`super::node::decode_plane_unscaled`]): the traversal uses only signs of `f` and the
@@ -71,8 +64,13 @@
 //! operation; on an axis the ray does not move along (`dg == 0`, e.g. every epipolar
 //! segment of a horizontal stereo baseline) the descent's child and the successor's exit
 //! edge come from per-ray integers and a predicted branch, so the next node's index never
-//! waits for the slab arithmetic (session 4 in [`super`]: that dependency chain, not the
-//! instruction count, set the time).
+//! waits for the slab arithmetic (that dependency chain, not the instruction count, sets the
+//! time).
+//!
+//! **Codegen to keep:** the traversal loop of `trace_layers` must hold no `cmov` after the
+//! `bsr` of the level jump (objdump): `raise_level` hides its identity behind `black_box` so
+//! that LLVM does not fold the successor's top-level cap into a `cmov` on the chain to the
+//! next node index.
 //!
 //! The loop carries a hard bound of `(W + H + 2) (2 levels + 2)` steps (every pixel column
 //! the segment crosses, each reached after at most `levels` descents); hitting it ends the
@@ -80,6 +78,9 @@
 //! unchecked (`get_unchecked`) under an invariant stated and debug-asserted at the load
 //! (the level index and node coordinates stay inside the padded level arrays), so the
 //! debug-build tests check it on every step.
+//!
+//! Measurements (visits, instructions and time per ray of each of these choices):
+//! `docs/notes/quadtree.md`.
 
 use glam::{UVec2, Vec3, Vec4};
 

@@ -52,7 +52,7 @@ pub struct QuadTree {
     /// there, every trigger depth) minus [`Z_SKIP_MARGIN`]. The traversal starts where the
     /// ray's `z` reaches it — the `z` slab of the ray against the root box ([`super::traverse`]).
     pub(crate) z_floor: f32,
-    /// Regional floors (session 6, second part): per rectangle of top-level nodes holding image pixels
+    /// Regional floors: per rectangle of top-level nodes holding image pixels
     /// (`tw x th` of them; rows `r0 <= r1`, columns `c0 <= c1`), the floor of
     /// [`Self::z_floor`] taken over those nodes only (their lower `z` bound and the trigger
     /// depths of their pixels), at `((r0 th + r1) tw + c0) tw + c1`; `z_floor` itself where

@@ -20,8 +20,7 @@
 //! first; then each of the `repeats` rounds runs every method once (the whole warp of both
 //! eyes, then ray generation, then the trace-only pass of both eyes), round-robin, and every
 //! time column keeps per method the best of the rounds: the standard way to compare on a
-//! shared machine (a disturbance during one method's block of repeats skewed the quad-tree /
-//! min-max trace-only ratio from 2.28x to 1.54x between two runs of the same setting). The
+//! shared machine (a disturbance then hits every method alike; `docs/notes/synth.md`). The
 //! eye rays are generated once per eye and traced by every tracer (identical rays). With
 //! `--quiet` off, the CLI prints the quad-tree's ratios to the other methods.
 //!

@@ -8,26 +8,21 @@
 //! already more than 1% behind layer 0's depth at the entry pixel has its true surface outside
 //! the captured view (the strip of an eye that the cyclopean reference does not see); a deeper
 //! layer there is a wrong guess, so the answer becomes layer 0's occlusion volume at the entry
-//! pixel (the single-layer inpainting). Measured on Sponza (1600x900, ipd 0.065, brute force):
-//! without it the right eye's last ~100 columns carried 45% of its squared error with 2 layers
-//! (right eye 29.3 dB against 31.7 dB with 1 layer). (b) A hit in a deeper layer is replaced
+//! pixel (the single-layer inpainting). (b) A hit in a deeper layer is replaced
 //! by layer 0's hit when a one-layer DDA (McGuire & Mara 2014 thin shell, 0.1 m,
 //! [`DdaTracer`]) hits layer 0 earlier: rays slipping through the cracks between the per-pixel
 //! planes of a layer-0 surface (which a single layer reports as an occlusion volume and
-//! inpaints) otherwise land on the surface behind it (atrium: +0.35 dB with 2 layers). The
-//! guard is our addition, not in Widmer et al. 2015; its DDA work is counted in the stats.
+//! inpaints) otherwise land on the surface behind it. The guard is our addition, not in Widmer et al. 2015; its DDA work is counted in the stats.
 //! (c) With (b) on, a deeper-layer hit is rejected when its reference view depth is more
 //! than 0.1% in front of layer 0's depth at the same pixel (a layer-k plane extrapolated in
-//! front of layer 0: at 1600x900 on atrium such hits landed up to 10x nearer than their
-//! sample) or when its sample lies less than 1% behind layer 0 there (a contact surface:
+//! front of layer 0) or when its sample lies less than 1% behind layer 0 there (a contact surface:
 //! floor under a column base, wall behind attached trim, a face buried in another; such
 //! samples lie inside or under the occluder, shade black, and a ray meeting their plane
 //! meets the visible surface beside it in truth). The answer becomes the layer-0 DDA hit if
 //! there is one, else layer 0's occlusion volume at that pixel (then filled). Part (b) is the special case Widmer's own crack handling (flag `O` + crack dilation,
 //! §3.2) should cover; with G-buffer normals we now derive `O` from the planes
-//! ([`parallax_screen::planes::crack_flags`]), but measured on atrium at 1600x900 (ipd
-//! 0.065, quad-tree, 2 layers) (a) + crack dilation scores 29.09-29.47 dB against 29.67 dB for
-//! (a) alone and 30.07 dB for (a) + (b) (none: 29.64 dB), so (b) stays.
+//! ([`parallax_screen::planes::crack_flags`]), but (a) + crack dilation scores below (a) + (b),
+//! so (b) stays.
 //!
 //! (d) [`super::WarpOptions::silhouette_check`] (with 2+ layers, after (a)-(c)): a deeper-layer hit is
 //! kept only when the ray reached it by passing behind a layer-0 *silhouette*. The ray's
@@ -37,12 +32,7 @@
 //! the ray went behind a continuous surface — it entered behind it from outside the captured
 //! view or slipped through it beyond the DDA's reach — and the reference knows nothing of what
 //! lies between layer 0 and the deeper layer there; the answer becomes layer 0's occlusion
-//! volume (then filled). Measured (quad-tree, ipd 0.065, per-pixel 2-layer vs 1-layer error,
-//! `tests/synth_diag.rs` `diagnose_worse_pixels`): on Sponza at 1600x900 the wrong layer-1
-//! answers behind smooth layer-0 neighbourhoods (27 pixels, mostly black samples of walls
-//! hidden behind pillars, where the truth is an intermediate surface the layers do not hold)
-//! added more squared error than all correct layer-1 answers removed; with (d) Sponza 2 layers
-//! go from 31.94 to 31.97 dB (1 layer: 31.96). Ours, not in Widmer et al. 2015.
+//! volume (then filled). Ours, not in Widmer et al. 2015.
 //!
 //! (e) [`super::WarpOptions::nearer_neighbour_check`] (with 2+ layers, after (d)): a deeper-layer hit
 //! is rejected (layer 0's occlusion volume, then filled) when a layer-0 sample of its bilinear
@@ -53,12 +43,9 @@
 //! surface extended half a pixel beyond its footprint, into the hit pixel). Such a neighbour
 //! shows a surface passing in front of the deeper sample just beside the occluder's edge; a ray
 //! passing the edge there meets that surface (or one the layers do not hold, between the two)
-//! before the deeper sample. Measured (quad-tree, ipd 0.065): at 1600x900 atrium 2 layers go
-//! from 30.43 to 30.45 dB (the silhouette pixels of the atrium's columns, where the eye ray at
-//! a sub-pixel position met a column side seen edge-on by the reference and the layer-1 sample
-//! was a dark wall behind), Sponza 31.967 -> 31.971 dB; at 800x450 atrium it costs 0.002 dB
-//! (27.881 -> 27.879); at 160x120, ipd 0.26 (`tests/synth.rs`) 0.03 dB (21.185 -> 21.152;
-//! without the plane-crossing condition 0.05 dB). Ours, not in Widmer et al. 2015.
+//! before the deeper sample. Ours, not in Widmer et al. 2015.
+//!
+//! What each part gains (and costs) on atrium and Sponza: `docs/notes/synth.md`.
 
 use glam::{UVec2, Vec2, Vec3};
 use parallax_screen::{DdaTracer, ScreenTracer, TraceResult, TraceStats};

@@ -23,13 +23,11 @@
 //! are any. Next to a contact edge (floor meeting a column, wall behind attached trim) the
 //! layer-1 sample at a pixel centre lies inside or under the occluder and shades black,
 //! while the eye's ray meets the visible part of the same surface in that pixel's footprint,
-//! which layer 0's neighbours hold. Measured on atrium (800x450, ipd 0.065, quad-tree):
-//! before this, such pixels (0.07% of the image) added more squared error than all layer-1
-//! disocclusion answers removed, and 2 layers scored below 1 layer + background fill.
+//! which layer 0's neighbours hold.
 //!
 //! **Layer-0 guard** (default on, only with 2+ layers; ours, not in Widmer et al. 2015): an
 //! answer from layer 1 or deeper is re-checked against layer 0 in five switchable parts (a)-(e),
-//! [`WarpOptions`]; what each does and what it measured are in `synth/guard.rs`.
+//! [`WarpOptions`]; what each does is in `warp/guard.rs`.
 //!
 //! **Occlusion-volume fill** ([`WarpOptions::fill`]). Fig. 6e fills single-layer misses and
 //! occlusion-volume answers "with the nearest background pixels". [`OcclusionFill::Crossed`]
@@ -37,8 +35,7 @@
 //! plane the ray passed behind: the occluder's edge, a foreground colour).
 //! [`OcclusionFill::NearestBackground`] (`background_fill`, the default; Fig. 6e shows it
 //! for single-layer references, we also apply it to the occlusion-volume answers left with
-//! 2 layers: +0.08 dB on atrium and Sponza at 1600x900, -0.00..0.17 dB at 160x120 in
-//! `tests/synth.rs`) walks from that pixel back along
+//! 2 layers) walks from that pixel back along
 //! the ray's screen direction in the reference (the epipolar line: the ray came from in front
 //! of the background on that side of the silhouette) to the first pixel deeper than the
 //! occluder edge by 1% (or uncovered: the environment), at most [`BACKGROUND_SEARCH_PX`]
@@ -46,29 +43,32 @@
 //! passed behind that layer too; the per-pixel tracers min-max, Hi-Z and DDA report them) is
 //! filled from layer 0's nearest background first (the visible background a single layer
 //! would give), from its own layer only when layer 0 has none: hidden-layer samples next to
-//! their own silhouettes are often dark contact or enclosed surfaces. Measured at 800x450,
-//! ipd 0.065 (2 layers): min-max atrium 27.875 -> 27.929 dB, Sponza 29.689 -> 29.760 dB; DDA
-//! 27.843 -> 27.901, 29.606 -> 29.646 dB (quad-tree and brute force report none). Ours.
+//! their own silhouettes are often dark contact or enclosed surfaces. Ours.
 //! Misses keep the environment colour (our misses are
 //! rays that never pass behind a layer: sky, or outside the reference frustum).
 //!
 //! **The per-pixel loop** (shared by every tracer, so its cost dilutes their speed ratios): per
 //! chunk of 64 pixels of a row (`WARP_CHUNK`), pass 1 generates each pixel's ray ([`PixelRays`]:
 //! the per-warp and per-row constants hoisted, no ray differentials), traces it and applies
-//! the layer-0 guard; pass 2 colours the chunk's answers (`synth/resolve.rs`: flat per-layer
+//! the layer-0 guard; pass 2 colours the chunk's answers (`warp/resolve.rs`: flat per-layer
 //! slices, no per-pixel lookups, an inline floor) and fills occlusion volumes. In pass 2 the
 //! short, latency-bound colour lookups of neighbouring pixels overlap in the out-of-order
 //! core instead of each waiting behind a whole trace. Output bit-identical to the one-pass
-//! loop with `generate_ray` it replaced (same operations, same order). Measured at 1600x900
-//! on atrium (1 layer, 0.1 m camera near plane, one thread, `bench warp` interleaved rounds):
-//! the quad-tree's `T_eye` went from ~500 to ~420-440 ms, its `T_eye - T_trace - T_raygen`
-//! from ~180 to ~110-130 ms and ray generation from ~30 to ~10 ms (the chunk size, 16 to a
-//! whole row, made no measurable difference).
+//! loop with `generate_ray` it replaced (same operations, same order).
 //!
 //! Besides colour, every pixel records what its ray found ([`HitKind`], shown like Fig. 6d:
 //! misses red, occlusion volumes blue) and its intersection-test count (box + plane tests, or
 //! steps for structures without tests — Fig. 1c's heatmap). Rows run in parallel (rayon), each
 //! with its own [`TraceStats`], summed at the end.
+//!
+//! **Invariants:** the warp is deterministic and independent of the thread count (rows write
+//! only their own pixels); every tracer sees the same pixel rays ([`PixelRays`]).
+//!
+//! **Parameters** ([`WarpOptions`], the same for every tracer): the colour resampling, the
+//! five switchable parts of the layer-0 guard, and the occlusion-volume fill; defaults and
+//! meanings in the table of [`crate::MethodOptions`].
+//!
+//! Measurements behind these choices: `docs/notes/synth.md`.
 
 use std::time::Instant;
 

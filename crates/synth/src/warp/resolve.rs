@@ -29,7 +29,7 @@ struct LayerSlices<'a> {
 
 impl LayerSlices<'_> {
     /// Sample `i` is covered and lies on the surface through `p` with normal `n` (within
-    /// `tol` of the plane, normals within 60°): [`super::same_surface`].
+    /// `tol` of the plane, normals within 60°): [`super::hit::same_surface`].
     #[inline(always)]
     fn same_surface(&self, i: usize, p: Vec3, n: Vec3, tol: f32) -> bool {
         let d = self.depth[i];

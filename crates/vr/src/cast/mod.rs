@@ -84,9 +84,8 @@ pub struct CastOptions {
 }
 
 impl Default for CastOptions {
-    /// The set-up kernel on 4-lane SSE packets (the 8-lane AVX2 build of the same kernel
-    /// measured no faster: LLVM leaves most of its `[f32; 8]` lane loops scalar; module docs of
-    /// `cast/setup/mod.rs`).
+    /// The set-up kernel on 4-lane SSE packets (the 8-lane AVX2 build of the same kernel is
+    /// no faster: `docs/notes/vr.md`).
     fn default() -> Self {
         CastOptions {
             test: SampleTest::TileSetup,
@@ -145,10 +144,7 @@ pub fn cast(
 /// choice of its kernel: `lanes = 4` tests four rays at a time on
 /// SSE (`packet.rs`), `8` eight rays at a time on AVX2 (four without AVX2), `1` one
 /// ray at a time against groups of four leaf boxes (`intersect.rs`); all give the same buffer.
-/// Measured (vr_speed, atrium 1080 x 600, spp 8): the 8-lane kernel is *slower* than the
-/// 4-lane one (speed-up over per-ray 1.7-2.0x vs 2.3-2.5x) — LLVM leaves some of the kernel's
-/// closures outside the `avx2` target-feature function, so they run on `[f32; 8]` arrays in
-/// scalar/SSE code; not yet fixed.
+/// The 8-lane kernel is slower than the 4-lane one (`docs/notes/vr.md`).
 pub fn cast_with(
     bvh: &Bvh,
     set: &SampleSet,

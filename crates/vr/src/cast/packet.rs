@@ -226,11 +226,13 @@ fn closest_n<L: Lanes>(
                 let at = |k: usize| L::splat(p[k][ln]);
                 shear_vertex([at(kx), at(ky), at(kz)], [okx, oky, okz], [sx, sy, sz])
             };
-            let r = watertight_lanes(proj(0), proj(1), proj(2));
+            let (va, vb, vc) = (proj(0), proj(1), proj(2));
+            let r = watertight_lanes(va, vb, vc);
+            let d = r.distance(va[2], vb[2], vc[2]);
             let exact = r.exact & m;
-            let t = r.t;
+            let t = d.t;
             let in_range = L::bits(t.gt(t_min)) & L::bits(t.lt(tri_lim));
-            let hit = r.inside & in_range & m & !exact;
+            let hit = r.same_sign & d.nonzero & in_range & m & !exact;
             let mut offer = |l: usize, tl: f32| {
                 if out.tri[l] == u32::MAX || tl < out.t[l] || (tl == out.t[l] && tri < out.tri[l]) {
                     out.t[l] = tl;

@@ -27,7 +27,7 @@
 //!
 //! [`crate::SetupExactness::Full`] (`cast/setup/mod.rs`) adds the depth band and the watertight
 //! `t` of every winner: bit-identical to per-ray traversal, at ~1.5x the cost of this kernel
-//! (measured figures in `cast/setup/mod.rs`).
+//! (measurements in `docs/notes/vr.md`).
 
 use parallax_bvh::Tri4;
 use parallax_core::math::WatertightRay;

@@ -5,7 +5,7 @@
 //! band — candidates whose `1/t` lies within the float error of the best are ordered by their
 //! watertight `t` and the BVH's tie-break — and the watertight `t` of every winner, so the
 //! same triangle gives the same `t` bit for bit. Ours, beyond HVVR; ~1.5x the cost of the
-//! default `Edges` kernel (measured figures in `cast/setup/mod.rs`).
+//! default `Edges` kernel (measurements in `docs/notes/vr.md`).
 
 use glam::Vec3;
 use parallax_bvh::Tri4;
@@ -330,9 +330,11 @@ fn final_t_lanes<L: Lanes>(
     let shear = [rays.d[kx] / dkz, rays.d[ky] / dkz, one / dkz];
     let o = [rays.o[kx], rays.o[ky], rays.o[kz]];
     let proj = |v: usize| shear_vertex([p[v][kx], p[v][ky], p[v][kz]], o, shear);
-    let r = watertight_lanes(proj(0), proj(1), proj(2));
-    let (exact, tv) = (r.exact, r.t);
-    let ok = r.inside & L::bits(tv.gt(L::splat(0.0)));
+    let (va, vb, vc) = (proj(0), proj(1), proj(2));
+    let r = watertight_lanes(va, vb, vc);
+    let d = r.distance(va[2], vb[2], vc[2]);
+    let (exact, tv) = (r.exact, d.t);
+    let ok = r.same_sign & d.nonzero & L::bits(tv.gt(L::splat(0.0)));
     let ok = ok & L::bits(tv.lt(L::splat(f32::INFINITY)));
     let done = need & !exact;
     let mut m = done;

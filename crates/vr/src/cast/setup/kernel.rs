@@ -7,7 +7,7 @@ use parallax_core::simd::{Lanes, max_or_rhs, min_or_rhs};
 
 use super::tri::{Segment, TriSetup};
 
-/// `n . d` per lane in the scalar order of [`dot3`] (no FMA: plain functions, not closures,
+/// `n . d` per lane in the scalar order of [`super::tri::dot3`] (no FMA: plain functions, not closures,
 /// so they are compiled inside the AVX2 entry point).
 #[inline(always)]
 pub(super) fn dot_n<L: Lanes>(n: [f32; 3], dx: L, dy: L, dz: L) -> L {

@@ -80,8 +80,7 @@
 //! than the next leaf's near depth (as the watertight kernel). Beyond the paper (its GPU threads
 //! test every triangle of the tile): before a leaf's set-up triangles, the packet runs the
 //! BVH's robust slab test on the box of the leaf's *kept* triangles and skips the leaf if no
-//! ray can reach it before its closest hit so far (this cut the triangle tests per ray from ~60
-//! to ~1.2 on atrium at 96 x 64).
+//! ray can reach it before its closest hit so far.
 //!
 //! **Watertightness at vertices.** With float signs alone, rays exactly through a shared
 //! vertex leaked (all spoke values rounding noise of one sign: 32 of 800 fan-centre rays with
@@ -100,87 +99,24 @@
 //! - **`Full`**: the edge band, the depth band and the winner's watertight `t` (below):
 //!   bit-identical to per-ray traversal.
 //!
-//! Edges is the default because Full's extra cost buys only the order of depth ties at equal
-//! `t` (within float tolerance, which the done-when allows) and bit-exact `t`, while
-//! it costs up to ~25% more beam-cast time (measured below; classroom ~3%); Edges keeps
-//! most of the speed of the kernel without any band (~6-12% slower on atrium, up to ~15% on
-//! the other scenes in these noisy runs).
+//! `Edges` is the default: `Full`'s extra cost buys only the order of depth ties at equal `t`
+//! (within float tolerance) and a bit-exact `t`.
 //!
-//! **Cost of exactness** (`cargo run --release -p parallax-render --example vr_cast_cpu --
-//! SCENE 540 600 16 3 MODE`: stereo 1080 x 600 film, spp 16, one thread, thread CPU time,
-//! best of 3; runs of the pre-band binary (commit fd42ce8, the same example) and of this one,
-//! alternating, two rounds each, on the loaded 2-core VM; beam Mrays/s and beam / per-ray
-//! ratio, best round):
-//!
-//! | scene (`SCENE`)  | pre-band (fd42ce8)   | Edges (default)      | Full                 |
-//! |------------------|----------------------|----------------------|----------------------|
-//! | atrium           | 18.2 Mrays/s, 4.19x  | 18.7 Mrays/s, 4.20x  | 15.5 Mrays/s, 3.47x  |
-//! | Sponza           | 43.2 Mrays/s, 5.24x  | 37.2 Mrays/s, 4.58x  | 31.5 Mrays/s, 3.83x  |
-//! | classroom        | 36.9 Mrays/s, 2.61x  | 31.9 Mrays/s, 2.17x  | 30.8 Mrays/s, 2.09x  |
-//!
-//! (Sponza: `../shared/scenes/sponza_dabrovic/sponza_dabrovic.glb`, classroom:
-//! `../shared/scenes/japanese_classroom/japanese_classroom.glb`, from the repository root,
-//! each with `Scene::camera(None)`; `MODE` = `edges` or `full`, the pre-band binary ignores
-//! it.) The machine's load rose during this run (atrium pre-band 569-597 ms, against 461-476
-//! ms an hour earlier), so single figures swing ~10%: an earlier, quieter run of the
-//! eager-band Edges kernel gave atrium 4.78-4.80x pre-band, 4.32-4.37x Edges, 3.37-3.45x Full;
-//! Sponza 5.12-5.45x, 4.45-4.53x, 3.17-3.78x; classroom 2.43x, 2.10x, 2.06x. perf samples of
-//! the lazy Edges kernel against the pre-band one on classroom at 1080 x 300 (6 rounds)
-//! found no difference beyond noise (sample stage 4134 vs 4226 samples, set-up 348 vs 389).
-//! Watertight fallbacks (of the ray-triangle tests): Edges 0.12% (atrium, classroom) and
-//! 0.03% (Sponza), all edge band; Full 2.27% / 0.05% / 0.31% plus the winners' `t` (0.89 /
-//! 0.42 / 0.06 tests per ray). A later, quieter atrium run (load ~3, the final code, same
-//! command, pre-band / Edges alternating twice, then Full and pre-band once): pre-band
-//! 460-493 ms (21.0-22.5 Mrays/s, 4.63-4.95x), Edges 521-524 ms (19.8-19.9 Mrays/s,
-//! 4.31-4.39x), Full 658 ms (15.8 Mrays/s, 3.41x): Edges costs ~6-12% on atrium, Full ~40%.
-//! The lead re-measures on the idle machine.
-//!
-//! Where Edges' extra time over the pre-band kernel goes (perf samples, atrium 1080 x 300):
-//! more than half was the band analysis in `TriSetup::new` (per triangle and tile: replacing
-//! it by constants saved ~10 ms of ~205 ms at 1080 x 300), so Edges sets triangles up
-//! lazily: the corner classification uses a crude conservative band (from `max |a_i|_1`
-//! alone, a few flops) and the full band is computed when a packet first reaches the
-//! triangle (`TileTris::refine`; all-out and unreached triangles never pay it); the rest is
-//! spread over the kernel (a second compare for packets with a candidate lane not certainly
-//! inside, the larger `TriSetup`). The edge band's watertight tests themselves (0.12% of the
-//! ray-triangle tests on atrium) are negligible. Full adds the winners' watertight `t` (0.89
-//! tests per ray, one lane-wise test per packet) and the depth band's scalar watertight tests
-//! (2.3% of the ray-triangle tests on atrium, ~60% of them overlapping coplanar faces with
-//! bit-identical `g` that no float filter can order). Not done: a cheaper exact `t` for Full
-//! (e.g. deferred to the consumers of the buffer), a vectorised band analysis.
-//!
-//! **Measured before the exact band** (`cargo run --release -p parallax-render --example vr_speed -- atrium 540 600
-//! 1,8,16,32 4 setup`, then `... 4 watertight`; stereo 540 x 600 per eye, 2 threads on the 2-core
-//! VM at load average 13-15 from other jobs, so wall times swing ~1.5x; speed-up = beam wall time
-//! vs per-ray `trace_per_ray` wall time in the same process, best of 3 / best of 2):
-//!
-//! | spp | set-up kernel (default) | watertight kernel |
-//! |-----|-------------------------|-------------------|
-//! | 1   | 2.03x (4.8 Mrays/s)     | 1.86x (3.1)       |
-//! | 8   | 3.82x (7.9)             | 2.37x (3.5)       |
-//! | 16  | 5.02x (7.3)             | 2.53x (5.3)       |
-//! | 32  | 3.86x (7.3)             | 2.30x (5.6)       |
-//!
-//! Interleaved spp-16-only runs at load 7-8: set-up 3.95x (10.4 Mrays/s), watertight 2.10x
-//! (5.7), set-up 4.37x (13.0): the set-up kernel casts 1.8-2.3x faster than the watertight one.
-//! (A spp-16-only pair of runs gave 4.05x for the 4-lane and 3.81x for the 8-lane set-up kernel,
-//! and 3.43x / 4.70x in another pair: the AVX2 8-lane build is no faster — LLVM leaves most of
-//! its `[f32; 8]` lane loops scalar (objdump: ~5x more xmm than ymm instructions), so 4 lanes
-//! is the default.) The 5x aim at spp 16 is reached in one of these loaded runs, not
-//! reliably; the full 2160 x 1200 table needs the idle machine. Per 4-ray packet the kernel
-//! does ~1.2 triangle tests per ray (set-up on atrium at 96 x 64); the set-up itself is
-//! counted in the caster's tile-cull time. At 96 x 64 tiles are large: 1-6% of a tile's
-//! triangles are all-out, < 1% all-in, the rest partial (the tile cull's leaf boxes already
-//! hug the beam) — the classification pays more at VR resolutions. Not done: the affine
-//! film-position form of `n . d` for pinhole tiles (the ray generation still normalises every
-//! direction), 4/8 triangles per SIMD op, a vectorised 8-lane build.
-//!
-//! **Exactness.** `Full`: same triangle and bit-identical `t` as per-ray traversal on every
-//! subsample of every scheme tested (tests/cast.rs: 0 differences in 426,770 subsamples at
-//! 96 x 64 and in 307,200 at 240 x 160). `Edges` (default): the same tests find 0
-//! differences on atrium (96 x 64 and 240 x 160) and 47 of 213,385 on cornell, all depth
-//! ties (both hit, `t` within 1e-5 relative; `t` itself within ~1e-5 of the watertight `t`). Tiles without a shared origin (thin lens) take the
+//! **Exactness** (tested in `tests/cast.rs` on every scheme): `Full` gives the same triangle and
+//! a bit-identical `t` as per-ray traversal for every subsample; `Edges` differs only in depth
+//! ties (both hit, `t` within 1e-5 relative). Tiles without a shared origin (thin lens) take the
 //! exact watertight kernel ([`crate::cast::intersect`]).
+//!
+//! **Parameters** (of [`test_tile_setup`], set through [`crate::CastOptions`]):
+//!
+//! | name | type | default | meaning |
+//! |---|---|---|---|
+//! | `exactness` | [`SetupExactness`] | `Edges` | which bands decide by the watertight test |
+//! | `lanes` | usize | 4 | rays per packet: 4 (SSE) or 8 (AVX2 if detected, else 4) |
+//! | [`RHO_MAX`] | f32 | 0.05 | depth band above which a triangle always takes the watertight test |
+//!
+//! Measurements (speed of `Edges` and `Full` against the kernel without a band, 4 vs 8 lanes,
+//! where the time goes): `docs/notes/vr.md`.
 
 pub mod edges;
 pub mod full;
