@@ -1,14 +1,18 @@
-//! Writing renders: PNG (tonemapped sRGB) or EXR (linear, with AOVs as named channels).
+//! Writing results: renders as PNG (tonemapped sRGB) or EXR (linear, with AOVs as named
+//! channels), PNG previews through the display transform, and JSON rows.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use parallax_core::image::png::{ToneMapping, Tonemap};
+use clap::ValueEnum;
+use parallax_core::image::png::ToneMapping;
 use parallax_core::image::{GBuffer, exr, png};
 use parallax_core::{Image, Rgb};
+use parallax_render::score::SCORE_TONEMAP;
+use serde::Serialize;
 
 /// The G-buffer channels `--aov` can ask for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum Aov {
     Depth,
     Normal,
@@ -16,26 +20,24 @@ pub enum Aov {
     Id,
 }
 
-impl Aov {
-    pub fn parse_list(s: &str) -> Result<Vec<Aov>> {
-        s.split(',')
-            .filter(|t| !t.is_empty())
-            .map(|t| match t.trim() {
-                "depth" => Ok(Aov::Depth),
-                "normal" => Ok(Aov::Normal),
-                "albedo" => Ok(Aov::Albedo),
-                "id" => Ok(Aov::Id),
-                other => bail!("unknown AOV {other:?}; expected depth, normal, albedo or id"),
-            })
-            .collect()
-    }
+/// Shaded renders go through the display transform of the scores (ACES filmic, exposure 0:
+/// highlights roll off instead of clipping), so a PNG shows what PSNR / SSIM compare.
+const RENDER_TONEMAP: ToneMapping = SCORE_TONEMAP;
+
+/// Writes a linear image as a PNG through the display transform; returns the path.
+pub fn write_png(path: &Path, img: &Image<Rgb>) -> Result<PathBuf> {
+    png::write_png(path, img, &RENDER_TONEMAP)?;
+    Ok(path.to_path_buf())
 }
 
-/// Shaded renders go through the ACES filmic curve (highlights roll off instead of clipping).
-const RENDER_TONEMAP: ToneMapping = ToneMapping {
-    exposure: 0.0,
-    tonemap: Tonemap::AcesFilmic,
-};
+/// Writes `rows` as pretty JSON to `path` (`--json FILE`, `--stats FILE`), if given.
+pub fn write_json<T: Serialize>(path: Option<&Path>, rows: &T) -> Result<()> {
+    if let Some(p) = path {
+        std::fs::write(p, serde_json::to_string_pretty(rows)?)
+            .with_context(|| format!("writing {}", p.display()))?;
+    }
+    Ok(())
+}
 
 fn ext(path: &Path) -> String {
     path.extension()

@@ -32,6 +32,7 @@ use serde::Serialize;
 
 use crate::VisibilityBuffer;
 use crate::frame::{Visibility, VrError, prepare, update_scene, visibility_into};
+use crate::patterns::{FOVEA_RADIUS_FRACTION, FOVEA_SLOPE};
 use crate::presets::{Dof, Preset, eye_cameras};
 use crate::resolve::{ShadingMode, resolve};
 use crate::shade::{ShadeOptions, VrShader};
@@ -89,12 +90,6 @@ pub struct VrBenchOptions {
     pub visibility: Vec<Visibility>,
     pub repeats: u32,
 }
-
-/// Foveated scheme: fovea radius as a fraction of the eye's film height.
-pub const FOVEA_RADIUS_FRACTION: f32 = 0.125;
-/// Foveated scheme: footprint growth per film pixel of eccentricity beyond the fovea (linear
-/// acuity model, §2.3).
-pub const FOVEA_SLOPE: f32 = 0.02;
 
 /// Eye sample sets of a scheme, or why it cannot be run.
 fn scheme_sets(

@@ -23,6 +23,8 @@ use crate::{Sample, SampleSet};
 /// Why a pattern could not be built for a camera.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum PatternError {
+    #[error("the gaze must be a finite point of [-1, 1] x [-1, 1], got {x},{y}")]
+    BadGaze { x: f32, y: f32 },
     #[error("the {pattern} pattern needs a {needs} camera, got {got}")]
     WrongCamera {
         pattern: &'static str,
@@ -207,4 +209,48 @@ impl SampleSet {
             _ => self.subsample_ray(i, k),
         }
     }
+}
+
+/// Foveated eye sets: fovea radius as a fraction of the eye's film height.
+pub const FOVEA_RADIUS_FRACTION: f32 = 0.125;
+/// Foveated eye sets: footprint growth per film pixel of eccentricity beyond the fovea (linear
+/// acuity model, §2.3).
+pub const FOVEA_SLOPE: f32 = 0.02;
+
+/// The sample set of one headset eye: the pixel grid, or with `gaze` (normalised film
+/// coordinates in `[-1, 1]^2`, y up) the foveated pattern around it ([`FOVEA_RADIUS_FRACTION`],
+/// [`FOVEA_SLOPE`]). A per-channel (distorted) camera gets its three colour channels' rays with
+/// `subpixel`, else only the green channel's, which then colour whole pixels.
+pub fn eye_set(
+    camera: Camera,
+    spp: u32,
+    subpixel: bool,
+    gaze: Option<[f32; 2]>,
+) -> Result<SampleSet, PatternError> {
+    let channels = camera.channel_count() as u8;
+    let mut set = match gaze {
+        None => SampleSet::grid(camera, spp),
+        Some([gx, gy]) => {
+            if !(gx.abs() <= 1.0 && gy.abs() <= 1.0) {
+                return Err(PatternError::BadGaze { x: gx, y: gy });
+            }
+            let (w, h) = (camera.width() as f32, camera.height() as f32);
+            let film = Vec2::new((gx + 1.0) * 0.5 * w, (1.0 - gy) * 0.5 * h);
+            let mut set =
+                SampleSet::foveated(camera, film, FOVEA_RADIUS_FRACTION * h, FOVEA_SLOPE, spp)?;
+            // The pattern is built for channel 0; give a per-channel camera all its channels.
+            if channels > 1 {
+                set.samples = set
+                    .samples
+                    .iter()
+                    .flat_map(|s| (0..channels).map(move |c| Sample { channel: c, ..*s }))
+                    .collect();
+            }
+            set
+        }
+    };
+    if !subpixel && channels > 1 {
+        set.samples.retain(|s| s.channel == 1);
+    }
+    Ok(set)
 }

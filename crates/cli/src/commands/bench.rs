@@ -13,7 +13,7 @@ pub enum BenchCommand {
     /// BVH build ms and closest-hit Mrays/s for primary (coherent) and random (incoherent) rays.
     Rays(RaysArgs),
     /// HVVR Tables 2-6: VR frame stage times, shade counts, Mrays/s vs the per-ray baseline.
-    Vr(super::vr::VrBenchArgs),
+    Vr(super::bench_vr::VrBenchArgs),
     /// Stereo warping per method and layer count (Widmer et al. 2015, Table 2).
     Warp(super::bench_synth::WarpBenchArgs),
     /// 15 -> 60 Hz temporal upsampling per method and layer count (Widmer et al. 2015, Table 3).
@@ -81,7 +81,7 @@ fn print_rays(rows: &[rays::RaysRow], embree_missing: Option<&str>) {
 
 pub fn run(cmd: &BenchCommand, quiet: bool) -> Result<()> {
     match cmd {
-        BenchCommand::Vr(a) => super::vr::bench(a, quiet),
+        BenchCommand::Vr(a) => super::bench_vr::bench(a, quiet),
         BenchCommand::Warp(a) => super::bench_synth::warp_bench(a, quiet),
         BenchCommand::Upsample(a) => super::bench_synth::upsample_bench(a, quiet),
         BenchCommand::Compression(a) => super::bench_synth::compression_bench(a, quiet),

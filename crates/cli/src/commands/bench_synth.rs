@@ -4,53 +4,18 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Context, Result, ensure};
+use anyhow::Result;
 use clap::Args;
 use parallax_bvh::Bvh;
 use parallax_synth::bench::{compression, upsample as up, warp};
 use parallax_synth::method::{Method, cube_near_name};
 use parallax_synth::upsample::{default_path, scene_path};
-use serde::Serialize;
 
-use super::warp::SynthArgs;
-use crate::args::ViewArgs;
+use crate::args::{
+    MethodListArgs, SynthArgs, SynthSize, ViewArgs, frame_count, layer_count, parse_method,
+};
+use crate::output;
 use crate::progress;
-
-fn parse_methods(s: &str) -> Result<Vec<Method>> {
-    let m = Method::parse_list(s)?;
-    ensure!(!m.is_empty(), "--method needs at least one method");
-    Ok(m)
-}
-
-fn parse_layers(s: &str) -> Result<Vec<usize>> {
-    let v: Vec<usize> = s
-        .split(',')
-        .map(|t| t.trim().parse::<usize>())
-        .collect::<Result<_, _>>()
-        .with_context(|| format!("--layers expects a comma list of counts, got {s:?}"))?;
-    ensure!(
-        !v.is_empty() && v.iter().all(|&l| (1..=8).contains(&l)),
-        "--layers must be in 1..=8, got {s:?}"
-    );
-    Ok(v)
-}
-
-/// `--dda-sweep`: a comma list of DDA max steps (empty: none).
-fn parse_steps(s: &Option<String>) -> Result<Vec<u32>> {
-    let Some(s) = s else {
-        return Ok(Vec::new());
-    };
-    let v: Vec<u32> = s
-        .split(',')
-        .map(|t| t.trim().parse::<u32>())
-        .collect::<Result<_, _>>()
-        .with_context(|| format!("--dda-sweep expects a comma list of step counts, got {s:?}"))?;
-    ensure!(
-        !v.is_empty() && v.iter().all(|&n| (1..=10_000_000).contains(&n)),
-        "--dda-sweep values must be in 1..=10000000, got {s:?}"
-    );
-    Ok(v)
-}
 
 /// Prints the minimal artifact-free DDA max steps of each layer count of a sweep.
 fn print_dda_minimal(sweeps: &[(usize, Vec<(u32, f64, f64, f64)>)]) {
@@ -84,14 +49,6 @@ fn dda_sweeps<'a>(
     out
 }
 
-fn write_json<T: Serialize>(path: &Option<PathBuf>, rows: &T) -> Result<()> {
-    if let Some(p) = path {
-        std::fs::write(p, serde_json::to_string_pretty(rows)?)
-            .with_context(|| format!("writing {}", p.display()))?;
-    }
-    Ok(())
-}
-
 fn cell(v: f64, digits: usize) -> String {
     if v.is_nan() {
         "-".into()
@@ -112,20 +69,10 @@ pub struct WarpBenchArgs {
     pub view: ViewArgs,
     #[command(flatten)]
     pub synth: SynthArgs,
-    #[arg(long, default_value_t = 1600)]
-    pub width: u32,
-    #[arg(long, default_value_t = 900)]
-    pub height: u32,
-    /// Comma list of methods or "all".
-    #[arg(long, default_value = "all")]
-    pub method: String,
-    /// Comma list of layer counts.
-    #[arg(long, default_value = "1,2")]
-    pub layers: String,
-    /// DDA: one row per max-steps value of this comma list (e.g. 8,16,32,64,100000) instead
-    /// of --dda-max-steps, and the minimal artifact-free value is printed (Widmer's tuning).
-    #[arg(long)]
-    pub dda_sweep: Option<String>,
+    #[command(flatten)]
+    pub size: SynthSize,
+    #[command(flatten)]
+    pub methods: MethodListArgs,
     /// Rounds: each runs every method's warp and trace-only pass of both eyes once
     /// (interleaved); the best round of each method is reported.
     #[arg(long, default_value_t = 1)]
@@ -136,20 +83,16 @@ pub struct WarpBenchArgs {
 }
 
 pub fn warp_bench(a: &WarpBenchArgs, quiet: bool) -> Result<()> {
-    let layers = parse_layers(&a.layers)?;
     let opts = a.synth.method_options()?;
-    ensure!(
-        a.view.ipd.is_finite() && a.view.ipd >= 0.0,
-        "--ipd must be >= 0"
-    );
+    a.view.check_ipd()?;
     let scene = a.view.load_scene()?;
     let bvh = Bvh::try_build(&scene.mesh)?;
     let setup = warp::StereoSetup {
         desc: a.view.camera_desc(&scene)?,
-        width: a.width,
-        height: a.height,
+        width: a.size.width,
+        height: a.size.height,
         ipd: a.view.ipd,
-        shading: a.synth.shading,
+        shading: a.synth.shading(),
         seed: a.synth.seed,
         score: !a.synth.no_score,
         repeats: a.repeats.max(1),
@@ -158,10 +101,10 @@ pub fn warp_bench(a: &WarpBenchArgs, quiet: bool) -> Result<()> {
         &scene,
         &bvh,
         &setup,
-        &parse_methods(&a.method)?,
-        &layers,
+        &a.methods.methods(),
+        &a.methods.layers,
         &opts,
-        &parse_steps(&a.dda_sweep)?,
+        &a.methods.dda_sweep,
         &reporter(quiet),
     )?;
     if !quiet {
@@ -169,8 +112,8 @@ pub fn warp_bench(a: &WarpBenchArgs, quiet: bool) -> Result<()> {
         println!(
             "{} {}x{}, ipd {}, cube near: {}{}, {} threads, best of {} interleaved rounds per eye",
             scene.name,
-            a.width,
-            a.height,
+            a.size.width,
+            a.size.height,
             a.view.ipd,
             cube_near_name(opts.cube_near),
             near.map_or(String::new(), |r| format!(
@@ -230,7 +173,7 @@ pub fn warp_bench(a: &WarpBenchArgs, quiet: bool) -> Result<()> {
             },
         )));
     }
-    write_json(&a.json, &rows)
+    output::write_json(a.json.as_deref(), &rows)
 }
 
 /// The note of a row some of whose rays ran out of their traversal's step bound (they end
@@ -299,34 +242,19 @@ pub struct UpsampleBenchArgs {
     pub view: ViewArgs,
     #[command(flatten)]
     pub synth: SynthArgs,
-    #[arg(long, default_value_t = 1600)]
-    pub width: u32,
-    #[arg(long, default_value_t = 900)]
-    pub height: u32,
+    #[command(flatten)]
+    pub size: SynthSize,
     /// Output frames at 60 Hz (1..=100000).
-    #[arg(long, default_value_t = 60, allow_negative_numbers = true)]
-    pub frames: i64,
-    /// Comma list of methods or "all".
-    #[arg(long, default_value = "all")]
-    pub method: String,
-    /// Comma list of layer counts.
-    #[arg(long, default_value = "1,2")]
-    pub layers: String,
-    /// DDA: one row per max-steps value of this comma list (each re-runs the path) instead
-    /// of --dda-max-steps, and the minimal artifact-free value is printed.
-    #[arg(long)]
-    pub dda_sweep: Option<String>,
+    #[arg(long, default_value_t = 60, allow_negative_numbers = true, value_parser = frame_count)]
+    pub frames: u32,
+    #[command(flatten)]
+    pub methods: MethodListArgs,
+    /// Write the rows as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
 }
 
 pub fn upsample_bench(a: &UpsampleBenchArgs, quiet: bool) -> Result<()> {
-    ensure!(
-        (1..=100_000).contains(&a.frames),
-        "--frames must be in 1..=100000, got {}",
-        a.frames
-    );
-    let layers = parse_layers(&a.layers)?;
     let opts = a.synth.upsample_options()?;
     let scene = a.view.load_scene()?;
     let bvh = Bvh::try_build(&scene.mesh)?;
@@ -336,10 +264,10 @@ pub fn upsample_bench(a: &UpsampleBenchArgs, quiet: bool) -> Result<()> {
         scene_path(&scene)?
     };
     let setup = up::UpsampleSetup {
-        width: a.width,
-        height: a.height,
-        frames: a.frames as u32,
-        shading: a.synth.shading,
+        width: a.size.width,
+        height: a.size.height,
+        frames: a.frames,
+        shading: a.synth.shading(),
         seed: a.synth.seed,
         score: !a.synth.no_score,
     };
@@ -348,10 +276,10 @@ pub fn upsample_bench(a: &UpsampleBenchArgs, quiet: bool) -> Result<()> {
         &bvh,
         &path,
         &setup,
-        &parse_methods(&a.method)?,
-        &layers,
+        &a.methods.methods(),
+        &a.methods.layers,
         &opts,
-        &parse_steps(&a.dda_sweep)?,
+        &a.methods.dda_sweep,
         &reporter(quiet),
     )?;
     if !quiet {
@@ -359,8 +287,8 @@ pub fn upsample_bench(a: &UpsampleBenchArgs, quiet: bool) -> Result<()> {
         println!(
             "{} {}x{}, {} frames at 60 Hz, a reference every 4th, cube near: {}{}",
             scene.name,
-            a.width,
-            a.height,
+            a.size.width,
+            a.size.height,
             a.frames,
             cube_near_name(opts.cube_near),
             near.map_or(String::new(), |r| format!(
@@ -410,7 +338,7 @@ pub fn upsample_bench(a: &UpsampleBenchArgs, quiet: bool) -> Result<()> {
             },
         )));
     }
-    write_json(&a.json, &rows)
+    output::write_json(a.json.as_deref(), &rows)
 }
 
 #[derive(Args, Debug)]
@@ -419,35 +347,29 @@ pub struct CompressionArgs {
     pub view: ViewArgs,
     #[command(flatten)]
     pub synth: SynthArgs,
-    #[arg(long, default_value_t = 1600)]
-    pub width: u32,
-    #[arg(long, default_value_t = 900)]
-    pub height: u32,
+    #[command(flatten)]
+    pub size: SynthSize,
     /// The method whose compression is swept.
-    #[arg(long, default_value = "quadtree", value_parser = super::warp::parse_method)]
+    #[arg(long, default_value = "quadtree", value_parser = parse_method)]
     pub method: Method,
-    /// Depth layers.
-    #[arg(long, default_value_t = 1)]
+    /// Depth layers (1..=8).
+    #[arg(long, default_value_t = 1, value_parser = layer_count)]
     pub layers: usize,
+    /// Write the rows as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
 }
 
 pub fn compression_bench(a: &CompressionArgs, quiet: bool) -> Result<()> {
-    ensure!(
-        (1..=8).contains(&a.layers),
-        "--layers must be in 1..=8, got {}",
-        a.layers
-    );
     let opts = a.synth.method_options()?;
     let scene = a.view.load_scene()?;
     let bvh = Bvh::try_build(&scene.mesh)?;
     let setup = warp::StereoSetup {
         desc: a.view.camera_desc(&scene)?,
-        width: a.width,
-        height: a.height,
+        width: a.size.width,
+        height: a.size.height,
         ipd: a.view.ipd,
-        shading: a.synth.shading,
+        shading: a.synth.shading(),
         seed: a.synth.seed,
         score: !a.synth.no_score,
         repeats: 1,
@@ -465,8 +387,8 @@ pub fn compression_bench(a: &CompressionArgs, quiet: bool) -> Result<()> {
         println!(
             "{} {}x{}, {} {} layer(s), ipd {}, cube near: {}",
             scene.name,
-            a.width,
-            a.height,
+            a.size.width,
+            a.size.height,
             a.method,
             a.layers,
             a.view.ipd,
@@ -492,5 +414,5 @@ pub fn compression_bench(a: &CompressionArgs, quiet: bool) -> Result<()> {
             );
         }
     }
-    write_json(&a.json, &rows)
+    output::write_json(a.json.as_deref(), &rows)
 }

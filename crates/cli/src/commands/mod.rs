@@ -2,6 +2,7 @@
 
 pub mod bench;
 pub mod bench_synth;
+pub mod bench_vr;
 pub mod capture;
 pub mod demo;
 pub mod info;

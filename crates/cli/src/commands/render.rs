@@ -34,8 +34,8 @@ pub struct RenderArgs {
     #[arg(long, default_value = "out/render.png")]
     pub out: PathBuf,
     /// G-buffer channels to write: comma list of depth, normal, albedo, id.
-    #[arg(long, default_value = "")]
-    pub aov: String,
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub aov: Vec<Aov>,
     /// Write run statistics (rays, seconds, Mrays/s, build and stage ms) as JSON.
     #[arg(long)]
     pub stats: Option<PathBuf>,
@@ -43,7 +43,7 @@ pub struct RenderArgs {
 
 pub fn run(a: &RenderArgs, quiet: bool) -> Result<()> {
     output::check_image_path(&a.out)?;
-    let aovs = Aov::parse_list(&a.aov)?;
+    let aovs = &a.aov;
     anyhow::ensure!(
         a.spp >= 1 && a.spp <= 1 << 16,
         "--spp must be in 1..=65536, got {}",

@@ -6,16 +6,15 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Context, Result, ensure};
+use anyhow::{Context, Result};
 use clap::Args;
 use parallax_bvh::Bvh;
 use parallax_core::image::png;
 use parallax_render::score::{SCORE_TONEMAP, ground_truth, score};
-use parallax_synth::method::{Method, cube_near_name};
+use parallax_synth::method::cube_near_name;
 use parallax_synth::upsample::{UpsampleOptions, default_path, scene_path, upsample};
 
-use super::warp::{SynthArgs, parse_method};
-use crate::args::ViewArgs;
+use crate::args::{MethodArgs, SynthArgs, SynthSize, ViewArgs, frame_count};
 use crate::progress;
 
 #[derive(Args, Debug)]
@@ -25,35 +24,19 @@ pub struct UpsampleArgs {
     pub view: ViewArgs,
     #[command(flatten)]
     pub synth: SynthArgs,
+    #[command(flatten)]
+    pub size: SynthSize,
+    #[command(flatten)]
+    pub choice: MethodArgs,
     /// Output frames at 60 Hz (1..=100000).
-    #[arg(long, default_value_t = 60, allow_negative_numbers = true)]
-    pub frames: i64,
-    #[arg(long, default_value_t = 1600)]
-    pub width: u32,
-    #[arg(long, default_value_t = 900)]
-    pub height: u32,
-    /// Depth layers of each reference (1..=8).
-    #[arg(long, default_value_t = 2)]
-    pub layers: usize,
-    /// quadtree, dda, minmax, hiz, mesh or brute.
-    #[arg(long, default_value = "quadtree", value_parser = parse_method)]
-    pub method: Method,
+    #[arg(long, default_value_t = 60, allow_negative_numbers = true, value_parser = frame_count)]
+    pub frames: u32,
     /// Output folder.
     #[arg(long, default_value = "out/upsample")]
     pub out: PathBuf,
 }
 
 pub fn run(a: &UpsampleArgs, quiet: bool) -> Result<()> {
-    ensure!(
-        (1..=100_000).contains(&a.frames),
-        "--frames must be in 1..=100000, got {}",
-        a.frames
-    );
-    ensure!(
-        (1..=8).contains(&a.layers),
-        "--layers must be in 1..=8, got {}",
-        a.layers
-    );
     let opts = a.synth.upsample_options()?;
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let scene = a.view.load_scene()?;
@@ -64,39 +47,42 @@ pub fn run(a: &UpsampleArgs, quiet: bool) -> Result<()> {
         scene_path(&scene)?
     };
     let uo = UpsampleOptions {
-        frames: a.frames as u32,
+        frames: a.frames,
         fps: 60.0,
         period: 4,
-        // The mesh warp uses layer 0 only.
-        layers: if a.method == Method::Mesh {
-            1
-        } else {
-            a.layers
-        },
-        method: a.method,
+        layers: a.choice.capture_layers(),
+        method: a.choice.method,
         method_opts: opts,
-        shading: a.synth.shading,
+        shading: a.synth.shading(),
         seed: a.synth.seed,
     };
     let pb = progress::bar(a.frames as u64, "upsample", quiet);
     let (mut psnr, mut ssim, mut scored) = (0.0, 0.0, 0u32);
-    let times = upsample(&scene, &bvh, &path, a.width, a.height, &uo, &mut |f| {
-        let p = a.out.join(format!("frame_{:04}.png", f.index));
-        png::write_png(&p, f.image(), &SCORE_TONEMAP)?;
-        if let Some(v) = &f.view {
-            let h = a.out.join(format!("frame_{:04}.hits.png", f.index));
-            png::write_png(&h, &v.hit_type_image(), &SCORE_TONEMAP)?;
-            if !a.synth.no_score {
-                let truth = ground_truth(&scene, &bvh, &f.camera, a.synth.shading, a.synth.seed);
-                let s = score(&v.image, &truth)?;
-                psnr += s.psnr;
-                ssim += s.ssim;
-                scored += 1;
+    let times = upsample(
+        &scene,
+        &bvh,
+        &path,
+        a.size.width,
+        a.size.height,
+        &uo,
+        &mut |f| {
+            let p = a.out.join(format!("frame_{:04}.png", f.index));
+            png::write_png(&p, f.image(), &SCORE_TONEMAP)?;
+            if let Some(v) = &f.view {
+                let h = a.out.join(format!("frame_{:04}.hits.png", f.index));
+                png::write_png(&h, &v.hit_type_image(), &SCORE_TONEMAP)?;
+                if !a.synth.no_score {
+                    let truth = ground_truth(&scene, &bvh, &f.camera, uo.shading, a.synth.seed);
+                    let s = score(&v.image, &truth)?;
+                    psnr += s.psnr;
+                    ssim += s.ssim;
+                    scored += 1;
+                }
             }
-        }
-        pb.inc(1);
-        Ok(())
-    })?;
+            pb.inc(1);
+            Ok(())
+        },
+    )?;
     pb.finish_and_clear();
     if !quiet {
         let refs: Vec<f64> = times
@@ -114,10 +100,10 @@ pub fn run(a: &UpsampleArgs, quiet: bool) -> Result<()> {
         println!("wrote {} frames to {}", times.len(), a.out.display());
         println!(
             "{} {} layer(s) {}x{}, cube near {}: {} references, T_ref {:.1} ms; {} synthesised, T_syn {:.1} ms; amortised {:.1} ms/frame",
-            a.method,
+            a.choice.method,
             uo.layers,
-            a.width,
-            a.height,
+            a.size.width,
+            a.size.height,
             cube_near_name(uo.method_opts.cube_near),
             refs.len(),
             mean(&refs),

@@ -11,18 +11,19 @@ use clap::Args;
 use parallax_bvh::Bvh;
 use parallax_core::image::png::{self, ToneMapping, Tonemap};
 use parallax_scene::animation::Animation;
-use parallax_scene::camera::{Camera, CameraModel, ModelKind};
+use parallax_scene::camera::{CameraModel, ModelKind};
 use parallax_vr::frame::{
     EyeFrame, FrameOptions, UpdateTimings, Visibility, render_eye_set, update_scene,
 };
+use parallax_vr::patterns::eye_set;
 use parallax_vr::presets::{Dof, HeadsetSpec, Preset, eye_cameras};
 use parallax_vr::reconstruct::pattern_image;
 use parallax_vr::resolve::ShadingMode;
 use parallax_vr::shade::ShadeOptions;
-use parallax_vr::{Sample, SampleSet};
 use serde::Serialize;
 
-use crate::args::ViewArgs;
+use crate::args::{ViewArgs, msaa_spp};
+use crate::output;
 
 #[derive(Args, Debug)]
 pub struct VrArgs {
@@ -34,7 +35,7 @@ pub struct VrArgs {
     #[arg(long, default_value = "rift-cv1", value_parser = Preset::parse)]
     pub preset: Preset,
     /// Subsamples per pixel: 1, 4, 8, 16 or 32.
-    #[arg(long, default_value_t = 8, value_parser = parse_spp)]
+    #[arg(long, default_value_t = 8, value_parser = msaa_spp)]
     pub msaa: u32,
     /// Shade every subsample (SSAA) instead of once per triangle per pixel (MSAA).
     #[arg(long)]
@@ -80,16 +81,6 @@ pub struct VrArgs {
     pub stats: Option<PathBuf>,
 }
 
-/// `--msaa` values.
-pub fn parse_spp(s: &str) -> Result<u32, String> {
-    match s.parse::<u32>() {
-        Ok(v @ (1 | 4 | 8 | 16 | 32)) => Ok(v),
-        _ => Err(format!(
-            "samples per pixel must be one of 1, 4, 8, 16, 32, got {s:?}"
-        )),
-    }
-}
-
 /// The headset of the flags: the preset, or `custom` from the camera flags; size overrides.
 pub fn headset(a: &VrArgs) -> Result<HeadsetSpec> {
     let mut spec = a.preset.spec();
@@ -125,42 +116,6 @@ fn dof(a: &VrArgs, target_distance: f32) -> Result<Option<Dof>> {
     };
     d.validate().map_err(anyhow::Error::msg)?;
     Ok(Some(d))
-}
-
-/// The sample set of one eye: the pixel grid, or with `gaze` (normalised film coordinates in
-/// [-1, 1]^2, y up) the foveated pattern around it (fovea and acuity slope of
-/// `parallax_vr::bench`); a per-channel (distorted) camera gets its three colour
-/// channels' rays with `subpixel`, else only the green channel's, coloring whole pixels.
-pub fn eye_set(
-    camera: Camera,
-    spp: u32,
-    subpixel: bool,
-    gaze: Option<[f32; 2]>,
-) -> Result<SampleSet> {
-    use parallax_vr::bench::{FOVEA_RADIUS_FRACTION, FOVEA_SLOPE};
-    let channels = camera.channel_count() as u8;
-    let mut set = match gaze {
-        None => SampleSet::grid(camera, spp),
-        Some([gx, gy]) => {
-            let (w, h) = (camera.width() as f32, camera.height() as f32);
-            let film = glam::Vec2::new((gx + 1.0) * 0.5 * w, (1.0 - gy) * 0.5 * h);
-            let mut set =
-                SampleSet::foveated(camera, film, FOVEA_RADIUS_FRACTION * h, FOVEA_SLOPE, spp)?;
-            // The pattern is built for channel 0; give a per-channel camera all its channels.
-            if channels > 1 {
-                set.samples = set
-                    .samples
-                    .iter()
-                    .flat_map(|s| (0..channels).map(move |c| Sample { channel: c, ..*s }))
-                    .collect();
-            }
-            set
-        }
-    };
-    if !subpixel && channels > 1 {
-        set.samples.retain(|s| s.channel == 1);
-    }
-    Ok(set)
 }
 
 #[derive(Serialize)]
@@ -288,10 +243,7 @@ pub fn run(a: &VrArgs, quiet: bool) -> Result<()> {
         shades_per_nonempty_pixel: shades as f64 / nonempty.max(1) as f64,
         mrays_per_s: rays as f64 / (vis_ms.max(1e-9) * 1e3),
     };
-    if let Some(p) = &a.stats {
-        std::fs::write(p, serde_json::to_string_pretty(&stats)?)
-            .with_context(|| format!("writing {}", p.display()))?;
-    }
+    output::write_json(a.stats.as_deref(), &stats)?;
     if !quiet {
         println!(
             "{}: preset {} ({}), {}x{} per eye, {} {}x, {} visibility, BVH {:.1} ms",
@@ -330,96 +282,6 @@ pub fn run(a: &VrArgs, quiet: bool) -> Result<()> {
             "wrote {} (left.png, right.png, pattern.png)",
             a.out.display()
         );
-    }
-    Ok(())
-}
-
-/// `parallax bench vr` (HVVR Tables 2-6; see `parallax_vr::bench`).
-#[derive(Args, Debug)]
-pub struct VrBenchArgs {
-    /// Scene and head pose (atrium, cornell, or e.g. the Sponza / classroom glTF paths).
-    #[command(flatten)]
-    pub view: ViewArgs,
-    /// Both eyes' width (each eye gets half).
-    #[arg(long, default_value_t = 2160)]
-    pub width: u32,
-    /// Height.
-    #[arg(long, default_value_t = 1200)]
-    pub height: u32,
-    /// Subsamples per pixel: comma list of 1, 4, 8, 16, 32 (HVVR Table 2 uses 32).
-    #[arg(long, default_value = "8", value_delimiter = ',', value_parser = parse_spp)]
-    pub msaa: Vec<u32>,
-    /// Schemes: comma list of normal, post-distort, wide, dof-0.5, dof-0.25, dof-0.1, foveated.
-    #[arg(
-        long,
-        value_delimiter = ',',
-        default_value = "normal,post-distort,wide,dof-0.5,dof-0.25,dof-0.1,foveated"
-    )]
-    pub schemes: Vec<String>,
-    /// Also SSAA rows (HVVR Table 4).
-    #[arg(long)]
-    pub ssaa: bool,
-    /// Visibility methods: comma list of per-ray, beam, beam-watertight, beam-exact.
-    #[arg(long, value_delimiter = ',', default_value = "per-ray,beam", value_parser = Visibility::parse)]
-    pub visibility: Vec<Visibility>,
-    /// Timed repetitions (the best is reported).
-    #[arg(long, default_value_t = 1)]
-    pub repeats: u32,
-    /// Write the rows as JSON.
-    #[arg(long)]
-    pub json: Option<PathBuf>,
-}
-
-pub fn bench(a: &VrBenchArgs, quiet: bool) -> Result<()> {
-    use parallax_vr::bench::{SCHEMES, VrBenchOptions, markdown, run, update_row};
-    for s in &a.schemes {
-        if !SCHEMES.contains(&s.as_str()) {
-            bail!(
-                "unknown scheme {s:?}; expected one of {}",
-                SCHEMES.join(", ")
-            );
-        }
-    }
-    let scene = a.view.load_scene()?;
-    let head = a.view.camera_desc(&scene)?;
-    let bvh = Bvh::try_build(&scene.mesh)?;
-    let mut shading = vec![ShadingMode::Msaa];
-    if a.ssaa {
-        shading.push(ShadingMode::Ssaa);
-    }
-    let opts = VrBenchOptions {
-        width: a.width,
-        height: a.height,
-        spp: a.msaa.clone(),
-        schemes: a.schemes.clone(),
-        shading,
-        visibility: a.visibility.clone(),
-        repeats: a.repeats,
-    };
-    let update = update_row(&scene, a.repeats.max(3))?;
-    let rows = run(&scene, &bvh, &head, &opts)?;
-    if !quiet {
-        println!(
-            "| scene | vertices | triangles | moving objects | moving vertices | build ms | animate ms | refit ms |"
-        );
-        println!("|---|---|---|---|---|---|---|---|");
-        println!(
-            "| {} | {} | {} | {} | {} | {:.2} | {:.3} | {:.3} |\n",
-            update.scene,
-            update.vertices,
-            update.triangles,
-            update.moving_objects,
-            update.moving_vertices,
-            update.build_ms,
-            update.animate_ms,
-            update.refit_ms
-        );
-        print!("{}", markdown(&rows));
-    }
-    if let Some(p) = &a.json {
-        let json = serde_json::json!({ "update": update, "rows": rows });
-        std::fs::write(p, serde_json::to_string_pretty(&json)?)
-            .with_context(|| format!("writing {}", p.display()))?;
     }
     Ok(())
 }

@@ -1,5 +1,6 @@
-//! References from a scene file to other files: data URIs (base64) and relative paths that must
-//! stay inside the scene's folder.
+//! References from a scene file to other files: data URIs (base64, decoded by the `base64`
+//! crate) and relative paths (percent-decoded by `percent-encoding`) that must stay inside the
+//! scene's folder.
 //!
 //! **Invariant:** a loader never reads a file outside the folder of the scene file it was given.
 //! A reference that is absolute, uses a scheme other than `data:`, or climbs out of the folder
@@ -126,58 +127,47 @@ fn lexical_inside(rel: &str) -> std::result::Result<PathBuf, String> {
     Ok(inside)
 }
 
-/// Decodes `%XX` escapes of a URI reference.
+/// Decodes `%XX` escapes of a URI reference (`percent-encoding`); a `%` not followed by two hex
+/// digits, or escapes that do not form UTF-8, are an error.
 fn percent_decode(s: &str) -> std::result::Result<String, String> {
-    if !s.contains('%') {
-        return Ok(s.to_string());
-    }
     let b = s.as_bytes();
-    let mut out = Vec::with_capacity(b.len());
-    let mut i = 0;
-    while i < b.len() {
-        if b[i] == b'%' {
-            let hex = b
-                .get(i + 1..i + 3)
-                .and_then(|h| std::str::from_utf8(h).ok())
-                .and_then(|h| u8::from_str_radix(h, 16).ok())
-                .ok_or("bad %-escape")?;
-            out.push(hex);
-            i += 3;
-        } else {
-            out.push(b[i]);
-            i += 1;
-        }
+    let hex2 = |i: usize| {
+        b.get(i + 1..i + 3)
+            .is_some_and(|h| h.iter().all(u8::is_ascii_hexdigit))
+    };
+    if (0..b.len()).any(|i| b[i] == b'%' && !hex2(i)) {
+        return Err("bad %-escape".into());
     }
-    String::from_utf8(out).map_err(|_| "%-escapes do not form UTF-8".to_string())
+    percent_encoding::percent_decode_str(s)
+        .decode_utf8()
+        .map(|c| c.into_owned())
+        .map_err(|_| "%-escapes do not form UTF-8".to_string())
 }
 
-/// Decodes standard base64 (RFC 4648 §4; padding optional).
+/// Decodes base64 (`base64` crate): the standard alphabet of RFC 4648 §4 as data URIs use it, or
+/// the URL-safe one (§5); padding optional, trailing bits tolerated.
 pub(crate) fn decode_base64(s: &str) -> std::result::Result<Vec<u8>, String> {
-    fn val(c: u8) -> Option<u32> {
-        Some(match c {
-            b'A'..=b'Z' => c - b'A',
-            b'a'..=b'z' => c - b'a' + 26,
-            b'0'..=b'9' => c - b'0' + 52,
-            b'+' | b'-' => 62,
-            b'/' | b'_' => 63,
-            _ => return None,
-        } as u32)
-    }
-    let s = s.trim_end_matches('=').as_bytes();
-    if s.len() % 4 == 1 {
-        return Err("length is not a valid base64 length".into());
-    }
-    let mut out = Vec::with_capacity(s.len() / 4 * 3 + 2);
-    for chunk in s.chunks(4) {
-        let mut acc = 0u32;
-        for (k, &c) in chunk.iter().enumerate() {
-            let v = val(c).ok_or_else(|| format!("invalid character {:?}", c as char))?;
-            acc |= v << (18 - 6 * k);
+    use base64::Engine;
+    use base64::alphabet::{STANDARD, URL_SAFE};
+    use base64::engine::{DecodePaddingMode, GeneralPurpose, GeneralPurposeConfig};
+    let config = GeneralPurposeConfig::new()
+        .with_decode_padding_mode(DecodePaddingMode::Indifferent)
+        .with_decode_allow_trailing_bits(true);
+    let standard = GeneralPurpose::new(&STANDARD, config);
+    match standard.decode(s) {
+        Err(base64::DecodeError::InvalidByte(..)) if s.contains(['-', '_']) => {
+            GeneralPurpose::new(&URL_SAFE, config).decode(s)
         }
-        let bytes = [(acc >> 16) as u8, (acc >> 8) as u8, acc as u8];
-        out.extend_from_slice(&bytes[..chunk.len() - 1]);
+        r => r,
     }
-    Ok(out)
+    .map_err(|e| e.to_string())
+}
+
+/// The scene name of a scene file: its file name without the extension.
+pub(crate) fn file_stem(path: &Path) -> String {
+    path.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default()
 }
 
 #[cfg(test)]
@@ -227,11 +217,4 @@ mod tests {
             );
         }
     }
-}
-
-/// The scene name of a scene file: its file name without the extension.
-pub(crate) fn file_stem(path: &Path) -> String {
-    path.file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default()
 }
