@@ -131,11 +131,11 @@ impl Lanes16 for Portable16 {
     }
     #[inline(always)]
     fn max(self, a: [Vec4; 4], b: [Vec4; 4]) -> [Vec4; 4] {
-        per4!(a, b, crate::simd::max_or_rhs)
+        per4!(a, b, parallax_core::simd::max_or_rhs)
     }
     #[inline(always)]
     fn min(self, a: [Vec4; 4], b: [Vec4; 4]) -> [Vec4; 4] {
-        per4!(a, b, crate::simd::min_or_rhs)
+        per4!(a, b, parallax_core::simd::min_or_rhs)
     }
     #[inline(always)]
     fn le(self, a: [Vec4; 4], b: [Vec4; 4]) -> u32 {

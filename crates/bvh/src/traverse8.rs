@@ -30,7 +30,7 @@ use parallax_core::math::{ROBUST_FAR_SCALE, WatertightRay};
 
 use crate::node::{is_leaf, leaf_count, leaf_first};
 use crate::node8::Node8;
-use crate::simd::{max_or_rhs, min_or_rhs};
+use parallax_core::simd::{max_or_rhs, min_or_rhs};
 use crate::stats::{Counter, NoStats, TraversalStats};
 use crate::traverse::{Best, sort_hits};
 use crate::tri4::Tri4Ray;
