@@ -45,6 +45,7 @@ fn path_writes_exr_with_variance_and_sample_count_and_png() {
     }
     assert!(img.channel("samples").unwrap().iter().all(|&n| n == 3.0));
     assert!(img.channel("R").unwrap().iter().any(|&v| v > 0.0));
+    assert!(d.join("c.preview.png").exists());
     let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
     for k in ["spp", "seconds", "paths_per_s", "mrays_per_s", "stats"] {
         assert!(json.get(k).is_some(), "stats lack {k}: {json}");

@@ -20,9 +20,10 @@
 //! the tracer and the thread, so equal hits give equal images; a path's radiance only grows by
 //! finite, non-negative terms (non-finite BSDF or light values end the path).
 //!
-//! Shading frame: the interpolated normal of [`SurfacePoint`] (which faces the incoming ray);
-//! reflecting models flip it once more when `wo` lies behind it (Mitsuba's `twosided` rule), so
-//! every model sees `wo.z >= 0`.
+//! Shading frame: the interpolated normal of [`SurfacePoint`] (which faces the incoming ray),
+//! flipped once more when `wo` lies behind it (silhouettes of interpolated normals), with the
+//! model seen from that side ([`Bsdf::flipped`]; Mitsuba decides sides by the shading frame
+//! too), so every model sees `wo.z >= 0`.
 
 use glam::Vec3;
 use parallax_core::math::Frame;
@@ -124,10 +125,16 @@ fn shadow_ray(s: &SurfacePoint, wi: Vec3, dist: f32) -> Ray {
 }
 
 impl<'a> Integrator<'a> {
-    pub fn new(scene: &'a Scene, materials: MaterialMode, max_depth: u32, rr_depth: u32) -> Self {
+    pub fn new(
+        scene: &'a Scene,
+        materials: MaterialMode,
+        max_depth: u32,
+        rr_depth: u32,
+        env_nee: f32,
+    ) -> Self {
         Self {
             scene,
-            lights: LightSampler::new(scene),
+            lights: LightSampler::new(scene, env_nee),
             materials,
             max_depth,
             rr_depth,
@@ -180,10 +187,11 @@ impl<'a> Integrator<'a> {
         if path.depth + 1 >= self.max_depth {
             return false;
         }
-        let bsdf = Bsdf::from_surface(s.material, s.albedo, s.front_face, self.materials);
+        let mut bsdf = Bsdf::from_surface(s.material, s.albedo, s.front_face, self.materials);
         let mut n = s.shading_normal;
-        if !bsdf.transmits() && wo.dot(n) < 0.0 {
+        if wo.dot(n) < 0.0 {
             n = -n;
+            bsdf = bsdf.flipped();
         }
         let frame = Frame::from_normal(n);
         let wo_l = frame.to_local(wo);

@@ -8,8 +8,21 @@
 //! - **area-like lights**: the emissive triangles (one by power, a uniform point on it,
 //!   [`EmitterSampler`]) and the constant environment (a cosine-weighted direction around the
 //!   shading normal, which is where a constant sky's contribution to a Lambertian surface
-//!   lies). With both present each is chosen with probability 1/2. These are combined with BSDF
-//!   sampling by the power heuristic ([`crate::mis`]).
+//!   lies). The environment is chosen with probability `p_env = env_nee · share` (`share` = 1
+//!   without emissive triangles, 1/2 with), the triangles with `1 - p_env`; without triangles
+//!   no connection is made with probability `1 - p_env`. These are combined with BSDF sampling
+//!   by the power heuristic ([`crate::mis`]).
+//!
+//! | parameter | type | default | meaning |
+//! |---|---|---|---|
+//! | `env_nee` | f32 | [`DEFAULT_ENV_NEE`] | how often a vertex connects to the constant environment, in [0, 1] |
+//!
+//! Why `env_nee` defaults to 0: BSDF sampling already importance-samples a *constant*
+//! environment as well as a direction density can (the integrand is `f cos θ V`), so an
+//! environment connection only adds a second sample of the same distribution (for Lambertian
+//! surfaces), at the price of a long shadow ray; measured, it costs more time than it saves
+//! variance on every scene tried (`docs/notes/path.md`). With `env_nee > 0` the connection is
+//! MIS-weighted as every other light.
 //!
 //! Mitsuba 3 instead picks one emitter uniformly and samples a constant environment uniformly
 //! over the sphere: the estimators differ in variance, not in expectation.
@@ -45,8 +58,10 @@ pub struct LightSampler<'a> {
     scene: &'a Scene,
     pub emitters: EmitterSampler,
     env: Vec3,
-    /// Probability of choosing the environment among the area-like lights.
+    /// Probability of connecting to the environment.
     p_env: f32,
+    /// Probability of connecting to an emissive triangle.
+    p_tri: f32,
     delta: Vec<Light>,
     delta_cdf: Vec<f32>,
     delta_pmf: Vec<f32>,
@@ -70,15 +85,29 @@ fn delta_power(light: &Light, scene_radius: f32) -> f32 {
     }
 }
 
+/// Default of `env_nee` (see the module docs).
+pub const DEFAULT_ENV_NEE: f32 = 0.0;
+
 impl<'a> LightSampler<'a> {
-    pub fn new(scene: &'a Scene) -> Self {
+    /// The lights of `scene`; `env_nee` (clamped to [0, 1]) as in the module table.
+    pub fn new(scene: &'a Scene, env_nee: f32) -> Self {
         let emitters = EmitterSampler::new(scene);
         let env = scene.environment;
         let has_env = env.max_element() > 0.0;
+        let q = if env_nee.is_finite() {
+            env_nee.clamp(0.0, 1.0)
+        } else {
+            DEFAULT_ENV_NEE
+        };
         let p_env = match (has_env, emitters.is_empty()) {
             (false, _) => 0.0,
-            (true, true) => 1.0,
-            (true, false) => 0.5,
+            (true, true) => q,
+            (true, false) => 0.5 * q,
+        };
+        let p_tri = if emitters.is_empty() {
+            0.0
+        } else {
+            1.0 - p_env
         };
         let b = scene.bounds();
         let radius = if b.is_empty() {
@@ -113,6 +142,7 @@ impl<'a> LightSampler<'a> {
             emitters,
             env,
             p_env,
+            p_tri,
             delta,
             delta_cdf,
             delta_pmf,
@@ -126,7 +156,7 @@ impl<'a> LightSampler<'a> {
 
     /// True when there is an emissive triangle or an environment to connect to.
     pub fn has_area(&self) -> bool {
-        self.p_env > 0.0 || !self.emitters.is_empty()
+        self.p_env > 0.0 || self.p_tri > 0.0
     }
 
     /// The constant environment radiance.
@@ -165,7 +195,10 @@ impl<'a> LightSampler<'a> {
                 pdf,
             });
         }
-        let u_tri = (u_pick - self.p_env) / (1.0 - self.p_env);
+        if u_pick >= self.p_env + self.p_tri {
+            return None; // no connection this time
+        }
+        let u_tri = ((u_pick - self.p_env) / self.p_tri).min(1.0);
         let e = self.emitters.sample(self.scene, u_tri, u)?;
         let d = e.position - p;
         let dist2 = d.length_squared();
@@ -178,7 +211,7 @@ impl<'a> LightSampler<'a> {
         if cos_l <= 0.0 {
             return None; // the back of a one-sided emitter
         }
-        let pdf = (1.0 - self.p_env) * e.pdf_area * dist2 / cos_l;
+        let pdf = self.p_tri * e.pdf_area * dist2 / cos_l;
         (pdf > 0.0 && pdf.is_finite()).then(|| LightSample {
             wi,
             dist,
@@ -191,7 +224,7 @@ impl<'a> LightSampler<'a> {
     /// emissive triangle `prim` at distance `t` with `cos_l = |n_light · dir|`.
     pub fn pdf_emitter_hit(&self, prim: u32, t: f32, cos_l: f32) -> f32 {
         match self.emitters.pdf_area(prim) {
-            Some(pa) if cos_l > 0.0 => (1.0 - self.p_env) * pa * t * t / cos_l,
+            Some(pa) if cos_l > 0.0 => self.p_tri * pa * t * t / cos_l,
             _ => 0.0,
         }
     }
@@ -222,7 +255,7 @@ mod tests {
                 intensity: Vec3::splat(3.0),
             },
         ];
-        let ls = LightSampler::new(&s);
+        let ls = LightSampler::new(&s, 1.0);
         // u < 1/4 picks the weak light; either way value = irradiance / pmf = 4 / 25.
         for u in [0.1, 0.9] {
             let l = ls.sample_delta(Vec3::ZERO, u).unwrap();
@@ -233,10 +266,14 @@ mod tests {
 
     #[test]
     fn area_samples_report_the_density_of_the_hit_queries() {
-        for (name, env) in [("cornell", Vec3::ZERO), ("cornell", Vec3::splat(0.3))] {
+        for (name, env, env_nee) in [
+            ("cornell", Vec3::ZERO, 1.0),
+            ("cornell", Vec3::splat(0.3), 1.0),
+            ("cornell", Vec3::splat(0.3), 0.25),
+        ] {
             let mut s = Scene::load(name).unwrap();
             s.environment = env;
-            let ls = LightSampler::new(&s);
+            let ls = LightSampler::new(&s, env_nee);
             let bvh = parallax_bvh::Bvh::build(&s.mesh);
             let mut rng = Rng::new(3, 4);
             let p = Vec3::new(0.1, 0.5, 0.2);

@@ -8,6 +8,7 @@
 //! | `max_depth` | u32 | 16 | longest path in segments, as Mitsuba 3's `max_depth` (1 = emitters seen directly, 2 = direct light) |
 //! | `rr_depth` | u32 | 5 | depth from which Russian roulette may end a path (Mitsuba 3's `rr_depth`) |
 //! | `materials` | [`MaterialMode`] | `AsIs` | the scene's materials, or every opaque surface Lambertian |
+//! | `env_nee` | f32 | 0 | probability that a vertex connects to the constant environment ([`crate::light_sampler`]) |
 //! | `tile` | u32 | 32 | edge of the square pixel tiles one wavefront covers |
 
 use parallax_render::bsdf::MaterialMode;
@@ -30,6 +31,7 @@ pub struct PathOptions {
     pub max_depth: u32,
     pub rr_depth: u32,
     pub materials: MaterialMode,
+    pub env_nee: f32,
     pub tile: u32,
 }
 
@@ -42,6 +44,7 @@ impl Default for PathOptions {
             max_depth: 16,
             rr_depth: 5,
             materials: MaterialMode::AsIs,
+            env_nee: crate::light_sampler::DEFAULT_ENV_NEE,
             tile: 32,
         }
     }
@@ -66,6 +69,9 @@ impl PathOptions {
                 "--max-depth must be in 1..={MAX_DEPTH}, got {}",
                 self.max_depth
             ));
+        }
+        if !(0.0..=1.0).contains(&self.env_nee) {
+            return bad(format!("--env-nee must be in [0, 1], got {}", self.env_nee));
         }
         if self.rr_depth == 0 {
             return bad("--rr-depth must be at least 1".into());

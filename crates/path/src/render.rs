@@ -58,7 +58,13 @@ impl<'a> PathTracer<'a> {
         opts: PathOptions,
     ) -> Result<Self> {
         opts.validate()?;
-        let integrator = Integrator::new(scene, opts.materials, opts.max_depth, opts.rr_depth);
+        let integrator = Integrator::new(
+            scene,
+            opts.materials,
+            opts.max_depth,
+            opts.rr_depth,
+            opts.env_nee,
+        );
         Ok(Self {
             scene,
             camera,

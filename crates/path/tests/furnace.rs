@@ -1,9 +1,11 @@
 //! Closed-form checks of the estimator (white furnaces).
 //!
 //! 1. A convex Lambertian sphere of albedo 1 under a constant environment `L` returns `L`
-//!    at every pixel, with zero variance: next-event estimation samples the sky by the cosine
-//!    lobe, BSDF sampling by the same lobe, so each of the two MIS-weighted terms is exactly
-//!    `L / 2` and no ray re-hits a convex surface. The bound is float rounding (1e-4 relative).
+//!    at every pixel, with zero variance: BSDF sampling alone gives `L` (no ray re-hits a convex
+//!    surface); with environment connections (`env_nee = 1`) both strategies sample the cosine
+//!    lobe, so each of the two MIS-weighted terms is exactly `L / 2`; with `env_nee = 1/2` the
+//!    weights are 4/5 and 1/5 and the connection, taken half the time, counts twice. The bound
+//!    is float rounding (1e-4 relative).
 //! 2. The inside of a closed box whose walls emit `Le` and reflect albedo `ρ`: every radiance
 //!    is `Le / (1 - ρ)` (the rendering equation's uniform solution). The estimator is noisy
 //!    here (light choice, Russian roulette); the image mean must lie within 5 standard errors,
@@ -33,21 +35,38 @@ fn lambertian_sphere_in_a_uniform_sky_returns_the_sky_exactly() {
         l,
     );
     let cam = pinhole(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, 45.0, 24, 24);
-    let out = render(
-        &s,
-        &cam,
-        PathOptions {
-            spp: 4,
-            materials: MaterialMode::Diffuse,
-            ..PathOptions::default()
-        },
-    );
-    for (i, p) in out.image.data().iter().enumerate() {
-        let err = ((*p - l) / l).abs().max_element();
-        assert!(err < 1e-4, "pixel {i}: {p} vs {l}");
+    for env_nee in [0.0, 0.5, 1.0] {
+        let out = render(
+            &s,
+            &cam,
+            PathOptions {
+                spp: 4,
+                materials: MaterialMode::Diffuse,
+                env_nee,
+                ..PathOptions::default()
+            },
+        );
+        // env_nee = 1/2 is not zero-variance: the connection is taken half the time. Its
+        // weights (4/5 BSDF, 1/5 x 2 connection) still make every sample L or L (4/5 + 2/5) or
+        // L (4/5), so check the mean there and every pixel elsewhere.
+        if env_nee == 0.5 {
+            let (mean, se) = mean_and_se(&out);
+            let expect = l.element_sum() as f64 / 3.0;
+            assert!(
+                (mean - expect).abs() <= 5.0 * se + 1e-4,
+                "{mean} vs {expect}"
+            );
+            continue;
+        }
+        for (i, p) in out.image.data().iter().enumerate() {
+            let err = ((*p - l) / l).abs().max_element();
+            assert!(err < 1e-4, "env_nee {env_nee}, pixel {i}: {p} vs {l}");
+        }
+        // The sphere covers the middle of the film: those pixels bounced, and with
+        // connections they cast shadow rays.
+        assert!(out.stats.bounces[1].rays > 0);
+        assert_eq!(out.stats.bounces[0].shadow_rays > 0, env_nee > 0.0);
     }
-    // The sphere covers the middle of the film: those pixels took the NEE + BSDF path.
-    assert!(out.stats.bounces[1].rays > 0 && out.stats.bounces[0].shadow_rays > 0);
 }
 
 #[test]

@@ -44,6 +44,23 @@ impl Texture {
         self.texels[y as usize * self.width as usize + x as usize]
     }
 
+    /// The texels the bilinear taps of [`Self::sample`] at `uv` start at: the first tap's
+    /// row-major index and the index one row below it (for cache prefetching).
+    pub fn tap_rows(&self, uv: Vec2) -> Option<(usize, usize)> {
+        if !uv.is_finite() {
+            return None;
+        }
+        let ix = (uv.x * self.width as f32 - 0.5).floor() as i64;
+        let iy = (uv.y * self.height as f32 - 0.5).floor() as i64;
+        let x = Self::wrap(self.wrap_s, ix, self.width) as usize;
+        let (ya, yb) = (
+            Self::wrap(self.wrap_t, iy, self.height) as usize,
+            Self::wrap(self.wrap_t, iy + 1, self.height) as usize,
+        );
+        let w = self.width as usize;
+        Some((ya * w + x, yb * w + x))
+    }
+
     /// Bilinear lookup; `uv = (0, 0)` is the top-left corner of the image (glTF convention).
     /// Texel centres sit at half-integer positions (`uv * size - 0.5`, as Mitsuba 3's bitmap
     /// and OpenGL filter); the four taps are wrapped once per axis.

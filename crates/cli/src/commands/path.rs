@@ -41,6 +41,10 @@ pub struct PathFlags {
     /// Depth from which Russian roulette may end paths (Mitsuba 3's rr_depth).
     #[arg(long, default_value_t = 5)]
     pub rr_depth: u32,
+    /// Probability that a path vertex connects to the constant environment (next-event
+    /// estimation, MIS-weighted against BSDF sampling), in [0, 1].
+    #[arg(long, default_value_t = parallax_path::light_sampler::DEFAULT_ENV_NEE)]
+    pub env_nee: f32,
     /// The structure that answers the rays: bvh.
     #[arg(long, default_value = "bvh")]
     pub tracer: String,
@@ -72,7 +76,8 @@ pub struct PathArgs {
     pub height: u32,
     #[command(flatten)]
     pub path: PathFlags,
-    /// Output image: .exr (linear RGB + variance.R/G/B + samples) or .png (tonemapped sRGB).
+    /// Output image: .exr (linear RGB + variance.R/G/B + samples, and a .preview.png) or .png
+    /// (tonemapped sRGB).
     #[arg(long, default_value = "out/path.png")]
     pub out: PathBuf,
     /// Write run statistics (spp, seconds, paths/s, rays per bounce) as JSON.
@@ -162,6 +167,7 @@ impl PathFlags {
             max_depth: self.max_depth,
             rr_depth: self.rr_depth,
             materials,
+            env_nee: self.env_nee,
             ..PathOptions::default()
         };
         o.validate()?;
@@ -182,7 +188,8 @@ impl PathFlags {
     }
 }
 
-/// Writes a path-traced image: EXR with `R,G,B`, `variance.R/G/B` and `samples`, or PNG.
+/// Writes a path-traced image: EXR with `R,G,B`, `variance.R/G/B` and `samples` plus a
+/// tonemapped `<stem>.preview.png` beside it, or a PNG.
 pub fn write_path_image(path: &std::path::Path, out: &PathOutput) -> Result<()> {
     let is_exr = path
         .extension()
@@ -212,6 +219,13 @@ pub fn write_path_image(path: &std::path::Path, out: &PathOutput) -> Result<()> 
     ];
     let channels: Vec<(&str, &[f32])> = owned.iter().map(|(n, v)| (*n, v.as_slice())).collect();
     exr::write_exr(path, out.image.width(), out.image.height(), &channels)?;
+    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("out");
+    output::write_render(
+        &path.with_file_name(format!("{stem}.preview.png")),
+        &out.image,
+        None,
+        &[],
+    )?;
     Ok(())
 }
 

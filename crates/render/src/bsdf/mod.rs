@@ -13,8 +13,8 @@
 //! **Conventions.** All directions are unit vectors in the local shading frame (`z` = shading
 //! normal, see [`parallax_core::math::Frame`]) and point away from the surface: `wo` towards
 //! the viewer (the previous path vertex), `wi` towards the light (the next vertex). The frame is
-//! oriented so that `wo.z >= 0` ([`Bsdf::from_surface`] takes care of it: every model here is
-//! two-sided; the dielectric is told which side `wo` is on). Values are for radiance transport
+//! oriented so that `wo.z >= 0`: every model here is two-sided, and the dielectric is told which
+//! side `wo` is on ([`Bsdf::from_surface`], [`Bsdf::flipped`]). Values are for radiance transport
 //! (camera paths): refraction scales radiance by `1 / eta^2`.
 //!
 //! **Invariants** (the tests in `tests/bsdf.rs` check them):
@@ -130,9 +130,15 @@ impl Bsdf {
         matches!(self, Bsdf::Lambert { .. } | Bsdf::MetallicRoughness(_))
     }
 
-    /// True when the model transmits light (its frame must not be flipped to `wo`'s side).
-    pub fn transmits(&self) -> bool {
-        matches!(self, Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. })
+    /// The model seen from the other side of its surface: the same for every two-sided model,
+    /// the inverse index for the dielectric interface. Used when `wo` lies behind the shading
+    /// normal (interpolated normals at silhouettes): the frame flips and the model with it,
+    /// as Mitsuba 3 decides sides by the shading frame.
+    pub fn flipped(self) -> Self {
+        match self {
+            Bsdf::Dielectric { eta } => Bsdf::Dielectric { eta: 1.0 / eta },
+            other => other,
+        }
     }
 
     /// `f(wo, wi) |cos θ_i|` of the smooth lobes.
