@@ -20,6 +20,9 @@
 //! coordinates are written as stored (glTF convention: `v = 0` at the image's top row), which is
 //! Mitsuba's bitmap convention for PLY meshes (`flip_tex_coords = false`).
 //!
+//! Mitsuba's bitmap has one wrap mode for both axes: the texture's `s` mode is written. A base
+//! colour factor other than one is baked into the exported texels (the bitmap has no factor).
+//!
 //! Only `--materials diffuse` exports: our metallic-roughness GGX has no exact Mitsuba
 //! counterpart, nor does KHR_lights_punctual's spot falloff (spot lights are refused).
 
@@ -127,7 +130,7 @@ pub fn export(
             .or_default()
             .push(t);
     }
-    let mut textures: BTreeMap<u32, String> = BTreeMap::new();
+    let mut textures: BTreeMap<u64, String> = BTreeMap::new();
     let mut shapes = Vec::new();
     for ((mat_id, smooth), tris) in &groups {
         let m = &scene.materials[*mat_id as usize];
@@ -165,13 +168,22 @@ pub fn export(
         } else {
             let mut b = json!({"type": "diffuse", "reflectance": v3(m.base_color)});
             if let Some(t) = m.base_color_texture {
+                // Mitsuba's bitmap has no colour factor: a factor other than one is baked into
+                // a texture file of its own.
                 let tex = &scene.textures[t as usize];
-                let name = match textures.get(&t) {
+                let factor = m.base_color;
+                let key = if factor == Vec3::ONE { t as u64 } else { (1 << 32) | *mat_id as u64 };
+                let name = match textures.get(&key) {
                     Some(n) => n.clone(),
                     None => {
-                        let n = format!("texture_{t:04}.exr");
-                        let split =
-                            |c: usize| -> Vec<f32> { tex.texels.iter().map(|v| v[c]).collect() };
+                        let n = if factor == Vec3::ONE {
+                            format!("texture_{t:04}.exr")
+                        } else {
+                            format!("texture_{t:04}_material_{mat_id:04}.exr")
+                        };
+                        let split = |c: usize| -> Vec<f32> {
+                            tex.texels.iter().map(|v| v[c] * factor[c]).collect()
+                        };
                         let (r, g, bl) = (split(0), split(1), split(2));
                         exr::write_exr(
                             dir.join(&n),
@@ -179,7 +191,7 @@ pub fn export(
                             tex.height,
                             &[("R", &r), ("G", &g), ("B", &bl)],
                         )?;
-                        textures.insert(t, n.clone());
+                        textures.insert(key, n.clone());
                         n
                     }
                 };
