@@ -6,7 +6,9 @@
 use glam::{Mat3, Vec2, Vec3};
 use parallax_bvh::{Bvh, Hit};
 use parallax_core::Rng;
-use parallax_raster::dirt::{DirtCapture, DirtCube, DirtError, DirtOptions, LevelInfo};
+use parallax_raster::dirt::{
+    CellDepth, DirtCapture, DirtCube, DirtError, DirtOptions, LevelInfo, bucket_mask,
+};
 use parallax_scene::camera::{CameraFrame, CameraModel, CubeMap, Pinhole};
 use parallax_scene::{CameraDesc, Scene, TriangleMesh};
 use proptest::prelude::*;
@@ -134,6 +136,7 @@ fn check_scene(mesh: &TriangleMesh, cam: &Pinhole, interior: u32) -> f64 {
         let cap = DirtCapture::build(mesh, cam, &opts(tile, buckets)).unwrap();
         let c = check_conservative(mesh, &bvh, &cap, interior, tile as u64);
         assert!(c.hits > c.rays / 4, "too few hits to mean anything: {c:?}");
+        check_masks(&cap);
         if tile == 1 {
             let st = cap.stats();
             avg = st.fragments as f64 / st.nonempty_cells.max(1) as f64;
@@ -245,6 +248,62 @@ proptest! {
         };
         let cap = DirtCapture::build(&mesh, &cam, &o).unwrap();
         check_conservative(&mesh, &bvh, &cap, 6, tris.len() as u64);
+        check_masks(&cap);
+        // The slow twin: exact per-cell clipping lists the same triangles in the same cells,
+        // within bounds the default (corner) ranges contain.
+        let exact = DirtCapture::build(&mesh, &cam, &DirtOptions { cell_depth: CellDepth::Exact, ..o }).unwrap();
+        check_conservative(&mesh, &bvh, &exact, 6, tris.len() as u64);
+        prop_assert_eq!(cap.stats().fragments, exact.stats().fragments);
+        let (nx, ny) = cap.cells();
+        for y in 0..ny {
+            for x in 0..nx {
+                prop_assert_eq!(cap.pixel_triangles(x, y), exact.pixel_triangles(x, y));
+                let ((a0, a1), (b0, b1)) = (cap.depth_bounds(x, y), exact.depth_bounds(x, y));
+                prop_assert!(a0 <= b0 && a1 >= b1, "cell ({x},{y}): [{a0}, {a1}] vs exact [{b0}, {b1}]");
+            }
+        }
+    }
+}
+
+/// Each cell's record: its bounds, the eq. 1 scale and exactly the bits of its non-empty
+/// buckets.
+fn check_masks(cap: &DirtCapture) {
+    let (nx, ny) = cap.cells();
+    let b = cap.buckets();
+    for y in 0..ny {
+        for x in 0..nx {
+            let want = (0..b)
+                .filter(|&k| !cap.bucket(x, y, k).is_empty())
+                .fold(0, |m, k| m | bucket_mask(k, k, b));
+            let r = cap.cell_records()[(y * nx + x) as usize];
+            assert_eq!(r.mask, want, "cell ({x},{y})");
+            let (lo, hi) = cap.depth_bounds(x, y);
+            assert_eq!((r.zmin, r.zmax), (lo, hi));
+            assert_eq!(r.scale, parallax_raster::dirt::bucket_scale(lo, hi, b));
+        }
+    }
+}
+
+#[test]
+fn bucket_masks_of_ranges() {
+    assert_eq!(bucket_mask(0, 0, 8), 1);
+    assert_eq!(bucket_mask(2, 4, 8), 0b11100);
+    assert_eq!(bucket_mask(0, 31, 32), u32::MAX);
+    assert_eq!(bucket_mask(31, 31, 32), 1 << 31);
+    // 64 buckets: groups of 2; 100: groups of 4.
+    assert_eq!(bucket_mask(4, 5, 64), 0b100);
+    assert_eq!(bucket_mask(3, 6, 64), 0b1110);
+    assert_eq!(bucket_mask(8, 11, 100), 0b100);
+    assert_eq!(bucket_mask(0, 1023, 1024), u32::MAX);
+    for b in [1, 7, 64, 65, 300, 1024] {
+        for lo in (0..b).step_by(5) {
+            for hi in (lo..b).step_by(7) {
+                let m = bucket_mask(lo, hi, b);
+                // The union of the single-bucket masks.
+                let u = (lo..=hi).fold(0, |m, k| m | bucket_mask(k, k, b));
+                assert_eq!(m, u, "{lo}..={hi} of {b}");
+            }
+        }
     }
 }
 
@@ -369,7 +428,8 @@ fn mip_chain_is_exact_min_max_of_children() {
         }
         let top = cap.mip(cap.mip_levels() - 1);
         assert_eq!((top.width, top.height), (1, 1));
-        assert!(top.min[0] > 0.0 && top.min[0] < top.max[0]);
+        let (lo, hi) = top.get(0, 0);
+        assert!(lo > 0.0 && lo < hi);
     }
 }
 
@@ -388,6 +448,7 @@ fn bytes_are_the_flat_arrays() {
         let expect = 4 * cap.offsets().len() as u64
             + 4 * cap.ids().len() as u64
             + 8 * texels
+            + 16 * (nx * ny) as u64
             + (cap.mip_levels() * std::mem::size_of::<LevelInfo>()) as u64;
         assert_eq!(cap.bytes(), expect);
         assert_eq!(cap.stats().bytes, expect);
@@ -410,8 +471,8 @@ fn deterministic_across_thread_counts() {
     let (a, b) = (build(1), build(3));
     assert_eq!(a.offsets(), b.offsets());
     assert_eq!(a.ids(), b.ids());
-    assert_eq!(a.mip(0).min, b.mip(0).min);
-    assert_eq!(a.mip(0).max, b.mip(0).max);
+    assert_eq!(a.mip(0).bounds, b.mip(0).bounds);
+    assert_eq!(a.cell_records(), b.cell_records());
     // Ids ascend within each bucket.
     let (nx, ny) = a.cells();
     for y in 0..ny {

@@ -13,13 +13,16 @@
 //!   the quad-tree must agree with;
 //! - baselines the quad-tree is measured against (Widmer et al. 2015, Tables 2-3), all behind
 //!   [`ScreenTracer`]: [`dda`] (McGuire & Mara 2014), [`minmax`] (Tevs et al. 2008), [`hiz`]
-//!   (Uludag 2014).
+//!   (Uludag 2014);
+//! - [`dirt`]: DIRT's tracer over per-view primitive lists (Vardis et al. 2017, §4.2), an exact
+//!   world-space tracer behind [`parallax_core::WorldTracer`].
 //!
 //! **Invariant:** nothing here reads the scene; tracers see only what a capture holds.
 
 pub mod brute;
 pub mod dda;
 mod depth_layers;
+pub mod dirt;
 pub mod hiz;
 pub mod minmax;
 pub mod planes;
@@ -29,6 +32,7 @@ pub mod tracer;
 
 pub use brute::{BruteForcePlanes, BruteResult};
 pub use dda::{DdaOptions, DdaTracer};
+pub use dirt::{DirtCounters, DirtTracer};
 pub use hiz::{HiZOptions, HiZTracer};
 pub use minmax::{MinMaxOptions, MinMaxTracer};
 pub use planes::{LayerPlanes, NormalSource};

@@ -22,6 +22,8 @@ pub enum BenchCommand {
     Compression(super::bench_synth::CompressionArgs),
     /// Path tracer: paths/s, Mrays/s per bounce, RMSE vs a high-spp reference at equal time.
     Path(super::path::PathBenchArgs),
+    /// DIRT Tables 1-3 (Vardis et al. 2017): DIRT vs BVH build, Mrays/s per ray type, memory.
+    Dirt(super::bench_dirt::DirtBenchArgs),
 }
 
 #[derive(Args, Debug)]
@@ -86,6 +88,7 @@ pub fn run(cmd: &BenchCommand, quiet: bool) -> Result<()> {
         BenchCommand::Upsample(a) => super::bench_synth::upsample_bench(a, quiet),
         BenchCommand::Compression(a) => super::bench_synth::compression_bench(a, quiet),
         BenchCommand::Path(a) => super::path::bench(a, quiet),
+        BenchCommand::Dirt(a) => super::bench_dirt::run_bench(a, quiet),
         BenchCommand::Rays(a) => {
             let scene = a.view.load_scene()?;
             let camera = a.view.camera(&scene, a.width, a.height)?;

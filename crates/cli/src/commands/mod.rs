@@ -1,6 +1,7 @@
 //! One file per subcommand.
 
 pub mod bench;
+pub mod bench_dirt;
 pub mod bench_synth;
 pub mod bench_vr;
 pub mod capture;

@@ -3,5 +3,9 @@
 //!
 //! - [`path`]: paths/s, Mrays/s per bounce, RMSE against a high-spp reference at equal spp and
 //!   equal time, per tracer.
+//! - [`dirt`]: DIRT's Tables 1-3 (Vardis et al. 2017): DIRT against the BVH on the rays of
+//!   [`dirt_rays`] (build, Mrays/s per ray type, memory, `B` and `S` sweeps).
 
+pub mod dirt;
+pub mod dirt_rays;
 pub mod path;

@@ -96,37 +96,47 @@ impl Poly {
         out
     }
 
-    /// Min and max of `p.z` over the polygon clipped to the strip `left <= p.x <= right`,
-    /// without building the clipped polygon: the clipped polygon's vertices are this polygon's
-    /// vertices inside the strip plus its edges' crossings of the two lines (the same points
-    /// two Sutherland-Hodgman steps would produce). `None` if the strip misses the polygon.
+    /// Component-wise min and max over the polygon clipped to the slab
+    /// `lo <= p[axis] <= hi`, without building the clipped polygon: its vertices are this
+    /// polygon's vertices inside the slab plus its edges' crossings of the two lines (the same
+    /// points two Sutherland-Hodgman steps would produce). `None` if the slab misses the
+    /// polygon.
     #[inline]
-    pub fn z_range_in_strip(&self, left: f64, right: f64) -> Option<(f64, f64)> {
+    pub fn span_in_slab(&self, axis: usize, lo: f64, hi: f64) -> Option<(DVec3, DVec3)> {
         let n = self.n;
         if n == 0 {
             return None;
         }
-        let mut lo = f64::INFINITY;
-        let mut hi = f64::NEG_INFINITY;
+        let mut min = DVec3::INFINITY;
+        let mut max = DVec3::NEG_INFINITY;
         let mut a = self.v[n - 1];
         for i in 0..n {
             let b = self.v[i];
-            if b.x >= left && b.x <= right {
-                lo = lo.min(b.z);
-                hi = hi.max(b.z);
+            if b[axis] >= lo && b[axis] <= hi {
+                min = min.min(b);
+                max = max.max(b);
             }
-            for line in [left, right] {
+            for line in [lo, hi] {
                 // Strict crossing (an endpoint on the line is a vertex handled above).
-                if (a.x < line && b.x > line) || (a.x > line && b.x < line) {
-                    let t = (line - a.x) / (b.x - a.x);
-                    let z = a.z + (b.z - a.z) * t;
-                    lo = lo.min(z);
-                    hi = hi.max(z);
+                if (a[axis] < line && b[axis] > line) || (a[axis] > line && b[axis] < line) {
+                    let t = (line - a[axis]) / (b[axis] - a[axis]);
+                    let mut p = a + (b - a) * t;
+                    p[axis] = line;
+                    min = min.min(p);
+                    max = max.max(p);
                 }
             }
             a = b;
         }
-        (lo <= hi).then_some((lo, hi))
+        (min.x <= max.x).then_some((min, max))
+    }
+
+    /// Min and max of `p.z` over the polygon clipped to the strip `left <= p.x <= right`
+    /// ([`Self::span_in_slab`] along x).
+    #[inline]
+    pub fn z_range_in_strip(&self, left: f64, right: f64) -> Option<(f64, f64)> {
+        self.span_in_slab(0, left, right)
+            .map(|(lo, hi)| (lo.z, hi.z))
     }
 
     /// Min and max of component `axis` over the vertices (`None` if empty).

@@ -5,7 +5,8 @@
 //! `ceil(w_k / 2) x ceil(h_k / 2)` texels, texel `(i, j)` holding the min of the mins and the
 //! max of the maxes over the children `(2i..=2i+1, 2j..=2j+1)` that exist (odd sizes: the last
 //! texel covers only the remaining child column/row). The chain ends at 1 x 1. Empty cells hold
-//! `(+inf, -inf)`, so they never widen a parent. All levels live in two flat arrays.
+//! `(+inf, -inf)`, so they never widen a parent. All levels live in one flat array of
+//! `[min, max]` pairs (one load per texel visited by a traversal).
 
 use serde::Serialize;
 
@@ -17,23 +18,24 @@ pub struct LevelInfo {
     pub offset: usize,
 }
 
+/// The bounds of an empty texel.
+pub const EMPTY: [f32; 2] = [f32::INFINITY, f32::NEG_INFINITY];
+
 /// One level of the chain (borrowed).
 #[derive(Clone, Copy, Debug)]
 pub struct MipLevel<'a> {
     pub width: u32,
     pub height: u32,
-    /// Row-major minimum view depth per texel (`+inf` where empty).
-    pub min: &'a [f32],
-    /// Row-major maximum view depth per texel (`-inf` where empty).
-    pub max: &'a [f32],
+    /// Row-major `[minimum, maximum]` view depth per texel ([`EMPTY`] where empty).
+    pub bounds: &'a [[f32; 2]],
 }
 
 impl MipLevel<'_> {
     /// `(min, max)` of texel `(x, y)`.
     #[inline]
     pub fn get(&self, x: u32, y: u32) -> (f32, f32) {
-        let i = (y * self.width + x) as usize;
-        (self.min[i], self.max[i])
+        let [lo, hi] = self.bounds[(y * self.width + x) as usize];
+        (lo, hi)
     }
 }
 
@@ -57,28 +59,22 @@ pub fn layout(width: u32, height: u32) -> (Vec<LevelInfo>, usize) {
     (levels, offset)
 }
 
-/// Fills levels 1.. of `min`/`max` from level 0 (already written at offset 0).
-pub fn build_chain(levels: &[LevelInfo], min: &mut [f32], max: &mut [f32]) {
+/// Fills levels 1.. of `bounds` from level 0 (already written at offset 0).
+pub fn build_chain(levels: &[LevelInfo], bounds: &mut [[f32; 2]]) {
     for k in 1..levels.len() {
         let (c, p) = (levels[k - 1], levels[k]);
-        let (child_min, parent_min) = min.split_at_mut(p.offset);
-        let (child_max, parent_max) = max.split_at_mut(p.offset);
-        let child_min = &child_min[c.offset..];
-        let child_max = &child_max[c.offset..];
+        let (child, parent) = bounds.split_at_mut(p.offset);
+        let child = &child[c.offset..];
         for y in 0..p.height {
             for x in 0..p.width {
-                let mut lo = f32::INFINITY;
-                let mut hi = f32::NEG_INFINITY;
+                let mut b = EMPTY;
                 for cy in 2 * y..(2 * y + 2).min(c.height) {
                     for cx in 2 * x..(2 * x + 2).min(c.width) {
-                        let i = (cy * c.width + cx) as usize;
-                        lo = lo.min(child_min[i]);
-                        hi = hi.max(child_max[i]);
+                        let [lo, hi] = child[(cy * c.width + cx) as usize];
+                        b = [b[0].min(lo), b[1].max(hi)];
                     }
                 }
-                let i = (y * p.width + x) as usize;
-                parent_min[i] = lo;
-                parent_max[i] = hi;
+                parent[(y * p.width + x) as usize] = b;
             }
         }
     }

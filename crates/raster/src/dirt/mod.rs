@@ -9,13 +9,16 @@
 //! | `buckets` | u32 | 8 | `B` uniform depth buckets per cell over `[zmin, zmax]` (§4.1.2, eq. 1) |
 //! | `near` | f32 | 1e-4 | near plane (view depth); surface closer than this is not captured |
 //! | `max_entries` | u64 | 2^28 | bound on list entries: the build fails instead of allocating more |
+//! | `cell_depth` | [`CellDepth`] | `Corners` | how a triangle's depth range in a cell is bounded |
 //!
-//! **What a cell holds.** Each triangle is clipped against the near plane, projected, and for
-//! every cell its projection overlaps (conservative rasterization: row slab, then column, of
-//! the clipped polygon) clipped against that cell's frustum (Sutherland & Hodgman 1974, in 2-D
-//! with `1 / depth` interpolated perspective-correctly) to get the view-depth range of its
-//! part inside the cell (DIRT Fig. 6a). "Fill Depth" (§4.1.1) takes the min/max over a cell's
-//! triangles; "Fill Primitives" (§4.1.2) appends each triangle to every bucket `[b_min, b_max]`
+//! **What a cell holds.** Each triangle is clipped against the near plane, projected, and
+//! listed in every cell its projection overlaps (conservative rasterization: row slab, then
+//! column, of the clipped polygon) with the view-depth range of its part inside the cell (DIRT
+//! Fig. 6a): by default the range of its depth plane over the cell's corners cut to its range
+//! in the cell row (exact inside the triangle), or, the slow twin, the exact range of the
+//! triangle clipped against the cell's frustum (Sutherland & Hodgman 1974, in 2-D with
+//! `1 / depth` interpolated perspective-correctly) as the paper's fragment shader does. "Fill
+//! Depth" (§4.1.1) takes the min/max over a cell's triangles; "Fill Primitives" (§4.1.2) appends each triangle to every bucket `[b_min, b_max]`
 //! its range overlaps (eq. 1a/1b, Fig. 6b), computed by [`bucket_index`] — the same monotone
 //! function the tracer uses for a ray depth, so a hit at depth `d` on a triangle always lies
 //! in a bucket that lists the triangle.
@@ -27,23 +30,30 @@
 //! vertices (the absolute error of an f32 ray-triangle `t`). Clipping is done in f64.
 //!
 //! **Layout** (DIRT Table 3, with flat arrays instead of linked lists): `offsets` (CSR, one per
-//! cell-bucket, `cells * B + 1` u32), `ids` (u32 scene triangle indices — the "vertex buffer"
-//! is the scene's [`TriangleMesh`]; nothing else is stored), and the mip chain (two f32 per
-//! texel over all levels; level 0 = the depth bounds). Within a bucket, ids ascend. The result
+//! cell-bucket, `cells * B + 1` u32), `ids` (u32 triangle indices into the "vertex buffer",
+//! [`DirtTriangles`], which holds the mesh's triangles in mesh order; [`DirtViews`] bundles it
+//! with the camera view and the cube map the tracer reads), the mip chain (`[min, max]` f32
+//! per texel over all levels; level 0 = the depth bounds) and per cell a [`CellRecord`]
+//! (bounds, bucket scale and the mask of its non-empty buckets, what the tracer reads of a
+//! cell in one load). Within a bucket, ids ascend. The result
 //! is bit-identical whatever the thread count (screen bands are processed in parallel, each
 //! owning its cells).
 //!
 //! Empty cells have bounds `(+inf, -inf)` and no entries.
-//!
-//! [`TriangleMesh`]: parallax_scene::TriangleMesh
 
 mod build;
 pub mod clip;
 mod cube;
+mod fill;
 pub mod mip;
+mod setup;
+mod triangles;
+mod views;
 
 pub use cube::DirtCube;
 pub use mip::{LevelInfo, MipLevel};
+pub use triangles::{DirtTri, DirtTriangles};
+pub use views::{DirtViews, DirtViewsOptions, DirtViewsStats, MAX_FACE_SIZE};
 
 use parallax_scene::camera::Pinhole;
 use serde::Serialize;
@@ -57,6 +67,17 @@ pub const MAX_BUCKETS: u32 = 1024;
 /// Largest allowed `cells * buckets` (size of the offsets array).
 pub const MAX_CELL_BUCKETS: u64 = 1 << 28;
 
+/// How the depth range of a triangle in a cell is computed (module docs of `fill`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub enum CellDepth {
+    /// The triangle's depth plane over the cell's corners, cut to its range in the cell row:
+    /// O(1) per cell, exact inside the triangle, wider at its edges.
+    #[default]
+    Corners,
+    /// The exact range over the triangle clipped to the cell (the slow twin).
+    Exact,
+}
+
 /// Build options (see the module table).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct DirtOptions {
@@ -64,6 +85,7 @@ pub struct DirtOptions {
     pub buckets: u32,
     pub near: f32,
     pub max_entries: u64,
+    pub cell_depth: CellDepth,
 }
 
 impl Default for DirtOptions {
@@ -73,6 +95,7 @@ impl Default for DirtOptions {
             buckets: 8,
             near: 1e-4,
             max_entries: 1 << 28,
+            cell_depth: CellDepth::Corners,
         }
     }
 }
@@ -128,8 +151,10 @@ pub struct DirtCapture {
     offsets: Vec<u32>,
     ids: Vec<u32>,
     levels: Vec<LevelInfo>,
-    mip_min: Vec<f32>,
-    mip_max: Vec<f32>,
+    /// `[zmin, zmax]` of every texel of every mip level.
+    bounds: Vec<[f32; 2]>,
+    /// What the tracer reads of every cell at once.
+    cells: Vec<CellRecord>,
     stats: DirtStats,
 }
 
@@ -156,6 +181,29 @@ pub fn bucket_index(zmin: f32, scale: f32, buckets: u32, z: f32) -> u32 {
     } else {
         0
     }
+}
+
+/// The bits of buckets `b0..=b1` of `buckets` in a cell's non-empty mask: bit `b` for bucket
+/// `b` when `buckets <= 32`, else bit `i` for buckets `i * g .. (i + 1) * g` with
+/// `g = ceil(buckets / 32)`.
+#[inline(always)]
+pub fn bucket_mask(b0: u32, b1: u32, buckets: u32) -> u32 {
+    let g = buckets.div_ceil(32).max(1);
+    let (lo, hi) = (b0 / g, b1 / g);
+    let upto = |b: u32| if b >= 31 { u32::MAX } else { (2u32 << b) - 1 };
+    upto(hi) & !(upto(lo) >> 1)
+}
+
+/// A cell as the tracer reads it, in one 16-byte load: its depth bounds, the eq. 1 scale
+/// [`bucket_scale`] of its range and the mask of its non-empty buckets ([`bucket_mask`]; the
+/// GPU version reads a bucket's null head pointer instead).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(16))]
+pub struct CellRecord {
+    pub zmin: f32,
+    pub zmax: f32,
+    pub scale: f32,
+    pub mask: u32,
 }
 
 impl DirtCapture {
@@ -218,8 +266,8 @@ impl DirtCapture {
     /// `(zmin, zmax)` of cell `(cx, cy)` over all its triangles' clipped parts (`(+inf, -inf)`
     /// if empty).
     pub fn depth_bounds(&self, cx: u32, cy: u32) -> (f32, f32) {
-        let i = self.cell_index(cx, cy);
-        (self.mip_min[i], self.mip_max[i])
+        let [lo, hi] = self.bounds[self.cell_index(cx, cy)];
+        (lo, hi)
     }
     /// The bucket of view depth `z` in cell `(cx, cy)` (DIRT eq. 1, clamped).
     pub fn bucket_of(&self, cx: u32, cy: u32, z: f32) -> u32 {
@@ -268,9 +316,17 @@ impl DirtCapture {
         MipLevel {
             width: l.width,
             height: l.height,
-            min: &self.mip_min[l.offset..l.offset + n],
-            max: &self.mip_max[l.offset..l.offset + n],
+            bounds: &self.bounds[l.offset..l.offset + n],
         }
+    }
+    /// The whole mip chain as flat arrays: the level table and `[min, max]` of every texel of
+    /// every level (level `k` at `levels[k].offset`, row-major).
+    pub fn mip_arrays(&self) -> (&[LevelInfo], &[[f32; 2]]) {
+        (&self.levels, &self.bounds)
+    }
+    /// Per cell (row-major), its [`CellRecord`].
+    pub fn cell_records(&self) -> &[CellRecord] {
+        &self.cells
     }
     /// CSR offsets, `cells * B + 1` entries: bucket `b` of cell `c` is
     /// `ids[offsets[c * B + b]..offsets[c * B + b + 1]]`.
@@ -281,12 +337,12 @@ impl DirtCapture {
     pub fn ids(&self) -> &[u32] {
         &self.ids
     }
-    /// Bytes held by the flat arrays (offsets, ids, mip min/max, level table).
+    /// Bytes held by the flat arrays (offsets, ids, mip bounds, cell records, level table).
     pub fn bytes(&self) -> u64 {
         (std::mem::size_of_val(self.offsets.as_slice())
             + std::mem::size_of_val(self.ids.as_slice())
-            + std::mem::size_of_val(self.mip_min.as_slice())
-            + std::mem::size_of_val(self.mip_max.as_slice())
+            + std::mem::size_of_val(self.bounds.as_slice())
+            + std::mem::size_of_val(self.cells.as_slice())
             + std::mem::size_of_val(self.levels.as_slice())) as u64
     }
     pub fn stats(&self) -> &DirtStats {

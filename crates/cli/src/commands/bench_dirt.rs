@@ -1,0 +1,197 @@
+//! `parallax bench dirt`: DIRT Tables 1-3 (Vardis et al. 2017) for DIRT against the BVH in the
+//! same run: build times, Mrays/s per ray type, memory per buffer, `B` and `S` sweeps.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use parallax_path::bench::dirt::{DirtBenchOptions, DirtBenchReport, run};
+use parallax_path::bench::dirt_rays::RayOptions;
+use parallax_raster::dirt::{DirtOptions, DirtViewsOptions};
+
+use crate::args::ViewArgs;
+
+#[derive(Args, Debug)]
+pub struct DirtBenchArgs {
+    #[command(flatten)]
+    pub view: ViewArgs,
+    #[arg(long, default_value_t = 1024)]
+    pub width: u32,
+    #[arg(long, default_value_t = 512)]
+    pub height: u32,
+    /// Cube face size in pixels.
+    #[arg(long, default_value_t = 256)]
+    pub face: u32,
+    /// Tile size S (a power of two): one primitive list per S x S pixels.
+    #[arg(long, default_value_t = 1)]
+    pub tile: u32,
+    /// Depth buckets B per cell.
+    #[arg(long, default_value_t = 8)]
+    pub buckets: u32,
+    /// Interleaved rounds per measurement (the best is reported).
+    #[arg(long, default_value_t = 3)]
+    pub repeats: u32,
+    /// B values of the bucket sweep (comma-separated; empty: none).
+    #[arg(long, value_delimiter = ',', default_value = "1,4,8,16,32")]
+    pub sweep_buckets: Vec<u32>,
+    /// S values of the tile sweep (comma-separated; empty: none).
+    #[arg(long, value_delimiter = ',', default_value = "1,2,4,8")]
+    pub sweep_tiles: Vec<u32>,
+    /// Skip both sweeps.
+    #[arg(long)]
+    pub no_sweep: bool,
+    /// Seed of the ray generation.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// GGX alpha of the glossy rays.
+    #[arg(long, default_value_t = 0.1)]
+    pub glossy_alpha: f32,
+    /// Write the report as JSON.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+pub fn run_bench(a: &DirtBenchArgs, quiet: bool) -> Result<()> {
+    if !(a.glossy_alpha.is_finite() && a.glossy_alpha > 0.0 && a.glossy_alpha <= 1.0) {
+        bail!("--glossy-alpha {} must be in (0, 1]", a.glossy_alpha);
+    }
+    let scene = a.view.load_scene()?;
+    let camera = a.view.camera(&scene, a.width, a.height)?;
+    let opts = DirtBenchOptions {
+        views: DirtViewsOptions {
+            face_size: a.face,
+            capture: DirtOptions {
+                tile_size: a.tile,
+                buckets: a.buckets,
+                ..DirtOptions::default()
+            },
+        },
+        repeats: a.repeats,
+        sweep_buckets: if a.no_sweep {
+            vec![]
+        } else {
+            a.sweep_buckets.clone()
+        },
+        sweep_tiles: if a.no_sweep {
+            vec![]
+        } else {
+            a.sweep_tiles.clone()
+        },
+        rays: RayOptions {
+            seed: a.seed,
+            glossy_alpha: a.glossy_alpha,
+        },
+    };
+    let report = run(&scene, &camera, &opts).context("bench dirt")?;
+    if !quiet {
+        print(&report);
+    }
+    if let Some(p) = &a.json {
+        std::fs::write(p, serde_json::to_string_pretty(&report)?)
+            .with_context(|| format!("writing {}", p.display()))?;
+    }
+    Ok(())
+}
+
+fn print(r: &DirtBenchReport) {
+    let o = &r.options.views;
+    println!(
+        "DIRT vs BVH, {}x{}, cube faces {}^2, S = {}, B = {}, {} threads, best of {} interleaved rounds\n",
+        r.width,
+        r.height,
+        o.face_size,
+        o.capture.tile_size,
+        o.capture.buckets,
+        r.threads,
+        r.options.repeats
+    );
+    println!(
+        "Build (ms; DIRT stages: triangle buffer / camera view / cube; capture setup / fill / assemble / mip)\n"
+    );
+    println!("| scene | method | triangles | build ms | vs BVH | stages | capture stages | MiB |");
+    println!("|---|---|---|---|---|---|---|---|");
+    for b in &r.build {
+        println!(
+            "| {} | {} | {} | {:.1} | {:.2}x | {:.1} / {:.1} / {:.1} | {:.1} / {:.1} / {:.1} / {:.1} | {:.1} |",
+            b.scene,
+            b.method,
+            b.triangles,
+            b.ms_build,
+            b.build_vs_bvh,
+            b.ms_triangles,
+            b.ms_camera,
+            b.ms_cube,
+            b.ms_setup,
+            b.ms_fill,
+            b.ms_assemble,
+            b.ms_mip,
+            b.bytes as f64 / (1 << 20) as f64
+        );
+    }
+    println!("\nTable 1: first path event, Mrays/s per ray type (time = thread CPU per ray)\n");
+    println!(
+        "| scene | rays | method | count | Mrays/s | CPU Mrays/s | time vs BVH | hit rate | same prim | ties | views | texels | cells | buckets | tests | % truncated |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    for x in &r.rays {
+        println!(
+            "| {} | {} | {} | {} | {:.2} | {:.2} | {:.2}x | {:.3} | {:.5} | {} | {:.2} | {:.1} | {:.1} | {:.1} | {:.1} | {:.3} |",
+            x.scene,
+            x.ray_type.name(),
+            x.method,
+            x.rays,
+            x.mrays_per_s,
+            x.cpu_mrays_per_s,
+            x.time_vs_bvh,
+            x.hit_rate,
+            x.same_prim,
+            x.ties,
+            x.views_per_ray,
+            x.texels_per_ray,
+            x.cells_per_ray,
+            x.buckets_per_ray,
+            x.tests_per_ray,
+            x.pct_truncated
+        );
+    }
+    println!(
+        "\nTable 3: memory (the paper's formula with the measured c·n_p, and the bytes measured)\n"
+    );
+    println!("| scene | buffer | formula | units | formula MiB | measured MiB | note |");
+    println!("|---|---|---|---|---|---|---|");
+    for m in &r.memory {
+        println!(
+            "| {} | {} | {} | {} | {:.2} | {:.2} | {} |",
+            m.scene,
+            m.buffer,
+            m.formula,
+            m.units,
+            m.formula_bytes / (1 << 20) as f64,
+            m.measured_bytes as f64 / (1 << 20) as f64,
+            m.note
+        );
+    }
+    if !r.sweep.is_empty() {
+        println!("\nSweeps over B and S (Fig. 10): build, memory, diffuse rays\n");
+        println!(
+            "| scene | S | B | face | build ms | vs BVH | MiB | entries | diffuse Mrays/s | time vs BVH | tests/ray |"
+        );
+        println!("|---|---|---|---|---|---|---|---|---|---|---|");
+        for s in &r.sweep {
+            println!(
+                "| {} | {} | {} | {} | {:.1} | {:.2}x | {:.1} | {} | {:.2} | {:.2}x | {:.1} |",
+                s.scene,
+                s.tile,
+                s.buckets,
+                s.face,
+                s.ms_build,
+                s.build_vs_bvh,
+                s.bytes as f64 / (1 << 20) as f64,
+                s.entries,
+                s.diffuse_mrays_per_s,
+                s.diffuse_time_vs_bvh,
+                s.tests_per_ray
+            );
+        }
+    }
+}

@@ -1,0 +1,34 @@
+//! Instruction counts of the BVH build and of DIRT's build (camera view 1024 x 512 + cube map)
+//! under callgrind, for A/B comparisons on a busy machine (`none` measures the scene load
+//! alone, to subtract):
+//!
+//! `RAYON_NUM_THREADS=1 valgrind --tool=callgrind --callgrind-out-file=/dev/null
+//!  target/release/examples/dirt_build_count none|bvh|dirt FACE S B [SCENE]`
+use parallax_raster::dirt::{DirtOptions, DirtViews, DirtViewsOptions};
+use parallax_scene::camera::Pinhole;
+fn main() {
+    let a: Vec<String> = std::env::args().skip(1).collect();
+    let scene = parallax_scene::Scene::load(a.get(4).map_or("atrium", |s| s.as_str())).unwrap();
+    match a[0].as_str() {
+        "bvh" => {
+            let b = parallax_bvh::Bvh::build(&scene.mesh);
+            println!("{}", b.triangles().len());
+        }
+        "dirt" => {
+            let desc = scene.camera(None).unwrap();
+            let cam = Pinhole::new(&desc, 1024, 512).unwrap();
+            let p = |i: usize| a[i].parse::<u32>().unwrap();
+            let o = DirtViewsOptions {
+                face_size: p(1),
+                capture: DirtOptions {
+                    tile_size: p(2),
+                    buckets: p(3),
+                    ..Default::default()
+                },
+            };
+            let v = DirtViews::build(&scene.mesh, Some(&cam), desc.eye, &o).unwrap();
+            println!("{}", v.views().map(|c| c.stats().fragments).sum::<u64>());
+        }
+        _ => {}
+    }
+}

@@ -1,0 +1,141 @@
+//! Everything DIRT's tracer reads (Vardis et al. 2017, §3 "Data structures" and §4.1
+//! "Overview"): the triangle buffer, the camera view's capture and the six captures of a cube
+//! map around the camera's eye (the multi-view setup of Vardis et al. 2016). Together the views
+//! see every direction from the eye, so every triangle farther than the near plane is listed in
+//! some view; the camera view adds the camera's (usually finer) grid where most rays travel.
+//!
+//! | option | type | default | meaning |
+//! |---|---|---|---|
+//! | `face_size` | u32 | 256 | cube face size in pixels (`1..=`[`MAX_FACE_SIZE`]) |
+//! | `capture` | [`DirtOptions`] | S = 1, B = 8 | tile size `S`, buckets `B`, near plane and entry budget of every view (the budget bounds the sum over all views) |
+//!
+//! The camera view is optional: without one (a camera model that is not a pinhole) the cube
+//! alone answers every ray.
+
+use std::time::Instant;
+
+use glam::Vec3;
+use parallax_scene::TriangleMesh;
+use parallax_scene::camera::{CubeMap, Pinhole};
+use serde::Serialize;
+
+use super::{DirtCapture, DirtCube, DirtError, DirtOptions, DirtTriangles};
+
+/// Largest allowed cube face size (pixels).
+pub const MAX_FACE_SIZE: u32 = 4096;
+
+/// Options of [`DirtViews::build`] (see the module table).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct DirtViewsOptions {
+    pub face_size: u32,
+    pub capture: DirtOptions,
+}
+
+impl Default for DirtViewsOptions {
+    fn default() -> Self {
+        Self {
+            face_size: 256,
+            capture: DirtOptions::default(),
+        }
+    }
+}
+
+/// Build times (ms) and sizes of the views.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct DirtViewsStats {
+    pub triangles_ms: f64,
+    pub camera_ms: f64,
+    pub cube_ms: f64,
+    pub total_ms: f64,
+    /// Bytes of the triangle buffer.
+    pub triangle_bytes: u64,
+    /// Bytes of all captures (depth bounds with mips, offsets, ids).
+    pub capture_bytes: u64,
+}
+
+/// The triangle buffer, the camera view (optional) and the cube map of DIRT.
+#[derive(Clone, Debug)]
+pub struct DirtViews {
+    pub triangles: DirtTriangles,
+    pub camera: Option<DirtCapture>,
+    pub cube: DirtCube,
+    pub options: DirtViewsOptions,
+    pub stats: DirtViewsStats,
+}
+
+impl DirtViews {
+    /// Builds the triangle buffer, the capture of `camera` (if any, at its own film size) and
+    /// the cube map around `eye` (the camera's position when a camera is given).
+    pub fn build(
+        mesh: &TriangleMesh,
+        camera: Option<&Pinhole>,
+        eye: Vec3,
+        opts: &DirtViewsOptions,
+    ) -> Result<DirtViews, DirtError> {
+        if opts.face_size == 0 || opts.face_size > MAX_FACE_SIZE {
+            return Err(DirtError::InvalidOptions(format!(
+                "cube face size {} must be in 1..={MAX_FACE_SIZE}",
+                opts.face_size
+            )));
+        }
+        let eye = camera.map_or(eye, |c| c.frame.position);
+        if !eye.is_finite() {
+            return Err(DirtError::InvalidView(format!(
+                "cube map centre {eye} is not finite"
+            )));
+        }
+        let t0 = Instant::now();
+        let triangles = DirtTriangles::from_mesh(mesh);
+        let triangles_ms = ms(t0);
+        let t1 = Instant::now();
+        let camera = camera
+            .map(|c| DirtCapture::build(mesh, c, &opts.capture))
+            .transpose()?;
+        let camera_ms = ms(t1);
+        let used = camera.as_ref().map_or(0, |c| c.stats().entries);
+        let cube_opts = DirtOptions {
+            max_entries: opts.capture.max_entries.saturating_sub(used).max(1),
+            ..opts.capture
+        };
+        let t2 = Instant::now();
+        let cube = DirtCube::build(
+            mesh,
+            &CubeMap {
+                eye,
+                face: opts.face_size,
+            },
+            &cube_opts,
+        )?;
+        let cube_ms = ms(t2);
+        let capture_bytes = cube.bytes() + camera.as_ref().map_or(0, DirtCapture::bytes);
+        let stats = DirtViewsStats {
+            triangles_ms,
+            camera_ms,
+            cube_ms,
+            total_ms: ms(t0),
+            triangle_bytes: triangles.bytes(),
+            capture_bytes,
+        };
+        Ok(DirtViews {
+            triangles,
+            camera,
+            cube,
+            options: *opts,
+            stats,
+        })
+    }
+
+    /// Every view: the camera view first (if any), then the cube faces +X, -X, +Y, -Y, +Z, -Z.
+    pub fn views(&self) -> impl Iterator<Item = &DirtCapture> {
+        self.camera.iter().chain(self.cube.faces.iter())
+    }
+
+    /// Bytes of the triangle buffer and every capture.
+    pub fn bytes(&self) -> u64 {
+        self.triangles.bytes() + self.views().map(DirtCapture::bytes).sum::<u64>()
+    }
+}
+
+fn ms(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}

@@ -1,0 +1,207 @@
+//! One DIRT view prepared for tracing: its projection as plane constants, and a world ray
+//! expressed in the view (Vardis et al. 2017, §4.2.1 "Screen-space ray tracing": "rays are
+//! clipped against the viewing frustum and subsequently traced ... up to the screen-space
+//! projection of their clipped endpoint").
+//!
+//! A view is a pinhole with camera space `q = R (p - eye)` (looking down `-z`), view depth
+//! `-q.z`, and film position `x = (u - a0) / ax`, `y = (b0 - v) / by` of the slopes
+//! `u = q.x / depth`, `v = q.y / depth` — the projection of `DirtCapture`'s build. On a ray
+//! `q(t) = o + t d` the depth `z(t) = z0 + t dz` is affine in `t`, and the film column
+//! `x = X` is the plane `q.x = u_X depth` through the eye, crossed at
+//! `t = (u_X z0 - o.x) / (d.x - u_X dz)`: cell boundaries are crossed in ray order at
+//! parameters computed directly, so the cells a traversal visits split the ray's parameter
+//! range into consecutive intervals that share their end points exactly.
+
+use glam::Vec3;
+use parallax_raster::dirt::DirtCapture;
+
+/// The constants of one view.
+#[derive(Clone, Debug)]
+pub(crate) struct ViewConsts {
+    pub eye: Vec3,
+    /// Rows of `R` (the view's right, up and backward axes).
+    pub rows: [Vec3; 3],
+    pub near: f32,
+    /// `u` of film column 0 and its step per pixel.
+    pub a0: f32,
+    pub ax: f32,
+    /// `u` of the last film column (`a0 + W ax`, computed without rounding through `ax`).
+    pub a_end: f32,
+    /// `v` of film row 0 and its (negated) step per pixel.
+    pub b0: f32,
+    pub by: f32,
+    /// `v` of the last film row.
+    pub b_end: f32,
+    /// `1 / (ax * S)` and `1 / (by * S)`: cells per unit slope.
+    pub cells_per_u: f32,
+    pub cells_per_v: f32,
+    pub tile: u32,
+    pub cells_x: u32,
+    pub cells_y: u32,
+    pub buckets: u32,
+    /// Index of the top mip level.
+    pub top: usize,
+    /// Per mip level, its first texel in the flat bounds array and its width.
+    pub level_offset: Vec<usize>,
+    pub level_width: Vec<usize>,
+    /// Bound on loop iterations of one traversal of this view.
+    pub max_steps: u32,
+}
+
+impl ViewConsts {
+    pub fn new(cap: &DirtCapture) -> ViewConsts {
+        let view = cap.view();
+        let b = view.frame.basis;
+        let (w, h) = (view.width as f32, view.height as f32);
+        let tx = view.tan_half_x();
+        let ty = view.tan_half_y;
+        let ax = 2.0 * tx / w;
+        let by = 2.0 * ty / h;
+        let s = cap.tile_size();
+        let (cells_x, cells_y) = cap.cells();
+        let top = cap.mip_levels() - 1;
+        let (levels, _) = cap.mip_arrays();
+        // Every iteration either descends a level or leaves a texel; leaving moves the cell
+        // one step in x or y in the ray's (monotone) film direction, and at most `top` levels
+        // are descended per move.
+        let max_steps = (cells_x + cells_y + 4).saturating_mul(2 * top as u32 + 4);
+        ViewConsts {
+            eye: view.frame.position,
+            rows: [b.x_axis, b.y_axis, b.z_axis],
+            near: cap.options().near,
+            a0: (view.shift.x - 1.0) * tx,
+            ax,
+            a_end: (view.shift.x + 1.0) * tx,
+            b0: (view.shift.y + 1.0) * ty,
+            by,
+            b_end: (view.shift.y - 1.0) * ty,
+            cells_per_u: 1.0 / (ax * s as f32),
+            cells_per_v: 1.0 / (by * s as f32),
+            tile: s,
+            cells_x,
+            cells_y,
+            buckets: cap.buckets(),
+            top,
+            level_offset: levels.iter().map(|l| l.offset).collect(),
+            level_width: levels.iter().map(|l| l.width as usize).collect(),
+            max_steps,
+        }
+    }
+
+    /// The world ray `origin + t dir` in this view.
+    #[inline(always)]
+    pub fn ray(&self, origin: Vec3, dir: Vec3) -> ViewRay {
+        let p = origin - self.eye;
+        let o = Vec3::new(
+            self.rows[0].dot(p),
+            self.rows[1].dot(p),
+            self.rows[2].dot(p),
+        );
+        let d = Vec3::new(
+            self.rows[0].dot(dir),
+            self.rows[1].dot(dir),
+            self.rows[2].dot(dir),
+        );
+        let (z0, dz) = (-o.z, -d.z);
+        // Signs of du/dt and dv/dt (numerators of the quotient rule; depth > 0 inside).
+        let gx = d.x * z0 - o.x * dz;
+        let gy = d.y * z0 - o.y * dz;
+        ViewRay {
+            o,
+            d,
+            z0,
+            dz,
+            step_x: sign(gx),
+            // Film y grows as v falls.
+            step_y: -sign(gy),
+        }
+    }
+
+    /// The part of `[t0, t1]` where the ray is inside the view's frustum: depth at least
+    /// `near`, film position inside `[0, W] x [0, H]`. Each bound is a half-space
+    /// `f0 + t f1 >= 0` in `t`. Neighbouring cube faces share their side planes, and the
+    /// constants of a face are exactly `±1` (90-degree faces), so the two faces compute
+    /// bit-identical crossing parameters and their intervals meet without a gap.
+    #[inline(always)]
+    pub fn clip(&self, r: &ViewRay, t0: f32, t1: f32) -> Option<(f32, f32)> {
+        self.clip_exit(r, t0, t1).map(|(lo, hi, _)| (lo, hi))
+    }
+
+    /// [`Self::clip`], and which bound ends the interval: [`Exit::End`] (`t1`), the near plane
+    /// or a film edge.
+    #[inline(always)]
+    pub fn clip_exit(&self, r: &ViewRay, t0: f32, t1: f32) -> Option<(f32, f32, Exit)> {
+        let (uw, vh) = (self.a_end, self.b_end);
+        let (a0, b0) = (self.a0, self.b0);
+        let halfspaces = [
+            (r.z0 - self.near, r.dz, Exit::Near),
+            (r.o.x - a0 * r.z0, r.d.x - a0 * r.dz, Exit::Left),
+            (uw * r.z0 - r.o.x, uw * r.dz - r.d.x, Exit::Right),
+            (b0 * r.z0 - r.o.y, b0 * r.dz - r.d.y, Exit::Top),
+            (r.o.y - vh * r.z0, r.d.y - vh * r.dz, Exit::Bottom),
+        ];
+        let (mut lo, mut hi, mut exit) = (t0, t1, Exit::End);
+        for (f0, f1, side) in halfspaces {
+            if f1 > 0.0 {
+                lo = lo.max(-f0 / f1);
+            } else if f1 < 0.0 {
+                let t = -f0 / f1;
+                if t < hi {
+                    hi = t;
+                    exit = side;
+                }
+            } else if f0 < 0.0 || f0.is_nan() {
+                return None;
+            }
+        }
+        (lo < hi).then_some((lo, hi, exit))
+    }
+}
+
+/// Which bound of a view's frustum ends a ray's interval in it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Exit {
+    /// The end of the interval asked for.
+    End,
+    Near,
+    /// Film x = 0, x = W, y = 0, y = H.
+    Left,
+    Right,
+    Top,
+    Bottom,
+}
+
+/// A world ray in one view (see the module docs).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ViewRay {
+    pub o: Vec3,
+    pub d: Vec3,
+    pub z0: f32,
+    pub dz: f32,
+    /// Direction of travel of the ray's projection in cells: -1, 0 or +1.
+    pub step_x: i32,
+    pub step_y: i32,
+}
+
+impl ViewRay {
+    /// View depth at `t`.
+    #[inline(always)]
+    pub fn depth(&self, t: f32) -> f32 {
+        self.z0 + t * self.dz
+    }
+
+    /// The slopes `(u, v)` at `t` (`t` inside the clipped range, so the depth is positive).
+    #[inline(always)]
+    pub fn slopes(&self, t: f32) -> (f32, f32) {
+        let inv = 1.0 / self.depth(t);
+        (
+            (self.o.x + t * self.d.x) * inv,
+            (self.o.y + t * self.d.y) * inv,
+        )
+    }
+}
+
+#[inline(always)]
+fn sign(x: f32) -> i32 {
+    (x > 0.0) as i32 - (x < 0.0) as i32
+}
