@@ -2,6 +2,8 @@
 //! under callgrind, for A/B comparisons on a busy machine (`none` measures the scene load
 //! alone, to subtract):
 //!
+//! (`DIRT_CAMERA=WxH` sets the camera film, default 1024x512.)
+//!
 //! `RAYON_NUM_THREADS=1 valgrind --tool=callgrind --callgrind-out-file=/dev/null
 //!  target/release/examples/dirt_build_count none|bvh|dirt FACE S B [SCENE]`
 use parallax_raster::dirt::{DirtOptions, DirtViews, DirtViewsOptions};
@@ -16,7 +18,14 @@ fn main() {
         }
         "dirt" => {
             let desc = scene.camera(None).unwrap();
-            let cam = Pinhole::new(&desc, 1024, 512).unwrap();
+            let (w, h) = match std::env::var("DIRT_CAMERA") {
+                Ok(v) => {
+                    let (a, b) = v.split_once('x').expect("DIRT_CAMERA=WxH");
+                    (a.parse().unwrap(), b.parse().unwrap())
+                }
+                Err(_) => (1024, 512),
+            };
+            let cam = Pinhole::new(&desc, w, h).unwrap();
             let p = |i: usize| a[i].parse::<u32>().unwrap();
             let o = DirtViewsOptions {
                 face_size: p(1),
@@ -27,7 +36,13 @@ fn main() {
                 },
             };
             let v = DirtViews::build(&scene.mesh, Some(&cam), desc.eye, &o).unwrap();
-            println!("{}", v.views().map(|c| c.stats().fragments).sum::<u64>());
+            for c in v.views() {
+                let st = c.stats();
+                println!(
+                    "{}x{} cells, {} in view, {} fragments, {} entries",
+                    st.cells_x, st.cells_y, st.triangles_in_view, st.fragments, st.entries
+                );
+            }
         }
         _ => {}
     }

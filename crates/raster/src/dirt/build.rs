@@ -13,7 +13,7 @@ use rayon::prelude::*;
 
 use super::fill::{BandOut, Grid, fill_band};
 use super::mip;
-use super::setup::ViewXf;
+use super::setup::{Setups, ViewXf};
 use super::{
     DirtCapture, DirtError, DirtOptions, DirtStats, MAX_BUCKETS, MAX_CELL_BUCKETS, MAX_TILE_SIZE,
 };
@@ -61,12 +61,8 @@ fn validate(view: &Pinhole, opts: &DirtOptions) -> Result<(), DirtError> {
     Ok(())
 }
 
-pub(super) fn build(
-    mesh: &TriangleMesh,
-    view: &Pinhole,
-    opts: &DirtOptions,
-) -> Result<DirtCapture, DirtError> {
-    let t_start = Instant::now();
+/// The cell grid of `view` (checked against the size limits).
+fn grid(view: &Pinhole, opts: &DirtOptions) -> Result<Grid, DirtError> {
     validate(view, opts)?;
     let s = opts.tile_size;
     let cells_x = view.width.div_ceil(s);
@@ -78,26 +74,85 @@ pub(super) fn build(
             opts.buckets
         )));
     }
-    let band_rows = cells_y.div_ceil(TARGET_BANDS).max(1);
-    let grid = Grid {
+    Ok(Grid {
         s,
         cells_x,
         cells_y,
         buckets: opts.buckets,
-        band_rows,
-    };
-    let bands = cells_y.div_ceil(band_rows);
+        band_rows: cells_y.div_ceil(TARGET_BANDS).max(1),
+    })
+}
+
+pub(super) fn build(
+    mesh: &TriangleMesh,
+    view: &Pinhole,
+    opts: &DirtOptions,
+) -> Result<DirtCapture, DirtError> {
+    let t_start = Instant::now();
+    let grid = grid(view, opts)?;
     let xf = ViewXf::new(view, opts.near as f64);
+    let setups = xf.setup_all(mesh);
+    finish(mesh, view, opts, grid, &xf, setups, ms(t_start))
+}
+
+/// The captures of several views of one mesh (the cube map's faces), with the triangle setup
+/// done in one pass over the mesh for all of them ([`ViewXf::setup_all_views`]); each face's
+/// entry budget is what the faces before it left of `opts.max_entries`.
+pub(super) fn build_views(
+    mesh: &TriangleMesh,
+    views: &[Pinhole],
+    opts: &DirtOptions,
+) -> Result<Vec<DirtCapture>, DirtError> {
+    let t_start = Instant::now();
+    let grids = views
+        .iter()
+        .map(|v| grid(v, opts))
+        .collect::<Result<Vec<_>, _>>()?;
+    let xfs: Vec<ViewXf> = views
+        .iter()
+        .map(|v| ViewXf::new(v, opts.near as f64))
+        .collect();
+    let setups = ViewXf::setup_all_views(&xfs, mesh);
+    let setup_ms = ms(t_start) / views.len().max(1) as f64;
+    let mut left = opts.max_entries;
+    let mut out = Vec::with_capacity(views.len());
+    for (((view, grid), xf), setups) in views.iter().zip(grids).zip(&xfs).zip(setups) {
+        let face_opts = DirtOptions {
+            max_entries: left.max(1),
+            ..*opts
+        };
+        let cap = finish(mesh, view, &face_opts, grid, xf, setups, setup_ms)?;
+        left = left.saturating_sub(cap.stats.entries);
+        out.push(cap);
+    }
+    Ok(out)
+}
+
+/// Binning, fill and assembly of one view from its set-up triangles (`setup_before` ms were
+/// spent setting them up).
+#[allow(clippy::too_many_arguments)]
+fn finish(
+    mesh: &TriangleMesh,
+    view: &Pinhole,
+    opts: &DirtOptions,
+    grid: Grid,
+    xf: &ViewXf,
+    setups: Setups,
+    setup_before: f64,
+) -> Result<DirtCapture, DirtError> {
+    let t_start = Instant::now();
+    let (s, cells_x, cells_y, band_rows) = (grid.s, grid.cells_x, grid.cells_y, grid.band_rows);
+    let cell_count = cells_x as u64 * cells_y as u64;
+    let bands = cells_y.div_ceil(band_rows);
     let ntri = mesh.triangle_count();
 
-    // 1. Setup + binning: which bands each triangle's clipped projection can touch.
-    let spans: Vec<(u32, u32)> = (0..ntri)
-        .into_par_iter()
-        .with_min_len(1024)
-        .map(|t| {
-            xf.setup(mesh, t)
-                .and_then(|tri| tri.poly.range(1))
-                .and_then(|(y0, y1)| Grid::span(y0, y1, s, 0, cells_y))
+    // 1. Binning: which bands each set-up triangle's clipped projection touches.
+    let t_bin = Instant::now();
+    let spans: Vec<(u32, u32)> = setups
+        .entries
+        .iter()
+        .map(|e| {
+            Grid::span(e.y.0, e.y.1, s, 0, cells_y)
                 .map_or((1, 0), |(r0, r1)| (r0 / band_rows, r1 / band_rows))
         })
         .collect();
@@ -114,16 +169,16 @@ pub(super) fn build(
     for b in 0..bands as usize {
         band_start[b + 1] += band_start[b];
     }
-    let mut band_tris = vec![0u32; band_start[bands as usize] as usize];
+    let mut band_entries = vec![0u32; band_start[bands as usize] as usize];
     let mut cursor = band_start.clone();
-    for (t, &(b0, b1)) in spans.iter().enumerate() {
+    for (i, &(b0, b1)) in spans.iter().enumerate() {
         for b in b0..=b1 {
-            band_tris[cursor[b as usize] as usize] = t as u32;
+            band_entries[cursor[b as usize] as usize] = i as u32;
             cursor[b as usize] += 1;
         }
     }
     drop(spans);
-    let setup_ms = ms(t_start);
+    let setup_ms = setup_before + ms(t_bin);
 
     // 2. Per band: clip, Fill Depth, count / prefix / fill.
     let t_fill = Instant::now();
@@ -131,9 +186,9 @@ pub(super) fn build(
     let outs: Vec<Result<BandOut, DirtError>> = (0..bands)
         .into_par_iter()
         .map_init(Vec::new, |frags, band| {
-            let tris = &band_tris
+            let entries = &band_entries
                 [band_start[band as usize] as usize..band_start[band as usize + 1] as usize];
-            fill_band(mesh, &xf, &grid, opts, band, tris, frags, &budget)
+            fill_band(&setups, xf, &grid, opts, band, entries, frags, &budget)
         })
         .collect();
     let outs: Vec<BandOut> = outs.into_iter().collect::<Result<_, _>>()?;
@@ -202,7 +257,7 @@ pub(super) fn build(
         },
     };
     cap.stats.bytes = cap.bytes();
-    cap.stats.total_ms = ms(t_start);
+    cap.stats.total_ms = setup_before + ms(t_start);
     Ok(cap)
 }
 

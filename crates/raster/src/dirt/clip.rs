@@ -97,38 +97,10 @@ impl Poly {
     }
 
     /// Component-wise min and max over the polygon clipped to the slab
-    /// `lo <= p[axis] <= hi`, without building the clipped polygon: its vertices are this
-    /// polygon's vertices inside the slab plus its edges' crossings of the two lines (the same
-    /// points two Sutherland-Hodgman steps would produce). `None` if the slab misses the
-    /// polygon.
+    /// `lo <= p[axis] <= hi` ([`span_in_slab`]).
     #[inline]
     pub fn span_in_slab(&self, axis: usize, lo: f64, hi: f64) -> Option<(DVec3, DVec3)> {
-        let n = self.n;
-        if n == 0 {
-            return None;
-        }
-        let mut min = DVec3::INFINITY;
-        let mut max = DVec3::NEG_INFINITY;
-        let mut a = self.v[n - 1];
-        for i in 0..n {
-            let b = self.v[i];
-            if b[axis] >= lo && b[axis] <= hi {
-                min = min.min(b);
-                max = max.max(b);
-            }
-            for line in [lo, hi] {
-                // Strict crossing (an endpoint on the line is a vertex handled above).
-                if (a[axis] < line && b[axis] > line) || (a[axis] > line && b[axis] < line) {
-                    let t = (line - a[axis]) / (b[axis] - a[axis]);
-                    let mut p = a + (b - a) * t;
-                    p[axis] = line;
-                    min = min.min(p);
-                    max = max.max(p);
-                }
-            }
-            a = b;
-        }
-        (min.x <= max.x).then_some((min, max))
+        span_in_slab(self.verts(), axis, lo, hi)
     }
 
     /// Min and max of `p.z` over the polygon clipped to the strip `left <= p.x <= right`
@@ -153,6 +125,38 @@ impl Poly {
         }
         Some((lo, hi))
     }
+}
+
+/// Component-wise min and max over the convex polygon `verts` clipped to the slab
+/// `lo <= p[axis] <= hi`, without building the clipped polygon: its vertices are the
+/// polygon's vertices inside the slab plus its edges' crossings of the two lines (the same
+/// points two Sutherland-Hodgman steps would produce). `None` if the slab misses the polygon.
+#[inline]
+pub fn span_in_slab(verts: &[DVec3], axis: usize, lo: f64, hi: f64) -> Option<(DVec3, DVec3)> {
+    let Some(&last) = verts.last() else {
+        return None;
+    };
+    let mut min = DVec3::INFINITY;
+    let mut max = DVec3::NEG_INFINITY;
+    let mut a = last;
+    for &b in verts {
+        if b[axis] >= lo && b[axis] <= hi {
+            min = min.min(b);
+            max = max.max(b);
+        }
+        for line in [lo, hi] {
+            // Strict crossing (an endpoint on the line is a vertex handled above).
+            if (a[axis] < line && b[axis] > line) || (a[axis] > line && b[axis] < line) {
+                let t = (line - a[axis]) / (b[axis] - a[axis]);
+                let mut p = a + (b - a) * t;
+                p[axis] = line;
+                min = min.min(p);
+                max = max.max(p);
+            }
+        }
+        a = b;
+    }
+    (min.x <= max.x).then_some((min, max))
 }
 
 #[cfg(test)]

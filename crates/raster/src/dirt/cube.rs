@@ -15,27 +15,18 @@ pub struct DirtCube {
 }
 
 impl DirtCube {
-    /// Builds the six faces (each in parallel internally). `opts.max_entries` bounds the
-    /// entries of the whole cube.
+    /// Builds the six faces (the triangle setup in one pass over the mesh for all faces, the
+    /// rest face by face, each in parallel internally). `opts.max_entries` bounds the entries
+    /// of the whole cube.
     pub fn build(
         mesh: &TriangleMesh,
         cube: &CubeMap,
         opts: &DirtOptions,
     ) -> Result<DirtCube, DirtError> {
-        let mut faces = Vec::with_capacity(6);
-        let mut left = opts.max_entries;
-        for i in 0..6 {
-            let face_opts = DirtOptions {
-                max_entries: left.max(1),
-                ..*opts
-            };
-            let f = DirtCapture::build(mesh, &cube.face_camera(i), &face_opts)?;
-            left = left.saturating_sub(f.stats().entries);
-            faces.push(f);
-        }
+        let views: Vec<_> = (0..6).map(|i| cube.face_camera(i)).collect();
         Ok(DirtCube {
             cube: cube.clone(),
-            faces,
+            faces: super::build::build_views(mesh, &views, opts)?,
         })
     }
 

@@ -16,9 +16,10 @@
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use parallax_scene::TriangleMesh;
+use glam::DVec3;
 
-use super::setup::{TriSetup, ViewXf};
+use super::clip::Poly;
+use super::setup::{SetupEntry, Setups, ViewXf};
 use super::{
     CellDepth, CellRecord, DirtError, DirtOptions, FILM_MARGIN_PX, bucket_index, bucket_mask,
     bucket_scale,
@@ -51,12 +52,20 @@ impl Grid {
     #[inline]
     pub fn span(v0: f64, v1: f64, s: u32, lo: u32, hi: u32) -> Option<(u32, u32)> {
         let m = FILM_MARGIN_PX;
-        let a = ((v0 - m) / s as f64).floor() - 1.0;
-        let b = ((v1 + m) / s as f64).floor();
+        let a = floor((v0 - m) / s as f64);
+        let b = floor((v1 + m) / s as f64);
         let a = a.max(lo as f64);
         let b = b.min(hi as f64 - 1.0);
         (a <= b).then_some((a as u32, b as u32))
     }
+}
+
+/// `x.floor()` for the film coordinates of the fill (finite, well inside the i64 range after
+/// the guard-band clip), without the library call `f64::floor` compiles to on baseline x86-64.
+#[inline(always)]
+fn floor(x: f64) -> f64 {
+    let i = x as i64 as f64;
+    if i > x { i - 1.0 } else { i }
 }
 
 /// A band's share of the result.
@@ -89,7 +98,7 @@ fn widen(zlo: f64, zhi: f64, abs_margin: f64) -> (f32, f32) {
 /// `[top, bottom]` cuts the triangle to `row` (`(min, max)` of its vertices).
 #[inline(always)]
 fn cell_w_range(
-    tri: &TriSetup,
+    tri: &SetupEntry,
     row_w: (f64, f64),
     (left, right): (f64, f64),
     (top, bottom): (f64, f64),
@@ -99,20 +108,63 @@ fn cell_w_range(
     };
     let (ax, bx) = (p.px * left, p.px * right);
     let (ay, by) = (p.py * top, p.py * bottom);
-    let lo = (p.p0 + ax.min(bx) + ay.min(by)).max(row_w.0);
-    let hi = (p.p0 + ax.max(bx) + ay.max(by)).min(row_w.1);
+    let (x_lo, x_hi) = if ax < bx { (ax, bx) } else { (bx, ax) };
+    let (y_lo, y_hi) = if ay < by { (ay, by) } else { (by, ay) };
+    let lo = p.p0 + x_lo + y_lo;
+    let hi = p.p0 + x_hi + y_hi;
+    let lo = if lo > row_w.0 { lo } else { row_w.0 };
+    let hi = if hi < row_w.1 { hi } else { row_w.1 };
     if lo <= hi { (lo, hi) } else { row_w }
 }
 
-/// Rasterizes the band's triangles (ascending ids) into its cells.
+/// The x and w ranges of a polygon cut to a row slab.
+struct RowSpan {
+    x: (f64, f64),
+    w: (f64, f64),
+}
+
+/// [`span_in_slab`] along film y, for x and w only, with plain comparisons (the values are
+/// finite): the exact ranges over the polygon cut to `top <= y <= bottom`.
+#[inline(always)]
+fn row_span(verts: &[DVec3], top: f64, bottom: f64) -> Option<RowSpan> {
+    let mut x = (f64::INFINITY, f64::NEG_INFINITY);
+    let mut w = x;
+    let mut add = |px: f64, pw: f64| {
+        x = (
+            if px < x.0 { px } else { x.0 },
+            if px > x.1 { px } else { x.1 },
+        );
+        w = (
+            if pw < w.0 { pw } else { w.0 },
+            if pw > w.1 { pw } else { w.1 },
+        );
+    };
+    let mut a = *verts.last()?;
+    for &b in verts {
+        if b.y >= top && b.y <= bottom {
+            add(b.x, b.z);
+        }
+        for line in [top, bottom] {
+            if (a.y < line && b.y > line) || (a.y > line && b.y < line) {
+                let t = (line - a.y) / (b.y - a.y);
+                add(a.x + (b.x - a.x) * t, a.z + (b.z - a.z) * t);
+            }
+        }
+        a = b;
+    }
+    (x.0 <= x.1).then_some(RowSpan { x, w })
+}
+
+/// Rasterizes the band's set-up triangles (`entries` into `setups`, ascending triangle ids)
+/// into its cells.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn fill_band(
-    mesh: &TriangleMesh,
+    setups: &Setups,
     xf: &ViewXf,
     g: &Grid,
     opts: &DirtOptions,
     band: u32,
-    tris: &[u32],
+    entries: &[u32],
     frags: &mut Vec<Fragment>,
     budget: &AtomicU64,
 ) -> Result<BandOut, DirtError> {
@@ -124,29 +176,29 @@ pub(super) fn fill_band(
     let ncells = ((row1 - row0) * g.cells_x) as usize;
     let mut zmin = vec![f32::INFINITY; ncells];
     let mut zmax = vec![f32::NEG_INFINITY; ncells];
-    for &t in tris {
-        let Some(tri) = xf.setup(mesh, t as usize) else {
-            continue;
-        };
+    for &e in entries {
+        let tri = &setups.entries[e as usize];
+        let poly = setups.poly(tri);
+        let t = tri.tri;
         let before = frags.len();
-        let Some((y0, y1)) = tri.poly.range(1) else {
-            continue;
-        };
-        let Some((r0, r1)) = Grid::span(y0, y1, g.s, row0, row1) else {
+        let Some((r0, r1)) = Grid::span(tri.y.0, tri.y.1, g.s, row0, row1) else {
             continue;
         };
         for r in r0..=r1 {
             let top = r as f64 * s - m;
             let bottom = ((r as f64 + 1.0) * s).min(xf.h) + m;
-            let Some((lo, hi)) = tri.poly.span_in_slab(1, top, bottom) else {
+            let Some(row) = row_span(poly, top, bottom) else {
                 continue;
             };
-            let Some((c0, c1)) = Grid::span(lo.x, hi.x, g.s, 0, g.cells_x) else {
+            let Some((c0, c1)) = Grid::span(row.x.0, row.x.1, g.s, 0, g.cells_x) else {
                 continue;
             };
             let row_poly = match opts.cell_depth {
                 CellDepth::Exact => {
-                    Some(tri.poly.clip_axis(1, top, 1.0).clip_axis(1, bottom, -1.0))
+                    let mut p = Poly::EMPTY;
+                    p.v[..poly.len()].copy_from_slice(poly);
+                    p.n = poly.len();
+                    Some(p.clip_axis(1, top, 1.0).clip_axis(1, bottom, -1.0))
                 }
                 CellDepth::Corners => None,
             };
@@ -154,7 +206,7 @@ pub(super) fn fill_band(
                 let left = c as f64 * s - m;
                 let right = ((c as f64 + 1.0) * s).min(xf.w) + m;
                 // The cut is convex: the column overlaps it iff it overlaps its x range.
-                if right < lo.x || left > hi.x {
+                if right < row.x.0 || left > row.x.1 {
                     continue;
                 }
                 let (wlo, whi) = match &row_poly {
@@ -162,15 +214,19 @@ pub(super) fn fill_band(
                         Some(r) => r,
                         None => continue,
                     },
-                    None => cell_w_range(&tri, (lo.z, hi.z), (left, right), (top, bottom)),
+                    None => cell_w_range(tri, row.w, (left, right), (top, bottom)),
                 };
                 // w = 1 / depth > 0 after the near clip.
                 let (zlo, zhi) = widen(1.0 / whi, 1.0 / wlo, tri.abs_margin);
                 let cell = (r - row0) * g.cells_x + c;
                 // Fill Depth (§4.1.1).
                 let k = cell as usize;
-                zmin[k] = zmin[k].min(zlo);
-                zmax[k] = zmax[k].max(zhi);
+                if zlo < zmin[k] {
+                    zmin[k] = zlo;
+                }
+                if zhi > zmax[k] {
+                    zmax[k] = zhi;
+                }
                 frags.push(Fragment {
                     cell,
                     tri: t,

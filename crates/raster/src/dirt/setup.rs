@@ -14,9 +14,10 @@
 //! eye, seen edge-on: evaluating it there would amplify rounding; such a triangle's depth
 //! range in a cell is the range over its row slab instead (wider, still conservative).
 
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 use parallax_scene::TriangleMesh;
 use parallax_scene::camera::Pinhole;
+use rayon::prelude::*;
 
 use super::clip::Poly;
 
@@ -36,23 +37,50 @@ pub(super) struct WPlane {
     pub py: f64,
 }
 
-/// A set-up triangle: its clipped projection (vertices `(film x, film y, w)`), its `w` plane
-/// and the absolute depth margin for it.
-pub(super) struct TriSetup {
-    pub poly: Poly,
+/// A set-up triangle: its clipped projection is `Setups::verts[v0..v0 + n]` (vertices
+/// `(film x, film y, w)`), with its `w` plane and the absolute depth margin for it.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct SetupEntry {
+    pub tri: u32,
+    pub v0: u32,
+    pub n: u32,
     pub plane: Option<WPlane>,
     pub abs_margin: f64,
+    /// Film y range of the polygon.
+    pub y: (f64, f64),
 }
+
+/// Every triangle of a mesh set up once for one view, in triangle order (culled ones left
+/// out), so the bands of the fill share the work.
+#[derive(Default)]
+pub(super) struct Setups {
+    pub entries: Vec<SetupEntry>,
+    pub verts: Vec<DVec3>,
+}
+
+impl Setups {
+    /// The polygon of entry `e`.
+    #[inline]
+    pub fn poly(&self, e: &SetupEntry) -> &[DVec3] {
+        &self.verts[e.v0 as usize..(e.v0 + e.n) as usize]
+    }
+}
+
+/// Triangles per task of [`ViewXf::setup_all`].
+const SETUP_CHUNK: usize = 2048;
 
 /// The view in f64: rotation rows (camera space = R (p - eye)), projection constants and the
 /// near + guard clip planes (camera space, `n . q + d >= 0` inside).
 pub(super) struct ViewXf {
     rows: [DVec3; 3],
+    /// The guard planes' slopes (`q.x + ax_lo q.z >= 0` ...).
+    slopes: [f64; 4],
+    /// `[a0, 1 / ax, b0, 1 / by]`: film x = `(u - a0) / ax`, film y = `(b0 - v) / by` of the
+    /// slopes `u = q.x / depth`, `v = q.y / depth`.
+    film: [f64; 4],
+    near: f64,
     eye: DVec3,
     eye_mag: f64,
-    tx: f64,
-    ty: f64,
-    shift: (f64, f64),
     pub w: f64,
     pub h: f64,
     planes: [(DVec3, f64); 5],
@@ -74,17 +102,23 @@ impl ViewXf {
         let ay_hi = (1.0 + gy + sy) * ty;
         let ay_lo = (-1.0 - gy + sy) * ty;
         let eye = view.frame.position.as_dvec3();
+        let rows = [
+            b.x_axis.as_dvec3(),
+            b.y_axis.as_dvec3(),
+            b.z_axis.as_dvec3(),
+        ];
         ViewXf {
-            rows: [
-                b.x_axis.as_dvec3(),
-                b.y_axis.as_dvec3(),
-                b.z_axis.as_dvec3(),
+            rows,
+            slopes: [ax_lo, ax_hi, ay_lo, ay_hi],
+            film: [
+                (sx - 1.0) * tx,
+                w / (2.0 * tx),
+                (sy + 1.0) * ty,
+                h / (2.0 * ty),
             ],
+            near,
             eye,
             eye_mag: eye.abs().max_element(),
-            tx,
-            ty,
-            shift: (sx, sy),
             w,
             h,
             planes: [
@@ -97,9 +131,9 @@ impl ViewXf {
         }
     }
 
-    #[inline]
-    fn to_camera(&self, p: Vec3) -> DVec3 {
-        let d = p.as_dvec3() - self.eye;
+    #[inline(always)]
+    fn to_camera(&self, p: DVec3) -> DVec3 {
+        let d = p - self.eye;
         DVec3::new(
             self.rows[0].dot(d),
             self.rows[1].dot(d),
@@ -107,75 +141,158 @@ impl ViewXf {
         )
     }
 
+    /// Signed distances of camera point `q` to the five clip planes (`>= 0` inside): the
+    /// planes of [`Self::planes`] written out (two non-zero terms each).
+    #[inline(always)]
+    fn plane_distances(&self, q: DVec3) -> [f64; 5] {
+        let [ax_lo, ax_hi, ay_lo, ay_hi] = self.slopes;
+        [
+            -q.z - self.near,
+            q.x + ax_lo * q.z,
+            -q.x - ax_hi * q.z,
+            q.y + ay_lo * q.z,
+            -q.y - ay_hi * q.z,
+        ]
+    }
+
     /// Camera point (in front) -> (film x, film y, 1 / view depth); inverse of
-    /// `Pinhole::camera_dir`.
-    #[inline]
+    /// `Pinhole::camera_dir` (as `(u - a0) / ax` and `(b0 - v) / by` of the slopes `u, v`).
+    #[inline(always)]
     fn project(&self, q: DVec3) -> DVec3 {
         let inv = 1.0 / -q.z;
-        let nx = q.x * inv / self.tx - self.shift.0;
-        let ny = q.y * inv / self.ty - self.shift.1;
-        DVec3::new((nx + 1.0) * 0.5 * self.w, (1.0 - ny) * 0.5 * self.h, inv)
+        let [a0, inv_ax, b0, inv_by] = self.film;
+        DVec3::new((q.x * inv - a0) * inv_ax, (b0 - q.y * inv) * inv_by, inv)
     }
 
     /// The `w` plane of the camera-space triangle `q` (module docs).
     fn w_plane(&self, q: &[DVec3; 3]) -> Option<WPlane> {
         let n = (q[1] - q[0]).cross(q[2] - q[0]);
         let d = n.dot(q[0]);
-        let scale = n.length() * (q[0].length() + q[1].length() + q[2].length());
-        if !(d.abs() > EDGE_ON * scale) {
+        // |n| |q| bounded from above without square roots (1-norms): a stricter test.
+        let qn = q[0].abs().element_sum() + q[1].abs().element_sum() + q[2].abs().element_sum();
+        if !(d.abs() > EDGE_ON * n.abs().element_sum() * qn) {
             return None;
         }
         // u = a0 + ax x, v = b0 - by y with the projection of `project`.
-        let ax = 2.0 * self.tx / self.w;
-        let a0 = (self.shift.0 - 1.0) * self.tx;
-        let by = 2.0 * self.ty / self.h;
-        let b0 = (self.shift.1 + 1.0) * self.ty;
+        let [a0, inv_ax, b0, inv_by] = self.film;
+        let inv_d = 1.0 / d;
         Some(WPlane {
-            p0: (n.x * a0 + n.y * b0 - n.z) / d,
-            px: n.x * ax / d,
-            py: -n.y * by / d,
+            p0: (n.x * a0 + n.y * b0 - n.z) * inv_d,
+            px: n.x * inv_d / inv_ax,
+            py: -n.y * inv_d / inv_by,
         })
     }
 
-    /// Triangle `t` set up for the fill (module docs); `None` if nothing of it is left in the
-    /// view (or it is not finite).
-    pub fn setup(&self, mesh: &TriangleMesh, t: usize) -> Option<TriSetup> {
-        let [a, b, c] = mesh.triangle(t);
-        let q = [self.to_camera(a), self.to_camera(b), self.to_camera(c)];
+    /// Sets triangle `t` up for the fill (module docs) and appends it to `out`, unless
+    /// nothing of it is left in the view (or it is not finite).
+    #[inline(always)]
+    fn setup_into(&self, t: usize, p: &[DVec3; 3], world_mag: f64, out: &mut Setups) {
+        let q = [
+            self.to_camera(p[0]),
+            self.to_camera(p[1]),
+            self.to_camera(p[2]),
+        ];
         if !q.iter().all(|v| v.is_finite()) {
-            return None;
+            return;
         }
         // Which planes cut the triangle (a bit per plane), or cull it.
+        let dist = [
+            self.plane_distances(q[0]),
+            self.plane_distances(q[1]),
+            self.plane_distances(q[2]),
+        ];
         let mut cut = 0u32;
-        for (k, &(n, d)) in self.planes.iter().enumerate() {
-            let inside = q.map(|v| n.dot(v) + d >= 0.0);
-            match inside {
-                [false, false, false] => return None,
+        for k in 0..5 {
+            match [dist[0][k] >= 0.0, dist[1][k] >= 0.0, dist[2][k] >= 0.0] {
+                [false, false, false] => return,
                 [true, true, true] => {}
                 _ => cut |= 1 << k,
             }
         }
-        let mut poly = Poly::from_triangle(q);
-        if cut != 0 {
+        let v0 = out.verts.len();
+        if cut == 0 {
+            out.verts
+                .extend([self.project(q[0]), self.project(q[1]), self.project(q[2])]);
+        } else {
+            let mut poly = Poly::from_triangle(q);
             for (k, &(n, d)) in self.planes.iter().enumerate() {
                 if cut >> k & 1 != 0 {
                     poly = poly.clip_plane(n, d);
                     if poly.n == 0 {
-                        return None;
+                        return;
                     }
                 }
             }
+            out.verts
+                .extend(poly.verts().iter().map(|&v| self.project(v)));
         }
-        for v in &mut poly.v[..poly.n] {
-            *v = self.project(*v);
-        }
-        let world_mag = a.abs().max(b.abs()).max(c.abs()).max_element() as f64;
-        let dist = q.iter().map(|v| v.length()).fold(0.0, f64::max);
-        let abs_margin = DEPTH_ABS_ULPS * f32::EPSILON as f64 * (dist + world_mag + self.eye_mag);
-        Some(TriSetup {
-            poly,
+        let verts = &out.verts[v0..];
+        let y = verts
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                (lo.min(v.y), hi.max(v.y))
+            });
+        // The farthest vertex from the eye, bounded by its 1-norm (no square root).
+        let far = q.iter().map(|v| v.abs().element_sum()).fold(0.0, f64::max);
+        out.entries.push(SetupEntry {
+            tri: t as u32,
+            v0: v0 as u32,
+            n: verts.len() as u32,
             plane: self.w_plane(&q),
-            abs_margin,
-        })
+            abs_margin: DEPTH_ABS_ULPS * f32::EPSILON as f64 * (far + world_mag + self.eye_mag),
+            y,
+        });
+    }
+
+    /// Every triangle of `mesh` set up, in parallel chunks kept in order.
+    pub fn setup_all(&self, mesh: &TriangleMesh) -> Setups {
+        Self::setup_all_views(std::slice::from_ref(self), mesh)
+            .pop()
+            .expect("one view")
+    }
+
+    /// Every triangle of `mesh` set up for each of `views` in one pass over the mesh (each
+    /// triangle's corners are read and converted once for all views), in parallel chunks
+    /// kept in order; `out[i]` is view `i`'s.
+    pub fn setup_all_views(views: &[ViewXf], mesh: &TriangleMesh) -> Vec<Setups> {
+        let n = mesh.triangle_count();
+        let chunks: Vec<Vec<Setups>> = (0..n.div_ceil(SETUP_CHUNK))
+            .into_par_iter()
+            .map(|c| {
+                let mut out: Vec<Setups> = views
+                    .iter()
+                    .map(|_| Setups {
+                        entries: Vec::with_capacity(SETUP_CHUNK),
+                        verts: Vec::with_capacity(3 * SETUP_CHUNK),
+                    })
+                    .collect();
+                for t in c * SETUP_CHUNK..((c + 1) * SETUP_CHUNK).min(n) {
+                    let [a, b, c] = mesh.triangle(t);
+                    let world_mag = a.abs().max(b.abs()).max(c.abs()).max_element() as f64;
+                    let p = [a.as_dvec3(), b.as_dvec3(), c.as_dvec3()];
+                    for (xf, o) in views.iter().zip(&mut out) {
+                        xf.setup_into(t, &p, world_mag, o);
+                    }
+                }
+                out
+            })
+            .collect();
+        (0..views.len())
+            .map(|v| {
+                let mut all = Setups {
+                    entries: Vec::with_capacity(chunks.iter().map(|c| c[v].entries.len()).sum()),
+                    verts: Vec::with_capacity(chunks.iter().map(|c| c[v].verts.len()).sum()),
+                };
+                for c in &chunks {
+                    let base = all.verts.len() as u32;
+                    all.entries.extend(c[v].entries.iter().map(|e| SetupEntry {
+                        v0: e.v0 + base,
+                        ..*e
+                    }));
+                    all.verts.extend_from_slice(&c[v].verts);
+                }
+                all
+            })
+            .collect()
     }
 }
