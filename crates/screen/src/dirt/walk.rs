@@ -250,6 +250,7 @@ pub(crate) fn walk(
     q.counters.views += 1;
     let (_, bounds) = cap.mip_arrays();
     let records = cap.cell_records();
+    let offsets = cap.offsets();
     let s = vc.tile as f32;
     let mut xs = Axis::new(r.step_x, vc.a0, vc.ax * s, r, r.o.x, r.d.x);
     let mut ys = Axis::new(r.step_y, vc.b0, -vc.by * s, r, r.o.y, r.d.y);
@@ -287,6 +288,9 @@ pub(crate) fn walk(
         };
         let overlaps = if level == 0 {
             let index = cy as usize * vc.cells_x as usize + cx as usize;
+            // The cell's bucket offsets do not depend on its record: start their load now so
+            // that the two cache misses overlap.
+            prefetch(offsets, index * vc.buckets as usize);
             let rec = &records[index];
             let overlaps = z_hi >= rec.zmin && z_lo <= rec.zmax;
             if overlaps {
@@ -413,6 +417,20 @@ fn behind(t: f32, boundary_px: f32, film_at_t: impl FnOnce() -> f32) -> f32 {
     } else {
         f32::INFINITY
     }
+}
+
+/// Hints the CPU to bring `data[i]` into the cache (no effect off x86-64, or out of range).
+#[inline(always)]
+fn prefetch<T>(data: &[T], i: usize) {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(x) = data.get(i) {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        // SAFETY: a prefetch reads nothing (it is a hint, even for an invalid address), and
+        // SSE is part of the x86-64 baseline.
+        unsafe { _mm_prefetch::<_MM_HINT_T0>((x as *const T).cast()) };
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (data, i);
 }
 
 /// `floor(f)` clamped to `[0, n)`.
