@@ -5,16 +5,24 @@
 //! | name | structure | hits | built from |
 //! |---|---|---|---|
 //! | `bvh` | binned-SAH 4-wide BVH ([`parallax_bvh::Bvh`]) | exact | the scene's triangles |
+//! | `dirt` | DIRT's per-view primitive lists ([`parallax_screen::DirtTracer`], Vardis et al. 2017) | exact | a capture of the camera's view (a pinhole camera; other models: none) and of a cube map around the camera |
 //!
 //! Image-space structures that need the camera (DIRT's views around it, the layered depth
 //! cube's capture) add their variant here; [`TracerOptions`] carries their parameters.
+//!
+//! | option | type | default | meaning |
+//! |---|---|---|---|
+//! | `dirt` | [`DirtViewsOptions`] | face 128, S 4, B 16 | DIRT's cube face size, tile size `S` and buckets `B` (`--dirt-face`, `--dirt-tile`, `--dirt-buckets`) |
 
 use std::time::Instant;
 
+use glam::{Vec2, Vec3};
 use parallax_bvh::Bvh;
 use parallax_core::WorldTracer;
+use parallax_raster::dirt::{DirtOptions, DirtViews, DirtViewsOptions};
 use parallax_scene::Scene;
-use parallax_scene::camera::Camera;
+use parallax_scene::camera::{Camera, CameraModel};
+use parallax_screen::DirtTracer;
 
 use crate::error::{PathError, Result};
 
@@ -24,14 +32,17 @@ pub enum TracerKind {
     /// The exact BVH over the scene's triangles (the reference).
     #[default]
     Bvh,
+    /// DIRT: Hi-Z and bucket tracing through per-view primitive lists, exact.
+    Dirt,
 }
 
 impl TracerKind {
-    pub const ALL: [TracerKind; 1] = [TracerKind::Bvh];
+    pub const ALL: [TracerKind; 2] = [TracerKind::Bvh, TracerKind::Dirt];
 
     pub fn name(self) -> &'static str {
         match self {
             TracerKind::Bvh => "bvh",
+            TracerKind::Dirt => "dirt",
         }
     }
 
@@ -46,9 +57,41 @@ impl TracerKind {
     }
 }
 
-/// Parameters of the structures that have any (none for the BVH).
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct TracerOptions {}
+/// Parameters of the structures that have any (none for the BVH; see the module table).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TracerOptions {
+    pub dirt: DirtViewsOptions,
+}
+
+/// DIRT's configuration for path tracing: 128^2 cube faces, 4 x 4 tiles, 16 buckets (the
+/// fastest trace of `bench dirt`'s sweeps at a build close to the BVH's; docs/notes/dirt.md).
+pub const DIRT_DEFAULTS: DirtViewsOptions = DirtViewsOptions {
+    face_size: 128,
+    capture: DirtOptions {
+        tile_size: 4,
+        buckets: 16,
+        near: 1e-4,
+        max_entries: 1 << 28,
+        cell_depth: parallax_raster::dirt::CellDepth::Corners,
+    },
+};
+
+impl Default for TracerOptions {
+    fn default() -> Self {
+        Self {
+            dirt: DIRT_DEFAULTS,
+        }
+    }
+}
+
+/// Where `camera` sits: the origin of its ray through the film centre (the centre of DIRT's
+/// cube map; any point is exact, the camera's own is where the views are finest).
+pub fn camera_centre(camera: &Camera) -> Vec3 {
+    let film = Vec2::new(camera.width() as f32, camera.height() as f32) * 0.5;
+    camera
+        .generate_ray(film, Vec2::splat(0.5), 1)
+        .map_or(Vec3::ZERO, |r| r.ray.origin)
+}
 
 /// A built tracer and what building it cost.
 pub struct BuiltTracer {
@@ -61,15 +104,27 @@ pub struct BuiltTracer {
 pub fn build_tracer(
     kind: TracerKind,
     scene: &Scene,
-    _camera: &Camera,
-    _opts: &TracerOptions,
+    camera: &Camera,
+    opts: &TracerOptions,
 ) -> Result<BuiltTracer> {
     let start = Instant::now();
+    let build_error = |message: String| PathError::Build {
+        tracer: kind.name().into(),
+        message,
+    };
     let tracer: Box<dyn WorldTracer> = match kind {
-        TracerKind::Bvh => Box::new(Bvh::try_build(&scene.mesh).map_err(|e| PathError::Build {
-            tracer: kind.name().into(),
-            message: e.to_string(),
-        })?),
+        TracerKind::Bvh => {
+            Box::new(Bvh::try_build(&scene.mesh).map_err(|e| build_error(e.to_string()))?)
+        }
+        TracerKind::Dirt => {
+            let pinhole = match camera {
+                Camera::Pinhole(p) => Some(p),
+                _ => None,
+            };
+            let views = DirtViews::build(&scene.mesh, pinhole, camera_centre(camera), &opts.dirt)
+                .map_err(|e| build_error(e.to_string()))?;
+            Box::new(DirtTracer::new(views))
+        }
     };
     Ok(BuiltTracer {
         tracer,
@@ -87,6 +142,42 @@ mod tests {
             assert_eq!(TracerKind::parse(k.name()).unwrap(), k);
         }
         let e = TracerKind::parse("octree").unwrap_err().to_string();
-        assert!(e.contains("octree") && e.contains("bvh"), "{e}");
+        assert!(
+            e.contains("octree") && e.contains("bvh") && e.contains("dirt"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn dirt_options_out_of_range_are_build_errors() {
+        let scene = Scene::load("cornell").unwrap();
+        let desc = scene.camera(None).unwrap();
+        let camera = Camera::new(
+            parallax_scene::camera::ModelKind::Pinhole,
+            &desc,
+            16,
+            12,
+            &Default::default(),
+        )
+        .unwrap();
+        for (face, buckets) in [(0, 16), (5000, 16), (64, 0), (64, 4096)] {
+            let opts = TracerOptions {
+                dirt: DirtViewsOptions {
+                    face_size: face,
+                    capture: DirtOptions {
+                        buckets,
+                        ..DIRT_DEFAULTS.capture
+                    },
+                },
+            };
+            let e = build_tracer(TracerKind::Dirt, &scene, &camera, &opts)
+                .err()
+                .expect("out of range")
+                .to_string();
+            assert!(e.contains("dirt") && e.contains("must be in"), "{e}");
+        }
+        let ok =
+            build_tracer(TracerKind::Dirt, &scene, &camera, &TracerOptions::default()).unwrap();
+        assert_eq!(ok.tracer.name(), "dirt");
     }
 }

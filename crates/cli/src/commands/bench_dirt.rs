@@ -6,8 +6,12 @@ use std::path::PathBuf;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use parallax_path::bench::dirt::{DirtBenchOptions, DirtBenchReport, run};
+use parallax_path::bench::dirt_path::path_agreement;
 use parallax_path::bench::dirt_rays::RayOptions;
+use parallax_path::{LightOverrides, PathOptions, TracerOptions, apply_lighting};
 use parallax_raster::dirt::{DirtOptions, DirtViewsOptions};
+use parallax_scene::Scene;
+use parallax_scene::camera::{Camera, CameraOptions, ModelKind};
 
 use crate::args::ViewArgs;
 
@@ -20,13 +24,13 @@ pub struct DirtBenchArgs {
     #[arg(long, default_value_t = 512)]
     pub height: u32,
     /// Cube face size in pixels.
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, default_value_t = 128)]
     pub face: u32,
     /// Tile size S (a power of two): one primitive list per S x S pixels.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 4)]
     pub tile: u32,
     /// Depth buckets B per cell.
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, default_value_t = 16)]
     pub buckets: u32,
     /// Interleaved rounds per measurement (the best is reported).
     #[arg(long, default_value_t = 3)]
@@ -43,17 +47,27 @@ pub struct DirtBenchArgs {
     /// Seed of the ray generation.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// GGX alpha of the glossy rays.
-    #[arg(long, default_value_t = 0.1)]
-    pub glossy_alpha: f32,
+    /// glTF roughness of the glossy rays' rough metal (GGX alpha = roughness^2).
+    #[arg(long, default_value_t = 0.3)]
+    pub glossy_roughness: f32,
+    /// Also path-trace the view with the BVH and with DIRT at this many samples per pixel and
+    /// compare every bounce's hits and the images (0: skip).
+    #[arg(long, default_value_t = 0)]
+    pub path_spp: u32,
+    /// Longest path of that comparison (segments).
+    #[arg(long, default_value_t = 5)]
+    pub path_max_depth: u32,
     /// Write the report as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
 }
 
 pub fn run_bench(a: &DirtBenchArgs, quiet: bool) -> Result<()> {
-    if !(a.glossy_alpha.is_finite() && a.glossy_alpha > 0.0 && a.glossy_alpha <= 1.0) {
-        bail!("--glossy-alpha {} must be in (0, 1]", a.glossy_alpha);
+    if !(a.glossy_roughness.is_finite() && a.glossy_roughness > 0.0 && a.glossy_roughness <= 1.0) {
+        bail!(
+            "--glossy-roughness {} must be in (0, 1]",
+            a.glossy_roughness
+        );
     }
     let scene = a.view.load_scene()?;
     let camera = a.view.camera(&scene, a.width, a.height)?;
@@ -79,8 +93,10 @@ pub fn run_bench(a: &DirtBenchArgs, quiet: bool) -> Result<()> {
         },
         rays: RayOptions {
             seed: a.seed,
-            glossy_alpha: a.glossy_alpha,
+            glossy_roughness: a.glossy_roughness,
         },
+        path_spp: a.path_spp,
+        path_max_depth: a.path_max_depth,
     };
     let report = run(&scene, &camera, &opts).context("bench dirt")?;
     if !quiet {
@@ -171,6 +187,38 @@ fn print(r: &DirtBenchReport) {
             m.note
         );
     }
+    if let Some(p) = &r.path {
+        println!(
+            "\nPath tracing, BVH vs DIRT behind the same path tracer: {}x{}, {} spp, max depth {}, same seed; PSNR {:.1} dB, {} pixels differ; build ms BVH {:.1} / DIRT {:.1}; render ms BVH {:.0} / DIRT {:.0}\n",
+            p.width,
+            p.height,
+            p.spp,
+            p.max_depth,
+            p.psnr,
+            p.pixels_differ,
+            p.ms_build_bvh,
+            p.ms_build_dirt,
+            p.ms_render_bvh,
+            p.ms_render_dirt
+        );
+        println!(
+            "| bounce | rays | same prim | ties | same or tie | unmatched | shadow rays | same occlusion |"
+        );
+        println!("|---|---|---|---|---|---|---|---|");
+        for b in &p.bounces {
+            println!(
+                "| {} | {} | {:.6} | {} | {:.6} | {} | {} | {:.6} |",
+                b.bounce,
+                b.rays,
+                b.same_fraction(),
+                b.ties,
+                b.same_or_tie_fraction(),
+                b.unmatched,
+                b.shadow_rays,
+                b.shadow_same as f64 / b.shadow_rays.max(1) as f64
+            );
+        }
+    }
     if !r.sweep.is_empty() {
         println!("\nSweeps over B and S (Fig. 10): build, memory, diffuse rays\n");
         println!(
@@ -194,4 +242,49 @@ fn print(r: &DirtBenchReport) {
             );
         }
     }
+}
+
+/// DIRT's piece of `parallax demo`: the path tracer with DIRT behind it and with the BVH, same
+/// seed, on a small view; writes DIRT's image and prints how many hits agree.
+pub fn demo_view(
+    scene: &Scene,
+    desc: &parallax_scene::CameraDesc,
+    width: u32,
+    height: u32,
+    out: &std::path::Path,
+    quiet: bool,
+) -> Result<()> {
+    let mut scene = scene.clone();
+    apply_lighting(&mut scene, &LightOverrides::default())?;
+    let (w, h) = ((width / 4).max(1), (height / 4).max(1));
+    let camera = Camera::new(ModelKind::Pinhole, desc, w, h, &CameraOptions::default())?;
+    let opts = PathOptions {
+        spp: 2,
+        seed: 1,
+        max_depth: 5,
+        ..PathOptions::default()
+    };
+    let (a, _, dirt) = path_agreement(&scene, &camera, &opts, &TracerOptions::default())?;
+    let path = out.join("dirt_path_traced.png");
+    super::path::write_path_image(&path, &dirt)?;
+    if !quiet {
+        let (rays, same) = a
+            .bounces
+            .iter()
+            .fold((0, 0), |(r, s), b| (r + b.rays, s + b.same));
+        let psnr = if a.psnr.is_finite() {
+            format!("{:.0} dB", a.psnr)
+        } else {
+            "bit-identical".into()
+        };
+        println!(
+            "| dirt_path_traced | DIRT behind the path tracer: {:.4}% of {rays} hits = BVH's, image vs BVH's {psnr} | {w}x{h} | {} | {:.1} | {:.0} | {} |",
+            100.0 * same as f64 / rays.max(1) as f64,
+            a.spp,
+            rays as f64 / (a.ms_render_dirt * 1e3),
+            a.ms_render_dirt + a.ms_build_dirt,
+            path.display()
+        );
+    }
+    Ok(())
 }

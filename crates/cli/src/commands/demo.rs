@@ -94,6 +94,7 @@ pub fn run(a: &DemoArgs, quiet: bool) -> Result<()> {
         }
     }
     super::path::demo_view(&scene, &desc, w, h, &a.out, quiet)?;
+    super::bench_dirt::demo_view(&scene, &desc, w, h, &a.out, quiet)?;
     vr_frame(a, &scene, &bvh, &desc, quiet)?;
     stereo_pair(&scene, &bvh, &desc, w, h, &a.out, quiet)?;
     if !quiet {

@@ -45,9 +45,18 @@ pub struct PathFlags {
     /// estimation, MIS-weighted against BSDF sampling), in [0, 1].
     #[arg(long, default_value_t = parallax_path::light_sampler::DEFAULT_ENV_NEE)]
     pub env_nee: f32,
-    /// The structure that answers the rays: bvh.
+    /// The structure that answers the rays: bvh or dirt.
     #[arg(long, default_value = "bvh")]
     pub tracer: String,
+    /// DIRT: cube face size in pixels [default: 128].
+    #[arg(long)]
+    pub dirt_face: Option<u32>,
+    /// DIRT: tile size S (a power of two), one primitive list per S x S pixels [default: 4].
+    #[arg(long)]
+    pub dirt_tile: Option<u32>,
+    /// DIRT: depth buckets B per cell [default: 16].
+    #[arg(long)]
+    pub dirt_buckets: Option<u32>,
     /// as-is (the scene's materials) or diffuse (every opaque surface Lambertian with its base
     /// colour or texture; glass a thin dielectric of index 1.5).
     #[arg(long, default_value = "as-is")]
@@ -145,6 +154,16 @@ impl PathFlags {
             })
             .collect::<Result<Vec<_>>>()?;
         Ok(LightOverrides { env, points })
+    }
+
+    /// The tracers' options of the flags (out-of-range values are reported by the build).
+    pub fn tracer_options(&self) -> TracerOptions {
+        let mut o = TracerOptions::default();
+        let d = &mut o.dirt;
+        d.face_size = self.dirt_face.unwrap_or(d.face_size);
+        d.capture.tile_size = self.dirt_tile.unwrap_or(d.capture.tile_size);
+        d.capture.buckets = self.dirt_buckets.unwrap_or(d.capture.buckets);
+        o
     }
 
     /// The path tracer's options of the flags.
@@ -270,7 +289,7 @@ pub fn run(a: &PathArgs, quiet: bool) -> Result<()> {
             println!("wrote {}", dir.join("scene.json").display());
         }
     }
-    let built = build_tracer(kind, &scene, &camera, &TracerOptions::default())?;
+    let built = build_tracer(kind, &scene, &camera, &a.path.tracer_options())?;
     let pt = PathTracer::new(&scene, &camera, built.tracer.as_ref(), opts)?;
     let out = render_with_progress(&pt, "path", quiet);
     write_path_image(&a.out, &out)?;

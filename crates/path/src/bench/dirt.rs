@@ -11,14 +11,19 @@
 //!   and its agreement with the BVH (same triangle, ties at equal `t`).
 //! - **Table 3** (memory per buffer): the paper's per-pixel formula beside the bytes measured.
 //! - **Sweeps** (Fig. 10): build time, memory and diffuse-ray speed over `B` and `S`.
+//! - **Path tracing** (§5.1, optional): the reference path tracer with the BVH and with DIRT
+//!   behind it, same seed, every ray recorded ([`super::dirt_path`]): per-bounce agreement and
+//!   PSNR.
 //!
 //! | option | type | default | meaning |
 //! |---|---|---|---|
-//! | `views` | [`DirtViewsOptions`] | face 256, S 1, B 8 | the configuration of the build and Table 1 |
+//! | `views` | [`DirtViewsOptions`] | [`DIRT_DEFAULTS`]: face 128, S 4, B 16 | the configuration of the build and Table 1 |
 //! | `repeats` | u32 | 3 | interleaved rounds per measurement (best reported) |
 //! | `sweep_buckets` | `Vec<u32>` | 1, 4, 8, 16, 32 | `B` values of the bucket sweep (at the configured `S`) |
 //! | `sweep_tiles` | `Vec<u32>` | 1, 2, 4, 8 | `S` values of the tile sweep (at the configured `B`) |
-//! | `rays` | [`RayOptions`] | seed 1, alpha 0.1 | ray generation |
+//! | `rays` | [`RayOptions`] | seed 1, roughness 0.3 | ray generation |
+//! | `path_spp` | u32 | 0 | samples per pixel of the path-tracing comparison (0: skipped) |
+//! | `path_max_depth` | u32 | 5 | its longest path (segments) |
 
 use std::time::Instant;
 
@@ -33,7 +38,11 @@ use parallax_screen::{DirtCounters, DirtTracer};
 use rayon::prelude::*;
 use serde::Serialize;
 
+use super::dirt_path::{PathAgreement, path_agreement};
 use super::dirt_rays::{RayOptions, RaySet, RayType, ray_sets};
+use crate::estimator::PathState;
+use crate::options::PathOptions;
+use crate::tracers::{DIRT_DEFAULTS, TracerOptions, camera_centre};
 
 /// Options of [`run`] (see the module table).
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -43,16 +52,20 @@ pub struct DirtBenchOptions {
     pub sweep_buckets: Vec<u32>,
     pub sweep_tiles: Vec<u32>,
     pub rays: RayOptions,
+    pub path_spp: u32,
+    pub path_max_depth: u32,
 }
 
 impl Default for DirtBenchOptions {
     fn default() -> Self {
         Self {
-            views: DirtViewsOptions::default(),
+            views: DIRT_DEFAULTS,
             repeats: 3,
             sweep_buckets: vec![1, 4, 8, 16, 32],
             sweep_tiles: vec![1, 2, 4, 8],
             rays: RayOptions::default(),
+            path_spp: 0,
+            path_max_depth: 5,
         }
     }
 }
@@ -64,6 +77,8 @@ pub enum DirtBenchError {
     Dirt(#[from] DirtError),
     #[error(transparent)]
     Bvh(#[from] parallax_bvh::BvhError),
+    #[error(transparent)]
+    Path(#[from] crate::error::PathError),
 }
 
 /// One build measurement.
@@ -157,6 +172,7 @@ pub struct DirtBenchReport {
     pub rays: Vec<RayRow>,
     pub memory: Vec<MemoryRow>,
     pub sweep: Vec<SweepRow>,
+    pub path: Option<PathAgreement>,
 }
 
 /// Runs the benchmark on `scene` seen by `camera` (a pinhole camera is DIRT's camera view;
@@ -170,7 +186,7 @@ pub fn run(
         Camera::Pinhole(p) => Some(p),
         _ => None,
     };
-    let eye = camera_eye(camera);
+    let eye = camera_centre(camera);
     let repeats = opts.repeats.max(1);
     let name = scene.name.clone();
 
@@ -226,7 +242,19 @@ pub fn run(
             &name, scene, &bvh, pinhole, eye, &v, diffuse, repeats,
         )?);
     }
+    let path = (opts.path_spp > 0)
+        .then(|| {
+            let o = PathOptions {
+                spp: opts.path_spp,
+                max_depth: opts.path_max_depth,
+                seed: opts.rays.seed,
+                ..PathOptions::default()
+            };
+            path_agreement(scene, camera, &o, &TracerOptions { dirt: opts.views }).map(|r| r.0)
+        })
+        .transpose()?;
     Ok(DirtBenchReport {
+        path,
         threads: rayon::current_num_threads(),
         width: camera.width(),
         height: camera.height(),
@@ -240,14 +268,6 @@ pub fn run(
 
 fn ms(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
-}
-
-/// The position of the camera (the cube map's centre).
-fn camera_eye(camera: &Camera) -> glam::Vec3 {
-    let film = glam::Vec2::new(camera.width() as f32, camera.height() as f32) * 0.5;
-    camera
-        .generate_ray(film, glam::Vec2::splat(0.5), 1)
-        .map_or(glam::Vec3::ZERO, |r| r.ray.origin)
 }
 
 fn build_rows(name: &str, scene: &Scene, bvh_ms: f64, views: &DirtViews) -> Vec<BuildRow> {
@@ -430,8 +450,15 @@ fn memory_rows(name: &str, camera: &Camera, views: &DirtViews) -> Vec<MemoryRow>
             std::mem::size_of_val(v.offsets()) as u64 + std::mem::size_of_val(v.ids()) as u64;
     }
     let pixels = camera.width() as u64 * camera.height() as u64;
+    // The wavefront path tracer keeps its hit and shading buffers per worker, for one tile of
+    // paths at a time (crate::wavefront), not for the whole film.
+    let in_flight = {
+        let tile = PathOptions::default().tile as u64;
+        (tile * tile * rayon::current_num_threads() as u64).min(pixels)
+    };
     let hit_record = std::mem::size_of::<Option<WorldHit>>() as u64;
-    let shading_record = std::mem::size_of::<SurfacePoint<'static>>() as u64;
+    let shading_record = (std::mem::size_of::<Option<SurfacePoint<'static>>>()
+        + std::mem::size_of::<PathState>()) as u64;
     let row = |buffer: &str, formula: &str, units, fb: f64, mb, note: &str| MemoryRow {
         scene: name.into(),
         buffer: buffer.into(),
@@ -475,16 +502,22 @@ fn memory_rows(name: &str, camera: &Camera, views: &DirtViews) -> Vec<MemoryRow>
             "4 + 32 per p_h",
             pixels,
             36.0 * pixels as f64,
-            hit_record * pixels,
-            &format!("one Option<WorldHit> of {hit_record} bytes per path"),
+            hit_record * in_flight,
+            &format!(
+                "one Option<WorldHit> ({hit_record} bytes) per path in flight: {in_flight} = a \
+                 32x32 tile per worker"
+            ),
         ),
         row(
             "shading buffer",
             "3 x 32 per p_h",
             pixels,
             96.0 * pixels as f64,
-            3 * shading_record * pixels,
-            &format!("three SurfacePoint of {shading_record} bytes per path (G_k-1, G_k, G_k+1)"),
+            shading_record * in_flight,
+            &format!(
+                "per path in flight: the fetched Option<SurfacePoint> (G_k+1) and the PathState \
+                 (ray, throughput, previous vertex's pdf and normal: G_k, G_k-1), {shading_record} bytes"
+            ),
         ),
         row(
             "mask texture",

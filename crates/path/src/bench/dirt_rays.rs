@@ -4,11 +4,13 @@
 //!
 //! - visibility: towards a fixed point outside the scene's extents, ending there (occlusion
 //!   queries: "terminated at the first intersection");
-//! - specular: the mirror direction about the shading normal;
-//! - glossy: GGX importance sampling of the visible normals (Heitz 2018), `alpha` below;
-//! - diffuse: cosine-weighted hemisphere sampling.
+//! - specular: a perfect mirror's sample ([`Bsdf::Mirror`]);
+//! - glossy: "BSDF importance sampling" of a rough metal ([`Bsdf::MetallicRoughness`] with
+//!   metallic 1: GGX visible normals, Heitz 2018), roughness below;
+//! - diffuse: a Lambertian's sample ([`Bsdf::Lambert`]: cosine-weighted hemisphere).
 //!
-//! Primary hits come from the tracer given (the BVH), surfaces from the scene
+//! The samplers are the path tracer's ([`parallax_render::bsdf`]), in the shading frame of the
+//! hit. Primary hits come from the tracer given (the BVH), surfaces from the scene
 //! ([`SurfacePoint`]), origins are offset off the surface ([`SurfacePoint::spawn_origin`]).
 //! Directions below the geometric surface (a shading normal far from the geometric one) are
 //! dropped. Random numbers come from per-pixel streams, so the rays do not depend on the
@@ -17,12 +19,13 @@
 //! | option | type | default | meaning |
 //! |---|---|---|---|
 //! | `seed` | u64 | 1 | seed of the per-pixel streams |
-//! | `glossy_alpha` | f32 | 0.1 | GGX `alpha` of the glossy rays (glTF roughness² ; 0.1 = roughness 0.32) |
+//! | `glossy_roughness` | f32 | 0.3 | glTF perceptual roughness of the glossy rays (GGX `alpha` = roughness²) |
 
 use glam::{Vec2, Vec3};
 use parallax_core::math::Frame;
-use parallax_core::sampling::{Rng, warp};
+use parallax_core::sampling::Rng;
 use parallax_core::{Ray, WorldStats, WorldTracer};
+use parallax_render::bsdf::{Bsdf, MetallicRoughness};
 use parallax_render::reference::surface::SurfacePoint;
 use parallax_scene::Scene;
 use parallax_scene::camera::{Camera, CameraModel};
@@ -66,14 +69,14 @@ impl RayType {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct RayOptions {
     pub seed: u64,
-    pub glossy_alpha: f32,
+    pub glossy_roughness: f32,
 }
 
 impl Default for RayOptions {
     fn default() -> Self {
         Self {
             seed: 1,
-            glossy_alpha: 0.1,
+            glossy_roughness: 0.3,
         }
     }
 }
@@ -101,11 +104,18 @@ pub fn ray_sets(
 ) -> Vec<RaySet> {
     let (w, h) = (camera.width(), camera.height());
     let light = visibility_target(scene);
-    let ggx = warp::Ggx::isotropic(opts.glossy_alpha.max(1e-4));
+    let bsdfs = [
+        Bsdf::Mirror { tint: Vec3::ONE },
+        Bsdf::MetallicRoughness(MetallicRoughness::new(
+            Vec3::ONE,
+            1.0,
+            opts.glossy_roughness,
+        )),
+        Bsdf::Lambert { albedo: Vec3::ONE },
+    ];
     let per_pixel: Vec<[Option<Ray>; 4]> = (0..h)
         .into_par_iter()
         .flat_map_iter(|y| {
-            let ggx = &ggx;
             (0..w).map(move |x| {
                 let film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
                 let mut none = [None; 4];
@@ -119,21 +129,21 @@ pub fn ray_sets(
                 let (n, ng) = (sp.shading_normal, sp.geometric_normal);
                 let mut rng = Rng::for_pixel(opts.seed, x, y, 0);
                 let frame = Frame::from_normal(n);
-                let wo = -cr.ray.dir.normalize();
-                let to_light = light - sp.position;
-                let glossy = {
-                    let wo_l = frame.to_local(wo);
-                    let m = ggx.sample_visible(wo_l, rng.next_vec2());
-                    frame.to_world(warp::reflect(wo_l, m))
-                };
-                let dirs = [
-                    to_light.normalize(),
-                    warp::reflect(wo, n),
-                    glossy,
-                    frame.to_world(warp::cosine_hemisphere(rng.next_vec2())),
+                let wo = frame.to_local(-cr.ray.dir.normalize());
+                let mut dirs = [
+                    (light - sp.position).normalize(),
+                    Vec3::ZERO,
+                    Vec3::ZERO,
+                    Vec3::ZERO,
                 ];
+                for (d, bsdf) in dirs[1..].iter_mut().zip(&bsdfs) {
+                    let (u_lobe, u) = (rng.next_f32(), rng.next_vec2());
+                    if let Some(s) = bsdf.sample(wo, u_lobe, u) {
+                        *d = frame.to_world(s.wi);
+                    }
+                }
                 for (k, d) in dirs.into_iter().enumerate() {
-                    if d.is_finite() && d.dot(ng) > 0.0 {
+                    if d != Vec3::ZERO && d.is_finite() && d.dot(ng) > 0.0 {
                         let o = sp.spawn_origin(d);
                         none[k] = Some(if k == 0 {
                             Ray::segment(o, d, 0.0, (light - o).length())
