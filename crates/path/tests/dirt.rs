@@ -5,7 +5,10 @@
 
 use glam::Vec3;
 use parallax_path::bench::dirt_path::path_agreement;
-use parallax_path::{LightOverrides, PathOptions, TracerOptions, apply_lighting};
+use parallax_path::{
+    LightOverrides, PathOptions, PathTracer, TracerKind, TracerOptions, apply_lighting,
+    build_tracer,
+};
 use parallax_scene::camera::{Camera, CameraOptions, ModelKind};
 use parallax_scene::{CameraDesc, Scene};
 
@@ -82,4 +85,39 @@ fn dirt_path_tracer_equals_the_bvh_path_tracer_on_the_classroom() {
         55.0,
     );
     check("classroom", scene, &desc);
+}
+
+#[test]
+fn dirt_path_tracer_is_the_same_at_one_and_two_threads() {
+    let mut scene = Scene::load("atrium").unwrap();
+    apply_lighting(&mut scene, &LightOverrides::default()).unwrap();
+    let desc = scene.camera(None).unwrap();
+    let camera = Camera::new(ModelKind::Pinhole, &desc, 40, 24, &CameraOptions::default()).unwrap();
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let built =
+                build_tracer(TracerKind::Dirt, &scene, &camera, &TracerOptions::default()).unwrap();
+            let opts = PathOptions {
+                spp: 2,
+                seed: 3,
+                ..PathOptions::default()
+            };
+            let pt = PathTracer::new(&scene, &camera, built.tracer.as_ref(), opts).unwrap();
+            let out = pt.render(&|_| {});
+            let bits: Vec<[u32; 3]> = out
+                .image
+                .data()
+                .iter()
+                .map(|c| [c.x.to_bits(), c.y.to_bits(), c.z.to_bits()])
+                .collect();
+            (bits, out.stats.rays())
+        })
+    };
+    let (a, b) = (run(1), run(2));
+    assert!(a.1 > 0);
+    assert_eq!(a, b, "1 and 2 threads differ");
 }

@@ -7,7 +7,8 @@ use glam::{Mat3, Vec2, Vec3};
 use parallax_bvh::{Bvh, Hit};
 use parallax_core::Rng;
 use parallax_raster::dirt::{
-    CellDepth, DirtCapture, DirtCube, DirtError, DirtOptions, LevelInfo, bucket_mask,
+    CellDepth, DirtCapture, DirtCube, DirtError, DirtOptions, DirtViews, DirtViewsOptions,
+    LevelInfo, bucket_mask,
 };
 use parallax_scene::camera::{CameraFrame, CameraModel, CubeMap, Pinhole};
 use parallax_scene::{CameraDesc, Scene, TriangleMesh};
@@ -551,4 +552,31 @@ fn bad_input_is_an_error() {
     // An empty mesh is fine: everything empty.
     let cap = DirtCapture::build(&TriangleMesh::default(), &cam, &DirtOptions::default()).unwrap();
     assert!(cap.ids().is_empty() && cap.depth_bounds(0, 0) == (f32::INFINITY, f32::NEG_INFINITY));
+}
+
+#[test]
+fn views_are_deterministic_across_thread_counts() {
+    let scene = Scene::load("atrium").unwrap();
+    let desc = scene.camera(None).unwrap();
+    let cam = Pinhole::new(&desc, 64, 40).unwrap();
+    let build = |threads| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let o = DirtViewsOptions {
+            face_size: 24,
+            capture: opts(2, 5),
+        };
+        pool.install(|| DirtViews::build(&scene.mesh, Some(&cam), desc.eye, &o).unwrap())
+    };
+    let (a, b) = (build(1), build(3));
+    assert_eq!(a.triangles.as_slice(), b.triangles.as_slice());
+    for (x, y) in a.views().zip(b.views()) {
+        assert_eq!(x.offsets(), y.offsets());
+        assert_eq!(x.ids(), y.ids());
+        assert_eq!(x.cell_records(), y.cell_records());
+        assert_eq!(x.mip_arrays().1, y.mip_arrays().1);
+    }
+    assert_eq!(a.views().count(), 7);
 }
