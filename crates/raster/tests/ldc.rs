@@ -302,3 +302,95 @@ fn invalid_inputs_are_errors() {
     empty.mesh = Default::default();
     assert!(LayeredDepthCube::build(&empty, 32, &o).is_err());
 }
+
+#[test]
+fn normals_follow_the_winding_and_geometric_normals_are_the_triangles() {
+    for (name, scene, res) in scenes() {
+        let ldc = LayeredDepthCube::build(&scene, res, &LdcOptions::default()).unwrap();
+        let mesh = &scene.mesh;
+        for ldi in &ldc.ldis {
+            let cap = &ldi.capture;
+            assert_eq!(ldi.geometric_normal.len(), cap.len());
+            for i in 0..cap.len() {
+                let p = cap.primitive_id[i] as usize;
+                let ng = mesh.geometric_normal(p);
+                assert_eq!(ldi.geometric_normal[i], ng, "{name}");
+                // The shading normal stays in the geometric normal's hemisphere (winding side).
+                assert!(cap.normal[i].dot(ng) > 0.0, "{name} axis {} sample {i}", ldi.axis);
+            }
+        }
+        let s = &ldc.stats;
+        for ms in [s.assign_ms, s.peel_ms, s.orient_ms, s.grid_ms] {
+            assert!(ms >= 0.0 && ms <= s.total_ms, "{name}: stage {ms} of {}", s.total_ms);
+        }
+        assert!(s.assign_ms + s.peel_ms + s.orient_ms + s.grid_ms <= s.total_ms);
+    }
+}
+
+#[test]
+fn a_region_of_interest_fits_the_cube_and_clips_the_rest() {
+    let scene = Scene::load("cornell").unwrap();
+    // The lower half of the box: the floor and the lower parts of walls and objects.
+    let roi = [Vec3::new(-2.0, -1.0, -2.0), Vec3::new(2.0, 1.0, 2.0)];
+    let opts = LdcOptions {
+        roi: Some(roi),
+        ..LdcOptions::default()
+    };
+    let full = LayeredDepthCube::build(&scene, 128, &LdcOptions::default()).unwrap();
+    let fitted = LayeredDepthCube::build(&scene, 128, &opts).unwrap();
+    assert!(fitted.stats.roi && !full.stats.roi);
+    let b = scene.mesh.bounds();
+    assert!(fitted.bounds.max.y < 1.0 + 2.0 * fitted.pixel_size);
+    assert!(fitted.bounds.min.x < b.min.x + 0.01);
+    // Every sample lies inside the fitted box.
+    for ldi in &fitted.ldis {
+        let ext = fitted.bounds.extent()[ldi.axis];
+        assert!(ldi.capture.depth.iter().all(|&d| d >= 0.0 && d <= ext));
+        for y in 0..ldi.capture.height() {
+            for x in 0..ldi.capture.width() {
+                for i in ldi.capture.range(x, y) {
+                    let mut p = fitted.pixel_ray_origin(ldi.axis, x, y);
+                    p[ldi.axis] += ldi.capture.depth[i];
+                    assert!(p.y <= fitted.bounds.max.y + 1e-4, "sample at {p} above the ROI");
+                }
+            }
+        }
+    }
+    assert!(fitted.stats.samples < full.stats.samples);
+    // A box that misses the scene, or an inverted one, is an error.
+    for bad in [
+        [Vec3::splat(10.0), Vec3::splat(11.0)],
+        [Vec3::ONE, Vec3::ZERO],
+        [Vec3::NAN, Vec3::ONE],
+    ] {
+        let o = LdcOptions {
+            roi: Some(bad),
+            ..LdcOptions::default()
+        };
+        assert!(LayeredDepthCube::build(&scene, 64, &o).is_err(), "{bad:?}");
+    }
+}
+
+#[test]
+fn depth_complexity_beyond_the_layer_limit_is_an_error() {
+    let scene = Scene::load("cornell").unwrap();
+    let ldc = LayeredDepthCube::build(&scene, 64, &LdcOptions::default()).unwrap();
+    let need = ldc.stats.max_depth_complexity;
+    assert!(need >= 2);
+    let exact = LdcOptions {
+        max_layers: need,
+        ..LdcOptions::default()
+    };
+    assert!(LayeredDepthCube::build(&scene, 64, &exact).is_ok());
+    let short = LdcOptions {
+        max_layers: need - 1,
+        ..LdcOptions::default()
+    };
+    let e = LayeredDepthCube::build(&scene, 64, &short).unwrap_err().to_string();
+    assert!(e.contains("layers") && e.contains(&need.to_string()), "{e}");
+    let zero = LdcOptions {
+        max_layers: 0,
+        ..LdcOptions::default()
+    };
+    assert!(LayeredDepthCube::build(&scene, 64, &zero).is_err());
+}

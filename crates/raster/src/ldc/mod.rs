@@ -11,41 +11,61 @@
 //! samples and no ray hits it. So every triangle is in exactly one LDI, and its samples are
 //! stored once; an LDI never sees a triangle within `acos(1/√3) ≈ 54.7°` of edge-on.
 //!
-//! **Geometry.** The box is the mesh bounds padded by `padding` times its longest side on every
-//! side. LDI `a` (0 = X, 1 = Y, 2 = Z) looks along `+a`; its image axes are `u = (a + 1) % 3`
-//! (columns, growing right) and `v = (a + 2) % 3` (rows, growing down), so the centre of pixel
-//! `(x, y)` is the ray `o + t e_a` with `o_u = min_u + (x + 1/2) s`, `o_v = min_v + (y + 1/2) s`,
+//! **Geometry.** The box is the mesh bounds (intersected with the region of interest `roi`
+//! when one is given) padded by `padding` times its longest side on every side. LDI `a`
+//! (0 = X, 1 = Y, 2 = Z) looks along `+a`; its image axes are `u = (a + 1) % 3` (columns,
+//! growing right) and `v = (a + 2) % 3` (rows, growing down), so the centre of pixel `(x, y)`
+//! is the ray `o + t e_a` with `o_u = min_u + (x + 1/2) s`, `o_v = min_v + (y + 1/2) s`,
 //! `o_a = min_a`, and a sample's depth is its `t` (distance from the box's `min_a` face).
 //! Pixels are square, of side `s = longest side / resolution`: `resolution` is the number of
-//! pixels along the box's longest side; the other sides get `ceil(side / s)` pixels (the image
-//! plane covers the box face, overhanging by less than a pixel at the far edges).
+//! pixels along the padded box's longest side; the other sides get `ceil(side / s)` pixels,
+//! and the box grows to whole pixels (its `max` faces move out by less than a pixel), so the
+//! LDI images cover its faces exactly. Geometry outside the box is clipped (the image edges,
+//! and the far plane of LDI `a` at the box's `max_a` face).
+//!
+//! **Region of interest.** An interior whose bounds are dominated by a huge ground quad (the
+//! classroom's 222 m plane) spreads the pixels over the whole quad; `roi` fits the cube to the
+//! part of the scene the secondary rays need. Surfaces outside it are not captured: rays that
+//! would hit them leave the cube and see the environment.
+//!
+//! **Sample normals** are the shading normals oriented like the triangle's winding (its
+//! geometric normal), not towards the LDI's viewer: a tracer turns them to face its ray, and
+//! the winding tells a refracting ray whether it enters or leaves a solid. Each sample also
+//! keeps its triangle's geometric normal ([`Ldi::geometric_normal`]): the plane it lies in.
 //!
 //! | option | type | default | meaning |
 //! |---|---|---|---|
 //! | `block` | u32 | 8 | coarse grid block edge `n` in pixels (§1.3) |
 //! | `padding` | f32 | 1e-3 | box padding, fraction of the longest side |
 //! | `max_samples` | u64 | 2^28 | per-LDI bound on samples: the build fails instead of allocating more |
+//! | `max_layers` | u32 | 1024 | bound on the depth complexity (layers) of any LDI pixel: the build fails beyond it |
+//! | `roi` | `Option<[Vec3; 2]>` | none | region of interest `[min, max]`: the cube covers its intersection with the scene bounds |
+//!
+//! **Build stages** ([`LdcStats`]): `assign_ms` (dominant axes of all triangles), `peel_ms`
+//! (the three all-layers captures: the counterpart of the paper's depth peeling, §1.2),
+//! `orient_ms` (sample normals to the winding, geometric normals), `grid_ms` (the three coarse grids, §1.3).
 //!
 //! **Memory:** three [`AllLayersCapture`]s (flat CSR arrays, [`AllLayersCapture::bytes`]) and
 //! three [`CoarseGrid`]s; [`LayeredDepthCube::bytes`] is their sum.
 
+mod build;
 pub mod coarse;
-
-use std::time::Instant;
 
 use glam::{DMat4, DVec4, Vec3};
 use parallax_core::math::Aabb;
-use parallax_scene::{Scene, TriangleMesh};
-use rayon::prelude::*;
+use parallax_scene::TriangleMesh;
 use serde::Serialize;
 
 pub use coarse::CoarseGrid;
 
-use crate::capture::{AllLayersCapture, AllLayersStats, all_layers, capture_all_layers};
-use crate::raster::{Projection, RasterError, View, ms};
+use crate::capture::{AllLayersCapture, AllLayersStats, all_layers};
+use crate::raster::{Projection, RasterError, View};
 
 /// Largest allowed resolution (pixels along the longest box side).
 pub const MAX_RESOLUTION: u32 = 1 << 14;
+
+/// Default bound on the layers (depth complexity) of an LDI pixel.
+pub const DEFAULT_MAX_LAYERS: u32 = 1024;
 
 /// Build options (see the module table).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -53,6 +73,9 @@ pub struct LdcOptions {
     pub block: u32,
     pub padding: f32,
     pub max_samples: u64,
+    pub max_layers: u32,
+    /// Region of interest `[min, max]` (world units), `None` for the whole scene.
+    pub roi: Option<[Vec3; 2]>,
 }
 
 impl Default for LdcOptions {
@@ -61,6 +84,8 @@ impl Default for LdcOptions {
             block: 8,
             padding: 1e-3,
             max_samples: all_layers::DEFAULT_MAX_SAMPLES,
+            max_layers: DEFAULT_MAX_LAYERS,
+            roi: None,
         }
     }
 }
@@ -91,21 +116,30 @@ pub struct LdiStats {
     pub coarse_ms: f64,
 }
 
-/// Sizes and per-stage times of an LDC build.
+/// Sizes and per-stage times of an LDC build (stages: see the module docs).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct LdcStats {
     pub resolution: u32,
     pub block: u32,
     pub box_min: Vec3,
     pub box_max: Vec3,
+    /// True when the box was fitted to a region of interest.
+    pub roi: bool,
     /// Pixel side in metres.
     pub pixel_size: f32,
     pub triangles: usize,
     pub samples: usize,
+    /// Largest number of samples of one pixel over the three LDIs (the layers the cube needs).
     pub max_depth_complexity: u32,
     pub bytes: usize,
     /// Dominant-axis assignment of all triangles.
     pub assign_ms: f64,
+    /// The three all-layers captures (depth peeling's counterpart).
+    pub peel_ms: f64,
+    /// Sample normals turned to the triangles' winding.
+    pub orient_ms: f64,
+    /// The three coarse grids.
+    pub grid_ms: f64,
     pub ldis: [LdiStats; 3],
     pub total_ms: f64,
 }
@@ -116,13 +150,18 @@ pub struct Ldi {
     /// 0 = X, 1 = Y, 2 = Z; the LDI looks along `+axis`.
     pub axis: usize,
     pub capture: AllLayersCapture,
+    /// Per sample the unit geometric normal of its triangle (winding orientation): the plane
+    /// the sample lies in, for tracers that intersect samples as planar splats.
+    pub geometric_normal: Vec<Vec3>,
     pub coarse: CoarseGrid,
 }
 
 impl Ldi {
-    /// Bytes of the samples and the coarse grid.
+    /// Bytes of the samples, their geometric normals and the coarse grid.
     pub fn bytes(&self) -> usize {
-        self.capture.bytes() + self.coarse.bytes()
+        self.capture.bytes()
+            + self.geometric_normal.len() * size_of::<Vec3>()
+            + self.coarse.bytes()
     }
 }
 
@@ -143,11 +182,13 @@ pub fn image_axes(axis: usize) -> (usize, usize) {
     ((axis + 1) % 3, (axis + 2) % 3)
 }
 
-/// The orthographic view of LDI `axis` of `bounds` with square pixels of side `s`.
+/// The orthographic view of LDI `axis` of `bounds` with square pixels of side `s`; depths run
+/// from the box's `min_axis` face (near plane 0) to its `max_axis` face (far plane).
 pub fn ldi_view(bounds: &Aabb, s: f32, axis: usize) -> Result<View, RasterError> {
     let (u, v) = image_axes(axis);
     let ext = bounds.extent();
-    let cells = |e: f32| ((e / s).ceil() as u32).max(1);
+    // A side of whole pixels (up to rounding) keeps its count.
+    let cells = |e: f32| (((e / s) * (1.0 - 1e-6)).ceil() as u32).max(1);
     let (width, height) = (cells(ext[u]), cells(ext[v]));
     parallax_core::image::check_size(width, height).map_err(RasterError::Size)?;
     let (lo, s) = (bounds.min.as_dvec3(), s as f64);
@@ -177,111 +218,11 @@ pub fn ldi_view(bounds: &Aabb, s: f32, axis: usize) -> Result<View, RasterError>
         world_to_clip: m,
         projection: Projection::Orthographic { forward },
         near: 0.0,
-        far: f32::INFINITY,
+        far: ext[axis],
     })
 }
 
 impl LayeredDepthCube {
-    /// Builds the LDC of `scene` with `resolution` pixels along the padded box's longest side.
-    /// Errors on an empty or non-finite scene, a resolution outside `1..=2^14`, invalid options
-    /// or an LDI exceeding `opts.max_samples`.
-    pub fn build(scene: &Scene, resolution: u32, opts: &LdcOptions) -> Result<Self, RasterError> {
-        let start = Instant::now();
-        let mesh = &scene.mesh;
-        if resolution == 0 || resolution > MAX_RESOLUTION {
-            return Err(RasterError::InvalidOptions(format!(
-                "resolution must be in 1..={MAX_RESOLUTION}, got {resolution}"
-            )));
-        }
-        if opts.block == 0 || opts.block > MAX_RESOLUTION {
-            return Err(RasterError::InvalidOptions(format!(
-                "block must be in 1..={MAX_RESOLUTION}, got {}",
-                opts.block
-            )));
-        }
-        if !(opts.padding.is_finite() && opts.padding >= 0.0 && opts.padding <= 1.0) {
-            return Err(RasterError::InvalidOptions(format!(
-                "padding must be in [0, 1], got {}",
-                opts.padding
-            )));
-        }
-        crate::raster::check_mesh(mesh)?;
-        let raw = mesh.bounds();
-        let longest = raw.extent().max_element();
-        if raw.is_empty() || !(raw.min.is_finite() && raw.max.is_finite()) {
-            return Err(RasterError::InvalidMesh(
-                "the scene has no finite bounding box".into(),
-            ));
-        }
-        // Padding keeps surfaces off the image plane (depth > 0) and gives flat scenes depth.
-        let pad = (opts.padding * longest).max(1e-6 * (1.0 + raw.max.abs().max_element()));
-        let bounds = Aabb::new(raw.min - pad, raw.max + pad);
-        let s = bounds.extent().max_element() / resolution as f32;
-
-        let t = Instant::now();
-        let axis_of: Vec<u8> = (0..mesh.indices.len())
-            .into_par_iter()
-            .map(|i| dominant_axis(mesh, i) as u8)
-            .collect();
-        let mut counts = [0usize; 3];
-        for &a in &axis_of {
-            counts[a as usize] += 1;
-        }
-        let assign_ms = ms(t);
-
-        let build = |axis: usize| -> Result<Ldi, RasterError> {
-            let view = ldi_view(&bounds, s, axis)?;
-            let filter = |p: u32| axis_of[p as usize] as usize == axis;
-            let capture = capture_all_layers(scene, &view, Some(&filter), opts.max_samples)?;
-            let coarse = CoarseGrid::build(&capture, opts.block);
-            Ok(Ldi {
-                axis,
-                capture,
-                coarse,
-            })
-        };
-        let mut ldis = Vec::with_capacity(3);
-        let mut ldi_stats = [LdiStats::default(); 3];
-        for (axis, st) in ldi_stats.iter_mut().enumerate() {
-            let t = Instant::now();
-            let ldi = build(axis)?;
-            let coarse_ms = ms(t) - ldi.capture.stats.total_ms;
-            *st = LdiStats {
-                axis,
-                triangles: counts[axis],
-                capture: ldi.capture.stats,
-                coarse_bytes: ldi.coarse.bytes(),
-                coarse_ms: coarse_ms.max(0.0),
-            };
-            ldis.push(ldi);
-        }
-        let ldis: [Ldi; 3] = ldis.try_into().expect("three LDIs");
-        let stats = LdcStats {
-            resolution,
-            block: opts.block,
-            box_min: bounds.min,
-            box_max: bounds.max,
-            pixel_size: s,
-            triangles: mesh.indices.len(),
-            samples: ldis.iter().map(|l| l.capture.len()).sum(),
-            max_depth_complexity: ldis
-                .iter()
-                .map(|l| l.capture.stats.max_depth_complexity)
-                .max()
-                .unwrap_or(0),
-            bytes: ldis.iter().map(Ldi::bytes).sum(),
-            assign_ms,
-            ldis: ldi_stats,
-            total_ms: ms(start),
-        };
-        Ok(Self {
-            bounds,
-            pixel_size: s,
-            ldis,
-            stats,
-        })
-    }
-
     /// Bytes of the three LDIs and their coarse grids.
     pub fn bytes(&self) -> usize {
         self.ldis.iter().map(Ldi::bytes).sum()

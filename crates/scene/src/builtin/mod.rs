@@ -6,6 +6,9 @@
 //! | `cornell` | global illumination, a mirror and a glass sphere (reflection papers) | ~2.3k     |
 //! | `foliage` | depth complexity (leaves, grass, fence slats: 8-20+ layers per ray)  | ~132k     |
 //!
+//! `room:<file>` (and `room-mirror:<file>`, `room-glass:<file>`) stages a model file in a small
+//! room with a mirror, a glass sphere and shadow-casting lights ([`room`]).
+//!
 //! Every scene is generated deterministically (same triangles on every call), is valid
 //! ([`Scene::validate`]), has lights, an environment, named cameras and a 60-frame camera path.
 //! Objects named `solid:...` are closed, outward-oriented solids (every edge shared by exactly
@@ -15,6 +18,7 @@ mod atrium;
 mod cameras;
 mod cornell;
 mod foliage;
+pub mod room;
 pub mod shapes;
 
 use crate::Scene;

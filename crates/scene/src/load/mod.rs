@@ -28,10 +28,19 @@ mod uri;
 pub use crate::scene::AnimationInfo;
 
 impl Scene {
-    /// A built-in scene by name, or a scene file (.gltf, .glb, .obj, .ply) by path.
+    /// A built-in scene by name, or a scene file (.gltf, .glb, .obj, .ply) by path, or
+    /// `room:<file>` (also `room-mirror:`, `room-glass:`): the file staged in the built-in
+    /// secondary-ray room ([`crate::builtin::room`]).
     pub fn load(name_or_path: &str) -> Result<Scene> {
         if let Some(scene) = builtin::by_name(name_or_path) {
             return Ok(scene);
+        }
+        if let Some((finish, file)) = builtin::room::parse(name_or_path) {
+            let model = Self::load(file)?;
+            return builtin::room::stage(model, finish).map_err(|message| SceneError::Invalid {
+                path: file.into(),
+                message,
+            });
         }
         let path = Path::new(name_or_path);
         if path.extension().is_none() && !path.exists() {
