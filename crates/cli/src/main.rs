@@ -42,6 +42,8 @@ enum Command {
     Upsample(commands::upsample::UpsampleArgs),
     /// Path-traced render (unidirectional, NEE + MIS) through any world-space tracer.
     Path(commands::path::PathArgs),
+    /// Reflections, refractions and shadows through any world-space tracer (LDC vs BVH).
+    Secondary(commands::secondary::SecondaryArgs),
     /// Benchmarks that reproduce the papers' and issues' measurements.
     #[command(subcommand)]
     Bench(commands::bench::BenchCommand),
@@ -68,6 +70,7 @@ fn main() -> std::process::ExitCode {
         Command::Warp(a) => commands::warp::run(&a, cli.quiet),
         Command::Upsample(a) => commands::upsample::run(&a, cli.quiet),
         Command::Path(a) => commands::path::run(&a, cli.quiet),
+        Command::Secondary(a) => commands::secondary::run(&a, cli.quiet),
         Command::Bench(b) => commands::bench::run(&b, cli.quiet),
     };
     match result {

@@ -17,6 +17,9 @@
 //! - [`dirt`]: DIRT's tracer over per-view primitive lists (Vardis et al. 2017, §4.2), an exact
 //!   world-space tracer behind [`parallax_core::WorldTracer`].
 //!
+//! - [`ldc`]: the two-level layered depth cube tracer (Bürger et al. 2007, §1.3-1.4) behind the
+//!   world-space interface [`parallax_core::WorldTracer`].
+//!
 //! **Invariant:** nothing here reads the scene; tracers see only what a capture holds.
 
 pub mod brute;
@@ -24,6 +27,7 @@ pub mod dda;
 mod depth_layers;
 pub mod dirt;
 pub mod hiz;
+pub mod ldc;
 pub mod minmax;
 pub mod planes;
 pub mod quadtree;
@@ -34,6 +38,7 @@ pub use brute::{BruteForcePlanes, BruteResult};
 pub use dda::{DdaOptions, DdaTracer};
 pub use dirt::{DirtCounters, DirtTracer};
 pub use hiz::{HiZOptions, HiZTracer};
+pub use ldc::{LdcTraceOptions, LdcTracer};
 pub use minmax::{MinMaxOptions, MinMaxTracer};
 pub use planes::{LayerPlanes, NormalSource};
 pub use quadtree::{LayerMode, QuadTree, QuadTreeOptions, QuadTreeTracer};

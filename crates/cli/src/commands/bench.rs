@@ -24,6 +24,8 @@ pub enum BenchCommand {
     Path(super::path::PathBenchArgs),
     /// DIRT Tables 1-3 (Vardis et al. 2017): DIRT vs BVH build, Mrays/s per ray type, memory.
     Dirt(super::bench_dirt::DirtBenchArgs),
+    /// Layered depth cube build and trace vs the BVH on the same rays (Bürger et al. 2007, Table 1).
+    Ldc(super::secondary::LdcBenchArgs),
 }
 
 #[derive(Args, Debug)]
@@ -89,6 +91,7 @@ pub fn run(cmd: &BenchCommand, quiet: bool) -> Result<()> {
         BenchCommand::Compression(a) => super::bench_synth::compression_bench(a, quiet),
         BenchCommand::Path(a) => super::path::bench(a, quiet),
         BenchCommand::Dirt(a) => super::bench_dirt::run_bench(a, quiet),
+        BenchCommand::Ldc(a) => super::secondary::bench(a, quiet),
         BenchCommand::Rays(a) => {
             let scene = a.view.load_scene()?;
             let camera = a.view.camera(&scene, a.width, a.height)?;

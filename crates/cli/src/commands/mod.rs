@@ -9,6 +9,7 @@ pub mod demo;
 pub mod info;
 pub mod path;
 pub mod render;
+pub mod secondary;
 pub mod upsample;
 pub mod vr;
 pub mod warp;
