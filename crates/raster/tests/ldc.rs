@@ -316,12 +316,20 @@ fn normals_follow_the_winding_and_geometric_normals_are_the_triangles() {
                 let ng = mesh.geometric_normal(p);
                 assert_eq!(ldi.geometric_normal[i], ng, "{name}");
                 // The shading normal stays in the geometric normal's hemisphere (winding side).
-                assert!(cap.normal[i].dot(ng) > 0.0, "{name} axis {} sample {i}", ldi.axis);
+                assert!(
+                    cap.normal[i].dot(ng) > 0.0,
+                    "{name} axis {} sample {i}",
+                    ldi.axis
+                );
             }
         }
         let s = &ldc.stats;
         for ms in [s.assign_ms, s.peel_ms, s.orient_ms, s.grid_ms] {
-            assert!(ms >= 0.0 && ms <= s.total_ms, "{name}: stage {ms} of {}", s.total_ms);
+            assert!(
+                ms >= 0.0 && ms <= s.total_ms,
+                "{name}: stage {ms} of {}",
+                s.total_ms
+            );
         }
         assert!(s.assign_ms + s.peel_ms + s.orient_ms + s.grid_ms <= s.total_ms);
     }
@@ -351,7 +359,10 @@ fn a_region_of_interest_fits_the_cube_and_clips_the_rest() {
                 for i in ldi.capture.range(x, y) {
                     let mut p = fitted.pixel_ray_origin(ldi.axis, x, y);
                     p[ldi.axis] += ldi.capture.depth[i];
-                    assert!(p.y <= fitted.bounds.max.y + 1e-4, "sample at {p} above the ROI");
+                    assert!(
+                        p.y <= fitted.bounds.max.y + 1e-4,
+                        "sample at {p} above the ROI"
+                    );
                 }
             }
         }
@@ -386,7 +397,9 @@ fn depth_complexity_beyond_the_layer_limit_is_an_error() {
         max_layers: need - 1,
         ..LdcOptions::default()
     };
-    let e = LayeredDepthCube::build(&scene, 64, &short).unwrap_err().to_string();
+    let e = LayeredDepthCube::build(&scene, 64, &short)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("layers") && e.contains(&need.to_string()), "{e}");
     let zero = LdcOptions {
         max_layers: 0,

@@ -159,9 +159,7 @@ pub struct Ldi {
 impl Ldi {
     /// Bytes of the samples, their geometric normals and the coarse grid.
     pub fn bytes(&self) -> usize {
-        self.capture.bytes()
-            + self.geometric_normal.len() * size_of::<Vec3>()
-            + self.coarse.bytes()
+        self.capture.bytes() + self.geometric_normal.len() * size_of::<Vec3>() + self.coarse.bytes()
     }
 }
 

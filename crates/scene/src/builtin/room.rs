@@ -239,7 +239,10 @@ mod tests {
             };
             assert!(kinds.iter().all(|&k| k == want));
         }
-        assert_eq!(parse("room-glass:a.ply"), Some((ModelFinish::Glass, "a.ply")));
+        assert_eq!(
+            parse("room-glass:a.ply"),
+            Some((ModelFinish::Glass, "a.ply"))
+        );
         assert_eq!(parse("a.ply"), None);
         let mut flat = model();
         flat.mesh = Default::default();
