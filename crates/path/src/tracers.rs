@@ -6,6 +6,7 @@
 //! |---|---|---|---|
 //! | `bvh` | binned-SAH 4-wide BVH ([`parallax_bvh::Bvh`]) | exact | the scene's triangles |
 //! | `dirt` | DIRT's per-view primitive lists ([`parallax_screen::DirtTracer`], Vardis et al. 2017) | exact | a capture of the camera's view (a pinhole camera; other models: none) and of a cube map around the camera |
+//! | `ldc` | two-level layered depth cube ([`parallax_screen::ldc::LdcTracer`], Bürger et al. 2007) | sampled | three all-layers LDIs of the scene box at [`LdcSettings::resolution`] |
 //!
 //! Image-space structures that need the camera (DIRT's views around it, the layered depth
 //! cube's capture) add their variant here; [`TracerOptions`] carries their parameters.
@@ -13,16 +14,20 @@
 //! | option | type | default | meaning |
 //! |---|---|---|---|
 //! | `dirt` | [`DirtViewsOptions`] | face 128, S 4, B 16 | DIRT's cube face size, tile size `S` and buckets `B` (`--dirt-face`, `--dirt-tile`, `--dirt-buckets`) |
+//! | `ldc` | [`LdcSettings`] | resolution 1024 | the cube's resolution, build and trace options |
 
 use std::time::Instant;
 
 use glam::{Vec2, Vec3};
 use parallax_bvh::Bvh;
-use parallax_core::WorldTracer;
+use parallax_core::{Aabb, WorldTracer};
 use parallax_raster::dirt::{DirtOptions, DirtViews, DirtViewsOptions};
+use parallax_raster::ldc::{LayeredDepthCube, LdcOptions, LdcStats};
 use parallax_scene::Scene;
 use parallax_scene::camera::{Camera, CameraModel};
 use parallax_screen::DirtTracer;
+use parallax_screen::ldc::{LdcTraceOptions, LdcTracer};
+use serde::Serialize;
 
 use crate::error::{PathError, Result};
 
@@ -34,15 +39,18 @@ pub enum TracerKind {
     Bvh,
     /// DIRT: Hi-Z and bucket tracing through per-view primitive lists, exact.
     Dirt,
+    /// The two-level layered depth cube (sampled hits).
+    Ldc,
 }
 
 impl TracerKind {
-    pub const ALL: [TracerKind; 2] = [TracerKind::Bvh, TracerKind::Dirt];
+    pub const ALL: [TracerKind; 3] = [TracerKind::Bvh, TracerKind::Dirt, TracerKind::Ldc];
 
     pub fn name(self) -> &'static str {
         match self {
             TracerKind::Bvh => "bvh",
             TracerKind::Dirt => "dirt",
+            TracerKind::Ldc => "ldc",
         }
     }
 
@@ -57,10 +65,30 @@ impl TracerKind {
     }
 }
 
+/// How the `ldc` tracer is built.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct LdcSettings {
+    /// Pixels along the cube's longest side (the paper: 512 or 1024).
+    pub resolution: u32,
+    pub build: LdcOptions,
+    pub trace: LdcTraceOptions,
+}
+
+impl Default for LdcSettings {
+    fn default() -> Self {
+        Self {
+            resolution: 1024,
+            build: LdcOptions::default(),
+            trace: LdcTraceOptions::default(),
+        }
+    }
+}
+
 /// Parameters of the structures that have any (none for the BVH; see the module table).
 #[derive(Clone, Debug, PartialEq)]
 pub struct TracerOptions {
     pub dirt: DirtViewsOptions,
+    pub ldc: LdcSettings,
 }
 
 /// DIRT's configuration for path tracing: 128^2 cube faces, 4 x 4 tiles, 16 buckets (the
@@ -80,6 +108,7 @@ impl Default for TracerOptions {
     fn default() -> Self {
         Self {
             dirt: DIRT_DEFAULTS,
+            ldc: LdcSettings::default(),
         }
     }
 }
@@ -98,6 +127,13 @@ pub struct BuiltTracer {
     pub tracer: Box<dyn WorldTracer>,
     /// Wall-clock milliseconds of the build.
     pub build_ms: f64,
+    /// Bytes of the structure.
+    pub bytes: usize,
+    /// The box the structure covers when it covers only part of the scene (an LDC fitted to
+    /// a region of interest).
+    pub bounds: Option<Aabb>,
+    /// The layered depth cube's build stats (`ldc` only).
+    pub ldc: Option<LdcStats>,
 }
 
 /// Builds the `kind` tracer for `scene` seen by `camera`.
@@ -108,13 +144,15 @@ pub fn build_tracer(
     opts: &TracerOptions,
 ) -> Result<BuiltTracer> {
     let start = Instant::now();
-    let build_error = |message: String| PathError::Build {
+    let failed = |e: &dyn std::fmt::Display| PathError::Build {
         tracer: kind.name().into(),
-        message,
+        message: e.to_string(),
     };
-    let tracer: Box<dyn WorldTracer> = match kind {
+    let (tracer, bytes, bounds, ldc): (Box<dyn WorldTracer>, _, _, _) = match kind {
         TracerKind::Bvh => {
-            Box::new(Bvh::try_build(&scene.mesh).map_err(|e| build_error(e.to_string()))?)
+            let bvh = Bvh::try_build(&scene.mesh).map_err(|e| failed(&e))?;
+            let bytes = bvh.bytes();
+            (Box::new(bvh), bytes, None, None)
         }
         TracerKind::Dirt => {
             let pinhole = match camera {
@@ -122,13 +160,26 @@ pub fn build_tracer(
                 _ => None,
             };
             let views = DirtViews::build(&scene.mesh, pinhole, camera_centre(camera), &opts.dirt)
-                .map_err(|e| build_error(e.to_string()))?;
-            Box::new(DirtTracer::new(views))
+                .map_err(|e| failed(&e))?;
+            let bytes = views.bytes() as usize;
+            (Box::new(DirtTracer::new(views)), bytes, None, None)
+        }
+        TracerKind::Ldc => {
+            let s = &opts.ldc;
+            let cube =
+                LayeredDepthCube::build(scene, s.resolution, &s.build).map_err(|e| failed(&e))?;
+            let (stats, bounds) = (cube.stats, s.build.roi.map(|_| cube.bounds));
+            let t = LdcTracer::new(cube, s.trace).map_err(|e| failed(&e))?;
+            let bytes = t.bytes();
+            (Box::new(t), bytes, bounds, Some(stats))
         }
     };
     Ok(BuiltTracer {
         tracer,
         build_ms: start.elapsed().as_secs_f64() * 1e3,
+        bytes,
+        bounds,
+        ldc,
     })
 }
 
@@ -143,7 +194,7 @@ mod tests {
         }
         let e = TracerKind::parse("octree").unwrap_err().to_string();
         assert!(
-            e.contains("octree") && e.contains("bvh") && e.contains("dirt"),
+            e.contains("octree") && e.contains("bvh") && e.contains("dirt") && e.contains("ldc"),
             "{e}"
         );
     }
@@ -169,6 +220,7 @@ mod tests {
                         ..DIRT_DEFAULTS.capture
                     },
                 },
+                ..TracerOptions::default()
             };
             let e = build_tracer(TracerKind::Dirt, &scene, &camera, &opts)
                 .err()

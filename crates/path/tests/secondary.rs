@@ -5,10 +5,10 @@
 
 use parallax_core::image::GBuffer;
 use parallax_path::secondary::replay::{RayBatch, replay_rows, score};
-use parallax_path::secondary::tracers::{self, BuiltTracer, LdcSettings, TracerKind};
 use parallax_path::secondary::{Effects, SecondaryError, SecondaryOptions, compare, render};
+use parallax_path::tracers::{BuiltTracer, LdcSettings, TracerKind, TracerOptions, build_tracer};
 use parallax_scene::Scene;
-use parallax_scene::camera::Pinhole;
+use parallax_scene::camera::{Camera, Pinhole};
 
 fn shared(rel: &str) -> String {
     format!(
@@ -28,12 +28,25 @@ fn view(scene: &Scene, w: u32, h: u32) -> (Pinhole, GBuffer) {
     (cam, g)
 }
 
+fn build(scene: &Scene, kind: TracerKind, ldc: LdcSettings) -> parallax_path::Result<BuiltTracer> {
+    let cam = Camera::Pinhole(Pinhole::new(&scene.camera(None).unwrap(), 8, 8).unwrap());
+    build_tracer(
+        kind,
+        scene,
+        &cam,
+        &TracerOptions {
+            ldc,
+            ..TracerOptions::default()
+        },
+    )
+}
+
 fn built(scene: &Scene, kind: TracerKind, res: u32) -> BuiltTracer {
     let s = LdcSettings {
-        resolution: res,
+        resolution: res.max(1),
         ..LdcSettings::default()
     };
-    tracers::build(kind, scene, &s).unwrap()
+    build(scene, kind, s).unwrap()
 }
 
 #[test]
@@ -185,20 +198,24 @@ fn bad_input_is_an_error() {
         .is_err()
     );
     assert!(Effects::parse("reflect,sparkle").is_err());
-    assert!(TracerKind::parse_list("bvh,octree").is_err());
-    assert!(TracerKind::parse_list("").is_err());
+    assert!(TracerKind::parse("octree").is_err());
     for res in [0, 1 << 20] {
         let s = LdcSettings {
             resolution: res,
             ..LdcSettings::default()
         };
-        assert!(
-            tracers::build(TracerKind::Ldc, &scene, &s).is_err(),
-            "{res}"
-        );
+        let e = build(&scene, TracerKind::Ldc, s)
+            .err()
+            .expect("an error")
+            .to_string();
+        assert!(e.contains("resolution"), "{e}");
     }
     let mut s = LdcSettings::default();
     s.trace.eps = 0.0;
     s.resolution = 32;
-    assert!(tracers::build(TracerKind::Ldc, &scene, &s).is_err());
+    let e = build(&scene, TracerKind::Ldc, s)
+        .err()
+        .expect("an error")
+        .to_string();
+    assert!(e.contains("eps"), "{e}");
 }

@@ -10,8 +10,8 @@ use glam::Vec3;
 use parallax_core::{Image, Rgb};
 use parallax_path::secondary::bench::{LdcBenchRow, LdcBenchSetup};
 use parallax_path::secondary::replay::EffectRow;
-use parallax_path::secondary::tracers::{self, LdcSettings, TracerKind};
 use parallax_path::secondary::{Effects, SecondaryOptions, bench, compare};
+use parallax_path::tracers::{LdcSettings, TracerKind, TracerOptions, build_tracer};
 use parallax_raster::ldc::{LdcOptions, MAX_RESOLUTION};
 use parallax_scene::camera::{Camera, Pinhole};
 use parallax_screen::ldc::{LdcTraceOptions, SampleTest};
@@ -181,7 +181,16 @@ fn write_json(path: &Path, value: &serde_json::Value) -> Result<()> {
 
 pub fn run(a: &SecondaryArgs, quiet: bool) -> Result<()> {
     output::check_image_path(&a.out)?;
-    let kinds = TracerKind::parse_list(&a.tracer)?;
+    let mut kinds = Vec::new();
+    for name in a.tracer.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        let k = TracerKind::parse(name)?;
+        if !kinds.contains(&k) {
+            kinds.push(k);
+        }
+    }
+    if kinds.is_empty() {
+        bail!("--tracer needs at least one tracer");
+    }
     let opts = SecondaryOptions {
         effects: Effects::parse(&a.effects)?,
         bounces: a.bounces,
@@ -199,11 +208,15 @@ pub fn run(a: &SecondaryArgs, quiet: bool) -> Result<()> {
         .layers
         .layers
         .remove(0);
-    let reference = tracers::build(TracerKind::Bvh, &scene, &settings)?;
+    let cam = Camera::Pinhole(camera.clone());
+    let topts = TracerOptions {
+        ldc: settings,
+        ..TracerOptions::default()
+    };
+    let reference = build_tracer(TracerKind::Bvh, &scene, &cam, &topts)?;
     let mut others = Vec::new();
     for &k in kinds.iter().filter(|&&k| k != TracerKind::Bvh) {
-        let t = tracers::build(k, &scene, &settings)
-            .with_context(|| format!("building the {} tracer", k.name()))?;
+        let t = build_tracer(k, &scene, &cam, &topts)?;
         if let Some(s) = &t.ldc {
             warn_ldc(s, quiet);
         }
@@ -275,7 +288,7 @@ pub fn run(a: &SecondaryArgs, quiet: bool) -> Result<()> {
 /// Writes `|tonemap(a) - tonemap(b)| * 10` as a PNG (linear, clamped).
 fn write_difference(path: &Path, a: &Image<Rgb>, b: &Image<Rgb>) -> Result<()> {
     use parallax_core::image::png::{tonemap_image, write_png_linear_clamped};
-    use parallax_path::secondary::replay::SCORE_TONEMAP;
+    use parallax_render::score::SCORE_TONEMAP;
     let (ta, tb) = (
         tonemap_image(a, &SCORE_TONEMAP),
         tonemap_image(b, &SCORE_TONEMAP),
@@ -471,8 +484,13 @@ pub fn demo_secondary(out: &Path, width: u32, height: u32, quiet: bool) -> Resul
         resolution: 512,
         ..LdcSettings::default()
     };
-    let reference = tracers::build(TracerKind::Bvh, &scene, &settings)?;
-    let ldc = tracers::build(TracerKind::Ldc, &scene, &settings)?;
+    let cam = Camera::Pinhole(camera.clone());
+    let topts = TracerOptions {
+        ldc: settings,
+        ..TracerOptions::default()
+    };
+    let reference = build_tracer(TracerKind::Bvh, &scene, &cam, &topts)?;
+    let ldc = build_tracer(TracerKind::Ldc, &scene, &cam, &topts)?;
     let opts = SecondaryOptions::default();
     let c = compare(
         &scene,

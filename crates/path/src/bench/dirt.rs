@@ -250,7 +250,16 @@ pub fn run(
                 seed: opts.rays.seed,
                 ..PathOptions::default()
             };
-            path_agreement(scene, camera, &o, &TracerOptions { dirt: opts.views }).map(|r| r.0)
+            path_agreement(
+                scene,
+                camera,
+                &o,
+                &TracerOptions {
+                    dirt: opts.views,
+                    ..TracerOptions::default()
+                },
+            )
+            .map(|r| r.0)
         })
         .transpose()?;
     Ok(DirtBenchReport {

@@ -172,7 +172,11 @@ pub fn export(
                 // a texture file of its own.
                 let tex = &scene.textures[t as usize];
                 let factor = m.base_color;
-                let key = if factor == Vec3::ONE { t as u64 } else { (1 << 32) | *mat_id as u64 };
+                let key = if factor == Vec3::ONE {
+                    t as u64
+                } else {
+                    (1 << 32) | *mat_id as u64
+                };
                 let name = match textures.get(&key) {
                     Some(n) => n.clone(),
                     None => {

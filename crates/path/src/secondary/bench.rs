@@ -32,7 +32,7 @@ use parallax_core::{Aabb, Ray};
 use parallax_raster::ldc::LdcStats;
 use parallax_render::brdf;
 use parallax_render::reference::surface::SurfacePoint;
-use parallax_scene::camera::Pinhole;
+use parallax_scene::camera::{Camera, Pinhole};
 use parallax_scene::{MaterialKind, Scene};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -41,8 +41,8 @@ use super::lights::{light_at, whitted_lights};
 use super::rays::{RaySet, ray_set};
 use super::render::{Answers, pixel_ray, trace_closest, trace_occluded};
 use super::replay::{Contender, EffectRow, RayBatch, replay_rows, score};
-use super::tracers::{BuiltTracer, LdcSettings, TracerKind, build};
 use super::{Effect, SecondaryError, SecondaryOptions, render};
+use crate::tracers::{BuiltTracer, LdcSettings, TracerKind, TracerOptions, build_tracer};
 
 /// Bench options (module table).
 #[derive(Clone, Debug)]
@@ -262,7 +262,19 @@ pub fn run(
         .layers
         .layers
         .remove(0);
-    let bvh = build(TracerKind::Bvh, scene, &setup.ldc)?;
+    let cam = Camera::Pinhole(camera.clone());
+    let build = |kind, ldc: &LdcSettings| {
+        build_tracer(
+            kind,
+            scene,
+            &cam,
+            &TracerOptions {
+                ldc: *ldc,
+                ..TracerOptions::default()
+            },
+        )
+    };
+    let bvh = build(TracerKind::Bvh, &setup.ldc)?;
     let truth = render(scene, camera, &g, bvh.tracer.as_ref(), &setup.secondary)?;
     // Synthetic origins fill the LDC's box (the ROI when one is given).
     let bounds = match setup.ldc.build.roi {
@@ -298,7 +310,7 @@ pub fn run(
             resolution: res,
             ..setup.ldc
         };
-        let ldc = build(TracerKind::Ldc, scene, &settings)?;
+        let ldc = build(TracerKind::Ldc, &settings)?;
         let image = render(scene, camera, &g, ldc.tracer.as_ref(), &setup.secondary)?;
         let (psnr, ssim) = score(&image.image, &truth.image)?;
         let contenders = [

@@ -11,8 +11,8 @@ use parallax_scene::camera::Pinhole;
 use serde::Serialize;
 
 use super::replay::{Contender, EffectRow, RayBatch, replay_rows, score};
-use super::tracers::BuiltTracer;
 use super::{SecondaryError, SecondaryOptions, render};
+use crate::tracers::BuiltTracer;
 
 /// One tracer's image and costs.
 #[derive(Clone, Debug, Serialize)]

@@ -44,7 +44,6 @@ pub mod lights;
 pub mod rays;
 pub mod render;
 pub mod replay;
-pub mod tracers;
 
 use serde::Serialize;
 
@@ -167,9 +166,7 @@ pub enum SecondaryError {
     #[error(transparent)]
     Raster(#[from] parallax_raster::RasterError),
     #[error(transparent)]
-    Bvh(#[from] parallax_bvh::BvhError),
-    #[error(transparent)]
-    Ldc(#[from] parallax_screen::ldc::LdcTraceError),
+    Tracer(#[from] crate::PathError),
     #[error(transparent)]
     Core(#[from] parallax_core::CoreError),
 }

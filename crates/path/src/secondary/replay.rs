@@ -10,21 +10,13 @@
 //! `outside` counts disagreements whose reference hit lies outside the other structure's box
 //! (for shadow rays: whose segment leaves the box), the part a region of interest gives up.
 //!
-//! **Scores:** both images through the PNGs' display transform (ACES filmic, sRGB), PSNR with
-//! peak 1 over the three channels, SSIM the mean of the per-channel SSIMs (data range 1).
+//! **Scores:** [`parallax_render::score`] (the display transform of the PNGs, PSNR with peak
+//! 1, mean per-channel SSIM), the same as every other technique's.
 
-use parallax_core::image::png::{ToneMapping, Tonemap, tonemap_image};
-use parallax_core::metrics::{psnr_rgb, ssim_rgb};
 use parallax_core::{Aabb, Image, Ray, Rgb, WorldHit, WorldStats, WorldTracer};
 use serde::Serialize;
 
 use super::render::{Answers, Batch, trace_closest, trace_occluded};
-
-/// The display transform of the scores (that of the PNGs).
-pub const SCORE_TONEMAP: ToneMapping = ToneMapping {
-    exposure: 0.0,
-    tonemap: Tonemap::AcesFilmic,
-};
 
 /// Counts of a ray-for-ray comparison (module docs).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
@@ -135,9 +127,8 @@ pub fn agree_occluded(
 
 /// PSNR (dB) and SSIM of `image` against `truth` (module docs).
 pub fn score(image: &Image<Rgb>, truth: &Image<Rgb>) -> parallax_core::Result<(f64, f64)> {
-    let a = tonemap_image(image, &SCORE_TONEMAP);
-    let b = tonemap_image(truth, &SCORE_TONEMAP);
-    Ok((psnr_rgb(&a, &b, 1.0)?, ssim_rgb(&a, &b, 1.0)?))
+    let s = parallax_render::score::score(image, truth)?;
+    Ok((s.psnr, s.ssim))
 }
 
 /// A tracer to compare, with what the comparison reports about it.

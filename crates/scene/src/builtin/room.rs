@@ -21,7 +21,7 @@
 
 use glam::Vec3;
 
-use super::named;
+use super::cameras::named;
 use super::shapes::MeshBuilder;
 use crate::{Light, Material, MaterialKind, ObjectRange, Scene};
 
