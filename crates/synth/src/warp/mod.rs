@@ -75,16 +75,16 @@ use std::time::Instant;
 use glam::{Mat3, UVec2, Vec2, Vec3};
 use parallax_core::{Image, Ray, Rgb};
 use parallax_scene::camera::Pinhole;
-use parallax_screen::{DdaOptions, DdaTracer, ScreenTracer, TraceResult, TraceStats};
+use parallax_screen::{ScreenTracer, TraceResult, TraceStats};
 use rayon::prelude::*;
 
 mod guard;
 mod hit;
+mod rays;
 mod resolve;
 
 use crate::layers::Reference;
-use guard::{guard_deep, nearer_neighbour_guard, silhouette_guard};
-use resolve::Resolver;
+pub use rays::RayWarp;
 
 pub use hit::{HitKind, Resample, SAME_SURFACE_PX};
 
@@ -253,35 +253,13 @@ pub fn warp_view_with(
     target: &Pinhole,
     opts: &WarpOptions,
 ) -> WarpedView {
-    let resample = opts.resample;
-    let deep = reference.layers.len() > 1;
-    // The background fill of Fig. 6e, for every layer count (module docs).
-    let fill_bg = opts.fill == OcclusionFill::NearestBackground;
-    let side_guard = opts.side_entry_guard && deep;
-    let silhouette = opts.silhouette_check && deep;
-    let nearer = opts.nearer_neighbour_check && deep;
-    let guard = (opts.dda_recheck && deep)
-        .then(|| {
-            // Never truncated: a segment clipped to the reference image crosses at most
-            // `max(W, H) + 1` pixel columns / rows along its major axis (stride 1), so this
-            // bound lets every re-check march to its end. The stereo default (260, tuned for
-            // atrium) gave up on 0.8% of the classroom's rays at 1600x900.
-            let d = DdaOptions::default();
-            let o = DdaOptions {
-                layers: 1,
-                max_steps: reference.width().max(reference.height()) + 2,
-                ..d
-            };
-            DdaTracer::new(&reference.cube, &reference.layers[..1], &o).ok()
-        })
-        .flatten();
     let (w, h) = (target.width, target.height);
     let n = w as usize * h as usize;
     let mut image = vec![Vec3::ZERO; n];
     let mut kinds = vec![HitKind::Miss; n];
     let mut work = vec![0u32; n];
     let rays = PixelRays::new(target);
-    let resolver = Resolver::new(reference, resample);
+    let per_ray = RayWarp::new(reference, opts);
     let start = Instant::now();
     let stats = image
         .par_chunks_mut(w as usize)
@@ -300,18 +278,8 @@ pub fn warp_view_with(
                 let x0 = (c * WARP_CHUNK) as u32;
                 // Pass 1: trace the chunk (and guard the answers).
                 for ((x, wk), answer) in (x0..).zip(wk.iter_mut()).zip(&mut answers) {
-                    let ray = row.ray(x);
                     let mut s = TraceStats::default();
-                    let mut r = tracer.trace(&ray, &mut s);
-                    if side_guard || guard.is_some() {
-                        r = guard_deep(reference, side_guard, guard.as_ref(), &ray, r, &mut s);
-                    }
-                    if silhouette {
-                        r = silhouette_guard(reference, &ray, r);
-                    }
-                    if nearer {
-                        r = nearer_neighbour_guard(reference, &ray, r);
-                    }
+                    let r = per_ray.trace(tracer, &row.ray(x), &mut s);
                     let tests = s.box_tests + s.plane_tests;
                     *wk = (if tests > 0 { tests } else { s.steps }).min(u32::MAX as u64) as u32;
                     total += s;
@@ -319,17 +287,7 @@ pub fn warp_view_with(
                 }
                 // Pass 2: colour the answers.
                 for ((x, (img, kind)), &r) in (x0..).zip(img.iter_mut().zip(kind)).zip(&answers) {
-                    (*img, *kind) = resolver.resolve(r);
-                    if let (true, HitKind::Occlusion(l)) = (fill_bg, *kind)
-                        && let TraceResult::OcclusionVolume { pixel, .. } = r
-                    {
-                        let ray = row.ray(x);
-                        if let Some(c) = background_fill(reference, 0, pixel, &ray)
-                            .or_else(|| background_fill(reference, l as u32, pixel, &ray))
-                        {
-                            *img = c;
-                        }
-                    }
+                    (*img, *kind) = per_ray.colour_with(|| row.ray(x), r);
                 }
             }
             total
