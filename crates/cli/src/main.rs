@@ -44,6 +44,10 @@ enum Command {
     Path(commands::path::PathArgs),
     /// Reflections, refractions and shadows through any world-space tracer (LDC vs BVH).
     Secondary(commands::secondary::SecondaryArgs),
+    /// Thin-lens depth of field by screen-space ray tracing through layers (Widmer et al. 2015).
+    Dof(commands::dof::DofArgs),
+    /// Light fields through layers: a Looking Glass quilt or near-eye elemental images (Widmer et al. 2015).
+    Lightfield(commands::lightfield::LightFieldArgs),
     /// Benchmarks that reproduce the papers' and issues' measurements.
     #[command(subcommand)]
     Bench(commands::bench::BenchCommand),
@@ -71,6 +75,8 @@ fn main() -> std::process::ExitCode {
         Command::Upsample(a) => commands::upsample::run(&a, cli.quiet),
         Command::Path(a) => commands::path::run(&a, cli.quiet),
         Command::Secondary(a) => commands::secondary::run(&a, cli.quiet),
+        Command::Dof(a) => commands::dof::run(&a, cli.quiet),
+        Command::Lightfield(a) => commands::lightfield::run(&a, cli.quiet),
         Command::Bench(b) => commands::bench::run(&b, cli.quiet),
     };
     match result {

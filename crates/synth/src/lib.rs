@@ -19,6 +19,9 @@
 //! - [`upsample`]: 15 -> 60 Hz along a camera path (Table 3);
 //! - [`mesh_warp`]: the forward-warping baseline;
 //! - [`input`]: a colour + depth image pair as a single-layer reference;
+//! - [`dof`]: thin-lens depth of field through the layers (§5.2, Table 4, Figs. 8-9);
+//! - [`lightfield`]: Looking Glass quilts and near-eye elemental images (§5.3);
+//! - [`margin`]: references widened for rays that start off the reference eye;
 //! - [`bench`](mod@bench): `parallax bench warp | upsample | compression` (Tables 2-3, Fig. 14/15);
 //! - scoring: [`score()`] and [`Shading`] come from `parallax_render::score` (PSNR / SSIM against
 //!   the BVH ground truth).
@@ -31,8 +34,11 @@
 //! `docs/notes/quadtree.md`, the baselines': `docs/notes/screen.md`).
 
 pub mod bench;
+pub mod dof;
 pub mod input;
 pub mod layers;
+pub mod lightfield;
+pub mod margin;
 pub mod mesh_warp;
 pub mod method;
 pub mod stereo;

@@ -287,6 +287,14 @@ impl Synthesizer {
         })
     }
 
+    /// The tracer (`None` for the mesh warp).
+    pub fn tracer(&self) -> Option<&dyn ScreenTracer> {
+        match self {
+            Synthesizer::Tracer(t, _) => Some(t.as_ref()),
+            Synthesizer::Mesh(_) => None,
+        }
+    }
+
     /// Synthesises `target`'s view of `reference`.
     pub fn view(&self, reference: &Reference, target: &Pinhole) -> Result<WarpedView, SynthError> {
         match self {

@@ -26,6 +26,8 @@ pub enum BenchCommand {
     Dirt(super::bench_dirt::DirtBenchArgs),
     /// Layered depth cube build and trace vs the BVH on the same rays (Bürger et al. 2007, Table 1).
     Ldc(super::secondary::LdcBenchArgs),
+    /// Depth of field per N_pri/N_sec, layer count and method (Widmer et al. 2015, Table 4, Fig. 8).
+    Dof(super::dof::DofBenchArgs),
 }
 
 #[derive(Args, Debug)]
@@ -92,6 +94,7 @@ pub fn run(cmd: &BenchCommand, quiet: bool) -> Result<()> {
         BenchCommand::Path(a) => super::path::bench(a, quiet),
         BenchCommand::Dirt(a) => super::bench_dirt::run_bench(a, quiet),
         BenchCommand::Ldc(a) => super::secondary::bench(a, quiet),
+        BenchCommand::Dof(a) => super::dof::bench(a, quiet),
         BenchCommand::Rays(a) => {
             let scene = a.view.load_scene()?;
             let camera = a.view.camera(&scene, a.width, a.height)?;

@@ -49,7 +49,7 @@ fn dda_sweeps<'a>(
     out
 }
 
-fn cell(v: f64, digits: usize) -> String {
+pub(crate) fn cell(v: f64, digits: usize) -> String {
     if v.is_nan() {
         "-".into()
     } else {
@@ -58,7 +58,7 @@ fn cell(v: f64, digits: usize) -> String {
 }
 
 /// A stage reporter on stderr (silent with --quiet).
-fn reporter(quiet: bool) -> impl Fn(&str) {
+pub(crate) fn reporter(quiet: bool) -> impl Fn(&str) {
     let pb = progress::bar(0, "bench", quiet);
     move |msg: &str| pb.set_message(msg.to_string())
 }

@@ -8,15 +8,11 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use clap::Args;
 use parallax_bvh::Bvh;
-use parallax_core::Rgb;
 use parallax_core::image::png::{self, ToneMapping};
 use parallax_render::score::SCORE_TONEMAP;
 use parallax_scene::camera::Pinhole;
 use parallax_synth::bench::warp::{StereoSetup, eye_truths, score_pair};
 use parallax_synth::capture_reference;
-use parallax_synth::input::{
-    Intrinsics, input_desc, read_color, read_depth, reference_from_images,
-};
 use parallax_synth::method::{Method, cube_near_name};
 use parallax_synth::stereo::warp_stereo;
 use parallax_synth::warp::WarpedView;
@@ -71,22 +67,7 @@ pub fn run(a: &WarpArgs, quiet: bool) -> Result<()> {
     // Reference: from a scene, or from colour + depth.
     let (mut reference, desc, scene) = match (&a.color, &a.depth) {
         (Some(c), Some(d)) => {
-            let color = read_color(c).with_context(|| format!("reading {}", c.display()))?;
-            let depth = read_depth(d).with_context(|| format!("reading {}", d.display()))?;
-            let intr = match a.focal_px {
-                Some(f) => Intrinsics::FocalPx(f),
-                None => Intrinsics::FovYDeg(a.view.fov_y.unwrap_or(60.0)),
-            };
-            let pose = match (&a.view.eye, &a.view.target) {
-                (Some(_), Some(_)) => {
-                    let scene = parallax_scene::Scene::default();
-                    let d = a.view.camera_desc(&scene)?;
-                    Some((d.eye, d.target, d.up))
-                }
-                _ => None,
-            };
-            let desc = input_desc(intr, color.height(), pose)?;
-            let r = reference_from_images(color, &depth, &desc, Rgb::ZERO)?;
+            let (r, desc) = super::input::load_color_depth(&a.view, c, d, a.focal_px)?;
             (r, desc, None)
         }
         _ => {

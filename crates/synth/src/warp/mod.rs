@@ -84,7 +84,7 @@ mod rays;
 mod resolve;
 
 use crate::layers::Reference;
-pub use rays::RayWarp;
+pub use rays::{RayWarp, warp_rays};
 
 pub use hit::{HitKind, Resample, SAME_SURFACE_PX};
 
