@@ -24,14 +24,12 @@ use glam::Vec3;
 use parallax_core::Aabb;
 use rayon::prelude::*;
 
-use crate::BuildOptions;
+use crate::options::{BuildOptions, MAX_BINS};
 
 /// Below this depth the binned SAH decides; deeper nodes split at the object median.
 pub(crate) const MAX_SAH_DEPTH: u32 = 48;
 /// Nodes with more triangles than this are binned in parallel chunks.
 pub(crate) const PAR_BIN_THRESHOLD: usize = 32 * 1024;
-/// Largest bin count accepted.
-pub(crate) const MAX_BINS: usize = 32;
 
 /// A triangle reference: its bounds and its index in the scene's mesh.
 #[derive(Clone, Copy, Debug)]

@@ -29,11 +29,12 @@ use glam::Vec4;
 use parallax_core::Ray;
 use parallax_core::math::{ROBUST_FAR_SCALE, WatertightRay};
 
+use crate::bvh::Bvh;
+use crate::hit::Hit;
 use crate::node::{is_leaf, leaf_count, leaf_first};
 use crate::stats::NoStats;
 use crate::traverse::{Best, STACK_SIZE};
 use crate::tri4::Tri4Ray;
-use crate::{Bvh, Hit};
 use parallax_core::simd::{max_or_rhs, min_or_rhs};
 
 /// Rays per packet traversal ([`Bvh::closest_hit_packet4`] splits longer slices).

@@ -39,6 +39,8 @@ use glam::Vec4;
 use parallax_core::Ray;
 use parallax_core::math::{ROBUST_FAR_SCALE, WatertightRay};
 
+use crate::bvh::Bvh;
+use crate::hit::Hit;
 use crate::lanes16::{F16, Lanes16, Portable16, U16};
 use crate::node::{is_leaf, leaf_count, leaf_first};
 use crate::node8::Node8;
@@ -46,7 +48,6 @@ use crate::stats::NoStats;
 use crate::traverse::Best;
 use crate::traverse8::{RayBoxes8, STACK8_SIZE};
 use crate::tri4::{Tri4Ray, blocks_for, lane_mask};
-use crate::{Bvh, Hit};
 
 /// Rays per packet ([`Bvh::closest_hit_packet`] splits longer slices).
 pub const PACKET_SIZE: usize = 16;

@@ -5,7 +5,7 @@ use parallax_core::Ray;
 use parallax_core::math::WatertightRay;
 use parallax_scene::TriangleMesh;
 
-use crate::Hit;
+use crate::hit::Hit;
 use crate::traverse::sort_hits;
 
 /// The closest hit over all triangles of `mesh` (the first in index order on exact ties).

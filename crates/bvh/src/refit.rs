@@ -13,9 +13,10 @@ use parallax_core::Aabb;
 use parallax_scene::TriangleMesh;
 use rayon::prelude::*;
 
+use crate::bvh::Bvh;
 use crate::node::{ChildRef, EMPTY};
+use crate::options::BvhError;
 use crate::tri::Tri;
-use crate::{Bvh, BvhError};
 
 impl Bvh {
     /// Updates the BVH to the mesh's current vertex positions, keeping its topology (the mesh

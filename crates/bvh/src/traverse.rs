@@ -18,10 +18,11 @@ use parallax_core::Ray;
 use parallax_core::math::ROBUST_FAR_SCALE;
 use parallax_core::math::WatertightRay;
 
+use crate::bvh::Bvh;
+use crate::hit::Hit;
 use crate::node::{Node4, is_leaf, leaf_count, leaf_first};
 use crate::stats::{Counter, NoStats, TraversalStats};
 use crate::tri4::{Tri4Ray, blocks_for, lane_mask};
-use crate::{Bvh, Hit};
 use parallax_core::simd::{max_or_rhs, min_or_rhs};
 
 /// Traversal stack entries.

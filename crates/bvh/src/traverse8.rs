@@ -28,12 +28,13 @@ use glam::Vec4;
 use parallax_core::Ray;
 use parallax_core::math::{ROBUST_FAR_SCALE, WatertightRay};
 
+use crate::bvh::Bvh;
+use crate::hit::Hit;
 use crate::node::{is_leaf, leaf_count, leaf_first};
 use crate::node8::Node8;
 use crate::stats::{Counter, NoStats, TraversalStats};
 use crate::traverse::{Best, sort_hits};
 use crate::tri4::Tri4Ray;
-use crate::{Bvh, Hit};
 use parallax_core::simd::{max_or_rhs, min_or_rhs};
 
 /// Stack entries of the 8-wide traversal: a node pushes at most 7, and the build checks

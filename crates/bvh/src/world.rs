@@ -4,7 +4,8 @@
 use glam::Vec2;
 use parallax_core::{Ray, WorldHit, WorldStats, WorldTracer};
 
-use crate::{Bvh, TraversalStats};
+use crate::bvh::Bvh;
+use crate::stats::TraversalStats;
 
 impl WorldTracer for Bvh {
     fn name(&self) -> &str {

@@ -114,7 +114,12 @@ fn interleaved_rounds_equal_each_method_alone() {
         }
         // Times: best of the rounds, finite; trace-only columns for tracers only.
         assert!(row.ms_view > 0.0 && row.ms_view.is_finite(), "{row:?}");
-        assert!(row.ms_view <= row.ms_view_cpu * 4.0 + 1.0 || row.ms_view_cpu.is_nan());
+        // CPU time is measured where the platform has it (no wall-clock bound: a loaded
+        // machine may deschedule the process for any time).
+        assert!(
+            row.ms_view_cpu.is_nan() || (row.ms_view_cpu >= 0.0 && row.ms_view_cpu.is_finite()),
+            "{row:?}"
+        );
         if m.is_tracer() {
             assert!(row.ms_trace > 0.0 && row.ms_trace.is_finite(), "{row:?}");
             assert!(row.trace_mrays_per_s > 0.0 && row.trace_cpu_mrays_per_s > 0.0);

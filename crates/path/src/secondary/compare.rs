@@ -10,8 +10,9 @@ use parallax_scene::Scene;
 use parallax_scene::camera::Pinhole;
 use serde::Serialize;
 
+use super::options::{SecondaryError, SecondaryOptions};
+use super::render::render;
 use super::replay::{Contender, EffectRow, RayBatch, replay_rows, score};
-use super::{SecondaryError, SecondaryOptions, render};
 use crate::tracers::BuiltTracer;
 
 /// One tracer's image and costs.

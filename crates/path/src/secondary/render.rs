@@ -16,7 +16,7 @@ use parallax_scene::{MaterialKind, Scene};
 use rayon::prelude::*;
 
 use super::lights::{WhittedLight, light_at, whitted_lights};
-use super::{Effect, SecondaryError, SecondaryOptions};
+use super::options::{Effect, SecondaryError, SecondaryOptions};
 
 /// Rays handed to the tracer per parallel task.
 pub const CHUNK: usize = 1024;

@@ -11,12 +11,12 @@ use parallax_scene::TriangleMesh;
 use parallax_scene::camera::Pinhole;
 use rayon::prelude::*;
 
+use super::capture::{
+    DirtCapture, DirtError, DirtOptions, DirtStats, MAX_BUCKETS, MAX_CELL_BUCKETS, MAX_TILE_SIZE,
+};
 use super::fill::{BandOut, Grid, fill_band};
 use super::mip;
 use super::setup::{Setups, ViewXf};
-use super::{
-    DirtCapture, DirtError, DirtOptions, DirtStats, MAX_BUCKETS, MAX_CELL_BUCKETS, MAX_TILE_SIZE,
-};
 
 /// Target number of screen bands (a band = whole cell rows, so bands concatenate in order).
 const TARGET_BANDS: u32 = 64;
@@ -81,6 +81,18 @@ fn grid(view: &Pinhole, opts: &DirtOptions) -> Result<Grid, DirtError> {
         buckets: opts.buckets,
         band_rows: cells_y.div_ceil(TARGET_BANDS).max(1),
     })
+}
+
+impl DirtCapture {
+    /// Builds the capture of `mesh` seen by `view` (DIRT §4.1: Fill Depth, Mipmap Depth,
+    /// Fill Primitives).
+    pub fn build(
+        mesh: &parallax_scene::TriangleMesh,
+        view: &Pinhole,
+        opts: &DirtOptions,
+    ) -> Result<DirtCapture, DirtError> {
+        build(mesh, view, opts)
+    }
 }
 
 pub(super) fn build(

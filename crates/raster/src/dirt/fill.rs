@@ -18,12 +18,12 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::DVec3;
 
-use super::clip::Poly;
-use super::setup::{SetupEntry, Setups, ViewXf};
-use super::{
+use super::capture::{
     CellDepth, CellRecord, DirtError, DirtOptions, FILM_MARGIN_PX, bucket_index, bucket_mask,
     bucket_scale,
 };
+use super::clip::Poly;
+use super::setup::{SetupEntry, Setups, ViewXf};
 
 /// Relative margin on a clipped depth range.
 const DEPTH_REL_MARGIN: f64 = 1.0 / 65536.0;

@@ -7,7 +7,7 @@ use std::f32::consts::FRAC_1_PI;
 use glam::{Vec2, Vec3};
 use parallax_core::sampling::warp;
 
-use super::BsdfSample;
+use super::sample::BsdfSample;
 
 /// `albedo / π · cos θ_i` in the upper hemisphere, zero elsewhere.
 #[inline]

@@ -23,7 +23,7 @@ use std::f32::consts::FRAC_1_PI;
 use glam::{Vec2, Vec3};
 use parallax_core::sampling::warp::{self, Ggx};
 
-use super::{BsdfSample, luminance};
+use super::sample::{BsdfSample, luminance};
 
 /// Smallest GGX alpha used: perceptual roughness below `sqrt(MIN_ALPHA)` ≈ 0.032 renders as
 /// that roughness (sharper lobes make the pdf spike beyond what f32 MIS handles gracefully).

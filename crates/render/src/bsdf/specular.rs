@@ -6,7 +6,7 @@
 
 use glam::Vec3;
 
-use super::BsdfSample;
+use super::sample::BsdfSample;
 use crate::brdf::fresnel_dielectric;
 
 /// Mirror reflection in the local frame.

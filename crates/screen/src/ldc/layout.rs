@@ -7,10 +7,33 @@
 //! misses is rejected without reading its samples (measured in `docs/notes/ldc.md`). The
 //! answers are those of the capture's row-major CSR arrays: only the order in memory differs.
 
-use parallax_raster::ldc::Ldi;
+use glam::Vec3;
+use parallax_raster::ldc::{Ldi, image_axes};
 use rayon::prelude::*;
 
-use super::slopes;
+/// Largest `|dz/du|`, `|dz/dv|` of a splat. The geometric normal of a triangle assigned to an
+/// LDI has its largest component on the LDI's axis, so its slopes are at most 1; the clamp
+/// only guards against non-finite or degenerate normals.
+pub const MAX_SLOPE: f32 = 2.0;
+
+/// The slopes `(dz/du, dz/dv)` of the plane of normal `n` in LDI `axis`, clamped to
+/// [`MAX_SLOPE`] (0 for a normal without an `axis` component).
+#[inline]
+pub(super) fn slopes(n: Vec3, axis: usize) -> (f32, f32) {
+    let (u, v) = image_axes(axis);
+    let na = n[axis];
+    if na == 0.0 || !na.is_finite() {
+        return (0.0, 0.0);
+    }
+    let c = |g: f32| {
+        if g.is_finite() {
+            g.clamp(-MAX_SLOPE, MAX_SLOPE)
+        } else {
+            0.0
+        }
+    };
+    (c(-n[u] / na), c(-n[v] / na))
+}
 
 /// One pixel: its samples are `cells[i].start..cells[i + 1].start`; `[lo, hi]` is their depth
 /// range (`[+inf, -inf]` when empty).

@@ -74,9 +74,10 @@
 //! index — and `8 intervals` per block; [`LdcTracer::tracer_bytes`]).
 
 mod layout;
+
+pub use layout::MAX_SLOPE;
 mod traverse;
 
-use glam::Vec3;
 use parallax_core::{HitSurface, NO_ID, Ray, SampledSurface, WorldHit, WorldStats, WorldTracer};
 use parallax_raster::ldc::{LayeredDepthCube, image_axes};
 use rayon::prelude::*;
@@ -93,11 +94,6 @@ pub const DEFAULT_SKIP: f32 = 0.5;
 
 /// Largest number of depth intervals per coarse block.
 pub const MAX_INTERVALS: u32 = 64;
-
-/// Largest `|dz/du|`, `|dz/dv|` of a splat. The geometric normal of a triangle assigned to an
-/// LDI has its largest component on the LDI's axis, so its slopes are at most 1; the clamp
-/// only guards against non-finite or degenerate normals.
-pub const MAX_SLOPE: f32 = 2.0;
 
 /// How a ray is tested against a layer sample (module docs).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
@@ -180,25 +176,6 @@ pub struct LdcTracer {
     ldis: [LdiTrace; 3],
     /// Tracer set-up time (splats and margins), ms.
     pub build_ms: f64,
-}
-
-/// The slopes `(dz/du, dz/dv)` of the plane of normal `n` in LDI `axis`, clamped to
-/// [`MAX_SLOPE`] (0 for a normal without an `axis` component).
-#[inline]
-fn slopes(n: Vec3, axis: usize) -> (f32, f32) {
-    let (u, v) = image_axes(axis);
-    let na = n[axis];
-    if na == 0.0 || !na.is_finite() {
-        return (0.0, 0.0);
-    }
-    let c = |g: f32| {
-        if g.is_finite() {
-            g.clamp(-MAX_SLOPE, MAX_SLOPE)
-        } else {
-            0.0
-        }
-    };
-    (c(-n[u] / na), c(-n[v] / na))
 }
 
 impl LdcTracer {

@@ -72,19 +72,25 @@
 
 use std::time::Instant;
 
-use glam::{Mat3, UVec2, Vec2, Vec3};
+use glam::{Mat3, Vec2, Vec3};
 use parallax_core::{Image, Ray, Rgb};
 use parallax_scene::camera::Pinhole;
 use parallax_screen::{ScreenTracer, TraceResult, TraceStats};
 use rayon::prelude::*;
 
+mod any_rays;
+mod fill;
 mod guard;
 mod hit;
+mod options;
 mod rays;
 mod resolve;
 
 use crate::layers::Reference;
-pub use rays::{RayWarp, warp_rays};
+pub use any_rays::warp_rays;
+pub use fill::BACKGROUND_SEARCH_PX;
+pub use options::{OcclusionFill, WarpOptions};
+pub use rays::RayWarp;
 
 pub use hit::{HitKind, Resample, SAME_SURFACE_PX};
 
@@ -183,63 +189,6 @@ impl WarpedView {
 /// and fetches colours from `reference` with [`Resample::default`].
 pub fn warp_view(tracer: &dyn ScreenTracer, reference: &Reference, target: &Pinhole) -> WarpedView {
     warp_view_with(tracer, reference, target, &WarpOptions::default())
-}
-
-/// How an occlusion-volume answer is coloured (module docs, "Occlusion-volume fill").
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
-pub enum OcclusionFill {
-    /// The colour of the pixel the tracer reports (the crossed pixel).
-    Crossed,
-    /// The nearest background pixel along the ray's epipolar line (Fig. 6e).
-    #[default]
-    NearestBackground,
-}
-
-/// Options of [`warp_view_with`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-pub struct WarpOptions {
-    pub resample: Resample,
-    /// Layer-0 guard part (a) (module docs): an answer from layer 1.. for a ray entering the
-    /// reference frustum through a side face behind layer 0 becomes layer 0's occlusion
-    /// volume.
-    pub side_entry_guard: bool,
-    /// Layer-0 guard part (b) (module docs): a hit in layer 1.. is replaced by layer 0's
-    /// thin-shell DDA hit when that comes first (rays slipping through layer-0 cracks).
-    pub dda_recheck: bool,
-    /// Colour of occlusion-volume answers (any layer count).
-    pub fill: OcclusionFill,
-    /// Layer-0 guard part (d) (module docs): a hit in layer 1.. is kept only when the ray
-    /// passed behind a layer-0 silhouette to reach it.
-    pub silhouette_check: bool,
-    /// Layer-0 guard part (e) (module docs): a hit in layer 1.. is rejected when a layer-0
-    /// sample of another surface in its bilinear cell lies between layer 0 and the hit.
-    pub nearer_neighbour_check: bool,
-}
-
-impl WarpOptions {
-    /// Both parts of the layer-0 guard on or off.
-    pub fn with_layer0_guard(self, on: bool) -> Self {
-        Self {
-            side_entry_guard: on,
-            dda_recheck: on,
-            silhouette_check: on,
-            nearer_neighbour_check: on,
-            ..self
-        }
-    }
-}
-
-impl Default for WarpOptions {
-    fn default() -> Self {
-        Self {
-            resample: Resample::default(),
-            side_entry_guard: true,
-            dda_recheck: true,
-            fill: OcclusionFill::default(),
-            silhouette_check: true,
-            nearer_neighbour_check: true,
-        }
-    }
 }
 
 /// Pixels of a row traced before their colours are looked up (module docs, "The per-pixel
@@ -362,73 +311,4 @@ impl RowRays<'_> {
         let len = d.length();
         Ray::new(p.origin, p.basis * (d / len))
     }
-}
-
-/// Steps of the background search of `background_fill` (pixels along the epipolar line).
-pub const BACKGROUND_SEARCH_PX: u32 = 8;
-
-/// A pixel deeper than the occluder edge by more than this fraction of its depth is
-/// background for `background_fill`.
-const BACKGROUND_REL: f32 = 0.01;
-
-/// Fig. 6e's "nearest background pixel" for an occlusion-volume answer at `pixel` of `layer`
-/// (module docs): the occluder edge depth is the nearer of `pixel` and the next pixel along
-/// the ray's screen direction in the reference; walking back from `pixel` against that
-/// direction one pixel at a time (at most [`BACKGROUND_SEARCH_PX`] steps), the first pixel
-/// that is uncovered or deeper than the edge by [`BACKGROUND_REL`] gives the colour. `None`
-/// when there is none (the caller keeps the crossed pixel's colour).
-fn background_fill(
-    reference: &Reference,
-    layer: u32,
-    pixel: UVec2,
-    ray: &parallax_core::Ray,
-) -> Option<Rgb> {
-    let g = reference.layers.get(layer as usize)?;
-    let colors = reference.colors.get(layer as usize)?;
-    let (w, h) = (g.width(), g.height());
-    if pixel.x >= w || pixel.y >= h {
-        return None;
-    }
-    let seg = reference.cube.clip_ray(ray)?;
-    let d = seg.p1 - seg.p0;
-    let dir = Vec2::new(d.x * w as f32, d.y * h as f32);
-    let len = dir.x.abs().max(dir.y.abs());
-    if !(len > 1e-6 && len.is_finite()) {
-        return None;
-    }
-    // One pixel per step along the major axis.
-    let step = dir / len;
-    let centre = Vec2::new(pixel.x as f32 + 0.5, pixel.y as f32 + 0.5);
-    let at = |p: Vec2| -> Option<usize> {
-        (p.x >= 0.0 && p.y >= 0.0 && p.x < w as f32 && p.y < h as f32)
-            .then(|| g.index(p.x as u32, p.y as u32))
-    };
-    let depth = |i: usize| {
-        let d = g.depth[i];
-        if d.is_finite() && d > 0.0 {
-            d
-        } else {
-            f32::INFINITY
-        }
-    };
-    let mut edge = depth(g.index(pixel.x, pixel.y));
-    if let Some(i) = at(centre + step) {
-        edge = edge.min(depth(i));
-    }
-    if !edge.is_finite() {
-        return None;
-    }
-    let limit = edge * (1.0 + BACKGROUND_REL);
-    for k in 0..=BACKGROUND_SEARCH_PX {
-        let i = at(centre - step * k as f32)?;
-        if depth(i) > limit {
-            let (x, y) = (i as u32 % w, i as u32 / w);
-            return Some(if g.depth[i].is_finite() && g.depth[i] > 0.0 {
-                *colors.get(x, y)
-            } else {
-                reference.background
-            });
-        }
-    }
-    None
 }

@@ -1,0 +1,100 @@
+//! The BVH itself: the 4-wide and 8-wide trees over the same leaves, the triangle copies and
+//! their map to the scene's indices, and read access to them (layouts in `node.rs`, `node8.rs`,
+//! `tri4.rs`; the build in `construct.rs`).
+
+use std::time::Duration;
+
+use parallax_core::Aabb;
+
+use crate::node::Node4;
+use crate::node8::Node8;
+use crate::tri::Tri;
+use crate::tri4::{self, Tri4};
+
+/// A bounding volume hierarchy over a [`TriangleMesh`]: a 4-wide and an 8-wide tree over the
+/// same leaves (see the crate docs).
+#[derive(Clone, Debug)]
+pub struct Bvh {
+    pub(crate) nodes: Vec<Node4>,
+    /// The 8-wide traversal tree over the same leaves (`node8.rs`).
+    pub(crate) nodes8: Vec<Node8>,
+    pub(crate) tris: Vec<Tri>,
+    pub(crate) prim_ids: Vec<u32>,
+    pub(crate) blocks: Vec<tri4::Tri4>,
+    pub(crate) bounds: Aabb,
+    pub(crate) depth: u32,
+    pub(crate) build_time: Duration,
+}
+
+impl Bvh {
+    /// Number of 4-wide nodes.
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// The 8-wide traversal tree, root first, in depth-first preorder (layout in [`node8`]).
+    pub fn nodes8(&self) -> &[Node8] {
+        &self.nodes8
+    }
+
+    /// Number of triangles indexed.
+    pub fn triangle_count(&self) -> usize {
+        self.tris.len()
+    }
+
+    /// Memory held by nodes, triangle copies (plain and in blocks of four) and the primitive
+    /// map, in bytes.
+    pub fn bytes(&self) -> usize {
+        self.nodes.len() * size_of::<Node4>()
+            + self.nodes8.len() * size_of::<Node8>()
+            + self.tris.len() * size_of::<Tri>()
+            + self.blocks.len() * size_of::<Tri4>()
+            + self.prim_ids.len() * size_of::<u32>()
+    }
+
+    /// Bounds of all triangles (empty for an empty mesh).
+    pub fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    /// Depth in 4-wide nodes (root = 1; 0 when empty).
+    pub fn depth(&self) -> u32 {
+        self.depth
+    }
+
+    /// Wall time of the build (including the collapse and the triangle gather).
+    pub fn build_time(&self) -> Duration {
+        self.build_time
+    }
+
+    /// The nodes, root first, in depth-first preorder (layout in [`node`]).
+    pub fn nodes(&self) -> &[Node4] {
+        &self.nodes
+    }
+
+    /// The triangle copies in leaf order; leaf `(first, count)` refers to
+    /// `triangles()[leaf_triangles(first, count)]`.
+    pub fn triangles(&self) -> &[Tri] {
+        &self.tris
+    }
+
+    /// The leaves' triangles in blocks of four, leaf order (layout in `tri4.rs`).
+    pub fn blocks(&self) -> &[Tri4] {
+        &self.blocks
+    }
+
+    /// The range in [`Bvh::triangles`] of the leaf `ChildRef::Leaf { first, count }` (`first`
+    /// is its first block). Panics on a reference that is not a leaf of this BVH.
+    pub fn leaf_triangles(&self, first: u32, count: u32) -> std::ops::Range<usize> {
+        if count == 0 {
+            return 0..0;
+        }
+        let start = self.blocks[first as usize].tri[0] as usize;
+        start..start + count as usize
+    }
+
+    /// The scene's triangle index of each entry of [`Bvh::triangles`].
+    pub fn prim_ids(&self) -> &[u32] {
+        &self.prim_ids
+    }
+}

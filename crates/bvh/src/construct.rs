@@ -1,0 +1,96 @@
+//! Building a [`Bvh`]: validation, the binned-SAH binary build (`build.rs`), and the two
+//! collapses into 4-wide (`collapse.rs`) and 8-wide (`collapse8.rs`) nodes over the same leaves.
+
+use std::time::Instant;
+
+use parallax_core::Aabb;
+use parallax_scene::TriangleMesh;
+use rayon::prelude::*;
+
+use crate::bvh::Bvh;
+use crate::options::{BuildOptions, BvhError};
+use crate::{build, collapse, collapse8, node, traverse, traverse8};
+
+impl Bvh {
+    /// Builds with the default [`BuildOptions`]. Panics only where [`Bvh::try_build_with`]
+    /// returns an error (an invalid mesh; loaders validate meshes, so this is a bug upstream).
+    pub fn build(mesh: &TriangleMesh) -> Bvh {
+        Self::build_with(mesh, &BuildOptions::default())
+    }
+
+    /// Builds with the default options, or explains why the mesh cannot be indexed.
+    pub fn try_build(mesh: &TriangleMesh) -> Result<Bvh, BvhError> {
+        Self::try_build_with(mesh, &BuildOptions::default())
+    }
+
+    /// Builds with explicit options; panics as [`Bvh::build`].
+    pub fn build_with(mesh: &TriangleMesh, opts: &BuildOptions) -> Bvh {
+        Self::try_build_with(mesh, opts).unwrap_or_else(|e| panic!("BVH build: {e}"))
+    }
+
+    /// Builds, or explains why the mesh cannot be indexed. An empty mesh gives an empty BVH
+    /// that every ray misses. Degenerate triangles are kept (the triangle test never hits them).
+    pub fn try_build_with(mesh: &TriangleMesh, opts: &BuildOptions) -> Result<Bvh, BvhError> {
+        let start = Instant::now();
+        let opts = opts.sanitized();
+        let n = mesh.triangle_count();
+        if n > node::MAX_TRIANGLES {
+            return Err(BvhError::TooManyTriangles { count: n });
+        }
+        let nv = mesh.positions.len();
+        if let Some(t) = mesh
+            .indices
+            .par_iter()
+            .position_any(|t| t.iter().any(|&i| i as usize >= nv))
+        {
+            return Err(BvhError::IndexOutOfRange { triangle: t });
+        }
+        if n == 0 {
+            return Ok(Bvh {
+                nodes: Vec::new(),
+                nodes8: Vec::new(),
+                tris: Vec::new(),
+                prim_ids: Vec::new(),
+                blocks: Vec::new(),
+                bounds: Aabb::EMPTY,
+                depth: 0,
+                build_time: start.elapsed(),
+            });
+        }
+        let mut refs: Vec<build::PrimRef> = (0..n)
+            .into_par_iter()
+            .with_min_len(4096)
+            .map(|i| {
+                let [a, b, c] = mesh.triangle(i);
+                build::PrimRef {
+                    min: a.min(b).min(c),
+                    max: a.max(b).max(c),
+                    id: i as u32,
+                }
+            })
+            .collect();
+        let root = build::build_binary(&mut refs, &opts);
+        let c = collapse::collapse(&root, &refs, |id| mesh.triangle(id as usize));
+        let c8 = collapse8::collapse8(&root, &c.leaf_blocks, c.nodes.len() / 2 + 1);
+        // The binary tree is freed here, inside the timed build.
+        drop(root);
+        assert!(
+            3 * c.depth as usize + 1 < traverse::STACK_SIZE
+                && 7 * c8.depth as usize + 1 < traverse8::STACK8_SIZE,
+            "BVH depth {} / {} exceeds the traversal stack",
+            c.depth,
+            c8.depth
+        );
+        let bounds = c.nodes[0].bounds();
+        Ok(Bvh {
+            nodes: c.nodes,
+            nodes8: c8.nodes,
+            tris: c.tris,
+            prim_ids: c.prim_ids,
+            blocks: c.blocks,
+            bounds,
+            depth: c.depth,
+            build_time: start.elapsed(),
+        })
+    }
+}
