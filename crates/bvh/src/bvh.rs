@@ -11,7 +11,7 @@ use crate::node8::Node8;
 use crate::tri::Tri;
 use crate::tri4::{self, Tri4};
 
-/// A bounding volume hierarchy over a [`TriangleMesh`]: a 4-wide and an 8-wide tree over the
+/// A bounding volume hierarchy over a [`TriangleMesh`](parallax_scene::TriangleMesh): a 4-wide and an 8-wide tree over the
 /// same leaves (see the crate docs).
 #[derive(Clone, Debug)]
 pub struct Bvh {
@@ -32,7 +32,7 @@ impl Bvh {
         self.nodes.len()
     }
 
-    /// The 8-wide traversal tree, root first, in depth-first preorder (layout in [`node8`]).
+    /// The 8-wide traversal tree, root first, in depth-first preorder (layout in [`crate::node8`]).
     pub fn nodes8(&self) -> &[Node8] {
         &self.nodes8
     }
@@ -67,7 +67,7 @@ impl Bvh {
         self.build_time
     }
 
-    /// The nodes, root first, in depth-first preorder (layout in [`node`]).
+    /// The nodes, root first, in depth-first preorder (layout in [`crate::node`]).
     pub fn nodes(&self) -> &[Node4] {
         &self.nodes
     }

@@ -14,7 +14,7 @@
 //!   variance and count per pixel; [`record`]: every ray and its hit, for comparisons;
 //! - [`lighting`]: light overrides and the default sky; [`light_sampler`]: light choice and
 //!   densities; [`mis`]; [`tracers`]: the `--tracer` factory;
-//! - [`bench`]: `parallax bench path`; [`export`]: the scene as a Mitsuba 3 cross-check reads it.
+//! - [`mod@bench`]: `parallax bench path`; [`export`]: the scene as a Mitsuba 3 cross-check reads it.
 //!
 //! **Invariant:** nothing here knows which structure answers its rays; every structure is
 //! compared on identical rays.

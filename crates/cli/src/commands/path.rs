@@ -61,14 +61,14 @@ pub struct PathFlags {
     /// colour or texture; glass a thin dielectric of index 1.5).
     #[arg(long, default_value = "as-is")]
     pub materials: String,
-    /// Constant environment radiance R[,G,B] (as Mitsuba's constant emitter). Any light
+    /// Constant environment radiance `R[,G,B]` (as Mitsuba's constant emitter). Any light
     /// override replaces the scene's analytic lights and environment.
     #[arg(long, num_args = 1..=3, value_delimiter = ',', allow_negative_numbers = true)]
     pub env: Option<Vec<f32>>,
     /// A point light at x,y,z (repeatable; write --point=-1,2,3 for a leading minus).
     #[arg(long, allow_negative_numbers = true)]
     pub point: Vec<String>,
-    /// Radiant intensity I[,I,I] in W/sr of each --point (once for all, or once per point).
+    /// Radiant intensity `I[,I,I]` in W/sr of each --point (once for all, or once per point).
     #[arg(long, allow_negative_numbers = true)]
     pub point_intensity: Vec<String>,
 }

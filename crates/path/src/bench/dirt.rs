@@ -4,7 +4,7 @@
 //! - **Build** (Table 2's "Build", and the paper's claim of fast construction): the BVH build
 //!   and DIRT's build (triangle buffer, camera view, cube map; per stage) in interleaved
 //!   rounds, best round each.
-//! - **Table 1** (Mrays/s per ray type for the first path event): the rays of [`dirt_rays`]
+//! - **Table 1** (Mrays/s per ray type for the first path event): the rays of [`super::dirt_rays`]
 //!   traced by DIRT and by the BVH, interleaved round by round (best round each), timed in
 //!   thread CPU time (summed over rayon's chunks; a busy machine inflates wall time, not CPU
 //!   time) and wall time; DIRT's work per ray (views, texels, cells, buckets, triangle tests)

@@ -10,7 +10,7 @@
 //! the synthetic sets of [`super::rays`] (`axis`, `random`, `surface`). The BVH answers them
 //! first (the reference); then both tracers replay all of them in interleaved rounds (best
 //! round per tracer and set). The view is also rendered with the scene's own materials by
-//! each tracer ([`super::render`]), and the LDC image is scored against the BVH image.
+//! each tracer ([`super::render()`]), and the LDC image is scored against the BVH image.
 //!
 //! **Times** are wall-clock on all threads of the run; the build is timed once per
 //! resolution (`ms_build` = assignment + peeling + orientation + grid + the tracer's layout,

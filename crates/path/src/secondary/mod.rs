@@ -6,7 +6,7 @@
 //!
 //! **Passes (§2).** (1) The structures are built (the LDC capture, the BVH); (2) the primary
 //! hits are rasterized into a G-buffer ([`parallax_raster::capture_gbuffer`], the same for
-//! every tracer); (3) secondary rays are traced level by level ([`render`]): at every surface
+//! every tracer); (3) secondary rays are traced level by level ([`render()`]): at every surface
 //! point a shadow ray to each light, at a mirror a reflection ray, at glass a reflection and a
 //! refraction ray (Snell's law, exact dielectric Fresnel weights, the material's IOR), up to
 //! `bounces` levels; a ray that misses every surface sees the environment (the paper's

@@ -27,7 +27,7 @@
 //! - every answer equals the BVH's (the same triangle and bit-identical `t` and barycentrics),
 //!   up to exact ties in `t` (coplanar duplicates: DIRT keeps the lower triangle id, the BVH the
 //!   lower index in its leaf order) and hits closer to the eye than the capture's near plane;
-//! - every loop is bounded: a view's walk by [`max_steps`](view) derived from its grid size
+//! - every loop is bounded: a view's walk by `max_steps` (`view.rs`) derived from its grid size
 //!   (walks cut by it are counted in [`WorldStats::truncated`]); at most seven views per ray;
 //! - invalid rays ([`Ray::is_valid`] false) and rays that leave every view miss.
 //!
