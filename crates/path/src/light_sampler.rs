@@ -20,8 +20,8 @@
 //! Why `env_nee` defaults to 0: BSDF sampling already importance-samples a *constant*
 //! environment as well as a direction density can (the integrand is `f cos θ V`), so an
 //! environment connection only adds a second sample of the same distribution (for Lambertian
-//! surfaces), at the price of a long shadow ray; measured, it costs more time than it saves
-//! variance on every scene tried (`docs/notes/path.md`). With `env_nee > 0` the connection is
+//! surfaces), at the price of a long shadow ray. Whether the second sample pays depends on the
+//! scene: measurements in `docs/notes/path.md`. With `env_nee > 0` the connection is
 //! MIS-weighted as every other light.
 //!
 //! Mitsuba 3 instead picks one emitter uniformly and samples a constant environment uniformly
