@@ -178,8 +178,8 @@ struct Checked {
 }
 
 /// Checks the set-up kernel with `exactness` on `set` against the watertight kernel and
-/// per-ray traversal (every difference printed); the 4- and 8-lane kernels give the same
-/// buffer, no certain decision is contradicted (`setup_rescues`).
+/// per-ray traversal (every difference printed); the 4-, 8- and 16-lane kernels give the
+/// same buffer, no certain decision is contradicted (`setup_rescues`).
 ///
 /// - [`SetupExactness::Full`]: the same triangle on every subsample, the same `t` bit for bit.
 /// - [`SetupExactness::Edges`] (the default): >= 99.99% of subsamples agree (unless
@@ -209,7 +209,7 @@ fn check_setup(
         cast(bvh, set, &h, &mut dflt);
         assert_eq!(dflt, setup, "{label}: the default is Edges");
     }
-    for lanes in [4, 8] {
+    for lanes in [4, 8, 16] {
         let mut other = VisibilityBuffer::new(set);
         cast_opts(bvh, set, &h, &mut other, CastOptions { lanes, ..opts });
         assert_eq!(other, setup, "{label}: {lanes} lanes");
@@ -336,6 +336,17 @@ fn tile_setup_kernel_agrees_with_watertight_kernel_for_every_scheme() {
                 assert!(diffs as f64 <= 5e-3 * total as f64, "{diffs} of {total}");
             }
         }
+    }
+}
+
+/// One pixel per 16-lane packet: atrium stereo at 16 spp (the 16-lane kernel's MSAA case).
+#[test]
+fn tile_setup_kernel_agrees_at_16_spp() {
+    let scene = Scene::load("atrium").unwrap();
+    let bvh = Bvh::build(&scene.mesh);
+    let set = SampleSet::grid(camera(&scene, ModelKind::Stereo, 32, 32), 16);
+    for exactness in [SetupExactness::Edges, SetupExactness::Full] {
+        check_setup(&bvh, &set, "atrium stereo 64x32 spp 16", exactness, false);
     }
 }
 

@@ -35,7 +35,7 @@ use parallax_core::simd::Lanes;
 
 use super::kernel::{PacketSlab, SetupWork, dot_n, edge_band, min_edge};
 use super::tri::{RHO_MAX, TileTris, exact_t};
-use crate::cast::packet::{ClosestN, RaysN};
+use crate::cast::packet::{ClosestN, MAX_LANES, RaysN};
 
 /// The closest hit of every lane of `rays` against the set-up list (module docs); `axis` /
 /// `sign` are the tile beam's dominant axis (the near-depth order), `slack` the early-exit
@@ -56,8 +56,8 @@ pub(super) fn closest_edges<L: Lanes>(
     let [dx, dy, dz] = rays.d;
     let mut best = zero;
     let mut out = ClosestN {
-        t: [f32::INFINITY; 8],
-        tri: [u32::MAX; 8],
+        t: [f32::INFINITY; MAX_LANES],
+        tri: [u32::MAX; MAX_LANES],
     };
     let mut hit_lanes = 0u32;
     let mut exit_depth = f32::INFINITY;
@@ -157,16 +157,17 @@ pub(super) fn closest_edges<L: Lanes>(
         if changed {
             hit_lanes = 0;
             exit_depth = f32::NEG_INFINITY;
+            // `1 / best` once per packet (the same IEEE division as per lane).
+            box_lim = one / best;
             for l in 0..L::N {
                 if valid >> l & 1 != 0 {
                     if out.tri[l] != u32::MAX {
                         hit_lanes |= 1 << l;
                     }
-                    let t = 1.0 / best.get(l);
+                    let t = box_lim.get(l);
                     exit_depth = exit_depth.max(sign * (oa + t * rays.d[axis].get(l)));
                 }
             }
-            box_lim = one / best;
         }
     }
     for l in 0..L::N {
