@@ -10,7 +10,79 @@
 use std::ops::{Add, Div, Mul, Sub};
 
 use glam::{BVec4A, Vec4};
-use parallax_core::simd::Lanes;
+use parallax_core::simd::{F8, Lanes};
+
+/// Horizontal operations the set-up kernel needs per packet (not per triangle), so they stay
+/// out of the scalar lane-by-lane loops: the smallest / largest lane (compare-and-select, the
+/// kernels' values are never NaN where it matters) and all lanes to an array.
+pub trait LaneReduce: Lanes {
+    fn hmin(self) -> f32;
+    fn hmax(self) -> f32;
+    /// Lanes `0..N` into `out[..N]`.
+    fn write(self, out: &mut [f32]);
+}
+
+#[inline(always)]
+fn min2(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
+}
+#[inline(always)]
+fn max2(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
+}
+
+impl LaneReduce for Vec4 {
+    #[inline(always)]
+    fn hmin(self) -> f32 {
+        let a = self.to_array();
+        min2(min2(a[0], a[1]), min2(a[2], a[3]))
+    }
+    #[inline(always)]
+    fn hmax(self) -> f32 {
+        let a = self.to_array();
+        max2(max2(a[0], a[1]), max2(a[2], a[3]))
+    }
+    #[inline(always)]
+    fn write(self, out: &mut [f32]) {
+        self.write_to_slice(&mut out[..4]);
+    }
+}
+
+impl LaneReduce for F8 {
+    #[inline(always)]
+    fn hmin(self) -> f32 {
+        self.0.iter().fold(f32::INFINITY, |a, &b| min2(a, b))
+    }
+    #[inline(always)]
+    fn hmax(self) -> f32 {
+        self.0.iter().fold(f32::NEG_INFINITY, |a, &b| max2(a, b))
+    }
+    #[inline(always)]
+    fn write(self, out: &mut [f32]) {
+        out[..8].copy_from_slice(&self.0);
+    }
+}
+
+impl LaneReduce for V16 {
+    #[inline(always)]
+    fn hmin(self) -> f32 {
+        let q = self.0;
+        let sel = |a: Vec4, b: Vec4| Vec4::select(a.cmplt(b), a, b);
+        sel(sel(q[0], q[1]), sel(q[2], q[3])).hmin()
+    }
+    #[inline(always)]
+    fn hmax(self) -> f32 {
+        let q = self.0;
+        let sel = |a: Vec4, b: Vec4| Vec4::select(a.cmpgt(b), a, b);
+        sel(sel(q[0], q[1]), sel(q[2], q[3])).hmax()
+    }
+    #[inline(always)]
+    fn write(self, out: &mut [f32]) {
+        for (i, q) in self.0.iter().enumerate() {
+            q.write_to_slice(&mut out[4 * i..4 * i + 4]);
+        }
+    }
+}
 
 /// Sixteen lanes: lane `i` is `self.0[i / 4][i % 4]`.
 #[derive(Clone, Copy, Debug)]

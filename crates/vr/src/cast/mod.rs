@@ -86,12 +86,12 @@ pub struct CastOptions {
 }
 
 impl Default for CastOptions {
-    /// The set-up kernel on 4-lane SSE packets (the 8-lane AVX2 build of the same kernel is
-    /// no faster: `docs/notes/vr.md`).
+    /// The set-up kernel on 16-lane packets (one pixel at 16 spp; 1.3-1.9x the 4-lane
+    /// kernel's speed on Sponza, `docs/notes/vr.md`; the 8-lane AVX2 build is slower).
     fn default() -> Self {
         CastOptions {
             test: SampleTest::TileSetup,
-            lanes: 4,
+            lanes: 16,
             exactness: SetupExactness::Edges,
         }
     }

@@ -112,7 +112,7 @@
 //! | name | type | default | meaning |
 //! |---|---|---|---|
 //! | `exactness` | [`SetupExactness`] | `Edges` | which bands decide by the watertight test |
-//! | `lanes` | usize | 4 | rays per packet: 4 (SSE), 8 (AVX2 if detected, else 4) or 16 (four SSE registers, [`crate::cast::lanes16`]) |
+//! | `lanes` | usize | 16 | rays per packet: 4 (SSE), 8 (AVX2 if detected, else 4) or 16 (four SSE registers, [`crate::cast::lanes16`]) |
 //! | [`RHO_MAX`] | f32 | 0.05 | depth band above which a triangle always takes the watertight test |
 //!
 //! Measurements (speed of `Edges` and `Full` against the kernel without a band, 4 vs 8 lanes,
@@ -126,11 +126,11 @@ mod tri;
 use glam::Vec4;
 use parallax_bvh::Tri4;
 use parallax_core::NO_ID;
-use parallax_core::simd::{F8, Lanes};
+use parallax_core::simd::F8;
 
 use crate::SampleSet;
 use crate::beam::Beam;
-use crate::cast::lanes16::V16;
+use crate::cast::lanes16::{LaneReduce, V16};
 use crate::cast::packet::for_each_packet;
 
 pub use kernel::SetupWork;
@@ -170,7 +170,7 @@ pub enum SetupExactness {
 /// set-up kernel with `L::N` lanes; `write(pair, t, tri)` stores a result.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn run_setup<L: Lanes, const FULL: bool>(
+fn run_setup<L: LaneReduce, const FULL: bool>(
     set: &SampleSet,
     blocks: &[Tri4],
     tt: &mut TileTris,
