@@ -109,6 +109,7 @@ impl ErrorCurve {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use parallax_core::sampling::Rng;
 
     fn curve(sigma2: f64, n: u32, noise: f64) -> ErrorCurve {
         ErrorCurve {
@@ -127,6 +128,86 @@ mod tests {
         let e = c.effective_spp(0.5 / 50.0 + 0.001);
         assert!(e.extrapolated && (e.spp - 50.0).abs() < 1e-9, "{e:?}");
         assert!(c.effective_spp(0.0005).spp.is_infinite());
+    }
+
+    /// A synthetic "renderer": pixel truths in [0.05, 1.05) per channel, and 1-spp samples
+    /// `truth · 2u` (mean the truth, relative standard deviation 58%, like the multiplicative
+    /// noise of a path tracer), each sample from its own seeded stream.
+    struct Synthetic {
+        truth: Vec<Vec3>,
+    }
+
+    impl Synthetic {
+        fn new(pixels: u32) -> Self {
+            let truth = (0..pixels)
+                .map(|i| {
+                    let mut r = Rng::for_pixel(7, i, 0, 0);
+                    Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) + Vec3::splat(0.05)
+                })
+                .collect();
+            Self { truth }
+        }
+
+        /// The mean of samples `samples` of `stream` at every pixel.
+        fn mean(&self, stream: u64, samples: std::ops::Range<u32>) -> Vec<Vec3> {
+            let n = samples.len() as f32;
+            self.truth
+                .iter()
+                .enumerate()
+                .map(|(i, &t)| {
+                    let mut acc = Vec3::ZERO;
+                    for s in samples.clone() {
+                        let mut r = Rng::for_pixel(stream, i as u32, 1, s);
+                        acc += t * 2.0 * Vec3::new(r.next_f32(), r.next_f32(), r.next_f32());
+                    }
+                    acc / n
+                })
+                .collect()
+        }
+    }
+
+    /// The done-when test of the metric: an image averaged from k independent 1-spp samples
+    /// scores k within 5% for k = 1..16, with the curve and the reference built as
+    /// [`super::super::reference`] builds them (a progressive render for the curve, a
+    /// finite-spp reference whose noise is estimated and subtracted).
+    #[test]
+    fn k_sample_means_of_synthetic_noise_score_k_within_five_percent() {
+        let px = 96 * 64;
+        let syn = Synthetic::new(px);
+        let reference_spp = 512u32;
+        let reference = syn.mean(1, 0..reference_spp);
+        // The reference's noise: sample variance of the per-pixel mean, from the known model
+        // estimated the way the film does it (second moment over a subset of samples).
+        let second = syn.truth.iter().enumerate().map(|(i, &t)| {
+            let mut m1 = Vec3::ZERO;
+            let mut m2 = Vec3::ZERO;
+            for s in 0..reference_spp {
+                let mut r = Rng::for_pixel(1, i as u32, 1, s);
+                let v = t * 2.0 * Vec3::new(r.next_f32(), r.next_f32(), r.next_f32());
+                m1 += v;
+                m2 += v * v;
+            }
+            let n = reference_spp as f32;
+            let var = (m2 / n - (m1 / n) * (m1 / n)) * (n / (n - 1.0));
+            (var / n).as_dvec3().element_sum()
+        });
+        let reference_noise = second.sum::<f64>() / (3 * px) as f64;
+        let curve = ErrorCurve {
+            mse: (1..=32)
+                .map(|n| mse(&syn.mean(2, 0..n), &reference))
+                .collect(),
+            reference_noise,
+        };
+        for k in 1..=16u32 {
+            let image = syn.mean(100 + k as u64, 0..k);
+            let e = curve.effective_spp(mse(&image, &reference));
+            assert!(!e.extrapolated);
+            assert!(
+                (e.spp / k as f64 - 1.0).abs() < 0.05,
+                "k = {k}: effective spp {:.3}",
+                e.spp
+            );
+        }
     }
 
     #[test]
