@@ -15,6 +15,7 @@
 //! | `base` | the scene as it is (the default sky and sun if it has no light) |
 //! | `glossy` | GGX roughness 0.2 on the materials that cover the largest half of the surface area ("Sponza (Glossy)") |
 //! | `moving-light` | the analytic lights replaced by one point light moving along a keyframed path through the view (environment kept) |
+//! | `moving-objects` | the scene's props move ([`Animation::for_scene`]: rigid spin and bob, or the file's own clips), the BVH is refit every frame |
 //!
 //! **Invariant:** a dataset's frame `f` is a function of `f` alone (poses are computed from the
 //! time, never accumulated), so any frame can be rendered on its own.
@@ -22,6 +23,7 @@
 use glam::Vec3;
 use parallax_bvh::Bvh;
 use parallax_core::WorldTracer;
+use parallax_scene::animation::Animation;
 use parallax_scene::camera::CameraFrame;
 use parallax_scene::path::{CameraKey, CameraPath};
 use parallax_scene::{CameraDesc, Light, Scene};
@@ -38,16 +40,23 @@ pub enum Variant {
     Base,
     Glossy,
     MovingLight,
+    MovingObjects,
 }
 
 impl Variant {
-    pub const ALL: [Variant; 3] = [Variant::Base, Variant::Glossy, Variant::MovingLight];
+    pub const ALL: [Variant; 4] = [
+        Variant::Base,
+        Variant::Glossy,
+        Variant::MovingLight,
+        Variant::MovingObjects,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
             Variant::Base => "base",
             Variant::Glossy => "glossy",
             Variant::MovingLight => "moving-light",
+            Variant::MovingObjects => "moving-objects",
         }
     }
 
@@ -76,6 +85,10 @@ pub trait FrameWorld {
     fn tracer(&self) -> &dyn WorldTracer;
     /// The head camera (centre of the eyes) of frame `f`.
     fn head(&self, f: u32) -> CameraDesc;
+    /// True when [`Self::pose`] moves geometry (content hashes must be taken per frame).
+    fn geometry_moves(&self) -> bool {
+        false
+    }
     /// A name for tables: scene, and the variant unless it is the base.
     fn label(&self) -> String;
 }
@@ -110,6 +123,8 @@ pub struct Dataset {
     pub path: CameraPath,
     pub variant: Variant,
     pub light: Option<LightTrack>,
+    /// The props' motion of [`Variant::MovingObjects`].
+    pub animation: Option<Animation>,
     bvh: Bvh,
 }
 
@@ -147,22 +162,25 @@ pub fn head_path(scene: &Scene) -> Result<CameraPath> {
         ),
         _ => match &scene.camera_path {
             Some(p) => p.clone(),
-            None => {
-                let d = scene.camera(None)?;
-                let f = CameraFrame::look_at(&d)?;
-                let back = f.forward() * (-0.15 * (d.target - d.eye).length());
-                let side = f.right() * (0.05 * (d.target - d.eye).length());
-                keys(
-                    &[
-                        (0.0, d.eye, d.target),
-                        (1.0, d.eye + back * 0.5 + side, d.target + side * 0.5),
-                        (2.0, d.eye + back, d.target),
-                    ],
-                    d.fov_y_deg,
-                )
-            }
+            None => dolly_path(&scene.camera(None)?)?,
         },
     })
+}
+
+/// A backward dolly from `d` by 15 % of its target distance, curving sideways by 5 %
+/// (module table: the path of scenes without one, and of a camera given on the command line).
+pub fn dolly_path(d: &CameraDesc) -> Result<CameraPath> {
+    let f = CameraFrame::look_at(d)?;
+    let back = f.forward() * (-0.15 * (d.target - d.eye).length());
+    let side = f.right() * (0.05 * (d.target - d.eye).length());
+    Ok(keys(
+        &[
+            (0.0, d.eye, d.target),
+            (1.0, d.eye + back * 0.5 + side, d.target + side * 0.5),
+            (2.0, d.eye + back, d.target),
+        ],
+        d.fov_y_deg,
+    ))
 }
 
 /// The moving light of `scene` (module table): along the view of the path's first frame, 1.2x
@@ -209,9 +227,18 @@ fn make_glossy(scene: &mut Scene) {
 
 impl Dataset {
     /// The dataset of `scene` in `variant`; scenes without light get the default sky first.
-    pub fn new(mut scene: Scene, variant: Variant) -> Result<Self> {
+    pub fn new(scene: Scene, variant: Variant) -> Result<Self> {
+        Self::with_head(scene, variant, None)
+    }
+
+    /// As [`Self::new`]; a given `head` camera replaces the scene's path by [`dolly_path`]
+    /// from it.
+    pub fn with_head(mut scene: Scene, variant: Variant, head: Option<CameraDesc>) -> Result<Self> {
         scene.add_default_lighting_if_unlit();
-        let path = head_path(&scene)?;
+        let path = match head {
+            Some(d) => dolly_path(&d)?,
+            None => head_path(&scene)?,
+        };
         let light = match variant {
             Variant::MovingLight => Some(moving_light(&path)?),
             _ => None,
@@ -219,12 +246,14 @@ impl Dataset {
         if variant == Variant::Glossy {
             make_glossy(&mut scene);
         }
+        let animation = (variant == Variant::MovingObjects).then(|| Animation::for_scene(&scene));
         let bvh = Bvh::try_build(&scene.mesh).map_err(|e| ReprojectError::Bvh(e.to_string()))?;
         Ok(Self {
             scene,
             path,
             variant,
             light,
+            animation,
             bvh,
         })
     }
@@ -258,6 +287,14 @@ impl FrameWorld for Dataset {
                 intensity: track.intensity,
             }];
         }
+        let t = self.time(f);
+        if let Some(anim) = &self.animation {
+            anim.apply(&mut self.scene.mesh, t)
+                .map_err(|e| ReprojectError::Bvh(format!("posing frame {f}: {e}")))?;
+            self.bvh
+                .refit(&self.scene.mesh)
+                .map_err(|e| ReprojectError::Bvh(e.to_string()))?;
+        }
         Ok(())
     }
 
@@ -271,6 +308,10 @@ impl FrameWorld for Dataset {
 
     fn head(&self, f: u32) -> CameraDesc {
         self.path.frame(f)
+    }
+
+    fn geometry_moves(&self) -> bool {
+        self.animation.is_some()
     }
 
     fn label(&self) -> String {

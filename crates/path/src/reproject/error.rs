@@ -15,6 +15,9 @@ pub enum ReprojectError {
     Scene(#[from] parallax_scene::SceneError),
     #[error("building the BVH: {0}")]
     Bvh(String),
+    /// A per-frame consumer (writing frames, scoring) failed.
+    #[error("{0}")]
+    Consumer(String),
     #[error("reference cache {path}: {source}")]
     Io {
         path: std::path::PathBuf,

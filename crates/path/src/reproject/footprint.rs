@@ -10,13 +10,19 @@
 //! The tests (as BMFR's `accumulate_noisy_data`, Koskela et al. 2019): a neighbour is kept when
 //! `|p_s - p_t|² < position²` and `|n_s - n_t|² < chord²` with `chord = 2 sin(normal / 2)` (the
 //! distance of two unit normals `normal` apart). Both are strict, so zero limits discard every
-//! neighbour.
+//! neighbour. With [`Tests::plane`] the position test measures the neighbour's distance from
+//! the target's tangent plane, `|(p_s - p_t) · n_t|`, instead of the full distance: offsets
+//! along the surface (a neighbour one pixel away on a grazing floor, the jitter of the primary
+//! rays) pass, steps off the surface (an occluder, a disocclusion) still fail. Not the paper's
+//! test (it compares the two world positions); ours, as the plane-distance tests of SVGF-style
+//! filters.
 //!
 //! | parameter | type | meaning |
 //! |---|---|---|
 //! | [`Kernel::radius`] | f32 in [1, 2] | tent radius in source pixels (1: bilinear over 2x2 neighbours; 2: 4x4; integer radii reproduce linear ramps exactly, others only approximately) |
 //! | [`Tests::position`] | f32 (scene units) | largest world-position difference kept |
 //! | [`Tests::normal_deg`] | f32 (degrees) | largest shading-normal angle kept |
+//! | [`Tests::plane`] | bool | position test against the target's tangent plane (false: the paper's distance) |
 //!
 //! **Invariants:** a footprint's kept weights sum to one (`inv_weight` renormalises); a pixel
 //! is [`Outcome::Reused`] exactly when at least one neighbour with non-zero weight passed both
@@ -86,6 +92,8 @@ pub struct Tests {
     pub position: f32,
     /// Largest shading-normal angle kept (degrees).
     pub normal_deg: f32,
+    /// Distance from the target's tangent plane instead of the full distance (module docs).
+    pub plane: bool,
 }
 
 impl Tests {
@@ -187,7 +195,14 @@ pub fn footprint(source: &EyeView, t: &Texel, kernel: Kernel, tests: Tests) -> F
             if wt > 0.0 && x >= 0 && y >= 0 && x < w && y < h {
                 inside = true;
                 let s = &source.texels[y as usize * w as usize + x as usize];
-                if s.is_hit() && (s.position - t.position).length_squared() < pos2 {
+                let d = s.position - t.position;
+                let d2 = if tests.plane {
+                    let h = d.dot(t.normal);
+                    h * h
+                } else {
+                    d.length_squared()
+                };
+                if s.is_hit() && d2 < pos2 {
                     near = true;
                     if (s.normal - t.normal).length_squared() < nrm2 {
                         mask |= 1 << bit;
@@ -275,6 +290,7 @@ mod tests {
     const LOOSE: Tests = Tests {
         position: 1.0,
         normal_deg: 30.0,
+        plane: false,
     };
 
     #[test]
@@ -340,6 +356,7 @@ mod tests {
         let zero = Tests {
             position: 0.0,
             normal_deg: 0.0,
+            plane: true,
         };
         for t in &src.texels {
             assert!(

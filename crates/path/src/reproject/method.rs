@@ -18,6 +18,7 @@
 //! | `blend` | [`Blend`] | `Fixed(0.2)` | temporal blend |
 //! | `demodulate` | bool | false | reproject radiance divided by the source texel's albedo and multiply by the target's (texture detail is not blurred; as SVGF and BMFR treat albedo) |
 //! | `combine` | [`Combine`] | `Paper` | how the left eye of stereo + temporal uses histories |
+//! | `plane_test` | bool | false | position test against the target's tangent plane ([`Tests::plane`]) |
 //!
 //! **Invariants:** a method's outputs depend only on the inputs of this and earlier frames
 //! (never on the thread count); a discarded left pixel is the path tracer's own sample of the
@@ -29,6 +30,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::buffers::{EyeView, Texel};
+use super::error::{Result, option_error};
 use super::footprint::{BAND_ROWS, Footprint, Kernel, Outcome, Tests, footprint, footprints};
 use super::history::{Blend, History, accumulate};
 use super::sampler::{PaperSampler, TraceCost, thread_ns};
@@ -48,6 +50,7 @@ pub struct Method {
     pub blend: Blend,
     pub demodulate: bool,
     pub combine: Combine,
+    pub plane_test: bool,
 }
 
 impl Method {
@@ -60,7 +63,56 @@ impl Method {
             blend: Blend::PAPER,
             demodulate: false,
             combine: Combine::Paper,
+            plane_test: false,
         }
+    }
+
+    /// The named presets: `paper` ([`Self::paper`]), `bmfr` (the paper with BMFR's running
+    /// mean, floor 0.2), and `ours` ([`Self::ours`]).
+    pub fn named(name: &str) -> Result<Self> {
+        match name {
+            "paper" => Ok(Self::paper()),
+            "bmfr" => Ok(Self {
+                name: "bmfr".into(),
+                blend: Blend::RunningMean { floor: 0.2 },
+                ..Self::paper()
+            }),
+            "ours" => Ok(Self::ours()),
+            _ => option_error(format!(
+                "unknown method {name:?}; expected one of {}",
+                Self::NAMES.join(", ")
+            )),
+        }
+    }
+
+    /// Names [`Self::named`] knows.
+    pub const NAMES: [&'static str; 3] = ["paper", "bmfr", "ours"];
+
+    /// Our variant: both eyes keep a full history ([`Combine::Cascade`]), BMFR's running
+    /// mean, radiance demodulated by albedo before it is reprojected, and the tangent-plane
+    /// position test.
+    pub fn ours() -> Self {
+        Self {
+            name: "ours".into(),
+            kernel: Kernel::BILINEAR,
+            blend: Blend::RunningMean { floor: 0.2 },
+            demodulate: true,
+            combine: Combine::Cascade,
+            plane_test: true,
+        }
+    }
+
+    /// Alpha in (0, 1], kernel radius in [1, 2].
+    pub fn validate(&self) -> Result<()> {
+        let a = self.blend.base_alpha();
+        if !(a > 0.0 && a <= 1.0) {
+            return option_error(format!("--alpha must be in (0, 1], got {a}"));
+        }
+        let r = self.kernel.radius;
+        if !(1.0..=2.0).contains(&r) {
+            return option_error(format!("--kernel-radius must be in [1, 2], got {r}"));
+        }
+        Ok(())
     }
 }
 
@@ -172,7 +224,11 @@ impl MethodState {
     /// Runs one frame.
     pub fn step(&mut self, inp: &FrameInputs) -> MethodFrame {
         let m = &self.method;
-        let (k, tests) = (m.kernel, inp.tests);
+        let k = m.kernel;
+        let tests = Tests {
+            plane: m.plane_test,
+            ..inp.tests
+        };
         let (left, right) = (&inp.left, &inp.right);
         let (n, w) = (left.len(), left.width() as usize);
         let rw = right.width();
@@ -281,7 +337,11 @@ impl MethodState {
                         _ => {
                             c[j] = traced[i];
                             if let Some(p) = prev {
-                                let f = footprint(&p.view, &left.texels[i], k, inp.tests);
+                                let tests = Tests {
+                                    plane: m.plane_test,
+                                    ..inp.tests
+                                };
+                                let f = footprint(&p.view, &left.texels[i], k, tests);
                                 if f.outcome == Outcome::Reused {
                                     let pw = p.view.width();
                                     let h = f.gather(k, &p.color, pw);

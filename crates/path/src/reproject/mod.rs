@@ -17,7 +17,8 @@
 //! - [`metric`]: effective spp from the n-spp error curve (§3); [`reference`]: references and
 //!   curves from one progressive render per frame and eye, cached on disk by content
 //!   ([`fingerprint`]);
-//! - `parallax bench reproject` ([`crate::bench::reproject`]) reproduces Tables 1-2.
+//! - [`evaluate`]: scores of a sequence per method and mode (Tables 1-2), which
+//!   `parallax bench reproject` prints.
 //!
 //! **Why inside `parallax-path`:** the reprojection's sample *is* the path tracer's estimator
 //! (its light sampler, MIS and BSDF sampling) and its references are path-traced renders; a
@@ -32,6 +33,7 @@
 pub mod buffers;
 pub mod dataset;
 pub mod error;
+pub mod evaluate;
 pub mod fingerprint;
 pub mod footprint;
 pub mod history;
@@ -44,6 +46,7 @@ pub mod sequence;
 pub use buffers::{EyeView, Texel};
 pub use dataset::{Dataset, FrameWorld, Variant};
 pub use error::{ReprojectError, Result};
+pub use evaluate::{EvalOptions, Evaluation, FrameScore, Mode, Series, Stats, evaluate};
 pub use footprint::{Footprint, Kernel, Outcome, Tests};
 pub use history::{Blend, History};
 pub use method::{Combine, Method, MethodFrame, MethodState, ModeFrame};

@@ -14,7 +14,8 @@
 //! | `frames` | u32 | 60 | frames from the start of the path |
 //! | `seed` | u64 | 0 | seed of every stream |
 //! | `materials` | [`MaterialMode`] | as-is | the scene's materials or all Lambertian |
-//! | `tests` | `Option<`[`Tests`]`>` | from the scene scale | neighbour limits; `None`: [`default_tests`] |
+//! | `max_position` | `Option<f32>` | from the scene scale | world-position limit (scene units); `None`: [`default_tests`] |
+//! | `max_normal_deg` | `Option<f32>` | [`NORMAL_DEG`] | shading-normal limit (degrees) |
 //!
 //! Default limits ("the scene-specific limits used in our measurements were each decided
 //! based on the scale of the particular scene"): the scene scale `s` is the median view depth
@@ -50,7 +51,29 @@ pub struct RunOptions {
     pub frames: u32,
     pub seed: u64,
     pub materials: MaterialMode,
-    pub tests: Option<Tests>,
+    pub max_position: Option<f32>,
+    pub max_normal_deg: Option<f32>,
+}
+
+impl RunOptions {
+    /// Film and frame counts within range, limits finite and non-negative.
+    pub fn validate(&self) -> Result<()> {
+        if self.width == 0 || self.height == 0 || self.width > 8192 || self.height > 8192 {
+            return option_error(format!(
+                "--width and --height must be in 1..=8192, got {}x{}",
+                self.width, self.height
+            ));
+        }
+        if !(self.ipd.is_finite() && self.ipd >= 0.0) {
+            return option_error(format!("--ipd must be finite and >= 0, got {}", self.ipd));
+        }
+        Tests {
+            position: self.max_position.unwrap_or(0.0),
+            normal_deg: self.max_normal_deg.unwrap_or(NORMAL_DEG),
+            plane: false,
+        }
+        .validate()
+    }
 }
 
 impl Tests {
@@ -88,6 +111,7 @@ pub fn default_tests(view: &EyeView) -> Option<Tests> {
     Some(Tests {
         position: POSITION_FRACTION * *median,
         normal_deg: NORMAL_DEG,
+        plane: false,
     })
 }
 
@@ -160,13 +184,11 @@ pub fn run(
             opts.frames
         ));
     }
-    if let Some(t) = &opts.tests {
-        t.validate()?;
-    }
+    opts.validate()?;
     for m in methods.iter_mut() {
         m.reset();
     }
-    let mut tests = opts.tests;
+    let mut tests: Option<Tests> = None;
     for f in 0..opts.frames {
         world.pose(f)?;
         let head = world.head(f);
@@ -184,10 +206,12 @@ pub fn run(
         let mut left_background = vec![Vec3::ZERO; left.len()];
         let left_gbuffer = sampler.trace_gbuffer(left_seed, &mut left, &mut left_background);
         let t = *tests.get_or_insert_with(|| {
-            default_tests(&right).unwrap_or(Tests {
-                position: 0.0,
-                normal_deg: 0.0,
-            })
+            let scale = default_tests(&right).map_or(0.0, |d| d.position);
+            Tests {
+                position: opts.max_position.unwrap_or(scale),
+                normal_deg: opts.max_normal_deg.unwrap_or(NORMAL_DEG),
+                plane: false,
+            }
         });
         let (right, left) = (Arc::new(right), Arc::new(left));
         let inputs = FrameInputs {
