@@ -14,10 +14,10 @@
 //! - [`method`]: the stereo, temporal and stereo + temporal frames of one method;
 //! - [`sequence`]: frames of a stereo sequence, seeds, default limits; [`dataset`]: the scenes,
 //!   head paths and variants (glossy, moving light);
-//! - [`metric`]: effective spp from the n-spp error curve (§3); [`reference`]: references and
+//! - [`metric`]: effective spp from the n-spp error curve (§3); [`mod@reference`]: references and
 //!   curves from one progressive render per frame and eye, cached on disk by content
 //!   ([`fingerprint`]);
-//! - [`evaluate`]: scores of a sequence per method and mode (Tables 1-2), which
+//! - [`mod@evaluate`]: scores of a sequence per method and mode (Tables 1-2), which
 //!   `parallax bench reproject` prints.
 //!
 //! **Why inside `parallax-path`:** the reprojection's sample *is* the path tracer's estimator
