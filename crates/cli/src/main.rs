@@ -48,6 +48,8 @@ enum Command {
     Dof(commands::dof::DofArgs),
     /// Light fields through layers: a Looking Glass quilt or near-eye elemental images (Widmer et al. 2015).
     Lightfield(commands::lightfield::LightFieldArgs),
+    /// Path-traced stereo with stereo and temporal sample reprojection (Mäkitalo et al. 2019).
+    Reproject(commands::reproject::ReprojectArgs),
     /// Benchmarks that reproduce the papers' and issues' measurements.
     #[command(subcommand)]
     Bench(commands::bench::BenchCommand),
@@ -77,6 +79,7 @@ fn main() -> std::process::ExitCode {
         Command::Secondary(a) => commands::secondary::run(&a, cli.quiet),
         Command::Dof(a) => commands::dof::run(&a, cli.quiet),
         Command::Lightfield(a) => commands::lightfield::run(&a, cli.quiet),
+        Command::Reproject(a) => commands::reproject::run_reproject(&a, cli.quiet),
         Command::Bench(b) => commands::bench::run(&b, cli.quiet),
     };
     match result {

@@ -98,6 +98,7 @@ pub fn run(a: &DemoArgs, quiet: bool) -> Result<()> {
     vr_frame(a, &scene, &bvh, &desc, quiet)?;
     stereo_pair(&scene, &bvh, &desc, w, h, &a.out, quiet)?;
     super::secondary::demo_secondary(&a.out, w / 2, h / 2, quiet)?;
+    super::reproject::demo_reproject(&a.scene, w / 6, h / 6, &a.out, quiet)?;
     if !quiet {
         println!("images in {}", a.out.display());
     }

@@ -12,6 +12,7 @@ pub mod input;
 pub mod lightfield;
 pub mod path;
 pub mod render;
+pub mod reproject;
 pub mod secondary;
 pub mod upsample;
 pub mod vr;
