@@ -48,6 +48,8 @@ enum Command {
     Dof(commands::dof::DofArgs),
     /// Light fields through layers: a Looking Glass quilt or near-eye elemental images (Widmer et al. 2015).
     Lightfield(commands::lightfield::LightFieldArgs),
+    /// Reflections traced through a cube map's per-face quad-trees (Widmer et al. 2015, §5.4).
+    Reflect(commands::reflect::ReflectCmdArgs),
     /// Benchmarks that reproduce the papers' and issues' measurements.
     #[command(subcommand)]
     Bench(commands::bench::BenchCommand),
@@ -76,6 +78,7 @@ fn main() -> std::process::ExitCode {
         Command::Path(a) => commands::path::run(&a, cli.quiet),
         Command::Secondary(a) => commands::secondary::run(&a, cli.quiet),
         Command::Dof(a) => commands::dof::run(&a, cli.quiet),
+        Command::Reflect(a) => commands::reflect::run(&a, cli.quiet),
         Command::Lightfield(a) => commands::lightfield::run(&a, cli.quiet),
         Command::Bench(b) => commands::bench::run(&b, cli.quiet),
     };

@@ -11,6 +11,14 @@
 //! space between the near cube and the far cube. A face tracer sees the whole ray and clips
 //! it to its own frustum (each frustum is convex, so that is the ray's one interval there).
 //!
+//! **Back sides.** Every captured sample faces the eye (its normal is turned towards it, and
+//! hidden layers hold front faces). A reflection ray that crosses a sample's plane from
+//! behind (normal along the ray) has not met that surface: a ray leaving a convex surface
+//! near its silhouette crosses the steep planes of the surface's own neighbouring pixels this
+//! way, and the surface it would really meet from behind is not in the capture. Such a
+//! crossing is passed over: the face is traced on from half a pixel footprint beyond it, at
+//! most [`MAX_BACK_SKIPS`] + 1 times per face (then the walk goes on to the next face).
+//!
 //! **Answers** ([`CubeTrace`]): a hit in a face's layer; an occlusion-volume answer (the ray
 //! passed behind the last layer's surface: with the quad-tree's inpainting mode on the last
 //! layer, the background-side pixel before the silhouette) is reported as a hit on that pixel's
@@ -33,7 +41,7 @@ use parallax_core::Ray;
 use parallax_core::image::GBuffer;
 use parallax_core::world::{HitSurface, SampledSurface, WorldHit, WorldStats, WorldTracer};
 use parallax_raster::CubeCapture;
-use parallax_scene::camera::Pinhole;
+use parallax_scene::camera::{CubeMap, Pinhole};
 
 use crate::{
     DdaOptions, DdaTracer, QuadTreeOptions, QuadTreeTracer, ScreenError, ScreenTracer, TraceResult,
@@ -41,12 +49,25 @@ use crate::{
 };
 pub use faces::{Exit, FaceWalk, Faces};
 
+/// Most back-side crossings passed over per face (module docs).
+pub const MAX_BACK_SKIPS: u32 = 4;
+
 /// One face: its pinhole, unit cube, layers and tracer.
 pub struct CubeFace {
     pub camera: Pinhole,
     pub cube: UnitCube,
     pub layers: Vec<GBuffer>,
     pub tracer: Box<dyn ScreenTracer>,
+}
+
+/// The tracer of a face that captured no surface: every ray misses.
+struct EmptyFace;
+
+impl ScreenTracer for EmptyFace {
+    fn trace(&self, _: &Ray, stats: &mut TraceStats) -> TraceResult {
+        stats.rays += 1;
+        TraceResult::Miss
+    }
 }
 
 /// What [`CubeMapTracer::trace`] found.
@@ -60,6 +81,8 @@ pub struct CubeTrace {
     pub visits: u32,
     /// The face walk was cut ([`faces::MAX_FACE_VISITS`]).
     pub truncated: bool,
+    /// Back-side crossings passed over (module docs).
+    pub back_skips: u32,
 }
 
 impl CubeTrace {
@@ -85,17 +108,16 @@ pub struct CubeMapTracer {
 }
 
 impl CubeMapTracer {
-    /// The shared depth range of a capture's faces: `near` = half the nearest captured
-    /// depth over all faces and layers, `far` = twice the farthest.
-    pub fn depth_range(capture: &CubeCapture) -> Result<(f32, f32), ScreenError> {
+    /// The shared depth range of a cube map's faces (`faces[i]` the layers of face `i`):
+    /// `near` = half the nearest captured depth over all faces and layers, `far` = twice the
+    /// farthest.
+    pub fn depth_range(faces: &[Vec<GBuffer>]) -> Result<(f32, f32), ScreenError> {
         let (mut lo, mut hi) = (f32::INFINITY, 0.0f32);
-        for f in &capture.faces {
-            for g in &f.layers.layers {
-                for &d in &g.depth {
-                    if d.is_finite() && d > 0.0 {
-                        lo = lo.min(d);
-                        hi = hi.max(d);
-                    }
+        for g in faces.iter().flatten() {
+            for &d in &g.depth {
+                if d.is_finite() && d > 0.0 {
+                    lo = lo.min(d);
+                    hi = hi.max(d);
                 }
             }
         }
@@ -107,29 +129,62 @@ impl CubeMapTracer {
         Ok((0.5 * lo, 2.0 * hi))
     }
 
-    /// Builds one tracer per face with `face(cube, layers)` over `capture`, named `name`
+    /// Builds one tracer per face of `capture` with `face(cube, layers)`, named `name`
     /// (e.g. `cubemap-quadtree`), all faces in the cube of [`Self::depth_range`].
     pub fn build<E: From<ScreenError>>(
         capture: &CubeCapture,
         name: &str,
         face: impl Fn(&UnitCube, &[GBuffer]) -> Result<Box<dyn ScreenTracer>, E>,
     ) -> Result<Self, E> {
-        if capture.faces.len() != 6 {
+        let layers: Vec<Vec<GBuffer>> = capture
+            .faces
+            .iter()
+            .map(|f| f.layers.layers.clone())
+            .collect();
+        Self::from_faces(&capture.cube, layers, name, face)
+    }
+
+    /// [`Self::build`] over the layers of each face of `cube` (`faces[i]` of face `i`, every
+    /// layer `cube.face_size()` square), however they were captured (e.g. hidden layers of
+    /// front faces only).
+    pub fn from_faces<E: From<ScreenError>>(
+        cube: &CubeMap,
+        faces: Vec<Vec<GBuffer>>,
+        name: &str,
+        face: impl Fn(&UnitCube, &[GBuffer]) -> Result<Box<dyn ScreenTracer>, E>,
+    ) -> Result<Self, E> {
+        if faces.len() != 6 {
             return Err(ScreenError::Mismatch(format!(
                 "a cube map has 6 faces, the capture {}",
-                capture.faces.len()
+                faces.len()
             ))
             .into());
         }
-        let (near, far) = Self::depth_range(capture)?;
+        let s = cube.face_size();
+        if faces
+            .iter()
+            .flatten()
+            .any(|g| g.width() != s || g.height() != s)
+        {
+            return Err(ScreenError::Mismatch(format!("cube map layers must be {s}x{s}")).into());
+        }
+        let (near, far) = Self::depth_range(&faces)?;
         let t = Instant::now();
-        let mut faces = Vec::with_capacity(6);
-        for (i, f) in capture.faces.iter().enumerate() {
-            let camera = capture.cube.face_camera(i);
+        let mut built = Vec::with_capacity(6);
+        for (i, layers) in faces.into_iter().enumerate() {
+            let camera = cube.face_camera(i);
             let cube = UnitCube::new(&camera, near, far)?;
-            let layers = f.layers.layers.clone();
-            let tracer = face(&cube, &layers)?;
-            faces.push(CubeFace {
+            // A face that captured nothing has nothing to hit (and no depths to fit a
+            // structure's parameters to).
+            let empty = layers
+                .iter()
+                .all(|g| !g.depth.iter().any(|d| d.is_finite()));
+            let tracer = if empty {
+                Box::new(EmptyFace)
+            } else {
+                face(&cube, &layers)?
+            };
+            built.push(CubeFace {
                 camera,
                 cube,
                 layers,
@@ -138,8 +193,8 @@ impl CubeMapTracer {
         }
         Ok(Self {
             name: name.to_string(),
-            faces,
-            walk: Faces::new(&capture.cube, near, far),
+            faces: built,
+            walk: Faces::new(cube, near, far),
             build_ms: t.elapsed().as_secs_f64() * 1e3,
         })
     }
@@ -169,6 +224,7 @@ impl CubeMapTracer {
             result: TraceResult::Miss,
             visits: 0,
             truncated: false,
+            back_skips: 0,
         };
         if !ray.is_valid() || ray.t_min.is_nan() || ray.t_max.is_nan() {
             return out;
@@ -177,14 +233,47 @@ impl CubeMapTracer {
         for (face, _) in walk.by_ref() {
             out.face = face;
             out.visits += 1;
-            let r = self.faces[face].tracer.trace(ray, stats);
-            if !matches!(r, TraceResult::Miss) {
-                out.result = r;
-                return out;
+            let mut r = *ray;
+            for _ in 0..=MAX_BACK_SKIPS {
+                let answer = self.faces[face].tracer.trace(&r, stats);
+                match answer {
+                    TraceResult::Miss => break,
+                    TraceResult::Hit {
+                        layer, pixel, t, ..
+                    } if self.from_behind(face, layer, pixel, ray) => {
+                        // Go on just past the crossing (module docs, "back sides").
+                        r.t_min = t + self.skip_step(face, t, ray);
+                        out.back_skips += 1;
+                    }
+                    answer => {
+                        out.result = answer;
+                        return out;
+                    }
+                }
             }
         }
         out.truncated = walk.truncated;
         out
+    }
+
+    /// True when `ray` crosses the sample at `pixel` of `layer` of `face` from behind (its
+    /// normal, which faces the eye, points along the ray).
+    fn from_behind(&self, face: usize, layer: u32, pixel: UVec2, ray: &Ray) -> bool {
+        let Some(g) = self.faces[face].layers.get(layer as usize) else {
+            return false;
+        };
+        pixel.x < g.width()
+            && pixel.y < g.height()
+            && g.normal[g.index(pixel.x, pixel.y)].dot(ray.dir) > 0.0
+    }
+
+    /// How far past a back-side crossing at `t` the trace resumes: half a face pixel
+    /// footprint at the crossing's distance from the eye, in units of the ray parameter.
+    fn skip_step(&self, face: usize, t: f32, ray: &Ray) -> f32 {
+        let p = ray.at(t);
+        let depth = (p - self.walk.eye).abs().max_element();
+        let footprint = 2.0 * depth / self.faces[face].camera.width as f32;
+        (0.5 * footprint / ray.dir.length()).max(1e-4 * t.abs())
     }
 
     /// The world hit of a cube trace: the answering layer sample's surface at the traced
