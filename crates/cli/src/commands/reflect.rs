@@ -25,9 +25,12 @@ use super::bench_synth::{cell, reporter};
 use crate::args::{SynthArgs, ViewArgs, layer_count};
 use crate::output::write_json;
 
-/// DDA max steps of the reflection commands (`--dda-max-steps` overrides it): measured with
-/// `bench reflect --dda-sweep` (docs/notes/synth.md).
-pub const DDA_MAX_STEPS_REFLECT: u32 = 256;
+/// DDA max steps of the reflection commands when `--dda-max-steps` is not given: the face
+/// size in pixels (a ray crosses a face in up to ~1.4 face sizes of steps; measured minimal
+/// artifact-free value with `bench reflect --dda-sweep`: docs/notes/synth.md).
+pub fn dda_max_steps_reflect(face: u32) -> u32 {
+    face.max(1)
+}
 
 /// Flags of the reflection renderer shared by `reflect` and `bench reflect`.
 #[derive(Args, Clone, Debug)]
@@ -90,9 +93,9 @@ pub struct ReflectCmdArgs {
     pub out: PathBuf,
 }
 
-fn method_options(s: &SynthArgs) -> Result<MethodOptions> {
+fn method_options(s: &SynthArgs, face: u32) -> Result<MethodOptions> {
     let mut o = s.method_options()?;
-    o.dda_max_steps = s.dda_max_steps.unwrap_or(DDA_MAX_STEPS_REFLECT);
+    o.dda_max_steps = s.dda_max_steps.unwrap_or(dda_max_steps_reflect(face));
     Ok(o)
 }
 
@@ -109,7 +112,7 @@ pub fn run(a: &ReflectCmdArgs, quiet: bool) -> Result<()> {
         a.method
     );
     let ropts = a.reflect.options(a.synth.seed, a.n_p, a.n_s, a.n_b)?;
-    let opts = method_options(&a.synth)?;
+    let opts = method_options(&a.synth, a.reflect.face)?;
     let scene = a.view.load_scene()?;
     let bvh = Bvh::try_build(&scene.mesh)?;
     let camera = Pinhole::new(&a.view.camera_desc(&scene)?, a.width, a.height)?;
@@ -247,7 +250,7 @@ pub fn bench(a: &ReflectBenchArgs, quiet: bool) -> Result<()> {
     for &(p, s, b) in &configs {
         a.reflect.options(a.synth.seed, p, s, b)?;
     }
-    let opts = method_options(&a.synth)?;
+    let opts = method_options(&a.synth, a.reflect.face)?;
     let dda_steps = if a.dda_sweep.is_empty() {
         vec![opts.dda_max_steps]
     } else {
@@ -287,12 +290,12 @@ pub fn bench(a: &ReflectBenchArgs, quiet: bool) -> Result<()> {
 
 fn print_rows(rows: &[ReflectRow]) {
     println!(
-        "| method | layers | N_p/N_s/N_b | dda steps | T_cm ms | T_ref ms | T_rr ms | T_rr CPU ms | FPS | Mrays/s | rays/px | nodes/ray | % cut | extra weight | PSNR refl. dB | PSNR image dB | SSIM |"
+        "| method | layers | N_p/N_s/N_b | dda steps | T_cm ms | T_ref ms | T_rr ms | T_rr CPU ms | FPS | Mrays/s | rays/px | nodes/ray | % cut | extra weight | trace-only Mrays/s | hit agreement | PSNR refl. dB | PSNR image dB | SSIM |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for r in rows {
         println!(
-            "| {} | {} | {}/{}/{} | {} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} | {:.2} | {:.1} | {:.2} | {} | {} | {} | {:.4} |",
+            "| {} | {} | {}/{}/{} | {} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} | {:.2} | {:.1} | {:.2} | {} | {:.2} | {:.3} | {} | {} | {:.4} |",
             r.method,
             r.layers,
             r.n_p,
@@ -309,6 +312,8 @@ fn print_rows(rows: &[ReflectRow]) {
             r.nodes_per_ray,
             r.pct_truncated,
             r.lookup_weight.map_or("-".into(), |w| format!("{w:.3}")),
+            r.trace_mrays_per_s,
+            r.agreement,
             if r.method == "bvh" {
                 "(truth)".into()
             } else {
@@ -322,4 +327,44 @@ fn print_rows(rows: &[ReflectRow]) {
             r.ssim
         );
     }
+}
+
+/// The demo's reflections: the `mirrors` room at `width x height`, a 2-layer cube map of
+/// 256^2 faces, quad-tree per face, N_p/N_s/N_b 3/8/1, scored against the BVH's reflections
+/// of the same rays; one row of the demo table.
+pub fn demo_reflect(out: &std::path::Path, width: u32, height: u32, quiet: bool) -> Result<()> {
+    let t = std::time::Instant::now();
+    let scene = parallax_scene::Scene::load("mirrors")?;
+    let bvh = Bvh::try_build(&scene.mesh)?;
+    let camera = Pinhole::new(&scene.camera(None)?, width.max(1), height.max(1))?;
+    let face = 256;
+    let reference = capture_reference(&scene, &bvh, &camera, 1, Shading::Fixed, 0)?;
+    let cube = ReflectionCube::capture(&scene, &bvh, &cube_desc(&camera), face, 2, 0)?;
+    let opts = MethodOptions::default();
+    let reflector = CubeReflector::build(&scene, &cube, Method::QuadTree, &opts)?;
+    let ropts = ReflectOptions {
+        n_p: 3,
+        n_s: 8,
+        n_b: 1,
+        ..ReflectOptions::default()
+    };
+    let eye = camera.frame.position;
+    let img = render_reflections(&reflector, &reference, eye, face, &ropts)?;
+    let truth = BvhReflector::new(&scene, &bvh, eye, 0);
+    let t_img = render_reflections(&truth, &reference, eye, face, &ropts)?;
+    let path = out.join("reflect_cubemap.png");
+    png::write_png(&path, &img.image, &SCORE_TONEMAP)?;
+    png::write_png(out.join("reflect_bvh.png"), &t_img.image, &SCORE_TONEMAP)?;
+    if !quiet {
+        let p = masked_psnr(&img.image, &t_img.image, &t_img.mask)?;
+        println!(
+            "| reflect_cubemap | mirrors: reflections through a 2-layer cube map's quad-trees vs the BVH ({p:.2} dB over the mirrors) | {}x{} | 3/8/1 | {:.1} | {:.0} | {} |",
+            camera.width,
+            camera.height,
+            img.mrays_per_s(),
+            t.elapsed().as_secs_f64() * 1e3,
+            path.display()
+        );
+    }
+    Ok(())
 }

@@ -14,6 +14,7 @@ use super::{Lobe, ReflectOptions, Reflector, SurfaceHit};
 use crate::SynthError;
 use crate::dof::lens_strata;
 use crate::layers::Reference;
+use parallax_scene::Scene;
 
 /// A reflection image and what it cost.
 #[derive(Clone, Debug)]
@@ -72,26 +73,88 @@ impl RowCounts {
     }
 }
 
+/// The `cols x rows` strata of `[0, 1)^2` for `n` lobe samples (the lens strata of depth of
+/// field).
+struct Strata {
+    cols: u32,
+    cell: Vec2,
+}
+
+impl Strata {
+    fn new(n: u32) -> Self {
+        let (cols, rows) = lens_strata(n);
+        Self {
+            cols,
+            cell: Vec2::new(1.0 / cols as f32, 1.0 / rows as f32),
+        }
+    }
+
+    /// A jittered sample of stratum `i`.
+    fn sample(&self, i: u32, rng: &mut Rng) -> Vec2 {
+        let corner = Vec2::new((i % self.cols) as f32, (i / self.cols) as f32);
+        (corner + rng.next_vec2()) * self.cell
+    }
+}
+
+/// A reflective primary surface: position, normal facing the eye, direction to the eye, lobe.
+struct Primary {
+    position: Vec3,
+    normal: Vec3,
+    wo: Vec3,
+    lobe: Lobe,
+}
+
+/// The reflective primary surface at pixel `(x, y)` of `reference`'s layer 0, if any.
+fn reflective(scene: &Scene, reference: &Reference, x: u32, y: u32) -> Option<Primary> {
+    let g = reference.layers.first()?;
+    if !g.is_hit(x, y) {
+        return None;
+    }
+    let i = g.index(x, y);
+    let lobe = Lobe::of(scene.materials.get(g.material_id[i] as usize)?, g.albedo[i])?;
+    let p = g.position[i];
+    let wo = (reference.camera.frame.position - p).normalize();
+    let n = g.normal[i];
+    Some(Primary {
+        position: p,
+        normal: if n.dot(wo) < 0.0 { -n } else { n },
+        wo,
+        lobe,
+    })
+}
+
+/// Where reflection rays start: `offset_px` face pixel footprints off their surface.
+struct RayStart {
+    offset_px: f32,
+    /// The cube map's eye and face size (where the footprints are measured).
+    eye: Vec3,
+    face: f32,
+}
+
+impl RayStart {
+    /// A ray from surface point `p` (normal `n`) along `dir`, started off the surface by
+    /// `offset_px` face pixel footprints at `p`'s distance from the eye.
+    fn ray(&self, p: Vec3, n: Vec3, dir: Vec3) -> Ray {
+        let scale = 1e-4 * p.abs().max_element().max(1.0);
+        let side = if dir.dot(n) >= 0.0 { 1.0 } else { -1.0 };
+        let origin = p + n * (scale * side);
+        let depth = (p - self.eye).abs().max_element();
+        let t_min = self.offset_px * 2.0 * depth / self.face;
+        Ray::segment(origin, dir, t_min, f32::INFINITY)
+    }
+}
+
 /// The renderer's shared state for one image.
 struct Pass<'a> {
     reflector: &'a dyn Reflector,
     opts: &'a ReflectOptions,
     environment: Vec3,
-    /// The cube map's eye and face size (where ray offsets are measured).
-    eye: Vec3,
-    face: f32,
+    start: RayStart,
 }
 
 impl Pass<'_> {
-    /// A ray from surface point `p` (normal `n`) along `dir`, started off the surface by
-    /// `offset_px` face pixel footprints at `p`'s distance from the eye.
     fn ray_from(&self, p: Vec3, n: Vec3, dir: Vec3) -> Ray {
-        let scale = 1e-4 * p.abs().max_element().max(1.0);
-        let side = if dir.dot(n) >= 0.0 { 1.0 } else { -1.0 };
-        let origin = p + n * (scale * side);
-        let depth = (p - self.eye).abs().max_element();
-        let t_min = self.opts.offset_px * 2.0 * depth / self.face;
-        Ray::segment(origin, dir, t_min, f32::INFINITY)
+        self.start.ray(p, n, dir)
     }
 
     /// Radiance of a path whose traced segment `ray` found `first`, with path weight `w`,
@@ -126,26 +189,17 @@ impl Pass<'_> {
     }
 
     /// The reflected radiance at a reflective primary surface (module docs of [`super`]).
-    fn pixel(
-        &self,
-        (x, y): (u32, u32),
-        p: Vec3,
-        n: Vec3,
-        wo: Vec3,
-        lobe: Lobe,
-        c: &mut RowCounts,
-    ) -> Vec3 {
+    fn pixel(&self, (x, y): (u32, u32), v: &Primary, c: &mut RowCounts) -> Vec3 {
         let o = self.opts;
         let r = self.reflector;
-        let (cols, rows) = lens_strata(o.n_p);
-        let cell = Vec2::new(1.0 / cols as f32, 1.0 / rows as f32);
+        let (p, n, wo, lobe) = (v.position, v.normal, v.wo, v.lobe);
+        let strata = Strata::new(o.n_p);
         let mut rng = Rng::for_pixel(o.seed, x, y, 0);
         let extras = if lobe.is_delta() { 0 } else { o.n_s };
         let path_rng = |k: u32| Rng::for_pixel(o.seed, x, y, 1 + k);
         let mut sum = Vec3::ZERO;
         for i in 0..o.n_p {
-            let corner = Vec2::new((i % cols) as f32, (i / cols) as f32);
-            let (dir, w) = lobe.sample(wo, n, (corner + rng.next_vec2()) * cell);
+            let (dir, w) = lobe.sample(wo, n, strata.sample(i, &mut rng));
             let ray = self.ray_from(p, n, dir);
             let first = if w.max_element() > 0.0 {
                 r.trace(&ray, &mut c.stats)
@@ -162,7 +216,7 @@ impl Pass<'_> {
             // The traced ray ended on a diffuse surface (or missed): its extra samples.
             let ended = first.is_none_or(|h| r.lobe(&h).is_none() || o.n_b == 1);
             for j in 0..extras {
-                let (dir_j, w_j) = lobe.sample(wo, n, (corner + rng.next_vec2()) * cell);
+                let (dir_j, w_j) = lobe.sample(wo, n, strata.sample(i, &mut rng));
                 if w_j.max_element() <= 0.0 {
                     den += 1.0;
                     continue;
@@ -195,6 +249,49 @@ impl Pass<'_> {
     }
 }
 
+/// The first-segment rays of [`render_reflections`] with `opts` (every reflective pixel's
+/// `N_p` traced rays and its extra samples' rays, in pixel order; rays of zero weight left
+/// out): the identical ray set every reflector is timed on.
+pub fn primary_rays(
+    scene: &Scene,
+    reference: &Reference,
+    eye: Vec3,
+    face: u32,
+    opts: &ReflectOptions,
+) -> Result<Vec<Ray>, SynthError> {
+    opts.validate()?;
+    let start = RayStart {
+        offset_px: opts.offset_px,
+        eye,
+        face: face.max(1) as f32,
+    };
+    let (w, h) = (reference.width(), reference.height());
+    let rows: Vec<Vec<Ray>> = (0..h)
+        .into_par_iter()
+        .map(|y| {
+            let mut out = Vec::new();
+            for x in 0..w {
+                let Some(v) = reflective(scene, reference, x, y) else {
+                    continue;
+                };
+                let strata = Strata::new(opts.n_p);
+                let mut rng = Rng::for_pixel(opts.seed, x, y, 0);
+                let extras = if v.lobe.is_delta() { 0 } else { opts.n_s };
+                for i in 0..opts.n_p {
+                    for _ in 0..=extras {
+                        let (dir, f) = v.lobe.sample(v.wo, v.normal, strata.sample(i, &mut rng));
+                        if f.max_element() > 0.0 {
+                            out.push(start.ray(v.position, v.normal, dir));
+                        }
+                    }
+                }
+            }
+            out
+        })
+        .collect();
+    Ok(rows.concat())
+}
+
 /// Renders the reflections of `reference`'s view (one layer: the primary surfaces and the
 /// colours of the pixels that do not reflect) through `reflector`, whose cube map is centred
 /// at `eye` with faces of `face` pixels (module docs of [`super`]).
@@ -209,10 +306,9 @@ pub fn render_reflections(
     if face == 0 {
         return Err(SynthError::Invalid("cube face size must be > 0".into()));
     }
-    let g = reference
-        .layers
-        .first()
-        .ok_or_else(|| SynthError::Invalid("the reference has no layer".into()))?;
+    if reference.layers.is_empty() {
+        return Err(SynthError::Invalid("the reference has no layer".into()));
+    }
     let colours = &reference.colors[0];
     let camera = &reference.camera;
     let (w, h) = (camera.width, camera.height);
@@ -220,8 +316,11 @@ pub fn render_reflections(
         reflector,
         opts,
         environment: reference.background,
-        eye,
-        face: face as f32,
+        start: RayStart {
+            offset_px: opts.offset_px,
+            eye,
+            face: face as f32,
+        },
     };
     let scene = reflector.scene();
     let mut image = vec![Rgb::ZERO; w as usize * h as usize];
@@ -237,22 +336,12 @@ pub fn render_reflections(
             let y = y as u32;
             for (x, (out, m)) in row.iter_mut().zip(mrow.iter_mut()).enumerate() {
                 let x = x as u32;
-                let i = g.index(x, y);
                 *out = *colours.get(x, y);
-                if !g.is_hit(x, y) {
+                let Some(v) = reflective(scene, reference, x, y) else {
                     continue;
-                }
-                let lobe = scene
-                    .materials
-                    .get(g.material_id[i] as usize)
-                    .and_then(|mat| Lobe::of(mat, g.albedo[i]));
-                let Some(lobe) = lobe else { continue };
-                let p = g.position[i];
-                let wo = (camera.frame.position - p).normalize();
-                let n = g.normal[i];
-                let n = if n.dot(wo) < 0.0 { -n } else { n };
+                };
                 *m = true;
-                *out = pass.pixel((x, y), p, n, wo, lobe, &mut c);
+                *out = pass.pixel((x, y), &v, &mut c);
             }
             c.cpu_ms = ms_between(c0, thread_cpu_ns());
             c
