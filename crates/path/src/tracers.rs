@@ -308,7 +308,10 @@ mod tests {
             let dir = Vec3::new(a.cos(), 0.6 * (1.3 * a).sin(), a.sin()).normalize();
             let ray = parallax_core::Ray::new(eye, dir);
             let t = bvh.tracer.closest_hit(&ray, &mut stats).map(|h| h.position);
-            let c = cube.tracer.closest_hit(&ray, &mut stats).map(|h| h.position);
+            let c = cube
+                .tracer
+                .closest_hit(&ray, &mut stats)
+                .map(|h| h.position);
             match (t, c) {
                 (Some(t), Some(c)) => worst = worst.max((t - c).length() / (t - eye).length()),
                 (None, None) => {}

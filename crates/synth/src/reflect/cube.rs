@@ -26,7 +26,7 @@ use std::time::Instant;
 use glam::{UVec2, Vec3};
 use parallax_bvh::Bvh;
 use parallax_core::image::GBuffer;
-use parallax_core::{Image, Ray, Rgb, WorldStats, WorldTracer};
+use parallax_core::{Ray, Rgb, WorldStats, WorldTracer};
 use parallax_render::score::Shading;
 use parallax_scene::camera::{CameraModel, CubeMap};
 use parallax_scene::{CameraDesc, Scene};
@@ -35,8 +35,10 @@ use serde::Serialize;
 
 use super::{Reflector, SurfaceHit};
 use crate::SynthError;
-use crate::layers::{HiddenLayers, MAX_LAYERS, shaded_layers};
+use crate::layers::{HiddenLayers, MAX_LAYERS, Reference, ReferenceTimes, shaded_layers};
 use crate::method::{Method, MethodOptions, build_tracer};
+use crate::warp::{RayWarp, WarpOptions};
+use parallax_screen::{CubeNear, TraceResult, UnitCube};
 
 /// Largest cube face accepted (pixels on a side).
 pub const MAX_FACE: u32 = 4096;
@@ -63,10 +65,9 @@ impl CubeTimes {
 #[derive(Clone, Debug)]
 pub struct ReflectionCube {
     pub cube: CubeMap,
-    /// `layers[face][k]`.
-    pub layers: Vec<Vec<GBuffer>>,
-    /// `colours[face][k]`: linear colour of every sample (environment where uncovered).
-    pub colours: Vec<Vec<Image<Rgb>>>,
+    /// Face `i` as a view-synthesis reference: its pinhole, layers, colours and unit cube (the
+    /// depth range shared by all six faces, [`CubeMapTracer::depth_range`]).
+    pub faces: Vec<Reference>,
     pub background: Rgb,
     pub times: CubeTimes,
 }
@@ -94,7 +95,7 @@ impl ReflectionCube {
         }
         let cube = CubeMap::new(eye, face)?;
         let mut times = CubeTimes::default();
-        let (mut all_layers, mut colours) = (Vec::with_capacity(6), Vec::with_capacity(6));
+        let mut shaded = Vec::with_capacity(6);
         for i in 0..6 {
             let camera = cube.face_camera(i);
             let (g, c, capture_ms, shade_ms) = shaded_layers(
@@ -108,13 +109,27 @@ impl ReflectionCube {
             )?;
             times.capture_ms += capture_ms;
             times.shade_ms += shade_ms;
-            all_layers.push(g);
-            colours.push(c);
+            shaded.push((camera, g, c));
         }
+        let depths: Vec<Vec<GBuffer>> = shaded.iter().map(|f| f.1.clone()).collect();
+        let (near, far) = CubeMapTracer::depth_range(&depths)?;
+        let faces = shaded
+            .into_iter()
+            .map(|(camera, layers, colors)| {
+                Ok(Reference {
+                    cube: UnitCube::new(&camera, near, far)?,
+                    camera,
+                    layers,
+                    colors,
+                    cube_near: CubeNear::Fitted,
+                    background: scene.environment,
+                    times: ReferenceTimes::default(),
+                })
+            })
+            .collect::<Result<Vec<_>, SynthError>>()?;
         Ok(Self {
             cube,
-            layers: all_layers,
-            colours,
+            faces,
             background: scene.environment,
             times,
         })
@@ -122,20 +137,26 @@ impl ReflectionCube {
 
     /// Bytes of the layers and colours.
     pub fn bytes(&self) -> usize {
-        let g: usize = self.layers.iter().flatten().map(GBuffer::bytes).sum();
-        let c: usize = self
-            .colours
+        self.faces
             .iter()
-            .flatten()
-            .map(|i| i.len() * std::mem::size_of::<Rgb>())
-            .sum();
-        g + c
+            .map(|f| {
+                let g: usize = f.layers.iter().map(GBuffer::bytes).sum();
+                g + f
+                    .colors
+                    .iter()
+                    .map(|c| c.len() * std::mem::size_of::<Rgb>())
+                    .sum::<usize>()
+            })
+            .sum()
     }
 }
 
 /// Reflection rays through the cube map's per-face structures (module docs).
 pub struct CubeReflector<'a> {
     pub cube: &'a ReflectionCube,
+    /// The colour lookup of each face (the stereo warp's: depth-aware bilinear resampling,
+    /// nearest-background fill of occlusion volumes; no layer-0 guard).
+    warps: Vec<RayWarp<'a>>,
     pub scene: &'a Scene,
     pub tracer: CubeMapTracer,
     pub method: Method,
@@ -161,7 +182,7 @@ impl<'a> CubeReflector<'a> {
         let name = format!("cubemap-{method}");
         let tracer = CubeMapTracer::from_faces(
             &cube.cube,
-            cube.layers.clone(),
+            cube.faces.iter().map(|f| f.layers.clone()).collect(),
             &name,
             |unit_cube, layers| build_tracer(method, unit_cube, layers, opts),
         )?;
@@ -169,8 +190,21 @@ impl<'a> CubeReflector<'a> {
             build_ms: t.elapsed().as_secs_f64() * 1e3,
             ..cube.times
         };
+        let colour_only = WarpOptions {
+            side_entry_guard: false,
+            dda_recheck: false,
+            silhouette_check: false,
+            nearer_neighbour_check: false,
+            ..opts.warp
+        };
+        let warps = cube
+            .faces
+            .iter()
+            .map(|f| RayWarp::new(f, &colour_only))
+            .collect();
         Ok(Self {
             cube,
+            warps,
             scene,
             tracer,
             method,
@@ -178,14 +212,24 @@ impl<'a> CubeReflector<'a> {
         })
     }
 
-    /// The layer sample at `pixel` of layer `layer` of face `face`, as a surface hit of
-    /// `ray` at `t`.
-    fn sample_hit(&self, ray: &Ray, face: usize, layer: usize, pixel: UVec2, t: f32) -> SurfaceHit {
-        let g = &self.cube.layers[face][layer];
+    /// The surface hit of `ray`'s answer `r` in face `face`: the answering layer sample's
+    /// attributes, at the traced position, with the face's resampled colour.
+    fn sample_hit(&self, ray: &Ray, face: usize, r: TraceResult) -> Option<SurfaceHit> {
+        let (layer, pixel, t) = match r {
+            TraceResult::Hit {
+                layer, pixel, t, ..
+            } => (layer, pixel, t),
+            TraceResult::OcclusionVolume { layer, pixel, t } => (layer, pixel, t),
+            TraceResult::Miss => return None,
+        };
+        if !(t > ray.t_min && t < ray.t_max) {
+            return None;
+        }
+        let g = self.cube.faces[face].layers.get(layer as usize)?;
         let i = g.index(pixel.x, pixel.y);
         let n = g.normal[i];
         let n = if n.dot(ray.dir) > 0.0 { -n } else { n };
-        SurfaceHit {
+        Some(SurfaceHit {
             t,
             position: ray.at(t),
             normal: n,
@@ -194,7 +238,8 @@ impl<'a> CubeReflector<'a> {
             prim: g.primitive_id[i],
             barycentrics: g.barycentrics[i],
             sample: Some((face as u8, layer as u8, pixel)),
-        }
+            colour: Some(self.warps[face].colour(ray, r).0),
+        })
     }
 
     /// The view depth of `p` in face `face` (distance along the face's axis).
@@ -221,28 +266,18 @@ impl Reflector for CubeReflector<'_> {
         stats.tests += s.box_tests + s.plane_tests;
         stats.steps += trace.visits as u64;
         stats.truncated += (s.truncated > 0 || trace.truncated) as u64;
-        let (layer, pixel, t) = trace.sample()?;
-        if !(t > ray.t_min && t < ray.t_max) {
-            return None;
-        }
-        Some(self.sample_hit(ray, trace.face, layer as usize, pixel, t))
+        self.sample_hit(ray, trace.face, trace.result)
     }
 
     fn colour(&self, hit: &SurfaceHit) -> Vec3 {
-        match hit.sample {
-            Some((f, l, p)) => {
-                let c = &self.cube.colours[f as usize][l as usize];
-                *c.get(p.x, p.y)
-            }
-            None => self.cube.background,
-        }
+        hit.colour.unwrap_or(self.cube.background)
     }
 
     fn plane_sample(&self, hit: &SurfaceHit, ray: &Ray, sigma: f32) -> (Vec3, f32) {
         let Some((face, layer, pixel)) = hit.sample else {
             return (Vec3::ZERO, 0.0);
         };
-        let g = &self.cube.layers[face as usize][layer as usize];
+        let g = &self.cube.faces[face as usize].layers[layer as usize];
         let i = g.index(pixel.x, pixel.y);
         // The hit sample's tangent plane n . (x - p_s) = 0.
         let (p_s, n) = (g.position[i], g.normal[i]);
@@ -263,7 +298,7 @@ impl Reflector for CubeReflector<'_> {
             (film.x.max(0.0) as u32).min(s - 1),
             (film.y.max(0.0) as u32).min(s - 1),
         );
-        let gq = &self.cube.layers[f][layer as usize];
+        let gq = &self.cube.faces[f].layers[layer as usize];
         let j = gq.index(q.x, q.y);
         let d_s = gq.depth[j];
         if !(d_s.is_finite() && d_s > 0.0) {
@@ -271,6 +306,12 @@ impl Reflector for CubeReflector<'_> {
         }
         let rel = (self.face_depth(f, x) - d_s) / d_s;
         let w = (-(rel * rel) / (sigma * sigma)).exp();
-        (*self.cube.colours[f][layer as usize].get(q.x, q.y), w)
+        let at = TraceResult::Hit {
+            layer: layer as u32,
+            pixel: q,
+            position: x,
+            t,
+        };
+        (self.warps[f].colour(ray, at).0, w)
     }
 }

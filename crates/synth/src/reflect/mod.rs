@@ -139,6 +139,8 @@ pub struct SurfaceHit {
     pub barycentrics: Vec2,
     /// The cube-map sample that answered: face, layer, pixel (`None` for exact hits).
     pub sample: Option<(u8, u8, UVec2)>,
+    /// The colour a sampled hit read from its face (`None`: computed on demand).
+    pub colour: Option<Vec3>,
 }
 
 /// What answers the reflection renderer's rays: the cube map's structures or the BVH.

@@ -59,6 +59,7 @@ impl Reflector for BvhReflector<'_> {
             prim: hit.prim,
             barycentrics: glam::Vec2::new(hit.u, hit.v),
             sample: None,
+            colour: None,
         })
     }
 
