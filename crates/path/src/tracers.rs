@@ -242,8 +242,8 @@ mod tests {
         );
     }
 
-    #[test]
-    fn dirt_options_out_of_range_are_build_errors() {
+    /// The cornell box and a small pinhole of its first camera.
+    fn cornell() -> (Scene, Camera) {
         let scene = Scene::load("cornell").unwrap();
         let desc = scene.camera(None).unwrap();
         let camera = Camera::new(
@@ -254,6 +254,12 @@ mod tests {
             &Default::default(),
         )
         .unwrap();
+        (scene, camera)
+    }
+
+    #[test]
+    fn dirt_options_out_of_range_are_build_errors() {
+        let (scene, camera) = cornell();
         for (face, buckets) in [(0, 16), (5000, 16), (64, 0), (64, 4096)] {
             let opts = TracerOptions {
                 dirt: DirtViewsOptions {
@@ -278,16 +284,7 @@ mod tests {
 
     #[test]
     fn the_cubemap_tracer_builds_and_answers_like_the_bvh_where_the_eye_sees() {
-        let scene = Scene::load("cornell").unwrap();
-        let desc = scene.camera(None).unwrap();
-        let camera = Camera::new(
-            parallax_scene::camera::ModelKind::Pinhole,
-            &desc,
-            16,
-            12,
-            &Default::default(),
-        )
-        .unwrap();
+        let (scene, camera) = cornell();
         let mut opts = TracerOptions::default();
         opts.cubemap.face = 0;
         let e = build_tracer(TracerKind::CubeMap, &scene, &camera, &opts)

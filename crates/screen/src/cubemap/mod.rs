@@ -298,8 +298,9 @@ impl CubeMapTracer {
         })
     }
 
-    /// Adds one traced ray's work to world stats.
-    fn count(stats: &mut WorldStats, s: &TraceStats, trace: &CubeTrace) {
+    /// Adds one traced ray's work (`s` of the face tracers, `trace` of the walk) to world
+    /// stats.
+    pub fn count(stats: &mut WorldStats, s: &TraceStats, trace: &CubeTrace) {
         stats.rays += 1;
         stats.nodes += s.nodes_visited + if s.nodes_visited == 0 { s.steps } else { 0 };
         stats.tests += s.box_tests + s.plane_tests;

@@ -261,11 +261,7 @@ impl Reflector for CubeReflector<'_> {
     fn trace(&self, ray: &Ray, stats: &mut WorldStats) -> Option<SurfaceHit> {
         let mut s = TraceStats::default();
         let trace = self.tracer.trace(ray, &mut s);
-        stats.rays += 1;
-        stats.nodes += s.nodes_visited + if s.nodes_visited == 0 { s.steps } else { 0 };
-        stats.tests += s.box_tests + s.plane_tests;
-        stats.steps += trace.visits as u64;
-        stats.truncated += (s.truncated > 0 || trace.truncated) as u64;
+        CubeMapTracer::count(stats, &s, &trace);
         self.sample_hit(ray, trace.face, trace.result)
     }
 

@@ -12,7 +12,9 @@
 //! `f = (n + 8) / 8π · cos^n θ_h`): the half vector from `pdf(h) = (n + 1) / 2π · cos^n θ_h`
 //! around the normal, `wi = reflect(wo, h)`, `pdf(wi) = pdf(h) / (4 wo·h)`, so the sample's
 //! weight `f cos θ_i / pdf(wi) = (n + 8) / (n + 1) · cos θ_i · (wo·h)` (times the colour); a
-//! direction below the surface has weight 0. No Fresnel term (a metal's base colour is its
+//! direction below the surface has weight 0. The lobe's energy falls off away from normal
+//! incidence (`cos θ_i cos θ_o` at the mirror direction: this normalisation has no microfacet
+//! `1 / (4 cos θ_i cos θ_o)`). No Fresnel term (a metal's base colour is its
 //! reflectance; the paper's lobe has none either).
 
 use glam::{Vec2, Vec3};
@@ -105,9 +107,10 @@ mod tests {
             w_sum += w.x;
         }
         // Exponent ~510: directions within a few degrees of the mirror direction, weights
-        // close to cos(theta_i) * (wo . h) ~ 0.8.
+        // close to (n + 8) / (n + 1) cos(theta_i) (wo . h) = 1.014 * 0.8 * 0.8 = 0.649 there
+        // (this BRDF darkens away from normal incidence; it has no microfacet 1/(4 cos cos)).
         assert!(cos_sum / 1000.0 > 0.99, "{}", cos_sum / 1000.0);
-        assert!((w_sum / 1000.0 - 0.8).abs() < 0.05, "{}", w_sum / 1000.0);
+        assert!((w_sum / 1000.0 - 0.649).abs() < 0.02, "{}", w_sum / 1000.0);
         assert!(Lobe::of(&Material::diffuse("d", Vec3::ONE), Vec3::ONE).is_none());
     }
 }

@@ -18,8 +18,9 @@
 //! traced when the traced ray ended on a diffuse surface: each is intersected with that hit's
 //! plane only and looked up in the cube map, weighted by depth agreement (the secondary
 //! samples of depth of field, [`cube`]); the ray's colour is the weighted mean (the traced ray
-//! with weight 1). After a traced ray that bounced on, its extra samples weigh 0. Mirrors
-//! draw no extra samples (every one is the same direction).
+//! with weight 1). After a traced ray that bounced on, its extra samples weigh 0; a stratum
+//! whose traced direction falls below the surface adds nothing. Mirrors draw no extra
+//! samples (every one is the same direction).
 //!
 //! **Ground truth** ([`truth`]): the same renderer with the BVH as [`Reflector`] — the same
 //! primary hits and sample directions, every segment traced exactly, extra samples traced as

@@ -200,18 +200,18 @@ impl Pass<'_> {
         let mut sum = Vec3::ZERO;
         for i in 0..o.n_p {
             let (dir, w) = lobe.sample(wo, n, strata.sample(i, &mut rng));
+            if w.max_element() <= 0.0 {
+                // Below the surface: the stratum adds nothing (its extra samples' draws are
+                // still taken, so later strata see the same stream).
+                for _ in 0..extras {
+                    strata.sample(i, &mut rng);
+                }
+                continue;
+            }
             let ray = self.ray_from(p, n, dir);
-            let first = if w.max_element() > 0.0 {
-                r.trace(&ray, &mut c.stats)
-            } else {
-                None
-            };
+            let first = r.trace(&ray, &mut c.stats);
             let k0 = i * (1 + extras);
-            let traced = if w.max_element() > 0.0 {
-                self.path(ray, first, w, &mut path_rng(k0), &mut c.stats)
-            } else {
-                Vec3::ZERO
-            };
+            let traced = self.path(ray, first, w, &mut path_rng(k0), &mut c.stats);
             let (mut num, mut den) = (traced, 1.0f32);
             // The traced ray ended on a diffuse surface (or missed): its extra samples.
             let ended = first.is_none_or(|h| r.lobe(&h).is_none() || o.n_b == 1);
@@ -250,8 +250,9 @@ impl Pass<'_> {
 }
 
 /// The first-segment rays of [`render_reflections`] with `opts` (every reflective pixel's
-/// `N_p` traced rays and its extra samples' rays, in pixel order; rays of zero weight left
-/// out): the identical ray set every reflector is timed on.
+/// `N_p` traced rays and its extra samples' rays, in pixel order; rays of zero weight and the
+/// strata of a traced ray of zero weight left out): the identical ray set every reflector is
+/// timed on.
 pub fn primary_rays(
     scene: &Scene,
     reference: &Reference,
@@ -278,9 +279,12 @@ pub fn primary_rays(
                 let mut rng = Rng::for_pixel(opts.seed, x, y, 0);
                 let extras = if v.lobe.is_delta() { 0 } else { opts.n_s };
                 for i in 0..opts.n_p {
+                    let mut traced = true;
                     for _ in 0..=extras {
                         let (dir, f) = v.lobe.sample(v.wo, v.normal, strata.sample(i, &mut rng));
-                        if f.max_element() > 0.0 {
+                        // A stratum whose traced direction is below the surface is skipped.
+                        traced &= f.max_element() > 0.0;
+                        if traced && f.max_element() > 0.0 {
                             out.push(start.ray(v.position, v.normal, dir));
                         }
                     }
