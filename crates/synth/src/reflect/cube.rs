@@ -12,14 +12,23 @@
 //!
 //! **Answers.** A hit (or the inpainted occlusion-volume answer, [`parallax_screen::cubemap`])
 //! is the layer sample of its face pixel: position on the ray, the sample's normal, material
-//! and albedo, and its colour read at that pixel (nearest; no resampling between pixels).
+//! and albedo. Its colour (asked only where a path ends) is the stereo warp's colour of that
+//! answer in that face ([`crate::warp::RayWarp::colour`]: depth-aware bilinear resampling at
+//! the hit, nearest-background fill of an occlusion volume).
+//!
 //! **Extra samples** ([`Reflector::plane_sample`]): a ray of the same lobe is intersected with
 //! the tangent plane of its traced twin's hit sample only (the hit pixel's plane stands in for
 //! the quad-tree leaf's: a leaf merges pixel planes within the tolerances `γ`), the
-//! intersection is looked up in the cube map (the face of its direction, the hit's layer) and
-//! weighted by `exp(-((d - d_s) / d_s)² / σ²)` — `d` its view depth in that face, `d_s` the
-//! sample's depth there — as depth of field weighs its secondary samples
-//! ([`crate::dof::secondary`]).
+//! intersection is looked up in the cube map (the face of its direction, the hit's layer,
+//! coloured as a hit there) and weighted by `exp(-((d - d_s) / d_s)² / σ²)` — `d` its view
+//! depth in that face, `d_s` the sample's depth there — as depth of field weighs its
+//! secondary samples ([`crate::dof::secondary`]).
+//!
+//! | parameter | type | default | meaning |
+//! |---|---|---|---|
+//! | `face` | u32 | (caller) | face size in pixels, `1..=`[`MAX_FACE`] |
+//! | `layers` | usize | (caller) | colour + depth layers per face, `1..=8` |
+//! | `method` | [`Method`] | (caller) | `quadtree` or `dda` per face, options as for view synthesis |
 
 use std::time::Instant;
 
@@ -213,13 +222,13 @@ impl<'a> CubeReflector<'a> {
     }
 
     /// The surface hit of `ray`'s answer `r` in face `face`: the answering layer sample's
-    /// attributes, at the traced position, with the face's resampled colour.
+    /// attributes at the traced position.
     fn sample_hit(&self, ray: &Ray, face: usize, r: TraceResult) -> Option<SurfaceHit> {
-        let (layer, pixel, t) = match r {
+        let (layer, pixel, t, occlusion) = match r {
             TraceResult::Hit {
                 layer, pixel, t, ..
-            } => (layer, pixel, t),
-            TraceResult::OcclusionVolume { layer, pixel, t } => (layer, pixel, t),
+            } => (layer, pixel, t, false),
+            TraceResult::OcclusionVolume { layer, pixel, t } => (layer, pixel, t, true),
             TraceResult::Miss => return None,
         };
         if !(t > ray.t_min && t < ray.t_max) {
@@ -238,7 +247,7 @@ impl<'a> CubeReflector<'a> {
             prim: g.primitive_id[i],
             barycentrics: g.barycentrics[i],
             sample: Some((face as u8, layer as u8, pixel)),
-            colour: Some(self.warps[face].colour(ray, r).0),
+            occlusion,
         })
     }
 
@@ -265,8 +274,22 @@ impl Reflector for CubeReflector<'_> {
         self.sample_hit(ray, trace.face, trace.result)
     }
 
-    fn colour(&self, hit: &SurfaceHit) -> Vec3 {
-        hit.colour.unwrap_or(self.cube.background)
+    fn colour(&self, ray: &Ray, hit: &SurfaceHit) -> Vec3 {
+        let Some((face, layer, pixel)) = hit.sample else {
+            return self.cube.background;
+        };
+        let (layer, t) = (layer as u32, hit.t);
+        let r = if hit.occlusion {
+            TraceResult::OcclusionVolume { layer, pixel, t }
+        } else {
+            TraceResult::Hit {
+                layer,
+                pixel,
+                position: hit.position,
+                t,
+            }
+        };
+        self.warps[face as usize].colour(ray, r).0
     }
 
     fn plane_sample(&self, hit: &SurfaceHit, ray: &Ray, sigma: f32) -> (Vec3, f32) {

@@ -140,8 +140,9 @@ pub struct SurfaceHit {
     pub barycentrics: Vec2,
     /// The cube-map sample that answered: face, layer, pixel (`None` for exact hits).
     pub sample: Option<(u8, u8, UVec2)>,
-    /// The colour a sampled hit read from its face (`None`: computed on demand).
-    pub colour: Option<Vec3>,
+    /// The sampled hit is the inpainted answer of an occlusion volume (the ray passed behind
+    /// the sample's surface), not a hit on it.
+    pub occlusion: bool,
 }
 
 /// What answers the reflection renderer's rays: the cube map's structures or the BVH.
@@ -155,8 +156,9 @@ pub trait Reflector: Sync {
     /// The first surface along `ray`, counting the ray in `stats`.
     fn trace(&self, ray: &Ray, stats: &mut WorldStats) -> Option<SurfaceHit>;
 
-    /// The colour of `hit`: the radiance its point sends towards the cube map's eye.
-    fn colour(&self, hit: &SurfaceHit) -> Vec3;
+    /// The colour of `ray`'s hit `hit`: the radiance its point sends towards the cube map's
+    /// eye (asked only where a path ends, so tracing alone does not pay for it).
+    fn colour(&self, ray: &Ray, hit: &SurfaceHit) -> Vec3;
 
     /// True when extra samples are traced as full paths (the ground truth) rather than
     /// looked up with [`Self::plane_sample`].

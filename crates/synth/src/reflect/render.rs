@@ -174,7 +174,7 @@ impl Pass<'_> {
             };
             let lobe = match r.lobe(&hit) {
                 Some(l) if segment < self.opts.n_b => l,
-                _ => return w * r.colour(&hit),
+                _ => return w * r.colour(&ray, &hit),
             };
             let wo = -ray.dir;
             let (dir, f) = lobe.sample(wo, hit.normal, rng.next_vec2());

@@ -59,11 +59,11 @@ impl Reflector for BvhReflector<'_> {
             prim: hit.prim,
             barycentrics: glam::Vec2::new(hit.u, hit.v),
             sample: None,
-            colour: None,
+            occlusion: false,
         })
     }
 
-    fn colour(&self, hit: &SurfaceHit) -> Vec3 {
+    fn colour(&self, _: &Ray, hit: &SurfaceHit) -> Vec3 {
         let to = hit.position - self.eye;
         let dist = to.length();
         if !(dist > 0.0 && dist.is_finite()) {
@@ -85,7 +85,7 @@ impl Reflector for BvhReflector<'_> {
         true
     }
 
-    fn plane_sample(&self, hit: &SurfaceHit, _: &Ray, _: f32) -> (Vec3, f32) {
-        (self.colour(hit), 1.0)
+    fn plane_sample(&self, hit: &SurfaceHit, ray: &Ray, _: f32) -> (Vec3, f32) {
+        (self.colour(ray, hit), 1.0)
     }
 }
