@@ -50,6 +50,8 @@ enum Command {
     Lightfield(commands::lightfield::LightFieldArgs),
     /// Path-traced stereo with stereo and temporal sample reprojection (Mäkitalo et al. 2019).
     Reproject(commands::reproject::ReprojectArgs),
+    /// Reflections traced through a cube map's per-face quad-trees (Widmer et al. 2015, §5.4).
+    Reflect(commands::reflect::ReflectCmdArgs),
     /// Benchmarks that reproduce the papers' and issues' measurements.
     #[command(subcommand)]
     Bench(commands::bench::BenchCommand),
@@ -78,6 +80,7 @@ fn main() -> std::process::ExitCode {
         Command::Path(a) => commands::path::run(&a, cli.quiet),
         Command::Secondary(a) => commands::secondary::run(&a, cli.quiet),
         Command::Dof(a) => commands::dof::run(&a, cli.quiet),
+        Command::Reflect(a) => commands::reflect::run(&a, cli.quiet),
         Command::Lightfield(a) => commands::lightfield::run(&a, cli.quiet),
         Command::Reproject(a) => commands::reproject::run_reproject(&a, cli.quiet),
         Command::Bench(b) => commands::bench::run(&b, cli.quiet),

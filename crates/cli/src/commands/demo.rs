@@ -95,6 +95,7 @@ pub fn run(a: &DemoArgs, quiet: bool) -> Result<()> {
     }
     super::path::demo_view(&scene, &desc, w, h, &a.out, quiet)?;
     super::bench_dirt::demo_view(&scene, &desc, w, h, &a.out, quiet)?;
+    super::reflect::demo_reflect(&a.out, w / 2, h / 2, quiet)?;
     vr_frame(a, &scene, &bvh, &desc, quiet)?;
     stereo_pair(&scene, &bvh, &desc, w, h, &a.out, quiet)?;
     super::secondary::demo_secondary(&a.out, w / 2, h / 2, quiet)?;

@@ -11,6 +11,7 @@ pub mod info;
 pub mod input;
 pub mod lightfield;
 pub mod path;
+pub mod reflect;
 pub mod render;
 pub mod reproject;
 pub mod secondary;
