@@ -1,0 +1,29 @@
+//! `parallax report RESULTS_DIR...`: the HTML page of `parallax run` results
+//! (`parallax_experiment::report`): images beside their ground truth with a wipe slider and
+//! error heatmaps, the rows as a sortable table, and plots.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::Args;
+
+#[derive(Args, Debug)]
+pub struct ReportArgs {
+    /// Results folders of `parallax run` (each with results.json).
+    #[arg(required = true)]
+    pub dirs: Vec<PathBuf>,
+    /// The page (default: DIR/index.html for one folder; required for several).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Inline every image as base64 (one file to send around).
+    #[arg(long)]
+    pub inline: bool,
+}
+
+pub fn run(a: &ReportArgs, quiet: bool) -> Result<()> {
+    let page = parallax_experiment::report::write_report(&a.dirs, a.out.as_deref(), a.inline)?;
+    if !quiet {
+        println!("report: {}", page.display());
+    }
+    Ok(())
+}
