@@ -1,6 +1,7 @@
 //! `parallax report RESULTS_DIR...`: the HTML page of `parallax run` results
 //! (`parallax_experiment::report`): images beside their ground truth with a wipe slider and
-//! error heatmaps, the rows as a sortable table, and plots.
+//! error heatmaps, the rows as a sortable table, and plots. A folder without `results.json`
+//! (e.g. `out/demo`, `out/warp`) gets the gallery of its PNGs.
 
 use std::path::PathBuf;
 
@@ -9,7 +10,7 @@ use clap::Args;
 
 #[derive(Args, Debug)]
 pub struct ReportArgs {
-    /// Results folders of `parallax run` (each with results.json).
+    /// Results folders of `parallax run` (each with results.json), or one folder of images.
     #[arg(required = true)]
     pub dirs: Vec<PathBuf>,
     /// The page (default: DIR/index.html for one folder; required for several).
@@ -21,7 +22,14 @@ pub struct ReportArgs {
 }
 
 pub fn run(a: &ReportArgs, quiet: bool) -> Result<()> {
-    let page = parallax_experiment::report::write_report(&a.dirs, a.out.as_deref(), a.inline)?;
+    use parallax_experiment::report;
+    let page = match a.dirs.as_slice() {
+        [d] if !d.join(parallax_experiment::results::RESULTS_FILE).exists() && a.out.is_none() => {
+            let title = format!("parallax: {}", d.display());
+            report::write_gallery(d, &title)?
+        }
+        dirs => report::write_report(dirs, a.out.as_deref(), a.inline)?,
+    };
     if !quiet {
         println!("report: {}", page.display());
     }

@@ -360,8 +360,8 @@ fn rows_table(r: &RunResults, rows: &[Row]) -> String {
     html::table(&columns, &cells)
 }
 
-/// The section of one results folder.
-fn section(dir: &Path, src: &Sources) -> Result<String, ExperimentError> {
+/// The section of one results folder and the experiment's title.
+fn section(dir: &Path, src: &Sources) -> Result<(String, String), ExperimentError> {
     let r: RunResults = read_json(&dir.join(RESULTS_FILE))?;
     let rows = rows_of(&r);
     let mut s = format!(
@@ -413,7 +413,7 @@ fn section(dir: &Path, src: &Sources) -> Result<String, ExperimentError> {
             s += &image_figures(&p.images, src, &format!("p{:04}-", p.index))?;
         }
     }
-    Ok(s)
+    Ok((s, r.title))
 }
 
 fn same_dir(a: &Path, b: &Path) -> bool {
@@ -453,11 +453,9 @@ pub fn write_report(
             inline: inline || !same_dir(d, page_dir),
             generated: PathBuf::from("report"),
         };
-        body += &section(d, &src)?;
-        titles.push(
-            d.file_name()
-                .map_or("results".into(), |n| n.to_string_lossy().into_owned()),
-        );
+        let (text, title) = section(d, &src)?;
+        body += &text;
+        titles.push(title);
     }
     let title = format!("parallax report: {}", titles.join(", "));
     std::fs::write(&page, html::page(&title, &body)).map_err(io(&page))?;
