@@ -189,6 +189,15 @@ pub fn run(opts: &FuzzOptions) -> std::io::Result<FuzzReport> {
         let peak = alloc::peak().saturating_sub(base);
         report.max_peak_bytes = report.max_peak_bytes.max(peak);
         counts[k] += 1;
+        if (case + 1) % 100_000 == 0 {
+            eprintln!(
+                "fuzz: {} inputs, {:.0} s, {} finding(s), largest peak heap {} MiB",
+                case + 1,
+                t0.elapsed().as_secs_f64(),
+                report.findings.len(),
+                report.max_peak_bytes >> 20
+            );
+        }
         if r.is_err() {
             let msg = last_panic.lock().map(|m| m.clone()).unwrap_or_default();
             let f = save(&opts.crash_dir, "panic", *t, &data, &msg);
