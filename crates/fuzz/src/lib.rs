@@ -13,7 +13,7 @@
 //! | `cases` | u64 | 10 000 | inputs to run (round robin over the targets) |
 //! | `seed` | u64 | 1 | the mutation stream |
 //! | `budget_bytes` | usize | 2 GiB | peak heap of one input above which it is a finding (the largest legal image, 2^28 f32 samples = 1 GiB, plus a decoder copy) |
-//! | `timeout_s` | u64 | 20 | one input's time limit |
+//! | `timeout_s` | u64 | 120 | one input's wall-clock limit (generous: the machine may be shared) |
 //! | `crash_dir` | path | `out/fuzz` | where findings and the scratch files go |
 
 pub mod alloc;
@@ -46,7 +46,7 @@ impl Default for FuzzOptions {
             cases: 10_000,
             seed: 1,
             budget_bytes: 2 << 30,
-            timeout_s: 20,
+            timeout_s: 120,
             crash_dir: PathBuf::from("out/fuzz"),
             targets: Target::ALL.to_vec(),
         }
@@ -149,23 +149,22 @@ pub fn run(opts: &FuzzOptions) -> std::io::Result<FuzzReport> {
     let t0 = Instant::now();
     let started = Arc::new(AtomicU64::new(u64::MAX));
     let done = Arc::new(AtomicU64::new(0));
-    let (st, dn, timeout, dir) = (
-        started.clone(),
-        done.clone(),
-        opts.timeout_s.max(1) * 1000,
-        opts.crash_dir.clone(),
-    );
+    let running = Arc::new(AtomicU64::new(0));
+    let (st, dn, rt) = (started.clone(), done.clone(), running.clone());
+    let (timeout, dir) = (opts.timeout_s.max(1) * 1000, opts.crash_dir.clone());
+    let names: Vec<Target> = by_target.iter().map(|t| t.0).collect();
     let watchdog = std::thread::spawn(move || {
         while dn.load(Ordering::Relaxed) == 0 {
             std::thread::sleep(Duration::from_millis(200));
             let s = st.load(Ordering::Relaxed);
             let now = t0.elapsed().as_millis() as u64;
             if s != u64::MAX && now.saturating_sub(s) > timeout {
-                eprintln!(
-                    "fuzz: an input ran over {} s; it is in {}/work/current.* (kept as the hang's input)",
-                    timeout / 1000,
-                    dir.display()
-                );
+                let t = names[rt.load(Ordering::Relaxed) as usize];
+                let cur = dir.join("work").join(format!("current.{}", t.ext()));
+                let data = std::fs::read(cur).unwrap_or_default();
+                let msg = format!("ran over {} s (wall clock)", timeout / 1000);
+                let f = save(&dir, "hang", t, &data, &msg);
+                eprintln!("fuzz: a {t:?} input {msg}: {}", f.display());
                 std::process::exit(3);
             }
         }
@@ -182,6 +181,7 @@ pub fn run(opts: &FuzzOptions) -> std::io::Result<FuzzReport> {
             data = mutated(*t, &data, other, &mut rng);
         }
         let file = work.join(format!("current.{}", t.ext()));
+        running.store(k as u64, Ordering::Relaxed);
         let base = alloc::reset_peak();
         started.store(t0.elapsed().as_millis() as u64, Ordering::Relaxed);
         let r = std::panic::catch_unwind(AssertUnwindSafe(|| t.run(&data, &file)));

@@ -56,7 +56,7 @@ pub struct CheckedLine {
 /// Subcommands an experiment may not run as its image command.
 const NOT_IMAGE_COMMANDS: [&str; 6] = ["run", "report", "merge", "bench", "demo", "scenes"];
 /// Image subcommands whose `--out` is a file (the others take a folder).
-const FILE_OUT_COMMANDS: [&str; 2] = ["render", "path"];
+const FILE_OUT_COMMANDS: [&str; 3] = ["render", "path", "secondary"];
 /// Keys the runner sets itself.
 const RESERVED_KEYS: [&str; 2] = ["json", "out"];
 
@@ -153,7 +153,8 @@ fn check_line(
         }
         if e.key == "scene" {
             if let Value::String(s) = &e.value {
-                if !parallax_scene::builtin::NAMES.contains(&s.as_str()) && !Path::new(s).exists() {
+                let file = parallax_scene::builtin::room::parse(s).map_or(s.as_str(), |r| r.1);
+                if !parallax_scene::builtin::NAMES.contains(&file) && !Path::new(file).exists() {
                     bail!(exp.key_error(
                         e.line,
                         "scene",
