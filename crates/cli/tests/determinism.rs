@@ -6,20 +6,7 @@
 #[allow(dead_code)]
 mod common;
 
-use std::path::Path;
-
-use common::{out_dir, parallax, stderr};
-
-fn files(dir: &Path) -> Vec<(std::path::PathBuf, Vec<u8>)> {
-    parallax_experiment::results::files_under(dir)
-        .unwrap()
-        .into_iter()
-        .map(|r| {
-            let b = std::fs::read(dir.join(&r)).unwrap();
-            (r, b)
-        })
-        .collect()
-}
+use common::{out_dir, parallax, stderr, tree};
 
 /// Runs `args` (with `{out}` replaced by an output folder) at 1 and 2 threads and compares.
 fn same_at_one_and_two_threads(name: &str, args: &[&str]) {
@@ -34,7 +21,7 @@ fn same_at_one_and_two_threads(name: &str, args: &[&str]) {
         let refs: Vec<&str> = a.iter().map(String::as_str).collect();
         let o = parallax(&refs);
         assert!(o.status.success(), "{name}: {}", stderr(&o));
-        trees.push(files(&dir));
+        trees.push(tree(&dir));
     }
     assert!(!trees[0].is_empty(), "{name} wrote files");
     let names =

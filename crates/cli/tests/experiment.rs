@@ -9,7 +9,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use common::{out_dir, stderr};
+use common::{out_dir, stderr, tree};
 
 /// Scheduler variables that would shard a run by themselves.
 const SHARD_ENV: [&str; 4] = [
@@ -68,18 +68,6 @@ fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
     let p = dir.join(name);
     std::fs::write(&p, text).unwrap();
     p
-}
-
-/// Every file under `dir` (relative) with its bytes.
-fn tree(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
-    parallax_experiment::results::files_under(dir)
-        .unwrap()
-        .into_iter()
-        .map(|r| {
-            let b = std::fs::read(dir.join(&r)).unwrap();
-            (r, b)
-        })
-        .collect()
 }
 
 fn assert_same_tree(a: &Path, b: &Path) {
@@ -427,4 +415,44 @@ fn report_opens_in_headless_chromium() {
     let tag = check_in_browser(&chrome, &warp.join("broken.html"), &d.join("broken.png"));
     assert_eq!(attr(&tag, "data-status"), "fail", "{tag}");
     assert_eq!(attr(&tag, "data-broken"), "1", "{tag}");
+}
+
+#[test]
+fn memory_budget_refuses_before_allocating() {
+    let o = parallax(&[
+        "--quiet",
+        "warp",
+        "--scene",
+        "cornell",
+        "--width",
+        "16384",
+        "--height",
+        "16384",
+        "--layers",
+        "8",
+        "--no-score",
+    ]);
+    let m = stderr(&o);
+    assert!(
+        !o.status.success() && m.contains("GiB") && m.contains("--memory-budget-gib 16"),
+        "{m}"
+    );
+    let o = parallax(&[
+        "--quiet",
+        "bench",
+        "upsample",
+        "--width",
+        "4000",
+        "--height",
+        "4000",
+        "--layers",
+        "1,8",
+        "--memory-budget-gib",
+        "1",
+    ]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("8 layer(s)"),
+        "{}",
+        stderr(&o)
+    );
 }

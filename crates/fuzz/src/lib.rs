@@ -198,23 +198,26 @@ pub fn run(opts: &FuzzOptions) -> std::io::Result<FuzzReport> {
                 report.max_peak_bytes >> 20
             );
         }
-        if r.is_err() {
-            let msg = last_panic.lock().map(|m| m.clone()).unwrap_or_default();
-            let f = save(&opts.crash_dir, "panic", *t, &data, &msg);
-            report.findings.push(Finding {
-                kind: "panic",
-                target: *t,
-                message: msg,
-                file: f,
-            });
+        let finding = if r.is_err() {
+            Some((
+                "panic",
+                last_panic.lock().map(|m| m.clone()).unwrap_or_default(),
+            ))
         } else if peak > opts.budget_bytes {
-            let msg = format!("peak heap {peak} bytes > budget {}", opts.budget_bytes);
-            let f = save(&opts.crash_dir, "budget", *t, &data, &msg);
+            Some((
+                "budget",
+                format!("peak heap {peak} bytes > budget {}", opts.budget_bytes),
+            ))
+        } else {
+            None
+        };
+        if let Some((kind, message)) = finding {
+            let file = save(&opts.crash_dir, kind, *t, &data, &message);
             report.findings.push(Finding {
-                kind: "budget",
+                kind,
                 target: *t,
-                message: msg,
-                file: f,
+                message,
+                file,
             });
         }
     }

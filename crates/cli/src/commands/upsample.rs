@@ -54,6 +54,7 @@ pub struct UpsampleArgs {
 
 pub fn run(a: &UpsampleArgs, quiet: bool) -> Result<()> {
     let opts = a.synth.upsample_options()?;
+    a.size.check_memory(a.choice.capture_layers())?;
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let scene = a.view.load_scene()?;
     let bvh = Bvh::try_build(&scene.mesh)?;
