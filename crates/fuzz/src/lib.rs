@@ -185,6 +185,13 @@ pub fn run(opts: &FuzzOptions) -> std::io::Result<FuzzReport> {
         let base = alloc::reset_peak();
         started.store(t0.elapsed().as_millis() as u64, Ordering::Relaxed);
         let r = std::panic::catch_unwind(AssertUnwindSafe(|| t.run(&data, &file)));
+        if let Ok(Err(e)) = r {
+            done.store(1, Ordering::Relaxed);
+            return Err(std::io::Error::other(format!(
+                "writing {}: {e}",
+                file.display()
+            )));
+        }
         started.store(u64::MAX, Ordering::Relaxed);
         let peak = alloc::peak().saturating_sub(base);
         report.max_peak_bytes = report.max_peak_bytes.max(peak);

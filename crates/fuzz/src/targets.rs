@@ -48,11 +48,10 @@ impl Target {
             .find(|t| t.ext().eq_ignore_ascii_case(ext))
     }
 
-    /// Runs one input, written to `file` first.
-    pub fn run(self, data: &[u8], file: &Path) {
-        if std::fs::write(file, data).is_err() {
-            return;
-        }
+    /// Runs one input, written to `file` first (an error only when it cannot be written:
+    /// a case that was not written tested nothing).
+    pub fn run(self, data: &[u8], file: &Path) -> std::io::Result<()> {
+        std::fs::write(file, data)?;
         match self {
             Target::Gltf | Target::Glb | Target::Obj | Target::Ply => {
                 let _ = parallax_scene::Scene::load(&file.to_string_lossy());
@@ -77,6 +76,7 @@ impl Target {
                 }
             }
         }
+        Ok(())
     }
 }
 

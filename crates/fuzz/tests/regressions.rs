@@ -30,7 +30,8 @@ fn saved_findings_do_not_panic_or_blow_the_budget() {
         };
         let data = std::fs::read(&p).unwrap();
         let base = alloc::reset_peak();
-        t.run(&data, &work.join(format!("case.{}", t.ext())));
+        t.run(&data, &work.join(format!("case.{}", t.ext())))
+            .unwrap();
         let peak = alloc::peak() - base;
         assert!(peak <= budget, "{}: peak heap {peak} bytes", p.display());
         n += 1;
