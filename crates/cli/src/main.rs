@@ -79,6 +79,18 @@ fn main() -> std::process::ExitCode {
     }
 }
 
+/// The command line as `parallax run` sees it: the clap definition and a parser of whole
+/// argument lists into jobs that [`dispatch`] them.
+const SHELL: commands::run::Shell = commands::run::Shell {
+    command: <Cli as clap::CommandFactory>::command,
+    parse: parse_job,
+};
+
+fn parse_job(argv: &[String]) -> Result<commands::run::Job, clap::Error> {
+    let cli = Cli::try_parse_from(argv)?;
+    Ok(Box::new(move |quiet| dispatch(cli.command, quiet)))
+}
+
 /// Runs one subcommand (also how `parallax run` runs the benches of an experiment).
 fn dispatch(command: Command, quiet: bool) -> anyhow::Result<()> {
     match command {
@@ -95,7 +107,7 @@ fn dispatch(command: Command, quiet: bool) -> anyhow::Result<()> {
         Command::Dof(a) => commands::dof::run(&a, quiet),
         Command::Lightfield(a) => commands::lightfield::run(&a, quiet),
         Command::Bench(b) => commands::bench::run(&b, quiet),
-        Command::Run(a) => commands::run::run(&a, quiet),
+        Command::Run(a) => commands::run::run(&a, quiet, &SHELL),
         Command::Report(a) => commands::report::run(&a, quiet),
         Command::Merge(a) => commands::merge::run(&a, quiet),
     }

@@ -24,7 +24,7 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 use toml::{Spanned, Value};
 
-use crate::ExperimentError;
+use crate::error::ExperimentError;
 
 /// Default [`Experiment::max_points`].
 pub const DEFAULT_MAX_POINTS: u64 = 10_000;

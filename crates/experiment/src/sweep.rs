@@ -10,7 +10,7 @@
 use serde::Serialize;
 use toml::Value;
 
-use crate::ExperimentError;
+use crate::error::ExperimentError;
 use crate::schema::{Entry, Experiment};
 
 /// One point of the sweep: its index and the value of every axis.

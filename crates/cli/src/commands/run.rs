@@ -1,6 +1,7 @@
 //! `parallax run EXPERIMENT.toml`: runs an experiment file (`parallax_experiment::schema`):
 //! every sweep point becomes a `parallax bench <name>` command line, parsed by the same clap
-//! definitions and run by the same code as when typed by hand (`crate::dispatch`), its
+//! definitions and run by the same code as when typed by hand (`main.rs`'s `dispatch`, handed in
+//! as a [`Shell`] so that this file does not import `main.rs`), its
 //! `--json` rows collected into `OUT/results.json`; with `[images]` the point's image
 //! subcommand (e.g. `parallax warp`) writes into `OUT/points/pNNNN/`. Then the HTML report
 //! (`OUT/index.html`).
@@ -14,7 +15,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use clap::{Args, CommandFactory, Parser};
+use clap::Args;
 use parallax_experiment::results::{
     self, MANIFEST_FILE, PointResult, RESULTS_FILE, RunResults, ShardManifest,
 };
@@ -47,10 +48,21 @@ pub struct RunArgs {
     pub no_report: bool,
 }
 
+/// A parsed command line, ready to run (`quiet` flag in).
+pub type Job = Box<dyn FnOnce(bool) -> Result<()>>;
+
+/// The binary's command-line interface as `parallax run` sees it (given by `main.rs`).
+pub struct Shell {
+    /// The clap definition of `parallax` (`Cli::command()`).
+    pub command: fn() -> clap::Command,
+    /// Parses a whole argument list (`parallax ...`) into a job that runs it.
+    pub parse: fn(&[String]) -> std::result::Result<Job, clap::Error>,
+}
+
 /// A command line checked against the clap definitions of `parallax`.
 pub struct CheckedLine {
     pub args: Vec<String>,
-    pub command: crate::Command,
+    pub job: Job,
 }
 
 /// Subcommands an experiment may not run as its image command.
@@ -90,8 +102,8 @@ fn expected(arg: &clap::Arg) -> String {
 }
 
 /// The clap command of `parallax <path...>` (e.g. `["bench", "warp"]`).
-fn subcommand(path: &[&str]) -> Option<clap::Command> {
-    let mut c = crate::Cli::command();
+fn subcommand(sh: &Shell, path: &[&str]) -> Option<clap::Command> {
+    let mut c = (sh.command)();
     for p in path {
         c = c.find_subcommand(p)?.clone();
     }
@@ -106,13 +118,14 @@ fn long_flag<'a>(cmd: &'a clap::Command, key: &str) -> Option<&'a clap::Arg> {
 
 /// Checks the keys of `entries` against `path`'s flags, then parses the line.
 fn check_line(
+    sh: &Shell,
     exp: &Experiment,
     path: &[&str],
     entries: &[&Entry],
     extra: &[String],
 ) -> Result<CheckedLine> {
     let name = format!("parallax {}", path.join(" "));
-    let cmd = subcommand(path).with_context(|| format!("no subcommand `{name}`"))?;
+    let cmd = subcommand(sh, path).with_context(|| format!("no subcommand `{name}`"))?;
     let mut args: Vec<String> = path.iter().map(|s| s.to_string()).collect();
     for e in entries {
         if RESERVED_KEYS.contains(&e.key.as_str()) {
@@ -169,12 +182,11 @@ fn check_line(
         args.extend(flag_args(e));
     }
     args.extend(extra.iter().cloned());
-    let argv = std::iter::once("parallax".to_string()).chain(args.iter().cloned());
-    match crate::Cli::try_parse_from(argv) {
-        Ok(cli) => Ok(CheckedLine {
-            args,
-            command: cli.command,
-        }),
+    let argv: Vec<String> = std::iter::once("parallax".to_string())
+        .chain(args.iter().cloned())
+        .collect();
+    match (sh.parse)(&argv) {
+        Ok(job) => Ok(CheckedLine { args, job }),
         Err(err) => {
             let invalid = err
                 .get(clap::error::ContextKind::InvalidArg)
@@ -219,8 +231,8 @@ struct PointPlan {
 }
 
 /// Builds and checks every point's command lines (before any work).
-fn plan(exp: &Experiment, out: &Path) -> Result<Vec<PointPlan>> {
-    let Some(bench_cmd) = subcommand(&["bench"]) else {
+fn plan(sh: &Shell, exp: &Experiment, out: &Path) -> Result<Vec<PointPlan>> {
+    let Some(bench_cmd) = subcommand(sh, &["bench"]) else {
         bail!("no bench subcommand");
     };
     let names: Vec<String> = bench_cmd
@@ -240,10 +252,10 @@ fn plan(exp: &Experiment, out: &Path) -> Result<Vec<PointPlan>> {
         ));
     }
     if let Some(img) = &exp.images {
-        let ok = subcommand(&[img.command.as_str()]).is_some()
+        let ok = subcommand(sh, &[img.command.as_str()]).is_some()
             && !NOT_IMAGE_COMMANDS.contains(&img.command.as_str());
         if !ok {
-            let all: Vec<String> = crate::Cli::command()
+            let all: Vec<String> = (sh.command)()
                 .get_subcommands()
                 .map(|c| c.get_name().to_string())
                 .filter(|n| !NOT_IMAGE_COMMANDS.contains(&n.as_str()) && n != "help" && n != "info")
@@ -265,6 +277,7 @@ fn plan(exp: &Experiment, out: &Path) -> Result<Vec<PointPlan>> {
         let json = dir.join("rows.json.tmp");
         let entries: Vec<&Entry> = exp.entries_of(&point).collect();
         let bench = check_line(
+            sh,
             exp,
             &["bench", exp.bench.as_str()],
             &entries,
@@ -273,7 +286,7 @@ fn plan(exp: &Experiment, out: &Path) -> Result<Vec<PointPlan>> {
         let images = match &exp.images {
             None => None,
             Some(img) => {
-                let cmd = subcommand(&[img.command.as_str()]).expect("checked above");
+                let cmd = subcommand(sh, &[img.command.as_str()]).expect("checked above");
                 let mut list: Vec<&Entry> = entries
                     .iter()
                     .copied()
@@ -287,6 +300,7 @@ fn plan(exp: &Experiment, out: &Path) -> Result<Vec<PointPlan>> {
                     dir.clone()
                 };
                 Some(check_line(
+                    sh,
                     exp,
                     &[img.command.as_str()],
                     &list,
@@ -332,7 +346,7 @@ fn run_point(p: PointPlan, out: &Path, mask: bool, quiet: bool) -> Result<PointR
     let dir = point_dir(out, p.point.index);
     std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
     let json = dir.join("rows.json.tmp");
-    crate::dispatch(p.bench.command, quiet).with_context(|| {
+    (p.bench.job)(quiet).with_context(|| {
         format!(
             "point {}: parallax {}",
             p.point.index,
@@ -351,7 +365,7 @@ fn run_point(p: PointPlan, out: &Path, mask: bool, quiet: bool) -> Result<PointR
     let mut image_args = Vec::new();
     if let Some(img) = p.images {
         image_args = img.args.clone();
-        crate::dispatch(img.command, true)
+        (img.job)(true)
             .with_context(|| format!("point {}: parallax {}", p.point.index, img.args.join(" ")))?;
     }
     let mut images: Vec<String> = results::files_under(&dir)?
@@ -386,10 +400,10 @@ fn run_point(p: PointPlan, out: &Path, mask: bool, quiet: bool) -> Result<PointR
     })
 }
 
-pub fn run(a: &RunArgs, quiet: bool) -> Result<()> {
+pub fn run(a: &RunArgs, quiet: bool, sh: &Shell) -> Result<()> {
     let exp = Experiment::from_file(&a.experiment)?;
     let out = a.out.clone().unwrap_or_else(|| exp.out.clone());
-    let plans = plan(&exp, &out)?;
+    let plans = plan(sh, &exp, &out)?;
     let total = plans.len();
     let shard = Shard::from_flags(a.shard.as_deref(), a.shard_count)?;
     let selected: Vec<usize> = match shard {

@@ -12,7 +12,7 @@ use std::path::Path;
 use plotters::style::RGBColor;
 use plotters::style::colors::colormaps::{ColorMap, ViridisRGB};
 
-use crate::ExperimentError;
+use crate::error::ExperimentError;
 
 /// A heatmap and the top of its scale.
 pub struct Heatmap {

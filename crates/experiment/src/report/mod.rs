@@ -29,7 +29,7 @@ use std::path::{Path, PathBuf};
 use base64::Engine;
 use serde_json::Value;
 
-use crate::ExperimentError;
+use crate::error::ExperimentError;
 use crate::results::{RESULTS_FILE, RunResults, read_json};
 use html::{Cell, esc};
 use plot::{Series, plot_svg};

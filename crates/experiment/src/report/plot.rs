@@ -6,7 +6,7 @@
 
 use plotters::prelude::*;
 
-use crate::ExperimentError;
+use crate::error::ExperimentError;
 
 /// One named series of (x, y) points.
 pub struct Series {
