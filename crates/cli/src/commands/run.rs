@@ -27,7 +27,7 @@ use parallax_experiment::{Entry, Experiment, Shard};
 pub struct RunArgs {
     /// Experiment file (TOML; examples in experiments/).
     pub experiment: PathBuf,
-    /// Output folder (default: the file's `out`, else out/experiments/<file stem>).
+    /// Output folder (default: the file's `out`, else `out/experiments/<file stem>`).
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Run part I of N of the sweep points (0-based, points i with i % N == I). Without it,
