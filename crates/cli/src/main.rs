@@ -48,9 +48,19 @@ enum Command {
     Dof(commands::dof::DofArgs),
     /// Light fields through layers: a Looking Glass quilt or near-eye elemental images (Widmer et al. 2015).
     Lightfield(commands::lightfield::LightFieldArgs),
+    /// Path-traced stereo with stereo and temporal sample reprojection (Mäkitalo et al. 2019).
+    Reproject(commands::reproject::ReprojectArgs),
+    /// Reflections traced through a cube map's per-face quad-trees (Widmer et al. 2015, §5.4).
+    Reflect(commands::reflect::ReflectCmdArgs),
     /// Benchmarks that reproduce the papers' and issues' measurements.
     #[command(subcommand)]
     Bench(commands::bench::BenchCommand),
+    /// Run a TOML experiment file (a bench over a parameter sweep): rows JSON + images + report.
+    Run(commands::run::RunArgs),
+    /// Write the HTML report of results folders of `parallax run`.
+    Report(commands::report::ReportArgs),
+    /// Merge the folders of a sharded job into the output of one unsharded run.
+    Merge(commands::merge::MergeArgs),
 }
 
 fn main() -> std::process::ExitCode {
@@ -64,26 +74,47 @@ fn main() -> std::process::ExitCode {
             return std::process::ExitCode::FAILURE;
         }
     }
-    let result = match cli.command {
-        Command::Render(a) => commands::render::run(&a, cli.quiet),
-        Command::Scenes => commands::info::scenes(),
-        Command::Info(a) => commands::info::run(&a),
-        Command::Capture(a) => commands::capture::run(&a, cli.quiet),
-        Command::Demo(a) => commands::demo::run(&a, cli.quiet),
-        Command::Vr(a) => commands::vr::run(&a, cli.quiet),
-        Command::Warp(a) => commands::warp::run(&a, cli.quiet),
-        Command::Upsample(a) => commands::upsample::run(&a, cli.quiet),
-        Command::Path(a) => commands::path::run(&a, cli.quiet),
-        Command::Secondary(a) => commands::secondary::run(&a, cli.quiet),
-        Command::Dof(a) => commands::dof::run(&a, cli.quiet),
-        Command::Lightfield(a) => commands::lightfield::run(&a, cli.quiet),
-        Command::Bench(b) => commands::bench::run(&b, cli.quiet),
-    };
-    match result {
+    match dispatch(cli.command, cli.quiet) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
             std::process::ExitCode::FAILURE
         }
+    }
+}
+
+/// The command line as `parallax run` sees it: the clap definition and a parser of whole
+/// argument lists into jobs that [`dispatch`] them.
+const SHELL: commands::run::Shell = commands::run::Shell {
+    command: <Cli as clap::CommandFactory>::command,
+    parse: parse_job,
+};
+
+fn parse_job(argv: &[String]) -> Result<commands::run::Job, clap::Error> {
+    let cli = Cli::try_parse_from(argv)?;
+    Ok(Box::new(move |quiet| dispatch(cli.command, quiet)))
+}
+
+/// Runs one subcommand (also how `parallax run` runs the benches of an experiment).
+fn dispatch(command: Command, quiet: bool) -> anyhow::Result<()> {
+    match command {
+        Command::Render(a) => commands::render::run(&a, quiet),
+        Command::Scenes => commands::info::scenes(),
+        Command::Info(a) => commands::info::run(&a),
+        Command::Capture(a) => commands::capture::run(&a, quiet),
+        Command::Demo(a) => commands::demo::run(&a, quiet),
+        Command::Vr(a) => commands::vr::run(&a, quiet),
+        Command::Warp(a) => commands::warp::run(&a, quiet),
+        Command::Upsample(a) => commands::upsample::run(&a, quiet),
+        Command::Path(a) => commands::path::run(&a, quiet),
+        Command::Secondary(a) => commands::secondary::run(&a, quiet),
+        Command::Dof(a) => commands::dof::run(&a, quiet),
+        Command::Reflect(a) => commands::reflect::run(&a, quiet),
+        Command::Lightfield(a) => commands::lightfield::run(&a, quiet),
+        Command::Reproject(a) => commands::reproject::run_reproject(&a, quiet),
+        Command::Bench(b) => commands::bench::run(&b, quiet),
+        Command::Run(a) => commands::run::run(&a, quiet, &SHELL),
+        Command::Report(a) => commands::report::run(&a, quiet),
+        Command::Merge(a) => commands::merge::run(&a, quiet),
     }
 }

@@ -15,6 +15,13 @@
 //! 5. **Russian roulette** from `depth >= rr_depth` (after the increment, as Mitsuba): survive
 //!    with `q = min(max(throughput) · eta², 0.95)`, divide the throughput by `q`.
 //!
+//! With [`Integrator::final_nee`], a smooth vertex whose BSDF sample could only add emission
+//! (`depth + 2 >= max_depth`) takes its light connection with full weight (no MIS: no BSDF
+//! sample competes) and ends the path there. The expectation is unchanged (every light path of
+//! at most `max_depth` segments is still counted once); the last closest-hit ray is saved.
+//! `max_depth = 3` with it is Mäkitalo et al. 2019's sample (§4.1: one primary ray, one
+//! secondary ray, light connections at both vertices).
+//!
 //! **Invariants:** every random number a path uses comes from its own stream
 //! ([`PathState::rng`], seeded by pixel, sample and channel), drawn in the same order whatever
 //! the tracer and the thread, so equal hits give equal images; a path's radiance only grows by
@@ -110,6 +117,8 @@ pub struct Integrator<'a> {
     pub materials: MaterialMode,
     pub max_depth: u32,
     pub rr_depth: u32,
+    /// See the module docs; off by default.
+    pub final_nee: bool,
 }
 
 /// A shadow ray from `s` towards `wi`, ending short of distance `dist` (infinite: unbounded).
@@ -138,6 +147,7 @@ impl<'a> Integrator<'a> {
             materials,
             max_depth,
             rr_depth,
+            final_nee: false,
         }
     }
 
@@ -195,6 +205,8 @@ impl<'a> Integrator<'a> {
         }
         let frame = Frame::from_normal(n);
         let wo_l = frame.to_local(wo);
+        // The last vertex of a `final_nee` path: light connections only, with full weight.
+        let last = self.final_nee && path.depth + 2 >= self.max_depth && bsdf.has_smooth_lobe();
         // 3. Next-event estimation.
         if bsdf.has_smooth_lobe() {
             if self.lights.has_delta() {
@@ -218,7 +230,11 @@ impl<'a> Integrator<'a> {
                     let wi_l = frame.to_local(l.wi);
                     let f = bsdf.eval(wo_l, wi_l);
                     if f.max_element() > 0.0 {
-                        let w = power_heuristic(l.pdf, bsdf.pdf(wo_l, wi_l));
+                        let w = if last {
+                            1.0
+                        } else {
+                            power_heuristic(l.pdf, bsdf.pdf(wo_l, wi_l))
+                        };
                         let c = path.throughput * f * l.value * w;
                         if c.max_element() > 0.0 && c.is_finite() {
                             shadows.push(ShadowRay {
@@ -230,6 +246,9 @@ impl<'a> Integrator<'a> {
                     }
                 }
             }
+        }
+        if last {
+            return false;
         }
         // 4. BSDF sampling.
         let u_lobe = path.rng.next_f32();

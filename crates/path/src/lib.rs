@@ -30,6 +30,7 @@ pub mod mis;
 pub mod options;
 pub mod record;
 pub mod render;
+pub mod reproject;
 pub mod secondary;
 pub mod stats;
 pub mod tracers;

@@ -10,6 +10,7 @@
 //! | `materials` | [`MaterialMode`] | `AsIs` | the scene's materials, or every opaque surface Lambertian |
 //! | `env_nee` | f32 | 0 | probability that a vertex connects to the constant environment ([`crate::light_sampler`]) |
 //! | `tile` | u32 | 32 | edge of the square pixel tiles one wavefront covers |
+//! | `final_nee` | bool | false | the last smooth vertex a path can reach connects to the lights with full weight and ends, instead of sampling a last segment for emission only (same expectation; one closest-hit ray fewer per path: `max_depth` 3 is Mäkitalo et al.'s 1-bounce sample) |
 
 use parallax_render::bsdf::MaterialMode;
 
@@ -33,6 +34,7 @@ pub struct PathOptions {
     pub materials: MaterialMode,
     pub env_nee: f32,
     pub tile: u32,
+    pub final_nee: bool,
 }
 
 impl Default for PathOptions {
@@ -46,6 +48,7 @@ impl Default for PathOptions {
             materials: MaterialMode::AsIs,
             env_nee: crate::light_sampler::DEFAULT_ENV_NEE,
             tile: 32,
+            final_nee: false,
         }
     }
 }

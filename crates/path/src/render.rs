@@ -58,13 +58,14 @@ impl<'a> PathTracer<'a> {
         opts: PathOptions,
     ) -> Result<Self> {
         opts.validate()?;
-        let integrator = Integrator::new(
+        let mut integrator = Integrator::new(
             scene,
             opts.materials,
             opts.max_depth,
             opts.rr_depth,
             opts.env_nee,
         );
+        integrator.final_nee = opts.final_nee;
         Ok(Self {
             scene,
             camera,

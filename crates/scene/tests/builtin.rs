@@ -120,7 +120,7 @@ fn camera_ray(c: &CameraDesc, aspect: f32, sx: f32, sy: f32) -> Ray {
 
 #[test]
 fn every_name_loads_validates_and_is_complete() {
-    assert_eq!(builtin::NAMES, &["atrium", "cornell", "foliage"]);
+    assert_eq!(builtin::NAMES, &["atrium", "cornell", "foliage", "mirrors"]);
     for &name in builtin::NAMES {
         let s = builtin::by_name(name).unwrap();
         let loaded = Scene::load(name).unwrap();
@@ -178,6 +178,11 @@ fn triangle_counts_and_bounds_are_as_designed() {
                 50_000..150_000,
                 Vec3::new(199.0, 5.0, 199.0),
                 Vec3::new(201.0, 9.0, 201.0),
+            ),
+            "mirrors" => (
+                5_000..20_000,
+                Vec3::new(8.1, 4.1, 10.6),
+                Vec3::new(8.3, 4.3, 10.8),
             ),
             other => panic!("unexpected scene {other}"),
         };

@@ -16,13 +16,16 @@
 //!   (Uludag 2014);
 //! - [`dirt`]: DIRT's tracer over per-view primitive lists (Vardis et al. 2017, §4.2), an exact
 //!   world-space tracer behind [`parallax_core::WorldTracer`].
-//!
 //! - [`ldc`]: the two-level layered depth cube tracer (Bürger et al. 2007, §1.3-1.4) behind the
 //!   world-space interface [`parallax_core::WorldTracer`].
+//! - [`cubemap`]: six faces of captured layers around a point, one screen-space structure per
+//!   face, as a world-space tracer ([`parallax_core::WorldTracer`]) with face transitions
+//!   (Widmer et al. 2015, §5.4).
 //!
 //! **Invariant:** nothing here reads the scene; tracers see only what a capture holds.
 
 pub mod brute;
+pub mod cubemap;
 pub mod dda;
 mod depth_layers;
 pub mod dirt;
@@ -35,6 +38,7 @@ pub mod space;
 pub mod tracer;
 
 pub use brute::{BruteForcePlanes, BruteResult};
+pub use cubemap::{CubeMapTracer, CubeTrace};
 pub use dda::{DdaOptions, DdaTracer};
 pub use dirt::{DirtCounters, DirtTracer};
 pub use hiz::{HiZOptions, HiZTracer};

@@ -159,6 +159,36 @@ pub fn capture_reference_with(
     shading: Shading,
     seed: u64,
 ) -> Result<Reference, SynthError> {
+    let (gbuffers, colors, capture_ms, shade_ms) =
+        shaded_layers(scene, bvh, camera, layers, hidden, shading, seed)?;
+    let cube = UnitCube::fit_depths(camera, gbuffers.iter().map(|g| &g.depth[..]))?;
+    Ok(Reference {
+        camera: camera.clone(),
+        layers: gbuffers,
+        colors,
+        cube,
+        cube_near: CubeNear::Fitted,
+        background: scene.environment,
+        times: ReferenceTimes {
+            capture_ms,
+            shade_ms,
+            build_ms: 0.0,
+        },
+    })
+}
+
+/// The layers of [`capture_reference_with`] and their colours, with the milliseconds of
+/// capturing and of shading; a view that sees nothing gives empty layers (environment
+/// colour), not an error.
+pub(crate) fn shaded_layers(
+    scene: &Scene,
+    bvh: &Bvh,
+    camera: &Pinhole,
+    layers: usize,
+    hidden: HiddenLayers,
+    shading: Shading,
+    seed: u64,
+) -> Result<(Vec<GBuffer>, Vec<Image<Rgb>>, f64, f64), SynthError> {
     let t = Instant::now();
     let view = View::from_pinhole(camera)?;
     let capture = capture_layers(scene, &view, &RasterOptions::layers(layers))?;
@@ -204,20 +234,7 @@ pub fn capture_reference_with(
         .map(|(k, g)| shade_layer(&shader, camera, g, k as u32, shading, seed))
         .collect();
     let shade_ms = t.elapsed().as_secs_f64() * 1e3;
-    let cube = UnitCube::fit_depths(camera, gbuffers.iter().map(|g| &g.depth[..]))?;
-    Ok(Reference {
-        camera: camera.clone(),
-        layers: gbuffers,
-        colors,
-        cube,
-        cube_near: CubeNear::Fitted,
-        background: scene.environment,
-        times: ReferenceTimes {
-            capture_ms,
-            shade_ms,
-            build_ms: 0.0,
-        },
-    })
+    Ok((gbuffers, colors, capture_ms, shade_ms))
 }
 
 /// Shades every covered sample of layer `k` (see the module docs).

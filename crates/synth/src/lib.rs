@@ -21,6 +21,7 @@
 //! - [`input`]: a colour + depth image pair as a single-layer reference;
 //! - [`dof`]: thin-lens depth of field through the layers (§5.2, Table 4, Figs. 8-9);
 //! - [`lightfield`]: Looking Glass quilts and near-eye elemental images (§5.3);
+//! - [`reflect`]: specular and glossy reflections through a cube map's quad-trees (§5.4);
 //! - [`margin`]: references widened for rays that start off the reference eye;
 //! - [`bench`](mod@bench): `parallax bench warp | upsample | compression` (Tables 2-3, Fig. 14/15);
 //! - scoring: [`score()`] and [`Shading`] come from `parallax_render::score` (PSNR / SSIM against
@@ -41,6 +42,7 @@ pub mod lightfield;
 pub mod margin;
 pub mod mesh_warp;
 pub mod method;
+pub mod reflect;
 pub mod stereo;
 pub mod upsample;
 pub mod warp;

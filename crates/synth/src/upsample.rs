@@ -144,10 +144,36 @@ pub fn upsample_interleaved(
     methods: &[(Method, MethodOptions)],
     on_frame: &mut dyn FnMut(usize, &UpsampleFrame) -> Result<(), SynthError>,
 ) -> Vec<Result<Vec<FrameTimes>, SynthError>> {
-    if opts.frames == 0 || opts.period == 0 || !(opts.fps > 0.0) {
+    let all = 0..opts.frames;
+    upsample_range(
+        scene, bvh, path, width, height, opts, methods, all, on_frame,
+    )
+}
+
+/// [`upsample_interleaved`] over the output frames `frames` of the `opts.frames` of the
+/// sequence only (a shard of a long sequence): `frames.start` must be a multiple of
+/// `opts.period` (a reference frame), so every frame sees the reference it has in the whole
+/// sequence and its image is bit-identical to the whole run's.
+#[allow(clippy::too_many_arguments)]
+pub fn upsample_range(
+    scene: &Scene,
+    bvh: &Bvh,
+    path: &CameraPath,
+    width: u32,
+    height: u32,
+    opts: &UpsampleOptions,
+    methods: &[(Method, MethodOptions)],
+    frames: std::ops::Range<u32>,
+    on_frame: &mut dyn FnMut(usize, &UpsampleFrame) -> Result<(), SynthError>,
+) -> Vec<Result<Vec<FrameTimes>, SynthError>> {
+    let bad_range = opts.period == 0
+        || frames.start % opts.period != 0
+        || frames.end > opts.frames
+        || frames.start > frames.end;
+    if opts.frames == 0 || bad_range || !(opts.fps > 0.0) {
         let msg = format!(
-            "need frames >= 1, period >= 1, fps > 0 (got {}, {}, {})",
-            opts.frames, opts.period, opts.fps
+            "need frames >= 1, period >= 1, fps > 0 and a frame range inside the sequence starting at a reference (got {}, {}, {}, {:?})",
+            opts.frames, opts.period, opts.fps, frames
         );
         return methods
             .iter()
@@ -157,12 +183,12 @@ pub fn upsample_interleaved(
     let t0 = path.keys[0].time;
     let mut out: Vec<Result<Vec<FrameTimes>, SynthError>> = methods
         .iter()
-        .map(|_| Ok(Vec::with_capacity(opts.frames as usize)))
+        .map(|_| Ok(Vec::with_capacity(frames.len())))
         .collect();
     // Per method: the index of its fitted reference and its structure.
     let mut current: Vec<Option<(usize, Synthesizer)>> = methods.iter().map(|_| None).collect();
     let mut refs: Vec<Reference> = Vec::new();
-    for i in 0..opts.frames {
+    for i in frames {
         if out.iter().all(Result::is_err) {
             break;
         }

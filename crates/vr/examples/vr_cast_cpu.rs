@@ -6,7 +6,9 @@
 //! 2 eye_w x h; `scene` a built-in name or a model path, e.g.
 //! `../shared/scenes/sponza_dabrovic/sponza_dabrovic.glb` from the repository root; `edges` =
 //! the set-up kernel with [`SetupExactness::Edges`] (default), `full` = with
-//! [`SetupExactness::Full`], `watertight` = the watertight kernel).
+//! [`SetupExactness::Full`], `watertight` = the watertight kernel). Optional further arguments:
+//! `lanes` (8th, default 4: `CastOptions::lanes`) and a head pose `eye target fov_y` (9th-11th,
+//! e.g. `-9,3.5,0 8,5,0 60`; default the scene's camera).
 
 use parallax_bvh::Bvh;
 use parallax_core::cpu_time::{ms_between, thread_cpu_ns};
@@ -41,7 +43,19 @@ fn main() {
     pool.install(|| {
         let scene = Scene::load(&scene_name).expect("scene");
         let bvh = Bvh::build(&scene.mesh);
-        let desc = scene.camera(None).unwrap();
+        let v3 = |s: &str| {
+            let c: Vec<f32> = s.split(',').map(|x| x.parse().unwrap()).collect();
+            glam::Vec3::new(c[0], c[1], c[2])
+        };
+        let desc = match args.get(11) {
+            Some(fov) => parallax_scene::CameraDesc::new(
+                v3(&args[9]),
+                v3(&args[10]),
+                glam::Vec3::Y,
+                fov.parse().unwrap(),
+            ),
+            None => scene.camera(None).unwrap(),
+        };
         let cam = Camera::new(
             ModelKind::Stereo,
             &desc,
@@ -54,7 +68,7 @@ fn main() {
         let hier = Hierarchy::build(&set).unwrap();
         let opts = CastOptions {
             test,
-            lanes: 4,
+            lanes: arg(8, "4").parse().unwrap(),
             exactness,
         };
         let mut beam = VisibilityBuffer::new(&set);

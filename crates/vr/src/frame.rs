@@ -38,7 +38,8 @@ pub enum VrError {
 /// Which visibility method fills the buffer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Visibility {
-    /// Every subsample ray traced on its own through the BVH (the Table 6 baseline).
+    /// Every subsample ray traced on its own through the BVH (single rays; the ray tracers of
+    /// HVVR's Table 6 are in `bench/table6.rs`).
     PerRay,
     /// HVVR's block / tile beam caster (§5.3-5.5) with its default sample test (the per-tile
     /// triangle set-up, `cast/setup/mod.rs`).

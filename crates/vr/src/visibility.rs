@@ -45,7 +45,7 @@ impl VisibilityBuffer {
     }
 }
 
-/// The baseline of HVVR's Table 6: every subsample ray traced on its own through the BVH
+/// The per-ray baseline: every subsample ray traced on its own through the BVH
 /// (parallel over samples).
 pub fn trace_per_ray(bvh: &Bvh, set: &SampleSet, out: &mut VisibilityBuffer) {
     let spp = set.spp as usize;

@@ -178,8 +178,8 @@ struct Checked {
 }
 
 /// Checks the set-up kernel with `exactness` on `set` against the watertight kernel and
-/// per-ray traversal (every difference printed); the 4- and 8-lane kernels give the same
-/// buffer, no certain decision is contradicted (`setup_rescues`).
+/// per-ray traversal (every difference printed); the 4-, 8- and 16-lane kernels give the
+/// same buffer, no certain decision is contradicted (`setup_rescues`).
 ///
 /// - [`SetupExactness::Full`]: the same triangle on every subsample, the same `t` bit for bit.
 /// - [`SetupExactness::Edges`] (the default): >= 99.99% of subsamples agree (unless
@@ -209,7 +209,7 @@ fn check_setup(
         cast(bvh, set, &h, &mut dflt);
         assert_eq!(dflt, setup, "{label}: the default is Edges");
     }
-    for lanes in [4, 8] {
+    for lanes in [4, 8, 16] {
         let mut other = VisibilityBuffer::new(set);
         cast_opts(bvh, set, &h, &mut other, CastOptions { lanes, ..opts });
         assert_eq!(other, setup, "{label}: {lanes} lanes");
@@ -339,6 +339,17 @@ fn tile_setup_kernel_agrees_with_watertight_kernel_for_every_scheme() {
     }
 }
 
+/// One pixel per 16-lane packet: atrium stereo at 16 spp (the 16-lane kernel's MSAA case).
+#[test]
+fn tile_setup_kernel_agrees_at_16_spp() {
+    let scene = Scene::load("atrium").unwrap();
+    let bvh = Bvh::build(&scene.mesh);
+    let set = SampleSet::grid(camera(&scene, ModelKind::Stereo, 32, 32), 16);
+    for exactness in [SetupExactness::Edges, SetupExactness::Full] {
+        check_setup(&bvh, &set, "atrium stereo 64x32 spp 16", exactness, false);
+    }
+}
+
 /// The same at a larger image (atrium, 240 x 160, grid and stereo, 4 spp).
 #[test]
 fn tile_setup_kernel_agrees_at_a_larger_size() {
@@ -357,4 +368,26 @@ fn tile_setup_kernel_agrees_at_a_larger_size() {
             );
         }
     }
+}
+
+/// The beam caster's buffer does not depend on the thread count (tiles write only their own
+/// samples): 1 vs 2 threads, the default (16-lane set-up) kernel, stereo at 16 spp.
+#[test]
+fn beam_caster_is_bit_identical_on_1_and_2_threads() {
+    let scene = Scene::load("atrium").unwrap();
+    let bvh = Bvh::build(&scene.mesh);
+    let set = SampleSet::grid(camera(&scene, ModelKind::Stereo, 32, 32), 16);
+    let h = Hierarchy::build(&set).unwrap();
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let mut out = VisibilityBuffer::new(&set);
+        pool.install(|| cast(&bvh, &set, &h, &mut out));
+        out
+    };
+    let one = run(1);
+    assert!(one.prim.iter().any(|&p| p != parallax_core::NO_ID));
+    assert_eq!(one, run(2));
 }

@@ -28,6 +28,10 @@ pub enum BenchCommand {
     Ldc(super::secondary::LdcBenchArgs),
     /// Depth of field per N_pri/N_sec, layer count and method (Widmer et al. 2015, Table 4, Fig. 8).
     Dof(super::dof::DofBenchArgs),
+    /// Stereo and temporal sample reprojection (Mäkitalo et al. 2019, Tables 1-2): % discarded, effective spp.
+    Reproject(super::reproject::ReprojectBenchArgs),
+    /// Cube-map reflections per N_p/N_s/N_b and layer count, quad-tree vs DDA vs BVH (Widmer et al. 2015, Table 5).
+    Reflect(super::reflect::ReflectBenchArgs),
 }
 
 #[derive(Args, Debug)]
@@ -95,6 +99,8 @@ pub fn run(cmd: &BenchCommand, quiet: bool) -> Result<()> {
         BenchCommand::Dirt(a) => super::bench_dirt::run_bench(a, quiet),
         BenchCommand::Ldc(a) => super::secondary::bench(a, quiet),
         BenchCommand::Dof(a) => super::dof::bench(a, quiet),
+        BenchCommand::Reproject(a) => super::reproject::bench(a, quiet),
+        BenchCommand::Reflect(a) => super::reflect::bench(a, quiet),
         BenchCommand::Rays(a) => {
             let scene = a.view.load_scene()?;
             let camera = a.view.camera(&scene, a.width, a.height)?;

@@ -84,6 +84,8 @@ pub struct WarpBenchArgs {
 
 pub fn warp_bench(a: &WarpBenchArgs, quiet: bool) -> Result<()> {
     let opts = a.synth.method_options()?;
+    a.size
+        .check_memory(a.methods.layers.iter().copied().max().unwrap_or(1))?;
     a.view.check_ipd()?;
     let scene = a.view.load_scene()?;
     let bvh = Bvh::try_build(&scene.mesh)?;
@@ -256,6 +258,8 @@ pub struct UpsampleBenchArgs {
 
 pub fn upsample_bench(a: &UpsampleBenchArgs, quiet: bool) -> Result<()> {
     let opts = a.synth.upsample_options()?;
+    a.size
+        .check_memory(a.methods.layers.iter().copied().max().unwrap_or(1))?;
     let scene = a.view.load_scene()?;
     let bvh = Bvh::try_build(&scene.mesh)?;
     let path = if a.view.eye.is_some() || a.view.camera.is_some() {
@@ -362,6 +366,7 @@ pub struct CompressionArgs {
 
 pub fn compression_bench(a: &CompressionArgs, quiet: bool) -> Result<()> {
     let opts = a.synth.method_options()?;
+    a.size.check_memory(a.layers)?;
     let scene = a.view.load_scene()?;
     let bvh = Bvh::try_build(&scene.mesh)?;
     let setup = warp::StereoSetup {

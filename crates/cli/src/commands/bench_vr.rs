@@ -4,8 +4,9 @@
 use std::path::PathBuf;
 
 use anyhow::Result;
-use clap::Args;
+use clap::{Args, ValueEnum};
 use parallax_bvh::Bvh;
+use parallax_vr::bench::table6::{self, Table6Options};
 use parallax_vr::bench::{SCHEMES, VrBenchOptions, markdown, run, update_row};
 use parallax_vr::frame::Visibility;
 use parallax_vr::resolve::ShadingMode;
@@ -57,9 +58,21 @@ pub struct VrBenchArgs {
     /// Timed repetitions (the best is reported).
     #[arg(long, default_value_t = 1)]
     pub repeats: u32,
+    /// HVVR Table 6 (the beam caster against Embree's and our BVH's rays on the same
+    /// subsample rays, `parallax_vr::bench::table6`): `with` the scheme rows, `skip`, or `only`.
+    #[arg(long, value_enum, default_value_t = Table6::With)]
+    pub table6: Table6,
     /// Write the rows as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
+}
+
+/// Whether `bench vr` runs Table 6 (`--table6`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Table6 {
+    With,
+    Skip,
+    Only,
 }
 
 pub fn bench(a: &VrBenchArgs, quiet: bool) -> Result<()> {
@@ -80,7 +93,22 @@ pub fn bench(a: &VrBenchArgs, quiet: bool) -> Result<()> {
         repeats: a.repeats,
     };
     let update = update_row(&scene, a.repeats.max(3))?;
-    let rows = run(&scene, &bvh, &head, &opts)?;
+    let rows = if a.table6 == Table6::Only {
+        Vec::new()
+    } else {
+        run(&scene, &bvh, &head, &opts)?
+    };
+    let t6 = if a.table6 == Table6::Skip {
+        None
+    } else {
+        let o = Table6Options {
+            width: a.width,
+            height: a.height,
+            spp: a.msaa.clone(),
+            repeats: a.repeats,
+        };
+        Some(table6::run(&scene, &bvh, &head, &o)?)
+    };
     if !quiet {
         println!(
             "| scene | vertices | triangles | moving objects | moving vertices | build ms | animate ms | refit ms |"
@@ -97,8 +125,16 @@ pub fn bench(a: &VrBenchArgs, quiet: bool) -> Result<()> {
             update.animate_ms,
             update.refit_ms
         );
-        print!("{}", markdown(&rows));
+        if !rows.is_empty() {
+            print!("{}", markdown(&rows));
+        }
+        if let Some(t) = &t6 {
+            println!(
+                "\nTable 6: the beam caster against ray tracers on the same rays (`normal` scheme)\n"
+            );
+            print!("{}", table6::markdown(t));
+        }
     }
-    let json = serde_json::json!({ "update": update, "rows": rows });
+    let json = serde_json::json!({ "update": update, "rows": rows, "table6": t6 });
     output::write_json(a.json.as_deref(), &json)
 }

@@ -95,11 +95,14 @@ pub fn run(a: &DemoArgs, quiet: bool) -> Result<()> {
     }
     super::path::demo_view(&scene, &desc, w, h, &a.out, quiet)?;
     super::bench_dirt::demo_view(&scene, &desc, w, h, &a.out, quiet)?;
+    super::reflect::demo_reflect(&a.out, w / 2, h / 2, quiet)?;
     vr_frame(a, &scene, &bvh, &desc, quiet)?;
     stereo_pair(&scene, &bvh, &desc, w, h, &a.out, quiet)?;
     super::secondary::demo_secondary(&a.out, w / 2, h / 2, quiet)?;
+    super::reproject::demo_reproject(&a.scene, w / 6, h / 6, &a.out, quiet)?;
+    let page = parallax_experiment::report::write_gallery(&a.out, "parallax demo")?;
     if !quiet {
-        println!("images in {}", a.out.display());
+        println!("images in {}, page {}", a.out.display(), page.display());
     }
     Ok(())
 }

@@ -94,7 +94,7 @@ pub struct SecondaryArgs {
     pub width: u32,
     #[arg(long, default_value_t = 540)]
     pub height: u32,
-    /// Tracers, a comma list of `bvh`, `ldc` (the BVH always renders the reference).
+    /// Tracers, a comma list of `bvh`, `ldc`, `cubemap` (the BVH always renders the reference).
     #[arg(long, default_value = "bvh,ldc")]
     pub tracer: String,
     /// Secondary effects: a comma list of `reflect`, `refract`, `shadow` (or `all`).

@@ -62,6 +62,7 @@ pub fn write_view(dir: &Path, name: &str, v: &WarpedView) -> Result<Vec<PathBuf>
 pub fn run(a: &WarpArgs, quiet: bool) -> Result<()> {
     a.view.check_ipd()?;
     let opts = a.synth.method_options()?;
+    a.size.check_memory(a.choice.capture_layers())?;
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let pb = progress::bar(4, "warp", quiet);
     // Reference: from a scene, or from colour + depth.

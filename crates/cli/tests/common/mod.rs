@@ -23,3 +23,16 @@ pub fn out_dir(suite: &str, name: &str) -> PathBuf {
 pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
+
+/// Every file under `dir` (relative, sorted) with its bytes.
+#[allow(dead_code)]
+pub fn tree(dir: &std::path::Path) -> Vec<(PathBuf, Vec<u8>)> {
+    parallax_experiment::results::files_under(dir)
+        .unwrap()
+        .into_iter()
+        .map(|r| {
+            let b = std::fs::read(dir.join(&r)).unwrap();
+            (r, b)
+        })
+        .collect()
+}

@@ -109,8 +109,12 @@ pub fn write_exr(
         .map_err(|e| io_err(path, format!("writing EXR: {e}")))
 }
 
+/// Largest accepted ratio of decoded (2-byte) samples to file bytes in [`read_exr`].
+pub const MAX_EXR_RATIO: u64 = 2048;
+
 /// Reads the first valid layer of an EXR file. The header is checked before any pixel is
-/// decoded: size (at most [`super::MAX_IMAGE_PIXELS`]), channel count, no deep data.
+/// decoded: size (at most [`super::MAX_IMAGE_PIXELS`]), channel count, no deep data, and
+/// no more samples than the file can hold at [`MAX_EXR_RATIO`] : 1.
 pub fn read_exr(path: impl AsRef<Path>) -> Result<ExrImage> {
     let path = path.as_ref();
     let meta = ::exr::meta::MetaData::read_from_file(path, false)
@@ -136,6 +140,21 @@ pub fn read_exr(path: impl AsRef<Path>) -> Result<ExrImage> {
     let total = width as u64 * height as u64 * channel_count as u64;
     if total > super::MAX_IMAGE_PIXELS {
         return Err(format_err(path, "channels * pixels exceeds 2^28 samples"));
+    }
+    // A decompression-bomb guard (found by parallax-fuzz: a 493-byte file whose header asks
+    // for 2^28 samples made the decoder allocate 2 GiB before reading a pixel): EXR's
+    // codecs stay far below MAX_EXR_RATIO : 1 (zlib's own limit is 1032 : 1), so a header
+    // that needs more samples than the file can hold at that ratio is rejected first.
+    let file_len = std::fs::metadata(path)
+        .map_err(|e| io_err(path, format!("reading EXR: {e}")))?
+        .len();
+    if total * 2 > file_len.saturating_mul(MAX_EXR_RATIO) {
+        return Err(format_err(
+            path,
+            format!(
+                "header claims {w}x{h} x {channel_count} channels but the file has {file_len} bytes (over {MAX_EXR_RATIO}:1): truncated or malformed"
+            ),
+        ));
     }
 
     let image = ::exr::prelude::read()

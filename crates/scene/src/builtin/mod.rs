@@ -5,6 +5,7 @@
 //! | `atrium`  | depth discontinuities and disocclusions (columns, arches, banners)   | ~49k      |
 //! | `cornell` | global illumination, a mirror and a glass sphere (reflection papers) | ~2.3k     |
 //! | `foliage` | depth complexity (leaves, grass, fence slats: 8-20+ layers per ray)  | ~132k     |
+//! | `mirrors` | reflections: a closed room with convex, concave and glossy mirrors   | ~9k       |
 //!
 //! `room:<file>` (and `room-mirror:<file>`, `room-glass:<file>`) stages a model file in a small
 //! room with a mirror, a glass sphere and shadow-casting lights ([`room`]).
@@ -18,13 +19,14 @@ mod atrium;
 mod cameras;
 mod cornell;
 mod foliage;
+mod mirrors;
 pub mod room;
 pub mod shapes;
 
 use crate::Scene;
 
 /// Names of the built-in scenes.
-pub const NAMES: &[&str] = &["atrium", "cornell", "foliage"];
+pub const NAMES: &[&str] = &["atrium", "cornell", "foliage", "mirrors"];
 
 /// A built-in scene by name.
 pub fn by_name(name: &str) -> Option<Scene> {
@@ -32,6 +34,7 @@ pub fn by_name(name: &str) -> Option<Scene> {
         "atrium" => Some(atrium::build()),
         "cornell" => Some(cornell::build()),
         "foliage" => Some(foliage::build()),
+        "mirrors" => Some(mirrors::build()),
         _ => None,
     }
 }
@@ -46,6 +49,7 @@ pub fn describe(name: &str) -> &'static str {
         "foliage" => {
             "trees, grass and a slatted fence: many thin occluders (depth complexity 8-20+)"
         }
+        "mirrors" => "a closed room with a convex mirror ball, a concave mirror and a glossy ball",
         _ => "",
     }
 }

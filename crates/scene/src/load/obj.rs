@@ -42,21 +42,31 @@ pub(crate) fn load(path: &Path) -> Result<Scene> {
         ignore_lines: true,
     };
     let forbidden: RefCell<Option<SceneError>> = RefCell::new(None);
-    let loaded = tobj::load_obj_buf(&mut BufReader::new(file), &opts, |mtl| {
-        let rel = mtl.to_string_lossy();
-        match resolve_relative(path, &rel) {
-            Ok(p) => tobj::load_mtl(p),
-            Err(RefError::Missing(_)) => Err(tobj::LoadError::OpenFileFailed),
-            Err(RefError::Forbidden(message)) => {
-                forbidden.replace(Some(SceneError::BadReference {
-                    path: path.to_path_buf(),
-                    uri: rel.into_owned(),
-                    message,
-                }));
-                Err(tobj::LoadError::OpenFileFailed)
+    // tobj 4.0 overflows on some out-of-range relative indices (`f 1/-11`: found by
+    // parallax-fuzz, crates/fuzz/regressions/panic-obj-01.obj): its panic becomes a parse
+    // error here, and in release builds (wrapping arithmetic) its answer is still checked
+    // below (indices in range, finite positions).
+    let parse = std::panic::AssertUnwindSafe(|| {
+        tobj::load_obj_buf(&mut BufReader::new(file), &opts, |mtl| {
+            let rel = mtl.to_string_lossy();
+            match resolve_relative(path, &rel) {
+                Ok(p) => tobj::load_mtl(p),
+                Err(RefError::Missing(_)) => Err(tobj::LoadError::OpenFileFailed),
+                Err(RefError::Forbidden(message)) => {
+                    forbidden.replace(Some(SceneError::BadReference {
+                        path: path.to_path_buf(),
+                        uri: rel.into_owned(),
+                        message,
+                    }));
+                    Err(tobj::LoadError::OpenFileFailed)
+                }
             }
-        }
+        })
     });
+    let loaded = std::panic::catch_unwind(parse).map_err(|_| SceneError::Parse {
+        path: path.to_path_buf(),
+        message: "malformed OBJ: a face index is out of range (the OBJ parser overflowed)".into(),
+    })?;
     if let Some(e) = forbidden.into_inner() {
         return Err(e);
     }

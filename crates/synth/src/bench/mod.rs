@@ -1,4 +1,4 @@
-//! Benchmarks behind `parallax bench warp | upsample | compression | dof`: each reproduces a table or
+//! Benchmarks behind `parallax bench warp | upsample | compression | dof | reflect`: each reproduces a table or
 //! figure of Widmer et al. 2015 on any scene and view and returns rows that the CLI prints as a
 //! Markdown table and JSON (field names shared with `parallax_render::bench`).
 
@@ -6,6 +6,7 @@ use crate::method::{Method, MethodOptions};
 
 pub mod compression;
 pub mod dof;
+pub mod reflect;
 pub mod trace;
 pub mod upsample;
 pub mod warp;

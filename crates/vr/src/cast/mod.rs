@@ -7,6 +7,7 @@
 //! the CPU threads, block after block.
 
 pub mod intersect;
+pub mod lanes16;
 pub mod leaves;
 pub mod packet;
 pub mod setup;
@@ -72,8 +73,9 @@ pub struct CastStats {
 }
 
 /// The caster's sample-test choice: the kernel and the SIMD width of its ray packets (`4` SSE,
-/// `8` AVX2 when detected (else 4), `1` one ray at a time — watertight kernel only; the set-up
-/// kernel treats `1` as `4`).
+/// `8` AVX2 when detected (else 4), `16` four SSE registers — set-up kernel only, the
+/// watertight kernel treats it as `4`; `1` one ray at a time — watertight kernel only; the
+/// set-up kernel treats `1` as `4`). Every width gives the same buffer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct CastOptions {
     pub test: SampleTest,
@@ -84,12 +86,12 @@ pub struct CastOptions {
 }
 
 impl Default for CastOptions {
-    /// The set-up kernel on 4-lane SSE packets (the 8-lane AVX2 build of the same kernel is
-    /// no faster: `docs/notes/vr.md`).
+    /// The set-up kernel on 16-lane packets (one pixel at 16 spp; 1.3-1.9x the 4-lane
+    /// kernel's speed on Sponza, `docs/notes/vr.md`; the 8-lane AVX2 build is slower).
     fn default() -> Self {
         CastOptions {
             test: SampleTest::TileSetup,
-            lanes: 4,
+            lanes: 16,
             exactness: SetupExactness::Edges,
         }
     }

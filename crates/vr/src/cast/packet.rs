@@ -29,7 +29,10 @@ use parallax_scene::camera::{Camera, Pinhole};
 use crate::SampleSet;
 use crate::beam::PreparedBeam;
 use crate::cast::leaves::LeafBox;
-/// Up to eight rays in SoA lanes.
+/// Most rays per packet (the 16-lane set-up kernel, [`crate::cast::lanes16`]).
+pub const MAX_LANES: usize = 16;
+
+/// Up to [`MAX_LANES`] rays in SoA lanes.
 #[derive(Clone, Copy)]
 pub struct RaysN<L> {
     pub o: [L; 3],
@@ -73,7 +76,7 @@ fn pinhole_n<L: Lanes>(p: &Pinhole, fx: L, fy: L) -> ([L; 3], [L; 3]) {
 #[inline(always)]
 pub(crate) fn gen_n<L: Lanes>(set: &SampleSet, pairs: &[(u32, u32)]) -> RaysN<L> {
     let n = pairs.len();
-    let mut film = [Vec2::ZERO; 8];
+    let mut film = [Vec2::ZERO; MAX_LANES];
     for (l, &(i, k)) in pairs.iter().enumerate() {
         let s = &set.samples[i as usize];
         film[l] = s.film + set.offsets[k as usize] * s.footprint;
@@ -107,7 +110,7 @@ pub(crate) fn gen_n<L: Lanes>(set: &SampleSet, pairs: &[(u32, u32)]) -> RaysN<L>
         }
         _ => {}
     }
-    let mut rays = [None::<Ray>; 8];
+    let mut rays = [None::<Ray>; MAX_LANES];
     let mut valid = 0;
     for (l, &(i, k)) in pairs.iter().enumerate() {
         rays[l] = set.fast_subsample_ray(i as usize, k as usize);
@@ -126,8 +129,8 @@ pub(crate) fn gen_n<L: Lanes>(set: &SampleSet, pairs: &[(u32, u32)]) -> RaysN<L>
 /// Result of a packet: per lane the closest `(t, index in Bvh::triangles)` (`u32::MAX` = none).
 #[derive(Clone, Copy, Debug)]
 pub struct ClosestN {
-    pub t: [f32; 8],
-    pub tri: [u32; 8],
+    pub t: [f32; MAX_LANES],
+    pub tri: [u32; MAX_LANES],
 }
 
 /// Work counters of the packet kernel.
@@ -153,8 +156,8 @@ fn closest_n<L: Lanes>(
     // divisions); a scalar `WatertightRay` is only built for the exact-fallback lanes.
     let valid = rays.valid;
     let mut out = ClosestN {
-        t: [f32::INFINITY; 8],
-        tri: [u32::MAX; 8],
+        t: [f32::INFINITY; MAX_LANES],
+        tri: [u32::MAX; MAX_LANES],
     };
     let mut perm = None;
     for l in 0..L::N {
@@ -335,7 +338,7 @@ pub(crate) fn for_each_packet<L: Lanes>(
     mut f: impl FnMut(&[(u32, u32)], &RaysN<L>),
 ) -> u64 {
     let mut rays_n = 0u64;
-    let mut pairs = [(0u32, 0u32); 8];
+    let mut pairs = [(0u32, 0u32); MAX_LANES];
     let mut j = 0;
     while j < total {
         let n = (total - j).min(L::N);

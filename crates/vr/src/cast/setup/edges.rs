@@ -35,14 +35,15 @@ use parallax_core::simd::Lanes;
 
 use super::kernel::{PacketSlab, SetupWork, dot_n, edge_band, min_edge};
 use super::tri::{RHO_MAX, TileTris, exact_t};
-use crate::cast::packet::{ClosestN, RaysN};
+use crate::cast::lanes16::LaneReduce;
+use crate::cast::packet::{ClosestN, MAX_LANES, RaysN};
 
 /// The closest hit of every lane of `rays` against the set-up list (module docs); `axis` /
 /// `sign` are the tile beam's dominant axis (the near-depth order), `slack` the early-exit
 /// slack.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub(super) fn closest_edges<L: Lanes>(
+pub(super) fn closest_edges<L: LaneReduce>(
     rays: &RaysN<L>,
     blocks: &[Tri4],
     tt: &mut TileTris,
@@ -56,8 +57,8 @@ pub(super) fn closest_edges<L: Lanes>(
     let [dx, dy, dz] = rays.d;
     let mut best = zero;
     let mut out = ClosestN {
-        t: [f32::INFINITY; 8],
-        tri: [u32::MAX; 8],
+        t: [f32::INFINITY; MAX_LANES],
+        tri: [u32::MAX; MAX_LANES],
     };
     let mut hit_lanes = 0u32;
     let mut exit_depth = f32::INFINITY;
@@ -65,7 +66,10 @@ pub(super) fn closest_edges<L: Lanes>(
     let oa = tt.origin[axis];
     let mut box_lim = L::splat(f32::INFINITY);
     let one = L::splat(1.0);
-    let packet = PacketSlab::new(rays.d);
+    let packet = PacketSlab::with_interval(rays.d);
+    let valid_m = L::from_fn(|l| (valid >> l & 1) as f32).gt(zero);
+    let (sign_v, oa_v) = (L::splat(sign), L::splat(oa));
+    let mut lim_max = f32::INFINITY;
     let dinf = packet.dinf;
     let lanes = valid.count_ones() as u64;
     for si in 0..tt.segs.len() {
@@ -77,7 +81,15 @@ pub(super) fn closest_edges<L: Lanes>(
         let first = start;
         start = end;
         // The BVH's robust slab test (Ize 2013 far scaling) of the packet on the run's box.
-        if !packet.reaches(&seg, box_lim, valid) {
+        // The packet's interval test first (one scalar test per packet); 16-lane packets
+        // skip the per-lane test behind it (fewer instructions, measured: docs/notes/vr.md).
+        let reach = if packet.has_interval() {
+            packet.interval_reaches(&seg, lim_max)
+                && (L::N >= 16 || packet.reaches(&seg, box_lim, valid))
+        } else {
+            packet.reaches(&seg, box_lim, valid)
+        };
+        if !reach {
             continue;
         }
         work.tri_tests += (end - first) as u64;
@@ -155,23 +167,23 @@ pub(super) fn closest_edges<L: Lanes>(
             changed = true;
         }
         if changed {
-            hit_lanes = 0;
-            exit_depth = f32::NEG_INFINITY;
-            for l in 0..L::N {
-                if valid >> l & 1 != 0 {
-                    if out.tri[l] != u32::MAX {
-                        hit_lanes |= 1 << l;
-                    }
-                    let t = 1.0 / best.get(l);
-                    exit_depth = exit_depth.max(sign * (oa + t * rays.d[axis].get(l)));
-                }
-            }
+            // `1 / best` once per packet (the same IEEE division as per lane); a lane has a
+            // hit iff its best `1/t` is positive (every win raises `best` above 0).
             box_lim = one / best;
+            hit_lanes = L::bits(best.gt(zero)) & valid;
+            let depth = sign_v * (oa_v + box_lim * rays.d[axis]);
+            exit_depth = L::select(valid_m, depth, L::splat(f32::NEG_INFINITY)).hmax();
+            lim_max = L::select(valid_m, box_lim, L::splat(f32::NEG_INFINITY)).hmax();
         }
     }
-    for l in 0..L::N {
-        if valid >> l & 1 != 0 && out.tri[l] != u32::MAX {
-            out.t[l] = 1.0 / best.get(l);
+    // Hit lanes: `t = 1 / best` (= `box_lim`); the others keep `inf`.
+    if hit_lanes != 0 {
+        let mut t = [0.0f32; MAX_LANES];
+        box_lim.write(&mut t);
+        for l in 0..L::N {
+            if hit_lanes >> l & 1 != 0 {
+                out.t[l] = t[l];
+            }
         }
     }
     out

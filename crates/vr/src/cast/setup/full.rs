@@ -14,17 +14,17 @@ use parallax_core::simd::Lanes;
 
 use super::kernel::{PacketSlab, SetupWork, dot_n, edge_band};
 use super::tri::{RHO_EXACT, RHO_MAX, TileTris, U, exact_closest, exact_t};
-use crate::cast::packet::{ClosestN, RaysN};
+use crate::cast::packet::{ClosestN, MAX_LANES, RaysN};
 
 /// Per-lane state of the best hit so far: `1/t` (lanes), its band, and the triangle.
 struct BestN<L> {
     gd: L,
     rho: L,
-    tri: [u32; 8],
+    tri: [u32; MAX_LANES],
     /// Index in the tile's set-up list.
-    idx: [u32; 8],
+    idx: [u32; MAX_LANES],
     /// The exact watertight `t`, when known (NaN otherwise).
-    t: [f32; 8],
+    t: [f32; MAX_LANES],
 }
 
 /// `x` with lane `l` replaced by `v`.
@@ -52,9 +52,9 @@ pub(super) fn closest_full<L: Lanes>(
     let mut best = BestN {
         gd: zero,
         rho: zero,
-        tri: [u32::MAX; 8],
-        idx: [u32::MAX; 8],
-        t: [f32::NAN; 8],
+        tri: [u32::MAX; MAX_LANES],
+        idx: [u32::MAX; MAX_LANES],
+        t: [f32::NAN; MAX_LANES],
     };
     // Lanes whose best so far was contradicted by the watertight test (a bound violation,
     // expected never): re-decided by the exact scan at the end.
@@ -200,8 +200,8 @@ pub(super) fn closest_full<L: Lanes>(
         }
     }
     let mut out = ClosestN {
-        t: [f32::INFINITY; 8],
-        tri: [u32::MAX; 8],
+        t: [f32::INFINITY; MAX_LANES],
+        tri: [u32::MAX; MAX_LANES],
     };
     // The winners' watertight t, lane-wise in one pass when the lanes share a permutation.
     let mut need = 0u32;
@@ -264,9 +264,9 @@ fn final_t_lanes<L: Lanes>(
     rays: &RaysN<L>,
     blocks: &[Tri4],
     tt: &TileTris,
-    idx: &[u32; 8],
+    idx: &[u32; MAX_LANES],
     need: u32,
-    t: &mut [f32; 8],
+    t: &mut [f32; MAX_LANES],
 ) -> u32 {
     let first = need.trailing_zeros() as usize;
     let lane_dir = |l: usize| Vec3::new(rays.d[0].get(l), rays.d[1].get(l), rays.d[2].get(l));
@@ -287,7 +287,7 @@ fn final_t_lanes<L: Lanes>(
     };
     let [kx, ky, kz] = perm;
     // Lanes outside `need` repeat the first lane's triangle (results ignored).
-    let mut srcs = [0u32; 8];
+    let mut srcs = [0u32; MAX_LANES];
     let mut same = true;
     let s0 = tt.tris[idx[first] as usize].src;
     for (l, s) in srcs.iter_mut().enumerate().take(L::N) {
@@ -309,7 +309,7 @@ fn final_t_lanes<L: Lanes>(
             }
         }
     } else {
-        let mut raw = [[[0.0f32; 8]; 3]; 3];
+        let mut raw = [[[0.0f32; MAX_LANES]; 3]; 3];
         for (l, &s) in srcs.iter().enumerate().take(L::N) {
             let b = &blocks[(s >> 2) as usize];
             let ln = (s & 3) as usize;

@@ -6,6 +6,7 @@ use parallax_core::math::ROBUST_FAR_SCALE;
 use parallax_core::simd::{Lanes, max_or_rhs, min_or_rhs};
 
 use super::tri::{Segment, TriSetup};
+use crate::cast::lanes16::LaneReduce;
 
 /// `n . d` per lane in the scalar order of [`super::tri::dot3`] (no FMA: plain functions, not closures,
 /// so they are compiled inside the AVX2 entry point).
@@ -64,6 +65,9 @@ pub(super) struct PacketSlab<L: Lanes> {
     inv: [L; 3],
     neg: [L::M; 3],
     pub dinf: f32,
+    /// Per axis the smallest and largest reciprocal direction of the valid lanes, when every
+    /// valid lane's is finite and of one sign (`None` otherwise): the packet's interval test.
+    interval: Option<[(f32, f32); 3]>,
 }
 
 impl<L: Lanes> PacketSlab<L> {
@@ -78,7 +82,60 @@ impl<L: Lanes> PacketSlab<L> {
         for l in 0..L::N {
             dinf = dinf.max(dinf_l.get(l));
         }
-        Self { inv, neg, dinf }
+        Self {
+            inv,
+            neg,
+            dinf,
+            interval: None,
+        }
+    }
+
+    /// [`PacketSlab::new`] with the packet's interval test ([`PacketSlab::interval_reaches`]);
+    /// invalid lanes (`d = 0`, reciprocal `+inf`) disable it.
+    #[inline(always)]
+    pub(super) fn with_interval(d: [L; 3]) -> Self
+    where
+        L: LaneReduce,
+    {
+        let mut s = Self::new(d);
+        let iv = [0, 1, 2].map(|a| (s.inv[a].hmin(), s.inv[a].hmax()));
+        let ok = iv
+            .iter()
+            .all(|r| r.0.is_finite() && r.1.is_finite() && (r.0 > 0.0 || r.1 < 0.0));
+        s.interval = ok.then_some(iv);
+        s
+    }
+
+    /// Whether the interval test is available ([`PacketSlab::with_interval`]).
+    #[inline(always)]
+    pub(super) fn has_interval(&self) -> bool {
+        self.interval.is_some()
+    }
+
+    /// A packet-wide conservative form of [`PacketSlab::reaches`] (same far scaling; `lim` =
+    /// the largest closest-hit limit of the valid lanes): false only if no valid lane reaches
+    /// the box. Float products are monotone in each factor, so per axis every lane's entry
+    /// `t` is at least the smaller of the interval's two products and its exit at most the
+    /// larger: a lane passing the per-lane test passes this one. True without an interval.
+    #[inline(always)]
+    pub(super) fn interval_reaches(&self, seg: &Segment, lim: f32) -> bool {
+        let Some(iv) = &self.interval else {
+            return true;
+        };
+        #[inline(always)]
+        fn axis((i0, i1): (f32, f32), lo: f32, hi: f32) -> (f32, f32) {
+            let (n, f) = if i1 < 0.0 { (hi, lo) } else { (lo, hi) };
+            let (a, b, c, d) = (n * i0, n * i1, f * i0, f * i1);
+            (if a < b { a } else { b }, if c > d { c } else { d })
+        }
+        let (nx, fx) = axis(iv[0], seg.lo.x, seg.hi.x);
+        let (ny, fy) = axis(iv[1], seg.lo.y, seg.hi.y);
+        let (nz, fz) = axis(iv[2], seg.lo.z, seg.hi.z);
+        let mx = |a: f32, b: f32| if a > b { a } else { b };
+        let mn = |a: f32, b: f32| if a < b { a } else { b };
+        let t_near = mx(mx(mx(nx, ny), nz), 0.0);
+        let t_far = mn(mn(mn(fx, fy), fz), lim);
+        t_near <= t_far * ROBUST_FAR_SCALE
     }
 
     /// The BVH's robust slab test (Ize 2013 far scaling) of the packet on a run's box: true

@@ -74,7 +74,7 @@
 //! - Triangles with `D = 0` (the plane holds `o`: seen edge-on, never hit by a ray from `o`)
 //!   or a non-finite `g` are dropped.
 //!
-//! The sample test then runs packets of 4 (SSE) or 8 (AVX2) rays over the set-up list in the
+//! The sample test then runs packets of 4 (SSE), 8 (AVX2) or 16 (four SSE registers) rays over the set-up list in the
 //! tile list's near-depth order, leaf by leaf; a triangle whose `g . d` is below every lane's
 //! best so far costs one 3-term dot product; the packet stops once every ray has a hit nearer
 //! than the next leaf's near depth (as the watertight kernel). Beyond the paper (its GPU threads
@@ -112,7 +112,7 @@
 //! | name | type | default | meaning |
 //! |---|---|---|---|
 //! | `exactness` | [`SetupExactness`] | `Edges` | which bands decide by the watertight test |
-//! | `lanes` | usize | 4 | rays per packet: 4 (SSE) or 8 (AVX2 if detected, else 4) |
+//! | `lanes` | usize | 16 | rays per packet: 4 (SSE), 8 (AVX2 if detected, else 4) or 16 (four SSE registers, [`crate::cast::lanes16`]) |
 //! | [`RHO_MAX`] | f32 | 0.05 | depth band above which a triangle always takes the watertight test |
 //!
 //! Measurements (speed of `Edges` and `Full` against the kernel without a band, 4 vs 8 lanes,
@@ -126,10 +126,11 @@ mod tri;
 use glam::Vec4;
 use parallax_bvh::Tri4;
 use parallax_core::NO_ID;
-use parallax_core::simd::{F8, Lanes};
+use parallax_core::simd::F8;
 
 use crate::SampleSet;
 use crate::beam::Beam;
+use crate::cast::lanes16::{LaneReduce, V16};
 use crate::cast::packet::for_each_packet;
 
 pub use kernel::SetupWork;
@@ -169,7 +170,7 @@ pub enum SetupExactness {
 /// set-up kernel with `L::N` lanes; `write(pair, t, tri)` stores a result.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn run_setup<L: Lanes, const FULL: bool>(
+fn run_setup<L: LaneReduce, const FULL: bool>(
     set: &SampleSet,
     blocks: &[Tri4],
     tt: &mut TileTris,
@@ -222,8 +223,8 @@ unsafe fn run_setup_avx2<const FULL: bool>(
 }
 
 /// Tests every subsample ray of the tile `samples` against the set-up list `tt` (built from
-/// `blocks`) and writes the closest hits, packets of 8 rays (AVX2, if detected and
-/// `lanes == 8`) or 4.
+/// `blocks`) and writes the closest hits, packets of 16 rays (`lanes == 16`), 8 (AVX2, if
+/// detected and `lanes == 8`) or 4.
 ///
 /// # Safety
 /// As [`crate::cast::intersect::test_tile`]: `prim` and `t` valid for `set.ray_count()` elements,
@@ -245,7 +246,15 @@ pub unsafe fn test_tile_setup(
     let spp = set.spp as usize;
     let slack = 1e-5 * (scale.abs() + 1.0);
     let total = samples.len() * spp;
-    let pair = |j: usize| (samples[j / spp], (j % spp) as u32);
+    // Power-of-two spp (every preset) without an integer division per ray.
+    let (shift, pow2) = (spp.trailing_zeros(), spp.is_power_of_two());
+    let pair = |j: usize| {
+        if pow2 {
+            (samples[j >> shift], (j & (spp - 1)) as u32)
+        } else {
+            (samples[j / spp], (j % spp) as u32)
+        }
+    };
     let write = |(i, k): (u32, u32), bt: f32, tri: u32| {
         let o = i as usize * spp + k as usize;
         // SAFETY: the caller guarantees exclusive access to this sample's entries.
@@ -271,6 +280,16 @@ pub unsafe fn test_tile_setup(
                 SetupExactness::Full => {
                     run_setup_avx2::<true>(set, blocks, tt, axis, sign, slack, total, pair, write)
                 }
+            }
+        };
+    }
+    if lanes == 16 {
+        return match exactness {
+            SetupExactness::Edges => {
+                run_setup::<V16, false>(set, blocks, tt, axis, sign, slack, total, pair, write)
+            }
+            SetupExactness::Full => {
+                run_setup::<V16, true>(set, blocks, tt, axis, sign, slack, total, pair, write)
             }
         };
     }

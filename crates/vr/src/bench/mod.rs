@@ -23,6 +23,8 @@
 //! fresh buffer inside the timed region would be timed too, `docs/notes/vr.md`).
 //! Not reproduced: HVVR's "pre-distort" row (a larger pinhole eye buffer resampled afterwards).
 
+pub mod table6;
+
 use std::time::Instant;
 
 use parallax_bvh::Bvh;
@@ -73,7 +75,7 @@ pub struct VrBenchRow {
     pub shades_per_nonempty_pixel: Option<f64>,
     /// Rays per second of the visibility stage, in millions.
     pub mrays_per_s: Option<f64>,
-    /// The per-ray baseline's rate for the same scheme (Table 6).
+    /// The per-ray baseline's rate (our BVH's single rays, `per-ray`) for the same scheme.
     pub baseline_mrays_per_s: Option<f64>,
     pub threads: usize,
 }
@@ -92,7 +94,7 @@ pub struct VrBenchOptions {
 }
 
 /// Eye sample sets of a scheme, or why it cannot be run.
-fn scheme_sets(
+pub(crate) fn scheme_sets(
     scheme: &str,
     head: &CameraDesc,
     w: u32,
@@ -323,7 +325,7 @@ pub fn update_row(scene: &Scene, repeats: u32) -> Result<UpdateRow, VrError> {
 pub fn markdown(rows: &[VrBenchRow]) -> String {
     let f = |v: Option<f64>, p: usize| v.map_or("-".to_string(), |x| format!("{x:.p$}"));
     let mut s = String::from(
-        "| scheme | scene | visibility | shading | size | spp | rays | traversal ms | intersect ms | shade ms | shades/px | Mrays/s | baseline Mrays/s | note |\n\
+        "| scheme | scene | visibility | shading | size | spp | rays | traversal ms | intersect ms | shade ms | shades/px | Mrays/s | per-ray Mrays/s | note |\n\
          |---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {

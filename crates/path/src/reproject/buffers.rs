@@ -1,0 +1,81 @@
+//! The per-eye, per-frame G-buffer of the reprojection (Mäkitalo et al. 2019, §4.1: "we do
+//! assume that we have access to the depth and shading normal buffers of both eyes"): per pixel
+//! the world position, shading normal, view depth and albedo of the primary hit of the pixel's
+//! sample, and the pinhole camera that saw it.
+//!
+//! **Invariants:** the texel of pixel `(x, y)` is at `y * width + x`; a miss has an infinite
+//! depth (its other fields are zero); `position` is the hit of the sample's own (jittered)
+//! primary ray, so it lies inside the pixel's footprint, and `normal` is unit length and faces
+//! that ray.
+
+use glam::Vec3;
+use parallax_scene::camera::Pinhole;
+
+/// One pixel of a G-buffer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Texel {
+    /// World position of the primary hit.
+    pub position: Vec3,
+    /// View depth (distance along the camera's forward axis); infinite for a miss.
+    pub depth: f32,
+    /// Unit shading normal, facing the primary ray.
+    pub normal: Vec3,
+    /// Linear RGB albedo (base colour times texture) of the hit.
+    pub albedo: Vec3,
+}
+
+impl Texel {
+    /// A pixel whose primary ray left the scene.
+    pub const MISS: Texel = Texel {
+        position: Vec3::ZERO,
+        depth: f32::INFINITY,
+        normal: Vec3::ZERO,
+        albedo: Vec3::ZERO,
+    };
+
+    /// True when the primary ray hit a surface.
+    #[inline]
+    pub fn is_hit(&self) -> bool {
+        self.depth.is_finite()
+    }
+}
+
+/// The G-buffer of one eye at one frame.
+#[derive(Clone, Debug)]
+pub struct EyeView {
+    pub camera: Pinhole,
+    /// Row-major, `width * height` texels.
+    pub texels: Vec<Texel>,
+}
+
+impl EyeView {
+    /// An all-miss G-buffer of `camera`'s size.
+    pub fn new(camera: Pinhole) -> Self {
+        let n = camera.width as usize * camera.height as usize;
+        Self {
+            camera,
+            texels: vec![Texel::MISS; n],
+        }
+    }
+
+    #[inline]
+    pub fn width(&self) -> u32 {
+        self.camera.width
+    }
+
+    #[inline]
+    pub fn height(&self) -> u32 {
+        self.camera.height
+    }
+
+    /// Pixels.
+    #[inline]
+    pub fn len(&self) -> usize {
+        self.texels.len()
+    }
+
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.texels.is_empty()
+    }
+}

@@ -1,0 +1,381 @@
+//! Backward reprojection of one pixel (Mäkitalo et al. 2019, §4.1; Nehab et al. 2007): the
+//! target pixel's world position is projected into the source view, the source pixels around
+//! that film position are weighted by a separable tent (radius 1 = the paper's bilinear
+//! weights over the 4 closest pixel centres), neighbours whose world position or shading
+//! normal differ from the target's beyond the limits are discarded, and the weights of the
+//! rest are renormalised. The same footprint serves the stereo (right eye -> left eye) and the
+//! temporal (previous frame -> current frame) reprojection and any per-pixel value (colour,
+//! history length).
+//!
+//! The tests (as BMFR's `accumulate_noisy_data`, Koskela et al. 2019): a neighbour is kept when
+//! `|p_s - p_t|² < position²` and `|n_s - n_t|² < chord²` with `chord = 2 sin(normal / 2)` (the
+//! distance of two unit normals `normal` apart). Both are strict, so zero limits discard every
+//! neighbour. With [`Tests::plane`] the position test measures the neighbour's distance from
+//! the target's tangent plane, `|(p_s - p_t) · n_t|`, instead of the full distance: offsets
+//! along the surface (a neighbour one pixel away on a grazing floor, the jitter of the primary
+//! rays) pass, steps off the surface (an occluder, a disocclusion) still fail. Not the paper's
+//! test (it compares the two world positions); ours, as the plane-distance tests of SVGF-style
+//! filters.
+//!
+//! | parameter | type | meaning |
+//! |---|---|---|
+//! | [`Kernel::radius`] | f32 in [1, 2] | tent radius in source pixels (1: bilinear over 2x2 neighbours; 2: 4x4; integer radii reproduce linear ramps exactly, others only approximately) |
+//! | [`Tests::position`] | f32 (scene units) | largest world-position difference kept |
+//! | [`Tests::normal_deg`] | f32 (degrees) | largest shading-normal angle kept |
+//! | [`Tests::plane`] | bool | position test against the target's tangent plane (false: the paper's distance) |
+//!
+//! **Invariants:** a footprint's kept weights sum to one (`inv_weight` renormalises); a pixel
+//! is [`Outcome::Reused`] exactly when at least one neighbour with non-zero weight passed both
+//! tests; the result depends only on the two views, never on the thread count.
+
+use std::ops::{Add, Mul};
+
+use glam::Vec3;
+use parallax_scene::camera::CameraModel;
+use rayon::prelude::*;
+
+use super::buffers::{EyeView, Texel};
+use super::sampler::thread_ns;
+
+/// What became of a target pixel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[repr(u8)]
+pub enum Outcome {
+    /// Filled from the source (at least one neighbour kept).
+    #[default]
+    Reused = 0,
+    /// The position projects outside the source view (or behind its camera).
+    Outside = 1,
+    /// Every neighbour failed the world-position test (or saw the sky).
+    Position = 2,
+    /// Some neighbour passed the position test, none the normal test.
+    Normal = 3,
+    /// The target pixel sees the sky: its value is the environment, known without a sample.
+    Background = 4,
+}
+
+impl Outcome {
+    /// True when the pixel needs a new sample (the source could not give it anything).
+    #[inline]
+    pub fn is_discarded(self) -> bool {
+        matches!(self, Outcome::Outside | Outcome::Position | Outcome::Normal)
+    }
+}
+
+/// The reconstruction kernel: a separable tent over source pixel centres.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Kernel {
+    /// Radius in source pixels, in `[1, 2]`; 1 is bilinear interpolation.
+    pub radius: f32,
+}
+
+impl Kernel {
+    /// The paper's bilinear weights.
+    pub const BILINEAR: Kernel = Kernel { radius: 1.0 };
+
+    /// Taps per axis: offsets `1 - half ..= half` from the pixel left of (above) the sample.
+    #[inline]
+    fn half(self) -> i32 {
+        self.radius.ceil() as i32
+    }
+
+    #[inline]
+    fn weight(self, d: f32) -> f32 {
+        (1.0 - d.abs() / self.radius).max(0.0)
+    }
+}
+
+/// The neighbour tests, squared for the inner loop.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tests {
+    /// Largest world-position difference kept (scene units).
+    pub position: f32,
+    /// Largest shading-normal angle kept (degrees).
+    pub normal_deg: f32,
+    /// Distance from the target's tangent plane instead of the full distance (module docs).
+    pub plane: bool,
+}
+
+impl Tests {
+    #[inline]
+    fn squared(self) -> (f32, f32) {
+        let chord = 2.0 * (0.5 * self.normal_deg.to_radians()).sin();
+        (self.position * self.position, chord * chord)
+    }
+}
+
+/// Where a target pixel's value comes from in the source: the kept neighbours (a bit per tap,
+/// row-major over the kernel's taps from `(x0, y0)`) and their weights' normaliser.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Footprint {
+    pub x0: i32,
+    pub y0: i32,
+    /// Offset of the projected position from the centre of the source pixel left of (above)
+    /// it, `(x0 + half - 1, y0 + half - 1)` with `half = ceil(radius)`, in `[0, 1)`.
+    pub fx: f32,
+    pub fy: f32,
+    pub mask: u16,
+    pub outcome: Outcome,
+    /// One over the sum of the kept weights (0 when nothing was kept).
+    pub inv_weight: f32,
+}
+
+/// A value a footprint can average.
+pub trait Blendable: Copy + Default + Add<Output = Self> + Mul<f32, Output = Self> {}
+impl Blendable for f32 {}
+impl Blendable for Vec3 {}
+
+impl Footprint {
+    fn discarded(outcome: Outcome) -> Self {
+        Self {
+            outcome,
+            ..Self::default()
+        }
+    }
+
+    /// The weighted mean of the kept neighbours' `values` (row-major, source `width`); zero
+    /// when nothing was kept.
+    #[inline]
+    pub fn gather<T: Blendable>(&self, kernel: Kernel, values: &[T], width: u32) -> T {
+        let mut acc = T::default();
+        if self.mask == 0 {
+            return acc;
+        }
+        let half = kernel.half();
+        let taps = 2 * half;
+        let mut bit = 0;
+        for ty in 0..taps {
+            let wy = kernel.weight((ty - half + 1) as f32 - self.fy);
+            for tx in 0..taps {
+                if self.mask & (1 << bit) != 0 {
+                    let wx = kernel.weight((tx - half + 1) as f32 - self.fx);
+                    let (x, y) = (self.x0 + tx, self.y0 + ty);
+                    acc = acc + values[y as usize * width as usize + x as usize] * (wx * wy);
+                }
+                bit += 1;
+            }
+        }
+        acc * self.inv_weight
+    }
+}
+
+/// The footprint of a target pixel seeing `t` in `source`.
+pub fn footprint(source: &EyeView, t: &Texel, kernel: Kernel, tests: Tests) -> Footprint {
+    if !t.is_hit() {
+        return Footprint::discarded(Outcome::Background);
+    }
+    let Some(f) = source.camera.project(t.position, 0) else {
+        return Footprint::discarded(Outcome::Outside);
+    };
+    if !f.is_finite() {
+        return Footprint::discarded(Outcome::Outside);
+    }
+    let (pos2, nrm2) = tests.squared();
+    let half = kernel.half();
+    let (w, h) = (source.width() as i32, source.height() as i32);
+    // Pixel centres are at integer + 0.5: the tap left of (above) the sample is floor(f - 0.5).
+    let (sx, sy) = (f.x - 0.5, f.y - 0.5);
+    let (bx, by) = (sx.floor(), sy.floor());
+    let lim = half as f32 + 1.0;
+    if !(bx > -lim && bx < w as f32 + lim && by > -lim && by < h as f32 + lim) {
+        return Footprint::discarded(Outcome::Outside);
+    }
+    let (fx, fy) = (sx - bx, sy - by);
+    let (x0, y0) = (bx as i32 - half + 1, by as i32 - half + 1);
+    let taps = 2 * half;
+    let (mut mask, mut sum, mut bit) = (0u16, 0.0f32, 0);
+    let (mut inside, mut near) = (false, false);
+    for ty in 0..taps {
+        let wy = kernel.weight((ty - half + 1) as f32 - fy);
+        let y = y0 + ty;
+        for tx in 0..taps {
+            let x = x0 + tx;
+            let wx = kernel.weight((tx - half + 1) as f32 - fx);
+            let wt = wx * wy;
+            if wt > 0.0 && x >= 0 && y >= 0 && x < w && y < h {
+                inside = true;
+                let s = &source.texels[y as usize * w as usize + x as usize];
+                let d = s.position - t.position;
+                let d2 = if tests.plane {
+                    let h = d.dot(t.normal);
+                    h * h
+                } else {
+                    d.length_squared()
+                };
+                if s.is_hit() && d2 < pos2 {
+                    near = true;
+                    if (s.normal - t.normal).length_squared() < nrm2 {
+                        mask |= 1 << bit;
+                        sum += wt;
+                    }
+                }
+            }
+            bit += 1;
+        }
+    }
+    let outcome = match (mask != 0, inside, near) {
+        (true, _, _) => Outcome::Reused,
+        (false, false, _) => Outcome::Outside,
+        (false, true, false) => Outcome::Position,
+        (false, true, true) => Outcome::Normal,
+    };
+    Footprint {
+        x0,
+        y0,
+        fx,
+        fy,
+        mask,
+        outcome,
+        inv_weight: if sum > 0.0 { 1.0 / sum } else { 0.0 },
+    }
+}
+
+/// Rows per parallel work item of the image passes.
+pub(crate) const BAND_ROWS: usize = 8;
+
+/// The footprint of every pixel of `target` in `source`, into `out`; returns the thread CPU
+/// nanoseconds spent.
+pub fn footprints(
+    target: &EyeView,
+    source: &EyeView,
+    kernel: Kernel,
+    tests: Tests,
+    out: &mut Vec<Footprint>,
+) -> u64 {
+    let w = target.width() as usize;
+    out.resize(target.len(), Footprint::default());
+    let ns: Vec<u64> = out
+        .par_chunks_mut(w * BAND_ROWS)
+        .zip(target.texels.par_chunks(w * BAND_ROWS))
+        .map(|(fps, texels)| {
+            let t0 = thread_ns();
+            for (fp, t) in fps.iter_mut().zip(texels) {
+                *fp = footprint(source, t, kernel, tests);
+            }
+            thread_ns().saturating_sub(t0)
+        })
+        .collect();
+    ns.iter().sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec2;
+    use parallax_scene::CameraDesc;
+    use parallax_scene::camera::Pinhole;
+
+    /// A view of the plane z = -d, every texel on it, facing +z.
+    fn plane_view(eye: Vec3, d: f32, w: u32, h: u32) -> EyeView {
+        let desc = CameraDesc::new(eye, eye - Vec3::Z, Vec3::Y, 60.0);
+        let cam = Pinhole::new(&desc, w, h).unwrap();
+        let mut v = EyeView::new(cam.clone());
+        for y in 0..h {
+            for x in 0..w {
+                let r = cam
+                    .generate_ray(Vec2::new(x as f32 + 0.5, y as f32 + 0.5), Vec2::ZERO, 0)
+                    .unwrap();
+                let t = (eye.z + d) / -r.ray.dir.z;
+                v.texels[(y * w + x) as usize] = Texel {
+                    position: r.ray.at(t),
+                    depth: d,
+                    normal: Vec3::Z,
+                    albedo: Vec3::ONE,
+                };
+            }
+        }
+        v
+    }
+
+    const LOOSE: Tests = Tests {
+        position: 1.0,
+        normal_deg: 30.0,
+        plane: false,
+    };
+
+    #[test]
+    fn same_view_reuses_each_pixel_with_its_own_value() {
+        let v = plane_view(Vec3::ZERO, 5.0, 16, 12);
+        let values: Vec<Vec3> = (0..v.len()).map(|i| Vec3::splat(i as f32)).collect();
+        for (i, t) in v.texels.iter().enumerate() {
+            let fp = footprint(&v, t, Kernel::BILINEAR, LOOSE);
+            assert_eq!(fp.outcome, Outcome::Reused);
+            let g = fp.gather(Kernel::BILINEAR, &values, 16);
+            assert!((g.x - i as f32).abs() < 1e-3, "{i}: {g}");
+        }
+    }
+
+    #[test]
+    fn bilinear_weights_interpolate_a_linear_ramp_and_sum_to_one() {
+        let src = plane_view(Vec3::ZERO, 5.0, 32, 24);
+        // Shifted eye: positions land between source pixel centres.
+        let dst = plane_view(Vec3::new(0.013, 0.021, 0.0), 5.0, 32, 24);
+        let ramp: Vec<Vec3> = (0..src.len())
+            .map(|i| Vec3::new((i % 32) as f32, (i / 32) as f32, 1.0))
+            .collect();
+        for kernel in [Kernel::BILINEAR, Kernel { radius: 2.0 }] {
+            for t in dst.texels.iter().skip(32 * 3).take(32 * 18) {
+                let fp = footprint(&src, t, kernel, LOOSE);
+                if fp.outcome != Outcome::Reused || fp.mask.count_ones() < 4 {
+                    continue;
+                }
+                let f = src.camera.project(t.position, 0).unwrap() - Vec2::splat(0.5);
+                if f.x < 2.0 || f.x > 29.0 {
+                    continue;
+                }
+                let g = fp.gather(kernel, &ramp, 32);
+                assert!((g.z - 1.0).abs() < 1e-5, "weights sum to {}", g.z);
+                assert!(
+                    (g.x - f.x).abs() < 1e-3 && (g.y - f.y).abs() < 1e-3,
+                    "{f} {g}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn tests_discard_far_positions_turned_normals_and_everything_at_zero() {
+        let src = plane_view(Vec3::ZERO, 5.0, 16, 12);
+        let t = src.texels[5 * 16 + 7];
+        let far = Texel {
+            position: t.position + Vec3::Z * 2.0,
+            ..t
+        };
+        assert_eq!(
+            footprint(&src, &far, Kernel::BILINEAR, LOOSE).outcome,
+            Outcome::Position
+        );
+        let turned = Texel {
+            normal: Vec3::X,
+            ..t
+        };
+        assert_eq!(
+            footprint(&src, &turned, Kernel::BILINEAR, LOOSE).outcome,
+            Outcome::Normal
+        );
+        let zero = Tests {
+            position: 0.0,
+            normal_deg: 0.0,
+            plane: true,
+        };
+        for t in &src.texels {
+            assert!(
+                footprint(&src, t, Kernel::BILINEAR, zero)
+                    .outcome
+                    .is_discarded()
+            );
+        }
+        let behind = Texel {
+            position: Vec3::new(0.0, 0.0, 3.0),
+            ..t
+        };
+        assert_eq!(
+            footprint(&src, &behind, Kernel::BILINEAR, LOOSE).outcome,
+            Outcome::Outside
+        );
+        assert_eq!(
+            footprint(&src, &Texel::MISS, Kernel::BILINEAR, LOOSE).outcome,
+            Outcome::Background
+        );
+    }
+}

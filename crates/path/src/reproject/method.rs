@@ -1,0 +1,369 @@
+//! One reprojection method run over a sequence: per frame it turns the traced right eye and
+//! the left eye's G-buffer into the three outputs of Mäkitalo et al. 2019, §4.1:
+//!
+//! - **stereo**: the left eye from the right eye's new 1-spp samples (backward reprojection,
+//!   [`super::footprint`]); only the discarded left pixels are path traced;
+//! - **temporal**: the right eye's 1-spp samples blended into its reprojected history
+//!   ([`super::history`]);
+//! - **stereo + temporal**: "we first apply temporal reprojection to the right eye, after which
+//!   the stereo reprojection is done from right eye to left eye"; the left pixels the stereo
+//!   tests discard are filled from the left eye's own history blended with a traced sample
+//!   ([`Combine::Paper`]). [`Combine::Cascade`] instead keeps a full left history: every left
+//!   pixel blends the stereo-reprojected right history (or its traced sample) into the left's
+//!   reprojected history, so the left eye averages both eyes' histories.
+//!
+//! | field | type | paper | meaning |
+//! |---|---|---|---|
+//! | `kernel` | [`Kernel`] | bilinear | reconstruction weights of both reprojections |
+//! | `blend` | [`Blend`] | `Fixed(0.2)` | temporal blend |
+//! | `demodulate` | bool | false | reproject radiance divided by the source texel's albedo and multiply by the target's (texture detail is not blurred; as SVGF and BMFR treat albedo) |
+//! | `combine` | [`Combine`] | `Paper` | how the left eye of stereo + temporal uses histories |
+//! | `plane_test` | bool | false | position test against the target's tangent plane ([`Tests::plane`]) |
+//!
+//! **Invariants:** a method's outputs depend only on the inputs of this and earlier frames
+//! (never on the thread count); a discarded left pixel is the path tracer's own sample of the
+//! left eye's stream, bit for bit.
+
+use std::sync::Arc;
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::buffers::{EyeView, Texel};
+use super::error::{Result, option_error};
+use super::footprint::{BAND_ROWS, Footprint, Kernel, Outcome, Tests, footprint, footprints};
+use super::history::{Blend, History, accumulate};
+use super::sampler::{PaperSampler, TraceCost, thread_ns};
+
+/// How stereo + temporal fills the left eye (module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Combine {
+    Paper,
+    Cascade,
+}
+
+/// A reprojection method (module table).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Method {
+    pub name: String,
+    pub kernel: Kernel,
+    pub blend: Blend,
+    pub demodulate: bool,
+    pub combine: Combine,
+    pub plane_test: bool,
+}
+
+impl Method {
+    /// Mäkitalo et al. 2019 as published: bilinear weights, alpha 0.2, radiance reprojected
+    /// as it is, the left eye's history only where the stereo tests discard.
+    pub fn paper() -> Self {
+        Self {
+            name: "paper".into(),
+            kernel: Kernel::BILINEAR,
+            blend: Blend::PAPER,
+            demodulate: false,
+            combine: Combine::Paper,
+            plane_test: false,
+        }
+    }
+
+    /// The named presets: `paper` ([`Self::paper`]), `bmfr` (the paper with BMFR's running
+    /// mean, floor 0.2), and `ours` ([`Self::ours`]).
+    pub fn named(name: &str) -> Result<Self> {
+        match name {
+            "paper" => Ok(Self::paper()),
+            "bmfr" => Ok(Self {
+                name: "bmfr".into(),
+                blend: Blend::RunningMean { floor: 0.2 },
+                ..Self::paper()
+            }),
+            "ours" => Ok(Self::ours()),
+            _ => option_error(format!(
+                "unknown method {name:?}; expected one of {}",
+                Self::NAMES.join(", ")
+            )),
+        }
+    }
+
+    /// Names [`Self::named`] knows.
+    pub const NAMES: [&'static str; 3] = ["paper", "bmfr", "ours"];
+
+    /// Our variant: both eyes keep a full history ([`Combine::Cascade`]), BMFR's running
+    /// mean, radiance demodulated by albedo before it is reprojected, and the tangent-plane
+    /// position test.
+    pub fn ours() -> Self {
+        Self {
+            name: "ours".into(),
+            kernel: Kernel::BILINEAR,
+            blend: Blend::RunningMean { floor: 0.2 },
+            demodulate: true,
+            combine: Combine::Cascade,
+            plane_test: true,
+        }
+    }
+
+    /// Alpha in (0, 1], kernel radius in [1, 2].
+    pub fn validate(&self) -> Result<()> {
+        let a = self.blend.base_alpha();
+        if !(a > 0.0 && a <= 1.0) {
+            return option_error(format!("--alpha must be in (0, 1], got {a}"));
+        }
+        let r = self.kernel.radius;
+        if !(1.0..=2.0).contains(&r) {
+            return option_error(format!("--kernel-radius must be in [1, 2], got {r}"));
+        }
+        Ok(())
+    }
+}
+
+/// The inputs every method of a frame shares.
+pub struct FrameInputs<'a> {
+    pub sampler: &'a PaperSampler<'a>,
+    /// The traced eye's G-buffer and the radiance of its 1-spp samples.
+    pub right: Arc<EyeView>,
+    pub right_radiance: &'a [Vec3],
+    /// The other eye's G-buffer and the radiance of its pixels that see the sky.
+    pub left: Arc<EyeView>,
+    pub left_background: &'a [Vec3],
+    /// The stream of the left eye's samples (for the pixels traced after discarding).
+    pub left_seed: u64,
+    pub tests: Tests,
+}
+
+/// One output image of a frame.
+#[derive(Clone, Debug)]
+pub struct ModeFrame {
+    /// Linear RGB, row-major.
+    pub image: Vec<Vec3>,
+    /// What became of each pixel.
+    pub outcomes: Vec<Outcome>,
+    /// Thread CPU nanoseconds of the reprojection passes this output needed.
+    pub reproject_ns: u64,
+}
+
+impl ModeFrame {
+    /// Pixels that needed a new sample (or restarted their history).
+    pub fn discarded(&self) -> usize {
+        self.outcomes.iter().filter(|o| o.is_discarded()).count()
+    }
+}
+
+/// The three outputs of a frame.
+pub struct MethodFrame {
+    pub stereo: ModeFrame,
+    pub temporal: ModeFrame,
+    pub combined: ModeFrame,
+    /// The left pixels traced after the stereo tests.
+    pub left_traced: TraceCost,
+}
+
+/// A method with its histories.
+pub struct MethodState {
+    pub method: Method,
+    right: Option<History>,
+    left: Option<History>,
+}
+
+/// Albedo factor of demodulation: the albedo where a channel has one, else 1 (so black and
+/// sky texels pass radiance through).
+#[inline]
+fn albedo_factor(t: &Texel) -> Vec3 {
+    Vec3::select(t.albedo.cmpgt(Vec3::splat(1e-3)), t.albedo, Vec3::ONE)
+}
+
+/// Runs `f(i)` for every pixel into a new image, parallel over bands; returns the image and
+/// the thread CPU nanoseconds.
+fn per_pixel(n: usize, w: usize, f: impl Fn(usize) -> Vec3 + Sync) -> (Vec<Vec3>, u64) {
+    let mut out = vec![Vec3::ZERO; n];
+    let ns: Vec<u64> = out
+        .par_chunks_mut(w * BAND_ROWS)
+        .enumerate()
+        .map(|(b, chunk)| {
+            let t0 = thread_ns();
+            let base = b * w * BAND_ROWS;
+            for (j, o) in chunk.iter_mut().enumerate() {
+                *o = f(base + j);
+            }
+            thread_ns().saturating_sub(t0)
+        })
+        .collect();
+    (out, ns.iter().sum())
+}
+
+/// `values` divided (`inverse`) or multiplied by the albedo factors of `view` when `on`
+/// (else copied), with the thread CPU nanoseconds.
+fn modulate(view: &EyeView, values: &[Vec3], inverse: bool, on: bool) -> (Vec<Vec3>, u64) {
+    if !on {
+        return (values.to_vec(), 0);
+    }
+    per_pixel(values.len(), view.width() as usize, |i| {
+        let f = albedo_factor(&view.texels[i]);
+        if inverse {
+            values[i] / f
+        } else {
+            values[i] * f
+        }
+    })
+}
+
+impl MethodState {
+    pub fn new(method: Method) -> Self {
+        Self {
+            method,
+            right: None,
+            left: None,
+        }
+    }
+
+    /// Drops the histories (the next frame starts a new sequence).
+    pub fn reset(&mut self) {
+        self.right = None;
+        self.left = None;
+    }
+
+    /// Runs one frame.
+    pub fn step(&mut self, inp: &FrameInputs) -> MethodFrame {
+        let m = &self.method;
+        let k = m.kernel;
+        let tests = Tests {
+            plane: m.plane_test,
+            ..inp.tests
+        };
+        let (left, right) = (&inp.left, &inp.right);
+        let (n, w) = (left.len(), left.width() as usize);
+        let rw = right.width();
+        let demod = m.demodulate;
+        let (r_new, rnew_ns) = modulate(right, inp.right_radiance, true, demod);
+        // Stereo: footprints of the left pixels in the right view, then the discarded pixels
+        // traced.
+        let mut fps = Vec::new();
+        let fp_ns = footprints(left, right, k, tests, &mut fps);
+        let discarded: Vec<u32> = (0..n as u32)
+            .filter(|&i| fps[i as usize].outcome.is_discarded())
+            .collect();
+        let mut traced_list = vec![Vec3::ZERO; discarded.len()];
+        let left_traced =
+            inp.sampler
+                .trace_pixels(&left.camera, inp.left_seed, &discarded, &mut traced_list);
+        let mut traced = vec![Vec3::ZERO; n];
+        for (&i, v) in discarded.iter().zip(&traced_list) {
+            traced[i as usize] = *v;
+        }
+        let (traced, traced_ns) = modulate(left, &traced, true, demod);
+        let background = inp.left_background;
+        let stereo_value = |i: usize, src: &[Vec3]| -> Vec3 {
+            match fps[i].outcome {
+                Outcome::Reused => fps[i].gather(k, src, rw),
+                Outcome::Background => background[i],
+                _ => traced[i],
+            }
+        };
+        let (stereo_img, apply_ns) = per_pixel(n, w, |i| stereo_value(i, &r_new));
+        let (image, out_ns) = modulate(left, &stereo_img, false, demod);
+        let shared_ns = fp_ns + rnew_ns + traced_ns;
+        let stereo = ModeFrame {
+            image,
+            outcomes: fps.iter().map(|f| f.outcome).collect(),
+            reproject_ns: shared_ns + apply_ns + out_ns,
+        };
+
+        // Temporal: the right eye's history.
+        let acc = accumulate(right, &r_new, self.right.as_ref(), k, tests, m.blend);
+        let (image, out_ns) = modulate(right, &acc.history.color, false, demod);
+        let temporal = ModeFrame {
+            image,
+            outcomes: acc.footprints.iter().map(|f| f.outcome).collect(),
+            reproject_ns: rnew_ns + acc.cpu_ns + out_ns,
+        };
+        let r_acc = &acc.history;
+
+        // Stereo + temporal.
+        let (left_hist, left_ns) = match m.combine {
+            Combine::Paper => self.paper_left(inp, &fps, r_acc, &traced),
+            Combine::Cascade => {
+                let (input, ns) = per_pixel(n, w, |i| stereo_value(i, &r_acc.color));
+                let a = accumulate(left, &input, self.left.as_ref(), k, tests, m.blend);
+                (a.history, ns + a.cpu_ns)
+            }
+        };
+        let (image, out_ns) = modulate(left, &left_hist.color, false, demod);
+        let combined = ModeFrame {
+            image,
+            outcomes: stereo.outcomes.clone(),
+            reproject_ns: shared_ns + acc.cpu_ns + left_ns + out_ns,
+        };
+        self.right = Some(acc.history);
+        self.left = Some(left_hist);
+        MethodFrame {
+            stereo,
+            temporal,
+            combined,
+            left_traced,
+        }
+    }
+
+    /// The paper's left eye of stereo + temporal: the stereo-reprojected right history where
+    /// the stereo tests keep a neighbour, else the traced sample blended into the left eye's
+    /// own reprojected history.
+    fn paper_left(
+        &self,
+        inp: &FrameInputs,
+        fps: &[Footprint],
+        r_acc: &History,
+        traced: &[Vec3],
+    ) -> (History, u64) {
+        let m = &self.method;
+        let (left, k) = (&inp.left, m.kernel);
+        let (n, w) = (left.len(), left.width() as usize);
+        let rw = inp.right.width();
+        let prev = self.left.as_ref();
+        let mut color = vec![Vec3::ZERO; n];
+        let mut count = vec![1.0f32; n];
+        let ns: Vec<u64> = color
+            .par_chunks_mut(w * BAND_ROWS)
+            .zip(count.par_chunks_mut(w * BAND_ROWS))
+            .enumerate()
+            .map(|(b, (c, cnt))| {
+                let t0 = thread_ns();
+                let base = b * w * BAND_ROWS;
+                for j in 0..c.len() {
+                    let i = base + j;
+                    match fps[i].outcome {
+                        Outcome::Reused => {
+                            c[j] = fps[i].gather(k, &r_acc.color, rw);
+                            cnt[j] = fps[i].gather(k, &r_acc.count, rw).max(1.0);
+                        }
+                        Outcome::Background => c[j] = inp.left_background[i],
+                        _ => {
+                            c[j] = traced[i];
+                            if let Some(p) = prev {
+                                let tests = Tests {
+                                    plane: m.plane_test,
+                                    ..inp.tests
+                                };
+                                let f = footprint(&p.view, &left.texels[i], k, tests);
+                                if f.outcome == Outcome::Reused {
+                                    let pw = p.view.width();
+                                    let h = f.gather(k, &p.color, pw);
+                                    let hn = f.gather(k, &p.count, pw);
+                                    let a = m.blend.alpha(hn);
+                                    c[j] = traced[i] * a + h * (1.0 - a);
+                                    cnt[j] = hn + 1.0;
+                                }
+                            }
+                        }
+                    }
+                }
+                thread_ns().saturating_sub(t0)
+            })
+            .collect();
+        (
+            History {
+                view: left.clone(),
+                color,
+                count,
+            },
+            ns.iter().sum(),
+        )
+    }
+}

@@ -1,0 +1,257 @@
+//! Sixteen f32 lanes as four SSE registers ([`V16`]): the lane type of the 16-ray set-up kernel
+//! (Hunt et al. 2018, §5.5, one packet per pixel at 16 subsamples: `cast/setup/mod.rs`).
+//!
+//! Every operation is glam's [`Vec4`] operation (the 4-lane kernel's) on each quarter, so lane
+//! `i` rounds exactly as the 4-lane kernel and scalar f32 do (the invariant of
+//! `parallax_core::simd`; tested against the scalar rule in this module's tests). Sixteen
+//! lanes amortise the per-triangle work that does not depend on the ray (loading the set-up
+//! triangle, splatting its covectors, the mask bookkeeping) over four times as many rays.
+
+use std::ops::{Add, Div, Mul, Sub};
+
+use glam::{BVec4A, Vec4};
+use parallax_core::simd::{F8, Lanes};
+
+/// Horizontal operations the set-up kernel needs per packet (not per triangle), so they stay
+/// out of the scalar lane-by-lane loops: the smallest / largest lane (compare-and-select, the
+/// kernels' values are never NaN where it matters) and all lanes to an array.
+pub trait LaneReduce: Lanes {
+    fn hmin(self) -> f32;
+    fn hmax(self) -> f32;
+    /// Lanes `0..N` into `out[..N]`.
+    fn write(self, out: &mut [f32]);
+}
+
+#[inline(always)]
+fn min2(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
+}
+#[inline(always)]
+fn max2(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
+}
+
+impl LaneReduce for Vec4 {
+    #[inline(always)]
+    fn hmin(self) -> f32 {
+        let a = self.to_array();
+        min2(min2(a[0], a[1]), min2(a[2], a[3]))
+    }
+    #[inline(always)]
+    fn hmax(self) -> f32 {
+        let a = self.to_array();
+        max2(max2(a[0], a[1]), max2(a[2], a[3]))
+    }
+    #[inline(always)]
+    fn write(self, out: &mut [f32]) {
+        self.write_to_slice(&mut out[..4]);
+    }
+}
+
+impl LaneReduce for F8 {
+    #[inline(always)]
+    fn hmin(self) -> f32 {
+        self.0.iter().fold(f32::INFINITY, |a, &b| min2(a, b))
+    }
+    #[inline(always)]
+    fn hmax(self) -> f32 {
+        self.0.iter().fold(f32::NEG_INFINITY, |a, &b| max2(a, b))
+    }
+    #[inline(always)]
+    fn write(self, out: &mut [f32]) {
+        out[..8].copy_from_slice(&self.0);
+    }
+}
+
+impl LaneReduce for V16 {
+    #[inline(always)]
+    fn hmin(self) -> f32 {
+        let q = self.0;
+        let sel = |a: Vec4, b: Vec4| Vec4::select(a.cmplt(b), a, b);
+        sel(sel(q[0], q[1]), sel(q[2], q[3])).hmin()
+    }
+    #[inline(always)]
+    fn hmax(self) -> f32 {
+        let q = self.0;
+        let sel = |a: Vec4, b: Vec4| Vec4::select(a.cmpgt(b), a, b);
+        sel(sel(q[0], q[1]), sel(q[2], q[3])).hmax()
+    }
+    #[inline(always)]
+    fn write(self, out: &mut [f32]) {
+        for (i, q) in self.0.iter().enumerate() {
+            q.write_to_slice(&mut out[4 * i..4 * i + 4]);
+        }
+    }
+}
+
+/// Sixteen lanes: lane `i` is `self.0[i / 4][i % 4]`.
+#[derive(Clone, Copy, Debug)]
+pub struct V16(pub [Vec4; 4]);
+
+/// The mask of [`V16`].
+#[derive(Clone, Copy, Debug)]
+pub struct M16(pub [BVec4A; 4]);
+
+macro_rules! binop {
+    ($tr:ident, $f:ident) => {
+        impl $tr for V16 {
+            type Output = V16;
+            #[inline(always)]
+            fn $f(self, o: V16) -> V16 {
+                let (a, b) = (self.0, o.0);
+                V16([a[0].$f(b[0]), a[1].$f(b[1]), a[2].$f(b[2]), a[3].$f(b[3])])
+            }
+        }
+    };
+}
+binop!(Add, add);
+binop!(Sub, sub);
+binop!(Mul, mul);
+binop!(Div, div);
+
+macro_rules! quarters {
+    ($f:ident, $out:ident) => {
+        #[inline(always)]
+        fn $f(self, o: Self) -> $out {
+            let (a, b) = (self.0, o.0);
+            $out([
+                Lanes::$f(a[0], b[0]),
+                Lanes::$f(a[1], b[1]),
+                Lanes::$f(a[2], b[2]),
+                Lanes::$f(a[3], b[3]),
+            ])
+        }
+    };
+}
+
+impl Lanes for V16 {
+    const N: usize = 16;
+    type M = M16;
+    #[inline(always)]
+    fn splat(x: f32) -> Self {
+        V16([Vec4::splat(x); 4])
+    }
+    #[inline(always)]
+    fn from_fn(mut f: impl FnMut(usize) -> f32) -> Self {
+        let mut q = |i: usize| Vec4::new(f(4 * i), f(4 * i + 1), f(4 * i + 2), f(4 * i + 3));
+        V16([q(0), q(1), q(2), q(3)])
+    }
+    #[inline(always)]
+    fn get(self, i: usize) -> f32 {
+        self.0[i >> 2][i & 3]
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        V16(self.0.map(Vec4::sqrt))
+    }
+    quarters!(lt, M16);
+    quarters!(gt, M16);
+    quarters!(le, M16);
+    quarters!(ge, M16);
+    quarters!(eq, M16);
+    quarters!(ne, M16);
+    quarters!(max_or_rhs, V16);
+    quarters!(min_or_rhs, V16);
+    #[inline(always)]
+    fn and(a: M16, b: M16) -> M16 {
+        M16([
+            a.0[0] & b.0[0],
+            a.0[1] & b.0[1],
+            a.0[2] & b.0[2],
+            a.0[3] & b.0[3],
+        ])
+    }
+    #[inline(always)]
+    fn or(a: M16, b: M16) -> M16 {
+        M16([
+            a.0[0] | b.0[0],
+            a.0[1] | b.0[1],
+            a.0[2] | b.0[2],
+            a.0[3] | b.0[3],
+        ])
+    }
+    #[inline(always)]
+    fn bits(m: M16) -> u32 {
+        let b = |i: usize| <Vec4 as Lanes>::bits(m.0[i]) << (4 * i);
+        b(0) | b(1) | b(2) | b(3)
+    }
+    #[inline(always)]
+    fn select(m: M16, a: Self, b: Self) -> Self {
+        let q = |i: usize| <Vec4 as Lanes>::select(m.0[i], a.0[i], b.0[i]);
+        V16([q(0), q(1), q(2), q(3)])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// NaN on either side, infinities, signed zeros, ordinary values.
+    const A: [f32; 16] = [
+        f32::NAN,
+        3.0,
+        -1.0,
+        f32::NAN,
+        0.0,
+        -0.0,
+        f32::INFINITY,
+        2.0,
+        1e-30,
+        -5.5,
+        7.0,
+        0.1,
+        f32::NEG_INFINITY,
+        4.0,
+        -0.0,
+        1.0,
+    ];
+    const B: [f32; 16] = [
+        1.0,
+        2.0,
+        5.0,
+        f32::INFINITY,
+        -0.0,
+        0.0,
+        f32::NAN,
+        2.0,
+        3e-30,
+        -5.5,
+        -7.0,
+        0.3,
+        1.0,
+        f32::NAN,
+        0.0,
+        1.0,
+    ];
+
+    fn same(a: f32, b: f32) -> bool {
+        a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())
+    }
+
+    #[test]
+    fn every_lane_is_the_scalar_operation() {
+        let (a, b) = (V16::from_fn(|i| A[i]), V16::from_fn(|i| B[i]));
+        for i in 0..16 {
+            let (x, y) = (A[i], B[i]);
+            assert!(same(a.get(i), x));
+            assert!(same(a.max_or_rhs(b).get(i), x.max_or_rhs(y)), "max {i}");
+            assert!(same(a.min_or_rhs(b).get(i), x.min_or_rhs(y)), "min {i}");
+            let bit = |m: M16| V16::bits(m) >> i & 1 == 1;
+            assert_eq!(bit(a.lt(b)), x < y);
+            assert_eq!(bit(a.gt(b)), x > y);
+            assert_eq!(bit(a.le(b)), x <= y);
+            assert_eq!(bit(a.ge(b)), x >= y);
+            assert_eq!(bit(a.eq(b)), x == y);
+            assert_eq!(bit(a.ne(b)), x != y);
+            assert_eq!(bit(V16::or(a.lt(b), a.eq(b))), x <= y);
+            assert_eq!(bit(V16::and(a.le(b), a.ge(b))), x == y);
+            assert!(same(
+                V16::select(a.lt(b), a, b).get(i),
+                if x < y { x } else { y }
+            ));
+            assert!(same((a * b + a / b - b).get(i), x * y + x / y - y));
+            assert!(same(a.sqrt().get(i), x.sqrt()));
+            assert!(same(V16::splat(x).get(i), x));
+        }
+    }
+}
