@@ -212,17 +212,9 @@ impl Bvh {
                 }
             }
             // Pop the next entry that can still hold a closer hit.
-            loop {
-                if sp == 0 {
-                    return;
-                }
-                sp -= 1;
-                // SAFETY: entries below `sp` were written by the pushes above.
-                let e = unsafe { stack.get_unchecked(sp).assume_init() };
-                if f32::from_bits((e >> 32) as u32) <= t_max * ROBUST_FAR_SCALE {
-                    cur = e as u32;
-                    break;
-                }
+            match pop_closer(&stack, &mut sp, t_max) {
+                Some(next) => cur = next,
+                None => return,
             }
         }
     }
@@ -496,4 +488,20 @@ impl Best {
             v: self.v,
         })
     }
+}
+
+/// Pops stack entries (`near t` bits in the high half, the node in the low half) until one can
+/// still hold a hit closer than `t_max` (with the robust far scaling), and returns its node;
+/// `None` when the stack runs empty. Entries below `*sp` must have been written.
+#[inline(always)]
+pub(crate) fn pop_closer(stack: &[MaybeUninit<u64>], sp: &mut usize, t_max: f32) -> Option<u32> {
+    while *sp > 0 {
+        *sp -= 1;
+        // SAFETY: the caller wrote every entry below `*sp` (the pushes of its traversal).
+        let e = unsafe { stack.get_unchecked(*sp).assume_init() };
+        if f32::from_bits((e >> 32) as u32) <= t_max * ROBUST_FAR_SCALE {
+            return Some(e as u32);
+        }
+    }
+    None
 }

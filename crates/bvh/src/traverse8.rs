@@ -33,7 +33,7 @@ use crate::hit::Hit;
 use crate::node::{is_leaf, leaf_count, leaf_first};
 use crate::node8::Node8;
 use crate::stats::{Counter, NoStats, TraversalStats};
-use crate::traverse::{Best, sort_hits};
+use crate::traverse::{Best, pop_closer, sort_hits};
 use crate::tri4::Tri4Ray;
 use parallax_core::simd::{max_or_rhs, min_or_rhs};
 
@@ -309,17 +309,9 @@ impl Bvh {
                     return;
                 }
             }
-            loop {
-                if sp == 0 {
-                    return;
-                }
-                sp -= 1;
-                // SAFETY: entries below `sp` were written by the pushes above.
-                let e = unsafe { stack.get_unchecked(sp).assume_init() };
-                if f32::from_bits((e >> 32) as u32) <= t_max * ROBUST_FAR_SCALE {
-                    cur = e as u32;
-                    break;
-                }
+            match pop_closer(&stack, &mut sp, t_max) {
+                Some(next) => cur = next,
+                None => return,
             }
         }
     }
