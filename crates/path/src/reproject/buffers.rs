@@ -38,6 +38,25 @@ impl Texel {
     pub fn is_hit(&self) -> bool {
         self.depth.is_finite()
     }
+
+    /// Albedo factor of demodulation: the albedo where a channel has one, else 1 (so black
+    /// and sky texels pass radiance through).
+    #[inline]
+    pub fn albedo_factor(&self) -> Vec3 {
+        Vec3::select(self.albedo.cmpgt(Vec3::splat(1e-3)), self.albedo, Vec3::ONE)
+    }
+
+    /// `v` divided by the albedo factor when `on` (radiance as demodulated values carry it).
+    #[inline]
+    pub fn demodulate(&self, v: Vec3, on: bool) -> Vec3 {
+        if on { v / self.albedo_factor() } else { v }
+    }
+
+    /// `v` times the albedo factor when `on` (an image value of demodulated radiance).
+    #[inline]
+    pub fn remodulate(&self, v: Vec3, on: bool) -> Vec3 {
+        if on { v * self.albedo_factor() } else { v }
+    }
 }
 
 /// The G-buffer of one eye at one frame.

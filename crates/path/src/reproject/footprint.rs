@@ -97,11 +97,24 @@ pub struct Tests {
 }
 
 impl Tests {
+    /// The limits squared, once per pass rather than per pixel (the chord needs a sine).
     #[inline]
-    fn squared(self) -> (f32, f32) {
+    fn limits(self) -> Limits {
         let chord = 2.0 * (0.5 * self.normal_deg.to_radians()).sin();
-        (self.position * self.position, chord * chord)
+        Limits {
+            pos2: self.position * self.position,
+            nrm2: chord * chord,
+            plane: self.plane,
+        }
     }
+}
+
+/// [`Tests`] as the inner loop compares them.
+#[derive(Clone, Copy, Debug)]
+struct Limits {
+    pos2: f32,
+    nrm2: f32,
+    plane: bool,
 }
 
 /// Where a target pixel's value comes from in the source: the kept neighbours (a bit per tap,
@@ -137,6 +150,23 @@ impl Footprint {
     /// when nothing was kept.
     #[inline]
     pub fn gather<T: Blendable>(&self, kernel: Kernel, values: &[T], width: u32) -> T {
+        if kernel == Kernel::BILINEAR {
+            self.gather_in::<true, T>(kernel, values, width)
+        } else {
+            self.gather_in::<false, T>(kernel, values, width)
+        }
+    }
+
+    /// [`Self::gather`]; `BILINEAR` fixes the kernel at compile time (same arithmetic, the
+    /// tap loops unrolled).
+    #[inline(always)]
+    fn gather_in<const BILINEAR: bool, T: Blendable>(
+        &self,
+        kernel: Kernel,
+        values: &[T],
+        width: u32,
+    ) -> T {
+        let kernel = if BILINEAR { Kernel::BILINEAR } else { kernel };
         let mut acc = T::default();
         if self.mask == 0 {
             return acc;
@@ -161,6 +191,24 @@ impl Footprint {
 
 /// The footprint of a target pixel seeing `t` in `source`.
 pub fn footprint(source: &EyeView, t: &Texel, kernel: Kernel, tests: Tests) -> Footprint {
+    let lim = tests.limits();
+    if kernel == Kernel::BILINEAR {
+        footprint_in::<true>(source, t, kernel, lim)
+    } else {
+        footprint_in::<false>(source, t, kernel, lim)
+    }
+}
+
+/// [`footprint`]; `BILINEAR` fixes the kernel at compile time: the same arithmetic (a
+/// division by the radius 1 is exact), the taps unrolled.
+#[inline(always)]
+fn footprint_in<const BILINEAR: bool>(
+    source: &EyeView,
+    t: &Texel,
+    kernel: Kernel,
+    lim: Limits,
+) -> Footprint {
+    let kernel = if BILINEAR { Kernel::BILINEAR } else { kernel };
     if !t.is_hit() {
         return Footprint::discarded(Outcome::Background);
     }
@@ -170,14 +218,14 @@ pub fn footprint(source: &EyeView, t: &Texel, kernel: Kernel, tests: Tests) -> F
     if !f.is_finite() {
         return Footprint::discarded(Outcome::Outside);
     }
-    let (pos2, nrm2) = tests.squared();
+    let (pos2, nrm2) = (lim.pos2, lim.nrm2);
     let half = kernel.half();
     let (w, h) = (source.width() as i32, source.height() as i32);
     // Pixel centres are at integer + 0.5: the tap left of (above) the sample is floor(f - 0.5).
     let (sx, sy) = (f.x - 0.5, f.y - 0.5);
     let (bx, by) = (sx.floor(), sy.floor());
-    let lim = half as f32 + 1.0;
-    if !(bx > -lim && bx < w as f32 + lim && by > -lim && by < h as f32 + lim) {
+    let reach = half as f32 + 1.0;
+    if !(bx > -reach && bx < w as f32 + reach && by > -reach && by < h as f32 + reach) {
         return Footprint::discarded(Outcome::Outside);
     }
     let (fx, fy) = (sx - bx, sy - by);
@@ -196,7 +244,7 @@ pub fn footprint(source: &EyeView, t: &Texel, kernel: Kernel, tests: Tests) -> F
                 inside = true;
                 let s = &source.texels[y as usize * w as usize + x as usize];
                 let d = s.position - t.position;
-                let d2 = if tests.plane {
+                let d2 = if lim.plane {
                     let h = d.dot(t.normal);
                     h * h
                 } else {
@@ -249,8 +297,15 @@ pub fn footprints(
         .zip(target.texels.par_chunks(w * BAND_ROWS))
         .map(|(fps, texels)| {
             let t0 = thread_ns();
-            for (fp, t) in fps.iter_mut().zip(texels) {
-                *fp = footprint(source, t, kernel, tests);
+            let lim = tests.limits();
+            if kernel == Kernel::BILINEAR {
+                for (fp, t) in fps.iter_mut().zip(texels) {
+                    *fp = footprint_in::<true>(source, t, kernel, lim);
+                }
+            } else {
+                for (fp, t) in fps.iter_mut().zip(texels) {
+                    *fp = footprint_in::<false>(source, t, kernel, lim);
+                }
             }
             thread_ns().saturating_sub(t0)
         })
@@ -377,5 +432,56 @@ mod tests {
             footprint(&src, &Texel::MISS, Kernel::BILINEAR, LOOSE).outcome,
             Outcome::Background
         );
+    }
+
+    #[test]
+    fn bilinear_specialisation_equals_the_general_kernel_bit_for_bit() {
+        let mut src = plane_view(Vec3::ZERO, 5.0, 24, 16);
+        // Bumps and turned normals so that every outcome and partial masks occur.
+        for (i, s) in src.texels.iter_mut().enumerate() {
+            let k = (i * 7919 % 13) as f32;
+            s.position.z += 0.05 * (k - 6.0);
+            if i % 5 == 0 {
+                s.normal = Vec3::new(0.6, 0.0, 0.8);
+            }
+            if i % 11 == 0 {
+                *s = Texel::MISS;
+            }
+        }
+        let dst = plane_view(Vec3::new(0.37, -0.21, 0.4), 5.0, 24, 16);
+        let values: Vec<Vec3> = (0..src.len())
+            .map(|i| Vec3::new(i as f32, (i * i % 17) as f32, 1.0))
+            .collect();
+        let counts: Vec<f32> = (0..src.len()).map(|i| (i % 9) as f32 + 1.0).collect();
+        let mut seen = std::collections::HashSet::new();
+        for plane in [false, true] {
+            let lim = Tests {
+                position: 0.12,
+                normal_deg: 25.0,
+                plane,
+            }
+            .limits();
+            for t in &dst.texels {
+                let fast = footprint_in::<true>(&src, t, Kernel::BILINEAR, lim);
+                let slow = footprint_in::<false>(&src, t, Kernel::BILINEAR, lim);
+                assert_eq!(fast, slow);
+                seen.insert(fast.outcome);
+                let (a, b) = (
+                    fast.gather_in::<true, Vec3>(Kernel::BILINEAR, &values, 24),
+                    slow.gather_in::<false, Vec3>(Kernel::BILINEAR, &values, 24),
+                );
+                assert_eq!(
+                    a.to_array().map(f32::to_bits),
+                    b.to_array().map(f32::to_bits)
+                );
+                assert_eq!(
+                    fast.gather_in::<true, f32>(Kernel::BILINEAR, &counts, 24)
+                        .to_bits(),
+                    slow.gather_in::<false, f32>(Kernel::BILINEAR, &counts, 24)
+                        .to_bits()
+                );
+            }
+        }
+        assert!(seen.len() >= 3, "outcomes seen: {seen:?}");
     }
 }

@@ -67,76 +67,81 @@ pub struct History {
     pub count: Vec<f32>,
 }
 
-impl History {
-    /// A history that starts now: every pixel holds `color`, one frame.
-    pub fn start(view: Arc<EyeView>, color: Vec<Vec3>) -> Self {
-        let n = color.len();
-        Self {
-            view,
-            color,
-            count: vec![1.0; n],
-        }
-    }
+/// How [`accumulate`] reprojects and blends.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Accumulation {
+    pub kernel: Kernel,
+    pub tests: Tests,
+    pub blend: Blend,
+    /// The values are radiance divided by the albedo factor ([`super::buffers::Texel::demodulate`]);
+    /// the image multiplies it back.
+    pub demodulated: bool,
 }
 
-/// One accumulated frame: the new history and what became of each pixel's old one.
+/// One accumulated frame: the new history, its image and what became of each pixel's old one.
 pub struct Accumulated {
     pub history: History,
+    /// The history's colour as radiance (remodulated by the view's albedo when the values
+    /// are demodulated).
+    pub image: Vec<Vec3>,
     /// Per pixel: [`Outcome::Reused`] where history was blended in ([`Outcome::Outside`]
     /// everywhere on the first frame).
     pub footprints: Vec<Footprint>,
-    /// Thread CPU nanoseconds of the footprints and the blend.
+    /// Thread CPU nanoseconds of the footprints, the blend and the image.
     pub cpu_ns: u64,
 }
 
-/// Blends `new` (the values of `view`'s pixels this frame) into `prev` reprojected into `view`.
+/// Blends `new(i)` (the value of `view`'s pixel `i` this frame) into `prev` reprojected into
+/// `view`; one pass over the pixels after the footprints (blend and image together).
 pub fn accumulate(
     view: &Arc<EyeView>,
-    new: &[Vec3],
+    new: &(dyn Fn(usize) -> Vec3 + Sync),
     prev: Option<&History>,
-    kernel: Kernel,
-    tests: Tests,
-    blend: Blend,
+    how: &Accumulation,
 ) -> Accumulated {
-    assert_eq!(new.len(), view.len());
-    let Some(prev) = prev else {
-        return Accumulated {
-            history: History::start(view.clone(), new.to_vec()),
-            footprints: vec![
+    let n = view.len();
+    let mut fps = Vec::new();
+    let mut cpu_ns = match prev {
+        Some(p) => footprints(view, &p.view, how.kernel, how.tests, &mut fps),
+        None => {
+            fps = vec![
                 Footprint {
                     outcome: Outcome::Outside,
                     ..Footprint::default()
                 };
-                view.len()
-            ],
-            cpu_ns: 0,
-        };
+                n
+            ];
+            0
+        }
     };
-    let mut fps = Vec::new();
-    let mut cpu_ns = footprints(view, &prev.view, kernel, tests, &mut fps);
-    let w = view.width() as usize;
-    let pw = prev.view.width();
-    let mut color = vec![Vec3::ZERO; new.len()];
-    let mut count = vec![1.0f32; new.len()];
+    let band = view.width() as usize * BAND_ROWS;
+    let mut color = vec![Vec3::ZERO; n];
+    let mut count = vec![1.0f32; n];
+    let mut image = vec![Vec3::ZERO; n];
+    let (kernel, blend, demod) = (how.kernel, how.blend, how.demodulated);
     let ns: Vec<u64> = color
-        .par_chunks_mut(w * BAND_ROWS)
-        .zip(count.par_chunks_mut(w * BAND_ROWS))
-        .zip(
-            fps.par_chunks(w * BAND_ROWS)
-                .zip(new.par_chunks(w * BAND_ROWS)),
-        )
-        .map(|((c, n), (f, v))| {
+        .par_chunks_mut(band)
+        .zip(count.par_chunks_mut(band))
+        .zip(image.par_chunks_mut(band))
+        .enumerate()
+        .map(|(b, ((c, cnt), img))| {
             let t0 = thread_ns();
-            for i in 0..c.len() {
-                if f[i].outcome == Outcome::Reused {
-                    let h = f[i].gather(kernel, &prev.color, pw);
-                    let hn = f[i].gather(kernel, &prev.count, pw);
-                    let a = blend.alpha(hn);
-                    c[i] = v[i] * a + h * (1.0 - a);
-                    n[i] = hn + 1.0;
-                } else {
-                    c[i] = v[i];
-                }
+            let base = b * band;
+            for j in 0..c.len() {
+                let i = base + j;
+                let v = new(i);
+                c[j] = match prev {
+                    Some(p) if fps[i].outcome == Outcome::Reused => {
+                        let pw = p.view.width();
+                        let h = fps[i].gather(kernel, &p.color, pw);
+                        let hn = fps[i].gather(kernel, &p.count, pw);
+                        let a = blend.alpha(hn);
+                        cnt[j] = hn + 1.0;
+                        v * a + h * (1.0 - a)
+                    }
+                    _ => v,
+                };
+                img[j] = view.texels[i].remodulate(c[j], demod);
             }
             thread_ns().saturating_sub(t0)
         })
@@ -148,6 +153,7 @@ pub fn accumulate(
             color,
             count,
         },
+        image,
         footprints: fps,
         cpu_ns,
     }

@@ -24,15 +24,16 @@
 //! (never on the thread count); a discarded left pixel is the path tracer's own sample of the
 //! left eye's stream, bit for bit.
 
+use std::borrow::Cow;
 use std::sync::Arc;
 
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::buffers::{EyeView, Texel};
+use super::buffers::EyeView;
 use super::error::{Result, option_error};
 use super::footprint::{BAND_ROWS, Footprint, Kernel, Outcome, Tests, footprint, footprints};
-use super::history::{Blend, History, accumulate};
+use super::history::{Accumulation, Blend, History, accumulate};
 use super::sampler::{PaperSampler, TraceCost, thread_ns};
 
 /// How stereo + temporal fills the left eye (module docs).
@@ -164,13 +165,6 @@ pub struct MethodState {
     left: Option<History>,
 }
 
-/// Albedo factor of demodulation: the albedo where a channel has one, else 1 (so black and
-/// sky texels pass radiance through).
-#[inline]
-fn albedo_factor(t: &Texel) -> Vec3 {
-    Vec3::select(t.albedo.cmpgt(Vec3::splat(1e-3)), t.albedo, Vec3::ONE)
-}
-
 /// Runs `f(i)` for every pixel into a new image, parallel over bands; returns the image and
 /// the thread CPU nanoseconds.
 fn per_pixel(n: usize, w: usize, f: impl Fn(usize) -> Vec3 + Sync) -> (Vec<Vec3>, u64) {
@@ -190,22 +184,6 @@ fn per_pixel(n: usize, w: usize, f: impl Fn(usize) -> Vec3 + Sync) -> (Vec<Vec3>
     (out, ns.iter().sum())
 }
 
-/// `values` divided (`inverse`) or multiplied by the albedo factors of `view` when `on`
-/// (else copied), with the thread CPU nanoseconds.
-fn modulate(view: &EyeView, values: &[Vec3], inverse: bool, on: bool) -> (Vec<Vec3>, u64) {
-    if !on {
-        return (values.to_vec(), 0);
-    }
-    per_pixel(values.len(), view.width() as usize, |i| {
-        let f = albedo_factor(&view.texels[i]);
-        if inverse {
-            values[i] / f
-        } else {
-            values[i] * f
-        }
-    })
-}
-
 impl MethodState {
     pub fn new(method: Method) -> Self {
         Self {
@@ -221,7 +199,8 @@ impl MethodState {
         self.left = None;
     }
 
-    /// Runs one frame.
+    /// Runs one frame. Every pass over the pixels does one job whole: the footprints, then
+    /// one pass per output that gathers, blends and remodulates.
     pub fn step(&mut self, inp: &FrameInputs) -> MethodFrame {
         let m = &self.method;
         let k = m.kernel;
@@ -233,7 +212,14 @@ impl MethodState {
         let (n, w) = (left.len(), left.width() as usize);
         let rw = right.width();
         let demod = m.demodulate;
-        let (r_new, rnew_ns) = modulate(right, inp.right_radiance, true, demod);
+        let (r_new, rnew_ns): (Cow<[Vec3]>, u64) = if demod {
+            let (v, ns) = per_pixel(right.len(), right.width() as usize, |i| {
+                right.texels[i].demodulate(inp.right_radiance[i], true)
+            });
+            (Cow::Owned(v), ns)
+        } else {
+            (Cow::Borrowed(inp.right_radiance), 0)
+        };
         // Stereo: footprints of the left pixels in the right view, then the discarded pixels
         // traced.
         let mut fps = Vec::new();
@@ -245,11 +231,12 @@ impl MethodState {
         let left_traced =
             inp.sampler
                 .trace_pixels(&left.camera, inp.left_seed, &discarded, &mut traced_list);
+        let t0 = thread_ns();
         let mut traced = vec![Vec3::ZERO; n];
         for (&i, v) in discarded.iter().zip(&traced_list) {
-            traced[i as usize] = *v;
+            traced[i as usize] = left.texels[i as usize].demodulate(*v, demod);
         }
-        let (traced, traced_ns) = modulate(left, &traced, true, demod);
+        let traced_ns = thread_ns().saturating_sub(t0);
         let background = inp.left_background;
         let stereo_value = |i: usize, src: &[Vec3]| -> Vec3 {
             match fps[i].outcome {
@@ -258,39 +245,48 @@ impl MethodState {
                 _ => traced[i],
             }
         };
-        let (stereo_img, apply_ns) = per_pixel(n, w, |i| stereo_value(i, &r_new));
-        let (image, out_ns) = modulate(left, &stereo_img, false, demod);
+        let (image, apply_ns) = per_pixel(n, w, |i| {
+            left.texels[i].remodulate(stereo_value(i, &r_new), demod)
+        });
         let shared_ns = fp_ns + rnew_ns + traced_ns;
         let stereo = ModeFrame {
             image,
             outcomes: fps.iter().map(|f| f.outcome).collect(),
-            reproject_ns: shared_ns + apply_ns + out_ns,
+            reproject_ns: shared_ns + apply_ns,
         };
 
         // Temporal: the right eye's history.
-        let acc = accumulate(right, &r_new, self.right.as_ref(), k, tests, m.blend);
-        let (image, out_ns) = modulate(right, &acc.history.color, false, demod);
+        let how = Accumulation {
+            kernel: k,
+            tests,
+            blend: m.blend,
+            demodulated: demod,
+        };
+        let acc = accumulate(right, &|i| r_new[i], self.right.as_ref(), &how);
         let temporal = ModeFrame {
-            image,
+            image: acc.image,
             outcomes: acc.footprints.iter().map(|f| f.outcome).collect(),
-            reproject_ns: rnew_ns + acc.cpu_ns + out_ns,
+            reproject_ns: rnew_ns + acc.cpu_ns,
         };
         let r_acc = &acc.history;
 
         // Stereo + temporal.
-        let (left_hist, left_ns) = match m.combine {
+        let (left_hist, image, left_ns) = match m.combine {
             Combine::Paper => self.paper_left(inp, &fps, r_acc, &traced),
             Combine::Cascade => {
-                let (input, ns) = per_pixel(n, w, |i| stereo_value(i, &r_acc.color));
-                let a = accumulate(left, &input, self.left.as_ref(), k, tests, m.blend);
-                (a.history, ns + a.cpu_ns)
+                let a = accumulate(
+                    left,
+                    &|i| stereo_value(i, &r_acc.color),
+                    self.left.as_ref(),
+                    &how,
+                );
+                (a.history, a.image, a.cpu_ns)
             }
         };
-        let (image, out_ns) = modulate(left, &left_hist.color, false, demod);
         let combined = ModeFrame {
             image,
             outcomes: stereo.outcomes.clone(),
-            reproject_ns: shared_ns + acc.cpu_ns + left_ns + out_ns,
+            reproject_ns: shared_ns + acc.cpu_ns + left_ns,
         };
         self.right = Some(acc.history);
         self.left = Some(left_hist);
@@ -311,7 +307,7 @@ impl MethodState {
         fps: &[Footprint],
         r_acc: &History,
         traced: &[Vec3],
-    ) -> (History, u64) {
+    ) -> (History, Vec<Vec3>, u64) {
         let m = &self.method;
         let (left, k) = (&inp.left, m.kernel);
         let (n, w) = (left.len(), left.width() as usize);
@@ -319,11 +315,17 @@ impl MethodState {
         let prev = self.left.as_ref();
         let mut color = vec![Vec3::ZERO; n];
         let mut count = vec![1.0f32; n];
+        let mut image = vec![Vec3::ZERO; n];
+        let tests = Tests {
+            plane: m.plane_test,
+            ..inp.tests
+        };
         let ns: Vec<u64> = color
             .par_chunks_mut(w * BAND_ROWS)
             .zip(count.par_chunks_mut(w * BAND_ROWS))
+            .zip(image.par_chunks_mut(w * BAND_ROWS))
             .enumerate()
-            .map(|(b, (c, cnt))| {
+            .map(|(b, ((c, cnt), img))| {
                 let t0 = thread_ns();
                 let base = b * w * BAND_ROWS;
                 for j in 0..c.len() {
@@ -337,10 +339,6 @@ impl MethodState {
                         _ => {
                             c[j] = traced[i];
                             if let Some(p) = prev {
-                                let tests = Tests {
-                                    plane: m.plane_test,
-                                    ..inp.tests
-                                };
                                 let f = footprint(&p.view, &left.texels[i], k, tests);
                                 if f.outcome == Outcome::Reused {
                                     let pw = p.view.width();
@@ -353,6 +351,7 @@ impl MethodState {
                             }
                         }
                     }
+                    img[j] = left.texels[i].remodulate(c[j], m.demodulate);
                 }
                 thread_ns().saturating_sub(t0)
             })
@@ -363,6 +362,7 @@ impl MethodState {
                 color,
                 count,
             },
+            image,
             ns.iter().sum(),
         )
     }

@@ -128,6 +128,7 @@ impl CameraModel for Pinhole {
         })
     }
 
+    #[inline]
     fn project(&self, p: Vec3, _channel: usize) -> Option<Vec2> {
         self.film_of_camera_point(self.frame.to_camera(p))
     }
