@@ -456,3 +456,38 @@ fn memory_budget_refuses_before_allocating() {
         stderr(&o)
     );
 }
+
+/// Every example experiment still parses against the benches' flags (a renamed flag or a
+/// removed scene fails here, not in a user's run); from the repository root, where the files'
+/// `../shared/scenes` paths resolve.
+#[test]
+fn every_example_experiment_checks_in_a_dry_run() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(root.join("experiments"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 9, "{files:?}");
+    let scenes = root.join("../shared/scenes");
+    for f in files {
+        let text = std::fs::read_to_string(&f).unwrap();
+        if text.contains("../shared/scenes") && !scenes.is_dir() {
+            eprintln!(
+                "{}: skipped, ../shared/scenes is not beside the repository",
+                f.display()
+            );
+            continue;
+        }
+        let mut c = Command::new(env!("CARGO_BIN_EXE_parallax"));
+        c.current_dir(&root).args(["run", "--dry-run", s(&f)]);
+        for k in SHARD_ENV {
+            c.env_remove(k);
+        }
+        let o = c.output().expect("binary runs");
+        ok(&o);
+        let out = String::from_utf8_lossy(&o.stdout);
+        assert!(out.contains("point(s) checked"), "{}: {out}", f.display());
+    }
+}
