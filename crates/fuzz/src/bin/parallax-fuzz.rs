@@ -1,45 +1,58 @@
 //! `parallax-fuzz`: the long fuzz run (`cargo run --release -p parallax-fuzz -- --cases
 //! 1000000`); see `parallax_fuzz` for what it does. Flags: `--cases N`, `--seed S`,
 //! `--budget-mib M` (peak heap of one input), `--timeout S`, `--out DIR` (findings),
-//! `--targets gltf,glb,obj,ply,png,exr,toml`. Exit status 1 when anything was found.
+//! `--targets gltf,glb,obj,ply,png,exr,toml` (`--help` for all). Exit status 1 when anything was
+//! found.
 
+use clap::Parser;
 use parallax_fuzz::targets::Target;
 use parallax_fuzz::{FuzzOptions, alloc};
 
 #[global_allocator]
 static ALLOC: alloc::Counting = alloc::Counting;
 
+/// The long fuzz run over the loaders, image inputs and experiment files.
+#[derive(Parser, Debug)]
+#[command(name = "parallax-fuzz", version)]
+struct Args {
+    /// Inputs to run (round robin over the targets)
+    #[arg(long, default_value_t = FuzzOptions::default().cases)]
+    cases: u64,
+    /// Seed of the mutations
+    #[arg(long, default_value_t = FuzzOptions::default().seed)]
+    seed: u64,
+    /// Largest peak heap of one input before it counts as a finding (MiB)
+    #[arg(long, default_value_t = FuzzOptions::default().budget_bytes >> 20)]
+    budget_mib: usize,
+    /// Wall-clock seconds one input may take before it counts as a hang
+    #[arg(long, default_value_t = FuzzOptions::default().timeout_s)]
+    timeout: u64,
+    /// Folder of the findings (and the current input, under work/)
+    #[arg(long, default_value = "out/fuzz")]
+    out: std::path::PathBuf,
+    /// Targets (comma list)
+    #[arg(long, value_delimiter = ',', value_parser = parse_target,
+          default_value = "gltf,glb,obj,ply,png,exr,toml")]
+    targets: Vec<Target>,
+}
+
+fn parse_target(s: &str) -> Result<Target, String> {
+    Target::of_ext(s).ok_or_else(|| {
+        let names: Vec<&str> = Target::ALL.iter().map(|t| t.ext()).collect();
+        format!("unknown target {s:?}; expected one of {}", names.join(", "))
+    })
+}
+
 fn main() -> std::process::ExitCode {
-    let mut o = FuzzOptions::default();
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        let mut val = || it.next().cloned().unwrap_or_default();
-        let parsed = match a.as_str() {
-            "--cases" => val().parse().map(|v| o.cases = v).is_ok(),
-            "--seed" => val().parse().map(|v| o.seed = v).is_ok(),
-            "--budget-mib" => val()
-                .parse::<usize>()
-                .map(|v| o.budget_bytes = v << 20)
-                .is_ok(),
-            "--timeout" => val().parse().map(|v| o.timeout_s = v).is_ok(),
-            "--out" => {
-                o.crash_dir = val().into();
-                true
-            }
-            "--targets" => {
-                let list: Option<Vec<Target>> = val().split(',').map(Target::of_ext).collect();
-                list.map(|l| o.targets = l).is_some()
-            }
-            _ => false,
-        };
-        if !parsed {
-            eprintln!(
-                "parallax-fuzz: bad flag {a:?}; flags: --cases N --seed S --budget-mib M --timeout S --out DIR --targets gltf,glb,obj,ply,png,exr,toml"
-            );
-            return std::process::ExitCode::FAILURE;
-        }
-    }
+    let a = Args::parse();
+    let o = FuzzOptions {
+        cases: a.cases,
+        seed: a.seed,
+        budget_bytes: a.budget_mib << 20,
+        timeout_s: a.timeout,
+        crash_dir: a.out,
+        targets: a.targets,
+    };
     // Above 4x the budget an allocation fails (abort) instead of swapping the machine.
     alloc::set_hard_cap(o.budget_bytes.saturating_mul(4).max(1 << 30));
     let r = match parallax_fuzz::run(&o) {
