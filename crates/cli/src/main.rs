@@ -102,7 +102,7 @@ fn dispatch(command: Command, quiet: bool) -> anyhow::Result<()> {
         Command::Scenes => commands::info::scenes(),
         Command::Info(a) => commands::info::run(&a),
         Command::Capture(a) => commands::capture::run(&a, quiet),
-        Command::Demo(a) => commands::demo::run(&a, quiet),
+        Command::Demo(a) => commands::demo::run(&a, quiet, &SHELL),
         Command::Vr(a) => commands::vr::run(&a, quiet),
         Command::Warp(a) => commands::warp::run(&a, quiet),
         Command::Upsample(a) => commands::upsample::run(&a, quiet),

@@ -30,7 +30,7 @@ pub struct DemoArgs {
     pub height: u32,
 }
 
-pub fn run(a: &DemoArgs, quiet: bool) -> Result<()> {
+pub fn run(a: &DemoArgs, quiet: bool, shell: &super::run::Shell) -> Result<()> {
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let scene = Scene::load(&a.scene)?;
     let t = Instant::now();
@@ -96,6 +96,7 @@ pub fn run(a: &DemoArgs, quiet: bool) -> Result<()> {
     super::path::demo_view(&scene, &desc, w, h, &a.out, quiet)?;
     super::bench_dirt::demo_view(&scene, &desc, w, h, &a.out, quiet)?;
     super::reflect::demo_reflect(&a.out, w / 2, h / 2, quiet)?;
+    super::demo_synth::synth_views(&a.scene, w / 2, h / 2, &a.out, shell, quiet)?;
     vr_frame(a, &scene, &bvh, &desc, quiet)?;
     stereo_pair(&scene, &bvh, &desc, w, h, &a.out, quiet)?;
     super::secondary::demo_secondary(&a.out, w / 2, h / 2, quiet)?;

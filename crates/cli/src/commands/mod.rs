@@ -6,6 +6,7 @@ pub mod bench_synth;
 pub mod bench_vr;
 pub mod capture;
 pub mod demo;
+pub mod demo_synth;
 pub mod dof;
 pub mod info;
 pub mod input;
