@@ -191,11 +191,32 @@ impl Footprint {
 
 /// The footprint of a target pixel seeing `t` in `source`.
 pub fn footprint(source: &EyeView, t: &Texel, kernel: Kernel, tests: Tests) -> Footprint {
-    let lim = tests.limits();
-    if kernel == Kernel::BILINEAR {
-        footprint_in::<true>(source, t, kernel, lim)
-    } else {
-        footprint_in::<false>(source, t, kernel, lim)
+    Reprojector::new(kernel, tests).footprint(source, t)
+}
+
+/// A kernel and tests prepared for many footprints (the limits squared once).
+#[derive(Clone, Copy, Debug)]
+pub struct Reprojector {
+    kernel: Kernel,
+    lim: Limits,
+}
+
+impl Reprojector {
+    pub fn new(kernel: Kernel, tests: Tests) -> Self {
+        Self {
+            kernel,
+            lim: tests.limits(),
+        }
+    }
+
+    /// [`footprint`] with the prepared kernel and tests.
+    #[inline]
+    pub fn footprint(&self, source: &EyeView, t: &Texel) -> Footprint {
+        if self.kernel == Kernel::BILINEAR {
+            footprint_in::<true>(source, t, self.kernel, self.lim)
+        } else {
+            footprint_in::<false>(source, t, self.kernel, self.lim)
+        }
     }
 }
 

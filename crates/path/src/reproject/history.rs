@@ -20,7 +20,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::buffers::EyeView;
-use super::footprint::{BAND_ROWS, Footprint, Kernel, Outcome, Tests, footprints};
+use super::footprint::{BAND_ROWS, Kernel, Outcome, Reprojector, Tests};
 use super::sampler::thread_ns;
 
 /// How the new value is blended into the reprojected history (module table).
@@ -86,13 +86,14 @@ pub struct Accumulated {
     pub image: Vec<Vec3>,
     /// Per pixel: [`Outcome::Reused`] where history was blended in ([`Outcome::Outside`]
     /// everywhere on the first frame).
-    pub footprints: Vec<Footprint>,
-    /// Thread CPU nanoseconds of the footprints, the blend and the image.
+    pub outcomes: Vec<Outcome>,
+    /// Thread CPU nanoseconds of the pass (footprints, blend and image).
     pub cpu_ns: u64,
 }
 
 /// Blends `new(i)` (the value of `view`'s pixel `i` this frame) into `prev` reprojected into
-/// `view`; one pass over the pixels after the footprints (blend and image together).
+/// `view`; one pass over the pixels: each pixel's footprint in the previous view, the blend
+/// and the image (the footprints are not stored).
 pub fn accumulate(
     view: &Arc<EyeView>,
     new: &(dyn Fn(usize) -> Vec3 + Sync),
@@ -100,53 +101,46 @@ pub fn accumulate(
     how: &Accumulation,
 ) -> Accumulated {
     let n = view.len();
-    let mut fps = Vec::new();
-    let mut cpu_ns = match prev {
-        Some(p) => footprints(view, &p.view, how.kernel, how.tests, &mut fps),
-        None => {
-            fps = vec![
-                Footprint {
-                    outcome: Outcome::Outside,
-                    ..Footprint::default()
-                };
-                n
-            ];
-            0
-        }
-    };
     let band = view.width() as usize * BAND_ROWS;
     let mut color = vec![Vec3::ZERO; n];
     let mut count = vec![1.0f32; n];
     let mut image = vec![Vec3::ZERO; n];
+    let mut outcomes = vec![Outcome::Outside; n];
     let (kernel, blend, demod) = (how.kernel, how.blend, how.demodulated);
+    let rep = Reprojector::new(kernel, how.tests);
     let ns: Vec<u64> = color
         .par_chunks_mut(band)
         .zip(count.par_chunks_mut(band))
-        .zip(image.par_chunks_mut(band))
+        .zip(
+            image
+                .par_chunks_mut(band)
+                .zip(outcomes.par_chunks_mut(band)),
+        )
         .enumerate()
-        .map(|(b, ((c, cnt), img))| {
+        .map(|(b, ((c, cnt), (img, out)))| {
             let t0 = thread_ns();
             let base = b * band;
             for j in 0..c.len() {
                 let i = base + j;
                 let v = new(i);
-                c[j] = match prev {
-                    Some(p) if fps[i].outcome == Outcome::Reused => {
+                c[j] = v;
+                if let Some(p) = prev {
+                    let f = rep.footprint(&p.view, &view.texels[i]);
+                    out[j] = f.outcome;
+                    if f.outcome == Outcome::Reused {
                         let pw = p.view.width();
-                        let h = fps[i].gather(kernel, &p.color, pw);
-                        let hn = fps[i].gather(kernel, &p.count, pw);
+                        let h = f.gather(kernel, &p.color, pw);
+                        let hn = f.gather(kernel, &p.count, pw);
                         let a = blend.alpha(hn);
                         cnt[j] = hn + 1.0;
-                        v * a + h * (1.0 - a)
+                        c[j] = v * a + h * (1.0 - a);
                     }
-                    _ => v,
-                };
+                }
                 img[j] = view.texels[i].remodulate(c[j], demod);
             }
             thread_ns().saturating_sub(t0)
         })
         .collect();
-    cpu_ns += ns.iter().sum::<u64>();
     Accumulated {
         history: History {
             view: view.clone(),
@@ -154,8 +148,8 @@ pub fn accumulate(
             count,
         },
         image,
-        footprints: fps,
-        cpu_ns,
+        outcomes,
+        cpu_ns: ns.iter().sum(),
     }
 }
 

@@ -32,7 +32,7 @@ use rayon::prelude::*;
 
 use super::buffers::EyeView;
 use super::error::{Result, option_error};
-use super::footprint::{BAND_ROWS, Footprint, Kernel, Outcome, Tests, footprint, footprints};
+use super::footprint::{BAND_ROWS, Footprint, Kernel, Outcome, Reprojector, Tests, footprints};
 use super::history::{Accumulation, Blend, History, accumulate};
 use super::sampler::{PaperSampler, TraceCost, thread_ns};
 
@@ -265,7 +265,7 @@ impl MethodState {
         let acc = accumulate(right, &|i| r_new[i], self.right.as_ref(), &how);
         let temporal = ModeFrame {
             image: acc.image,
-            outcomes: acc.footprints.iter().map(|f| f.outcome).collect(),
+            outcomes: acc.outcomes,
             reproject_ns: rnew_ns + acc.cpu_ns,
         };
         let r_acc = &acc.history;
@@ -316,10 +316,13 @@ impl MethodState {
         let mut color = vec![Vec3::ZERO; n];
         let mut count = vec![1.0f32; n];
         let mut image = vec![Vec3::ZERO; n];
-        let tests = Tests {
-            plane: m.plane_test,
-            ..inp.tests
-        };
+        let rep = Reprojector::new(
+            k,
+            Tests {
+                plane: m.plane_test,
+                ..inp.tests
+            },
+        );
         let ns: Vec<u64> = color
             .par_chunks_mut(w * BAND_ROWS)
             .zip(count.par_chunks_mut(w * BAND_ROWS))
@@ -339,7 +342,7 @@ impl MethodState {
                         _ => {
                             c[j] = traced[i];
                             if let Some(p) = prev {
-                                let f = footprint(&p.view, &left.texels[i], k, tests);
+                                let f = rep.footprint(&p.view, &left.texels[i]);
                                 if f.outcome == Outcome::Reused {
                                     let pw = p.view.width();
                                     let h = f.gather(k, &p.color, pw);
