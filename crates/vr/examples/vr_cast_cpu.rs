@@ -68,8 +68,10 @@ fn main() {
         let hier = Hierarchy::build(&set).unwrap();
         let opts = CastOptions {
             test,
-            lanes: arg(8, "4").parse().unwrap(),
+            // `16sse`: the portable 16-lane twin instead of AVX-512.
+            lanes: arg(8, "4").trim_end_matches("sse").parse().unwrap(),
             exactness,
+            avx512: !arg(8, "4").ends_with("sse"),
         };
         let mut beam = VisibilityBuffer::new(&set);
         let mut reference = VisibilityBuffer::new(&set);

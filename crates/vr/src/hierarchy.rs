@@ -1,5 +1,6 @@
 //! The two-level sample hierarchy of HVVR (Hunt et al. 2018, §5, Fig. 4): samples grouped into
-//! tiles of at most [`TILE_SAMPLES`] = 128 samples, tiles into blocks of at most
+//! tiles of at most [`tile_samples`] samples (HVVR's [`TILE_SAMPLES`] = 128 from 8 spp up,
+//! more at lower spp), tiles into blocks of at most
 //! [`BLOCK_TILES`] = 64 tiles, each with a bounding beam over *every* subsample ray of its
 //! samples (all `spp` footprint offsets and lens positions).
 //!
@@ -9,8 +10,9 @@
 //! cube face: a beam never spans two centres of projection). Each group is split recursively at
 //! the median film position along x when the x extent is at least twice the y extent, else
 //! along y, into blocks of at most 128 x 64 = 8192 samples, and each block likewise into tiles of
-//! at most 128 samples; on a grid this gives 16 x 8 pixel tiles and 128 x 64 pixel blocks
-//! (HVVR's sizes) wherever the film divides evenly.
+//! at most [`tile_samples`] samples; on a grid at 8 spp and more this gives 16 x 8 pixel tiles
+//! and 128 x 64 pixel blocks (HVVR's sizes) wherever the film divides evenly (32 x 32 pixel
+//! tiles at 1 spp).
 //!
 //! **Beams** ([`crate::beam::BeamBuilder`]): the dominant-axis beam of the tile's actual
 //! subsample rays (generated once here, exactly as the caster generates them), so a beam holds
@@ -30,6 +32,18 @@ use crate::SampleSet;
 pub const TILE_SAMPLES: usize = 128;
 /// Most tiles per block (HVVR: 8 x 8 tiles).
 pub const BLOCK_TILES: usize = 64;
+
+/// Most samples per tile at `spp` subsamples: tiles of about [`TILE_RAYS`] rays, at least
+/// [`TILE_SAMPLES`] (HVVR's 128) samples: 1024 samples at 1 spp, 512 at 2, 256 at 4, 128 from
+/// 8 spp up. At low spp HVVR's 128-sample tiles leave the per-tile triangle set-up and tile
+/// cull to few rays (measured at 1 spp: 128-sample tiles 812 instructions per ray, 1024-sample
+/// tiles 497, `docs/notes/vr.md`). Blocks keep at most `TILE_SAMPLES * BLOCK_TILES` samples.
+pub fn tile_samples(spp: u32) -> usize {
+    (TILE_RAYS / spp.max(1) as usize).max(TILE_SAMPLES)
+}
+
+/// Subsample rays per tile aimed at by [`tile_samples`].
+pub const TILE_RAYS: usize = 1024;
 
 /// Why a hierarchy could not be built.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -134,7 +148,7 @@ fn rays_of(set: &SampleSet, idx: &[u32]) -> BeamBuilder {
 
 /// Tiles of one block's samples (`idx`, at offset `base` of the order array).
 fn build_tiles(set: &SampleSet, idx: &mut [u32], base: u32, out: &mut Vec<(Tile, BeamBuilder)>) {
-    if idx.len() > TILE_SAMPLES {
+    if idx.len() > tile_samples(set.spp) {
         let mid = median_split(set, idx);
         let (a, b) = idx.split_at_mut(mid);
         build_tiles(set, a, base, out);

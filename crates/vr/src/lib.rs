@@ -58,7 +58,8 @@ pub mod shade;
 pub mod visibility;
 
 pub use cast::setup::{SampleTest, SetupExactness};
-pub use cast::{CastOptions, CastStats, cast, cast_opts, cast_with};
+pub use cast::stored::RayBuffer;
+pub use cast::{CastOptions, CastStats, cast, cast_opts, cast_stored, cast_with};
 pub use hierarchy::{Block, Hierarchy, HierarchyError, Tile};
 pub use patterns::PatternError;
 pub use samples::{Sample, SampleSet};

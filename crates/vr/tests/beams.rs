@@ -4,7 +4,7 @@
 use glam::{Vec2, Vec3};
 use parallax_scene::CameraDesc;
 use parallax_scene::camera::{Camera, CameraOptions, ModelKind};
-use parallax_vr::hierarchy::{BLOCK_TILES, TILE_SAMPLES};
+use parallax_vr::hierarchy::{BLOCK_TILES, tile_samples};
 use parallax_vr::{Hierarchy, SampleSet};
 use proptest::prelude::*;
 
@@ -33,7 +33,7 @@ fn check(set: &SampleSet) -> Result<(), TestCaseError> {
         prop_assert_eq!(b.first_tile as usize, tiles_seen);
         tiles_seen += b.tile_count as usize;
         for t in &h.tiles[b.first_tile as usize..(b.first_tile + b.tile_count) as usize] {
-            prop_assert!(t.len as usize <= TILE_SAMPLES && t.len > 0);
+            prop_assert!(t.len as usize <= tile_samples(set.spp) && t.len > 0);
             for &i in &h.order[t.start as usize..(t.start + t.len) as usize] {
                 for k in 0..set.spp as usize {
                     if let Some(r) = set.subsample_ray(i as usize, k) {
@@ -83,7 +83,7 @@ fn cam_h(c: &Camera) -> f32 {
 }
 
 #[test]
-fn grid_tiles_are_16_by_8() {
+fn grid_tiles_are_16_by_8_from_8_spp() {
     let desc = CameraDesc::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0);
     let cam = Camera::new(
         ModelKind::Pinhole,
@@ -93,17 +93,21 @@ fn grid_tiles_are_16_by_8() {
         &CameraOptions::default(),
     )
     .unwrap();
-    let set = SampleSet::grid(cam, 1);
-    let h = Hierarchy::build(&set).unwrap();
-    assert_eq!(h.tiles.len(), 256 * 128 / 128);
-    assert_eq!(h.blocks.len(), 4);
-    for t in &h.tiles {
-        let (mut lo, mut hi) = (Vec2::INFINITY, Vec2::NEG_INFINITY);
-        for &i in &h.order[t.start as usize..(t.start + t.len) as usize] {
-            lo = lo.min(set.samples[i as usize].film);
-            hi = hi.max(set.samples[i as usize].film);
+    // HVVR's 16 x 8 pixel tiles from 8 spp up; 32 x 32 pixels (1024 rays) at 1 spp.
+    for (spp, tile, extent) in [(8, 128, Vec2::new(15.0, 7.0)), (1, 1024, Vec2::splat(31.0))] {
+        let set = SampleSet::grid(cam.clone(), spp);
+        let h = Hierarchy::build(&set).unwrap();
+        assert_eq!(tile_samples(spp), tile);
+        assert_eq!(h.tiles.len(), 256 * 128 / tile, "spp {spp}");
+        assert_eq!(h.blocks.len(), 4);
+        for t in &h.tiles {
+            let (mut lo, mut hi) = (Vec2::INFINITY, Vec2::NEG_INFINITY);
+            for &i in &h.order[t.start as usize..(t.start + t.len) as usize] {
+                lo = lo.min(set.samples[i as usize].film);
+                hi = hi.max(set.samples[i as usize].film);
+            }
+            assert_eq!(hi - lo, extent, "spp {spp}");
         }
-        assert_eq!(hi - lo, Vec2::new(15.0, 7.0));
     }
 }
 

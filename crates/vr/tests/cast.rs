@@ -6,8 +6,8 @@ use parallax_bvh::Bvh;
 use parallax_scene::Scene;
 use parallax_scene::camera::{Camera, CameraOptions, ModelKind};
 use parallax_vr::{
-    CastOptions, Hierarchy, SampleSet, SampleTest, SetupExactness, VisibilityBuffer, cast,
-    cast_opts, cast_with, trace_per_ray,
+    CastOptions, Hierarchy, RayBuffer, SampleSet, SampleTest, SetupExactness, VisibilityBuffer,
+    cast, cast_opts, cast_stored, cast_with, trace_per_ray,
 };
 
 const W: u32 = 96;
@@ -214,6 +214,16 @@ fn check_setup(
         cast_opts(bvh, set, &h, &mut other, CastOptions { lanes, ..opts });
         assert_eq!(other, setup, "{label}: {lanes} lanes");
     }
+    // The portable 16-lane twin (four SSE registers) equals the AVX-512 lanes (the default
+    // where the CPU has them) bit for bit.
+    let mut portable = VisibilityBuffer::new(set);
+    let sse = CastOptions {
+        lanes: 16,
+        avx512: false,
+        ..opts
+    };
+    cast_opts(bvh, set, &h, &mut portable, sse);
+    assert_eq!(portable, setup, "{label}: 16 portable lanes");
     let mut reference = VisibilityBuffer::new(set);
     trace_per_ray(bvh, set, &mut reference);
     let (diff_ref, t_ref) = mismatches(&setup, &reference);
@@ -347,6 +357,31 @@ fn tile_setup_kernel_agrees_at_16_spp() {
     let set = SampleSet::grid(camera(&scene, ModelKind::Stereo, 32, 32), 16);
     for exactness in [SetupExactness::Edges, SetupExactness::Full] {
         check_setup(&bvh, &set, "atrium stereo 64x32 spp 16", exactness, false);
+    }
+}
+
+/// HVVR Table 3's stored ray buffer gives the procedural rays' buffer, bit for bit (both
+/// exactness settings, 1 and 16 spp, pinhole and stereo).
+#[test]
+fn stored_rays_give_the_procedural_buffer() {
+    let scene = Scene::load("atrium").unwrap();
+    let bvh = Bvh::build(&scene.mesh);
+    for (kind, spp) in [(ModelKind::Stereo, 16), (ModelKind::Pinhole, 1)] {
+        let set = SampleSet::grid(camera(&scene, kind, 48, 32), spp);
+        let h = Hierarchy::build(&set).unwrap();
+        let stored = RayBuffer::new(&set);
+        assert_eq!(stored.bytes(), set.ray_count() * 24);
+        for exactness in [SetupExactness::Edges, SetupExactness::Full] {
+            let opts = CastOptions {
+                exactness,
+                ..CastOptions::default()
+            };
+            let (mut a, mut b) = (VisibilityBuffer::new(&set), VisibilityBuffer::new(&set));
+            cast_opts(&bvh, &set, &h, &mut a, opts);
+            cast_stored(&bvh, &set, &stored, &h, &mut b, opts);
+            assert!(a.prim.iter().any(|&p| p != parallax_core::NO_ID));
+            assert_eq!(a, b, "{kind:?} spp {spp} {exactness:?}");
+        }
     }
 }
 

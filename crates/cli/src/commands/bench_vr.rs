@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use anyhow::Result;
 use clap::{Args, ValueEnum};
 use parallax_bvh::Bvh;
+use parallax_vr::bench::table3;
 use parallax_vr::bench::table6::{self, Table6Options};
 use parallax_vr::bench::{SCHEMES, VrBenchOptions, markdown, run, update_row};
 use parallax_vr::frame::Visibility;
@@ -24,6 +25,11 @@ fn scheme(s: &str) -> Result<String, String> {
             SCHEMES.join(", ")
         ))
     }
+}
+
+/// `--table3-spp`: 0 (skip) or a `--msaa` value.
+fn table3_spp(s: &str) -> Result<u32, String> {
+    if s == "0" { Ok(0) } else { msaa_spp(s) }
 }
 
 /// `parallax bench vr` (HVVR Tables 1-6; see `parallax_vr::bench`).
@@ -62,6 +68,10 @@ pub struct VrBenchArgs {
     /// subsample rays, `parallax_vr::bench::table6`): `with` the scheme rows, `skip`, or `only`.
     #[arg(long, value_enum, default_value_t = Table6::With)]
     pub table6: Table6,
+    /// HVVR Table 3 at this spp (procedural subsample rays against a stored high-resolution
+    /// ray buffer, `parallax_vr::bench::table3`); 0 skips it.
+    #[arg(long, default_value_t = 0, value_parser = table3_spp)]
+    pub table3_spp: u32,
     /// Write the rows as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -109,6 +119,12 @@ pub fn bench(a: &VrBenchArgs, quiet: bool) -> Result<()> {
         };
         Some(table6::run(&scene, &bvh, &head, &o)?)
     };
+    let t3 = match a.table3_spp {
+        0 => None,
+        spp => Some(table3::run(
+            &scene, &bvh, &head, a.width, a.height, spp, a.repeats,
+        )?),
+    };
     if !quiet {
         println!(
             "| scene | vertices | triangles | moving objects | moving vertices | build ms | animate ms | refit ms |"
@@ -134,7 +150,13 @@ pub fn bench(a: &VrBenchArgs, quiet: bool) -> Result<()> {
             );
             print!("{}", table6::markdown(t));
         }
+        if let Some(t) = &t3 {
+            println!(
+                "\nTable 3: procedural subsample rays against a stored ray buffer (`normal` scheme, same rays)\n"
+            );
+            print!("{}", table3::markdown(t));
+        }
     }
-    let json = serde_json::json!({ "update": update, "rows": rows, "table6": t6 });
+    let json = serde_json::json!({ "update": update, "rows": rows, "table6": t6, "table3": t3 });
     output::write_json(a.json.as_deref(), &json)
 }

@@ -23,6 +23,7 @@
 //! fresh buffer inside the timed region would be timed too, `docs/notes/vr.md`).
 //! Not reproduced: HVVR's "pre-distort" row (a larger pinhole eye buffer resampled afterwards).
 
+pub mod table3;
 pub mod table6;
 
 use std::time::Instant;

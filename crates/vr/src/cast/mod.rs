@@ -8,9 +8,11 @@
 
 pub mod intersect;
 pub mod lanes16;
+pub(crate) mod lanes512;
 pub mod leaves;
 pub mod packet;
 pub mod setup;
+pub mod stored;
 
 use std::time::{Duration, Instant};
 
@@ -25,6 +27,7 @@ use crate::cast::setup::{
     SampleTest, SetupCounts, SetupExactness, SetupWork, TileTris, setup_tile, shared_origin,
     test_tile_setup,
 };
+use crate::cast::stored::RayBuffer;
 use crate::{Hierarchy, SampleSet, VisibilityBuffer};
 
 /// Per-stage times (summed over threads: CPU time, not wall time) and work counts of a cast.
@@ -83,6 +86,9 @@ pub struct CastOptions {
     /// How exactly the set-up kernel reproduces per-ray traversal (ignored by the watertight
     /// kernel, which is always exact).
     pub exactness: SetupExactness,
+    /// Run 16-lane set-up packets in one AVX-512 register when the CPU has AVX-512F (else, or
+    /// when false, four SSE registers: the portable twin, the same buffer bit for bit).
+    pub avx512: bool,
 }
 
 impl Default for CastOptions {
@@ -93,6 +99,7 @@ impl Default for CastOptions {
             test: SampleTest::TileSetup,
             lanes: 16,
             exactness: SetupExactness::Edges,
+            avx512: true,
         }
     }
 }
@@ -163,6 +170,7 @@ pub fn cast_with(
             test: SampleTest::Watertight,
             lanes,
             exactness: SetupExactness::Full,
+            avx512: true,
         },
     )
 }
@@ -171,6 +179,36 @@ pub fn cast_with(
 pub fn cast_opts(
     bvh: &Bvh,
     set: &SampleSet,
+    hierarchy: &Hierarchy,
+    out: &mut VisibilityBuffer,
+    opts: CastOptions,
+) -> CastStats {
+    cast_from(bvh, set, None, hierarchy, out, opts)
+}
+
+/// [`cast_opts`] reading the subsample rays from `stored` (made from `set`: HVVR Table 3's
+/// high-resolution ray buffer, `cast/stored.rs`) instead of generating them: the same buffer.
+/// Panics if `stored` holds another number of rays (a programming error).
+pub fn cast_stored(
+    bvh: &Bvh,
+    set: &SampleSet,
+    stored: &RayBuffer,
+    hierarchy: &Hierarchy,
+    out: &mut VisibilityBuffer,
+    opts: CastOptions,
+) -> CastStats {
+    assert_eq!(
+        stored.rays.len(),
+        set.ray_count(),
+        "ray buffer of another set"
+    );
+    cast_from(bvh, set, Some(stored), hierarchy, out, opts)
+}
+
+fn cast_from(
+    bvh: &Bvh,
+    set: &SampleSet,
+    stored: Option<&RayBuffer>,
     hierarchy: &Hierarchy,
     out: &mut VisibilityBuffer,
     opts: CastOptions,
@@ -244,6 +282,7 @@ pub fn cast_opts(
                     let w = unsafe {
                         test_tile_setup(
                             set,
+                            stored,
                             blocks_,
                             prim_ids,
                             samples,
@@ -251,6 +290,7 @@ pub fn cast_opts(
                             &tile.beam,
                             scale,
                             lanes,
+                            opts.avx512,
                             opts.exactness,
                             ptr.prim,
                             ptr.t,

@@ -29,6 +29,7 @@ use parallax_scene::camera::{Camera, Pinhole};
 use crate::SampleSet;
 use crate::beam::PreparedBeam;
 use crate::cast::leaves::LeafBox;
+use crate::cast::stored::RayBuffer;
 /// Most rays per packet (the 16-lane set-up kernel, [`crate::cast::lanes16`]).
 pub const MAX_LANES: usize = 16;
 
@@ -65,17 +66,33 @@ fn pinhole_n<L: Lanes>(p: &Pinhole, fx: L, fy: L) -> ([L; 3], [L; 3]) {
     let z = L::splat(-1.0);
     let len = (x * x + y * y + z * z).sqrt();
     let (x, y, z) = (x / len, y / len, z / len);
+    // No closures here: inside an AVX-512 entry point a closure would call the lane
+    // intrinsics out of line (closures have no target features, `cast/lanes512.rs`).
     let m = &p.frame.basis;
-    let col = |c: Vec3, i: usize| L::splat(c[i]);
-    let d = [0, 1, 2].map(|i| col(m.x_axis, i) * x + col(m.y_axis, i) * y + col(m.z_axis, i) * z);
+    let d = [
+        L::splat(m.x_axis.x) * x + L::splat(m.y_axis.x) * y + L::splat(m.z_axis.x) * z,
+        L::splat(m.x_axis.y) * x + L::splat(m.y_axis.y) * y + L::splat(m.z_axis.y) * z,
+        L::splat(m.x_axis.z) * x + L::splat(m.y_axis.z) * y + L::splat(m.z_axis.z) * z,
+    ];
     let o = p.frame.position;
     ([L::splat(o.x), L::splat(o.y), L::splat(o.z)], d)
 }
 
-/// The subsample rays `(sample, k)` of `pairs` (up to `L::N`) into lanes.
+/// The subsample rays `(sample, k)` of `pairs` (up to `L::N`) into lanes, read from `stored`
+/// when given (HVVR Table 3's naive ray buffer, `cast/stored.rs`), else generated.
 #[inline(always)]
-pub(crate) fn gen_n<L: Lanes>(set: &SampleSet, pairs: &[(u32, u32)]) -> RaysN<L> {
+pub(crate) fn gen_n<L: Lanes>(
+    set: &SampleSet,
+    stored: Option<&RayBuffer>,
+    pairs: &[(u32, u32)],
+) -> RaysN<L> {
     let n = pairs.len();
+    if let Some(buf) = stored {
+        return read_n(set, buf, pairs);
+    }
+    if let Some(r) = gen_one_sample(set, pairs) {
+        return r;
+    }
     let mut film = [Vec2::ZERO; MAX_LANES];
     for (l, &(i, k)) in pairs.iter().enumerate() {
         let s = &set.samples[i as usize];
@@ -122,6 +139,96 @@ pub(crate) fn gen_n<L: Lanes>(set: &SampleSet, pairs: &[(u32, u32)]) -> RaysN<L>
     RaysN {
         o: [comp(0, true), comp(1, true), comp(2, true)],
         d: [comp(0, false), comp(1, false), comp(2, false)],
+        valid,
+    }
+}
+
+/// [`gen_n`] for a full packet of one sample's consecutive subsamples `k0..k0 + N` (a pixel
+/// at 16 spp, half a pixel at 32) of a pinhole or stereo camera: the film positions
+/// `film + offsets[k] * footprint` lane-wise (the same f32 operations as the per-lane path),
+/// and the stereo eye test from the smallest and largest offset (`x -> film + x * footprint`
+/// is monotone for `footprint >= 0`, so they bound every lane exactly as the per-lane test).
+/// `None` for any other packet (the per-lane path).
+#[inline(always)]
+fn gen_one_sample<L: Lanes>(set: &SampleSet, pairs: &[(u32, u32)]) -> Option<RaysN<L>> {
+    let n = pairs.len();
+    let (i0, k0) = pairs[0];
+    if n != L::N || pairs[n - 1] != (i0, k0 + n as u32 - 1) {
+        return None;
+    }
+    if !pairs
+        .iter()
+        .enumerate()
+        .all(|(l, &(i, k))| i == i0 && k == k0 + l as u32)
+    {
+        return None;
+    }
+    let s = &set.samples[i0 as usize];
+    let fp = s.footprint;
+    if !(fp >= 0.0) {
+        return None;
+    }
+    let offs = &set.offsets[k0 as usize..k0 as usize + n];
+    let full = (1u32 << n) - 1;
+    let fp_v = L::splat(fp);
+    let fx = L::splat(s.film.x) + L::from_fn(|l| offs[l].x) * fp_v;
+    let fy = L::splat(s.film.y) + L::from_fn(|l| offs[l].y) * fp_v;
+    match &set.camera {
+        Camera::Pinhole(p) => {
+            let (o, d) = pinhole_n(p, fx, fy);
+            Some(RaysN { o, d, valid: full })
+        }
+        Camera::Stereo(rig) => {
+            let w = rig.eye_width() as f32;
+            let (mut lo, mut hi) = (offs[0].x, offs[0].x);
+            for o in offs {
+                lo = lo.min(o.x);
+                hi = hi.max(o.x);
+            }
+            let (lo, hi) = (s.film.x + lo * fp, s.film.x + hi * fp);
+            let inside = lo >= 0.0 && hi <= 2.0 * w;
+            let (left, right) = (hi < w, lo >= w);
+            if !(inside && (left || right)) {
+                return None;
+            }
+            let (p, fx) = if left {
+                (&rig.eyes[0], fx)
+            } else {
+                (&rig.eyes[1], fx - L::splat(w))
+            };
+            let (o, d) = pinhole_n(p, fx, fy);
+            Some(RaysN { o, d, valid: full })
+        }
+        _ => None,
+    }
+}
+
+/// [`gen_n`] from a stored ray buffer: the same lanes (lanes past `pairs.len()` repeat lane 0).
+#[inline(always)]
+fn read_n<L: Lanes>(set: &SampleSet, buf: &RayBuffer, pairs: &[(u32, u32)]) -> RaysN<L> {
+    let spp = set.spp as usize;
+    let mut r = [[0.0f32; MAX_LANES]; 6];
+    let mut valid = 0;
+    for l in 0..L::N {
+        let (i, k) = pairs[if l < pairs.len() { l } else { 0 }];
+        let x = &buf.rays[i as usize * spp + k as usize];
+        for (c, rc) in r.iter_mut().enumerate() {
+            rc[l] = x[c];
+        }
+        let ok = x[3] != 0.0 || x[4] != 0.0 || x[5] != 0.0;
+        valid |= ((ok && l < pairs.len()) as u32) << l;
+    }
+    RaysN {
+        o: [
+            L::from_fn(|l| r[0][l]),
+            L::from_fn(|l| r[1][l]),
+            L::from_fn(|l| r[2][l]),
+        ],
+        d: [
+            L::from_fn(|l| r[3][l]),
+            L::from_fn(|l| r[4][l]),
+            L::from_fn(|l| r[5][l]),
+        ],
         valid,
     }
 }
@@ -305,7 +412,7 @@ pub(crate) fn run_packets<L: Lanes>(
     mut fallback: impl FnMut(&Ray) -> (f32, u32),
 ) -> (PacketWork, u64) {
     let mut pw = PacketWork::default();
-    let rays_n = for_each_packet::<L>(set, total, pair, |batch, rays| {
+    let rays_n = for_each_packet::<L>(set, None, total, pair, |batch, rays| {
         match closest_n(rays, blocks, leaves, beam, slack, &mut pw) {
             Some(c) => {
                 for (l, &p) in batch.iter().enumerate() {
@@ -328,11 +435,13 @@ pub(crate) fn run_packets<L: Lanes>(
 }
 
 /// Cuts subsample rays `0..total` of a tile (`pair(j)` = its `(sample, k)`) into packets of
-/// `L::N` lanes (the last one partial), generates each packet's rays and hands both to `f`.
+/// `L::N` lanes (the last one partial), generates each packet's rays (or reads them from
+/// `stored`) and hands both to `f`.
 /// Returns the number of valid rays.
 #[inline(always)]
 pub(crate) fn for_each_packet<L: Lanes>(
     set: &SampleSet,
+    stored: Option<&RayBuffer>,
     total: usize,
     pair: impl Fn(usize) -> (u32, u32),
     mut f: impl FnMut(&[(u32, u32)], &RaysN<L>),
@@ -347,7 +456,7 @@ pub(crate) fn for_each_packet<L: Lanes>(
         }
         j += n;
         let batch = &pairs[..n];
-        let rays = gen_n::<L>(set, batch);
+        let rays = gen_n::<L>(set, stored, batch);
         rays_n += rays.valid.count_ones() as u64;
         f(batch, &rays);
     }

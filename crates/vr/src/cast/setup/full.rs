@@ -329,8 +329,10 @@ fn final_t_lanes<L: Lanes>(
     let dkz = rays.d[kz];
     let shear = [rays.d[kx] / dkz, rays.d[ky] / dkz, one / dkz];
     let o = [rays.o[kx], rays.o[ky], rays.o[kz]];
-    let proj = |v: usize| shear_vertex([p[v][kx], p[v][ky], p[v][kz]], o, shear);
-    let (va, vb, vc) = (proj(0), proj(1), proj(2));
+    // Not a closure (lane intrinsics would not inline into it, `cast/lanes512.rs`).
+    let va = shear_vertex([p[0][kx], p[0][ky], p[0][kz]], o, shear);
+    let vb = shear_vertex([p[1][kx], p[1][ky], p[1][kz]], o, shear);
+    let vc = shear_vertex([p[2][kx], p[2][ky], p[2][kz]], o, shear);
     let r = watertight_lanes(va, vb, vc);
     let d = r.distance(va[2], vb[2], vc[2]);
     let (exact, tv) = (r.exact, d.t);

@@ -2,6 +2,7 @@
 //! products in the scalar order of [`super::tri::dot3`], the BVH's robust slab test of a packet
 //! on a run's box ([`PacketSlab`]), and the work counters ([`SetupWork`]).
 
+use glam::{BVec4A, Vec4};
 use parallax_core::math::ROBUST_FAR_SCALE;
 use parallax_core::simd::{Lanes, max_or_rhs, min_or_rhs};
 
@@ -58,6 +59,16 @@ pub(super) fn slab<L: Lanes>(lo: f32, hi: f32, inv: L, neg: L::M) -> (L, L) {
     (L::select(neg, t1, t0), L::select(neg, t0, t1))
 }
 
+/// Lanes x, y, z of a [`Vec4`].
+const XYZ: BVec4A = BVec4A::from_array([true, true, true, false]);
+
+/// `|x|` per lane (a plain function, not a closure: see [`dot_n`]).
+#[inline(always)]
+fn abs_n<L: Lanes>(x: L) -> L {
+    let zero = L::splat(0.0);
+    L::select(x.lt(zero), zero - x, x)
+}
+
 /// Per-packet constants of the set-up kernels (`cast/setup/edges.rs`, `cast/setup/full.rs`): reciprocal
 /// directions and their signs for the BVH's robust slab test, and the packet's largest
 /// `|d|_inf` over its lanes (the scale of the edge band; invalid lanes have `d = 0`).
@@ -67,7 +78,17 @@ pub(super) struct PacketSlab<L: Lanes> {
     pub dinf: f32,
     /// Per axis the smallest and largest reciprocal direction of the valid lanes, when every
     /// valid lane's is finite and of one sign (`None` otherwise): the packet's interval test.
-    interval: Option<[(f32, f32); 3]>,
+    interval: Option<Interval>,
+}
+
+/// The packet's reciprocal-direction interval as SSE registers (lanes x, y, z; `w` = 0): the
+/// smaller and larger end per axis and the axes where both are negative. The interval test
+/// runs the three axes of [`PacketSlab::interval_reaches`] in one register each step.
+#[derive(Clone, Copy)]
+struct Interval {
+    i0: Vec4,
+    i1: Vec4,
+    neg: BVec4A,
 }
 
 impl<L: Lanes> PacketSlab<L> {
@@ -76,8 +97,7 @@ impl<L: Lanes> PacketSlab<L> {
         let (zero, one) = (L::splat(0.0), L::splat(1.0));
         let inv = [one / dx, one / dy, one / dz];
         let neg = [inv[0].lt(zero), inv[1].lt(zero), inv[2].lt(zero)];
-        let abs = |x: L| L::select(x.lt(zero), zero - x, x);
-        let dinf_l = max_or_rhs(abs(dx), max_or_rhs(abs(dy), abs(dz)));
+        let dinf_l = max_or_rhs(abs_n(dx), max_or_rhs(abs_n(dy), abs_n(dz)));
         let mut dinf = 0.0f32;
         for l in 0..L::N {
             dinf = dinf.max(dinf_l.get(l));
@@ -98,11 +118,18 @@ impl<L: Lanes> PacketSlab<L> {
         L: LaneReduce,
     {
         let mut s = Self::new(d);
-        let iv = [0, 1, 2].map(|a| (s.inv[a].hmin(), s.inv[a].hmax()));
-        let ok = iv
-            .iter()
-            .all(|r| r.0.is_finite() && r.1.is_finite() && (r.0 > 0.0 || r.1 < 0.0));
-        s.interval = ok.then_some(iv);
+        let (x0, x1) = (s.inv[0].hmin(), s.inv[0].hmax());
+        let (y0, y1) = (s.inv[1].hmin(), s.inv[1].hmax());
+        let (z0, z1) = (s.inv[2].hmin(), s.inv[2].hmax());
+        let ok = |r0: f32, r1: f32| r0.is_finite() && r1.is_finite() && (r0 > 0.0 || r1 < 0.0);
+        if ok(x0, x1) && ok(y0, y1) && ok(z0, z1) {
+            let i1 = Vec4::new(x1, y1, z1, 0.0);
+            s.interval = Some(Interval {
+                i0: Vec4::new(x0, y0, z0, 0.0),
+                i1,
+                neg: i1.cmplt(Vec4::ZERO),
+            });
+        }
         s
     }
 
@@ -122,19 +149,21 @@ impl<L: Lanes> PacketSlab<L> {
         let Some(iv) = &self.interval else {
             return true;
         };
-        #[inline(always)]
-        fn axis((i0, i1): (f32, f32), lo: f32, hi: f32) -> (f32, f32) {
-            let (n, f) = if i1 < 0.0 { (hi, lo) } else { (lo, hi) };
-            let (a, b, c, d) = (n * i0, n * i1, f * i0, f * i1);
-            (if a < b { a } else { b }, if c > d { c } else { d })
-        }
-        let (nx, fx) = axis(iv[0], seg.lo.x, seg.hi.x);
-        let (ny, fy) = axis(iv[1], seg.lo.y, seg.hi.y);
-        let (nz, fz) = axis(iv[2], seg.lo.z, seg.hi.z);
-        let mx = |a: f32, b: f32| if a > b { a } else { b };
-        let mn = |a: f32, b: f32| if a < b { a } else { b };
-        let t_near = mx(mx(mx(nx, ny), nz), 0.0);
-        let t_far = mn(mn(mn(fx, fy), fz), lim);
+        // Per axis (lanes x, y, z): the near and far planes by the interval's sign, the four
+        // products, `if a < b { a } else { b }` (`minps`) for the entry and `if c > d { c }
+        // else { d }` (`maxps`) for the exit. Lane `w` is 0 (`lo.w = hi.w = i.w = 0`) for the
+        // entry, which also takes the `max` with 0, and `lim` for the exit. The products are
+        // finite or infinite, never NaN (finite planes and interval), so the horizontal max /
+        // min equal the scalar chain of the per-axis form up to the sign of a zero, which no
+        // comparison sees.
+        let (lo, hi) = (seg.lo, seg.hi);
+        let n = Vec4::select(iv.neg, hi, lo);
+        let f = Vec4::select(iv.neg, lo, hi);
+        let near = (n * iv.i0).min(n * iv.i1);
+        let far = (f * iv.i0).max(f * iv.i1);
+        let far = Vec4::select(XYZ, far, Vec4::splat(lim));
+        let t_near = near.max_element();
+        let t_far = far.min_element();
         t_near <= t_far * ROBUST_FAR_SCALE
     }
 

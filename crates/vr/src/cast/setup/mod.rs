@@ -131,7 +131,10 @@ use parallax_core::simd::F8;
 use crate::SampleSet;
 use crate::beam::Beam;
 use crate::cast::lanes16::{LaneReduce, V16};
-use crate::cast::packet::for_each_packet;
+#[cfg(target_arch = "x86_64")]
+use crate::cast::lanes512::Z16;
+use crate::cast::packet::{ClosestN, MAX_LANES, gen_n};
+use crate::cast::stored::RayBuffer;
 
 pub use kernel::SetupWork;
 pub use tri::{
@@ -166,12 +169,67 @@ pub enum SetupExactness {
     Full,
 }
 
+/// Where the set-up kernels write their results: the visibility buffer's entries
+/// `sample * spp + k` (raw pointers: every sample's entries are written by one tile only).
+#[derive(Clone, Copy)]
+struct Out<'a> {
+    prim: *mut u32,
+    t: *mut f32,
+    prim_ids: &'a [u32],
+    spp: usize,
+}
+
+impl Out<'_> {
+    /// Stores subsample `(i, k)`'s closest hit (`tri` = `u32::MAX`: none).
+    ///
+    /// # Safety
+    /// Exclusive access to the entry, within the buffer (`test_tile_setup`).
+    #[inline(always)]
+    unsafe fn one(&self, (i, k): (u32, u32), bt: f32, tri: u32) {
+        let o = i as usize * self.spp + k as usize;
+        // SAFETY: the caller's.
+        unsafe {
+            if tri == u32::MAX {
+                *self.prim.add(o) = NO_ID;
+                *self.t.add(o) = f32::INFINITY;
+            } else {
+                *self.prim.add(o) = self.prim_ids[tri as usize];
+                *self.t.add(o) = bt;
+            }
+        }
+    }
+
+    /// Stores lanes `0..n` of `c`, the subsamples `k0..k0 + n` of sample `i` (contiguous
+    /// entries; a miss has `t = inf` in `c` already).
+    ///
+    /// # Safety
+    /// As [`Out::one`], for the `n` entries.
+    #[inline(always)]
+    unsafe fn run(&self, (i, k0): (u32, u32), c: &ClosestN, n: usize) {
+        let o = i as usize * self.spp + k0 as usize;
+        // SAFETY: the caller's.
+        unsafe {
+            for l in 0..n {
+                let tri = c.tri[l];
+                let (p, bt) = if tri == u32::MAX {
+                    (NO_ID, f32::INFINITY)
+                } else {
+                    (self.prim_ids[tri as usize], c.t[l])
+                };
+                *self.prim.add(o + l) = p;
+                *self.t.add(o + l) = bt;
+            }
+        }
+    }
+}
+
 /// Runs every subsample ray `0..total` of a tile (`pair(j)` = its `(sample, k)`) through the
-/// set-up kernel with `L::N` lanes; `write(pair, t, tri)` stores a result.
+/// set-up kernel with `L::N` lanes; the results go to `out`.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn run_setup<L: LaneReduce, const FULL: bool>(
     set: &SampleSet,
+    stored: Option<&RayBuffer>,
     blocks: &[Tri4],
     tt: &mut TileTris,
     axis: usize,
@@ -179,11 +237,24 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
     slack: f32,
     total: usize,
     pair: impl Fn(usize) -> (u32, u32),
-    mut write: impl FnMut((u32, u32), f32, u32),
+    out: Out<'_>,
 ) -> SetupWork {
     let mut work = SetupWork::default();
-    let rays_n = for_each_packet::<L>(set, total, pair, |batch, rays| {
-        let mut rays = *rays;
+    // The packet loop of `for_each_packet`, written out: the kernel must not sit in a closure
+    // (no target features there: the AVX-512 lanes would be out-of-line calls, measured 3x
+    // slower; `cast/lanes512.rs`).
+    let mut rays_n = 0u64;
+    let mut pairs = [(0u32, 0u32); MAX_LANES];
+    let mut j = 0;
+    while j < total {
+        let n = (total - j).min(L::N);
+        for (l, p) in pairs.iter_mut().enumerate().take(n) {
+            *p = pair(j + l);
+        }
+        j += n;
+        let batch = &pairs[..n];
+        let mut rays = gen_n::<L>(set, stored, batch);
+        rays_n += rays.valid.count_ones() as u64;
         // Invalid lanes get `d = 0`: `g . d = 0` is never a hit.
         for l in 0..batch.len() {
             if rays.valid >> l & 1 == 0 {
@@ -197,10 +268,23 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
         } else {
             edges::closest_edges(&rays, blocks, tt, axis, sign, slack, &mut work)
         };
-        for (l, &p) in batch.iter().enumerate() {
-            write(p, c.t[l], c.tri[l]);
+        // One sample's consecutive subsamples: `pair` maps consecutive `j` to `(sample, j % spp)`
+        // (`test_tile_setup`), so a last lane at `k0 + n - 1` of the first lane's sample means
+        // no wrap to the next sample in between.
+        let (i0, k0) = batch[0];
+        let run = batch[n - 1] == (i0, k0 + n as u32 - 1);
+        // SAFETY: the caller of `test_tile_setup` guarantees exclusive access to these
+        // samples' entries.
+        unsafe {
+            if run {
+                out.run(batch[0], &c, n);
+            } else {
+                for (l, &p) in batch.iter().enumerate() {
+                    out.one(p, c.t[l], c.tri[l]);
+                }
+            }
         }
-    });
+    }
     work.rays = rays_n;
     work
 }
@@ -210,6 +294,7 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
 #[allow(clippy::too_many_arguments)]
 unsafe fn run_setup_avx2<const FULL: bool>(
     set: &SampleSet,
+    stored: Option<&RayBuffer>,
     blocks: &[Tri4],
     tt: &mut TileTris,
     axis: usize,
@@ -217,14 +302,37 @@ unsafe fn run_setup_avx2<const FULL: bool>(
     slack: f32,
     total: usize,
     pair: impl Fn(usize) -> (u32, u32),
-    write: impl FnMut((u32, u32), f32, u32),
+    out: Out<'_>,
 ) -> SetupWork {
-    run_setup::<F8, FULL>(set, blocks, tt, axis, sign, slack, total, pair, write)
+    run_setup::<F8, FULL>(set, stored, blocks, tt, axis, sign, slack, total, pair, out)
+}
+
+/// [`run_setup`] with sixteen AVX-512 lanes ([`Z16`], one register per packet).
+///
+/// # Safety
+/// The CPU must support AVX-512F (checked by the caller with `is_x86_feature_detected!`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[allow(clippy::too_many_arguments)]
+unsafe fn run_setup_avx512<const FULL: bool>(
+    set: &SampleSet,
+    stored: Option<&RayBuffer>,
+    blocks: &[Tri4],
+    tt: &mut TileTris,
+    axis: usize,
+    sign: f32,
+    slack: f32,
+    total: usize,
+    pair: impl Fn(usize) -> (u32, u32),
+    out: Out<'_>,
+) -> SetupWork {
+    run_setup::<Z16, FULL>(set, stored, blocks, tt, axis, sign, slack, total, pair, out)
 }
 
 /// Tests every subsample ray of the tile `samples` against the set-up list `tt` (built from
-/// `blocks`) and writes the closest hits, packets of 16 rays (`lanes == 16`), 8 (AVX2, if
-/// detected and `lanes == 8`) or 4.
+/// `blocks`) and writes the closest hits, packets of 16 rays (`lanes == 16`: one AVX-512
+/// register if detected and `avx512`, else four SSE registers), 8 (AVX2, if detected and
+/// `lanes == 8`) or 4. Every choice gives the same buffer.
 ///
 /// # Safety
 /// As [`crate::cast::intersect::test_tile`]: `prim` and `t` valid for `set.ray_count()` elements,
@@ -232,6 +340,7 @@ unsafe fn run_setup_avx2<const FULL: bool>(
 #[allow(clippy::too_many_arguments)]
 pub unsafe fn test_tile_setup(
     set: &SampleSet,
+    stored: Option<&RayBuffer>,
     blocks: &[Tri4],
     prim_ids: &[u32],
     samples: &[u32],
@@ -239,6 +348,7 @@ pub unsafe fn test_tile_setup(
     beam: &Beam,
     scale: f32,
     lanes: usize,
+    avx512: bool,
     exactness: SetupExactness,
     prim: *mut u32,
     t: *mut f32,
@@ -255,18 +365,11 @@ pub unsafe fn test_tile_setup(
             (samples[j / spp], (j % spp) as u32)
         }
     };
-    let write = |(i, k): (u32, u32), bt: f32, tri: u32| {
-        let o = i as usize * spp + k as usize;
-        // SAFETY: the caller guarantees exclusive access to this sample's entries.
-        unsafe {
-            if tri == u32::MAX {
-                *prim.add(o) = NO_ID;
-                *t.add(o) = f32::INFINITY;
-            } else {
-                *prim.add(o) = prim_ids[tri as usize];
-                *t.add(o) = bt;
-            }
-        }
+    let out = Out {
+        prim,
+        t,
+        prim_ids,
+        spp,
     };
     let (axis, sign) = (beam.axis as usize, beam.sign);
     #[cfg(target_arch = "x86_64")]
@@ -274,31 +377,45 @@ pub unsafe fn test_tile_setup(
         // SAFETY: AVX2 was detected.
         return unsafe {
             match exactness {
-                SetupExactness::Edges => {
-                    run_setup_avx2::<false>(set, blocks, tt, axis, sign, slack, total, pair, write)
-                }
-                SetupExactness::Full => {
-                    run_setup_avx2::<true>(set, blocks, tt, axis, sign, slack, total, pair, write)
-                }
+                SetupExactness::Edges => run_setup_avx2::<false>(
+                    set, stored, blocks, tt, axis, sign, slack, total, pair, out,
+                ),
+                SetupExactness::Full => run_setup_avx2::<true>(
+                    set, stored, blocks, tt, axis, sign, slack, total, pair, out,
+                ),
+            }
+        };
+    }
+    #[cfg(target_arch = "x86_64")]
+    if lanes == 16 && avx512 && std::arch::is_x86_feature_detected!("avx512f") {
+        // SAFETY: AVX-512F was detected.
+        return unsafe {
+            match exactness {
+                SetupExactness::Edges => run_setup_avx512::<false>(
+                    set, stored, blocks, tt, axis, sign, slack, total, pair, out,
+                ),
+                SetupExactness::Full => run_setup_avx512::<true>(
+                    set, stored, blocks, tt, axis, sign, slack, total, pair, out,
+                ),
             }
         };
     }
     if lanes == 16 {
         return match exactness {
-            SetupExactness::Edges => {
-                run_setup::<V16, false>(set, blocks, tt, axis, sign, slack, total, pair, write)
-            }
+            SetupExactness::Edges => run_setup::<V16, false>(
+                set, stored, blocks, tt, axis, sign, slack, total, pair, out,
+            ),
             SetupExactness::Full => {
-                run_setup::<V16, true>(set, blocks, tt, axis, sign, slack, total, pair, write)
+                run_setup::<V16, true>(set, stored, blocks, tt, axis, sign, slack, total, pair, out)
             }
         };
     }
     match exactness {
         SetupExactness::Edges => {
-            run_setup::<Vec4, false>(set, blocks, tt, axis, sign, slack, total, pair, write)
+            run_setup::<Vec4, false>(set, stored, blocks, tt, axis, sign, slack, total, pair, out)
         }
         SetupExactness::Full => {
-            run_setup::<Vec4, true>(set, blocks, tt, axis, sign, slack, total, pair, write)
+            run_setup::<Vec4, true>(set, stored, blocks, tt, axis, sign, slack, total, pair, out)
         }
     }
 }

@@ -9,7 +9,7 @@
 //! bound |d|_inf` and `|g . d - 1/t_woop| <= rho g . d`: a value outside the band decides the
 //! ray exactly as the watertight test would.
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 use parallax_bvh::Tri4;
 use parallax_bvh::node::{leaf_count, leaf_first};
 use parallax_core::math::{WatertightRay, watertight_permutation};
@@ -365,9 +365,9 @@ pub fn exact_closest(ray: &Ray, blocks: &[Tri4], tris: &[TriSetup]) -> (f32, u32
 pub struct Segment {
     pub end: u32,
     pub near: f32,
-    /// Box of the run's triangles relative to the origin (`min - o`, `max - o`).
-    pub lo: Vec3,
-    pub hi: Vec3,
+    /// Box of the run's triangles relative to the origin (`min - o`, `max - o`; `w` = 0).
+    pub lo: Vec4,
+    pub hi: Vec4,
 }
 
 /// Counts of the corner classification.
@@ -491,8 +491,8 @@ pub fn setup_tile(
             out.segs.push(Segment {
                 end,
                 near: r.near,
-                lo: bx.min - origin,
-                hi: bx.max - origin,
+                lo: (bx.min - origin).extend(0.0),
+                hi: (bx.max - origin).extend(0.0),
             });
         }
     }
