@@ -360,6 +360,38 @@ fn tile_setup_kernel_agrees_at_16_spp() {
     }
 }
 
+/// The caster writes every entry (no clearing pass): a buffer full of garbage from before
+/// comes out equal to a fresh one, on every scheme (fisheye rims: samples without rays).
+#[test]
+fn a_reused_buffer_equals_a_fresh_one() {
+    let scene = Scene::load("atrium").unwrap();
+    let bvh = Bvh::build(&scene.mesh);
+    // Plus a stereo grid with 600 samples off the film (no rays: tiles and blocks without rays).
+    let mut off = SampleSet::grid(camera(&scene, ModelKind::Stereo, 48, 32), 4);
+    for j in 0..600 {
+        let mut s = off.samples[0];
+        s.film = Vec2::new(5000.0 + (j % 30) as f32, 1.0 + (j / 30) as f32);
+        off.samples.push(s);
+    }
+    let mut sets = schemes(&scene, 4);
+    sets.push(("stereo with off-film samples", off));
+    for (name, set) in sets {
+        let h = Hierarchy::build(&set).unwrap();
+        let mut fresh = VisibilityBuffer::new(&set);
+        cast(&bvh, &set, &h, &mut fresh);
+        let mut reused = VisibilityBuffer::new(&set);
+        reused.prim.fill(12345);
+        reused.t.fill(-1.0);
+        cast(&bvh, &set, &h, &mut reused);
+        assert_eq!(fresh, reused, "{name}");
+        reused.prim.fill(7);
+        cast_with(&bvh, &set, &h, &mut reused, 4);
+        let mut fresh_wt = VisibilityBuffer::new(&set);
+        cast_with(&bvh, &set, &h, &mut fresh_wt, 4);
+        assert_eq!(fresh_wt, reused, "{name} watertight");
+    }
+}
+
 /// HVVR Table 3's stored ray buffer gives the procedural rays' buffer, bit for bit (both
 /// exactness settings, 1 and 16 spp, pinhole and stereo).
 #[test]

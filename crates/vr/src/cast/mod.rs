@@ -225,8 +225,9 @@ fn cast_from(
         out.prim.len() == set.ray_count() && out.t.len() == set.ray_count() && out.spp == set.spp,
         "visibility buffer made for another sample set"
     );
-    out.prim.fill(parallax_core::NO_ID);
-    out.t.fill(f32::INFINITY);
+    // No clearing pass over the buffer (at 16 spp and 2160 x 1200 it is 330 MB of writes):
+    // every sample lies in exactly one tile (`order` is a permutation), and every tile writes
+    // all of its samples' entries, empty tiles and blocks included (`clear_samples`).
     let scale = scene_scale(bvh, hierarchy);
     let ptr = OutPtr {
         prim: out.prim.as_mut_ptr(),
@@ -249,6 +250,12 @@ fn cast_from(
             let ptr = ptr;
             let mut tally = Tally::default();
             if block.rays == 0 {
+                let tiles = &hierarchy.tiles
+                    [block.first_tile as usize..(block.first_tile + block.tile_count) as usize];
+                for tile in tiles {
+                    // SAFETY: as below (this tile's entries only).
+                    unsafe { clear_samples(hierarchy, tile, set.spp as usize, ptr) };
+                }
                 return tally;
             }
             let t0 = Instant::now();
@@ -263,6 +270,8 @@ fn cast_from(
                 [block.first_tile as usize..(block.first_tile + block.tile_count) as usize];
             for tile in tiles {
                 if tile.rays == 0 {
+                    // SAFETY: as below (this tile's entries only).
+                    unsafe { clear_samples(hierarchy, tile, set.spp as usize, ptr) };
                     continue;
                 }
                 let a = Instant::now();
@@ -352,6 +361,24 @@ fn cast_from(
         setup_final_tests: t.setup.final_tests,
         setup_rescues: t.setup.rescues,
         setup_edge_band: t.setup.edge_band,
+    }
+}
+
+/// Writes "no hit" to every subsample entry of `tile`'s samples (a tile without rays).
+///
+/// # Safety
+/// `ptr` points to buffers of `sample_count * spp` entries that no other thread writes for
+/// this tile's samples (`order` is a permutation, checked by the caller).
+unsafe fn clear_samples(h: &Hierarchy, tile: &crate::Tile, spp: usize, ptr: OutPtr) {
+    for &i in &h.order[tile.start as usize..(tile.start + tile.len) as usize] {
+        for k in 0..spp {
+            let o = i as usize * spp + k;
+            // SAFETY: the caller's.
+            unsafe {
+                *ptr.prim.add(o) = parallax_core::NO_ID;
+                *ptr.t.add(o) = f32::INFINITY;
+            }
+        }
     }
 }
 
