@@ -39,8 +39,9 @@
 //! | name | type | default | meaning |
 //! |---|---|---|---|
 //! | `test` | [`SampleTest`] | `TileSetup` | the sample test (tiles without a shared origin, e.g. thin lens, always take the watertight kernel) |
-//! | `lanes` | usize | 16 | rays per SIMD packet: 4 (SSE), 8 (AVX2 if detected), 16 (set-up kernel: four SSE registers, one pixel at 16 spp), 1 (one ray against four leaf boxes) |
+//! | `lanes` | usize | 16 | rays per SIMD packet: 4 (SSE), 8 (AVX2 if detected), 16 (set-up kernel: one AVX-512 or four SSE registers, one pixel at 16 spp), 1 (one ray against four leaf boxes) |
 //! | `exactness` | [`SetupExactness`] | `Edges` | how exactly the set-up kernel reproduces per-ray traversal |
+//! | `avx512` | bool | true | 16-lane set-up packets in one AVX-512 register where the CPU has AVX-512F (else the four-SSE-register twin; the same buffer) |
 //!
 //! Measurements and what was tried: `docs/notes/vr.md`.
 

@@ -183,11 +183,11 @@ impl Lanes for V16 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// NaN on either side, infinities, signed zeros, ordinary values.
-    const A: [f32; 16] = [
+    pub(crate) const A: [f32; 16] = [
         f32::NAN,
         3.0,
         -1.0,
@@ -205,7 +205,7 @@ mod tests {
         -0.0,
         1.0,
     ];
-    const B: [f32; 16] = [
+    pub(crate) const B: [f32; 16] = [
         1.0,
         2.0,
         5.0,
@@ -224,7 +224,8 @@ mod tests {
         1.0,
     ];
 
-    fn same(a: f32, b: f32) -> bool {
+    /// Bit-identical, or both NaN.
+    pub(crate) fn same(a: f32, b: f32) -> bool {
         a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())
     }
 

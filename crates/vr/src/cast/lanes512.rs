@@ -158,46 +158,7 @@ impl LaneReduce for Z16 {
 mod tests {
     use super::*;
 
-    const A: [f32; 16] = [
-        f32::NAN,
-        3.0,
-        -1.0,
-        f32::NAN,
-        0.0,
-        -0.0,
-        f32::INFINITY,
-        2.0,
-        1e-30,
-        -5.5,
-        7.0,
-        0.1,
-        f32::NEG_INFINITY,
-        4.0,
-        -0.0,
-        1.0,
-    ];
-    const B: [f32; 16] = [
-        1.0,
-        2.0,
-        5.0,
-        f32::INFINITY,
-        -0.0,
-        0.0,
-        f32::NAN,
-        2.0,
-        3e-30,
-        -5.5,
-        -7.0,
-        0.3,
-        1.0,
-        f32::NAN,
-        0.0,
-        1.0,
-    ];
-
-    fn same(a: f32, b: f32) -> bool {
-        a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())
-    }
+    use crate::cast::lanes16::tests::{A, B, same};
 
     #[target_feature(enable = "avx512f")]
     fn check() {

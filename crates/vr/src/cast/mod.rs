@@ -76,7 +76,8 @@ pub struct CastStats {
 }
 
 /// The caster's sample-test choice: the kernel and the SIMD width of its ray packets (`4` SSE,
-/// `8` AVX2 when detected (else 4), `16` four SSE registers — set-up kernel only, the
+/// `8` AVX2 when detected (else 4), `16` one AVX-512 register (`avx512` and detected) or four
+/// SSE registers — set-up kernel only, the
 /// watertight kernel treats it as `4`; `1` one ray at a time — watertight kernel only; the
 /// set-up kernel treats `1` as `4`). Every width gives the same buffer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -93,7 +94,8 @@ pub struct CastOptions {
 
 impl Default for CastOptions {
     /// The set-up kernel on 16-lane packets (one pixel at 16 spp; 1.3-1.9x the 4-lane
-    /// kernel's speed on Sponza, `docs/notes/vr.md`; the 8-lane AVX2 build is slower).
+    /// kernel's speed on Sponza, AVX-512 a further ~1.3x, `docs/notes/vr.md`; the 8-lane AVX2
+    /// build is slower).
     fn default() -> Self {
         CastOptions {
             test: SampleTest::TileSetup,

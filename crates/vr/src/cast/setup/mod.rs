@@ -289,45 +289,45 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
     work
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-#[allow(clippy::too_many_arguments)]
-unsafe fn run_setup_avx2<const FULL: bool>(
-    set: &SampleSet,
-    stored: Option<&RayBuffer>,
-    blocks: &[Tri4],
-    tt: &mut TileTris,
-    axis: usize,
-    sign: f32,
-    slack: f32,
-    total: usize,
-    pair: impl Fn(usize) -> (u32, u32),
-    out: Out<'_>,
-) -> SetupWork {
-    run_setup::<F8, FULL>(set, stored, blocks, tt, axis, sign, slack, total, pair, out)
-}
-
-/// [`run_setup`] with sixteen AVX-512 lanes ([`Z16`], one register per packet).
+/// `unsafe fn $name<const FULL: bool>(...)`: [`run_setup`] with lanes `$lanes` compiled for the
+/// target feature `$feature`.
 ///
-/// # Safety
-/// The CPU must support AVX-512F (checked by the caller with `is_x86_feature_detected!`).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-#[allow(clippy::too_many_arguments)]
-unsafe fn run_setup_avx512<const FULL: bool>(
-    set: &SampleSet,
-    stored: Option<&RayBuffer>,
-    blocks: &[Tri4],
-    tt: &mut TileTris,
-    axis: usize,
-    sign: f32,
-    slack: f32,
-    total: usize,
-    pair: impl Fn(usize) -> (u32, u32),
-    out: Out<'_>,
-) -> SetupWork {
-    run_setup::<Z16, FULL>(set, stored, blocks, tt, axis, sign, slack, total, pair, out)
+/// # Safety (of the generated function)
+/// The CPU must support `$feature` (checked by the caller with `is_x86_feature_detected!`).
+macro_rules! isa_entry {
+    ($(#[$doc:meta])* $name:ident, $feature:literal, $lanes:ty) => {
+        $(#[$doc])*
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = $feature)]
+        #[allow(clippy::too_many_arguments)]
+        unsafe fn $name<const FULL: bool>(
+            set: &SampleSet,
+            stored: Option<&RayBuffer>,
+            blocks: &[Tri4],
+            tt: &mut TileTris,
+            axis: usize,
+            sign: f32,
+            slack: f32,
+            total: usize,
+            pair: impl Fn(usize) -> (u32, u32),
+            out: Out<'_>,
+        ) -> SetupWork {
+            run_setup::<$lanes, FULL>(set, stored, blocks, tt, axis, sign, slack, total, pair, out)
+        }
+    };
 }
+isa_entry!(
+    /// [`run_setup`] with eight AVX2 lanes.
+    run_setup_avx2,
+    "avx2",
+    F8
+);
+isa_entry!(
+    /// [`run_setup`] with sixteen AVX-512 lanes ([`Z16`], one register per packet).
+    run_setup_avx512,
+    "avx512f",
+    Z16
+);
 
 /// Tests every subsample ray of the tile `samples` against the set-up list `tt` (built from
 /// `blocks`) and writes the closest hits, packets of 16 rays (`lanes == 16`: one AVX-512
@@ -372,50 +372,31 @@ pub unsafe fn test_tile_setup(
         spp,
     };
     let (axis, sign) = (beam.axis as usize, beam.sign);
+    // `run!(f)` / `run!(f, L)`: `f` (with lane type `L`) for the chosen exactness.
+    macro_rules! run {
+        ($f:ident $(, $l:ty)?) => {
+            match exactness {
+                SetupExactness::Edges => {
+                    $f::<$($l,)? false>(set, stored, blocks, tt, axis, sign, slack, total, pair, out)
+                }
+                SetupExactness::Full => {
+                    $f::<$($l,)? true>(set, stored, blocks, tt, axis, sign, slack, total, pair, out)
+                }
+            }
+        };
+    }
     #[cfg(target_arch = "x86_64")]
     if lanes == 8 && std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: AVX2 was detected.
-        return unsafe {
-            match exactness {
-                SetupExactness::Edges => run_setup_avx2::<false>(
-                    set, stored, blocks, tt, axis, sign, slack, total, pair, out,
-                ),
-                SetupExactness::Full => run_setup_avx2::<true>(
-                    set, stored, blocks, tt, axis, sign, slack, total, pair, out,
-                ),
-            }
-        };
+        return unsafe { run!(run_setup_avx2) };
     }
     #[cfg(target_arch = "x86_64")]
     if lanes == 16 && avx512 && std::arch::is_x86_feature_detected!("avx512f") {
         // SAFETY: AVX-512F was detected.
-        return unsafe {
-            match exactness {
-                SetupExactness::Edges => run_setup_avx512::<false>(
-                    set, stored, blocks, tt, axis, sign, slack, total, pair, out,
-                ),
-                SetupExactness::Full => run_setup_avx512::<true>(
-                    set, stored, blocks, tt, axis, sign, slack, total, pair, out,
-                ),
-            }
-        };
+        return unsafe { run!(run_setup_avx512) };
     }
     if lanes == 16 {
-        return match exactness {
-            SetupExactness::Edges => run_setup::<V16, false>(
-                set, stored, blocks, tt, axis, sign, slack, total, pair, out,
-            ),
-            SetupExactness::Full => {
-                run_setup::<V16, true>(set, stored, blocks, tt, axis, sign, slack, total, pair, out)
-            }
-        };
+        return run!(run_setup, V16);
     }
-    match exactness {
-        SetupExactness::Edges => {
-            run_setup::<Vec4, false>(set, stored, blocks, tt, axis, sign, slack, total, pair, out)
-        }
-        SetupExactness::Full => {
-            run_setup::<Vec4, true>(set, stored, blocks, tt, axis, sign, slack, total, pair, out)
-        }
-    }
+    run!(run_setup, Vec4)
 }
