@@ -43,6 +43,7 @@
 //! Measurements (speed against the BVH, build times, memory, the `B` and `S` sweeps) are in
 //! `docs/notes/dirt.md`.
 
+mod best;
 mod tri4;
 mod view;
 mod walk;
@@ -53,10 +54,11 @@ use parallax_core::{Ray, WorldHit, WorldStats, WorldTracer};
 use parallax_raster::dirt::DirtViews;
 use parallax_scene::camera::CubeMap;
 
+use best::Best;
+pub use best::DirtCounters;
 use tri4::Query;
 use view::{Exit, ViewConsts, ViewRay};
-pub use walk::DirtCounters;
-use walk::{Best, WalkEnd, walk};
+use walk::{WalkEnd, walk};
 
 /// DIRT behind the world-space tracer interface (module docs).
 #[derive(Clone, Debug)]

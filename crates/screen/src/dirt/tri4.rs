@@ -20,7 +20,7 @@ use glam::{Vec3, Vec4};
 use parallax_core::math::{WatertightRay, shear_vertex, watertight_lanes};
 use parallax_raster::dirt::DirtTri;
 
-use super::walk::{Best, DirtCounters};
+use super::best::{Best, DirtCounters};
 
 /// Slots of the per-ray mailbox (a power of two).
 const MAILBOX: usize = 32;
