@@ -2,7 +2,7 @@
 //! `valgrind --tool=callgrind`; the difference between a mode and `load` is that mode's cost).
 //!
 //! ```sh
-//! cargo build --release --example dirt_profile
+//! cargo build --release -p parallax-path --example dirt_profile
 //! valgrind --tool=callgrind target/release/examples/dirt_profile atrium dirt 3
 //! ```
 //!
