@@ -11,7 +11,8 @@
 //! `N` times), `bvh` (the BVH build `N` times), `trace-dirt` / `trace-bvh` (the diffuse rays of
 //! `bench dirt` traced `N` times). 1024x512 film, the `bench dirt` defaults
 //! ([`DIRT_DEFAULTS`]; `DIRT_NOCAM` set: no camera view, the cube alone; `DIRT_FACE`,
-//! `DIRT_TILE`, `DIRT_BUCKETS`: other face size, `S`, `B`). One thread unless `RAYON_NUM_THREADS` says otherwise.
+//! `DIRT_TILE`, `DIRT_BUCKETS`: other face size, `S`, `B`). One thread unless
+//! `RAYON_NUM_THREADS` says otherwise.
 
 use glam::Vec3;
 use parallax_bvh::Bvh;
