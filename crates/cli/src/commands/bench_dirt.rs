@@ -57,6 +57,10 @@ pub struct DirtBenchArgs {
     /// Longest path of that comparison (segments).
     #[arg(long, default_value_t = 5)]
     pub path_max_depth: u32,
+    /// Build and trace the cube map alone, without DIRT's camera view (Table 1, the build and
+    /// the sweeps; the path-tracing comparison keeps the camera view).
+    #[arg(long)]
+    pub no_camera_view: bool,
     /// Write the report as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -97,6 +101,7 @@ pub fn run_bench(a: &DirtBenchArgs, quiet: bool) -> Result<()> {
         },
         path_spp: a.path_spp,
         path_max_depth: a.path_max_depth,
+        camera_view: !a.no_camera_view,
     };
     let report = run(&scene, &camera, &opts).context("bench dirt")?;
     if !quiet {
@@ -112,9 +117,14 @@ pub fn run_bench(a: &DirtBenchArgs, quiet: bool) -> Result<()> {
 fn print(r: &DirtBenchReport) {
     let o = &r.options.views;
     println!(
-        "DIRT vs BVH, {}x{}, cube faces {}^2, S = {}, B = {}, {} threads, best of {} interleaved rounds\n",
+        "DIRT vs BVH, {}x{}, {}cube faces {}^2, S = {}, B = {}, {} threads, best of {} interleaved rounds\n",
         r.width,
         r.height,
+        if r.options.camera_view {
+            "camera view + "
+        } else {
+            "no camera view, "
+        },
         o.face_size,
         o.capture.tile_size,
         o.capture.buckets,

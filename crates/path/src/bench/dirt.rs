@@ -24,6 +24,7 @@
 //! | `rays` | [`RayOptions`] | seed 1, roughness 0.3 | ray generation |
 //! | `path_spp` | u32 | 0 | samples per pixel of the path-tracing comparison (0: skipped) |
 //! | `path_max_depth` | u32 | 5 | its longest path (segments) |
+//! | `camera_view` | bool | true | build and trace DIRT's camera view (false: the cube map alone answers every ray; the path-tracing comparison keeps the camera view) |
 
 use std::time::Instant;
 
@@ -54,6 +55,7 @@ pub struct DirtBenchOptions {
     pub rays: RayOptions,
     pub path_spp: u32,
     pub path_max_depth: u32,
+    pub camera_view: bool,
 }
 
 impl Default for DirtBenchOptions {
@@ -66,6 +68,7 @@ impl Default for DirtBenchOptions {
             rays: RayOptions::default(),
             path_spp: 0,
             path_max_depth: 5,
+            camera_view: true,
         }
     }
 }
@@ -183,7 +186,7 @@ pub fn run(
     opts: &DirtBenchOptions,
 ) -> Result<DirtBenchReport, DirtBenchError> {
     let pinhole = match camera {
-        Camera::Pinhole(p) => Some(p),
+        Camera::Pinhole(p) if opts.camera_view => Some(p),
         _ => None,
     };
     let eye = camera_centre(camera);

@@ -6,6 +6,8 @@
 //!   and expressed in it (§4.2.1 "Screen-space ray tracing");
 //! - `walk`: Hi-Z over the min-max mips and bucket tracing in the finest cells (Algorithm 1),
 //!   with the argument why the answer is exact;
+//! - `tri4`: the ray-triangle tests of a bucket, four triangles at a time, and the per-ray
+//!   mailbox;
 //! - this file: the multi-view driver (§4.2.1: "If no valid hit is found within the current
 //!   view, the process is repeated for each subsequent view the ray intersects").
 //!
@@ -41,6 +43,8 @@
 //! Measurements (speed against the BVH, build times, memory, the `B` and `S` sweeps) are in
 //! `docs/notes/dirt.md`.
 
+mod best;
+mod tri4;
 mod view;
 mod walk;
 
@@ -50,9 +54,11 @@ use parallax_core::{Ray, WorldHit, WorldStats, WorldTracer};
 use parallax_raster::dirt::DirtViews;
 use parallax_scene::camera::CubeMap;
 
+use best::Best;
+pub use best::DirtCounters;
+use tri4::Query;
 use view::{Exit, ViewConsts, ViewRay};
-pub use walk::DirtCounters;
-use walk::{Best, Query, WalkEnd, walk};
+use walk::{WalkEnd, walk};
 
 /// DIRT behind the world-space tracer interface (module docs).
 #[derive(Clone, Debug)]
@@ -113,7 +119,7 @@ impl DirtTracer {
             return Best::NONE;
         };
         let wt = WatertightRay::new(ray);
-        let mut q = Query::new(&wt, self.views.triangles.as_slice(), any);
+        let mut q = Query::new(wt, self.views.triangles.as_slice(), any);
         self.trace_views(ray, t0, t1, &mut q);
         *counters += q.counters;
         q.best

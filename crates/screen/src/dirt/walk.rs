@@ -14,7 +14,10 @@
 //! **Bucket tracing.** The ray's depth span in the cell gives the bucket range by eq. 1
 //! ([`bucket_index`], the capture's own function); buckets are visited in ray order (towards
 //! the far plane: ascending; towards the eye: descending) and every triangle listed in them is
-//! tested with the watertight test ([`WatertightRay::intersect_within`]). A hit is kept when it
+//! tested with the watertight test, four at a time (`tri4`: the lanes of
+//! [`parallax_core::math::watertight_lanes`], the scalar
+//! [`parallax_core::math::WatertightRay::intersect_within`] where an edge function is exactly
+//! zero). A hit is kept when it
 //! is the closest so far (ties in `t`: the lower triangle id). It is *accepted* — the answer —
 //! once the walk has reached it: its `t` is at most the cell's exit (it projects into this
 //! cell, or an earlier one: the paper's test "the hit point lies within the candidate pixel
@@ -33,79 +36,10 @@
 //! cell or a later bucket, so at a larger `t`. The tests are the BVH's test on the same f32
 //! corners, so `t` and barycentrics are bit-identical to the BVH's.
 
-use parallax_core::math::WatertightRay;
-use parallax_raster::dirt::{CellRecord, DirtCapture, DirtTri, bucket_index, bucket_mask};
+use parallax_raster::dirt::{CellRecord, DirtCapture, bucket_index, bucket_mask};
 
+use super::tri4::Query;
 use super::view::{ViewConsts, ViewRay};
-
-/// The closest hit so far.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Best {
-    pub t: f32,
-    pub prim: u32,
-    pub u: f32,
-    pub v: f32,
-}
-
-impl Best {
-    pub const NONE: Best = Best {
-        t: f32::INFINITY,
-        prim: u32::MAX,
-        u: 0.0,
-        v: 0.0,
-    };
-
-    #[inline(always)]
-    pub fn found(&self) -> bool {
-        self.prim != u32::MAX
-    }
-
-    /// Exclusive upper bound for the next test: a triangle at exactly `t` must still be tested
-    /// for the tie-break.
-    #[inline(always)]
-    fn limit(&self, t_max: f32) -> f32 {
-        if self.found() {
-            self.t.next_up().min(t_max)
-        } else {
-            t_max
-        }
-    }
-
-    #[inline(always)]
-    fn offer(&mut self, t: f32, prim: u32, u: f32, v: f32) {
-        if t < self.t || (t == self.t && prim < self.prim) {
-            *self = Best { t, prim, u, v };
-        }
-    }
-}
-
-/// Work counters of the walks of one ray.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
-pub struct DirtCounters {
-    /// Views entered.
-    pub views: u64,
-    /// Mip texels visited (all levels).
-    pub texels: u64,
-    /// Level-0 cells whose buckets were traced.
-    pub cells: u64,
-    /// Buckets traced.
-    pub buckets: u64,
-    /// Ray-triangle tests.
-    pub tests: u64,
-    /// Walks cut by their step bound.
-    pub truncated: u64,
-}
-
-impl std::ops::AddAssign for DirtCounters {
-    fn add_assign(&mut self, o: Self) {
-        self.views += o.views;
-        self.texels += o.texels;
-        self.cells += o.cells;
-        self.buckets += o.buckets;
-        self.tests += o.tests;
-        self.truncated += o.truncated;
-    }
-}
 
 /// How a walk ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -114,59 +48,6 @@ pub(crate) enum WalkEnd {
     Done,
     /// The ray left the interval without an accepted hit.
     Continue,
-}
-
-/// Slots of the per-ray mailbox (a power of two).
-const MAILBOX: usize = 32;
-
-/// What a walk needs about the ray and its answer so far.
-pub(crate) struct Query<'a> {
-    pub wt: &'a WatertightRay,
-    pub tris: &'a [DirtTri],
-    /// Occlusion query: stop at the first hit.
-    pub any: bool,
-    pub best: Best,
-    pub counters: DirtCounters,
-    /// Triangles tested lately (direct-mapped by id): a triangle listed in many cells and
-    /// buckets along the ray is tested once per stay in its slot. Its answer would be the
-    /// same again, and it was offered to `best` already, so skipping it is exact.
-    mailbox: [u32; MAILBOX],
-}
-
-impl<'a> Query<'a> {
-    pub fn new(wt: &'a WatertightRay, tris: &'a [DirtTri], any: bool) -> Self {
-        Query {
-            wt,
-            tris,
-            any,
-            best: Best::NONE,
-            counters: DirtCounters::default(),
-            mailbox: [u32::MAX; MAILBOX],
-        }
-    }
-
-    /// Tests the triangles `ids`; true when an occlusion query found a hit.
-    #[inline(always)]
-    fn test(&mut self, ids: &[u32]) -> bool {
-        for &id in ids {
-            let slot = &mut self.mailbox[id as usize & (MAILBOX - 1)];
-            if *slot == id {
-                continue;
-            }
-            *slot = id;
-            self.counters.tests += 1;
-            let tri = &self.tris[id as usize];
-            let lim = self.best.limit(self.wt.t_max);
-            if let Some(h) = self.wt.intersect_within(tri.p0, tri.p1, tri.p2, lim) {
-                if self.any {
-                    self.best.offer(h.t, id, h.u, h.v);
-                    return true;
-                }
-                self.best.offer(h.t, id, h.u, h.v);
-            }
-        }
-        false
-    }
 }
 
 /// Parameters where the ray crosses the cell boundaries of one film axis: boundary `k` (in

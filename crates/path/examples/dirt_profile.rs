@@ -1,0 +1,119 @@
+//! A driver for instruction-count profiles of DIRT's build and trace (run it under
+//! `valgrind --tool=callgrind`; the difference between a mode and `load` is that mode's cost).
+//!
+//! ```sh
+//! cargo build --release -p parallax-path --example dirt_profile
+//! valgrind --tool=callgrind target/release/examples/dirt_profile atrium dirt 3
+//! ```
+//!
+//! Arguments: `SCENE MODE N [EYE TARGET FOV_Y]` with `EYE` and `TARGET` as `x,y,z`; modes:
+//! `load` (load the scene, build the BVH and the rays, nothing else), `dirt` (the DIRT build
+//! `N` times), `bvh` (the BVH build `N` times), `trace-dirt` / `trace-bvh` (the diffuse rays of
+//! `bench dirt` traced `N` times). 1024x512 film, the `bench dirt` defaults
+//! ([`DIRT_DEFAULTS`]; `DIRT_NOCAM` set: no camera view, the cube alone; `DIRT_FACE`,
+//! `DIRT_TILE`, `DIRT_BUCKETS`: other face size, `S`, `B`). One thread unless
+//! `RAYON_NUM_THREADS` says otherwise.
+
+use glam::Vec3;
+use parallax_bvh::Bvh;
+use parallax_path::bench::dirt_rays::{RayOptions, RayType, ray_sets};
+use parallax_path::tracers::{DIRT_DEFAULTS, camera_centre};
+use parallax_raster::dirt::DirtViews;
+use parallax_scene::camera::{Camera, CameraOptions, ModelKind};
+use parallax_scene::{CameraDesc, Scene};
+use parallax_screen::{DirtCounters, DirtTracer};
+
+fn vec3(s: &str) -> Vec3 {
+    let v: Vec<f32> = s.split(',').map(|x| x.parse().expect("number")).collect();
+    Vec3::new(v[0], v[1], v[2])
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    if args.len() < 4 {
+        eprintln!("usage: dirt_profile SCENE MODE N [EYE TARGET FOV_Y]");
+        std::process::exit(2);
+    }
+    if std::env::var_os("RAYON_NUM_THREADS").is_none() {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build_global()
+            .expect("thread pool");
+    }
+    let scene = Scene::load(&args[1]).expect("scene");
+    let n: u32 = args[3].parse().expect("N");
+    let desc = if args.len() >= 7 {
+        CameraDesc::new(
+            vec3(&args[4]),
+            vec3(&args[5]),
+            Vec3::Y,
+            args[6].parse().expect("fov"),
+        )
+    } else {
+        scene.camera(None).expect("camera")
+    };
+    let camera = Camera::new(
+        ModelKind::Pinhole,
+        &desc,
+        1024,
+        512,
+        &CameraOptions::default(),
+    )
+    .expect("camera");
+    let pinhole = match &camera {
+        Camera::Pinhole(p) => Some(p),
+        _ => None,
+    };
+    let eye = camera_centre(&camera);
+    let bvh = Bvh::try_build(&scene.mesh).expect("bvh");
+    let sets = ray_sets(&scene, &bvh, &camera, &RayOptions::default());
+    let diffuse = &sets
+        .iter()
+        .find(|s| s.kind == RayType::Diffuse)
+        .expect("diffuse")
+        .rays;
+    // DIRT_NOCAM: the cube map alone; DIRT_FACE / DIRT_TILE / DIRT_BUCKETS: other settings.
+    let pinhole = pinhole.filter(|_| std::env::var_os("DIRT_NOCAM").is_none());
+    let env = |k: &str, d: u32| std::env::var(k).map_or(d, |v| v.parse().expect(k));
+    let mut opts = DIRT_DEFAULTS;
+    opts.face_size = env("DIRT_FACE", opts.face_size);
+    opts.capture.tile_size = env("DIRT_TILE", opts.capture.tile_size);
+    opts.capture.buckets = env("DIRT_BUCKETS", opts.capture.buckets);
+    let build = || DirtViews::build(&scene.mesh, pinhole, eye, &opts).expect("dirt");
+    let mut hits = 0u64;
+    match args[2].as_str() {
+        "load" => {}
+        "dirt" => {
+            for _ in 0..n {
+                hits += std::hint::black_box(build()).stats.capture_bytes;
+            }
+        }
+        "bvh" => {
+            for _ in 0..n {
+                hits += std::hint::black_box(Bvh::try_build(&scene.mesh).expect("bvh")).node_count()
+                    as u64;
+            }
+        }
+        "trace-dirt" => {
+            let dirt = DirtTracer::new(build());
+            let mut c = DirtCounters::default();
+            for _ in 0..n {
+                hits += diffuse
+                    .iter()
+                    .filter(|r| dirt.closest_hit_counted(r, &mut c).is_some())
+                    .count() as u64;
+            }
+            eprintln!("{c:?}");
+        }
+        "trace-bvh" => {
+            for _ in 0..n {
+                hits += diffuse
+                    .iter()
+                    .filter(|r| bvh.closest_hit(r).is_some())
+                    .count() as u64;
+            }
+        }
+        m => panic!("unknown mode {m}"),
+    }
+    println!("{} diffuse rays, {hits}", diffuse.len());
+}
