@@ -46,6 +46,11 @@ pub struct BuildRow {
     pub nodes: usize,
     pub plane_nodes: usize,
     pub threads: usize,
+    /// Best-round ms of the tree's effective planes (top-down levels, one decode per node
+    /// and row) and of their definition (a climb and a decode per pixel): layer 0 of the
+    /// 2-layer build only (`NaN` elsewhere).
+    pub ms_effective_planes: f64,
+    pub ms_effective_planes_climb: f64,
 }
 
 /// XOR of every bit of the layer's depths and normals (module docs, "Stream").
@@ -108,6 +113,17 @@ pub fn run(
         trees = (Some(one), Some(two));
     }
     let (one, two) = (trees.0.expect("a round"), trees.1.expect("a round"));
+    // The fixed point's inner step, fast path against its definition (interleaved).
+    progress("effective planes");
+    let (mut fast, mut climb) = (f64::INFINITY, f64::INFINITY);
+    for _ in 0..repeats.max(1) {
+        let t = Instant::now();
+        std::hint::black_box(two.trees[0].effective_planes());
+        fast = fast.min(t.elapsed().as_secs_f64() * 1e3);
+        let t = Instant::now();
+        std::hint::black_box(two.trees[0].effective_planes_by_climbing());
+        climb = climb.min(t.elapsed().as_secs_f64() * 1e3);
+    }
     let row = |layers: usize, tree: usize, ms: f64, t: &QuadTreeTracer| BuildRow {
         method: "quadtree".into(),
         layers,
@@ -120,6 +136,16 @@ pub fn run(
         nodes: t.trees[tree].node_count(),
         plane_nodes: t.trees[tree].plane_node_count(),
         threads: rayon::current_num_threads(),
+        ms_effective_planes: if (layers, tree) == (2, 0) {
+            fast
+        } else {
+            f64::NAN
+        },
+        ms_effective_planes_climb: if (layers, tree) == (2, 0) {
+            climb
+        } else {
+            f64::NAN
+        },
     };
     Ok(vec![
         row(1, 0, build1, &one),
