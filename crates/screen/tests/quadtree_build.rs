@@ -6,8 +6,6 @@
 
 mod quadtree_util;
 
-use glam::Vec3;
-use parallax_core::{GBuffer, Rng};
 use parallax_screen::{LayerPlanes, QuadTree, QuadTreeOptions, QuadTreeTracer};
 use quadtree_util::*;
 
@@ -43,23 +41,6 @@ fn check(t: &QuadTree, what: &str) -> usize {
         }
     }
     merged
-}
-
-/// A layer behind `g` with random gaps and normals (unsafe pixels for the cascade).
-fn behind(g: &GBuffer, seed: u64) -> GBuffer {
-    let mut rng = Rng::new(seed, 3);
-    let mut b = g.clone();
-    for k in 0..b.depth.len() {
-        if !b.depth[k].is_finite() || rng.next_f32() < 0.2 {
-            b.depth[k] = f32::INFINITY;
-            b.normal[k] = Vec3::ZERO;
-            continue;
-        }
-        b.depth[k] += 0.02 + 2.0 * rng.next_f32().powi(3);
-        let t = Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, 0.0) * 2.5;
-        b.normal[k] = (Vec3::Z + t).normalize();
-    }
-    b
 }
 
 #[test]

@@ -187,54 +187,19 @@ impl QuadTree {
     /// `flag` holds the crack flag `O`.
     ///
     /// Computed from [`Self::effective_levels`] (one pass per level, no per-pixel climb),
-    /// each merged node decoded once per row it covers; equal to
+    /// each merged node decoded once per run of a row it covers; equal to
     /// [`Self::effective_planes_by_climbing`] bit for bit (tested).
     pub fn effective_planes(&self) -> LayerPlanes {
         let lv = self.effective_levels();
         let w0 = self.levels[0].w;
-        let (w, h) = (self.width, self.height);
-        let n = (w * h) as usize;
-        let mut normal = vec![Vec3::ZERO; n];
-        let mut offset = vec![0.0; n];
-        let mut flag = vec![false; n];
-        normal
-            .par_chunks_mut(w as usize)
-            .zip(offset.par_chunks_mut(w as usize))
-            .zip(flag.par_chunks_mut(w as usize))
-            .enumerate()
-            .for_each(|(j, ((nrow, orow), frow))| {
-                let j = j as u32;
-                // The node of the previous pixel and its decoded plane.
-                let mut last: Option<((u32, u32, u32), Vec3, f32, bool)> = None;
-                for i in 0..w {
-                    let l = lv[(j * w0 + i) as usize];
-                    if l == NO_PLANE {
-                        continue;
-                    }
-                    let l = l as u32;
-                    let key = (l, i >> l, j >> l);
-                    let (nn, c, f) = match last {
-                        Some((k, nn, c, f)) if k == key => (nn, c, f),
-                        _ => {
-                            let node = self.node(l as usize, key.1, key.2);
-                            let (nn, c) = decode_plane(node, l, key.1, key.2, self.wf, self.hf);
-                            let f = node.flags() & FLAG_CRACK != 0;
-                            last = Some((key, nn, c, f));
-                            (nn, c, f)
-                        }
-                    };
-                    nrow[i as usize] = nn;
-                    orow[i as usize] = c;
-                    frow[i as usize] = f;
-                }
-            });
-        LayerPlanes {
-            width: w,
-            height: h,
-            normal,
-            offset,
-            flag,
-        }
+        decoded_planes(self.width, self.height, self.wf, self.hf, |i, j| {
+            let l = lv[(j * w0 + i) as usize];
+            (l != NO_PLANE).then(|| {
+                let l = l as u32;
+                let (qx, qy) = (i >> l, j >> l);
+                (self.node(l as usize, qx, qy), l, qx, qy)
+            })
+        })
     }
 
     /// [`Self::effective_planes`] by the definition: per pixel, climb to its effective node
@@ -307,12 +272,24 @@ pub(crate) fn decoded_planes(
         .zip(flag.par_chunks_mut(w as usize))
         .enumerate()
         .for_each(|(j, ((nrow, orow), frow))| {
+            // The previous pixel's node and its decoded plane: a merged node covers a run of
+            // pixels of the row, decoded once (the decode is a function of the node and its
+            // position only).
+            let mut last: Option<((Node, u32, u32, u32), Vec3, f32)> = None;
             for i in 0..w {
-                if let Some((node, l, qx, qy)) = node_of(i, j as u32) {
-                    let (nn, c) = decode_plane(node, l, qx, qy, wf, hf);
+                if let Some(key) = node_of(i, j as u32) {
+                    let (nn, c) = match last {
+                        Some((k, nn, c)) if k == key => (nn, c),
+                        _ => {
+                            let (node, l, qx, qy) = key;
+                            let (nn, c) = decode_plane(node, l, qx, qy, wf, hf);
+                            last = Some((key, nn, c));
+                            (nn, c)
+                        }
+                    };
                     nrow[i as usize] = nn;
                     orow[i as usize] = c;
-                    frow[i as usize] = node.flags() & FLAG_CRACK != 0;
+                    frow[i as usize] = key.0.flags() & FLAG_CRACK != 0;
                 }
             }
         });
