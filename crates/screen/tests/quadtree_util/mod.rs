@@ -464,7 +464,7 @@ pub fn exact(opts: QuadTreeOptions) -> QuadTreeOptions {
 
 /// A second layer behind `g`: depth + random gap, unrelated random normals (so deeper planes
 /// often poke in front of layer 0 inside footprints: unsafe pixels).
-fn behind(g: &GBuffer, seed: u64) -> GBuffer {
+pub fn behind(g: &GBuffer, seed: u64) -> GBuffer {
     let mut rng = Rng::new(seed, 3);
     let mut b = g.clone();
     for k in 0..b.depth.len() {
