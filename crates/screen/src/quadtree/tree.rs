@@ -186,7 +186,7 @@ impl QuadTree {
     /// planes; with lossy settings every pixel of a merged node carries the proxy plane.
     /// `flag` holds the crack flag `O`.
     ///
-    /// Computed from [`Self::effective_levels`] (one pass per level, no per-pixel climb),
+    /// Computed from the effective levels (`effective_levels`: one pass per level, no climb),
     /// each merged node decoded once per run of a row it covers; equal to
     /// [`Self::effective_planes_by_climbing`] bit for bit (tested).
     pub fn effective_planes(&self) -> LayerPlanes {
