@@ -5,13 +5,15 @@
 //! linear). **Depth:** an EXR holding per-pixel **view depth** (positive distance along the
 //! view axis, metres, not the distance to the eye) in the first present channel of `Z`,
 //! `depth` (what `parallax render --aov depth` writes), `Y`, `R`. A non-finite or non-positive
-//! depth means "no surface" (environment colour). **Camera:** a pinhole with the vertical
+//! depth means "no surface": background at infinity, whose colour misses take by direction
+//! ([`crate::environment`]); `background` is used only when the input has no such pixel. **Camera:** a pinhole with the vertical
 //! field of view in degrees or the focal length in pixels (`tan(fov_y / 2) = (H / 2) / f`),
 //! at a pose (`eye`, `target`, `up`) or the identity pose (eye at the origin looking down -Z,
 //! +Y up). Normals are reconstructed from depth (Widmer's input; the G-buffer normal channel is
 //! filled with them, so either [`parallax_screen::NormalSource`] works).
 
 use std::path::Path;
+use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 use parallax_core::image::png::read_image;
@@ -23,6 +25,7 @@ use parallax_scene::camera::Pinhole;
 use parallax_screen::{CubeNear, UnitCube};
 
 use crate::SynthError;
+use crate::environment::Environment;
 use crate::layers::{Reference, ReferenceTimes};
 
 /// Depth channel names tried in order.
@@ -137,20 +140,18 @@ pub fn reference_from_images(
         }
     }
     let cube = UnitCube::fit_depths(&camera, [&g.depth[..]])?;
-    // Uncovered pixels show the background, as in a rendered reference.
-    let shown: Vec<Rgb> = color
-        .data()
-        .iter()
-        .zip(clean.data())
-        .map(|(c, d)| if d.is_finite() { *c } else { background })
-        .collect();
+    // Pixels without depth are background at infinity: they keep their colour, and rays
+    // that miss every surface take it by direction (`crate::environment`).
+    let sky: Vec<bool> = clean.data().iter().map(|d| !d.is_finite()).collect();
+    let environment = Environment::from_sky(&camera, &color, &sky).map(Arc::new);
     Ok(Reference {
         camera,
         layers: vec![g],
-        colors: vec![Image::from_vec(w, h, shown)?],
+        colors: vec![color],
         cube,
         cube_near: CubeNear::Fitted,
         background,
+        environment,
         times: ReferenceTimes::default(),
     })
 }

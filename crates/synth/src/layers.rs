@@ -21,6 +21,7 @@
 //!
 //! `T_ref` = capture + shade (+ the tracer build, added by the caller).
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use glam::Vec2;
@@ -35,6 +36,7 @@ use parallax_screen::{CubeNear, UnitCube};
 use serde::Serialize;
 
 use crate::SynthError;
+use crate::environment::Environment;
 use parallax_render::reference::shade::Shader;
 use parallax_render::tiles::for_each_pixel;
 
@@ -85,6 +87,10 @@ pub struct Reference {
     pub cube_near: CubeNear,
     /// Colour of rays that miss everything (the scene's environment).
     pub background: Rgb,
+    /// Colours by direction of the pixels without depth of a colour + depth input
+    /// ([`crate::environment`]); misses take them instead of [`Self::background`]. `None` for
+    /// rendered references (their misses see the scene's constant environment).
+    pub environment: Option<Arc<Environment>>,
     pub times: ReferenceTimes,
 }
 
@@ -94,6 +100,16 @@ impl Reference {
     }
     pub fn height(&self) -> u32 {
         self.camera.height
+    }
+
+    /// The colour of a ray in world direction `dir` that misses every layer: the input's
+    /// environment by direction, else [`Self::background`].
+    #[inline]
+    pub fn environment_colour(&self, dir: glam::Vec3) -> Rgb {
+        match &self.environment {
+            Some(e) => e.lookup(dir),
+            None => self.background,
+        }
     }
 
     /// Refits [`Self::cube`] around the captured depths of every layer with its near plane
@@ -169,6 +185,7 @@ pub fn capture_reference_with(
         cube,
         cube_near: CubeNear::Fitted,
         background: scene.environment,
+        environment: None,
         times: ReferenceTimes {
             capture_ms,
             shade_ms,

@@ -19,6 +19,7 @@
 //! - [`upsample`]: 15 -> 60 Hz along a camera path (Table 3);
 //! - [`mesh_warp`]: the forward-warping baseline;
 //! - [`input`]: a colour + depth image pair as a single-layer reference;
+//! - [`environment`]: the input's pixels without depth as colours by direction (misses);
 //! - [`dof`]: thin-lens depth of field through the layers (§5.2, Table 4, Figs. 8-9);
 //! - [`lightfield`]: Looking Glass quilts and near-eye elemental images (§5.3);
 //! - [`reflect`]: specular and glossy reflections through a cube map's quad-trees (§5.4);
@@ -36,6 +37,7 @@
 
 pub mod bench;
 pub mod dof;
+pub mod environment;
 pub mod input;
 pub mod layers;
 pub mod lightfield;

@@ -13,11 +13,13 @@
 //!
 //! **Warp.** The mesh is rasterized into the target view with [`parallax_raster::rasterize`]
 //! (one layer, nearest fragment); a pixel's colour interpolates its triangle's vertex colours
-//! with the fragment's perspective-correct barycentrics. Uncovered pixels are misses.
+//! with the fragment's perspective-correct barycentrics. Uncovered pixels are misses (the
+//! environment colour; a colour + depth input's by direction, [`crate::environment`]).
 
+use std::sync::Arc;
 use std::time::Instant;
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use parallax_core::{Image, Rgb};
 use parallax_raster::{RasterOptions, View, rasterize};
 use parallax_scene::TriangleMesh;
@@ -26,6 +28,7 @@ use parallax_screen::TraceStats;
 use rayon::prelude::*;
 
 use crate::SynthError;
+use crate::environment::Environment;
 use crate::layers::Reference;
 use crate::warp::{HitKind, WarpedView};
 
@@ -35,6 +38,8 @@ pub struct GridMesh {
     pub mesh: TriangleMesh,
     pub colors: Vec<Rgb>,
     pub background: Rgb,
+    /// The input's environment by direction (misses), as in [`crate::warp`].
+    pub environment: Option<Arc<Environment>>,
 }
 
 impl GridMesh {
@@ -89,6 +94,7 @@ impl GridMesh {
             mesh,
             colors: reference.colors[0].data().to_vec(),
             background: reference.background,
+            environment: reference.environment.clone(),
         })
     }
 
@@ -103,7 +109,14 @@ impl GridMesh {
             .map(|i| {
                 let f = frags.get(i % w, i / w, 0);
                 if f.is_empty() {
-                    return (self.background, HitKind::Miss);
+                    let c = match &self.environment {
+                        Some(env) => {
+                            let film = Vec2::new((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
+                            env.lookup(target.frame.dir_to_world(target.camera_dir(film)))
+                        }
+                        None => self.background,
+                    };
+                    return (c, HitKind::Miss);
                 }
                 let [a, b, c] = self.mesh.indices[f.prim as usize];
                 let col = self.colors[a as usize] * (1.0 - f.b1 - f.b2)

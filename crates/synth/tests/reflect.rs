@@ -224,3 +224,81 @@ fn bad_options_are_errors() {
         .to_string();
     assert!(err.contains("quadtree or dda"), "{err}");
 }
+
+/// Diagnostic (`cargo test --release -p parallax-synth --test reflect -- --ignored
+/// --nocapture error_split`): PSNR of 1/8/1 reflections over the mirror pixels whose BVH
+/// reflection hit the cube map's centre sees and over the others, for 1 and 2 layers and two
+/// placements of the cube map (at the eye, and halfway between the eye and the mirrors).
+#[test]
+#[ignore]
+fn error_split_by_what_the_cube_centre_sees() {
+    let s = Setup::new(480, 270);
+    let g = &s.reference.layers[0];
+    let mut mirror_sum = Vec3::ZERO;
+    let mut nm = 0.0;
+    for i in 0..g.len() {
+        if g.depth[i].is_finite()
+            && s.scene
+                .materials
+                .get(g.material_id[i] as usize)
+                .is_some_and(|m| m.name == "mirror")
+        {
+            mirror_sum += g.position[i];
+            nm += 1.0;
+        }
+    }
+    let centres = [
+        ("eye", s.eye()),
+        ("halfway", 0.5 * (s.eye() + mirror_sum / nm)),
+    ];
+    let o = opts(1, 8, 1);
+    let face = 512;
+    for (name, c) in centres {
+        let truth = BvhReflector::new(&s.scene, &s.bvh, s.eye(), 0);
+        let t = render_reflections(&truth, &s.reference, s.eye(), face, &o).unwrap();
+        let sees = |q: Vec3| {
+            let d = q - c;
+            let r = Ray::segment(c, d.normalize(), 0.0, d.length() * (1.0 - 1e-3));
+            s.bvh.closest_hit(&r).is_none()
+        };
+        // Per reflective pixel: does the cube centre see the BVH hit of its centre ray?
+        let mut seen = vec![false; g.len()];
+        for i in 0..g.len() {
+            if !t.mask[i] {
+                continue;
+            }
+            let p = g.position[i];
+            let dir = brdf::reflect((s.eye() - p).normalize(), g.normal[i]);
+            let ray = Ray::segment(p + g.normal[i] * 1e-4, dir, 1e-3, f32::INFINITY);
+            let mut st = WorldStats::default();
+            seen[i] = truth.trace(&ray, &mut st).is_some_and(|h| sees(h.position));
+        }
+        let in_seen: Vec<bool> = (0..g.len()).map(|i| t.mask[i] && seen[i]).collect();
+        let in_hidden: Vec<bool> = (0..g.len()).map(|i| t.mask[i] && !seen[i]).collect();
+        let share = in_seen.iter().filter(|b| **b).count() as f64
+            / t.mask.iter().filter(|b| **b).count() as f64;
+        for layers in [1, 2] {
+            let desc = CameraDesc::new(c, c - Vec3::Z, Vec3::Y, 90.0);
+            let cube = ReflectionCube::capture(&s.scene, &s.bvh, &desc, face, layers, 0).unwrap();
+            let r =
+                CubeReflector::build(&s.scene, &cube, Method::QuadTree, &MethodOptions::default())
+                    .unwrap();
+            let img = render_reflections(&r, &s.reference, s.eye(), face, &o).unwrap();
+            let all = masked_psnr(&img.image, &t.image, &t.mask).unwrap();
+            let a = masked_psnr(&img.image, &t.image, &in_seen).unwrap();
+            let b = masked_psnr(&img.image, &t.image, &in_hidden).unwrap();
+            // Squared-error share of the hidden pixels: 10^(-psnr/10) * n per part.
+            let n_seen = in_seen.iter().filter(|b| **b).count() as f64;
+            let n_hidden = in_hidden.iter().filter(|b| **b).count() as f64;
+            let (e_seen, e_hidden) = (
+                10f64.powf(-a / 10.0) * n_seen,
+                10f64.powf(-b / 10.0) * n_hidden,
+            );
+            println!(
+                "centre {name}, {layers} layer(s): PSNR {all:.2} dB over all reflective pixels; {a:.2} dB over the {:.1}% whose hit the centre sees, {b:.2} dB over the rest ({:.1}% of the squared error)",
+                100.0 * share,
+                100.0 * e_hidden / (e_seen + e_hidden)
+            );
+        }
+    }
+}

@@ -32,6 +32,8 @@ pub enum BenchCommand {
     Reproject(super::reproject::ReprojectBenchArgs),
     /// Cube-map reflections per N_p/N_s/N_b and layer count, quad-tree vs DDA vs BVH (Widmer et al. 2015, Table 5).
     Reflect(super::reflect::ReflectBenchArgs),
+    /// Quad-tree build of one layer and the cascade's fixed point vs streaming the layer once (Widmer et al. 2015, §3.3).
+    QuadtreeBuild(super::bench_synth::BuildBenchArgs),
 }
 
 #[derive(Args, Debug)]
@@ -101,6 +103,7 @@ pub fn run(cmd: &BenchCommand, quiet: bool) -> Result<()> {
         BenchCommand::Dof(a) => super::dof::bench(a, quiet),
         BenchCommand::Reproject(a) => super::reproject::bench(a, quiet),
         BenchCommand::Reflect(a) => super::reflect::bench(a, quiet),
+        BenchCommand::QuadtreeBuild(a) => super::bench_synth::build_bench(a, quiet),
         BenchCommand::Rays(a) => {
             let scene = a.view.load_scene()?;
             let camera = a.view.camera(&scene, a.width, a.height)?;

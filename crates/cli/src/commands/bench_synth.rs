@@ -77,6 +77,11 @@ pub struct WarpBenchArgs {
     /// (interleaved); the best round of each method is reported.
     #[arg(long, default_value_t = 1)]
     pub repeats: u32,
+    /// Instead of captured layers: warp the BVH render of the reference view and its depth
+    /// as a user's colour + depth input (one layer, normals from depth, sky without depth),
+    /// PSNR over the whole image, the surfaces and the sky (`parallax_synth::bench::input`).
+    #[arg(long)]
+    pub color_depth_input: bool,
     /// Write the rows as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -99,6 +104,39 @@ pub fn warp_bench(a: &WarpBenchArgs, quiet: bool) -> Result<()> {
         score: !a.synth.no_score,
         repeats: a.repeats.max(1),
     };
+    if a.color_depth_input {
+        let rows = parallax_synth::bench::input::run(
+            &scene,
+            &bvh,
+            &setup,
+            &a.methods.methods(),
+            &opts,
+            &reporter(quiet),
+        )?;
+        if !quiet {
+            println!(
+                "{} {}x{}, ipd {}, colour + depth input (1 layer, normals from depth), cube near {}",
+                scene.name,
+                a.size.width,
+                a.size.height,
+                a.view.ipd,
+                cube_near_name(opts.cube_near)
+            );
+            println!("| method | PSNR dB | PSNR surfaces dB | PSNR sky dB | T_eye ms (both) |");
+            println!("|---|---|---|---|---|");
+            for r in &rows {
+                println!(
+                    "| {} | {:.2} | {:.2} | {} | {:.1} |",
+                    r.method,
+                    r.psnr,
+                    r.psnr_surfaces,
+                    cell(r.psnr_sky, 2),
+                    r.ms_view
+                );
+            }
+        }
+        return output::write_json(a.json.as_deref(), &rows);
+    }
     let rows = warp::run(
         &scene,
         &bvh,
@@ -190,6 +228,62 @@ fn truncation_note(method: &str, pct: f64) -> String {
         ""
     };
     format!("{pct:.2}% of rays hit the step bound{hint}")
+}
+
+#[derive(Args, Debug)]
+pub struct BuildBenchArgs {
+    #[command(flatten)]
+    pub view: ViewArgs,
+    #[command(flatten)]
+    pub synth: SynthArgs,
+    #[command(flatten)]
+    pub size: SynthSize,
+    /// Interleaved rounds (stream, 1-layer build, 2-layer build); the best of each is reported.
+    #[arg(long, default_value_t = 5)]
+    pub repeats: u32,
+    /// Write the rows as JSON.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+/// `parallax bench quadtree-build` (`parallax_synth::bench::build`).
+pub fn build_bench(a: &BuildBenchArgs, quiet: bool) -> Result<()> {
+    let opts = a.synth.method_options()?;
+    a.size.check_memory(2)?;
+    let scene = a.view.load_scene()?;
+    let bvh = Bvh::try_build(&scene.mesh)?;
+    let desc = a.view.camera_desc(&scene)?;
+    let cam = parallax_scene::camera::Pinhole::new(&desc, a.size.width, a.size.height)?;
+    let rows =
+        parallax_synth::bench::build::run(&scene, &bvh, &cam, &opts, a.repeats, &reporter(quiet))?;
+    if !quiet {
+        println!(
+            "{} {}x{}, cube near {}, {} threads, best of {} interleaved rounds",
+            scene.name,
+            a.size.width,
+            a.size.height,
+            cube_near_name(opts.cube_near),
+            rayon::current_num_threads(),
+            a.repeats.max(1)
+        );
+        println!("| layers | tree | build ms | stream ms | build / stream | nodes | plane nodes |");
+        println!("|---|---|---|---|---|---|---|");
+        for r in &rows {
+            println!(
+                "| {} | {} | {:.2} | {:.3} | {:.1}x | {} | {} |",
+                r.layers, r.tree, r.ms_build, r.ms_stream, r.ratio, r.nodes, r.plane_nodes
+            );
+        }
+        if let [one, fixed, _] = &rows[..] {
+            println!(
+                "fixed point (layer 0 of 2) / 1-layer build: {:.2}x; its effective planes {:.2} ms (by a climb per pixel: {:.2} ms)",
+                fixed.ms_build / one.ms_build,
+                fixed.ms_effective_planes,
+                fixed.ms_effective_planes_climb
+            );
+        }
+    }
+    output::write_json(a.json.as_deref(), &rows)
 }
 
 /// The quad-tree's throughput ratios to every other method of the same layer count (the

@@ -9,7 +9,7 @@ use anyhow::{Context, Result, ensure};
 use clap::Args;
 use parallax_bvh::Bvh;
 use parallax_core::image::png;
-use parallax_render::score::{SCORE_TONEMAP, score};
+use parallax_render::score::score;
 use parallax_scene::camera::ThinLens;
 use parallax_synth::bench::dof as bench_dof;
 use parallax_synth::dof::setup::guard_px;
@@ -172,9 +172,10 @@ pub fn run(a: &DofArgs, quiet: bool) -> Result<()> {
     let img = render_dof(&structure, &reference, &setup.lens, &dof_opts)?;
     pb.inc(1);
     let mut written = Vec::new();
+    let tm = super::input::output_tonemap(scene.is_none());
     let mut save = |name: &str, im: &parallax_core::Image<parallax_core::Rgb>| -> Result<()> {
         let p = a.out.join(name);
-        png::write_png(&p, im, &SCORE_TONEMAP)?;
+        png::write_png(&p, im, &tm)?;
         written.push(p);
         Ok(())
     };

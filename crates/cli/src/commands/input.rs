@@ -2,11 +2,19 @@
 //! that takes one (`warp`, `dof`, `lightfield`): the colour (EXR linear or PNG / JPEG sRGB),
 //! its view depth (EXR), the intrinsics (`--focal-px`, else `--fov-y`, default 60 degrees)
 //! and the pose (`--eye/--target/--up`, else the identity pose).
+//!
+//! **Output encoding.** Renders of a scene are written through the display transform of the
+//! scores (ACES filmic, [`SCORE_TONEMAP`]); a user's content keeps its encoding: PNGs made
+//! from colour + depth input are plain sRGB of the linear values ([`USER_TONEMAP`]: no tone
+//! curve, so an identity warp of an sRGB PNG returns its bytes), and `--exr` (where offered)
+//! writes the linear values as EXR.
 
 use std::path::Path;
 
 use anyhow::{Context, Result};
 use parallax_core::Rgb;
+use parallax_core::image::png::ToneMapping;
+use parallax_render::score::SCORE_TONEMAP;
 use parallax_scene::CameraDesc;
 use parallax_synth::Reference;
 use parallax_synth::input::{
@@ -39,4 +47,21 @@ pub fn load_color_depth(
     let desc = input_desc(intr, c.height(), pose)?;
     let r = reference_from_images(c, &d, &desc, Rgb::ZERO)?;
     Ok((r, desc))
+}
+
+/// PNG encoding of a user's content: sRGB of the clamped linear values, no tone curve
+/// (module docs).
+pub const USER_TONEMAP: ToneMapping = ToneMapping {
+    exposure: 0.0,
+    tonemap: parallax_core::image::png::Tonemap::Clamp,
+};
+
+/// The PNG encoding of a command's outputs: [`USER_TONEMAP`] for colour + depth input,
+/// else the scores' display transform.
+pub fn output_tonemap(user_input: bool) -> ToneMapping {
+    if user_input {
+        USER_TONEMAP
+    } else {
+        SCORE_TONEMAP
+    }
 }

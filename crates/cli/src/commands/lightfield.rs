@@ -10,9 +10,9 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail, ensure};
 use clap::{Args, ValueEnum};
 use parallax_bvh::Bvh;
-use parallax_core::image::png;
+use parallax_core::image::png::{self, ToneMapping};
 use parallax_core::{Image, Rgb};
-use parallax_render::score::{SCORE_TONEMAP, score};
+use parallax_render::score::score;
 use parallax_scene::camera::{Eye, StereoRig};
 use parallax_synth::lightfield::near_eye::NearEye;
 use parallax_synth::lightfield::quilt::{PRESETS, QuiltSpec, QuiltViews};
@@ -195,9 +195,17 @@ fn build(method: Method, r: &mut Reference, opts: &MethodOptions) -> Result<Synt
     Ok(s)
 }
 
-fn save(out: &Path, name: &str, img: &Image<Rgb>, written: &mut Vec<PathBuf>) -> Result<()> {
+/// Writes `img` as `out/name` through `tm` (a user's content keeps its encoding,
+/// `super::input` module docs).
+fn save(
+    out: &Path,
+    name: &str,
+    img: &Image<Rgb>,
+    tm: &ToneMapping,
+    written: &mut Vec<PathBuf>,
+) -> Result<()> {
     let p = out.join(name);
-    png::write_png(&p, img, &SCORE_TONEMAP).with_context(|| format!("writing {}", p.display()))?;
+    png::write_png(&p, img, tm).with_context(|| format!("writing {}", p.display()))?;
     written.push(p);
     Ok(())
 }
@@ -307,14 +315,22 @@ fn quilt(a: &LightFieldArgs, opts: &MethodOptions, quiet: bool) -> Result<Vec<Li
     );
     pb.inc(1);
     let q = quilt_image(&views, &rendered)?;
+    let tm = super::input::output_tonemap(scene.is_none());
     let mut written = Vec::new();
     save(
         &a.out,
         &format!("{}{}.png", a.name, spec.suffix()),
         &q,
+        &tm,
         &mut written,
     )?;
-    save(&a.out, "reference.png", &reference.colors[0], &mut written)?;
+    save(
+        &a.out,
+        "reference.png",
+        &reference.colors[0],
+        &tm,
+        &mut written,
+    )?;
     let layers = reference.layers.len();
     let mut rows: Vec<LightFieldRow> = rendered
         .iter()
@@ -343,6 +359,7 @@ fn quilt(a: &LightFieldArgs, opts: &MethodOptions, quiet: bool) -> Result<Vec<Li
             &a.out,
             &format!("{}.bvh{}.png", a.name, spec.suffix()),
             &qt,
+            &tm,
             &mut written,
         )?;
     }
@@ -425,6 +442,7 @@ fn near_eye(a: &LightFieldArgs, opts: &MethodOptions, quiet: bool) -> Result<Vec
         }
     };
     pb.inc(1);
+    let tm = super::input::output_tonemap(scene.is_none());
     let mut t_ref = 0.0;
     for (k, (mut r, frame)) in eyes.into_iter().enumerate() {
         let synth = build(a.method, &mut r, opts)?;
@@ -441,6 +459,7 @@ fn near_eye(a: &LightFieldArgs, opts: &MethodOptions, quiet: bool) -> Result<Vec
             &a.out,
             &format!("elemental_{name}.png"),
             &v.image,
+            &tm,
             &mut written,
         )?;
         let offset = if k == 0 { -0.5 } else { 0.5 } * a.view.ipd;
@@ -463,6 +482,7 @@ fn near_eye(a: &LightFieldArgs, opts: &MethodOptions, quiet: bool) -> Result<Vec
                 &a.out,
                 &format!("elemental_{name}.bvh.png"),
                 &b.image,
+                &tm,
                 &mut written,
             )?;
         }

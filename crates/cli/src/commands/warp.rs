@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use clap::Args;
 use parallax_bvh::Bvh;
+use parallax_core::image::exr;
 use parallax_core::image::png::{self, ToneMapping};
 use parallax_render::score::SCORE_TONEMAP;
 use parallax_scene::camera::Pinhole;
@@ -45,13 +46,22 @@ pub struct WarpArgs {
     /// Colour + depth input: focal length in pixels (else --fov-y, default 60 degrees).
     #[arg(long, conflicts_with = "fov_y")]
     pub focal_px: Option<f32>,
+    /// Also write the eyes' linear colour as EXR (`left.exr`, `right.exr`).
+    #[arg(long)]
+    pub exr: bool,
 }
 
-/// Writes the colour, hit-type and heatmap PNGs of one view as `DIR/NAME*.png`.
-pub fn write_view(dir: &Path, name: &str, v: &WarpedView) -> Result<Vec<PathBuf>> {
-    let tm = SCORE_TONEMAP;
+/// Writes the colour, hit-type and heatmap PNGs of one view as `DIR/NAME*.png`, the colour
+/// through `tm` (hit types through the scores' display transform).
+pub fn write_view(
+    dir: &Path,
+    name: &str,
+    v: &WarpedView,
+    tm: &ToneMapping,
+) -> Result<Vec<PathBuf>> {
     let p = dir.join(format!("{name}.png"));
-    png::write_png(&p, &v.image, &tm)?;
+    png::write_png(&p, &v.image, tm)?;
+    let tm = SCORE_TONEMAP;
     let hits = dir.join(format!("{name}.hits.png"));
     png::write_png(&hits, &v.hit_type_image(), &tm)?;
     let heat = dir.join(format!("{name}.heat.png"));
@@ -87,12 +97,21 @@ pub fn run(a: &WarpArgs, quiet: bool) -> Result<()> {
     pb.set_message(a.choice.method.name());
     let sv = warp_stereo(&mut reference, &desc, a.view.ipd, a.choice.method, &opts)?;
     pb.inc(1);
-    let mut written = vec![output::write_png(
-        &a.out.join("reference.png"),
-        &reference.colors[0],
-    )?];
+    // A user's content keeps its encoding (`super::input` module docs).
+    let tm = super::input::output_tonemap(scene.is_none());
+    let reference_png = a.out.join("reference.png");
+    png::write_png(&reference_png, &reference.colors[0], &tm)?;
+    let mut written = vec![reference_png];
     for (name, v) in ["left", "right"].iter().zip(&sv.views) {
-        written.extend(write_view(&a.out, name, v)?);
+        written.extend(write_view(&a.out, name, v, &tm)?);
+        if a.exr {
+            let p = a.out.join(format!("{name}.exr"));
+            let rgb = |f: fn(&glam::Vec3) -> f32| v.image.data().iter().map(f).collect::<Vec<_>>();
+            let (r, g, b) = (rgb(|c| c.x), rgb(|c| c.y), rgb(|c| c.z));
+            let (w, h) = (v.image.width(), v.image.height());
+            exr::write_exr(&p, w, h, &[("R", &r), ("G", &g), ("B", &b)])?;
+            written.push(p);
+        }
     }
     pb.inc(1);
     let score = match (&scene, a.synth.no_score) {

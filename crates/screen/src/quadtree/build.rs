@@ -38,7 +38,7 @@ use super::QuadTreeOptions;
 use super::merge::MergeCtx;
 use super::node::{FLAG_CRACK, Node};
 use super::tree::{
-    Level, QuadTree, Z_FLOOR_TABLE_MAX, Z_REGION_MIN_GAIN, Z_SKIP_MARGIN, decoded_planes,
+    Level, NO_PLANE, QuadTree, Z_FLOOR_TABLE_MAX, Z_REGION_MIN_GAIN, Z_SKIP_MARGIN, decoded_planes,
 };
 use crate::planes::layer_size;
 use crate::{LayerPlanes, NormalSource, ScreenError, UnitCube};
@@ -281,15 +281,16 @@ impl QuadTree {
         if !tz.is_empty() {
             tree.mark_unsafe(&tz);
         }
-        // After `mark_unsafe`, which changes flags and AABB ranges but no node kinds.
+        // After `mark_unsafe`, which changes flags and AABB ranges but no node kinds. The
+        // effective levels top-down (one pass per level) instead of a climb per pixel.
+        let eff = tree.effective_levels();
+        let w0 = tree.levels[0].w as usize;
         let mut pl = vec![0u8; (w * h) as usize];
         pl.par_chunks_mut(w as usize)
             .enumerate()
             .for_each(|(j, row)| {
-                for (i, v) in row.iter_mut().enumerate() {
-                    if let Some((_, l, _, _)) = tree.effective_node(i as u32, j as u32) {
-                        *v = l as u8;
-                    }
+                for (v, &l) in row.iter_mut().zip(&eff[j * w0..]) {
+                    *v = if l == NO_PLANE { 0 } else { l };
                 }
             });
         tree.plane_level = pl;

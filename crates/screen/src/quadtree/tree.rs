@@ -120,6 +120,12 @@ impl QuadTree {
         self.count().0
     }
 
+    /// Per pixel (`W x H`, row-major), the level of its effective plane node (0 where that
+    /// is the pixel itself or where it has none): what the traversal's start loads.
+    pub fn plane_levels(&self) -> &[u8] {
+        &self.plane_level
+    }
+
     /// Plane nodes reachable by the traversal (leaves of the pruned tree).
     pub fn plane_node_count(&self) -> usize {
         self.count().1
@@ -179,12 +185,73 @@ impl QuadTree {
     /// same f32 code as the traversal). With lossless settings these are the quantised pixel
     /// planes; with lossy settings every pixel of a merged node carries the proxy plane.
     /// `flag` holds the crack flag `O`.
+    ///
+    /// Computed from the effective levels (`effective_levels`: one pass per level, no climb),
+    /// each merged node decoded once per run of a row it covers; equal to
+    /// [`Self::effective_planes_by_climbing`] bit for bit (tested).
     pub fn effective_planes(&self) -> LayerPlanes {
+        let lv = self.effective_levels();
+        let w0 = self.levels[0].w;
+        decoded_planes(self.width, self.height, self.wf, self.hf, |i, j| {
+            let l = lv[(j * w0 + i) as usize];
+            (l != NO_PLANE).then(|| {
+                let l = l as u32;
+                let (qx, qy) = (i >> l, j >> l);
+                (self.node(l as usize, qx, qy), l, qx, qy)
+            })
+        })
+    }
+
+    /// [`Self::effective_planes`] by the definition: per pixel, climb to its effective node
+    /// ([`Self::effective_node`]) and decode it (the slow twin of the tests).
+    pub fn effective_planes_by_climbing(&self) -> LayerPlanes {
         decoded_planes(self.width, self.height, self.wf, self.hf, |i, j| {
             self.effective_node(i, j)
         })
     }
+
+    /// Per level-0 node (`levels[0].w x levels[0].h`, padding included), the level of its
+    /// effective plane node ([`Self::effective_node`]), [`NO_PLANE`] where it has none:
+    /// computed top-down, one pass per level (a node inherits its parent's effective level,
+    /// else is its own effective node when it is a plane). Equal to the per-pixel climb
+    /// because a plane node's descendants are all planes (§3.3 condition 1).
+    pub(crate) fn effective_levels(&self) -> Vec<u8> {
+        let top = self.levels.len() - 1;
+        let own = |l: usize| -> Vec<u8> {
+            self.levels[l]
+                .nodes
+                .iter()
+                .map(|n| if n.is_plane() { l as u8 } else { NO_PLANE })
+                .collect()
+        };
+        let mut cur = own(top);
+        for l in (0..top).rev() {
+            let (lw, pw) = (self.levels[l].w as usize, self.levels[l + 1].w as usize);
+            let nodes = &self.levels[l].nodes;
+            let parent = &cur;
+            let mut next = vec![NO_PLANE; nodes.len()];
+            next.par_chunks_mut(lw).enumerate().for_each(|(y, row)| {
+                let prow = &parent[(y / 2) * pw..];
+                let nrow = &nodes[y * lw..(y + 1) * lw];
+                for (x, v) in row.iter_mut().enumerate() {
+                    let p = prow[x / 2];
+                    *v = if p != NO_PLANE {
+                        p
+                    } else if nrow[x].is_plane() {
+                        l as u8
+                    } else {
+                        NO_PLANE
+                    };
+                }
+            });
+            cur = next;
+        }
+        cur
+    }
 }
+
+/// [`QuadTree::effective_levels`]: no plane node above or at this node.
+pub(crate) const NO_PLANE: u8 = u8::MAX;
 
 /// Per pixel `(i, j)` of a `w x h` layer, the decoded plane of the node `node_of(i, j)`
 /// (`(node, level, qx, qy)`, or `None` for no plane) in [`LayerPlanes`] form, rows in parallel.
@@ -205,12 +272,24 @@ pub(crate) fn decoded_planes(
         .zip(flag.par_chunks_mut(w as usize))
         .enumerate()
         .for_each(|(j, ((nrow, orow), frow))| {
+            // The previous pixel's node and its decoded plane: a merged node covers a run of
+            // pixels of the row, decoded once (the decode is a function of the node and its
+            // position only).
+            let mut last: Option<((Node, u32, u32, u32), Vec3, f32)> = None;
             for i in 0..w {
-                if let Some((node, l, qx, qy)) = node_of(i, j as u32) {
-                    let (nn, c) = decode_plane(node, l, qx, qy, wf, hf);
+                if let Some(key) = node_of(i, j as u32) {
+                    let (nn, c) = match last {
+                        Some((k, nn, c)) if k == key => (nn, c),
+                        _ => {
+                            let (node, l, qx, qy) = key;
+                            let (nn, c) = decode_plane(node, l, qx, qy, wf, hf);
+                            last = Some((key, nn, c));
+                            (nn, c)
+                        }
+                    };
                     nrow[i as usize] = nn;
                     orow[i as usize] = c;
-                    frow[i as usize] = node.flags() & FLAG_CRACK != 0;
+                    frow[i as usize] = key.0.flags() & FLAG_CRACK != 0;
                 }
             }
         });

@@ -461,3 +461,21 @@ pub fn exact(opts: QuadTreeOptions) -> QuadTreeOptions {
         ..opts
     }
 }
+
+/// A second layer behind `g`: depth + random gap, unrelated random normals (so deeper planes
+/// often poke in front of layer 0 inside footprints: unsafe pixels).
+pub fn behind(g: &GBuffer, seed: u64) -> GBuffer {
+    let mut rng = Rng::new(seed, 3);
+    let mut b = g.clone();
+    for k in 0..b.depth.len() {
+        if !b.depth[k].is_finite() || rng.next_f32() < 0.2 {
+            b.depth[k] = f32::INFINITY;
+            b.normal[k] = Vec3::ZERO;
+            continue;
+        }
+        b.depth[k] += 0.02 + 2.0 * rng.next_f32().powi(3);
+        let t = Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, 0.0) * 2.5;
+        b.normal[k] = (Vec3::Z + t).normalize();
+    }
+    b
+}

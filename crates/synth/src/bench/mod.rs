@@ -1,11 +1,13 @@
-//! Benchmarks behind `parallax bench warp | upsample | compression | dof | reflect`: each reproduces a table or
+//! Benchmarks behind `parallax bench warp | upsample | compression | dof | reflect | quadtree-build`: each reproduces a table or
 //! figure of Widmer et al. 2015 on any scene and view and returns rows that the CLI prints as a
 //! Markdown table and JSON (field names shared with `parallax_render::bench`).
 
 use crate::method::{Method, MethodOptions};
 
+pub mod build;
 pub mod compression;
 pub mod dof;
+pub mod input;
 pub mod reflect;
 pub mod trace;
 pub mod upsample;

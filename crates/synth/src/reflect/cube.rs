@@ -132,6 +132,7 @@ impl ReflectionCube {
                     colors,
                     cube_near: CubeNear::Fitted,
                     background: scene.environment,
+                    environment: None,
                     times: ReferenceTimes::default(),
                 })
             })

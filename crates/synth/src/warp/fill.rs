@@ -68,7 +68,7 @@ pub(super) fn background_fill(
             return Some(if g.depth[i].is_finite() && g.depth[i] > 0.0 {
                 *colors.get(x, y)
             } else {
-                reference.background
+                reference.environment_colour(ray.dir)
             });
         }
     }

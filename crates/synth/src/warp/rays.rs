@@ -111,6 +111,9 @@ impl<'a> RayWarp<'a> {
     #[inline(always)]
     pub fn colour_with(&self, ray: impl FnOnce() -> Ray, r: TraceResult) -> (Rgb, HitKind) {
         let (mut c, kind) = self.resolver.resolve(r);
+        if let (Some(env), HitKind::Miss) = (&self.reference.environment, kind) {
+            return (env.lookup(ray().dir), kind);
+        }
         if let (true, HitKind::Occlusion(l)) = (self.fill_bg, kind)
             && let TraceResult::OcclusionVolume { pixel, .. } = r
         {

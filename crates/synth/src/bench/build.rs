@@ -1,0 +1,155 @@
+//! `parallax bench quadtree-build`: the quad-tree build (Widmer et al. 2015, §3.2-3.3; the
+//! paper's `T_ref` holds it) against the time to stream the layer it reads through memory
+//! once, in one process, interleaved rounds, best round of each.
+//!
+//! **Stream** = one pass over the layer's view depths and normals (the inputs of the leaves,
+//! 16 bytes per pixel), folding their bits with XOR over rayon row chunks (the build's thread
+//! pool): a memory-bound pass with no arithmetic to speak of, the floor any build of the layer
+//! has. **Build** = [`QuadTreeTracer::build`] over 1 layer (one tree) and over 2 layers, whose
+//! layer-0 tree is the cascade's pruning fixed point (`crate` quad-tree docs, "cascade";
+//! layer 1's time includes its effective planes, which layer 0 needs). The ratios are
+//! `build / stream` of the same layer.
+//!
+//! Rows reuse `bench warp`'s field names (`method`, `layers`, `ms_*`).
+
+use std::time::Instant;
+
+use parallax_bvh::Bvh;
+use parallax_core::image::GBuffer;
+use parallax_scene::Scene;
+use parallax_scene::camera::Pinhole;
+use parallax_screen::QuadTreeTracer;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::SynthError;
+use crate::layers::capture_reference;
+use crate::method::{MethodOptions, quadtree_options};
+use parallax_render::score::Shading;
+
+/// One tree of one build setting.
+#[derive(Clone, Debug, Serialize)]
+pub struct BuildRow {
+    pub method: String,
+    /// Layers of the build (1, or 2 for the cascade).
+    pub layers: usize,
+    /// The tree's layer (0 = nearest).
+    pub tree: usize,
+    pub width: u32,
+    pub height: u32,
+    /// Best-round build milliseconds of this tree.
+    pub ms_build: f64,
+    /// Best-round milliseconds of streaming this layer's depth + normals once.
+    pub ms_stream: f64,
+    /// `ms_build / ms_stream`.
+    pub ratio: f64,
+    pub nodes: usize,
+    pub plane_nodes: usize,
+    pub threads: usize,
+    /// Best-round ms of the tree's effective planes (top-down levels, one decode per node
+    /// and row) and of their definition (a climb and a decode per pixel): layer 0 of the
+    /// 2-layer build only (`NaN` elsewhere).
+    pub ms_effective_planes: f64,
+    pub ms_effective_planes_climb: f64,
+}
+
+/// XOR of every bit of the layer's depths and normals (module docs, "Stream").
+pub fn stream_layer(g: &GBuffer) -> u32 {
+    let w = g.width() as usize;
+    let d: u32 = g
+        .depth
+        .par_chunks(w * 8)
+        .map(|c| c.iter().fold(0u32, |a, x| a ^ x.to_bits()))
+        .reduce(|| 0, |a, b| a ^ b);
+    let n: u32 = g
+        .normal
+        .par_chunks(w * 8)
+        .map(|c| {
+            c.iter().fold(0u32, |a, v| {
+                a ^ v.x.to_bits() ^ v.y.to_bits() ^ v.z.to_bits()
+            })
+        })
+        .reduce(|| 0, |a, b| a ^ b);
+    d ^ n
+}
+
+/// Captures two layers of `camera`'s view and times the builds (module docs); `progress`
+/// gets the stage names.
+pub fn run(
+    scene: &Scene,
+    bvh: &Bvh,
+    camera: &Pinhole,
+    opts: &MethodOptions,
+    repeats: u32,
+    progress: &dyn Fn(&str),
+) -> Result<Vec<BuildRow>, SynthError> {
+    progress("capture");
+    let reference = capture_reference(scene, bvh, camera, 2, Shading::Fixed, 0)?;
+    let mut reference = reference;
+    reference.fit_cube(opts.cube_near)?;
+    let layers = &reference.layers;
+    let q = quadtree_options(opts);
+    let q = parallax_screen::QuadTreeOptions {
+        gamma_dist: q.gamma_dist * crate::method::gamma_dist_scale(&reference.cube, layers)?,
+        ..q
+    };
+    let mut stream = [f64::INFINITY; 2];
+    let mut build1 = f64::INFINITY;
+    let mut build2 = [f64::INFINITY; 2];
+    let mut trees: (Option<QuadTreeTracer>, Option<QuadTreeTracer>) = (None, None);
+    for round in 0..repeats.max(1) {
+        progress(&format!("round {}", round + 1));
+        for (k, s) in stream.iter_mut().enumerate() {
+            let t = Instant::now();
+            std::hint::black_box(stream_layer(&layers[k]));
+            *s = s.min(t.elapsed().as_secs_f64() * 1e3);
+        }
+        let one = QuadTreeTracer::build(&reference.cube, &layers[..1], &q)?;
+        build1 = build1.min(one.build_ms()[0]);
+        let two = QuadTreeTracer::build(&reference.cube, &layers[..2], &q)?;
+        for (b, m) in build2.iter_mut().zip(two.build_ms()) {
+            *b = b.min(m);
+        }
+        trees = (Some(one), Some(two));
+    }
+    let (one, two) = (trees.0.expect("a round"), trees.1.expect("a round"));
+    // The fixed point's inner step, fast path against its definition (interleaved).
+    progress("effective planes");
+    let (mut fast, mut climb) = (f64::INFINITY, f64::INFINITY);
+    for _ in 0..repeats.max(1) {
+        let t = Instant::now();
+        std::hint::black_box(two.trees[0].effective_planes());
+        fast = fast.min(t.elapsed().as_secs_f64() * 1e3);
+        let t = Instant::now();
+        std::hint::black_box(two.trees[0].effective_planes_by_climbing());
+        climb = climb.min(t.elapsed().as_secs_f64() * 1e3);
+    }
+    let row = |layers: usize, tree: usize, ms: f64, t: &QuadTreeTracer| BuildRow {
+        method: "quadtree".into(),
+        layers,
+        tree,
+        width: camera.width,
+        height: camera.height,
+        ms_build: ms,
+        ms_stream: stream[tree],
+        ratio: ms / stream[tree],
+        nodes: t.trees[tree].node_count(),
+        plane_nodes: t.trees[tree].plane_node_count(),
+        threads: rayon::current_num_threads(),
+        ms_effective_planes: if (layers, tree) == (2, 0) {
+            fast
+        } else {
+            f64::NAN
+        },
+        ms_effective_planes_climb: if (layers, tree) == (2, 0) {
+            climb
+        } else {
+            f64::NAN
+        },
+    };
+    Ok(vec![
+        row(1, 0, build1, &one),
+        row(2, 0, build2[0], &two),
+        row(2, 1, build2[1], &two),
+    ])
+}
