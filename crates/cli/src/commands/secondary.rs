@@ -51,6 +51,9 @@ pub struct LdcArgs {
     /// margin), `none` (the whole scene) or `--ldc-roi=minx,miny,minz,maxx,maxy,maxz`.
     #[arg(long, default_value = "auto", allow_hyphen_values = true)]
     pub ldc_roi: String,
+    /// `--ldc-roi auto`: growth of the view's box on every side, fraction of its longest side.
+    #[arg(long, default_value_t = parallax_path::secondary::roi::DEFAULT_MARGIN)]
+    pub ldc_roi_margin: f32,
 }
 
 /// How the cube's box is chosen (`--ldc-roi`).
@@ -97,8 +100,8 @@ impl LdcArgs {
         g: &parallax_core::image::GBuffer,
     ) {
         if self.roi_choice() == RoiChoice::View {
-            use parallax_path::secondary::roi::{DEFAULT_MARGIN, DEFAULT_TRIM, view_roi};
-            settings.build.roi = view_roi(scene, camera, g, DEFAULT_TRIM, DEFAULT_MARGIN);
+            use parallax_path::secondary::roi::{DEFAULT_TRIM, view_roi};
+            settings.build.roi = view_roi(scene, camera, g, DEFAULT_TRIM, self.ldc_roi_margin);
         }
     }
 }
@@ -118,6 +121,12 @@ impl LdcArgs {
             );
         }
         let roi = self.roi_box()?;
+        if !(self.ldc_roi_margin.is_finite() && (0.0..=10.0).contains(&self.ldc_roi_margin)) {
+            bail!(
+                "--ldc-roi-margin must be in [0, 10], got {}",
+                self.ldc_roi_margin
+            );
+        }
         Ok(LdcSettings {
             resolution: self.ldc_res,
             build: LdcOptions {
@@ -422,7 +431,7 @@ pub fn bench(a: &LdcBenchArgs, quiet: bool) -> Result<()> {
         synthetic_rays: a.synthetic_rays.min(1 << 24),
         repeats: a.repeats,
         tolerance: a.agree_eps,
-        view_roi: a.ldc.roi_choice() == RoiChoice::View,
+        view_roi: (a.ldc.roi_choice() == RoiChoice::View).then_some(a.ldc.ldc_roi_margin),
         ..LdcBenchSetup::default()
     };
     let scene = a.view.load_scene()?;

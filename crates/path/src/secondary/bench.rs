@@ -25,7 +25,7 @@
 //! | `repeats` | u32 | 3 | interleaved timing rounds |
 //! | `tolerance` | `Option<f32>` | the LDC's `eps` | agreement distance (world units) |
 //! | `seed` | u64 | 7 | synthetic ray streams |
-//! | `view_roi` | bool | false | fit the cube to the view ([`super::roi::view_roi`]) instead of `ldc.build.roi` |
+//! | `view_roi` | `Option<f32>` | none | fit the cube to the view ([`super::roi::view_roi`], this margin) instead of `ldc.build.roi` |
 
 use glam::Vec3;
 use parallax_core::image::GBuffer;
@@ -44,7 +44,7 @@ use super::lights::{light_at, whitted_lights};
 use super::rays::{RaySet, ray_set};
 use super::render::{Answers, pixel_ray, trace_closest, trace_occluded};
 use super::replay::{Contender, EffectRow, RayBatch, replay_rows, score};
-use super::roi::{DEFAULT_MARGIN, DEFAULT_TRIM, view_roi};
+use super::roi::{DEFAULT_TRIM, view_roi};
 use super::{Effect, SecondaryError, SecondaryOptions, render};
 use crate::tracers::{BuiltTracer, LdcSettings, TracerKind, TracerOptions, build_tracer};
 
@@ -58,7 +58,7 @@ pub struct LdcBenchSetup {
     pub repeats: u32,
     pub tolerance: Option<f32>,
     pub seed: u64,
-    pub view_roi: bool,
+    pub view_roi: Option<f32>,
 }
 
 impl Default for LdcBenchSetup {
@@ -71,7 +71,7 @@ impl Default for LdcBenchSetup {
             repeats: 3,
             tolerance: None,
             seed: 7,
-            view_roi: false,
+            view_roi: None,
         }
     }
 }
@@ -303,8 +303,8 @@ pub fn run(
         .remove(0);
     let cam = Camera::Pinhole(camera.clone());
     let mut base_ldc = setup.ldc;
-    if setup.view_roi {
-        base_ldc.build.roi = view_roi(scene, camera, &g, DEFAULT_TRIM, DEFAULT_MARGIN);
+    if let Some(margin) = setup.view_roi {
+        base_ldc.build.roi = view_roi(scene, camera, &g, DEFAULT_TRIM, margin);
     }
     let build = |kind, ldc: &LdcSettings| {
         build_tracer(
