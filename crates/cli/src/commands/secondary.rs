@@ -32,7 +32,7 @@ pub struct LdcArgs {
     #[arg(long, default_value = "plane")]
     pub ldc_test: String,
     /// Coarse grid block edge in pixels.
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, default_value_t = parallax_raster::ldc::DEFAULT_BLOCK)]
     pub ldc_block: u32,
     /// Depth intervals per coarse block (1 = the paper's single [min, max]).
     #[arg(long, default_value_t = parallax_screen::ldc::DEFAULT_INTERVALS)]

@@ -69,7 +69,7 @@
 //! |---|---|---|---|
 //! | `eps` | f32 | 0.001 | hit tolerance in world units (the paper's, §3) |
 //! | `test` | [`SampleTest`] | `Plane` | planar splats, or the paper's constant-depth samples |
-//! | `intervals` | u32 | 4 | depth intervals per coarse block (1 = the paper's `[min, max]`), at most [`MAX_INTERVALS`] |
+//! | `intervals` | u32 | 8 | depth intervals per coarse block (1 = the paper's `[min, max]`), at most [`MAX_INTERVALS`] |
 //! | `skip` | f32 | 0.5 | hits nearer to the ray's origin than this many LDI pixels are ignored, in `[0, 16]` |
 //! | `overlap` | f32 | 0.1 | a planar splat reaches this many pixels past its pixel's square on every side, in `[0, 1]` |
 //!
@@ -92,7 +92,7 @@ use serde::Serialize;
 pub const DEFAULT_EPS: f32 = 1e-3;
 
 /// Default number of depth intervals per coarse block.
-pub const DEFAULT_INTERVALS: u32 = 4;
+pub const DEFAULT_INTERVALS: u32 = 8;
 
 /// Default distance from a ray's origin, in LDI pixels, within which hits are ignored.
 pub const DEFAULT_SKIP: f32 = 0.5;
