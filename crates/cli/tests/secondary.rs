@@ -125,6 +125,18 @@ fn bench_ldc_prints_table_1_and_writes_json() {
             assert!(view.get(k).is_some(), "row lacks {k}");
         }
     }
+    // Every disagreement of the LDC is in exactly one class (the classifier's invariant).
+    for r in rows.iter().filter(|r| r["method"] == "ldc") {
+        let rays = r["rays"].as_f64().unwrap();
+        let disagree = (rays * (1.0 - r["agreement"].as_f64().unwrap())).round() as u64;
+        let classes: u64 = r["classes"]
+            .as_object()
+            .unwrap()
+            .values()
+            .map(|v| v.as_u64().unwrap())
+            .sum();
+        assert_eq!(classes, disagree, "{r}");
+    }
     for set in ["reflect", "refract", "shadow", "axis", "random", "surface"] {
         assert!(
             rows.iter()
@@ -157,6 +169,10 @@ fn bad_ldc_input_gives_clear_errors() {
         (&["--ldc-res", "100000"], "--ldc-res"),
         (&["--ldc-max-layers", "1"], "layers"),
         (&["--ldc-roi=5,5,5,6,6,6"], "region of interest"),
+        (&["--ldc-roi=1,2,3"], "--ldc-roi"),
+        (&["--ldc-roi", "everything"], "--ldc-roi"),
+        (&["--ldc-roi-margin=-1"], "--ldc-roi-margin"),
+        (&["--ldc-overlap", "2"], "overlap"),
         (&["--tracer", "octree"], "unknown tracer"),
         (&["--effects", "sparkle"], "unknown effect"),
         (&["--bounces", "99"], "bounces"),

@@ -219,3 +219,41 @@ fn bad_input_is_an_error() {
         .to_string();
     assert!(e.contains("eps"), "{e}");
 }
+
+#[test]
+fn the_view_fitted_region_of_interest_is_kept_only_when_it_buys_resolution() {
+    use parallax_path::secondary::roi::{DEFAULT_MARGIN, DEFAULT_TRIM, view_roi};
+    let scene = Scene::load("cornell").unwrap();
+    let (cam, g) = view(&scene, 64, 48);
+    // The camera sees the whole box: fitting would only cut geometry off.
+    assert_eq!(
+        view_roi(&scene, &cam, &g, DEFAULT_TRIM, DEFAULT_MARGIN),
+        None
+    );
+    // A far copy of the box stretches the bounds 50-fold; the view still sees the first box.
+    let box_bounds = scene.mesh.bounds();
+    let mut far = scene.clone();
+    let mut copy = scene.mesh.clone();
+    for p in &mut copy.positions {
+        *p += glam::Vec3::new(100.0, 0.0, 0.0);
+    }
+    far.mesh.append(&copy, 0);
+    let (cam, g) = view(&far, 64, 48);
+    let [lo, hi] = view_roi(&far, &cam, &g, DEFAULT_TRIM, DEFAULT_MARGIN).expect("a fit");
+    assert!(lo.cmplt(hi).all());
+    let far_bounds = far.mesh.bounds();
+    assert!(lo.cmpge(far_bounds.min).all() && hi.cmple(far_bounds.max).all());
+    assert!((hi - lo).max_element() * 10.0 < far_bounds.extent().max_element());
+    // The margin keeps the first box whole (walls, floor and ceiling the view sees).
+    assert!(
+        lo.cmple(box_bounds.min).all() && hi.cmpge(box_bounds.max).all(),
+        "{lo} .. {hi}"
+    );
+    // A view of nothing fits nothing.
+    let mut empty = g.clone();
+    empty.depth.fill(f32::INFINITY);
+    assert_eq!(
+        view_roi(&far, &cam, &empty, DEFAULT_TRIM, DEFAULT_MARGIN),
+        None
+    );
+}

@@ -192,6 +192,12 @@ fn invalid_options_are_errors() {
             ..d
         },
         LdcTraceOptions { skip: -1.0, ..d },
+        LdcTraceOptions { overlap: -0.1, ..d },
+        LdcTraceOptions { overlap: 2.0, ..d },
+        LdcTraceOptions {
+            overlap: f32::NAN,
+            ..d
+        },
         LdcTraceOptions {
             skip: f32::NAN,
             ..d

@@ -32,7 +32,7 @@ pub struct LdcArgs {
     #[arg(long, default_value = "plane")]
     pub ldc_test: String,
     /// Coarse grid block edge in pixels.
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, default_value_t = parallax_raster::ldc::DEFAULT_BLOCK)]
     pub ldc_block: u32,
     /// Depth intervals per coarse block (1 = the paper's single [min, max]).
     #[arg(long, default_value_t = parallax_screen::ldc::DEFAULT_INTERVALS)]
@@ -41,12 +41,69 @@ pub struct LdcArgs {
     /// ray leaves, known only to within a pixel).
     #[arg(long, default_value_t = parallax_screen::ldc::DEFAULT_SKIP, allow_negative_numbers = true)]
     pub ldc_skip: f32,
+    /// Growth of a planar splat past its pixel's square, in pixels on every side.
+    #[arg(long, default_value_t = parallax_screen::ldc::DEFAULT_OVERLAP, allow_negative_numbers = true)]
+    pub ldc_overlap: f32,
     /// Layer limit (depth complexity) of an LDI pixel.
     #[arg(long, default_value_t = parallax_raster::ldc::DEFAULT_MAX_LAYERS)]
     pub ldc_max_layers: u32,
-    /// Region of interest the cube is fitted to: `--ldc-roi=minx,miny,minz,maxx,maxy,maxz`.
-    #[arg(long, value_delimiter = ',', num_args = 1..=6, allow_negative_numbers = true)]
-    pub ldc_roi: Option<Vec<f32>>,
+    /// Region of interest the cube is fitted to: `auto` (the view's visible geometry plus a
+    /// margin), `none` (the whole scene) or `--ldc-roi=minx,miny,minz,maxx,maxy,maxz`.
+    #[arg(long, default_value = "auto", allow_hyphen_values = true)]
+    pub ldc_roi: String,
+    /// `--ldc-roi auto`: growth of the view's box on every side, fraction of its longest side.
+    #[arg(long, default_value_t = parallax_path::secondary::roi::DEFAULT_MARGIN)]
+    pub ldc_roi_margin: f32,
+}
+
+/// How the cube's box is chosen (`--ldc-roi`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum RoiChoice {
+    /// Fitted to the view ([`parallax_path::secondary::roi::view_roi`]).
+    View,
+    /// The whole scene, or the given box (in the settings).
+    Fixed,
+}
+
+impl LdcArgs {
+    /// The choice of box; a given box is in [`Self::settings`].
+    pub fn roi_choice(&self) -> RoiChoice {
+        if self.ldc_roi.trim() == "auto" {
+            RoiChoice::View
+        } else {
+            RoiChoice::Fixed
+        }
+    }
+
+    fn roi_box(&self) -> Result<Option<[Vec3; 2]>> {
+        let s = self.ldc_roi.trim();
+        if s == "auto" || s == "none" {
+            return Ok(None);
+        }
+        let v: Vec<f32> = s
+            .split(',')
+            .map(|x| x.trim().parse::<f32>())
+            .collect::<std::result::Result<_, _>>()
+            .with_context(|| format!("--ldc-roi expects auto, none or six numbers, got {s:?}"))?;
+        match v.as_slice() {
+            [a, b, c, d, e, f] => Ok(Some([Vec3::new(*a, *b, *c), Vec3::new(*d, *e, *f)])),
+            _ => bail!("--ldc-roi expects auto, none or six numbers, got {s:?}"),
+        }
+    }
+
+    /// The cube's box for `camera`'s view `g` of `scene` (`--ldc-roi auto` fits it here).
+    pub fn resolve_roi(
+        &self,
+        settings: &mut LdcSettings,
+        scene: &parallax_scene::Scene,
+        camera: &Pinhole,
+        g: &parallax_core::image::GBuffer,
+    ) {
+        if self.roi_choice() == RoiChoice::View {
+            use parallax_path::secondary::roi::{DEFAULT_TRIM, view_roi};
+            settings.build.roi = view_roi(scene, camera, g, DEFAULT_TRIM, self.ldc_roi_margin);
+        }
+    }
 }
 
 impl LdcArgs {
@@ -63,11 +120,13 @@ impl LdcArgs {
                 self.ldc_eps
             );
         }
-        let roi = match self.ldc_roi.as_deref() {
-            None => None,
-            Some([a, b, c, d, e, f]) => Some([Vec3::new(*a, *b, *c), Vec3::new(*d, *e, *f)]),
-            Some(v) => bail!("--ldc-roi expects six numbers, got {v:?}"),
-        };
+        let roi = self.roi_box()?;
+        if !(self.ldc_roi_margin.is_finite() && (0.0..=10.0).contains(&self.ldc_roi_margin)) {
+            bail!(
+                "--ldc-roi-margin must be in [0, 10], got {}",
+                self.ldc_roi_margin
+            );
+        }
         Ok(LdcSettings {
             resolution: self.ldc_res,
             build: LdcOptions {
@@ -81,6 +140,7 @@ impl LdcArgs {
                 test: SampleTest::parse(&self.ldc_test)?,
                 intervals: self.ldc_intervals,
                 skip: self.ldc_skip,
+                overlap: self.ldc_overlap,
             },
         })
     }
@@ -196,7 +256,7 @@ pub fn run(a: &SecondaryArgs, quiet: bool) -> Result<()> {
         bounces: a.bounces,
     };
     opts.validate()?;
-    let settings = a.ldc.settings()?;
+    let mut settings = a.ldc.settings()?;
     let tolerance = a.agree_eps.unwrap_or(settings.trace.eps);
     if !(tolerance.is_finite() && tolerance > 0.0) {
         bail!("--agree-eps must be a finite number > 0, got {tolerance}");
@@ -208,6 +268,7 @@ pub fn run(a: &SecondaryArgs, quiet: bool) -> Result<()> {
         .layers
         .layers
         .remove(0);
+    a.ldc.resolve_roi(&mut settings, &scene, &camera, &g);
     let cam = Camera::Pinhole(camera.clone());
     let topts = TracerOptions {
         ldc: settings,
@@ -370,6 +431,7 @@ pub fn bench(a: &LdcBenchArgs, quiet: bool) -> Result<()> {
         synthetic_rays: a.synthetic_rays.min(1 << 24),
         repeats: a.repeats,
         tolerance: a.agree_eps,
+        view_roi: (a.ldc.roi_choice() == RoiChoice::View).then_some(a.ldc.ldc_roi_margin),
         ..LdcBenchSetup::default()
     };
     let scene = a.view.load_scene()?;
@@ -377,6 +439,7 @@ pub fn bench(a: &LdcBenchArgs, quiet: bool) -> Result<()> {
     let rows = bench::run(&scene, &camera, &setup)?;
     if !quiet {
         print_table1(&rows);
+        print_classes(&rows);
     }
     if let Some(p) = &a.json {
         write_json(p, &serde_json::to_value(&rows)?)?;
@@ -397,10 +460,9 @@ fn print_table1(rows: &[LdcBenchRow]) {
         first.threads,
         first.eps,
         first.sample_test,
-        if rows.iter().any(|r| r.roi) {
-            ", region of interest"
-        } else {
-            ""
+        match rows.iter().find(|r| r.roi) {
+            Some(r) => format!(", region of interest {:?} .. {:?}", r.box_min, r.box_max),
+            None => String::new(),
         }
     );
     println!(
@@ -464,6 +526,35 @@ fn print_table1(rows: &[LdcBenchRow]) {
             r.steps_per_ray,
             r.tests_per_ray,
             r.pct_truncated
+        );
+    }
+}
+
+/// The LDC's disagreements per ray set and class (`parallax_path::secondary::classify`).
+fn print_classes(rows: &[LdcBenchRow]) {
+    println!();
+    println!(
+        "| LDI res | set | rays | disagree | truncated | outside | near | overhang | early | skipped | uncaptured | grazing | edge | gap |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    for r in rows.iter().filter(|r| r.method == "ldc") {
+        let c = &r.classes;
+        println!(
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            r.resolution,
+            r.rays_set,
+            r.rays,
+            c.total(),
+            c.truncated,
+            c.outside,
+            c.near,
+            c.overhang,
+            c.early,
+            c.skipped,
+            c.uncaptured,
+            c.grazing,
+            c.edge,
+            c.gap
         );
     }
 }

@@ -25,22 +25,26 @@
 //! | `repeats` | u32 | 3 | interleaved timing rounds |
 //! | `tolerance` | `Option<f32>` | the LDC's `eps` | agreement distance (world units) |
 //! | `seed` | u64 | 7 | synthetic ray streams |
+//! | `view_roi` | `Option<f32>` | none | fit the cube to the view ([`super::roi::view_roi`], this margin) instead of `ldc.build.roi` |
 
 use glam::Vec3;
 use parallax_core::image::GBuffer;
 use parallax_core::{Aabb, Ray};
-use parallax_raster::ldc::LdcStats;
+use parallax_raster::ldc::{LayeredDepthCube, LdcStats};
 use parallax_render::brdf;
 use parallax_render::reference::surface::SurfacePoint;
 use parallax_scene::camera::{Camera, Pinhole};
 use parallax_scene::{MaterialKind, Scene};
+use parallax_screen::ldc::LdcTracer;
 use rayon::prelude::*;
 use serde::Serialize;
 
+use super::classify::{Classifier, Disagreements};
 use super::lights::{light_at, whitted_lights};
 use super::rays::{RaySet, ray_set};
 use super::render::{Answers, pixel_ray, trace_closest, trace_occluded};
 use super::replay::{Contender, EffectRow, RayBatch, replay_rows, score};
+use super::roi::{DEFAULT_TRIM, view_roi};
 use super::{Effect, SecondaryError, SecondaryOptions, render};
 use crate::tracers::{BuiltTracer, LdcSettings, TracerKind, TracerOptions, build_tracer};
 
@@ -54,6 +58,7 @@ pub struct LdcBenchSetup {
     pub repeats: u32,
     pub tolerance: Option<f32>,
     pub seed: u64,
+    pub view_roi: Option<f32>,
 }
 
 impl Default for LdcBenchSetup {
@@ -66,6 +71,7 @@ impl Default for LdcBenchSetup {
             repeats: 3,
             tolerance: None,
             seed: 7,
+            view_roi: None,
         }
     }
 }
@@ -117,7 +123,38 @@ pub struct LdcBenchRow {
     pub eps: f32,
     pub sample_test: String,
     pub roi: bool,
+    /// The LDC's disagreements by class ([`super::classify`]).
+    pub classes: Disagreements,
+    /// The LDC's box (the padded scene or region-of-interest bounds; zero for the BVH).
+    pub box_min: [f32; 3],
+    pub box_max: [f32; 3],
     pub threads: usize,
+}
+
+/// The view's ray sets.
+const VIEW: [&str; 3] = ["reflect", "refract", "shadow"];
+
+/// The layered depth cube as the bench builds it (the tracer factory's `ldc`, kept concrete
+/// for the classifier).
+struct LdcBuilt {
+    tracer: LdcTracer,
+    build_ms: f64,
+    bounds: Option<Aabb>,
+}
+
+impl LdcBuilt {
+    fn build(scene: &Scene, s: &LdcSettings) -> Result<Self, SecondaryError> {
+        let start = std::time::Instant::now();
+        let cube = LayeredDepthCube::build(scene, s.resolution, &s.build)?;
+        let bounds = s.build.roi.map(|_| cube.bounds);
+        let tracer = LdcTracer::new(cube, s.trace)
+            .map_err(|e| SecondaryError::InvalidOptions(e.to_string()))?;
+        Ok(Self {
+            tracer,
+            build_ms: start.elapsed().as_secs_f64() * 1e3,
+            bounds,
+        })
+    }
 }
 
 /// The view's reflection, refraction and shadow rays (module docs), in pixel order.
@@ -243,6 +280,8 @@ fn ldc_fields(row: &mut LdcBenchRow, s: &LdcStats) {
     row.ms_orient = s.orient_ms;
     row.ms_grid = s.grid_ms;
     row.roi = s.roi;
+    row.box_min = s.box_min.to_array();
+    row.box_max = s.box_max.to_array();
 }
 
 /// Runs the bench on `scene` seen by `camera` (module docs).
@@ -263,6 +302,10 @@ pub fn run(
         .layers
         .remove(0);
     let cam = Camera::Pinhole(camera.clone());
+    let mut base_ldc = setup.ldc;
+    if let Some(margin) = setup.view_roi {
+        base_ldc.build.roi = view_roi(scene, camera, &g, DEFAULT_TRIM, margin);
+    }
     let build = |kind, ldc: &LdcSettings| {
         build_tracer(
             kind,
@@ -274,10 +317,10 @@ pub fn run(
             },
         )
     };
-    let bvh = build(TracerKind::Bvh, &setup.ldc)?;
+    let bvh = build(TracerKind::Bvh, &base_ldc)?;
     let truth = render(scene, camera, &g, bvh.tracer.as_ref(), &setup.secondary)?;
     // Synthetic origins fill the LDC's box (the ROI when one is given).
-    let bounds = match setup.ldc.build.roi {
+    let bounds = match base_ldc.build.roi {
         Some([lo, hi]) => Aabb::new(
             scene.mesh.bounds().min.max(lo),
             scene.mesh.bounds().max.min(hi),
@@ -294,7 +337,7 @@ pub fn run(
             answers: &s.answers,
         })
         .collect();
-    let tolerance = setup.tolerance.unwrap_or(setup.ldc.trace.eps);
+    let tolerance = setup.tolerance.unwrap_or(base_ldc.trace.eps);
     let base = LdcBenchRow {
         scene: scene.name.clone(),
         width: camera.width,
@@ -308,10 +351,10 @@ pub fn run(
     for &res in &setup.resolutions {
         let settings = LdcSettings {
             resolution: res,
-            ..setup.ldc
+            ..base_ldc
         };
-        let ldc = build(TracerKind::Ldc, &settings)?;
-        let image = render(scene, camera, &g, ldc.tracer.as_ref(), &setup.secondary)?;
+        let ldc = LdcBuilt::build(scene, &settings)?;
+        let image = render(scene, camera, &g, &ldc.tracer, &setup.secondary)?;
         let (psnr, ssim) = score(&image.image, &truth.image)?;
         let contenders = [
             Contender {
@@ -320,13 +363,22 @@ pub fn run(
                 bounds: None,
             },
             Contender {
-                tracer: ldc.tracer.as_ref(),
+                tracer: &ldc.tracer,
                 build_ms: ldc.build_ms,
                 bounds: ldc.bounds,
             },
         ];
         let rows = replay_rows(&batches, &contenders, setup.repeats, tolerance);
-        let stats = ldc.ldc.expect("an LDC build has stats");
+        let stats = ldc.tracer.cube().stats;
+        let classifier = Classifier {
+            scene,
+            ldc: &ldc.tracer,
+            bvh: bvh.tracer.as_ref(),
+        };
+        let classes: Vec<(&str, Disagreements)> = sets
+            .iter()
+            .map(|s| (s.label, classifier.classify(&s.rays, &s.answers, tolerance)))
+            .collect();
         let view_total = |method: &str| -> EffectRow {
             let mut t = EffectRow {
                 method: method.to_string(),
@@ -335,9 +387,10 @@ pub fn run(
                 ..EffectRow::default()
             };
             let (mut nodes, mut tests, mut steps, mut trunc) = (0.0, 0.0, 0.0, 0.0);
-            for r in rows.iter().filter(|r| {
-                r.method == method && ["reflect", "refract", "shadow"].contains(&r.effect.as_str())
-            }) {
+            for r in rows
+                .iter()
+                .filter(|r| r.method == method && VIEW.contains(&r.effect.as_str()))
+            {
                 t.rays += r.rays;
                 t.counts += r.counts;
                 t.ms_trace += r.ms_trace;
@@ -373,8 +426,15 @@ pub fn run(
             if r.method == "ldc" {
                 row.resolution = res;
                 ldc_fields(&mut row, &stats);
-                row.bytes = ldc.bytes;
-                row.bytes_per_layer = ldc.bytes as f64 / stats.max_depth_complexity.max(1) as f64;
+                row.bytes = ldc.tracer.bytes();
+                row.bytes_per_layer = row.bytes as f64 / stats.max_depth_complexity.max(1) as f64;
+                row.classes = classes
+                    .iter()
+                    .filter(|(l, _)| *l == r.effect || r.effect == "view" && VIEW.contains(l))
+                    .fold(Disagreements::default(), |mut a, (_, d)| {
+                        a += *d;
+                        a
+                    });
                 row.ms_build = ldc.build_ms;
                 row.ms_setup = ldc.build_ms - stats.total_ms;
                 row.psnr = psnr;

@@ -39,12 +39,14 @@
 //! tracer sees the same primary hits; the renderer never asks which structure answers.
 
 pub mod bench;
+pub mod classify;
 pub mod compare;
 pub mod lights;
 pub mod options;
 pub mod rays;
 pub mod render;
 pub mod replay;
+pub mod roi;
 
 pub use compare::{Comparison, compare};
 pub use options::{Effect, Effects, MAX_BOUNCES, SecondaryError, SecondaryOptions};

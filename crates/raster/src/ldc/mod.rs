@@ -35,7 +35,7 @@
 //!
 //! | option | type | default | meaning |
 //! |---|---|---|---|
-//! | `block` | u32 | 8 | coarse grid block edge `n` in pixels (§1.3) |
+//! | `block` | u32 | 16 | coarse grid block edge `n` in pixels (§1.3; the paper does not give its `n`) |
 //! | `padding` | f32 | 1e-3 | box padding, fraction of the longest side |
 //! | `max_samples` | u64 | 2^28 | per-LDI bound on samples: the build fails instead of allocating more |
 //! | `max_layers` | u32 | 1024 | bound on the depth complexity (layers) of any LDI pixel: the build fails beyond it |
@@ -64,6 +64,9 @@ use crate::raster::{Projection, RasterError, View};
 /// Largest allowed resolution (pixels along the longest box side).
 pub const MAX_RESOLUTION: u32 = 1 << 14;
 
+/// Default coarse block edge in pixels (measured in `docs/notes/ldc.md`).
+pub const DEFAULT_BLOCK: u32 = 16;
+
 /// Default bound on the layers (depth complexity) of an LDI pixel.
 pub const DEFAULT_MAX_LAYERS: u32 = 1024;
 
@@ -81,7 +84,7 @@ pub struct LdcOptions {
 impl Default for LdcOptions {
     fn default() -> Self {
         Self {
-            block: 8,
+            block: DEFAULT_BLOCK,
             padding: 1e-3,
             max_samples: all_layers::DEFAULT_MAX_SAMPLES,
             max_layers: DEFAULT_MAX_LAYERS,

@@ -40,7 +40,11 @@
 //! lies inside the square or within `eps` of the sample's point ("the distance between a point
 //! on the secondary ray and a fragment coded in the LDC was less than 0.001", §3). Splats of
 //! neighbouring pixels tile a surface without gaps in depth, and a hit's position is the
-//! crossing itself (measured in `docs/notes/ldc.md`).
+//! crossing itself (measured in `docs/notes/ldc.md`). Where two neighbouring splats lie in
+//! different planes (a crease of the mesh, a pixel whose centre falls on another triangle of
+//! a finely tessellated surface) a ray can cross each plane over the other's square and slip
+//! through both; the square grown by `overlap` pixels on every side closes that crack (the
+//! grown splats overlap, and the first one the walk meets answers).
 //!
 //! **Self-intersection.** A secondary ray starts on (a hair above) the surface it leaves.
 //! A sample is accepted only if the ray crosses its plane ahead of its start (`t > t_min`):
@@ -65,8 +69,9 @@
 //! |---|---|---|---|
 //! | `eps` | f32 | 0.001 | hit tolerance in world units (the paper's, §3) |
 //! | `test` | [`SampleTest`] | `Plane` | planar splats, or the paper's constant-depth samples |
-//! | `intervals` | u32 | 4 | depth intervals per coarse block (1 = the paper's `[min, max]`), at most [`MAX_INTERVALS`] |
+//! | `intervals` | u32 | 8 | depth intervals per coarse block (1 = the paper's `[min, max]`), at most [`MAX_INTERVALS`] |
 //! | `skip` | f32 | 0.5 | hits nearer to the ray's origin than this many LDI pixels are ignored, in `[0, 16]` |
+//! | `overlap` | f32 | 0.1 | a planar splat reaches this many pixels past its pixel's square on every side, in `[0, 1]` |
 //!
 //! **Memory:** the cube ([`LayeredDepthCube::bytes`]: offsets, depth, normals, albedo,
 //! primitive id per sample, coarse grids) plus the tracer's block-major copy (`layout.rs`:
@@ -87,10 +92,13 @@ use serde::Serialize;
 pub const DEFAULT_EPS: f32 = 1e-3;
 
 /// Default number of depth intervals per coarse block.
-pub const DEFAULT_INTERVALS: u32 = 4;
+pub const DEFAULT_INTERVALS: u32 = 8;
 
 /// Default distance from a ray's origin, in LDI pixels, within which hits are ignored.
 pub const DEFAULT_SKIP: f32 = 0.5;
+
+/// Default growth of a planar splat past its pixel's square, in pixels on every side.
+pub const DEFAULT_OVERLAP: f32 = 0.1;
 
 /// Largest number of depth intervals per coarse block.
 pub const MAX_INTERVALS: u32 = 64;
@@ -131,6 +139,7 @@ pub struct LdcTraceOptions {
     pub test: SampleTest,
     pub intervals: u32,
     pub skip: f32,
+    pub overlap: f32,
 }
 
 impl Default for LdcTraceOptions {
@@ -140,6 +149,7 @@ impl Default for LdcTraceOptions {
             test: SampleTest::default(),
             intervals: DEFAULT_INTERVALS,
             skip: DEFAULT_SKIP,
+            overlap: DEFAULT_OVERLAP,
         }
     }
 }
@@ -164,7 +174,7 @@ struct LdiTrace {
     /// Pixels and splats in block-major order (slopes in world units per world unit).
     layout: layout::BlockLayout,
     /// Largest depth change of a splat from its pixel centre to where a ray may cross it
-    /// (world units): `max(s / 2, eps) * max(|dz/du| + |dz/dv|)`; 0 for the depth test.
+    /// (world units): `max((1/2 + overlap) s, eps) * max(|dz/du| + |dz/dv|)`; 0 for the depth test.
     margin: f32,
 }
 
@@ -191,6 +201,12 @@ impl LdcTracer {
             return Err(LdcTraceError(format!(
                 "skip must be in [0, 16] pixels, got {}",
                 opts.skip
+            )));
+        }
+        if !(opts.overlap.is_finite() && (0.0..=1.0).contains(&opts.overlap)) {
+            return Err(LdcTraceError(format!(
+                "overlap must be in [0, 1] pixels, got {}",
+                opts.overlap
             )));
         }
         if opts.intervals == 0 || opts.intervals > MAX_INTERVALS {
@@ -224,7 +240,7 @@ impl LdcTracer {
                 blocks_x: ldi.coarse.blocks_x,
                 blocks_y: ldi.coarse.blocks_y,
                 layout,
-                margin: (0.5 * s).max(opts.eps) * spread,
+                margin: ((0.5 + opts.overlap) * s).max(opts.eps) * spread,
             }
         });
         Ok(Self {

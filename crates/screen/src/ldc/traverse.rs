@@ -277,7 +277,7 @@ impl LdcTracer {
             return None;
         }
         let s = self.ldc.pixel_size;
-        let half = 0.5 * s;
+        let half = (0.5 + self.opts.overlap) * s;
         let eps2 = eps * eps;
         // The ray relative to the pixel centre (world units).
         let cu = r.uo - (px as f32 + 0.5) * s;
@@ -308,7 +308,8 @@ impl LdcTracer {
             let (key, t_hit) = match self.opts.test {
                 SampleTest::Plane => {
                     // Where the ray crosses the tangent plane, relative to the pixel centre:
-                    // inside the pixel's square (the splat) or within eps of the sample point.
+                    // inside the pixel's square grown by `overlap` (the splat) or within eps
+                    // of the sample point.
                     let (du, dv) = (cu + t_cross * r.du, cv + t_cross * r.dv);
                     let inside = du.abs() <= half && dv.abs() <= half;
                     if !inside {
