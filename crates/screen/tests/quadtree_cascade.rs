@@ -4,8 +4,7 @@
 
 mod quadtree_util;
 
-use glam::Vec3;
-use parallax_core::{GBuffer, Ray, Rng};
+use parallax_core::{GBuffer, Ray};
 use parallax_raster::{RasterOptions, View, capture_layers};
 use parallax_scene::{Scene, camera::Pinhole};
 use parallax_screen::{
