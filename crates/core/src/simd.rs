@@ -355,6 +355,59 @@ impl Lanes for F8 {
     }
 }
 
+/// Bit-equal, or both NaN (NaN payloads may differ between constant folding and hardware).
+fn same_f32(a: f32, b: f32) -> bool {
+    a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())
+}
+
+/// Test support for every [`Lanes`] implementation (here and in the technique crates): each
+/// lane of `a` and `b` (holding `xs` and `ys`) gives, under min / max, the compares, the mask
+/// logic, select and arithmetic, what the scalar `f32` gives. Panics naming the lane otherwise.
+pub fn assert_lanes_match_scalar<L: Lanes>(a: L, b: L, xs: &[f32], ys: &[f32]) {
+    assert!(
+        xs.len() >= L::N && ys.len() >= L::N,
+        "{} operands per side",
+        L::N
+    );
+    for i in 0..L::N {
+        let (x, y) = (xs[i], ys[i]);
+        assert!(same_f32(a.get(i), x), "get lane {i}");
+        assert!(
+            same_f32(a.max_or_rhs(b).get(i), x.max_or_rhs(y)),
+            "max lane {i}"
+        );
+        assert!(
+            same_f32(a.min_or_rhs(b).get(i), x.min_or_rhs(y)),
+            "min lane {i}"
+        );
+        assert!(
+            same_f32(max_or_rhs(a, b).get(i), x.max_or_rhs(y)),
+            "max_or_rhs lane {i}"
+        );
+        assert!(
+            same_f32(min_or_rhs(a, b).get(i), x.min_or_rhs(y)),
+            "min_or_rhs lane {i}"
+        );
+        let bit = |m: L::M| L::bits(m) >> i & 1 == 1;
+        assert_eq!(bit(a.lt(b)), x < y, "lt lane {i}");
+        assert_eq!(bit(a.gt(b)), x > y, "gt lane {i}");
+        assert_eq!(bit(a.le(b)), x <= y, "le lane {i}");
+        assert_eq!(bit(a.ge(b)), x >= y, "ge lane {i}");
+        assert_eq!(bit(a.eq(b)), x == y, "eq lane {i}");
+        assert_eq!(bit(a.ne(b)), x != y, "ne lane {i}");
+        assert_eq!(bit(L::or(a.lt(b), a.eq(b))), x <= y, "or lane {i}");
+        assert_eq!(bit(L::and(a.le(b), a.ge(b))), x == y, "and lane {i}");
+        assert!(
+            same_f32(L::select(a.lt(b), a, b).get(i), if x < y { x } else { y }),
+            "select lane {i}"
+        );
+        assert!(
+            same_f32((a * b + a / b - b).get(i), x * y + x / y - y),
+            "arithmetic lane {i}"
+        );
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -372,33 +425,7 @@ mod tests {
     fn check<L: Lanes>(load: impl Fn(&[f32]) -> L) {
         for start in (0..8).step_by(L::N) {
             let (a, b) = (load(&A[start..]), load(&B[start..]));
-            for i in 0..L::N {
-                let (x, y) = (A[start + i], B[start + i]);
-                assert!(
-                    same(a.max_or_rhs(b).get(i), x.max_or_rhs(y)),
-                    "max lane {i}"
-                );
-                assert!(
-                    same(a.min_or_rhs(b).get(i), x.min_or_rhs(y)),
-                    "min lane {i}"
-                );
-                assert!(same(max_or_rhs(a, b).get(i), x.max_or_rhs(y)));
-                assert!(same(min_or_rhs(a, b).get(i), x.min_or_rhs(y)));
-                let bit = |m: L::M| L::bits(m) >> i & 1 == 1;
-                assert_eq!(bit(a.lt(b)), x < y);
-                assert_eq!(bit(a.gt(b)), x > y);
-                assert_eq!(bit(a.le(b)), x <= y);
-                assert_eq!(bit(a.ge(b)), x >= y);
-                assert_eq!(bit(a.eq(b)), x == y);
-                assert_eq!(bit(a.ne(b)), x != y);
-                assert_eq!(bit(L::or(a.lt(b), a.eq(b))), x <= y);
-                assert_eq!(bit(L::and(a.le(b), a.ge(b))), x == y);
-                assert!(same(
-                    L::select(a.lt(b), a, b).get(i),
-                    if x < y { x } else { y }
-                ));
-                assert!(same((a * b + a / b - b).get(i), x * y + x / y - y));
-            }
+            assert_lanes_match_scalar(a, b, &A[start..start + L::N], &B[start..start + L::N]);
         }
     }
 
