@@ -182,3 +182,39 @@ fn defocus_raises_the_msaa_shade_count() {
         last = s;
     }
 }
+
+/// Mean of the linear RGB channels.
+fn mean(img: &Image<Vec3>) -> f64 {
+    img.data()
+        .iter()
+        .map(|c| c.element_sum() as f64)
+        .sum::<f64>()
+        / (3 * img.data().len()) as f64
+}
+
+#[test]
+fn shadows_on_bring_the_frame_to_the_reference_renderers_light() {
+    // With shadows the sky term is occluded as in the reference renderer (its sky visibility
+    // rays), so the two frames receive the same light on average; without shadows the sky
+    // lights every surface fully and the atrium's arcades come out brighter.
+    use parallax_render::reference::{RenderOptions, render};
+    let (scene, bvh) = setup("atrium");
+    let cam = camera(&scene, ModelKind::Pinhole);
+    let set = SampleSet::grid(cam.clone(), 4);
+    let vis = visibility(Visibility::PerRay, &bvh, &set).unwrap();
+    let frame = |shadows| {
+        let shader = VrShader::new(&scene, &bvh, ShadeOptions { shadows });
+        let r = resolve(&set, &vis, &shader, ShadingMode::Msaa);
+        mean(&reconstruct(&set, &r.colors))
+    };
+    let (on, off) = (frame(true), frame(false));
+    let opts = RenderOptions {
+        spp: 64,
+        seed: 3,
+        gbuffer: false,
+    };
+    let reference = mean(&render(&scene, &bvh, &cam, &opts, &|_| {}).image);
+    println!("mean radiance: vr shadows {on:.4}, vr no shadows {off:.4}, reference {reference:.4}");
+    assert!((on / reference - 1.0).abs() < 0.05, "{on} vs {reference}");
+    assert!(off > 1.2 * reference, "{off} vs {reference}");
+}
