@@ -3,6 +3,7 @@
 
 mod args;
 mod commands;
+mod demo_piece;
 mod output;
 mod progress;
 

@@ -78,6 +78,38 @@ fn demo_writes_every_piece_and_its_page() {
             "no {piece} row:\n{table}"
         );
     }
+    // The page: a section per paper, each result with a ground truth behind a wipe slider,
+    // and the stereo warp scored against the BVH's eye views.
+    for section in [
+        "Path tracing and DIRT",
+        "Widmer et al. 2015",
+        "HVVR",
+        "Layered depth cubes",
+        "Stereo and temporal reprojection",
+        "Camera models",
+    ] {
+        assert!(
+            page.contains(&format!("<h2>{section}")),
+            "no section {section}"
+        );
+    }
+    for truth in [
+        "dirt_path_traced_bvh.png",
+        "stereo_warp_left_bvh.png",
+        "dof_bvh.png",
+        "quilt_bvh.png",
+        "reflect_bvh.png",
+        "secondary_bvh.png",
+    ] {
+        let wipe = format!("<div class=\"wipe\"><img src=\"{truth}\"");
+        assert!(page.contains(&wipe), "no wipe against {truth}");
+    }
+    let p = psnr_png(
+        &dir.join("stereo_warp_left.png"),
+        &dir.join("stereo_warp_left_bvh.png"),
+    );
+    println!("stereo_warp_left vs its BVH view: {p:.2} dB");
+    assert!(p >= 18.0, "stereo warp left eye vs BVH: {p:.2} dB < 18");
     let p = psnr_png(&dir.join("dof_quadtree.png"), &dir.join("dof_bvh.png"));
     println!("dof_quadtree vs dof_bvh: {p:.2} dB");
     assert!(p >= 20.0, "dof_quadtree vs dof_bvh: {p:.2} dB < 20");

@@ -14,6 +14,7 @@ use parallax_scene::Scene;
 use parallax_scene::camera::{Camera, CameraOptions, ModelKind};
 
 use crate::args::ViewArgs;
+use crate::demo_piece::{DemoPiece, section};
 
 #[derive(Args, Debug)]
 pub struct DirtBenchArgs {
@@ -255,15 +256,14 @@ fn print(r: &DirtBenchReport) {
 }
 
 /// DIRT's piece of `parallax demo`: the path tracer with DIRT behind it and with the BVH, same
-/// seed, on a small view; writes DIRT's image and prints how many hits agree.
+/// seed, on a small view; writes DIRT's image and the BVH's, and says how many hits agree.
 pub fn demo_view(
     scene: &Scene,
     desc: &parallax_scene::CameraDesc,
     width: u32,
     height: u32,
     out: &std::path::Path,
-    quiet: bool,
-) -> Result<()> {
+) -> Result<DemoPiece> {
     let mut scene = scene.clone();
     apply_lighting(&mut scene, &LightOverrides::default())?;
     let (w, h) = ((width / 4).max(1), (height / 4).max(1));
@@ -274,27 +274,31 @@ pub fn demo_view(
         max_depth: 5,
         ..PathOptions::default()
     };
-    let (a, _, dirt) = path_agreement(&scene, &camera, &opts, &TracerOptions::default())?;
-    let path = out.join("dirt_path_traced.png");
-    super::path::write_path_image(&path, &dirt)?;
-    if !quiet {
-        let (rays, same) = a
-            .bounces
-            .iter()
-            .fold((0, 0), |(r, s), b| (r + b.rays, s + b.same));
-        let psnr = if a.psnr.is_finite() {
-            format!("{:.0} dB", a.psnr)
-        } else {
-            "bit-identical".into()
-        };
-        println!(
-            "| dirt_path_traced | DIRT behind the path tracer: {:.4}% of {rays} hits = BVH's, image vs BVH's {psnr} | {w}x{h} | {} | {:.1} | {:.0} | {} |",
-            100.0 * same as f64 / rays.max(1) as f64,
-            a.spp,
-            rays as f64 / (a.ms_render_dirt * 1e3),
-            a.ms_render_dirt + a.ms_build_dirt,
-            path.display()
-        );
-    }
-    Ok(())
+    let (a, bvh, dirt) = path_agreement(&scene, &camera, &opts, &TracerOptions::default())?;
+    super::path::write_path_image(&out.join("dirt_path_traced.png"), &dirt)?;
+    super::path::write_path_image(&out.join("dirt_path_traced_bvh.png"), &bvh)?;
+    let (rays, same) = a
+        .bounces
+        .iter()
+        .fold((0, 0), |(r, s), b| (r + b.rays, s + b.same));
+    let psnr = if a.psnr.is_finite() {
+        format!("{:.0} dB", a.psnr)
+    } else {
+        "bit-identical".into()
+    };
+    Ok(DemoPiece {
+        label: "dirt_path_traced".into(),
+        section: section::PATH,
+        title: "DIRT behind the path tracer".into(),
+        what: format!(
+            "the same path tracer and seed with DIRT's per-view primitive lists answering every ray: {:.4}% of {rays} hits = the BVH's, image vs the BVH's {psnr}",
+            100.0 * same as f64 / rays.max(1) as f64
+        ),
+        size: format!("{w}x{h}"),
+        spp: a.spp.to_string(),
+        mrays: Some(rays as f64 / (a.ms_render_dirt * 1e3)),
+        ms: a.ms_render_dirt + a.ms_build_dirt,
+        images: vec!["dirt_path_traced.png".into()],
+        truth: Some("dirt_path_traced_bvh.png".into()),
+    })
 }

@@ -9,10 +9,12 @@ use std::time::Instant;
 use anyhow::{Context, Result, anyhow};
 
 use super::run::Shell;
+use crate::demo_piece::{DemoPiece, section};
 
 /// One demo piece: a command line and the images it leaves.
 struct Piece {
     label: &'static str,
+    title: &'static str,
     what: String,
     size: String,
     args: Vec<String>,
@@ -27,8 +29,7 @@ pub fn synth_views(
     h: u32,
     out: &Path,
     shell: &Shell,
-    quiet: bool,
-) -> Result<()> {
+) -> Result<Vec<DemoPiece>> {
     let work = out.join("synth");
     let (w, h) = (w.max(8), h.max(8));
     let (vw, vh) = ((w / 2).max(4), (h / 2).max(4));
@@ -36,7 +37,8 @@ pub fn synth_views(
     let pieces = [
         Piece {
             label: "dof_quadtree",
-            what: "thin lens through a 2-layer quad-tree, 8 lens rays x 4 secondaries (dof_bvh.png: the BVH thin lens)".into(),
+            title: "Depth of field (§5.2)",
+            what: "thin-lens rays traced through a 2-layer quad-tree of one pinhole capture, 8 lens rays x 4 secondary samples per pixel, vs the BVH thin lens".into(),
             size: format!("{w}x{h}"),
             args: s(&[
                 "dof", "--scene", scene, "--width", &w.to_string(), "--height", &h.to_string(),
@@ -47,7 +49,8 @@ pub fn synth_views(
         },
         Piece {
             label: "quilt",
-            what: "Looking Glass quilt, 4x2 views over 35 deg from one 2-layer reference (quilt_bvh.png: the BVH views)".into(),
+            title: "Light field: a Looking Glass quilt (§5.3)",
+            what: "4x2 views over a 35 deg cone, view 0 bottom left, every pixel's ray traced through one 2-layer reference capture, vs the BVH's views".into(),
             size: format!("8x {vw}x{vh}"),
             args: s(&[
                 "lightfield", "--kind", "quilt", "--scene", scene, "--cols", "4", "--rows", "2",
@@ -58,6 +61,7 @@ pub fn synth_views(
             copies: Vec::new(),
         },
     ];
+    let mut done = Vec::new();
     for p in pieces {
         let dir = work.join(p.label);
         let mut argv = vec!["parallax".to_string()];
@@ -79,24 +83,25 @@ pub fn synth_views(
         } else {
             (p.copies, p.what)
         };
-        let mut first = None;
         for (from, to) in &copies {
             let dst = out.join(to);
             std::fs::copy(dir.join(from), &dst)
                 .with_context(|| format!("copying {} to {}", from, dst.display()))?;
-            first.get_or_insert(dst);
         }
-        if !quiet {
-            println!(
-                "| {} | {} | {} | - | - | {ms:.0} | {} |",
-                p.label,
-                what,
-                p.size,
-                first.map(|f| f.display().to_string()).unwrap_or_default()
-            );
-        }
+        done.push(DemoPiece {
+            label: p.label.into(),
+            section: section::WIDMER,
+            title: p.title.into(),
+            what,
+            size: p.size,
+            spp: "-".into(),
+            mrays: None,
+            ms,
+            images: vec![copies[0].1.to_string()],
+            truth: copies.get(1).map(|c| c.1.to_string()),
+        });
     }
-    Ok(())
+    Ok(done)
 }
 
 /// The quilt and its BVH twin (their names carry the `_qs{cols}x{rows}a{aspect}` suffix).

@@ -19,6 +19,7 @@ use parallax_scene::Scene;
 use parallax_scene::camera::{Camera, CameraModel};
 
 use crate::args::ViewArgs;
+use crate::demo_piece::{DemoPiece, section};
 use crate::output;
 use crate::progress;
 
@@ -453,7 +454,7 @@ pub fn demo_view(
     height: u32,
     out: &std::path::Path,
     quiet: bool,
-) -> Result<()> {
+) -> Result<DemoPiece> {
     let mut scene = scene.clone();
     apply_lighting(&mut scene, &LightOverrides::default())?;
     let (w, h) = ((width / 3).max(1), (height / 3).max(1));
@@ -472,18 +473,21 @@ pub fn demo_view(
     };
     let pt = PathTracer::new(&scene, &camera, built.tracer.as_ref(), opts)?;
     let res = render_with_progress(&pt, "path", quiet);
-    let path = out.join("path_traced.png");
-    write_path_image(&path, &res)?;
-    if !quiet {
-        println!(
-            "| path_traced | path tracer, NEE + MIS, depth {} ({:.2} M paths/s) | {w}x{h} | {} | {:.1} | {:.0} | {} |",
+    write_path_image(&out.join("path_traced.png"), &res)?;
+    Ok(DemoPiece {
+        label: "path_traced".into(),
+        section: section::PATH,
+        title: "Path-traced view".into(),
+        what: format!(
+            "unidirectional path tracer over the BVH, next-event estimation with MIS, depth {} ({:.2} M paths/s)",
             pt.opts.max_depth,
-            res.stats.paths as f64 / res.seconds * 1e-6,
-            res.spp,
-            res.stats.rays() as f64 / res.seconds * 1e-6,
-            res.seconds * 1e3,
-            path.display()
-        );
-    }
-    Ok(())
+            res.stats.paths as f64 / res.seconds * 1e-6
+        ),
+        size: format!("{w}x{h}"),
+        spp: res.spp.to_string(),
+        mrays: Some(res.stats.rays() as f64 / res.seconds * 1e-6),
+        ms: res.seconds * 1e3,
+        images: vec!["path_traced.png".into()],
+        truth: None,
+    })
 }

@@ -23,6 +23,7 @@ use parallax_synth::{MethodOptions, capture_reference};
 
 use super::bench_synth::{cell, reporter};
 use crate::args::{SynthArgs, ViewArgs, layer_count};
+use crate::demo_piece::{DemoPiece, section};
 use crate::output::write_json;
 
 /// DDA max steps of the reflection commands when `--dda-max-steps` is not given: the face
@@ -331,8 +332,8 @@ fn print_rows(rows: &[ReflectRow]) {
 
 /// The demo's reflections: the `mirrors` room at `width x height`, a 2-layer cube map of
 /// 256^2 faces, quad-tree per face, N_p/N_s/N_b 3/8/1, scored against the BVH's reflections
-/// of the same rays; one row of the demo table.
-pub fn demo_reflect(out: &std::path::Path, width: u32, height: u32, quiet: bool) -> Result<()> {
+/// of the same rays.
+pub fn demo_reflect(out: &std::path::Path, width: u32, height: u32) -> Result<DemoPiece> {
     let t = std::time::Instant::now();
     let scene = parallax_scene::Scene::load("mirrors")?;
     let bvh = Bvh::try_build(&scene.mesh)?;
@@ -352,19 +353,21 @@ pub fn demo_reflect(out: &std::path::Path, width: u32, height: u32, quiet: bool)
     let img = render_reflections(&reflector, &reference, eye, face, &ropts)?;
     let truth = BvhReflector::new(&scene, &bvh, eye, 0);
     let t_img = render_reflections(&truth, &reference, eye, face, &ropts)?;
-    let path = out.join("reflect_cubemap.png");
-    png::write_png(&path, &img.image, &SCORE_TONEMAP)?;
+    png::write_png(out.join("reflect_cubemap.png"), &img.image, &SCORE_TONEMAP)?;
     png::write_png(out.join("reflect_bvh.png"), &t_img.image, &SCORE_TONEMAP)?;
-    if !quiet {
-        let p = masked_psnr(&img.image, &t_img.image, &t_img.mask)?;
-        println!(
-            "| reflect_cubemap | mirrors: reflections through a 2-layer cube map's quad-trees vs the BVH ({p:.2} dB over the mirrors) | {}x{} | 3/8/1 | {:.1} | {:.0} | {} |",
-            camera.width,
-            camera.height,
-            img.mrays_per_s(),
-            t.elapsed().as_secs_f64() * 1e3,
-            path.display()
-        );
-    }
-    Ok(())
+    let p = masked_psnr(&img.image, &t_img.image, &t_img.mask)?;
+    Ok(DemoPiece {
+        label: "reflect_cubemap".into(),
+        section: section::WIDMER,
+        title: "Cube-map reflections (§5.4)".into(),
+        what: format!(
+            "built-in mirrors room: reflections traced through a 2-layer cube map at the eye, one quad-tree per face, N_p/N_s/N_b 3/8/1, vs the same rays through the BVH ({p:.2} dB over the mirrors)"
+        ),
+        size: format!("{}x{}", camera.width, camera.height),
+        spp: "3/8/1".into(),
+        mrays: Some(img.mrays_per_s()),
+        ms: t.elapsed().as_secs_f64() * 1e3,
+        images: vec!["reflect_cubemap.png".into()],
+        truth: Some("reflect_bvh.png".into()),
+    })
 }

@@ -20,6 +20,7 @@ use parallax_render::bsdf::MaterialMode;
 use serde::Serialize;
 
 use crate::args::ViewArgs;
+use crate::demo_piece::{DemoPiece, section};
 use crate::output;
 use crate::progress;
 
@@ -411,7 +412,7 @@ pub fn bench(a: &ReprojectBenchArgs, quiet: bool) -> Result<()> {
 
 /// The demo's piece: a short stereo sequence of `scene` with our method, scored against small
 /// references (no cache), and the last frame's comparison image.
-pub fn demo_reproject(scene: &str, w: u32, h: u32, out: &Path, quiet: bool) -> Result<()> {
+pub fn demo_reproject(scene: &str, w: u32, h: u32, out: &Path) -> Result<DemoPiece> {
     let t = std::time::Instant::now();
     let mut world = Dataset::new(parallax_scene::Scene::load(scene)?, Variant::Base)?;
     let run = RunOptions {
@@ -437,18 +438,24 @@ pub fn demo_reproject(scene: &str, w: u32, h: u32, out: &Path, quiet: bool) -> R
     let mut states = vec![MethodState::new(Method::ours())];
     let path = out.join("reproject_compare.png");
     run_sequence_last(&mut world, &run, &mut states, &path)?;
-    if !quiet {
-        let spp = |m| e.series("ours", m).map_or(0.0, |s| s.effective_spp().avg);
-        println!(
-            "| reproject (ours, 4 frames) | pinhole stereo, 1 spp | {w}x{h} x2 | 1 | - | {:.0} | {} (effective spp: stereo {:.2}, temporal {:.2}, stereo+temporal {:.2}) |",
-            t.elapsed().as_secs_f64() * 1e3,
-            path.display(),
+    let spp = |m| e.series("ours", m).map_or(0.0, |s| s.effective_spp().avg);
+    Ok(DemoPiece {
+        label: "reproject (ours, 4 frames)".into(),
+        section: section::REPROJECT,
+        title: "Path-traced stereo at 1 spp, reprojected".into(),
+        what: format!(
+            "last frame of a 4-frame stereo sequence: the right eye's 1-spp trace (left half) beside the left eye with stereo + temporal reprojection (ours, right half); effective spp: stereo {:.2}, temporal {:.2}, stereo+temporal {:.2}",
             spp(Mode::Stereo),
             spp(Mode::Temporal),
             spp(Mode::StereoTemporal)
-        );
-    }
-    Ok(())
+        ),
+        size: format!("{w}x{h} x2"),
+        spp: "1".into(),
+        mrays: None,
+        ms: t.elapsed().as_secs_f64() * 1e3,
+        images: vec!["reproject_compare.png".into()],
+        truth: None,
+    })
 }
 
 /// Runs the sequence and writes the last frame's right 1 spp | left stereo + temporal.

@@ -17,6 +17,7 @@ use parallax_scene::camera::{Camera, Pinhole};
 use parallax_screen::ldc::{LdcTraceOptions, SampleTest};
 
 use crate::args::ViewArgs;
+use crate::demo_piece::{DemoPiece, section};
 use crate::output;
 
 /// The `ldc` tracer's flags.
@@ -561,7 +562,7 @@ fn print_classes(rows: &[LdcBenchRow]) {
 
 /// The demo's secondary-ray view: the built-in Cornell box's mirror and glass traced through
 /// the BVH and through a 512² LDC, into `out/secondary_{bvh,ldc}.png`.
-pub fn demo_secondary(out: &Path, width: u32, height: u32, quiet: bool) -> Result<()> {
+pub fn demo_secondary(out: &Path, width: u32, height: u32) -> Result<DemoPiece> {
     let t = std::time::Instant::now();
     let scene = parallax_scene::Scene::load("cornell")?;
     let desc = scene.camera(None)?;
@@ -596,17 +597,20 @@ pub fn demo_secondary(out: &Path, width: u32, height: u32, quiet: bool) -> Resul
     for (name, image) in &c.images {
         output::write_render(&out.join(format!("secondary_{name}.png")), image, None, &[])?;
     }
-    if !quiet {
-        let l = &c.tracers[1];
-        println!(
-            "| secondary_bvh/ldc | cornell reflections, refractions, shadows: BVH vs 512² LDC ({:.2} dB, SSIM {:.4}) | {}x{} | 1 | - | {:.0} | {} |",
-            l.psnr,
-            l.ssim,
-            camera.width,
-            camera.height,
-            t.elapsed().as_secs_f64() * 1e3,
-            out.join("secondary_ldc.png").display()
-        );
-    }
-    Ok(())
+    let l = &c.tracers[1];
+    Ok(DemoPiece {
+        label: "secondary_bvh/ldc".into(),
+        section: section::LDC,
+        title: "Reflections, refractions and shadows through a layered depth cube".into(),
+        what: format!(
+            "built-in Cornell box: Whitted secondary rays traced through a 512² layered depth cube vs the same rays through the BVH ({:.2} dB, SSIM {:.4})",
+            l.psnr, l.ssim
+        ),
+        size: format!("{}x{}", camera.width, camera.height),
+        spp: "1".into(),
+        mrays: None,
+        ms: t.elapsed().as_secs_f64() * 1e3,
+        images: vec!["secondary_ldc.png".into()],
+        truth: Some("secondary_bvh.png".into()),
+    })
 }

@@ -145,11 +145,17 @@ impl Cell {
                 sort: s.clone(),
                 numeric: false,
             },
+            // Nested rows (per-bounce lists, per-budget records) would fill the table with
+            // JSON: the cell says how many entries there are and keeps the JSON as its tooltip.
             Some(other) => {
-                let s = other.to_string();
+                let text = match other {
+                    Value::Array(a) => format!("[{} entries]", a.len()),
+                    Value::Object(o) => format!("{{{} fields}}", o.len()),
+                    v => v.to_string(),
+                };
                 Cell {
-                    text: s.clone(),
-                    sort: s,
+                    text,
+                    sort: other.to_string(),
                     numeric: false,
                 }
             }
@@ -167,8 +173,13 @@ pub fn table(columns: &[String], rows: &[Vec<Cell>]) -> String {
     for r in rows {
         s += "<tr>";
         for c in r {
+            let title = if c.sort != c.text && !c.numeric {
+                format!(" title=\"{}\"", esc(&c.sort))
+            } else {
+                String::new()
+            };
             s += &format!(
-                "<td{} data-v=\"{}\">{}</td>",
+                "<td{}{title} data-v=\"{}\">{}</td>",
                 if c.numeric { "" } else { " class=\"s\"" },
                 esc(&c.sort),
                 esc(&c.text)
@@ -177,4 +188,22 @@ pub fn table(columns: &[String], rows: &[Vec<Cell>]) -> String {
         s += "</tr>";
     }
     s + "</tbody></table></div>"
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nested_cells_are_summarised_with_the_json_as_tooltip() {
+        let v = serde_json::json!([{"bounce": 0}, {"bounce": 1}]);
+        let c = Cell::of(Some(&v));
+        assert_eq!(c.text, "[2 entries]");
+        assert_eq!(c.sort, v.to_string());
+        let html = table(&["bounces".into()], &[vec![c]]);
+        assert!(html.contains(">[2 entries]</td>"), "{html}");
+        assert!(html.contains("title=\"[{&quot;bounce&quot;:0}"), "{html}");
+        let n = Cell::of(Some(&serde_json::json!(1.5)));
+        assert!(!table(&["x".into()], &[vec![n]]).contains("title="));
+    }
 }

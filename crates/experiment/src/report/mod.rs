@@ -19,6 +19,7 @@
 //! | `page` | file | `DIR/index.html` for one folder | where the page goes |
 //! | `inline` | bool | false | inline every image (always on when the page is elsewhere) |
 
+mod gallery;
 pub mod heatmap;
 pub mod html;
 pub mod plot;
@@ -33,6 +34,8 @@ use crate::error::ExperimentError;
 use crate::results::{RESULTS_FILE, RunResults, read_json};
 use html::{Cell, esc};
 use plot::{Series, plot_svg};
+
+pub use gallery::{GalleryItem, write_captioned_gallery, write_gallery};
 
 /// Columns tried, in order, as the time axis of "quality vs time".
 pub const TIME_KEYS: [&str; 7] = [
@@ -121,16 +124,7 @@ fn image_figures(images: &[String], src: &Sources, tag: &str) -> Result<String, 
             .map_or(stem.to_string(), |n| n.to_string_lossy().into_owned());
         let truth = format!("{stem}.bvh.png");
         if has(&truth) {
-            out += &html::wipe(&src.file(img)?, &src.file(&truth)?, &name);
-            let h = heatmap::error_heatmap(&src.base.join(img), &src.base.join(&truth))?;
-            let uri = src.generated(&format!("{tag}{name}.error.png"), &h.png)?;
-            out += &format!(
-                "<figure><img src=\"{}\" alt=\"error\"><figcaption>{}: |result - truth|, mean {:.2} / 255</figcaption>{}</figure>",
-                esc(&uri),
-                esc(&name),
-                h.mean_error,
-                heatmap::scale_svg(h.scale_max)
-            );
+            out += &truth_figures(img, &truth, &name, src, tag)?;
         } else {
             out += &html::figure(&src.file(img)?, &name);
         }
@@ -145,6 +139,28 @@ fn image_figures(images: &[String], src: &Sources, tag: &str) -> Result<String, 
         }
     }
     Ok(out + "</div>")
+}
+
+/// A result beside its ground truth: the wipe slider between the two and the error heatmap
+/// (written as `{tag}{name}.error.png`) with its colour scale.
+fn truth_figures(
+    img: &str,
+    truth: &str,
+    name: &str,
+    src: &Sources,
+    tag: &str,
+) -> Result<String, ExperimentError> {
+    let mut out = html::wipe(&src.file(img)?, &src.file(truth)?, name);
+    let h = heatmap::error_heatmap(&src.base.join(img), &src.base.join(truth))?;
+    let uri = src.generated(&format!("{tag}{name}.error.png"), &h.png)?;
+    out += &format!(
+        "<figure><img src=\"{}\" alt=\"error\"><figcaption>{}: |result - truth|, mean {:.2} / 255</figcaption>{}</figure>",
+        esc(&uri),
+        esc(name),
+        h.mean_error,
+        heatmap::scale_svg(h.scale_max)
+    );
+    Ok(out)
 }
 
 /// A row of the table with its point.
@@ -337,10 +353,13 @@ fn rows_table(r: &RunResults, rows: &[Row]) -> String {
         columns.extend(p.params.iter().map(|q| q.key.clone()));
     }
     let nparams = columns.len();
-    for row in rows {
-        for k in row.fields.keys() {
-            if !columns.contains(k) {
-                columns.push(k.clone());
+    // Scalar fields first, then nested ones (lists, records), each in first-seen order.
+    for nested in [false, true] {
+        for row in rows {
+            for (k, v) in row.fields {
+                if (v.is_array() || v.is_object()) == nested && !columns.contains(k) {
+                    columns.push(k.clone());
+                }
             }
         }
     }
@@ -459,33 +478,5 @@ pub fn write_report(
     }
     let title = format!("parallax report: {}", titles.join(", "));
     std::fs::write(&page, html::page(&title, &body)).map_err(io(&page))?;
-    Ok(page)
-}
-
-/// Writes `DIR/index.html`: every PNG in `dir` (not its subfolders), sorted, with the same
-/// figures as a report's points. Returns the page's path.
-pub fn write_gallery(dir: &Path, title: &str) -> Result<PathBuf, ExperimentError> {
-    let mut images: Vec<String> = Vec::new();
-    for e in std::fs::read_dir(dir).map_err(io(dir))? {
-        let e = e.map_err(io(dir))?;
-        let name = e.file_name().to_string_lossy().into_owned();
-        if name.ends_with(".png") && !name.ends_with(".error.png") && e.path().is_file() {
-            images.push(name);
-        }
-    }
-    images.sort();
-    let src = Sources {
-        base: dir.to_path_buf(),
-        inline: false,
-        generated: PathBuf::from("report"),
-    };
-    let body = format!(
-        "<p class=\"meta\">{} images in <code>{}</code></p>{}",
-        images.len(),
-        esc(&dir.display().to_string()),
-        image_figures(&images, &src, "")?
-    );
-    let page = dir.join("index.html");
-    std::fs::write(&page, html::page(title, &body)).map_err(io(&page))?;
     Ok(page)
 }
