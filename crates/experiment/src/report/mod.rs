@@ -353,7 +353,13 @@ fn rows_table(r: &RunResults, rows: &[Row]) -> String {
         columns.extend(p.params.iter().map(|q| q.key.clone()));
     }
     let nparams = columns.len();
-    // Scalar fields first, then nested ones (lists, records), each in first-seen order.
+    // The series names (method, mode, ...) first, then the other scalar fields, then nested
+    // ones (lists, records), each in first-seen order.
+    for k in SERIES_KEYS {
+        if rows.iter().any(|r| r.fields.contains_key(k)) && !columns.iter().any(|c| c == k) {
+            columns.push(k.to_string());
+        }
+    }
     for nested in [false, true] {
         for row in rows {
             for (k, v) in row.fields {
