@@ -160,17 +160,17 @@ fn finish(
 
     // 1. Binning: which bands each set-up triangle's clipped projection touches.
     let t_bin = Instant::now();
-    let spans: Vec<(u32, u32)> = setups
-        .entries
+    let spans: Vec<(u32, u32, u32)> = setups
         .iter()
-        .map(|e| {
-            Grid::span(e.y.0, e.y.1, s, 0, cells_y)
-                .map_or((1, 0), |(r0, r1)| (r0 / band_rows, r1 / band_rows))
+        .map(|(key, e)| {
+            Grid::span(e.y.0, e.y.1, s, 0, cells_y).map_or((key, 1, 0), |(r0, r1)| {
+                (key, r0 / band_rows, r1 / band_rows)
+            })
         })
         .collect();
     let mut band_start = vec![0u32; bands as usize + 1];
     let mut in_view = 0u64;
-    for &(b0, b1) in &spans {
+    for &(_, b0, b1) in &spans {
         if b0 <= b1 {
             in_view += 1;
             for b in b0..=b1 {
@@ -183,9 +183,9 @@ fn finish(
     }
     let mut band_entries = vec![0u32; band_start[bands as usize] as usize];
     let mut cursor = band_start.clone();
-    for (i, &(b0, b1)) in spans.iter().enumerate() {
+    for &(key, b0, b1) in &spans {
         for b in b0..=b1 {
-            band_entries[cursor[b as usize] as usize] = i as u32;
+            band_entries[cursor[b as usize] as usize] = key;
             cursor[b as usize] += 1;
         }
     }
@@ -197,10 +197,10 @@ fn finish(
     let budget = AtomicU64::new(0);
     let outs: Vec<Result<BandOut, DirtError>> = (0..bands)
         .into_par_iter()
-        .map_init(Vec::new, |frags, band| {
+        .map(|band| {
             let entries = &band_entries
                 [band_start[band as usize] as usize..band_start[band as usize + 1] as usize];
-            fill_band(&setups, xf, &grid, opts, band, entries, frags, &budget)
+            fill_band(&setups, xf, &grid, opts, band, entries, &budget)
         })
         .collect();
     let outs: Vec<BandOut> = outs.into_iter().collect::<Result<_, _>>()?;
