@@ -2,7 +2,9 @@
 //! parallel, each band owning its cell rows) the conservative rasterization with per-cell
 //! depth ranges (Fig. 6a), Fill Depth (§4.1.1) and the count / prefix-sum / fill of the
 //! buckets (§4.1.2, eq. 1) (`fill`); finally the bands are concatenated into the flat CSR
-//! arrays and the mip chain is built.
+//! arrays and the mip chain is built. Several views of one mesh (the camera view and the cube
+//! faces of [`super::DirtViews`]) share one setup pass over the mesh ([`build_views`]); a
+//! view's set-up triangles stay in the chunks the parallel setup made them in.
 
 use std::sync::atomic::AtomicU64;
 use std::time::Instant;

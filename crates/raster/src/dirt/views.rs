@@ -9,6 +9,10 @@
 //! | `face_size` | u32 | 256 | cube face size in pixels (`1..=`[`MAX_FACE_SIZE`]) |
 //! | `capture` | [`DirtOptions`] | S = 1, B = 8 | tile size `S`, buckets `B`, near plane and entry budget of every view (the budget bounds the sum over all views) |
 //!
+//! The camera view and the six faces are built together: one triangle setup pass over the mesh
+//! for all seven views, then each view's fill (the camera view's entries count first against
+//! the entry budget).
+//!
 //! The camera view is optional: without one (a camera model that is not a pinhole) the cube
 //! alone answers every ray.
 
