@@ -172,17 +172,6 @@ pub(crate) fn walk(
             // The cell's bucket offsets do not depend on its record: start their load now so
             // that the two cache misses overlap.
             prefetch(offsets, index * vc.buckets as usize);
-            // The level-0 cell the ray enters next (if the walk stays at level 0, as it does
-            // after tracing a cell): its record and offsets load while this one is traced.
-            let next = if t_col <= t_row {
-                index.wrapping_add(if xs.up == 1 { 1 } else { usize::MAX })
-            } else if ys.up == 1 {
-                index.wrapping_add(vc.cells_x as usize)
-            } else {
-                index.wrapping_sub(vc.cells_x as usize)
-            };
-            prefetch(records, next);
-            prefetch(offsets, next.wrapping_mul(vc.buckets as usize));
             let rec = &records[index];
             let overlaps = z_hi >= rec.zmin && z_lo <= rec.zmax;
             if overlaps {
@@ -266,16 +255,6 @@ fn trace_cell(vc: &ViewConsts, cap: &DirtCapture, r: &ViewRay, c: &Cell, q: &mut
     }
     let (offsets, ids) = (cap.offsets(), cap.ids());
     let base = c.index * nb as usize;
-    // The ids of every bucket of the range are contiguous: start their loads, and those of
-    // their triangles, before the first test waits on them.
-    let span = &ids[offsets[base + b_a.min(b_b) as usize] as usize
-        ..offsets[base + b_a.max(b_b) as usize + 1] as usize];
-    for line in span.chunks(16) {
-        prefetch(line, 0);
-    }
-    for &id in span.iter().take(PREFETCH_TRIANGLES) {
-        prefetch(q.tris, id as usize);
-    }
     let ascending = b_a <= b_b;
     let mut b = b_a;
     loop {
@@ -301,9 +280,6 @@ fn trace_cell(vc: &ViewConsts, cap: &DirtCapture, r: &ViewRay, c: &Cell, q: &mut
         }
     }
 }
-
-/// At most this many triangles of a cell's bucket range are prefetched before its tests.
-const PREFETCH_TRIANGLES: usize = 32;
 
 /// How close (pixels) the ray must be to a boundary whose crossing was computed behind the
 /// current parameter for the crossing to count as "now" (rounding); farther away, the computed
