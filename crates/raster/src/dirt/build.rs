@@ -16,7 +16,7 @@ use rayon::prelude::*;
 use super::capture::{
     DirtCapture, DirtError, DirtOptions, DirtStats, MAX_BUCKETS, MAX_CELL_BUCKETS, MAX_TILE_SIZE,
 };
-use super::fill::{BandOut, Grid, fill_band};
+use super::fill::{BandOut, FillJob, Grid, fill_band};
 use super::mip;
 use super::setup::{Setups, ViewXf};
 
@@ -197,12 +197,19 @@ fn finish(
     // 2. Per band: clip, Fill Depth, count / prefix / fill.
     let t_fill = Instant::now();
     let budget = AtomicU64::new(0);
+    let job = FillJob {
+        setups: &setups,
+        xf,
+        grid: &grid,
+        opts,
+        budget: &budget,
+    };
     let outs: Vec<Result<BandOut, DirtError>> = (0..bands)
         .into_par_iter()
         .map(|band| {
             let entries = &band_entries
                 [band_start[band as usize] as usize..band_start[band as usize + 1] as usize];
-            fill_band(&setups, xf, &grid, opts, band, entries, &budget)
+            fill_band(&job, band, entries)
         })
         .collect();
     let outs: Vec<BandOut> = outs.into_iter().collect::<Result<_, _>>()?;

@@ -169,42 +169,45 @@ fn row_span(verts: &[DVec3], top: f64, bottom: f64) -> Option<RowSpan> {
     (x.0 <= x.1).then_some(RowSpan { x, w })
 }
 
-/// Rasterizes the band's set-up triangles (`entries`: keys into `setups`, ascending triangle
-/// ids)
-/// into its cells.
-#[allow(clippy::too_many_arguments)]
-pub(super) fn fill_band(
-    setups: &Setups,
-    xf: &ViewXf,
-    g: &Grid,
-    opts: &DirtOptions,
-    band: u32,
-    entries: &[u32],
-    budget: &AtomicU64,
-) -> Result<BandOut, DirtError> {
-    FRAGMENTS.with_borrow_mut(|frags| {
-        frags.clear();
-        fill_band_with(setups, xf, g, opts, band, entries, budget, frags)
-    })
+/// What every band of one view's fill reads.
+pub(super) struct FillJob<'a> {
+    pub setups: &'a Setups,
+    pub xf: &'a ViewXf,
+    pub grid: &'a Grid,
+    pub opts: &'a DirtOptions,
+    /// Entries of the view (all bands) so far, against `opts.max_entries`.
+    pub budget: &'a AtomicU64,
 }
 
 thread_local! {
     /// Each worker's fragment buffer, kept across bands and builds (no allocation once warm).
-    static FRAGMENTS: std::cell::RefCell<Vec<Fragment>> = const { std::cell::RefCell::new(Vec::new()) };
+    static FRAGMENTS: std::cell::RefCell<Vec<Fragment>> =
+        const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// Rasterizes the band's set-up triangles (`entries`: keys into the setups, ascending
+/// triangle ids) into its cells.
+pub(super) fn fill_band(job: &FillJob, band: u32, entries: &[u32]) -> Result<BandOut, DirtError> {
+    FRAGMENTS.with_borrow_mut(|frags| {
+        frags.clear();
+        fill_band_with(job, band, entries, frags)
+    })
 }
 
 /// [`fill_band`] with an empty fragment buffer.
-#[allow(clippy::too_many_arguments)]
 fn fill_band_with(
-    setups: &Setups,
-    xf: &ViewXf,
-    g: &Grid,
-    opts: &DirtOptions,
+    job: &FillJob,
     band: u32,
     entries: &[u32],
-    budget: &AtomicU64,
     frags: &mut Vec<Fragment>,
 ) -> Result<BandOut, DirtError> {
+    let FillJob {
+        setups,
+        xf,
+        grid: g,
+        opts,
+        budget,
+    } = *job;
     let m = FILM_MARGIN_PX;
     let s = g.s as f64;
     let row0 = band * g.band_rows;
