@@ -2,7 +2,9 @@
 //! parallel, each band owning its cell rows) the conservative rasterization with per-cell
 //! depth ranges (Fig. 6a), Fill Depth (§4.1.1) and the count / prefix-sum / fill of the
 //! buckets (§4.1.2, eq. 1) (`fill`); finally the bands are concatenated into the flat CSR
-//! arrays and the mip chain is built.
+//! arrays and the mip chain is built. Several views of one mesh (the camera view and the cube
+//! faces of [`super::DirtViews`]) share one setup pass over the mesh ([`build_views`]); a
+//! view's set-up triangles stay in the chunks the parallel setup made them in.
 
 use std::sync::atomic::AtomicU64;
 use std::time::Instant;
@@ -14,7 +16,7 @@ use rayon::prelude::*;
 use super::capture::{
     DirtCapture, DirtError, DirtOptions, DirtStats, MAX_BUCKETS, MAX_CELL_BUCKETS, MAX_TILE_SIZE,
 };
-use super::fill::{BandOut, Grid, fill_band};
+use super::fill::{BandOut, FillJob, Grid, fill_band};
 use super::mip;
 use super::setup::{Setups, ViewXf};
 
@@ -160,17 +162,17 @@ fn finish(
 
     // 1. Binning: which bands each set-up triangle's clipped projection touches.
     let t_bin = Instant::now();
-    let spans: Vec<(u32, u32)> = setups
-        .entries
+    let spans: Vec<(u32, u32, u32)> = setups
         .iter()
-        .map(|e| {
-            Grid::span(e.y.0, e.y.1, s, 0, cells_y)
-                .map_or((1, 0), |(r0, r1)| (r0 / band_rows, r1 / band_rows))
+        .map(|(key, e)| {
+            Grid::span(e.y.0, e.y.1, s, 0, cells_y).map_or((key, 1, 0), |(r0, r1)| {
+                (key, r0 / band_rows, r1 / band_rows)
+            })
         })
         .collect();
     let mut band_start = vec![0u32; bands as usize + 1];
     let mut in_view = 0u64;
-    for &(b0, b1) in &spans {
+    for &(_, b0, b1) in &spans {
         if b0 <= b1 {
             in_view += 1;
             for b in b0..=b1 {
@@ -183,9 +185,9 @@ fn finish(
     }
     let mut band_entries = vec![0u32; band_start[bands as usize] as usize];
     let mut cursor = band_start.clone();
-    for (i, &(b0, b1)) in spans.iter().enumerate() {
+    for &(key, b0, b1) in &spans {
         for b in b0..=b1 {
-            band_entries[cursor[b as usize] as usize] = i as u32;
+            band_entries[cursor[b as usize] as usize] = key;
             cursor[b as usize] += 1;
         }
     }
@@ -195,12 +197,19 @@ fn finish(
     // 2. Per band: clip, Fill Depth, count / prefix / fill.
     let t_fill = Instant::now();
     let budget = AtomicU64::new(0);
+    let job = FillJob {
+        setups: &setups,
+        xf,
+        grid: &grid,
+        opts,
+        budget: &budget,
+    };
     let outs: Vec<Result<BandOut, DirtError>> = (0..bands)
         .into_par_iter()
-        .map_init(Vec::new, |frags, band| {
+        .map(|band| {
             let entries = &band_entries
                 [band_start[band as usize] as usize..band_start[band as usize + 1] as usize];
-            fill_band(&setups, xf, &grid, opts, band, entries, frags, &budget)
+            fill_band(&job, band, entries)
         })
         .collect();
     let outs: Vec<BandOut> = outs.into_iter().collect::<Result<_, _>>()?;

@@ -68,6 +68,20 @@ fn floor(x: f64) -> f64 {
     if i > x { i - 1.0 } else { i }
 }
 
+/// Fragments counted locally between two updates of the shared entry budget.
+const BILL_EVERY: u64 = 4096;
+
+/// Adds `*unbilled` entries to the shared `budget` (and zeroes it); the build fails once the
+/// total exceeds `max`.
+#[inline]
+fn bill(budget: &AtomicU64, unbilled: &mut u64, max: u64) -> Result<(), DirtError> {
+    let n = std::mem::take(unbilled);
+    if budget.fetch_add(n, Ordering::Relaxed) + n > max {
+        return Err(DirtError::TooLarge { max });
+    }
+    Ok(())
+}
+
 /// A band's share of the result.
 pub(super) struct BandOut {
     /// `[zmin, zmax]` per cell.
@@ -155,20 +169,45 @@ fn row_span(verts: &[DVec3], top: f64, bottom: f64) -> Option<RowSpan> {
     (x.0 <= x.1).then_some(RowSpan { x, w })
 }
 
-/// Rasterizes the band's set-up triangles (`entries` into `setups`, ascending triangle ids)
-/// into its cells.
-#[allow(clippy::too_many_arguments)]
-pub(super) fn fill_band(
-    setups: &Setups,
-    xf: &ViewXf,
-    g: &Grid,
-    opts: &DirtOptions,
+/// What every band of one view's fill reads.
+pub(super) struct FillJob<'a> {
+    pub setups: &'a Setups,
+    pub xf: &'a ViewXf,
+    pub grid: &'a Grid,
+    pub opts: &'a DirtOptions,
+    /// Entries of the view (all bands) so far, against `opts.max_entries`.
+    pub budget: &'a AtomicU64,
+}
+
+thread_local! {
+    /// Each worker's fragment buffer, kept across bands and builds (no allocation once warm).
+    static FRAGMENTS: std::cell::RefCell<Vec<Fragment>> =
+        const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// Rasterizes the band's set-up triangles (`entries`: keys into the setups, ascending
+/// triangle ids) into its cells.
+pub(super) fn fill_band(job: &FillJob, band: u32, entries: &[u32]) -> Result<BandOut, DirtError> {
+    FRAGMENTS.with_borrow_mut(|frags| {
+        frags.clear();
+        fill_band_with(job, band, entries, frags)
+    })
+}
+
+/// [`fill_band`] with an empty fragment buffer.
+fn fill_band_with(
+    job: &FillJob,
     band: u32,
     entries: &[u32],
     frags: &mut Vec<Fragment>,
-    budget: &AtomicU64,
 ) -> Result<BandOut, DirtError> {
-    frags.clear();
+    let FillJob {
+        setups,
+        xf,
+        grid: g,
+        opts,
+        budget,
+    } = *job;
     let m = FILM_MARGIN_PX;
     let s = g.s as f64;
     let row0 = band * g.band_rows;
@@ -176,9 +215,10 @@ pub(super) fn fill_band(
     let ncells = ((row1 - row0) * g.cells_x) as usize;
     let mut zmin = vec![f32::INFINITY; ncells];
     let mut zmax = vec![f32::NEG_INFINITY; ncells];
+    // Fragments not yet added to the shared budget.
+    let mut unbilled = 0u64;
     for &e in entries {
-        let tri = &setups.entries[e as usize];
-        let poly = setups.poly(tri);
+        let (tri, poly) = setups.get(e);
         let t = tri.tri;
         let before = frags.len();
         let Some((r0, r1)) = Grid::span(tri.y.0, tri.y.1, g.s, row0, row1) else {
@@ -235,13 +275,12 @@ pub(super) fn fill_band(
                 });
             }
         }
-        let added = (frags.len() - before) as u64;
-        if budget.fetch_add(added, Ordering::Relaxed) + added > opts.max_entries {
-            return Err(DirtError::TooLarge {
-                max: opts.max_entries,
-            });
+        unbilled += (frags.len() - before) as u64;
+        if unbilled >= BILL_EVERY {
+            bill(budget, &mut unbilled, opts.max_entries)?;
         }
     }
+    bill(budget, &mut unbilled, opts.max_entries)?;
 
     // Fill Primitives (§4.1.2): count per bucket (eq. 1a/1b), prefix sum, fill.
     let nb = g.buckets as usize;
@@ -255,26 +294,25 @@ pub(super) fn fill_band(
             bucket_index(zmin[c], scale[c], g.buckets, f.zhi) as usize,
         )
     };
+    // Counts per cell-bucket in `offsets[k]`; after the inclusive prefix sum `offsets[k]` is
+    // bucket `k`'s end, and the fill (fragments in reverse, each entry decrementing its
+    // bucket's end) leaves it at the bucket's start with the ids ascending in every bucket.
     let mut offsets = vec![0u32; ncells * nb + 1];
     let mut total = 0u64;
     for f in frags.iter() {
         let (b0, b1) = brange(f);
         let base = f.cell as usize * nb;
-        for o in &mut offsets[base + b0 + 1..=base + b1 + 1] {
+        for o in &mut offsets[base + b0..=base + b1] {
             *o += 1;
         }
         total += (b1 - b0 + 1) as u64;
     }
     // Entries beyond fragments (triangles in several buckets) count against the budget too.
-    let extra = total - frags.len() as u64;
-    if budget.fetch_add(extra, Ordering::Relaxed) + extra > opts.max_entries {
-        return Err(DirtError::TooLarge {
-            max: opts.max_entries,
-        });
-    }
+    let mut extra = total - frags.len() as u64;
+    bill(budget, &mut extra, opts.max_entries)?;
     let cells = (0..ncells)
         .map(|c| {
-            let counts = &offsets[c * nb + 1..(c + 1) * nb + 1];
+            let counts = &offsets[c * nb..(c + 1) * nb];
             let mask = counts
                 .iter()
                 .enumerate()
@@ -290,17 +328,17 @@ pub(super) fn fill_band(
             }
         })
         .collect();
-    for k in 0..ncells * nb {
-        offsets[k + 1] += offsets[k];
+    for k in 1..ncells * nb {
+        offsets[k] += offsets[k - 1];
     }
-    let mut cursor = offsets.clone();
+    offsets[ncells * nb] = total as u32;
     let mut ids = vec![0u32; total as usize];
-    for f in frags.iter() {
+    for f in frags.iter().rev() {
         let (b0, b1) = brange(f);
         let base = f.cell as usize * nb;
-        for cur in &mut cursor[base + b0..=base + b1] {
-            ids[*cur as usize] = f.tri;
-            *cur += 1;
+        for end in &mut offsets[base + b0..=base + b1] {
+            *end -= 1;
+            ids[*end as usize] = f.tri;
         }
     }
     Ok(BandOut {

@@ -50,24 +50,45 @@ pub(super) struct SetupEntry {
     pub y: (f64, f64),
 }
 
-/// Every triangle of a mesh set up once for one view, in triangle order (culled ones left
-/// out), so the bands of the fill share the work.
+/// The set-up triangles of one chunk of [`SETUP_CHUNK`] mesh triangles for one view.
 #[derive(Default)]
-pub(super) struct Setups {
+pub(super) struct SetupChunk {
     pub entries: Vec<SetupEntry>,
     pub verts: Vec<DVec3>,
 }
 
+/// Every triangle of a mesh set up once for one view, in triangle order (culled ones left
+/// out), so the bands of the fill share the work. Kept in the chunks the parallel setup made
+/// them in (no copy into one array); an entry is named by a key `chunk << CHUNK_BITS | index`.
+#[derive(Default)]
+pub(super) struct Setups {
+    chunks: Vec<SetupChunk>,
+}
+
 impl Setups {
-    /// The polygon of entry `e`.
+    /// Entry `key` and its polygon.
     #[inline]
-    pub fn poly(&self, e: &SetupEntry) -> &[DVec3] {
-        &self.verts[e.v0 as usize..(e.v0 + e.n) as usize]
+    pub fn get(&self, key: u32) -> (&SetupEntry, &[DVec3]) {
+        let c = &self.chunks[(key >> CHUNK_BITS) as usize];
+        let e = &c.entries[(key & ((1 << CHUNK_BITS) - 1)) as usize];
+        (e, &c.verts[e.v0 as usize..(e.v0 + e.n) as usize])
+    }
+
+    /// Every entry with its key, in triangle order.
+    pub fn iter(&self) -> impl Iterator<Item = (u32, &SetupEntry)> {
+        self.chunks.iter().enumerate().flat_map(|(c, chunk)| {
+            chunk
+                .entries
+                .iter()
+                .enumerate()
+                .map(move |(i, e)| (((c as u32) << CHUNK_BITS) | i as u32, e))
+        })
     }
 }
 
-/// Triangles per task of [`ViewXf::setup_all`].
-const SETUP_CHUNK: usize = 2048;
+/// Triangles per task of [`ViewXf::setup_all`] (`2^CHUNK_BITS`).
+const CHUNK_BITS: u32 = 11;
+const SETUP_CHUNK: usize = 1 << CHUNK_BITS;
 
 /// The view in f64: rotation rows (camera space = R (p - eye)), projection constants and the
 /// near + guard clip planes (camera space, `n . q + d >= 0` inside).
@@ -186,7 +207,7 @@ impl ViewXf {
     /// Sets triangle `t` up for the fill (module docs) and appends it to `out`, unless
     /// nothing of it is left in the view (or it is not finite).
     #[inline(always)]
-    fn setup_into(&self, t: usize, p: &[DVec3; 3], world_mag: f64, out: &mut Setups) {
+    fn setup_into(&self, t: usize, p: &[DVec3; 3], world_mag: f64, out: &mut SetupChunk) {
         let q = [
             self.to_camera(p[0]),
             self.to_camera(p[1]),
@@ -256,12 +277,12 @@ impl ViewXf {
     /// kept in order; `out[i]` is view `i`'s.
     pub fn setup_all_views(views: &[ViewXf], mesh: &TriangleMesh) -> Vec<Setups> {
         let n = mesh.triangle_count();
-        let chunks: Vec<Vec<Setups>> = (0..n.div_ceil(SETUP_CHUNK))
+        let chunks: Vec<Vec<SetupChunk>> = (0..n.div_ceil(SETUP_CHUNK))
             .into_par_iter()
             .map(|c| {
-                let mut out: Vec<Setups> = views
+                let mut out: Vec<SetupChunk> = views
                     .iter()
-                    .map(|_| Setups {
+                    .map(|_| SetupChunk {
                         entries: Vec::with_capacity(SETUP_CHUNK),
                         verts: Vec::with_capacity(3 * SETUP_CHUNK),
                     })
@@ -277,22 +298,12 @@ impl ViewXf {
                 out
             })
             .collect();
-        (0..views.len())
-            .map(|v| {
-                let mut all = Setups {
-                    entries: Vec::with_capacity(chunks.iter().map(|c| c[v].entries.len()).sum()),
-                    verts: Vec::with_capacity(chunks.iter().map(|c| c[v].verts.len()).sum()),
-                };
-                for c in &chunks {
-                    let base = all.verts.len() as u32;
-                    all.entries.extend(c[v].entries.iter().map(|e| SetupEntry {
-                        v0: e.v0 + base,
-                        ..*e
-                    }));
-                    all.verts.extend_from_slice(&c[v].verts);
-                }
-                all
-            })
-            .collect()
+        let mut per_view: Vec<Setups> = views.iter().map(|_| Setups::default()).collect();
+        for chunk in chunks {
+            for (v, c) in per_view.iter_mut().zip(chunk) {
+                v.chunks.push(c);
+            }
+        }
+        per_view
     }
 }

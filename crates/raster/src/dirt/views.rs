@@ -9,6 +9,10 @@
 //! | `face_size` | u32 | 256 | cube face size in pixels (`1..=`[`MAX_FACE_SIZE`]) |
 //! | `capture` | [`DirtOptions`] | S = 1, B = 8 | tile size `S`, buckets `B`, near plane and entry budget of every view (the budget bounds the sum over all views) |
 //!
+//! The camera view and the six faces are built together: one triangle setup pass over the mesh
+//! for all seven views, then each view's fill (the camera view's entries count first against
+//! the entry budget).
+//!
 //! The camera view is optional: without one (a camera model that is not a pinhole) the cube
 //! alone answers every ray.
 
@@ -87,26 +91,26 @@ impl DirtViews {
         let t0 = Instant::now();
         let triangles = DirtTriangles::from_mesh(mesh);
         let triangles_ms = ms(t0);
-        let t1 = Instant::now();
-        let camera = camera
-            .map(|c| DirtCapture::build(mesh, c, &opts.capture))
-            .transpose()?;
-        let camera_ms = ms(t1);
-        let used = camera.as_ref().map_or(0, |c| c.stats().entries);
-        let cube_opts = DirtOptions {
-            max_entries: opts.capture.max_entries.saturating_sub(used).max(1),
-            ..opts.capture
+        // The camera view and the six faces share one triangle setup pass over the mesh; the
+        // camera view's entries count first against the budget, as if built first.
+        let cube_map = CubeMap {
+            eye,
+            face: opts.face_size,
         };
-        let t2 = Instant::now();
-        let cube = DirtCube::build(
-            mesh,
-            &CubeMap {
-                eye,
-                face: opts.face_size,
-            },
-            &cube_opts,
-        )?;
-        let cube_ms = ms(t2);
+        let pinholes: Vec<Pinhole> = camera
+            .into_iter()
+            .cloned()
+            .chain((0..6).map(|i| cube_map.face_camera(i)))
+            .collect();
+        let mut caps = super::build::build_views(mesh, &pinholes, &opts.capture)?;
+        let faces = caps.split_off(caps.len() - 6);
+        let camera = caps.pop();
+        let camera_ms = camera.as_ref().map_or(0.0, |c| c.stats().total_ms);
+        let cube = DirtCube {
+            cube: cube_map,
+            faces,
+        };
+        let cube_ms = cube.total_ms();
         let capture_bytes = cube.bytes() + camera.as_ref().map_or(0, DirtCapture::bytes);
         let stats = DirtViewsStats {
             triangles_ms,
