@@ -11,7 +11,7 @@ use parallax_screen::TraceResult;
 use parallax_synth::dof::truth::masked_psnr;
 use parallax_synth::lightfield::quilt::{QuiltSpec, QuiltViews, assemble, tile};
 use parallax_synth::lightfield::{
-    bvh_pinhole, bvh_pinhole_aa, box_filter, quilt_reference, render_views, render_views_aa,
+    box_filter, bvh_pinhole, bvh_pinhole_aa, quilt_reference, render_views, render_views_aa,
     spp_side, supersampled,
 };
 use parallax_synth::method::{Method, MethodOptions, Synthesizer};
@@ -81,7 +81,10 @@ fn antialiased_tiles_are_filtered_renders_of_their_views() {
         assert_eq!((cam.width, cam.height), (96, 72));
         let v = warp_view_with(tracer, &r, &cam, &opts);
         let expect = box_filter(&v.image, 2).unwrap();
-        assert!(tile(&views.spec, &q, i).unwrap().data() == expect.data(), "view {i}");
+        assert!(
+            tile(&views.spec, &q, i).unwrap().data() == expect.data(),
+            "view {i}"
+        );
         assert_eq!(aa[i as usize].rays.image.width(), 96);
     }
     // Scored against the truth of the same rays and filter: the filtered side views are
@@ -112,7 +115,13 @@ fn antialiased_tiles_are_filtered_renders_of_their_views() {
 fn error_split() {
     let (scene, bvh) = atrium();
     let shader = Shader::new(&scene, &bvh);
-    for (cone, scale, s) in [(3.75, 3, 1), (0.375, 3, 1), (3.75, 5, 1), (3.75, 3, 2)] {
+    for (cone, scale, s) in [
+        (3.75, 3, 1),
+        (0.375, 3, 1),
+        (3.75, 5, 1),
+        (3.75, 3, 2),
+        (3.75, 3, 3),
+    ] {
         let (views, r, synth) = quilt(&scene, &bvh, 320, 240, cone, scale, 2);
         let opts = MethodOptions::default().warp;
         let warp = RayWarp::new(&r, &opts);
@@ -120,20 +129,28 @@ fn error_split() {
         let rendered = render_views_aa(synth.tracer().unwrap(), &r, &views, &opts, s).unwrap();
         for i in [0u32, 2] {
             let cam = supersampled(&views.camera(i), s);
-            let truth = bvh_pinhole(&scene, &bvh, &cam, Shading::Fixed, 0).unwrap().image;
+            let truth = bvh_pinhole(&scene, &bvh, &cam, Shading::Fixed, 0)
+                .unwrap()
+                .image;
             let rays = PixelRays::new(&cam);
             let n = (cam.width * cam.height) as usize;
             // Pixels no layer holds (and the sky) keep the truth in R and O.
             let (mut rr, mut oo) = (truth.data().to_vec(), truth.data().to_vec());
             let mut held = vec![false; n];
+            // Held pixels whose traced answer is the true surface (within 1% of its distance);
+            // pixels whose truth is the sky; surfaces no layer holds.
+            let (mut same, mut sky, mut unheld) = (vec![false; n], vec![false; n], vec![false; n]);
+            let tracer = synth.tracer().unwrap();
             for y in 0..cam.height {
                 for x in 0..cam.width {
                     let k = (y * cam.width + x) as usize;
                     let ray = rays.row(y).ray(x);
                     let Some(h) = bvh.closest_hit(&ray) else {
+                        sky[k] = true;
                         continue;
                     };
                     let p = ray.at(h.t);
+                    unheld[k] = true;
                     let d = p - eye;
                     let ref_ray = Ray::new(eye, d.normalize());
                     let hit = Hit { t: d.length(), ..h };
@@ -153,8 +170,7 @@ fn error_split() {
                     }
                     let Some(layer) = r.layers.iter().position(|g| {
                         let i = g.index(q.x, q.y);
-                        g.depth[i].is_finite()
-                            && (g.position[i] - p).length() <= 0.01 * d.length()
+                        g.depth[i].is_finite() && (g.position[i] - p).length() <= 0.01 * d.length()
                     }) else {
                         continue;
                     };
@@ -166,6 +182,11 @@ fn error_split() {
                     };
                     oo[k] = warp.colour(&ray, answer).0;
                     held[k] = true;
+                    unheld[k] = false;
+                    let a = warp.trace(tracer, &ray, &mut Default::default());
+                    same[k] = a
+                        .hit_t()
+                        .is_some_and(|t| (ray.at(t) - p).length() <= 0.01 * d.length());
                 }
             }
             let img = |v: Vec<Rgb>| Image::from_vec(cam.width, cam.height, v).unwrap();
@@ -183,6 +204,20 @@ fn error_split() {
                 m(&oo, &rr),
                 m(&oo, &truth),
                 m(synth_img, &oo),
+            );
+            let other: Vec<bool> = (0..n).map(|k| held[k] && !same[k]).collect();
+            let frac = |m: &[bool]| 100.0 * m.iter().filter(|b| **b).count() as f64 / n as f64;
+            let mp = |a: &Image<Rgb>, b: &Image<Rgb>, m: &[bool]| masked_psnr(a, b, m).unwrap();
+            println!(
+                "  S-O {:.2} dB over the {:.1}% answered on the true surface, {:.2} dB over the {:.1}% answered elsewhere; S-T {:.2} dB over the {:.1}% sky, {:.2} dB over the {:.1}% surfaces no layer holds",
+                mp(synth_img, &oo, &same),
+                frac(&same),
+                mp(synth_img, &oo, &other),
+                frac(&other),
+                mp(synth_img, &truth, &sky),
+                frac(&sky),
+                mp(synth_img, &truth, &unheld),
+                frac(&unheld),
             );
             if s > 1 {
                 let t = box_filter(&truth, s).unwrap();

@@ -349,7 +349,14 @@ fn quilt(a: &LightFieldArgs, opts: &MethodOptions, quiet: bool) -> Result<Vec<Li
         .iter()
         .enumerate()
         .map(|(i, v)| {
-            let mut r = row("quilt", i as u32, a, layers, views.offset(i as u32), &v.rays);
+            let mut r = row(
+                "quilt",
+                i as u32,
+                a,
+                layers,
+                views.offset(i as u32),
+                &v.rays,
+            );
             (r.width, r.height) = (v.image.width(), v.image.height());
             r
         })
