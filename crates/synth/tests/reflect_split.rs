@@ -3,7 +3,8 @@
 //! traces every ray exactly with the BVH and colours its hit by the cube map's colour lookup
 //! at the exact hit point. Truth `T` vs oracle `O` is the colour reconstruction from the
 //! faces' samples (the face resolution); oracle vs cube map `C` is where the traced answer
-//! differs from the exact one (and the extra samples' plane lookups).
+//! differs from the exact one (and the extra samples' plane lookups). A test checks the
+//! optional thickness of the cube map's surfaces on `mirrors-open` and `mirrors`.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -155,9 +156,80 @@ impl Reflector for AgreeingOnly<'_> {
     }
 }
 
+/// The share of mirror pixels' reflection rays (1/0/1 paths, first segments) whose cube-map
+/// hit lies within 5% of the BVH hit's distance (both missing counts as agreement).
+fn agreement(
+    scene: &Scene,
+    bvh: &Bvh,
+    r: &dyn Reflector,
+    reference: &parallax_synth::Reference,
+) -> f64 {
+    let eye = reference.camera.frame.position;
+    let truth = BvhReflector::new(scene, bvh, eye, 0);
+    let g = &reference.layers[0];
+    let (mut agree, mut n) = (0u32, 0u32);
+    for i in 0..g.len() {
+        let mirror = scene.materials.get(g.material_id[i] as usize);
+        if !g.depth[i].is_finite() || mirror.is_none_or(|m| m.name != "mirror") {
+            continue;
+        }
+        let p = g.position[i];
+        let dir = brdf::reflect((eye - p).normalize(), g.normal[i]);
+        let t_min = 1.5 * 2.0 * (p - eye).abs().max_element() / FACE as f32;
+        let ray = Ray::segment(p + g.normal[i] * 1e-4, dir, t_min, f32::INFINITY);
+        let mut st = WorldStats::default();
+        let a = r.trace(&ray, &mut st).map(|h| h.position);
+        let b = truth.trace(&ray, &mut st).map(|h| h.position);
+        n += 1;
+        agree += match (a, b) {
+            (Some(a), Some(b)) => (a - b).length() <= 0.05 * (b - ray.origin).length(),
+            (None, None) => true,
+            _ => false,
+        } as u32;
+    }
+    agree as f64 / n.max(1) as f64
+}
+
+/// Face size of the agreement test.
+const FACE: u32 = 192;
+
+/// `mirrors-open` (192x108, 192^2 faces, 2 layers): giving the cube map's surfaces a
+/// thickness (`CubeMapTracer::thickness`) lets rays that pass behind the pillars and boxes
+/// (as the eye sees them) go on to the sky and ground the BVH finds, where occlusion volumes
+/// end them; and it changes nothing on a ray that never enters one (the `mirrors` room's
+/// answers barely move).
+#[test]
+fn thickness_lets_rays_pass_behind_thin_occluders() {
+    let mut measured = Vec::new();
+    for name in ["mirrors-open", "mirrors"] {
+        let scene = Scene::load(name).unwrap();
+        let bvh = Bvh::build(&scene.mesh);
+        let camera = Pinhole::new(&scene.camera(None).unwrap(), 192, 108).unwrap();
+        let reference = capture_reference(&scene, &bvh, &camera, 1, Shading::Fixed, 0).unwrap();
+        let eye = camera.frame.position;
+        let desc = CameraDesc::new(eye, eye - Vec3::Z, Vec3::Y, 90.0);
+        let cube = ReflectionCube::capture(&scene, &bvh, &desc, FACE, 2, 0).unwrap();
+        let mut r =
+            CubeReflector::build(&scene, &cube, Method::QuadTree, &MethodOptions::default())
+                .unwrap();
+        let plain = agreement(&scene, &bvh, &r, &reference);
+        r.tracer.thickness = Some(0.1);
+        let thick = agreement(&scene, &bvh, &r, &reference);
+        println!(
+            "{name}: mirror hit agreement {plain:.3} with occlusion volumes, {thick:.3} with thickness 0.1"
+        );
+        measured.push((plain, thick));
+    }
+    let (open, room) = (measured[0], measured[1]);
+    assert!(open.1 > open.0 + 0.05, "mirrors-open: {open:?}");
+    assert!(open.1 > 0.9, "mirrors-open: {open:?}");
+    assert!((room.1 - room.0).abs() < 0.02, "mirrors: {room:?}");
+}
+
 /// Diagnostic (`cargo test --release -p parallax-synth --test reflect_split -- --ignored
 /// --nocapture`; `REFLECT_SPLIT_SCENE` (default `mirrors`), `REFLECT_SPLIT_FACES` (default
-/// `512,1024`), `REFLECT_SPLIT_SIZE` (default `480,270`)): per face size, 1 layer, quad-tree,
+/// `512,1024`), `REFLECT_SPLIT_SIZE` (default `480,270`), `REFLECT_SPLIT_THICKNESS` (default
+/// none), `REFLECT_SPLIT_LAYERS` (default 1)): per face size, 1 layer, quad-tree,
 /// 1/0/1 and 1/8/1, PSNR of `C` and `O` against `T` and of `C` against `O` over the reflective
 /// pixels whose BVH reflection hit the eye sees, and of `C` over all reflective pixels.
 #[test]
@@ -180,9 +252,14 @@ fn reflection_error_split() {
     };
     for face in faces {
         let desc = CameraDesc::new(eye, eye - Vec3::Z, Vec3::Y, 90.0);
-        let cube = ReflectionCube::capture(&scene, &bvh, &desc, face, 1, 0).unwrap();
-        let c = CubeReflector::build(&scene, &cube, Method::QuadTree, &MethodOptions::default())
-            .unwrap();
+        let layers: usize = env("REFLECT_SPLIT_LAYERS", "1").parse().unwrap();
+        let cube = ReflectionCube::capture(&scene, &bvh, &desc, face, layers, 0).unwrap();
+        let mut c =
+            CubeReflector::build(&scene, &cube, Method::QuadTree, &MethodOptions::default())
+                .unwrap();
+        c.tracer.thickness = std::env::var("REFLECT_SPLIT_THICKNESS")
+            .ok()
+            .map(|t| t.parse().unwrap());
         let truth = BvhReflector::new(&scene, &bvh, eye, 0);
         let oracle = Oracle {
             exact: BvhReflector::new(&scene, &bvh, eye, 0),
