@@ -120,7 +120,10 @@ fn camera_ray(c: &CameraDesc, aspect: f32, sx: f32, sy: f32) -> Ray {
 
 #[test]
 fn every_name_loads_validates_and_is_complete() {
-    assert_eq!(builtin::NAMES, &["atrium", "cornell", "foliage", "mirrors"]);
+    assert_eq!(
+        builtin::NAMES,
+        &["atrium", "cornell", "foliage", "mirrors", "mirrors-open"]
+    );
     for &name in builtin::NAMES {
         let s = builtin::by_name(name).unwrap();
         let loaded = Scene::load(name).unwrap();
@@ -183,6 +186,11 @@ fn triangle_counts_and_bounds_are_as_designed() {
                 5_000..20_000,
                 Vec3::new(8.1, 4.1, 10.6),
                 Vec3::new(8.3, 4.3, 10.8),
+            ),
+            "mirrors-open" => (
+                8_000..25_000,
+                Vec3::new(299.9, 2.6, 299.9),
+                Vec3::new(300.1, 2.8, 300.1),
             ),
             other => panic!("unexpected scene {other}"),
         };

@@ -17,8 +17,8 @@ use parallax_scene::camera::{Eye, StereoRig};
 use parallax_synth::lightfield::near_eye::NearEye;
 use parallax_synth::lightfield::quilt::{PRESETS, QuiltSpec, QuiltViews};
 use parallax_synth::lightfield::{
-    bvh_pinhole, bvh_view, near_eye_reference, quilt_image, quilt_reference, render_elemental,
-    render_views,
+    bvh_pinhole_aa, bvh_view, near_eye_reference, quilt_reference, render_elemental,
+    render_views_aa, spp_side,
 };
 use parallax_synth::method::{Method, Synthesizer};
 use parallax_synth::{MethodOptions, Reference};
@@ -76,6 +76,11 @@ pub struct LightFieldArgs {
     /// for its 420x560 tiles).
     #[arg(long, default_value_t = 3)]
     pub ref_scale: u32,
+    /// Quilt: rays per pixel, an s x s grid (1, 4, 9, ..., 64) box-filtered, used identically
+    /// for the synthesised views and their BVH truth (antialiased views, as a light-field
+    /// display shows them).
+    #[arg(long, default_value_t = 1)]
+    pub spp: u32,
     /// Near-eye: display pixels per eye, W,H.
     #[arg(long, value_delimiter = ',', num_args = 2, default_values_t = [1280, 720])]
     pub display: Vec<u32>,
@@ -217,6 +222,11 @@ pub fn run(a: &LightFieldArgs, quiet: bool) -> Result<()> {
         a.layers
     );
     let opts = a.synth.method_options()?;
+    spp_side(a.spp).context("--spp")?;
+    ensure!(
+        a.spp == 1 || a.kind == Kind::Quilt,
+        "--spp is for quilts (near-eye elemental images are rendered with one ray per pixel)"
+    );
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let rows = match a.kind {
         Kind::Quilt => quilt(a, &opts, quiet)?,
@@ -307,14 +317,17 @@ fn quilt(a: &LightFieldArgs, opts: &MethodOptions, quiet: bool) -> Result<Vec<Li
     };
     pb.inc(1);
     let synth = build(a.method, &mut reference, opts)?;
-    let rendered = render_views(
+    let side = spp_side(a.spp)?;
+    let rendered = render_views_aa(
         synth.tracer().expect("a tracer"),
         &reference,
         &views,
         &opts.warp,
-    );
+        side,
+    )?;
     pb.inc(1);
-    let q = quilt_image(&views, &rendered)?;
+    let images: Vec<Image<Rgb>> = rendered.iter().map(|v| v.image.clone()).collect();
+    let q = parallax_synth::lightfield::quilt::assemble(&views.spec, &images)?;
     let tm = super::input::output_tonemap(scene.is_none());
     let mut written = Vec::new();
     save(
@@ -335,16 +348,28 @@ fn quilt(a: &LightFieldArgs, opts: &MethodOptions, quiet: bool) -> Result<Vec<Li
     let mut rows: Vec<LightFieldRow> = rendered
         .iter()
         .enumerate()
-        .map(|(i, v)| row("quilt", i as u32, a, layers, views.offset(i as u32), v))
+        .map(|(i, v)| {
+            let mut r = row(
+                "quilt",
+                i as u32,
+                a,
+                layers,
+                views.offset(i as u32),
+                &v.rays,
+            );
+            (r.width, r.height) = (v.image.width(), v.image.height());
+            r
+        })
         .collect();
     if let (Some((scene, bvh)), false) = (&scene, a.synth.no_score) {
         let mut truths = Vec::new();
         for (i, r) in rows.iter_mut().enumerate() {
             pb.set_message(format!("BVH view {i}"));
-            let b = bvh_pinhole(
+            let b = bvh_pinhole_aa(
                 scene,
                 bvh,
                 &views.camera(i as u32),
+                side,
                 a.synth.shading(),
                 a.synth.seed,
             )?;
@@ -370,12 +395,13 @@ fn quilt(a: &LightFieldArgs, opts: &MethodOptions, quiet: bool) -> Result<Vec<Li
         }
         let t = reference.times;
         println!(
-            "{} {} layer(s), {} views of {}x{} over {} deg, focal plane {:.2} m, reference {}x{}: T_ref {:.1} ms (capture {:.1}, shade {:.1}, build {:.1}), all views {:.1} ms",
+            "{} {} layer(s), {} views of {}x{} at {} ray(s) per pixel over {} deg, focal plane {:.2} m, reference {}x{}: T_ref {:.1} ms (capture {:.1}, shade {:.1}, build {:.1}), all views {:.1} ms",
             a.method,
             layers,
             spec.views(),
             spec.view_w,
             spec.view_h,
+            a.spp,
             spec.view_cone_deg,
             views.focus,
             reference.width(),
@@ -384,7 +410,7 @@ fn quilt(a: &LightFieldArgs, opts: &MethodOptions, quiet: bool) -> Result<Vec<Li
             t.capture_ms,
             t.shade_ms,
             t.build_ms,
-            rendered.iter().map(|v| v.ms).sum::<f64>()
+            rendered.iter().map(|v| v.rays.ms).sum::<f64>()
         );
     }
     Ok(rows)

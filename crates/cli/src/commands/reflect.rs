@@ -45,9 +45,24 @@ pub struct ReflectArgs {
     /// Reflection rays start this many cube-face pixel footprints off their surface (>= 0).
     #[arg(long, default_value_t = 1.5)]
     pub offset_px: f32,
+    /// Relative thickness of the cube map's surfaces: a ray passing behind a surface at depth
+    /// d further than d x (1 + THICKNESS) goes on instead of ending in its occlusion volume
+    /// (default: occlusion volumes are final, as in the paper).
+    #[arg(long)]
+    pub thickness: Option<f32>,
 }
 
 impl ReflectArgs {
+    fn thickness(&self) -> Result<Option<f32>> {
+        if let Some(t) = self.thickness {
+            anyhow::ensure!(
+                t.is_finite() && t > 0.0,
+                "--thickness must be finite and > 0, got {t}"
+            );
+        }
+        Ok(self.thickness)
+    }
+
     fn options(&self, seed: u64, n_p: u32, n_s: u32, n_b: u32) -> Result<ReflectOptions> {
         let o = ReflectOptions {
             n_p,
@@ -130,7 +145,8 @@ pub fn run(a: &ReflectCmdArgs, quiet: bool) -> Result<()> {
         a.layers,
         a.synth.seed,
     )?;
-    let reflector = CubeReflector::build(&scene, &cube, a.method, &opts)?;
+    let mut reflector = CubeReflector::build(&scene, &cube, a.method, &opts)?;
+    reflector.tracer.thickness = a.reflect.thickness()?;
     progress("reflections");
     let eye = camera.frame.position;
     let img = render_reflections(&reflector, &reference, eye, a.reflect.face, &ropts)?;
@@ -270,17 +286,20 @@ pub fn bench(a: &ReflectBenchArgs, quiet: bool) -> Result<()> {
         opts,
         reflect: a.reflect.options(a.synth.seed, 1, 0, 1)?,
         repeats: a.repeats.max(1),
+        thickness: a.reflect.thickness()?,
     };
     let rows = bench_reflect::run(&scene, &bvh, &b, &reporter(quiet))?;
     if !quiet {
         println!(
-            "{} {}x{}, cube faces {}^2, sigma {}, offset {} px, {} threads, best of {} interleaved rounds\n",
+            "{} {}x{}, cube faces {}^2, sigma {}, offset {} px, thickness {}, {} threads, best of {} interleaved rounds\n",
             scene.name,
             a.width,
             a.height,
             a.reflect.face,
             a.reflect.sigma,
             a.reflect.offset_px,
+            b.thickness
+                .map_or("none (occlusion volumes)".to_string(), |t| t.to_string()),
             rayon::current_num_threads(),
             b.repeats
         );

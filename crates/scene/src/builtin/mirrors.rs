@@ -22,15 +22,15 @@ use super::cameras::{named, path};
 use super::shapes::MeshBuilder;
 use crate::{Light, Material, MaterialKind, Scene};
 
-const TILE_A: u32 = 0;
-const TILE_B: u32 = 1;
-const WALL_RED: u32 = 2;
-const WALL_GREEN: u32 = 3;
-const WALL_BLUE: u32 = 4;
-const WALL_WHITE: u32 = 5;
-const ORANGE: u32 = 6;
-const MIRROR: u32 = 7;
-const GLOSSY: u32 = 8;
+pub(super) const TILE_A: u32 = 0;
+pub(super) const TILE_B: u32 = 1;
+pub(super) const WALL_RED: u32 = 2;
+pub(super) const WALL_GREEN: u32 = 3;
+pub(super) const WALL_BLUE: u32 = 4;
+pub(super) const WALL_WHITE: u32 = 5;
+pub(super) const ORANGE: u32 = 6;
+pub(super) const MIRROR: u32 = 7;
+pub(super) const GLOSSY: u32 = 8;
 const CEILING: u32 = 9;
 
 /// Room interior bounds.
@@ -41,7 +41,8 @@ const Z_FRONT: f32 = 4.5;
 /// Wall thickness.
 const T: f32 = 0.1;
 
-fn materials() -> Vec<Material> {
+/// The materials of `mirrors` (and of `mirrors-open`, which leaves the ceiling's unused).
+pub(super) fn materials() -> Vec<Material> {
     vec![
         Material::diffuse("tile_light", Vec3::new(0.75, 0.74, 0.70)),
         Material::diffuse("tile_dark", Vec3::new(0.18, 0.18, 0.20)),
@@ -69,22 +70,52 @@ fn materials() -> Vec<Material> {
     ]
 }
 
-/// Builds the scene.
-pub fn build() -> Scene {
-    let mut b = MeshBuilder::new();
-    // Floor tiles: 1 m squares, alternating, closed slabs below y = 0.
-    let (nx, nz) = ((2.0 * X) as i32, (Z_FRONT - Z_BACK).ceil() as i32);
+/// Floor tiles of `size` metres over `x` x `z`, alternating [`TILE_A`] / [`TILE_B`], closed
+/// slabs below y = 0 (the last row and column clipped to the bounds).
+pub(super) fn checker_floor(b: &mut MeshBuilder, x: [f32; 2], z: [f32; 2], size: f32) {
+    let nx = ((x[1] - x[0]) / size).ceil() as i32;
+    let nz = ((z[1] - z[0]) / size).ceil() as i32;
     for i in 0..nx {
         for k in 0..nz {
-            let x0 = -X + i as f32;
-            let z0 = Z_BACK + k as f32;
-            let z1 = (z0 + 1.0).min(Z_FRONT);
+            let x0 = x[0] + i as f32 * size;
+            let z0 = z[0] + k as f32 * size;
+            let (x1, z1) = ((x0 + size).min(x[1]), (z0 + size).min(z[1]));
             let m = if (i + k) % 2 == 0 { TILE_A } else { TILE_B };
             b.object(&format!("solid:tile.{i}.{k}"), |b| {
-                b.cuboid(Vec3::new(x0, -T, z0), Vec3::new(x0 + 1.0, 0.0, z1), m)
+                b.cuboid(Vec3::new(x0, -T, z0), Vec3::new(x1, 0.0, z1), m)
             });
         }
     }
+}
+
+/// A concave cylindrical mirror: a 6 cm shell on the circle of radius `r` about `c` (its
+/// centre of curvature, on the viewer's side), `width_deg` wide around -z, from height
+/// `y0` up by `height`; its normal points back to `c`.
+pub(super) fn concave_mirror(
+    b: &mut MeshBuilder,
+    c: Vec3,
+    r: f32,
+    width_deg: f32,
+    y0: f32,
+    height: f32,
+) {
+    let half = (0.5 * width_deg).to_radians();
+    b.object("solid:concave_mirror", |b| {
+        b.sheet(48, 12, 0.06, MIRROR, |u, v| {
+            let a = -half + 2.0 * half * u;
+            let (s, cs) = a.sin_cos();
+            let p = c + Vec3::new(r * s, y0 + height * v, -r * cs);
+            // dP/du x dP/dv points along -(outward): towards `c`.
+            let n = Vec3::new(-s, 0.0, cs);
+            (p, n)
+        });
+    });
+}
+
+/// Builds the scene.
+pub fn build() -> Scene {
+    let mut b = MeshBuilder::new();
+    checker_floor(&mut b, [-X, X], [Z_BACK, Z_FRONT], 1.0);
     b.object("solid:ceiling", |b| {
         b.cuboid(
             Vec3::new(-X - T, Y, Z_BACK - T),
@@ -153,19 +184,7 @@ pub fn build() -> Scene {
     b.object("solid:glossy_ball", |b| {
         b.sphere(Vec3::new(1.5, 0.6, 0.1), 0.6, 48, 24, GLOSSY)
     });
-    b.object("solid:concave_mirror", |b| {
-        // A shell on the circle of radius R about `c` (the camera side), spanning 70 degrees
-        // around -z; its normal points back to `c`, so the mirror is concave.
-        let (c, r, half) = (Vec3::new(0.8, 0.0, 1.5), 3.2f32, 35f32.to_radians());
-        b.sheet(48, 12, 0.06, MIRROR, |u, v| {
-            let a = -half + 2.0 * half * u;
-            let (s, cs) = a.sin_cos();
-            let p = c + Vec3::new(r * s, 0.3 + 2.4 * v, -r * cs);
-            // dP/du x dP/dv points along -(outward): towards `c`.
-            let n = Vec3::new(-s, 0.0, cs);
-            (p, n)
-        });
-    });
+    concave_mirror(&mut b, Vec3::new(0.8, 0.0, 1.5), 3.2, 70.0, 0.3, 2.4);
     let main_eye = Vec3::new(0.0, 1.6, 3.6);
     let main_target = Vec3::new(0.0, 1.1, -1.5);
     Scene {

@@ -6,6 +6,7 @@
 //! | `cornell` | global illumination, a mirror and a glass sphere (reflection papers) | ~2.3k     |
 //! | `foliage` | depth complexity (leaves, grass, fence slats: 8-20+ layers per ray)  | ~132k     |
 //! | `mirrors` | reflections: a closed room with convex, concave and glossy mirrors   | ~9k       |
+//! | `mirrors-open` | reflections of what the camera sees: curved mirrors in the open (Widmer Fig. 11) | ~14k |
 //!
 //! `room:<file>` (and `room-mirror:<file>`, `room-glass:<file>`) stages a model file in a small
 //! room with a mirror, a glass sphere and shadow-casting lights ([`room`]).
@@ -20,13 +21,14 @@ mod cameras;
 mod cornell;
 mod foliage;
 mod mirrors;
+mod mirrors_open;
 pub mod room;
 pub mod shapes;
 
 use crate::Scene;
 
 /// Names of the built-in scenes.
-pub const NAMES: &[&str] = &["atrium", "cornell", "foliage", "mirrors"];
+pub const NAMES: &[&str] = &["atrium", "cornell", "foliage", "mirrors", "mirrors-open"];
 
 /// A built-in scene by name.
 pub fn by_name(name: &str) -> Option<Scene> {
@@ -35,6 +37,7 @@ pub fn by_name(name: &str) -> Option<Scene> {
         "cornell" => Some(cornell::build()),
         "foliage" => Some(foliage::build()),
         "mirrors" => Some(mirrors::build()),
+        "mirrors-open" => Some(mirrors_open::build()),
         _ => None,
     }
 }
@@ -50,6 +53,9 @@ pub fn describe(name: &str) -> &'static str {
             "trees, grass and a slatted fence: many thin occluders (depth complexity 8-20+)"
         }
         "mirrors" => "a closed room with a convex mirror ball, a concave mirror and a glossy ball",
+        "mirrors-open" => {
+            "curved mirrors in the open reflecting surroundings the camera sees (Widmer Fig. 11 set-up)"
+        }
         _ => "",
     }
 }

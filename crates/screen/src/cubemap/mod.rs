@@ -19,6 +19,17 @@
 //! crossing is passed over: the face is traced on from half a pixel footprint beyond it, at
 //! most [`MAX_BACK_SKIPS`] + 1 times per face (then the walk goes on to the next face).
 //!
+//! **Thickness** (optional, [`CubeMapTracer::thickness`] = `τ`; off by default, the paper's
+//! semantics): a face's occlusion-volume answer says the ray passed behind a captured surface
+//! with nothing hit; a cube map's occluders are then infinitely thick, so every ray that
+//! passes behind a pillar towards the sky answers with the pillar. With `τ` every sample at
+//! depth `d` occludes only `[d, d (1 + τ)]` (the DDA's `z_thickness`, relative): from the
+//! occlusion entry the ray is marched on in steps of half a face pixel footprint (at least
+//! `τ d / 4`) — inside a sample's interval it is a hit on that sample; once in front of layer
+//! 0 again (or over an empty pixel) the face tracer resumes there; leaving the face (or the
+//! ray) goes on to the next face. At most [`MAX_BACK_SKIPS`] + 1 face traces per face count
+//! both kinds of skips.
+//!
 //! **Answers** ([`CubeTrace`]): a hit in a face's layer; an occlusion-volume answer (the ray
 //! passed behind the last layer's surface: with the quad-tree's inpainting mode on the last
 //! layer, the background-side pixel before the silhouette) is reported as a hit on that pixel's
@@ -41,7 +52,7 @@ use parallax_core::Ray;
 use parallax_core::image::GBuffer;
 use parallax_core::world::{HitSurface, SampledSurface, WorldHit, WorldStats, WorldTracer};
 use parallax_raster::CubeCapture;
-use parallax_scene::camera::{CubeMap, Pinhole};
+use parallax_scene::camera::{CameraModel, CubeMap, Pinhole};
 
 use crate::{
     DdaOptions, DdaTracer, QuadTreeOptions, QuadTreeTracer, ScreenError, ScreenTracer, TraceResult,
@@ -51,6 +62,19 @@ pub use faces::{Exit, FaceWalk, Faces};
 
 /// Most back-side crossings passed over per face (module docs).
 pub const MAX_BACK_SKIPS: u32 = 4;
+
+/// Most march steps behind an occluder per face, in face sizes (module docs, "thickness").
+const MARCH_FACES: u32 = 4;
+
+/// Where the march behind an occluder ended.
+enum Behind {
+    /// In front of layer 0 (or over an empty pixel) at this ray parameter.
+    Free(f32),
+    /// Inside a sample's thickness interval: a hit on it.
+    Inside(TraceResult),
+    /// Out of the face or past the ray's end.
+    Left,
+}
 
 /// One face: its pinhole, unit cube, layers and tracer.
 pub struct CubeFace {
@@ -105,6 +129,9 @@ pub struct CubeMapTracer {
     pub walk: Faces,
     /// Milliseconds of building the six face tracers.
     pub build_ms: f64,
+    /// Relative thickness of captured surfaces (module docs, "thickness"); `None`: occlusion
+    /// volumes are final answers.
+    pub thickness: Option<f32>,
 }
 
 impl CubeMapTracer {
@@ -196,6 +223,7 @@ impl CubeMapTracer {
             faces: built,
             walk: Faces::new(cube, near, far),
             build_ms: t.elapsed().as_secs_f64() * 1e3,
+            thickness: None,
         })
     }
 
@@ -245,6 +273,20 @@ impl CubeMapTracer {
                         r.t_min = t + self.skip_step(face, t, ray);
                         out.back_skips += 1;
                     }
+                    TraceResult::OcclusionVolume { t, .. } if self.thickness.is_some() => {
+                        let tau = self.thickness.unwrap_or(0.0);
+                        match self.march_behind(face, ray, t, tau) {
+                            Behind::Free(t_free) => {
+                                r.t_min = t_free;
+                                out.back_skips += 1;
+                            }
+                            Behind::Inside(hit) => {
+                                out.result = hit;
+                                return out;
+                            }
+                            Behind::Left => break,
+                        }
+                    }
                     answer => {
                         out.result = answer;
                         return out;
@@ -254,6 +296,53 @@ impl CubeMapTracer {
         }
         out.truncated = walk.truncated;
         out
+    }
+
+    /// Marches `ray` on from its occlusion entry at `t` in `face` with samples `tau` thick
+    /// (module docs, "thickness").
+    fn march_behind(&self, face: usize, ray: &Ray, mut t: f32, tau: f32) -> Behind {
+        let f = &self.faces[face];
+        let axis = parallax_scene::camera::cube::FACE_AXES[face];
+        let eye = self.walk.eye;
+        let size = f.camera.width;
+        let Some(g0) = f.layers.first() else {
+            return Behind::Left;
+        };
+        for _ in 0..MARCH_FACES * size {
+            if !(t < ray.t_max) {
+                return Behind::Left;
+            }
+            let p = ray.at(t);
+            let Some(film) = f.camera.project(p, 0) else {
+                return Behind::Left;
+            };
+            if !(film.x >= 0.0 && film.y >= 0.0 && film.x < size as f32 && film.y < size as f32) {
+                return Behind::Left;
+            }
+            let q = UVec2::new(film.x as u32, film.y as u32);
+            let i = g0.index(q.x, q.y);
+            let d = (p - eye).dot(axis);
+            for (layer, g) in f.layers.iter().enumerate() {
+                let ds = g.depth[i];
+                if ds.is_finite() && ds > 0.0 && d >= ds && d <= ds * (1.0 + tau) {
+                    return Behind::Inside(TraceResult::Hit {
+                        layer: layer as u32,
+                        pixel: q,
+                        position: p,
+                        t,
+                    });
+                }
+            }
+            let d0 = g0.depth[i];
+            if !(d0.is_finite() && d0 > 0.0) || d < d0 {
+                return Behind::Free(t);
+            }
+            let step = self
+                .skip_step(face, t, ray)
+                .max(0.25 * tau * d / ray.dir.length());
+            t += step;
+        }
+        Behind::Left
     }
 
     /// True when `ray` crosses the sample at `pixel` of `layer` of `face` from behind (its

@@ -96,6 +96,9 @@ pub struct ReflectBench {
     pub opts: MethodOptions,
     pub reflect: ReflectOptions,
     pub repeats: u32,
+    /// Relative thickness of the cube map's surfaces ([`parallax_screen::CubeMapTracer::thickness`];
+    /// `None`: the paper's occlusion volumes).
+    pub thickness: Option<f32>,
 }
 
 /// Table 5 (module docs); `progress` gets a line per step.
@@ -134,6 +137,9 @@ pub fn run(
                 CubeReflector::build(scene, &cube, Method::Dda, &o)?,
                 Some(st),
             ));
+        }
+        for (s, _) in &mut structures {
+            s.tracer.thickness = b.thickness;
         }
         let truth_tracer = BvhReflector::new(scene, bvh, eye, seed);
         for &(n_p, n_s, n_b) in &b.configs {

@@ -12,8 +12,21 @@
 //!   ([`bvh_view`]: the ground truth each view is scored against, and the baseline each
 //!   view's time is compared with — trace-only and shaded).
 //!
+//! **Antialiased views** ([`render_views_aa`], `parallax lightfield --spp`): a light-field
+//! display shows filtered views, so a view may be rendered with `s x s` rays per pixel — the
+//! pixel centres of the same camera at `s` times the size ([`supersampled`]: same frame,
+//! field of view and off-axis shift) — and box-filtered to the tile ([`box_filter`]). The
+//! ground truth of such a view is the BVH render of the same `s x s` rays with the same
+//! filter, so synthesis and truth differ only in how each ray is answered.
+//!
+//! | parameter | type | default | meaning |
+//! |---|---|---|---|
+//! | `scale` | u32 | 3 (CLI) | reference size / tile size, `1..=`[`MAX_REFERENCE_SCALE`] |
+//! | `s` | u32 | 1 | rays per pixel side of an antialiased view, `1..=`[`MAX_SPP_SIDE`] (`--spp` = `s²`) |
+//!
 //! **Invariant:** a quilt tile is exactly the warp of the reference to that tile's view
-//! camera (tested), and every image is bit-identical for any thread count.
+//! camera (at `s` times its size, box-filtered; tested), and every image is bit-identical for
+//! any thread count.
 
 pub mod near_eye;
 pub mod quilt;
@@ -94,6 +107,79 @@ pub fn render_views(
 pub fn quilt_image(views: &QuiltViews, rendered: &[WarpedView]) -> Result<Image<Rgb>, SynthError> {
     let images: Vec<Image<Rgb>> = rendered.iter().map(|v| v.image.clone()).collect();
     assemble(&views.spec, &images)
+}
+
+/// Largest rays per pixel side of an antialiased view (`--spp` up to 64).
+pub const MAX_SPP_SIDE: u32 = 8;
+
+/// The side `s` of an `s x s` grid of rays per pixel from a ray count `spp` (a square in
+/// `1..=MAX_SPP_SIDE²`).
+pub fn spp_side(spp: u32) -> Result<u32, SynthError> {
+    let s = (spp as f64).sqrt().round() as u32;
+    if s * s != spp || !(1..=MAX_SPP_SIDE).contains(&s) {
+        return Err(SynthError::Invalid(format!(
+            "rays per pixel must be a square s x s with s in 1..={MAX_SPP_SIDE} (1, 4, 9, ..., {}), got {spp}",
+            MAX_SPP_SIDE * MAX_SPP_SIDE
+        )));
+    }
+    Ok(s)
+}
+
+/// `camera` at `s` times its size: the same frame, field of view and off-axis shift, so its
+/// pixel centres are an `s x s` grid inside each of `camera`'s pixels.
+pub fn supersampled(camera: &Pinhole, s: u32) -> Pinhole {
+    Pinhole {
+        width: camera.width * s,
+        height: camera.height * s,
+        ..camera.clone()
+    }
+}
+
+/// The mean of every `s x s` block of `image` (whose size is a multiple of `s`).
+pub fn box_filter(image: &Image<Rgb>, s: u32) -> Result<Image<Rgb>, SynthError> {
+    let (w, h) = (image.width(), image.height());
+    if s == 0 || w % s != 0 || h % s != 0 {
+        return Err(SynthError::Invalid(format!(
+            "box filter: a {w}x{h} image is not made of {s}x{s} blocks"
+        )));
+    }
+    let norm = 1.0 / (s * s) as f32;
+    Ok(Image::from_fn(w / s, h / s, |x, y| {
+        let mut sum = Rgb::ZERO;
+        for j in 0..s {
+            for i in 0..s {
+                sum += *image.get(x * s + i, y * s + j);
+            }
+        }
+        sum * norm
+    })?)
+}
+
+/// A view rendered with `s x s` rays per pixel: the warp of the supersampled camera (its
+/// answers and time) and its box-filtered image at tile size.
+#[derive(Clone, Debug)]
+pub struct AaView {
+    pub rays: WarpedView,
+    pub image: Image<Rgb>,
+}
+
+/// Every view of `views` with `s x s` rays per pixel, box-filtered (`s = 1`: the images of
+/// [`render_views`]).
+pub fn render_views_aa(
+    tracer: &dyn ScreenTracer,
+    reference: &Reference,
+    views: &QuiltViews,
+    opts: &WarpOptions,
+    s: u32,
+) -> Result<Vec<AaView>, SynthError> {
+    (0..views.spec.views())
+        .map(|i| {
+            let cam = supersampled(&views.camera(i), s);
+            let rays = warp_view_with(tracer, reference, &cam, opts);
+            let image = box_filter(&rays.image, s)?;
+            Ok(AaView { rays, image })
+        })
+        .collect()
 }
 
 /// The reference of one eye of a near-eye display: the eye's pinhole `width` pixels wide
@@ -191,6 +277,23 @@ pub fn bvh_view(
         image: Image::from_vec(width, height, out)?,
         ms_render,
         ms_trace,
+    })
+}
+
+/// [`bvh_pinhole`] with `s x s` rays per pixel, box-filtered ([`render_views_aa`]'s truth);
+/// the times are those of all the rays.
+pub fn bvh_pinhole_aa(
+    scene: &Scene,
+    bvh: &Bvh,
+    camera: &Pinhole,
+    s: u32,
+    shading: Shading,
+    seed: u64,
+) -> Result<BvhView, SynthError> {
+    let b = bvh_pinhole(scene, bvh, &supersampled(camera, s), shading, seed)?;
+    Ok(BvhView {
+        image: box_filter(&b.image, s)?,
+        ..b
     })
 }
 
