@@ -30,7 +30,7 @@
 
 use std::ops::{Add, Mul};
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 use parallax_scene::camera::CameraModel;
 use rayon::prelude::*;
 
@@ -137,6 +137,9 @@ pub struct Footprint {
 pub trait Blendable: Copy + Default + Add<Output = Self> + Mul<f32, Output = Self> {}
 impl Blendable for f32 {}
 impl Blendable for Vec3 {}
+/// A colour with a fourth value gathered alongside (a history's colour and length): each lane
+/// is summed with exactly the scalar operations of a `Vec3` or `f32` gather.
+impl Blendable for Vec4 {}
 
 impl Footprint {
     fn discarded(outcome: Outcome) -> Self {
@@ -213,17 +216,19 @@ impl Reprojector {
     #[inline]
     pub fn footprint(&self, source: &EyeView, t: &Texel) -> Footprint {
         if self.kernel == Kernel::BILINEAR {
-            footprint_in::<true>(source, t, self.kernel, self.lim)
+            footprint_in::<true, true>(source, t, self.kernel, self.lim)
         } else {
-            footprint_in::<false>(source, t, self.kernel, self.lim)
+            footprint_in::<false, false>(source, t, self.kernel, self.lim)
         }
     }
 }
 
 /// [`footprint`]; `BILINEAR` fixes the kernel at compile time: the same arithmetic (a
-/// division by the radius 1 is exact), the taps unrolled.
+/// division by the radius 1 is exact), the taps unrolled; `LANES` (with `BILINEAR`, on
+/// x86-64) tests the four taps in the lanes of one SSE vector ([`bilinear_taps_x4`]) where
+/// all four lie inside the source.
 #[inline(always)]
-fn footprint_in<const BILINEAR: bool>(
+fn footprint_in<const BILINEAR: bool, const LANES: bool>(
     source: &EyeView,
     t: &Texel,
     kernel: Kernel,
@@ -243,14 +248,23 @@ fn footprint_in<const BILINEAR: bool>(
     let half = kernel.half();
     let (w, h) = (source.width() as i32, source.height() as i32);
     // Pixel centres are at integer + 0.5: the tap left of (above) the sample is floor(f - 0.5).
+    // With `reach` an integer, `floor(s) > -reach` is `s >= 1 - reach` and `floor(s) < n +
+    // reach` is `s < n + reach`, so the range is checked before the floor (which then fits an
+    // i32).
     let (sx, sy) = (f.x - 0.5, f.y - 0.5);
-    let (bx, by) = (sx.floor(), sy.floor());
     let reach = half as f32 + 1.0;
-    if !(bx > -reach && bx < w as f32 + reach && by > -reach && by < h as f32 + reach) {
+    if !(sx >= 1.0 - reach && sx < w as f32 + reach && sy >= 1.0 - reach && sy < h as f32 + reach) {
         return Footprint::discarded(Outcome::Outside);
     }
+    let (ix, iy) = (floor_i32(sx), floor_i32(sy));
+    let (bx, by) = (ix as f32, iy as f32);
     let (fx, fy) = (sx - bx, sy - by);
-    let (x0, y0) = (bx as i32 - half + 1, by as i32 - half + 1);
+    let (x0, y0) = (ix - half + 1, iy - half + 1);
+    #[cfg(target_arch = "x86_64")]
+    if BILINEAR && LANES && x0 >= 0 && y0 >= 0 && x0 + 1 < w && y0 + 1 < h {
+        let (mask, sum, inside, near) = bilinear_taps_x4(source, t, x0, y0, fx, fy, lim);
+        return placed(x0, y0, fx, fy, mask, sum, inside, near);
+    }
     let taps = 2 * half;
     let (mut mask, mut sum, mut bit) = (0u16, 0.0f32, 0);
     let (mut inside, mut near) = (false, false);
@@ -282,6 +296,22 @@ fn footprint_in<const BILINEAR: bool>(
             bit += 1;
         }
     }
+    placed(x0, y0, fx, fy, mask, sum, inside, near)
+}
+
+/// The footprint of a target placed in the source, from its kept taps.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn placed(
+    x0: i32,
+    y0: i32,
+    fx: f32,
+    fy: f32,
+    mask: u16,
+    sum: f32,
+    inside: bool,
+    near: bool,
+) -> Footprint {
     let outcome = match (mask != 0, inside, near) {
         (true, _, _) => Outcome::Reused,
         (false, false, _) => Outcome::Outside,
@@ -297,6 +327,108 @@ fn footprint_in<const BILINEAR: bool>(
         outcome,
         inv_weight: if sum > 0.0 { 1.0 / sum } else { 0.0 },
     }
+}
+
+/// The four taps of a bilinear footprint, all inside the source, tested in the lanes of SSE
+/// vectors (lane = tap, row-major from `(x0, y0)`): every lane does the operations of the
+/// scalar loop of [`footprint_in`] in the same order (differences, products summed as glam's
+/// `dot`, strict compares), and the kept weights are summed lane by lane in tap order (a
+/// dropped tap adds +0, which leaves a sum of non-negative weights unchanged), so the result
+/// is the scalar loop's bit for bit. Returns `(mask, sum, inside, near)`.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn bilinear_taps_x4(
+    source: &EyeView,
+    t: &Texel,
+    x0: i32,
+    y0: i32,
+    fx: f32,
+    fy: f32,
+    lim: Limits,
+) -> (u16, f32, bool, bool) {
+    use std::arch::x86_64::*;
+    let k = Kernel::BILINEAR;
+    let (wx0, wx1) = (k.weight(0.0 - fx), k.weight(1.0 - fx));
+    let (wy0, wy1) = (k.weight(0.0 - fy), k.weight(1.0 - fy));
+    let w = source.width() as usize;
+    let i0 = y0 as usize * w + x0 as usize;
+    let (r0, r1) = (
+        &source.texels[i0..i0 + 2],
+        &source.texels[i0 + w..i0 + w + 2],
+    );
+    let s = [&r0[0], &r0[1], &r1[0], &r1[1]];
+    // SAFETY: SSE2 is part of x86-64; `Texel` is `repr(C)`, so 16 bytes from `position` are
+    // the position and depth and 16 bytes from `normal` are the normal and albedo.x, all
+    // inside the texel.
+    unsafe {
+        let pd = s.map(|s| _mm_loadu_ps(&s.position.x));
+        let na = s.map(|s| _mm_loadu_ps(&s.normal.x));
+        // 4x4 transposes: per-tap vectors -> per-component vectors over the taps.
+        let transpose = |v: [__m128; 4]| {
+            let (a, b) = (_mm_unpacklo_ps(v[0], v[1]), _mm_unpacklo_ps(v[2], v[3]));
+            let (c, d) = (_mm_unpackhi_ps(v[0], v[1]), _mm_unpackhi_ps(v[2], v[3]));
+            [
+                _mm_movelh_ps(a, b),
+                _mm_movehl_ps(b, a),
+                _mm_movelh_ps(c, d),
+                _mm_movehl_ps(d, c),
+            ]
+        };
+        let [px, py, pz, depth] = transpose(pd);
+        let [nx, ny, nz, _] = transpose(na);
+        let splat = _mm_set1_ps;
+        let (dx, dy, dz) = (
+            _mm_sub_ps(px, splat(t.position.x)),
+            _mm_sub_ps(py, splat(t.position.y)),
+            _mm_sub_ps(pz, splat(t.position.z)),
+        );
+        let dot = |ax, ay, az, bx, by, bz| {
+            _mm_add_ps(
+                _mm_add_ps(_mm_mul_ps(ax, bx), _mm_mul_ps(ay, by)),
+                _mm_mul_ps(az, bz),
+            )
+        };
+        let (tnx, tny, tnz) = (splat(t.normal.x), splat(t.normal.y), splat(t.normal.z));
+        let d2 = if lim.plane {
+            let h = dot(dx, dy, dz, tnx, tny, tnz);
+            _mm_mul_ps(h, h)
+        } else {
+            dot(dx, dy, dz, dx, dy, dz)
+        };
+        let (ex, ey, ez) = (
+            _mm_sub_ps(nx, tnx),
+            _mm_sub_ps(ny, tny),
+            _mm_sub_ps(nz, tnz),
+        );
+        let n2 = dot(ex, ey, ez, ex, ey, ez);
+        let wt = _mm_mul_ps(
+            _mm_setr_ps(wx0, wx1, wx0, wx1),
+            _mm_setr_ps(wy0, wy0, wy1, wy1),
+        );
+        let valid = _mm_cmpgt_ps(wt, _mm_setzero_ps());
+        // `is_finite`: |depth| < inf (false for NaN).
+        let abs = _mm_andnot_ps(splat(-0.0), depth);
+        let hit = _mm_cmplt_ps(abs, splat(f32::INFINITY));
+        let near = _mm_and_ps(_mm_and_ps(valid, hit), _mm_cmplt_ps(d2, splat(lim.pos2)));
+        let keep = _mm_and_ps(near, _mm_cmplt_ps(n2, splat(lim.nrm2)));
+        let mut kept = [0.0f32; 4];
+        _mm_storeu_ps(kept.as_mut_ptr(), _mm_and_ps(keep, wt));
+        let sum = 0.0 + kept[0] + kept[1] + kept[2] + kept[3];
+        (
+            _mm_movemask_ps(keep) as u16,
+            sum,
+            _mm_movemask_ps(valid) != 0,
+            _mm_movemask_ps(near) != 0,
+        )
+    }
+}
+
+/// `x.floor()` as an integer, for `x` within the i32 range: a truncation and a compare
+/// (`f32::floor` is a library call on the x86-64 baseline, which has no SSE4.1 rounding).
+#[inline(always)]
+fn floor_i32(x: f32) -> i32 {
+    let t = x as i32;
+    if (t as f32) > x { t - 1 } else { t }
 }
 
 /// Rows per parallel work item of the image passes.
@@ -321,11 +453,11 @@ pub fn footprints(
             let lim = tests.limits();
             if kernel == Kernel::BILINEAR {
                 for (fp, t) in fps.iter_mut().zip(texels) {
-                    *fp = footprint_in::<true>(source, t, kernel, lim);
+                    *fp = footprint_in::<true, true>(source, t, kernel, lim);
                 }
             } else {
                 for (fp, t) in fps.iter_mut().zip(texels) {
-                    *fp = footprint_in::<false>(source, t, kernel, lim);
+                    *fp = footprint_in::<false, false>(source, t, kernel, lim);
                 }
             }
             thread_ns().saturating_sub(t0)
@@ -456,6 +588,32 @@ mod tests {
     }
 
     #[test]
+    fn integer_floor_equals_f32_floor() {
+        let mut xs = vec![
+            0.0f32,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            2.999_999_8,
+            -2.999_999_8,
+        ];
+        xs.extend((-4000..4000).map(|k| k as f32 * 0.013_7));
+        xs.extend([
+            1e6,
+            -1e6,
+            1e6 + 0.5,
+            -1e6 - 0.5,
+            f32::EPSILON,
+            -f32::EPSILON,
+        ]);
+        for x in xs {
+            assert_eq!(floor_i32(x) as f32, x.floor(), "{x}");
+        }
+    }
+
+    #[test]
     fn bilinear_specialisation_equals_the_general_kernel_bit_for_bit() {
         let mut src = plane_view(Vec3::ZERO, 5.0, 24, 16);
         // Bumps and turned normals so that every outcome and partial masks occur.
@@ -474,6 +632,11 @@ mod tests {
             .map(|i| Vec3::new(i as f32, (i * i % 17) as f32, 1.0))
             .collect();
         let counts: Vec<f32> = (0..src.len()).map(|i| (i % 9) as f32 + 1.0).collect();
+        let packed: Vec<Vec4> = values
+            .iter()
+            .zip(&counts)
+            .map(|(v, c)| v.extend(*c))
+            .collect();
         let mut seen = std::collections::HashSet::new();
         for plane in [false, true] {
             let lim = Tests {
@@ -483,9 +646,15 @@ mod tests {
             }
             .limits();
             for t in &dst.texels {
-                let fast = footprint_in::<true>(&src, t, Kernel::BILINEAR, lim);
-                let slow = footprint_in::<false>(&src, t, Kernel::BILINEAR, lim);
+                let lanes = footprint_in::<true, true>(&src, t, Kernel::BILINEAR, lim);
+                let fast = footprint_in::<true, false>(&src, t, Kernel::BILINEAR, lim);
+                let slow = footprint_in::<false, false>(&src, t, Kernel::BILINEAR, lim);
                 assert_eq!(fast, slow);
+                assert_eq!(
+                    (lanes.mask, lanes.inv_weight.to_bits(), lanes.outcome),
+                    (slow.mask, slow.inv_weight.to_bits(), slow.outcome)
+                );
+                assert_eq!(lanes, slow);
                 seen.insert(fast.outcome);
                 let (a, b) = (
                     fast.gather_in::<true, Vec3>(Kernel::BILINEAR, &values, 24),
@@ -495,11 +664,18 @@ mod tests {
                     a.to_array().map(f32::to_bits),
                     b.to_array().map(f32::to_bits)
                 );
+                let n = fast.gather_in::<true, f32>(Kernel::BILINEAR, &counts, 24);
                 assert_eq!(
-                    fast.gather_in::<true, f32>(Kernel::BILINEAR, &counts, 24)
-                        .to_bits(),
+                    n.to_bits(),
                     slow.gather_in::<false, f32>(Kernel::BILINEAR, &counts, 24)
                         .to_bits()
+                );
+                // A colour and a count gathered together (SIMD lanes) equal both gathered
+                // apart.
+                let both = fast.gather_in::<true, Vec4>(Kernel::BILINEAR, &packed, 24);
+                assert_eq!(
+                    both.to_array().map(f32::to_bits),
+                    [a.x, a.y, a.z, n].map(f32::to_bits)
                 );
             }
         }
