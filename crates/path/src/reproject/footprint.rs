@@ -26,7 +26,9 @@
 //!
 //! **Invariants:** a footprint's kept weights sum to one (`inv_weight` renormalises); a pixel
 //! is [`Outcome::Reused`] exactly when at least one neighbour with non-zero weight passed both
-//! tests; the result depends only on the two views, never on the thread count.
+//! tests; the result depends only on the two views, never on the thread count. The bilinear
+//! taps are tested in SSE lanes on x86-64 (`lanes.rs`), bit for bit as the scalar loop
+//! (tested).
 
 use std::ops::{Add, Mul};
 
@@ -35,6 +37,8 @@ use parallax_scene::camera::CameraModel;
 use rayon::prelude::*;
 
 use super::buffers::{EyeView, Texel};
+#[cfg(target_arch = "x86_64")]
+use super::lanes::bilinear_taps_x4;
 use super::sampler::thread_ns;
 
 /// What became of a target pixel.
@@ -262,7 +266,15 @@ fn footprint_in<const BILINEAR: bool, const LANES: bool>(
     let (x0, y0) = (ix - half + 1, iy - half + 1);
     #[cfg(target_arch = "x86_64")]
     if BILINEAR && LANES && x0 >= 0 && y0 >= 0 && x0 + 1 < w && y0 + 1 < h {
-        let (mask, sum, inside, near) = bilinear_taps_x4(source, t, x0, y0, fx, fy, lim);
+        let weights = [
+            kernel.weight(0.0 - fx),
+            kernel.weight(1.0 - fx),
+            kernel.weight(0.0 - fy),
+            kernel.weight(1.0 - fy),
+        ];
+        let (pos2, nrm2, plane) = (lim.pos2, lim.nrm2, lim.plane);
+        let (mask, sum, inside, near) =
+            bilinear_taps_x4(source, t, x0, y0, weights, pos2, nrm2, plane);
         return placed(x0, y0, fx, fy, mask, sum, inside, near);
     }
     let taps = 2 * half;
@@ -326,100 +338,6 @@ fn placed(
         mask,
         outcome,
         inv_weight: if sum > 0.0 { 1.0 / sum } else { 0.0 },
-    }
-}
-
-/// The four taps of a bilinear footprint, all inside the source, tested in the lanes of SSE
-/// vectors (lane = tap, row-major from `(x0, y0)`): every lane does the operations of the
-/// scalar loop of [`footprint_in`] in the same order (differences, products summed as glam's
-/// `dot`, strict compares), and the kept weights are summed lane by lane in tap order (a
-/// dropped tap adds +0, which leaves a sum of non-negative weights unchanged), so the result
-/// is the scalar loop's bit for bit. Returns `(mask, sum, inside, near)`.
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn bilinear_taps_x4(
-    source: &EyeView,
-    t: &Texel,
-    x0: i32,
-    y0: i32,
-    fx: f32,
-    fy: f32,
-    lim: Limits,
-) -> (u16, f32, bool, bool) {
-    use std::arch::x86_64::*;
-    let k = Kernel::BILINEAR;
-    let (wx0, wx1) = (k.weight(0.0 - fx), k.weight(1.0 - fx));
-    let (wy0, wy1) = (k.weight(0.0 - fy), k.weight(1.0 - fy));
-    let w = source.width() as usize;
-    let i0 = y0 as usize * w + x0 as usize;
-    let (r0, r1) = (
-        &source.texels[i0..i0 + 2],
-        &source.texels[i0 + w..i0 + w + 2],
-    );
-    let s = [&r0[0], &r0[1], &r1[0], &r1[1]];
-    // SAFETY: SSE2 is part of x86-64; `Texel` is `repr(C)`, so 16 bytes from `position` are
-    // the position and depth and 16 bytes from `normal` are the normal and albedo.x, all
-    // inside the texel.
-    unsafe {
-        let pd = s.map(|s| _mm_loadu_ps(&s.position.x));
-        let na = s.map(|s| _mm_loadu_ps(&s.normal.x));
-        // 4x4 transposes: per-tap vectors -> per-component vectors over the taps.
-        let transpose = |v: [__m128; 4]| {
-            let (a, b) = (_mm_unpacklo_ps(v[0], v[1]), _mm_unpacklo_ps(v[2], v[3]));
-            let (c, d) = (_mm_unpackhi_ps(v[0], v[1]), _mm_unpackhi_ps(v[2], v[3]));
-            [
-                _mm_movelh_ps(a, b),
-                _mm_movehl_ps(b, a),
-                _mm_movelh_ps(c, d),
-                _mm_movehl_ps(d, c),
-            ]
-        };
-        let [px, py, pz, depth] = transpose(pd);
-        let [nx, ny, nz, _] = transpose(na);
-        let splat = _mm_set1_ps;
-        let (dx, dy, dz) = (
-            _mm_sub_ps(px, splat(t.position.x)),
-            _mm_sub_ps(py, splat(t.position.y)),
-            _mm_sub_ps(pz, splat(t.position.z)),
-        );
-        let dot = |ax, ay, az, bx, by, bz| {
-            _mm_add_ps(
-                _mm_add_ps(_mm_mul_ps(ax, bx), _mm_mul_ps(ay, by)),
-                _mm_mul_ps(az, bz),
-            )
-        };
-        let (tnx, tny, tnz) = (splat(t.normal.x), splat(t.normal.y), splat(t.normal.z));
-        let d2 = if lim.plane {
-            let h = dot(dx, dy, dz, tnx, tny, tnz);
-            _mm_mul_ps(h, h)
-        } else {
-            dot(dx, dy, dz, dx, dy, dz)
-        };
-        let (ex, ey, ez) = (
-            _mm_sub_ps(nx, tnx),
-            _mm_sub_ps(ny, tny),
-            _mm_sub_ps(nz, tnz),
-        );
-        let n2 = dot(ex, ey, ez, ex, ey, ez);
-        let wt = _mm_mul_ps(
-            _mm_setr_ps(wx0, wx1, wx0, wx1),
-            _mm_setr_ps(wy0, wy0, wy1, wy1),
-        );
-        let valid = _mm_cmpgt_ps(wt, _mm_setzero_ps());
-        // `is_finite`: |depth| < inf (false for NaN).
-        let abs = _mm_andnot_ps(splat(-0.0), depth);
-        let hit = _mm_cmplt_ps(abs, splat(f32::INFINITY));
-        let near = _mm_and_ps(_mm_and_ps(valid, hit), _mm_cmplt_ps(d2, splat(lim.pos2)));
-        let keep = _mm_and_ps(near, _mm_cmplt_ps(n2, splat(lim.nrm2)));
-        let mut kept = [0.0f32; 4];
-        _mm_storeu_ps(kept.as_mut_ptr(), _mm_and_ps(keep, wt));
-        let sum = 0.0 + kept[0] + kept[1] + kept[2] + kept[3];
-        (
-            _mm_movemask_ps(keep) as u16,
-            sum,
-            _mm_movemask_ps(valid) != 0,
-            _mm_movemask_ps(near) != 0,
-        )
     }
 }
 
