@@ -37,10 +37,16 @@ fn atrium(variant: Variant) -> Dataset {
 
 /// Every frame's images and outcomes of every method and mode, as bits.
 fn sequence_bits(world: &mut dyn FrameWorld, o: &RunOptions) -> Vec<Vec<u32>> {
-    let mut states: Vec<MethodState> = [Method::paper(), Method::ours()]
-        .into_iter()
-        .map(MethodState::new)
-        .collect();
+    sequence_bits_of(world, o, &[Method::paper(), Method::ours()])
+}
+
+/// [`sequence_bits`] of the given methods.
+fn sequence_bits_of(
+    world: &mut dyn FrameWorld,
+    o: &RunOptions,
+    methods: &[Method],
+) -> Vec<Vec<u32>> {
+    let mut states: Vec<MethodState> = methods.iter().cloned().map(MethodState::new).collect();
     let mut out = Vec::new();
     run(world, o, &mut states, &mut |f, _| {
         for m in f.methods {
@@ -76,6 +82,27 @@ fn paper_sample_is_the_path_tracers_first_sample() {
     pt.render_samples(&mut film, 0..1, false, &|_| {});
     assert_eq!(film.mean().into_vec(), radiance);
     assert!(radiance.iter().any(|c| c.max_element() > 0.0));
+}
+
+/// Not a test: prints a hash of every frame, method and mode of a 4-frame atrium sequence at
+/// 80x48 (still and with moving props), to compare outputs before and after a change to the
+/// passes: `cargo test -p parallax-path --test reproject -- --ignored --nocapture output_hash`.
+#[test]
+#[ignore]
+fn output_hash() {
+    let methods: Vec<Method> = Method::NAMES
+        .iter()
+        .map(|n| Method::named(n).unwrap())
+        .collect();
+    for variant in [Variant::Base, Variant::MovingObjects] {
+        let bits = sequence_bits_of(&mut atrium(variant), &opts(80, 48, 4), &methods);
+        // FNV-1a over every word, in order.
+        let mut h = 0xcbf2_9ce4_8422_2325u64;
+        for w in bits.iter().flatten() {
+            h = (h ^ *w as u64).wrapping_mul(0x100_0000_01b3);
+        }
+        println!("output hash {variant:?}: {h:016x} ({} outputs)", bits.len());
+    }
 }
 
 #[test]

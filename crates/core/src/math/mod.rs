@@ -1,6 +1,8 @@
-//! Geometry on glam: rays, boxes, planes, frusta and the watertight ray-triangle test.
+//! Geometry on glam: rays, boxes, planes, frusta and the watertight ray-triangle test; an
+//! exact integer floor.
 
 mod aabb;
+mod floor;
 mod frame;
 mod frustum;
 mod plane;
@@ -8,6 +10,7 @@ mod ray;
 mod triangle;
 
 pub use aabb::{Aabb, ROBUST_FAR_SCALE};
+pub use floor::{FLOOR_EXACT, floor_i32};
 pub use frame::Frame;
 pub use frustum::{Containment, Frustum};
 pub use plane::Plane;

@@ -11,8 +11,10 @@
 use glam::Vec3;
 use parallax_scene::camera::Pinhole;
 
-/// One pixel of a G-buffer.
+/// One pixel of a G-buffer. `repr(C)`: the footprint's SSE path loads the position with the
+/// depth and the normal with the albedo's first channel as 16 bytes each.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
 pub struct Texel {
     /// World position of the primary hit.
     pub position: Vec3,

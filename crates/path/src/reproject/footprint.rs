@@ -26,15 +26,20 @@
 //!
 //! **Invariants:** a footprint's kept weights sum to one (`inv_weight` renormalises); a pixel
 //! is [`Outcome::Reused`] exactly when at least one neighbour with non-zero weight passed both
-//! tests; the result depends only on the two views, never on the thread count.
+//! tests; the result depends only on the two views, never on the thread count. The bilinear
+//! taps are tested in SSE lanes on x86-64 (`lanes.rs`), bit for bit as the scalar loop
+//! (tested).
 
 use std::ops::{Add, Mul};
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
+use parallax_core::math::floor_i32;
 use parallax_scene::camera::CameraModel;
 use rayon::prelude::*;
 
 use super::buffers::{EyeView, Texel};
+#[cfg(target_arch = "x86_64")]
+use super::lanes::bilinear_taps_x4;
 use super::sampler::thread_ns;
 
 /// What became of a target pixel.
@@ -137,6 +142,9 @@ pub struct Footprint {
 pub trait Blendable: Copy + Default + Add<Output = Self> + Mul<f32, Output = Self> {}
 impl Blendable for f32 {}
 impl Blendable for Vec3 {}
+/// A colour with a fourth value gathered alongside (a history's colour and length): each lane
+/// is summed with exactly the scalar operations of a `Vec3` or `f32` gather.
+impl Blendable for Vec4 {}
 
 impl Footprint {
     fn discarded(outcome: Outcome) -> Self {
@@ -213,17 +221,19 @@ impl Reprojector {
     #[inline]
     pub fn footprint(&self, source: &EyeView, t: &Texel) -> Footprint {
         if self.kernel == Kernel::BILINEAR {
-            footprint_in::<true>(source, t, self.kernel, self.lim)
+            footprint_in::<true, true>(source, t, self.kernel, self.lim)
         } else {
-            footprint_in::<false>(source, t, self.kernel, self.lim)
+            footprint_in::<false, false>(source, t, self.kernel, self.lim)
         }
     }
 }
 
 /// [`footprint`]; `BILINEAR` fixes the kernel at compile time: the same arithmetic (a
-/// division by the radius 1 is exact), the taps unrolled.
+/// division by the radius 1 is exact), the taps unrolled; `LANES` (with `BILINEAR`, on
+/// x86-64) tests the four taps in the lanes of one SSE vector ([`bilinear_taps_x4`]) where
+/// all four lie inside the source.
 #[inline(always)]
-fn footprint_in<const BILINEAR: bool>(
+fn footprint_in<const BILINEAR: bool, const LANES: bool>(
     source: &EyeView,
     t: &Texel,
     kernel: Kernel,
@@ -243,14 +253,31 @@ fn footprint_in<const BILINEAR: bool>(
     let half = kernel.half();
     let (w, h) = (source.width() as i32, source.height() as i32);
     // Pixel centres are at integer + 0.5: the tap left of (above) the sample is floor(f - 0.5).
+    // With `reach` an integer, `floor(s) > -reach` is `s >= 1 - reach` and `floor(s) < n +
+    // reach` is `s < n + reach`, so the range is checked before the floor (exact below 2^23,
+    // far beyond any film).
     let (sx, sy) = (f.x - 0.5, f.y - 0.5);
-    let (bx, by) = (sx.floor(), sy.floor());
     let reach = half as f32 + 1.0;
-    if !(bx > -reach && bx < w as f32 + reach && by > -reach && by < h as f32 + reach) {
+    if !(sx >= 1.0 - reach && sx < w as f32 + reach && sy >= 1.0 - reach && sy < h as f32 + reach) {
         return Footprint::discarded(Outcome::Outside);
     }
+    let (ix, iy) = (floor_i32(sx), floor_i32(sy));
+    let (bx, by) = (ix as f32, iy as f32);
     let (fx, fy) = (sx - bx, sy - by);
-    let (x0, y0) = (bx as i32 - half + 1, by as i32 - half + 1);
+    let (x0, y0) = (ix - half + 1, iy - half + 1);
+    #[cfg(target_arch = "x86_64")]
+    if BILINEAR && LANES && x0 >= 0 && y0 >= 0 && x0 + 1 < w && y0 + 1 < h {
+        let weights = [
+            kernel.weight(0.0 - fx),
+            kernel.weight(1.0 - fx),
+            kernel.weight(0.0 - fy),
+            kernel.weight(1.0 - fy),
+        ];
+        let (pos2, nrm2, plane) = (lim.pos2, lim.nrm2, lim.plane);
+        let (mask, sum, inside, near) =
+            bilinear_taps_x4(source, t, x0, y0, weights, pos2, nrm2, plane);
+        return placed(x0, y0, fx, fy, mask, sum, inside, near);
+    }
     let taps = 2 * half;
     let (mut mask, mut sum, mut bit) = (0u16, 0.0f32, 0);
     let (mut inside, mut near) = (false, false);
@@ -282,6 +309,22 @@ fn footprint_in<const BILINEAR: bool>(
             bit += 1;
         }
     }
+    placed(x0, y0, fx, fy, mask, sum, inside, near)
+}
+
+/// The footprint of a target placed in the source, from its kept taps.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn placed(
+    x0: i32,
+    y0: i32,
+    fx: f32,
+    fy: f32,
+    mask: u16,
+    sum: f32,
+    inside: bool,
+    near: bool,
+) -> Footprint {
     let outcome = match (mask != 0, inside, near) {
         (true, _, _) => Outcome::Reused,
         (false, false, _) => Outcome::Outside,
@@ -321,11 +364,11 @@ pub fn footprints(
             let lim = tests.limits();
             if kernel == Kernel::BILINEAR {
                 for (fp, t) in fps.iter_mut().zip(texels) {
-                    *fp = footprint_in::<true>(source, t, kernel, lim);
+                    *fp = footprint_in::<true, true>(source, t, kernel, lim);
                 }
             } else {
                 for (fp, t) in fps.iter_mut().zip(texels) {
-                    *fp = footprint_in::<false>(source, t, kernel, lim);
+                    *fp = footprint_in::<false, false>(source, t, kernel, lim);
                 }
             }
             thread_ns().saturating_sub(t0)
@@ -458,8 +501,14 @@ mod tests {
     #[test]
     fn bilinear_specialisation_equals_the_general_kernel_bit_for_bit() {
         let mut src = plane_view(Vec3::ZERO, 5.0, 24, 16);
-        // Bumps and turned normals so that every outcome and partial masks occur.
-        for (i, s) in src.texels.iter_mut().enumerate() {
+        // Bumps and turned normals on the left half so that every outcome and partial masks
+        // occur; the flat right half keeps all four taps.
+        for (i, s) in src
+            .texels
+            .iter_mut()
+            .enumerate()
+            .filter(|(i, _)| i % 24 < 12)
+        {
             let k = (i * 7919 % 13) as f32;
             s.position.z += 0.05 * (k - 6.0);
             if i % 5 == 0 {
@@ -474,7 +523,12 @@ mod tests {
             .map(|i| Vec3::new(i as f32, (i * i % 17) as f32, 1.0))
             .collect();
         let counts: Vec<f32> = (0..src.len()).map(|i| (i % 9) as f32 + 1.0).collect();
-        let mut seen = std::collections::HashSet::new();
+        let packed: Vec<Vec4> = values
+            .iter()
+            .zip(&counts)
+            .map(|(v, c)| v.extend(*c))
+            .collect();
+        let (mut seen, mut full) = (std::collections::HashSet::new(), 0);
         for plane in [false, true] {
             let lim = Tests {
                 position: 0.12,
@@ -483,10 +537,17 @@ mod tests {
             }
             .limits();
             for t in &dst.texels {
-                let fast = footprint_in::<true>(&src, t, Kernel::BILINEAR, lim);
-                let slow = footprint_in::<false>(&src, t, Kernel::BILINEAR, lim);
+                let lanes = footprint_in::<true, true>(&src, t, Kernel::BILINEAR, lim);
+                let fast = footprint_in::<true, false>(&src, t, Kernel::BILINEAR, lim);
+                let slow = footprint_in::<false, false>(&src, t, Kernel::BILINEAR, lim);
                 assert_eq!(fast, slow);
+                assert_eq!(
+                    (lanes.mask, lanes.inv_weight.to_bits(), lanes.outcome),
+                    (slow.mask, slow.inv_weight.to_bits(), slow.outcome)
+                );
+                assert_eq!(lanes, slow);
                 seen.insert(fast.outcome);
+                full += usize::from(fast.mask == 0xF);
                 let (a, b) = (
                     fast.gather_in::<true, Vec3>(Kernel::BILINEAR, &values, 24),
                     slow.gather_in::<false, Vec3>(Kernel::BILINEAR, &values, 24),
@@ -495,14 +556,22 @@ mod tests {
                     a.to_array().map(f32::to_bits),
                     b.to_array().map(f32::to_bits)
                 );
+                let n = fast.gather_in::<true, f32>(Kernel::BILINEAR, &counts, 24);
                 assert_eq!(
-                    fast.gather_in::<true, f32>(Kernel::BILINEAR, &counts, 24)
-                        .to_bits(),
+                    n.to_bits(),
                     slow.gather_in::<false, f32>(Kernel::BILINEAR, &counts, 24)
                         .to_bits()
+                );
+                // A colour and a count gathered together (SIMD lanes) equal both gathered
+                // apart.
+                let both = fast.gather_in::<true, Vec4>(Kernel::BILINEAR, &packed, 24);
+                assert_eq!(
+                    both.to_array().map(f32::to_bits),
+                    [a.x, a.y, a.z, n].map(f32::to_bits)
                 );
             }
         }
         assert!(seen.len() >= 3, "outcomes seen: {seen:?}");
+        assert!(full > 0, "no footprint kept all four taps");
     }
 }

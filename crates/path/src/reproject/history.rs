@@ -10,13 +10,14 @@
 //! | `Fixed(a)` | `a` (the paper: 0.2) | Mäkitalo et al. 2019, §4.1 |
 //! | `RunningMean { floor }` | `max(1 / (n + 1), floor)` with `n` the reprojected history length | BMFR's `accumulate_noisy_data` (Koskela et al. 2019), floor 0.2 |
 //!
-//! **Invariants:** a history's `count[i]` is the number of frames blended into pixel `i` (the
+//! **Invariants:** a history's `acc[i].w` is the number of frames blended into pixel `i` (the
 //! footprint-weighted mean of the reprojected counts, plus one), at least 1; a discarded pixel
-//! restarts at 1 with the new value only.
+//! restarts at 1 with the new value only. Colour and count sit in one `Vec4` so one gather
+//! reads both (each lane summed exactly as a gather of the colour or the count alone).
 
 use std::sync::Arc;
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
 use super::buffers::EyeView;
@@ -63,8 +64,16 @@ impl Blend {
 #[derive(Clone, Debug)]
 pub struct History {
     pub view: Arc<EyeView>,
-    pub color: Vec<Vec3>,
-    pub count: Vec<f32>,
+    /// Per pixel: the accumulated colour (xyz) and the number of frames in it (w).
+    pub acc: Vec<Vec4>,
+}
+
+impl History {
+    /// The accumulated colour of pixel `i`.
+    #[inline]
+    pub fn color(&self, i: usize) -> Vec3 {
+        self.acc[i].truncate()
+    }
 }
 
 /// How [`accumulate`] reprojects and blends.
@@ -96,47 +105,43 @@ pub struct Accumulated {
 /// and the image (the footprints are not stored).
 pub fn accumulate(
     view: &Arc<EyeView>,
-    new: &(dyn Fn(usize) -> Vec3 + Sync),
+    new: impl Fn(usize) -> Vec3 + Sync,
     prev: Option<&History>,
     how: &Accumulation,
 ) -> Accumulated {
     let n = view.len();
     let band = view.width() as usize * BAND_ROWS;
-    let mut color = vec![Vec3::ZERO; n];
-    let mut count = vec![1.0f32; n];
+    let mut acc = vec![Vec4::ZERO; n];
     let mut image = vec![Vec3::ZERO; n];
     let mut outcomes = vec![Outcome::Outside; n];
     let (kernel, blend, demod) = (how.kernel, how.blend, how.demodulated);
     let rep = Reprojector::new(kernel, how.tests);
-    let ns: Vec<u64> = color
+    let ns: Vec<u64> = acc
         .par_chunks_mut(band)
-        .zip(count.par_chunks_mut(band))
-        .zip(
-            image
-                .par_chunks_mut(band)
-                .zip(outcomes.par_chunks_mut(band)),
-        )
+        .zip(image.par_chunks_mut(band))
+        .zip(outcomes.par_chunks_mut(band))
         .enumerate()
-        .map(|(b, ((c, cnt), (img, out)))| {
+        .map(|(b, ((hist, img), out))| {
             let t0 = thread_ns();
             let base = b * band;
-            for j in 0..c.len() {
+            for (j, ((hj, ij), oj)) in hist.iter_mut().zip(img).zip(out).enumerate() {
                 let i = base + j;
+                let t = &view.texels[i];
                 let v = new(i);
-                c[j] = v;
+                let (mut c, mut cnt) = (v, 1.0);
                 if let Some(p) = prev {
-                    let f = rep.footprint(&p.view, &view.texels[i]);
-                    out[j] = f.outcome;
+                    let f = rep.footprint(&p.view, t);
+                    *oj = f.outcome;
                     if f.outcome == Outcome::Reused {
-                        let pw = p.view.width();
-                        let h = f.gather(kernel, &p.color, pw);
-                        let hn = f.gather(kernel, &p.count, pw);
+                        let g = f.gather(kernel, &p.acc, p.view.width());
+                        let (h, hn) = (g.truncate(), g.w);
                         let a = blend.alpha(hn);
-                        cnt[j] = hn + 1.0;
-                        c[j] = v * a + h * (1.0 - a);
+                        cnt = hn + 1.0;
+                        c = v * a + h * (1.0 - a);
                     }
                 }
-                img[j] = view.texels[i].remodulate(c[j], demod);
+                *hj = c.extend(cnt);
+                *ij = t.remodulate(c, demod);
             }
             thread_ns().saturating_sub(t0)
         })
@@ -144,8 +149,7 @@ pub fn accumulate(
     Accumulated {
         history: History {
             view: view.clone(),
-            color,
-            count,
+            acc,
         },
         image,
         outcomes,

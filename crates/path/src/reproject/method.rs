@@ -27,7 +27,7 @@
 use std::borrow::Cow;
 use std::sync::Arc;
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
 use super::buffers::EyeView;
@@ -163,6 +163,10 @@ pub struct MethodState {
     pub method: Method,
     right: Option<History>,
     left: Option<History>,
+    /// The traced left samples (demodulated when the method demodulates) at their pixels;
+    /// only this frame's discarded pixels are written and read, so it is kept between frames
+    /// without clearing.
+    traced: Vec<Vec3>,
 }
 
 /// Runs `f(i)` for every pixel into a new image, parallel over bands; returns the image and
@@ -184,12 +188,30 @@ fn per_pixel(n: usize, w: usize, f: impl Fn(usize) -> Vec3 + Sync) -> (Vec<Vec3>
     (out, ns.iter().sum())
 }
 
+/// The stereo value of left pixel `i`: `reused(footprint)` where the stereo tests kept a
+/// neighbour, the environment where it sees the sky, else its traced sample.
+#[inline(always)]
+fn stereo_value(
+    i: usize,
+    fps: &[Footprint],
+    background: &[Vec3],
+    traced: &[Vec3],
+    reused: impl FnOnce(&Footprint) -> Vec3,
+) -> Vec3 {
+    match fps[i].outcome {
+        Outcome::Reused => reused(&fps[i]),
+        Outcome::Background => background[i],
+        _ => traced[i],
+    }
+}
+
 impl MethodState {
     pub fn new(method: Method) -> Self {
         Self {
             method,
             right: None,
             left: None,
+            traced: Vec::new(),
         }
     }
 
@@ -200,7 +222,11 @@ impl MethodState {
     }
 
     /// Runs one frame. Every pass over the pixels does one job whole: the footprints, then
-    /// one pass per output that gathers, blends and remodulates.
+    /// one pass per output that gathers, blends and remodulates. Each output's cost counts the
+    /// passes it needs on its own: stereo its footprints, traced samples' storing and image
+    /// (and the demodulated right samples it gathers from); temporal the right eye's
+    /// accumulation (which demodulates its new samples itself); stereo + temporal the stereo
+    /// footprints, the traced samples' storing and both eyes' accumulations.
     pub fn step(&mut self, inp: &FrameInputs) -> MethodFrame {
         let m = &self.method;
         let k = m.kernel;
@@ -212,14 +238,7 @@ impl MethodState {
         let (n, w) = (left.len(), left.width() as usize);
         let rw = right.width();
         let demod = m.demodulate;
-        let (r_new, rnew_ns): (Cow<[Vec3]>, u64) = if demod {
-            let (v, ns) = per_pixel(right.len(), right.width() as usize, |i| {
-                right.texels[i].demodulate(inp.right_radiance[i], true)
-            });
-            (Cow::Owned(v), ns)
-        } else {
-            (Cow::Borrowed(inp.right_radiance), 0)
-        };
+        let r_rad = inp.right_radiance;
         // Stereo: footprints of the left pixels in the right view, then the discarded pixels
         // traced.
         let mut fps = Vec::new();
@@ -232,27 +251,32 @@ impl MethodState {
             inp.sampler
                 .trace_pixels(&left.camera, inp.left_seed, &discarded, &mut traced_list);
         let t0 = thread_ns();
-        let mut traced = vec![Vec3::ZERO; n];
+        let traced = &mut self.traced;
+        traced.resize(n, Vec3::ZERO);
         for (&i, v) in discarded.iter().zip(&traced_list) {
             traced[i as usize] = left.texels[i as usize].demodulate(*v, demod);
         }
+        let traced = &*traced;
         let traced_ns = thread_ns().saturating_sub(t0);
         let background = inp.left_background;
-        let stereo_value = |i: usize, src: &[Vec3]| -> Vec3 {
-            match fps[i].outcome {
-                Outcome::Reused => fps[i].gather(k, src, rw),
-                Outcome::Background => background[i],
-                _ => traced[i],
-            }
+        let (r_new, rnew_ns): (Cow<[Vec3]>, u64) = if demod {
+            let (v, ns) = per_pixel(right.len(), right.width() as usize, |i| {
+                right.texels[i].demodulate(r_rad[i], true)
+            });
+            (Cow::Owned(v), ns)
+        } else {
+            (Cow::Borrowed(r_rad), 0)
         };
         let (image, apply_ns) = per_pixel(n, w, |i| {
-            left.texels[i].remodulate(stereo_value(i, &r_new), demod)
+            let v = stereo_value(i, &fps, background, traced, |f| f.gather(k, &r_new, rw));
+            left.texels[i].remodulate(v, demod)
         });
-        let shared_ns = fp_ns + rnew_ns + traced_ns;
+        drop(r_new);
+        let shared_ns = fp_ns + traced_ns;
         let stereo = ModeFrame {
             image,
             outcomes: fps.iter().map(|f| f.outcome).collect(),
-            reproject_ns: shared_ns + apply_ns,
+            reproject_ns: shared_ns + rnew_ns + apply_ns,
         };
 
         // Temporal: the right eye's history.
@@ -262,21 +286,30 @@ impl MethodState {
             blend: m.blend,
             demodulated: demod,
         };
-        let acc = accumulate(right, &|i| r_new[i], self.right.as_ref(), &how);
+        let acc = accumulate(
+            right,
+            |i| right.texels[i].demodulate(r_rad[i], demod),
+            self.right.as_ref(),
+            &how,
+        );
         let temporal = ModeFrame {
             image: acc.image,
             outcomes: acc.outcomes,
-            reproject_ns: rnew_ns + acc.cpu_ns,
+            reproject_ns: acc.cpu_ns,
         };
         let r_acc = &acc.history;
 
         // Stereo + temporal.
         let (left_hist, image, left_ns) = match m.combine {
-            Combine::Paper => self.paper_left(inp, &fps, r_acc, &traced),
+            Combine::Paper => self.paper_left(inp, &fps, r_acc),
             Combine::Cascade => {
                 let a = accumulate(
                     left,
-                    &|i| stereo_value(i, &r_acc.color),
+                    |i| {
+                        stereo_value(i, &fps, background, traced, |f| {
+                            f.gather(k, &r_acc.acc, rw).truncate()
+                        })
+                    },
                     self.left.as_ref(),
                     &how,
                 );
@@ -306,15 +339,15 @@ impl MethodState {
         inp: &FrameInputs,
         fps: &[Footprint],
         r_acc: &History,
-        traced: &[Vec3],
     ) -> (History, Vec<Vec3>, u64) {
         let m = &self.method;
         let (left, k) = (&inp.left, m.kernel);
         let (n, w) = (left.len(), left.width() as usize);
         let rw = inp.right.width();
         let prev = self.left.as_ref();
-        let mut color = vec![Vec3::ZERO; n];
-        let mut count = vec![1.0f32; n];
+        let traced = &self.traced;
+        let band = w * BAND_ROWS;
+        let mut acc = vec![Vec4::ZERO; n];
         let mut image = vec![Vec3::ZERO; n];
         let rep = Reprojector::new(
             k,
@@ -323,38 +356,37 @@ impl MethodState {
                 ..inp.tests
             },
         );
-        let ns: Vec<u64> = color
-            .par_chunks_mut(w * BAND_ROWS)
-            .zip(count.par_chunks_mut(w * BAND_ROWS))
-            .zip(image.par_chunks_mut(w * BAND_ROWS))
+        let ns: Vec<u64> = acc
+            .par_chunks_mut(band)
+            .zip(image.par_chunks_mut(band))
             .enumerate()
-            .map(|(b, ((c, cnt), img))| {
+            .map(|(b, (hist, img))| {
                 let t0 = thread_ns();
-                let base = b * w * BAND_ROWS;
-                for j in 0..c.len() {
+                let base = b * band;
+                for (j, (hj, ij)) in hist.iter_mut().zip(img).enumerate() {
                     let i = base + j;
-                    match fps[i].outcome {
+                    let (c, cnt) = match fps[i].outcome {
                         Outcome::Reused => {
-                            c[j] = fps[i].gather(k, &r_acc.color, rw);
-                            cnt[j] = fps[i].gather(k, &r_acc.count, rw).max(1.0);
+                            let g = fps[i].gather(k, &r_acc.acc, rw);
+                            (g.truncate(), g.w.max(1.0))
                         }
-                        Outcome::Background => c[j] = inp.left_background[i],
+                        Outcome::Background => (inp.left_background[i], 1.0),
                         _ => {
-                            c[j] = traced[i];
+                            let mut out = (traced[i], 1.0);
                             if let Some(p) = prev {
                                 let f = rep.footprint(&p.view, &left.texels[i]);
                                 if f.outcome == Outcome::Reused {
-                                    let pw = p.view.width();
-                                    let h = f.gather(k, &p.color, pw);
-                                    let hn = f.gather(k, &p.count, pw);
+                                    let g = f.gather(k, &p.acc, p.view.width());
+                                    let (h, hn) = (g.truncate(), g.w);
                                     let a = m.blend.alpha(hn);
-                                    c[j] = traced[i] * a + h * (1.0 - a);
-                                    cnt[j] = hn + 1.0;
+                                    out = (traced[i] * a + h * (1.0 - a), hn + 1.0);
                                 }
                             }
+                            out
                         }
-                    }
-                    img[j] = left.texels[i].remodulate(c[j], m.demodulate);
+                    };
+                    *hj = c.extend(cnt);
+                    *ij = left.texels[i].remodulate(c, m.demodulate);
                 }
                 thread_ns().saturating_sub(t0)
             })
@@ -362,8 +394,7 @@ impl MethodState {
         (
             History {
                 view: left.clone(),
-                color,
-                count,
+                acc,
             },
             image,
             ns.iter().sum(),

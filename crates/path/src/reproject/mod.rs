@@ -37,6 +37,8 @@ pub mod evaluate;
 pub mod fingerprint;
 pub mod footprint;
 pub mod history;
+#[cfg(target_arch = "x86_64")]
+mod lanes;
 pub mod method;
 pub mod metric;
 pub mod reference;

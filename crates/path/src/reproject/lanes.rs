@@ -1,0 +1,110 @@
+//! The bilinear footprint's four taps tested in the lanes of SSE vectors (x86-64), for
+//! [`super::footprint`]: the source texels' positions and normals are loaded 16 bytes at a
+//! time and transposed so that one vector holds one component of all four taps.
+//!
+//! **Invariants:** the result is the scalar tap loop's bit for bit (every lane does the
+//! scalar operations in the same order; tested in `footprint`'s tests against the scalar and
+//! general kernels); the caller guarantees that all four taps lie inside the source.
+//!
+//! | parameter | type | meaning |
+//! |---|---|---|
+//! | `weights` | [f32; 4] | tent weights of columns `x0`, `x0 + 1`, rows `y0`, `y0 + 1` |
+//! | `pos2`, `nrm2` | f32 | squared position limit and squared normal chord |
+//! | `plane` | bool | position measured against the target's tangent plane |
+
+use std::arch::x86_64::*;
+
+use super::buffers::{EyeView, Texel};
+
+/// The four taps of a bilinear footprint, all inside the source, tested in the lanes of SSE
+/// vectors (lane = tap, row-major from `(x0, y0)`): every lane does the operations of the
+/// scalar tap loop of `footprint::footprint_in` in the same order (differences, products
+/// summed as glam's `dot`, strict compares), and the kept weights are summed lane by lane in tap order (a
+/// dropped tap adds +0, which leaves a sum of non-negative weights unchanged), so the result
+/// is the scalar loop's bit for bit. `weights` are the tent weights of the columns `x0`,
+/// `x0 + 1` and the rows `y0`, `y0 + 1`; `pos2`, `nrm2` the squared limits, `plane` the
+/// tangent-plane test. Returns `(mask, sum, inside, near)`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(super) fn bilinear_taps_x4(
+    source: &EyeView,
+    t: &Texel,
+    x0: i32,
+    y0: i32,
+    [wx0, wx1, wy0, wy1]: [f32; 4],
+    pos2: f32,
+    nrm2: f32,
+    plane: bool,
+) -> (u16, f32, bool, bool) {
+    let w = source.width() as usize;
+    let i0 = y0 as usize * w + x0 as usize;
+    let (r0, r1) = (
+        &source.texels[i0..i0 + 2],
+        &source.texels[i0 + w..i0 + w + 2],
+    );
+    let s = [&r0[0], &r0[1], &r1[0], &r1[1]];
+    // SAFETY: SSE2 is part of x86-64; `Texel` is `repr(C)`, so 16 bytes from `position` are
+    // the position and depth and 16 bytes from `normal` are the normal and albedo.x, all
+    // inside the texel.
+    unsafe {
+        let pd = s.map(|s| _mm_loadu_ps(&s.position.x));
+        let na = s.map(|s| _mm_loadu_ps(&s.normal.x));
+        // 4x4 transposes: per-tap vectors -> per-component vectors over the taps.
+        let transpose = |v: [__m128; 4]| {
+            let (a, b) = (_mm_unpacklo_ps(v[0], v[1]), _mm_unpacklo_ps(v[2], v[3]));
+            let (c, d) = (_mm_unpackhi_ps(v[0], v[1]), _mm_unpackhi_ps(v[2], v[3]));
+            [
+                _mm_movelh_ps(a, b),
+                _mm_movehl_ps(b, a),
+                _mm_movelh_ps(c, d),
+                _mm_movehl_ps(d, c),
+            ]
+        };
+        let [px, py, pz, depth] = transpose(pd);
+        let [nx, ny, nz, _] = transpose(na);
+        let splat = _mm_set1_ps;
+        let (dx, dy, dz) = (
+            _mm_sub_ps(px, splat(t.position.x)),
+            _mm_sub_ps(py, splat(t.position.y)),
+            _mm_sub_ps(pz, splat(t.position.z)),
+        );
+        let dot = |ax, ay, az, bx, by, bz| {
+            _mm_add_ps(
+                _mm_add_ps(_mm_mul_ps(ax, bx), _mm_mul_ps(ay, by)),
+                _mm_mul_ps(az, bz),
+            )
+        };
+        let (tnx, tny, tnz) = (splat(t.normal.x), splat(t.normal.y), splat(t.normal.z));
+        let d2 = if plane {
+            let h = dot(dx, dy, dz, tnx, tny, tnz);
+            _mm_mul_ps(h, h)
+        } else {
+            dot(dx, dy, dz, dx, dy, dz)
+        };
+        let (ex, ey, ez) = (
+            _mm_sub_ps(nx, tnx),
+            _mm_sub_ps(ny, tny),
+            _mm_sub_ps(nz, tnz),
+        );
+        let n2 = dot(ex, ey, ez, ex, ey, ez);
+        let wt = _mm_mul_ps(
+            _mm_setr_ps(wx0, wx1, wx0, wx1),
+            _mm_setr_ps(wy0, wy0, wy1, wy1),
+        );
+        let valid = _mm_cmpgt_ps(wt, _mm_setzero_ps());
+        // `is_finite`: |depth| < inf (false for NaN).
+        let abs = _mm_andnot_ps(splat(-0.0), depth);
+        let hit = _mm_cmplt_ps(abs, splat(f32::INFINITY));
+        let near = _mm_and_ps(_mm_and_ps(valid, hit), _mm_cmplt_ps(d2, splat(pos2)));
+        let keep = _mm_and_ps(near, _mm_cmplt_ps(n2, splat(nrm2)));
+        let mut kept = [0.0f32; 4];
+        _mm_storeu_ps(kept.as_mut_ptr(), _mm_and_ps(keep, wt));
+        let sum = 0.0 + kept[0] + kept[1] + kept[2] + kept[3];
+        (
+            _mm_movemask_ps(keep) as u16,
+            sum,
+            _mm_movemask_ps(valid) != 0,
+            _mm_movemask_ps(near) != 0,
+        )
+    }
+}
