@@ -39,6 +39,7 @@ use super::merge::MergeCtx;
 use super::node::{FLAG_CRACK, Node};
 use super::tree::{
     Level, NO_PLANE, QuadTree, Z_FLOOR_TABLE_MAX, Z_REGION_MIN_GAIN, Z_SKIP_MARGIN, decoded_planes,
+    effective_levels,
 };
 use crate::planes::layer_size;
 use crate::{LayerPlanes, NormalSource, ScreenError, UnitCube};
@@ -52,7 +53,7 @@ impl QuadTree {
         layer: &GBuffer,
         opts: &QuadTreeOptions,
     ) -> Result<Self, ScreenError> {
-        Self::build_cascaded(cube, layer, opts, &[])
+        Self::build_cascaded(cube, layer, opts, &[], false)
     }
 
     /// [`Self::build`] for a layer followed by the `deeper` layers' effective planes: the
@@ -66,6 +67,7 @@ impl QuadTree {
         layer: &GBuffer,
         opts: &QuadTreeOptions,
         deeper: &[LayerPlanes],
+        reference: bool,
     ) -> Result<Self, ScreenError> {
         let cam = &cube.camera;
         let (w, h) = layer_size(cube, layer)?;
@@ -107,7 +109,7 @@ impl QuadTree {
             max_rel_gap,
         } = opts.normals
         else {
-            return Self::from_leaf_fn(cube, w, h, opts, deeper, leaf);
+            return Self::from_leaf_fn(cube, w, h, opts, deeper, reference, leaf);
         };
         // G-buffer normals: the leaves first, then flag `O` from their decoded planes
         // ([`crate::planes::crack_flags`]).
@@ -121,7 +123,7 @@ impl QuadTree {
                 }
             });
         let o = gbuffer_flags(cube, w, h, &leaves, min_rel_gap, max_rel_gap);
-        Self::from_leaf_fn(cube, w, h, opts, deeper, |k, _, _| {
+        Self::from_leaf_fn(cube, w, h, opts, deeper, reference, |k, _, _| {
             let n = leaves[k];
             if o[k] {
                 Node {
@@ -150,7 +152,7 @@ impl QuadTree {
                 cube.camera.height
             )));
         }
-        Self::from_leaf_fn(cube, w, h, opts, &[], |k, _, _| {
+        Self::from_leaf_fn(cube, w, h, opts, &[], false, |k, _, _| {
             if !planes.covered(k) {
                 return Node::EMPTY;
             }
@@ -171,6 +173,7 @@ impl QuadTree {
         h: u32,
         opts: &QuadTreeOptions,
         deeper: &[LayerPlanes],
+        reference: bool,
         leaf: impl Fn(usize, u32, u32) -> Node + Sync,
     ) -> Result<Self, ScreenError> {
         if !(opts.crack_dilation.is_finite() && opts.crack_dilation >= 0.0) {
@@ -217,27 +220,21 @@ impl QuadTree {
             h: h0,
             nodes: leaves,
         };
-        // Cascade: trigger depths from the pixel planes; no merging over unsafe pixels.
-        let tz = if deeper.is_empty() {
-            Vec::new()
+        let (levels, tz, eff) = if deeper.is_empty() {
+            let levels = prune(&ctx, level0, nlev, &[], w, h);
+            let eff = effective_levels(&levels);
+            (levels, Vec::new(), eff)
+        } else if reference {
+            fixed_point_reference(&ctx, level0, nlev, (w, h), deeper)
         } else {
-            let px = leaf_planes(&level0, w, h, wf, hf);
-            super::cascade::trigger_depths(&px, deeper)
+            super::fixpoint::fixed_point(&ctx, level0, nlev, (w, h), deeper)
         };
-        // Pixels (`W x H`) no node may merge over. Seeded with the pixel-plane analysis,
-        // then grown to a fixed point: a merged proxy plane deviates from its pixels' own
-        // planes by up to the merge tolerance (§3.3, `gamma_dist`, far above the safety
-        // margin), so a pixel safe against its own plane can be unsafe against the proxy
-        // the traversal tests (a deeper plane in front of it: found by proptest,
-        // `quadtree_cascade.rs`). Such pixels are blocked too and the levels rebuilt; the
-        // set only grows, so this ends (in practice after one extra pass, or none).
-        let mut blocked_px: Vec<bool> = tz.iter().map(|z| z.is_finite()).collect();
         let mut tree = Self {
             width: w,
             height: h,
             wf,
             hf,
-            levels: Vec::new(),
+            levels,
             crack_px: opts.crack_dilation,
             trigger_z: Vec::new(),
             plane_top: 0,
@@ -248,31 +245,6 @@ impl QuadTree {
             z_floor_tw: 0,
             z_floor_th: 0,
         };
-        let mut first = Some(level0);
-        let tz = loop {
-            // Level 0 is never changed by pruning: reuse it on a rebuild.
-            let l0 = first
-                .take()
-                .unwrap_or_else(|| std::mem::take(&mut tree.levels).swap_remove(0));
-            tree.levels = prune(&ctx, l0, nlev, &blocked_px, w, h);
-            if deeper.is_empty() || ctx.never {
-                // No merging: the effective planes are the pixel planes.
-                break tz;
-            }
-            let tz_eff = super::cascade::trigger_depths(&tree.effective_planes(), deeper);
-            let mut grew = false;
-            for (b, z) in blocked_px.iter_mut().zip(&tz_eff) {
-                if z.is_finite() && !*b {
-                    *b = true;
-                    grew = true;
-                }
-            }
-            if !grew {
-                // Every unsafe pixel is blocked, i.e. its effective plane is its pixel
-                // plane, and `tz_eff` was computed from the planes the traversal tests.
-                break tz_eff;
-            }
-        };
         // Top-down: the small upper levels are scanned first.
         tree.plane_top = (0..tree.levels.len())
             .rev()
@@ -281,9 +253,8 @@ impl QuadTree {
         if !tz.is_empty() {
             tree.mark_unsafe(&tz);
         }
-        // After `mark_unsafe`, which changes flags and AABB ranges but no node kinds. The
-        // effective levels top-down (one pass per level) instead of a climb per pixel.
-        let eff = tree.effective_levels();
+        // `mark_unsafe` changes flags and AABB ranges but no node kinds: `eff` (the effective
+        // levels, top-down, one pass per level, instead of a climb per pixel) still holds.
         let w0 = tree.levels[0].w as usize;
         let mut pl = vec![0u8; (w * h) as usize];
         pl.par_chunks_mut(w as usize)
@@ -465,9 +436,99 @@ fn map_gradient(mt: &glam::DMat4, p: Vec3, n: Vec3) -> Option<(f32, f32)> {
     Some((g(q.x)?, g(q.y)?))
 }
 
+/// The cascade's pruning fixed point by its definition (the slow twin of
+/// [`super::fixpoint::fixed_point`], same results): trigger depths from the pixel planes
+/// block merging over unsafe pixels. Pixels (`W x H`) no node may merge over are seeded with
+/// the pixel-plane analysis, then grown to a fixed point: a merged proxy plane deviates from
+/// its pixels' own planes by up to the merge tolerance (§3.3, `gamma_dist`, far above the
+/// safety margin), so a pixel safe against its own plane can be unsafe against the proxy
+/// the traversal tests (a deeper plane in front of it: found by proptest,
+/// `quadtree_cascade.rs`). Such pixels are blocked too and the levels rebuilt; the set only
+/// grows, so this ends (in practice after one extra pass, or none). Returns the levels, the
+/// trigger depths and the effective levels.
+fn fixed_point_reference(
+    ctx: &MergeCtx,
+    level0: Level,
+    nlev: u32,
+    (w, h): (u32, u32),
+    deeper: &[LayerPlanes],
+) -> (Vec<Level>, Vec<f32>, Vec<u8>) {
+    let tz = {
+        let px = leaf_planes(&level0, w, h, ctx.wf, ctx.hf);
+        super::cascade::trigger_depths(&px, deeper)
+    };
+    let mut blocked_px: Vec<bool> = tz.iter().map(|z| z.is_finite()).collect();
+    let mut first = Some(level0);
+    let mut levels: Vec<Level> = Vec::new();
+    let tz = loop {
+        // Level 0 is never changed by pruning: reuse it on a rebuild.
+        let l0 = first
+            .take()
+            .unwrap_or_else(|| std::mem::take(&mut levels).swap_remove(0));
+        levels = prune(ctx, l0, nlev, &blocked_px, w, h);
+        if ctx.never {
+            // No merging: the effective planes are the pixel planes.
+            break tz;
+        }
+        let eff = super::tree::decoded_planes(w, h, ctx.wf, ctx.hf, |i, j| {
+            let n0 = levels[0].nodes[(j * levels[0].w + i) as usize];
+            if !n0.is_plane() {
+                return None;
+            }
+            let mut best = (n0, 0u32, i, j);
+            for (l, lv) in levels.iter().enumerate().skip(1) {
+                let (qx, qy) = (i >> l, j >> l);
+                let n = lv.nodes[(qy * lv.w + qx) as usize];
+                if !n.is_plane() {
+                    break;
+                }
+                best = (n, l as u32, qx, qy);
+            }
+            Some(best)
+        });
+        let tz_eff = super::cascade::trigger_depths(&eff, deeper);
+        let mut grew = false;
+        for (b, z) in blocked_px.iter_mut().zip(&tz_eff) {
+            if z.is_finite() && !*b {
+                *b = true;
+                grew = true;
+            }
+        }
+        if !grew {
+            // Every unsafe pixel is blocked, i.e. its effective plane is its pixel
+            // plane, and `tz_eff` was computed from the planes the traversal tests.
+            break tz_eff;
+        }
+    };
+    let eff = effective_levels(&levels);
+    (levels, tz, eff)
+}
+
+/// Node `(qx, qy)` at level `l` from its four children in `child` (level `l - 1`), merged
+/// only if `allow` (§3.3, [`MergeCtx::parent`]).
+#[inline]
+pub(super) fn parent_of(
+    ctx: &MergeCtx,
+    child: &Level,
+    l: u32,
+    qx: u32,
+    qy: u32,
+    allow: bool,
+) -> Node {
+    let cl = l - 1;
+    let mut kids = [Node::EMPTY; 4];
+    let mut pos = [(0u32, 0u32); 4];
+    for (c, (kid, p)) in kids.iter_mut().zip(pos.iter_mut()).enumerate() {
+        let (cx, cy) = (2 * qx + (c as u32 & 1), 2 * qy + (c as u32 >> 1));
+        *p = (cx, cy);
+        *kid = child.nodes[(cy * child.w + cx) as usize];
+    }
+    ctx.parent(l, qx, qy, cl, &kids, &pos, allow)
+}
+
 /// Levels `0..nlev` of a tree: `level0` and the levels built from it by pruning (§3.3),
 /// never merging a node that contains a pixel marked in `blocked` (`W x H`; empty: none).
-fn prune(
+pub(super) fn prune(
     ctx: &MergeCtx,
     level0: Level,
     nlev: u32,
@@ -511,15 +572,7 @@ fn prune(
                 for (qx, out) in row.iter_mut().enumerate() {
                     let qx = qx as u32;
                     let allow = blocked.is_empty() || !blocked[(qy * pw + qx) as usize];
-                    let cl = l - 1;
-                    let mut kids = [Node::EMPTY; 4];
-                    let mut pos = [(0u32, 0u32); 4];
-                    for (c, (kid, p)) in kids.iter_mut().zip(pos.iter_mut()).enumerate() {
-                        let (cx, cy) = (2 * qx + (c as u32 & 1), 2 * qy + (c as u32 >> 1));
-                        *p = (cx, cy);
-                        *kid = child.nodes[(cy * child.w + cx) as usize];
-                    }
-                    *out = ctx.parent(l, qx, qy, cl, &kids, &pos, allow);
+                    *out = parent_of(ctx, child, l, qx, qy, allow);
                 }
             });
         levels.push(Level {

@@ -73,6 +73,7 @@
 
 pub mod build;
 pub mod cascade;
+mod fixpoint;
 pub mod merge;
 pub mod node;
 pub mod traverse;
