@@ -198,6 +198,7 @@ impl QuadTree {
             far: cube.far as f64,
             crack_px: opts.crack_dilation,
             never: !(opts.gamma_norm < 1.0 && opts.gamma_dist > 0.0),
+            lanes: !reference,
         };
 
         // Level 0: leaves (§3.2).
@@ -381,36 +382,41 @@ impl QuadTree {
     /// `tz` below it; merged plane nodes above an unsafe pixel get the flag and trigger on
     /// footprint entry (conservative).
     pub(crate) fn mark_unsafe(&mut self, tz: &[f32]) {
-        let (w, h) = (self.width, self.height);
-        let mut cur: Vec<f32> = {
-            let lv = &self.levels[0];
-            let mut m = vec![f32::INFINITY; lv.nodes.len()];
-            for j in 0..h {
-                for i in 0..w {
-                    m[(j * lv.w + i) as usize] = tz[(j * w + i) as usize];
-                }
-            }
-            m
-        };
+        let (w, h) = (self.width as usize, self.height as usize);
+        let mut cur = vec![f32::INFINITY; self.levels[0].nodes.len()];
+        let w0 = self.levels[0].w as usize;
+        cur.par_chunks_mut(w0)
+            .take(h)
+            .zip(tz.par_chunks(w))
+            .for_each(|(row, t)| row[..w].copy_from_slice(t));
         self.trigger_z = tz.to_vec();
         for l in 0..self.levels.len() {
             if l > 0 {
-                let (cw, pw, ph) = (self.levels[l - 1].w, self.levels[l].w, self.levels[l].h);
-                let mut next = vec![f32::INFINITY; (pw * ph) as usize];
-                for qy in 0..ph {
-                    for qx in 0..pw {
-                        let c = |dx: u32, dy: u32| cur[((2 * qy + dy) * cw + 2 * qx + dx) as usize];
-                        next[(qy * pw + qx) as usize] =
-                            c(0, 0).min(c(1, 0)).min(c(0, 1)).min(c(1, 1));
+                let (cw, pw) = (self.levels[l - 1].w as usize, self.levels[l].w as usize);
+                let mut next = vec![f32::INFINITY; self.levels[l].nodes.len()];
+                let child = &cur;
+                next.par_chunks_mut(pw).enumerate().for_each(|(qy, row)| {
+                    let (r0, r1) = (&child[2 * qy * cw..], &child[(2 * qy + 1) * cw..]);
+                    for (qx, v) in row.iter_mut().enumerate() {
+                        *v = r0[2 * qx]
+                            .min(r0[2 * qx + 1])
+                            .min(r1[2 * qx])
+                            .min(r1[2 * qx + 1]);
                     }
-                }
+                });
                 cur = next;
             }
-            for (node, &m) in self.levels[l].nodes.iter_mut().zip(&cur) {
-                if m.is_finite() {
-                    node.mark_unsafe(m);
-                }
-            }
+            self.levels[l]
+                .nodes
+                .par_chunks_mut(4096)
+                .zip(cur.par_chunks(4096))
+                .for_each(|(nodes, m)| {
+                    for (node, &m) in nodes.iter_mut().zip(m) {
+                        if m.is_finite() {
+                            node.mark_unsafe(m);
+                        }
+                    }
+                });
         }
     }
 }
@@ -424,8 +430,11 @@ impl QuadTree {
 fn map_gradient(mt: &glam::DMat4, p: Vec3, n: Vec3) -> Option<(f32, f32)> {
     let (p, n) = (p.as_dvec3(), n.as_dvec3());
     let q = *mt * n.extend(-n.dot(p));
-    let len = q.truncate().length();
-    if !(len.is_finite() && len > 0.0) {
+    // `|q.xyz|` finite and > 0 (as `map_plane` asks), without its square root: the same
+    // answer, since the square root of a non-negative value is finite and positive exactly
+    // when the value is.
+    let len2 = q.truncate().length_squared();
+    if !(len2.is_finite() && len2 > 0.0) {
         return None;
     }
     // Orientation-free: the gradient is the same for q and -q.

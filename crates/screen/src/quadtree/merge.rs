@@ -18,6 +18,9 @@ pub(crate) struct MergeCtx {
     pub(crate) far: f64,
     pub(crate) crack_px: f32,
     pub(crate) never: bool,
+    /// Evaluate the four children in lanes ([`Self::parent_lanes`], same bits); `false`:
+    /// the scalar definition (the reference build).
+    pub(crate) lanes: bool,
 }
 
 impl MergeCtx {
@@ -56,6 +59,9 @@ impl MergeCtx {
         pos: &[(u32, u32); 4],
         allow_merge: bool,
     ) -> Node {
+        if self.lanes {
+            return self.parent_lanes(l, qx, qy, cl, kids, pos, allow_merge);
+        }
         if !self.never
             && allow_merge
             && kids.iter().all(|k| k.is_plane())
@@ -129,6 +135,23 @@ impl MergeCtx {
                 proj[4 * i + m] = nn.dot(p);
             }
         }
+        self.proxy(l, qx, qy, nn, min_cos, &proj, flags)
+    }
+
+    /// The proxy plane of a merge (§3.3) from its normal `nn`, the smallest cosine
+    /// `min_cos` of a child normal to it and the projections `proj` of the 16 child corners
+    /// on `nn`, if conditions 2 and 3 hold.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn proxy(
+        &self,
+        l: u32,
+        qx: u32,
+        qy: u32,
+        nn: Vec3,
+        min_cos: f32,
+        proj: &[f32; 16],
+        flags: u32,
+    ) -> Option<Node> {
         let c = proj.iter().sum::<f32>() / 16.0;
         let dmax = proj.iter().map(|p| (p - c).abs()).fold(0.0f32, f32::max) / -nn.z;
         let (xc, yc) = node_centre(l, qx, qy, self.wf, self.hf);
@@ -156,7 +179,7 @@ impl MergeCtx {
         (((1.0 / inv_d) - n) / (f - n)).clamp(0.0, 1.0) as f32
     }
 
-    fn cos_thr(&self, u: f32) -> f32 {
+    pub(super) fn cos_thr(&self, u: f32) -> f32 {
         if !self.adaptive || self.cos_norm >= 1.0 {
             return self.cos_norm;
         }

@@ -75,6 +75,7 @@ pub mod build;
 pub mod cascade;
 mod fixpoint;
 pub mod merge;
+mod merge_lanes;
 pub mod node;
 pub mod traverse;
 pub mod tree;
