@@ -86,13 +86,31 @@ impl QuadTree {
         let depth = &layer.depth;
         let mt = cube.cube_to_world.transpose();
         let (wf, hf) = (w as f32, h as f32);
+        // The world direction through a pixel centre, `basis * camera_dir(film)`, is
+        // `(x_axis dx + y_axis dy) + z_axis (-1)` (glam's `Mat3 * Vec3` order): its column and
+        // row terms are tabulated once, the same products, so the sum is the same bits.
+        let (tx, ty) = (cam.tan_half_x(), cam.tan_half_y);
+        let b = cam.frame.basis;
+        let (cw, ch) = (cam.width as f32, cam.height as f32);
+        let col: Vec<Vec3> = (0..w)
+            .map(|i| b.x_axis * ((2.0 * (i as f32 + 0.5) / cw - 1.0 + cam.shift.x) * tx))
+            .collect();
+        let row: Vec<Vec3> = (0..h)
+            .map(|j| b.y_axis * ((1.0 - 2.0 * (j as f32 + 0.5) / ch + cam.shift.y) * ty))
+            .collect();
+        let back = b.z_axis * -1.0;
         let leaf = |k: usize, i: u32, j: u32| {
             let d = depth[k];
             if !(d.is_finite() && d > 0.0) || normals[k] == Vec3::ZERO {
                 return Node::EMPTY;
             }
-            let film = glam::Vec2::new(i as f32 + 0.5, j as f32 + 0.5);
-            let p = cam.frame.position + cam.frame.dir_to_world(cam.camera_dir(film)) * d;
+            let dir = if reference {
+                let film = glam::Vec2::new(i as f32 + 0.5, j as f32 + 0.5);
+                cam.frame.dir_to_world(cam.camera_dir(film))
+            } else {
+                (col[i as usize] + row[j as usize]) + back
+            };
+            let p = cam.frame.position + dir * d;
             let Some((gx, gy)) = map_gradient(&mt, p, normals[k]) else {
                 return Node::EMPTY;
             };
@@ -292,15 +310,22 @@ impl QuadTree {
             }
         }
         if !self.trigger_z.is_empty() {
-            for j in 0..h {
-                for i in 0..w {
-                    let z = self.trigger_z[(j * w + i) as usize];
-                    let k = ((j >> top) * tw + (i >> top)) as usize;
-                    if z.is_finite() && z < zn[k] {
-                        zn[k] = z;
+            // One band of `2^top` pixel rows per row of `zn`, each scanned in row order.
+            let tzs = &self.trigger_z;
+            zn.par_chunks_mut(tw as usize)
+                .enumerate()
+                .for_each(|(r, zr)| {
+                    let r = r as u32;
+                    for j in (r << top)..((r + 1) << top).min(h) {
+                        for i in 0..w {
+                            let z = tzs[(j * w + i) as usize];
+                            let k = (i >> top) as usize;
+                            if z.is_finite() && z < zr[k] {
+                                zr[k] = z;
+                            }
+                        }
                     }
-                }
-            }
+                });
         }
         let floor = |z: f32| {
             if z - Z_SKIP_MARGIN > 0.0 {
@@ -545,31 +570,32 @@ pub(super) fn prune(
     w: u32,
     h: u32,
 ) -> Vec<Level> {
-    let (w0, h0) = (level0.w, level0.h);
-    let mut blocked: Vec<bool> = if blocked_px.is_empty() {
-        Vec::new()
-    } else {
-        let mut b = vec![false; (w0 * h0) as usize];
-        for j in 0..h {
-            for i in 0..w {
-                b[(j * w0 + i) as usize] = blocked_px[(j * w + i) as usize];
-            }
-        }
-        b
-    };
+    let mut blocked: Vec<bool> = Vec::new();
     let mut levels = vec![level0];
     for l in 1..nlev {
         let child = levels.last().unwrap();
         let (pw, ph) = (child.w / 2, child.h / 2);
-        if !blocked.is_empty() {
-            let cw = child.w;
-            blocked = (0..pw * ph)
-                .map(|q| {
-                    let (qx, qy) = (q % pw, q / pw);
-                    let c = |dx: u32, dy: u32| blocked[((2 * qy + dy) * cw + 2 * qx + dx) as usize];
-                    c(0, 0) || c(1, 0) || c(0, 1) || c(1, 1)
-                })
-                .collect();
+        if !blocked_px.is_empty() {
+            // A node is blocked when one of its children is (level 1: an image pixel).
+            let mut next = vec![false; (pw * ph) as usize];
+            let prev = &blocked;
+            next.par_chunks_mut(pw as usize)
+                .enumerate()
+                .for_each(|(qy, row)| {
+                    let qy = qy as u32;
+                    for (qx, b) in row.iter_mut().enumerate() {
+                        let qx = qx as u32;
+                        *b = (0..4).any(|c| {
+                            let (x, y) = (2 * qx + (c & 1), 2 * qy + (c >> 1));
+                            if l == 1 {
+                                x < w && y < h && blocked_px[(y * w + x) as usize]
+                            } else {
+                                prev[(y * child.w + x) as usize]
+                            }
+                        });
+                    }
+                });
+            blocked = next;
         }
         let blocked = &blocked;
         let mut nodes = vec![Node::EMPTY; (pw * ph) as usize];

@@ -123,6 +123,8 @@ fn fill_triggers(
     plane: impl Fn(u32, u32) -> Option<Option<(Vec3, f32)>> + Sync,
 ) {
     let (wf, hf) = (ctx.wf, ctx.hf);
+    // The footprints' `x` edges, `i / W` (the definition's divisions, once per column).
+    let xe: Vec<f32> = (0..=w).map(|i| i as f32 / wf).collect();
     tz.par_chunks_mut(w as usize)
         .enumerate()
         .for_each(|(j, row)| {
@@ -131,7 +133,8 @@ fn fill_triggers(
             for (i, t) in row.iter_mut().enumerate() {
                 let i = i as u32;
                 if let Some(p) = plane(i, j) {
-                    let xs = Vec4::new(i as f32, (i + 1) as f32, i as f32, (i + 1) as f32) / wf;
+                    let (x0, x1) = (xe[i as usize], xe[i as usize + 1]);
+                    let xs = Vec4::new(x0, x1, x0, x1);
                     *t = pixel_trigger_lanes((j * w + i) as usize, xs, ys, p, deeper);
                 }
             }
