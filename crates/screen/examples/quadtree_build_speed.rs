@@ -2,7 +2,10 @@
 //! per round, in one process and interleaved, the stream of the layer (its depths and
 //! normals once, XOR of their bits), the 1-layer build and the 2-layer build (layer 0 is the
 //! cascade's pruning fixed point); best round of each, as wall time and as process CPU time
-//! (all threads; less sensitive to other jobs on the machine than wall time).
+//! (all threads; less sensitive to other jobs on the machine than wall time). The fixed
+//! point's CPU time is the 2-layer build's minus that of layer 1 alone (its 1-layer build
+//! and its effective planes, which layer 0's cascade needs), against the 1-layer build of
+//! layer 0.
 //!
 //! `cd crates/screen && cargo run --release --example quadtree_build_speed -- [ROUNDS]`
 //! (default 7). Under `perf record` this profiles the build (the capture is a small share).
@@ -58,20 +61,24 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let layers = cap.layers.layers.clone();
     let cube = UnitCube::fit(&cam, layers.iter().map(|g| &g.depth[..]), CubeNear::Fitted)?;
     let opts = QuadTreeOptions::default();
-    let mut best = [(f64::INFINITY, f64::INFINITY); 3];
+    let mut best = [(f64::INFINITY, f64::INFINITY); 4];
     for _ in 0..rounds {
         let r = [
             time(|| stream(&layers[0])),
             time(|| QuadTreeTracer::build(&cube, &layers[..1], &opts).unwrap()),
             time(|| QuadTreeTracer::build(&cube, &layers[..2], &opts).unwrap()),
+            time(|| {
+                let t = QuadTreeTracer::build(&cube, &layers[1..2], &opts).unwrap();
+                t.trees[0].effective_planes()
+            }),
         ];
         for (b, r) in best.iter_mut().zip(r) {
             *b = (b.0.min(r.0), b.1.min(r.1));
         }
     }
-    let [s, one, two] = best;
+    let [s, one, two, deep] = best;
     println!(
-        "atrium {w}x{h}, {} threads, best of {rounds}: stream {:.2} ms (CPU {:.2}); 1 layer {:.2} ms ({:.1}x, CPU {:.2}); 2 layers {:.2} ms (CPU {:.2})",
+        "atrium {w}x{h}, {} threads, best of {rounds}: stream {:.2} ms (CPU {:.2}); 1 layer {:.2} ms ({:.1}x, CPU {:.2}); 2 layers {:.2} ms (CPU {:.2}); layer 1 + its effective planes CPU {:.2}; fixed point CPU {:.2} = {:.2}x the 1-layer build's",
         rayon::current_num_threads(),
         s.0,
         s.1,
@@ -79,7 +86,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         one.0 / s.0,
         one.1,
         two.0,
-        two.1
+        two.1,
+        deep.1,
+        two.1 - deep.1,
+        (two.1 - deep.1) / one.1
     );
     Ok(())
 }

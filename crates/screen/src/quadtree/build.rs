@@ -270,7 +270,7 @@ impl QuadTree {
             .find(|&l| tree.levels[l].nodes.iter().any(|n| n.is_plane()))
             .unwrap_or(0);
         if !tz.is_empty() {
-            tree.mark_unsafe(&tz);
+            tree.mark_unsafe(tz);
         }
         // `mark_unsafe` changes flags and AABB ranges but no node kinds: `eff` (the effective
         // levels, top-down, one pass per level, instead of a climb per pixel) still holds.
@@ -406,31 +406,47 @@ impl QuadTree {
     /// pixels become AABBs `(tz, -inf)`; every AABB above lowers its `min z` to the minimum
     /// `tz` below it; merged plane nodes above an unsafe pixel get the flag and trigger on
     /// footprint entry (conservative).
-    pub(crate) fn mark_unsafe(&mut self, tz: &[f32]) {
+    pub(crate) fn mark_unsafe(&mut self, tz: Vec<f32>) {
         let (w, h) = (self.width as usize, self.height as usize);
-        let mut cur = vec![f32::INFINITY; self.levels[0].nodes.len()];
+        // Level 0 straight from `tz` (`W x H`; the padding has no trigger depth).
         let w0 = self.levels[0].w as usize;
-        cur.par_chunks_mut(w0)
-            .take(h)
+        self.levels[0]
+            .nodes
+            .par_chunks_mut(w0)
             .zip(tz.par_chunks(w))
-            .for_each(|(row, t)| row[..w].copy_from_slice(t));
-        self.trigger_z = tz.to_vec();
-        for l in 0..self.levels.len() {
-            if l > 0 {
-                let (cw, pw) = (self.levels[l - 1].w as usize, self.levels[l].w as usize);
-                let mut next = vec![f32::INFINITY; self.levels[l].nodes.len()];
-                let child = &cur;
-                next.par_chunks_mut(pw).enumerate().for_each(|(qy, row)| {
-                    let (r0, r1) = (&child[2 * qy * cw..], &child[(2 * qy + 1) * cw..]);
-                    for (qx, v) in row.iter_mut().enumerate() {
-                        *v = r0[2 * qx]
-                            .min(r0[2 * qx + 1])
-                            .min(r1[2 * qx])
-                            .min(r1[2 * qx + 1]);
+            .for_each(|(nodes, t)| {
+                for (node, &m) in nodes.iter_mut().zip(t) {
+                    if m.is_finite() {
+                        node.mark_unsafe(m);
                     }
-                });
-                cur = next;
-            }
+                }
+            });
+        // Per node of the level below, the smallest trigger depth under it.
+        let mut cur: Vec<f32> = Vec::new();
+        for l in 1..self.levels.len() {
+            let (cw, pw) = (self.levels[l - 1].w as usize, self.levels[l].w as usize);
+            let mut next = vec![f32::INFINITY; self.levels[l].nodes.len()];
+            let child = &cur;
+            let tz = &tz;
+            next.par_chunks_mut(pw).enumerate().for_each(|(qy, row)| {
+                let c = |x: usize, y: usize| {
+                    if l > 1 {
+                        child[y * cw + x]
+                    } else if x < w && y < h {
+                        tz[y * w + x]
+                    } else {
+                        f32::INFINITY
+                    }
+                };
+                for (qx, v) in row.iter_mut().enumerate() {
+                    let (x, y) = (2 * qx, 2 * qy);
+                    *v = c(x, y)
+                        .min(c(x + 1, y))
+                        .min(c(x, y + 1))
+                        .min(c(x + 1, y + 1));
+                }
+            });
+            cur = next;
             self.levels[l]
                 .nodes
                 .par_chunks_mut(4096)
@@ -443,6 +459,7 @@ impl QuadTree {
                     }
                 });
         }
+        self.trigger_z = tz;
     }
 }
 

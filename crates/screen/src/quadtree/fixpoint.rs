@@ -28,7 +28,7 @@ use rayon::prelude::*;
 
 use super::cascade::pixel_trigger_lanes;
 use super::merge::MergeCtx;
-use super::node::decode_plane;
+use super::node::{Node, decode_plane};
 use super::tree::{Level, NO_PLANE, effective_levels};
 use crate::LayerPlanes;
 
@@ -44,9 +44,7 @@ pub(super) fn fixed_point(
 ) -> (Vec<Level>, Vec<f32>, Vec<u8>) {
     let mut tz_px = vec![f32::INFINITY; (w * h) as usize];
     let l0 = std::slice::from_ref(&level0);
-    fill_triggers(&mut tz_px, ctx, (w, h), deeper, |i, j| {
-        Some(pixel_plane(l0, i, j, ctx))
-    });
+    fill_triggers(&mut tz_px, ctx, w, deeper, |i, j| Some(pixel_key(l0, i, j)));
     let mut blocked: Vec<bool> = tz_px.iter().map(|z| z.is_finite()).collect();
     let mut levels = super::build::prune(ctx, level0, nlev, &blocked, w, h);
     let mut eff = effective_levels(&levels);
@@ -56,9 +54,9 @@ pub(super) fn fixed_point(
     // Trigger depths of the effective planes: the pixel planes' except under merged nodes.
     let mut tz = tz_px.clone();
     let w0 = levels[0].w;
-    fill_triggers(&mut tz, ctx, (w, h), deeper, |i, j| {
+    fill_triggers(&mut tz, ctx, w, deeper, |i, j| {
         let l = eff[(j * w0 + i) as usize];
-        (l != NO_PLANE && l > 0).then(|| Some(decoded(&levels, l, i, j, ctx)))
+        (l != NO_PLANE && l > 0).then(|| Some(ancestor_key(&levels, l, i, j)))
     });
     loop {
         let newly: Vec<u32> = (0..w * h)
@@ -73,54 +71,50 @@ pub(super) fn fixed_point(
         reprune(ctx, &mut levels, &newly, w);
         let prev = std::mem::replace(&mut eff, effective_levels(&levels));
         let (levels, eff) = (&levels, &eff);
-        fill_triggers(&mut tz, ctx, (w, h), deeper, |i, j| {
+        fill_triggers(&mut tz, ctx, w, deeper, |i, j| {
             let k = (j * w0 + i) as usize;
             let l = eff[k];
             if l == prev[k] {
                 None
             } else if l == NO_PLANE || l == 0 {
                 // Its own leaf again: the pixel plane's trigger depth (same computation).
-                Some(pixel_plane(levels, i, j, ctx))
+                Some(pixel_key(levels, i, j))
             } else {
-                Some(Some(decoded(levels, l, i, j, ctx)))
+                Some(Some(ancestor_key(levels, l, i, j)))
             }
         });
     }
 }
 
-/// The decoded plane of pixel `(i, j)`'s leaf, if it is a plane.
-fn pixel_plane(levels: &[Level], i: u32, j: u32, ctx: &MergeCtx) -> Option<(Vec3, f32)> {
+/// Pixel `(i, j)`'s leaf as a [`fill_triggers`] key, if it is a plane.
+#[inline]
+fn pixel_key(levels: &[Level], i: u32, j: u32) -> Option<Key> {
     let node = levels[0].nodes[(j * levels[0].w + i) as usize];
-    node.is_plane()
-        .then(|| decode_plane(node, 0, i, j, ctx.wf, ctx.hf))
+    node.is_plane().then_some((node, 0, i, j))
 }
 
-/// The decoded plane of pixel `(i, j)`'s ancestor at level `l` (a plane node).
+/// Pixel `(i, j)`'s ancestor at level `l` (a plane node) as a [`fill_triggers`] key.
 #[inline]
-fn decoded(levels: &[Level], l: u8, i: u32, j: u32, ctx: &MergeCtx) -> (Vec3, f32) {
+fn ancestor_key(levels: &[Level], l: u8, i: u32, j: u32) -> Key {
     let l = l as u32;
     let (qx, qy) = (i >> l, j >> l);
     let lv = &levels[l as usize];
-    decode_plane(
-        lv.nodes[(qy * lv.w + qx) as usize],
-        l,
-        qx,
-        qy,
-        ctx.wf,
-        ctx.hf,
-    )
+    (lv.nodes[(qy * lv.w + qx) as usize], l, qx, qy)
 }
 
+/// A plane node with its level and position.
+type Key = (Node, u32, u32, u32);
+
 /// Per pixel `(i, j)` of `tz` (`W x H`, rows in parallel) with `plane(i, j) = Some(p)`: the
-/// trigger depth of plane `p` (`None`: empty) at that pixel against `deeper`; pixels where
-/// `plane` answers `None` keep their value. `plane` is called in row order, so a merged
-/// node's plane can be decoded once per run.
+/// trigger depth of the decoded plane of node `p` ([`decode_plane`]; `None`: empty) at that
+/// pixel against `deeper`; pixels where `plane` answers `None` keep their value. A node
+/// covering a run of a row is decoded once (the decode is a function of the key).
 fn fill_triggers(
     tz: &mut [f32],
     ctx: &MergeCtx,
-    (w, _h): (u32, u32),
+    w: u32,
     deeper: &[LayerPlanes],
-    plane: impl Fn(u32, u32) -> Option<Option<(Vec3, f32)>> + Sync,
+    plane: impl Fn(u32, u32) -> Option<Option<Key>> + Sync,
 ) {
     let (wf, hf) = (ctx.wf, ctx.hf);
     // The footprints' `x` edges, `i / W` (the definition's divisions, once per column).
@@ -130,13 +124,24 @@ fn fill_triggers(
         .for_each(|(j, row)| {
             let j = j as u32;
             let ys = Vec4::new(j as f32, j as f32, (j + 1) as f32, (j + 1) as f32) / hf;
+            let mut last: Option<(Key, (Vec3, f32))> = None;
             for (i, t) in row.iter_mut().enumerate() {
                 let i = i as u32;
-                if let Some(p) = plane(i, j) {
-                    let (x0, x1) = (xe[i as usize], xe[i as usize + 1]);
-                    let xs = Vec4::new(x0, x1, x0, x1);
-                    *t = pixel_trigger_lanes((j * w + i) as usize, xs, ys, p, deeper);
-                }
+                let Some(key) = plane(i, j) else {
+                    continue;
+                };
+                let p = key.map(|key| match last {
+                    Some((k, p)) if k == key => p,
+                    _ => {
+                        let (node, l, qx, qy) = key;
+                        let p = decode_plane(node, l, qx, qy, wf, hf);
+                        last = Some((key, p));
+                        p
+                    }
+                });
+                let (x0, x1) = (xe[i as usize], xe[i as usize + 1]);
+                let xs = Vec4::new(x0, x1, x0, x1);
+                *t = pixel_trigger_lanes((j * w + i) as usize, xs, ys, p, deeper);
             }
         });
 }
