@@ -7,15 +7,23 @@
 //! and its effective planes, which layer 0's cascade needs), against the 1-layer build of
 //! layer 0.
 //!
-//! `cd crates/screen && cargo run --release --example quadtree_build_speed -- [ROUNDS]`
-//! (default 7). Under `perf record` this profiles the build (the capture is a small share).
+//! `--check`: instead, asserts that [`QuadTreeTracer::build`] equals
+//! [`QuadTreeTracer::build_reference`] (the definitions) tree for tree, bit for bit, for 1
+//! and 2 layers (the real-scene counterpart of `tests/quadtree_build.rs`).
+//!
+//! `cd crates/screen && cargo run --release --example quadtree_build_speed -- [ROUNDS]
+//! [--check] [--sponza]` (default 7 rounds; `--sponza`: Sponza from
+//! `../../../shared/scenes/sponza_dabrovic/sponza_dabrovic.glb`, eye (-9, 3.5, 0), target
+//! (8, 5, 0), 60°, instead of atrium). Under `perf record` this profiles the build (the
+//! capture is a small share).
 
 use std::time::Instant;
 
+use glam::Vec3;
 use parallax_core::cpu_time::{ms_between, process_cpu_ns};
 use parallax_core::image::GBuffer;
 use parallax_raster::{RasterOptions, View, capture_layers};
-use parallax_scene::{Scene, camera::Pinhole};
+use parallax_scene::{CameraDesc, Scene, camera::Pinhole};
 use parallax_screen::{CubeNear, QuadTreeOptions, QuadTreeTracer, UnitCube};
 use rayon::prelude::*;
 
@@ -49,10 +57,29 @@ fn time<T>(f: impl FnOnce() -> T) -> (f64, f64) {
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let rounds: u32 = std::env::args().nth(1).map_or(Ok(7), |a| a.parse())?;
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let flag = |f: &str| args.iter().any(|a| a == f);
+    let rounds: u32 = args
+        .iter()
+        .find(|a| !a.starts_with("--"))
+        .map_or(Ok(7), |a| a.parse())?;
     let (w, h) = (1600, 900);
-    let scene = Scene::load("atrium")?;
-    let cam = Pinhole::new(&scene.camera(None)?, w, h)?;
+    let (scene, desc) = if flag("--sponza") {
+        let scene = Scene::load("../../../shared/scenes/sponza_dabrovic/sponza_dabrovic.glb")?;
+        let desc = CameraDesc::new(
+            Vec3::new(-9.0, 3.5, 0.0),
+            Vec3::new(8.0, 5.0, 0.0),
+            Vec3::Y,
+            60.0,
+        );
+        (scene, desc)
+    } else {
+        let scene = Scene::load("atrium")?;
+        let desc = scene.camera(None)?;
+        (scene, desc)
+    };
+    let name = if flag("--sponza") { "sponza" } else { "atrium" };
+    let cam = Pinhole::new(&desc, w, h)?;
     let cap = capture_layers(
         &scene,
         &View::from_pinhole(&cam)?,
@@ -61,6 +88,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let layers = cap.layers.layers.clone();
     let cube = UnitCube::fit(&cam, layers.iter().map(|g| &g.depth[..]), CubeNear::Fitted)?;
     let opts = QuadTreeOptions::default();
+    if flag("--check") {
+        for n in 1..=2 {
+            let fast = QuadTreeTracer::build(&cube, &layers[..n], &opts)?;
+            let slow = QuadTreeTracer::build_reference(&cube, &layers[..n], &opts)?;
+            for (k, (a, b)) in fast.trees.iter().zip(&slow.trees).enumerate() {
+                assert!(a == b, "{name}: {n} layers, tree {k} differs");
+                let (pa, pb) = (a.effective_planes(), b.effective_planes());
+                assert!(
+                    pa.offset
+                        .iter()
+                        .zip(&pb.offset)
+                        .all(|(x, y)| x.to_bits() == y.to_bits())
+                );
+            }
+            println!(
+                "{name} {w}x{h}, {n} layer(s): fast build == reference build ({} unsafe pixels in layer 0)",
+                fast.unsafe_pixels()[0]
+            );
+        }
+        return Ok(());
+    }
     let mut best = [(f64::INFINITY, f64::INFINITY); 4];
     for _ in 0..rounds {
         let r = [
@@ -78,7 +126,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let [s, one, two, deep] = best;
     println!(
-        "atrium {w}x{h}, {} threads, best of {rounds}: stream {:.2} ms (CPU {:.2}); 1 layer {:.2} ms ({:.1}x, CPU {:.2}); 2 layers {:.2} ms (CPU {:.2}); layer 1 + its effective planes CPU {:.2}; fixed point CPU {:.2} = {:.2}x the 1-layer build's",
+        "{name} {w}x{h}, {} threads, best of {rounds}: stream {:.2} ms (CPU {:.2}); 1 layer {:.2} ms ({:.1}x, CPU {:.2}); 2 layers {:.2} ms (CPU {:.2}); layer 1 + its effective planes CPU {:.2}; fixed point CPU {:.2} = {:.2}x the 1-layer build's",
         rayon::current_num_threads(),
         s.0,
         s.1,
