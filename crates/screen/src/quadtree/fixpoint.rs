@@ -2,7 +2,7 @@
 //! cascading of [`super::cascade`]), computed incrementally.
 //!
 //! **What is computed** — the same levels and trigger depths as the definition
-//! (`build.rs`, `fixed_point_reference`): seed the blocked pixels with the trigger depths of
+//! (`fixed_point_reference` in `prune.rs`): seed the blocked pixels with the trigger depths of
 //! the pixel planes, prune, compute the trigger depths of the effective planes, block the
 //! pixels that became unsafe, rebuild, until no pixel is added. This version does less work
 //! per iteration, with the same results bit for bit (`tests/quadtree_build.rs` compares
@@ -46,7 +46,7 @@ pub(super) fn fixed_point(
     let l0 = std::slice::from_ref(&level0);
     fill_triggers(&mut tz_px, ctx, w, deeper, |i, j| Some(pixel_key(l0, i, j)));
     let mut blocked: Vec<bool> = tz_px.iter().map(|z| z.is_finite()).collect();
-    let mut levels = super::build::prune(ctx, level0, nlev, &blocked, w, h);
+    let mut levels = super::prune::prune(ctx, level0, nlev, &blocked, w, h);
     let mut eff = effective_levels(&levels);
     if ctx.never {
         return (levels, tz_px, eff);
@@ -158,7 +158,7 @@ fn reprune(ctx: &MergeCtx, levels: &mut [Level], newly: &[u32], w: u32) {
         let (child, par) = (&lo[l - 1], &mut hi[0]);
         for &(qy, qx) in &next {
             par.nodes[(qy * par.w + qx) as usize] =
-                super::build::parent_of(ctx, child, l as u32, qx, qy, false);
+                super::prune::parent_of(ctx, child, l as u32, qx, qy, false);
         }
         cur = next;
     }
