@@ -227,21 +227,11 @@ fn pixel_trigger(
     plane: Option<(Vec3, f32)>,
     deeper: &[LayerPlanes],
 ) -> f32 {
-    let mut bad = false;
-    let mut front = f32::INFINITY;
-    for pj in deeper {
-        if !pj.covered(idx) {
-            continue;
-        }
-        let (nj, cj) = (pj.normal[idx], pj.offset[idx]);
-        if !(nj.z < -1e-6) {
-            bad = true;
-            front = 0.0;
-            continue;
-        }
+    trigger_over(idx, deeper, |nj, cj, front| {
+        let mut bad = false;
         for (x, y) in [(x0, y0), (x1, y0), (x0, y1), (x1, y1)] {
             let z = plane_z(nj, cj, x, y);
-            front = front.min(z);
+            *front = front.min(z);
             let f = match plane {
                 Some((n, c)) => n.dot(Vec3::new(x, y, z)) - c,
                 None => f32::NAN,
@@ -250,13 +240,8 @@ fn pixel_trigger(
                 bad = true;
             }
         }
-    }
-    if bad {
-        let t = front - SAFE_MARGIN;
-        if t > 0.0 { t } else { 0.0 }
-    } else {
-        f32::INFINITY
-    }
+        bad
+    })
 }
 
 /// [`pixel_trigger`] with the four footprint corners in the lanes of `xs`, `ys`
@@ -272,6 +257,31 @@ pub(crate) fn pixel_trigger_lanes(
     plane: Option<(Vec3, f32)>,
     deeper: &[LayerPlanes],
 ) -> f32 {
+    let s = Vec4::splat;
+    trigger_over(idx, deeper, |nj, cj, front| {
+        let z = (s(cj) - s(nj.x) * xs - s(nj.y) * ys) / s(nj.z);
+        for zc in z.to_array() {
+            *front = front.min(zc);
+        }
+        match plane {
+            Some((n, c)) => {
+                let f = s(n.x) * xs + s(n.y) * ys + s(n.z) * z - s(c);
+                !f.cmple(s(-SAFE_MARGIN)).all()
+            }
+            None => true,
+        }
+    })
+}
+
+/// The trigger depth of pixel `idx` from its deeper planes: `corners(N_j, c_j, front)`
+/// lowers `front` to the plane's corner `z` and answers whether a corner is not safely
+/// behind this layer's plane; a plane seen edge-on is unsafe with `front = 0`.
+#[inline(always)]
+fn trigger_over(
+    idx: usize,
+    deeper: &[LayerPlanes],
+    mut corners: impl FnMut(Vec3, f32, &mut f32) -> bool,
+) -> f32 {
     let mut bad = false;
     let mut front = f32::INFINITY;
     for pj in deeper {
@@ -284,19 +294,8 @@ pub(crate) fn pixel_trigger_lanes(
             front = 0.0;
             continue;
         }
-        let s = Vec4::splat;
-        let z = (s(cj) - s(nj.x) * xs - s(nj.y) * ys) / s(nj.z);
-        for zc in z.to_array() {
-            front = front.min(zc);
-        }
-        match plane {
-            Some((n, c)) => {
-                let f = s(n.x) * xs + s(n.y) * ys + s(n.z) * z - s(c);
-                if !f.cmple(s(-SAFE_MARGIN)).all() {
-                    bad = true;
-                }
-            }
-            None => bad = true,
+        if corners(nj, cj, &mut front) {
+            bad = true;
         }
     }
     if bad {
