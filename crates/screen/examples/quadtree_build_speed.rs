@@ -1,6 +1,7 @@
 //! Quad-tree build speed (Widmer et al. 2015, §3) on atrium at 1600x900, 2 captured layers:
 //! per round, in one process and interleaved, the 1-layer build and the 2-layer build (layer 0
-//! is the cascade's pruning fixed point); best round of each, as wall time and as process CPU time
+//! is the cascade's pruning fixed point), each also by [`QuadTreeTracer::build_reference`]
+//! (the scalar definitions, the whole tree re-pruned per fixed-point iteration); best round of each, as wall time and as process CPU time
 //! (all threads; less sensitive to other jobs on the machine than wall time). The fixed
 //! point's CPU time is the 2-layer build's minus that of layer 1 alone (its 1-layer build
 //! and its effective planes, which layer 0's cascade needs), against the 1-layer build of
@@ -88,9 +89,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         return Ok(());
     }
-    let mut best = [(f64::INFINITY, f64::INFINITY); 3];
+    let mut best = [(f64::INFINITY, f64::INFINITY); 5];
     for _ in 0..rounds {
         let r = [
+            time(|| QuadTreeTracer::build_reference(&cube, &layers[..1], &opts).unwrap()),
+            time(|| QuadTreeTracer::build_reference(&cube, &layers[..2], &opts).unwrap()),
             time(|| QuadTreeTracer::build(&cube, &layers[..1], &opts).unwrap()),
             time(|| QuadTreeTracer::build(&cube, &layers[..2], &opts).unwrap()),
             time(|| {
@@ -102,7 +105,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             *b = (b.0.min(r.0), b.1.min(r.1));
         }
     }
-    let [one, two, deep] = best;
+    let [ref1, ref2, one, two, deep] = best;
+    println!(
+        "reference build (scalar definitions, full fixed point): 1 layer {:.2} ms (CPU {:.2}), 2 layers {:.2} ms (CPU {:.2}); fast / reference CPU: 1 layer {:.2}, 2 layers {:.2}",
+        ref1.0,
+        ref1.1,
+        ref2.0,
+        ref2.1,
+        one.1 / ref1.1,
+        two.1 / ref2.1
+    );
     println!(
         "{name} {w}x{h}, {} threads, best of {rounds}: 1 layer {:.2} ms (CPU {:.2}); 2 layers {:.2} ms (CPU {:.2}); layer 1 + its effective planes CPU {:.2}; fixed point CPU {:.2} = {:.2}x the 1-layer build's",
         rayon::current_num_threads(),
