@@ -39,12 +39,17 @@ impl MergeCtx {
         };
         let half = 0.5 * (1u32 << level) as f32 + dil;
         let spread = gx.abs() * half / self.wf + gy.abs() * half / self.hf;
-        if !spread.is_finite() {
-            return (0.0, 1.0);
+        plane_range(node.zc(), spread)
+    }
+
+    /// The threshold of the early reject on the smallest child-normal cosine: the loosest
+    /// this node could get.
+    pub(super) fn loosest_cos(&self) -> f32 {
+        if self.adaptive {
+            self.cos_thr(1.0)
+        } else {
+            self.cos_norm
         }
-        let zc = node.zc();
-        let (lo, hi) = (zc - spread, zc + spread);
-        ((lo - Z_EPS).clamp(0.0, 1.0), (hi + Z_EPS).clamp(0.0, 1.0))
     }
 
     /// The parent of `kids` (children at level `cl`, positions `pos`, in order
@@ -69,17 +74,7 @@ impl MergeCtx {
         {
             return p;
         }
-        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
-        for k in kids {
-            let (a, b) = self.zrange(*k, cl);
-            lo = lo.min(a);
-            hi = hi.max(b);
-        }
-        if lo > hi {
-            Node::EMPTY
-        } else {
-            Node::aabb(lo, hi)
-        }
+        union(kids.iter().map(|k| self.zrange(*k, cl)))
     }
 
     /// §3.3: the proxy plane of four plane children, if the three conditions hold.
@@ -109,12 +104,7 @@ impl MergeCtx {
             .map(|p| p.0.dot(nn))
             .fold(f32::INFINITY, f32::min);
         // Cheap early reject with the loosest threshold this node could get.
-        let loosest = if self.adaptive {
-            self.cos_thr(1.0)
-        } else {
-            self.cos_norm
-        };
-        if !(min_cos > loosest) {
+        if !(min_cos > self.loosest_cos()) {
             return None;
         }
         // Child corners from the stored centre z and the decoded plane gradient:
@@ -179,7 +169,7 @@ impl MergeCtx {
         (((1.0 / inv_d) - n) / (f - n)).clamp(0.0, 1.0) as f32
     }
 
-    pub(super) fn cos_thr(&self, u: f32) -> f32 {
+    fn cos_thr(&self, u: f32) -> f32 {
         if !self.adaptive || self.cos_norm >= 1.0 {
             return self.cos_norm;
         }
@@ -196,5 +186,31 @@ impl MergeCtx {
         }
         let cap = 0.1f32.max(self.gamma_dist);
         (self.gamma_dist * (1.0 + (super::ADAPTIVE_SCALE - 1.0) * u)).min(cap)
+    }
+}
+
+/// The range `z_c ± spread` of a plane over its footprint, widened by [`Z_EPS`] and clamped
+/// to `[0, 1]`; `[0, 1]` for an infinite or NaN spread.
+#[inline]
+pub(super) fn plane_range(zc: f32, spread: f32) -> (f32, f32) {
+    if !spread.is_finite() {
+        return (0.0, 1.0);
+    }
+    let (lo, hi) = (zc - spread, zc + spread);
+    ((lo - Z_EPS).clamp(0.0, 1.0), (hi + Z_EPS).clamp(0.0, 1.0))
+}
+
+/// The AABB node of the union of the children's ranges, in order (empty if none).
+#[inline]
+pub(super) fn union(ranges: impl Iterator<Item = (f32, f32)>) -> Node {
+    let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+    for (a, b) in ranges {
+        lo = lo.min(a);
+        hi = hi.max(b);
+    }
+    if lo > hi {
+        Node::EMPTY
+    } else {
+        Node::aabb(lo, hi)
     }
 }

@@ -10,9 +10,8 @@
 
 use glam::{Vec3, Vec4};
 
-use super::merge::MergeCtx;
+use super::merge::{MergeCtx, plane_range, union};
 use super::node::{FLAG_CRACK, Node};
-use super::tree::Z_EPS;
 
 /// `Vec4` from four values computed per child.
 #[inline(always)]
@@ -67,25 +66,13 @@ impl MergeCtx {
         let spread = ((gx.abs() * half) / Vec4::splat(self.wf)
             + (gy.abs() * half) / Vec4::splat(self.hf))
         .to_array();
-        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
-        for (k, s) in kids.iter().zip(spread) {
-            let (a, b) = if !k.is_plane() {
-                k.zrange()
-            } else if !s.is_finite() {
-                (0.0, 1.0)
+        union(kids.iter().zip(spread).map(|(k, s)| {
+            if k.is_plane() {
+                plane_range(k.zc(), s)
             } else {
-                let zc = k.zc();
-                let (lo, hi) = (zc - s, zc + s);
-                ((lo - Z_EPS).clamp(0.0, 1.0), (hi + Z_EPS).clamp(0.0, 1.0))
-            };
-            lo = lo.min(a);
-            hi = hi.max(b);
-        }
-        if lo > hi {
-            Node::EMPTY
-        } else {
-            Node::aabb(lo, hi)
-        }
+                k.zrange()
+            }
+        }))
     }
 
     /// `MergeCtx::merge` in lanes; `gx`, `gy`: the children's decoded gradients.
@@ -123,12 +110,7 @@ impl MergeCtx {
         let (vx, vy, vz) = (Vec4::from(nx), Vec4::from(ny), Vec4::from(nz));
         let cos = (vx * s(nn.x) + vy * s(nn.y) + vz * s(nn.z)).to_array();
         let min_cos = cos.into_iter().fold(f32::INFINITY, f32::min);
-        let loosest = if self.adaptive {
-            self.cos_thr(1.0)
-        } else {
-            self.cos_norm
-        };
-        if !(min_cos > loosest) {
+        if !(min_cos > self.loosest_cos()) {
             return None;
         }
         // `node_centre` per child and the 16 corner projections, one corner per step.
