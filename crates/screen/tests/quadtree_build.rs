@@ -70,3 +70,74 @@ fn fast_effective_levels_and_planes_equal_the_climb() {
     // The lossy trees merge: the test covers merged nodes, not only pixel planes.
     assert!(merged > 1000, "{merged} pixels under merged nodes");
 }
+
+/// Every field of two trees (nodes, trigger depths, effective levels, floors) bit for bit.
+fn same_tree(a: &QuadTree, b: &QuadTree) -> bool {
+    // `PartialEq` compares the f32 fields by value: also compare the planes' bits.
+    a == b && same_planes(&a.effective_planes(), &b.effective_planes())
+}
+
+#[test]
+fn fast_build_equals_the_reference_build() {
+    let lossy = QuadTreeOptions {
+        gamma_norm: 10f32.to_radians().cos(),
+        gamma_dist: 1e-2,
+        ..QuadTreeOptions::default()
+    };
+    let loose = QuadTreeOptions {
+        gamma_norm: 30f32.to_radians().cos(),
+        gamma_dist: 5e-2,
+        adaptive: true,
+        ..QuadTreeOptions::default()
+    };
+    let flagged = QuadTreeOptions {
+        normals: parallax_screen::NormalSource::GBufferFlagged {
+            min_rel_gap: 0.01,
+            max_rel_gap: 0.05,
+        },
+        ..lossy
+    };
+    let depth = QuadTreeOptions {
+        normals: parallax_screen::NormalSource::Depth {
+            max_rel_error: 0.05,
+        },
+        ..lossy
+    };
+    let all = [
+        QuadTreeOptions::default(),
+        QuadTreeOptions::lossless(),
+        lossy,
+        loose,
+        flagged,
+        depth,
+    ];
+    let mut trees = 0;
+    for (seed, (w, h)) in [
+        (4u64, (37u32, 23u32)),
+        (5, (64, 64)),
+        (6, (50, 17)),
+        (7, (96, 40)),
+    ] {
+        let cam = camera(w, h);
+        for empty in [0.0, 0.15] {
+            let g = height_field(&cam, seed, empty);
+            let g1 = behind(&g, seed);
+            let layers = [g.clone(), g1.clone(), behind(&g1, seed + 100)];
+            let cube = cube(&cam, &layers);
+            for opts in all {
+                for n in 1..=3 {
+                    let fast = QuadTreeTracer::build(&cube, &layers[..n], &opts).unwrap();
+                    let slow = QuadTreeTracer::build_reference(&cube, &layers[..n], &opts).unwrap();
+                    for (k, (a, b)) in fast.trees.iter().zip(&slow.trees).enumerate() {
+                        assert!(
+                            same_tree(a, b),
+                            "{seed} {w}x{h} empty {empty} {opts:?}: {n} layers, tree {k}"
+                        );
+                        trees += 1;
+                    }
+                }
+            }
+        }
+    }
+    assert_eq!(trees, 4 * 2 * 6 * 6);
+}

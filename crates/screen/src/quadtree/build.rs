@@ -27,7 +27,12 @@
 //! the error bound of condition 3 refers to what the tree actually stores (up to the proxy's
 //! own f16/f32 rounding).
 //!
-//! Every level is built in parallel over rows (rayon).
+//! Every level is built in parallel over rows (rayon). **Fast paths, same bits:** the leaf
+//! directions come from per-column and per-row tables of the same products; merges run with
+//! the children in lanes (`merge_lanes`); with deeper layers the pruning fixed point is
+//! computed incrementally (`fixpoint`). `QuadTree::build_cascaded` with `reference` runs
+//! the scalar definitions instead (`QuadTreeTracer::build_reference`); the tests compare
+//! the two tree for tree (`tests/quadtree_build.rs`).
 
 use glam::Vec3;
 use parallax_core::{GBuffer, Image};
@@ -38,7 +43,8 @@ use super::QuadTreeOptions;
 use super::merge::MergeCtx;
 use super::node::{FLAG_CRACK, Node};
 use super::tree::{
-    Level, NO_PLANE, QuadTree, Z_FLOOR_TABLE_MAX, Z_REGION_MIN_GAIN, Z_SKIP_MARGIN, decoded_planes,
+    Level, NO_PLANE, QuadTree, Z_FLOOR_TABLE_MAX, Z_REGION_MIN_GAIN, Z_SKIP_MARGIN,
+    effective_levels,
 };
 use crate::planes::layer_size;
 use crate::{LayerPlanes, NormalSource, ScreenError, UnitCube};
@@ -52,7 +58,7 @@ impl QuadTree {
         layer: &GBuffer,
         opts: &QuadTreeOptions,
     ) -> Result<Self, ScreenError> {
-        Self::build_cascaded(cube, layer, opts, &[])
+        Self::build_cascaded(cube, layer, opts, &[], false)
     }
 
     /// [`Self::build`] for a layer followed by the `deeper` layers' effective planes: the
@@ -60,12 +66,13 @@ impl QuadTree {
     /// merges over an unsafe pixel (so its effective plane is the pixel plane the trigger
     /// depth was derived from; a pixel that only a merged proxy plane makes unsafe is
     /// blocked and the levels rebuilt, to a fixed point), and the unsafe pixels are marked
-    /// (see [`super::cascade`]).
+    /// (see [`super::cascade`]). `reference`: by the scalar definitions (the slow twin).
     pub(crate) fn build_cascaded(
         cube: &UnitCube,
         layer: &GBuffer,
         opts: &QuadTreeOptions,
         deeper: &[LayerPlanes],
+        reference: bool,
     ) -> Result<Self, ScreenError> {
         let cam = &cube.camera;
         let (w, h) = layer_size(cube, layer)?;
@@ -84,13 +91,31 @@ impl QuadTree {
         let depth = &layer.depth;
         let mt = cube.cube_to_world.transpose();
         let (wf, hf) = (w as f32, h as f32);
+        // The world direction through a pixel centre, `basis * camera_dir(film)`, is
+        // `(x_axis dx + y_axis dy) + z_axis (-1)` (glam's `Mat3 * Vec3` order): its column and
+        // row terms are tabulated once, the same products, so the sum is the same bits.
+        let (tx, ty) = (cam.tan_half_x(), cam.tan_half_y);
+        let b = cam.frame.basis;
+        let (cw, ch) = (cam.width as f32, cam.height as f32);
+        let col: Vec<Vec3> = (0..w)
+            .map(|i| b.x_axis * ((2.0 * (i as f32 + 0.5) / cw - 1.0 + cam.shift.x) * tx))
+            .collect();
+        let row: Vec<Vec3> = (0..h)
+            .map(|j| b.y_axis * ((1.0 - 2.0 * (j as f32 + 0.5) / ch + cam.shift.y) * ty))
+            .collect();
+        let back = b.z_axis * -1.0;
         let leaf = |k: usize, i: u32, j: u32| {
             let d = depth[k];
             if !(d.is_finite() && d > 0.0) || normals[k] == Vec3::ZERO {
                 return Node::EMPTY;
             }
-            let film = glam::Vec2::new(i as f32 + 0.5, j as f32 + 0.5);
-            let p = cam.frame.position + cam.frame.dir_to_world(cam.camera_dir(film)) * d;
+            let dir = if reference {
+                let film = glam::Vec2::new(i as f32 + 0.5, j as f32 + 0.5);
+                cam.frame.dir_to_world(cam.camera_dir(film))
+            } else {
+                (col[i as usize] + row[j as usize]) + back
+            };
+            let p = cam.frame.position + dir * d;
             let Some((gx, gy)) = map_gradient(&mt, p, normals[k]) else {
                 return Node::EMPTY;
             };
@@ -107,7 +132,7 @@ impl QuadTree {
             max_rel_gap,
         } = opts.normals
         else {
-            return Self::from_leaf_fn(cube, w, h, opts, deeper, leaf);
+            return Self::from_leaf_fn(cube, w, h, opts, deeper, reference, leaf);
         };
         // G-buffer normals: the leaves first, then flag `O` from their decoded planes
         // ([`crate::planes::crack_flags`]).
@@ -121,7 +146,7 @@ impl QuadTree {
                 }
             });
         let o = gbuffer_flags(cube, w, h, &leaves, min_rel_gap, max_rel_gap);
-        Self::from_leaf_fn(cube, w, h, opts, deeper, |k, _, _| {
+        Self::from_leaf_fn(cube, w, h, opts, deeper, reference, |k, _, _| {
             let n = leaves[k];
             if o[k] {
                 Node {
@@ -150,7 +175,7 @@ impl QuadTree {
                 cube.camera.height
             )));
         }
-        Self::from_leaf_fn(cube, w, h, opts, &[], |k, _, _| {
+        Self::from_leaf_fn(cube, w, h, opts, &[], false, |k, _, _| {
             if !planes.covered(k) {
                 return Node::EMPTY;
             }
@@ -171,6 +196,7 @@ impl QuadTree {
         h: u32,
         opts: &QuadTreeOptions,
         deeper: &[LayerPlanes],
+        reference: bool,
         leaf: impl Fn(usize, u32, u32) -> Node + Sync,
     ) -> Result<Self, ScreenError> {
         if !(opts.crack_dilation.is_finite() && opts.crack_dilation >= 0.0) {
@@ -195,6 +221,7 @@ impl QuadTree {
             far: cube.far as f64,
             crack_px: opts.crack_dilation,
             never: !(opts.gamma_norm < 1.0 && opts.gamma_dist > 0.0),
+            lanes: !reference,
         };
 
         // Level 0: leaves (§3.2).
@@ -217,27 +244,21 @@ impl QuadTree {
             h: h0,
             nodes: leaves,
         };
-        // Cascade: trigger depths from the pixel planes; no merging over unsafe pixels.
-        let tz = if deeper.is_empty() {
-            Vec::new()
+        let (levels, tz, eff) = if deeper.is_empty() {
+            let levels = super::prune::prune(&ctx, level0, nlev, &[], w, h);
+            let eff = effective_levels(&levels);
+            (levels, Vec::new(), eff)
+        } else if reference {
+            super::prune::fixed_point_reference(&ctx, level0, nlev, (w, h), deeper)
         } else {
-            let px = leaf_planes(&level0, w, h, wf, hf);
-            super::cascade::trigger_depths(&px, deeper)
+            super::fixpoint::fixed_point(&ctx, level0, nlev, (w, h), deeper)
         };
-        // Pixels (`W x H`) no node may merge over. Seeded with the pixel-plane analysis,
-        // then grown to a fixed point: a merged proxy plane deviates from its pixels' own
-        // planes by up to the merge tolerance (§3.3, `gamma_dist`, far above the safety
-        // margin), so a pixel safe against its own plane can be unsafe against the proxy
-        // the traversal tests (a deeper plane in front of it: found by proptest,
-        // `quadtree_cascade.rs`). Such pixels are blocked too and the levels rebuilt; the
-        // set only grows, so this ends (in practice after one extra pass, or none).
-        let mut blocked_px: Vec<bool> = tz.iter().map(|z| z.is_finite()).collect();
         let mut tree = Self {
             width: w,
             height: h,
             wf,
             hf,
-            levels: Vec::new(),
+            levels,
             crack_px: opts.crack_dilation,
             trigger_z: Vec::new(),
             plane_top: 0,
@@ -248,42 +269,16 @@ impl QuadTree {
             z_floor_tw: 0,
             z_floor_th: 0,
         };
-        let mut first = Some(level0);
-        let tz = loop {
-            // Level 0 is never changed by pruning: reuse it on a rebuild.
-            let l0 = first
-                .take()
-                .unwrap_or_else(|| std::mem::take(&mut tree.levels).swap_remove(0));
-            tree.levels = prune(&ctx, l0, nlev, &blocked_px, w, h);
-            if deeper.is_empty() || ctx.never {
-                // No merging: the effective planes are the pixel planes.
-                break tz;
-            }
-            let tz_eff = super::cascade::trigger_depths(&tree.effective_planes(), deeper);
-            let mut grew = false;
-            for (b, z) in blocked_px.iter_mut().zip(&tz_eff) {
-                if z.is_finite() && !*b {
-                    *b = true;
-                    grew = true;
-                }
-            }
-            if !grew {
-                // Every unsafe pixel is blocked, i.e. its effective plane is its pixel
-                // plane, and `tz_eff` was computed from the planes the traversal tests.
-                break tz_eff;
-            }
-        };
         // Top-down: the small upper levels are scanned first.
         tree.plane_top = (0..tree.levels.len())
             .rev()
             .find(|&l| tree.levels[l].nodes.iter().any(|n| n.is_plane()))
             .unwrap_or(0);
         if !tz.is_empty() {
-            tree.mark_unsafe(&tz);
+            tree.mark_unsafe(tz);
         }
-        // After `mark_unsafe`, which changes flags and AABB ranges but no node kinds. The
-        // effective levels top-down (one pass per level) instead of a climb per pixel.
-        let eff = tree.effective_levels();
+        // `mark_unsafe` changes flags and AABB ranges but no node kinds: `eff` (the effective
+        // levels, top-down, one pass per level, instead of a climb per pixel) still holds.
         let w0 = tree.levels[0].w as usize;
         let mut pl = vec![0u8; (w * h) as usize];
         pl.par_chunks_mut(w as usize)
@@ -320,15 +315,22 @@ impl QuadTree {
             }
         }
         if !self.trigger_z.is_empty() {
-            for j in 0..h {
-                for i in 0..w {
-                    let z = self.trigger_z[(j * w + i) as usize];
-                    let k = ((j >> top) * tw + (i >> top)) as usize;
-                    if z.is_finite() && z < zn[k] {
-                        zn[k] = z;
+            // One band of `2^top` pixel rows per row of `zn`, each scanned in row order.
+            let tzs = &self.trigger_z;
+            zn.par_chunks_mut(tw as usize)
+                .enumerate()
+                .for_each(|(r, zr)| {
+                    let r = r as u32;
+                    for j in (r << top)..((r + 1) << top).min(h) {
+                        for i in 0..w {
+                            let z = tzs[(j * w + i) as usize];
+                            let k = (i >> top) as usize;
+                            if z.is_finite() && z < zr[k] {
+                                zr[k] = z;
+                            }
+                        }
                     }
-                }
-            }
+                });
         }
         let floor = |z: f32| {
             if z - Z_SKIP_MARGIN > 0.0 {
@@ -409,38 +411,60 @@ impl QuadTree {
     /// pixels become AABBs `(tz, -inf)`; every AABB above lowers its `min z` to the minimum
     /// `tz` below it; merged plane nodes above an unsafe pixel get the flag and trigger on
     /// footprint entry (conservative).
-    pub(crate) fn mark_unsafe(&mut self, tz: &[f32]) {
-        let (w, h) = (self.width, self.height);
-        let mut cur: Vec<f32> = {
-            let lv = &self.levels[0];
-            let mut m = vec![f32::INFINITY; lv.nodes.len()];
-            for j in 0..h {
-                for i in 0..w {
-                    m[(j * lv.w + i) as usize] = tz[(j * w + i) as usize];
-                }
-            }
-            m
-        };
-        self.trigger_z = tz.to_vec();
-        for l in 0..self.levels.len() {
-            if l > 0 {
-                let (cw, pw, ph) = (self.levels[l - 1].w, self.levels[l].w, self.levels[l].h);
-                let mut next = vec![f32::INFINITY; (pw * ph) as usize];
-                for qy in 0..ph {
-                    for qx in 0..pw {
-                        let c = |dx: u32, dy: u32| cur[((2 * qy + dy) * cw + 2 * qx + dx) as usize];
-                        next[(qy * pw + qx) as usize] =
-                            c(0, 0).min(c(1, 0)).min(c(0, 1)).min(c(1, 1));
+    pub(crate) fn mark_unsafe(&mut self, tz: Vec<f32>) {
+        let (w, h) = (self.width as usize, self.height as usize);
+        // Level 0 straight from `tz` (`W x H`; the padding has no trigger depth).
+        let w0 = self.levels[0].w as usize;
+        self.levels[0]
+            .nodes
+            .par_chunks_mut(w0)
+            .zip(tz.par_chunks(w))
+            .for_each(|(nodes, t)| {
+                for (node, &m) in nodes.iter_mut().zip(t) {
+                    if m.is_finite() {
+                        node.mark_unsafe(m);
                     }
                 }
-                cur = next;
-            }
-            for (node, &m) in self.levels[l].nodes.iter_mut().zip(&cur) {
-                if m.is_finite() {
-                    node.mark_unsafe(m);
+            });
+        // Per node of the level below, the smallest trigger depth under it.
+        let mut cur: Vec<f32> = Vec::new();
+        for l in 1..self.levels.len() {
+            let (cw, pw) = (self.levels[l - 1].w as usize, self.levels[l].w as usize);
+            let mut next = vec![f32::INFINITY; self.levels[l].nodes.len()];
+            let child = &cur;
+            let tz = &tz;
+            next.par_chunks_mut(pw).enumerate().for_each(|(qy, row)| {
+                let c = |x: usize, y: usize| {
+                    if l > 1 {
+                        child[y * cw + x]
+                    } else if x < w && y < h {
+                        tz[y * w + x]
+                    } else {
+                        f32::INFINITY
+                    }
+                };
+                for (qx, v) in row.iter_mut().enumerate() {
+                    let (x, y) = (2 * qx, 2 * qy);
+                    *v = c(x, y)
+                        .min(c(x + 1, y))
+                        .min(c(x, y + 1))
+                        .min(c(x + 1, y + 1));
                 }
-            }
+            });
+            cur = next;
+            self.levels[l]
+                .nodes
+                .par_chunks_mut(4096)
+                .zip(cur.par_chunks(4096))
+                .for_each(|(nodes, m)| {
+                    for (node, &m) in nodes.iter_mut().zip(m) {
+                        if m.is_finite() {
+                            node.mark_unsafe(m);
+                        }
+                    }
+                });
         }
+        self.trigger_z = tz;
     }
 }
 
@@ -453,8 +477,11 @@ impl QuadTree {
 fn map_gradient(mt: &glam::DMat4, p: Vec3, n: Vec3) -> Option<(f32, f32)> {
     let (p, n) = (p.as_dvec3(), n.as_dvec3());
     let q = *mt * n.extend(-n.dot(p));
-    let len = q.truncate().length();
-    if !(len.is_finite() && len > 0.0) {
+    // `|q.xyz|` finite and > 0 (as `map_plane` asks), without its square root: the same
+    // answer, since the square root of a non-negative value is finite and positive exactly
+    // when the value is.
+    let len2 = q.truncate().length_squared();
+    if !(len2.is_finite() && len2 > 0.0) {
         return None;
     }
     // Orientation-free: the gradient is the same for q and -q.
@@ -463,80 +490,6 @@ fn map_gradient(mt: &glam::DMat4, p: Vec3, n: Vec3) -> Option<(f32, f32)> {
         if v.is_nan() { None } else { Some(v as f32) }
     };
     Some((g(q.x)?, g(q.y)?))
-}
-
-/// Levels `0..nlev` of a tree: `level0` and the levels built from it by pruning (§3.3),
-/// never merging a node that contains a pixel marked in `blocked` (`W x H`; empty: none).
-fn prune(
-    ctx: &MergeCtx,
-    level0: Level,
-    nlev: u32,
-    blocked_px: &[bool],
-    w: u32,
-    h: u32,
-) -> Vec<Level> {
-    let (w0, h0) = (level0.w, level0.h);
-    let mut blocked: Vec<bool> = if blocked_px.is_empty() {
-        Vec::new()
-    } else {
-        let mut b = vec![false; (w0 * h0) as usize];
-        for j in 0..h {
-            for i in 0..w {
-                b[(j * w0 + i) as usize] = blocked_px[(j * w + i) as usize];
-            }
-        }
-        b
-    };
-    let mut levels = vec![level0];
-    for l in 1..nlev {
-        let child = levels.last().unwrap();
-        let (pw, ph) = (child.w / 2, child.h / 2);
-        if !blocked.is_empty() {
-            let cw = child.w;
-            blocked = (0..pw * ph)
-                .map(|q| {
-                    let (qx, qy) = (q % pw, q / pw);
-                    let c = |dx: u32, dy: u32| blocked[((2 * qy + dy) * cw + 2 * qx + dx) as usize];
-                    c(0, 0) || c(1, 0) || c(0, 1) || c(1, 1)
-                })
-                .collect();
-        }
-        let blocked = &blocked;
-        let mut nodes = vec![Node::EMPTY; (pw * ph) as usize];
-        nodes
-            .par_chunks_mut(pw as usize)
-            .enumerate()
-            .for_each(|(qy, row)| {
-                let qy = qy as u32;
-                for (qx, out) in row.iter_mut().enumerate() {
-                    let qx = qx as u32;
-                    let allow = blocked.is_empty() || !blocked[(qy * pw + qx) as usize];
-                    let cl = l - 1;
-                    let mut kids = [Node::EMPTY; 4];
-                    let mut pos = [(0u32, 0u32); 4];
-                    for (c, (kid, p)) in kids.iter_mut().zip(pos.iter_mut()).enumerate() {
-                        let (cx, cy) = (2 * qx + (c as u32 & 1), 2 * qy + (c as u32 >> 1));
-                        *p = (cx, cy);
-                        *kid = child.nodes[(cy * child.w + cx) as usize];
-                    }
-                    *out = ctx.parent(l, qx, qy, cl, &kids, &pos, allow);
-                }
-            });
-        levels.push(Level {
-            w: pw,
-            h: ph,
-            nodes,
-        });
-    }
-    levels
-}
-
-/// The decoded pixel planes of a level-0 array in [`LayerPlanes`] form.
-fn leaf_planes(level0: &Level, w: u32, h: u32, wf: f32, hf: f32) -> LayerPlanes {
-    decoded_planes(w, h, wf, hf, |i, j| {
-        let node = level0.nodes[(j * level0.w + i) as usize];
-        node.is_plane().then_some((node, 0, i, j))
-    })
 }
 
 /// Flag `O` of G-buffer leaves: [`crate::planes::crack_flags`] over the decoded leaf planes

@@ -79,7 +79,7 @@
 
 use std::time::Instant;
 
-use glam::UVec2;
+use glam::{UVec2, Vec3, Vec4};
 use parallax_core::{GBuffer, Ray};
 use rayon::prelude::*;
 
@@ -113,6 +113,27 @@ impl QuadTreeTracer {
         layers: &[GBuffer],
         opts: &QuadTreeOptions,
     ) -> Result<Self, ScreenError> {
+        Self::build_impl(cube, layers, opts, false)
+    }
+
+    /// [`Self::build`] by the definitions: the slow twin of the tests, equal bit for bit
+    /// (`tests/quadtree_build.rs`). It prunes the whole tree on every iteration of the
+    /// cascade's fixed point and computes every trigger depth from full per-pixel plane
+    /// arrays, one footprint corner at a time.
+    pub fn build_reference(
+        cube: &UnitCube,
+        layers: &[GBuffer],
+        opts: &QuadTreeOptions,
+    ) -> Result<Self, ScreenError> {
+        Self::build_impl(cube, layers, opts, true)
+    }
+
+    fn build_impl(
+        cube: &UnitCube,
+        layers: &[GBuffer],
+        opts: &QuadTreeOptions,
+        reference: bool,
+    ) -> Result<Self, ScreenError> {
         if layers.is_empty() {
             return Err(ScreenError::Mismatch("no layers".into()));
         }
@@ -125,7 +146,7 @@ impl QuadTreeTracer {
         let mut eff: Vec<LayerPlanes> = Vec::new(); // layers k+1.. in order
         for k in (0..nl).rev() {
             let t = Instant::now();
-            let tree = QuadTree::build_cascaded(cube, &layers[k], opts, &eff)?;
+            let tree = QuadTree::build_cascaded(cube, &layers[k], opts, &eff, reference)?;
             if k > 0 {
                 eff.insert(0, tree.effective_planes());
             }
@@ -177,7 +198,8 @@ impl QuadTreeTracer {
 /// Trigger depths of a layer's pixel planes `pk` against all `deeper` layers' effective
 /// planes (module docs, "Trigger region"): `+inf` for safe pixels, else the minimum over
 /// deeper planes of their footprint-corner `z` minus [`SAFE_MARGIN`] (0 for a deeper plane
-/// seen edge-on).
+/// seen edge-on). The definition: one corner at a time ([`pixel_trigger`]); the build's
+/// fast path evaluates the four corners in lanes ([`pixel_trigger_lanes`], same bits).
 pub(crate) fn trigger_depths(pk: &LayerPlanes, deeper: &[LayerPlanes]) -> Vec<f32> {
     let (w, h) = (pk.width, pk.height);
     let (wf, hf) = (w as f32, h as f32);
@@ -190,38 +212,98 @@ pub(crate) fn trigger_depths(pk: &LayerPlanes, deeper: &[LayerPlanes]) -> Vec<f3
             for i in 0..w {
                 let idx = (j * w + i) as usize;
                 let (x0, x1) = (i as f32 / wf, (i + 1) as f32 / wf);
-                let mut bad = false;
-                let mut front = f32::INFINITY;
-                for pj in deeper {
-                    if !pj.covered(idx) {
-                        continue;
-                    }
-                    let (nj, cj) = (pj.normal[idx], pj.offset[idx]);
-                    if !(nj.z < -1e-6) {
-                        bad = true;
-                        front = 0.0;
-                        continue;
-                    }
-                    for (x, y) in [(x0, y0), (x1, y0), (x0, y1), (x1, y1)] {
-                        let z = plane_z(nj, cj, x, y);
-                        front = front.min(z);
-                        let f = if pk.covered(idx) {
-                            pk.side(idx, glam::Vec3::new(x, y, z))
-                        } else {
-                            f32::NAN
-                        };
-                        if !(f <= -SAFE_MARGIN) {
-                            bad = true;
-                        }
-                    }
-                }
-                if bad {
-                    let t = front - SAFE_MARGIN;
-                    row[i as usize] = if t > 0.0 { t } else { 0.0 };
-                }
+                let plane = pk.covered(idx).then(|| (pk.normal[idx], pk.offset[idx]));
+                row[i as usize] = pixel_trigger(idx, (x0, x1, y0, y1), plane, deeper);
             }
         });
     tz
+}
+
+/// The trigger depth of pixel `idx` with footprint `(x0, x1, y0, y1)` (cube units) and
+/// plane `plane` (`N·P = c`, `None`: empty) against the `deeper` layers ([`trigger_depths`]).
+fn pixel_trigger(
+    idx: usize,
+    (x0, x1, y0, y1): (f32, f32, f32, f32),
+    plane: Option<(Vec3, f32)>,
+    deeper: &[LayerPlanes],
+) -> f32 {
+    trigger_over(idx, deeper, |nj, cj, front| {
+        let mut bad = false;
+        for (x, y) in [(x0, y0), (x1, y0), (x0, y1), (x1, y1)] {
+            let z = plane_z(nj, cj, x, y);
+            *front = front.min(z);
+            let f = match plane {
+                Some((n, c)) => n.dot(Vec3::new(x, y, z)) - c,
+                None => f32::NAN,
+            };
+            if !(f <= -SAFE_MARGIN) {
+                bad = true;
+            }
+        }
+        bad
+    })
+}
+
+/// [`pixel_trigger`] with the four footprint corners in the lanes of `xs`, `ys`
+/// (`(x0, x1, x0, x1)`, `(y0, y0, y1, y1)`): every lane does the scalar definition's
+/// operations in its order (`plane_z`, the `Vec3` dot left to right; no fused
+/// multiply-add), so the result is the same bits (`tests/quadtree_build.rs` compares whole
+/// trees with the definition's build).
+#[inline]
+pub(crate) fn pixel_trigger_lanes(
+    idx: usize,
+    xs: Vec4,
+    ys: Vec4,
+    plane: Option<(Vec3, f32)>,
+    deeper: &[LayerPlanes],
+) -> f32 {
+    let s = Vec4::splat;
+    trigger_over(idx, deeper, |nj, cj, front| {
+        let z = (s(cj) - s(nj.x) * xs - s(nj.y) * ys) / s(nj.z);
+        for zc in z.to_array() {
+            *front = front.min(zc);
+        }
+        match plane {
+            Some((n, c)) => {
+                let f = s(n.x) * xs + s(n.y) * ys + s(n.z) * z - s(c);
+                !f.cmple(s(-SAFE_MARGIN)).all()
+            }
+            None => true,
+        }
+    })
+}
+
+/// The trigger depth of pixel `idx` from its deeper planes: `corners(N_j, c_j, front)`
+/// lowers `front` to the plane's corner `z` and answers whether a corner is not safely
+/// behind this layer's plane; a plane seen edge-on is unsafe with `front = 0`.
+#[inline(always)]
+fn trigger_over(
+    idx: usize,
+    deeper: &[LayerPlanes],
+    mut corners: impl FnMut(Vec3, f32, &mut f32) -> bool,
+) -> f32 {
+    let mut bad = false;
+    let mut front = f32::INFINITY;
+    for pj in deeper {
+        if !pj.covered(idx) {
+            continue;
+        }
+        let (nj, cj) = (pj.normal[idx], pj.offset[idx]);
+        if !(nj.z < -1e-6) {
+            bad = true;
+            front = 0.0;
+            continue;
+        }
+        if corners(nj, cj, &mut front) {
+            bad = true;
+        }
+    }
+    if bad {
+        let t = front - SAFE_MARGIN;
+        if t > 0.0 { t } else { 0.0 }
+    } else {
+        f32::INFINITY
+    }
 }
 
 impl QuadTreeTracer {

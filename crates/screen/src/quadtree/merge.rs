@@ -18,6 +18,9 @@ pub(crate) struct MergeCtx {
     pub(crate) far: f64,
     pub(crate) crack_px: f32,
     pub(crate) never: bool,
+    /// Evaluate the four children in lanes ([`Self::parent_lanes`], same bits); `false`:
+    /// the scalar definition (the reference build).
+    pub(crate) lanes: bool,
 }
 
 impl MergeCtx {
@@ -36,12 +39,17 @@ impl MergeCtx {
         };
         let half = 0.5 * (1u32 << level) as f32 + dil;
         let spread = gx.abs() * half / self.wf + gy.abs() * half / self.hf;
-        if !spread.is_finite() {
-            return (0.0, 1.0);
+        plane_range(node.zc(), spread)
+    }
+
+    /// The threshold of the early reject on the smallest child-normal cosine: the loosest
+    /// this node could get.
+    pub(super) fn loosest_cos(&self) -> f32 {
+        if self.adaptive {
+            self.cos_thr(1.0)
+        } else {
+            self.cos_norm
         }
-        let zc = node.zc();
-        let (lo, hi) = (zc - spread, zc + spread);
-        ((lo - Z_EPS).clamp(0.0, 1.0), (hi + Z_EPS).clamp(0.0, 1.0))
     }
 
     /// The parent of `kids` (children at level `cl`, positions `pos`, in order
@@ -56,6 +64,9 @@ impl MergeCtx {
         pos: &[(u32, u32); 4],
         allow_merge: bool,
     ) -> Node {
+        if self.lanes {
+            return self.parent_lanes(l, qx, qy, cl, kids, pos, allow_merge);
+        }
         if !self.never
             && allow_merge
             && kids.iter().all(|k| k.is_plane())
@@ -63,17 +74,7 @@ impl MergeCtx {
         {
             return p;
         }
-        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
-        for k in kids {
-            let (a, b) = self.zrange(*k, cl);
-            lo = lo.min(a);
-            hi = hi.max(b);
-        }
-        if lo > hi {
-            Node::EMPTY
-        } else {
-            Node::aabb(lo, hi)
-        }
+        union(kids.iter().map(|k| self.zrange(*k, cl)))
     }
 
     /// §3.3: the proxy plane of four plane children, if the three conditions hold.
@@ -103,12 +104,7 @@ impl MergeCtx {
             .map(|p| p.0.dot(nn))
             .fold(f32::INFINITY, f32::min);
         // Cheap early reject with the loosest threshold this node could get.
-        let loosest = if self.adaptive {
-            self.cos_thr(1.0)
-        } else {
-            self.cos_norm
-        };
-        if !(min_cos > loosest) {
+        if !(min_cos > self.loosest_cos()) {
             return None;
         }
         // Child corners from the stored centre z and the decoded plane gradient:
@@ -129,6 +125,23 @@ impl MergeCtx {
                 proj[4 * i + m] = nn.dot(p);
             }
         }
+        self.proxy(l, qx, qy, nn, min_cos, &proj, flags)
+    }
+
+    /// The proxy plane of a merge (§3.3) from its normal `nn`, the smallest cosine
+    /// `min_cos` of a child normal to it and the projections `proj` of the 16 child corners
+    /// on `nn`, if conditions 2 and 3 hold.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn proxy(
+        &self,
+        l: u32,
+        qx: u32,
+        qy: u32,
+        nn: Vec3,
+        min_cos: f32,
+        proj: &[f32; 16],
+        flags: u32,
+    ) -> Option<Node> {
         let c = proj.iter().sum::<f32>() / 16.0;
         let dmax = proj.iter().map(|p| (p - c).abs()).fold(0.0f32, f32::max) / -nn.z;
         let (xc, yc) = node_centre(l, qx, qy, self.wf, self.hf);
@@ -173,5 +186,31 @@ impl MergeCtx {
         }
         let cap = 0.1f32.max(self.gamma_dist);
         (self.gamma_dist * (1.0 + (super::ADAPTIVE_SCALE - 1.0) * u)).min(cap)
+    }
+}
+
+/// The range `z_c ± spread` of a plane over its footprint, widened by [`Z_EPS`] and clamped
+/// to `[0, 1]`; `[0, 1]` for an infinite or NaN spread.
+#[inline]
+pub(super) fn plane_range(zc: f32, spread: f32) -> (f32, f32) {
+    if !spread.is_finite() {
+        return (0.0, 1.0);
+    }
+    let (lo, hi) = (zc - spread, zc + spread);
+    ((lo - Z_EPS).clamp(0.0, 1.0), (hi + Z_EPS).clamp(0.0, 1.0))
+}
+
+/// The AABB node of the union of the children's ranges, in order (empty if none).
+#[inline]
+pub(super) fn union(ranges: impl Iterator<Item = (f32, f32)>) -> Node {
+    let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+    for (a, b) in ranges {
+        lo = lo.min(a);
+        hi = hi.max(b);
+    }
+    if lo > hi {
+        Node::EMPTY
+    } else {
+        Node::aabb(lo, hi)
     }
 }

@@ -4,7 +4,10 @@
 //! - [`node`]: the 64-bit node of §3.4 (plane / AABB, tag in the sign bit);
 //! - [`build`]: [`QuadTree`], one layer — per-pixel planes as leaves (§3.2) and bottom-up
 //!   adaptive pruning with the three conditions and the least-squares proxy plane (§3.3);
-//! - [`merge`]: one pruning step (proxy plane or conservative AABB);
+//! - [`merge`]: one pruning step (proxy plane or conservative AABB); `merge_lanes`: the same
+//!   step with the four children in `Vec4` lanes (same bits, the build's fast path);
+//!   `fixpoint`: the cascade's pruning fixed point computed incrementally (same results as the
+//!   definition in `prune`, which [`QuadTreeTracer::build_reference`] runs);
 //! - [`traverse`]: the stackless traversal of §4 (exact plane hits, child by entry
 //!   quadrant, successor by exit edge, restart `findMSB((Qx^Qx*)|(Qy^Qy*))` levels up —
 //!   Frisken & Perry 2002 — crack dilation, occlusion-volume extrusion, hard step bound);
@@ -73,8 +76,11 @@
 
 pub mod build;
 pub mod cascade;
+mod fixpoint;
 pub mod merge;
+mod merge_lanes;
 pub mod node;
+mod prune;
 pub mod traverse;
 pub mod tree;
 

@@ -51,7 +51,6 @@
 //! Measurements of the slope encoding against `N.x, N.y`: `docs/notes/quadtree.md`.
 
 use glam::Vec3;
-use half::f16;
 
 /// Plane flag: the paper's `O`, "close to a depth discontinuity" (§3.2): the plane is
 /// tested over a footprint dilated backwards along the ray ([`super::QuadTreeOptions::crack_dilation`]).
@@ -95,14 +94,15 @@ impl Node {
     /// A plane node from `z_c` and the plane's z increments `dzx`, `dzy` across the node's
     /// footprint (module docs; clamped to `±65504`); `None` unless `z_c` is finite and
     /// `>= 0` and the increments are not NaN.
+    #[inline]
     pub fn plane(zc: f32, dzx: f32, dzy: f32, flags: u32) -> Option<Node> {
         if !(zc.is_finite() && zc >= 0.0) || dzx.is_nan() || dzy.is_nan() {
             return None;
         }
         // Round to a 21-bit mantissa (may carry into the exponent: still correct).
         let bits = (zc.to_bits() + 2) & !FLAG_MASK;
-        let hx = f16::from_f32(dzx.clamp(-F16_MAX, F16_MAX)).to_bits() as u32;
-        let hy = f16::from_f32(dzy.clamp(-F16_MAX, F16_MAX)).to_bits() as u32;
+        let hx = f32_to_f16_bits(dzx.clamp(-F16_MAX, F16_MAX)) as u32;
+        let hy = f32_to_f16_bits(dzy.clamp(-F16_MAX, F16_MAX)) as u32;
         Some(Node {
             a: SIGN | bits | (flags & FLAG_MASK),
             b: hx | (hy << 16),
@@ -111,6 +111,7 @@ impl Node {
 
     /// A plane node at `level` of a `w x h` image from `z_c` and the plane's cube gradient
     /// `(gx, gy) = (dz/dx, dz/dy)` (may be infinite: clamped; `None` for NaN).
+    #[inline]
     pub fn plane_with_gradient(
         zc: f32,
         gx: f32,
@@ -236,6 +237,33 @@ pub fn f16_bits_to_f32(h: u16) -> f32 {
     f32::from_bits((sub & is_sub) | (normal & !is_sub) | ((h & 0x8000) << 16))
 }
 
+/// Exact f32 -> f16 conversion (round to nearest, ties to even) of a value that is not NaN
+/// and at most 65504 in magnitude (the clamped slopes), inlinable and without `half`'s run-time
+/// dispatch (an out-of-line call per value in the build's leaf loop). The rounding is
+/// F. Giesen's "float_to_half_fast3_rtne": a normal half by adding the rebias and the
+/// round-to-nearest-even bias to the bits; a subnormal half (or zero) by an f32 addition of
+/// `2^-1` (IEEE addition rounds the dropped bits to nearest even). Equal to
+/// `f16::from_f32` bit for bit (tests below: every half and the f32 values around each
+/// rounding boundary).
+#[inline(always)]
+pub fn f32_to_f16_bits(v: f32) -> u16 {
+    let x = v.to_bits();
+    let sign = (x >> 16) & 0x8000;
+    let a = x & 0x7fff_ffff;
+    let h = if a >= 0x4780_0000 {
+        // |v| >= 65536: infinity (never a NaN here).
+        0x7c00
+    } else if a < 0x3880_0000 {
+        // |v| < 2^-14: a subnormal half; the magic 0.5 aligns the half's mantissa.
+        let magic = f32::from_bits(((127 - 15) + (23 - 10) + 1) << 23);
+        (f32::from_bits(a) + magic).to_bits() - magic.to_bits()
+    } else {
+        let odd = (a >> 13) & 1;
+        (a.wrapping_add(((15u32.wrapping_sub(127)) << 23).wrapping_add(0xfff)) + odd) >> 13
+    };
+    (sign | h) as u16
+}
+
 /// Cube-space centre of node `(qx, qy)` at `level` of a `w x h` image.
 #[inline(always)]
 pub fn node_centre(level: u32, qx: u32, qy: u32, w: f32, h: f32) -> (f32, f32) {
@@ -290,6 +318,7 @@ pub fn plane_z(n: Vec3, c: f32, x: f32, y: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use half::f16;
 
     #[test]
     fn f16_decode_matches_half() {
@@ -298,6 +327,48 @@ mod tests {
             if r.is_finite() {
                 assert_eq!(f16_bits_to_f32(h).to_bits(), r.to_f32().to_bits(), "{h:#x}");
             }
+        }
+    }
+
+    #[test]
+    fn f16_encode_matches_half() {
+        let check = |v: f32| {
+            if !v.is_nan() && v.abs() <= F16_MAX {
+                assert_eq!(
+                    f32_to_f16_bits(v),
+                    f16::from_f32(v).to_bits(),
+                    "{v:e} ({:#x})",
+                    v.to_bits()
+                );
+            }
+        };
+        // Every half, and the f32 values at and around each midpoint between two halves.
+        for h in 0..=u16::MAX {
+            let a = f16::from_bits(h).to_f32();
+            let b = f16::from_bits(h.wrapping_add(1)).to_f32();
+            check(a);
+            if a.is_finite() && b.is_finite() && (a < 0.0) == (b < 0.0) {
+                let m = 0.5 * (a as f64 + b as f64);
+                let mb = (m as f32).to_bits();
+                for d in [-2i32, -1, 0, 1, 2] {
+                    check(f32::from_bits(mb.wrapping_add_signed(d)));
+                }
+            }
+        }
+        // A spread of f32 bit patterns (every exponent, many mantissas).
+        for k in 0..(1u32 << 22) {
+            check(f32::from_bits(k.wrapping_mul(1021)));
+        }
+        for v in [
+            0.0,
+            -0.0,
+            65504.0,
+            -65504.0,
+            65519.99,
+            5.9604645e-8,
+            2.9802322e-8,
+        ] {
+            check(v);
         }
     }
 

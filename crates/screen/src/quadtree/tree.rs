@@ -18,7 +18,7 @@ use crate::LayerPlanes;
 pub const Z_EPS: f32 = 1e-6;
 
 /// One level: a flat row-major array of `w x h` nodes.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Level {
     pub w: u32,
     pub h: u32,
@@ -26,7 +26,7 @@ pub struct Level {
 }
 
 /// The quad-tree of one captured layer (§3).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct QuadTree {
     pub(crate) width: u32,
     pub(crate) height: u32,
@@ -216,38 +216,40 @@ impl QuadTree {
     /// else is its own effective node when it is a plane). Equal to the per-pixel climb
     /// because a plane node's descendants are all planes (§3.3 condition 1).
     pub(crate) fn effective_levels(&self) -> Vec<u8> {
-        let top = self.levels.len() - 1;
-        let own = |l: usize| -> Vec<u8> {
-            self.levels[l]
-                .nodes
-                .iter()
-                .map(|n| if n.is_plane() { l as u8 } else { NO_PLANE })
-                .collect()
-        };
-        let mut cur = own(top);
-        for l in (0..top).rev() {
-            let (lw, pw) = (self.levels[l].w as usize, self.levels[l + 1].w as usize);
-            let nodes = &self.levels[l].nodes;
-            let parent = &cur;
-            let mut next = vec![NO_PLANE; nodes.len()];
-            next.par_chunks_mut(lw).enumerate().for_each(|(y, row)| {
-                let prow = &parent[(y / 2) * pw..];
-                let nrow = &nodes[y * lw..(y + 1) * lw];
-                for (x, v) in row.iter_mut().enumerate() {
-                    let p = prow[x / 2];
-                    *v = if p != NO_PLANE {
-                        p
-                    } else if nrow[x].is_plane() {
-                        l as u8
-                    } else {
-                        NO_PLANE
-                    };
-                }
-            });
-            cur = next;
-        }
-        cur
+        effective_levels(&self.levels)
     }
+}
+
+/// [`QuadTree::effective_levels`] of the levels `levels` (level 0 first).
+pub(crate) fn effective_levels(levels: &[Level]) -> Vec<u8> {
+    let top = levels.len() - 1;
+    let mut cur: Vec<u8> = levels[top]
+        .nodes
+        .iter()
+        .map(|n| if n.is_plane() { top as u8 } else { NO_PLANE })
+        .collect();
+    for l in (0..top).rev() {
+        let (lw, pw) = (levels[l].w as usize, levels[l + 1].w as usize);
+        let nodes = &levels[l].nodes;
+        let parent = &cur;
+        let mut next = vec![NO_PLANE; nodes.len()];
+        next.par_chunks_mut(lw).enumerate().for_each(|(y, row)| {
+            let prow = &parent[(y / 2) * pw..];
+            let nrow = &nodes[y * lw..(y + 1) * lw];
+            for (x, v) in row.iter_mut().enumerate() {
+                let p = prow[x / 2];
+                *v = if p != NO_PLANE {
+                    p
+                } else if nrow[x].is_plane() {
+                    l as u8
+                } else {
+                    NO_PLANE
+                };
+            }
+        });
+        cur = next;
+    }
+    cur
 }
 
 /// [`QuadTree::effective_levels`]: no plane node above or at this node.

@@ -1,0 +1,169 @@
+//! Bottom-up pruning of a whole tree (Widmer et al. 2015, §3.3): the levels above the
+//! leaves, one [`MergeCtx::parent`] per node, in parallel over rows; and the cascade's
+//! pruning fixed point by its definition (the slow twin of [`super::fixpoint`]).
+//!
+//! **Invariants:** a node containing a blocked pixel never merges; level 0 is not changed.
+
+use rayon::prelude::*;
+
+use super::merge::MergeCtx;
+use super::node::Node;
+use super::tree::{Level, decoded_planes, effective_levels};
+use crate::LayerPlanes;
+
+/// The cascade's pruning fixed point by its definition (the slow twin of
+/// [`super::fixpoint::fixed_point`], same results): trigger depths from the pixel planes
+/// block merging over unsafe pixels. Pixels (`W x H`) no node may merge over are seeded with
+/// the pixel-plane analysis, then grown to a fixed point: a merged proxy plane deviates from
+/// its pixels' own planes by up to the merge tolerance (§3.3, `gamma_dist`, far above the
+/// safety margin), so a pixel safe against its own plane can be unsafe against the proxy
+/// the traversal tests (a deeper plane in front of it: found by proptest,
+/// `quadtree_cascade.rs`). Such pixels are blocked too and the levels rebuilt; the set only
+/// grows, so this ends (in practice after one extra pass, or none). Returns the levels, the
+/// trigger depths and the effective levels.
+pub(super) fn fixed_point_reference(
+    ctx: &MergeCtx,
+    level0: Level,
+    nlev: u32,
+    (w, h): (u32, u32),
+    deeper: &[LayerPlanes],
+) -> (Vec<Level>, Vec<f32>, Vec<u8>) {
+    let tz = {
+        let px = leaf_planes(&level0, w, h, ctx.wf, ctx.hf);
+        super::cascade::trigger_depths(&px, deeper)
+    };
+    let mut blocked_px: Vec<bool> = tz.iter().map(|z| z.is_finite()).collect();
+    let mut first = Some(level0);
+    let mut levels: Vec<Level> = Vec::new();
+    let tz = loop {
+        // Level 0 is never changed by pruning: reuse it on a rebuild.
+        let l0 = first
+            .take()
+            .unwrap_or_else(|| std::mem::take(&mut levels).swap_remove(0));
+        levels = prune(ctx, l0, nlev, &blocked_px, w, h);
+        if ctx.never {
+            // No merging: the effective planes are the pixel planes.
+            break tz;
+        }
+        let eff = decoded_planes(w, h, ctx.wf, ctx.hf, |i, j| {
+            let n0 = levels[0].nodes[(j * levels[0].w + i) as usize];
+            if !n0.is_plane() {
+                return None;
+            }
+            let mut best = (n0, 0u32, i, j);
+            for (l, lv) in levels.iter().enumerate().skip(1) {
+                let (qx, qy) = (i >> l, j >> l);
+                let n = lv.nodes[(qy * lv.w + qx) as usize];
+                if !n.is_plane() {
+                    break;
+                }
+                best = (n, l as u32, qx, qy);
+            }
+            Some(best)
+        });
+        let tz_eff = super::cascade::trigger_depths(&eff, deeper);
+        let mut grew = false;
+        for (b, z) in blocked_px.iter_mut().zip(&tz_eff) {
+            if z.is_finite() && !*b {
+                *b = true;
+                grew = true;
+            }
+        }
+        if !grew {
+            // Every unsafe pixel is blocked, i.e. its effective plane is its pixel
+            // plane, and `tz_eff` was computed from the planes the traversal tests.
+            break tz_eff;
+        }
+    };
+    let eff = effective_levels(&levels);
+    (levels, tz, eff)
+}
+
+/// Node `(qx, qy)` at level `l` from its four children in `child` (level `l - 1`), merged
+/// only if `allow` (§3.3, [`MergeCtx::parent`]).
+#[inline]
+pub(super) fn parent_of(
+    ctx: &MergeCtx,
+    child: &Level,
+    l: u32,
+    qx: u32,
+    qy: u32,
+    allow: bool,
+) -> Node {
+    let cl = l - 1;
+    let mut kids = [Node::EMPTY; 4];
+    let mut pos = [(0u32, 0u32); 4];
+    for (c, (kid, p)) in kids.iter_mut().zip(pos.iter_mut()).enumerate() {
+        let (cx, cy) = (2 * qx + (c as u32 & 1), 2 * qy + (c as u32 >> 1));
+        *p = (cx, cy);
+        *kid = child.nodes[(cy * child.w + cx) as usize];
+    }
+    ctx.parent(l, qx, qy, cl, &kids, &pos, allow)
+}
+
+/// Levels `0..nlev` of a tree: `level0` and the levels built from it by pruning (§3.3),
+/// never merging a node that contains a pixel marked in `blocked` (`W x H`; empty: none).
+pub(super) fn prune(
+    ctx: &MergeCtx,
+    level0: Level,
+    nlev: u32,
+    blocked_px: &[bool],
+    w: u32,
+    h: u32,
+) -> Vec<Level> {
+    let mut blocked: Vec<bool> = Vec::new();
+    let mut levels = vec![level0];
+    for l in 1..nlev {
+        let child = levels.last().unwrap();
+        let (pw, ph) = (child.w / 2, child.h / 2);
+        if !blocked_px.is_empty() {
+            // A node is blocked when one of its children is (level 1: an image pixel).
+            let mut next = vec![false; (pw * ph) as usize];
+            let prev = &blocked;
+            next.par_chunks_mut(pw as usize)
+                .enumerate()
+                .for_each(|(qy, row)| {
+                    let qy = qy as u32;
+                    for (qx, b) in row.iter_mut().enumerate() {
+                        let qx = qx as u32;
+                        *b = (0..4).any(|c| {
+                            let (x, y) = (2 * qx + (c & 1), 2 * qy + (c >> 1));
+                            if l == 1 {
+                                x < w && y < h && blocked_px[(y * w + x) as usize]
+                            } else {
+                                prev[(y * child.w + x) as usize]
+                            }
+                        });
+                    }
+                });
+            blocked = next;
+        }
+        let blocked = &blocked;
+        let mut nodes = vec![Node::EMPTY; (pw * ph) as usize];
+        nodes
+            .par_chunks_mut(pw as usize)
+            .enumerate()
+            .for_each(|(qy, row)| {
+                let qy = qy as u32;
+                for (qx, out) in row.iter_mut().enumerate() {
+                    let qx = qx as u32;
+                    let allow = blocked.is_empty() || !blocked[(qy * pw + qx) as usize];
+                    *out = parent_of(ctx, child, l, qx, qy, allow);
+                }
+            });
+        levels.push(Level {
+            w: pw,
+            h: ph,
+            nodes,
+        });
+    }
+    levels
+}
+
+/// The decoded pixel planes of a level-0 array in [`LayerPlanes`] form.
+fn leaf_planes(level0: &Level, w: u32, h: u32, wf: f32, hf: f32) -> LayerPlanes {
+    decoded_planes(w, h, wf, hf, |i, j| {
+        let node = level0.nodes[(j * level0.w + i) as usize];
+        node.is_plane().then_some((node, 0, i, j))
+    })
+}
