@@ -50,12 +50,12 @@ pub fn synth_views(
         Piece {
             label: "quilt",
             title: "Light field: a Looking Glass quilt (§5.3)",
-            what: "4x2 views over a 35 deg cone, view 0 bottom left, every pixel's ray traced through one 2-layer reference capture, vs the BVH's views".into(),
+            what: "4x2 views over a 35 deg cone, view 0 bottom left, 2 x 2 rays per pixel (box-filtered) traced through one 2-layer reference capture, vs the BVH's views through the same rays".into(),
             size: format!("8x {vw}x{vh}"),
             args: s(&[
                 "lightfield", "--kind", "quilt", "--scene", scene, "--cols", "4", "--rows", "2",
                 "--view-width", &vw.to_string(), "--view-height", &vh.to_string(),
-                "--layers", "2", "--name", "quilt", "--json",
+                "--layers", "2", "--spp", "4", "--name", "quilt", "--json",
                 &work.join("quilt").join("rows.json").display().to_string(),
             ]),
             copies: Vec::new(),
