@@ -449,6 +449,7 @@ fn bytes_are_the_flat_arrays() {
         let expect = 4 * cap.offsets().len() as u64
             + 4 * cap.ids().len() as u64
             + 8 * texels
+            + 8 * texels // the reciprocal chain
             + 16 * (nx * ny) as u64
             + (cap.mip_levels() * std::mem::size_of::<LevelInfo>()) as u64;
         assert_eq!(cap.bytes(), expect);

@@ -454,6 +454,7 @@ fn memory_rows(name: &str, camera: &Camera, views: &DirtViews) -> Vec<MemoryRow>
         let (levels, b) = v.mip_arrays();
         texels += b.len() as u64;
         bounds_bytes += std::mem::size_of_val(b) as u64
+            + std::mem::size_of_val(v.recip_mip()) as u64
             + std::mem::size_of_val(levels) as u64
             + std::mem::size_of_val(v.cell_records()) as u64;
         entries += v.stats().entries;
@@ -488,7 +489,7 @@ fn memory_rows(name: &str, camera: &Camera, views: &DirtViews) -> Vec<MemoryRow>
             11.0 * cells as f64,
             bounds_bytes,
             &format!(
-                "{texels} texels over all mip levels, [min, max] f32; + a 16-byte cell record (bounds, bucket scale, bucket mask) per cell"
+                "{texels} texels over all mip levels, [min, max] f32 and its reciprocal [1 / max, 1 / min] (what the walk reads); + a 16-byte cell record (bounds, bucket scale, bucket mask) per cell"
             ),
         ),
         row(

@@ -241,6 +241,7 @@ fn finish(
     // 4. Mipmap Depth.
     let t_mip = Instant::now();
     mip::build_chain(&levels, &mut bounds);
+    let recip_bounds = mip::reciprocal(&bounds);
     let mip_ms = ms(t_mip);
 
     let nonempty_cells = bounds[..cell_count as usize]
@@ -256,6 +257,7 @@ fn finish(
         ids,
         levels,
         bounds,
+        recip_bounds,
         cells,
         stats: DirtStats {
             width: view.width,

@@ -101,6 +101,8 @@ pub struct DirtCapture {
     pub(super) levels: Vec<LevelInfo>,
     /// `[zmin, zmax]` of every texel of every mip level.
     pub(super) bounds: Vec<[f32; 2]>,
+    /// `bounds` as reciprocal depths `[1 / max, 1 / min]` ([`super::mip::reciprocal`]).
+    pub(super) recip_bounds: Vec<[f32; 2]>,
     /// What the tracer reads of every cell at once.
     pub(super) cells: Vec<CellRecord>,
     pub(super) stats: DirtStats,
@@ -136,9 +138,13 @@ pub fn bucket_index(zmin: f32, scale: f32, buckets: u32, z: f32) -> u32 {
 /// `g = ceil(buckets / 32)`.
 #[inline(always)]
 pub fn bucket_mask(b0: u32, b1: u32, buckets: u32) -> u32 {
-    let g = buckets.div_ceil(32).max(1);
-    let (lo, hi) = (b0 / g, b1 / g);
     let upto = |b: u32| if b >= 31 { u32::MAX } else { (2u32 << b) - 1 };
+    if buckets <= 32 {
+        // One bit per bucket (no integer division on the tracer's path).
+        return upto(b1) & !(upto(b0) >> 1);
+    }
+    let g = buckets.div_ceil(32);
+    let (lo, hi) = (b0 / g, b1 / g);
     upto(hi) & !(upto(lo) >> 1)
 }
 
@@ -262,6 +268,11 @@ impl DirtCapture {
     pub fn mip_arrays(&self) -> (&[LevelInfo], &[[f32; 2]]) {
         (&self.levels, &self.bounds)
     }
+    /// The mip chain as reciprocal depth bounds `[1 / max, 1 / min]` (widened outward; layout
+    /// of [`Self::mip_arrays`]): what the tracer's walk reads.
+    pub fn recip_mip(&self) -> &[[f32; 2]] {
+        &self.recip_bounds
+    }
     /// Per cell (row-major), its [`CellRecord`].
     pub fn cell_records(&self) -> &[CellRecord] {
         &self.cells
@@ -275,11 +286,13 @@ impl DirtCapture {
     pub fn ids(&self) -> &[u32] {
         &self.ids
     }
-    /// Bytes held by the flat arrays (offsets, ids, mip bounds, cell records, level table).
+    /// Bytes held by the flat arrays (offsets, ids, mip bounds and their reciprocals, cell
+    /// records, level table).
     pub fn bytes(&self) -> u64 {
         (std::mem::size_of_val(self.offsets.as_slice())
             + std::mem::size_of_val(self.ids.as_slice())
             + std::mem::size_of_val(self.bounds.as_slice())
+            + std::mem::size_of_val(self.recip_bounds.as_slice())
             + std::mem::size_of_val(self.cells.as_slice())
             + std::mem::size_of_val(self.levels.as_slice())) as u64
     }

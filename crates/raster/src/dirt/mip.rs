@@ -7,6 +7,11 @@
 //! texel covers only the remaining child column/row). The chain ends at 1 x 1. Empty cells hold
 //! `(+inf, -inf)`, so they never widen a parent. All levels live in one flat array of
 //! `[min, max]` pairs (one load per texel visited by a traversal).
+//!
+//! **Reciprocal chain.** The tracer walks a ray's projection with `1 / depth` affine along
+//! it (as screen-space ray marchers do; DIRT §4.2.1 traces in screen space), so it reads the
+//! same chain as reciprocal bounds `[1 / max, 1 / min]` ([`reciprocal`]), each widened outward
+//! by a relative `2^-22` so that the reciprocal's rounding never narrows a texel.
 
 use serde::Serialize;
 
@@ -80,6 +85,30 @@ pub fn build_chain(levels: &[LevelInfo], bounds: &mut [[f32; 2]]) {
     }
 }
 
+/// Relative widening of a reciprocal bound (several f32 ulps).
+const RECIP_MARGIN: f64 = 1.0 / (1u64 << 22) as f64;
+
+/// The reciprocal depth bounds `[1 / max, 1 / min]` of every texel (module docs), widened
+/// outward: a texel whose depths are all `<= 0` (or an empty one) is [`EMPTY`], a minimum
+/// `<= 0` gives an upper bound of `+inf`.
+pub fn reciprocal(bounds: &[[f32; 2]]) -> Vec<[f32; 2]> {
+    bounds
+        .iter()
+        .map(|&[lo, hi]| {
+            if lo > hi || hi <= 0.0 {
+                return EMPTY;
+            }
+            let w_lo = (1.0 - RECIP_MARGIN) / hi as f64;
+            let w_hi = if lo > 0.0 {
+                (1.0 + RECIP_MARGIN) / lo as f64
+            } else {
+                f64::INFINITY
+            };
+            [w_lo as f32, w_hi as f32]
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -90,5 +119,30 @@ mod tests {
         let sizes: Vec<_> = levels.iter().map(|l| (l.width, l.height)).collect();
         assert_eq!(sizes, vec![(5, 3), (3, 2), (2, 1), (1, 1)]);
         assert_eq!(total, 15 + 6 + 2 + 1);
+    }
+
+    /// Every positive depth inside a texel's bounds has its reciprocal inside the texel's
+    /// reciprocal bounds; empty and non-positive texels are empty.
+    #[test]
+    fn reciprocal_bounds_contain_every_depth() {
+        let zs = [1e-4f32, 0.37, 1.0, 3.3, 1234.5, 1e7];
+        for &a in &zs {
+            for &b in &zs {
+                if a > b {
+                    continue;
+                }
+                let [lo, hi] = reciprocal(&[[a, b]])[0];
+                for z in [a, b, a * 0.5 + b * 0.5] {
+                    let w = 1.0 / z;
+                    assert!(
+                        lo <= w && w <= hi,
+                        "{z} in [{a}, {b}]: {w} not in [{lo}, {hi}]"
+                    );
+                }
+            }
+        }
+        assert_eq!(reciprocal(&[EMPTY])[0], EMPTY);
+        assert_eq!(reciprocal(&[[-2.0, -1.0]])[0], EMPTY);
+        assert_eq!(reciprocal(&[[0.0, 2.0]])[0][1], f32::INFINITY);
     }
 }

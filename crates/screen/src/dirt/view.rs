@@ -6,14 +6,14 @@
 //! A view is a pinhole with camera space `q = R (p - eye)` (looking down `-z`), view depth
 //! `-q.z`, and film position `x = (u - a0) / ax`, `y = (b0 - v) / by` of the slopes
 //! `u = q.x / depth`, `v = q.y / depth` — the projection of `DirtCapture`'s build. On a ray
-//! `q(t) = o + t d` the depth `z(t) = z0 + t dz` is affine in `t`, and the film column
-//! `x = X` is the plane `q.x = u_X depth` through the eye, crossed at
-//! `t = (u_X z0 - o.x) / (d.x - u_X dz)`: cell boundaries are crossed in ray order at
-//! parameters computed directly, so the cells a traversal visits split the ray's parameter
-//! range into consecutive intervals that share their end points exactly.
+//! `q(t) = o + t d` the depth `z(t) = z0 + t dz` is affine in `t`; the walk (`walk`) projects
+//! the clipped segment's two ends and steps along its projection.
 
 use glam::Vec3;
 use parallax_raster::dirt::DirtCapture;
+
+/// Mip levels a view can have: a grid of at most `2^31` cells a side.
+pub(crate) const MAX_LEVELS: usize = 32;
 
 /// The constants of one view.
 #[derive(Clone, Debug)]
@@ -22,28 +22,25 @@ pub(crate) struct ViewConsts {
     /// Rows of `R` (the view's right, up and backward axes).
     pub rows: [Vec3; 3],
     pub near: f32,
-    /// `u` of film column 0 and its step per pixel.
+    /// `u` of film column 0.
     pub a0: f32,
-    pub ax: f32,
     /// `u` of the last film column (`a0 + W ax`, computed without rounding through `ax`).
     pub a_end: f32,
-    /// `v` of film row 0 and its (negated) step per pixel.
+    /// `v` of film row 0.
     pub b0: f32,
-    pub by: f32,
     /// `v` of the last film row.
     pub b_end: f32,
     /// `1 / (ax * S)` and `1 / (by * S)`: cells per unit slope.
     pub cells_per_u: f32,
     pub cells_per_v: f32,
-    pub tile: u32,
     pub cells_x: u32,
     pub cells_y: u32,
     pub buckets: u32,
     /// Index of the top mip level.
     pub top: usize,
     /// Per mip level, its first texel in the flat bounds array and its width.
-    pub level_offset: Vec<usize>,
-    pub level_width: Vec<usize>,
+    pub level_offset: [u32; MAX_LEVELS],
+    pub level_width: [u32; MAX_LEVELS],
     /// Bound on loop iterations of one traversal of this view.
     pub max_steps: u32,
 }
@@ -60,7 +57,11 @@ impl ViewConsts {
         let s = cap.tile_size();
         let (cells_x, cells_y) = cap.cells();
         let top = cap.mip_levels() - 1;
-        let (levels, _) = cap.mip_arrays();
+        let (levels, bounds) = cap.mip_arrays();
+        assert!(
+            levels.len() <= MAX_LEVELS && bounds.len() <= u32::MAX as usize,
+            "mip chain too large"
+        );
         // Every iteration either descends a level or leaves a texel; leaving moves the cell
         // one step in x or y in the ray's (monotone) film direction, and at most `top` levels
         // are descended per move.
@@ -70,20 +71,17 @@ impl ViewConsts {
             rows: [b.x_axis, b.y_axis, b.z_axis],
             near: cap.options().near,
             a0: (view.shift.x - 1.0) * tx,
-            ax,
             a_end: (view.shift.x + 1.0) * tx,
             b0: (view.shift.y + 1.0) * ty,
-            by,
             b_end: (view.shift.y - 1.0) * ty,
             cells_per_u: 1.0 / (ax * s as f32),
             cells_per_v: 1.0 / (by * s as f32),
-            tile: s,
             cells_x,
             cells_y,
             buckets: cap.buckets(),
             top,
-            level_offset: levels.iter().map(|l| l.offset).collect(),
-            level_width: levels.iter().map(|l| l.width as usize).collect(),
+            level_offset: std::array::from_fn(|k| levels.get(k).map_or(0, |l| l.offset as u32)),
+            level_width: std::array::from_fn(|k| levels.get(k).map_or(0, |l| l.width)),
             max_steps,
         }
     }
@@ -102,18 +100,11 @@ impl ViewConsts {
             self.rows[1].dot(dir),
             self.rows[2].dot(dir),
         );
-        let (z0, dz) = (-o.z, -d.z);
-        // Signs of du/dt and dv/dt (numerators of the quotient rule; depth > 0 inside).
-        let gx = d.x * z0 - o.x * dz;
-        let gy = d.y * z0 - o.y * dz;
         ViewRay {
             o,
             d,
-            z0,
-            dz,
-            step_x: sign(gx),
-            // Film y grows as v falls.
-            step_y: -sign(gy),
+            z0: -o.z,
+            dz: -d.z,
         }
     }
 
@@ -178,9 +169,6 @@ pub(crate) struct ViewRay {
     pub d: Vec3,
     pub z0: f32,
     pub dz: f32,
-    /// Direction of travel of the ray's projection in cells: -1, 0 or +1.
-    pub step_x: i32,
-    pub step_y: i32,
 }
 
 impl ViewRay {
@@ -189,19 +177,4 @@ impl ViewRay {
     pub fn depth(&self, t: f32) -> f32 {
         self.z0 + t * self.dz
     }
-
-    /// The slopes `(u, v)` at `t` (`t` inside the clipped range, so the depth is positive).
-    #[inline(always)]
-    pub fn slopes(&self, t: f32) -> (f32, f32) {
-        let inv = 1.0 / self.depth(t);
-        (
-            (self.o.x + t * self.d.x) * inv,
-            (self.o.y + t * self.d.y) * inv,
-        )
-    }
-}
-
-#[inline(always)]
-fn sign(x: f32) -> i32 {
-    (x > 0.0) as i32 - (x < 0.0) as i32
 }

@@ -2,26 +2,39 @@
 //! min-max mips of the depth bounds (lines 1-6), and at the finest level the bucket tracing of
 //! the cell's id lists (lines 7-22) with analytic ray-triangle tests.
 //!
+//! **The walk in film space** (as screen-space ray marchers step in homogeneous space,
+//! McGuire & Mara 2014): the ray's clipped segment `[t_a, t_b]` is projected once, at its two
+//! ends, onto the view's cell grid (film position in cells) with reciprocal view depth
+//! `w = 1 / depth`. Along the projected segment, film position and `w` are both affine in
+//! one screen-space parameter `λ in [0, 1]`, so the crossing of cell boundary `k` is
+//! `λ = k inv + c` and the ray's `w` there is `w_a + λ (w_b - w_a)`: a multiply-add each, no
+//! division per texel. The mips are read as reciprocal bounds `[1 / zmax, 1 / zmin]`
+//! (`DirtCapture::recip_mip`, widened outward), so a texel test needs no division either;
+//! only a traced cell turns its two `w` into depths for eq. 1.
+//!
 //! **Hi-Z** (Uludag 2014 on a min-max pyramid, as the paper's GPU code): the walk keeps the
-//! level-0 cell `(cx, cy)` that contains the ray at the current parameter `t` and a level `L`.
-//! The texel `(cx >> L, cy >> L)` is left by the ray at `t_exit` (the first of its column or
-//! row boundary crossings in the ray's film direction, or the end of the interval); the ray's
-//! view depth over `[t, t_exit]` is the interval between the depths at the two ends (depth is
-//! affine in `t`). Disjoint from the texel's `[zmin, zmax]`: the texel is skipped, the walk
-//! moves to `t_exit` and one level up. Overlapping above level 0: one level down. At level 0:
-//! bucket tracing, then on to `t_exit` and one level up.
+//! level-0 cell `(cx, cy)` that contains the ray at the current `λ` and a level `L`. The
+//! texel `(cx >> L, cy >> L)` is left at `λ_exit` (the first of its column or row boundary
+//! crossings in the ray's film direction, or the end of the segment); the ray's `w` over
+//! `[λ, λ_exit]` is the interval between its values at the two ends. Disjoint from the
+//! texel's reciprocal bounds: the texel is skipped, the walk moves to `λ_exit` and one level
+//! up. Overlapping above level 0: one level down. At level 0: the cell's record (bounds, eq. 1
+//! scale, non-empty bucket mask), the buckets of the ray's depth span there, and if any of
+//! them holds a triangle, bucket tracing; then on to `λ_exit`.
 //!
 //! **Bucket tracing.** The ray's depth span in the cell gives the bucket range by eq. 1
 //! ([`bucket_index`], the capture's own function); buckets are visited in ray order (towards
-//! the far plane: ascending; towards the eye: descending) and every triangle listed in them is
+//! the far plane: ascending; towards the eye: descending), the empty ones skipped by the
+//! record's mask, and every triangle listed in them is
 //! tested with the watertight test, four at a time (`tri4`: the lanes of
 //! [`parallax_core::math::watertight_lanes`], the scalar
 //! [`parallax_core::math::WatertightRay::intersect_within`] where an edge function is exactly
 //! zero). A hit is kept when it
 //! is the closest so far (ties in `t`: the lower triangle id). It is *accepted* — the answer —
-//! once the walk has reached it: its `t` is at most the cell's exit (it projects into this
+//! once the walk has reached it: its `λ` is at most the cell's exit (it projects into this
 //! cell, or an earlier one: the paper's test "the hit point lies within the candidate pixel
-//! tile", done in ray parameter instead of by projecting) and its depth's bucket is not after
+//! tile", done in the walk's parameter instead of by projecting; the hit's `λ` is computed
+//! once per best hit) and its depth's bucket is not after
 //! the bucket just traced (the early exit of Alg. 1 line 19, which the paper takes as soon as
 //! any hit is found in a bucket; a triangle listed in this bucket can be hit at a depth of a
 //! later bucket, so we wait until the walk has reached that depth). The paper drops a hit
@@ -29,17 +42,28 @@
 //! the `t` of every later test and of the walk), which returns the same answer.
 //!
 //! **Why the answer is exact.** The capture lists a triangle in every cell its clipped part
-//! overlaps, in every bucket its depth range overlaps (widened by more than the f32 error of
-//! the depth and the film position of a hit). A hit at `t*` lies in the cell whose interval
-//! holds `t*`, at a depth inside that cell's ray depth span, so its triangle is in a bucket the
-//! walk traces there. When a hit is accepted, every untested triangle's hit lies in a later
-//! cell or a later bucket, so at a larger `t`. The tests are the BVH's test on the same f32
-//! corners, so `t` and barycentrics are bit-identical to the BVH's.
+//! overlaps, in every bucket its depth range overlaps, with the cells widened by
+//! `FILM_MARGIN_PX` and the depth ranges by a relative `2^-16` (more than the f32 error of a
+//! hit's depth and film position). The walk's cells split `[0, 1]` into consecutive `λ`
+//! intervals that share their computed end points, and consecutive cells share the computed
+//! `w` at their common boundary, so every point of the segment is in some traced interval.
+//! The rounding of the walk only moves where the film position and `w` are evaluated: the
+//! projected ends are the ray's within a few f32 ulps, a computed crossing `λ` lies within
+//! ulps (times the segment's film length) of the boundary, and `w_a + λ (w_b - w_a)` is the
+//! segment's reciprocal depth at a `λ` within an ulp of the computed one, within ulps. So the
+//! film positions the walk assigns to a cell are within a thousandth of the film margin of
+//! it, and the depth spans it traces there are the ray's depths over them within a few ulps:
+//! a hit at `t*` lies in a cell the walk traces (the cell of its `λ`, or a neighbour within
+//! the margin, which lists the triangle too), at a depth inside that cell's traced span, so
+//! its triangle is in a bucket the walk traces there. When a hit is accepted, every untested
+//! triangle's hit lies in a later cell or a later bucket, so at a larger `t`. The tests are
+//! the BVH's test on the same f32 corners, so `t` and barycentrics are bit-identical to the
+//! BVH's.
 
-use parallax_raster::dirt::{CellRecord, DirtCapture, bucket_index, bucket_mask};
+use parallax_raster::dirt::{DirtCapture, bucket_index, bucket_mask};
 
 use super::tri4::Query;
-use super::view::{ViewConsts, ViewRay};
+use super::view::{MAX_LEVELS, ViewConsts, ViewRay};
 
 /// How a walk ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -50,14 +74,13 @@ pub(crate) enum WalkEnd {
     Continue,
 }
 
-/// Parameters where the ray crosses the cell boundaries of one film axis: boundary `k` (in
-/// cells) has slope `c0 + k ck`, crossed at `t(k) = (n0 + k nk) / (d0 + k dk)` (`view`
-/// module docs); an axis the ray does not move along has `t = 1 / 0 = +inf`.
+/// One film axis of the projected segment: boundary `k` (in cells) is crossed at
+/// `λ = k inv + c` (`inv = 1 / (x_b - x_a)`, `c = -x_a inv`); an axis the ray does not move
+/// along has `inv = 0`, `c = +inf`, so every crossing is at `+inf`.
+#[derive(Clone, Copy)]
 struct Axis {
-    n0: f32,
-    nk: f32,
-    d0: f32,
-    dk: f32,
+    inv: f32,
+    c: f32,
     /// 1 when the ray moves towards higher cell indices.
     up: u32,
     /// The ray moves along this axis.
@@ -67,38 +90,97 @@ struct Axis {
 impl Axis {
     /// An axis the ray does not move along.
     const STILL: Axis = Axis {
-        n0: 1.0,
-        nk: 0.0,
-        d0: 0.0,
-        dk: 0.0,
+        inv: 0.0,
+        c: f32::INFINITY,
         up: 0,
         moving: false,
     };
-}
 
-impl Axis {
+    /// The axis of a segment from `a` to `b` (cells). Below `MIN_SPAN` cells the axis does
+    /// not move (its film span is far inside the capture's film margin, and `1 / span` stays
+    /// finite with room for `k inv`).
     #[inline(always)]
-    fn new(step: i32, c0: f32, ck: f32, r: &ViewRay, o: f32, d: f32) -> Axis {
-        if step == 0 {
+    fn new(a: f32, b: f32) -> Axis {
+        const MIN_SPAN: f32 = 1e-30;
+        let span = b - a;
+        if span.abs() <= MIN_SPAN || span.is_nan() {
             return Axis::STILL;
         }
+        let inv = 1.0 / span;
         Axis {
-            n0: c0 * r.z0 - o,
-            nk: ck * r.z0,
-            d0: d - c0 * r.dz,
-            dk: -ck * r.dz,
-            up: (step > 0) as u32,
+            inv,
+            c: -a * inv,
+            up: (span > 0.0) as u32,
             moving: true,
         }
     }
 
-    /// The crossing of boundary `k` in front of the eye (`+inf` if the line meets the
-    /// boundary's plane behind the eye: the projection's asymptote stops short of it).
+    /// `λ` of the crossing of boundary `k`.
     #[inline(always)]
-    fn cross(&self, k: u32, r: &ViewRay) -> f32 {
-        let k = k as f32;
-        let t = (self.n0 + k * self.nk) / (self.d0 + k * self.dk);
-        if r.depth(t) > 0.0 { t } else { f32::INFINITY }
+    fn cross(&self, k: u32) -> f32 {
+        k as f32 * self.inv + self.c
+    }
+}
+
+/// The ray's clipped segment `[t_a, t_b]` projected onto the view's cell grid: film position
+/// (in cells) and reciprocal view depth `w = 1 / depth` are affine in the screen-space
+/// parameter `λ in [0, 1]` (module docs).
+struct Segment {
+    x: f32,
+    y: f32,
+    dx: f32,
+    dy: f32,
+    w: f32,
+    dw: f32,
+    /// The ends in `t`, `t_b - t_a` and the depth at `t_b`, to map a hit's `t` to `λ`.
+    t_a: f32,
+    t_b: f32,
+    dt: f32,
+    z_b: f32,
+}
+
+impl Segment {
+    #[inline(always)]
+    fn new(vc: &ViewConsts, r: &ViewRay, t_a: f32, t_b: f32) -> Segment {
+        let (z_a, z_b) = (r.depth(t_a), r.depth(t_b));
+        let (w_a, w_b) = (1.0 / z_a, 1.0 / z_b);
+        let film = |t: f32, w: f32| {
+            let (u, v) = ((r.o.x + t * r.d.x) * w, (r.o.y + t * r.d.y) * w);
+            ((u - vc.a0) * vc.cells_per_u, (vc.b0 - v) * vc.cells_per_v)
+        };
+        let (x_a, y_a) = film(t_a, w_a);
+        let (x_b, y_b) = film(t_b, w_b);
+        Segment {
+            x: x_a,
+            y: y_a,
+            dx: x_b - x_a,
+            dy: y_b - y_a,
+            w: w_a,
+            dw: w_b - w_a,
+            t_a,
+            t_b,
+            dt: t_b - t_a,
+            z_b,
+        }
+    }
+
+    /// Reciprocal depth at `λ` (monotone in `λ`).
+    #[inline(always)]
+    fn w_at(&self, l: f32) -> f32 {
+        self.w + l * self.dw
+    }
+
+    /// `λ` of the ray point at `t`: `(t - t_a) z_b / ((t_b - t_a) z(t))` inside the segment
+    /// (at most 1), 0 before it, `+inf` after it.
+    #[inline]
+    fn lambda_of(&self, r: &ViewRay, t: f32) -> f32 {
+        if t <= self.t_a {
+            0.0
+        } else if t <= self.t_b {
+            fmin((t - self.t_a) * self.z_b / (self.dt * r.depth(t)), 1.0)
+        } else {
+            f32::INFINITY
+        }
     }
 }
 
@@ -125,25 +207,24 @@ pub(crate) fn walk(
     q: &mut Query,
 ) -> WalkEnd {
     let t_end = fmin(t_end, q.best.t);
-    if !(t_start < t_end) {
+    if t_start.partial_cmp(&t_end) != Some(std::cmp::Ordering::Less) {
         return WalkEnd::Continue;
     }
     q.counters.views += 1;
-    let (_, bounds) = cap.mip_arrays();
+    let bounds = cap.recip_mip();
     let records = cap.cell_records();
-    let offsets = cap.offsets();
-    let s = vc.tile as f32;
-    let mut xs = Axis::new(r.step_x, vc.a0, vc.ax * s, r, r.o.x, r.d.x);
-    let mut ys = Axis::new(r.step_y, vc.b0, -vc.by * s, r, r.o.y, r.d.y);
+    let seg = Segment::new(vc, r, t_start, t_end);
+    let mut xs = Axis::new(seg.x, seg.x + seg.dx);
+    let mut ys = Axis::new(seg.y, seg.y + seg.dy);
+    let w_falls = seg.dw < 0.0;
 
     // The start cell (clamped onto the grid: the start may lie on the frustum's boundary).
-    let (u, v) = r.slopes(t_start);
-    let mut cx = cell_index((u - vc.a0) * vc.cells_per_u, vc.cells_x);
-    let mut cy = cell_index((vc.b0 - v) * vc.cells_per_v, vc.cells_y);
+    let mut cx = cell_index(seg.x, vc.cells_x);
+    let mut cy = cell_index(seg.y, vc.cells_y);
     let mut level = 0usize;
-    let mut t = t_start;
-    let mut z_t = r.depth(t);
-    let ascending = r.dz >= 0.0;
+    let mut l = 0.0f32;
+    let mut w_l = seg.w;
+    let mut hit_l = HitLambda::NONE;
     let mut texels = 0u64;
     let mut end = None;
 
@@ -152,73 +233,71 @@ pub(crate) fn walk(
         let (tx, ty) = (cx >> level, cy >> level);
         // Where the ray leaves the texel: its next column and row boundaries (in cells).
         let (kx, ky) = ((tx + xs.up) << level, (ty + ys.up) << level);
-        let mut t_col = xs.cross(kx, r);
-        let mut t_row = ys.cross(ky, r);
-        if t_col < t {
-            t_col = behind(t, kx as f32 * s, || (r.slopes(t).0 - vc.a0) / vc.ax);
-        }
-        if t_row < t {
-            t_row = behind(t, ky as f32 * s, || (vc.b0 - r.slopes(t).1) / vc.by);
-        }
-        let t_exit = fmax(fmin(fmin(t_col, t_row), t_end), t);
-        let z_exit = r.depth(t_exit);
-        let (z_lo, z_hi) = if ascending {
-            (z_t, z_exit)
+        let l_col = xs.cross(kx);
+        let l_row = ys.cross(ky);
+        let l_exit = fmax(fmin(fmin(l_col, l_row), 1.0), l);
+        let w_exit = seg.w_at(l_exit);
+        let (w_lo, w_hi) = if w_falls {
+            (w_exit, w_l)
         } else {
-            (z_exit, z_t)
+            (w_l, w_exit)
         };
-        let overlaps = if level == 0 {
+        let lv_i = level & (MAX_LEVELS - 1);
+        let texel = vc.level_offset[lv_i] as usize
+            + ty as usize * vc.level_width[lv_i] as usize
+            + tx as usize;
+        let [lo, hi] = bounds[texel];
+        let overlaps = w_hi >= lo && w_lo <= hi;
+        if overlaps {
+            if level > 0 {
+                level -= 1;
+                continue;
+            }
+            q.counters.cells += 1;
             let index = cy as usize * vc.cells_x as usize + cx as usize;
-            // The cell's bucket offsets do not depend on its record: start their load now so
-            // that the two cache misses overlap.
-            prefetch(offsets, index * vc.buckets as usize);
             let rec = &records[index];
-            let overlaps = z_hi >= rec.zmin && z_lo <= rec.zmax;
-            if overlaps {
+            let nb = vc.buckets;
+            let b_a = bucket_index(rec.zmin, rec.scale, nb, 1.0 / w_l);
+            let b_b = bucket_index(rec.zmin, rec.scale, nb, 1.0 / w_exit);
+            // Skip the cell when every bucket of the range is empty (null head pointers).
+            if rec.mask & bucket_mask(b_a.min(b_b), b_a.max(b_b), nb) != 0 {
                 let cell = Cell {
                     index,
-                    rec: *rec,
-                    t_exit,
-                    z: (z_t, z_exit),
+                    zmin: rec.zmin,
+                    scale: rec.scale,
+                    mask: rec.mask,
+                    buckets: (b_a, b_b),
+                    l_exit,
                 };
-                if trace_cell(vc, cap, r, &cell, q) {
+                if trace_cell(vc, cap, r, &seg, &cell, &mut hit_l, q) {
                     end = Some(WalkEnd::Done);
                     break;
                 }
             }
-            overlaps
-        } else {
-            let texel = vc.level_offset[level] + ty as usize * vc.level_width[level] + tx as usize;
-            let [lo, hi] = bounds[texel];
-            if z_hi >= lo && z_lo <= hi {
-                level -= 1;
-                continue;
-            }
-            false
-        };
+        }
         // On to the next texel.
-        if t_exit >= t_end {
+        if l_exit >= 1.0 {
             end = Some(WalkEnd::Continue);
             break;
         }
         let lv = level as u32;
-        if t_col <= t_row {
+        if l_col <= l_row {
             cx = next_cell(cx, kx, &mut xs, vc.cells_x);
-            if t_row == t_col {
+            if l_row == l_col {
                 cy = next_cell(cy, ky, &mut ys, vc.cells_y);
             } else if level > 0 {
-                let (_, v) = r.slopes(t_exit);
-                cy = refine(cy, ty, lv, &ys, (vc.b0 - v) * vc.cells_per_v, vc.cells_y);
+                let y = seg.y + l_exit * seg.dy;
+                cy = refine(cy, ty, lv, &ys, y, vc.cells_y);
             }
         } else {
             cy = next_cell(cy, ky, &mut ys, vc.cells_y);
             if level > 0 {
-                let (u, _) = r.slopes(t_exit);
-                cx = refine(cx, tx, lv, &xs, (u - vc.a0) * vc.cells_per_u, vc.cells_x);
+                let x = seg.x + l_exit * seg.dx;
+                cx = refine(cx, tx, lv, &xs, x, vc.cells_x);
             }
         }
-        t = t_exit;
-        z_t = z_exit;
+        l = l_exit;
+        w_l = w_exit;
         // Up a level after a skip (Hi-Z); after tracing a cell the ray is among surfaces,
         // where the next cell is likely to overlap too: stay at the finest level.
         if !overlaps && level < vc.top {
@@ -232,38 +311,71 @@ pub(crate) fn walk(
     })
 }
 
+/// `λ` of the best hit so far, computed once per best hit.
+struct HitLambda {
+    t: f32,
+    l: f32,
+}
+
+impl HitLambda {
+    const NONE: HitLambda = HitLambda {
+        t: f32::NAN,
+        l: 0.0,
+    };
+
+    #[inline]
+    fn get(&mut self, seg: &Segment, r: &ViewRay, t: f32) -> f32 {
+        if self.t != t {
+            *self = HitLambda {
+                t,
+                l: seg.lambda_of(r, t),
+            };
+        }
+        self.l
+    }
+}
+
 /// A level-0 cell the walk traces.
 struct Cell {
     index: usize,
-    rec: CellRecord,
-    t_exit: f32,
-    /// The ray's depth at entry and at exit.
-    z: (f32, f32),
+    /// The cell's eq. 1 constants (its record).
+    zmin: f32,
+    scale: f32,
+    /// Its non-empty buckets ([`bucket_mask`]).
+    mask: u32,
+    /// The buckets of the ray's depth at entry and at exit.
+    buckets: (u32, u32),
+    /// `λ` where the ray leaves the cell.
+    l_exit: f32,
 }
 
-/// Bucket tracing in one cell (Alg. 1 lines 7-22); true when the answer is known. Not
-/// inlined: the walk's loop keeps its state in registers.
+/// Bucket tracing in one cell whose range of buckets holds a triangle (Alg. 1 lines 7-22);
+/// true when the answer is known. Not inlined: the walk's loop keeps its state in registers.
 #[inline(never)]
-fn trace_cell(vc: &ViewConsts, cap: &DirtCapture, r: &ViewRay, c: &Cell, q: &mut Query) -> bool {
-    q.counters.cells += 1;
-    let (lo, scale, nb) = (c.rec.zmin, c.rec.scale, vc.buckets);
-    let b_a = bucket_index(lo, scale, nb, c.z.0);
-    let b_b = bucket_index(lo, scale, nb, c.z.1);
-    // Skip the cell when every bucket of the range is empty (null head pointers).
-    if c.rec.mask & bucket_mask(b_a.min(b_b), b_a.max(b_b), nb) == 0 {
-        return false;
-    }
+fn trace_cell(
+    vc: &ViewConsts,
+    cap: &DirtCapture,
+    r: &ViewRay,
+    seg: &Segment,
+    c: &Cell,
+    hit_l: &mut HitLambda,
+    q: &mut Query,
+) -> bool {
+    let (lo, scale, nb) = (c.zmin, c.scale, vc.buckets);
+    let (b_a, b_b) = c.buckets;
     let (offsets, ids) = (cap.offsets(), cap.ids());
     let base = c.index * nb as usize;
     let ascending = b_a <= b_b;
     let mut b = b_a;
     loop {
-        q.counters.buckets += 1;
-        let k = base + b as usize;
-        if q.test(&ids[offsets[k] as usize..offsets[k + 1] as usize]) {
-            return true;
+        if c.mask & bucket_mask(b, b, nb) != 0 {
+            q.counters.buckets += 1;
+            let k = base + b as usize;
+            if q.test(&ids[offsets[k] as usize..offsets[k + 1] as usize]) {
+                return true;
+            }
         }
-        if q.best.found() && q.best.t <= c.t_exit {
+        if q.best.found() && hit_l.get(seg, r, q.best.t) <= c.l_exit {
             // Accept once the walk has reached the hit's bucket (module docs).
             let bb = bucket_index(lo, scale, nb, r.depth(q.best.t));
             if (ascending && bb <= b) || (!ascending && bb >= b) {
@@ -279,39 +391,6 @@ fn trace_cell(vc: &ViewConsts, cap: &DirtCapture, r: &ViewRay, c: &Cell, q: &mut
             b -= 1;
         }
     }
-}
-
-/// How close (pixels) the ray must be to a boundary whose crossing was computed behind the
-/// current parameter for the crossing to count as "now" (rounding); farther away, the computed
-/// crossing is the numerically undecided one of a ray whose projection runs parallel to the
-/// boundary (`du/dt` or `dv/dt` within rounding of 0: the line meets the plane near the eye
-/// plane, behind the walk), and the ray never crosses it.
-const EDGE_PX: f32 = 1e-3;
-
-/// A crossing computed behind the current parameter `t` (see [`EDGE_PX`]): `t` if the ray
-/// is at the boundary (film coordinate `film_at_t()` within [`EDGE_PX`] of `boundary_px`),
-/// else never.
-#[cold]
-fn behind(t: f32, boundary_px: f32, film_at_t: impl FnOnce() -> f32) -> f32 {
-    if (film_at_t() - boundary_px).abs() <= EDGE_PX {
-        t
-    } else {
-        f32::INFINITY
-    }
-}
-
-/// Hints the CPU to bring `data[i]` into the cache (no effect off x86-64, or out of range).
-#[inline(always)]
-fn prefetch<T>(data: &[T], i: usize) {
-    #[cfg(target_arch = "x86_64")]
-    if let Some(x) = data.get(i) {
-        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-        // SAFETY: a prefetch reads nothing (it is a hint, even for an invalid address), and
-        // SSE is part of the x86-64 baseline.
-        unsafe { _mm_prefetch::<_MM_HINT_T0>((x as *const T).cast()) };
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = (data, i);
 }
 
 /// `floor(f)` clamped to `[0, n)`.
