@@ -35,6 +35,10 @@ pub(super) struct Fragment {
     tri: u32,
     zlo: f32,
     zhi: f32,
+    /// Its first and last bucket (eq. 1a/1b), once the cell's bounds are known: computed by
+    /// the count pass, read by the fill pass.
+    b0: u16,
+    b1: u16,
 }
 
 /// The cell grid and its split into bands of whole cell rows.
@@ -272,6 +276,8 @@ fn fill_band_with(
                     tri: t,
                     zlo,
                     zhi,
+                    b0: 0,
+                    b1: 0,
                 });
             }
         }
@@ -299,8 +305,9 @@ fn fill_band_with(
     // bucket's end) leaves it at the bucket's start with the ids ascending in every bucket.
     let mut offsets = vec![0u32; ncells * nb + 1];
     let mut total = 0u64;
-    for f in frags.iter() {
+    for f in frags.iter_mut() {
         let (b0, b1) = brange(f);
+        (f.b0, f.b1) = (b0 as u16, b1 as u16);
         let base = f.cell as usize * nb;
         for o in &mut offsets[base + b0..=base + b1] {
             *o += 1;
@@ -334,7 +341,7 @@ fn fill_band_with(
     offsets[ncells * nb] = total as u32;
     let mut ids = vec![0u32; total as usize];
     for f in frags.iter().rev() {
-        let (b0, b1) = brange(f);
+        let (b0, b1) = (f.b0 as usize, f.b1 as usize);
         let base = f.cell as usize * nb;
         for end in &mut offsets[base + b0..=base + b1] {
             *end -= 1;
