@@ -8,9 +8,13 @@
 //! per iteration, with the same results bit for bit (`tests/quadtree_build.rs` compares
 //! whole trees with the definition's build):
 //!
-//! - the pixel planes are decoded from the level-0 nodes where they are needed, not copied
-//!   into a [`LayerPlanes`] first, and each pixel's four footprint corners are evaluated in
-//!   lanes ([`super::cascade::pixel_trigger_lanes`]);
+//! - the pixel planes are decoded from the level-0 nodes only where a deeper plane needs them
+//!   (pixel centres tabulated per column and row), not copied into a [`LayerPlanes`] first,
+//!   and each pixel's four footprint corners are evaluated in lanes
+//!   ([`super::cascade::pixel_trigger_lanes`]);
+//! - the blocked pixels are kept as a list too: pruning marks only their ancestors
+//!   ([`Blocked::List`]) and the unsafe pixels are marked through their ancestors only
+//!   (`QuadTree::mark_unsafe_listed`; ~1 % of the pixels on atrium);
 //! - a pixel whose effective node is its own leaf (level 0) or none has the pixel planes'
 //!   trigger depth: only pixels under merged nodes are evaluated against their proxy plane
 //!   (decoded once per run of a row);
@@ -19,7 +23,8 @@
 //!   not merge (it covers a blocked pixel), so it is an AABB or empty;
 //! - after a rebuild only pixels whose effective level changed are evaluated again: a plane
 //!   node that stays effective was not recomputed (recomputed nodes are never planes), so
-//!   its pixels keep their trigger depth.
+//!   its pixels keep their trigger depth. Those pixels are found from the recomputed nodes
+//!   that were planes (`refill`): no pass over the whole image per iteration.
 //!
 //! **Invariants:** the blocked set only grows, so the loop ends; level 0 is never changed.
 
@@ -28,62 +33,155 @@ use rayon::prelude::*;
 
 use super::cascade::pixel_trigger_lanes;
 use super::merge::MergeCtx;
-use super::node::{Node, decode_plane};
+use super::node::{Node, decode_plane, decode_plane_at};
+use super::prune::Blocked;
 use super::tree::{Level, NO_PLANE, effective_levels};
 use crate::LayerPlanes;
 
 /// The levels after pruning to the fixed point, the trigger depths (`W x H`) and the
 /// effective levels of the final levels (`levels[0].w x levels[0].h`,
-/// [`super::QuadTree::effective_levels`]). `deeper` is not empty.
+/// [`super::QuadTree::effective_levels`]), and the unsafe pixels (indices `j W + i` of the
+/// finite trigger depths, ascending). `deeper` is not empty.
 pub(super) fn fixed_point(
     ctx: &MergeCtx,
     level0: Level,
     nlev: u32,
     (w, h): (u32, u32),
     deeper: &[LayerPlanes],
-) -> (Vec<Level>, Vec<f32>, Vec<u8>) {
-    let mut tz_px = vec![f32::INFINITY; (w * h) as usize];
+) -> (Vec<Level>, Vec<f32>, Vec<u8>, Option<Vec<u32>>) {
+    let mut tz = vec![f32::INFINITY; (w * h) as usize];
     let l0 = std::slice::from_ref(&level0);
-    fill_triggers(&mut tz_px, ctx, w, deeper, |i, j| Some(pixel_key(l0, i, j)));
-    let mut blocked: Vec<bool> = tz_px.iter().map(|z| z.is_finite()).collect();
-    let mut levels = super::prune::prune(ctx, level0, nlev, &blocked, w, h);
+    // The pixels with a finite trigger depth, i.e. the blocked ones, in a list and a map.
+    let mut listed = fill_triggers(&mut tz, ctx, w, deeper, &[], |i, j| {
+        Some(pixel_key(l0, i, j))
+    });
+    let mut blocked = vec![false; (w * h) as usize];
+    for &k in &listed {
+        blocked[k as usize] = true;
+    }
+    let mut levels = super::prune::prune(ctx, level0, nlev, Blocked::List(&listed), w, h);
     let mut eff = effective_levels(&levels);
     if ctx.never {
-        return (levels, tz_px, eff);
+        return (levels, tz, eff, Some(listed));
     }
-    // Trigger depths of the effective planes: the pixel planes' except under merged nodes.
-    let mut tz = tz_px.clone();
+    // Trigger depths of the effective planes: the pixel planes' except under merged nodes,
+    // which hold no blocked pixel, so only they can be newly unsafe.
     let w0 = levels[0].w;
-    fill_triggers(&mut tz, ctx, w, deeper, |i, j| {
+    let mut newly = fill_triggers(&mut tz, ctx, w, deeper, &blocked, |i, j| {
         let l = eff[(j * w0 + i) as usize];
         (l != NO_PLANE && l > 0).then(|| Some(ancestor_key(&levels, l, i, j)))
     });
-    loop {
-        let newly: Vec<u32> = (0..w * h)
-            .filter(|&k| tz[k as usize].is_finite() && !blocked[k as usize])
-            .collect();
-        if newly.is_empty() {
-            return (levels, tz, eff);
-        }
+    while !newly.is_empty() {
         for &k in &newly {
             blocked[k as usize] = true;
         }
-        reprune(ctx, &mut levels, &newly, w);
-        let prev = std::mem::replace(&mut eff, effective_levels(&levels));
-        let (levels, eff) = (&levels, &eff);
-        fill_triggers(&mut tz, ctx, w, deeper, |i, j| {
-            let k = (j * w0 + i) as usize;
-            let l = eff[k];
-            if l == prev[k] {
-                None
-            } else if l == NO_PLANE || l == 0 {
-                // Its own leaf again: the pixel plane's trigger depth (same computation).
-                Some(pixel_key(levels, i, j))
-            } else {
-                Some(Some(ancestor_key(levels, l, i, j)))
-            }
-        });
+        listed.extend_from_slice(&newly);
+        let dissolved = reprune(ctx, &mut levels, &newly, w);
+        newly = refill(
+            &mut tz,
+            &mut eff,
+            ctx,
+            (w, h),
+            deeper,
+            &blocked,
+            &levels,
+            &dissolved,
+        );
     }
+    // A pixel blocked after a proxy made it unsafe may be safe against its own plane.
+    listed.retain(|&k| tz[k as usize].is_finite());
+    listed.sort_unstable();
+    (levels, tz, eff, Some(listed))
+}
+
+/// After a rebuild: the effective levels and trigger depths of the pixels under the
+/// `dissolved` nodes (recomputed nodes that were planes; `(level, qx, qy)`), and the pixels
+/// that became unsafe there and are not yet blocked. A dissolved node's ancestors are
+/// recomputed too (they are ancestors of the same newly blocked pixels), so they are not
+/// planes; each child of a dissolved node that is still a plane (was not recomputed: every
+/// child of a plane node is a plane, and recomputed nodes are not) is now the topmost plane
+/// over its footprint, i.e. those pixels' effective node — exactly the pixels whose
+/// effective level changed (a recomputed node that was not a plane was above every effective
+/// node under it).
+#[allow(clippy::too_many_arguments)]
+fn refill(
+    tz: &mut [f32],
+    eff: &mut [u8],
+    ctx: &MergeCtx,
+    (w, h): (u32, u32),
+    deeper: &[LayerPlanes],
+    blocked: &[bool],
+    levels: &[Level],
+    dissolved: &[(u32, u32, u32)],
+) -> Vec<u32> {
+    // The still-plane children of the dissolved nodes: disjoint footprints.
+    let mut kids: Vec<(u32, u32, u32)> = Vec::new();
+    for &(l, qx, qy) in dissolved {
+        let cl = l - 1;
+        let child = &levels[cl as usize];
+        for c in 0..4 {
+            let (cx, cy) = (2 * qx + (c & 1), 2 * qy + (c >> 1));
+            if child.nodes[(cy * child.w + cx) as usize].is_plane() {
+                kids.push((cl, cx, cy));
+            }
+        }
+    }
+    let (wf, hf) = (ctx.wf, ctx.hf);
+    let w0 = levels[0].w;
+    // Per footprint, the pixels' new trigger depths (in parallel), written afterwards.
+    let vals: Vec<Vec<(u32, f32)>> = kids
+        .par_iter()
+        .map(|&(l, qx, qy)| {
+            let (x0, y0) = (qx << l, qy << l);
+            let (x1, y1) = (((qx + 1) << l).min(w), ((qy + 1) << l).min(h));
+            let mut out = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
+            // A merged node: one decode for its whole footprint.
+            let merged = (l > 0).then(|| {
+                let lv = &levels[l as usize];
+                decode_plane(lv.nodes[(qy * lv.w + qx) as usize], l, qx, qy, wf, hf)
+            });
+            for j in y0..y1 {
+                let ys = Vec4::new(j as f32, j as f32, (j + 1) as f32, (j + 1) as f32) / hf;
+                for i in x0..x1 {
+                    let xs = Vec4::new(
+                        i as f32 / wf,
+                        (i + 1) as f32 / wf,
+                        i as f32 / wf,
+                        (i + 1) as f32 / wf,
+                    );
+                    let k = j * w + i;
+                    let t = pixel_trigger_lanes(
+                        k as usize,
+                        xs,
+                        ys,
+                        || match merged {
+                            Some(p) => Some(p),
+                            None => pixel_key(levels, i, j)
+                                .map(|(node, l, qx, qy)| decode_plane(node, l, qx, qy, wf, hf)),
+                        },
+                        deeper,
+                    );
+                    out.push((k, t));
+                }
+            }
+            out
+        })
+        .collect();
+    for &(l, qx, qy) in &kids {
+        let (x0, y0) = (qx << l, qy << l);
+        for y in y0..((qy + 1) << l) {
+            let row = (y * w0) as usize;
+            eff[row + x0 as usize..row + ((qx + 1) << l) as usize].fill(l as u8);
+        }
+    }
+    let mut newly = Vec::new();
+    for (k, t) in vals.into_iter().flatten() {
+        tz[k as usize] = t;
+        if t.is_finite() && !blocked[k as usize] {
+            newly.push(k);
+        }
+    }
+    newly
 }
 
 /// Pixel `(i, j)`'s leaf as a [`fill_triggers`] key, if it is a plane.
@@ -107,48 +205,73 @@ type Key = (Node, u32, u32, u32);
 
 /// Per pixel `(i, j)` of `tz` (`W x H`, rows in parallel) with `plane(i, j) = Some(p)`: the
 /// trigger depth of the decoded plane of node `p` ([`decode_plane`]; `None`: empty) at that
-/// pixel against `deeper`; pixels where `plane` answers `None` keep their value. A node
-/// covering a run of a row is decoded once (the decode is a function of the key).
+/// pixel against `deeper`; pixels where `plane` answers `None` keep their value. The plane
+/// is decoded only where a deeper plane needs it, and a node covering a run of a row once
+/// (the decode is a function of the key). Returns the pixels (indices `j W + i`, ascending)
+/// that got a finite trigger depth and are not marked in `blocked` (empty: none is).
 fn fill_triggers(
     tz: &mut [f32],
     ctx: &MergeCtx,
     w: u32,
     deeper: &[LayerPlanes],
+    blocked: &[bool],
     plane: impl Fn(u32, u32) -> Option<Option<Key>> + Sync,
-) {
+) -> Vec<u32> {
     let (wf, hf) = (ctx.wf, ctx.hf);
-    // The footprints' `x` edges, `i / W` (the definition's divisions, once per column).
+    // The footprints' `x` edges, `i / W` (the definition's divisions, once per column), and
+    // the pixel centres `((i + 0.5) 1) / W` of `node_centre` at level 0.
     let xe: Vec<f32> = (0..=w).map(|i| i as f32 / wf).collect();
+    let xc: Vec<f32> = (0..w).map(|i| ((i as f32 + 0.5) * 1.0) / wf).collect();
     tz.par_chunks_mut(w as usize)
         .enumerate()
-        .for_each(|(j, row)| {
+        .flat_map_iter(|(j, row)| {
             let j = j as u32;
             let ys = Vec4::new(j as f32, j as f32, (j + 1) as f32, (j + 1) as f32) / hf;
+            let yc = ((j as f32 + 0.5) * 1.0) / hf;
             let mut last: Option<(Key, (Vec3, f32))> = None;
+            let mut newly = Vec::new();
             for (i, t) in row.iter_mut().enumerate() {
-                let i = i as u32;
-                let Some(key) = plane(i, j) else {
+                let Some(key) = plane(i as u32, j) else {
                     continue;
                 };
-                let p = key.map(|key| match last {
-                    Some((k, p)) if k == key => p,
-                    _ => {
-                        let (node, l, qx, qy) = key;
-                        let p = decode_plane(node, l, qx, qy, wf, hf);
-                        last = Some((key, p));
-                        p
-                    }
-                });
-                let (x0, x1) = (xe[i as usize], xe[i as usize + 1]);
+                let (x0, x1) = (xe[i], xe[i + 1]);
                 let xs = Vec4::new(x0, x1, x0, x1);
-                *t = pixel_trigger_lanes((j * w + i) as usize, xs, ys, p, deeper);
+                let k = j as usize * w as usize + i;
+                *t = pixel_trigger_lanes(
+                    k,
+                    xs,
+                    ys,
+                    || {
+                        key.map(|key| match last {
+                            Some((k, p)) if k == key => p,
+                            _ => {
+                                let (node, l, qx, qy) = key;
+                                let p = if l == 0 {
+                                    decode_plane_at(node, 0, xc[i], yc, wf, hf)
+                                } else {
+                                    decode_plane(node, l, qx, qy, wf, hf)
+                                };
+                                last = Some((key, p));
+                                p
+                            }
+                        })
+                    },
+                    deeper,
+                );
+                if t.is_finite() && (blocked.is_empty() || !blocked[k]) {
+                    newly.push(k as u32);
+                }
             }
-        });
+            newly
+        })
+        .collect()
 }
 
 /// Recomputes the ancestors of the pixels `newly` (indices `j W + i`, just blocked) level by
-/// level, bottom-up; none of them may merge.
-fn reprune(ctx: &MergeCtx, levels: &mut [Level], newly: &[u32], w: u32) {
+/// level, bottom-up; none of them may merge. Returns the recomputed nodes that were planes
+/// before (`(level, qx, qy)`).
+fn reprune(ctx: &MergeCtx, levels: &mut [Level], newly: &[u32], w: u32) -> Vec<(u32, u32, u32)> {
+    let mut dissolved = Vec::new();
     let mut cur: Vec<(u32, u32)> = newly.iter().map(|&k| (k / w, k % w)).collect();
     for l in 1..levels.len() {
         let mut next: Vec<(u32, u32)> = cur.iter().map(|&(y, x)| (y >> 1, x >> 1)).collect();
@@ -157,9 +280,13 @@ fn reprune(ctx: &MergeCtx, levels: &mut [Level], newly: &[u32], w: u32) {
         let (lo, hi) = levels.split_at_mut(l);
         let (child, par) = (&lo[l - 1], &mut hi[0]);
         for &(qy, qx) in &next {
-            par.nodes[(qy * par.w + qx) as usize] =
-                super::prune::parent_of(ctx, child, l as u32, qx, qy, false);
+            let node = &mut par.nodes[(qy * par.w + qx) as usize];
+            if node.is_plane() {
+                dissolved.push((l as u32, qx, qy));
+            }
+            *node = super::prune::parent_of(ctx, child, l as u32, qx, qy, false);
         }
         cur = next;
     }
+    dissolved
 }
