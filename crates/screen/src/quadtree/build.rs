@@ -30,7 +30,7 @@
 //! Every level is built in parallel over rows (rayon). **Fast paths, same bits:** the leaf
 //! directions come from per-column and per-row tables of the same products; merges run with
 //! the children in lanes (`merge_lanes`); with deeper layers the pruning fixed point is
-//! computed incrementally (`fixpoint`). `QuadTree::build_cascaded` with `reference` runs
+//! computed incrementally (`fixpoint`), its pixel-plane trigger depths in the leaf pass. `QuadTree::build_cascaded` with `reference` runs
 //! the scalar definitions instead (`QuadTreeTracer::build_reference`); the tests compare
 //! the two tree for tree (`tests/quadtree_build.rs`).
 
@@ -228,18 +228,35 @@ impl QuadTree {
         // Level 0: leaves (§3.2).
         let (w0, h0) = (top_w << top, top_h << top);
         let mut leaves = vec![Node::EMPTY; (w0 * h0) as usize];
-        leaves
-            .par_chunks_mut(w0 as usize)
-            .enumerate()
-            .for_each(|(j, row)| {
-                let j = j as u32;
-                if j >= h {
-                    return;
-                }
-                for i in 0..w {
-                    row[i as usize] = leaf((j * w + i) as usize, i, j);
-                }
-            });
+        let leaf_row = |row: &mut [Node], j: u32| {
+            for i in 0..w {
+                row[i as usize] = leaf((j * w + i) as usize, i, j);
+            }
+        };
+        // With deeper layers (fast path), each row's pixel-plane trigger depths right after
+        // its leaves (`fixpoint`), and the pixels where they are finite.
+        let mut px_triggers = None;
+        let image = &mut leaves[..(w0 * h) as usize];
+        if !deeper.is_empty() && !reference {
+            let cols = super::fixpoint::Columns::new(w, wf);
+            let mut tz = vec![f32::INFINITY; (w * h) as usize];
+            let listed: Vec<u32> = image
+                .par_chunks_mut(w0 as usize)
+                .zip(tz.par_chunks_mut(w as usize))
+                .enumerate()
+                .flat_map_iter(|(j, (row, t))| {
+                    let j = j as u32;
+                    leaf_row(row, j);
+                    super::fixpoint::pixel_triggers_row(t, row, j, &ctx, &cols, deeper)
+                })
+                .collect();
+            px_triggers = Some((tz, listed));
+        } else {
+            image
+                .par_chunks_mut(w0 as usize)
+                .enumerate()
+                .for_each(|(j, row)| leaf_row(row, j as u32));
+        }
         let level0 = Level {
             w: w0,
             h: h0,
@@ -254,7 +271,8 @@ impl QuadTree {
                 super::prune::fixed_point_reference(&ctx, level0, nlev, (w, h), deeper);
             (levels, tz, eff, None)
         } else {
-            super::fixpoint::fixed_point(&ctx, level0, nlev, (w, h), deeper)
+            let px = px_triggers.expect("computed with the leaves");
+            super::fixpoint::fixed_point(&ctx, level0, nlev, (w, h), deeper, px)
         };
         let mut tree = Self {
             width: w,

@@ -8,10 +8,11 @@
 //! per iteration, with the same results bit for bit (`tests/quadtree_build.rs` compares
 //! whole trees with the definition's build):
 //!
-//! - the pixel planes are decoded from the level-0 nodes only where a deeper plane needs them
-//!   (pixel centres tabulated per column and row), not copied into a [`LayerPlanes`] first,
-//!   and each pixel's four footprint corners are evaluated in lanes
-//!   ([`super::cascade::pixel_trigger_lanes`]);
+//! - the pixel planes' trigger depths are computed by the leaf pass, each row right after
+//!   its leaves (`pixel_triggers_row`, no second pass over level 0); the pixel planes are
+//!   decoded from the leaves only where a deeper plane needs them (pixel centres tabulated
+//!   per column and row), not copied into a [`LayerPlanes`] first, and each pixel's four
+//!   footprint corners are evaluated in lanes ([`super::cascade::pixel_trigger_lanes`]);
 //! - the blocked pixels are kept as a list too: pruning marks only their ancestors
 //!   ([`Blocked::List`]) and the unsafe pixels are marked through their ancestors only
 //!   (`QuadTree::mark_unsafe_listed`; ~1 % of the pixels on atrium);
@@ -41,20 +42,18 @@ use crate::LayerPlanes;
 /// The levels after pruning to the fixed point, the trigger depths (`W x H`) and the
 /// effective levels of the final levels (`levels[0].w x levels[0].h`,
 /// [`super::QuadTree::effective_levels`]), and the unsafe pixels (indices `j W + i` of the
-/// finite trigger depths, ascending). `deeper` is not empty.
+/// finite trigger depths, ascending). `deeper` is not empty; `(tz, listed)`: the trigger
+/// depths of the pixel planes and the pixels where they are finite, ascending (computed with
+/// the leaves, [`pixel_triggers_row`] per row).
 pub(super) fn fixed_point(
     ctx: &MergeCtx,
     level0: Level,
     nlev: u32,
     (w, h): (u32, u32),
     deeper: &[LayerPlanes],
+    (mut tz, mut listed): (Vec<f32>, Vec<u32>),
 ) -> (Vec<Level>, Vec<f32>, Vec<u8>, Option<Vec<u32>>) {
-    let mut tz = vec![f32::INFINITY; (w * h) as usize];
-    let l0 = std::slice::from_ref(&level0);
     // The pixels with a finite trigger depth, i.e. the blocked ones, in a list and a map.
-    let mut listed = fill_triggers(&mut tz, ctx, w, deeper, &[], |i, j| {
-        Some(pixel_key(l0, i, j))
-    });
     let mut blocked = vec![false; (w * h) as usize];
     for &k in &listed {
         blocked[k as usize] = true;
@@ -203,12 +202,28 @@ fn ancestor_key(levels: &[Level], l: u8, i: u32, j: u32) -> Key {
 /// A plane node with its level and position.
 type Key = (Node, u32, u32, u32);
 
+/// Per-column tables of the trigger passes: the footprints' `x` edges `i / W` (the
+/// definition's divisions, once per column) and the pixel centres `((i + 0.5) 1) / W` of
+/// `node_centre` at level 0.
+pub(super) struct Columns {
+    xe: Vec<f32>,
+    xc: Vec<f32>,
+}
+
+impl Columns {
+    pub(super) fn new(w: u32, wf: f32) -> Self {
+        Self {
+            xe: (0..=w).map(|i| i as f32 / wf).collect(),
+            xc: (0..w).map(|i| ((i as f32 + 0.5) * 1.0) / wf).collect(),
+        }
+    }
+}
+
 /// Per pixel `(i, j)` of `tz` (`W x H`, rows in parallel) with `plane(i, j) = Some(p)`: the
 /// trigger depth of the decoded plane of node `p` ([`decode_plane`]; `None`: empty) at that
-/// pixel against `deeper`; pixels where `plane` answers `None` keep their value. The plane
-/// is decoded only where a deeper plane needs it, and a node covering a run of a row once
-/// (the decode is a function of the key). Returns the pixels (indices `j W + i`, ascending)
-/// that got a finite trigger depth and are not marked in `blocked` (empty: none is).
+/// pixel against `deeper`; pixels where `plane` answers `None` keep their value. Returns the
+/// pixels (indices `j W + i`, ascending) that got a finite trigger depth and are not marked
+/// in `blocked` (empty: none is).
 fn fill_triggers(
     tz: &mut [f32],
     ctx: &MergeCtx,
@@ -217,54 +232,86 @@ fn fill_triggers(
     blocked: &[bool],
     plane: impl Fn(u32, u32) -> Option<Option<Key>> + Sync,
 ) -> Vec<u32> {
-    let (wf, hf) = (ctx.wf, ctx.hf);
-    // The footprints' `x` edges, `i / W` (the definition's divisions, once per column), and
-    // the pixel centres `((i + 0.5) 1) / W` of `node_centre` at level 0.
-    let xe: Vec<f32> = (0..=w).map(|i| i as f32 / wf).collect();
-    let xc: Vec<f32> = (0..w).map(|i| ((i as f32 + 0.5) * 1.0) / wf).collect();
+    let cols = Columns::new(w, ctx.wf);
     tz.par_chunks_mut(w as usize)
         .enumerate()
         .flat_map_iter(|(j, row)| {
             let j = j as u32;
-            let ys = Vec4::new(j as f32, j as f32, (j + 1) as f32, (j + 1) as f32) / hf;
-            let yc = ((j as f32 + 0.5) * 1.0) / hf;
-            let mut last: Option<(Key, (Vec3, f32))> = None;
-            let mut newly = Vec::new();
-            for (i, t) in row.iter_mut().enumerate() {
-                let Some(key) = plane(i as u32, j) else {
-                    continue;
-                };
-                let (x0, x1) = (xe[i], xe[i + 1]);
-                let xs = Vec4::new(x0, x1, x0, x1);
-                let k = j as usize * w as usize + i;
-                *t = pixel_trigger_lanes(
-                    k,
-                    xs,
-                    ys,
-                    || {
-                        key.map(|key| match last {
-                            Some((k, p)) if k == key => p,
-                            _ => {
-                                let (node, l, qx, qy) = key;
-                                let p = if l == 0 {
-                                    decode_plane_at(node, 0, xc[i], yc, wf, hf)
-                                } else {
-                                    decode_plane(node, l, qx, qy, wf, hf)
-                                };
-                                last = Some((key, p));
-                                p
-                            }
-                        })
-                    },
-                    deeper,
-                );
-                if t.is_finite() && (blocked.is_empty() || !blocked[k]) {
-                    newly.push(k as u32);
-                }
-            }
-            newly
+            triggers_row(row, j, ctx, &cols, deeper, blocked, |i| plane(i, j))
         })
         .collect()
+}
+
+/// The pixel planes' trigger depths of row `j` (`tz`, `W` values) from the row's leaves
+/// `nodes` ([`fill_triggers`] with the pixel planes; the build runs it right after the row's
+/// leaves, while they are in cache). Returns the row's pixels with a finite trigger depth.
+pub(super) fn pixel_triggers_row(
+    tz: &mut [f32],
+    nodes: &[Node],
+    j: u32,
+    ctx: &MergeCtx,
+    cols: &Columns,
+    deeper: &[LayerPlanes],
+) -> Vec<u32> {
+    triggers_row(tz, j, ctx, cols, deeper, &[], |i| {
+        let node = nodes[i as usize];
+        Some(node.is_plane().then_some((node, 0, i, j)))
+    })
+}
+
+/// [`fill_triggers`] for row `j`; `plane(i)`: the key of pixel `(i, j)`. The plane is
+/// decoded only where a deeper plane needs it, and a node covering a run of the row once
+/// (the decode is a function of the key).
+#[inline]
+fn triggers_row(
+    row: &mut [f32],
+    j: u32,
+    ctx: &MergeCtx,
+    cols: &Columns,
+    deeper: &[LayerPlanes],
+    blocked: &[bool],
+    plane: impl Fn(u32) -> Option<Option<Key>>,
+) -> Vec<u32> {
+    let (wf, hf) = (ctx.wf, ctx.hf);
+    let (xe, xc) = (&cols.xe, &cols.xc);
+    let base = j as usize * row.len();
+    let ys = Vec4::new(j as f32, j as f32, (j + 1) as f32, (j + 1) as f32) / hf;
+    let yc = ((j as f32 + 0.5) * 1.0) / hf;
+    let mut last: Option<(Key, (Vec3, f32))> = None;
+    let mut newly = Vec::new();
+    for (i, t) in row.iter_mut().enumerate() {
+        let Some(key) = plane(i as u32) else {
+            continue;
+        };
+        let (x0, x1) = (xe[i], xe[i + 1]);
+        let xs = Vec4::new(x0, x1, x0, x1);
+        let k = base + i;
+        *t = pixel_trigger_lanes(
+            k,
+            xs,
+            ys,
+            || {
+                key.map(|key| match last {
+                    Some((k, p)) if k == key => p,
+                    _ => {
+                        let (node, l, qx, qy) = key;
+                        let p = if l == 0 {
+                            decode_plane_at(node, 0, xc[i], yc, wf, hf)
+                        } else {
+                            decode_plane(node, l, qx, qy, wf, hf)
+                        };
+                        last = Some((key, p));
+                        p
+                    }
+                })
+            },
+            deeper,
+        );
+        if t.is_finite() && (blocked.is_empty() || !blocked[k]) {
+            newly.push(k as u32);
+        }
+    }
+    newly
 }
 
 /// Recomputes the ancestors of the pixels `newly` (indices `j W + i`, just blocked) level by
