@@ -262,8 +262,12 @@ pub(crate) fn pixel_trigger_lanes(
     let mut decoded: Option<Option<(Vec3, f32)>> = None;
     trigger_over(idx, deeper, |nj, cj, front| {
         let z = (s(cj) - s(nj.x) * xs - s(nj.y) * ys) / s(nj.z);
+        // `front.min(zc)` of the definition as one `minss` each: `front` is never NaN and a
+        // NaN corner is skipped as there; at a tie of `+0` and `-0` the sign may differ,
+        // which the trigger depth `max(front - margin, +0)` does not see (`±0 - margin` is
+        // the same value).
         for zc in z.to_array() {
-            *front = front.min(zc);
+            *front = if zc < *front { zc } else { *front };
         }
         match *decoded.get_or_insert_with(&mut plane) {
             Some((n, c)) => {
