@@ -202,19 +202,25 @@ fn ancestor_key(levels: &[Level], l: u8, i: u32, j: u32) -> Key {
 /// A plane node with its level and position.
 type Key = (Node, u32, u32, u32);
 
-/// Per-column tables of the trigger passes: the footprints' `x` edges `i / W` (the
-/// definition's divisions, once per column) and the pixel centres `((i + 0.5) 1) / W` of
+/// Per-column tables of the trigger passes: the footprints' `x` edges `x0 = i / W`, `x1 =
+/// (i + 1) / W` (the definition's divisions, once per column) as the lanes `(x0, x1, x0,
+/// x1)` of [`pixel_trigger_lanes`], and the pixel centres `((i + 0.5) 1) / W` of
 /// `node_centre` at level 0.
 pub(super) struct Columns {
-    xe: Vec<f32>,
+    xs: Vec<Vec4>,
     xc: Vec<f32>,
 }
 
 impl Columns {
     pub(super) fn new(w: u32, wf: f32) -> Self {
+        let xe: Vec<f32> = (0..=w).map(|i| i as f32 / wf).collect();
+        let xs = xe
+            .windows(2)
+            .map(|e| Vec4::new(e[0], e[1], e[0], e[1]))
+            .collect();
         Self {
-            xe: (0..=w).map(|i| i as f32 / wf).collect(),
             xc: (0..w).map(|i| ((i as f32 + 0.5) * 1.0) / wf).collect(),
+            xs,
         }
     }
 }
@@ -253,10 +259,34 @@ pub(super) fn pixel_triggers_row(
     cols: &Columns,
     deeper: &[LayerPlanes],
 ) -> Vec<u32> {
-    triggers_row(tz, j, ctx, cols, deeper, &[], |i| {
-        let node = nodes[i as usize];
-        Some(node.is_plane().then_some((node, 0, i, j)))
-    })
+    // Every key differs (one leaf per pixel): no decode cache, the centre from the tables.
+    let (wf, hf) = (ctx.wf, ctx.hf);
+    let base = j as usize * tz.len();
+    let ys = Vec4::new(j as f32, j as f32, (j + 1) as f32, (j + 1) as f32) / hf;
+    let yc = ((j as f32 + 0.5) * 1.0) / hf;
+    let mut listed = Vec::new();
+    for (i, ((t, &node), (&xs, &xc))) in tz
+        .iter_mut()
+        .zip(nodes)
+        .zip(cols.xs.iter().zip(&cols.xc))
+        .enumerate()
+    {
+        let k = base + i;
+        *t = pixel_trigger_lanes(
+            k,
+            xs,
+            ys,
+            || {
+                node.is_plane()
+                    .then(|| decode_plane_at(node, 0, xc, yc, wf, hf))
+            },
+            deeper,
+        );
+        if t.is_finite() {
+            listed.push(k as u32);
+        }
+    }
+    listed
 }
 
 /// [`fill_triggers`] for row `j`; `plane(i)`: the key of pixel `(i, j)`. The plane is
@@ -273,7 +303,7 @@ fn triggers_row(
     plane: impl Fn(u32) -> Option<Option<Key>>,
 ) -> Vec<u32> {
     let (wf, hf) = (ctx.wf, ctx.hf);
-    let (xe, xc) = (&cols.xe, &cols.xc);
+    let xc = &cols.xc;
     let base = j as usize * row.len();
     let ys = Vec4::new(j as f32, j as f32, (j + 1) as f32, (j + 1) as f32) / hf;
     let yc = ((j as f32 + 0.5) * 1.0) / hf;
@@ -283,8 +313,7 @@ fn triggers_row(
         let Some(key) = plane(i as u32) else {
             continue;
         };
-        let (x0, x1) = (xe[i], xe[i + 1]);
-        let xs = Vec4::new(x0, x1, x0, x1);
+        let xs = cols.xs[i];
         let k = base + i;
         *t = pixel_trigger_lanes(
             k,
