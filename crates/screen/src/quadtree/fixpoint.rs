@@ -29,7 +29,7 @@
 //!
 //! **Invariants:** the blocked set only grows, so the loop ends; level 0 is never changed.
 
-use glam::{Vec3, Vec4};
+use glam::Vec4;
 use rayon::prelude::*;
 
 use super::cascade::pixel_trigger_lanes;
@@ -65,11 +65,7 @@ pub(super) fn fixed_point(
     }
     // Trigger depths of the effective planes: the pixel planes' except under merged nodes,
     // which hold no blocked pixel, so only they can be newly unsafe.
-    let w0 = levels[0].w;
-    let mut newly = fill_triggers(&mut tz, ctx, w, deeper, &blocked, |i, j| {
-        let l = eff[(j * w0 + i) as usize];
-        (l != NO_PLANE && l > 0).then(|| Some(ancestor_key(&levels, l, i, j)))
-    });
+    let mut newly = merged_triggers(&mut tz, ctx, w, deeper, &blocked, &levels, &eff);
     while !newly.is_empty() {
         for &k in &newly {
             blocked[k as usize] = true;
@@ -183,20 +179,11 @@ fn refill(
     newly
 }
 
-/// Pixel `(i, j)`'s leaf as a [`fill_triggers`] key, if it is a plane.
+/// Pixel `(i, j)`'s leaf as a key, if it is a plane.
 #[inline]
 fn pixel_key(levels: &[Level], i: u32, j: u32) -> Option<Key> {
     let node = levels[0].nodes[(j * levels[0].w + i) as usize];
     node.is_plane().then_some((node, 0, i, j))
-}
-
-/// Pixel `(i, j)`'s ancestor at level `l` (a plane node) as a [`fill_triggers`] key.
-#[inline]
-fn ancestor_key(levels: &[Level], l: u8, i: u32, j: u32) -> Key {
-    let l = l as u32;
-    let (qx, qy) = (i >> l, j >> l);
-    let lv = &levels[l as usize];
-    (lv.nodes[(qy * lv.w + qx) as usize], l, qx, qy)
 }
 
 /// A plane node with its level and position.
@@ -225,32 +212,61 @@ impl Columns {
     }
 }
 
-/// Per pixel `(i, j)` of `tz` (`W x H`, rows in parallel) with `plane(i, j) = Some(p)`: the
-/// trigger depth of the decoded plane of node `p` ([`decode_plane`]; `None`: empty) at that
-/// pixel against `deeper`; pixels where `plane` answers `None` keep their value. Returns the
+/// The trigger depths (`tz`, `W x H`, rows in parallel) of the pixels under merged nodes
+/// (effective level `eff > 0`) against `deeper`, from their effective node's decoded plane
+/// ([`decode_plane`]); other pixels keep their value. The pixels of one effective node in a
+/// row are one run (they all have its level): its plane is decoded once per run. Returns the
 /// pixels (indices `j W + i`, ascending) that got a finite trigger depth and are not marked
-/// in `blocked` (empty: none is).
-fn fill_triggers(
+/// in `blocked`.
+fn merged_triggers(
     tz: &mut [f32],
     ctx: &MergeCtx,
     w: u32,
     deeper: &[LayerPlanes],
     blocked: &[bool],
-    plane: impl Fn(u32, u32) -> Option<Option<Key>> + Sync,
+    levels: &[Level],
+    eff: &[u8],
 ) -> Vec<u32> {
     let cols = Columns::new(w, ctx.wf);
-    tz.par_chunks_mut(w as usize)
+    let (wf, hf) = (ctx.wf, ctx.hf);
+    let (wu, w0) = (w as usize, levels[0].w as usize);
+    tz.par_chunks_mut(wu)
         .enumerate()
         .flat_map_iter(|(j, row)| {
+            let base = j * wu;
+            let er = &eff[j * w0..j * w0 + wu];
             let j = j as u32;
-            triggers_row(row, j, ctx, &cols, deeper, blocked, |i| plane(i, j))
+            let ys = Vec4::new(j as f32, j as f32, (j + 1) as f32, (j + 1) as f32) / hf;
+            let mut newly = Vec::new();
+            let mut i = 0;
+            while i < wu {
+                let l = er[i];
+                if l == NO_PLANE || l == 0 {
+                    i += 1;
+                    continue;
+                }
+                let l = l as u32;
+                let (qx, qy) = (i as u32 >> l, j >> l);
+                let lv = &levels[l as usize];
+                let p = decode_plane(lv.nodes[(qy * lv.w + qx) as usize], l, qx, qy, wf, hf);
+                let end = (((qx + 1) << l) as usize).min(wu);
+                for (ii, t) in row.iter_mut().enumerate().take(end).skip(i) {
+                    let k = base + ii;
+                    *t = pixel_trigger_lanes(k, cols.xs[ii], ys, || Some(p), deeper);
+                    if t.is_finite() && !blocked[k] {
+                        newly.push(k as u32);
+                    }
+                }
+                i = end;
+            }
+            newly
         })
         .collect()
 }
 
 /// The pixel planes' trigger depths of row `j` (`tz`, `W` values) from the row's leaves
-/// `nodes` ([`fill_triggers`] with the pixel planes; the build runs it right after the row's
-/// leaves, while they are in cache). Returns the row's pixels with a finite trigger depth.
+/// `nodes` (the build runs it right after the row's leaves, while they are in cache).
+/// Returns the row's pixels with a finite trigger depth.
 pub(super) fn pixel_triggers_row(
     tz: &mut [f32],
     nodes: &[Node],
@@ -287,60 +303,6 @@ pub(super) fn pixel_triggers_row(
         }
     }
     listed
-}
-
-/// [`fill_triggers`] for row `j`; `plane(i)`: the key of pixel `(i, j)`. The plane is
-/// decoded only where a deeper plane needs it, and a node covering a run of the row once
-/// (the decode is a function of the key).
-#[inline]
-fn triggers_row(
-    row: &mut [f32],
-    j: u32,
-    ctx: &MergeCtx,
-    cols: &Columns,
-    deeper: &[LayerPlanes],
-    blocked: &[bool],
-    plane: impl Fn(u32) -> Option<Option<Key>>,
-) -> Vec<u32> {
-    let (wf, hf) = (ctx.wf, ctx.hf);
-    let xc = &cols.xc;
-    let base = j as usize * row.len();
-    let ys = Vec4::new(j as f32, j as f32, (j + 1) as f32, (j + 1) as f32) / hf;
-    let yc = ((j as f32 + 0.5) * 1.0) / hf;
-    let mut last: Option<(Key, (Vec3, f32))> = None;
-    let mut newly = Vec::new();
-    for (i, t) in row.iter_mut().enumerate() {
-        let Some(key) = plane(i as u32) else {
-            continue;
-        };
-        let xs = cols.xs[i];
-        let k = base + i;
-        *t = pixel_trigger_lanes(
-            k,
-            xs,
-            ys,
-            || {
-                key.map(|key| match last {
-                    Some((k, p)) if k == key => p,
-                    _ => {
-                        let (node, l, qx, qy) = key;
-                        let p = if l == 0 {
-                            decode_plane_at(node, 0, xc[i], yc, wf, hf)
-                        } else {
-                            decode_plane(node, l, qx, qy, wf, hf)
-                        };
-                        last = Some((key, p));
-                        p
-                    }
-                })
-            },
-            deeper,
-        );
-        if t.is_finite() && (blocked.is_empty() || !blocked[k]) {
-            newly.push(k as u32);
-        }
-    }
-    newly
 }
 
 /// Recomputes the ancestors of the pixels `newly` (indices `j W + i`, just blocked) level by
