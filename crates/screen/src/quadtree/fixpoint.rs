@@ -17,8 +17,9 @@
 //!   ([`Blocked::List`]) and the unsafe pixels are marked through their ancestors only
 //!   (`QuadTree::mark_unsafe_listed`; ~1 % of the pixels on atrium);
 //! - a pixel whose effective node is its own leaf (level 0) or none has the pixel planes'
-//!   trigger depth: only pixels under merged nodes are evaluated against their proxy plane
-//!   (decoded once per run of a row);
+//!   trigger depth: only pixels under merged nodes are evaluated against their proxy plane,
+//!   by runs (the pixels of one effective node in a row all have its level: one decode per
+//!   run, `merged_triggers`);
 //! - a rebuild only recomputes the ancestors of the newly blocked pixels: every other node
 //!   has the same children and the same "may merge" answer as before. A recomputed node may
 //!   not merge (it covers a blocked pixel), so it is an AABB or empty;
