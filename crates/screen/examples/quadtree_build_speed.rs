@@ -8,6 +8,11 @@
 //! layer 0. (The stream of the layer, the floor the build is measured against, is `parallax
 //! bench quadtree-build`'s.)
 //!
+//! `--profile LAYERS`: instead, only [`QuadTreeTracer::build`] of `LAYERS` (1 or 2) layers,
+//! `ROUNDS` times (for `perf record` and `valgrind --tool=callgrind`: no reference build, no
+//! other layer count in the profile); `LAYERS` = `deep`: the 1-layer build of layer 1 and its
+//! effective planes (the share of the 2-layer build that is not layer 0's).
+//!
 //! `--check`: instead, asserts that [`QuadTreeTracer::build`] equals
 //! [`QuadTreeTracer::build_reference`] (the definitions) tree for tree, bit for bit, for 1
 //! and 2 layers (the real-scene counterpart of `tests/quadtree_build.rs`).
@@ -41,6 +46,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let flag = |f: &str| args.iter().any(|a| a == f);
     let rounds: u32 = args
         .iter()
+        .take_while(|a| *a != "--profile")
         .find(|a| !a.starts_with("--"))
         .map_or(Ok(7), |a| a.parse())?;
     let (w, h) = (1600, 900);
@@ -86,6 +92,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 "{name} {w}x{h}, {n} layer(s): fast build == reference build ({} unsafe pixels in layer 0)",
                 fast.unsafe_pixels()[0]
             );
+        }
+        return Ok(());
+    }
+    if let Some(i) = args.iter().position(|a| a == "--profile") {
+        let what = args.get(i + 1).map_or("1", |a| a.as_str());
+        for _ in 0..rounds {
+            let (wall, cpu) = if what == "deep" {
+                time(|| {
+                    let t = QuadTreeTracer::build(&cube, &layers[1..2], &opts).unwrap();
+                    t.trees[0].effective_planes()
+                })
+            } else {
+                let n: usize = what.parse()?;
+                time(|| QuadTreeTracer::build(&cube, &layers[..n], &opts).unwrap())
+            };
+            println!("{name} {what}: {wall:.2} ms (CPU {cpu:.2})");
         }
         return Ok(());
     }

@@ -30,7 +30,7 @@
 //! Every level is built in parallel over rows (rayon). **Fast paths, same bits:** the leaf
 //! directions come from per-column and per-row tables of the same products; merges run with
 //! the children in lanes (`merge_lanes`); with deeper layers the pruning fixed point is
-//! computed incrementally (`fixpoint`). `QuadTree::build_cascaded` with `reference` runs
+//! computed incrementally (`fixpoint`), its pixel-plane trigger depths in the leaf pass. `QuadTree::build_cascaded` with `reference` runs
 //! the scalar definitions instead (`QuadTreeTracer::build_reference`); the tests compare
 //! the two tree for tree (`tests/quadtree_build.rs`).
 
@@ -42,6 +42,7 @@ use rayon::prelude::*;
 use super::QuadTreeOptions;
 use super::merge::MergeCtx;
 use super::node::{FLAG_CRACK, Node};
+use super::prune::Blocked;
 use super::tree::{
     Level, NO_PLANE, QuadTree, Z_FLOOR_TABLE_MAX, Z_REGION_MIN_GAIN, Z_SKIP_MARGIN,
     effective_levels,
@@ -227,31 +228,51 @@ impl QuadTree {
         // Level 0: leaves (§3.2).
         let (w0, h0) = (top_w << top, top_h << top);
         let mut leaves = vec![Node::EMPTY; (w0 * h0) as usize];
-        leaves
-            .par_chunks_mut(w0 as usize)
-            .enumerate()
-            .for_each(|(j, row)| {
-                let j = j as u32;
-                if j >= h {
-                    return;
-                }
-                for i in 0..w {
-                    row[i as usize] = leaf((j * w + i) as usize, i, j);
-                }
-            });
+        let leaf_row = |row: &mut [Node], j: u32| {
+            for i in 0..w {
+                row[i as usize] = leaf((j * w + i) as usize, i, j);
+            }
+        };
+        // With deeper layers (fast path), each row's pixel-plane trigger depths right after
+        // its leaves (`fixpoint`), and the pixels where they are finite.
+        let mut px_triggers = None;
+        let image = &mut leaves[..(w0 * h) as usize];
+        if !deeper.is_empty() && !reference {
+            let cols = super::fixpoint::Columns::new(w, wf);
+            let mut tz = vec![f32::INFINITY; (w * h) as usize];
+            let listed: Vec<u32> = image
+                .par_chunks_mut(w0 as usize)
+                .zip(tz.par_chunks_mut(w as usize))
+                .enumerate()
+                .flat_map_iter(|(j, (row, t))| {
+                    let j = j as u32;
+                    leaf_row(row, j);
+                    super::fixpoint::pixel_triggers_row(t, row, j, &ctx, &cols, deeper)
+                })
+                .collect();
+            px_triggers = Some((tz, listed));
+        } else {
+            image
+                .par_chunks_mut(w0 as usize)
+                .enumerate()
+                .for_each(|(j, row)| leaf_row(row, j as u32));
+        }
         let level0 = Level {
             w: w0,
             h: h0,
             nodes: leaves,
         };
-        let (levels, tz, eff) = if deeper.is_empty() {
-            let levels = super::prune::prune(&ctx, level0, nlev, &[], w, h);
+        let (levels, tz, eff, unsafe_px) = if deeper.is_empty() {
+            let levels = super::prune::prune(&ctx, level0, nlev, Blocked::None, w, h);
             let eff = effective_levels(&levels);
-            (levels, Vec::new(), eff)
+            (levels, Vec::new(), eff, None)
         } else if reference {
-            super::prune::fixed_point_reference(&ctx, level0, nlev, (w, h), deeper)
+            let (levels, tz, eff) =
+                super::prune::fixed_point_reference(&ctx, level0, nlev, (w, h), deeper);
+            (levels, tz, eff, None)
         } else {
-            super::fixpoint::fixed_point(&ctx, level0, nlev, (w, h), deeper)
+            let px = px_triggers.expect("computed with the leaves");
+            super::fixpoint::fixed_point(&ctx, level0, nlev, (w, h), deeper, px)
         };
         let mut tree = Self {
             width: w,
@@ -274,9 +295,11 @@ impl QuadTree {
             .rev()
             .find(|&l| tree.levels[l].nodes.iter().any(|n| n.is_plane()))
             .unwrap_or(0);
-        if !tz.is_empty() {
-            tree.mark_unsafe(tz);
-        }
+        let top_tz = match unsafe_px {
+            _ if tz.is_empty() => Vec::new(),
+            Some(px) => tree.mark_unsafe_listed(tz, &px),
+            None => tree.mark_unsafe(tz),
+        };
         // `mark_unsafe` changes flags and AABB ranges but no node kinds: `eff` (the effective
         // levels, top-down, one pass per level, instead of a climb per pixel) still holds.
         let w0 = tree.levels[0].w as usize;
@@ -290,15 +313,16 @@ impl QuadTree {
             });
         tree.plane_level = pl;
         // After `mark_unsafe` (it lowers AABB ranges to trigger depths).
-        tree.set_z_floors(&ctx);
+        tree.set_z_floors(&ctx, &top_tz);
         Ok(tree)
     }
 
     /// [`Self::z_floor`] and the regional table [`Self::z_floor_rect`]: per top-level node
     /// holding image pixels its lower `z` bound (AABB range, or the footprint range of a
     /// plane node) and the trigger depths of its pixels; the floors subtract
-    /// [`Z_SKIP_MARGIN`] and are clamped to 0.
-    fn set_z_floors(&mut self, ctx: &MergeCtx) {
+    /// [`Z_SKIP_MARGIN`] and are clamped to 0. `top_tz`: per top-level node the smallest
+    /// trigger depth under it (of [`Self::mark_unsafe`]; empty: none).
+    fn set_z_floors(&mut self, ctx: &MergeCtx, top_tz: &[f32]) {
         let top = self.levels.len() - 1;
         let (w, h) = (self.width, self.height);
         let (tw, th) = (((w - 1) >> top) + 1, ((h - 1) >> top) + 1);
@@ -314,23 +338,17 @@ impl QuadTree {
                 };
             }
         }
-        if !self.trigger_z.is_empty() {
-            // One band of `2^top` pixel rows per row of `zn`, each scanned in row order.
-            let tzs = &self.trigger_z;
-            zn.par_chunks_mut(tw as usize)
-                .enumerate()
-                .for_each(|(r, zr)| {
-                    let r = r as u32;
-                    for j in (r << top)..((r + 1) << top).min(h) {
-                        for i in 0..w {
-                            let z = tzs[(j * w + i) as usize];
-                            let k = (i >> top) as usize;
-                            if z.is_finite() && z < zr[k] {
-                                zr[k] = z;
-                            }
-                        }
+        if !top_tz.is_empty() {
+            // The smallest finite trigger depth of each top-level node's pixels.
+            for qy in 0..th {
+                for qx in 0..tw {
+                    let z = top_tz[(qy * lv.w + qx) as usize];
+                    let k = (qy * tw + qx) as usize;
+                    if z.is_finite() && z < zn[k] {
+                        zn[k] = z;
                     }
-                });
+                }
+            }
         }
         let floor = |z: f32| {
             if z - Z_SKIP_MARGIN > 0.0 {
@@ -410,61 +428,136 @@ impl QuadTree {
     /// nodes get [`super::node::FLAG_UNSAFE`] and keep `tz` in [`Self::trigger_z`]; empty
     /// pixels become AABBs `(tz, -inf)`; every AABB above lowers its `min z` to the minimum
     /// `tz` below it; merged plane nodes above an unsafe pixel get the flag and trigger on
-    /// footprint entry (conservative).
-    pub(crate) fn mark_unsafe(&mut self, tz: Vec<f32>) {
+    /// footprint entry (conservative). Returns, per top-level node (`levels[top].w x
+    /// levels[top].h`), the smallest `tz` under it.
+    pub(crate) fn mark_unsafe(&mut self, tz: Vec<f32>) -> Vec<f32> {
         let (w, h) = (self.width as usize, self.height as usize);
-        // Level 0 straight from `tz` (`W x H`; the padding has no trigger depth).
-        let w0 = self.levels[0].w as usize;
-        self.levels[0]
+        let nl = self.levels.len();
+        if nl == 1 {
+            let nodes = &mut self.levels[0].nodes;
+            for (node, &m) in nodes.iter_mut().zip(&tz) {
+                if m.is_finite() {
+                    node.mark_unsafe(m);
+                }
+            }
+            // The top level is level 0: its minima are `tz` itself.
+            self.trigger_z = tz;
+            return self.trigger_z.clone();
+        }
+        // Levels 0 and 1 in one pass over `tz` (`W x H`; the padding has no trigger depth):
+        // per level-1 row, its two pixel rows are marked and their minima taken.
+        let (lo, hi) = self.levels.split_at_mut(1);
+        let (w0, w1) = (lo[0].w as usize, hi[0].w as usize);
+        let mut cur = vec![f32::INFINITY; hi[0].nodes.len()];
+        let tzr = &tz;
+        lo[0]
             .nodes
-            .par_chunks_mut(w0)
-            .zip(tz.par_chunks(w))
-            .for_each(|(nodes, t)| {
-                for (node, &m) in nodes.iter_mut().zip(t) {
+            .par_chunks_mut(2 * w0)
+            .zip(hi[0].nodes.par_chunks_mut(w1))
+            .zip(cur.par_chunks_mut(w1))
+            .enumerate()
+            .for_each(|(qy, ((n0, n1), m1))| {
+                for dy in 0..2 {
+                    let y = 2 * qy + dy;
+                    if y >= h {
+                        break;
+                    }
+                    let t = &tzr[y * w..(y + 1) * w];
+                    for (node, &m) in n0[dy * w0..].iter_mut().zip(t) {
+                        if m.is_finite() {
+                            node.mark_unsafe(m);
+                        }
+                    }
+                }
+                let c = |x: usize, y: usize| {
+                    if x < w && y < h {
+                        tzr[y * w + x]
+                    } else {
+                        f32::INFINITY
+                    }
+                };
+                for (qx, (node, v)) in n1.iter_mut().zip(m1.iter_mut()).enumerate() {
+                    let (x, y) = (2 * qx, 2 * qy);
+                    let m = c(x, y)
+                        .min(c(x + 1, y))
+                        .min(c(x, y + 1))
+                        .min(c(x + 1, y + 1));
+                    *v = m;
                     if m.is_finite() {
                         node.mark_unsafe(m);
                     }
                 }
             });
-        // Per node of the level below, the smallest trigger depth under it.
-        let mut cur: Vec<f32> = Vec::new();
-        for l in 1..self.levels.len() {
+        // Per node, the smallest trigger depth under it (from the level below), marked in
+        // the same pass.
+        for l in 2..nl {
             let (cw, pw) = (self.levels[l - 1].w as usize, self.levels[l].w as usize);
             let mut next = vec![f32::INFINITY; self.levels[l].nodes.len()];
             let child = &cur;
-            let tz = &tz;
-            next.par_chunks_mut(pw).enumerate().for_each(|(qy, row)| {
-                let c = |x: usize, y: usize| {
-                    if l > 1 {
-                        child[y * cw + x]
-                    } else if x < w && y < h {
-                        tz[y * w + x]
-                    } else {
-                        f32::INFINITY
-                    }
-                };
-                for (qx, v) in row.iter_mut().enumerate() {
-                    let (x, y) = (2 * qx, 2 * qy);
-                    *v = c(x, y)
-                        .min(c(x + 1, y))
-                        .min(c(x, y + 1))
-                        .min(c(x + 1, y + 1));
-                }
-            });
-            cur = next;
             self.levels[l]
                 .nodes
-                .par_chunks_mut(4096)
-                .zip(cur.par_chunks(4096))
-                .for_each(|(nodes, m)| {
-                    for (node, &m) in nodes.iter_mut().zip(m) {
+                .par_chunks_mut(pw)
+                .zip(next.par_chunks_mut(pw))
+                .enumerate()
+                .for_each(|(qy, (nodes, row))| {
+                    let c0 = &child[2 * qy * cw..];
+                    let c1 = &child[(2 * qy + 1) * cw..];
+                    for (qx, (node, v)) in nodes.iter_mut().zip(row.iter_mut()).enumerate() {
+                        let x = 2 * qx;
+                        let m = c0[x].min(c0[x + 1]).min(c1[x]).min(c1[x + 1]);
+                        *v = m;
                         if m.is_finite() {
                             node.mark_unsafe(m);
                         }
                     }
                 });
+            cur = next;
         }
         self.trigger_z = tz;
+        cur
+    }
+}
+
+impl QuadTree {
+    /// [`Self::mark_unsafe`] given the unsafe pixels `px` (indices `j W + i`, those with a
+    /// finite `tz`, any order): only their ancestors are visited, level by level. The same
+    /// nodes are marked with the same minima: the trigger depths are `+0` or positive and
+    /// never NaN, so their minimum does not depend on the order it is taken in.
+    pub(crate) fn mark_unsafe_listed(&mut self, tz: Vec<f32>, px: &[u32]) -> Vec<f32> {
+        let w = self.width;
+        // (row, column, smallest trigger depth below) of the marked nodes of a level.
+        let mut cur: Vec<(u32, u32, f32)> =
+            px.iter().map(|&k| (k / w, k % w, tz[k as usize])).collect();
+        let l0 = &mut self.levels[0];
+        for &(y, x, m) in &cur {
+            l0.nodes[(y * l0.w + x) as usize].mark_unsafe(m);
+        }
+        let mut next: Vec<(u32, u32, f32)> = Vec::with_capacity(cur.len());
+        for l in 1..self.levels.len() {
+            for v in &mut cur {
+                (v.0, v.1) = (v.0 >> 1, v.1 >> 1);
+            }
+            cur.sort_unstable_by_key(|&(y, x, _)| (y, x));
+            next.clear();
+            for &(y, x, m) in &cur {
+                match next.last_mut() {
+                    Some(last) if (last.0, last.1) == (y, x) => last.2 = last.2.min(m),
+                    _ => next.push((y, x, m)),
+                }
+            }
+            let lv = &mut self.levels[l];
+            for &(y, x, m) in &next {
+                lv.nodes[(y * lv.w + x) as usize].mark_unsafe(m);
+            }
+            std::mem::swap(&mut cur, &mut next);
+        }
+        let top = &self.levels[self.levels.len() - 1];
+        let mut mins = vec![f32::INFINITY; top.nodes.len()];
+        for &(y, x, m) in &cur {
+            mins[(y * top.w + x) as usize] = m;
+        }
+        self.trigger_z = tz;
+        mins
     }
 }
 

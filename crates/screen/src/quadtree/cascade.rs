@@ -245,25 +245,31 @@ fn pixel_trigger(
 }
 
 /// [`pixel_trigger`] with the four footprint corners in the lanes of `xs`, `ys`
-/// (`(x0, x1, x0, x1)`, `(y0, y0, y1, y1)`): every lane does the scalar definition's
-/// operations in its order (`plane_z`, the `Vec3` dot left to right; no fused
-/// multiply-add), so the result is the same bits (`tests/quadtree_build.rs` compares whole
-/// trees with the definition's build).
+/// (`(x0, x1, x0, x1)`, `(y0, y0, y1, y1)`) and the pixel's plane computed by `plane` only
+/// where a deeper plane needs it (at most once): every lane does the scalar definition's
+/// operations in its order (`plane_z`, the `Vec3` dot left to right; no fused multiply-add),
+/// so the result is the same bits (`tests/quadtree_build.rs` compares whole trees with the
+/// definition's build).
 #[inline]
 pub(crate) fn pixel_trigger_lanes(
     idx: usize,
     xs: Vec4,
     ys: Vec4,
-    plane: Option<(Vec3, f32)>,
+    mut plane: impl FnMut() -> Option<(Vec3, f32)>,
     deeper: &[LayerPlanes],
 ) -> f32 {
     let s = Vec4::splat;
+    let mut decoded: Option<Option<(Vec3, f32)>> = None;
     trigger_over(idx, deeper, |nj, cj, front| {
         let z = (s(cj) - s(nj.x) * xs - s(nj.y) * ys) / s(nj.z);
+        // `front.min(zc)` of the definition as one `minss` each: `front` is never NaN and a
+        // NaN corner is skipped as there; at a tie of `+0` and `-0` the sign may differ,
+        // which the trigger depth `max(front - margin, +0)` does not see (`±0 - margin` is
+        // the same value).
         for zc in z.to_array() {
-            *front = front.min(zc);
+            *front = if zc < *front { zc } else { *front };
         }
-        match plane {
+        match *decoded.get_or_insert_with(&mut plane) {
             Some((n, c)) => {
                 let f = s(n.x) * xs + s(n.y) * ys + s(n.z) * z - s(c);
                 !f.cmple(s(-SAFE_MARGIN)).all()

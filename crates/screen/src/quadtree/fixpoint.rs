@@ -8,147 +8,309 @@
 //! per iteration, with the same results bit for bit (`tests/quadtree_build.rs` compares
 //! whole trees with the definition's build):
 //!
-//! - the pixel planes are decoded from the level-0 nodes where they are needed, not copied
-//!   into a [`LayerPlanes`] first, and each pixel's four footprint corners are evaluated in
-//!   lanes ([`super::cascade::pixel_trigger_lanes`]);
+//! - the pixel planes' trigger depths are computed by the leaf pass, each row right after
+//!   its leaves (`pixel_triggers_row`, no second pass over level 0); the pixel planes are
+//!   decoded from the leaves only where a deeper plane needs them (pixel centres tabulated
+//!   per column and row), not copied into a [`LayerPlanes`] first, and each pixel's four
+//!   footprint corners are evaluated in lanes ([`super::cascade::pixel_trigger_lanes`]);
+//! - the blocked pixels are kept as a list too: pruning marks only their ancestors
+//!   ([`Blocked::List`]) and the unsafe pixels are marked through their ancestors only
+//!   (`QuadTree::mark_unsafe_listed`; ~1 % of the pixels on atrium);
 //! - a pixel whose effective node is its own leaf (level 0) or none has the pixel planes'
-//!   trigger depth: only pixels under merged nodes are evaluated against their proxy plane
-//!   (decoded once per run of a row);
+//!   trigger depth: only pixels under merged nodes are evaluated against their proxy plane,
+//!   by runs (the pixels of one effective node in a row all have its level: one decode per
+//!   run, `merged_triggers`);
 //! - a rebuild only recomputes the ancestors of the newly blocked pixels: every other node
 //!   has the same children and the same "may merge" answer as before. A recomputed node may
 //!   not merge (it covers a blocked pixel), so it is an AABB or empty;
 //! - after a rebuild only pixels whose effective level changed are evaluated again: a plane
 //!   node that stays effective was not recomputed (recomputed nodes are never planes), so
-//!   its pixels keep their trigger depth.
+//!   its pixels keep their trigger depth. Those pixels are found from the recomputed nodes
+//!   that were planes (`refill`): no pass over the whole image per iteration.
 //!
 //! **Invariants:** the blocked set only grows, so the loop ends; level 0 is never changed.
 
-use glam::{Vec3, Vec4};
+use glam::Vec4;
 use rayon::prelude::*;
 
 use super::cascade::pixel_trigger_lanes;
 use super::merge::MergeCtx;
-use super::node::{Node, decode_plane};
+use super::node::{Node, decode_plane, decode_plane_at};
+use super::prune::Blocked;
 use super::tree::{Level, NO_PLANE, effective_levels};
 use crate::LayerPlanes;
 
 /// The levels after pruning to the fixed point, the trigger depths (`W x H`) and the
 /// effective levels of the final levels (`levels[0].w x levels[0].h`,
-/// [`super::QuadTree::effective_levels`]). `deeper` is not empty.
+/// [`super::QuadTree::effective_levels`]), and the unsafe pixels (indices `j W + i` of the
+/// finite trigger depths, ascending). `deeper` is not empty; `(tz, listed)`: the trigger
+/// depths of the pixel planes and the pixels where they are finite, ascending (computed with
+/// the leaves, [`pixel_triggers_row`] per row).
 pub(super) fn fixed_point(
     ctx: &MergeCtx,
     level0: Level,
     nlev: u32,
     (w, h): (u32, u32),
     deeper: &[LayerPlanes],
-) -> (Vec<Level>, Vec<f32>, Vec<u8>) {
-    let mut tz_px = vec![f32::INFINITY; (w * h) as usize];
-    let l0 = std::slice::from_ref(&level0);
-    fill_triggers(&mut tz_px, ctx, w, deeper, |i, j| Some(pixel_key(l0, i, j)));
-    let mut blocked: Vec<bool> = tz_px.iter().map(|z| z.is_finite()).collect();
-    let mut levels = super::prune::prune(ctx, level0, nlev, &blocked, w, h);
+    (mut tz, mut listed): (Vec<f32>, Vec<u32>),
+) -> (Vec<Level>, Vec<f32>, Vec<u8>, Option<Vec<u32>>) {
+    // The pixels with a finite trigger depth, i.e. the blocked ones, in a list and a map.
+    let mut blocked = vec![false; (w * h) as usize];
+    for &k in &listed {
+        blocked[k as usize] = true;
+    }
+    let mut levels = super::prune::prune(ctx, level0, nlev, Blocked::List(&listed), w, h);
     let mut eff = effective_levels(&levels);
     if ctx.never {
-        return (levels, tz_px, eff);
+        return (levels, tz, eff, Some(listed));
     }
-    // Trigger depths of the effective planes: the pixel planes' except under merged nodes.
-    let mut tz = tz_px.clone();
-    let w0 = levels[0].w;
-    fill_triggers(&mut tz, ctx, w, deeper, |i, j| {
-        let l = eff[(j * w0 + i) as usize];
-        (l != NO_PLANE && l > 0).then(|| Some(ancestor_key(&levels, l, i, j)))
-    });
-    loop {
-        let newly: Vec<u32> = (0..w * h)
-            .filter(|&k| tz[k as usize].is_finite() && !blocked[k as usize])
-            .collect();
-        if newly.is_empty() {
-            return (levels, tz, eff);
-        }
+    // Trigger depths of the effective planes: the pixel planes' except under merged nodes,
+    // which hold no blocked pixel, so only they can be newly unsafe.
+    let mut newly = merged_triggers(&mut tz, ctx, w, deeper, &blocked, &levels, &eff);
+    while !newly.is_empty() {
         for &k in &newly {
             blocked[k as usize] = true;
         }
-        reprune(ctx, &mut levels, &newly, w);
-        let prev = std::mem::replace(&mut eff, effective_levels(&levels));
-        let (levels, eff) = (&levels, &eff);
-        fill_triggers(&mut tz, ctx, w, deeper, |i, j| {
-            let k = (j * w0 + i) as usize;
-            let l = eff[k];
-            if l == prev[k] {
-                None
-            } else if l == NO_PLANE || l == 0 {
-                // Its own leaf again: the pixel plane's trigger depth (same computation).
-                Some(pixel_key(levels, i, j))
-            } else {
-                Some(Some(ancestor_key(levels, l, i, j)))
-            }
-        });
+        listed.extend_from_slice(&newly);
+        let dissolved = reprune(ctx, &mut levels, &newly, w);
+        newly = refill(
+            &mut tz,
+            &mut eff,
+            ctx,
+            (w, h),
+            deeper,
+            &blocked,
+            &levels,
+            &dissolved,
+        );
     }
+    // A pixel blocked after a proxy made it unsafe may be safe against its own plane.
+    listed.retain(|&k| tz[k as usize].is_finite());
+    listed.sort_unstable();
+    (levels, tz, eff, Some(listed))
 }
 
-/// Pixel `(i, j)`'s leaf as a [`fill_triggers`] key, if it is a plane.
+/// After a rebuild: the effective levels and trigger depths of the pixels under the
+/// `dissolved` nodes (recomputed nodes that were planes; `(level, qx, qy)`), and the pixels
+/// that became unsafe there and are not yet blocked. A dissolved node's ancestors are
+/// recomputed too (they are ancestors of the same newly blocked pixels), so they are not
+/// planes; each child of a dissolved node that is still a plane (was not recomputed: every
+/// child of a plane node is a plane, and recomputed nodes are not) is now the topmost plane
+/// over its footprint, i.e. those pixels' effective node — exactly the pixels whose
+/// effective level changed (a recomputed node that was not a plane was above every effective
+/// node under it).
+#[allow(clippy::too_many_arguments)]
+fn refill(
+    tz: &mut [f32],
+    eff: &mut [u8],
+    ctx: &MergeCtx,
+    (w, h): (u32, u32),
+    deeper: &[LayerPlanes],
+    blocked: &[bool],
+    levels: &[Level],
+    dissolved: &[(u32, u32, u32)],
+) -> Vec<u32> {
+    // The still-plane children of the dissolved nodes: disjoint footprints.
+    let mut kids: Vec<(u32, u32, u32)> = Vec::new();
+    for &(l, qx, qy) in dissolved {
+        let cl = l - 1;
+        let child = &levels[cl as usize];
+        for c in 0..4 {
+            let (cx, cy) = (2 * qx + (c & 1), 2 * qy + (c >> 1));
+            if child.nodes[(cy * child.w + cx) as usize].is_plane() {
+                kids.push((cl, cx, cy));
+            }
+        }
+    }
+    let (wf, hf) = (ctx.wf, ctx.hf);
+    let w0 = levels[0].w;
+    // Per footprint, the pixels' new trigger depths (in parallel), written afterwards.
+    let vals: Vec<Vec<(u32, f32)>> = kids
+        .par_iter()
+        .map(|&(l, qx, qy)| {
+            let (x0, y0) = (qx << l, qy << l);
+            let (x1, y1) = (((qx + 1) << l).min(w), ((qy + 1) << l).min(h));
+            let mut out = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
+            // A merged node: one decode for its whole footprint.
+            let merged = (l > 0).then(|| {
+                let lv = &levels[l as usize];
+                decode_plane(lv.nodes[(qy * lv.w + qx) as usize], l, qx, qy, wf, hf)
+            });
+            for j in y0..y1 {
+                let ys = Vec4::new(j as f32, j as f32, (j + 1) as f32, (j + 1) as f32) / hf;
+                for i in x0..x1 {
+                    let xs = Vec4::new(
+                        i as f32 / wf,
+                        (i + 1) as f32 / wf,
+                        i as f32 / wf,
+                        (i + 1) as f32 / wf,
+                    );
+                    let k = j * w + i;
+                    let t = pixel_trigger_lanes(
+                        k as usize,
+                        xs,
+                        ys,
+                        || match merged {
+                            Some(p) => Some(p),
+                            None => pixel_key(levels, i, j)
+                                .map(|(node, l, qx, qy)| decode_plane(node, l, qx, qy, wf, hf)),
+                        },
+                        deeper,
+                    );
+                    out.push((k, t));
+                }
+            }
+            out
+        })
+        .collect();
+    for &(l, qx, qy) in &kids {
+        let (x0, y0) = (qx << l, qy << l);
+        for y in y0..((qy + 1) << l) {
+            let row = (y * w0) as usize;
+            eff[row + x0 as usize..row + ((qx + 1) << l) as usize].fill(l as u8);
+        }
+    }
+    let mut newly = Vec::new();
+    for (k, t) in vals.into_iter().flatten() {
+        tz[k as usize] = t;
+        if t.is_finite() && !blocked[k as usize] {
+            newly.push(k);
+        }
+    }
+    newly
+}
+
+/// Pixel `(i, j)`'s leaf as a key, if it is a plane.
 #[inline]
 fn pixel_key(levels: &[Level], i: u32, j: u32) -> Option<Key> {
     let node = levels[0].nodes[(j * levels[0].w + i) as usize];
     node.is_plane().then_some((node, 0, i, j))
 }
 
-/// Pixel `(i, j)`'s ancestor at level `l` (a plane node) as a [`fill_triggers`] key.
-#[inline]
-fn ancestor_key(levels: &[Level], l: u8, i: u32, j: u32) -> Key {
-    let l = l as u32;
-    let (qx, qy) = (i >> l, j >> l);
-    let lv = &levels[l as usize];
-    (lv.nodes[(qy * lv.w + qx) as usize], l, qx, qy)
-}
-
 /// A plane node with its level and position.
 type Key = (Node, u32, u32, u32);
 
-/// Per pixel `(i, j)` of `tz` (`W x H`, rows in parallel) with `plane(i, j) = Some(p)`: the
-/// trigger depth of the decoded plane of node `p` ([`decode_plane`]; `None`: empty) at that
-/// pixel against `deeper`; pixels where `plane` answers `None` keep their value. A node
-/// covering a run of a row is decoded once (the decode is a function of the key).
-fn fill_triggers(
+/// Per-column tables of the trigger passes: the footprints' `x` edges `x0 = i / W`, `x1 =
+/// (i + 1) / W` (the definition's divisions, once per column) as the lanes `(x0, x1, x0,
+/// x1)` of [`pixel_trigger_lanes`], and the pixel centres `((i + 0.5) 1) / W` of
+/// `node_centre` at level 0.
+pub(super) struct Columns {
+    xs: Vec<Vec4>,
+    xc: Vec<f32>,
+}
+
+impl Columns {
+    pub(super) fn new(w: u32, wf: f32) -> Self {
+        let xe: Vec<f32> = (0..=w).map(|i| i as f32 / wf).collect();
+        let xs = xe
+            .windows(2)
+            .map(|e| Vec4::new(e[0], e[1], e[0], e[1]))
+            .collect();
+        Self {
+            xc: (0..w).map(|i| ((i as f32 + 0.5) * 1.0) / wf).collect(),
+            xs,
+        }
+    }
+}
+
+/// The trigger depths (`tz`, `W x H`, rows in parallel) of the pixels under merged nodes
+/// (effective level `eff > 0`) against `deeper`, from their effective node's decoded plane
+/// ([`decode_plane`]); other pixels keep their value. The pixels of one effective node in a
+/// row are one run (they all have its level): its plane is decoded once per run. Returns the
+/// pixels (indices `j W + i`, ascending) that got a finite trigger depth and are not marked
+/// in `blocked`.
+fn merged_triggers(
     tz: &mut [f32],
     ctx: &MergeCtx,
     w: u32,
     deeper: &[LayerPlanes],
-    plane: impl Fn(u32, u32) -> Option<Option<Key>> + Sync,
-) {
+    blocked: &[bool],
+    levels: &[Level],
+    eff: &[u8],
+) -> Vec<u32> {
+    let cols = Columns::new(w, ctx.wf);
     let (wf, hf) = (ctx.wf, ctx.hf);
-    // The footprints' `x` edges, `i / W` (the definition's divisions, once per column).
-    let xe: Vec<f32> = (0..=w).map(|i| i as f32 / wf).collect();
-    tz.par_chunks_mut(w as usize)
+    let (wu, w0) = (w as usize, levels[0].w as usize);
+    tz.par_chunks_mut(wu)
         .enumerate()
-        .for_each(|(j, row)| {
+        .flat_map_iter(|(j, row)| {
+            let base = j * wu;
+            let er = &eff[j * w0..j * w0 + wu];
             let j = j as u32;
             let ys = Vec4::new(j as f32, j as f32, (j + 1) as f32, (j + 1) as f32) / hf;
-            let mut last: Option<(Key, (Vec3, f32))> = None;
-            for (i, t) in row.iter_mut().enumerate() {
-                let i = i as u32;
-                let Some(key) = plane(i, j) else {
+            let mut newly = Vec::new();
+            let mut i = 0;
+            while i < wu {
+                let l = er[i];
+                if l == NO_PLANE || l == 0 {
+                    i += 1;
                     continue;
-                };
-                let p = key.map(|key| match last {
-                    Some((k, p)) if k == key => p,
-                    _ => {
-                        let (node, l, qx, qy) = key;
-                        let p = decode_plane(node, l, qx, qy, wf, hf);
-                        last = Some((key, p));
-                        p
+                }
+                let l = l as u32;
+                let (qx, qy) = (i as u32 >> l, j >> l);
+                let lv = &levels[l as usize];
+                let p = decode_plane(lv.nodes[(qy * lv.w + qx) as usize], l, qx, qy, wf, hf);
+                let end = (((qx + 1) << l) as usize).min(wu);
+                for (ii, t) in row.iter_mut().enumerate().take(end).skip(i) {
+                    let k = base + ii;
+                    *t = pixel_trigger_lanes(k, cols.xs[ii], ys, || Some(p), deeper);
+                    if t.is_finite() && !blocked[k] {
+                        newly.push(k as u32);
                     }
-                });
-                let (x0, x1) = (xe[i as usize], xe[i as usize + 1]);
-                let xs = Vec4::new(x0, x1, x0, x1);
-                *t = pixel_trigger_lanes((j * w + i) as usize, xs, ys, p, deeper);
+                }
+                i = end;
             }
-        });
+            newly
+        })
+        .collect()
+}
+
+/// The pixel planes' trigger depths of row `j` (`tz`, `W` values) from the row's leaves
+/// `nodes` (the build runs it right after the row's leaves, while they are in cache).
+/// Returns the row's pixels with a finite trigger depth.
+pub(super) fn pixel_triggers_row(
+    tz: &mut [f32],
+    nodes: &[Node],
+    j: u32,
+    ctx: &MergeCtx,
+    cols: &Columns,
+    deeper: &[LayerPlanes],
+) -> Vec<u32> {
+    // Every key differs (one leaf per pixel): no decode cache, the centre from the tables.
+    let (wf, hf) = (ctx.wf, ctx.hf);
+    let base = j as usize * tz.len();
+    let ys = Vec4::new(j as f32, j as f32, (j + 1) as f32, (j + 1) as f32) / hf;
+    let yc = ((j as f32 + 0.5) * 1.0) / hf;
+    let mut listed = Vec::new();
+    for (i, ((t, &node), (&xs, &xc))) in tz
+        .iter_mut()
+        .zip(nodes)
+        .zip(cols.xs.iter().zip(&cols.xc))
+        .enumerate()
+    {
+        let k = base + i;
+        *t = pixel_trigger_lanes(
+            k,
+            xs,
+            ys,
+            || {
+                node.is_plane()
+                    .then(|| decode_plane_at(node, 0, xc, yc, wf, hf))
+            },
+            deeper,
+        );
+        if t.is_finite() {
+            listed.push(k as u32);
+        }
+    }
+    listed
 }
 
 /// Recomputes the ancestors of the pixels `newly` (indices `j W + i`, just blocked) level by
-/// level, bottom-up; none of them may merge.
-fn reprune(ctx: &MergeCtx, levels: &mut [Level], newly: &[u32], w: u32) {
+/// level, bottom-up; none of them may merge. Returns the recomputed nodes that were planes
+/// before (`(level, qx, qy)`).
+fn reprune(ctx: &MergeCtx, levels: &mut [Level], newly: &[u32], w: u32) -> Vec<(u32, u32, u32)> {
+    let mut dissolved = Vec::new();
     let mut cur: Vec<(u32, u32)> = newly.iter().map(|&k| (k / w, k % w)).collect();
     for l in 1..levels.len() {
         let mut next: Vec<(u32, u32)> = cur.iter().map(|&(y, x)| (y >> 1, x >> 1)).collect();
@@ -157,9 +319,13 @@ fn reprune(ctx: &MergeCtx, levels: &mut [Level], newly: &[u32], w: u32) {
         let (lo, hi) = levels.split_at_mut(l);
         let (child, par) = (&lo[l - 1], &mut hi[0]);
         for &(qy, qx) in &next {
-            par.nodes[(qy * par.w + qx) as usize] =
-                super::prune::parent_of(ctx, child, l as u32, qx, qy, false);
+            let node = &mut par.nodes[(qy * par.w + qx) as usize];
+            if node.is_plane() {
+                dissolved.push((l as u32, qx, qy));
+            }
+            *node = super::prune::parent_of(ctx, child, l as u32, qx, qy, false);
         }
         cur = next;
     }
+    dissolved
 }

@@ -309,6 +309,14 @@ pub fn decode_plane(node: Node, level: u32, qx: u32, qy: u32, w: f32, h: f32) ->
     (n, n.dot(Vec3::new(xc, yc, node.zc())))
 }
 
+/// [`decode_plane`] with the node's footprint centre `(xc, yc)` given (the values of
+/// [`node_centre`], e.g. tabulated per column and row).
+#[inline(always)]
+pub fn decode_plane_at(node: Node, level: u32, xc: f32, yc: f32, w: f32, h: f32) -> (Vec3, f32) {
+    let n = node.test_normal(level, w, h);
+    (n, n.dot(Vec3::new(xc, yc, node.zc())))
+}
+
 /// Cube `z` of plane `(n, c)` at `(x, y)` (infinite or NaN for planes with `n.z == 0`).
 #[inline(always)]
 pub fn plane_z(n: Vec3, c: f32, x: f32, y: f32) -> f32 {

@@ -40,7 +40,7 @@ pub(super) fn fixed_point_reference(
         let l0 = first
             .take()
             .unwrap_or_else(|| std::mem::take(&mut levels).swap_remove(0));
-        levels = prune(ctx, l0, nlev, &blocked_px, w, h);
+        levels = prune(ctx, l0, nlev, Blocked::Pixels(&blocked_px), w, h);
         if ctx.never {
             // No merging: the effective planes are the pixel planes.
             break tz;
@@ -101,13 +101,24 @@ pub(super) fn parent_of(
     ctx.parent(l, qx, qy, cl, &kids, &pos, allow)
 }
 
+/// The pixels (of a `W x H` layer) no node may merge over.
+#[derive(Clone, Copy)]
+pub(super) enum Blocked<'a> {
+    /// None.
+    None,
+    /// Per pixel, whether it is blocked (the definition: every node scans its pixels).
+    Pixels(&'a [bool]),
+    /// The blocked pixels' indices `j W + i` (any order): each marks its ancestors.
+    List(&'a [u32]),
+}
+
 /// Levels `0..nlev` of a tree: `level0` and the levels built from it by pruning (§3.3),
-/// never merging a node that contains a pixel marked in `blocked` (`W x H`; empty: none).
+/// never merging a node that contains a blocked pixel.
 pub(super) fn prune(
     ctx: &MergeCtx,
     level0: Level,
     nlev: u32,
-    blocked_px: &[bool],
+    blocked_px: Blocked,
     w: u32,
     h: u32,
 ) -> Vec<Level> {
@@ -116,27 +127,39 @@ pub(super) fn prune(
     for l in 1..nlev {
         let child = levels.last().unwrap();
         let (pw, ph) = (child.w / 2, child.h / 2);
-        if !blocked_px.is_empty() {
-            // A node is blocked when one of its children is (level 1: an image pixel).
-            let mut next = vec![false; (pw * ph) as usize];
-            let prev = &blocked;
-            next.par_chunks_mut(pw as usize)
-                .enumerate()
-                .for_each(|(qy, row)| {
-                    let qy = qy as u32;
-                    for (qx, b) in row.iter_mut().enumerate() {
-                        let qx = qx as u32;
-                        *b = (0..4).any(|c| {
-                            let (x, y) = (2 * qx + (c & 1), 2 * qy + (c >> 1));
-                            if l == 1 {
-                                x < w && y < h && blocked_px[(y * w + x) as usize]
-                            } else {
-                                prev[(y * child.w + x) as usize]
-                            }
-                        });
-                    }
-                });
-            blocked = next;
+        match blocked_px {
+            Blocked::None => {}
+            Blocked::Pixels(blocked_px) => {
+                // A node is blocked when one of its children is (level 1: an image pixel).
+                let mut next = vec![false; (pw * ph) as usize];
+                let prev = &blocked;
+                next.par_chunks_mut(pw as usize)
+                    .enumerate()
+                    .for_each(|(qy, row)| {
+                        let qy = qy as u32;
+                        for (qx, b) in row.iter_mut().enumerate() {
+                            let qx = qx as u32;
+                            *b = (0..4).any(|c| {
+                                let (x, y) = (2 * qx + (c & 1), 2 * qy + (c >> 1));
+                                if l == 1 {
+                                    x < w && y < h && blocked_px[(y * w + x) as usize]
+                                } else {
+                                    prev[(y * child.w + x) as usize]
+                                }
+                            });
+                        }
+                    });
+                blocked = next;
+            }
+            Blocked::List(px) => {
+                // The same nodes: the ancestors at level `l` of the blocked pixels.
+                let mut next = vec![false; (pw * ph) as usize];
+                for &k in px {
+                    let (x, y) = ((k % w) >> l, (k / w) >> l);
+                    next[(y * pw + x) as usize] = true;
+                }
+                blocked = next;
+            }
         }
         let blocked = &blocked;
         let mut nodes = vec![Node::EMPTY; (pw * ph) as usize];
