@@ -8,7 +8,7 @@
 //! primary ray, so it lies inside the pixel's footprint, and `normal` is unit length and faces
 //! that ray.
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 use parallax_scene::camera::Pinhole;
 
 /// One pixel of a G-buffer. `repr(C)`: the footprint's SSE path loads the position with the
@@ -45,19 +45,36 @@ impl Texel {
     /// and sky texels pass radiance through).
     #[inline]
     pub fn albedo_factor(&self) -> Vec3 {
-        Vec3::select(self.albedo.cmpgt(Vec3::splat(1e-3)), self.albedo, Vec3::ONE)
+        self.albedo_factor_lanes().into()
+    }
+
+    /// [`Self::albedo_factor`] in the lanes of one vector.
+    #[inline(always)]
+    fn albedo_factor_lanes(&self) -> Vec3A {
+        let a = Vec3A::from(self.albedo);
+        Vec3A::select(a.cmpgt(Vec3A::splat(1e-3)), a, Vec3A::ONE)
     }
 
     /// `v` divided by the albedo factor when `on` (radiance as demodulated values carry it).
+    /// The three channels are divided in the lanes of one vector (each lane's division is
+    /// the scalar one, correctly rounded).
     #[inline]
     pub fn demodulate(&self, v: Vec3, on: bool) -> Vec3 {
-        if on { v / self.albedo_factor() } else { v }
+        if on {
+            (Vec3A::from(v) / self.albedo_factor_lanes()).into()
+        } else {
+            v
+        }
     }
 
     /// `v` times the albedo factor when `on` (an image value of demodulated radiance).
     #[inline]
     pub fn remodulate(&self, v: Vec3, on: bool) -> Vec3 {
-        if on { v * self.albedo_factor() } else { v }
+        if on {
+            (Vec3A::from(v) * self.albedo_factor_lanes()).into()
+        } else {
+            v
+        }
     }
 }
 

@@ -32,14 +32,13 @@
 
 use std::ops::{Add, Mul};
 
-use glam::{Vec3, Vec4};
-use parallax_core::math::floor_i32;
-use parallax_scene::camera::CameraModel;
+use glam::{Vec3, Vec4, Vec4Swizzles};
 use rayon::prelude::*;
 
 use super::buffers::{EyeView, Texel};
 #[cfg(target_arch = "x86_64")]
 use super::lanes::bilinear_taps_x4;
+use super::projector::{Projector, floor_xy};
 use super::sampler::thread_ns;
 
 /// What became of a target pixel.
@@ -179,6 +178,17 @@ impl Footprint {
         if self.mask == 0 {
             return acc;
         }
+        if BILINEAR {
+            let (x0, y0, w) = (self.x0, self.y0, width as usize);
+            if x0 >= 0 && y0 >= 0 && x0 + 1 < width as i32 {
+                let i0 = y0 as usize * w + x0 as usize;
+                if let (Some(r0), Some(r1)) =
+                    (values.get(i0..i0 + 2), values.get(i0 + w..i0 + w + 2))
+                {
+                    return self.gather_bilinear([r0[0], r0[1], r1[0], r1[1]]);
+                }
+            }
+        }
         let half = kernel.half();
         let taps = 2 * half;
         let mut bit = 0;
@@ -195,35 +205,74 @@ impl Footprint {
         }
         acc * self.inv_weight
     }
+
+    /// The bilinear gather of the four taps' values (row-major from `(x0, y0)`), all inside
+    /// the source: the four tent weights in the lanes of one vector, each kept tap's value
+    /// times its weight, summed in tap order from zero, times the normaliser. A dropped tap
+    /// adds +0 instead of nothing, which changes no sum (a sum that starts at +0 is never -0),
+    /// so the result is the tap loop's bit for bit (tested).
+    #[inline(always)]
+    fn gather_bilinear<T: Blendable>(&self, v: [T; 4]) -> T {
+        let wt = bilinear_weights(Vec4::new(self.fx, self.fy, 0.0, 0.0));
+        let tap = |k: u32, v: T, w: f32| {
+            if self.mask & (1 << k) != 0 {
+                v * w
+            } else {
+                T::default()
+            }
+        };
+        (T::default()
+            + tap(0, v[0], wt.x)
+            + tap(1, v[1], wt.y)
+            + tap(2, v[2], wt.z)
+            + tap(3, v[3], wt.w))
+            * self.inv_weight
+    }
+}
+
+/// The bilinear weights of the four taps (row-major from `(x0, y0)`) of a sample at offset
+/// `f` (lanes x, y) from the tap `(x0, y0)`: `kernel.weight(tx - fx) * kernel.weight(ty - fy)`
+/// of [`Kernel::BILINEAR`] bit for bit, the tent weights in the lanes of one vector (a
+/// division by the radius 1 is exact and dropped).
+#[inline(always)]
+fn bilinear_weights(f: Vec4) -> Vec4 {
+    let d = Vec4::new(0.0, 1.0, 0.0, 1.0) - f.xxyy();
+    let w = (Vec4::ONE - d.abs()).max(Vec4::ZERO);
+    w.xyxy() * w.zzww()
 }
 
 /// The footprint of a target pixel seeing `t` in `source`.
 pub fn footprint(source: &EyeView, t: &Texel, kernel: Kernel, tests: Tests) -> Footprint {
-    Reprojector::new(kernel, tests).footprint(source, t)
+    Reprojector::new(source, kernel, tests).footprint(t)
 }
 
-/// A kernel and tests prepared for many footprints (the limits squared once).
+/// A source view, kernel and tests prepared for many footprints (the limits squared and the
+/// source camera's projection constants computed once).
 #[derive(Clone, Copy, Debug)]
-pub struct Reprojector {
+pub struct Reprojector<'a> {
+    source: &'a EyeView,
+    proj: Projector,
     kernel: Kernel,
     lim: Limits,
 }
 
-impl Reprojector {
-    pub fn new(kernel: Kernel, tests: Tests) -> Self {
+impl<'a> Reprojector<'a> {
+    pub fn new(source: &'a EyeView, kernel: Kernel, tests: Tests) -> Self {
         Self {
+            source,
+            proj: Projector::new(&source.camera),
             kernel,
             lim: tests.limits(),
         }
     }
 
-    /// [`footprint`] with the prepared kernel and tests.
-    #[inline]
-    pub fn footprint(&self, source: &EyeView, t: &Texel) -> Footprint {
+    /// [`footprint`] in the prepared source with the prepared kernel and tests.
+    #[inline(always)]
+    pub fn footprint(&self, t: &Texel) -> Footprint {
         if self.kernel == Kernel::BILINEAR {
-            footprint_in::<true, true>(source, t, self.kernel, self.lim)
+            footprint_in::<true, true>(self.source, &self.proj, t, self.kernel, self.lim)
         } else {
-            footprint_in::<false, false>(source, t, self.kernel, self.lim)
+            footprint_in::<false, false>(self.source, &self.proj, t, self.kernel, self.lim)
         }
     }
 }
@@ -235,6 +284,7 @@ impl Reprojector {
 #[inline(always)]
 fn footprint_in<const BILINEAR: bool, const LANES: bool>(
     source: &EyeView,
+    proj: &Projector,
     t: &Texel,
     kernel: Kernel,
     lim: Limits,
@@ -243,39 +293,31 @@ fn footprint_in<const BILINEAR: bool, const LANES: bool>(
     if !t.is_hit() {
         return Footprint::discarded(Outcome::Background);
     }
-    let Some(f) = source.camera.project(t.position, 0) else {
+    // The film position `f` minus 0.5 (`Pinhole::project` bit for bit).
+    let Some(s) = proj.project(t.position) else {
         return Footprint::discarded(Outcome::Outside);
     };
-    if !f.is_finite() {
-        return Footprint::discarded(Outcome::Outside);
-    }
     let (pos2, nrm2) = (lim.pos2, lim.nrm2);
     let half = kernel.half();
     let (w, h) = (source.width() as i32, source.height() as i32);
     // Pixel centres are at integer + 0.5: the tap left of (above) the sample is floor(f - 0.5).
     // With `reach` an integer, `floor(s) > -reach` is `s >= 1 - reach` and `floor(s) < n +
     // reach` is `s < n + reach`, so the range is checked before the floor (exact below 2^23,
-    // far beyond any film).
-    let (sx, sy) = (f.x - 0.5, f.y - 0.5);
+    // far beyond any film); a non-finite `f` fails it (NaN compares false) and is outside.
+    // Both axes at once: `sx >= 1 - reach && sx < w + reach` (and y) in lanes x, y.
     let reach = half as f32 + 1.0;
-    if !(sx >= 1.0 - reach && sx < w as f32 + reach && sy >= 1.0 - reach && sy < h as f32 + reach) {
+    let in_range = s.cmpge(Vec4::splat(1.0 - reach)) & s.cmplt(proj.size() + Vec4::splat(reach));
+    if in_range.bitmask() & 3 != 3 {
         return Footprint::discarded(Outcome::Outside);
     }
-    let (ix, iy) = (floor_i32(sx), floor_i32(sy));
-    let (bx, by) = (ix as f32, iy as f32);
-    let (fx, fy) = (sx - bx, sy - by);
+    let (ix, iy, frac) = floor_xy(s);
+    let (fx, fy) = (frac.x, frac.y);
     let (x0, y0) = (ix - half + 1, iy - half + 1);
     #[cfg(target_arch = "x86_64")]
     if BILINEAR && LANES && x0 >= 0 && y0 >= 0 && x0 + 1 < w && y0 + 1 < h {
-        let weights = [
-            kernel.weight(0.0 - fx),
-            kernel.weight(1.0 - fx),
-            kernel.weight(0.0 - fy),
-            kernel.weight(1.0 - fy),
-        ];
         let (pos2, nrm2, plane) = (lim.pos2, lim.nrm2, lim.plane);
-        let (mask, sum, inside, near) =
-            bilinear_taps_x4(source, t, x0, y0, weights, pos2, nrm2, plane);
+        let wt = bilinear_weights(frac);
+        let (mask, sum, inside, near) = bilinear_taps_x4(source, t, x0, y0, wt, pos2, nrm2, plane);
         return placed(x0, y0, fx, fy, mask, sum, inside, near);
     }
     let taps = 2 * half;
@@ -356,6 +398,7 @@ pub fn footprints(
 ) -> u64 {
     let w = target.width() as usize;
     out.resize(target.len(), Footprint::default());
+    let proj = Projector::new(&source.camera);
     let ns: Vec<u64> = out
         .par_chunks_mut(w * BAND_ROWS)
         .zip(target.texels.par_chunks(w * BAND_ROWS))
@@ -364,11 +407,11 @@ pub fn footprints(
             let lim = tests.limits();
             if kernel == Kernel::BILINEAR {
                 for (fp, t) in fps.iter_mut().zip(texels) {
-                    *fp = footprint_in::<true, true>(source, t, kernel, lim);
+                    *fp = footprint_in::<true, true>(source, &proj, t, kernel, lim);
                 }
             } else {
                 for (fp, t) in fps.iter_mut().zip(texels) {
-                    *fp = footprint_in::<false, false>(source, t, kernel, lim);
+                    *fp = footprint_in::<false, false>(source, &proj, t, kernel, lim);
                 }
             }
             thread_ns().saturating_sub(t0)
@@ -382,7 +425,7 @@ mod tests {
     use super::*;
     use glam::Vec2;
     use parallax_scene::CameraDesc;
-    use parallax_scene::camera::Pinhole;
+    use parallax_scene::camera::{CameraModel, Pinhole};
 
     /// A view of the plane z = -d, every texel on it, facing +z.
     fn plane_view(eye: Vec3, d: f32, w: u32, h: u32) -> EyeView {
@@ -529,6 +572,7 @@ mod tests {
             .map(|(v, c)| v.extend(*c))
             .collect();
         let (mut seen, mut full) = (std::collections::HashSet::new(), 0);
+        let proj = Projector::new(&src.camera);
         for plane in [false, true] {
             let lim = Tests {
                 position: 0.12,
@@ -537,9 +581,9 @@ mod tests {
             }
             .limits();
             for t in &dst.texels {
-                let lanes = footprint_in::<true, true>(&src, t, Kernel::BILINEAR, lim);
-                let fast = footprint_in::<true, false>(&src, t, Kernel::BILINEAR, lim);
-                let slow = footprint_in::<false, false>(&src, t, Kernel::BILINEAR, lim);
+                let lanes = footprint_in::<true, true>(&src, &proj, t, Kernel::BILINEAR, lim);
+                let fast = footprint_in::<true, false>(&src, &proj, t, Kernel::BILINEAR, lim);
+                let slow = footprint_in::<false, false>(&src, &proj, t, Kernel::BILINEAR, lim);
                 assert_eq!(fast, slow);
                 assert_eq!(
                     (lanes.mask, lanes.inv_weight.to_bits(), lanes.outcome),

@@ -115,7 +115,7 @@ pub fn accumulate(
     let mut image = vec![Vec3::ZERO; n];
     let mut outcomes = vec![Outcome::Outside; n];
     let (kernel, blend, demod) = (how.kernel, how.blend, how.demodulated);
-    let rep = Reprojector::new(kernel, how.tests);
+    let rep = prev.map(|p| Reprojector::new(&p.view, kernel, how.tests));
     let ns: Vec<u64> = acc
         .par_chunks_mut(band)
         .zip(image.par_chunks_mut(band))
@@ -129,8 +129,8 @@ pub fn accumulate(
                 let t = &view.texels[i];
                 let v = new(i);
                 let (mut c, mut cnt) = (v, 1.0);
-                if let Some(p) = prev {
-                    let f = rep.footprint(&p.view, t);
+                if let (Some(p), Some(rep)) = (prev, &rep) {
+                    let f = rep.footprint(t);
                     *oj = f.outcome;
                     if f.outcome == Outcome::Reused {
                         let g = f.gather(kernel, &p.acc, p.view.width());

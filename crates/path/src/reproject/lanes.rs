@@ -8,11 +8,13 @@
 //!
 //! | parameter | type | meaning |
 //! |---|---|---|
-//! | `weights` | [f32; 4] | tent weights of columns `x0`, `x0 + 1`, rows `y0`, `y0 + 1` |
+//! | `wt` | Vec4 | the four taps' weights, row-major from `(x0, y0)` |
 //! | `pos2`, `nrm2` | f32 | squared position limit and squared normal chord |
 //! | `plane` | bool | position measured against the target's tangent plane |
 
 use std::arch::x86_64::*;
+
+use glam::Vec4;
 
 use super::buffers::{EyeView, Texel};
 
@@ -21,8 +23,8 @@ use super::buffers::{EyeView, Texel};
 /// scalar tap loop of `footprint::footprint_in` in the same order (differences, products
 /// summed as glam's `dot`, strict compares), and the kept weights are summed lane by lane in tap order (a
 /// dropped tap adds +0, which leaves a sum of non-negative weights unchanged), so the result
-/// is the scalar loop's bit for bit. `weights` are the tent weights of the columns `x0`,
-/// `x0 + 1` and the rows `y0`, `y0 + 1`; `pos2`, `nrm2` the squared limits, `plane` the
+/// is the scalar loop's bit for bit. `wt` are the taps' weights (the products of the tent
+/// weights of their column and row, in tap order); `pos2`, `nrm2` the squared limits, `plane` the
 /// tangent-plane test. Returns `(mask, sum, inside, near)`.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
@@ -31,7 +33,7 @@ pub(super) fn bilinear_taps_x4(
     t: &Texel,
     x0: i32,
     y0: i32,
-    [wx0, wx1, wy0, wy1]: [f32; 4],
+    wt: Vec4,
     pos2: f32,
     nrm2: f32,
     plane: bool,
@@ -87,10 +89,7 @@ pub(super) fn bilinear_taps_x4(
             _mm_sub_ps(nz, tnz),
         );
         let n2 = dot(ex, ey, ez, ex, ey, ez);
-        let wt = _mm_mul_ps(
-            _mm_setr_ps(wx0, wx1, wx0, wx1),
-            _mm_setr_ps(wy0, wy0, wy1, wy1),
-        );
+        let wt: __m128 = wt.into();
         let valid = _mm_cmpgt_ps(wt, _mm_setzero_ps());
         // `is_finite`: |depth| < inf (false for NaN).
         let abs = _mm_andnot_ps(splat(-0.0), depth);

@@ -349,13 +349,11 @@ impl MethodState {
         let band = w * BAND_ROWS;
         let mut acc = vec![Vec4::ZERO; n];
         let mut image = vec![Vec3::ZERO; n];
-        let rep = Reprojector::new(
-            k,
-            Tests {
-                plane: m.plane_test,
-                ..inp.tests
-            },
-        );
+        let tests = Tests {
+            plane: m.plane_test,
+            ..inp.tests
+        };
+        let rep = prev.map(|p| Reprojector::new(&p.view, k, tests));
         let ns: Vec<u64> = acc
             .par_chunks_mut(band)
             .zip(image.par_chunks_mut(band))
@@ -373,8 +371,8 @@ impl MethodState {
                         Outcome::Background => (inp.left_background[i], 1.0),
                         _ => {
                             let mut out = (traced[i], 1.0);
-                            if let Some(p) = prev {
-                                let f = rep.footprint(&p.view, &left.texels[i]);
+                            if let (Some(p), Some(rep)) = (prev, &rep) {
+                                let f = rep.footprint(&left.texels[i]);
                                 if f.outcome == Outcome::Reused {
                                     let g = f.gather(k, &p.acc, p.view.width());
                                     let (h, hn) = (g.truncate(), g.w);

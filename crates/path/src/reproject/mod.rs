@@ -41,6 +41,7 @@ pub mod history;
 mod lanes;
 pub mod method;
 pub mod metric;
+mod projector;
 pub mod reference;
 pub mod sampler;
 pub mod sequence;
