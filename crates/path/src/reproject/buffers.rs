@@ -8,7 +8,7 @@
 //! primary ray, so it lies inside the pixel's footprint, and `normal` is unit length and faces
 //! that ray.
 
-use glam::{Vec3, Vec3A};
+use glam::{Vec3, Vec3A, Vec4};
 use parallax_scene::camera::Pinhole;
 
 /// One pixel of a G-buffer. `repr(C)`: the footprint's SSE path loads the position with the
@@ -64,6 +64,28 @@ impl Texel {
             (Vec3A::from(v) / self.albedo_factor_lanes()).into()
         } else {
             v
+        }
+    }
+
+    /// [`Self::demodulate`] into lanes x, y, z of a vector (w is 0).
+    #[inline]
+    pub fn demodulate_lanes(&self, v: Vec3, on: bool) -> Vec4 {
+        let v = Vec3A::from(v);
+        if on {
+            (v / self.albedo_factor_lanes()).extend(0.0)
+        } else {
+            v.extend(0.0)
+        }
+    }
+
+    /// [`Self::remodulate`] of lanes x, y, z of `v`.
+    #[inline]
+    pub fn remodulate_lanes(&self, v: Vec4, on: bool) -> Vec3 {
+        let v = Vec3A::from_vec4(v);
+        if on {
+            (v * self.albedo_factor_lanes()).into()
+        } else {
+            v.into()
         }
     }
 

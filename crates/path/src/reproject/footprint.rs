@@ -133,17 +133,76 @@ pub struct Footprint {
     pub fy: f32,
     pub mask: u16,
     pub outcome: Outcome,
+    /// The bilinear kernel's four taps all lie inside the source (false for wider kernels).
+    pub taps_inside: bool,
     /// One over the sum of the kept weights (0 when nothing was kept).
     pub inv_weight: f32,
 }
 
 /// A value a footprint can average.
-pub trait Blendable: Copy + Default + Add<Output = Self> + Mul<f32, Output = Self> {}
+pub trait Blendable: Copy + Default + Add<Output = Self> + Mul<f32, Output = Self> {
+    /// The bilinear sum of four taps' values `v` (row-major) with weights `wt` (lanes, in tap
+    /// order), of the taps whose `mask` bit is set: `0 + t0 + t1 + t2 + t3` with `t_k =
+    /// v[k] * wt[k]` for a kept tap and `+0` for a dropped one. Adding +0 instead of nothing
+    /// changes no sum (one that starts at +0 is never -0), so this is the tap loop's sum bit
+    /// for bit.
+    #[inline(always)]
+    fn sum_taps(v: [Self; 4], wt: Vec4, mask: u16) -> Self {
+        let tap = |k: u32, v: Self, w: f32| {
+            if mask & (1 << k) != 0 {
+                v * w
+            } else {
+                Self::default()
+            }
+        };
+        Self::default()
+            + tap(0, v[0], wt.x)
+            + tap(1, v[1], wt.y)
+            + tap(2, v[2], wt.z)
+            + tap(3, v[3], wt.w)
+    }
+}
 impl Blendable for f32 {}
 impl Blendable for Vec3 {}
 /// A colour with a fourth value gathered alongside (a history's colour and length): each lane
 /// is summed with exactly the scalar operations of a `Vec3` or `f32` gather.
-impl Blendable for Vec4 {}
+impl Blendable for Vec4 {
+    /// The trait's sum without branches: the products of dropped taps are cleared with a lane
+    /// mask (x86-64).
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn sum_taps(v: [Self; 4], wt: Vec4, mask: u16) -> Self {
+        use std::arch::x86_64::*;
+        // SAFETY: SSE2 is part of x86-64.
+        unsafe {
+            let bits = _mm_setr_epi32(1, 2, 4, 8);
+            let m = _mm_castsi128_ps(_mm_cmpeq_epi32(
+                _mm_and_si128(_mm_set1_epi32(mask as i32), bits),
+                bits,
+            ));
+            let w: __m128 = wt.into();
+            let t0 = _mm_and_ps(
+                _mm_mul_ps(v[0].into(), _mm_shuffle_ps::<0x00>(w, w)),
+                _mm_shuffle_ps::<0x00>(m, m),
+            );
+            let t1 = _mm_and_ps(
+                _mm_mul_ps(v[1].into(), _mm_shuffle_ps::<0x55>(w, w)),
+                _mm_shuffle_ps::<0x55>(m, m),
+            );
+            let t2 = _mm_and_ps(
+                _mm_mul_ps(v[2].into(), _mm_shuffle_ps::<0xAA>(w, w)),
+                _mm_shuffle_ps::<0xAA>(m, m),
+            );
+            let t3 = _mm_and_ps(
+                _mm_mul_ps(v[3].into(), _mm_shuffle_ps::<0xFF>(w, w)),
+                _mm_shuffle_ps::<0xFF>(m, m),
+            );
+            let s = _mm_add_ps(_mm_setzero_ps(), t0);
+            let s = _mm_add_ps(_mm_add_ps(_mm_add_ps(s, t1), t2), t3);
+            s.into()
+        }
+    }
+}
 
 impl Footprint {
     fn discarded(outcome: Outcome) -> Self {
@@ -178,15 +237,11 @@ impl Footprint {
         if self.mask == 0 {
             return acc;
         }
-        if BILINEAR {
-            let (x0, y0, w) = (self.x0, self.y0, width as usize);
-            if x0 >= 0 && y0 >= 0 && x0 + 1 < width as i32 {
-                let i0 = y0 as usize * w + x0 as usize;
-                if let (Some(r0), Some(r1)) =
-                    (values.get(i0..i0 + 2), values.get(i0 + w..i0 + w + 2))
-                {
-                    return self.gather_bilinear([r0[0], r0[1], r1[0], r1[1]]);
-                }
+        if BILINEAR && self.taps_inside {
+            let w = width as usize;
+            let i0 = self.y0 as usize * w + self.x0 as usize;
+            if let (Some(r0), Some(r1)) = (values.get(i0..i0 + 2), values.get(i0 + w..i0 + w + 2)) {
+                return self.gather_bilinear([r0[0], r0[1], r1[0], r1[1]]);
             }
         }
         let half = kernel.half();
@@ -214,19 +269,7 @@ impl Footprint {
     #[inline(always)]
     fn gather_bilinear<T: Blendable>(&self, v: [T; 4]) -> T {
         let wt = bilinear_weights(Vec4::new(self.fx, self.fy, 0.0, 0.0));
-        let tap = |k: u32, v: T, w: f32| {
-            if self.mask & (1 << k) != 0 {
-                v * w
-            } else {
-                T::default()
-            }
-        };
-        (T::default()
-            + tap(0, v[0], wt.x)
-            + tap(1, v[1], wt.y)
-            + tap(2, v[2], wt.z)
-            + tap(3, v[3], wt.w))
-            * self.inv_weight
+        T::sum_taps(v, wt, self.mask) * self.inv_weight
     }
 }
 
@@ -318,7 +361,7 @@ fn footprint_in<const BILINEAR: bool, const LANES: bool>(
         let (pos2, nrm2, plane) = (lim.pos2, lim.nrm2, lim.plane);
         let wt = bilinear_weights(frac);
         let (mask, sum, inside, near) = bilinear_taps_x4(source, t, x0, y0, wt, pos2, nrm2, plane);
-        return placed(x0, y0, fx, fy, mask, sum, inside, near);
+        return placed(x0, y0, fx, fy, mask, sum, inside, near, true);
     }
     let taps = 2 * half;
     let (mut mask, mut sum, mut bit) = (0u16, 0.0f32, 0);
@@ -351,7 +394,8 @@ fn footprint_in<const BILINEAR: bool, const LANES: bool>(
             bit += 1;
         }
     }
-    placed(x0, y0, fx, fy, mask, sum, inside, near)
+    let taps_inside = kernel == Kernel::BILINEAR && x0 >= 0 && y0 >= 0 && x0 + 1 < w && y0 + 1 < h;
+    placed(x0, y0, fx, fy, mask, sum, inside, near, taps_inside)
 }
 
 /// The footprint of a target placed in the source, from its kept taps.
@@ -366,6 +410,7 @@ fn placed(
     sum: f32,
     inside: bool,
     near: bool,
+    taps_inside: bool,
 ) -> Footprint {
     let outcome = match (mask != 0, inside, near) {
         (true, _, _) => Outcome::Reused,
@@ -380,6 +425,7 @@ fn placed(
         fy,
         mask,
         outcome,
+        taps_inside,
         inv_weight: if sum > 0.0 { 1.0 / sum } else { 0.0 },
     }
 }

@@ -33,7 +33,7 @@ use rayon::prelude::*;
 use super::buffers::EyeView;
 use super::error::{Result, option_error};
 use super::footprint::{BAND_ROWS, Footprint, Kernel, Outcome, Reprojector, Tests, footprints};
-use super::history::{Accumulation, Blend, History, accumulate};
+use super::history::{Accumulation, Alpha, Blend, History, accumulate};
 use super::sampler::{PaperSampler, TraceCost, thread_ns};
 
 /// How stereo + temporal fills the left eye (module docs).
@@ -288,7 +288,7 @@ impl MethodState {
         };
         let acc = accumulate(
             right,
-            |i| right.texels[i].demodulate(r_rad[i], demod),
+            |i| right.texels[i].demodulate_lanes(r_rad[i], demod),
             self.right.as_ref(),
             &how,
         );
@@ -305,10 +305,10 @@ impl MethodState {
             Combine::Cascade => {
                 let a = accumulate(
                     left,
-                    |i| {
-                        stereo_value(i, &fps, background, traced, |f| {
-                            f.gather(k, &r_acc.acc, rw).truncate()
-                        })
+                    |i| match fps[i].outcome {
+                        Outcome::Reused => fps[i].gather(k, &r_acc.acc, rw),
+                        Outcome::Background => background[i].extend(0.0),
+                        _ => traced[i].extend(0.0),
                     },
                     self.left.as_ref(),
                     &how,
@@ -354,6 +354,7 @@ impl MethodState {
             ..inp.tests
         };
         let rep = prev.map(|p| Reprojector::new(&p.view, k, tests));
+        let alpha = Alpha::new(m.blend);
         let ns: Vec<u64> = acc
             .par_chunks_mut(band)
             .zip(image.par_chunks_mut(band))
@@ -376,7 +377,7 @@ impl MethodState {
                                 if f.outcome == Outcome::Reused {
                                     let g = f.gather(k, &p.acc, p.view.width());
                                     let (h, hn) = (g.truncate(), g.w);
-                                    let a = m.blend.alpha(hn);
+                                    let a = alpha.alpha(hn);
                                     out = (traced[i] * a + h * (1.0 - a), hn + 1.0);
                                 }
                             }
