@@ -340,6 +340,21 @@ fn footprint_in<const BILINEAR: bool, const LANES: bool>(
     let Some(s) = proj.project(t.position) else {
         return Footprint::discarded(Outcome::Outside);
     };
+    // The bilinear taps all inside the source (the common case, tested in SSE lanes):
+    // `floor(s) >= 0` is `s >= 0` and `floor(s) + 1 < n` is `s < n - 1` (integer bounds,
+    // exact), both axes in lanes x, y; such a position also passes the range check below.
+    #[cfg(target_arch = "x86_64")]
+    if BILINEAR && LANES {
+        let inner = s.cmpge(Vec4::ZERO) & s.cmplt(proj.size() - Vec4::ONE);
+        if inner.bitmask() & 3 == 3 {
+            let (x0, y0, frac) = floor_xy(s);
+            let (pos2, nrm2, plane) = (lim.pos2, lim.nrm2, lim.plane);
+            let wt = bilinear_weights(frac);
+            let (mask, sum, inside, near) =
+                bilinear_taps_x4(source, t, x0, y0, wt, pos2, nrm2, plane);
+            return placed(x0, y0, frac.x, frac.y, mask, sum, inside, near, true);
+        }
+    }
     let (pos2, nrm2) = (lim.pos2, lim.nrm2);
     let half = kernel.half();
     let (w, h) = (source.width() as i32, source.height() as i32);
@@ -356,13 +371,6 @@ fn footprint_in<const BILINEAR: bool, const LANES: bool>(
     let (ix, iy, frac) = floor_xy(s);
     let (fx, fy) = (frac.x, frac.y);
     let (x0, y0) = (ix - half + 1, iy - half + 1);
-    #[cfg(target_arch = "x86_64")]
-    if BILINEAR && LANES && x0 >= 0 && y0 >= 0 && x0 + 1 < w && y0 + 1 < h {
-        let (pos2, nrm2, plane) = (lim.pos2, lim.nrm2, lim.plane);
-        let wt = bilinear_weights(frac);
-        let (mask, sum, inside, near) = bilinear_taps_x4(source, t, x0, y0, wt, pos2, nrm2, plane);
-        return placed(x0, y0, fx, fy, mask, sum, inside, near, true);
-    }
     let taps = 2 * half;
     let (mut mask, mut sum, mut bit) = (0u16, 0.0f32, 0);
     let (mut inside, mut near) = (false, false);

@@ -196,8 +196,9 @@ pub fn accumulate(
                 let i0 = base + r * CHUNK;
                 let fps = &mut fps[..hr.len()];
                 if let Some(rep) = &rep {
-                    for (k, f) in fps.iter_mut().enumerate() {
-                        *f = rep.footprint(&view.texels[i0 + k]);
+                    let texels = &view.texels[i0..i0 + fps.len()];
+                    for (f, t) in fps.iter_mut().zip(texels) {
+                        *f = rep.footprint(t);
                     }
                 }
                 for (k, ((hj, ij), oj)) in hr.iter_mut().zip(ir).zip(or).enumerate() {
