@@ -35,6 +35,20 @@ impl Texel {
         albedo: Vec3::ZERO,
     };
 
+    /// The world position in the lanes of one vector (on x86-64 one 16-byte load of the
+    /// position and the depth, which `repr(C)` places after it).
+    #[inline(always)]
+    pub fn position_lanes(&self) -> Vec3A {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: SSE2 is part of x86-64; the 16 bytes from `position` are the position and
+        // the depth, inside the texel.
+        unsafe {
+            Vec3A::from(std::arch::x86_64::_mm_loadu_ps(&self.position.x))
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        Vec3A::from(self.position)
+    }
+
     /// True when the primary ray hit a surface.
     #[inline]
     pub fn is_hit(&self) -> bool {

@@ -337,7 +337,7 @@ fn footprint_in<const BILINEAR: bool, const LANES: bool>(
         return Footprint::discarded(Outcome::Background);
     }
     // The film position `f` minus 0.5 (`Pinhole::project` bit for bit).
-    let Some(s) = proj.project(t.position) else {
+    let Some(s) = proj.project(t.position_lanes()) else {
         return Footprint::discarded(Outcome::Outside);
     };
     // The bilinear taps all inside the source (the common case, tested in SSE lanes):

@@ -10,7 +10,7 @@
 //! division and multiplication are correctly rounded per lane; `1 - y` is computed as
 //! `1 + (-y)`, which IEEE 754 defines as the same operation). Tested against the camera.
 
-use glam::{Vec3, Vec3A, Vec4};
+use glam::{Vec3A, Vec4};
 #[cfg(not(target_arch = "x86_64"))]
 use parallax_core::math::floor_i32;
 use parallax_scene::camera::Pinhole;
@@ -54,9 +54,9 @@ impl Projector {
     /// `camera.project(p, 0) - 0.5` bit for bit; `None` for points behind or on the eye
     /// plane.
     #[inline(always)]
-    pub(crate) fn project(&self, p: Vec3) -> Option<Vec4> {
+    pub(crate) fn project(&self, p: Vec3A) -> Option<Vec4> {
         // `basis^T * (p - position)`: glam's `Mat3 * Vec3` sums the columns in this order.
-        let d = Vec3A::from(p) - self.position;
+        let d = p - self.position;
         let q = self.cols[0] * d.x + self.cols[1] * d.y + self.cols[2] * d.z;
         if q.z >= 0.0 {
             return None;
@@ -100,7 +100,7 @@ pub(crate) fn floor_xy(s: Vec4) -> (i32, i32, Vec4) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::Vec2;
+    use glam::{Vec2, Vec3};
     use parallax_scene::CameraDesc;
     use parallax_scene::camera::CameraModel;
 
@@ -130,7 +130,7 @@ mod tests {
             for _ in 0..20_000 {
                 let p = Vec3::new(next() * 20.0, next() * 20.0, next() * 20.0);
                 let want = cam.project(p, 0);
-                match (proj.project(p), want) {
+                match (proj.project(p.into()), want) {
                     (Some(s), Some(f)) => {
                         let fm = f - Vec2::splat(0.5);
                         assert_eq!(
