@@ -85,7 +85,7 @@ impl Alpha {
     /// The smallest `x > 0` with `fl(1 / x) <= floor` (infinity where there is none or it
     /// is not finite).
     fn floor_from(floor: f32) -> f32 {
-        if !(floor > 0.0) {
+        if floor.is_nan() || floor <= 0.0 {
             return f32::INFINITY;
         }
         let mut x = 1.0 / floor;

@@ -1,4 +1,4 @@
-//! A pinhole's projection prepared for the footprints of a pass: [`Pinhole::project`] bit for
+//! A pinhole's projection prepared for the footprints of a pass: `Pinhole::project` bit for
 //! bit, with the camera's constants (the transposed basis, `tan_half_x`, the window shift, the
 //! film size) computed once per pass instead of per point, and the x and y chains computed in
 //! the lanes of one vector (glam's `Vec3A` / `Vec4`: SSE on x86-64), so the four chained
@@ -15,7 +15,7 @@ use glam::{Vec3A, Vec4};
 use parallax_core::math::floor_i32;
 use parallax_scene::camera::Pinhole;
 
-/// [`Pinhole::project`] with the camera's constants prepared (module docs).
+/// `Pinhole::project` with the camera's constants prepared (module docs).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Projector {
     position: Vec3A,
@@ -69,7 +69,7 @@ impl Projector {
 }
 
 /// `floor` of lanes x and y of `s` as integers, and `s` minus them (lanes x, y; z and w are
-/// unspecified): [`floor_i32`] and `s - floor as f32` bit for bit (the same truncation, compare
+/// unspecified): `parallax_core::math::floor_i32` and `s - floor as f32` bit for bit (the same truncation, compare
 /// and step, two lanes at a time on x86-64), for `|s.x|, |s.y| <` 2^23.
 #[inline(always)]
 pub(crate) fn floor_xy(s: Vec4) -> (i32, i32, Vec4) {
