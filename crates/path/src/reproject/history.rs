@@ -160,9 +160,10 @@ pub struct Accumulated {
 
 /// Blends `new(i)` (the value of `view`'s pixel `i` this frame, in lanes x, y, z; w is
 /// ignored) into `prev` reprojected into `view`; one pass over the pixels: each pixel's
-/// footprint in the previous view, the blend and the image (the footprints are not stored).
-/// The blend is done in the lanes of the history's `Vec4` (each colour lane does the scalar
-/// blend's operations; the count lane is then set).
+/// footprint in the previous view, the blend and the image (footprints are kept only for the
+/// current run of 16 pixels, on the stack). The blend is done in the lanes of the
+/// history's `Vec4` (each colour lane does the scalar blend's operations; the count lane is
+/// then set), with the running mean's alpha from [`Alpha`].
 pub fn accumulate(
     view: &Arc<EyeView>,
     new: impl Fn(usize) -> Vec4 + Sync,
