@@ -137,6 +137,10 @@ pub struct Footprint {
     pub taps_inside: bool,
     /// One over the sum of the kept weights (0 when nothing was kept).
     pub inv_weight: f32,
+    /// Where `taps_inside`: the four taps' bilinear weights (row-major from `(x0, y0)`, the
+    /// products of the tent weights of their column and row) with the dropped taps' lanes
+    /// +0, computed once by the footprint for its gathers; zero otherwise.
+    pub weights: Vec4,
 }
 
 /// A value a footprint can average.
@@ -145,7 +149,8 @@ pub trait Blendable: Copy + Default + Add<Output = Self> + Mul<f32, Output = Sel
     /// order), of the taps whose `mask` bit is set: `0 + t0 + t1 + t2 + t3` with `t_k =
     /// v[k] * wt[k]` for a kept tap and `+0` for a dropped one. Adding +0 instead of nothing
     /// changes no sum (one that starts at +0 is never -0), so this is the tap loop's sum bit
-    /// for bit.
+    /// for bit. A kept tap's weight is positive and a dropped tap's lane of `wt` is +0
+    /// ([`Footprint::weights`]), so `wt[k] > 0` is the tap's `mask` bit.
     #[inline(always)]
     fn sum_taps(v: [Self; 4], wt: Vec4, mask: u16) -> Self {
         let tap = |k: u32, v: Self, w: f32| {
@@ -167,20 +172,17 @@ impl Blendable for Vec3 {}
 /// A colour with a fourth value gathered alongside (a history's colour and length): each lane
 /// is summed with exactly the scalar operations of a `Vec3` or `f32` gather.
 impl Blendable for Vec4 {
-    /// The trait's sum without branches: the products of dropped taps are cleared with a lane
-    /// mask (x86-64).
+    /// The trait's sum without branches: the products of dropped taps (the `mask` bits clear,
+    /// i.e. the lanes where `wt[k] > 0` is false) are cleared with a lane mask (x86-64), so a
+    /// dropped tap adds +0 whatever its value.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    fn sum_taps(v: [Self; 4], wt: Vec4, mask: u16) -> Self {
+    fn sum_taps(v: [Self; 4], wt: Vec4, _mask: u16) -> Self {
         use std::arch::x86_64::*;
         // SAFETY: SSE2 is part of x86-64.
         unsafe {
-            let bits = _mm_setr_epi32(1, 2, 4, 8);
-            let m = _mm_castsi128_ps(_mm_cmpeq_epi32(
-                _mm_and_si128(_mm_set1_epi32(mask as i32), bits),
-                bits,
-            ));
             let w: __m128 = wt.into();
+            let m = _mm_cmpgt_ps(w, _mm_setzero_ps());
             let t0 = _mm_and_ps(
                 _mm_mul_ps(v[0].into(), _mm_shuffle_ps::<0x00>(w, w)),
                 _mm_shuffle_ps::<0x00>(m, m),
@@ -240,8 +242,9 @@ impl Footprint {
         if BILINEAR && self.taps_inside {
             let w = width as usize;
             let i0 = self.y0 as usize * w + self.x0 as usize;
-            if let (Some(r0), Some(r1)) = (values.get(i0..i0 + 2), values.get(i0 + w..i0 + w + 2)) {
-                return self.gather_bilinear([r0[0], r0[1], r1[0], r1[1]]);
+            // One range check for both rows (the indices below are within `w + 2`).
+            if let Some(r) = values.get(i0..i0 + w + 2) {
+                return self.gather_bilinear([r[0], r[1], r[w], r[w + 1]]);
             }
         }
         let half = kernel.half();
@@ -262,14 +265,14 @@ impl Footprint {
     }
 
     /// The bilinear gather of the four taps' values (row-major from `(x0, y0)`), all inside
-    /// the source: the four tent weights in the lanes of one vector, each kept tap's value
-    /// times its weight, summed in tap order from zero, times the normaliser. A dropped tap
-    /// adds +0 instead of nothing, which changes no sum (a sum that starts at +0 is never -0),
-    /// so the result is the tap loop's bit for bit (tested).
+    /// the source: each kept tap's value times its weight (the footprint's
+    /// [`Footprint::weights`], the tent weights in the lanes of one vector), summed in tap
+    /// order from zero, times the normaliser. A dropped tap adds +0 instead of nothing, which
+    /// changes no sum (a sum that starts at +0 is never -0), so the result is the tap loop's
+    /// bit for bit (tested).
     #[inline(always)]
     fn gather_bilinear<T: Blendable>(&self, v: [T; 4]) -> T {
-        let wt = bilinear_weights(Vec4::new(self.fx, self.fy, 0.0, 0.0));
-        T::sum_taps(v, wt, self.mask) * self.inv_weight
+        T::sum_taps(v, self.weights, self.mask) * self.inv_weight
     }
 }
 
@@ -350,9 +353,9 @@ fn footprint_in<const BILINEAR: bool, const LANES: bool>(
             let (x0, y0, frac) = floor_xy(s);
             let (pos2, nrm2, plane) = (lim.pos2, lim.nrm2, lim.plane);
             let wt = bilinear_weights(frac);
-            let (mask, sum, inside, near) =
+            let (mask, sum, inside, near, kept) =
                 bilinear_taps_x4(source, t, x0, y0, wt, pos2, nrm2, plane);
-            return placed(x0, y0, frac.x, frac.y, mask, sum, inside, near, true);
+            return placed(x0, y0, frac.x, frac.y, mask, sum, inside, near, Some(kept));
         }
     }
     let (pos2, nrm2) = (lim.pos2, lim.nrm2);
@@ -403,10 +406,20 @@ fn footprint_in<const BILINEAR: bool, const LANES: bool>(
         }
     }
     let taps_inside = kernel == Kernel::BILINEAR && x0 >= 0 && y0 >= 0 && x0 + 1 < w && y0 + 1 < h;
-    placed(x0, y0, fx, fy, mask, sum, inside, near, taps_inside)
+    // The four tent weights of a bilinear footprint inside the source, the dropped taps'
+    // lanes +0.
+    let kept = taps_inside.then(|| {
+        let wt = bilinear_weights(frac).to_array();
+        Vec4::from_array(std::array::from_fn(|k| {
+            if mask & (1 << k) != 0 { wt[k] } else { 0.0 }
+        }))
+    });
+    placed(x0, y0, fx, fy, mask, sum, inside, near, kept)
 }
 
-/// The footprint of a target placed in the source, from its kept taps.
+/// The footprint of a target placed in the source, from its kept taps; `kept` are the
+/// bilinear taps' weights with the dropped taps' lanes +0 when all four taps lie inside the
+/// source (the footprint's `taps_inside`), else `None`.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn placed(
@@ -418,7 +431,7 @@ fn placed(
     sum: f32,
     inside: bool,
     near: bool,
-    taps_inside: bool,
+    kept: Option<Vec4>,
 ) -> Footprint {
     let outcome = match (mask != 0, inside, near) {
         (true, _, _) => Outcome::Reused,
@@ -433,8 +446,9 @@ fn placed(
         fy,
         mask,
         outcome,
-        taps_inside,
+        taps_inside: kept.is_some(),
         inv_weight: if sum > 0.0 { 1.0 / sum } else { 0.0 },
+        weights: kept.unwrap_or(Vec4::ZERO),
     }
 }
 
@@ -644,6 +658,10 @@ mod tests {
                     (slow.mask, slow.inv_weight.to_bits(), slow.outcome)
                 );
                 assert_eq!(lanes, slow);
+                // The kept weights' positive lanes are the mask's bits (the Vec4 gather's lane
+                // mask).
+                let positive = slow.weights.cmpgt(Vec4::ZERO).bitmask() as u16;
+                assert_eq!(positive, if slow.taps_inside { slow.mask } else { 0 });
                 seen.insert(fast.outcome);
                 full += usize::from(fast.mask == 0xF);
                 let (a, b) = (

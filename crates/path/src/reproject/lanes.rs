@@ -25,7 +25,8 @@ use super::buffers::{EyeView, Texel};
 /// dropped tap adds +0, which leaves a sum of non-negative weights unchanged), so the result
 /// is the scalar loop's bit for bit. `wt` are the taps' weights (the products of the tent
 /// weights of their column and row, in tap order); `pos2`, `nrm2` the squared limits, `plane` the
-/// tangent-plane test. Returns `(mask, sum, inside, near)`.
+/// tangent-plane test. Returns `(mask, sum, inside, near, kept)`, `kept` the weights with the
+/// dropped taps' lanes +0.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(super) fn bilinear_taps_x4(
@@ -37,14 +38,12 @@ pub(super) fn bilinear_taps_x4(
     pos2: f32,
     nrm2: f32,
     plane: bool,
-) -> (u16, f32, bool, bool) {
+) -> (u16, f32, bool, bool, Vec4) {
     let w = source.width() as usize;
     let i0 = y0 as usize * w + x0 as usize;
-    let (r0, r1) = (
-        &source.texels[i0..i0 + 2],
-        &source.texels[i0 + w..i0 + w + 2],
-    );
-    let s = [&r0[0], &r0[1], &r1[0], &r1[1]];
+    // Both rows in one range check (the indices below are within `w + 2`).
+    let r = &source.texels[i0..i0 + w + 2];
+    let s = [&r[0], &r[1], &r[w], &r[w + 1]];
     // SAFETY: SSE2 is part of x86-64; `Texel` is `repr(C)`, so 16 bytes from `position` are
     // the position and depth and 16 bytes from `normal` are the normal and albedo.x, all
     // inside the texel.
@@ -96,14 +95,16 @@ pub(super) fn bilinear_taps_x4(
         let hit = _mm_cmplt_ps(abs, splat(f32::INFINITY));
         let near = _mm_and_ps(_mm_and_ps(valid, hit), _mm_cmplt_ps(d2, splat(pos2)));
         let keep = _mm_and_ps(near, _mm_cmplt_ps(n2, splat(nrm2)));
+        let kept_lanes = _mm_and_ps(keep, wt);
         let mut kept = [0.0f32; 4];
-        _mm_storeu_ps(kept.as_mut_ptr(), _mm_and_ps(keep, wt));
+        _mm_storeu_ps(kept.as_mut_ptr(), kept_lanes);
         let sum = 0.0 + kept[0] + kept[1] + kept[2] + kept[3];
         (
             _mm_movemask_ps(keep) as u16,
             sum,
             _mm_movemask_ps(valid) != 0,
             _mm_movemask_ps(near) != 0,
+            kept_lanes.into(),
         )
     }
 }
