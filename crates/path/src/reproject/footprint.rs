@@ -36,6 +36,7 @@ use glam::{Vec3, Vec4, Vec4Swizzles};
 use rayon::prelude::*;
 
 use super::buffers::{EyeView, Texel};
+use super::isa::Isa;
 #[cfg(target_arch = "x86_64")]
 use super::lanes::bilinear_taps_x4;
 use super::projector::{Projector, floor_xy};
@@ -456,13 +457,25 @@ fn placed(
 pub(crate) const BAND_ROWS: usize = 8;
 
 /// The footprint of every pixel of `target` in `source`, into `out`; returns the thread CPU
-/// nanoseconds spent.
+/// nanoseconds spent. Runs in the build of [`Isa::detect`].
 pub fn footprints(
     target: &EyeView,
     source: &EyeView,
     kernel: Kernel,
     tests: Tests,
     out: &mut Vec<Footprint>,
+) -> u64 {
+    footprints_with(target, source, kernel, tests, out, Isa::detect())
+}
+
+/// [`footprints`] in the build of `isa` (every build's footprints are the same bit for bit).
+pub fn footprints_with(
+    target: &EyeView,
+    source: &EyeView,
+    kernel: Kernel,
+    tests: Tests,
+    out: &mut Vec<Footprint>,
+    isa: Isa,
 ) -> u64 {
     let w = target.width() as usize;
     out.resize(target.len(), Footprint::default());
@@ -473,15 +486,20 @@ pub fn footprints(
         .map(|(fps, texels)| {
             let t0 = thread_ns();
             let lim = tests.limits();
-            if kernel == Kernel::BILINEAR {
-                for (fp, t) in fps.iter_mut().zip(texels) {
-                    *fp = footprint_in::<true, true>(source, &proj, t, kernel, lim);
-                }
-            } else {
-                for (fp, t) in fps.iter_mut().zip(texels) {
-                    *fp = footprint_in::<false, false>(source, &proj, t, kernel, lim);
-                }
-            }
+            isa.run(
+                #[inline(always)]
+                || {
+                    if kernel == Kernel::BILINEAR {
+                        for (fp, t) in fps.iter_mut().zip(texels) {
+                            *fp = footprint_in::<true, true>(source, &proj, t, kernel, lim);
+                        }
+                    } else {
+                        for (fp, t) in fps.iter_mut().zip(texels) {
+                            *fp = footprint_in::<false, false>(source, &proj, t, kernel, lim);
+                        }
+                    }
+                },
+            );
             thread_ns().saturating_sub(t0)
         })
         .collect();

@@ -22,6 +22,7 @@ use rayon::prelude::*;
 
 use super::buffers::EyeView;
 use super::footprint::{BAND_ROWS, Footprint, Kernel, Outcome, Reprojector, Tests};
+use super::isa::Isa;
 
 /// Pixels whose footprints are computed before their gathers.
 const CHUNK: usize = 16;
@@ -163,12 +164,24 @@ pub struct Accumulated {
 /// footprint in the previous view, the blend and the image (footprints are kept only for the
 /// current run of 16 pixels, on the stack). The blend is done in the lanes of the
 /// history's `Vec4` (each colour lane does the scalar blend's operations; the count lane is
-/// then set), with the running mean's alpha from [`Alpha`].
+/// then set), with the running mean's alpha from [`Alpha`]. Runs in the build of
+/// [`Isa::detect`].
 pub fn accumulate(
     view: &Arc<EyeView>,
     new: impl Fn(usize) -> Vec4 + Sync,
     prev: Option<&History>,
     how: &Accumulation,
+) -> Accumulated {
+    accumulate_with(view, new, prev, how, Isa::detect())
+}
+
+/// [`accumulate`] in the build of `isa` (every build's outputs are the same bit for bit).
+pub fn accumulate_with(
+    view: &Arc<EyeView>,
+    new: impl Fn(usize) -> Vec4 + Sync,
+    prev: Option<&History>,
+    how: &Accumulation,
+    isa: Isa,
 ) -> Accumulated {
     let n = view.len();
     let band = view.width() as usize * BAND_ROWS;
@@ -185,44 +198,49 @@ pub fn accumulate(
         .map(|(b, ((hist, img), out))| {
             let t0 = thread_ns();
             let base = b * band;
-            // Per run of CHUNK pixels: the footprints first, then the gathers and blends (the
-            // independent footprints overlap instead of waiting on each pixel's blend).
-            let mut fps = [Footprint::default(); CHUNK];
-            for (r, ((hr, ir), or)) in hist
-                .chunks_mut(CHUNK)
-                .zip(img.chunks_mut(CHUNK))
-                .zip(out.chunks_mut(CHUNK))
-                .enumerate()
-            {
-                let i0 = base + r * CHUNK;
-                let fps = &mut fps[..hr.len()];
-                if let Some(rep) = &rep {
-                    let texels = &view.texels[i0..i0 + fps.len()];
-                    for (f, t) in fps.iter_mut().zip(texels) {
-                        *f = rep.footprint(t);
-                    }
-                }
-                for (k, ((hj, ij), oj)) in hr.iter_mut().zip(ir).zip(or).enumerate() {
-                    let i = i0 + k;
-                    let t = &view.texels[i];
-                    let v = new(i);
-                    let (mut c, mut cnt) = (v, 1.0);
-                    if let Some(p) = prev {
-                        let f = &fps[k];
-                        *oj = f.outcome;
-                        if f.outcome == Outcome::Reused {
-                            // Colour (xyz) and count (w) of the reprojected history.
-                            let h = f.gather(kernel, &p.acc, p.view.width());
-                            let a = blend.alpha(h.w);
-                            cnt = h.w + 1.0;
-                            c = v * a + h * (1.0 - a);
+            isa.run(
+                #[inline(always)]
+                || {
+                    // Per run of CHUNK pixels: the footprints first, then the gathers and blends (the
+                    // independent footprints overlap instead of waiting on each pixel's blend).
+                    let mut fps = [Footprint::default(); CHUNK];
+                    for (r, ((hr, ir), or)) in hist
+                        .chunks_mut(CHUNK)
+                        .zip(img.chunks_mut(CHUNK))
+                        .zip(out.chunks_mut(CHUNK))
+                        .enumerate()
+                    {
+                        let i0 = base + r * CHUNK;
+                        let fps = &mut fps[..hr.len()];
+                        if let Some(rep) = &rep {
+                            let texels = &view.texels[i0..i0 + fps.len()];
+                            for (f, t) in fps.iter_mut().zip(texels) {
+                                *f = rep.footprint(t);
+                            }
+                        }
+                        for (k, ((hj, ij), oj)) in hr.iter_mut().zip(ir).zip(or).enumerate() {
+                            let i = i0 + k;
+                            let t = &view.texels[i];
+                            let v = new(i);
+                            let (mut c, mut cnt) = (v, 1.0);
+                            if let Some(p) = prev {
+                                let f = &fps[k];
+                                *oj = f.outcome;
+                                if f.outcome == Outcome::Reused {
+                                    // Colour (xyz) and count (w) of the reprojected history.
+                                    let h = f.gather(kernel, &p.acc, p.view.width());
+                                    let a = blend.alpha(h.w);
+                                    cnt = h.w + 1.0;
+                                    c = v * a + h * (1.0 - a);
+                                }
+                            }
+                            let c = c.with_w(cnt);
+                            *hj = c;
+                            *ij = t.remodulate_lanes(c, demod);
                         }
                     }
-                    let c = c.with_w(cnt);
-                    *hj = c;
-                    *ij = t.remodulate_lanes(c, demod);
-                }
-            }
+                },
+            );
             thread_ns().saturating_sub(t0)
         })
         .collect();

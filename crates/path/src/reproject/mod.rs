@@ -37,6 +37,7 @@ pub mod evaluate;
 pub mod fingerprint;
 pub mod footprint;
 pub mod history;
+pub mod isa;
 #[cfg(target_arch = "x86_64")]
 mod lanes;
 pub mod method;
