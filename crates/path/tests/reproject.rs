@@ -243,7 +243,7 @@ impl FrameWorld for FixedHead {
         self.0.tracer()
     }
     fn head(&self, _: u32) -> CameraDesc {
-        self.1.clone()
+        self.1
     }
     fn geometry_moves(&self) -> bool {
         self.0.geometry_moves()
