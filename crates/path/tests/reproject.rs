@@ -7,6 +7,7 @@ use glam::Vec3;
 use parallax_core::WorldTracer;
 use parallax_path::reproject::dataset::{Dataset, FrameWorld, Variant};
 use parallax_path::reproject::footprint::Outcome;
+use parallax_path::reproject::isa::Isa;
 use parallax_path::reproject::method::{Method, MethodState};
 use parallax_path::reproject::reference::{ReferenceCache, ReferenceSpec};
 use parallax_path::reproject::sampler::PaperSampler;
@@ -37,16 +38,20 @@ fn atrium(variant: Variant) -> Dataset {
 
 /// Every frame's images and outcomes of every method and mode, as bits.
 fn sequence_bits(world: &mut dyn FrameWorld, o: &RunOptions) -> Vec<Vec<u32>> {
-    sequence_bits_of(world, o, &[Method::paper(), Method::ours()])
+    sequence_bits_of(world, o, &[Method::paper(), Method::ours()], Isa::detect())
 }
 
-/// [`sequence_bits`] of the given methods.
+/// [`sequence_bits`] of the given methods, their passes run in the build of `isa`.
 fn sequence_bits_of(
     world: &mut dyn FrameWorld,
     o: &RunOptions,
     methods: &[Method],
+    isa: Isa,
 ) -> Vec<Vec<u32>> {
-    let mut states: Vec<MethodState> = methods.iter().cloned().map(MethodState::new).collect();
+    let mut states: Vec<MethodState> = methods
+        .iter()
+        .map(|m| MethodState::new(m.clone()).with_isa(isa))
+        .collect();
     let mut out = Vec::new();
     run(world, o, &mut states, &mut |f, _| {
         for m in f.methods {
@@ -95,13 +100,40 @@ fn output_hash() {
         .map(|n| Method::named(n).unwrap())
         .collect();
     for variant in [Variant::Base, Variant::MovingObjects] {
-        let bits = sequence_bits_of(&mut atrium(variant), &opts(80, 48, 4), &methods);
+        let bits = sequence_bits_of(
+            &mut atrium(variant),
+            &opts(80, 48, 4),
+            &methods,
+            Isa::detect(),
+        );
         // FNV-1a over every word, in order.
         let mut h = 0xcbf2_9ce4_8422_2325u64;
         for w in bits.iter().flatten() {
             h = (h ^ *w as u64).wrapping_mul(0x100_0000_01b3);
         }
         println!("output hash {variant:?}: {h:016x} ({} outputs)", bits.len());
+    }
+}
+
+/// The passes' AVX build (chosen where the CPU has AVX) and the baseline build give the same
+/// frames and outcomes bit for bit, for every method, still and with moving props.
+#[test]
+fn avx_and_baseline_builds_give_the_same_frames() {
+    let methods: Vec<Method> = Method::NAMES
+        .iter()
+        .map(|n| Method::named(n).unwrap())
+        .collect();
+    if !Isa::detect().is_avx() {
+        eprintln!("no AVX on this CPU: only the baseline build is compared with itself");
+    }
+    for variant in [Variant::Base, Variant::MovingObjects] {
+        let o = opts(40, 24, 4);
+        let bits = |isa| sequence_bits_of(&mut atrium(variant), &o, &methods, isa);
+        let (base, detected) = (bits(Isa::BASELINE), bits(Isa::detect()));
+        assert_eq!(base.len(), detected.len());
+        for (k, (a, b)) in base.iter().zip(&detected).enumerate() {
+            assert!(a == b, "{variant:?}: output {k} differs between the builds");
+        }
     }
 }
 
@@ -211,7 +243,7 @@ impl FrameWorld for FixedHead {
         self.0.tracer()
     }
     fn head(&self, _: u32) -> CameraDesc {
-        self.1.clone()
+        self.1
     }
     fn geometry_moves(&self) -> bool {
         self.0.geometry_moves()

@@ -8,7 +8,7 @@
 //! primary ray, so it lies inside the pixel's footprint, and `normal` is unit length and faces
 //! that ray.
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A, Vec4};
 use parallax_scene::camera::Pinhole;
 
 /// One pixel of a G-buffer. `repr(C)`: the footprint's SSE path loads the position with the
@@ -35,6 +35,20 @@ impl Texel {
         albedo: Vec3::ZERO,
     };
 
+    /// The world position in the lanes of one vector (on x86-64 one 16-byte load of the
+    /// position and the depth, which `repr(C)` places after it).
+    #[inline(always)]
+    pub fn position_lanes(&self) -> Vec3A {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: SSE2 is part of x86-64; the 16 bytes from `position` are the position and
+        // the depth, inside the texel.
+        unsafe {
+            Vec3A::from(std::arch::x86_64::_mm_loadu_ps(&self.position.x))
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        Vec3A::from(self.position)
+    }
+
     /// True when the primary ray hit a surface.
     #[inline]
     pub fn is_hit(&self) -> bool {
@@ -45,19 +59,58 @@ impl Texel {
     /// and sky texels pass radiance through).
     #[inline]
     pub fn albedo_factor(&self) -> Vec3 {
-        Vec3::select(self.albedo.cmpgt(Vec3::splat(1e-3)), self.albedo, Vec3::ONE)
+        self.albedo_factor_lanes().into()
+    }
+
+    /// [`Self::albedo_factor`] in the lanes of one vector.
+    #[inline(always)]
+    fn albedo_factor_lanes(&self) -> Vec3A {
+        let a = Vec3A::from(self.albedo);
+        Vec3A::select(a.cmpgt(Vec3A::splat(1e-3)), a, Vec3A::ONE)
     }
 
     /// `v` divided by the albedo factor when `on` (radiance as demodulated values carry it).
+    /// The three channels are divided in the lanes of one vector (each lane's division is
+    /// the scalar one, correctly rounded).
     #[inline]
     pub fn demodulate(&self, v: Vec3, on: bool) -> Vec3 {
-        if on { v / self.albedo_factor() } else { v }
+        if on {
+            (Vec3A::from(v) / self.albedo_factor_lanes()).into()
+        } else {
+            v
+        }
+    }
+
+    /// [`Self::demodulate`] into lanes x, y, z of a vector (w is 0).
+    #[inline]
+    pub fn demodulate_lanes(&self, v: Vec3, on: bool) -> Vec4 {
+        let v = Vec3A::from(v);
+        if on {
+            (v / self.albedo_factor_lanes()).extend(0.0)
+        } else {
+            v.extend(0.0)
+        }
+    }
+
+    /// [`Self::remodulate`] of lanes x, y, z of `v`.
+    #[inline]
+    pub fn remodulate_lanes(&self, v: Vec4, on: bool) -> Vec3 {
+        let v = Vec3A::from_vec4(v);
+        if on {
+            (v * self.albedo_factor_lanes()).into()
+        } else {
+            v.into()
+        }
     }
 
     /// `v` times the albedo factor when `on` (an image value of demodulated radiance).
     #[inline]
     pub fn remodulate(&self, v: Vec3, on: bool) -> Vec3 {
-        if on { v * self.albedo_factor() } else { v }
+        if on {
+            (Vec3A::from(v) * self.albedo_factor_lanes()).into()
+        } else {
+            v
+        }
     }
 }
 

@@ -32,14 +32,14 @@
 
 use std::ops::{Add, Mul};
 
-use glam::{Vec3, Vec4};
-use parallax_core::math::floor_i32;
-use parallax_scene::camera::CameraModel;
+use glam::{Vec3, Vec4, Vec4Swizzles};
 use rayon::prelude::*;
 
 use super::buffers::{EyeView, Texel};
+use super::isa::Isa;
 #[cfg(target_arch = "x86_64")]
 use super::lanes::bilinear_taps_x4;
+use super::projector::{Projector, floor_xy};
 use super::sampler::thread_ns;
 
 /// What became of a target pixel.
@@ -134,17 +134,78 @@ pub struct Footprint {
     pub fy: f32,
     pub mask: u16,
     pub outcome: Outcome,
+    /// The bilinear kernel's four taps all lie inside the source (false for wider kernels).
+    pub taps_inside: bool,
     /// One over the sum of the kept weights (0 when nothing was kept).
     pub inv_weight: f32,
+    /// Where `taps_inside`: the four taps' bilinear weights (row-major from `(x0, y0)`, the
+    /// products of the tent weights of their column and row) with the dropped taps' lanes
+    /// +0, computed once by the footprint for its gathers; zero otherwise.
+    pub weights: Vec4,
 }
 
 /// A value a footprint can average.
-pub trait Blendable: Copy + Default + Add<Output = Self> + Mul<f32, Output = Self> {}
+pub trait Blendable: Copy + Default + Add<Output = Self> + Mul<f32, Output = Self> {
+    /// The bilinear sum of four taps' values `v` (row-major) with weights `wt` (lanes, in tap
+    /// order), of the taps whose `mask` bit is set: `0 + t0 + t1 + t2 + t3` with `t_k =
+    /// v[k] * wt[k]` for a kept tap and `+0` for a dropped one. Adding +0 instead of nothing
+    /// changes no sum (one that starts at +0 is never -0), so this is the tap loop's sum bit
+    /// for bit. A kept tap's weight is positive and a dropped tap's lane of `wt` is +0
+    /// ([`Footprint::weights`]), so `wt[k] > 0` is the tap's `mask` bit.
+    #[inline(always)]
+    fn sum_taps(v: [Self; 4], wt: Vec4, mask: u16) -> Self {
+        let tap = |k: u32, v: Self, w: f32| {
+            if mask & (1 << k) != 0 {
+                v * w
+            } else {
+                Self::default()
+            }
+        };
+        Self::default()
+            + tap(0, v[0], wt.x)
+            + tap(1, v[1], wt.y)
+            + tap(2, v[2], wt.z)
+            + tap(3, v[3], wt.w)
+    }
+}
 impl Blendable for f32 {}
 impl Blendable for Vec3 {}
 /// A colour with a fourth value gathered alongside (a history's colour and length): each lane
 /// is summed with exactly the scalar operations of a `Vec3` or `f32` gather.
-impl Blendable for Vec4 {}
+impl Blendable for Vec4 {
+    /// The trait's sum without branches: the products of dropped taps (the `mask` bits clear,
+    /// i.e. the lanes where `wt[k] > 0` is false) are cleared with a lane mask (x86-64), so a
+    /// dropped tap adds +0 whatever its value.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn sum_taps(v: [Self; 4], wt: Vec4, _mask: u16) -> Self {
+        use std::arch::x86_64::*;
+        // SAFETY: SSE2 is part of x86-64.
+        unsafe {
+            let w: __m128 = wt.into();
+            let m = _mm_cmpgt_ps(w, _mm_setzero_ps());
+            let t0 = _mm_and_ps(
+                _mm_mul_ps(v[0].into(), _mm_shuffle_ps::<0x00>(w, w)),
+                _mm_shuffle_ps::<0x00>(m, m),
+            );
+            let t1 = _mm_and_ps(
+                _mm_mul_ps(v[1].into(), _mm_shuffle_ps::<0x55>(w, w)),
+                _mm_shuffle_ps::<0x55>(m, m),
+            );
+            let t2 = _mm_and_ps(
+                _mm_mul_ps(v[2].into(), _mm_shuffle_ps::<0xAA>(w, w)),
+                _mm_shuffle_ps::<0xAA>(m, m),
+            );
+            let t3 = _mm_and_ps(
+                _mm_mul_ps(v[3].into(), _mm_shuffle_ps::<0xFF>(w, w)),
+                _mm_shuffle_ps::<0xFF>(m, m),
+            );
+            let s = _mm_add_ps(_mm_setzero_ps(), t0);
+            let s = _mm_add_ps(_mm_add_ps(_mm_add_ps(s, t1), t2), t3);
+            s.into()
+        }
+    }
+}
 
 impl Footprint {
     fn discarded(outcome: Outcome) -> Self {
@@ -179,6 +240,14 @@ impl Footprint {
         if self.mask == 0 {
             return acc;
         }
+        if BILINEAR && self.taps_inside {
+            let w = width as usize;
+            let i0 = self.y0 as usize * w + self.x0 as usize;
+            // One range check for both rows (the indices below are within `w + 2`).
+            if let Some(r) = values.get(i0..i0 + w + 2) {
+                return self.gather_bilinear([r[0], r[1], r[w], r[w + 1]]);
+            }
+        }
         let half = kernel.half();
         let taps = 2 * half;
         let mut bit = 0;
@@ -195,35 +264,62 @@ impl Footprint {
         }
         acc * self.inv_weight
     }
+
+    /// The bilinear gather of the four taps' values (row-major from `(x0, y0)`), all inside
+    /// the source: each kept tap's value times its weight (the footprint's
+    /// [`Footprint::weights`], the tent weights in the lanes of one vector), summed in tap
+    /// order from zero, times the normaliser. A dropped tap adds +0 instead of nothing, which
+    /// changes no sum (a sum that starts at +0 is never -0), so the result is the tap loop's
+    /// bit for bit (tested).
+    #[inline(always)]
+    fn gather_bilinear<T: Blendable>(&self, v: [T; 4]) -> T {
+        T::sum_taps(v, self.weights, self.mask) * self.inv_weight
+    }
+}
+
+/// The bilinear weights of the four taps (row-major from `(x0, y0)`) of a sample at offset
+/// `f` (lanes x, y) from the tap `(x0, y0)`: `kernel.weight(tx - fx) * kernel.weight(ty - fy)`
+/// of [`Kernel::BILINEAR`] bit for bit, the tent weights in the lanes of one vector (a
+/// division by the radius 1 is exact and dropped).
+#[inline(always)]
+fn bilinear_weights(f: Vec4) -> Vec4 {
+    let d = Vec4::new(0.0, 1.0, 0.0, 1.0) - f.xxyy();
+    let w = (Vec4::ONE - d.abs()).max(Vec4::ZERO);
+    w.xyxy() * w.zzww()
 }
 
 /// The footprint of a target pixel seeing `t` in `source`.
 pub fn footprint(source: &EyeView, t: &Texel, kernel: Kernel, tests: Tests) -> Footprint {
-    Reprojector::new(kernel, tests).footprint(source, t)
+    Reprojector::new(source, kernel, tests).footprint(t)
 }
 
-/// A kernel and tests prepared for many footprints (the limits squared once).
+/// A source view, kernel and tests prepared for many footprints (the limits squared and the
+/// source camera's projection constants computed once).
 #[derive(Clone, Copy, Debug)]
-pub struct Reprojector {
+pub struct Reprojector<'a> {
+    source: &'a EyeView,
+    proj: Projector,
     kernel: Kernel,
     lim: Limits,
 }
 
-impl Reprojector {
-    pub fn new(kernel: Kernel, tests: Tests) -> Self {
+impl<'a> Reprojector<'a> {
+    pub fn new(source: &'a EyeView, kernel: Kernel, tests: Tests) -> Self {
         Self {
+            source,
+            proj: Projector::new(&source.camera),
             kernel,
             lim: tests.limits(),
         }
     }
 
-    /// [`footprint`] with the prepared kernel and tests.
-    #[inline]
-    pub fn footprint(&self, source: &EyeView, t: &Texel) -> Footprint {
+    /// [`footprint`] in the prepared source with the prepared kernel and tests.
+    #[inline(always)]
+    pub fn footprint(&self, t: &Texel) -> Footprint {
         if self.kernel == Kernel::BILINEAR {
-            footprint_in::<true, true>(source, t, self.kernel, self.lim)
+            footprint_in::<true, true>(self.source, &self.proj, t, self.kernel, self.lim)
         } else {
-            footprint_in::<false, false>(source, t, self.kernel, self.lim)
+            footprint_in::<false, false>(self.source, &self.proj, t, self.kernel, self.lim)
         }
     }
 }
@@ -235,6 +331,7 @@ impl Reprojector {
 #[inline(always)]
 fn footprint_in<const BILINEAR: bool, const LANES: bool>(
     source: &EyeView,
+    proj: &Projector,
     t: &Texel,
     kernel: Kernel,
     lim: Limits,
@@ -243,11 +340,24 @@ fn footprint_in<const BILINEAR: bool, const LANES: bool>(
     if !t.is_hit() {
         return Footprint::discarded(Outcome::Background);
     }
-    let Some(f) = source.camera.project(t.position, 0) else {
+    // The film position `f` minus 0.5 (`Pinhole::project` bit for bit).
+    let Some(s) = proj.project(t.position_lanes()) else {
         return Footprint::discarded(Outcome::Outside);
     };
-    if !f.is_finite() {
-        return Footprint::discarded(Outcome::Outside);
+    // The bilinear taps all inside the source (the common case, tested in SSE lanes):
+    // `floor(s) >= 0` is `s >= 0` and `floor(s) + 1 < n` is `s < n - 1` (integer bounds,
+    // exact), both axes in lanes x, y; such a position also passes the range check below.
+    #[cfg(target_arch = "x86_64")]
+    if BILINEAR && LANES {
+        let inner = s.cmpge(Vec4::ZERO) & s.cmplt(proj.size() - Vec4::ONE);
+        if inner.bitmask() & 3 == 3 {
+            let (x0, y0, frac) = floor_xy(s);
+            let (pos2, nrm2, plane) = (lim.pos2, lim.nrm2, lim.plane);
+            let wt = bilinear_weights(frac);
+            let (mask, sum, inside, near, kept) =
+                bilinear_taps_x4(source, t, x0, y0, wt, pos2, nrm2, plane);
+            return placed(x0, y0, frac.x, frac.y, mask, sum, inside, near, Some(kept));
+        }
     }
     let (pos2, nrm2) = (lim.pos2, lim.nrm2);
     let half = kernel.half();
@@ -255,29 +365,16 @@ fn footprint_in<const BILINEAR: bool, const LANES: bool>(
     // Pixel centres are at integer + 0.5: the tap left of (above) the sample is floor(f - 0.5).
     // With `reach` an integer, `floor(s) > -reach` is `s >= 1 - reach` and `floor(s) < n +
     // reach` is `s < n + reach`, so the range is checked before the floor (exact below 2^23,
-    // far beyond any film).
-    let (sx, sy) = (f.x - 0.5, f.y - 0.5);
+    // far beyond any film); a non-finite `f` fails it (NaN compares false) and is outside.
+    // Both axes at once: `sx >= 1 - reach && sx < w + reach` (and y) in lanes x, y.
     let reach = half as f32 + 1.0;
-    if !(sx >= 1.0 - reach && sx < w as f32 + reach && sy >= 1.0 - reach && sy < h as f32 + reach) {
+    let in_range = s.cmpge(Vec4::splat(1.0 - reach)) & s.cmplt(proj.size() + Vec4::splat(reach));
+    if in_range.bitmask() & 3 != 3 {
         return Footprint::discarded(Outcome::Outside);
     }
-    let (ix, iy) = (floor_i32(sx), floor_i32(sy));
-    let (bx, by) = (ix as f32, iy as f32);
-    let (fx, fy) = (sx - bx, sy - by);
+    let (ix, iy, frac) = floor_xy(s);
+    let (fx, fy) = (frac.x, frac.y);
     let (x0, y0) = (ix - half + 1, iy - half + 1);
-    #[cfg(target_arch = "x86_64")]
-    if BILINEAR && LANES && x0 >= 0 && y0 >= 0 && x0 + 1 < w && y0 + 1 < h {
-        let weights = [
-            kernel.weight(0.0 - fx),
-            kernel.weight(1.0 - fx),
-            kernel.weight(0.0 - fy),
-            kernel.weight(1.0 - fy),
-        ];
-        let (pos2, nrm2, plane) = (lim.pos2, lim.nrm2, lim.plane);
-        let (mask, sum, inside, near) =
-            bilinear_taps_x4(source, t, x0, y0, weights, pos2, nrm2, plane);
-        return placed(x0, y0, fx, fy, mask, sum, inside, near);
-    }
     let taps = 2 * half;
     let (mut mask, mut sum, mut bit) = (0u16, 0.0f32, 0);
     let (mut inside, mut near) = (false, false);
@@ -309,10 +406,21 @@ fn footprint_in<const BILINEAR: bool, const LANES: bool>(
             bit += 1;
         }
     }
-    placed(x0, y0, fx, fy, mask, sum, inside, near)
+    let taps_inside = kernel == Kernel::BILINEAR && x0 >= 0 && y0 >= 0 && x0 + 1 < w && y0 + 1 < h;
+    // The four tent weights of a bilinear footprint inside the source, the dropped taps'
+    // lanes +0.
+    let kept = taps_inside.then(|| {
+        let wt = bilinear_weights(frac).to_array();
+        Vec4::from_array(std::array::from_fn(|k| {
+            if mask & (1 << k) != 0 { wt[k] } else { 0.0 }
+        }))
+    });
+    placed(x0, y0, fx, fy, mask, sum, inside, near, kept)
 }
 
-/// The footprint of a target placed in the source, from its kept taps.
+/// The footprint of a target placed in the source, from its kept taps; `kept` are the
+/// bilinear taps' weights with the dropped taps' lanes +0 when all four taps lie inside the
+/// source (the footprint's `taps_inside`), else `None`.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn placed(
@@ -324,6 +432,7 @@ fn placed(
     sum: f32,
     inside: bool,
     near: bool,
+    kept: Option<Vec4>,
 ) -> Footprint {
     let outcome = match (mask != 0, inside, near) {
         (true, _, _) => Outcome::Reused,
@@ -338,7 +447,9 @@ fn placed(
         fy,
         mask,
         outcome,
+        taps_inside: kept.is_some(),
         inv_weight: if sum > 0.0 { 1.0 / sum } else { 0.0 },
+        weights: kept.unwrap_or(Vec4::ZERO),
     }
 }
 
@@ -346,7 +457,7 @@ fn placed(
 pub(crate) const BAND_ROWS: usize = 8;
 
 /// The footprint of every pixel of `target` in `source`, into `out`; returns the thread CPU
-/// nanoseconds spent.
+/// nanoseconds spent. Runs in the build of [`Isa::detect`].
 pub fn footprints(
     target: &EyeView,
     source: &EyeView,
@@ -354,23 +465,41 @@ pub fn footprints(
     tests: Tests,
     out: &mut Vec<Footprint>,
 ) -> u64 {
+    footprints_with(target, source, kernel, tests, out, Isa::detect())
+}
+
+/// [`footprints`] in the build of `isa` (every build's footprints are the same bit for bit).
+pub fn footprints_with(
+    target: &EyeView,
+    source: &EyeView,
+    kernel: Kernel,
+    tests: Tests,
+    out: &mut Vec<Footprint>,
+    isa: Isa,
+) -> u64 {
     let w = target.width() as usize;
     out.resize(target.len(), Footprint::default());
+    let proj = Projector::new(&source.camera);
     let ns: Vec<u64> = out
         .par_chunks_mut(w * BAND_ROWS)
         .zip(target.texels.par_chunks(w * BAND_ROWS))
         .map(|(fps, texels)| {
             let t0 = thread_ns();
             let lim = tests.limits();
-            if kernel == Kernel::BILINEAR {
-                for (fp, t) in fps.iter_mut().zip(texels) {
-                    *fp = footprint_in::<true, true>(source, t, kernel, lim);
-                }
-            } else {
-                for (fp, t) in fps.iter_mut().zip(texels) {
-                    *fp = footprint_in::<false, false>(source, t, kernel, lim);
-                }
-            }
+            isa.run(
+                #[inline(always)]
+                || {
+                    if kernel == Kernel::BILINEAR {
+                        for (fp, t) in fps.iter_mut().zip(texels) {
+                            *fp = footprint_in::<true, true>(source, &proj, t, kernel, lim);
+                        }
+                    } else {
+                        for (fp, t) in fps.iter_mut().zip(texels) {
+                            *fp = footprint_in::<false, false>(source, &proj, t, kernel, lim);
+                        }
+                    }
+                },
+            );
             thread_ns().saturating_sub(t0)
         })
         .collect();
@@ -382,7 +511,7 @@ mod tests {
     use super::*;
     use glam::Vec2;
     use parallax_scene::CameraDesc;
-    use parallax_scene::camera::Pinhole;
+    use parallax_scene::camera::{CameraModel, Pinhole};
 
     /// A view of the plane z = -d, every texel on it, facing +z.
     fn plane_view(eye: Vec3, d: f32, w: u32, h: u32) -> EyeView {
@@ -529,6 +658,7 @@ mod tests {
             .map(|(v, c)| v.extend(*c))
             .collect();
         let (mut seen, mut full) = (std::collections::HashSet::new(), 0);
+        let proj = Projector::new(&src.camera);
         for plane in [false, true] {
             let lim = Tests {
                 position: 0.12,
@@ -537,15 +667,19 @@ mod tests {
             }
             .limits();
             for t in &dst.texels {
-                let lanes = footprint_in::<true, true>(&src, t, Kernel::BILINEAR, lim);
-                let fast = footprint_in::<true, false>(&src, t, Kernel::BILINEAR, lim);
-                let slow = footprint_in::<false, false>(&src, t, Kernel::BILINEAR, lim);
+                let lanes = footprint_in::<true, true>(&src, &proj, t, Kernel::BILINEAR, lim);
+                let fast = footprint_in::<true, false>(&src, &proj, t, Kernel::BILINEAR, lim);
+                let slow = footprint_in::<false, false>(&src, &proj, t, Kernel::BILINEAR, lim);
                 assert_eq!(fast, slow);
                 assert_eq!(
                     (lanes.mask, lanes.inv_weight.to_bits(), lanes.outcome),
                     (slow.mask, slow.inv_weight.to_bits(), slow.outcome)
                 );
                 assert_eq!(lanes, slow);
+                // The kept weights' positive lanes are the mask's bits (the Vec4 gather's lane
+                // mask).
+                let positive = slow.weights.cmpgt(Vec4::ZERO).bitmask() as u16;
+                assert_eq!(positive, if slow.taps_inside { slow.mask } else { 0 });
                 seen.insert(fast.outcome);
                 full += usize::from(fast.mask == 0xF);
                 let (a, b) = (

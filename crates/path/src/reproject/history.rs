@@ -21,7 +21,11 @@ use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
 use super::buffers::EyeView;
-use super::footprint::{BAND_ROWS, Kernel, Outcome, Reprojector, Tests};
+use super::footprint::{BAND_ROWS, Footprint, Kernel, Outcome, Reprojector, Tests};
+use super::isa::Isa;
+
+/// Pixels whose footprints are computed before their gathers.
+const CHUNK: usize = 16;
 use super::sampler::thread_ns;
 
 /// How the new value is blended into the reprojected history (module table).
@@ -56,6 +60,61 @@ impl Blend {
         match self {
             Blend::Fixed(_) => "fixed",
             Blend::RunningMean { .. } => "running-mean",
+        }
+    }
+}
+
+/// A [`Blend`] prepared for a pass: [`Blend::alpha`] bit for bit, with the running mean's
+/// division skipped where its result cannot exceed the floor: `fl(1 / x)` does not grow with
+/// `x > 0`, so `max(fl(1 / (n + 1)), floor)` is `floor` for every `n + 1 >= from`, the
+/// smallest such `x`, found once.
+#[derive(Clone, Copy, Debug)]
+pub struct Alpha {
+    blend: Blend,
+    from: f32,
+}
+
+impl Alpha {
+    pub fn new(blend: Blend) -> Self {
+        let from = match blend {
+            Blend::Fixed(_) => f32::INFINITY,
+            Blend::RunningMean { floor } => Self::floor_from(floor),
+        };
+        Self { blend, from }
+    }
+
+    /// The smallest `x > 0` with `fl(1 / x) <= floor` (infinity where there is none or it
+    /// is not finite).
+    fn floor_from(floor: f32) -> f32 {
+        if floor.is_nan() || floor <= 0.0 {
+            return f32::INFINITY;
+        }
+        let mut x = 1.0 / floor;
+        if !x.is_finite() {
+            return f32::INFINITY;
+        }
+        while 1.0 / x > floor {
+            x = x.next_up();
+        }
+        while 1.0 / x.next_down() <= floor {
+            x = x.next_down();
+        }
+        x
+    }
+
+    /// [`Blend::alpha`]`(n)`.
+    #[inline(always)]
+    pub fn alpha(&self, n: f32) -> f32 {
+        match self.blend {
+            Blend::Fixed(a) => a,
+            Blend::RunningMean { floor } => {
+                let x = n + 1.0;
+                if x >= self.from {
+                    floor
+                } else {
+                    (1.0 / x).max(floor)
+                }
+            }
         }
     }
 }
@@ -100,22 +159,37 @@ pub struct Accumulated {
     pub cpu_ns: u64,
 }
 
-/// Blends `new(i)` (the value of `view`'s pixel `i` this frame) into `prev` reprojected into
-/// `view`; one pass over the pixels: each pixel's footprint in the previous view, the blend
-/// and the image (the footprints are not stored).
+/// Blends `new(i)` (the value of `view`'s pixel `i` this frame, in lanes x, y, z; w is
+/// ignored) into `prev` reprojected into `view`; one pass over the pixels: each pixel's
+/// footprint in the previous view, the blend and the image (footprints are kept only for the
+/// current run of 16 pixels, on the stack). The blend is done in the lanes of the
+/// history's `Vec4` (each colour lane does the scalar blend's operations; the count lane is
+/// then set), with the running mean's alpha from [`Alpha`]. Runs in the build of
+/// [`Isa::detect`].
 pub fn accumulate(
     view: &Arc<EyeView>,
-    new: impl Fn(usize) -> Vec3 + Sync,
+    new: impl Fn(usize) -> Vec4 + Sync,
     prev: Option<&History>,
     how: &Accumulation,
+) -> Accumulated {
+    accumulate_with(view, new, prev, how, Isa::detect())
+}
+
+/// [`accumulate`] in the build of `isa` (every build's outputs are the same bit for bit).
+pub fn accumulate_with(
+    view: &Arc<EyeView>,
+    new: impl Fn(usize) -> Vec4 + Sync,
+    prev: Option<&History>,
+    how: &Accumulation,
+    isa: Isa,
 ) -> Accumulated {
     let n = view.len();
     let band = view.width() as usize * BAND_ROWS;
     let mut acc = vec![Vec4::ZERO; n];
     let mut image = vec![Vec3::ZERO; n];
     let mut outcomes = vec![Outcome::Outside; n];
-    let (kernel, blend, demod) = (how.kernel, how.blend, how.demodulated);
-    let rep = Reprojector::new(kernel, how.tests);
+    let (kernel, blend, demod) = (how.kernel, Alpha::new(how.blend), how.demodulated);
+    let rep = prev.map(|p| Reprojector::new(&p.view, kernel, how.tests));
     let ns: Vec<u64> = acc
         .par_chunks_mut(band)
         .zip(image.par_chunks_mut(band))
@@ -124,25 +198,49 @@ pub fn accumulate(
         .map(|(b, ((hist, img), out))| {
             let t0 = thread_ns();
             let base = b * band;
-            for (j, ((hj, ij), oj)) in hist.iter_mut().zip(img).zip(out).enumerate() {
-                let i = base + j;
-                let t = &view.texels[i];
-                let v = new(i);
-                let (mut c, mut cnt) = (v, 1.0);
-                if let Some(p) = prev {
-                    let f = rep.footprint(&p.view, t);
-                    *oj = f.outcome;
-                    if f.outcome == Outcome::Reused {
-                        let g = f.gather(kernel, &p.acc, p.view.width());
-                        let (h, hn) = (g.truncate(), g.w);
-                        let a = blend.alpha(hn);
-                        cnt = hn + 1.0;
-                        c = v * a + h * (1.0 - a);
+            isa.run(
+                #[inline(always)]
+                || {
+                    // Per run of CHUNK pixels: the footprints first, then the gathers and blends (the
+                    // independent footprints overlap instead of waiting on each pixel's blend).
+                    let mut fps = [Footprint::default(); CHUNK];
+                    for (r, ((hr, ir), or)) in hist
+                        .chunks_mut(CHUNK)
+                        .zip(img.chunks_mut(CHUNK))
+                        .zip(out.chunks_mut(CHUNK))
+                        .enumerate()
+                    {
+                        let i0 = base + r * CHUNK;
+                        let fps = &mut fps[..hr.len()];
+                        if let Some(rep) = &rep {
+                            let texels = &view.texels[i0..i0 + fps.len()];
+                            for (f, t) in fps.iter_mut().zip(texels) {
+                                *f = rep.footprint(t);
+                            }
+                        }
+                        for (k, ((hj, ij), oj)) in hr.iter_mut().zip(ir).zip(or).enumerate() {
+                            let i = i0 + k;
+                            let t = &view.texels[i];
+                            let v = new(i);
+                            let (mut c, mut cnt) = (v, 1.0);
+                            if let Some(p) = prev {
+                                let f = &fps[k];
+                                *oj = f.outcome;
+                                if f.outcome == Outcome::Reused {
+                                    // Colour (xyz) and count (w) of the reprojected history.
+                                    let h = f.gather(kernel, &p.acc, p.view.width());
+                                    let a = blend.alpha(h.w);
+                                    cnt = h.w + 1.0;
+                                    c = v * a + h * (1.0 - a);
+                                }
+                            }
+                            let c = c.with_w(cnt);
+                            *hj = c;
+                            *ij = t.remodulate_lanes(c, demod);
+                        }
                     }
-                }
-                *hj = c.extend(cnt);
-                *ij = t.remodulate(c, demod);
-            }
+                },
+            );
             thread_ns().saturating_sub(t0)
         })
         .collect();
@@ -178,5 +276,41 @@ mod tests {
             n += 1.0;
         }
         assert!((mean - 5.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn prepared_alpha_equals_the_blend_bit_for_bit() {
+        for blend in [
+            Blend::PAPER,
+            Blend::RunningMean { floor: 0.2 },
+            Blend::RunningMean { floor: 0.3 },
+            Blend::RunningMean { floor: 1.0 },
+            Blend::RunningMean { floor: 1e-3 },
+        ] {
+            let a = Alpha::new(blend);
+            let mut ns: Vec<f32> = (0..4000).map(|k| k as f32 * 0.01).collect();
+            ns.extend([f32::INFINITY, 1e30, f32::NAN, -0.5, -1.0]);
+            if a.from.is_finite() {
+                // Every value within 64 ulps of the threshold.
+                let t = a.from - 1.0;
+                let mut lo = t;
+                for _ in 0..64 {
+                    lo = lo.next_down();
+                }
+                let mut x = lo;
+                for _ in 0..128 {
+                    ns.push(x);
+                    x = x.next_up();
+                }
+            }
+            for n in ns {
+                assert_eq!(
+                    a.alpha(n).to_bits(),
+                    blend.alpha(n).to_bits(),
+                    "{blend:?} n = {n}"
+                );
+            }
+        }
+        assert_eq!(Alpha::new(Blend::RunningMean { floor: 0.2 }).from, 5.0);
     }
 }

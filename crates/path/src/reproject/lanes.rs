@@ -8,11 +8,13 @@
 //!
 //! | parameter | type | meaning |
 //! |---|---|---|
-//! | `weights` | [f32; 4] | tent weights of columns `x0`, `x0 + 1`, rows `y0`, `y0 + 1` |
+//! | `wt` | Vec4 | the four taps' weights, row-major from `(x0, y0)` |
 //! | `pos2`, `nrm2` | f32 | squared position limit and squared normal chord |
 //! | `plane` | bool | position measured against the target's tangent plane |
 
 use std::arch::x86_64::*;
+
+use glam::Vec4;
 
 use super::buffers::{EyeView, Texel};
 
@@ -21,9 +23,10 @@ use super::buffers::{EyeView, Texel};
 /// scalar tap loop of `footprint::footprint_in` in the same order (differences, products
 /// summed as glam's `dot`, strict compares), and the kept weights are summed lane by lane in tap order (a
 /// dropped tap adds +0, which leaves a sum of non-negative weights unchanged), so the result
-/// is the scalar loop's bit for bit. `weights` are the tent weights of the columns `x0`,
-/// `x0 + 1` and the rows `y0`, `y0 + 1`; `pos2`, `nrm2` the squared limits, `plane` the
-/// tangent-plane test. Returns `(mask, sum, inside, near)`.
+/// is the scalar loop's bit for bit. `wt` are the taps' weights (the products of the tent
+/// weights of their column and row, in tap order); `pos2`, `nrm2` the squared limits, `plane` the
+/// tangent-plane test. Returns `(mask, sum, inside, near, kept)`, `kept` the weights with the
+/// dropped taps' lanes +0.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(super) fn bilinear_taps_x4(
@@ -31,18 +34,16 @@ pub(super) fn bilinear_taps_x4(
     t: &Texel,
     x0: i32,
     y0: i32,
-    [wx0, wx1, wy0, wy1]: [f32; 4],
+    wt: Vec4,
     pos2: f32,
     nrm2: f32,
     plane: bool,
-) -> (u16, f32, bool, bool) {
+) -> (u16, f32, bool, bool, Vec4) {
     let w = source.width() as usize;
     let i0 = y0 as usize * w + x0 as usize;
-    let (r0, r1) = (
-        &source.texels[i0..i0 + 2],
-        &source.texels[i0 + w..i0 + w + 2],
-    );
-    let s = [&r0[0], &r0[1], &r1[0], &r1[1]];
+    // Both rows in one range check (the indices below are within `w + 2`).
+    let r = &source.texels[i0..i0 + w + 2];
+    let s = [&r[0], &r[1], &r[w], &r[w + 1]];
     // SAFETY: SSE2 is part of x86-64; `Texel` is `repr(C)`, so 16 bytes from `position` are
     // the position and depth and 16 bytes from `normal` are the normal and albedo.x, all
     // inside the texel.
@@ -87,24 +88,23 @@ pub(super) fn bilinear_taps_x4(
             _mm_sub_ps(nz, tnz),
         );
         let n2 = dot(ex, ey, ez, ex, ey, ez);
-        let wt = _mm_mul_ps(
-            _mm_setr_ps(wx0, wx1, wx0, wx1),
-            _mm_setr_ps(wy0, wy0, wy1, wy1),
-        );
+        let wt: __m128 = wt.into();
         let valid = _mm_cmpgt_ps(wt, _mm_setzero_ps());
         // `is_finite`: |depth| < inf (false for NaN).
         let abs = _mm_andnot_ps(splat(-0.0), depth);
         let hit = _mm_cmplt_ps(abs, splat(f32::INFINITY));
         let near = _mm_and_ps(_mm_and_ps(valid, hit), _mm_cmplt_ps(d2, splat(pos2)));
         let keep = _mm_and_ps(near, _mm_cmplt_ps(n2, splat(nrm2)));
+        let kept_lanes = _mm_and_ps(keep, wt);
         let mut kept = [0.0f32; 4];
-        _mm_storeu_ps(kept.as_mut_ptr(), _mm_and_ps(keep, wt));
+        _mm_storeu_ps(kept.as_mut_ptr(), kept_lanes);
         let sum = 0.0 + kept[0] + kept[1] + kept[2] + kept[3];
         (
             _mm_movemask_ps(keep) as u16,
             sum,
             _mm_movemask_ps(valid) != 0,
             _mm_movemask_ps(near) != 0,
+            kept_lanes.into(),
         )
     }
 }

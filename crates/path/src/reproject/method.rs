@@ -32,8 +32,11 @@ use rayon::prelude::*;
 
 use super::buffers::EyeView;
 use super::error::{Result, option_error};
-use super::footprint::{BAND_ROWS, Footprint, Kernel, Outcome, Reprojector, Tests, footprints};
-use super::history::{Accumulation, Blend, History, accumulate};
+use super::footprint::{
+    BAND_ROWS, Footprint, Kernel, Outcome, Reprojector, Tests, footprints_with,
+};
+use super::history::{Accumulation, Alpha, Blend, History, accumulate_with};
+use super::isa::Isa;
 use super::sampler::{PaperSampler, TraceCost, thread_ns};
 
 /// How stereo + temporal fills the left eye (module docs).
@@ -167,11 +170,13 @@ pub struct MethodState {
     /// only this frame's discarded pixels are written and read, so it is kept between frames
     /// without clearing.
     traced: Vec<Vec3>,
+    /// The build the passes run in ([`Isa::detect`] unless set with [`Self::with_isa`]).
+    isa: Isa,
 }
 
-/// Runs `f(i)` for every pixel into a new image, parallel over bands; returns the image and
-/// the thread CPU nanoseconds.
-fn per_pixel(n: usize, w: usize, f: impl Fn(usize) -> Vec3 + Sync) -> (Vec<Vec3>, u64) {
+/// Runs `f(i)` for every pixel into a new image, parallel over bands, in the build of `isa`;
+/// returns the image and the thread CPU nanoseconds.
+fn per_pixel(n: usize, w: usize, isa: Isa, f: impl Fn(usize) -> Vec3 + Sync) -> (Vec<Vec3>, u64) {
     let mut out = vec![Vec3::ZERO; n];
     let ns: Vec<u64> = out
         .par_chunks_mut(w * BAND_ROWS)
@@ -179,9 +184,14 @@ fn per_pixel(n: usize, w: usize, f: impl Fn(usize) -> Vec3 + Sync) -> (Vec<Vec3>
         .map(|(b, chunk)| {
             let t0 = thread_ns();
             let base = b * w * BAND_ROWS;
-            for (j, o) in chunk.iter_mut().enumerate() {
-                *o = f(base + j);
-            }
+            isa.run(
+                #[inline(always)]
+                || {
+                    for (j, o) in chunk.iter_mut().enumerate() {
+                        *o = f(base + j);
+                    }
+                },
+            );
             thread_ns().saturating_sub(t0)
         })
         .collect();
@@ -212,7 +222,15 @@ impl MethodState {
             right: None,
             left: None,
             traced: Vec::new(),
+            isa: Isa::detect(),
         }
+    }
+
+    /// The same method with its passes run in the build of `isa` (the outputs are the same
+    /// bit for bit in every build).
+    pub fn with_isa(mut self, isa: Isa) -> Self {
+        self.isa = isa;
+        self
     }
 
     /// Drops the histories (the next frame starts a new sequence).
@@ -242,7 +260,7 @@ impl MethodState {
         // Stereo: footprints of the left pixels in the right view, then the discarded pixels
         // traced.
         let mut fps = Vec::new();
-        let fp_ns = footprints(left, right, k, tests, &mut fps);
+        let fp_ns = footprints_with(left, right, k, tests, &mut fps, self.isa);
         let discarded: Vec<u32> = (0..n as u32)
             .filter(|&i| fps[i as usize].outcome.is_discarded())
             .collect();
@@ -260,17 +278,34 @@ impl MethodState {
         let traced_ns = thread_ns().saturating_sub(t0);
         let background = inp.left_background;
         let (r_new, rnew_ns): (Cow<[Vec3]>, u64) = if demod {
-            let (v, ns) = per_pixel(right.len(), right.width() as usize, |i| {
-                right.texels[i].demodulate(r_rad[i], true)
-            });
+            let (v, ns) = per_pixel(
+                right.len(),
+                right.width() as usize,
+                self.isa,
+                #[inline(always)]
+                |i| right.texels[i].demodulate(r_rad[i], true),
+            );
             (Cow::Owned(v), ns)
         } else {
             (Cow::Borrowed(r_rad), 0)
         };
-        let (image, apply_ns) = per_pixel(n, w, |i| {
-            let v = stereo_value(i, &fps, background, traced, |f| f.gather(k, &r_new, rw));
-            left.texels[i].remodulate(v, demod)
-        });
+        let (image, apply_ns) = per_pixel(
+            n,
+            w,
+            self.isa,
+            #[inline(always)]
+            |i| {
+                let v = stereo_value(
+                    i,
+                    &fps,
+                    background,
+                    traced,
+                    #[inline(always)]
+                    |f| f.gather(k, &r_new, rw),
+                );
+                left.texels[i].remodulate(v, demod)
+            },
+        );
         drop(r_new);
         let shared_ns = fp_ns + traced_ns;
         let stereo = ModeFrame {
@@ -286,11 +321,13 @@ impl MethodState {
             blend: m.blend,
             demodulated: demod,
         };
-        let acc = accumulate(
+        let acc = accumulate_with(
             right,
-            |i| right.texels[i].demodulate(r_rad[i], demod),
+            #[inline(always)]
+            |i| right.texels[i].demodulate_lanes(r_rad[i], demod),
             self.right.as_ref(),
             &how,
+            self.isa,
         );
         let temporal = ModeFrame {
             image: acc.image,
@@ -303,15 +340,17 @@ impl MethodState {
         let (left_hist, image, left_ns) = match m.combine {
             Combine::Paper => self.paper_left(inp, &fps, r_acc),
             Combine::Cascade => {
-                let a = accumulate(
+                let a = accumulate_with(
                     left,
-                    |i| {
-                        stereo_value(i, &fps, background, traced, |f| {
-                            f.gather(k, &r_acc.acc, rw).truncate()
-                        })
+                    #[inline(always)]
+                    |i| match fps[i].outcome {
+                        Outcome::Reused => fps[i].gather(k, &r_acc.acc, rw),
+                        Outcome::Background => background[i].extend(0.0),
+                        _ => traced[i].extend(0.0),
                     },
                     self.left.as_ref(),
                     &how,
+                    self.isa,
                 );
                 (a.history, a.image, a.cpu_ns)
             }
@@ -349,13 +388,12 @@ impl MethodState {
         let band = w * BAND_ROWS;
         let mut acc = vec![Vec4::ZERO; n];
         let mut image = vec![Vec3::ZERO; n];
-        let rep = Reprojector::new(
-            k,
-            Tests {
-                plane: m.plane_test,
-                ..inp.tests
-            },
-        );
+        let tests = Tests {
+            plane: m.plane_test,
+            ..inp.tests
+        };
+        let rep = prev.map(|p| Reprojector::new(&p.view, k, tests));
+        let alpha = Alpha::new(m.blend);
         let ns: Vec<u64> = acc
             .par_chunks_mut(band)
             .zip(image.par_chunks_mut(band))
@@ -363,31 +401,36 @@ impl MethodState {
             .map(|(b, (hist, img))| {
                 let t0 = thread_ns();
                 let base = b * band;
-                for (j, (hj, ij)) in hist.iter_mut().zip(img).enumerate() {
-                    let i = base + j;
-                    let (c, cnt) = match fps[i].outcome {
-                        Outcome::Reused => {
-                            let g = fps[i].gather(k, &r_acc.acc, rw);
-                            (g.truncate(), g.w.max(1.0))
-                        }
-                        Outcome::Background => (inp.left_background[i], 1.0),
-                        _ => {
-                            let mut out = (traced[i], 1.0);
-                            if let Some(p) = prev {
-                                let f = rep.footprint(&p.view, &left.texels[i]);
-                                if f.outcome == Outcome::Reused {
-                                    let g = f.gather(k, &p.acc, p.view.width());
-                                    let (h, hn) = (g.truncate(), g.w);
-                                    let a = m.blend.alpha(hn);
-                                    out = (traced[i] * a + h * (1.0 - a), hn + 1.0);
+                self.isa.run(
+                    #[inline(always)]
+                    || {
+                        for (j, (hj, ij)) in hist.iter_mut().zip(img).enumerate() {
+                            let i = base + j;
+                            let (c, cnt) = match fps[i].outcome {
+                                Outcome::Reused => {
+                                    let g = fps[i].gather(k, &r_acc.acc, rw);
+                                    (g.truncate(), g.w.max(1.0))
                                 }
-                            }
-                            out
+                                Outcome::Background => (inp.left_background[i], 1.0),
+                                _ => {
+                                    let mut out = (traced[i], 1.0);
+                                    if let (Some(p), Some(rep)) = (prev, &rep) {
+                                        let f = rep.footprint(&left.texels[i]);
+                                        if f.outcome == Outcome::Reused {
+                                            let g = f.gather(k, &p.acc, p.view.width());
+                                            let (h, hn) = (g.truncate(), g.w);
+                                            let a = alpha.alpha(hn);
+                                            out = (traced[i] * a + h * (1.0 - a), hn + 1.0);
+                                        }
+                                    }
+                                    out
+                                }
+                            };
+                            *hj = c.extend(cnt);
+                            *ij = left.texels[i].remodulate(c, m.demodulate);
                         }
-                    };
-                    *hj = c.extend(cnt);
-                    *ij = left.texels[i].remodulate(c, m.demodulate);
-                }
+                    },
+                );
                 thread_ns().saturating_sub(t0)
             })
             .collect();

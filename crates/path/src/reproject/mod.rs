@@ -37,10 +37,12 @@ pub mod evaluate;
 pub mod fingerprint;
 pub mod footprint;
 pub mod history;
+pub mod isa;
 #[cfg(target_arch = "x86_64")]
 mod lanes;
 pub mod method;
 pub mod metric;
+mod projector;
 pub mod reference;
 pub mod sampler;
 pub mod sequence;
