@@ -5,7 +5,8 @@
 //! - [`build`]: [`QuadTree`], one layer — per-pixel planes as leaves (§3.2) and bottom-up
 //!   adaptive pruning with the three conditions and the least-squares proxy plane (§3.3);
 //! - [`merge`]: one pruning step (proxy plane or conservative AABB); `merge_lanes`: the same
-//!   step with the four children in `Vec4` lanes (same bits, the build's fast path);
+//!   step with the four children in `Vec4` lanes (same bits); `merge_rows`: a level's row
+//!   with four parents in lanes (same bits, the build's fast path over whole levels);
 //!   `fixpoint`: the cascade's pruning fixed point computed incrementally (same results as the
 //!   definition in `prune`, which [`QuadTreeTracer::build_reference`] runs);
 //! - [`traverse`]: the stackless traversal of §4 (exact plane hits, child by entry
@@ -79,6 +80,7 @@ pub mod cascade;
 mod fixpoint;
 pub mod merge;
 mod merge_lanes;
+mod merge_rows;
 pub mod node;
 mod prune;
 pub mod traverse;
