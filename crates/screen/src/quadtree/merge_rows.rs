@@ -2,8 +2,10 @@
 //! `Vec4`s: the build's fast path over whole levels (level 1 alone has `W H / 4` parents).
 //!
 //! The children of four neighbouring parents are read straight from the two child rows
-//! below them (no per-node index arithmetic); for each child position (0,0), (1,0), (0,1),
-//! (1,1) a `Vec4` holds that child of the four parents. Every lane does exactly the operations
+//! below them (no per-node index arithmetic): two SSE2 loads of two nodes per parent and a
+//! 4x4 transpose give, for each child position (0,0), (1,0), (0,1), (1,1), that child's `a`
+//! and `b` words of the four parents in lanes; the tags, `z_c`, flags and the f16 slopes are
+//! decoded in those lanes (the same integer operations as [`super::node`]'s scalar decode). Every lane does exactly the operations
 //! of the scalar definition ([`MergeCtx::parent`] with `lanes == false`: `merge` and
 //! `proxy` in [`super::merge`]) in its order — IEEE square root, division, products and sums
 //! are correctly rounded per lane, there is no fused multiply-add — so the nodes are the same
@@ -24,6 +26,8 @@
 //! definition's own [`union`] (its `f32::min` / `f32::max` folds, in child order), with the
 //! plane children's spreads computed in lanes as [`MergeCtx::zrange`] does.
 
+use core::arch::x86_64::*;
+
 use glam::{BVec4A, Vec4};
 
 use super::merge::{MergeCtx, plane_range, union};
@@ -33,22 +37,144 @@ use super::tree::Level;
 /// Lane-wise IEEE square root (`sqrtps`).
 #[inline(always)]
 fn sqrt4(v: Vec4) -> Vec4 {
-    #[cfg(target_arch = "x86_64")]
-    #[allow(unused_unsafe)]
-    {
-        // SAFETY: SSE is part of the x86_64 baseline.
-        unsafe { Vec4::from(core::arch::x86_64::_mm_sqrt_ps(v.into())) }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        Vec4::from_array(v.to_array().map(f32::sqrt))
-    }
+    // SAFETY: SSE is part of the x86_64 baseline.
+    unsafe { Vec4::from(_mm_sqrt_ps(v.into())) }
 }
 
 /// `Vec4` from four values computed per lane.
 #[inline(always)]
 fn lanes(f: impl Fn(usize) -> f32) -> Vec4 {
     Vec4::new(f(0), f(1), f(2), f(3))
+}
+
+/// [`super::node::f16_bits_to_f32`] of the low 16 bits of each lane (the same integer
+/// operations, the subnormal case by the same exact conversion and product).
+#[inline(always)]
+fn f16x4(h: __m128i) -> Vec4 {
+    // SAFETY: SSE2 is part of the x86_64 baseline.
+    unsafe {
+        let mag = _mm_and_si128(h, _mm_set1_epi32(0x7fff));
+        let normal = _mm_add_epi32(_mm_slli_epi32(mag, 13), _mm_set1_epi32(0x3800_0000));
+        let sub = _mm_castps_si128(_mm_mul_ps(
+            _mm_cvtepi32_ps(mag),
+            _mm_castsi128_ps(_mm_set1_epi32(0x3380_0000)),
+        ));
+        let is_sub = _mm_cmplt_epi32(mag, _mm_set1_epi32(0x400));
+        let v = _mm_or_si128(_mm_and_si128(sub, is_sub), _mm_andnot_si128(is_sub, normal));
+        let sign = _mm_slli_epi32(_mm_and_si128(h, _mm_set1_epi32(0x8000)), 16);
+        Vec4::from(_mm_castsi128_ps(_mm_or_si128(v, sign)))
+    }
+}
+
+/// The four parents' children as words: `a[k]`, `b[k]` hold child `k`'s `a` and `b` of the
+/// four parents, lane `p` = parent `p` (module docs).
+struct Kids {
+    a: [__m128i; 4],
+    b: [__m128i; 4],
+}
+
+impl Kids {
+    /// The children of parents `qx0 .. qx0 + n` (`n <= 4`) from the child rows `r0`, `r1`;
+    /// lanes beyond `n` hold empty nodes.
+    #[inline(always)]
+    fn gather(r0: &[Node], r1: &[Node], qx0: usize, n: usize) -> Self {
+        let pair = |r: &[Node], p: usize| -> __m128i {
+            // SAFETY: SSE2 baseline; the load reads the two nodes `r[x..x + 2]` (checked).
+            unsafe {
+                if p < n {
+                    let x = 2 * (qx0 + p);
+                    let two = &r[x..x + 2];
+                    _mm_loadu_si128(two.as_ptr() as *const __m128i)
+                } else {
+                    let e = Node::EMPTY;
+                    _mm_setr_epi32(e.a as i32, e.b as i32, e.a as i32, e.b as i32)
+                }
+            }
+        };
+        // Rows (a, b, a, b) of nodes 2p, 2p + 1, transposed: columns a0, b0, a1, b1.
+        let t = |r: &[Node]| -> [__m128i; 4] {
+            let (v0, v1, v2, v3) = (pair(r, 0), pair(r, 1), pair(r, 2), pair(r, 3));
+            // SAFETY: SSE2 baseline.
+            unsafe {
+                let (t0, t1) = (_mm_unpacklo_epi32(v0, v1), _mm_unpacklo_epi32(v2, v3));
+                let (t2, t3) = (_mm_unpackhi_epi32(v0, v1), _mm_unpackhi_epi32(v2, v3));
+                [
+                    _mm_unpacklo_epi64(t0, t1),
+                    _mm_unpackhi_epi64(t0, t1),
+                    _mm_unpacklo_epi64(t2, t3),
+                    _mm_unpackhi_epi64(t2, t3),
+                ]
+            }
+        };
+        let [a0, b0, a1, b1] = t(r0);
+        let [a2, b2, a3, b3] = t(r1);
+        Self {
+            a: [a0, a1, a2, a3],
+            b: [b0, b1, b2, b3],
+        }
+    }
+
+    /// Per child, the lanes whose child is a plane node (sign bit of `a`), as a bit mask.
+    #[inline(always)]
+    fn planes(&self, k: usize) -> u32 {
+        // SAFETY: SSE baseline.
+        unsafe { _mm_movemask_ps(_mm_castsi128_ps(self.a[k])) as u32 }
+    }
+
+    /// Whether every child of every lane is [`Node::EMPTY`].
+    #[inline(always)]
+    fn all_empty(&self) -> bool {
+        let e = Node::EMPTY;
+        // SAFETY: SSE2 baseline.
+        unsafe {
+            let (ea, eb) = (_mm_set1_epi32(e.a as i32), _mm_set1_epi32(e.b as i32));
+            let mut m = _mm_set1_epi32(-1);
+            for k in 0..4 {
+                m = _mm_and_si128(m, _mm_cmpeq_epi32(self.a[k], ea));
+                m = _mm_and_si128(m, _mm_cmpeq_epi32(self.b[k], eb));
+            }
+            _mm_movemask_epi8(m) == 0xffff
+        }
+    }
+
+    /// Child `k` of every lane as nodes.
+    #[inline(always)]
+    fn nodes(&self, k: usize) -> [Node; 4] {
+        let (mut a, mut b) = ([0u32; 4], [0u32; 4]);
+        // SAFETY: SSE2 baseline; 16-byte unaligned stores into 16-byte arrays.
+        unsafe {
+            _mm_storeu_si128(a.as_mut_ptr() as *mut __m128i, self.a[k]);
+            _mm_storeu_si128(b.as_mut_ptr() as *mut __m128i, self.b[k]);
+        }
+        [0, 1, 2, 3].map(|p| Node { a: a[p], b: b[p] })
+    }
+
+    /// Child `k`'s `z_c` per lane ([`Node::zc`]).
+    #[inline(always)]
+    fn zc(&self, k: usize) -> Vec4 {
+        // SAFETY: SSE2 baseline.
+        unsafe {
+            let m = _mm_set1_epi32(0x7fff_fffc);
+            Vec4::from(_mm_castsi128_ps(_mm_and_si128(self.a[k], m)))
+        }
+    }
+
+    /// Child `k`'s crack flag per lane, as a lane mask (all ones where set).
+    #[inline(always)]
+    fn crack(&self, k: usize) -> __m128 {
+        // SAFETY: SSE2 baseline.
+        unsafe {
+            let one = _mm_set1_epi32(FLAG_CRACK as i32);
+            _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(self.a[k], one), one))
+        }
+    }
+
+    /// Child `k`'s stored increments per lane ([`Node::increments`]).
+    #[inline(always)]
+    fn increments(&self, k: usize) -> (Vec4, Vec4) {
+        // SAFETY: SSE2 baseline.
+        unsafe { (f16x4(self.b[k]), f16x4(_mm_srli_epi32(self.b[k], 16))) }
+    }
 }
 
 /// Child offsets `(dx, dy)` of the child positions, in the definition's order.
@@ -74,21 +200,17 @@ impl MergeCtx {
         let r1 = &child.nodes[(y0 + 1) * cw..(y0 + 2) * cw];
         for (g, outs) in out.chunks_mut(4).enumerate() {
             let qx0 = 4 * g;
-            // kids[k][p]: child k of parent qx0 + p (empty beyond the row).
-            let mut kids = [[Node::EMPTY; 4]; 4];
-            let mut any_plane = false;
-            for p in 0..outs.len() {
-                let x = 2 * (qx0 + p);
-                let ks = [r0[x], r0[x + 1], r1[x], r1[x + 1]];
-                for (k, n) in ks.into_iter().enumerate() {
-                    kids[k][p] = n;
-                    any_plane |= n.is_plane();
-                }
-            }
-            if !any_plane {
+            let kids = Kids::gather(r0, r1, qx0, outs.len());
+            let any_plane = (0..4).fold(0, |m, k| m | kids.planes(k));
+            if any_plane == 0 {
                 // Only AABB children: their stored ranges.
+                if kids.all_empty() {
+                    outs.fill(Node::EMPTY);
+                    continue;
+                }
+                let ks = [0, 1, 2, 3].map(|k| kids.nodes(k));
                 for (p, o) in outs.iter_mut().enumerate() {
-                    *o = union((0..4).map(|k| kids[k][p].zrange()));
+                    *o = union((0..4).map(|k| ks[k][p].zrange()));
                 }
                 continue;
             }
@@ -97,14 +219,14 @@ impl MergeCtx {
     }
 
     /// Parents `qx0 .. qx0 + out.len()` of row `qy`, level `l`, from their children
-    /// `kids[k][p]` (module docs).
+    /// `kids` (module docs).
     #[inline]
     fn parents4(
         &self,
         l: u32,
         qx0: u32,
         qy: u32,
-        kids: &[[Node; 4]; 4],
+        kids: &Kids,
         out: &mut [Node],
         allow: &impl Fn(u32) -> bool,
     ) {
@@ -119,17 +241,14 @@ impl MergeCtx {
         let mut gx = [Vec4::ZERO; 4];
         let mut gy = [Vec4::ZERO; 4];
         for k in 0..4 {
-            let (mut ex, mut ey) = ([0.0f32; 4], [0.0f32; 4]);
-            for p in 0..4 {
-                (ex[p], ey[p]) = kids[k][p].increments();
-            }
-            gx[k] = Vec4::from(ex) * s(ws);
-            gy[k] = Vec4::from(ey) * s(hs);
+            let (ex, ey) = kids.increments(k);
+            gx[k] = ex * s(ws);
+            gy[k] = ey * s(hs);
         }
         let n = out.len();
-        let cand = |p: usize| {
-            p < n && !self.never && (0..4).all(|k| kids[k][p].is_plane()) && allow(qx0 + p as u32)
-        };
+        let all_planes = (0..4).fold(0xf, |m, k| m & kids.planes(k));
+        let cand =
+            |p: usize| p < n && !self.never && all_planes & (1 << p) != 0 && allow(qx0 + p as u32);
         let cand = [cand(0), cand(1), cand(2), cand(3)];
         let mut merged = [None; 4];
         if cand.iter().any(|&c| c) {
@@ -145,21 +264,20 @@ impl MergeCtx {
         let size = (1u32 << cl) as f32;
         let mut spread = [[0.0f32; 4]; 4];
         for k in 0..4 {
-            let half = lanes(|p| {
-                let dil = if kids[k][p].flags() & FLAG_CRACK != 0 {
-                    self.crack_px
-                } else {
-                    0.0
-                };
-                0.5 * size + dil
+            // SAFETY: SSE baseline.
+            let half = Vec4::from(unsafe {
+                let m = kids.crack(k);
+                let (dil, none) = (s(0.5 * size + self.crack_px), s(0.5 * size + 0.0));
+                _mm_or_ps(_mm_and_ps(m, dil.into()), _mm_andnot_ps(m, none.into()))
             });
             spread[k] =
                 ((gx[k].abs() * half) / s(self.wf) + (gy[k].abs() * half) / s(self.hf)).to_array();
         }
+        let ks = [0, 1, 2, 3].map(|k| kids.nodes(k));
         for (p, o) in out.iter_mut().enumerate() {
             *o = merged[p].unwrap_or_else(|| {
                 union((0..4).map(|k| {
-                    let kid = kids[k][p];
+                    let kid = ks[k][p];
                     if kid.is_plane() {
                         plane_range(kid.zc(), spread[k][p])
                     } else {
@@ -179,7 +297,7 @@ impl MergeCtx {
         l: u32,
         qx0: u32,
         qy: u32,
-        kids: &[[Node; 4]; 4],
+        kids: &Kids,
         cand: [bool; 4],
         gx: &[Vec4; 4],
         gy: &[Vec4; 4],
@@ -225,7 +343,7 @@ impl MergeCtx {
             let xc = ((lanes(|p| (2 * (qx0 + p as u32) + kx as u32) as f32) + s(0.5)) * s(size))
                 / s(self.wf);
             let yc = s((((2 * qy + ky as u32) as f32 + 0.5) * size) / self.hf);
-            let zc = lanes(|p| kids[k][p].zc());
+            let zc = kids.zc(k);
             for (m, &(cx, cy)) in CORNER.iter().enumerate() {
                 let (dx, dy) = (cx * hx, cy * hy);
                 let (px, py, pz) = (xc + s(dx), yc + s(dy), zc + gx[k] * s(dx) + gy[k] * s(dy));
@@ -250,6 +368,14 @@ impl MergeCtx {
         let (gxp, gyp) = ((nnx * inv).to_array(), (nny * inv).to_array());
         let min_cos = min_cos.to_array();
         let valid = valid.bitmask();
+        // SAFETY: SSE baseline.
+        let crack = unsafe {
+            let m = _mm_or_ps(
+                _mm_or_ps(kids.crack(0), kids.crack(1)),
+                _mm_or_ps(kids.crack(2), kids.crack(3)),
+            );
+            _mm_movemask_ps(m) as u32
+        };
         let mut res = [None; 4];
         for (p, r) in res.iter_mut().enumerate() {
             if valid & (1 << p) == 0 {
@@ -261,7 +387,7 @@ impl MergeCtx {
                 0.0
             };
             if min_cos[p] > self.cos_thr(u) && dmax[p] < self.dist_thr(u) {
-                let flags = (0..4).fold(0, |f, k| f | (kids[k][p].flags() & FLAG_CRACK));
+                let flags = if (crack >> p) & 1 != 0 { FLAG_CRACK } else { 0 };
                 *r = Node::plane_with_gradient(zc[p], gxp[p], gyp[p], l, self.wf, self.hf, flags);
             }
         }

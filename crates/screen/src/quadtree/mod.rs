@@ -6,7 +6,8 @@
 //!   adaptive pruning with the three conditions and the least-squares proxy plane (§3.3);
 //! - [`merge`]: one pruning step (proxy plane or conservative AABB); `merge_lanes`: the same
 //!   step with the four children in `Vec4` lanes (same bits); `merge_rows`: a level's row
-//!   with four parents in lanes (same bits, the build's fast path over whole levels);
+//!   with four parents in SSE2 lanes (same bits, the build's fast path over whole levels on
+//!   x86_64);
 //!   `fixpoint`: the cascade's pruning fixed point computed incrementally (same results as the
 //!   definition in `prune`, which [`QuadTreeTracer::build_reference`] runs);
 //! - [`traverse`]: the stackless traversal of §4 (exact plane hits, child by entry
@@ -80,6 +81,7 @@ pub mod cascade;
 mod fixpoint;
 pub mod merge;
 mod merge_lanes;
+#[cfg(target_arch = "x86_64")]
 mod merge_rows;
 pub mod node;
 mod prune;

@@ -169,6 +169,7 @@ pub(super) fn prune(
             .for_each(|(qy, row)| {
                 let qy = qy as u32;
                 let allow = |qx: u32| blocked.is_empty() || !blocked[(qy * pw + qx) as usize];
+                #[cfg(target_arch = "x86_64")]
                 if ctx.lanes {
                     // Four parents per step, children straight from their two rows.
                     ctx.parent_row(child, l, qy, row, allow);
