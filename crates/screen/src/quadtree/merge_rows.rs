@@ -41,12 +41,6 @@ fn sqrt4(v: Vec4) -> Vec4 {
     unsafe { Vec4::from(_mm_sqrt_ps(v.into())) }
 }
 
-/// `Vec4` from four values computed per lane.
-#[inline(always)]
-fn lanes(f: impl Fn(usize) -> f32) -> Vec4 {
-    Vec4::new(f(0), f(1), f(2), f(3))
-}
-
 /// [`super::node::f16_bits_to_f32`] of the low 16 bits of each lane (the same integer
 /// operations, the subnormal case by the same exact conversion and product).
 #[inline(always)]
@@ -340,8 +334,10 @@ impl MergeCtx {
         let mut acc = s(init);
         let mut proj = [Vec4::ZERO; 16];
         for (k, &(kx, ky)) in KID.iter().enumerate() {
-            let xc = ((lanes(|p| (2 * (qx0 + p as u32) + kx as u32) as f32) + s(0.5)) * s(size))
-                / s(self.wf);
+            // The children's columns `2 (qx0 + p) + kx` as floats: sums of small integers,
+            // exact, so the same values as the conversions of `node_centre`.
+            let cx = s((2 * qx0 + kx as u32) as f32) + Vec4::new(0.0, 2.0, 4.0, 6.0);
+            let xc = ((cx + s(0.5)) * s(size)) / s(self.wf);
             let yc = s((((2 * qy + ky as u32) as f32 + 0.5) * size) / self.hf);
             let zc = kids.zc(k);
             for (m, &(cx, cy)) in CORNER.iter().enumerate() {
@@ -357,11 +353,13 @@ impl MergeCtx {
         let mut dm = Vec4::ZERO;
         for v in proj {
             let d = (v - c).abs();
-            dm = Vec4::select(d.cmpgt(dm), d, dm);
+            // SAFETY: SSE baseline. `maxps(d, dm)` is `d > dm ? d : dm` per lane (a NaN `d`
+            // keeps `dm`): the definition's compare-select.
+            dm = Vec4::from(unsafe { _mm_max_ps(d.into(), dm.into()) });
         }
         let dmax = (dm / -nnz).to_array();
         let psize = (1u32 << l) as f32;
-        let xc = ((lanes(|p| (qx0 + p as u32) as f32) + s(0.5)) * s(psize)) / s(self.wf);
+        let xc = ((s(qx0 as f32) + Vec4::new(0.0, 1.0, 2.0, 3.0) + s(0.5)) * s(psize)) / s(self.wf);
         let yc = s(((qy as f32 + 0.5) * psize) / self.hf);
         let zc = ((c - nnx * xc - nny * yc) / nnz).to_array();
         let inv = s(-1.0) / nnz;
