@@ -29,7 +29,8 @@
 //!
 //! Every level is built in parallel over rows (rayon). **Fast paths, same bits:** the leaves
 //! are made a row at a time (`Leaves`), their directions from per-column and per-row tables
-//! of the same products and `z` with [`UnitCube::z_of_depth`]'s constant terms computed once;
+//! of the same products and `z` with [`UnitCube::z_of_depth`]'s constant terms computed once,
+//! the plane map and the node in SSE2 lanes (`leaf_lanes`);
 //! a level's merges run with four parents in lanes (`merge_rows`); without deeper layers the
 //! per-pixel plane levels come from level 1 down (`tree::plane_levels`); with deeper layers
 //! the pruning fixed point is computed incrementally (`fixpoint`), its pixel-plane trigger
@@ -101,6 +102,12 @@ impl QuadTree {
             normals,
             flags,
             mt: cube.cube_to_world.transpose(),
+            #[cfg(target_arch = "x86_64")]
+            map: super::leaf_lanes::LeafMap::new(
+                &cube.cube_to_world.transpose(),
+                w as f32,
+                h as f32,
+            ),
             // The world direction through a pixel centre, `basis * camera_dir(film)`, is
             // `(x_axis dx + y_axis dy) + z_axis (-1)` (glam's `Mat3 * Vec3` order): its column
             // and row terms are tabulated once, the same products, so the sum is the same
@@ -568,6 +575,9 @@ struct Leaves<'a> {
     /// Flag `O` per pixel (depth normals), if any.
     flags: Option<&'a [bool]>,
     mt: glam::DMat4,
+    /// `mt` and the node's scale for the lanes of `leaf_lanes`.
+    #[cfg(target_arch = "x86_64")]
+    map: super::leaf_lanes::LeafMap,
     col: Vec<Vec3>,
     row: Vec<Vec3>,
     back: Vec3,
@@ -609,6 +619,18 @@ impl Leaves<'_> {
                     (self.col[i] + rj) + self.back
                 };
                 let p = cam.frame.position + dir * d;
+                #[cfg(target_arch = "x86_64")]
+                if !REFERENCE {
+                    // The same map and node in SSE2 lanes (`leaf_lanes`).
+                    let f = if self.flags.is_some_and(|f| f[k0 + i]) {
+                        FLAG_CRACK
+                    } else {
+                        0
+                    };
+                    let z = ((self.inv_near - 1.0 / d as f64) / self.z_den) as f32;
+                    *o = self.map.leaf(p, n, z, f);
+                    continue;
+                }
                 match map_gradient(&self.mt, p, n) {
                     None => Node::EMPTY,
                     Some((gx, gy)) => {

@@ -79,6 +79,8 @@
 pub mod build;
 pub mod cascade;
 mod fixpoint;
+#[cfg(target_arch = "x86_64")]
+mod leaf_lanes;
 pub mod merge;
 mod merge_lanes;
 #[cfg(target_arch = "x86_64")]
