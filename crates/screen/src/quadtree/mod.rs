@@ -4,6 +4,7 @@
 //! - [`node`]: the 64-bit node of §3.4 (plane / AABB, tag in the sign bit);
 //! - [`build`]: [`QuadTree`], one layer — per-pixel planes as leaves (§3.2) and bottom-up
 //!   adaptive pruning with the three conditions and the least-squares proxy plane (§3.3);
+//!   `leaf_lanes`: a leaf's plane map and node in SSE2 lanes (same bits, x86_64);
 //! - [`merge`]: one pruning step (proxy plane or conservative AABB); `merge_lanes`: the same
 //!   step with the four children in `Vec4` lanes (same bits); `merge_rows`: a level's row
 //!   with four parents in SSE2 lanes (same bits, the build's fast path over whole levels on
