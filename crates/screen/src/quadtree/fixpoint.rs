@@ -197,6 +197,8 @@ type Key = (Node, u32, u32, u32);
 pub(super) struct Columns {
     xs: Vec<Vec4>,
     xc: Vec<f32>,
+    /// The edges `i / W`, `i = 0..=W`.
+    xe: Vec<f32>,
 }
 
 impl Columns {
@@ -209,6 +211,7 @@ impl Columns {
         Self {
             xc: (0..w).map(|i| ((i as f32 + 0.5) * 1.0) / wf).collect(),
             xs,
+            xe,
         }
     }
 }
@@ -282,11 +285,38 @@ pub(super) fn pixel_triggers_row(
     let ys = Vec4::new(j as f32, j as f32, (j + 1) as f32, (j + 1) as f32) / hf;
     let yc = ((j as f32 + 0.5) * 1.0) / hf;
     let mut listed = Vec::new();
+    // Four pixels per step in lanes (`trigger_lanes`, same bits), the rest one by one.
+    let mut done = 0;
+    #[cfg(target_arch = "x86_64")]
+    {
+        let y = ((j as f32) / hf, ((j + 1) as f32) / hf, yc);
+        while done + 4 <= tz.len() {
+            let i = done;
+            let t = super::trigger_lanes::pixel_triggers4(
+                base + i,
+                &nodes[i..],
+                &cols.xe[i..],
+                &cols.xc[i..],
+                y,
+                (wf, hf),
+                deeper,
+            )
+            .to_array();
+            for (d, v) in t.into_iter().enumerate() {
+                tz[i + d] = v;
+                if v.is_finite() {
+                    listed.push((base + i + d) as u32);
+                }
+            }
+            done += 4;
+        }
+    }
     for (i, ((t, &node), (&xs, &xc))) in tz
         .iter_mut()
         .zip(nodes)
         .zip(cols.xs.iter().zip(&cols.xc))
         .enumerate()
+        .skip(done)
     {
         let k = base + i;
         *t = pixel_trigger_lanes(

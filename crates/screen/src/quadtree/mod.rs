@@ -90,6 +90,8 @@ pub mod node;
 mod prune;
 pub mod traverse;
 pub mod tree;
+#[cfg(target_arch = "x86_64")]
+mod trigger_lanes;
 
 pub use cascade::QuadTreeTracer;
 pub use node::Node;
