@@ -254,6 +254,29 @@ fn merged_triggers(
                 let lv = &levels[l as usize];
                 let p = decode_plane(lv.nodes[(qy * lv.w + qx) as usize], l, qx, qy, wf, hf);
                 let end = (((qx + 1) << l) as usize).min(wu);
+                // Runs of 4 pixels or more (levels >= 2, starting at a multiple of 4): four
+                // pixels per step in lanes (`trigger_lanes`, same bits).
+                #[cfg(target_arch = "x86_64")]
+                if l >= 2 {
+                    let y = ((j as f32) / hf, ((j + 1) as f32) / hf);
+                    while i + 4 <= end {
+                        let t = super::trigger_lanes::merged_triggers4(
+                            base + i,
+                            p,
+                            &cols.xe[i..],
+                            y,
+                            deeper,
+                        );
+                        for (d, v) in t.to_array().into_iter().enumerate() {
+                            let k = base + i + d;
+                            row[i + d] = v;
+                            if v.is_finite() && !blocked[k] {
+                                newly.push(k as u32);
+                            }
+                        }
+                        i += 4;
+                    }
+                }
                 for (ii, t) in row.iter_mut().enumerate().take(end).skip(i) {
                     let k = base + ii;
                     *t = pixel_trigger_lanes(k, cols.xs[ii], ys, || Some(p), deeper);

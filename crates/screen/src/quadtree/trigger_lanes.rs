@@ -112,6 +112,36 @@ pub(super) fn pixel_triggers4(
         // Plane leaves: the tag in the sign bit of `a`.
         (nx, ny, nz, c, _mm_castsi128_ps(_mm_srai_epi32(a, 31)))
     };
+    triggers4(k, (pnx, pny, pnz, pc, plane), xe, (y0, y1), deeper)
+}
+
+/// The trigger depths of the pixels `k .. k + 4` of one merged node's run: its plane `(n,
+/// c)` in every lane.
+#[inline]
+pub(super) fn merged_triggers4(
+    k: usize,
+    (n, c): (glam::Vec3, f32),
+    xe: &[f32],
+    y: (f32, f32),
+    deeper: &[LayerPlanes],
+) -> Vec4 {
+    let s = Vec4::splat;
+    let all = unsafe { _mm_castsi128_ps(_mm_set1_epi32(-1)) };
+    triggers4(k, (s(n.x), s(n.y), s(n.z), s(c), all), xe, y, deeper)
+}
+
+/// The trigger depths of the pixels `k .. k + 4` with their own planes `(n.x, n.y, n.z, c)`
+/// per lane and a lane mask of the pixels that have one, the footprint edges `xe[i .. i +
+/// 5]` and the row's edges `y0`, `y1` (module docs).
+#[inline(always)]
+fn triggers4(
+    k: usize,
+    (pnx, pny, pnz, pc, plane): (Vec4, Vec4, Vec4, Vec4, __m128),
+    xe: &[f32],
+    (y0, y1): (f32, f32),
+    deeper: &[LayerPlanes],
+) -> Vec4 {
+    let s = Vec4::splat;
     let (x0, x1) = (load4(&xe[..4]), load4(&xe[1..5]));
     let corners = [(x0, y0), (x1, y0), (x0, y1), (x1, y1)];
     let mut front = s(f32::INFINITY);
