@@ -254,6 +254,31 @@ fn merged_triggers(
                 let lv = &levels[l as usize];
                 let p = decode_plane(lv.nodes[(qy * lv.w + qx) as usize], l, qx, qy, wf, hf);
                 let end = (((qx + 1) << l) as usize).min(wu);
+                // Two runs of two pixels (level 1) starting at a multiple of 4: four pixels
+                // in lanes, each pair with its node's plane (`trigger_lanes`, same bits).
+                #[cfg(target_arch = "x86_64")]
+                if l == 1 && i % 4 == 0 && i + 4 <= wu && er[i + 2] == 1 {
+                    let q = lv.nodes[(qy * lv.w + qx + 1) as usize];
+                    let pb = decode_plane(q, l, qx + 1, qy, wf, hf);
+                    let y = ((j as f32) / hf, ((j + 1) as f32) / hf);
+                    let t = super::trigger_lanes::merged_pair_triggers4(
+                        base + i,
+                        p,
+                        pb,
+                        &cols.xe[i..],
+                        y,
+                        deeper,
+                    );
+                    for (d, v) in t.to_array().into_iter().enumerate() {
+                        let k = base + i + d;
+                        row[i + d] = v;
+                        if v.is_finite() && !blocked[k] {
+                            newly.push(k as u32);
+                        }
+                    }
+                    i += 4;
+                    continue;
+                }
                 // Runs of 4 pixels or more (levels >= 2, starting at a multiple of 4): four
                 // pixels per step in lanes (`trigger_lanes`, same bits).
                 #[cfg(target_arch = "x86_64")]

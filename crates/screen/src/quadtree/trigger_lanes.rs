@@ -130,6 +130,29 @@ pub(super) fn merged_triggers4(
     triggers4(k, (s(n.x), s(n.y), s(n.z), s(c), all), xe, y, deeper)
 }
 
+/// [`merged_triggers4`] of two runs of two pixels: plane `a` in the first two lanes, `b`
+/// in the last two.
+#[inline]
+pub(super) fn merged_pair_triggers4(
+    k: usize,
+    (a, ca): (glam::Vec3, f32),
+    (b, cb): (glam::Vec3, f32),
+    xe: &[f32],
+    y: (f32, f32),
+    deeper: &[LayerPlanes],
+) -> Vec4 {
+    let all = unsafe { _mm_castsi128_ps(_mm_set1_epi32(-1)) };
+    let two = |u: f32, v: f32| Vec4::new(u, u, v, v);
+    let planes = (
+        two(a.x, b.x),
+        two(a.y, b.y),
+        two(a.z, b.z),
+        two(ca, cb),
+        all,
+    );
+    triggers4(k, planes, xe, y, deeper)
+}
+
 /// The trigger depths of the pixels `k .. k + 4` with their own planes `(n.x, n.y, n.z, c)`
 /// per lane and a lane mask of the pixels that have one, the footprint edges `xe[i .. i +
 /// 5]` and the row's edges `y0`, `y1` (module docs).
