@@ -11,15 +11,17 @@
 //! - the pixel planes' trigger depths are computed by the leaf pass, each row right after
 //!   its leaves (`pixel_triggers_row`, no second pass over level 0); the pixel planes are
 //!   decoded from the leaves only where a deeper plane needs them (pixel centres tabulated
-//!   per column and row), not copied into a [`LayerPlanes`] first, and each pixel's four
-//!   footprint corners are evaluated in lanes ([`super::cascade::pixel_trigger_lanes`]);
+//!   per column and row), not copied into a [`LayerPlanes`] first; on x86_64 four pixels
+//!   per step, one per lane (`trigger_lanes`), elsewhere each pixel's four footprint corners
+//!   in lanes ([`super::cascade::pixel_trigger_lanes`]);
 //! - the blocked pixels are kept as a list too: pruning marks only their ancestors
 //!   ([`Blocked::List`]) and the unsafe pixels are marked through their ancestors only
 //!   (`QuadTree::mark_unsafe_listed`; ~1 % of the pixels on atrium);
 //! - a pixel whose effective node is its own leaf (level 0) or none has the pixel planes'
 //!   trigger depth: only pixels under merged nodes are evaluated against their proxy plane,
 //!   by runs (the pixels of one effective node in a row all have its level: one decode per
-//!   run, `merged_triggers`);
+//!   run, `merged_triggers`); on x86_64 runs of level >= 2 four pixels per step and two
+//!   adjacent level-1 runs together, one pixel per lane (`trigger_lanes`);
 //! - a rebuild only recomputes the ancestors of the newly blocked pixels: every other node
 //!   has the same children and the same "may merge" answer as before. A recomputed node may
 //!   not merge (it covers a blocked pixel), so it is an AABB or empty;

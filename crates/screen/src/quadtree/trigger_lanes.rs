@@ -1,12 +1,14 @@
-//! The pixel planes' cascade trigger depths ([`super::cascade`], `pixel_trigger`) of four
-//! neighbouring pixels of a row at once, one pixel per lane (x86_64 SSE2): the fast path of
-//! `fixpoint::pixel_triggers_row`.
+//! The cascade trigger depths ([`super::cascade`], `pixel_trigger`) of four neighbouring
+//! pixels of a row at once, one pixel per lane (x86_64 SSE2): the fast path of
+//! `fixpoint::pixel_triggers_row` (each pixel against its own leaf's plane) and of
+//! `fixpoint::merged_triggers` (against a merged node's plane: one node's run of four
+//! pixels, or two level-1 runs of two).
 //!
 //! Every lane does exactly the scalar definition's operations in its order, so the trigger
 //! depths are the same bits (`tests/quadtree_build.rs` compares whole trees, trigger depths
 //! included, with the reference build, which runs the definition):
 //!
-//! - the pixel's own plane as [`super::node::decode_plane_at`] at level 0: the f16 slopes
+//! - a pixel's own leaf's plane as [`super::node::decode_plane_at`] at level 0: the f16 slopes
 //!   decoded by `f16_bits_to_f32`'s integer operations, the gradient, the power-of-two
 //!   scale of [`Node::test_normal`] from the exponent bits (`maxps` is its compare-select),
 //!   `c = (n.x x_c + n.y y_c) + n.z z_c`; computed for every lane, used only where a deeper
