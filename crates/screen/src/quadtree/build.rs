@@ -27,12 +27,16 @@
 //! the error bound of condition 3 refers to what the tree actually stores (up to the proxy's
 //! own f16/f32 rounding).
 //!
-//! Every level is built in parallel over rows (rayon). **Fast paths, same bits:** the leaf
-//! directions come from per-column and per-row tables of the same products; merges run with
-//! the children in lanes (`merge_lanes`); with deeper layers the pruning fixed point is
-//! computed incrementally (`fixpoint`), its pixel-plane trigger depths in the leaf pass. `QuadTree::build_cascaded` with `reference` runs
-//! the scalar definitions instead (`QuadTreeTracer::build_reference`); the tests compare
-//! the two tree for tree (`tests/quadtree_build.rs`).
+//! Every level is built in parallel over rows (rayon). **Fast paths, same bits:** the leaves
+//! are made a row at a time (`Leaves`), their directions from per-column and per-row tables
+//! of the same products and `z` with [`UnitCube::z_of_depth`]'s constant terms computed once,
+//! the plane map and the node in SSE2 lanes (`leaf_lanes`);
+//! a level's merges run with four parents in lanes (`merge_rows`); without deeper layers the
+//! per-pixel plane levels come from level 1 down (`tree::plane_levels`); with deeper layers
+//! the pruning fixed point is computed incrementally (`fixpoint`), its pixel-plane trigger
+//! depths in the leaf pass. `QuadTree::build_cascaded` with `reference` runs the scalar
+//! definitions instead (`QuadTreeTracer::build_reference`); the tests compare the two tree
+//! for tree (`tests/quadtree_build.rs`).
 
 use glam::Vec3;
 use parallax_core::{GBuffer, Image};
@@ -44,8 +48,7 @@ use super::merge::MergeCtx;
 use super::node::{FLAG_CRACK, Node};
 use super::prune::Blocked;
 use super::tree::{
-    Level, NO_PLANE, QuadTree, Z_FLOOR_TABLE_MAX, Z_REGION_MIN_GAIN, Z_SKIP_MARGIN,
-    effective_levels,
+    Level, NO_PLANE, QuadTree, Z_FLOOR_TABLE_MAX, Z_REGION_MIN_GAIN, Z_SKIP_MARGIN, plane_levels,
 };
 use crate::planes::layer_size;
 use crate::{LayerPlanes, NormalSource, ScreenError, UnitCube};
@@ -89,73 +92,67 @@ impl QuadTree {
                 )
             }
         };
-        let depth = &layer.depth;
-        let mt = cube.cube_to_world.transpose();
-        let (wf, hf) = (w as f32, h as f32);
-        // The world direction through a pixel centre, `basis * camera_dir(film)`, is
-        // `(x_axis dx + y_axis dy) + z_axis (-1)` (glam's `Mat3 * Vec3` order): its column and
-        // row terms are tabulated once, the same products, so the sum is the same bits.
         let (tx, ty) = (cam.tan_half_x(), cam.tan_half_y);
         let b = cam.frame.basis;
         let (cw, ch) = (cam.width as f32, cam.height as f32);
-        let col: Vec<Vec3> = (0..w)
-            .map(|i| b.x_axis * ((2.0 * (i as f32 + 0.5) / cw - 1.0 + cam.shift.x) * tx))
-            .collect();
-        let row: Vec<Vec3> = (0..h)
-            .map(|j| b.y_axis * ((1.0 - 2.0 * (j as f32 + 0.5) / ch + cam.shift.y) * ty))
-            .collect();
-        let back = b.z_axis * -1.0;
-        let leaf = |k: usize, i: u32, j: u32| {
-            let d = depth[k];
-            if !(d.is_finite() && d > 0.0) || normals[k] == Vec3::ZERO {
-                return Node::EMPTY;
-            }
-            let dir = if reference {
-                let film = glam::Vec2::new(i as f32 + 0.5, j as f32 + 0.5);
-                cam.frame.dir_to_world(cam.camera_dir(film))
-            } else {
-                (col[i as usize] + row[j as usize]) + back
-            };
-            let p = cam.frame.position + dir * d;
-            let Some((gx, gy)) = map_gradient(&mt, p, normals[k]) else {
-                return Node::EMPTY;
-            };
-            let f = if flags.is_some_and(|f| f[k]) {
-                FLAG_CRACK
-            } else {
-                0
-            };
-            Node::plane_with_gradient(cube.z_of_depth(d), gx, gy, 0, wf, hf, f)
-                .unwrap_or(Node::EMPTY)
+        let (n, f) = (cube.near as f64, cube.far as f64);
+        let leaves = Leaves {
+            cube,
+            depth: &layer.depth,
+            normals,
+            flags,
+            mt: cube.cube_to_world.transpose(),
+            #[cfg(target_arch = "x86_64")]
+            map: super::leaf_lanes::LeafMap::new(
+                &cube.cube_to_world.transpose(),
+                w as f32,
+                h as f32,
+            ),
+            // The world direction through a pixel centre, `basis * camera_dir(film)`, is
+            // `(x_axis dx + y_axis dy) + z_axis (-1)` (glam's `Mat3 * Vec3` order): its column
+            // and row terms are tabulated once, the same products, so the sum is the same
+            // bits.
+            col: (0..w)
+                .map(|i| b.x_axis * ((2.0 * (i as f32 + 0.5) / cw - 1.0 + cam.shift.x) * tx))
+                .collect(),
+            row: (0..h)
+                .map(|j| b.y_axis * ((1.0 - 2.0 * (j as f32 + 0.5) / ch + cam.shift.y) * ty))
+                .collect(),
+            back: b.z_axis * -1.0,
+            inv_near: 1.0 / n,
+            z_den: 1.0 / n - 1.0 / f,
+            wf: w as f32,
+            hf: h as f32,
         };
         let NormalSource::GBufferFlagged {
             min_rel_gap,
             max_rel_gap,
         } = opts.normals
         else {
-            return Self::from_leaf_fn(cube, w, h, opts, deeper, reference, leaf);
+            return Self::from_leaf_rows(cube, w, h, opts, deeper, reference, |row, j| {
+                leaves.row(row, j, reference)
+            });
         };
         // G-buffer normals: the leaves first, then flag `O` from their decoded planes
         // ([`crate::planes::crack_flags`]).
-        let mut leaves = vec![Node::EMPTY; (w as usize) * (h as usize)];
-        leaves
+        let mut nodes = vec![Node::EMPTY; (w as usize) * (h as usize)];
+        nodes
             .par_chunks_mut(w as usize)
             .enumerate()
-            .for_each(|(j, row)| {
-                for (i, n) in row.iter_mut().enumerate() {
-                    *n = leaf(j * w as usize + i, i as u32, j as u32);
-                }
-            });
-        let o = gbuffer_flags(cube, w, h, &leaves, min_rel_gap, max_rel_gap);
-        Self::from_leaf_fn(cube, w, h, opts, deeper, reference, |k, _, _| {
-            let n = leaves[k];
-            if o[k] {
-                Node {
-                    a: n.a | FLAG_CRACK,
-                    ..n
-                }
-            } else {
-                n
+            .for_each(|(j, row)| leaves.row(row, j as u32, reference));
+        let o = gbuffer_flags(cube, w, h, &nodes, min_rel_gap, max_rel_gap);
+        Self::from_leaf_rows(cube, w, h, opts, deeper, reference, |row, j| {
+            let k0 = (j * w) as usize;
+            for (i, out) in row[..w as usize].iter_mut().enumerate() {
+                let n = nodes[k0 + i];
+                *out = if o[k0 + i] {
+                    Node {
+                        a: n.a | FLAG_CRACK,
+                        ..n
+                    }
+                } else {
+                    n
+                };
             }
         })
     }
@@ -176,7 +173,7 @@ impl QuadTree {
                 cube.camera.height
             )));
         }
-        Self::from_leaf_fn(cube, w, h, opts, &[], false, |k, _, _| {
+        let leaf = |k: usize| {
             if !planes.covered(k) {
                 return Node::EMPTY;
             }
@@ -187,18 +184,25 @@ impl QuadTree {
             let (wf, hf) = (w as f32, h as f32);
             Node::plane_with_gradient(cube.z_of_depth(depth[k]), gx, gy, 0, wf, hf, flags)
                 .unwrap_or(Node::EMPTY)
+        };
+        Self::from_leaf_rows(cube, w, h, opts, &[], false, |row, j| {
+            let k0 = (j * w) as usize;
+            for (i, out) in row[..w as usize].iter_mut().enumerate() {
+                *out = leaf(k0 + i);
+            }
         })
     }
 
-    /// The tree whose pixel `(i, j)` (index `k`) is the leaf `leaf(k, i, j)`.
-    fn from_leaf_fn(
+    /// The tree whose leaves of pixel row `j` (the first `w` nodes of a padded level-0 row)
+    /// `leaf_row(row, j)` writes.
+    fn from_leaf_rows(
         cube: &UnitCube,
         w: u32,
         h: u32,
         opts: &QuadTreeOptions,
         deeper: &[LayerPlanes],
         reference: bool,
-        leaf: impl Fn(usize, u32, u32) -> Node + Sync,
+        leaf_row: impl Fn(&mut [Node], u32) + Sync,
     ) -> Result<Self, ScreenError> {
         if !(opts.crack_dilation.is_finite() && opts.crack_dilation >= 0.0) {
             return Err(ScreenError::InvalidSpace(format!(
@@ -228,11 +232,6 @@ impl QuadTree {
         // Level 0: leaves (§3.2).
         let (w0, h0) = (top_w << top, top_h << top);
         let mut leaves = vec![Node::EMPTY; (w0 * h0) as usize];
-        let leaf_row = |row: &mut [Node], j: u32| {
-            for i in 0..w {
-                row[i as usize] = leaf((j * w + i) as usize, i, j);
-            }
-        };
         // With deeper layers (fast path), each row's pixel-plane trigger depths right after
         // its leaves (`fixpoint`), and the pixels where they are finite.
         let mut px_triggers = None;
@@ -264,8 +263,8 @@ impl QuadTree {
         };
         let (levels, tz, eff, unsafe_px) = if deeper.is_empty() {
             let levels = super::prune::prune(&ctx, level0, nlev, Blocked::None, w, h);
-            let eff = effective_levels(&levels);
-            (levels, Vec::new(), eff, None)
+            // No cascade: the plane levels straight from level 1 (`plane_levels`).
+            (levels, Vec::new(), Vec::new(), None)
         } else if reference {
             let (levels, tz, eff) =
                 super::prune::fixed_point_reference(&ctx, level0, nlev, (w, h), deeper);
@@ -302,16 +301,20 @@ impl QuadTree {
         };
         // `mark_unsafe` changes flags and AABB ranges but no node kinds: `eff` (the effective
         // levels, top-down, one pass per level, instead of a climb per pixel) still holds.
-        let w0 = tree.levels[0].w as usize;
-        let mut pl = vec![0u8; (w * h) as usize];
-        pl.par_chunks_mut(w as usize)
-            .enumerate()
-            .for_each(|(j, row)| {
-                for (v, &l) in row.iter_mut().zip(&eff[j * w0..]) {
-                    *v = if l == NO_PLANE { 0 } else { l };
-                }
-            });
-        tree.plane_level = pl;
+        tree.plane_level = if eff.is_empty() {
+            plane_levels(&tree.levels, w, h)
+        } else {
+            let w0 = tree.levels[0].w as usize;
+            let mut pl = vec![0u8; (w * h) as usize];
+            pl.par_chunks_mut(w as usize)
+                .enumerate()
+                .for_each(|(j, row)| {
+                    for (v, &l) in row.iter_mut().zip(&eff[j * w0..]) {
+                        *v = if l == NO_PLANE { 0 } else { l };
+                    }
+                });
+            pl
+        };
         // After `mark_unsafe` (it lowers AABB ranges to trigger depths).
         tree.set_z_floors(&ctx, &top_tz);
         Ok(tree)
@@ -558,6 +561,95 @@ impl QuadTree {
         }
         self.trigger_z = tz;
         mins
+    }
+}
+
+/// The leaves of a G-buffer layer (§3.2, module docs), with what every pixel needs
+/// computed once: the transposed inverse cube map, the per-column and per-row terms of the
+/// pixel-centre directions, and [`UnitCube::z_of_depth`]'s constant terms (the same f64
+/// values, so the same bits).
+struct Leaves<'a> {
+    cube: &'a UnitCube,
+    depth: &'a [f32],
+    normals: &'a [Vec3],
+    /// Flag `O` per pixel (depth normals), if any.
+    flags: Option<&'a [bool]>,
+    mt: glam::DMat4,
+    /// `mt` and the node's scale for the lanes of `leaf_lanes`.
+    #[cfg(target_arch = "x86_64")]
+    map: super::leaf_lanes::LeafMap,
+    col: Vec<Vec3>,
+    row: Vec<Vec3>,
+    back: Vec3,
+    /// `1 / near` and `1 / near - 1 / far`, in f64.
+    inv_near: f64,
+    z_den: f64,
+    wf: f32,
+    hf: f32,
+}
+
+impl Leaves<'_> {
+    /// The leaves of pixel row `j` into `out[..W]`; `reference`: the pixel direction by
+    /// the camera's own function and [`UnitCube::z_of_depth`] (the definitions).
+    fn row(&self, out: &mut [Node], j: u32, reference: bool) {
+        if reference {
+            self.row_with::<true>(out, j)
+        } else {
+            self.row_with::<false>(out, j)
+        }
+    }
+
+    #[inline(always)]
+    fn row_with<const REFERENCE: bool>(&self, out: &mut [Node], j: u32) {
+        let w = self.col.len();
+        let k0 = j as usize * w;
+        let (depth, normals) = (&self.depth[k0..k0 + w], &self.normals[k0..k0 + w]);
+        let rj = self.row[j as usize];
+        let cam = &self.cube.camera;
+        for (i, o) in out[..w].iter_mut().enumerate() {
+            let d = depth[i];
+            let n = normals[i];
+            *o = if !(d.is_finite() && d > 0.0) || n == Vec3::ZERO {
+                Node::EMPTY
+            } else {
+                let dir = if REFERENCE {
+                    let film = glam::Vec2::new(i as f32 + 0.5, j as f32 + 0.5);
+                    cam.frame.dir_to_world(cam.camera_dir(film))
+                } else {
+                    (self.col[i] + rj) + self.back
+                };
+                let p = cam.frame.position + dir * d;
+                #[cfg(target_arch = "x86_64")]
+                if !REFERENCE {
+                    // The same map and node in SSE2 lanes (`leaf_lanes`).
+                    let f = if self.flags.is_some_and(|f| f[k0 + i]) {
+                        FLAG_CRACK
+                    } else {
+                        0
+                    };
+                    let z = ((self.inv_near - 1.0 / d as f64) / self.z_den) as f32;
+                    *o = self.map.leaf(p, n, z, f);
+                    continue;
+                }
+                match map_gradient(&self.mt, p, n) {
+                    None => Node::EMPTY,
+                    Some((gx, gy)) => {
+                        let f = if self.flags.is_some_and(|f| f[k0 + i]) {
+                            FLAG_CRACK
+                        } else {
+                            0
+                        };
+                        let z = if REFERENCE {
+                            self.cube.z_of_depth(d)
+                        } else {
+                            ((self.inv_near - 1.0 / d as f64) / self.z_den) as f32
+                        };
+                        Node::plane_with_gradient(z, gx, gy, 0, self.wf, self.hf, f)
+                            .unwrap_or(Node::EMPTY)
+                    }
+                }
+            };
+        }
     }
 }
 

@@ -91,7 +91,7 @@ use crate::depth_layers::{Clip, PixelRay};
 use crate::{LayerPlanes, ScreenError, ScreenTracer, TraceResult, TraceStats, UnitCube};
 
 /// Margin of the safety test (in `f` units).
-const SAFE_MARGIN: f32 = 1e-6;
+pub(super) const SAFE_MARGIN: f32 = 1e-6;
 
 /// The quad-trees of all layers of one reference view (§3-§4.1).
 #[derive(Clone, Debug)]

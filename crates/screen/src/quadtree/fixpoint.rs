@@ -11,15 +11,17 @@
 //! - the pixel planes' trigger depths are computed by the leaf pass, each row right after
 //!   its leaves (`pixel_triggers_row`, no second pass over level 0); the pixel planes are
 //!   decoded from the leaves only where a deeper plane needs them (pixel centres tabulated
-//!   per column and row), not copied into a [`LayerPlanes`] first, and each pixel's four
-//!   footprint corners are evaluated in lanes ([`super::cascade::pixel_trigger_lanes`]);
+//!   per column and row), not copied into a [`LayerPlanes`] first; on x86_64 four pixels
+//!   per step, one per lane (`trigger_lanes`), elsewhere each pixel's four footprint corners
+//!   in lanes ([`super::cascade::pixel_trigger_lanes`]);
 //! - the blocked pixels are kept as a list too: pruning marks only their ancestors
 //!   ([`Blocked::List`]) and the unsafe pixels are marked through their ancestors only
 //!   (`QuadTree::mark_unsafe_listed`; ~1 % of the pixels on atrium);
 //! - a pixel whose effective node is its own leaf (level 0) or none has the pixel planes'
 //!   trigger depth: only pixels under merged nodes are evaluated against their proxy plane,
 //!   by runs (the pixels of one effective node in a row all have its level: one decode per
-//!   run, `merged_triggers`);
+//!   run, `merged_triggers`); on x86_64 runs of level >= 2 four pixels per step and two
+//!   adjacent level-1 runs together, one pixel per lane (`trigger_lanes`);
 //! - a rebuild only recomputes the ancestors of the newly blocked pixels: every other node
 //!   has the same children and the same "may merge" answer as before. A recomputed node may
 //!   not merge (it covers a blocked pixel), so it is an AABB or empty;
@@ -197,6 +199,8 @@ type Key = (Node, u32, u32, u32);
 pub(super) struct Columns {
     xs: Vec<Vec4>,
     xc: Vec<f32>,
+    /// The edges `i / W`, `i = 0..=W`.
+    xe: Vec<f32>,
 }
 
 impl Columns {
@@ -209,6 +213,7 @@ impl Columns {
         Self {
             xc: (0..w).map(|i| ((i as f32 + 0.5) * 1.0) / wf).collect(),
             xs,
+            xe,
         }
     }
 }
@@ -251,6 +256,54 @@ fn merged_triggers(
                 let lv = &levels[l as usize];
                 let p = decode_plane(lv.nodes[(qy * lv.w + qx) as usize], l, qx, qy, wf, hf);
                 let end = (((qx + 1) << l) as usize).min(wu);
+                // Two runs of two pixels (level 1) starting at a multiple of 4: four pixels
+                // in lanes, each pair with its node's plane (`trigger_lanes`, same bits).
+                #[cfg(target_arch = "x86_64")]
+                if l == 1 && i % 4 == 0 && i + 4 <= wu && er[i + 2] == 1 {
+                    let q = lv.nodes[(qy * lv.w + qx + 1) as usize];
+                    let pb = decode_plane(q, l, qx + 1, qy, wf, hf);
+                    let y = ((j as f32) / hf, ((j + 1) as f32) / hf);
+                    let t = super::trigger_lanes::merged_pair_triggers4(
+                        base + i,
+                        p,
+                        pb,
+                        &cols.xe[i..],
+                        y,
+                        deeper,
+                    );
+                    for (d, v) in t.to_array().into_iter().enumerate() {
+                        let k = base + i + d;
+                        row[i + d] = v;
+                        if v.is_finite() && !blocked[k] {
+                            newly.push(k as u32);
+                        }
+                    }
+                    i += 4;
+                    continue;
+                }
+                // Runs of 4 pixels or more (levels >= 2, starting at a multiple of 4): four
+                // pixels per step in lanes (`trigger_lanes`, same bits).
+                #[cfg(target_arch = "x86_64")]
+                if l >= 2 {
+                    let y = ((j as f32) / hf, ((j + 1) as f32) / hf);
+                    while i + 4 <= end {
+                        let t = super::trigger_lanes::merged_triggers4(
+                            base + i,
+                            p,
+                            &cols.xe[i..],
+                            y,
+                            deeper,
+                        );
+                        for (d, v) in t.to_array().into_iter().enumerate() {
+                            let k = base + i + d;
+                            row[i + d] = v;
+                            if v.is_finite() && !blocked[k] {
+                                newly.push(k as u32);
+                            }
+                        }
+                        i += 4;
+                    }
+                }
                 for (ii, t) in row.iter_mut().enumerate().take(end).skip(i) {
                     let k = base + ii;
                     *t = pixel_trigger_lanes(k, cols.xs[ii], ys, || Some(p), deeper);
@@ -282,11 +335,38 @@ pub(super) fn pixel_triggers_row(
     let ys = Vec4::new(j as f32, j as f32, (j + 1) as f32, (j + 1) as f32) / hf;
     let yc = ((j as f32 + 0.5) * 1.0) / hf;
     let mut listed = Vec::new();
+    // Four pixels per step in lanes (`trigger_lanes`, same bits), the rest one by one.
+    let mut done = 0;
+    #[cfg(target_arch = "x86_64")]
+    {
+        let y = ((j as f32) / hf, ((j + 1) as f32) / hf, yc);
+        while done + 4 <= tz.len() {
+            let i = done;
+            let t = super::trigger_lanes::pixel_triggers4(
+                base + i,
+                &nodes[i..],
+                &cols.xe[i..],
+                &cols.xc[i..],
+                y,
+                (wf, hf),
+                deeper,
+            )
+            .to_array();
+            for (d, v) in t.into_iter().enumerate() {
+                tz[i + d] = v;
+                if v.is_finite() {
+                    listed.push((base + i + d) as u32);
+                }
+            }
+            done += 4;
+        }
+    }
     for (i, ((t, &node), (&xs, &xc))) in tz
         .iter_mut()
         .zip(nodes)
         .zip(cols.xs.iter().zip(&cols.xc))
         .enumerate()
+        .skip(done)
     {
         let k = base + i;
         *t = pixel_trigger_lanes(

@@ -143,7 +143,13 @@ impl MergeCtx {
         flags: u32,
     ) -> Option<Node> {
         let c = proj.iter().sum::<f32>() / 16.0;
-        let dmax = proj.iter().map(|p| (p - c).abs()).fold(0.0f32, f32::max) / -nn.z;
+        // The largest `|p - c|` by compare-select (`maxss`), not `f32::max`'s NaN handling:
+        // the values are `+0` or positive, or NaN, which both skip, so the same value.
+        let dmax = proj
+            .iter()
+            .map(|p| (p - c).abs())
+            .fold(0.0f32, |m, d| if d > m { d } else { m })
+            / -nn.z;
         let (xc, yc) = node_centre(l, qx, qy, self.wf, self.hf);
         let zc = plane_z(nn, c, xc, yc);
         let u = if self.adaptive {
@@ -160,7 +166,7 @@ impl MergeCtx {
     }
 
     /// Linear depth fraction `(d - near) / (far - near)` of cube `z`, in `[0, 1]`.
-    fn depth_fraction(&self, z: f32) -> f32 {
+    pub(super) fn depth_fraction(&self, z: f32) -> f32 {
         let (n, f) = (self.near, self.far);
         let inv_d = 1.0 / n - z as f64 * (1.0 / n - 1.0 / f);
         if !(inv_d > 0.0) {
@@ -169,7 +175,7 @@ impl MergeCtx {
         (((1.0 / inv_d) - n) / (f - n)).clamp(0.0, 1.0) as f32
     }
 
-    fn cos_thr(&self, u: f32) -> f32 {
+    pub(super) fn cos_thr(&self, u: f32) -> f32 {
         if !self.adaptive || self.cos_norm >= 1.0 {
             return self.cos_norm;
         }
@@ -180,7 +186,7 @@ impl MergeCtx {
             .cos()
     }
 
-    fn dist_thr(&self, u: f32) -> f32 {
+    pub(super) fn dist_thr(&self, u: f32) -> f32 {
         if !self.adaptive {
             return self.gamma_dist;
         }

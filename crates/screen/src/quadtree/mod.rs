@@ -4,8 +4,11 @@
 //! - [`node`]: the 64-bit node of §3.4 (plane / AABB, tag in the sign bit);
 //! - [`build`]: [`QuadTree`], one layer — per-pixel planes as leaves (§3.2) and bottom-up
 //!   adaptive pruning with the three conditions and the least-squares proxy plane (§3.3);
+//!   `leaf_lanes`: a leaf's plane map and node in SSE2 lanes (same bits, x86_64);
 //! - [`merge`]: one pruning step (proxy plane or conservative AABB); `merge_lanes`: the same
-//!   step with the four children in `Vec4` lanes (same bits, the build's fast path);
+//!   step with the four children in `Vec4` lanes (same bits); `merge_rows`: a level's row
+//!   with four parents in SSE2 lanes (same bits, the build's fast path over whole levels on
+//!   x86_64);
 //!   `fixpoint`: the cascade's pruning fixed point computed incrementally (same results as the
 //!   definition in `prune`, which [`QuadTreeTracer::build_reference`] runs);
 //! - [`traverse`]: the stackless traversal of §4 (exact plane hits, child by entry
@@ -77,12 +80,18 @@
 pub mod build;
 pub mod cascade;
 mod fixpoint;
+#[cfg(target_arch = "x86_64")]
+mod leaf_lanes;
 pub mod merge;
 mod merge_lanes;
+#[cfg(target_arch = "x86_64")]
+mod merge_rows;
 pub mod node;
 mod prune;
 pub mod traverse;
 pub mod tree;
+#[cfg(target_arch = "x86_64")]
+mod trigger_lanes;
 
 pub use cascade::QuadTreeTracer;
 pub use node::Node;

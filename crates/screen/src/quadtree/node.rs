@@ -242,7 +242,8 @@ pub fn f16_bits_to_f32(h: u16) -> f32 {
 /// dispatch (an out-of-line call per value in the build's leaf loop). The rounding is
 /// F. Giesen's "float_to_half_fast3_rtne": a normal half by adding the rebias and the
 /// round-to-nearest-even bias to the bits; a subnormal half (or zero) by an f32 addition of
-/// `2^-1` (IEEE addition rounds the dropped bits to nearest even). Equal to
+/// `2^-1` (IEEE addition rounds the dropped bits to nearest even); both computed and one
+/// selected without a branch. Equal to
 /// `f16::from_f32` bit for bit (tests below: every half and the f32 values around each
 /// rounding boundary).
 #[inline(always)]
@@ -250,17 +251,23 @@ pub fn f32_to_f16_bits(v: f32) -> u16 {
     let x = v.to_bits();
     let sign = (x >> 16) & 0x8000;
     let a = x & 0x7fff_ffff;
-    let h = if a >= 0x4780_0000 {
-        // |v| >= 65536: infinity (never a NaN here).
-        0x7c00
-    } else if a < 0x3880_0000 {
-        // |v| < 2^-14: a subnormal half; the magic 0.5 aligns the half's mantissa.
-        let magic = f32::from_bits(((127 - 15) + (23 - 10) + 1) << 23);
-        (f32::from_bits(a) + magic).to_bits() - magic.to_bits()
-    } else {
-        let odd = (a >> 13) & 1;
-        (a.wrapping_add(((15u32.wrapping_sub(127)) << 23).wrapping_add(0xfff)) + odd) >> 13
-    };
+    // All three cases computed, one selected by masks: no branch (the slopes of nearly
+    // fronto-parallel planes straddle the subnormal boundary, a branch there mispredicts).
+    // |v| < 2^-14: a subnormal half; the magic 0.5 aligns the half's mantissa.
+    let magic = f32::from_bits(((127 - 15) + (23 - 10) + 1) << 23);
+    let sub = (f32::from_bits(a) + magic)
+        .to_bits()
+        .wrapping_sub(magic.to_bits());
+    // A normal half: rebias the exponent, round to nearest even.
+    let odd = (a >> 13) & 1;
+    let normal = a
+        .wrapping_add(((15u32.wrapping_sub(127)) << 23).wrapping_add(0xfff))
+        .wrapping_add(odd)
+        >> 13;
+    // |v| >= 65536: infinity (never a NaN here).
+    let is_inf = 0u32.wrapping_sub((a >= 0x4780_0000) as u32);
+    let is_sub = 0u32.wrapping_sub((a < 0x3880_0000) as u32);
+    let h = (0x7c00 & is_inf) | (sub & is_sub) | (normal & !(is_sub | is_inf));
     (sign | h) as u16
 }
 

@@ -168,10 +168,16 @@ pub(super) fn prune(
             .enumerate()
             .for_each(|(qy, row)| {
                 let qy = qy as u32;
+                let allow = |qx: u32| blocked.is_empty() || !blocked[(qy * pw + qx) as usize];
+                #[cfg(target_arch = "x86_64")]
+                if ctx.lanes {
+                    // Four parents per step, children straight from their two rows.
+                    ctx.parent_row(child, l, qy, row, allow);
+                    return;
+                }
                 for (qx, out) in row.iter_mut().enumerate() {
                     let qx = qx as u32;
-                    let allow = blocked.is_empty() || !blocked[(qy * pw + qx) as usize];
-                    *out = parent_of(ctx, child, l, qx, qy, allow);
+                    *out = parent_of(ctx, child, l, qx, qy, allow(qx));
                 }
             });
         levels.push(Level {

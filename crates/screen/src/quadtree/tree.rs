@@ -222,13 +222,18 @@ impl QuadTree {
 
 /// [`QuadTree::effective_levels`] of the levels `levels` (level 0 first).
 pub(crate) fn effective_levels(levels: &[Level]) -> Vec<u8> {
+    effective_levels_down_to(levels, 0)
+}
+
+/// [`effective_levels`] per node of level `bottom` (`levels[bottom].w x levels[bottom].h`).
+fn effective_levels_down_to(levels: &[Level], bottom: usize) -> Vec<u8> {
     let top = levels.len() - 1;
     let mut cur: Vec<u8> = levels[top]
         .nodes
         .iter()
         .map(|n| if n.is_plane() { top as u8 } else { NO_PLANE })
         .collect();
-    for l in (0..top).rev() {
+    for l in (bottom..top).rev() {
         let (lw, pw) = (levels[l].w as usize, levels[l + 1].w as usize);
         let nodes = &levels[l].nodes;
         let parent = &cur;
@@ -250,6 +255,29 @@ pub(crate) fn effective_levels(levels: &[Level]) -> Vec<u8> {
         cur = next;
     }
     cur
+}
+
+/// [`QuadTree::plane_level`] (`w x h` pixels) of the levels `levels`: the effective levels
+/// down to level 1, then per pixel its parent's (`NO_PLANE` as 0) — a pixel whose parent has
+/// no plane ancestor-or-self is its own effective node or has none, 0 either way, so level 0
+/// itself is not read.
+pub(crate) fn plane_levels(levels: &[Level], w: u32, h: u32) -> Vec<u8> {
+    let mut pl = vec![0u8; (w * h) as usize];
+    if levels.len() == 1 {
+        return pl;
+    }
+    let e1 = effective_levels_down_to(levels, 1);
+    let w1 = levels[1].w as usize;
+    pl.par_chunks_mut(w as usize)
+        .enumerate()
+        .for_each(|(j, row)| {
+            let prow = &e1[(j / 2) * w1..];
+            for (x, v) in row.iter_mut().enumerate() {
+                let p = prow[x / 2];
+                *v = if p == NO_PLANE { 0 } else { p };
+            }
+        });
+    pl
 }
 
 /// [`QuadTree::effective_levels`]: no plane node above or at this node.

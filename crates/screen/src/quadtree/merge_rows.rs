@@ -1,0 +1,394 @@
+//! One row of a pruning level (Widmer et al. 2015, §3.3) with four *parents* in the lanes of
+//! `Vec4`s: the build's fast path over whole levels (level 1 alone has `W H / 4` parents).
+//!
+//! The children of four neighbouring parents are read straight from the two child rows
+//! below them (no per-node index arithmetic): two SSE2 loads of two nodes per parent and a
+//! 4x4 transpose give, for each child position (0,0), (1,0), (0,1), (1,1), that child's `a`
+//! and `b` words of the four parents in lanes; the tags, `z_c`, flags and the f16 slopes are
+//! decoded in those lanes (the same integer operations as [`super::node`]'s scalar decode). Every lane does exactly the operations
+//! of the scalar definition ([`MergeCtx::parent`] with `lanes == false`: `merge` and
+//! `proxy` in [`super::merge`]) in its order — IEEE square root, division, products and sums
+//! are correctly rounded per lane, there is no fused multiply-add — so the nodes are the same
+//! bits (`tests/quadtree_build.rs` compares whole trees with the reference build):
+//!
+//! - the child normals `(g_x, g_y, -1) / sqrt(1 + g_x^2 + g_y^2)`, their sum from `+0` in
+//!   child order and glam's `normalize_or_zero` (`1 / sqrt(dot)`, kept if finite and `> 0`);
+//! - the smallest child cosine as `minps`: the cosines of a lane that can merge are finite,
+//!   and the definition only compares the minimum with thresholds, so the sign a tie of
+//!   zeros might take does not matter;
+//! - the 16 corner projections summed in the definition's order (child-major) from the
+//!   same initial value as `f32`'s `Sum`, and their largest deviation by compare-select
+//!   (the definition's fold skips NaN the same way);
+//! - the proxy's centre `z`, slopes and the thresholds per lane; the node itself is encoded
+//!   per merged lane by the same [`Node::plane_with_gradient`].
+//!
+//! Parents that do not merge get the union of their children's conservative ranges by the
+//! definition's own [`union`] (its `f32::min` / `f32::max` folds, in child order), with the
+//! plane children's spreads computed in lanes as [`MergeCtx::zrange`] does.
+
+use core::arch::x86_64::*;
+
+use glam::{BVec4A, Vec4};
+
+use super::merge::{MergeCtx, plane_range, union};
+use super::node::{FLAG_CRACK, Node};
+use super::tree::Level;
+
+/// Lane-wise IEEE square root (`sqrtps`).
+#[inline(always)]
+fn sqrt4(v: Vec4) -> Vec4 {
+    // SAFETY: SSE is part of the x86_64 baseline.
+    unsafe { Vec4::from(_mm_sqrt_ps(v.into())) }
+}
+
+/// [`super::node::f16_bits_to_f32`] of the low 16 bits of each lane (the same integer
+/// operations, the subnormal case by the same exact conversion and product).
+#[inline(always)]
+fn f16x4(h: __m128i) -> Vec4 {
+    // SAFETY: SSE2 is part of the x86_64 baseline.
+    unsafe {
+        let mag = _mm_and_si128(h, _mm_set1_epi32(0x7fff));
+        let normal = _mm_add_epi32(_mm_slli_epi32(mag, 13), _mm_set1_epi32(0x3800_0000));
+        let sub = _mm_castps_si128(_mm_mul_ps(
+            _mm_cvtepi32_ps(mag),
+            _mm_castsi128_ps(_mm_set1_epi32(0x3380_0000)),
+        ));
+        let is_sub = _mm_cmplt_epi32(mag, _mm_set1_epi32(0x400));
+        let v = _mm_or_si128(_mm_and_si128(sub, is_sub), _mm_andnot_si128(is_sub, normal));
+        let sign = _mm_slli_epi32(_mm_and_si128(h, _mm_set1_epi32(0x8000)), 16);
+        Vec4::from(_mm_castsi128_ps(_mm_or_si128(v, sign)))
+    }
+}
+
+/// The four parents' children as words: `a[k]`, `b[k]` hold child `k`'s `a` and `b` of the
+/// four parents, lane `p` = parent `p` (module docs).
+struct Kids {
+    a: [__m128i; 4],
+    b: [__m128i; 4],
+}
+
+impl Kids {
+    /// The children of parents `qx0 .. qx0 + n` (`n <= 4`) from the child rows `r0`, `r1`;
+    /// lanes beyond `n` hold empty nodes.
+    #[inline(always)]
+    fn gather(r0: &[Node], r1: &[Node], qx0: usize, n: usize) -> Self {
+        let pair = |r: &[Node], p: usize| -> __m128i {
+            // SAFETY: SSE2 baseline; the load reads the two nodes `r[x..x + 2]` (checked).
+            unsafe {
+                if p < n {
+                    let x = 2 * (qx0 + p);
+                    let two = &r[x..x + 2];
+                    _mm_loadu_si128(two.as_ptr() as *const __m128i)
+                } else {
+                    let e = Node::EMPTY;
+                    _mm_setr_epi32(e.a as i32, e.b as i32, e.a as i32, e.b as i32)
+                }
+            }
+        };
+        // Rows (a, b, a, b) of nodes 2p, 2p + 1, transposed: columns a0, b0, a1, b1.
+        let t = |r: &[Node]| -> [__m128i; 4] {
+            let (v0, v1, v2, v3) = (pair(r, 0), pair(r, 1), pair(r, 2), pair(r, 3));
+            // SAFETY: SSE2 baseline.
+            unsafe {
+                let (t0, t1) = (_mm_unpacklo_epi32(v0, v1), _mm_unpacklo_epi32(v2, v3));
+                let (t2, t3) = (_mm_unpackhi_epi32(v0, v1), _mm_unpackhi_epi32(v2, v3));
+                [
+                    _mm_unpacklo_epi64(t0, t1),
+                    _mm_unpackhi_epi64(t0, t1),
+                    _mm_unpacklo_epi64(t2, t3),
+                    _mm_unpackhi_epi64(t2, t3),
+                ]
+            }
+        };
+        let [a0, b0, a1, b1] = t(r0);
+        let [a2, b2, a3, b3] = t(r1);
+        Self {
+            a: [a0, a1, a2, a3],
+            b: [b0, b1, b2, b3],
+        }
+    }
+
+    /// Per child, the lanes whose child is a plane node (sign bit of `a`), as a bit mask.
+    #[inline(always)]
+    fn planes(&self, k: usize) -> u32 {
+        // SAFETY: SSE baseline.
+        unsafe { _mm_movemask_ps(_mm_castsi128_ps(self.a[k])) as u32 }
+    }
+
+    /// Whether every child of every lane is [`Node::EMPTY`].
+    #[inline(always)]
+    fn all_empty(&self) -> bool {
+        let e = Node::EMPTY;
+        // SAFETY: SSE2 baseline.
+        unsafe {
+            let (ea, eb) = (_mm_set1_epi32(e.a as i32), _mm_set1_epi32(e.b as i32));
+            let mut m = _mm_set1_epi32(-1);
+            for k in 0..4 {
+                m = _mm_and_si128(m, _mm_cmpeq_epi32(self.a[k], ea));
+                m = _mm_and_si128(m, _mm_cmpeq_epi32(self.b[k], eb));
+            }
+            _mm_movemask_epi8(m) == 0xffff
+        }
+    }
+
+    /// Child `k` of every lane as nodes.
+    #[inline(always)]
+    fn nodes(&self, k: usize) -> [Node; 4] {
+        let (mut a, mut b) = ([0u32; 4], [0u32; 4]);
+        // SAFETY: SSE2 baseline; 16-byte unaligned stores into 16-byte arrays.
+        unsafe {
+            _mm_storeu_si128(a.as_mut_ptr() as *mut __m128i, self.a[k]);
+            _mm_storeu_si128(b.as_mut_ptr() as *mut __m128i, self.b[k]);
+        }
+        [0, 1, 2, 3].map(|p| Node { a: a[p], b: b[p] })
+    }
+
+    /// Child `k`'s `z_c` per lane ([`Node::zc`]).
+    #[inline(always)]
+    fn zc(&self, k: usize) -> Vec4 {
+        // SAFETY: SSE2 baseline.
+        unsafe {
+            let m = _mm_set1_epi32(0x7fff_fffc);
+            Vec4::from(_mm_castsi128_ps(_mm_and_si128(self.a[k], m)))
+        }
+    }
+
+    /// Child `k`'s crack flag per lane, as a lane mask (all ones where set).
+    #[inline(always)]
+    fn crack(&self, k: usize) -> __m128 {
+        // SAFETY: SSE2 baseline.
+        unsafe {
+            let one = _mm_set1_epi32(FLAG_CRACK as i32);
+            _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(self.a[k], one), one))
+        }
+    }
+
+    /// Child `k`'s stored increments per lane ([`Node::increments`]).
+    #[inline(always)]
+    fn increments(&self, k: usize) -> (Vec4, Vec4) {
+        // SAFETY: SSE2 baseline.
+        unsafe { (f16x4(self.b[k]), f16x4(_mm_srli_epi32(self.b[k], 16))) }
+    }
+}
+
+/// Child offsets `(dx, dy)` of the child positions, in the definition's order.
+const KID: [(usize, usize); 4] = [(0, 0), (1, 0), (0, 1), (1, 1)];
+/// Footprint corner signs, in the definition's order.
+const CORNER: [(f32, f32); 4] = [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)];
+
+impl MergeCtx {
+    /// Row `qy` of level `l` (`out`: the row's nodes) from level `l - 1` (`child`), equal
+    /// node for node to [`MergeCtx::parent`] of each parent's four children; `allow(qx)`:
+    /// whether parent `qx` may merge (contains no blocked pixel).
+    pub(super) fn parent_row(
+        &self,
+        child: &Level,
+        l: u32,
+        qy: u32,
+        out: &mut [Node],
+        allow: impl Fn(u32) -> bool,
+    ) {
+        let cw = child.w as usize;
+        let y0 = 2 * qy as usize;
+        let r0 = &child.nodes[y0 * cw..(y0 + 1) * cw];
+        let r1 = &child.nodes[(y0 + 1) * cw..(y0 + 2) * cw];
+        for (g, outs) in out.chunks_mut(4).enumerate() {
+            let qx0 = 4 * g;
+            let kids = Kids::gather(r0, r1, qx0, outs.len());
+            let any_plane = (0..4).fold(0, |m, k| m | kids.planes(k));
+            if any_plane == 0 {
+                // Only AABB children: their stored ranges.
+                if kids.all_empty() {
+                    outs.fill(Node::EMPTY);
+                    continue;
+                }
+                let ks = [0, 1, 2, 3].map(|k| kids.nodes(k));
+                for (p, o) in outs.iter_mut().enumerate() {
+                    *o = union((0..4).map(|k| ks[k][p].zrange()));
+                }
+                continue;
+            }
+            self.parents4(l, qx0 as u32, qy, &kids, outs, &allow);
+        }
+    }
+
+    /// Parents `qx0 .. qx0 + out.len()` of row `qy`, level `l`, from their children
+    /// `kids` (module docs).
+    #[inline]
+    fn parents4(
+        &self,
+        l: u32,
+        qx0: u32,
+        qy: u32,
+        kids: &Kids,
+        out: &mut [Node],
+        allow: &impl Fn(u32) -> bool,
+    ) {
+        let s = Vec4::splat;
+        let cl = l - 1;
+        // The gradients as `Node::gradient` computes them (garbage in lanes of AABB
+        // children, which nothing below reads).
+        let (ws, hs) = (
+            f32::from_bits(self.wf.to_bits() - (cl << 23)),
+            f32::from_bits(self.hf.to_bits() - (cl << 23)),
+        );
+        let mut gx = [Vec4::ZERO; 4];
+        let mut gy = [Vec4::ZERO; 4];
+        for k in 0..4 {
+            let (ex, ey) = kids.increments(k);
+            gx[k] = ex * s(ws);
+            gy[k] = ey * s(hs);
+        }
+        let n = out.len();
+        let all_planes = (0..4).fold(0xf, |m, k| m & kids.planes(k));
+        let cand =
+            |p: usize| p < n && !self.never && all_planes & (1 << p) != 0 && allow(qx0 + p as u32);
+        let cand = [cand(0), cand(1), cand(2), cand(3)];
+        let mut merged = [None; 4];
+        if cand.iter().any(|&c| c) {
+            merged = self.merge4(l, qx0, qy, kids, cand, &gx, &gy);
+        }
+        if merged[..n].iter().all(|m| m.is_some()) {
+            for (o, m) in out.iter_mut().zip(merged) {
+                *o = m.expect("checked");
+            }
+            return;
+        }
+        // `MergeCtx::zrange` per child: the spread's divisions in lanes.
+        let size = (1u32 << cl) as f32;
+        let mut spread = [[0.0f32; 4]; 4];
+        for k in 0..4 {
+            // SAFETY: SSE baseline.
+            let half = Vec4::from(unsafe {
+                let m = kids.crack(k);
+                let (dil, none) = (s(0.5 * size + self.crack_px), s(0.5 * size + 0.0));
+                _mm_or_ps(_mm_and_ps(m, dil.into()), _mm_andnot_ps(m, none.into()))
+            });
+            spread[k] =
+                ((gx[k].abs() * half) / s(self.wf) + (gy[k].abs() * half) / s(self.hf)).to_array();
+        }
+        let ks = [0, 1, 2, 3].map(|k| kids.nodes(k));
+        for (p, o) in out.iter_mut().enumerate() {
+            *o = merged[p].unwrap_or_else(|| {
+                union((0..4).map(|k| {
+                    let kid = ks[k][p];
+                    if kid.is_plane() {
+                        plane_range(kid.zc(), spread[k][p])
+                    } else {
+                        kid.zrange()
+                    }
+                }))
+            });
+        }
+    }
+
+    /// `MergeCtx::merge` and `MergeCtx::proxy` of the candidate parents (`cand`: four
+    /// plane children, allowed to merge) in lanes; `gx`, `gy`: the children's gradients.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn merge4(
+        &self,
+        l: u32,
+        qx0: u32,
+        qy: u32,
+        kids: &Kids,
+        cand: [bool; 4],
+        gx: &[Vec4; 4],
+        gy: &[Vec4; 4],
+    ) -> [Option<Node>; 4] {
+        let s = Vec4::splat;
+        let cl = l - 1;
+        // `Node::normal` per child, and their sum from `+0` in child order.
+        let (mut nx, mut ny, mut nz) = ([Vec4::ZERO; 4], [Vec4::ZERO; 4], [Vec4::ZERO; 4]);
+        let (mut sx, mut sy, mut sz) = (Vec4::ZERO, Vec4::ZERO, Vec4::ZERO);
+        for k in 0..4 {
+            let r = s(1.0) / sqrt4(s(1.0) + gx[k] * gx[k] + gy[k] * gy[k]);
+            (nx[k], ny[k], nz[k]) = (gx[k] * r, gy[k] * r, -r);
+            sx += nx[k];
+            sy += ny[k];
+            sz += nz[k];
+        }
+        // `Vec3::normalize_or_zero`.
+        let rcp = s(1.0) / sqrt4(sx * sx + sy * sy + sz * sz);
+        let ok = rcp.is_finite_mask() & rcp.cmpgt(Vec4::ZERO);
+        let (nnx, nny, nnz) = (
+            Vec4::select(ok, sx * rcp, Vec4::ZERO),
+            Vec4::select(ok, sy * rcp, Vec4::ZERO),
+            Vec4::select(ok, sz * rcp, Vec4::ZERO),
+        );
+        let mut min_cos = s(f32::INFINITY);
+        for k in 0..4 {
+            min_cos = min_cos.min(nx[k] * nnx + ny[k] * nny + nz[k] * nnz);
+        }
+        let valid = BVec4A::new(cand[0], cand[1], cand[2], cand[3])
+            & nnz.cmplt(s(-1e-6))
+            & min_cos.cmpgt(s(self.loosest_cos()));
+        if !valid.any() {
+            return [None; 4];
+        }
+        // The 16 child corners projected on the proxy normal, child-major.
+        let size = (1u32 << cl) as f32;
+        let half = 0.5 * size;
+        let (hx, hy) = (half / self.wf, half / self.hf);
+        let init: f32 = core::iter::empty::<f32>().sum();
+        let mut acc = s(init);
+        let mut proj = [Vec4::ZERO; 16];
+        for (k, &(kx, ky)) in KID.iter().enumerate() {
+            // The children's columns `2 (qx0 + p) + kx` as floats: sums of small integers,
+            // exact, so the same values as the conversions of `node_centre`.
+            let cx = s((2 * qx0 + kx as u32) as f32) + Vec4::new(0.0, 2.0, 4.0, 6.0);
+            let xc = ((cx + s(0.5)) * s(size)) / s(self.wf);
+            let yc = s((((2 * qy + ky as u32) as f32 + 0.5) * size) / self.hf);
+            let zc = kids.zc(k);
+            for (m, &(cx, cy)) in CORNER.iter().enumerate() {
+                let (dx, dy) = (cx * hx, cy * hy);
+                let (px, py, pz) = (xc + s(dx), yc + s(dy), zc + gx[k] * s(dx) + gy[k] * s(dy));
+                let v = nnx * px + nny * py + nnz * pz;
+                proj[4 * k + m] = v;
+                acc += v;
+            }
+        }
+        // `MergeCtx::proxy`.
+        let c = acc / s(16.0);
+        let mut dm = Vec4::ZERO;
+        for v in proj {
+            let d = (v - c).abs();
+            // SAFETY: SSE baseline. `maxps(d, dm)` is `d > dm ? d : dm` per lane (a NaN `d`
+            // keeps `dm`): the definition's compare-select.
+            dm = Vec4::from(unsafe { _mm_max_ps(d.into(), dm.into()) });
+        }
+        let dmax = (dm / -nnz).to_array();
+        let psize = (1u32 << l) as f32;
+        let xc = ((s(qx0 as f32) + Vec4::new(0.0, 1.0, 2.0, 3.0) + s(0.5)) * s(psize)) / s(self.wf);
+        let yc = s(((qy as f32 + 0.5) * psize) / self.hf);
+        let zc = ((c - nnx * xc - nny * yc) / nnz).to_array();
+        let inv = s(-1.0) / nnz;
+        let (gxp, gyp) = ((nnx * inv).to_array(), (nny * inv).to_array());
+        let min_cos = min_cos.to_array();
+        let valid = valid.bitmask();
+        // SAFETY: SSE baseline.
+        let crack = unsafe {
+            let m = _mm_or_ps(
+                _mm_or_ps(kids.crack(0), kids.crack(1)),
+                _mm_or_ps(kids.crack(2), kids.crack(3)),
+            );
+            _mm_movemask_ps(m) as u32
+        };
+        let mut res = [None; 4];
+        for (p, r) in res.iter_mut().enumerate() {
+            if valid & (1 << p) == 0 {
+                continue;
+            }
+            let u = if self.adaptive {
+                self.depth_fraction(zc[p])
+            } else {
+                0.0
+            };
+            if min_cos[p] > self.cos_thr(u) && dmax[p] < self.dist_thr(u) {
+                let flags = if (crack >> p) & 1 != 0 { FLAG_CRACK } else { 0 };
+                *r = Node::plane_with_gradient(zc[p], gxp[p], gyp[p], l, self.wf, self.hf, flags);
+            }
+        }
+        res
+    }
+}
