@@ -163,16 +163,39 @@ fn gen_one_sample<L: Lanes>(set: &SampleSet, pairs: &[(u32, u32)]) -> Option<Ray
     {
         return None;
     }
+    let offs = &set.offsets[k0 as usize..k0 as usize + n];
+    let (mut lo, mut hi) = (offs[0].x, offs[0].x);
+    for o in offs {
+        lo = lo.min(o.x);
+        hi = hi.max(o.x);
+    }
+    let ox = L::from_fn(|l| offs[l].x);
+    let oy = L::from_fn(|l| offs[l].y);
+    sample_chunk(set, i0, ox, oy, lo, hi)
+}
+
+/// The rays of [`gen_one_sample`] from the chunk's offsets in lanes (`ox`, `oy`) and the
+/// smallest and largest x offset (`lo`, `hi`): the same rays, for callers that keep the
+/// offset lanes of a tile.
+#[inline(always)]
+pub(crate) fn sample_chunk<L: Lanes>(
+    set: &SampleSet,
+    i0: u32,
+    ox: L,
+    oy: L,
+    lo: f32,
+    hi: f32,
+) -> Option<RaysN<L>> {
+    let n = L::N;
     let s = &set.samples[i0 as usize];
     let fp = s.footprint;
     if !(fp >= 0.0) {
         return None;
     }
-    let offs = &set.offsets[k0 as usize..k0 as usize + n];
     let full = (1u32 << n) - 1;
     let fp_v = L::splat(fp);
-    let fx = L::splat(s.film.x) + L::from_fn(|l| offs[l].x) * fp_v;
-    let fy = L::splat(s.film.y) + L::from_fn(|l| offs[l].y) * fp_v;
+    let fx = L::splat(s.film.x) + ox * fp_v;
+    let fy = L::splat(s.film.y) + oy * fp_v;
     match &set.camera {
         Camera::Pinhole(p) => {
             let (o, d) = pinhole_n(p, fx, fy);
@@ -180,11 +203,6 @@ fn gen_one_sample<L: Lanes>(set: &SampleSet, pairs: &[(u32, u32)]) -> Option<Ray
         }
         Camera::Stereo(rig) => {
             let w = rig.eye_width() as f32;
-            let (mut lo, mut hi) = (offs[0].x, offs[0].x);
-            for o in offs {
-                lo = lo.min(o.x);
-                hi = hi.max(o.x);
-            }
             let (lo, hi) = (s.film.x + lo * fp, s.film.x + hi * fp);
             let inside = lo >= 0.0 && hi <= 2.0 * w;
             let (left, right) = (hi < w, lo >= w);

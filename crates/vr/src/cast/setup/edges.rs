@@ -33,6 +33,7 @@ use parallax_bvh::Tri4;
 use parallax_core::math::WatertightRay;
 use parallax_core::simd::Lanes;
 
+use super::affine::{PacketBox, PacketClass};
 use super::kernel::{PacketSlab, SetupWork, dot_n, edge_band, min_edge};
 use super::tri::{RHO_MAX, TileTris, exact_t};
 use crate::cast::lanes16::LaneReduce;
@@ -50,6 +51,7 @@ pub(super) fn closest_edges<L: LaneReduce>(
     axis: usize,
     sign: f32,
     slack: f32,
+    pbox: Option<&PacketBox>,
     work: &mut SetupWork,
 ) -> ClosestN {
     let valid = rays.valid;
@@ -100,6 +102,15 @@ pub(super) fn closest_edges<L: LaneReduce>(
                 tt.refine(j, blocks);
             }
             let tr = &tt.tris[j];
+            // The affine packet test (`affine.rs`): every lane certainly out or in.
+            let class = match pbox {
+                Some(pb) if !tr.all_in => pb.classify(&tt.aff[j], tr.bound),
+                _ => PacketClass::Partial,
+            };
+            if class == PacketClass::Out {
+                work.packet_out += 1;
+                continue;
+            }
             let gd = dot_n(tr.g, dx, dy, dz);
             if tr.rho > RHO_MAX {
                 // Ill-conditioned: the watertight test decides coverage and depth.
@@ -113,7 +124,12 @@ pub(super) fn closest_edges<L: LaneReduce>(
                 continue;
             }
             // Certainly inside (a mask), plus the band's lanes the watertight test accepts.
-            let (inn_m, mut unsure) = edge_band(tr, rays.d, dinf, ge, cand);
+            let (inn_m, mut unsure) = if class == PacketClass::In {
+                work.packet_in += 1;
+                (ge, 0)
+            } else {
+                edge_band(tr, rays.d, dinf, ge, cand)
+            };
             let mut extra = 0u32;
             // Within the edge band: the watertight test decides coverage (~0.2% of pairs).
             if unsure != 0 {

@@ -74,6 +74,12 @@
 //! - Triangles with `D = 0` (the plane holds `o`: seen edge-on, never hit by a ray from `o`)
 //!   or a non-finite `g` are dropped.
 //!
+//! **The affine packet test** ([`affine`], `Edges` only, pinhole and stereo tiles): before a
+//! packet's per-lane edge test, the edge functions' affine form in the film position decides
+//! the whole packet (one pixel at 16 spp) against the triangle — every lane certainly out or
+//! certainly in, with a rigorous error bound — or leaves it to the per-lane test; the buffer is
+//! the same bit for bit (`tests/affine.rs`).
+//!
 //! The sample test then runs packets of 4 (SSE), 8 (AVX2) or 16 (four SSE registers) rays over the set-up list in the
 //! tile list's near-depth order, leaf by leaf; a triangle whose `g . d` is below every lane's
 //! best so far costs one 3-term dot product; the packet stops once every ray has a hit nearer
@@ -114,16 +120,18 @@
 //! | `exactness` | [`SetupExactness`] | `Edges` | which bands decide by the watertight test |
 //! | `lanes` | usize | 16 | rays per packet: 4 (SSE), 8 (AVX2 if detected, else 4) or 16 (four SSE registers, [`crate::cast::lanes16`]) |
 //! | [`RHO_MAX`] | f32 | 0.05 | depth band above which a triangle always takes the watertight test |
+//! | `affine` | bool | true | the affine packet test ([`affine`]) before the per-lane edge test (`Edges` only) |
 //!
 //! Measurements (speed of `Edges` and `Full` against the kernel without a band, 4 vs 8 lanes,
 //! where the time goes): `docs/notes/vr.md`.
 
+pub mod affine;
 pub mod edges;
 pub mod full;
 mod kernel;
 mod tri;
 
-use glam::Vec4;
+use glam::{Vec2, Vec4};
 use parallax_bvh::Tri4;
 use parallax_core::NO_ID;
 use parallax_core::simd::F8;
@@ -133,8 +141,10 @@ use crate::beam::Beam;
 use crate::cast::lanes16::{LaneReduce, V16};
 #[cfg(target_arch = "x86_64")]
 use crate::cast::lanes512::Z16;
-use crate::cast::packet::{ClosestN, MAX_LANES, gen_n};
+use crate::cast::packet::{ClosestN, MAX_LANES, gen_n, sample_chunk};
 use crate::cast::stored::RayBuffer;
+use crate::samples::MAX_SPP;
+use affine::{FilmFrame, PacketBox};
 
 pub use kernel::SetupWork;
 pub use tri::{
@@ -245,6 +255,25 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
     // slower; `cast/lanes512.rs`).
     let mut rays_n = 0u64;
     let mut pairs = [(0u32, 0u32); MAX_LANES];
+    // The affine packet test (`affine.rs`): per chunk of `L::N` subsamples the range of their
+    // offsets (one-sample packets take their film box from it).
+    let frame = if FULL { None } else { tt.frame };
+    let spp = set.spp as usize;
+    let chunked = spp % L::N == 0;
+    let mut ranges = [(Vec2::ZERO, Vec2::ZERO); MAX_SPP as usize / 4];
+    // One sample's chunk of `L::N` subsamples: its offsets in lanes, kept for the tile (the
+    // ray generator's `gen_one_sample` builds them per packet).
+    let zero = L::splat(0.0);
+    let mut lanes = [(zero, zero); MAX_SPP as usize / 4];
+    if chunked {
+        for c in 0..spp / L::N {
+            let o = &set.offsets[c * L::N..(c + 1) * L::N];
+            ranges[c] = o
+                .iter()
+                .fold((o[0], o[0]), |(a, b), &x| (a.min(x), b.max(x)));
+            lanes[c] = (L::from_fn(|l| o[l].x), L::from_fn(|l| o[l].y));
+        }
+    }
     let mut j = 0;
     while j < total {
         let n = (total - j).min(L::N);
@@ -253,7 +282,28 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
         }
         j += n;
         let batch = &pairs[..n];
-        let mut rays = gen_n::<L>(set, stored, batch);
+        let (i0, k0) = batch[0];
+        // One sample's aligned chunk (`pair` is monotone in the sample: first and last lane
+        // of one sample hold every lane between).
+        let chunk = chunked
+            && n == L::N
+            && k0 as usize % L::N == 0
+            && batch[n - 1] == (i0, k0 + n as u32 - 1);
+        let c = k0 as usize / L::N;
+        let pbox = match &frame {
+            Some(fr) => packet_box(fr, set, batch, chunk.then(|| ranges[c])),
+            None => None,
+        };
+        let chunk_rays = if chunk && stored.is_none() {
+            let ((ox, oy), (a, b)) = (lanes[c], ranges[c]);
+            sample_chunk::<L>(set, i0, ox, oy, a.x, b.x)
+        } else {
+            None
+        };
+        let mut rays = match chunk_rays {
+            Some(r) => r,
+            None => gen_n::<L>(set, stored, batch),
+        };
         rays_n += rays.valid.count_ones() as u64;
         // Invalid lanes get `d = 0`: `g . d = 0` is never a hit.
         for l in 0..batch.len() {
@@ -266,7 +316,16 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
         let c = if FULL {
             full::closest_full(&rays, blocks, &*tt, axis, sign, slack, &mut work)
         } else {
-            edges::closest_edges(&rays, blocks, tt, axis, sign, slack, &mut work)
+            edges::closest_edges(
+                &rays,
+                blocks,
+                tt,
+                axis,
+                sign,
+                slack,
+                pbox.as_ref(),
+                &mut work,
+            )
         };
         // One sample's consecutive subsamples: `pair` maps consecutive `j` to `(sample, j % spp)`
         // (`test_tile_setup`), so a last lane at `k0 + n - 1` of the first lane's sample means
@@ -287,6 +346,36 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
     }
     work.rays = rays_n;
     work
+}
+
+/// The camera-space box of a packet's rays (`affine.rs`): its film box is the exact float
+/// range of the lanes' `film + offset * footprint` — from `range` (the smallest and largest
+/// offset of one sample's chunk; `x -> film + x * footprint` is monotone for
+/// `footprint >= 0`), else lane by lane.
+#[inline(always)]
+fn packet_box(
+    fr: &FilmFrame,
+    set: &SampleSet,
+    batch: &[(u32, u32)],
+    range: Option<(Vec2, Vec2)>,
+) -> Option<PacketBox> {
+    let s = &set.samples[batch[0].0 as usize];
+    let (lo, hi) = if let Some((a, b)) = range
+        && s.footprint >= 0.0
+    {
+        (s.film + a * s.footprint, s.film + b * s.footprint)
+    } else {
+        let mut lo = Vec2::splat(f32::INFINITY);
+        let mut hi = Vec2::splat(f32::NEG_INFINITY);
+        for &(i, k) in batch {
+            let s = &set.samples[i as usize];
+            let f = s.film + set.offsets[k as usize] * s.footprint;
+            lo = lo.min(f);
+            hi = hi.max(f);
+        }
+        (lo, hi)
+    };
+    PacketBox::new(fr, lo.x, hi.x, lo.y, hi.y)
 }
 
 /// `unsafe fn $name<const FULL: bool>(...)`: [`run_setup`] with lanes `$lanes` compiled for the
@@ -350,10 +439,20 @@ pub unsafe fn test_tile_setup(
     lanes: usize,
     avx512: bool,
     exactness: SetupExactness,
+    affine: bool,
     prim: *mut u32,
     t: *mut f32,
 ) -> SetupWork {
     let spp = set.spp as usize;
+    tt.frame = None;
+    if affine && exactness == SetupExactness::Edges && !samples.is_empty() {
+        let film_x = set.samples[samples[0] as usize].film.x;
+        tt.frame = FilmFrame::of(set, tt.origin, film_x);
+        if tt.frame.is_some() {
+            tt.aff.clear();
+            tt.aff.resize(tt.tris.len(), Default::default());
+        }
+    }
     let slack = 1e-5 * (scale.abs() + 1.0);
     let total = samples.len() * spp;
     // Power-of-two spp (every preset) without an integer division per ray.
