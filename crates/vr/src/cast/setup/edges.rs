@@ -69,7 +69,11 @@ pub(super) fn closest_edges<L: LaneReduce>(
     let mut box_lim = L::splat(f32::INFINITY);
     let one = L::splat(1.0);
     let packet = PacketSlab::with_interval(rays.d);
-    let valid_m = L::from_fn(|l| (valid >> l & 1) as f32).gt(zero);
+    let valid_m = if valid == (1 << L::N) - 1 {
+        zero.eq(zero)
+    } else {
+        L::from_fn(|l| (valid >> l & 1) as f32).gt(zero)
+    };
     let (sign_v, oa_v) = (L::splat(sign), L::splat(oa));
     let mut lim_max = f32::INFINITY;
     let dinf = packet.dinf;

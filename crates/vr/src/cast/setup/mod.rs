@@ -277,28 +277,28 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
     let mut j = 0;
     while j < total {
         let n = (total - j).min(L::N);
-        for (l, p) in pairs.iter_mut().enumerate().take(n) {
-            *p = pair(j + l);
-        }
-        j += n;
-        let batch = &pairs[..n];
-        let (i0, k0) = batch[0];
-        // One sample's aligned chunk (`pair` is monotone in the sample: first and last lane
-        // of one sample hold every lane between).
-        let chunk = chunked
-            && n == L::N
-            && k0 as usize % L::N == 0
-            && batch[n - 1] == (i0, k0 + n as u32 - 1);
+        // `j` is a multiple of `L::N`: with `chunked` (`spp % L::N == 0`) a full packet is one
+        // sample's aligned chunk `k0..k0 + L::N` (`pair(j) = (samples[j / spp], j % spp)`).
+        let chunk = chunked && n == L::N;
+        let (i0, k0) = pair(j);
         let c = k0 as usize / L::N;
-        let pbox = match &frame {
-            Some(fr) => packet_box(fr, set, batch, chunk.then(|| ranges[c])),
-            None => None,
-        };
         let chunk_rays = if chunk && stored.is_none() {
             let ((ox, oy), (a, b)) = (lanes[c], ranges[c]);
             sample_chunk::<L>(set, i0, ox, oy, a.x, b.x)
         } else {
             None
+        };
+        // The lanes' `(sample, k)` pairs, unless the chunk's rays and box need none.
+        if !chunk || chunk_rays.is_none() {
+            for (l, p) in pairs.iter_mut().enumerate().take(n) {
+                *p = pair(j + l);
+            }
+        }
+        j += n;
+        let batch = &pairs[..n];
+        let pbox = match &frame {
+            Some(fr) => packet_box(fr, set, i0, batch, chunk.then(|| ranges[c])),
+            None => None,
         };
         let mut rays = match chunk_rays {
             Some(r) => r,
@@ -306,10 +306,12 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
         };
         rays_n += rays.valid.count_ones() as u64;
         // Invalid lanes get `d = 0`: `g . d = 0` is never a hit.
-        for l in 0..batch.len() {
-            if rays.valid >> l & 1 == 0 {
-                for a in 0..3 {
-                    rays.d[a] = L::from_fn(|i| if i == l { 0.0 } else { rays.d[a].get(i) });
+        if rays.valid != (1 << n) - 1 {
+            for l in 0..n {
+                if rays.valid >> l & 1 == 0 {
+                    for a in 0..3 {
+                        rays.d[a] = L::from_fn(|i| if i == l { 0.0 } else { rays.d[a].get(i) });
+                    }
                 }
             }
         }
@@ -330,13 +332,12 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
         // One sample's consecutive subsamples: `pair` maps consecutive `j` to `(sample, j % spp)`
         // (`test_tile_setup`), so a last lane at `k0 + n - 1` of the first lane's sample means
         // no wrap to the next sample in between.
-        let (i0, k0) = batch[0];
-        let run = batch[n - 1] == (i0, k0 + n as u32 - 1);
+        let run = chunk || batch[n - 1] == (batch[0].0, batch[0].1 + n as u32 - 1);
         // SAFETY: the caller of `test_tile_setup` guarantees exclusive access to these
         // samples' entries.
         unsafe {
             if run {
-                out.run(batch[0], &c, n);
+                out.run((i0, k0), &c, n);
             } else {
                 for (l, &p) in batch.iter().enumerate() {
                     out.one(p, c.t[l], c.tri[l]);
@@ -350,16 +351,17 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
 
 /// The camera-space box of a packet's rays (`affine.rs`): its film box is the exact float
 /// range of the lanes' `film + offset * footprint` — from `range` (the smallest and largest
-/// offset of one sample's chunk; `x -> film + x * footprint` is monotone for
-/// `footprint >= 0`), else lane by lane.
+/// offset of sample `i0`'s chunk; `x -> film + x * footprint` is monotone for
+/// `footprint >= 0`), else lane by lane over `batch`.
 #[inline(always)]
 fn packet_box(
     fr: &FilmFrame,
     set: &SampleSet,
+    i0: u32,
     batch: &[(u32, u32)],
     range: Option<(Vec2, Vec2)>,
 ) -> Option<PacketBox> {
-    let s = &set.samples[batch[0].0 as usize];
+    let s = &set.samples[i0 as usize];
     let (lo, hi) = if let Some((a, b)) = range
         && s.footprint >= 0.0
     {
