@@ -86,12 +86,24 @@ pub(crate) fn gen_n<L: Lanes>(
     stored: Option<&RayBuffer>,
     pairs: &[(u32, u32)],
 ) -> RaysN<L> {
+    gen_n_film(set, stored, pairs).0
+}
+
+/// [`gen_n`], and the lanes' film positions `(x, y)` (lanes past `pairs.len()` repeat lane
+/// 0) when the per-lane generator computed them (`None` for stored rays and one-sample
+/// packets).
+#[inline(always)]
+pub(crate) fn gen_n_film<L: Lanes>(
+    set: &SampleSet,
+    stored: Option<&RayBuffer>,
+    pairs: &[(u32, u32)],
+) -> (RaysN<L>, Option<(L, L)>) {
     let n = pairs.len();
     if let Some(buf) = stored {
-        return read_n(set, buf, pairs);
+        return (read_n(set, buf, pairs), None);
     }
     if let Some(r) = gen_one_sample(set, pairs) {
-        return r;
+        return (r, None);
     }
     let mut film = [Vec2::ZERO; MAX_LANES];
     for (l, &(i, k)) in pairs.iter().enumerate() {
@@ -105,10 +117,11 @@ pub(crate) fn gen_n<L: Lanes>(
     let full = (1u32 << n) - 1;
     let fx = L::from_fn(|l| film[l].x);
     let fy = L::from_fn(|l| film[l].y);
+    let lanes = Some((fx, fy));
     match &set.camera {
         Camera::Pinhole(p) => {
             let (o, d) = pinhole_n(p, fx, fy);
-            return RaysN { o, d, valid: full };
+            return (RaysN { o, d, valid: full }, lanes);
         }
         Camera::Stereo(rig) => {
             let w = rig.eye_width() as f32;
@@ -122,7 +135,7 @@ pub(crate) fn gen_n<L: Lanes>(
                     (&rig.eyes[1], fx - L::splat(w))
                 };
                 let (o, d) = pinhole_n(p, fx, fy);
-                return RaysN { o, d, valid: full };
+                return (RaysN { o, d, valid: full }, lanes);
             }
         }
         _ => {}
@@ -136,11 +149,12 @@ pub(crate) fn gen_n<L: Lanes>(
     let comp = |a: usize, origin: bool| {
         L::from_fn(|l| rays[l].map_or(0.0, |r| if origin { r.origin[a] } else { r.dir[a] }))
     };
-    RaysN {
+    let rays = RaysN {
         o: [comp(0, true), comp(1, true), comp(2, true)],
         d: [comp(0, false), comp(1, false), comp(2, false)],
         valid,
-    }
+    };
+    (rays, lanes)
 }
 
 /// [`gen_n`] for a full packet of one sample's consecutive subsamples `k0..k0 + N` (a pixel

@@ -141,7 +141,7 @@ use crate::beam::Beam;
 use crate::cast::lanes16::{LaneReduce, V16};
 #[cfg(target_arch = "x86_64")]
 use crate::cast::lanes512::Z16;
-use crate::cast::packet::{ClosestN, MAX_LANES, gen_n, sample_chunk};
+use crate::cast::packet::{ClosestN, MAX_LANES, gen_n_film, sample_chunk};
 use crate::cast::stored::RayBuffer;
 use crate::samples::MAX_SPP;
 use affine::{FilmFrame, PacketBox};
@@ -296,13 +296,17 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
         }
         j += n;
         let batch = &pairs[..n];
-        let pbox = match &frame {
-            Some(fr) => packet_box(fr, set, i0, batch, chunk.then(|| ranges[c])),
-            None => None,
+        let (mut rays, film) = match chunk_rays {
+            Some(r) => (r, None),
+            None => gen_n_film::<L>(set, stored, batch),
         };
-        let mut rays = match chunk_rays {
-            Some(r) => r,
-            None => gen_n::<L>(set, stored, batch),
+        let pbox = match (&frame, film) {
+            (None, _) => None,
+            // The lanes' film positions from the generator: their exact float range.
+            (Some(fr), Some((fx, fy))) => {
+                PacketBox::new(fr, fx.hmin(), fx.hmax(), fy.hmin(), fy.hmax())
+            }
+            (Some(fr), None) => packet_box(fr, set, i0, batch, chunk.then(|| ranges[c])),
         };
         rays_n += rays.valid.count_ones() as u64;
         // Invalid lanes get `d = 0`: `g . d = 0` is never a hit.
