@@ -89,15 +89,15 @@ pub(crate) fn gen_n<L: Lanes>(
     gen_n_film(set, stored, pairs).0
 }
 
-/// [`gen_n`], and the lanes' film positions `(x, y)` (lanes past `pairs.len()` repeat lane
-/// 0) when the per-lane generator computed them (`None` for stored rays and one-sample
-/// packets).
+/// [`gen_n`], and the lanes' film box `(min, max)` (the exact float range of their
+/// `film + offset * footprint`) when the per-lane generator computed the film positions
+/// (`None` for stored rays, one-sample packets and NaN positions).
 #[inline(always)]
 pub(crate) fn gen_n_film<L: Lanes>(
     set: &SampleSet,
     stored: Option<&RayBuffer>,
     pairs: &[(u32, u32)],
-) -> (RaysN<L>, Option<(L, L)>) {
+) -> (RaysN<L>, Option<(Vec2, Vec2)>) {
     let n = pairs.len();
     if let Some(buf) = stored {
         return (read_n(set, buf, pairs), None);
@@ -106,9 +106,15 @@ pub(crate) fn gen_n_film<L: Lanes>(
         return (r, None);
     }
     let mut film = [Vec2::ZERO; MAX_LANES];
+    let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
+    let mut nan = false;
     for (l, &(i, k)) in pairs.iter().enumerate() {
         let s = &set.samples[i as usize];
-        film[l] = s.film + set.offsets[k as usize] * s.footprint;
+        let f = s.film + set.offsets[k as usize] * s.footprint;
+        film[l] = f;
+        lo = lo.min(f);
+        hi = hi.max(f);
+        nan |= f.is_nan();
     }
     let f0 = film[0];
     for f in film.iter_mut().skip(n) {
@@ -117,17 +123,18 @@ pub(crate) fn gen_n_film<L: Lanes>(
     let full = (1u32 << n) - 1;
     let fx = L::from_fn(|l| film[l].x);
     let fy = L::from_fn(|l| film[l].y);
-    let lanes = Some((fx, fy));
+    let bx = (!nan).then_some((lo, hi));
     match &set.camera {
         Camera::Pinhole(p) => {
             let (o, d) = pinhole_n(p, fx, fy);
-            return (RaysN { o, d, valid: full }, lanes);
+            return (RaysN { o, d, valid: full }, bx);
         }
         Camera::Stereo(rig) => {
+            // Every lane in `[0, 2w]`, and all left (`< w`) or all right (`>= w`): the range
+            // decides it as the lane-by-lane test would (no NaN among the lanes).
             let w = rig.eye_width() as f32;
-            let inside = film[..n].iter().all(|f| f.x >= 0.0 && f.x <= 2.0 * w);
-            let left = film[..n].iter().all(|f| f.x < w);
-            let right = film[..n].iter().all(|f| f.x >= w);
+            let inside = !nan && lo.x >= 0.0 && hi.x <= 2.0 * w;
+            let (left, right) = (hi.x < w, lo.x >= w);
             if inside && (left || right) {
                 let (p, fx) = if left {
                     (&rig.eyes[0], fx)
@@ -135,7 +142,7 @@ pub(crate) fn gen_n_film<L: Lanes>(
                     (&rig.eyes[1], fx - L::splat(w))
                 };
                 let (o, d) = pinhole_n(p, fx, fy);
-                return (RaysN { o, d, valid: full }, lanes);
+                return (RaysN { o, d, valid: full }, bx);
             }
         }
         _ => {}
@@ -154,7 +161,7 @@ pub(crate) fn gen_n_film<L: Lanes>(
         d: [comp(0, false), comp(1, false), comp(2, false)],
         valid,
     };
-    (rays, lanes)
+    (rays, bx)
 }
 
 /// [`gen_n`] for a full packet of one sample's consecutive subsamples `k0..k0 + N` (a pixel

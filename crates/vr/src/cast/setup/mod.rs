@@ -302,10 +302,8 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
         };
         let pbox = match (&frame, film) {
             (None, _) => None,
-            // The lanes' film positions from the generator: their exact float range.
-            (Some(fr), Some((fx, fy))) => {
-                PacketBox::new(fr, fx.hmin(), fx.hmax(), fy.hmin(), fy.hmax())
-            }
+            // The generator's film box of the lanes.
+            (Some(fr), Some((lo, hi))) => PacketBox::new(fr, lo.x, hi.x, lo.y, hi.y),
             (Some(fr), None) => packet_box(fr, set, i0, batch, chunk.then(|| ranges[c])),
         };
         rays_n += rays.valid.count_ones() as u64;
