@@ -101,6 +101,15 @@ fn main() {
             best_ray / best_beam,
             beam.agreement(&reference)
         );
+        // FNV-1a of the buffer (triangle and `t` bits of every subsample): equal buffers, equal
+        // hashes (compares builds and modes).
+        let mut hash = 0xcbf2_9ce4_8422_2325u64;
+        for (p, t) in beam.prim.iter().zip(&beam.t) {
+            for x in [*p, t.to_bits()] {
+                hash = (hash ^ x as u64).wrapping_mul(0x0100_0000_01b3);
+            }
+        }
+        println!("  buffer hash {hash:016x}");
         let tris = (stats.tris_all_out + stats.tris_partial + stats.tris_all_in).max(1) as f64;
         println!(
             "  set-up triangles: all-out {:.4} partial {:.4} all-in {:.4} of {tris}, packet-triangle tests / ray {:.4}",
