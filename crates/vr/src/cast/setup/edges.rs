@@ -16,6 +16,11 @@
 //!   the watertight `t`: these *depth ties* (overlapping coplanar faces, triangles meeting at
 //!   the hit point) are the only differences from per-ray traversal (tests/cast.rs:
 //!   >= 99.99% agreement, every difference within 1e-5 relative in `t`, never hit vs miss).
+//! - **Affine packet test first** (`cast/setup/affine.rs`, pinhole and stereo tiles): before
+//!   `g . d`, the edge functions' affine form over the packet's film box decides the whole
+//!   packet — every lane certainly outside (skipped) or certainly inside (no per-lane edge
+//!   test) — with a rigorous error bound; partial packets take the per-lane test below. The
+//!   decisions equal the watertight test's, so the buffer is unchanged (`tests/affine.rs`).
 //! - **Lazy band.** The tile's triangles are set up with a crude conservative band (enough
 //!   for the corner classification); a triangle's full band (and its depth condition `rho`)
 //!   is computed when a packet first reaches it (`TileTris::refine`), so triangles dropped
