@@ -259,7 +259,7 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
     // offsets (one-sample packets take their film box from it).
     let frame = if FULL { None } else { tt.frame };
     let spp = set.spp as usize;
-    let chunked = spp % L::N == 0;
+    let chunked = spp.is_multiple_of(L::N);
     let mut ranges = [(Vec2::ZERO, Vec2::ZERO); MAX_SPP as usize / 4];
     // One sample's chunk of `L::N` subsamples: its offsets in lanes, kept for the tile (the
     // ray generator's `gen_one_sample` builds them per packet).
