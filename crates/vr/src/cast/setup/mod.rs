@@ -217,6 +217,19 @@ impl Out<'_> {
     #[inline(always)]
     unsafe fn run(&self, (i, k0): (u32, u32), c: &ClosestN, n: usize) {
         let o = i as usize * self.spp + k0 as usize;
+        // One triangle on every lane (a pixel inside one triangle): one `prim_ids` look-up.
+        let t0 = c.tri[0];
+        if t0 != u32::MAX && c.tri[..n].iter().all(|&x| x == t0) {
+            let p = self.prim_ids[t0 as usize];
+            // SAFETY: the caller's.
+            unsafe {
+                for l in 0..n {
+                    *self.prim.add(o + l) = p;
+                    *self.t.add(o + l) = c.t[l];
+                }
+            }
+            return;
+        }
         // SAFETY: the caller's.
         unsafe {
             for l in 0..n {

@@ -228,7 +228,9 @@ impl TriSetup {
             (cross(a[1], e[1]) * s).to_array(),
             (cross(a[2], e[2]) * s).to_array(),
         ];
-        if !n.iter().flatten().all(|x| x.is_finite()) {
+        // All nine finite iff the sum of the `x - x` is 0 (+0 for finite `x`, NaN otherwise).
+        let z: f32 = n.iter().flatten().map(|&x| x - x).sum();
+        if z != 0.0 {
             return None;
         }
         let (bound, rho) = if lazy {
