@@ -6,7 +6,8 @@
 //! 2 eye_w x h; `scene` a built-in name or a model path, e.g.
 //! `../shared/scenes/sponza_dabrovic/sponza_dabrovic.glb` from the repository root; `edges` =
 //! the set-up kernel with [`SetupExactness::Edges`] (default), `full` = with
-//! [`SetupExactness::Full`], `watertight` = the watertight kernel). Optional further arguments:
+//! [`SetupExactness::Full`], `watertight` = the watertight kernel, `edges-plain` = `edges`
+//! without the affine packet test). Optional further arguments:
 //! `lanes` (8th, default 4: `CastOptions::lanes`) and a head pose `eye target fov_y` (9th-11th,
 //! e.g. `-9,3.5,0 8,5,0 60`; default the scene's camera).
 
@@ -31,7 +32,7 @@ fn main() {
     let (test, exactness) = match mode.as_str() {
         "watertight" => (SampleTest::Watertight, SetupExactness::Full),
         "full" => (SampleTest::TileSetup, SetupExactness::Full),
-        "edges" | "setup" => (SampleTest::TileSetup, SetupExactness::Edges),
+        "edges" | "setup" | "edges-plain" => (SampleTest::TileSetup, SetupExactness::Edges),
         m => panic!("unknown mode {m:?}: edges, full or watertight"),
     };
     // `beam-only` as the 7th argument skips the per-ray baseline (for instruction counts).
@@ -72,6 +73,8 @@ fn main() {
             lanes: arg(8, "4").trim_end_matches("sse").parse().unwrap(),
             exactness,
             avx512: !arg(8, "4").ends_with("sse"),
+            // `edges-plain`: without the affine packet test (`cast/setup/affine.rs`).
+            affine: mode != "edges-plain",
         };
         let mut beam = VisibilityBuffer::new(&set);
         let mut reference = VisibilityBuffer::new(&set);
@@ -98,6 +101,15 @@ fn main() {
             best_ray / best_beam,
             beam.agreement(&reference)
         );
+        // FNV-1a of the buffer (triangle and `t` bits of every subsample): equal buffers, equal
+        // hashes (compares builds and modes).
+        let mut hash = 0xcbf2_9ce4_8422_2325u64;
+        for (p, t) in beam.prim.iter().zip(&beam.t) {
+            for x in [*p, t.to_bits()] {
+                hash = (hash ^ x as u64).wrapping_mul(0x0100_0000_01b3);
+            }
+        }
+        println!("  buffer hash {hash:016x}");
         let tris = (stats.tris_all_out + stats.tris_partial + stats.tris_all_in).max(1) as f64;
         println!(
             "  set-up triangles: all-out {:.4} partial {:.4} all-in {:.4} of {tris}, packet-triangle tests / ray {:.4}",
@@ -121,6 +133,11 @@ fn main() {
             s.setup_edge_band as f64 / s.setup_pair_tests.max(1) as f64,
             s.setup_final_tests as f64 / s.rays.max(1) as f64,
             s.setup_rescues
+        );
+        println!(
+            "  affine packet test: {:.4} of the packet-triangle tests all out, {:.4} all in",
+            s.setup_packet_out as f64 / s.tri_tests.max(1) as f64,
+            s.setup_packet_in as f64 / s.tri_tests.max(1) as f64,
         );
     });
 }

@@ -73,6 +73,10 @@ pub struct CastStats {
     /// Of `setup_exact_tests`: those for an edge value within the band (the rest are depth
     /// comparisons within the depth band, including the best's own watertight `t`).
     pub setup_edge_band: u64,
+    /// Packet-triangle tests decided for the whole packet by the affine packet test
+    /// (`cast/setup/affine.rs`): every ray certainly outside / certainly inside.
+    pub setup_packet_out: u64,
+    pub setup_packet_in: u64,
 }
 
 /// The caster's sample-test choice: the kernel and the SIMD width of its ray packets (`4` SSE,
@@ -90,6 +94,10 @@ pub struct CastOptions {
     /// Run 16-lane set-up packets in one AVX-512 register when the CPU has AVX-512F (else, or
     /// when false, four SSE registers: the portable twin, the same buffer bit for bit).
     pub avx512: bool,
+    /// Run the affine packet test (`cast/setup/affine.rs`) before the per-lane edge test of
+    /// the set-up kernel with [`SetupExactness::Edges`] (pinhole and stereo tiles): the same
+    /// buffer bit for bit, fewer instructions.
+    pub affine: bool,
 }
 
 impl Default for CastOptions {
@@ -102,6 +110,7 @@ impl Default for CastOptions {
             lanes: 16,
             exactness: SetupExactness::Edges,
             avx512: true,
+            affine: true,
         }
     }
 }
@@ -173,6 +182,7 @@ pub fn cast_with(
             lanes,
             exactness: SetupExactness::Full,
             avx512: true,
+            affine: false,
         },
     )
 }
@@ -303,6 +313,7 @@ fn cast_from(
                             lanes,
                             opts.avx512,
                             opts.exactness,
+                            opts.affine,
                             ptr.prim,
                             ptr.t,
                         )
@@ -363,6 +374,8 @@ fn cast_from(
         setup_final_tests: t.setup.final_tests,
         setup_rescues: t.setup.rescues,
         setup_edge_band: t.setup.edge_band,
+        setup_packet_out: t.setup.packet_out,
+        setup_packet_in: t.setup.packet_in,
     }
 }
 

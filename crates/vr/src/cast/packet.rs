@@ -86,17 +86,35 @@ pub(crate) fn gen_n<L: Lanes>(
     stored: Option<&RayBuffer>,
     pairs: &[(u32, u32)],
 ) -> RaysN<L> {
+    gen_n_film(set, stored, pairs).0
+}
+
+/// [`gen_n`], and the lanes' film box `(min, max)` (the exact float range of their
+/// `film + offset * footprint`) when the per-lane generator computed the film positions
+/// (`None` for stored rays, one-sample packets and NaN positions).
+#[inline(always)]
+pub(crate) fn gen_n_film<L: Lanes>(
+    set: &SampleSet,
+    stored: Option<&RayBuffer>,
+    pairs: &[(u32, u32)],
+) -> (RaysN<L>, Option<(Vec2, Vec2)>) {
     let n = pairs.len();
     if let Some(buf) = stored {
-        return read_n(set, buf, pairs);
+        return (read_n(set, buf, pairs), None);
     }
     if let Some(r) = gen_one_sample(set, pairs) {
-        return r;
+        return (r, None);
     }
     let mut film = [Vec2::ZERO; MAX_LANES];
+    let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
+    let mut nan = false;
     for (l, &(i, k)) in pairs.iter().enumerate() {
         let s = &set.samples[i as usize];
-        film[l] = s.film + set.offsets[k as usize] * s.footprint;
+        let f = s.film + set.offsets[k as usize] * s.footprint;
+        film[l] = f;
+        lo = lo.min(f);
+        hi = hi.max(f);
+        nan |= f.is_nan();
     }
     let f0 = film[0];
     for f in film.iter_mut().skip(n) {
@@ -105,16 +123,18 @@ pub(crate) fn gen_n<L: Lanes>(
     let full = (1u32 << n) - 1;
     let fx = L::from_fn(|l| film[l].x);
     let fy = L::from_fn(|l| film[l].y);
+    let bx = (!nan).then_some((lo, hi));
     match &set.camera {
         Camera::Pinhole(p) => {
             let (o, d) = pinhole_n(p, fx, fy);
-            return RaysN { o, d, valid: full };
+            return (RaysN { o, d, valid: full }, bx);
         }
         Camera::Stereo(rig) => {
+            // Every lane in `[0, 2w]`, and all left (`< w`) or all right (`>= w`): the range
+            // decides it as the lane-by-lane test would (no NaN among the lanes).
             let w = rig.eye_width() as f32;
-            let inside = film[..n].iter().all(|f| f.x >= 0.0 && f.x <= 2.0 * w);
-            let left = film[..n].iter().all(|f| f.x < w);
-            let right = film[..n].iter().all(|f| f.x >= w);
+            let inside = !nan && lo.x >= 0.0 && hi.x <= 2.0 * w;
+            let (left, right) = (hi.x < w, lo.x >= w);
             if inside && (left || right) {
                 let (p, fx) = if left {
                     (&rig.eyes[0], fx)
@@ -122,7 +142,7 @@ pub(crate) fn gen_n<L: Lanes>(
                     (&rig.eyes[1], fx - L::splat(w))
                 };
                 let (o, d) = pinhole_n(p, fx, fy);
-                return RaysN { o, d, valid: full };
+                return (RaysN { o, d, valid: full }, bx);
             }
         }
         _ => {}
@@ -136,11 +156,12 @@ pub(crate) fn gen_n<L: Lanes>(
     let comp = |a: usize, origin: bool| {
         L::from_fn(|l| rays[l].map_or(0.0, |r| if origin { r.origin[a] } else { r.dir[a] }))
     };
-    RaysN {
+    let rays = RaysN {
         o: [comp(0, true), comp(1, true), comp(2, true)],
         d: [comp(0, false), comp(1, false), comp(2, false)],
         valid,
-    }
+    };
+    (rays, bx)
 }
 
 /// [`gen_n`] for a full packet of one sample's consecutive subsamples `k0..k0 + N` (a pixel
@@ -163,16 +184,39 @@ fn gen_one_sample<L: Lanes>(set: &SampleSet, pairs: &[(u32, u32)]) -> Option<Ray
     {
         return None;
     }
+    let offs = &set.offsets[k0 as usize..k0 as usize + n];
+    let (mut lo, mut hi) = (offs[0].x, offs[0].x);
+    for o in offs {
+        lo = lo.min(o.x);
+        hi = hi.max(o.x);
+    }
+    let ox = L::from_fn(|l| offs[l].x);
+    let oy = L::from_fn(|l| offs[l].y);
+    sample_chunk(set, i0, ox, oy, lo, hi)
+}
+
+/// The rays of [`gen_one_sample`] from the chunk's offsets in lanes (`ox`, `oy`) and the
+/// smallest and largest x offset (`lo`, `hi`): the same rays, for callers that keep the
+/// offset lanes of a tile.
+#[inline(always)]
+pub(crate) fn sample_chunk<L: Lanes>(
+    set: &SampleSet,
+    i0: u32,
+    ox: L,
+    oy: L,
+    lo: f32,
+    hi: f32,
+) -> Option<RaysN<L>> {
+    let n = L::N;
     let s = &set.samples[i0 as usize];
     let fp = s.footprint;
     if !(fp >= 0.0) {
         return None;
     }
-    let offs = &set.offsets[k0 as usize..k0 as usize + n];
     let full = (1u32 << n) - 1;
     let fp_v = L::splat(fp);
-    let fx = L::splat(s.film.x) + L::from_fn(|l| offs[l].x) * fp_v;
-    let fy = L::splat(s.film.y) + L::from_fn(|l| offs[l].y) * fp_v;
+    let fx = L::splat(s.film.x) + ox * fp_v;
+    let fy = L::splat(s.film.y) + oy * fp_v;
     match &set.camera {
         Camera::Pinhole(p) => {
             let (o, d) = pinhole_n(p, fx, fy);
@@ -180,11 +224,6 @@ fn gen_one_sample<L: Lanes>(set: &SampleSet, pairs: &[(u32, u32)]) -> Option<Ray
         }
         Camera::Stereo(rig) => {
             let w = rig.eye_width() as f32;
-            let (mut lo, mut hi) = (offs[0].x, offs[0].x);
-            for o in offs {
-                lo = lo.min(o.x);
-                hi = hi.max(o.x);
-            }
             let (lo, hi) = (s.film.x + lo * fp, s.film.x + hi * fp);
             let inside = lo >= 0.0 && hi <= 2.0 * w;
             let (left, right) = (hi < w, lo >= w);

@@ -16,6 +16,11 @@
 //!   the watertight `t`: these *depth ties* (overlapping coplanar faces, triangles meeting at
 //!   the hit point) are the only differences from per-ray traversal (tests/cast.rs:
 //!   >= 99.99% agreement, every difference within 1e-5 relative in `t`, never hit vs miss).
+//! - **Affine packet test first** (`cast/setup/affine.rs`, pinhole and stereo tiles): before
+//!   `g . d`, the edge functions' affine form over the packet's film box decides the whole
+//!   packet — every lane certainly outside (skipped) or certainly inside (no per-lane edge
+//!   test) — with a rigorous error bound; partial packets take the per-lane test below. The
+//!   decisions equal the watertight test's, so the buffer is unchanged (`tests/affine.rs`).
 //! - **Lazy band.** The tile's triangles are set up with a crude conservative band (enough
 //!   for the corner classification); a triangle's full band (and its depth condition `rho`)
 //!   is computed when a packet first reaches it (`TileTris::refine`), so triangles dropped
@@ -33,6 +38,7 @@ use parallax_bvh::Tri4;
 use parallax_core::math::WatertightRay;
 use parallax_core::simd::Lanes;
 
+use super::affine::{PacketBox, PacketClass};
 use super::kernel::{PacketSlab, SetupWork, dot_n, edge_band, min_edge};
 use super::tri::{RHO_MAX, TileTris, exact_t};
 use crate::cast::lanes16::LaneReduce;
@@ -50,6 +56,7 @@ pub(super) fn closest_edges<L: LaneReduce>(
     axis: usize,
     sign: f32,
     slack: f32,
+    pbox: Option<&PacketBox>,
     work: &mut SetupWork,
 ) -> ClosestN {
     let valid = rays.valid;
@@ -67,7 +74,11 @@ pub(super) fn closest_edges<L: LaneReduce>(
     let mut box_lim = L::splat(f32::INFINITY);
     let one = L::splat(1.0);
     let packet = PacketSlab::with_interval(rays.d);
-    let valid_m = L::from_fn(|l| (valid >> l & 1) as f32).gt(zero);
+    let valid_m = if valid == (1 << L::N) - 1 {
+        zero.eq(zero)
+    } else {
+        L::from_fn(|l| (valid >> l & 1) as f32).gt(zero)
+    };
     let (sign_v, oa_v) = (L::splat(sign), L::splat(oa));
     let mut lim_max = f32::INFINITY;
     let dinf = packet.dinf;
@@ -100,6 +111,15 @@ pub(super) fn closest_edges<L: LaneReduce>(
                 tt.refine(j, blocks);
             }
             let tr = &tt.tris[j];
+            // The affine packet test (`affine.rs`): every lane certainly out or in.
+            let class = match pbox {
+                Some(pb) if !tr.all_in => pb.classify(&tt.aff[j], tr.bound),
+                _ => PacketClass::Partial,
+            };
+            if class == PacketClass::Out {
+                work.packet_out += 1;
+                continue;
+            }
             let gd = dot_n(tr.g, dx, dy, dz);
             if tr.rho > RHO_MAX {
                 // Ill-conditioned: the watertight test decides coverage and depth.
@@ -113,7 +133,12 @@ pub(super) fn closest_edges<L: LaneReduce>(
                 continue;
             }
             // Certainly inside (a mask), plus the band's lanes the watertight test accepts.
-            let (inn_m, mut unsure) = edge_band(tr, rays.d, dinf, ge, cand);
+            let (inn_m, mut unsure) = if class == PacketClass::In {
+                work.packet_in += 1;
+                (ge, 0)
+            } else {
+                edge_band(tr, rays.d, dinf, ge, cand)
+            };
             let mut extra = 0u32;
             // Within the edge band: the watertight test decides coverage (~0.2% of pairs).
             if unsure != 0 {

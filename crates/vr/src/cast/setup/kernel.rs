@@ -93,21 +93,28 @@ struct Interval {
 
 impl<L: Lanes> PacketSlab<L> {
     #[inline(always)]
-    pub(super) fn new([dx, dy, dz]: [L; 3]) -> Self {
+    pub(super) fn new(d: [L; 3]) -> Self {
+        let (mut s, dinf_l) = Self::lanes(d);
+        for l in 0..L::N {
+            s.dinf = s.dinf.max(dinf_l.get(l));
+        }
+        s
+    }
+
+    /// The reciprocals and their signs; `dinf` = 0 and the per-lane `|d|_inf`.
+    #[inline(always)]
+    fn lanes([dx, dy, dz]: [L; 3]) -> (Self, L) {
         let (zero, one) = (L::splat(0.0), L::splat(1.0));
         let inv = [one / dx, one / dy, one / dz];
         let neg = [inv[0].lt(zero), inv[1].lt(zero), inv[2].lt(zero)];
         let dinf_l = max_or_rhs(abs_n(dx), max_or_rhs(abs_n(dy), abs_n(dz)));
-        let mut dinf = 0.0f32;
-        for l in 0..L::N {
-            dinf = dinf.max(dinf_l.get(l));
-        }
-        Self {
+        let s = Self {
             inv,
             neg,
-            dinf,
+            dinf: 0.0,
             interval: None,
-        }
+        };
+        (s, dinf_l)
     }
 
     /// [`PacketSlab::new`] with the packet's interval test ([`PacketSlab::interval_reaches`]);
@@ -117,7 +124,10 @@ impl<L: Lanes> PacketSlab<L> {
     where
         L: LaneReduce,
     {
-        let mut s = Self::new(d);
+        // `dinf` as `new`'s scalar loop (`0.max(x) = x`, NaN lanes ignored, the sign of a zero
+        // never seen: the band `bound * dinf` is only compared), by one horizontal maximum.
+        let (mut s, dinf_l) = Self::lanes(d);
+        s.dinf = max_or_rhs(dinf_l, L::splat(0.0)).hmax();
         let (x0, x1) = (s.inv[0].hmin(), s.inv[0].hmax());
         let (y0, y1) = (s.inv[1].hmin(), s.inv[1].hmax());
         let (z0, z1) = (s.inv[2].hmin(), s.inv[2].hmax());
@@ -197,6 +207,9 @@ pub struct SetupWork {
     pub edge_band: u64,
     /// Rays re-decided by the exact scan (a certain decision contradicted; expected 0).
     pub rescues: u64,
+    /// Packet-triangle tests the affine packet test decided: all rays out / all rays in.
+    pub packet_out: u64,
+    pub packet_in: u64,
 }
 
 impl SetupWork {
@@ -209,5 +222,7 @@ impl SetupWork {
         self.final_tests += o.final_tests;
         self.edge_band += o.edge_band;
         self.rescues += o.rescues;
+        self.packet_out += o.packet_out;
+        self.packet_in += o.packet_in;
     }
 }

@@ -74,6 +74,12 @@
 //! - Triangles with `D = 0` (the plane holds `o`: seen edge-on, never hit by a ray from `o`)
 //!   or a non-finite `g` are dropped.
 //!
+//! **The affine packet test** ([`affine`], `Edges` only, pinhole and stereo tiles): before a
+//! packet's per-lane edge test, the edge functions' affine form in the film position decides
+//! the whole packet (one pixel at 16 spp) against the triangle — every lane certainly out or
+//! certainly in, with a rigorous error bound — or leaves it to the per-lane test; the buffer is
+//! the same bit for bit (`tests/affine.rs`).
+//!
 //! The sample test then runs packets of 4 (SSE), 8 (AVX2) or 16 (four SSE registers) rays over the set-up list in the
 //! tile list's near-depth order, leaf by leaf; a triangle whose `g . d` is below every lane's
 //! best so far costs one 3-term dot product; the packet stops once every ray has a hit nearer
@@ -114,16 +120,18 @@
 //! | `exactness` | [`SetupExactness`] | `Edges` | which bands decide by the watertight test |
 //! | `lanes` | usize | 16 | rays per packet: 4 (SSE), 8 (AVX2 if detected, else 4) or 16 (four SSE registers, [`crate::cast::lanes16`]) |
 //! | [`RHO_MAX`] | f32 | 0.05 | depth band above which a triangle always takes the watertight test |
+//! | `affine` | bool | true | the affine packet test ([`affine`]) before the per-lane edge test (`Edges` only) |
 //!
 //! Measurements (speed of `Edges` and `Full` against the kernel without a band, 4 vs 8 lanes,
 //! where the time goes): `docs/notes/vr.md`.
 
+pub mod affine;
 pub mod edges;
 pub mod full;
 mod kernel;
 mod tri;
 
-use glam::Vec4;
+use glam::{Vec2, Vec4};
 use parallax_bvh::Tri4;
 use parallax_core::NO_ID;
 use parallax_core::simd::F8;
@@ -133,8 +141,10 @@ use crate::beam::Beam;
 use crate::cast::lanes16::{LaneReduce, V16};
 #[cfg(target_arch = "x86_64")]
 use crate::cast::lanes512::Z16;
-use crate::cast::packet::{ClosestN, MAX_LANES, gen_n};
+use crate::cast::packet::{ClosestN, MAX_LANES, gen_n_film, sample_chunk};
 use crate::cast::stored::RayBuffer;
+use crate::samples::MAX_SPP;
+use affine::{FilmFrame, PacketBox};
 
 pub use kernel::SetupWork;
 pub use tri::{
@@ -207,6 +217,19 @@ impl Out<'_> {
     #[inline(always)]
     unsafe fn run(&self, (i, k0): (u32, u32), c: &ClosestN, n: usize) {
         let o = i as usize * self.spp + k0 as usize;
+        // One triangle on every lane (a pixel inside one triangle): one `prim_ids` look-up.
+        let t0 = c.tri[0];
+        if t0 != u32::MAX && c.tri[..n].iter().all(|&x| x == t0) {
+            let p = self.prim_ids[t0 as usize];
+            // SAFETY: the caller's.
+            unsafe {
+                for l in 0..n {
+                    *self.prim.add(o + l) = p;
+                    *self.t.add(o + l) = c.t[l];
+                }
+            }
+            return;
+        }
         // SAFETY: the caller's.
         unsafe {
             for l in 0..n {
@@ -245,39 +268,91 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
     // slower; `cast/lanes512.rs`).
     let mut rays_n = 0u64;
     let mut pairs = [(0u32, 0u32); MAX_LANES];
+    // The affine packet test (`affine.rs`): per chunk of `L::N` subsamples the range of their
+    // offsets (one-sample packets take their film box from it).
+    let frame = if FULL { None } else { tt.frame };
+    let spp = set.spp as usize;
+    let chunked = spp.is_multiple_of(L::N);
+    let mut ranges = [(Vec2::ZERO, Vec2::ZERO); MAX_SPP as usize / 4];
+    // One sample's chunk of `L::N` subsamples: its offsets in lanes, kept for the tile (the
+    // ray generator's `gen_one_sample` builds them per packet).
+    let zero = L::splat(0.0);
+    let mut lanes = [(zero, zero); MAX_SPP as usize / 4];
+    if chunked {
+        for c in 0..spp / L::N {
+            let o = &set.offsets[c * L::N..(c + 1) * L::N];
+            ranges[c] = o
+                .iter()
+                .fold((o[0], o[0]), |(a, b), &x| (a.min(x), b.max(x)));
+            lanes[c] = (L::from_fn(|l| o[l].x), L::from_fn(|l| o[l].y));
+        }
+    }
     let mut j = 0;
     while j < total {
         let n = (total - j).min(L::N);
-        for (l, p) in pairs.iter_mut().enumerate().take(n) {
-            *p = pair(j + l);
+        // `j` is a multiple of `L::N`: with `chunked` (`spp % L::N == 0`) a full packet is one
+        // sample's aligned chunk `k0..k0 + L::N` (`pair(j) = (samples[j / spp], j % spp)`).
+        let chunk = chunked && n == L::N;
+        let (i0, k0) = pair(j);
+        let c = k0 as usize / L::N;
+        let chunk_rays = if chunk && stored.is_none() {
+            let ((ox, oy), (a, b)) = (lanes[c], ranges[c]);
+            sample_chunk::<L>(set, i0, ox, oy, a.x, b.x)
+        } else {
+            None
+        };
+        // The lanes' `(sample, k)` pairs, unless the chunk's rays and box need none.
+        if !chunk || chunk_rays.is_none() {
+            for (l, p) in pairs.iter_mut().enumerate().take(n) {
+                *p = pair(j + l);
+            }
         }
         j += n;
         let batch = &pairs[..n];
-        let mut rays = gen_n::<L>(set, stored, batch);
+        let (mut rays, film) = match chunk_rays {
+            Some(r) => (r, None),
+            None => gen_n_film::<L>(set, stored, batch),
+        };
+        let pbox = match (&frame, film) {
+            (None, _) => None,
+            // The generator's film box of the lanes.
+            (Some(fr), Some((lo, hi))) => PacketBox::new(fr, lo.x, hi.x, lo.y, hi.y),
+            (Some(fr), None) => packet_box(fr, set, i0, batch, chunk.then(|| ranges[c])),
+        };
         rays_n += rays.valid.count_ones() as u64;
         // Invalid lanes get `d = 0`: `g . d = 0` is never a hit.
-        for l in 0..batch.len() {
-            if rays.valid >> l & 1 == 0 {
-                for a in 0..3 {
-                    rays.d[a] = L::from_fn(|i| if i == l { 0.0 } else { rays.d[a].get(i) });
+        if rays.valid != (1 << n) - 1 {
+            for l in 0..n {
+                if rays.valid >> l & 1 == 0 {
+                    for a in 0..3 {
+                        rays.d[a] = L::from_fn(|i| if i == l { 0.0 } else { rays.d[a].get(i) });
+                    }
                 }
             }
         }
         let c = if FULL {
             full::closest_full(&rays, blocks, &*tt, axis, sign, slack, &mut work)
         } else {
-            edges::closest_edges(&rays, blocks, tt, axis, sign, slack, &mut work)
+            edges::closest_edges(
+                &rays,
+                blocks,
+                tt,
+                axis,
+                sign,
+                slack,
+                pbox.as_ref(),
+                &mut work,
+            )
         };
         // One sample's consecutive subsamples: `pair` maps consecutive `j` to `(sample, j % spp)`
         // (`test_tile_setup`), so a last lane at `k0 + n - 1` of the first lane's sample means
         // no wrap to the next sample in between.
-        let (i0, k0) = batch[0];
-        let run = batch[n - 1] == (i0, k0 + n as u32 - 1);
+        let run = chunk || batch[n - 1] == (batch[0].0, batch[0].1 + n as u32 - 1);
         // SAFETY: the caller of `test_tile_setup` guarantees exclusive access to these
         // samples' entries.
         unsafe {
             if run {
-                out.run(batch[0], &c, n);
+                out.run((i0, k0), &c, n);
             } else {
                 for (l, &p) in batch.iter().enumerate() {
                     out.one(p, c.t[l], c.tri[l]);
@@ -287,6 +362,37 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
     }
     work.rays = rays_n;
     work
+}
+
+/// The camera-space box of a packet's rays (`affine.rs`): its film box is the exact float
+/// range of the lanes' `film + offset * footprint` — from `range` (the smallest and largest
+/// offset of sample `i0`'s chunk; `x -> film + x * footprint` is monotone for
+/// `footprint >= 0`), else lane by lane over `batch`.
+#[inline(always)]
+fn packet_box(
+    fr: &FilmFrame,
+    set: &SampleSet,
+    i0: u32,
+    batch: &[(u32, u32)],
+    range: Option<(Vec2, Vec2)>,
+) -> Option<PacketBox> {
+    let s = &set.samples[i0 as usize];
+    let (lo, hi) = if let Some((a, b)) = range
+        && s.footprint >= 0.0
+    {
+        (s.film + a * s.footprint, s.film + b * s.footprint)
+    } else {
+        let mut lo = Vec2::splat(f32::INFINITY);
+        let mut hi = Vec2::splat(f32::NEG_INFINITY);
+        for &(i, k) in batch {
+            let s = &set.samples[i as usize];
+            let f = s.film + set.offsets[k as usize] * s.footprint;
+            lo = lo.min(f);
+            hi = hi.max(f);
+        }
+        (lo, hi)
+    };
+    PacketBox::new(fr, lo.x, hi.x, lo.y, hi.y)
 }
 
 /// `unsafe fn $name<const FULL: bool>(...)`: [`run_setup`] with lanes `$lanes` compiled for the
@@ -350,10 +456,20 @@ pub unsafe fn test_tile_setup(
     lanes: usize,
     avx512: bool,
     exactness: SetupExactness,
+    affine: bool,
     prim: *mut u32,
     t: *mut f32,
 ) -> SetupWork {
     let spp = set.spp as usize;
+    tt.frame = None;
+    if affine && exactness == SetupExactness::Edges && !samples.is_empty() {
+        let film_x = set.samples[samples[0] as usize].film.x;
+        tt.frame = FilmFrame::of(set, tt.origin, film_x);
+        if tt.frame.is_some() {
+            tt.aff.clear();
+            tt.aff.resize(tt.tris.len(), Default::default());
+        }
+    }
     let slack = 1e-5 * (scale.abs() + 1.0);
     let total = samples.len() * spp;
     // Power-of-two spp (every preset) without an integer division per ray.

@@ -15,6 +15,7 @@ use parallax_bvh::node::{leaf_count, leaf_first};
 use parallax_core::math::{WatertightRay, watertight_permutation};
 use parallax_core::{Aabb, Ray};
 
+use super::affine::{AffineTri, FilmFrame};
 use crate::beam::{Beam, LeafRef};
 
 /// Unit roundoff of f32 (`2^-24`): `fl(x op y) = (x op y)(1 + δ)`, `|δ| <= U`.
@@ -227,7 +228,9 @@ impl TriSetup {
             (cross(a[1], e[1]) * s).to_array(),
             (cross(a[2], e[2]) * s).to_array(),
         ];
-        if !n.iter().flatten().all(|x| x.is_finite()) {
+        // All nine finite iff the sum of the `x - x` is 0 (+0 for finite `x`, NaN otherwise).
+        let z: f32 = n.iter().flatten().map(|&x| x - x).sum();
+        if z != 0.0 {
             return None;
         }
         let (bound, rho) = if lazy {
@@ -392,6 +395,11 @@ pub struct TileTris {
     pub perm: Option<[usize; 3]>,
     /// The cone of the tile's rays (for the lazy band, [`TileTris::refine`]).
     pub cone: Cone,
+    /// The film frame of the tile's eye when the affine packet test runs
+    /// (`cast/setup/affine.rs`), and `aff[j]`, the affine form of `tris[j]` (filled by
+    /// [`TileTris::refine`]).
+    pub frame: Option<FilmFrame>,
+    pub aff: Vec<AffineTri>,
 }
 
 impl Default for Cone {
@@ -413,6 +421,9 @@ impl TileTris {
             Some(e) => {
                 s.bound = e.bound;
                 s.rho = e.rho;
+                if let (Some(fr), Some(a)) = (&self.frame, self.aff.get_mut(j)) {
+                    *a = fr.affine(&s.n);
+                }
             }
             // (Never: the same checks passed in the lazy set-up.)
             None => s.rho = f32::INFINITY,
@@ -437,6 +448,7 @@ pub fn setup_tile(
     out: &mut TileTris,
 ) {
     out.origin = origin;
+    out.frame = None;
     out.tris.clear();
     out.segs.clear();
     out.rho_max = 0.0;

@@ -1,0 +1,299 @@
+//! The affine packet test: HVVR's per-pixel form of the sample test (Hunt et al. 2018, §5.5;
+//! HVVR's `IntersectTriangleThread`: edge values at the pixel centre plus their derivatives in
+//! the subsample offset), used to decide a whole packet of subsample rays against a set-up
+//! triangle at once, with a rigorous float error bound, before any per-lane work.
+//!
+//! **What it does.** For a pinhole camera (and each eye of the stereo rig) the unnormalised
+//! camera-space direction through film position `f = (fx, fy)` is
+//! `v(f) = ((2 fx / w - 1 + sx) tx, (1 - 2 fy / h + sy) ty, -1)`, affine in `f`, and the
+//! world direction is `B v / |v|` (`B` the camera basis). So a set-up triangle's edge value
+//! `n_i . d` (`cast/setup/mod.rs`) is, up to the positive factor `1 / |v|`, the affine function
+//! `L_i(v) = m_i . v` with the camera-space covector `m_i = B^T n_i`, computed once per tile and
+//! triangle ([`AffineTri`], three edges in the lanes of one SSE register). A packet's film
+//! positions lie in a box; its image in camera space is a box `[xc ± rx] x [yc ± ry] x {-1}`
+//! ([`PacketBox`]), and over it `L_i` ranges over `m . (xc, yc, -1) ± (|m_x| rx + |m_y| ry)`:
+//! per packet and triangle that is 2 multiply-adds per edge for the centre and 2 for the
+//! radius (HVVR's centre value and offset derivatives, with the offset table replaced by its
+//! bounding box), for all three edges in one SSE register. If for some edge the whole range
+//! lies below `-tau_i`, every ray of the packet is certainly outside; if for every edge it lies
+//! above `tau_i`, every ray is certainly inside; otherwise the packet is *partial* and each lane
+//! takes the existing per-lane test (set-up value with the edge band, the watertight test
+//! inside the band). At 16 spp a packet is one pixel, so most packet-triangle pairs are decided
+//! here; at 1 spp a packet is a 4 x 4-pixel Morton block.
+//!
+//! **Invariant** (why the output is unchanged): a packet classified *out* has, for every lane,
+//! an edge whose watertight edge function is negative; a packet classified *in* has, for every
+//! lane, three positive watertight edge functions. So every lane's coverage decision equals the
+//! watertight test's, exactly as the per-lane band test's decisions do, and the depth rule
+//! (which reads the same `g . d` of the same float ray) is untouched: the buffer is identical
+//! to the one without this test (`tests/affine.rs` compares both, bit for bit).
+//!
+//! **The bound.** Notation: `U = 2^-24`; `n` the stored (float) covector, `n*` the exact
+//! `a_i x a_{i+1}` of the rounded `a_i`; `d` the float ray of a lane, `v` its float camera
+//! direction, `v*` the exact `v(f)` at the lane's float film position `f`; `rb >= max_j |B_j|_2`
+//! (rows of `B`, computed), `bmax >= max |B_jk|`. `TriSetup::bound` covers (tri.rs) the
+//! covector error `|n - n*| . |d| <= 3.1 U |a_i|_1 |e_i|_1 |d|_inf` plus the watertight test's
+//! error `W |d|_inf`, so a lane with real `n . d > bound |d|_inf` is certainly inside that edge
+//! (and `< -bound |d|_inf` certainly outside).
+//!
+//! 1. Ray generation: `|x - x*| <= e_x = 4.1 U tx (|2 fx / w| + 1 + |sx|)` (division,
+//!    subtraction, addition, product; the factor 2 is exact), likewise `e_y`; `|len - |v|| <=
+//!    2.5 U |v|` (three positive squares, a square root), each `v_k / len` one more rounding,
+//!    `B u` a 3-term dot product (`3 U sum_k |B_jk| |u_k|`), and `|v / |v| - v* / |v*|| <= 2
+//!    |v - v*| / |v*|` with `|v*| >= 1` (`z = -1`): per component
+//!    `|d - B v* / |v*||_inf <= Delta = rb (6.6 U + 3.47 (e_x + e_y))`, so
+//!    `n . d >= L*(v*) / |v*| - |n|_1 Delta` and `|d|_inf <= rb + Delta`, where
+//!    `L*(v) = (B^T n) . v` with the exact `B^T n`.
+//! 2. With `Vmax >= |v*|` over the box: if `min_box L* > tau_i = Vmax (bound (rb + Delta) +
+//!    |n_i|_1 Delta) + eps_i`, then for every lane `n . d >= min L* / Vmax - |n|_1 Delta >
+//!    bound |d|_inf`: certainly inside. Symmetrically for `max_box L* < -tau_i`: outside.
+//! 3. The float evaluation: `m = fl(B^T n)` loses `3 U bmax |n|_1` per component, the centre
+//!    value (3 terms) `3 U`, the radius (2 terms) `2 U`, the final difference `1 U`, each of
+//!    `bmax |n|_1 S` with `S = |xc| + rx + |yc| + ry + 1`: `eps_i = 9.1 U bmax |n_i|_1 S`.
+//! 4. The packet's camera box holds every lane's exact `v*`: the film box is the exact float
+//!    minimum and maximum of the lanes' film positions (the same float operations, monotone),
+//!    `x(f)` is monotone in `f` (`tx > 0`), `e_x` widens it, and the centre / radius rounding
+//!    is covered by `2 U (|xl| + |xh|)` and a final `(1 + 8 U)`.
+//!
+//! Every U-term is doubled (first-order analysis, as `TriSetup::bound`); `Vmax`, `S`, `Delta`
+//! and `tau` are rounded up by `1.01`. NaN or infinite values make both comparisons false
+//! (partial: the per-lane test decides). Tests (`tests/affine.rs`): the classification never
+//! contradicts the watertight test on random and adversarial rays (rays through edges and
+//! shared vertices, grazing triangles), and whole casts equal the casts without it.
+//!
+//! **Parameters** (set through [`crate::CastOptions::affine`]):
+//!
+//! | name | type | default | meaning |
+//! |---|---|---|---|
+//! | `affine` | bool | true | run the packet test before the per-lane test (pinhole and stereo tiles, `SetupExactness::Edges`) |
+
+use glam::{Mat3, Vec3, Vec4};
+use parallax_scene::camera::{Camera, Pinhole};
+
+use super::tri::U;
+use crate::SampleSet;
+
+/// A pinhole's film-to-camera map and basis, for the tile's eye (module docs).
+#[derive(Clone, Copy, Debug)]
+pub struct FilmFrame {
+    /// Columns of `B` as SSE registers (lane 3 = 0).
+    b: [Vec4; 3],
+    w: f32,
+    h: f32,
+    tx: f32,
+    ty: f32,
+    sx: f32,
+    sy: f32,
+    /// Film x offset of the eye (0, or the eye width for the right eye of a stereo rig).
+    x0: f32,
+    /// Film x range of the eye (rays outside it come from the other eye or none).
+    fx_lo: f32,
+    fx_hi: f32,
+    /// `>= max_j |B_j|_2` and `>= max |B_jk|` (rounded up).
+    rb: f32,
+    bmax: f32,
+}
+
+impl FilmFrame {
+    fn new(p: &Pinhole, x0: f32, fx_lo: f32, fx_hi: f32) -> Option<Self> {
+        let m: Mat3 = p.frame.basis;
+        let (w, h) = (p.width as f32, p.height as f32);
+        let (tx, ty) = (p.tan_half_x(), p.tan_half_y);
+        let ok = [w, h, tx, ty, p.shift.x, p.shift.y]
+            .iter()
+            .all(|x| x.is_finite())
+            && w > 0.0
+            && h > 0.0
+            && tx > 0.0
+            && ty > 0.0
+            && m.is_finite();
+        if !ok {
+            return None;
+        }
+        let rows = [m.row(0), m.row(1), m.row(2)];
+        let rb = rows.iter().map(|r| r.length()).fold(0.0, f32::max) * 1.001;
+        let bmax = rows
+            .iter()
+            .map(|r| r.abs().max_element())
+            .fold(0.0, f32::max)
+            * 1.001;
+        Some(FilmFrame {
+            b: [
+                m.x_axis.extend(0.0),
+                m.y_axis.extend(0.0),
+                m.z_axis.extend(0.0),
+            ],
+            w,
+            h,
+            tx,
+            ty,
+            sx: p.shift.x,
+            sy: p.shift.y,
+            x0,
+            fx_lo,
+            fx_hi,
+            rb,
+            bmax,
+        })
+    }
+
+    /// The frame of the eye whose origin is `origin` and whose film holds the tile's first
+    /// sample `film_x`; `None` for cameras without an affine film map (everything but the
+    /// pinhole and the stereo rig).
+    pub fn of(set: &SampleSet, origin: Vec3, film_x: f32) -> Option<Self> {
+        match &set.camera {
+            Camera::Pinhole(p) => {
+                (p.frame.position == origin).then_some(())?;
+                Self::new(p, 0.0, f32::NEG_INFINITY, f32::INFINITY)
+            }
+            Camera::Stereo(rig) => {
+                let w = rig.eye_width() as f32;
+                let (e, x0, lo, hi) = if film_x < w {
+                    (0, 0.0, 0.0, w)
+                } else {
+                    (1, w, w, 2.0 * w)
+                };
+                let p = &rig.eyes[e];
+                (p.frame.position == origin).then_some(())?;
+                Self::new(p, x0, lo, hi)
+            }
+            _ => None,
+        }
+    }
+
+    /// The affine form of set-up covectors `n` (module docs).
+    pub fn affine(&self, n: &[[f32; 3]; 3]) -> AffineTri {
+        // m_k = B_k . n (column k of B: the camera axis k in world space), per edge in lanes.
+        let nx = Vec4::new(n[0][0], n[1][0], n[2][0], 0.0);
+        let ny = Vec4::new(n[0][1], n[1][1], n[2][1], 0.0);
+        let nz = Vec4::new(n[0][2], n[1][2], n[2][2], 0.0);
+        let col = |c: Vec4| Vec4::splat(c.x) * nx + Vec4::splat(c.y) * ny + Vec4::splat(c.z) * nz;
+        let (mx, my, mz) = (col(self.b[0]), col(self.b[1]), col(self.b[2]));
+        AffineTri {
+            mx,
+            my,
+            mz,
+            amx: mx.abs(),
+            amy: my.abs(),
+            n1: nx.abs() + ny.abs() + nz.abs(),
+        }
+    }
+}
+
+/// A set-up triangle's three edge covectors in camera space (`m_i = B^T n_i`, lanes 0-2;
+/// lane 3 = 0), their absolute values and `|n_i|_1` (rounded as computed; module docs).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct AffineTri {
+    mx: Vec4,
+    my: Vec4,
+    mz: Vec4,
+    amx: Vec4,
+    amy: Vec4,
+    n1: Vec4,
+}
+
+/// A packet's camera-space box and the per-packet factors of `tau` (module docs).
+#[derive(Clone, Copy, Debug)]
+pub struct PacketBox {
+    xc: Vec4,
+    yc: Vec4,
+    rx: Vec4,
+    ry: Vec4,
+    /// `tau_i = n1_i ka + bound kb`.
+    ka: Vec4,
+    kb: f32,
+}
+
+/// The packet test's decision for one set-up triangle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PacketClass {
+    /// Every ray certainly outside (one edge).
+    Out,
+    /// Every ray certainly inside (all three edges).
+    In,
+    /// Decide per lane.
+    Partial,
+}
+
+/// `true` in lanes 0-2.
+const XYZ: glam::BVec4A = glam::BVec4A::from_array([true, true, true, false]);
+
+impl PacketBox {
+    /// The box of a packet whose lanes' float film positions lie in `[fx0, fx1] x [fy0, fy1]`
+    /// (exact float minimum and maximum of the lanes' `film + offset * footprint`, before the
+    /// eye's x offset); `None` if it leaves the frame's eye or is not finite.
+    #[inline]
+    pub fn new(fr: &FilmFrame, fx0: f32, fx1: f32, fy0: f32, fy1: f32) -> Option<Self> {
+        // The stereo eye test of the ray generation: x in [0, w) left, [w, 2w] right.
+        let inside = if fr.x0 == 0.0 {
+            fx0 >= fr.fx_lo && fx1 < fr.fx_hi
+        } else {
+            fx0 >= fr.fx_lo && fx1 <= fr.fx_hi
+        };
+        if !(inside && fx0 <= fx1 && fy0 <= fy1) {
+            return None;
+        }
+        // The eye's film x (`fx - w` for the right eye: monotone, as the generator's).
+        let (fx0, fx1) = if fr.x0 == 0.0 {
+            (fx0, fx1)
+        } else {
+            (fx0 - fr.x0, fx1 - fr.x0)
+        };
+        // x(f) and y(f) with the generator's float operations (monotone: x up, y down).
+        let xf = |f: f32| (2.0 * f / fr.w - 1.0 + fr.sx) * fr.tx;
+        let yf = |f: f32| (1.0 - 2.0 * f / fr.h + fr.sy) * fr.ty;
+        let (xl, xh) = (xf(fx0), xf(fx1));
+        let (yl, yh) = (yf(fy1), yf(fy0));
+        let fxm = fx0.abs().max(fx1.abs());
+        let fym = fy0.abs().max(fy1.abs());
+        let ex = 4.1 * U * fr.tx * (2.0 * fxm / fr.w + 1.0 + fr.sx.abs()) * 1.01;
+        let ey = 4.1 * U * fr.ty * (2.0 * fym / fr.h + 1.0 + fr.sy.abs()) * 1.01;
+        let side = |l: f32, h: f32, e: f32| {
+            let c = 0.5 * (l + h);
+            let r = (0.5 * (h - l) + e + 2.0 * U * (l.abs() + h.abs())) * (1.0 + 8.0 * U);
+            (c, r)
+        };
+        let (xc, rx) = side(xl, xh, ex);
+        let (yc, ry) = side(yl, yh, ey);
+        let (ax, ay) = (xc.abs() + rx, yc.abs() + ry);
+        let vmax = (1.0 + ax * ax + ay * ay).sqrt() * 1.01;
+        let s = (ax + ay + 1.0) * 1.01;
+        // Doubled U-terms (module docs): Delta = rb (13.2 U + 6.94 (e_x + e_y)).
+        let delta = fr.rb * (13.2 * U + 6.94 * (ex + ey)) * 1.01;
+        let ka = (vmax * delta + 18.2 * U * fr.bmax * s) * 1.01;
+        let kb = vmax * (fr.rb + delta) * 1.01;
+        if !(ka.is_finite() && kb.is_finite() && xc.is_finite() && yc.is_finite()) {
+            return None;
+        }
+        Some(PacketBox {
+            xc: Vec4::splat(xc),
+            yc: Vec4::splat(yc),
+            rx: Vec4::splat(rx),
+            ry: Vec4::splat(ry),
+            ka: Vec4::splat(ka),
+            kb,
+        })
+    }
+
+    /// Classifies a set-up triangle (its affine form `a`, edge band `bound`) for every ray of
+    /// the packet (module docs).
+    #[inline(always)]
+    pub fn classify(&self, a: &AffineTri, bound: f32) -> PacketClass {
+        let c = a.mx * self.xc + a.my * self.yc - a.mz;
+        let r = a.amx * self.rx + a.amy * self.ry;
+        let tau = a.n1 * self.ka + Vec4::splat(bound * self.kb);
+        let hi = c + r;
+        let lo = c - r;
+        // Out: one edge with its largest value below -tau.
+        let out = (hi + tau).cmplt(Vec4::ZERO) & XYZ;
+        if out.any() {
+            return PacketClass::Out;
+        }
+        let inn = (lo - tau).cmpgt(Vec4::ZERO);
+        if inn.bitmask() & 7 == 7 {
+            PacketClass::In
+        } else {
+            PacketClass::Partial
+        }
+    }
+}

@@ -1,0 +1,270 @@
+//! The affine packet test (`cast/setup/affine.rs`): its whole-packet decisions never contradict
+//! the watertight test (adversarial rays: subsamples exactly on edges, shared edges, shared
+//! vertices, grazing and tiny triangles, near and far), and casts with it equal casts without
+//! it bit for bit (every lane width, 1 to 32 spp, pinhole, stereo and foveated sets).
+
+use glam::{Vec2, Vec3};
+use parallax_bvh::Bvh;
+use parallax_core::Ray;
+use parallax_core::math::WatertightRay;
+use parallax_scene::camera::{Camera, CameraOptions, ModelKind};
+use parallax_scene::{CameraDesc, Scene};
+use parallax_vr::cast::setup::affine::{FilmFrame, PacketBox, PacketClass};
+use parallax_vr::cast::setup::{Cone, TriSetup};
+use parallax_vr::{CastOptions, Hierarchy, SampleSet, VisibilityBuffer, cast_opts};
+
+fn camera(scene: &Scene, kind: ModelKind, w: u32, h: u32) -> Camera {
+    let desc = scene.camera(None).unwrap();
+    Camera::new(kind, &desc, w, h, &CameraOptions::default()).unwrap()
+}
+
+/// Casts `set` with and without the affine packet test for every lane width (and the portable
+/// 16-lane twin): the buffers are equal bit for bit. Returns the packet-triangle tests the
+/// packet test decided and all of them.
+fn same_with_and_without(bvh: &Bvh, set: &SampleSet, label: &str) -> (u64, u64) {
+    let h = Hierarchy::build(set).unwrap();
+    let plain = CastOptions {
+        affine: false,
+        ..CastOptions::default()
+    };
+    let mut reference = VisibilityBuffer::new(set);
+    cast_opts(bvh, set, &h, &mut reference, plain);
+    let (mut decided, mut tests) = (0, 0);
+    for (lanes, avx512) in [(4, true), (8, true), (16, false), (16, true)] {
+        let opts = CastOptions {
+            lanes,
+            avx512,
+            ..CastOptions::default()
+        };
+        assert!(opts.affine);
+        let mut with = VisibilityBuffer::new(set);
+        let st = cast_opts(bvh, set, &h, &mut with, opts);
+        assert_eq!(st.setup_rescues, 0, "{label}");
+        let diff = with
+            .prim
+            .iter()
+            .zip(&reference.prim)
+            .zip(with.t.iter().zip(&reference.t))
+            .filter(|((p, q), (s, u))| p != q || s.to_bits() != u.to_bits())
+            .count();
+        assert_eq!(
+            diff, 0,
+            "{label}: {lanes} lanes (avx512 {avx512}): {diff} entries differ"
+        );
+        decided += st.setup_packet_out + st.setup_packet_in;
+        tests += st.tri_tests;
+    }
+    (decided, tests)
+}
+
+/// Casts with the affine packet test equal casts without it, bit for bit: atrium and cornell,
+/// pinhole grid, stereo and foveated sets, 1, 4, 16 and 32 spp (and Sponza at 16 spp when the
+/// shared scenes are present).
+#[test]
+fn affine_packet_test_leaves_the_buffer_unchanged() {
+    for name in ["atrium", "cornell"] {
+        let scene = Scene::load(name).unwrap();
+        let bvh = Bvh::build(&scene.mesh);
+        for spp in [1, 4, 16, 32] {
+            let sets = [
+                (
+                    "grid",
+                    SampleSet::grid(camera(&scene, ModelKind::Pinhole, 64, 48), spp),
+                ),
+                (
+                    "stereo",
+                    SampleSet::grid(camera(&scene, ModelKind::Stereo, 40, 40), spp),
+                ),
+                (
+                    "foveated",
+                    SampleSet::foveated(
+                        camera(&scene, ModelKind::Pinhole, 64, 48),
+                        Vec2::new(30.0, 20.0),
+                        8.0,
+                        0.15,
+                        spp,
+                    )
+                    .unwrap(),
+                ),
+            ];
+            for (scheme, set) in sets {
+                let label = format!("{name} {scheme} spp {spp}");
+                let (decided, tests) = same_with_and_without(&bvh, &set, &label);
+                eprintln!(
+                    "{label}: packet test decided {decided} of {tests} packet-triangle tests"
+                );
+                assert!(decided > 0, "{label}: the packet test never decided");
+            }
+        }
+    }
+    let sponza = "../../../shared/scenes/sponza_dabrovic/sponza_dabrovic.glb";
+    if std::path::Path::new(sponza).exists() {
+        let scene = Scene::load(sponza).unwrap();
+        let bvh = Bvh::build(&scene.mesh);
+        let desc = CameraDesc::new(
+            Vec3::new(-9.0, 3.5, 0.0),
+            Vec3::new(8.0, 5.0, 0.0),
+            Vec3::Y,
+            60.0,
+        );
+        let cam = Camera::new(ModelKind::Stereo, &desc, 48, 40, &CameraOptions::default());
+        let set = SampleSet::grid(cam.unwrap(), 16);
+        let (decided, tests) = same_with_and_without(&bvh, &set, "sponza stereo spp 16");
+        eprintln!("sponza: packet test decided {decided} of {tests}");
+    }
+}
+
+/// A small deterministic generator in `[0, 1)`.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f32 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((self.0 >> 40) as f32) / (1u64 << 24) as f32
+    }
+}
+
+/// Checks every packet (one pixel's 16 subsamples, and 4 x 4-pixel blocks at 1 spp) of a
+/// pinhole around pixel `(px, py)` against `tri`: an `Out` packet has no lane the watertight
+/// test hits, an `In` packet has every lane hit. Returns `(out, in, partial)` counts.
+fn check_tri(set16: &SampleSet, set1: &SampleSet, tri: [Vec3; 3], counts: &mut [u64; 3]) {
+    let Camera::Pinhole(p) = &set16.camera else {
+        unreachable!()
+    };
+    let o = p.frame.position;
+    let w = p.width;
+    for (set, block) in [(set16, 1u32), (set1, 4u32)] {
+        let fr = FilmFrame::of(set, o, 0.5).unwrap();
+        let spp = set.spp as usize;
+        for by in (0..p.height).step_by(block as usize) {
+            for bx in (0..w).step_by(block as usize) {
+                // The packet's rays and film box.
+                let mut rays = Vec::new();
+                let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
+                for y in by..by + block {
+                    for x in bx..bx + block {
+                        let i = (y * w + x) as usize;
+                        for k in 0..spp {
+                            let s = &set.samples[i];
+                            let f = s.film + set.offsets[k] * s.footprint;
+                            lo = lo.min(f);
+                            hi = hi.max(f);
+                            rays.push(set.fast_subsample_ray(i, k).unwrap());
+                        }
+                    }
+                }
+                let Some(pb) = PacketBox::new(&fr, lo.x, hi.x, lo.y, hi.y) else {
+                    continue;
+                };
+                // The packet's cone (as a tile's: centre and largest chord, widened).
+                let c = rays.iter().map(|r| r.dir).sum::<Vec3>().normalize();
+                let r = rays
+                    .iter()
+                    .map(|r| (r.dir - c).length())
+                    .fold(0.0, f32::max);
+                let cone = Cone {
+                    centre: c,
+                    radius: r * 1.001 + 1e-6,
+                };
+                let Some(ts) = TriSetup::new(tri, o, 0, 0, &cone) else {
+                    continue;
+                };
+                let class = pb.classify(&fr.affine(&ts.n), ts.bound);
+                let hits = rays
+                    .iter()
+                    .filter(|r: &&Ray| {
+                        WatertightRay::new(r)
+                            .intersect(tri[0], tri[1], tri[2])
+                            .is_some()
+                    })
+                    .count();
+                match class {
+                    PacketClass::Out => {
+                        assert_eq!(hits, 0, "Out packet ({bx}, {by}) with {hits} hits: {tri:?}");
+                        counts[0] += 1;
+                    }
+                    PacketClass::In => {
+                        assert_eq!(hits, rays.len(), "In packet ({bx}, {by}): {tri:?}");
+                        counts[1] += 1;
+                    }
+                    PacketClass::Partial => counts[2] += 1,
+                }
+            }
+        }
+    }
+}
+
+/// The packet test never contradicts the watertight test, on triangles built to be hard:
+/// edges through subsample rays (and their mirror images: shared edges), fans around a vertex
+/// on a subsample ray, grazing (nearly edge-on) triangles, sub-pixel and huge triangles, at
+/// distances from 1e-2 to 1e4; every class occurs.
+#[test]
+fn packet_classification_never_contradicts_the_watertight_test() {
+    let desc = CameraDesc::new(
+        Vec3::new(0.3, -1.2, 2.0),
+        Vec3::new(1.0, 0.5, -3.0),
+        Vec3::Y,
+        50.0,
+    );
+    let (w, h) = (12, 12);
+    let cam = Camera::new(ModelKind::Pinhole, &desc, w, h, &CameraOptions::default()).unwrap();
+    let set16 = SampleSet::grid(cam.clone(), 16);
+    let set1 = SampleSet::grid(cam, 1);
+    let o = match &set16.camera {
+        Camera::Pinhole(p) => p.frame.position,
+        _ => unreachable!(),
+    };
+    let mut rng = Rng(7);
+    let mut counts = [0u64; 3];
+    let sub = |rng: &mut Rng| {
+        let i = (rng.next() * (w * h) as f32) as usize;
+        let k = (rng.next() * 16.0) as usize;
+        set16.fast_subsample_ray(i, k).unwrap().dir
+    };
+    for case in 0..160 {
+        let dist = 10f32.powf(rng.next() * 6.0 - 2.0);
+        let (d1, d2) = (sub(&mut rng), sub(&mut rng));
+        let (p1, p2) = (o + d1 * dist, o + d2 * dist * (0.5 + rng.next()));
+        let side = (d1.cross(d2)).normalize_or_zero() * dist * (0.01 + rng.next());
+        let tris: Vec<[Vec3; 3]> = match case % 4 {
+            // An edge through two subsample rays, and its mirror (a shared edge).
+            0 => {
+                let mid = (p1 + p2) * 0.5;
+                vec![[p1, p2, mid + side], [p2, p1, mid - side]]
+            }
+            // A fan of four triangles around a vertex on a subsample ray.
+            1 => {
+                let (a, b) = d1.any_orthonormal_pair();
+                let s = dist * (0.002 + 0.05 * rng.next());
+                let ring = [a, b, -a, -b].map(|x| p1 + x * s);
+                (0..4).map(|q| [p1, ring[q], ring[(q + 1) % 4]]).collect()
+            }
+            // Grazing: nearly containing a subsample ray.
+            2 => {
+                let far = o + d1 * dist * 2.0;
+                let eps = dist * 1e-4 * rng.next();
+                vec![[p1, far, p1 + side * 1e-3 + d2 * eps], [p1, far + side, p2]]
+            }
+            // Sub-pixel to huge, random.
+            _ => {
+                let s = dist * 10f32.powf(rng.next() * 4.0 - 4.0);
+                let j = |rng: &mut Rng| Vec3::new(rng.next(), rng.next(), rng.next()) - 0.5;
+                vec![[
+                    p1 + j(&mut rng) * s,
+                    p1 + j(&mut rng) * s,
+                    p1 + j(&mut rng) * s,
+                ]]
+            }
+        };
+        for t in tris {
+            check_tri(&set16, &set1, t, &mut counts);
+        }
+    }
+    eprintln!(
+        "packets out {} in {} partial {}",
+        counts[0], counts[1], counts[2]
+    );
+    assert!(counts.iter().all(|&c| c > 100), "{counts:?}");
+}
