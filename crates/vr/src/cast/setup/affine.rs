@@ -70,8 +70,11 @@
 use glam::{Mat3, Vec3, Vec4};
 use parallax_scene::camera::{Camera, Pinhole};
 
-use super::tri::U;
 use crate::SampleSet;
+
+/// Unit roundoff of f32 (`2^-24`), the `U` of the bound above (the same constant as the
+/// watertight set-up's in `tri.rs`).
+const U: f32 = f32::EPSILON * 0.5;
 
 /// A pinhole's film-to-camera map and basis, for the tile's eye (module docs).
 #[derive(Clone, Copy, Debug)]
