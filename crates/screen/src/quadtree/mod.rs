@@ -81,6 +81,7 @@ pub mod merge;
 mod merge_lanes;
 pub mod node;
 mod prune;
+mod setup;
 pub mod traverse;
 pub mod tree;
 
