@@ -74,6 +74,7 @@
 //!
 //! Measurements, and what was tried and dropped: `docs/notes/quadtree.md`.
 
+mod batch;
 pub mod build;
 pub mod cascade;
 mod fixpoint;
