@@ -72,6 +72,11 @@
 //! that LLVM does not fold the successor's top-level cap into a `cmov` on the chain to the
 //! next node index.
 //!
+//! [`QuadTree::trace_layer`] is [`QuadTree::layer_start`] (the `z`-floor skip, start level and
+//! node) followed by [`QuadTree::layer_walk`] (the loop), so that a batch of rays can compute
+//! all its starts before the first walk (`super::batch`); the per-ray set-up is
+//! [`RaySetup`] (`super::setup`).
+//!
 //! The loop carries a hard bound of `(W + H + 2) (2 levels + 2)` steps (every pixel column
 //! the segment crosses, each reached after at most `levels` descents); hitting it ends the
 //! layer with what was found. Nothing allocates; the hot loop is f32. Node loads are

@@ -33,7 +33,7 @@
 //! reference is captured `guard` pixels wider on every side (same pixel size, same centre).
 //!
 //! **Batches** (speed only): with `N_sec = 1` and the quad-tree, a row's lens rays are traced
-//! [`LENS_BATCH`] at a time with [`QuadTreeTracer::trace_batch`] (clip, set-up and start of
+//! `LENS_BATCH` (8) at a time with [`QuadTreeTracer::trace_batch`] (clip, set-up and start of
 //! every ray of the batch before the first walk: the per-ray set-up is a latency chain that
 //! the batch's rays then overlap); the samples, their order, every result and every pixel's
 //! sum are those of one ray at a time (test `tests/dof_batch.rs`). Secondary samples follow
