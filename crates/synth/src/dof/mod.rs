@@ -375,7 +375,7 @@ fn batched_row(
     }
     flush(&rays[..n], &px[..n], row, c);
     for out in row.iter_mut() {
-        *out = *out / opts.n_pri as f32;
+        *out /= opts.n_pri as f32;
     }
 }
 
