@@ -84,11 +84,13 @@ use parallax_core::{GBuffer, Ray};
 use rayon::prelude::*;
 
 use super::node::plane_z;
-use super::traverse::{Query, RaySetup};
+use super::traverse::{LayerEvents, Query, RaySetup};
 use super::tree::QuadTree;
 use super::{INPAINT_DILATION_PX, LayerMode, QuadTreeOptions};
 use crate::depth_layers::{Clip, PixelRay};
-use crate::{LayerPlanes, ScreenError, ScreenTracer, TraceResult, TraceStats, UnitCube};
+use crate::{
+    CubeSegment, LayerPlanes, ScreenError, ScreenTracer, TraceResult, TraceStats, UnitCube,
+};
 
 /// Margin of the safety test (in `f` units).
 pub(super) const SAFE_MARGIN: f32 = 1e-6;
@@ -103,7 +105,7 @@ pub struct QuadTreeTracer {
     unsafe_pixels: Vec<usize>,
     /// The f32 cube clip shared with the baselines ([`Self::with_f32_clip`]).
     clip: Clip,
-    f32_clip: bool,
+    pub(super) f32_clip: bool,
 }
 
 impl QuadTreeTracer {
@@ -349,6 +351,20 @@ impl QuadTreeTracer {
         }
         let t0 = &self.trees[0];
         let rs = RaySetup::new(&seg, t0.wf, t0.hf);
+        self.trace_segment(ray, &seg, &rs, stats)
+    }
+
+    /// [`Self::trace_impl`] after the clip and the set-up: `seg` is `ray`'s cube segment and
+    /// `rs` its [`RaySetup`] (also the batches' last phase, [`super::batch`]).
+    #[inline(always)]
+    pub(super) fn trace_segment(
+        &self,
+        ray: &Ray,
+        seg: &CubeSegment,
+        rs: &RaySetup,
+        stats: &mut TraceStats,
+    ) -> (TraceResult, usize) {
+        let t0 = &self.trees[0];
         let nl = self.trees.len();
         if nl == 1 && self.opts.mode == LayerMode::Cascade {
             // One layer without inpainting: the general loop below with its query fixed
@@ -361,28 +377,8 @@ impl QuadTreeTracer {
                 want_trigger: false,
                 stop_at_ov: false,
             };
-            let ev = t0.trace_layer(&rs, &q, stats);
-            if let Some((s, pixel)) = ev.hit {
-                stats.hits += 1;
-                let t = seg.world_t(s);
-                let r = TraceResult::Hit {
-                    layer: 0,
-                    pixel,
-                    position: ray.at(t),
-                    t,
-                };
-                return (r, 1);
-            }
-            if let Some((s, pixel)) = ev.ov {
-                stats.occlusion_volumes += 1;
-                let r = TraceResult::OcclusionVolume {
-                    layer: 0,
-                    pixel,
-                    t: seg.world_t(s),
-                };
-                return (r, 1);
-            }
-            return (TraceResult::Miss, 1);
+            let ev = t0.trace_layer(rs, &q, stats);
+            return (one_layer_result(ray, seg, &ev, stats), 1);
         }
         let mut q = Query {
             s_lo: 0.0,
@@ -400,7 +396,7 @@ impl QuadTreeTracer {
             let last = k + 1 == nl;
             q.want_trigger = !last;
             q.stop_at_ov = last && self.opts.mode == LayerMode::Inpaint;
-            let ev = tree.trace_layer(&rs, &q, stats);
+            let ev = tree.trace_layer(rs, &q, stats);
             if let Some((s, px)) = ev.hit {
                 best_hit = Some((s, px, k as u32));
                 q.s_hi = s;
@@ -455,6 +451,36 @@ impl QuadTreeTracer {
         }
         (TraceResult::Miss, reached)
     }
+}
+
+/// The answer of a single-layer cascade trace of `ray` (segment `seg`) from its layer-0
+/// events, with the hit / occlusion counts.
+#[inline(always)]
+pub(super) fn one_layer_result(
+    ray: &Ray,
+    seg: &CubeSegment,
+    ev: &LayerEvents,
+    stats: &mut TraceStats,
+) -> TraceResult {
+    if let Some((s, pixel)) = ev.hit {
+        stats.hits += 1;
+        let t = seg.world_t(s);
+        return TraceResult::Hit {
+            layer: 0,
+            pixel,
+            position: ray.at(t),
+            t,
+        };
+    }
+    if let Some((s, pixel)) = ev.ov {
+        stats.occlusion_volumes += 1;
+        return TraceResult::OcclusionVolume {
+            layer: 0,
+            pixel,
+            t: seg.world_t(s),
+        };
+    }
+    TraceResult::Miss
 }
 
 impl ScreenTracer for QuadTreeTracer {

@@ -14,6 +14,10 @@
 //! - [`traverse`]: the stackless traversal of §4 (exact plane hits, child by entry
 //!   quadrant, successor by exit edge, restart `findMSB((Qx^Qx*)|(Qy^Qy*))` levels up —
 //!   Frisken & Perry 2002 — crack dilation, occlusion-volume extrusion, hard step bound);
+//!   `setup`: its per-ray set-up ([`traverse::RaySetup`]);
+//! - `batch`: [`QuadTreeTracer::trace_batch`], many rays in phases (clip, set-up and start,
+//!   walk) with the results of one ray at a time — the per-ray set-up's latency chains of
+//!   the batch's rays overlap (depth of field's lens rays, §5.2);
 //! - [`cascade`]: [`QuadTreeTracer`], all layers of one reference view, with the occlusion
 //!   handling of §4.1 in the two [`LayerMode`]s, and the derivation that makes cascading
 //!   exact.
@@ -77,6 +81,7 @@
 //!
 //! Measurements, and what was tried and dropped: `docs/notes/quadtree.md`.
 
+mod batch;
 pub mod build;
 pub mod cascade;
 mod fixpoint;
@@ -88,6 +93,7 @@ mod merge_lanes;
 mod merge_rows;
 pub mod node;
 mod prune;
+mod setup;
 pub mod traverse;
 pub mod tree;
 #[cfg(target_arch = "x86_64")]

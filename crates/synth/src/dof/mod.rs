@@ -32,6 +32,14 @@
 //! lens-centre frustum near the image border by up to the circle of confusion, so the
 //! reference is captured `guard` pixels wider on every side (same pixel size, same centre).
 //!
+//! **Batches** (speed only): with `N_sec = 1` and the quad-tree, a row's lens rays are traced
+//! `LENS_BATCH` (8) at a time with [`QuadTreeTracer::trace_batch`] (clip, set-up and start of
+//! every ray of the batch before the first walk: the per-ray set-up is a latency chain that
+//! the batch's rays then overlap); the samples, their order, every result and every pixel's
+//! sum are those of one ray at a time (test `tests/dof_batch.rs`). Secondary samples follow
+//! their primary's result, so `N_sec > 1` traces one ray at a time; the other tracers (the
+//! DDA baseline) too.
+//!
 //! **Invariants:** the image is bit-identical for any thread count (per-pixel random stream
 //! `Rng::for_pixel(seed, x, y, 0)`, consumed in a fixed order; rows write only their own
 //! pixels); with `aperture = 0` every lens ray is the pinhole ray of the pixel centre, so the
@@ -73,6 +81,8 @@ pub use setup::{DofSetup, capture_dof_reference};
 pub const MAX_PRIMARY: u32 = 4096;
 /// Largest `n_sec` accepted (colour samples per lens ray).
 pub const MAX_SECONDARY: u32 = 256;
+/// Lens rays of a pixel handed to [`QuadTreeTracer::trace_batch`] at once.
+const LENS_BATCH: usize = 8;
 /// Default `sigma` of the secondary weight (relative depth, module docs).
 pub const DEFAULT_SIGMA: f32 = 0.02;
 
@@ -290,6 +300,21 @@ struct RowCounts {
 }
 
 impl RowCounts {
+    /// Counts a lens ray's answer.
+    #[inline(always)]
+    fn tally(&mut self, kind: HitKind) {
+        match kind {
+            HitKind::Hit(l) if l >= 1 => self.deep += 1,
+            HitKind::Occlusion(l) if l >= 1 => self.deep += 1,
+            _ => {}
+        }
+        match kind {
+            HitKind::Miss => self.misses += 1,
+            HitKind::Occlusion(_) => self.occlusions += 1,
+            HitKind::Hit(_) => {}
+        }
+    }
+
     fn add(mut self, o: Self) -> Self {
         self.stats += o.stats;
         self.deep += o.deep;
@@ -298,6 +323,59 @@ impl RowCounts {
         self.secondary += o.secondary;
         self.cpu_ms += o.cpu_ms;
         self
+    }
+}
+
+/// One row `y` of [`render_dof`] with `N_sec = 1` through the quad-tree: the row's lens rays,
+/// made pixel by pixel in the order of the one-ray-at-a-time loop (the same samples), traced
+/// in batches of [`LENS_BATCH`] that may span pixels ([`QuadTreeTracer::trace_batch`]: the
+/// same results); each ray's colour is added to its pixel in the ray's order, so every
+/// pixel's sum is the same. `row` holds zeros on entry.
+#[allow(clippy::too_many_arguments)]
+fn batched_row(
+    qt: &QuadTreeTracer,
+    per_ray: &RayWarp,
+    lens_rays: &LensRays,
+    lens: &ThinLens,
+    opts: &DofOptions,
+    y: u32,
+    row: &mut [Rgb],
+    c: &mut RowCounts,
+) {
+    let (cols, rows) = lens_strata(opts.n_pri);
+    let cell = Vec2::new(1.0 / cols as f32, 1.0 / rows as f32);
+    let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); LENS_BATCH];
+    let mut px = [0usize; LENS_BATCH];
+    let mut found = [TraceResult::Miss; LENS_BATCH];
+    let mut flush = |rays: &[Ray], px: &[usize], row: &mut [Rgb], c: &mut RowCounts| {
+        let found = &mut found[..rays.len()];
+        qt.trace_batch(rays, found, &mut c.stats);
+        for ((ray, &r), &x) in rays.iter().zip(found.iter()).zip(px) {
+            let r = per_ray.guarded(ray, r, &mut c.stats);
+            let (colour, kind) = per_ray.colour(ray, r);
+            c.tally(kind);
+            row[x] += colour;
+        }
+    };
+    let mut n = 0;
+    for x in 0..row.len() {
+        let film = Vec2::new(x as u32 as f32 + 0.5, y as f32 + 0.5);
+        let p_focus = lens_rays.focus_point(lens, film);
+        let mut rng = Rng::for_pixel(opts.seed, x as u32, y, 0);
+        for i in 0..opts.n_pri {
+            let corner = Vec2::new((i % cols) as f32, (i / cols) as f32);
+            rays[n] = lens_rays.ray(p_focus, (corner + rng.next_vec2()) * cell);
+            px[n] = x;
+            n += 1;
+            if n == LENS_BATCH {
+                flush(&rays, &px, row, c);
+                n = 0;
+            }
+        }
+    }
+    flush(&rays[..n], &px[..n], row, c);
+    for out in row.iter_mut() {
+        *out /= opts.n_pri as f32;
     }
 }
 
@@ -326,6 +404,13 @@ pub fn render_dof(
         DofStructure::Other(..) => None,
     };
     let tracer = structure.tracer();
+    // Plain lens sampling through the quad-tree traces a pixel's lens rays in batches (the
+    // secondaries' samples follow their primary's result, so `N_sec > 1` keeps the order
+    // of one ray at a time).
+    let batched = match structure {
+        DofStructure::QuadTree(q) if opts.n_sec == 1 => Some(q),
+        _ => None,
+    };
     let per_ray = RayWarp::new(reference, &opts.warp);
     let lens_rays = LensRays::new(lens);
     let (w, h) = (lens.width(), lens.height());
@@ -339,6 +424,11 @@ pub fn render_dof(
         .map(|(y, row)| {
             let c0 = thread_cpu_ns();
             let mut c = RowCounts::default();
+            if let Some(qt) = batched {
+                batched_row(qt, &per_ray, &lens_rays, lens, opts, y as u32, row, &mut c);
+                c.cpu_ms = ms_between(c0, thread_cpu_ns());
+                return c;
+            }
             for (x, out) in row.iter_mut().enumerate() {
                 let (x, y) = (x as u32, y as u32);
                 let film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
@@ -350,16 +440,7 @@ pub fn render_dof(
                     let mut lens_sample = || (corner + rng.next_vec2()) * cell;
                     let ray = lens_rays.ray(p_focus, lens_sample());
                     let (colour, kind, r) = per_ray.answer(tracer, &ray, &mut c.stats);
-                    match kind {
-                        HitKind::Hit(l) if l >= 1 => c.deep += 1,
-                        HitKind::Occlusion(l) if l >= 1 => c.deep += 1,
-                        _ => {}
-                    }
-                    match kind {
-                        HitKind::Miss => c.misses += 1,
-                        HitKind::Occlusion(_) => c.occlusions += 1,
-                        HitKind::Hit(_) => {}
-                    }
+                    c.tally(kind);
                     let mut ray_colour = colour;
                     if let (Some(sec), TraceResult::Hit { layer, pixel, .. }) = (&secondaries, r)
                         && opts.n_sec > 1

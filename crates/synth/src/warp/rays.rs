@@ -78,8 +78,15 @@ impl<'a> RayWarp<'a> {
         ray: &Ray,
         stats: &mut TraceStats,
     ) -> TraceResult {
+        let r = tracer.trace(ray, stats);
+        self.guarded(ray, r, stats)
+    }
+
+    /// The layer-0 guard of [`Self::trace`] applied to `r`, the tracer's answer for `ray`
+    /// (for rays traced in batches), adding the guard's work to `stats`.
+    #[inline(always)]
+    pub fn guarded(&self, ray: &Ray, mut r: TraceResult, stats: &mut TraceStats) -> TraceResult {
         let reference = self.reference;
-        let mut r = tracer.trace(ray, stats);
         if self.side_guard || self.guard.is_some() {
             r = guard_deep(
                 reference,

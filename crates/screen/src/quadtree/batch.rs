@@ -1,0 +1,111 @@
+//! [`QuadTreeTracer::trace_batch`]: many rays at once, in phases (the application: the lens
+//! rays of one pixel in depth of field, Widmer et al. 2015, §5.2 — short rays whose
+//! per-ray set-up costs as much as their traversal).
+//!
+//! **What changes, what does not.** Every ray gets exactly the operations of
+//! [`QuadTreeTracer::trace_ray`] — the f64 cube clip, [`RaySetup::new`], the start of
+//! [`QuadTree::layer_start`] and the walk of [`QuadTree::layer_walk`] — so results and work
+//! counters are bit for bit those of tracing the rays one by one (test
+//! `tests/quadtree_batch.rs`). Only the order differs: up to [`BATCH`] rays are clipped,
+//! then set up and started, then walked. The set-up is a chain of dependent divisions and
+//! conversions ending in the start node's index (`docs/notes/quadtree.md`, "latency, not
+//! instructions"); one ray at a time the CPU waits on it, and a mispredicted branch of the
+//! walk (about three per ray) discards the next ray's set-up that had started. In phases the
+//! chains of the batch's rays are independent and overlap, and each walk starts from a
+//! finished set-up.
+//!
+//! With one layer in cascade mode (the common case of depth of field) the layer's start is
+//! part of the second phase; with several layers or inpainting the cascade runs ray by ray
+//! after the clip and set-up phases (a deeper layer's window depends on the layer before).
+//! The opt-in f32 clip traces the rays one by one.
+
+use parallax_core::Ray;
+
+use super::LayerMode;
+use super::cascade::{QuadTreeTracer, one_layer_result};
+use super::traverse::{LayerStart, Query, RaySetup};
+use crate::{CubeSegment, ScreenTracer, TraceResult, TraceStats};
+
+/// Rays per phase of [`QuadTreeTracer::trace_batch`].
+pub const BATCH: usize = 8;
+
+impl QuadTreeTracer {
+    /// Traces `rays[i]` into `out[i]` (equal lengths), adding the work to `stats`: the same
+    /// results and counters as [`ScreenTracer::trace`] per ray (module docs).
+    pub fn trace_batch(&self, rays: &[Ray], out: &mut [TraceResult], stats: &mut TraceStats) {
+        assert_eq!(rays.len(), out.len(), "one result per ray");
+        if self.f32_clip {
+            for (ray, o) in rays.iter().zip(out.iter_mut()) {
+                *o = self.trace(ray, stats);
+            }
+            return;
+        }
+        let one = self.trees.len() == 1 && self.opts.mode == LayerMode::Cascade;
+        for (rays, out) in rays.chunks(BATCH).zip(out.chunks_mut(BATCH)) {
+            if one {
+                self.one_layer_phases(rays, out, stats);
+            } else {
+                self.cascade_phases(rays, out, stats);
+            }
+        }
+    }
+
+    /// At most [`BATCH`] rays through several layers (or with inpainting): clip, set-up, then
+    /// the cascade of [`QuadTreeTracer::trace_ray`] ray by ray.
+    #[inline(always)]
+    fn cascade_phases(&self, rays: &[Ray], out: &mut [TraceResult], stats: &mut TraceStats) {
+        debug_assert!(rays.len() <= BATCH && rays.len() == out.len());
+        let t0 = &self.trees[0];
+        let mut segs: [Option<CubeSegment>; BATCH] = [None; BATCH];
+        for (seg, ray) in segs.iter_mut().zip(rays) {
+            *seg = self.cube.clip_ray(ray);
+        }
+        let mut setups: [Option<RaySetup>; BATCH] = [None; BATCH];
+        for (rs, seg) in setups.iter_mut().zip(&segs) {
+            *rs = seg.as_ref().map(|seg| RaySetup::new(seg, t0.wf, t0.hf));
+        }
+        for (i, (ray, o)) in rays.iter().zip(out.iter_mut()).enumerate() {
+            stats.rays += 1;
+            *o = match (&segs[i], &setups[i]) {
+                (Some(seg), Some(rs)) => self.trace_segment(ray, seg, rs, stats).0,
+                _ => TraceResult::Miss,
+            };
+        }
+    }
+
+    /// At most [`BATCH`] rays through the single layer in three phases: clip, set-up and
+    /// start, walk and result (the one-layer path of [`QuadTreeTracer::trace_ray`]).
+    #[inline(always)]
+    fn one_layer_phases(&self, rays: &[Ray], out: &mut [TraceResult], stats: &mut TraceStats) {
+        debug_assert!(rays.len() <= BATCH && rays.len() == out.len());
+        let t0 = &self.trees[0];
+        let q = Query {
+            s_lo: 0.0,
+            s_hi: 1.0,
+            hi_inclusive: true,
+            want_trigger: false,
+            stop_at_ov: false,
+        };
+        let mut segs: [Option<CubeSegment>; BATCH] = [None; BATCH];
+        for (seg, ray) in segs.iter_mut().zip(rays) {
+            *seg = self.cube.clip_ray(ray);
+        }
+        let mut started: [Option<(RaySetup, Option<LayerStart>)>; BATCH] = [None; BATCH];
+        for (st, seg) in started.iter_mut().zip(&segs) {
+            if let Some(seg) = seg {
+                let rs = RaySetup::new(seg, t0.wf, t0.hf);
+                *st = Some((rs, t0.layer_start(&rs, &q)));
+            }
+        }
+        for (i, (ray, o)) in rays.iter().zip(out.iter_mut()).enumerate() {
+            stats.rays += 1;
+            *o = match (&segs[i], &started[i]) {
+                (Some(seg), Some((rs, Some(start)))) => {
+                    let ev = t0.layer_walk(rs, &q, *start, stats);
+                    one_layer_result(ray, seg, &ev, stats)
+                }
+                _ => TraceResult::Miss,
+            };
+        }
+    }
+}
