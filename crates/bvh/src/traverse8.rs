@@ -69,20 +69,31 @@ impl RayBoxes8 {
     }
 }
 
-/// An 8-lane slab test: the hit mask (bit i = lane i) and the stack keys of the eight lanes,
-/// `t_near bits << 32 | child` (all-ones distance bits in missed lanes, so their keys sort
-/// last; the distances of hit lanes are `>= t_min`, so their bits order as the floats where
-/// `t_min >= 0`).
+/// An 8-lane slab test: the hit mask (bit i = lane i) and the entry distances (`Dist`, in
+/// registers where the test has them), then, only for nodes with a hit child (the child
+/// references are the node's fourth cache line), the stack keys of the eight lanes,
+/// `t_near bits << 32 | child`: meaningful in hit lanes only (the traversal reads no other);
+/// the distances of hit lanes are `>= t_min`, so their bits order as the floats where
+/// `t_min >= 0`.
 pub(crate) trait NodeTest8 {
-    fn test(&self, node: &Node8, t_max: f32) -> (u32, [u64; 8]);
+    type Dist: Copy;
+    fn test(&self, node: &Node8, t_max: f32) -> (u32, Self::Dist);
+    fn keys(&self, node: &Node8, t: Self::Dist) -> [u64; 8];
 }
 
 /// The portable twin: two 4-lane halves.
 pub(crate) struct Portable8(pub RayBoxes8);
 
 impl NodeTest8 for Portable8 {
+    type Dist = [f32; 8];
+
     #[inline(always)]
-    fn test(&self, node: &Node8, t_max: f32) -> (u32, [u64; 8]) {
+    fn keys(&self, node: &Node8, t: [f32; 8]) -> [u64; 8] {
+        std::array::from_fn(|c| (t[c].to_bits() as u64) << 32 | node.child[c] as u64)
+    }
+
+    #[inline(always)]
+    fn test(&self, node: &Node8, t_max: f32) -> (u32, [f32; 8]) {
         let rb = &self.0;
         let base = node.bounds.as_ptr() as *const u8;
         let mut mask = 0;
@@ -107,14 +118,10 @@ impl NodeTest8 for Portable8 {
             let t_far = min_or_rhs(tfz, min_or_rhs(tfy, min_or_rhs(tfx, Vec4::splat(t_max))));
             let t_far = t_far * ROBUST_FAR_SCALE;
             let hit = t_near.cmple(t_far);
-            let t_near = Vec4::select(hit, t_near, Vec4::splat(f32::from_bits(u32::MAX)));
             mask |= hit.bitmask() << (4 * h);
             t[4 * h..4 * h + 4].copy_from_slice(&t_near.to_array());
         }
-        (
-            mask,
-            std::array::from_fn(|c| (t[c].to_bits() as u64) << 32 | node.child[c] as u64),
-        )
+        (mask, t)
     }
 }
 
@@ -148,8 +155,30 @@ impl Avx2Boxes8 {
 
 #[cfg(target_arch = "x86_64")]
 impl NodeTest8 for Avx2Boxes8 {
+    type Dist = std::arch::x86_64::__m256;
+
     #[inline(always)]
-    fn test(&self, node: &Node8, t_max: f32) -> (u32, [u64; 8]) {
+    fn keys(&self, node: &Node8, t_near: Self::Dist) -> [u64; 8] {
+        use std::arch::x86_64::*;
+        // SAFETY: AVX2 was detected (`new`); `child` is 32-byte aligned (offset 192 of the
+        // 64-byte aligned node).
+        unsafe {
+            // Interleave the children (low halves) with the distance bits (high halves), then
+            // restore lane order: `lo` = keys 0, 1 | 4, 5, `hi` = 2, 3 | 6, 7.
+            let child = _mm256_load_si256(node.child.as_ptr() as *const __m256i);
+            let tb = _mm256_castps_si256(t_near);
+            let lo = _mm256_unpacklo_epi32(child, tb);
+            let hi = _mm256_unpackhi_epi32(child, tb);
+            let mut keys = [0u64; 8];
+            let kp = keys.as_mut_ptr() as *mut __m256i;
+            _mm256_storeu_si256(kp, _mm256_permute2x128_si256::<0x20>(lo, hi));
+            _mm256_storeu_si256(kp.add(1), _mm256_permute2x128_si256::<0x31>(lo, hi));
+            keys
+        }
+    }
+
+    #[inline(always)]
+    fn test(&self, node: &Node8, t_max: f32) -> (u32, Self::Dist) {
         use std::arch::x86_64::*;
         let rb = &self.rb;
         let base = node.bounds.as_ptr() as *const u8;
@@ -179,21 +208,7 @@ impl NodeTest8 for Avx2Boxes8 {
             );
             let t_far = _mm256_mul_ps(t_far, _mm256_set1_ps(ROBUST_FAR_SCALE));
             let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(t_near, t_far);
-            let t_near = _mm256_or_ps(
-                t_near,
-                _mm256_andnot_ps(hit, _mm256_castsi256_ps(_mm256_set1_epi32(-1))),
-            );
-            // Keys in lanes: interleave the children (low halves) with the distance bits (high
-            // halves), then restore lane order: `lo` = keys 0, 1 | 4, 5, `hi` = 2, 3 | 6, 7.
-            let child = _mm256_load_si256(node.child.as_ptr() as *const __m256i);
-            let tb = _mm256_castps_si256(t_near);
-            let lo = _mm256_unpacklo_epi32(child, tb);
-            let hi = _mm256_unpackhi_epi32(child, tb);
-            let mut keys = [0u64; 8];
-            let kp = keys.as_mut_ptr() as *mut __m256i;
-            _mm256_storeu_si256(kp, _mm256_permute2x128_si256::<0x20>(lo, hi));
-            _mm256_storeu_si256(kp.add(1), _mm256_permute2x128_si256::<0x31>(lo, hi));
-            (_mm256_movemask_ps(hit) as u32, keys)
+            (_mm256_movemask_ps(hit) as u32, t_near)
         }
     }
 }
@@ -311,8 +326,9 @@ impl Bvh {
                 // SAFETY: inner child references index the node array (build invariant).
                 let node = unsafe { &*nodes.add(cur as usize) };
                 stats.node(node.num_children);
-                let (mask, keys) = nt.test(node, t_max);
+                let (mask, dist) = nt.test(node, t_max);
                 if mask != 0 {
+                    let keys = nt.keys(node, dist);
                     // SAFETY: `c < 8`.
                     let key = |c: usize| unsafe { *keys.get_unchecked(c) };
                     // Leaf children come first (`node8.rs`): start the loads of the hit leaves'
