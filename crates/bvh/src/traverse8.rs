@@ -487,25 +487,26 @@ impl Bvh {
         if self.nodes8.is_empty() || !ray_ok(ray) {
             return None;
         }
-        let rb = RayBoxes8::new(ray);
         #[cfg(target_arch = "x86_64")]
         if use_avx2() {
             // SAFETY: AVX2 was detected.
-            return unsafe { self.closest8_avx2(rb, ray, stats) };
+            return unsafe { self.closest8_avx2(ray, stats) };
         }
-        self.closest8(&Portable8(rb), ray, stats)
+        self.closest8_portable(ray, stats)
+    }
+
+    /// The portable kernel, out of line so that the dispatch above stays a small function
+    /// (inlined, its 5.5 KB stack frame and spills were paid on the AVX2 path too).
+    #[inline(never)]
+    fn closest8_portable<C: Counter>(&self, ray: &Ray, stats: &mut C) -> Option<Hit> {
+        self.closest8(&Portable8(RayBoxes8::new(ray)), ray, stats)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn closest8_avx2<C: Counter>(
-        &self,
-        rb: RayBoxes8,
-        ray: &Ray,
-        stats: &mut C,
-    ) -> Option<Hit> {
+    unsafe fn closest8_avx2<C: Counter>(&self, ray: &Ray, stats: &mut C) -> Option<Hit> {
         // SAFETY: AVX2 is enabled for this function (the caller detected it).
-        let nt = unsafe { Avx2Boxes8::new(rb) };
+        let nt = unsafe { Avx2Boxes8::new(RayBoxes8::new(ray)) };
         self.closest8(&nt, ray, stats)
     }
 
@@ -515,20 +516,25 @@ impl Bvh {
         if self.nodes8.is_empty() || !ray_ok(ray) {
             return false;
         }
-        let rb = RayBoxes8::new(ray);
         #[cfg(target_arch = "x86_64")]
         if use_avx2() {
             // SAFETY: AVX2 was detected.
-            return unsafe { self.any8_avx2(rb, ray, stats) };
+            return unsafe { self.any8_avx2(ray, stats) };
         }
-        self.any8(&Portable8(rb), ray, stats)
+        self.any8_portable(ray, stats)
+    }
+
+    /// The portable kernel, out of line (as [`Self::closest8_portable`]).
+    #[inline(never)]
+    fn any8_portable<C: Counter>(&self, ray: &Ray, stats: &mut C) -> bool {
+        self.any8(&Portable8(RayBoxes8::new(ray)), ray, stats)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn any8_avx2<C: Counter>(&self, rb: RayBoxes8, ray: &Ray, stats: &mut C) -> bool {
+    unsafe fn any8_avx2<C: Counter>(&self, ray: &Ray, stats: &mut C) -> bool {
         // SAFETY: AVX2 is enabled for this function (the caller detected it).
-        let nt = unsafe { Avx2Boxes8::new(rb) };
+        let nt = unsafe { Avx2Boxes8::new(RayBoxes8::new(ray)) };
         self.any8(&nt, ray, stats)
     }
 
@@ -539,26 +545,25 @@ impl Bvh {
         if self.nodes8.is_empty() || !ray_ok(ray) {
             return;
         }
-        let rb = RayBoxes8::new(ray);
         #[cfg(target_arch = "x86_64")]
         if use_avx2() {
             // SAFETY: AVX2 was detected.
-            return unsafe { self.all8_avx2(rb, ray, out, stats) };
+            return unsafe { self.all8_avx2(ray, out, stats) };
         }
-        self.all8(&Portable8(rb), ray, out, stats)
+        self.all8_portable(ray, out, stats)
+    }
+
+    /// The portable kernel, out of line (as [`Self::closest8_portable`]).
+    #[inline(never)]
+    fn all8_portable<C: Counter>(&self, ray: &Ray, out: &mut Vec<Hit>, stats: &mut C) {
+        self.all8(&Portable8(RayBoxes8::new(ray)), ray, out, stats)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn all8_avx2<C: Counter>(
-        &self,
-        rb: RayBoxes8,
-        ray: &Ray,
-        out: &mut Vec<Hit>,
-        s: &mut C,
-    ) {
+    unsafe fn all8_avx2<C: Counter>(&self, ray: &Ray, out: &mut Vec<Hit>, s: &mut C) {
         // SAFETY: AVX2 is enabled for this function (the caller detected it).
-        let nt = unsafe { Avx2Boxes8::new(rb) };
+        let nt = unsafe { Avx2Boxes8::new(RayBoxes8::new(ray)) };
         self.all8(&nt, ray, out, s)
     }
 
