@@ -16,7 +16,10 @@
 //! `minps`, so a ray on a slab plane with a zero direction component is handled as in
 //! `simd.rs`). No FMA: `(b - o) * inv` rounds twice, each a relative error, which the far
 //! scaling covers; Embree's `b * inv - o * inv` has an absolute error in `o * inv` that it does
-//! not (notes: docs/notes/bvh.md). Leaves are the shared 4-triangle blocks (`tri4.rs`).
+//! not (notes: docs/notes/bvh.md). Leaves are the shared 4-triangle blocks (`tri4.rs`), tested
+//! by a `LeafTest8` step (a trait, not a closure, so that it inlines into the AVX2 kernel with
+//! its target features). Hit children are ordered by `u64` keys built in lanes (AVX2: the
+//! entry distances interleaved with the child row), only for nodes with a hit child.
 //!
 //! **Invariant:** every query returns exactly what its 4-wide twin returns
 //! ([`Bvh::closest_hit4`], ...): the node test only culls (conservatively), and the closest hit
