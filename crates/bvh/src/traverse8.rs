@@ -16,7 +16,10 @@
 //! `minps`, so a ray on a slab plane with a zero direction component is handled as in
 //! `simd.rs`). No FMA: `(b - o) * inv` rounds twice, each a relative error, which the far
 //! scaling covers; Embree's `b * inv - o * inv` has an absolute error in `o * inv` that it does
-//! not (notes: docs/notes/bvh.md). Leaves are the shared 4-triangle blocks (`tri4.rs`).
+//! not (notes: docs/notes/bvh.md). Leaves are the shared 4-triangle blocks (`tri4.rs`), tested
+//! by a `LeafTest8` step (a trait, not a closure, so that it inlines into the AVX2 kernel with
+//! its target features). Hit children are ordered by `u64` keys built in lanes (AVX2: the
+//! entry distances interleaved with the child row), only for nodes with a hit child.
 //!
 //! **Invariant:** every query returns exactly what its 4-wide twin returns
 //! ([`Bvh::closest_hit4`], ...): the node test only culls (conservatively), and the closest hit
@@ -69,16 +72,29 @@ impl RayBoxes8 {
     }
 }
 
-/// An 8-lane slab test: the hit mask (bit i = lane i) and the entry distances (all-ones bits in
-/// missed lanes, so their keys sort last).
+/// An 8-lane slab test: the hit mask (bit i = lane i) and the entry distances (`Dist`, in
+/// registers where the test has them), then, only for nodes with a hit child (the child
+/// references are the node's fourth cache line), the stack keys of the eight lanes,
+/// `t_near bits << 32 | child`: meaningful in hit lanes only (the traversal reads no other);
+/// the distances of hit lanes are `>= t_min`, so their bits order as the floats where
+/// `t_min >= 0`.
 pub(crate) trait NodeTest8 {
-    fn test(&self, node: &Node8, t_max: f32) -> (u32, [f32; 8]);
+    type Dist: Copy;
+    fn test(&self, node: &Node8, t_max: f32) -> (u32, Self::Dist);
+    fn keys(&self, node: &Node8, t: Self::Dist) -> [u64; 8];
 }
 
 /// The portable twin: two 4-lane halves.
 pub(crate) struct Portable8(pub RayBoxes8);
 
 impl NodeTest8 for Portable8 {
+    type Dist = [f32; 8];
+
+    #[inline(always)]
+    fn keys(&self, node: &Node8, t: [f32; 8]) -> [u64; 8] {
+        std::array::from_fn(|c| (t[c].to_bits() as u64) << 32 | node.child[c] as u64)
+    }
+
     #[inline(always)]
     fn test(&self, node: &Node8, t_max: f32) -> (u32, [f32; 8]) {
         let rb = &self.0;
@@ -105,7 +121,6 @@ impl NodeTest8 for Portable8 {
             let t_far = min_or_rhs(tfz, min_or_rhs(tfy, min_or_rhs(tfx, Vec4::splat(t_max))));
             let t_far = t_far * ROBUST_FAR_SCALE;
             let hit = t_near.cmple(t_far);
-            let t_near = Vec4::select(hit, t_near, Vec4::splat(f32::from_bits(u32::MAX)));
             mask |= hit.bitmask() << (4 * h);
             t[4 * h..4 * h + 4].copy_from_slice(&t_near.to_array());
         }
@@ -143,8 +158,30 @@ impl Avx2Boxes8 {
 
 #[cfg(target_arch = "x86_64")]
 impl NodeTest8 for Avx2Boxes8 {
+    type Dist = std::arch::x86_64::__m256;
+
     #[inline(always)]
-    fn test(&self, node: &Node8, t_max: f32) -> (u32, [f32; 8]) {
+    fn keys(&self, node: &Node8, t_near: Self::Dist) -> [u64; 8] {
+        use std::arch::x86_64::*;
+        // SAFETY: AVX2 was detected (`new`); `child` is 32-byte aligned (offset 192 of the
+        // 64-byte aligned node).
+        unsafe {
+            // Interleave the children (low halves) with the distance bits (high halves), then
+            // restore lane order: `lo` = keys 0, 1 | 4, 5, `hi` = 2, 3 | 6, 7.
+            let child = _mm256_load_si256(node.child.as_ptr() as *const __m256i);
+            let tb = _mm256_castps_si256(t_near);
+            let lo = _mm256_unpacklo_epi32(child, tb);
+            let hi = _mm256_unpackhi_epi32(child, tb);
+            let mut keys = [0u64; 8];
+            let kp = keys.as_mut_ptr() as *mut __m256i;
+            _mm256_storeu_si256(kp, _mm256_permute2x128_si256::<0x20>(lo, hi));
+            _mm256_storeu_si256(kp.add(1), _mm256_permute2x128_si256::<0x31>(lo, hi));
+            keys
+        }
+    }
+
+    #[inline(always)]
+    fn test(&self, node: &Node8, t_max: f32) -> (u32, Self::Dist) {
         use std::arch::x86_64::*;
         let rb = &self.rb;
         let base = node.bounds.as_ptr() as *const u8;
@@ -174,19 +211,66 @@ impl NodeTest8 for Avx2Boxes8 {
             );
             let t_far = _mm256_mul_ps(t_far, _mm256_set1_ps(ROBUST_FAR_SCALE));
             let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(t_near, t_far);
-            let t_near = _mm256_or_ps(
-                t_near,
-                _mm256_andnot_ps(hit, _mm256_castsi256_ps(_mm256_set1_epi32(-1))),
-            );
-            let mut t = [0.0f32; 8];
-            _mm256_storeu_ps(t.as_mut_ptr(), t_near);
-            (_mm256_movemask_ps(hit) as u32, t)
+            (_mm256_movemask_ps(hit) as u32, t_near)
         }
     }
 }
 
 /// Whether the traversal prefetches the blocks of hit leaf children (notes: docs/notes/bvh.md).
 const PREFETCH_LEAVES: bool = true;
+
+/// The leaf step of [`Bvh::traverse8`]: a struct with an `#[inline(always)]` method, not a
+/// closure, so that it inlines into the AVX2 traversal and is compiled with its target features
+/// (closures do not inherit them, and a leaf closure became an out-of-line SSE call per leaf).
+pub(crate) trait LeafTest8<C: Counter> {
+    /// Tests leaf `(first, count)`, may shrink `t_max`; `true` stops the traversal.
+    fn test(&mut self, bvh: &Bvh, first: u32, count: u32, t_max: &mut f32, stats: &mut C) -> bool;
+}
+
+/// Closest hit: keeps the lexicographic minimum of `(t, triangle index)` in `best`, and the
+/// traversal's `t_max` after the last leaf in `t`.
+struct ClosestLeaf<'a> {
+    r4: &'a Tri4Ray,
+    best: &'a mut Best,
+    t: f32,
+}
+
+impl<C: Counter> LeafTest8<C> for ClosestLeaf<'_> {
+    #[inline(always)]
+    fn test(&mut self, bvh: &Bvh, first: u32, count: u32, t_max: &mut f32, stats: &mut C) -> bool {
+        bvh.leaf_closest(self.r4, first, count, t_max, self.best, stats);
+        self.t = *t_max;
+        false
+    }
+}
+
+/// Any hit: stops at the first hit.
+struct AnyLeaf {
+    r4: Tri4Ray,
+    found: bool,
+}
+
+impl<C: Counter> LeafTest8<C> for AnyLeaf {
+    #[inline(always)]
+    fn test(&mut self, bvh: &Bvh, first: u32, count: u32, t_max: &mut f32, stats: &mut C) -> bool {
+        self.found = bvh.leaf_any(&self.r4, first, count, *t_max, stats);
+        self.found
+    }
+}
+
+/// All hits: appends every hit to `out`.
+struct AllLeaf<'a> {
+    wt: WatertightRay,
+    out: &'a mut Vec<Hit>,
+}
+
+impl<C: Counter> LeafTest8<C> for AllLeaf<'_> {
+    #[inline(always)]
+    fn test(&mut self, bvh: &Bvh, first: u32, count: u32, _: &mut f32, stats: &mut C) -> bool {
+        bvh.leaf_all(&self.wt, first, count, self.out, stats);
+        false
+    }
+}
 
 #[inline(always)]
 fn ray_ok(ray: &Ray) -> bool {
@@ -221,10 +305,11 @@ impl Bvh {
         let _ = (node, mask);
     }
 
-    /// The 8-wide traversal kernel (the 4-wide `traverse` with eight lanes): `leaf(first,
+    /// The 8-wide traversal kernel (the 4-wide `traverse` with eight lanes): `leaf.test(first,
     /// count, t_max, stats)` tests a leaf, may shrink `t_max`, returns `true` to stop. With
-    /// `ORDERED`, hit children are visited near-to-far (insertion sort of the hit lanes' keys),
-    /// otherwise in lane order.
+    /// `ORDERED`, hit children are visited near-to-far (two: one compare; three or four: a
+    /// 5-comparator network on the compressed keys; more: insertion sort), otherwise in lane
+    /// order.
     #[inline(always)]
     fn traverse8<C: Counter, T: NodeTest8, const ORDERED: bool>(
         &self,
@@ -232,7 +317,7 @@ impl Bvh {
         root: u32,
         mut t_max: f32,
         stats: &mut C,
-        mut leaf: impl FnMut(u32, u32, &mut f32, &mut C) -> bool,
+        leaf: &mut impl LeafTest8<C>,
     ) {
         let mut stack = [MaybeUninit::<u64>::uninit(); STACK8_SIZE];
         let mut sp = 0usize;
@@ -244,9 +329,11 @@ impl Bvh {
                 // SAFETY: inner child references index the node array (build invariant).
                 let node = unsafe { &*nodes.add(cur as usize) };
                 stats.node(node.num_children);
-                let (mask, t) = nt.test(node, t_max);
+                let (mask, dist) = nt.test(node, t_max);
                 if mask != 0 {
-                    let key = |c: usize| (t[c].to_bits() as u64) << 32 | node.child[c] as u64;
+                    let keys = nt.keys(node, dist);
+                    // SAFETY: `c < 8`.
+                    let key = |c: usize| unsafe { *keys.get_unchecked(c) };
                     // Leaf children come first (`node8.rs`): start the loads of the hit leaves'
                     // triangle blocks now, so their misses overlap the work until they are
                     // tested.
@@ -281,31 +368,59 @@ impl Bvh {
                         cur = a.min(b) as u32;
                         continue;
                     }
-                    // Three or more: insertion sort, far to near, then push all but the nearest.
-                    let mut ks = [0u64; 8];
+                    // Three or more: the hit keys compressed into `ks` (padding sorts last).
+                    let mut ks = [u64::MAX; 8];
                     let mut n = 0;
                     let mut m = mask;
                     while m != 0 {
-                        let k = key(m.trailing_zeros() as usize);
+                        // SAFETY: at most 8 hit lanes.
+                        unsafe { *ks.get_unchecked_mut(n) = key(m.trailing_zeros() as usize) };
                         m &= m - 1;
-                        let mut j = n;
+                        n += 1;
+                    }
+                    let sort2 = |ks: &mut [u64; 8], i: usize, j: usize| {
+                        let (x, y) = (ks[i], ks[j]);
+                        ks[i] = x.min(y);
+                        ks[j] = x.max(y);
+                    };
+                    if n <= 4 {
+                        // Three or four: a 5-comparator network, push far to near.
+                        sort2(&mut ks, 0, 1);
+                        sort2(&mut ks, 2, 3);
+                        sort2(&mut ks, 0, 2);
+                        sort2(&mut ks, 1, 3);
+                        sort2(&mut ks, 1, 2);
+                        unsafe { *stack.get_unchecked_mut(sp) = MaybeUninit::new(ks[3]) };
+                        sp += n - 3;
+                        unsafe { *stack.get_unchecked_mut(sp) = MaybeUninit::new(ks[2]) };
+                        unsafe { *stack.get_unchecked_mut(sp + 1) = MaybeUninit::new(ks[1]) };
+                        sp += 2;
+                        cur = ks[0] as u32;
+                        continue;
+                    }
+                    // Five to eight: insertion sort, far to near, then push all but the nearest.
+                    for i in 1..n {
+                        let k = ks[i];
+                        let mut j = i;
                         while j > 0 && ks[j - 1] < k {
                             ks[j] = ks[j - 1];
                             j -= 1;
                         }
                         ks[j] = k;
-                        n += 1;
                     }
-                    for &k in &ks[..n - 1] {
-                        unsafe { *stack.get_unchecked_mut(sp) = MaybeUninit::new(k) };
-                        sp += 1;
+                    // All eight slots (no length-dependent copy: that became a `memcpy` call);
+                    // the entries above the first `n - 1` are overwritten by later pushes.
+                    // SAFETY: `sp + 8 <= 7 * depth8 + 1 < STACK8_SIZE` (checked at build).
+                    for (i, &k) in ks.iter().enumerate() {
+                        unsafe { *stack.get_unchecked_mut(sp + i) = MaybeUninit::new(k) };
                     }
+                    sp += n - 1;
                     cur = ks[n - 1] as u32;
                     continue;
                 }
             } else {
                 stats.leaf();
-                if leaf(leaf_first(cur), leaf_count(cur), &mut t_max, stats) {
+                if leaf.test(self, leaf_first(cur), leaf_count(cur), &mut t_max, stats) {
                     return;
                 }
             }
@@ -338,33 +453,32 @@ impl Bvh {
         best: &mut Best,
         stats: &mut C,
     ) {
-        let mut t_cur = *t_max;
-        self.traverse8::<C, T, true>(nt, root, *t_max, stats, |first, count, t, stats| {
-            self.leaf_closest(r4, first, count, t, best, stats);
-            t_cur = *t;
-            false
-        });
-        *t_max = t_cur;
+        let mut leaf = ClosestLeaf {
+            r4,
+            best,
+            t: *t_max,
+        };
+        self.traverse8::<C, T, true>(nt, root, *t_max, stats, &mut leaf);
+        *t_max = leaf.t;
     }
 
     #[inline(always)]
     fn any8<C: Counter, T: NodeTest8>(&self, nt: &T, ray: &Ray, stats: &mut C) -> bool {
-        let r4 = Tri4Ray::new(WatertightRay::new(ray));
-        let mut found = false;
-        self.traverse8::<C, T, false>(nt, 0, ray.t_max, stats, |first, count, t_max, stats| {
-            found = self.leaf_any(&r4, first, count, *t_max, stats);
-            found
-        });
-        found
+        let mut leaf = AnyLeaf {
+            r4: Tri4Ray::new(WatertightRay::new(ray)),
+            found: false,
+        };
+        self.traverse8::<C, T, false>(nt, 0, ray.t_max, stats, &mut leaf);
+        leaf.found
     }
 
     #[inline(always)]
     fn all8<C: Counter, T: NodeTest8>(&self, nt: &T, ray: &Ray, out: &mut Vec<Hit>, stats: &mut C) {
-        let wt = WatertightRay::new(ray);
-        self.traverse8::<C, T, false>(nt, 0, ray.t_max, stats, |first, count, _, stats| {
-            self.leaf_all(&wt, first, count, out, stats);
-            false
-        });
+        let mut leaf = AllLeaf {
+            wt: WatertightRay::new(ray),
+            out,
+        };
+        self.traverse8::<C, T, false>(nt, 0, ray.t_max, stats, &mut leaf);
         sort_hits(out);
     }
 }
@@ -376,25 +490,26 @@ impl Bvh {
         if self.nodes8.is_empty() || !ray_ok(ray) {
             return None;
         }
-        let rb = RayBoxes8::new(ray);
         #[cfg(target_arch = "x86_64")]
         if use_avx2() {
             // SAFETY: AVX2 was detected.
-            return unsafe { self.closest8_avx2(rb, ray, stats) };
+            return unsafe { self.closest8_avx2(ray, stats) };
         }
-        self.closest8(&Portable8(rb), ray, stats)
+        self.closest8_portable(ray, stats)
+    }
+
+    /// The portable kernel, out of line so that the dispatch above stays a small function
+    /// (inlined, its 5.5 KB stack frame and spills were paid on the AVX2 path too).
+    #[inline(never)]
+    fn closest8_portable<C: Counter>(&self, ray: &Ray, stats: &mut C) -> Option<Hit> {
+        self.closest8(&Portable8(RayBoxes8::new(ray)), ray, stats)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn closest8_avx2<C: Counter>(
-        &self,
-        rb: RayBoxes8,
-        ray: &Ray,
-        stats: &mut C,
-    ) -> Option<Hit> {
+    unsafe fn closest8_avx2<C: Counter>(&self, ray: &Ray, stats: &mut C) -> Option<Hit> {
         // SAFETY: AVX2 is enabled for this function (the caller detected it).
-        let nt = unsafe { Avx2Boxes8::new(rb) };
+        let nt = unsafe { Avx2Boxes8::new(RayBoxes8::new(ray)) };
         self.closest8(&nt, ray, stats)
     }
 
@@ -404,20 +519,25 @@ impl Bvh {
         if self.nodes8.is_empty() || !ray_ok(ray) {
             return false;
         }
-        let rb = RayBoxes8::new(ray);
         #[cfg(target_arch = "x86_64")]
         if use_avx2() {
             // SAFETY: AVX2 was detected.
-            return unsafe { self.any8_avx2(rb, ray, stats) };
+            return unsafe { self.any8_avx2(ray, stats) };
         }
-        self.any8(&Portable8(rb), ray, stats)
+        self.any8_portable(ray, stats)
+    }
+
+    /// The portable kernel, out of line (as [`Self::closest8_portable`]).
+    #[inline(never)]
+    fn any8_portable<C: Counter>(&self, ray: &Ray, stats: &mut C) -> bool {
+        self.any8(&Portable8(RayBoxes8::new(ray)), ray, stats)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn any8_avx2<C: Counter>(&self, rb: RayBoxes8, ray: &Ray, stats: &mut C) -> bool {
+    unsafe fn any8_avx2<C: Counter>(&self, ray: &Ray, stats: &mut C) -> bool {
         // SAFETY: AVX2 is enabled for this function (the caller detected it).
-        let nt = unsafe { Avx2Boxes8::new(rb) };
+        let nt = unsafe { Avx2Boxes8::new(RayBoxes8::new(ray)) };
         self.any8(&nt, ray, stats)
     }
 
@@ -428,26 +548,25 @@ impl Bvh {
         if self.nodes8.is_empty() || !ray_ok(ray) {
             return;
         }
-        let rb = RayBoxes8::new(ray);
         #[cfg(target_arch = "x86_64")]
         if use_avx2() {
             // SAFETY: AVX2 was detected.
-            return unsafe { self.all8_avx2(rb, ray, out, stats) };
+            return unsafe { self.all8_avx2(ray, out, stats) };
         }
-        self.all8(&Portable8(rb), ray, out, stats)
+        self.all8_portable(ray, out, stats)
+    }
+
+    /// The portable kernel, out of line (as [`Self::closest8_portable`]).
+    #[inline(never)]
+    fn all8_portable<C: Counter>(&self, ray: &Ray, out: &mut Vec<Hit>, stats: &mut C) {
+        self.all8(&Portable8(RayBoxes8::new(ray)), ray, out, stats)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn all8_avx2<C: Counter>(
-        &self,
-        rb: RayBoxes8,
-        ray: &Ray,
-        out: &mut Vec<Hit>,
-        s: &mut C,
-    ) {
+    unsafe fn all8_avx2<C: Counter>(&self, ray: &Ray, out: &mut Vec<Hit>, s: &mut C) {
         // SAFETY: AVX2 is enabled for this function (the caller detected it).
-        let nt = unsafe { Avx2Boxes8::new(rb) };
+        let nt = unsafe { Avx2Boxes8::new(RayBoxes8::new(ray)) };
         self.all8(&nt, ray, out, s)
     }
 

@@ -91,11 +91,12 @@ pub struct Tri4Hits {
 }
 
 /// A ray prepared for the 4-triangle test: the permutation and shear of Woop et al. 2013, §3,
-/// splatted into lanes.
+/// splatted into lanes, the origin already in permuted order (`org[i]` = origin axis `k[i]`).
 #[derive(Clone, Copy, Debug)]
 pub struct Tri4Ray {
     pub wt: WatertightRay,
     org: [Vec4; 3],
+    /// `[kx, ky, kz]`, each `< 3` (checked once in [`Tri4Ray::new`]).
     k: [usize; 3],
     sx: Vec4,
     sy: Vec4,
@@ -106,9 +107,14 @@ pub struct Tri4Ray {
 impl Tri4Ray {
     #[inline(always)]
     pub fn new(wt: WatertightRay) -> Self {
-        let o = wt.origin;
+        let o = wt.origin.to_array();
+        assert!(wt.kx < 3 && wt.ky < 3 && wt.kz < 3);
         Self {
-            org: [Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z)],
+            org: [
+                Vec4::splat(o[wt.kx]),
+                Vec4::splat(o[wt.ky]),
+                Vec4::splat(o[wt.kz]),
+            ],
             k: [wt.kx, wt.ky, wt.kz],
             sx: Vec4::splat(wt.sx),
             sy: Vec4::splat(wt.sy),
@@ -130,11 +136,18 @@ impl Tri4Ray {
     #[inline(always)]
     pub fn intersect(&self, b: &Tri4, mask: u32, t_lim: f32) -> Tri4Hits {
         let [kx, ky, kz] = self.k;
-        let o = [self.org[kx], self.org[ky], self.org[kz]];
         let shear = [self.sx, self.sy, self.sz];
         let proj = |v: usize| {
             let p = &b.p[v];
-            shear_vertex([p[kx], p[ky], p[kz]], o, shear)
+            // SAFETY: `kx, ky, kz < 3` (`new`).
+            let q = unsafe {
+                [
+                    *p.get_unchecked(kx),
+                    *p.get_unchecked(ky),
+                    *p.get_unchecked(kz),
+                ]
+            };
+            shear_vertex(q, self.org, shear)
         };
         let (va, vb, vc) = (proj(0), proj(1), proj(2));
         let r = watertight_lanes(va, vb, vc);

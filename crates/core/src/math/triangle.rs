@@ -180,8 +180,9 @@ impl WatertightRay {
     /// when `dir[kz] < 0`, and precompute the shear constants.
     #[inline]
     pub fn new(ray: &Ray) -> Self {
-        let d = ray.dir;
-        let [kx, ky, kz] = watertight_permutation(d);
+        let [kx, ky, kz] = watertight_permutation(ray.dir);
+        // Components by array index (a load), not `Vec3`'s `Index` (a branch chain per use).
+        let d = ray.dir.to_array();
         Self {
             origin: ray.origin,
             kx,
