@@ -79,13 +79,7 @@ impl QuadTreeTracer {
     fn one_layer_phases(&self, rays: &[Ray], out: &mut [TraceResult], stats: &mut TraceStats) {
         debug_assert!(rays.len() <= BATCH && rays.len() == out.len());
         let t0 = &self.trees[0];
-        let q = Query {
-            s_lo: 0.0,
-            s_hi: 1.0,
-            hi_inclusive: true,
-            want_trigger: false,
-            stop_at_ov: false,
-        };
+        let q = Query::WHOLE;
         let mut segs: [Option<CubeSegment>; BATCH] = [None; BATCH];
         for (seg, ray) in segs.iter_mut().zip(rays) {
             *seg = self.cube.clip_ray(ray);

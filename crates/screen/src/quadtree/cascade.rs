@@ -370,23 +370,11 @@ impl QuadTreeTracer {
             // One layer without inpainting: the general loop below with its query fixed
             // (no trigger, no stop at occlusion), so the inlined traversal drops the cascade
             // bookkeeping. Same result.
-            let q = Query {
-                s_lo: 0.0,
-                s_hi: 1.0,
-                hi_inclusive: true,
-                want_trigger: false,
-                stop_at_ov: false,
-            };
+            let q = Query::WHOLE;
             let ev = t0.trace_layer(rs, &q, stats);
             return (one_layer_result(ray, seg, &ev, stats), 1);
         }
-        let mut q = Query {
-            s_lo: 0.0,
-            s_hi: 1.0,
-            hi_inclusive: true,
-            want_trigger: false,
-            stop_at_ov: false,
-        };
+        let mut q = Query::WHOLE;
         let mut best_hit: Option<(f32, UVec2, u32)> = None;
         let mut best_ov: Option<(f32, UVec2, u32)> = None;
         let mut inpainted = false;

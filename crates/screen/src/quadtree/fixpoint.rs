@@ -271,13 +271,7 @@ fn merged_triggers(
                         y,
                         deeper,
                     );
-                    for (d, v) in t.to_array().into_iter().enumerate() {
-                        let k = base + i + d;
-                        row[i + d] = v;
-                        if v.is_finite() && !blocked[k] {
-                            newly.push(k as u32);
-                        }
-                    }
+                    store_triggers4(t, base + i, &mut row[i..], blocked, &mut newly);
                     i += 4;
                     continue;
                 }
@@ -294,13 +288,7 @@ fn merged_triggers(
                             y,
                             deeper,
                         );
-                        for (d, v) in t.to_array().into_iter().enumerate() {
-                            let k = base + i + d;
-                            row[i + d] = v;
-                            if v.is_finite() && !blocked[k] {
-                                newly.push(k as u32);
-                            }
-                        }
+                        store_triggers4(t, base + i, &mut row[i..], blocked, &mut newly);
                         i += 4;
                     }
                 }
@@ -408,4 +396,23 @@ fn reprune(ctx: &MergeCtx, levels: &mut [Level], newly: &[u32], w: u32) -> Vec<(
         cur = next;
     }
     dissolved
+}
+
+/// Stores four lanes' trigger depths of pixels `k0..k0 + 4` in `row[..4]` and lists those
+/// that became finite (newly blocked) and were not blocked before.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn store_triggers4(
+    t: glam::Vec4,
+    k0: usize,
+    row: &mut [f32],
+    blocked: &[bool],
+    newly: &mut Vec<u32>,
+) {
+    for (d, v) in t.to_array().into_iter().enumerate() {
+        row[d] = v;
+        if v.is_finite() && !blocked[k0 + d] {
+            newly.push((k0 + d) as u32);
+        }
+    }
 }

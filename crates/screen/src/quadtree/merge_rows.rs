@@ -44,7 +44,7 @@ fn sqrt4(v: Vec4) -> Vec4 {
 /// [`super::node::f16_bits_to_f32`] of the low 16 bits of each lane (the same integer
 /// operations, the subnormal case by the same exact conversion and product).
 #[inline(always)]
-fn f16x4(h: __m128i) -> Vec4 {
+pub(super) fn f16x4(h: __m128i) -> Vec4 {
     // SAFETY: SSE2 is part of the x86_64 baseline.
     unsafe {
         let mag = _mm_and_si128(h, _mm_set1_epi32(0x7fff));

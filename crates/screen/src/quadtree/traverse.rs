@@ -141,6 +141,18 @@ pub struct Query {
     pub stop_at_ov: bool,
 }
 
+impl Query {
+    /// The whole segment, no trigger depth, no stop at occlusion: one layer without
+    /// inpainting.
+    pub const WHOLE: Query = Query {
+        s_lo: 0.0,
+        s_hi: 1.0,
+        hi_inclusive: true,
+        want_trigger: false,
+        stop_at_ov: false,
+    };
+}
+
 impl QuadTree {
     /// Traverses this layer along `ray` over `[q.s_lo, q.s_hi]` (§4); stops at the first hit
     /// (or, with `stop_at_ov`, the first occlusion-volume entry).

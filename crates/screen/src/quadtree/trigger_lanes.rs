@@ -29,6 +29,7 @@ use core::arch::x86_64::*;
 use glam::Vec4;
 
 use super::cascade::SAFE_MARGIN;
+use super::merge_rows::f16x4;
 use super::node::Node;
 use crate::LayerPlanes;
 
@@ -43,23 +44,6 @@ fn sel(m: __m128, a: Vec4, b: Vec4) -> Vec4 {
             _mm_and_ps(m, a.into()),
             _mm_andnot_ps(m, b.into()),
         ))
-    }
-}
-
-/// [`super::node::f16_bits_to_f32`] of the low 16 bits of each lane.
-#[inline(always)]
-fn f16x4(h: __m128i) -> Vec4 {
-    unsafe {
-        let mag = _mm_and_si128(h, _mm_set1_epi32(0x7fff));
-        let normal = _mm_add_epi32(_mm_slli_epi32(mag, 13), _mm_set1_epi32(0x3800_0000));
-        let sub = _mm_castps_si128(_mm_mul_ps(
-            _mm_cvtepi32_ps(mag),
-            _mm_castsi128_ps(_mm_set1_epi32(0x3380_0000)),
-        ));
-        let is_sub = _mm_cmplt_epi32(mag, _mm_set1_epi32(0x400));
-        let v = _mm_or_si128(_mm_and_si128(sub, is_sub), _mm_andnot_si128(is_sub, normal));
-        let sign = _mm_slli_epi32(_mm_and_si128(h, _mm_set1_epi32(0x8000)), 16);
-        Vec4::from(_mm_castsi128_ps(_mm_or_si128(v, sign)))
     }
 }
 
