@@ -83,6 +83,10 @@ pub(super) fn closest_edges<L: LaneReduce>(
     let mut lim_max = f32::INFINITY;
     let dinf = packet.dinf;
     let lanes = valid.count_ones() as u64;
+    // `run_bits`: the interval test of the four runs `si & !3..` at `run_lim`. `lim_max` only
+    // decreases and the test is monotone in it, so a run failing at `run_lim` fails at
+    // `lim_max`; a run passing is tested again alone if `lim_max` changed since.
+    let (mut run_lim, mut run_bits) = (f32::INFINITY, 0u32);
     for si in 0..tt.segs.len() {
         let seg = tt.segs[si];
         if hit_lanes == valid && seg.near > exit_depth + slack {
@@ -94,8 +98,14 @@ pub(super) fn closest_edges<L: LaneReduce>(
         // The BVH's robust slab test (Ize 2013 far scaling) of the packet on the run's box.
         // The packet's interval test first (one scalar test per packet); 16-lane packets
         // skip the per-lane test behind it (fewer instructions, measured: docs/notes/vr.md).
+        // The interval test four runs at a time (`runs4`), again after a change of `lim_max`.
         let reach = if packet.has_interval() {
-            packet.interval_reaches(&seg, lim_max)
+            if si & 3 == 0 {
+                run_lim = lim_max;
+                run_bits = packet.interval_reaches4(&tt.runs4[si / 4], lim_max);
+            }
+            run_bits >> (si & 3) & 1 != 0
+                && (run_lim == lim_max || packet.interval_reaches(&seg, lim_max))
                 && (L::N >= 16 || packet.reaches(&seg, box_lim, valid))
         } else {
             packet.reaches(&seg, box_lim, valid)

@@ -129,6 +129,7 @@ pub mod affine;
 pub mod edges;
 pub mod full;
 mod kernel;
+mod tile;
 mod tri;
 
 use glam::{Vec2, Vec4};
@@ -147,9 +148,10 @@ use crate::samples::MAX_SPP;
 use affine::{FilmFrame, PacketBox};
 
 pub use kernel::SetupWork;
+pub use tile::{setup_tile, setup_tile_scalar};
 pub use tri::{
     BeamCorners, Cone, CornerClass, EdgeClass, RHO_MAX, Segment, SetupCounts, TileTris, TriSetup,
-    dot3, exact_closest, exact_t, setup_tile, shared_origin,
+    dot3, exact_closest, exact_t, shared_origin,
 };
 
 /// Which sample test the caster runs (module docs of `cast/setup/mod.rs` and `intersect.rs`).
