@@ -40,6 +40,7 @@ use parallax_core::simd::Lanes;
 
 use super::affine::{PacketBox, PacketClass};
 use super::kernel::{PacketSlab, SetupWork, dot_n, edge_band, min_edge};
+use super::tile::refine_run;
 use super::tri::{RHO_MAX, TileTris, exact_t};
 use crate::cast::lanes16::LaneReduce;
 use crate::cast::packet::{ClosestN, MAX_LANES, RaysN};
@@ -116,10 +117,12 @@ pub(super) fn closest_edges<L: LaneReduce>(
         work.tri_tests += (end - first) as u64;
         work.pair_tests += (end - first) as u64 * lanes;
         let mut changed = false;
+        // The full bands of the run's lazy triangles, four at a time (every triangle of an
+        // entered run is reached: the loop below never stops early).
+        if tt.tris[first].rho.is_nan() {
+            refine_run(tt, first, end, blocks);
+        }
         for j in first..end {
-            if tt.tris[j].rho.is_nan() {
-                tt.refine(j, blocks);
-            }
             let tr = &tt.tris[j];
             // The affine packet test (`affine.rs`): every lane certainly out or in.
             let class = match pbox {

@@ -1,8 +1,10 @@
 //! The per-tile set-up of a tile's triangle list (HVVR, Hunt et al. 2018, §5.5: "triangle setup
-//! ... tile-corner classification", module docs of [`super`]) four triangles at a time: the lanes
-//! of a BVH leaf block ([`Tri4`], structure of arrays) are set up together in SSE registers
-//! ([`LazySetup4`]), classified against the tile's corners in the same registers, and the kept
-//! triangles appended to the tile's list ([`setup_tile`]).
+//! ... tile-corner classification", module docs of [`super`]) four triangles at a time: the
+//! tile's triangles, in list order, are gathered from the BVH's leaf blocks ([`Tri4`]) into
+//! packs of four consecutive ones (across blocks and leaves: Sponza's leaf blocks hold ~2.2
+//! triangles on average), set up together in SSE registers ([`LazySetup4`]), classified
+//! against the tile's corners in the same registers, and the kept triangles appended to the
+//! tile's list in order, each leaf's run closed after its last triangle ([`setup_tile`]).
 //!
 //! **Invariant: the same bits as the scalar set-up.** Every lane runs exactly the operations of
 //! [`TriSetup::new_with`] (lazy band) and [`BeamCorners::classify`] in the same order: IEEE
@@ -10,15 +12,17 @@
 //! constants folded the same way, negation and `|x|` as sign-bit operations, `max` only where
 //! no operand can be NaN. The rejection tests are equivalent decisions (`D = 0` or not finite,
 //! `g` or the nine covector entries not finite). So the list, its bands and its
-//! classification equal the scalar twin's ([`setup_tile_scalar`]) bit for bit; the tests below
-//! compare both on random and adversarial triangles. The non-lazy set-up
-//! ([`crate::SetupExactness::Full`]) stays scalar.
+//! classification equal the scalar twin's ([`setup_tile_scalar`]) bit for bit, and the run
+//! boxes ([`Segment`]) are equal (taken per triangle before the run: a `0` and `-0` may swap,
+//! which no slab-test comparison sees); the tests below compare both on random and adversarial
+//! triangles. The non-lazy set-up ([`crate::SetupExactness::Full`]) stays scalar.
 
 use glam::{BVec4A, Vec3, Vec4};
 use parallax_bvh::Tri4;
 use parallax_bvh::node::{leaf_count, leaf_first};
 use parallax_core::Aabb;
 use parallax_core::math::watertight_permutation;
+use parallax_core::simd::Lanes;
 
 use super::tri::{
     BeamCorners, Cone, CornerClass, RHO_MAX, RunBoxes4, SQRT3, Segment, TileTris, TriSetup, U,
@@ -69,11 +73,12 @@ pub struct LazySetup4 {
 }
 
 impl LazySetup4 {
-    /// The lanes of `b` set up for rays from `o` within a cone of chord radius `radius`.
+    /// The lanes of `p` (`p[vertex][axis]`, lane = triangle) set up for rays from `o` within
+    /// a cone of chord radius `radius`.
     #[inline(always)]
-    pub fn new(b: &Tri4, o: Vec3, radius: f32) -> Self {
+    pub fn new(p: &[[Vec4; 3]; 3], o: Vec3, radius: f32) -> Self {
         let os = [Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z)];
-        let a = [sub3(b.p[0], os), sub3(b.p[1], os), sub3(b.p[2], os)];
+        let a = [sub3(p[0], os), sub3(p[1], os), sub3(p[2], os)];
         let e = [sub3(a[1], a[0]), sub3(a[2], a[1]), sub3(a[0], a[2])];
         let nrm = cross4(e[0], [-e[2][0], -e[2][1], -e[2][2]]);
         let d = dot4(nrm, a[0]);
@@ -164,6 +169,98 @@ fn lane_of(x: &[[f32; 4]; 13], l: usize, tri: u32, src: u32, all_in: bool) -> Tr
     }
 }
 
+/// `|v|^2 = (x x + y y) + z z` per lane (`Vec3::length_squared`).
+#[inline(always)]
+fn lsq4(v: [Vec4; 3]) -> Vec4 {
+    dot4(v, v)
+}
+
+/// `f32::max(acc, x)` for `acc` never NaN (`maxps(x, acc)`: `x` if `x > acc`, else `acc`).
+#[inline(always)]
+fn fmax4(acc: Vec4, x: Vec4) -> Vec4 {
+    x.max(acc)
+}
+
+/// The full bands of four triangles (`p[vertex][axis]`, lane = triangle) for rays from `o`
+/// within `cone`: per lane `(bound, rho)` of [`TriSetup::new`] (the non-lazy branch of
+/// [`TriSetup::new_with`]), operation by operation.
+#[inline(always)]
+pub fn bands4(p: &[[Vec4; 3]; 3], o: Vec3, cone: &Cone) -> (Vec4, Vec4) {
+    let sp = Vec4::splat;
+    let os = [sp(o.x), sp(o.y), sp(o.z)];
+    let a = [sub3(p[0], os), sub3(p[1], os), sub3(p[2], os)];
+    let e = [sub3(a[1], a[0]), sub3(a[2], a[1]), sub3(a[0], a[2])];
+    let nrm = cross4(e[0], [-e[2][0], -e[2][1], -e[2][2]]);
+    let d = dot4(nrm, a[0]);
+    let c = [sp(cone.centre.x), sp(cone.centre.y), sp(cone.centre.z)];
+    let r = sp(cone.radius);
+    let psi_of = |ai: [Vec4; 3]| {
+        let (x, y) = (cross4(ai, c), [ai[0] * r, ai[1] * r, ai[2] * r]);
+        sp(SQRT3) * Lanes::sqrt(sp(2.0) * (lsq4(x) + lsq4(y))) * sp(1.001)
+    };
+    let psi = [psi_of(a[0]), psi_of(a[1]), psi_of(a[2])];
+    let amax = a.map(|x| x[0].abs().max(x[1].abs().max(x[2].abs())));
+    let ep = [0, 1, 2].map(|i| sp(U) * (sp(2.02) * amax[i] + sp(1.01) * psi[i]));
+    let (mut bound, mut wsum) = (Vec4::ZERO, Vec4::ZERO);
+    for i in 0..3 {
+        let (b, cc) = (i, (i + 1) % 3);
+        let w = sp(2.0) * (ep[cc] * psi[b] + ep[b] * psi[cc]) + sp(4.04 * U) * psi[b] * psi[cc];
+        let pr = sp(6.1 * U) * l1_4(a[i]) * l1_4(e[i]);
+        bound = fmax4(bound, w + pr);
+        wsum += w;
+    }
+    let bound = sp(2.0) * bound;
+    let amax_sq = fmax4(fmax4(fmax4(Vec4::ZERO, lsq4(a[0])), lsq4(a[1])), lsq4(a[2]));
+    let dabs = d.abs();
+    let sigma_kappa = Lanes::sqrt(amax_sq * lsq4(e[0]) * lsq4(e[2])) * sp(1.001) / dabs;
+    let lsq_e = fmax4(fmax4(fmax4(Vec4::ZERO, lsq4(e[0])), lsq4(e[1])), lsq4(e[2]));
+    let lambda = Lanes::sqrt(lsq_e) * sp(1.001);
+    let rho =
+        sp(2.0) * (sp(SQRT3) * lambda * wsum / dabs + sp(14.0 * U) * sigma_kappa + sp(11.0 * U));
+    let rho = Vec4::select(
+        rho.is_finite_mask() & rho.cmple(sp(RHO_MAX)),
+        rho,
+        Vec4::INFINITY,
+    );
+    let bound = Vec4::select(bound.is_finite_mask(), bound, Vec4::INFINITY);
+    (bound, rho)
+}
+
+/// [`TileTris::refine`] of every lazy triangle of `tt.tris[first..end]` (a run), four at a
+/// time ([`bands4`]); the affine forms per triangle.
+#[inline(never)]
+pub fn refine_run(tt: &mut TileTris, first: usize, end: usize, blocks: &[Tri4]) {
+    let mut j = first;
+    while j < end {
+        let k = (end - j).min(4);
+        let mut p = [[[0.0f32; 4]; 3]; 3];
+        for l in 0..k {
+            let src = tt.tris[j + l].src;
+            let b = &blocks[(src >> 2) as usize];
+            let ln = (src & 3) as usize;
+            for v in 0..3 {
+                for a in 0..3 {
+                    p[v][a][l] = b.p[v][a].as_ref()[ln];
+                }
+            }
+        }
+        let (bound, rho) = bands4(&p.map(|v| v.map(Vec4::from_array)), tt.origin, &tt.cone);
+        let (bound, rho) = (bound.to_array(), rho.to_array());
+        for l in 0..k {
+            let s = &mut tt.tris[j + l];
+            if !s.rho.is_nan() {
+                continue;
+            }
+            s.bound = bound[l];
+            s.rho = rho[l];
+            if let (Some(fr), Some(a)) = (&tt.frame, tt.aff.get_mut(j + l)) {
+                *a = fr.affine(&s.n);
+            }
+        }
+        j += k;
+    }
+}
+
 /// The state `setup_tile` starts from: the beam's corners, cone and watertight permutation.
 fn begin(beam: &Beam, origin: Vec3, out: &mut TileTris) -> Option<BeamCorners> {
     out.origin = origin;
@@ -227,64 +324,68 @@ pub fn setup_tile(
     }
     let corners = begin(beam, origin, out);
     let radius = out.cone.radius;
+    // The tile's triangles in list order (`4 * block + lane`) and each leaf's end in it.
+    let (mut ents, mut ends) = (std::mem::take(&mut out.ents), std::mem::take(&mut out.ends));
+    ents.clear();
+    ends.clear();
     for r in leaves {
-        // The run's box per lane (`minps` / `maxps`: `Aabb::grow`'s operation), reduced at
-        // the end of the run.
-        let mut lo = [Vec4::INFINITY; 3];
-        let mut hi = [Vec4::NEG_INFINITY; 3];
         let (first, count) = (leaf_first(r.leaf), leaf_count(r.leaf));
-        for k in 0..count.div_ceil(4) {
-            let bi = first + k;
-            let b = &blocks[bi as usize];
-            let n = (count - 4 * k).min(4) as usize;
-            let mut valid = 0u32;
-            for (ln, &t) in b.tri[..n].iter().enumerate() {
-                valid |= ((t != u32::MAX) as u32) << ln;
-            }
-            if valid == 0 {
-                continue;
-            }
-            let s = LazySetup4::new(b, origin, radius);
-            let (outm, inm) = corners.map_or((0, 0), |c| s.classify(&c));
-            let keep = valid & s.ok & !outm;
-            out.counts.all_out += (valid & !keep).count_ones() as u64;
-            out.counts.all_in += (keep & inm).count_ones() as u64;
-            out.counts.partial += (keep & !inm).count_ones() as u64;
-            if keep == 0 {
-                continue;
-            }
-            let x = s.arrays();
-            let mut m = keep;
-            while m != 0 {
-                let ln = m.trailing_zeros() as usize;
-                m &= m - 1;
-                let all_in = inm >> ln & 1 != 0;
-                out.tris
-                    .push(lane_of(&x, ln, b.tri[ln], 4 * bi + ln as u32, all_in));
-            }
-            let kept = BVec4A::from_array([0, 1, 2, 3].map(|l| keep >> l & 1 != 0));
-            for a in 0..3 {
-                let p = [b.p[0][a], b.p[1][a], b.p[2][a]];
-                let mn = p[0].min(p[1]).min(p[2]);
-                let mx = p[0].max(p[1]).max(p[2]);
-                lo[a] = lo[a].min(Vec4::select(kept, mn, Vec4::INFINITY));
-                hi[a] = hi[a].max(Vec4::select(kept, mx, Vec4::NEG_INFINITY));
+        for j in 0..count {
+            let bi = first + j / 4;
+            if blocks[bi as usize].tri[(j % 4) as usize] != u32::MAX {
+                ents.push(4 * first + j);
             }
         }
-        let bx = Aabb::new(
-            Vec3::new(
-                lo[0].min_element(),
-                lo[1].min_element(),
-                lo[2].min_element(),
-            ),
-            Vec3::new(
-                hi[0].max_element(),
-                hi[1].max_element(),
-                hi[2].max_element(),
-            ),
-        );
-        end_run(out, r, bx);
+        ends.push(ents.len() as u32);
     }
+    // Packs of four consecutive triangles (across blocks and leaves), set up together; the
+    // kept ones appended in order, each leaf's run closed when its last triangle is done.
+    let mut li = 0usize;
+    let mut bx = Aabb::EMPTY;
+    for (pi, pack) in ents.chunks(4).enumerate() {
+        let mut p = [[[0.0f32; 4]; 3]; 3];
+        for (l, &src) in pack.iter().enumerate() {
+            let b = &blocks[(src >> 2) as usize];
+            let ln = (src & 3) as usize;
+            for v in 0..3 {
+                for a in 0..3 {
+                    p[v][a][l] = b.p[v][a].as_ref()[ln];
+                }
+            }
+        }
+        let p = p.map(|v| v.map(Vec4::from_array));
+        let s = LazySetup4::new(&p, origin, radius);
+        let (outm, inm) = corners.map_or((0, 0), |c| s.classify(&c));
+        let valid = (1u32 << pack.len()) - 1;
+        let keep = valid & s.ok & !outm;
+        out.counts.all_out += (valid & !keep).count_ones() as u64;
+        out.counts.all_in += (keep & inm).count_ones() as u64;
+        out.counts.partial += (keep & !inm).count_ones() as u64;
+        let x = s.arrays();
+        // Per lane the triangle's box (`Aabb::grow`'s `min` / `max` of its vertices).
+        let mn = [0, 1, 2].map(|a| p[0][a].min(p[1][a]).min(p[2][a]).to_array());
+        let mx = [0, 1, 2].map(|a| p[0][a].max(p[1][a]).max(p[2][a]).to_array());
+        for (l, &src) in pack.iter().enumerate() {
+            let q = (4 * pi + l) as u32;
+            while ends[li] == q {
+                end_run(out, &leaves[li], bx);
+                bx = Aabb::EMPTY;
+                li += 1;
+            }
+            if keep >> l & 1 != 0 {
+                let tri = blocks[(src >> 2) as usize].tri[(src & 3) as usize];
+                out.tris.push(lane_of(&x, l, tri, src, inm >> l & 1 != 0));
+                bx.min = bx.min.min(Vec3::new(mn[0][l], mn[1][l], mn[2][l]));
+                bx.max = bx.max.max(Vec3::new(mx[0][l], mx[1][l], mx[2][l]));
+            }
+        }
+    }
+    while li < leaves.len() {
+        end_run(out, &leaves[li], bx);
+        bx = Aabb::EMPTY;
+        li += 1;
+    }
+    (out.ents, out.ends) = (ents, ends);
 }
 
 /// The scalar twin of [`setup_tile`]: one triangle at a time ([`TriSetup::new_with`],
@@ -451,7 +552,7 @@ mod tests {
                 Cone::of(Some(&corners))
             };
             for (bi, b) in blocks.iter().enumerate() {
-                let s4 = LazySetup4::new(b, o, cone.radius);
+                let s4 = LazySetup4::new(&b.p, o, cone.radius);
                 let (outm, inm) = s4.classify(&corners);
                 for l in 0..4 {
                     lanes += 1;
@@ -524,5 +625,39 @@ mod tests {
             }
             assert_eq!((a.perm, a.rho_max.to_bits()), (b.perm, b.rho_max.to_bits()));
         }
+    }
+
+    #[test]
+    fn run_refine_equals_scalar_refine() {
+        let mut rng = Rng(0x5151_7e57_c0ff_ee01);
+        let mut refined = 0;
+        for _ in 0..20 {
+            let o = rng.v(10.0);
+            let tris = triangles(&mut rng, o);
+            let blocks = blocks_of(&tris[..tris.len() / 4 * 4]);
+            let leaves: Vec<LeafRef> = (0..blocks.len() as u32)
+                .map(|first| LeafRef {
+                    leaf: ChildRef::Leaf { first, count: 4 }.encode(),
+                    near: first as f32,
+                })
+                .collect();
+            let bm = beam(&mut rng, o);
+            let mut a = TileTris::default();
+            setup_tile(&blocks, &leaves, &bm, o, true, &mut a);
+            let mut b = a.clone();
+            let mut first = 0;
+            for seg in a.segs.clone() {
+                refine_run(&mut a, first, seg.end as usize, &blocks);
+                first = seg.end as usize;
+            }
+            for j in 0..b.tris.len() {
+                b.refine(j, &blocks);
+            }
+            for (x, y) in a.tris.iter().zip(&b.tris) {
+                assert_eq!(bits(x), bits(y), "{x:?} {y:?}");
+                refined += 1;
+            }
+        }
+        assert!(refined > 1000, "{refined}");
     }
 }

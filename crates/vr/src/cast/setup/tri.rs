@@ -410,6 +410,10 @@ pub struct TileTris {
     /// [`TileTris::refine`]).
     pub frame: Option<FilmFrame>,
     pub aff: Vec<AffineTri>,
+    /// Scratch of `setup_tile` (`cast/setup/tile.rs`): the tile's triangles in list order
+    /// and each leaf's end in that list.
+    pub ents: Vec<u32>,
+    pub ends: Vec<u32>,
 }
 
 impl Default for Cone {
