@@ -89,11 +89,11 @@ pub(super) fn closest_edges<L: LaneReduce>(
     // `lim_max`; a run passing is tested again alone if `lim_max` changed since.
     let (mut run_lim, mut run_bits) = (f32::INFINITY, 0u32);
     for si in 0..tt.segs.len() {
-        let seg = tt.segs[si];
-        if hit_lanes == valid && seg.near > exit_depth + slack {
+        // (The run's box is read only when tested: a copy of the segment costs more.)
+        let (near, end) = (tt.segs[si].near, tt.segs[si].end as usize);
+        if hit_lanes == valid && near > exit_depth + slack {
             break;
         }
-        let end = seg.end as usize;
         let first = start;
         start = end;
         // The BVH's robust slab test (Ize 2013 far scaling) of the packet on the run's box.
@@ -106,10 +106,10 @@ pub(super) fn closest_edges<L: LaneReduce>(
                 run_bits = packet.interval_reaches4(&tt.runs4[si / 4], lim_max);
             }
             run_bits >> (si & 3) & 1 != 0
-                && (run_lim == lim_max || packet.interval_reaches(&seg, lim_max))
-                && (L::N >= 16 || packet.reaches(&seg, box_lim, valid))
+                && (run_lim == lim_max || packet.interval_reaches(&tt.segs[si], lim_max))
+                && (L::N >= 16 || packet.reaches(&tt.segs[si], box_lim, valid))
         } else {
-            packet.reaches(&seg, box_lim, valid)
+            packet.reaches(&tt.segs[si], box_lim, valid)
         };
         if !reach {
             continue;
@@ -218,10 +218,8 @@ pub(super) fn closest_edges<L: LaneReduce>(
     if hit_lanes != 0 {
         let mut t = [0.0f32; MAX_LANES];
         box_lim.write(&mut t);
-        for l in 0..L::N {
-            if hit_lanes >> l & 1 != 0 {
-                out.t[l] = t[l];
-            }
+        for (l, o) in out.t[..L::N].iter_mut().enumerate() {
+            *o = if hit_lanes >> l & 1 != 0 { t[l] } else { *o };
         }
     }
     out
