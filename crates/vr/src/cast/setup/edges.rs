@@ -23,8 +23,9 @@
 //!   decisions equal the watertight test's, so the buffer is unchanged (`tests/affine.rs`).
 //! - **Lazy band.** The tile's triangles are set up with a crude conservative band (enough
 //!   for the corner classification); a triangle's full band (and its depth condition `rho`)
-//!   is computed when a packet first reaches it (`TileTris::refine`), so triangles dropped
-//!   all-out or never reached skip the band analysis.
+//!   is computed when a packet first enters its run, for the whole run four triangles at a
+//!   time (`refine_run` in `cast/setup/tile.rs`, bit-identical to `TileTris::refine`), so
+//!   triangles dropped all-out or in runs never entered skip the band analysis.
 //! - Ill-conditioned triangles (`rho > RHO_MAX`: seen nearly edge-on, or their plane nearly
 //!   through the origin, where `g . d` may even have the wrong sign) take the watertight
 //!   test for coverage and depth (their `1/t` is the watertight `t`'s), so they cannot turn

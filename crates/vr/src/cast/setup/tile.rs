@@ -310,7 +310,7 @@ fn end_run(out: &mut TileTris, r: &LeafRef, bx: Aabb) {
 
 /// Sets up every triangle of the tile list `leaves` (near-depth order) for rays from `origin`
 /// within `beam`, dropping all-out triangles (module docs of [`super`]); the lazy set-up four
-/// triangles at a time ([`LazySetup4`]), the full one scalar.
+/// triangles at a time (`LazySetup4`, `cast/setup/tile.rs`), the full one scalar.
 pub fn setup_tile(
     blocks: &[Tri4],
     leaves: &[LeafRef],
