@@ -23,8 +23,9 @@
 //!   decisions equal the watertight test's, so the buffer is unchanged (`tests/affine.rs`).
 //! - **Lazy band.** The tile's triangles are set up with a crude conservative band (enough
 //!   for the corner classification); a triangle's full band (and its depth condition `rho`)
-//!   is computed when a packet first reaches it (`TileTris::refine`), so triangles dropped
-//!   all-out or never reached skip the band analysis.
+//!   is computed when a packet first enters its run, for the whole run four triangles at a
+//!   time (`refine_run` in `cast/setup/tile.rs`, bit-identical to `TileTris::refine`), so
+//!   triangles dropped all-out or in runs never entered skip the band analysis.
 //! - Ill-conditioned triangles (`rho > RHO_MAX`: seen nearly edge-on, or their plane nearly
 //!   through the origin, where `g . d` may even have the wrong sign) take the watertight
 //!   test for coverage and depth (their `1/t` is the watertight `t`'s), so they cannot turn
@@ -40,6 +41,7 @@ use parallax_core::simd::Lanes;
 
 use super::affine::{PacketBox, PacketClass};
 use super::kernel::{PacketSlab, SetupWork, dot_n, edge_band, min_edge};
+use super::tile::refine_run;
 use super::tri::{RHO_MAX, TileTris, exact_t};
 use crate::cast::lanes16::LaneReduce;
 use crate::cast::packet::{ClosestN, MAX_LANES, RaysN};
@@ -83,22 +85,32 @@ pub(super) fn closest_edges<L: LaneReduce>(
     let mut lim_max = f32::INFINITY;
     let dinf = packet.dinf;
     let lanes = valid.count_ones() as u64;
+    // `run_bits`: the interval test of the four runs `si & !3..` at `run_lim`. `lim_max` only
+    // decreases and the test is monotone in it, so a run failing at `run_lim` fails at
+    // `lim_max`; a run passing is tested again alone if `lim_max` changed since.
+    let (mut run_lim, mut run_bits) = (f32::INFINITY, 0u32);
     for si in 0..tt.segs.len() {
-        let seg = tt.segs[si];
-        if hit_lanes == valid && seg.near > exit_depth + slack {
+        // (The run's box is read only when tested: a copy of the segment costs more.)
+        let (near, end) = (tt.segs[si].near, tt.segs[si].end as usize);
+        if hit_lanes == valid && near > exit_depth + slack {
             break;
         }
-        let end = seg.end as usize;
         let first = start;
         start = end;
         // The BVH's robust slab test (Ize 2013 far scaling) of the packet on the run's box.
         // The packet's interval test first (one scalar test per packet); 16-lane packets
         // skip the per-lane test behind it (fewer instructions, measured: docs/notes/vr.md).
+        // The interval test four runs at a time (`runs4`), again after a change of `lim_max`.
         let reach = if packet.has_interval() {
-            packet.interval_reaches(&seg, lim_max)
-                && (L::N >= 16 || packet.reaches(&seg, box_lim, valid))
+            if si & 3 == 0 {
+                run_lim = lim_max;
+                run_bits = packet.interval_reaches4(&tt.runs4[si / 4], lim_max);
+            }
+            run_bits >> (si & 3) & 1 != 0
+                && (run_lim == lim_max || packet.interval_reaches(&tt.segs[si], lim_max))
+                && (L::N >= 16 || packet.reaches(&tt.segs[si], box_lim, valid))
         } else {
-            packet.reaches(&seg, box_lim, valid)
+            packet.reaches(&tt.segs[si], box_lim, valid)
         };
         if !reach {
             continue;
@@ -106,10 +118,12 @@ pub(super) fn closest_edges<L: LaneReduce>(
         work.tri_tests += (end - first) as u64;
         work.pair_tests += (end - first) as u64 * lanes;
         let mut changed = false;
+        // The full bands of the run's lazy triangles, four at a time (every triangle of an
+        // entered run is reached: the loop below never stops early).
+        if tt.tris[first].rho.is_nan() {
+            refine_run(tt, first, end, blocks);
+        }
         for j in first..end {
-            if tt.tris[j].rho.is_nan() {
-                tt.refine(j, blocks);
-            }
             let tr = &tt.tris[j];
             // The affine packet test (`affine.rs`): every lane certainly out or in.
             let class = match pbox {
@@ -205,10 +219,8 @@ pub(super) fn closest_edges<L: LaneReduce>(
     if hit_lanes != 0 {
         let mut t = [0.0f32; MAX_LANES];
         box_lim.write(&mut t);
-        for l in 0..L::N {
-            if hit_lanes >> l & 1 != 0 {
-                out.t[l] = t[l];
-            }
+        for (l, o) in out.t[..L::N].iter_mut().enumerate() {
+            *o = if hit_lanes >> l & 1 != 0 { t[l] } else { *o };
         }
     }
     out

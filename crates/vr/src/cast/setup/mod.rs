@@ -80,6 +80,12 @@
 //! certainly in, with a rigorous error bound — or leaves it to the per-lane test; the buffer is
 //! the same bit for bit (`tests/affine.rs`).
 //!
+//! **Set-up in lanes** (`cast/setup/tile.rs`): the `Edges` set-up (lazy band, classification)
+//! runs four consecutive triangles of the tile list at once in SSE registers, and the full
+//! bands of a run's triangles four at a time when a packet first enters the run; per lane the
+//! scalar operations in the scalar order, so the list is bit-identical to the scalar twin's
+//! (tested there). `Full` sets up one triangle at a time.
+//!
 //! The sample test then runs packets of 4 (SSE), 8 (AVX2) or 16 (four SSE registers) rays over the set-up list in the
 //! tile list's near-depth order, leaf by leaf; a triangle whose `g . d` is below every lane's
 //! best so far costs one 3-term dot product; the packet stops once every ray has a hit nearer
@@ -129,6 +135,7 @@ pub mod affine;
 pub mod edges;
 pub mod full;
 mod kernel;
+mod tile;
 mod tri;
 
 use glam::{Vec2, Vec4};
@@ -147,9 +154,10 @@ use crate::samples::MAX_SPP;
 use affine::{FilmFrame, PacketBox};
 
 pub use kernel::SetupWork;
+pub use tile::{setup_tile, setup_tile_scalar};
 pub use tri::{
     BeamCorners, Cone, CornerClass, EdgeClass, RHO_MAX, Segment, SetupCounts, TileTris, TriSetup,
-    dot3, exact_closest, exact_t, setup_tile, shared_origin,
+    dot3, exact_closest, exact_t, shared_origin,
 };
 
 /// Which sample test the caster runs (module docs of `cast/setup/mod.rs` and `intersect.rs`).

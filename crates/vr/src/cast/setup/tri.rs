@@ -11,16 +11,15 @@
 
 use glam::{Vec3, Vec4};
 use parallax_bvh::Tri4;
-use parallax_bvh::node::{leaf_count, leaf_first};
-use parallax_core::math::{WatertightRay, watertight_permutation};
-use parallax_core::{Aabb, Ray};
+use parallax_core::Ray;
+use parallax_core::math::WatertightRay;
 
 use super::affine::{AffineTri, FilmFrame};
-use crate::beam::{Beam, LeafRef};
+use crate::beam::Beam;
 
 /// Unit roundoff of f32 (`2^-24`): `fl(x op y) = (x op y)(1 + δ)`, `|δ| <= U`.
 pub(super) const U: f32 = f32::EPSILON * 0.5;
-const SQRT3: f32 = 1.732_051;
+pub(super) const SQRT3: f32 = 1.732_051;
 /// A triangle whose depth band [`TriSetup::rho`] exceeds this is ill-conditioned (seen almost
 /// edge-on, or its plane passes near the origin): its depth is always decided exactly.
 pub const RHO_MAX: f32 = 0.05;
@@ -373,6 +372,15 @@ pub struct Segment {
     pub hi: Vec4,
 }
 
+/// The boxes of four consecutive runs `segs[4k..4k + 4]` ([`Segment::lo`], [`Segment::hi`]),
+/// per axis one lane per run: the packet's interval test of four runs in one pass
+/// (`PacketSlab::interval_reaches4` in `cast/setup/kernel.rs`). Lanes past the last run are 0.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RunBoxes4 {
+    pub lo: [[f32; 4]; 3],
+    pub hi: [[f32; 4]; 3],
+}
+
 /// Counts of the corner classification.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct SetupCounts {
@@ -387,6 +395,8 @@ pub struct TileTris {
     pub origin: Vec3,
     pub tris: Vec<TriSetup>,
     pub segs: Vec<Segment>,
+    /// `runs4[k]`: the boxes of `segs[4k..4k + 4]`.
+    pub runs4: Vec<RunBoxes4>,
     pub counts: SetupCounts,
     /// The largest depth band `rho` of the list's well-conditioned triangles.
     pub rho_max: f32,
@@ -400,6 +410,10 @@ pub struct TileTris {
     /// [`TileTris::refine`]).
     pub frame: Option<FilmFrame>,
     pub aff: Vec<AffineTri>,
+    /// Scratch of `setup_tile` (`cast/setup/tile.rs`): the tile's triangles in list order
+    /// and each leaf's end in that list.
+    pub ents: Vec<u32>,
+    pub ends: Vec<u32>,
 }
 
 impl Default for Cone {
@@ -435,77 +449,4 @@ impl TileTris {
 pub fn shared_origin(beam: &Beam) -> Option<Vec3> {
     (!beam.everything && !beam.origin.is_empty() && beam.origin.min == beam.origin.max)
         .then_some(beam.origin.min)
-}
-
-/// Sets up every triangle of the tile list `leaves` (near-depth order) for rays from `origin`
-/// within `beam`, dropping all-out triangles (module docs).
-pub fn setup_tile(
-    blocks: &[Tri4],
-    leaves: &[LeafRef],
-    beam: &Beam,
-    origin: Vec3,
-    lazy: bool,
-    out: &mut TileTris,
-) {
-    out.origin = origin;
-    out.frame = None;
-    out.tris.clear();
-    out.segs.clear();
-    out.rho_max = 0.0;
-    let corners = BeamCorners::new(beam);
-    let cone = Cone::of(corners.as_ref());
-    out.cone = cone;
-    out.perm = corners.and_then(|c| {
-        // Float division is monotone and x / x = 1: slopes below 1 mean |d_b| < |d_a|.
-        let (a, (b, cc)) = (beam.axis as usize, beam.side_axes());
-        (c.cmax[b] < 1.0 && c.cmax[cc] < 1.0).then(|| {
-            let mut d = Vec3::ZERO;
-            d[a] = beam.sign;
-            watertight_permutation(d)
-        })
-    });
-    for r in leaves {
-        let mut bx = Aabb::EMPTY;
-        let (first, count) = (leaf_first(r.leaf), leaf_count(r.leaf));
-        for j in 0..count {
-            let bi = first + j / 4;
-            let b = &blocks[bi as usize];
-            let ln = (j % 4) as usize;
-            if b.tri[ln] == u32::MAX {
-                continue;
-            }
-            let v = [b.vertex(ln, 0), b.vertex(ln, 1), b.vertex(ln, 2)];
-            let Some(mut s) =
-                TriSetup::new_with(v, origin, b.tri[ln], 4 * bi + ln as u32, &cone, lazy)
-            else {
-                out.counts.all_out += 1;
-                continue;
-            };
-            match corners.map_or(CornerClass::Partial, |c| c.classify(&s)) {
-                CornerClass::AllOut => {
-                    out.counts.all_out += 1;
-                    continue;
-                }
-                CornerClass::AllIn => {
-                    out.counts.all_in += 1;
-                    s.all_in = true;
-                }
-                CornerClass::Partial => out.counts.partial += 1,
-            }
-            if s.rho <= RHO_MAX {
-                out.rho_max = out.rho_max.max(s.rho);
-            }
-            out.tris.push(s);
-            bx = bx.grow(v[0]).grow(v[1]).grow(v[2]);
-        }
-        let end = out.tris.len() as u32;
-        if out.segs.last().map_or(0, |s| s.end) < end {
-            out.segs.push(Segment {
-                end,
-                near: r.near,
-                lo: (bx.min - origin).extend(0.0),
-                hi: (bx.max - origin).extend(0.0),
-            });
-        }
-    }
 }

@@ -1,0 +1,663 @@
+//! The per-tile set-up of a tile's triangle list (HVVR, Hunt et al. 2018, §5.5: "triangle setup
+//! ... tile-corner classification", module docs of [`super`]) four triangles at a time: the
+//! tile's triangles, in list order, are gathered from the BVH's leaf blocks ([`Tri4`]) into
+//! packs of four consecutive ones (across blocks and leaves: Sponza's leaf blocks hold ~2.2
+//! triangles on average), set up together in SSE registers ([`LazySetup4`]), classified
+//! against the tile's corners in the same registers, and the kept triangles appended to the
+//! tile's list in order, each leaf's run closed after its last triangle ([`setup_tile`]).
+//!
+//! **Invariant: the same bits as the scalar set-up.** Every lane runs exactly the operations of
+//! [`TriSetup::new_with`] (lazy band) and [`BeamCorners::classify`] in the same order: IEEE
+//! single-precision `+ - * /` per lane, never contracted into FMAs (Rust does not contract),
+//! constants folded the same way, negation and `|x|` as sign-bit operations, `max` only where
+//! no operand can be NaN. The rejection tests are equivalent decisions (`D = 0` or not finite,
+//! `g` or the nine covector entries not finite). So the list, its bands and its
+//! classification equal the scalar twin's ([`setup_tile_scalar`]) bit for bit, and the run
+//! boxes ([`Segment`]) are equal (taken per triangle before the run: a `0` and `-0` may swap,
+//! which no slab-test comparison sees); the tests below compare both on random and adversarial
+//! triangles. The non-lazy set-up ([`crate::SetupExactness::Full`]) stays scalar.
+
+use glam::{BVec4A, Vec3, Vec4};
+use parallax_bvh::Tri4;
+use parallax_bvh::node::{leaf_count, leaf_first};
+use parallax_core::Aabb;
+use parallax_core::math::watertight_permutation;
+use parallax_core::simd::Lanes;
+
+use super::tri::{
+    BeamCorners, Cone, CornerClass, RHO_MAX, RunBoxes4, SQRT3, Segment, TileTris, TriSetup, U,
+};
+use crate::beam::{Beam, LeafRef};
+
+/// `a x b` per lane, component by component as the scalar `cross`.
+#[inline(always)]
+fn cross4(a: [Vec4; 3], b: [Vec4; 3]) -> [Vec4; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+#[inline(always)]
+fn sub3(a: [Vec4; 3], b: [Vec4; 3]) -> [Vec4; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+/// `((a_x b_x + a_y b_y) + a_z b_z)` per lane (the scalar `dot3` / `Vec3::dot` order).
+#[inline(always)]
+fn dot4(a: [Vec4; 3], b: [Vec4; 3]) -> Vec4 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// `(|x| + |y|) + |z|` per lane.
+#[inline(always)]
+fn l1_4(a: [Vec4; 3]) -> Vec4 {
+    a[0].abs() + a[1].abs() + a[2].abs()
+}
+
+#[inline(always)]
+fn finite3(a: [Vec4; 3]) -> BVec4A {
+    a[0].is_finite_mask() & a[1].is_finite_mask() & a[2].is_finite_mask()
+}
+
+/// The lazy set-up of the four lanes of a block ([`TriSetup::new_with`] with `lazy`, per lane).
+#[derive(Clone, Copy, Debug)]
+pub struct LazySetup4 {
+    /// `n[i][axis]`: edge covector `i`.
+    pub n: [[Vec4; 3]; 3],
+    pub g: [Vec4; 3],
+    pub bound: Vec4,
+    /// Lanes the scalar set-up keeps (`Some`).
+    pub ok: u32,
+}
+
+impl LazySetup4 {
+    /// The lanes of `p` (`p[vertex][axis]`, lane = triangle) set up for rays from `o` within
+    /// a cone of chord radius `radius`.
+    #[inline(always)]
+    pub fn new(p: &[[Vec4; 3]; 3], o: Vec3, radius: f32) -> Self {
+        let os = [Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z)];
+        let a = [sub3(p[0], os), sub3(p[1], os), sub3(p[2], os)];
+        let e = [sub3(a[1], a[0]), sub3(a[2], a[1]), sub3(a[0], a[2])];
+        let nrm = cross4(e[0], [-e[2][0], -e[2][1], -e[2][2]]);
+        let d = dot4(nrm, a[0]);
+        let mut ok = d.cmpne(Vec4::ZERO) & d.is_finite_mask();
+        let g = [nrm[0] / d, nrm[1] / d, nrm[2] / d];
+        ok &= finite3(g);
+        let s = Vec4::select(d.cmpgt(Vec4::ZERO), Vec4::ONE, -Vec4::ONE);
+        let sc = |c: [Vec4; 3]| [c[0] * s, c[1] * s, c[2] * s];
+        let n = [
+            sc(cross4(a[0], e[0])),
+            sc(cross4(a[1], e[1])),
+            sc(cross4(a[2], e[2])),
+        ];
+        ok &= finite3(n[0]) & finite3(n[1]) & finite3(n[2]);
+        // The lazy band of `TriSetup::new_with`, term by term. (`max` of the 1-norms: no NaN in
+        // a kept lane, whose `a_i` are finite.)
+        let aa = l1_4(a[0]).max(l1_4(a[1])).max(l1_4(a[2]));
+        let pp = Vec4::splat(SQRT3 * 1.4143) * aa * Vec4::splat(1.0 + radius) * Vec4::splat(1.01);
+        let ep = Vec4::splat(U) * (Vec4::splat(2.02) * aa + Vec4::splat(1.01) * pp);
+        let w = Vec4::splat(2.0) * (Vec4::splat(2.0) * ep * pp) + Vec4::splat(4.04 * U) * pp * pp;
+        let p = Vec4::splat(6.1 * U) * aa * (Vec4::splat(2.0) * aa) * Vec4::splat(1.01);
+        let bound = Vec4::splat(2.0) * (w + p) * Vec4::splat(1.01);
+        let bound = Vec4::select(bound.is_finite_mask(), bound, Vec4::INFINITY);
+        LazySetup4 {
+            n,
+            g,
+            bound,
+            ok: ok.bitmask(),
+        }
+    }
+
+    /// [`BeamCorners::classify`] per lane: the masks of the lanes all out and all in.
+    #[inline(always)]
+    pub fn classify(&self, c: &BeamCorners) -> (u32, u32) {
+        let cm = Vec4::splat(c.cmax.max_element());
+        let cmax = [
+            Vec4::splat(c.cmax.x),
+            Vec4::splat(c.cmax.y),
+            Vec4::splat(c.cmax.z),
+        ];
+        let corners =
+            c.c.map(|x| [Vec4::splat(x.x), Vec4::splat(x.y), Vec4::splat(x.z)]);
+        let mut out_any = BVec4A::splat(false);
+        let mut all_in = BVec4A::splat(true);
+        for e in &self.n {
+            let tol = self.bound * cm
+                + Vec4::splat(3.1 * U) * dot4([e[0].abs(), e[1].abs(), e[2].abs()], cmax);
+            let ntol = -tol;
+            let (mut out, mut inn) = (BVec4A::splat(true), BVec4A::splat(true));
+            for cc in &corners {
+                let v = dot4(*e, *cc);
+                out &= v.cmplt(ntol);
+                inn &= v.cmpgt(tol);
+            }
+            out_any |= out;
+            all_in &= inn;
+        }
+        (out_any.bitmask(), all_in.bitmask() & !out_any.bitmask())
+    }
+
+    /// The lanes as arrays: `[n_0 x, y, z, n_1 .., n_2 .., g x, y, z, bound][lane]`.
+    #[inline(always)]
+    pub fn arrays(&self) -> [[f32; 4]; 13] {
+        let n = &self.n;
+        [
+            n[0][0], n[0][1], n[0][2], n[1][0], n[1][1], n[1][2], n[2][0], n[2][1], n[2][2],
+            self.g[0], self.g[1], self.g[2], self.bound,
+        ]
+        .map(|v| v.to_array())
+    }
+}
+
+/// Lane `l` of [`LazySetup4::arrays`] as a [`TriSetup`] (lazy: `rho` NaN).
+#[inline(always)]
+fn lane_of(x: &[[f32; 4]; 13], l: usize, tri: u32, src: u32, all_in: bool) -> TriSetup {
+    TriSetup {
+        n: [
+            [x[0][l], x[1][l], x[2][l]],
+            [x[3][l], x[4][l], x[5][l]],
+            [x[6][l], x[7][l], x[8][l]],
+        ],
+        g: [x[9][l], x[10][l], x[11][l]],
+        tri,
+        src,
+        bound: x[12][l],
+        rho: f32::NAN,
+        all_in,
+    }
+}
+
+/// `|v|^2 = (x x + y y) + z z` per lane (`Vec3::length_squared`).
+#[inline(always)]
+fn lsq4(v: [Vec4; 3]) -> Vec4 {
+    dot4(v, v)
+}
+
+/// `f32::max(acc, x)` for `acc` never NaN (`maxps(x, acc)`: `x` if `x > acc`, else `acc`).
+#[inline(always)]
+fn fmax4(acc: Vec4, x: Vec4) -> Vec4 {
+    x.max(acc)
+}
+
+/// The full bands of four triangles (`p[vertex][axis]`, lane = triangle) for rays from `o`
+/// within `cone`: per lane `(bound, rho)` of [`TriSetup::new`] (the non-lazy branch of
+/// [`TriSetup::new_with`]), operation by operation.
+#[inline(always)]
+pub fn bands4(p: &[[Vec4; 3]; 3], o: Vec3, cone: &Cone) -> (Vec4, Vec4) {
+    let sp = Vec4::splat;
+    let os = [sp(o.x), sp(o.y), sp(o.z)];
+    let a = [sub3(p[0], os), sub3(p[1], os), sub3(p[2], os)];
+    let e = [sub3(a[1], a[0]), sub3(a[2], a[1]), sub3(a[0], a[2])];
+    let nrm = cross4(e[0], [-e[2][0], -e[2][1], -e[2][2]]);
+    let d = dot4(nrm, a[0]);
+    let c = [sp(cone.centre.x), sp(cone.centre.y), sp(cone.centre.z)];
+    let r = sp(cone.radius);
+    let psi_of = |ai: [Vec4; 3]| {
+        let (x, y) = (cross4(ai, c), [ai[0] * r, ai[1] * r, ai[2] * r]);
+        sp(SQRT3) * Lanes::sqrt(sp(2.0) * (lsq4(x) + lsq4(y))) * sp(1.001)
+    };
+    let psi = [psi_of(a[0]), psi_of(a[1]), psi_of(a[2])];
+    let amax = a.map(|x| x[0].abs().max(x[1].abs().max(x[2].abs())));
+    let ep = [0, 1, 2].map(|i| sp(U) * (sp(2.02) * amax[i] + sp(1.01) * psi[i]));
+    let (mut bound, mut wsum) = (Vec4::ZERO, Vec4::ZERO);
+    for i in 0..3 {
+        let (b, cc) = (i, (i + 1) % 3);
+        let w = sp(2.0) * (ep[cc] * psi[b] + ep[b] * psi[cc]) + sp(4.04 * U) * psi[b] * psi[cc];
+        let pr = sp(6.1 * U) * l1_4(a[i]) * l1_4(e[i]);
+        bound = fmax4(bound, w + pr);
+        wsum += w;
+    }
+    let bound = sp(2.0) * bound;
+    let amax_sq = fmax4(fmax4(fmax4(Vec4::ZERO, lsq4(a[0])), lsq4(a[1])), lsq4(a[2]));
+    let dabs = d.abs();
+    let sigma_kappa = Lanes::sqrt(amax_sq * lsq4(e[0]) * lsq4(e[2])) * sp(1.001) / dabs;
+    let lsq_e = fmax4(fmax4(fmax4(Vec4::ZERO, lsq4(e[0])), lsq4(e[1])), lsq4(e[2]));
+    let lambda = Lanes::sqrt(lsq_e) * sp(1.001);
+    let rho =
+        sp(2.0) * (sp(SQRT3) * lambda * wsum / dabs + sp(14.0 * U) * sigma_kappa + sp(11.0 * U));
+    let rho = Vec4::select(
+        rho.is_finite_mask() & rho.cmple(sp(RHO_MAX)),
+        rho,
+        Vec4::INFINITY,
+    );
+    let bound = Vec4::select(bound.is_finite_mask(), bound, Vec4::INFINITY);
+    (bound, rho)
+}
+
+/// [`TileTris::refine`] of every lazy triangle of `tt.tris[first..end]` (a run), four at a
+/// time ([`bands4`]); the affine forms per triangle.
+#[inline(never)]
+pub fn refine_run(tt: &mut TileTris, first: usize, end: usize, blocks: &[Tri4]) {
+    let mut j = first;
+    while j < end {
+        let k = (end - j).min(4);
+        let mut p = [[[0.0f32; 4]; 3]; 3];
+        for l in 0..k {
+            let src = tt.tris[j + l].src;
+            let b = &blocks[(src >> 2) as usize];
+            let ln = (src & 3) as usize;
+            for v in 0..3 {
+                for a in 0..3 {
+                    p[v][a][l] = b.p[v][a].as_ref()[ln];
+                }
+            }
+        }
+        let (bound, rho) = bands4(&p.map(|v| v.map(Vec4::from_array)), tt.origin, &tt.cone);
+        let (bound, rho) = (bound.to_array(), rho.to_array());
+        for l in 0..k {
+            let s = &mut tt.tris[j + l];
+            if !s.rho.is_nan() {
+                continue;
+            }
+            s.bound = bound[l];
+            s.rho = rho[l];
+            if let (Some(fr), Some(a)) = (&tt.frame, tt.aff.get_mut(j + l)) {
+                *a = fr.affine(&s.n);
+            }
+        }
+        j += k;
+    }
+}
+
+/// The state `setup_tile` starts from: the beam's corners, cone and watertight permutation.
+fn begin(beam: &Beam, origin: Vec3, out: &mut TileTris) -> Option<BeamCorners> {
+    out.origin = origin;
+    out.frame = None;
+    out.tris.clear();
+    out.segs.clear();
+    out.runs4.clear();
+    out.rho_max = 0.0;
+    let corners = BeamCorners::new(beam);
+    let cone = Cone::of(corners.as_ref());
+    out.cone = cone;
+    out.perm = corners.and_then(|c| {
+        // Float division is monotone and x / x = 1: slopes below 1 mean |d_b| < |d_a|.
+        let (a, (b, cc)) = (beam.axis as usize, beam.side_axes());
+        (c.cmax[b] < 1.0 && c.cmax[cc] < 1.0).then(|| {
+            let mut d = Vec3::ZERO;
+            d[a] = beam.sign;
+            watertight_permutation(d)
+        })
+    });
+    corners
+}
+
+/// Appends the run of leaf `r` (its kept triangles `tris[previous end..]`, box `bx`).
+#[inline(always)]
+fn end_run(out: &mut TileTris, r: &LeafRef, bx: Aabb) {
+    let end = out.tris.len() as u32;
+    if out.segs.last().map_or(0, |s| s.end) < end {
+        let (lo, hi) = (bx.min - out.origin, bx.max - out.origin);
+        let k = out.segs.len();
+        out.segs.push(Segment {
+            end,
+            near: r.near,
+            lo: lo.extend(0.0),
+            hi: hi.extend(0.0),
+        });
+        if k % 4 == 0 {
+            out.runs4.push(RunBoxes4::default());
+        }
+        let rb = out.runs4.last_mut().expect("pushed above");
+        for a in 0..3 {
+            rb.lo[a][k % 4] = lo[a];
+            rb.hi[a][k % 4] = hi[a];
+        }
+    }
+}
+
+/// Sets up every triangle of the tile list `leaves` (near-depth order) for rays from `origin`
+/// within `beam`, dropping all-out triangles (module docs of [`super`]); the lazy set-up four
+/// triangles at a time (`LazySetup4`, `cast/setup/tile.rs`), the full one scalar.
+pub fn setup_tile(
+    blocks: &[Tri4],
+    leaves: &[LeafRef],
+    beam: &Beam,
+    origin: Vec3,
+    lazy: bool,
+    out: &mut TileTris,
+) {
+    if !lazy {
+        return setup_tile_scalar(blocks, leaves, beam, origin, lazy, out);
+    }
+    let corners = begin(beam, origin, out);
+    let radius = out.cone.radius;
+    // The tile's triangles in list order (`4 * block + lane`) and each leaf's end in it.
+    let (mut ents, mut ends) = (std::mem::take(&mut out.ents), std::mem::take(&mut out.ends));
+    ents.clear();
+    ends.clear();
+    for r in leaves {
+        let (first, count) = (leaf_first(r.leaf), leaf_count(r.leaf));
+        for j in 0..count {
+            let bi = first + j / 4;
+            if blocks[bi as usize].tri[(j % 4) as usize] != u32::MAX {
+                ents.push(4 * first + j);
+            }
+        }
+        ends.push(ents.len() as u32);
+    }
+    // Packs of four consecutive triangles (across blocks and leaves), set up together; the
+    // kept ones appended in order, each leaf's run closed when its last triangle is done.
+    let mut li = 0usize;
+    let mut bx = Aabb::EMPTY;
+    for (pi, pack) in ents.chunks(4).enumerate() {
+        let mut p = [[[0.0f32; 4]; 3]; 3];
+        for (l, &src) in pack.iter().enumerate() {
+            let b = &blocks[(src >> 2) as usize];
+            let ln = (src & 3) as usize;
+            for v in 0..3 {
+                for a in 0..3 {
+                    p[v][a][l] = b.p[v][a].as_ref()[ln];
+                }
+            }
+        }
+        let p = p.map(|v| v.map(Vec4::from_array));
+        let s = LazySetup4::new(&p, origin, radius);
+        let (outm, inm) = corners.map_or((0, 0), |c| s.classify(&c));
+        let valid = (1u32 << pack.len()) - 1;
+        let keep = valid & s.ok & !outm;
+        out.counts.all_out += (valid & !keep).count_ones() as u64;
+        out.counts.all_in += (keep & inm).count_ones() as u64;
+        out.counts.partial += (keep & !inm).count_ones() as u64;
+        let x = s.arrays();
+        // Per lane the triangle's box (`Aabb::grow`'s `min` / `max` of its vertices).
+        let mn = [0, 1, 2].map(|a| p[0][a].min(p[1][a]).min(p[2][a]).to_array());
+        let mx = [0, 1, 2].map(|a| p[0][a].max(p[1][a]).max(p[2][a]).to_array());
+        for (l, &src) in pack.iter().enumerate() {
+            let q = (4 * pi + l) as u32;
+            while ends[li] == q {
+                end_run(out, &leaves[li], bx);
+                bx = Aabb::EMPTY;
+                li += 1;
+            }
+            if keep >> l & 1 != 0 {
+                let tri = blocks[(src >> 2) as usize].tri[(src & 3) as usize];
+                out.tris.push(lane_of(&x, l, tri, src, inm >> l & 1 != 0));
+                bx.min = bx.min.min(Vec3::new(mn[0][l], mn[1][l], mn[2][l]));
+                bx.max = bx.max.max(Vec3::new(mx[0][l], mx[1][l], mx[2][l]));
+            }
+        }
+    }
+    while li < leaves.len() {
+        end_run(out, &leaves[li], bx);
+        bx = Aabb::EMPTY;
+        li += 1;
+    }
+    (out.ents, out.ends) = (ents, ends);
+}
+
+/// The scalar twin of [`setup_tile`]: one triangle at a time ([`TriSetup::new_with`],
+/// [`BeamCorners::classify`]); the reference of the lane set-up's tests.
+pub fn setup_tile_scalar(
+    blocks: &[Tri4],
+    leaves: &[LeafRef],
+    beam: &Beam,
+    origin: Vec3,
+    lazy: bool,
+    out: &mut TileTris,
+) {
+    let corners = begin(beam, origin, out);
+    let cone = out.cone;
+    for r in leaves {
+        let mut bx = Aabb::EMPTY;
+        let (first, count) = (leaf_first(r.leaf), leaf_count(r.leaf));
+        for j in 0..count {
+            let bi = first + j / 4;
+            let b = &blocks[bi as usize];
+            let ln = (j % 4) as usize;
+            if b.tri[ln] == u32::MAX {
+                continue;
+            }
+            let v = [b.vertex(ln, 0), b.vertex(ln, 1), b.vertex(ln, 2)];
+            let Some(mut s) =
+                TriSetup::new_with(v, origin, b.tri[ln], 4 * bi + ln as u32, &cone, lazy)
+            else {
+                out.counts.all_out += 1;
+                continue;
+            };
+            match corners.map_or(CornerClass::Partial, |c| c.classify(&s)) {
+                CornerClass::AllOut => {
+                    out.counts.all_out += 1;
+                    continue;
+                }
+                CornerClass::AllIn => {
+                    out.counts.all_in += 1;
+                    s.all_in = true;
+                }
+                CornerClass::Partial => out.counts.partial += 1,
+            }
+            if s.rho <= RHO_MAX {
+                out.rho_max = out.rho_max.max(s.rho);
+            }
+            out.tris.push(s);
+            bx = bx.grow(v[0]).grow(v[1]).grow(v[2]);
+        }
+        end_run(out, r, bx);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use parallax_bvh::node::ChildRef;
+
+    /// xorshift64*, deterministic.
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> u64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+        }
+        fn f(&mut self) -> f32 {
+            (self.next() >> 40) as f32 / (1u64 << 24) as f32
+        }
+        fn v(&mut self, s: f32) -> Vec3 {
+            Vec3::new(self.f() - 0.5, self.f() - 0.5, self.f() - 0.5) * s
+        }
+    }
+
+    /// Random and adversarial triangles around `o`: every scale from 1e-30 to 1e30, degenerate
+    /// and collinear ones, a vertex at the origin, planes through the origin, shared edges,
+    /// non-finite vertices.
+    fn triangles(rng: &mut Rng, o: Vec3) -> Vec<[Vec3; 3]> {
+        let mut t = Vec::new();
+        for _ in 0..4000 {
+            let scale = 10f32.powi((rng.next() % 61) as i32 - 30);
+            let c = o + rng.v(2.0 * scale);
+            let sz = scale * 10f32.powi(-((rng.next() % 8) as i32));
+            let v = [c + rng.v(sz), c + rng.v(sz), c + rng.v(sz)];
+            t.push(v);
+            match rng.next() % 10 {
+                0 => t.push([v[0], v[1], v[0] + (v[1] - v[0]) * 0.5]),
+                1 => t.push([o, v[1], v[2]]),
+                2 => t.push([v[0], v[0], v[2]]),
+                3 => t.push([o + (v[0] - o) * 2.0, v[0], v[1]]),
+                4 => t.push([v[1], v[0], c + rng.v(sz)]),
+                5 => t.push([v[0], Vec3::new(f32::INFINITY, 0.0, 1.0), v[2]]),
+                6 => t.push([v[0], Vec3::new(f32::NAN, 0.0, 1.0), v[2]]),
+                7 => t.push([v[0] * 1e30, v[1] * 1e30, v[2] * -1e30]),
+                8 => t.push([v[0], v[1] + Vec3::splat(f32::MIN_POSITIVE), v[1]]),
+                _ => t.push([v[0].to_array().map(|x| x * 1e-38).into(), v[1], v[2]]),
+            }
+        }
+        t
+    }
+
+    fn blocks_of(tris: &[[Vec3; 3]]) -> Vec<Tri4> {
+        tris.chunks(4)
+            .enumerate()
+            .map(|(k, ch)| {
+                let mut b = Tri4::EMPTY;
+                for (l, t) in ch.iter().enumerate() {
+                    for (v, p) in t.iter().enumerate() {
+                        for a in 0..3 {
+                            b.p[v][a][l] = p[a];
+                        }
+                    }
+                    // Some padding lanes inside a block.
+                    b.tri[l] = if (k + l) % 13 == 5 {
+                        u32::MAX
+                    } else {
+                        (4 * k + l) as u32
+                    };
+                }
+                b
+            })
+            .collect()
+    }
+
+    fn beam(rng: &mut Rng, o: Vec3) -> Beam {
+        let (u0, v0) = (rng.f() * 1.6 - 0.8, rng.f() * 1.6 - 0.8);
+        let (du, dv) = (rng.f() * 0.3, rng.f() * 0.3);
+        Beam {
+            axis: (rng.next() % 3) as u8,
+            sign: if rng.next() % 2 == 0 { 1.0 } else { -1.0 },
+            u: [u0, u0 + du],
+            v: [v0, v0 + dv],
+            origin: Aabb::EMPTY.grow(o),
+            everything: false,
+        }
+    }
+
+    fn bits(s: &TriSetup) -> Vec<u32> {
+        let mut v: Vec<u32> = s.n.iter().flatten().map(|x| x.to_bits()).collect();
+        v.extend(s.g.map(f32::to_bits));
+        v.extend([
+            s.tri,
+            s.src,
+            s.bound.to_bits(),
+            s.rho.to_bits(),
+            s.all_in as u32,
+        ]);
+        v
+    }
+
+    #[test]
+    fn lane_setup_equals_scalar_bit_for_bit() {
+        let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+        let (mut kept, mut lanes) = (0, 0);
+        for round in 0..6 {
+            let o = if round == 0 { Vec3::ZERO } else { rng.v(100.0) };
+            let tris = triangles(&mut rng, o);
+            let blocks = blocks_of(&tris);
+            let bm = beam(&mut rng, o);
+            let corners = BeamCorners::new(&bm).unwrap();
+            let cone = if round == 1 {
+                Cone::ANY
+            } else {
+                Cone::of(Some(&corners))
+            };
+            for (bi, b) in blocks.iter().enumerate() {
+                let s4 = LazySetup4::new(&b.p, o, cone.radius);
+                let (outm, inm) = s4.classify(&corners);
+                for l in 0..4 {
+                    lanes += 1;
+                    let v = [b.vertex(l, 0), b.vertex(l, 1), b.vertex(l, 2)];
+                    let src = 4 * bi as u32 + l as u32;
+                    let s = TriSetup::new_with(v, o, 7, src, &cone, true);
+                    assert_eq!(s.is_some(), s4.ok >> l & 1 != 0, "{v:?} {o:?}");
+                    let Some(mut s) = s else { continue };
+                    kept += 1;
+                    let class = corners.classify(&s);
+                    assert_eq!(class == CornerClass::AllOut, outm >> l & 1 != 0, "{v:?}");
+                    assert_eq!(class == CornerClass::AllIn, inm >> l & 1 != 0, "{v:?}");
+                    s.all_in = class == CornerClass::AllIn;
+                    let t = lane_of(&s4.arrays(), l, 7, src, s.all_in);
+                    assert_eq!(bits(&s), bits(&t), "{v:?} {o:?}");
+                }
+            }
+        }
+        assert!(kept > lanes / 10, "{kept} of {lanes}");
+    }
+
+    #[test]
+    fn setup_tile_equals_scalar_twin() {
+        let mut rng = Rng(0x1234_5678_9abc_def1);
+        for _ in 0..20 {
+            let o = rng.v(10.0);
+            let tris = triangles(&mut rng, o);
+            let blocks = blocks_of(&tris[..tris.len() / 4 * 4]);
+            // Leaves of 1 to 16 triangles (whole blocks, the last one partly filled).
+            let mut leaves = Vec::new();
+            let mut first = 0u32;
+            while (first as usize) < blocks.len() {
+                let nb = (1 + rng.next() % 4).min((blocks.len() - first as usize) as u64) as u32;
+                let count = (4 * nb - (rng.next() % 4) as u32).min(15);
+                let leaf = ChildRef::Leaf { first, count }.encode();
+                leaves.push(LeafRef {
+                    leaf,
+                    near: first as f32,
+                });
+                first += nb;
+            }
+            let bm = if rng.next() % 5 == 0 {
+                Beam::EVERYTHING
+            } else {
+                beam(&mut rng, o)
+            };
+            let (mut a, mut b) = (TileTris::default(), TileTris::default());
+            setup_tile(&blocks, &leaves, &bm, o, true, &mut a);
+            setup_tile_scalar(&blocks, &leaves, &bm, o, true, &mut b);
+            assert_eq!(a.tris.len(), b.tris.len());
+            for (x, y) in a.tris.iter().zip(&b.tris) {
+                assert_eq!(bits(x), bits(y));
+            }
+            assert_eq!(a.segs.len(), b.segs.len());
+            for (x, y) in a.segs.iter().zip(&b.segs) {
+                assert_eq!(x.end, y.end);
+                assert_eq!(x.near.to_bits(), y.near.to_bits());
+                // Equal values (the sign of a zero may differ: no comparison sees it).
+                assert_eq!((x.lo, x.hi), (y.lo, y.hi));
+            }
+            let c = |t: &TileTris| (t.counts.all_out, t.counts.partial, t.counts.all_in);
+            assert_eq!(c(&a), c(&b));
+            assert_eq!(a.runs4.len(), a.segs.len().div_ceil(4));
+            for (k, x) in a.segs.iter().enumerate() {
+                let rb = &a.runs4[k / 4];
+                for ax in 0..3 {
+                    assert_eq!(rb.lo[ax][k % 4].to_bits(), x.lo[ax].to_bits());
+                    assert_eq!(rb.hi[ax][k % 4].to_bits(), x.hi[ax].to_bits());
+                }
+            }
+            assert_eq!((a.perm, a.rho_max.to_bits()), (b.perm, b.rho_max.to_bits()));
+        }
+    }
+
+    #[test]
+    fn run_refine_equals_scalar_refine() {
+        let mut rng = Rng(0x5151_7e57_c0ff_ee01);
+        let mut refined = 0;
+        for _ in 0..20 {
+            let o = rng.v(10.0);
+            let tris = triangles(&mut rng, o);
+            let blocks = blocks_of(&tris[..tris.len() / 4 * 4]);
+            let leaves: Vec<LeafRef> = (0..blocks.len() as u32)
+                .map(|first| LeafRef {
+                    leaf: ChildRef::Leaf { first, count: 4 }.encode(),
+                    near: first as f32,
+                })
+                .collect();
+            let bm = beam(&mut rng, o);
+            let mut a = TileTris::default();
+            setup_tile(&blocks, &leaves, &bm, o, true, &mut a);
+            let mut b = a.clone();
+            let mut first = 0;
+            for seg in a.segs.clone() {
+                refine_run(&mut a, first, seg.end as usize, &blocks);
+                first = seg.end as usize;
+            }
+            for j in 0..b.tris.len() {
+                b.refine(j, &blocks);
+            }
+            for (x, y) in a.tris.iter().zip(&b.tris) {
+                assert_eq!(bits(x), bits(y), "{x:?} {y:?}");
+                refined += 1;
+            }
+        }
+        assert!(refined > 1000, "{refined}");
+    }
+}
