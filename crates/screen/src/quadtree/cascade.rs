@@ -355,7 +355,7 @@ impl QuadTreeTracer {
     }
 
     /// [`Self::trace_impl`] after the clip and the set-up: `seg` is `ray`'s cube segment and
-    /// `rs` its [`RaySetup`] (also the batches' last phase, [`super::batch`]).
+    /// `rs` its [`RaySetup`] (also the batches' last phase, `quadtree/batch.rs`).
     #[inline(always)]
     pub(super) fn trace_segment(
         &self,

@@ -167,7 +167,7 @@ impl QuadTree {
     /// The start of [`Self::trace_layer`]: the `z`-floor skip, the start level and node
     /// (module docs); `None` when nothing of the window is left to traverse (no events, no
     /// work counted). Split from the walk so that a batch of rays can compute all its
-    /// starts before the first walk ([`super::batch`]).
+    /// starts before the first walk (`quadtree/batch.rs`).
     #[inline(always)]
     pub fn layer_start(&self, ray: &RaySetup, q: &Query) -> Option<LayerStart> {
         if !(q.s_lo <= q.s_hi) {
