@@ -191,6 +191,34 @@ fn bad_input_gives_clear_errors() {
             &["render", "--scene", "cornell", "--spp", "0", "--out", p],
             "--spp",
         ),
+        (
+            &[
+                "reflect",
+                "--scene",
+                "mirrors-open",
+                "--spp",
+                "0",
+                "--out",
+                p,
+            ],
+            "rays per pixel must be a square",
+        ),
+        (
+            &[
+                "reflect",
+                "--scene",
+                "mirrors-open",
+                "--spp",
+                "1000",
+                "--out",
+                p,
+            ],
+            "rays per pixel must be a square",
+        ),
+        (
+            &["bench", "reflect", "--scene", "mirrors", "--spp", "1,5"],
+            "rays per pixel must be a square",
+        ),
     ];
     for (args, needle) in cases {
         let o = parallax(args);

@@ -204,6 +204,13 @@ fn bad_options_are_errors() {
             },
             "offset",
         ),
+        (
+            ReflectOptions {
+                trace_below: 1.5,
+                ..opts(1, 8, 1)
+            },
+            "tracing weight",
+        ),
     ] {
         let e = o.validate().unwrap_err().to_string();
         assert!(e.contains(what), "{e}");

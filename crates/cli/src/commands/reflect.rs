@@ -1,7 +1,9 @@
 //! `parallax reflect` and `parallax bench reflect`: specular and glossy reflections traced
 //! through a cube map of colour + depth layers at the camera, one quad-tree (or DDA) per face
 //! (Widmer et al. 2015, §5.4, Table 5, Figs. 11-13), scored against the same reflections
-//! traced with the BVH.
+//! traced with the BVH. `--spp N` (a square `s x s`) renders `s x s` primary rays per pixel
+//! (the view captured at `s` times its size) and box-filters them; the BVH truth is the same
+//! rays with the same filter.
 
 use std::path::PathBuf;
 
@@ -15,6 +17,7 @@ use parallax_scene::CameraDesc;
 use parallax_scene::camera::Pinhole;
 use parallax_synth::bench::reflect::{self as bench_reflect, ReflectBench, ReflectRow, TABLE5};
 use parallax_synth::dof::truth::masked_psnr;
+use parallax_synth::lightfield::{spp_side, supersampled};
 use parallax_synth::method::Method;
 use parallax_synth::reflect::{
     BvhReflector, CubeReflector, ReflectOptions, ReflectionCube, Reflector, render_reflections,
@@ -50,6 +53,10 @@ pub struct ReflectArgs {
     /// (default: occlusion volumes are final, as in the paper).
     #[arg(long)]
     pub thickness: Option<f32>,
+    /// Extra samples whose plane-lookup weight is below this (0..=1) are traced through the
+    /// cube map as paths instead (0: never, the paper's lookups).
+    #[arg(long, default_value_t = 0.0)]
+    pub trace_below: f32,
 }
 
 impl ReflectArgs {
@@ -70,6 +77,7 @@ impl ReflectArgs {
             n_b,
             sigma: self.sigma,
             offset_px: self.offset_px,
+            trace_below: self.trace_below,
             seed,
         };
         o.validate()?;
@@ -104,6 +112,10 @@ pub struct ReflectCmdArgs {
     /// Traced segments per path (N_b).
     #[arg(long, default_value_t = 1)]
     pub n_b: u32,
+    /// Primary rays per pixel, a square s x s (1, 4, 9, ...): the view at s times its size,
+    /// box-filtered; the BVH truth is the same rays with the same filter.
+    #[arg(long, default_value_t = 1)]
+    pub spp: u32,
     /// Output folder.
     #[arg(long, default_value = "out/reflect")]
     pub out: PathBuf,
@@ -128,6 +140,7 @@ pub fn run(a: &ReflectCmdArgs, quiet: bool) -> Result<()> {
         a.method
     );
     let ropts = a.reflect.options(a.synth.seed, a.n_p, a.n_s, a.n_b)?;
+    let side = spp_side(a.spp).context("--spp")?;
     let opts = method_options(&a.synth, a.reflect.face)?;
     let scene = a.view.load_scene()?;
     let bvh = Bvh::try_build(&scene.mesh)?;
@@ -135,7 +148,8 @@ pub fn run(a: &ReflectCmdArgs, quiet: bool) -> Result<()> {
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let progress = reporter(quiet);
     progress("view");
-    let reference = capture_reference(&scene, &bvh, &camera, 1, Shading::Fixed, a.synth.seed)?;
+    let fine = supersampled(&camera, side);
+    let reference = capture_reference(&scene, &bvh, &fine, 1, Shading::Fixed, a.synth.seed)?;
     progress("cube map");
     let cube = ReflectionCube::capture(
         &scene,
@@ -149,7 +163,8 @@ pub fn run(a: &ReflectCmdArgs, quiet: bool) -> Result<()> {
     reflector.tracer.thickness = a.reflect.thickness()?;
     progress("reflections");
     let eye = camera.frame.position;
-    let img = render_reflections(&reflector, &reference, eye, a.reflect.face, &ropts)?;
+    let img = render_reflections(&reflector, &reference, eye, a.reflect.face, &ropts)?
+        .box_filtered(side)?;
     let mut written = Vec::new();
     let mut save = |name: &str, im: &parallax_core::Image<parallax_core::Rgb>| -> Result<()> {
         let p = a.out.join(name);
@@ -163,7 +178,8 @@ pub fn run(a: &ReflectCmdArgs, quiet: bool) -> Result<()> {
     } else {
         progress("BVH reflections");
         let truth = BvhReflector::new(&scene, &bvh, eye, a.synth.seed);
-        let t = render_reflections(&truth, &reference, eye, a.reflect.face, &ropts)?;
+        let t = render_reflections(&truth, &reference, eye, a.reflect.face, &ropts)?
+            .box_filtered(side)?;
         save("reflect.bvh.png", &t.image)?;
         Some((
             masked_psnr(&img.image, &t.image, &t.mask)?,
@@ -176,11 +192,12 @@ pub fn run(a: &ReflectCmdArgs, quiet: bool) -> Result<()> {
             println!("wrote {}", p.display());
         }
         println!(
-            "{} {} layer(s), {}x{}, faces {}^2, N_p/N_s/N_b {}/{}/{}: T_cm {:.1} ms (capture {:.1}, shade {:.1}, build {:.1}), T_ref {:.1} ms, T_rr {:.1} ms, {} reflective pixels, {:.2} Mrays/s{}",
+            "{} {} layer(s), {}x{} ({} spp), faces {}^2, N_p/N_s/N_b {}/{}/{}: T_cm {:.1} ms (capture {:.1}, shade {:.1}, build {:.1}), T_ref {:.1} ms, T_rr {:.1} ms, {} reflective pixels, {:.2} Mrays/s{}",
             reflector.name(),
             a.layers,
             a.width,
             a.height,
+            a.spp,
             a.reflect.face,
             a.n_p,
             a.n_s,
@@ -227,6 +244,11 @@ pub struct ReflectBenchArgs {
     /// N_p/N_s/N_b configurations as a comma list of p/s/b (default: Table 5's).
     #[arg(long, value_delimiter = ',')]
     pub configs: Vec<String>,
+    /// Comma list of primary rays per pixel, each a square s x s (1, 4, 9, ...): one set of
+    /// rows per value, the view at s times its size box-filtered, the BVH truth the same
+    /// rays with the same filter.
+    #[arg(long, value_delimiter = ',', default_value = "1")]
+    pub spp: Vec<u32>,
     /// DDA: one set of rows per max-steps value of this comma list instead of
     /// --dda-max-steps.
     #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=10_000_000))]
@@ -267,6 +289,9 @@ pub fn bench(a: &ReflectBenchArgs, quiet: bool) -> Result<()> {
     for &(p, s, b) in &configs {
         a.reflect.options(a.synth.seed, p, s, b)?;
     }
+    for &n in &a.spp {
+        spp_side(n).context("--spp")?;
+    }
     let opts = method_options(&a.synth, a.reflect.face)?;
     let dda_steps = if a.dda_sweep.is_empty() {
         vec![opts.dda_max_steps]
@@ -281,6 +306,7 @@ pub fn bench(a: &ReflectBenchArgs, quiet: bool) -> Result<()> {
         face: a.reflect.face,
         layers: a.layers.clone(),
         configs,
+        spp: a.spp.clone(),
         dda_steps,
         quadtree: !a.no_quadtree,
         opts,
@@ -310,17 +336,18 @@ pub fn bench(a: &ReflectBenchArgs, quiet: bool) -> Result<()> {
 
 fn print_rows(rows: &[ReflectRow]) {
     println!(
-        "| method | layers | N_p/N_s/N_b | dda steps | T_cm ms | T_ref ms | T_rr ms | T_rr CPU ms | FPS | Mrays/s | rays/px | nodes/ray | % cut | extra weight | trace-only Mrays/s | hit agreement | PSNR refl. dB | PSNR image dB | SSIM |"
+        "| method | layers | N_p/N_s/N_b | spp | dda steps | T_cm ms | T_ref ms | T_rr ms | T_rr CPU ms | FPS | Mrays/s | rays/px | nodes/ray | % cut | extra weight | trace-only Mrays/s | hit agreement | PSNR refl. dB | PSNR image dB | SSIM |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for r in rows {
         println!(
-            "| {} | {} | {}/{}/{} | {} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} | {:.2} | {:.1} | {:.2} | {} | {:.2} | {:.3} | {} | {} | {:.4} |",
+            "| {} | {} | {}/{}/{} | {} | {} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} | {:.2} | {:.1} | {:.2} | {} | {:.2} | {:.3} | {} | {} | {:.4} |",
             r.method,
             r.layers,
             r.n_p,
             r.n_s,
             r.n_b,
+            r.spp,
             r.dda_max_steps.map_or("-".into(), |n| n.to_string()),
             cell(r.ms_cm, 1),
             r.ms_ref,

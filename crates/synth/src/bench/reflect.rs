@@ -12,6 +12,12 @@
 //! not stored), so tracing speed is compared on a **trace-only pass**: the first-segment
 //! rays of the configuration, identical for every structure, closest hits only
 //! (`ms_trace`, `trace_mrays_per_s`, and hit `agreement` with the BVH).
+//!
+//! **Antialiased rows** (`spp` = `s²` > 1): the view is captured at `s` times its size and
+//! every reflector renders all its `s x s` rays per pixel, box-filtered to the view's size
+//! ([`crate::reflect::ReflectionImage::box_filtered`]); the truth is the BVH reflector on the
+//! same rays with the same filter, so PSNR compares filtered images of identical ray sets.
+//! Ray counts and times are those of all the rays (`rays_per_pixel` per filtered pixel).
 
 use glam::Vec3;
 use parallax_bvh::Bvh;
@@ -23,6 +29,7 @@ use serde::Serialize;
 use crate::SynthError;
 use crate::dof::truth::masked_psnr;
 use crate::layers::{Reference, capture_reference};
+use crate::lightfield::{spp_side, supersampled};
 use crate::method::{Method, MethodOptions};
 use crate::reflect::render::primary_rays;
 use crate::reflect::{
@@ -48,6 +55,8 @@ pub struct ReflectRow {
     pub n_p: u32,
     pub n_s: u32,
     pub n_b: u32,
+    /// Primary rays per pixel (`s x s`, box-filtered).
+    pub spp: u32,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub dda_max_steps: Option<u32>,
     /// `T_cm`: cube capture + shade + build (the BVH's build for its row).
@@ -90,6 +99,8 @@ pub struct ReflectBench {
     pub face: u32,
     pub layers: Vec<usize>,
     pub configs: Vec<(u32, u32, u32)>,
+    /// Primary rays per pixel, one set of rows per value (squares `s x s`, [`spp_side`]).
+    pub spp: Vec<u32>,
     /// One DDA row per value.
     pub dda_steps: Vec<u32>,
     pub quadtree: bool,
@@ -109,9 +120,14 @@ pub fn run(
     progress: &dyn Fn(&str),
 ) -> Result<Vec<ReflectRow>, SynthError> {
     let seed = b.reflect.seed;
-    progress("view");
-    let reference = capture_reference(scene, bvh, &b.camera, 1, Shading::Fixed, seed)?;
-    let ms_ref = reference.times.capture_ms + reference.times.shade_ms;
+    let mut references = Vec::new();
+    for &spp in &b.spp {
+        let side = spp_side(spp)?;
+        progress(&format!("view, {spp} ray(s) per pixel"));
+        let cam = supersampled(&b.camera, side);
+        let reference = capture_reference(scene, bvh, &cam, 1, Shading::Fixed, seed)?;
+        references.push((spp, side, reference));
+    }
     let eye = b.camera.frame.position;
     let desc = CameraDesc::new(eye, eye - Vec3::Z, Vec3::Y, 90.0);
     let mut rows = Vec::new();
@@ -142,19 +158,25 @@ pub fn run(
             s.tracer.thickness = b.thickness;
         }
         let truth_tracer = BvhReflector::new(scene, bvh, eye, seed);
-        for &(n_p, n_s, n_b) in &b.configs {
+        let runs = b
+            .configs
+            .iter()
+            .flat_map(|c| references.iter().map(move |r| (c, r)));
+        for (&(n_p, n_s, n_b), (spp, side, reference)) in runs {
+            let (spp, side) = (*spp, *side);
+            let ms_ref = reference.times.capture_ms + reference.times.shade_ms;
             let opts = ReflectOptions {
                 n_p,
                 n_s,
                 n_b,
                 ..b.reflect
             };
-            progress(&format!("{layers} layer(s), {n_p}/{n_s}/{n_b}"));
+            progress(&format!("{layers} layer(s), {n_p}/{n_s}/{n_b}, {spp} spp"));
             let mut reflectors: Vec<&dyn Reflector> = vec![&truth_tracer];
             reflectors.extend(structures.iter().map(|(s, _)| s as &dyn Reflector));
-            let best = best_of(&reflectors, &reference, eye, b, &opts)?;
+            let best = best_of(&reflectors, reference, eye, b, &opts, side)?;
             let truth = &best[0];
-            let rays = primary_rays(scene, &reference, eye, b.face, &opts)?;
+            let rays = primary_rays(scene, reference, eye, b.face, &opts)?;
             let traced = trace_only(&reflectors, &rays, b.repeats);
             let truth_hits = &traced[0].1;
             let mut traced = traced.iter();
@@ -172,6 +194,7 @@ pub fn run(
                     n_p,
                     n_s,
                     n_b,
+                    spp,
                     dda_max_steps: steps,
                     ms_cm,
                     ms_build,
@@ -210,13 +233,15 @@ pub fn run(
     Ok(rows)
 }
 
-/// Every reflector's render of `opts`, in `b.repeats` interleaved rounds, the fastest kept.
+/// Every reflector's render of `opts` over `reference` (the view at `side` times its size),
+/// box-filtered by `side`, in `b.repeats` interleaved rounds, the fastest kept.
 fn best_of(
     reflectors: &[&dyn Reflector],
     reference: &Reference,
     eye: Vec3,
     b: &ReflectBench,
     opts: &ReflectOptions,
+    side: u32,
 ) -> Result<Vec<ReflectionImage>, SynthError> {
     let mut best: Vec<Option<ReflectionImage>> = vec![None; reflectors.len()];
     for _ in 0..b.repeats.max(1) {
@@ -227,7 +252,9 @@ fn best_of(
             }
         }
     }
-    Ok(best.into_iter().map(|b| b.expect("one round")).collect())
+    best.into_iter()
+        .map(|b| b.expect("one round").box_filtered(side))
+        .collect()
 }
 
 /// Closest hits of `rays` through every reflector in parallel chunks, `repeats` interleaved

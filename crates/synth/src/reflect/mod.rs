@@ -20,7 +20,15 @@
 //! samples of depth of field, [`cube`]); the ray's colour is the weighted mean (the traced ray
 //! with weight 1). After a traced ray that bounced on, its extra samples weigh 0; a stratum
 //! whose traced direction falls below the surface adds nothing. Mirrors draw no extra
-//! samples (every one is the same direction).
+//! samples (every one is the same direction). With `trace_below > 0` (not in the paper) an
+//! extra sample whose lookup weighs less than `trace_below` — its plane misses the surface
+//! the lobe direction reaches — is traced as a full path instead (weight 1, as the truth).
+//!
+//! **Antialiasing** (`reflect --spp`): the view is captured at `s` times its size
+//! ([`crate::lightfield::supersampled`]), every reflector renders all its `s x s` primary
+//! pixels and the image is box-filtered to the view's size
+//! ([`ReflectionImage::box_filtered`]); the truth is the BVH reflector on the same rays with
+//! the same filter.
 //!
 //! **Ground truth** ([`truth`]): the same renderer with the BVH as [`Reflector`] — the same
 //! primary hits and sample directions, every segment traced exactly, extra samples traced as
@@ -33,6 +41,7 @@
 //! | `n_b` | u32 | 1 | traced segments per path (bounces), `1..=`[`MAX_BOUNCES`] |
 //! | `sigma` | f32 | 0.02 | width of the extra samples' depth weight (relative depth), `> 0` |
 //! | `offset_px` | f32 | 1.5 | reflection rays start this many cube-face pixel footprints (at the origin's distance from the eye) off their surface, so a sampled surface does not reflect itself, `>= 0`, finite |
+//! | `trace_below` | f32 | 0 | extra samples whose plane-lookup weight is below this are traced as paths, `0..=1` (0: never, the paper) |
 //! | `seed` | u64 | 0 | seed of the per-pixel direction streams |
 //!
 //! **Invariants:** the image is bit-identical for any thread count (per-pixel streams:
@@ -71,6 +80,7 @@ pub struct ReflectOptions {
     pub n_b: u32,
     pub sigma: f32,
     pub offset_px: f32,
+    pub trace_below: f32,
     pub seed: u64,
 }
 
@@ -82,6 +92,7 @@ impl Default for ReflectOptions {
             n_b: 1,
             sigma: crate::dof::DEFAULT_SIGMA,
             offset_px: 1.5,
+            trace_below: 0.0,
             seed: 0,
         }
     }
@@ -119,6 +130,12 @@ impl ReflectOptions {
             return bad(format!(
                 "the ray offset must be finite and >= 0 pixels, got {}",
                 self.offset_px
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.trace_below) {
+            return bad(format!(
+                "the extra samples' tracing weight must be in 0..=1, got {}",
+                self.trace_below
             ));
         }
         Ok(())

@@ -27,6 +27,9 @@ pub struct ReflectionImage {
     /// Extra samples answered by plane lookups, and the sum of their weights.
     pub lookups: u64,
     pub lookup_weight: f64,
+    /// Extra samples traced as paths because their plane lookup weighed less than
+    /// `ReflectOptions::trace_below`.
+    pub extras_traced: u64,
     /// Wall-clock milliseconds of the pass (`T_rr`).
     pub ms: f64,
     /// CPU milliseconds of the threads that rendered the rows (NaN without a thread clock).
@@ -52,6 +55,32 @@ impl ReflectionImage {
     pub fn mean_lookup_weight(&self) -> f64 {
         self.lookup_weight / self.lookups as f64
     }
+
+    /// The image of `s x s` rays per pixel (rendered over a reference of the view at `s`
+    /// times its size, [`crate::lightfield::supersampled`]) box-filtered to the view's size
+    /// ([`crate::lightfield::box_filter`], the antialiased light-field views' filter): a
+    /// pixel reflects when any of its `s x s` rays does (the others keep the view's colour
+    /// on every reflector, so they add no error over the mask). Counters and times are
+    /// those of all the rays.
+    pub fn box_filtered(self, s: u32) -> Result<Self, SynthError> {
+        if s == 1 {
+            return Ok(self);
+        }
+        let image = crate::lightfield::box_filter(&self.image, s)?;
+        let (w, fine_w) = (image.width() as usize, self.image.width() as usize);
+        let s = s as usize;
+        let mask = (0..image.len())
+            .map(|i| {
+                let (x, y) = (i % w * s, i / w * s);
+                (0..s).any(|j| (0..s).any(|k| self.mask[(y + j) * fine_w + x + k]))
+            })
+            .collect();
+        Ok(Self {
+            image,
+            mask,
+            ..self
+        })
+    }
 }
 
 /// Per-row counters.
@@ -60,6 +89,7 @@ struct RowCounts {
     stats: WorldStats,
     lookups: u64,
     lookup_weight: f64,
+    extras_traced: u64,
     cpu_ms: f64,
 }
 
@@ -68,6 +98,7 @@ impl RowCounts {
         self.stats += o.stats;
         self.lookups += o.lookups;
         self.lookup_weight += o.lookup_weight;
+        self.extras_traced += o.extras_traced;
         self.cpu_ms += o.cpu_ms;
         self
     }
@@ -228,14 +259,17 @@ impl Pass<'_> {
                     None => Some((self.environment, 1.0)),
                     Some(_) => Some((Vec3::ZERO, 0.0)),
                 };
+                if let Some((_, weight)) = looked_up {
+                    c.lookups += 1;
+                    c.lookup_weight += weight as f64;
+                }
                 match looked_up {
-                    Some((colour, weight)) => {
-                        c.lookups += 1;
-                        c.lookup_weight += weight as f64;
+                    Some((colour, weight)) if weight >= o.trace_below => {
                         num += w_j * colour * weight;
                         den += weight;
                     }
-                    None => {
+                    _ => {
+                        c.extras_traced += looked_up.is_some() as u64;
                         let first_j = r.trace(&ray_j, &mut c.stats);
                         num +=
                             self.path(ray_j, first_j, w_j, &mut path_rng(k0 + 1 + j), &mut c.stats);
@@ -358,6 +392,7 @@ pub fn render_reflections(
         stats: counts.stats,
         lookups: counts.lookups,
         lookup_weight: counts.lookup_weight,
+        extras_traced: counts.extras_traced,
         ms,
         cpu_ms: counts.cpu_ms,
     })
