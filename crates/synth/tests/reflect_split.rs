@@ -16,6 +16,7 @@ use parallax_render::score::Shading;
 use parallax_scene::camera::{CameraModel, CubeMap, Pinhole};
 use parallax_scene::{CameraDesc, Scene};
 use parallax_synth::dof::truth::masked_psnr;
+use parallax_synth::lightfield::{spp_side, supersampled};
 use parallax_synth::reflect::{
     BvhReflector, CubeReflector, ReflectOptions, ReflectionCube, Reflector, SurfaceHit,
     render_reflections,
@@ -229,9 +230,13 @@ fn thickness_lets_rays_pass_behind_thin_occluders() {
 /// Diagnostic (`cargo test --release -p parallax-synth --test reflect_split -- --ignored
 /// --nocapture`; `REFLECT_SPLIT_SCENE` (default `mirrors`), `REFLECT_SPLIT_FACES` (default
 /// `512,1024`), `REFLECT_SPLIT_SIZE` (default `480,270`), `REFLECT_SPLIT_THICKNESS` (default
-/// none), `REFLECT_SPLIT_LAYERS` (default 1)): per face size, 1 layer, quad-tree,
-/// 1/0/1 and 1/8/1, PSNR of `C` and `O` against `T` and of `C` against `O` over the reflective
-/// pixels whose BVH reflection hit the eye sees, and of `C` over all reflective pixels.
+/// none), `REFLECT_SPLIT_LAYERS` (default 1), `REFLECT_SPLIT_SPP` (default 1: rays per pixel,
+/// `s x s` box-filtered on every side), `REFLECT_SPLIT_CONFIGS` (default `1/0/1,1/8/1`),
+/// `REFLECT_SPLIT_TRACE_BELOW` (default 0, `ReflectOptions::trace_below`),
+/// `REFLECT_SPLIT_METHOD` (`quadtree` or `dda` at the face size's steps),
+/// `REFLECT_SPLIT_HIDDEN` (set: the not-seen pixels split by surface, [`hidden_split`])): per
+/// face size, PSNR of `C` and `O` against `T` and of `C` against `O` over the reflective pixels whose BVH reflection hit the eye sees (antialiased: every reflecting ray
+/// of the pixel's), and of `C` over all reflective pixels.
 #[test]
 #[ignore]
 fn reflection_error_split() {
@@ -241,7 +246,13 @@ fn reflection_error_split() {
     let faces = nums(env("REFLECT_SPLIT_FACES", "512,1024"));
     let size = nums(env("REFLECT_SPLIT_SIZE", "480,270"));
     let bvh = Bvh::build(&scene.mesh);
-    let camera = Pinhole::new(&scene.camera(None).unwrap(), size[0], size[1]).unwrap();
+    let side = spp_side(env("REFLECT_SPLIT_SPP", "1").parse().unwrap()).unwrap();
+    let configs: Vec<Vec<u32>> = env("REFLECT_SPLIT_CONFIGS", "1/0/1,1/8/1")
+        .split(',')
+        .map(|c| c.split('/').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    let view = Pinhole::new(&scene.camera(None).unwrap(), size[0], size[1]).unwrap();
+    let camera = supersampled(&view, side);
     let reference = capture_reference(&scene, &bvh, &camera, 1, Shading::Fixed, 0).unwrap();
     let eye = camera.frame.position;
     let g = &reference.layers[0];
@@ -254,9 +265,15 @@ fn reflection_error_split() {
         let desc = CameraDesc::new(eye, eye - Vec3::Z, Vec3::Y, 90.0);
         let layers: usize = env("REFLECT_SPLIT_LAYERS", "1").parse().unwrap();
         let cube = ReflectionCube::capture(&scene, &bvh, &desc, face, layers, 0).unwrap();
-        let mut c =
-            CubeReflector::build(&scene, &cube, Method::QuadTree, &MethodOptions::default())
-                .unwrap();
+        let method = match env("REFLECT_SPLIT_METHOD", "quadtree").as_str() {
+            "dda" => Method::Dda,
+            _ => Method::QuadTree,
+        };
+        let mopts = MethodOptions {
+            dda_max_steps: face,
+            ..MethodOptions::default()
+        };
+        let mut c = CubeReflector::build(&scene, &cube, method, &mopts).unwrap();
         c.tracer.thickness = std::env::var("REFLECT_SPLIT_THICKNESS")
             .ok()
             .map(|t| t.parse().unwrap());
@@ -265,28 +282,39 @@ fn reflection_error_split() {
             exact: BvhReflector::new(&scene, &bvh, eye, 0),
             cube: &c,
         };
-        for (n_p, n_s) in [(1, 0), (1, 8)] {
+        for cfg in &configs {
+            let (n_p, n_s, n_b) = (cfg[0], cfg[1], cfg[2]);
             let o = ReflectOptions {
                 n_p,
                 n_s,
-                n_b: 1,
+                n_b,
+                trace_below: env("REFLECT_SPLIT_TRACE_BELOW", "0").parse().unwrap(),
                 ..ReflectOptions::default()
             };
-            let t = render_reflections(&truth, &reference, eye, face, &o).unwrap();
-            let ci = render_reflections(&c, &reference, eye, face, &o).unwrap();
-            let oi = render_reflections(&oracle, &reference, eye, face, &o).unwrap();
+            let render = |r: &dyn Reflector| {
+                render_reflections(r, &reference, eye, face, &o)
+                    .unwrap()
+                    .box_filtered(side)
+                    .unwrap()
+            };
+            let fine_mask = render_reflections(&truth, &reference, eye, face, &o)
+                .unwrap()
+                .mask;
+            let t = render(&truth);
+            let ci = render(&c);
+            let oi = render(&oracle);
             let agreeing = AgreeingOnly {
                 oracle: &oracle,
                 rays: AtomicU64::new(0),
                 disagree: AtomicU64::new(0),
                 kinds: Default::default(),
             };
-            let ai = render_reflections(&agreeing, &reference, eye, face, &o).unwrap();
+            let ai = render(&agreeing);
             let disagree = agreeing.disagree.load(Ordering::Relaxed) as f64
                 / agreeing.rays.load(Ordering::Relaxed).max(1) as f64;
-            let mut seen = vec![false; g.len()];
+            let mut seen_fine = vec![false; g.len()];
             for i in 0..g.len() {
-                if !t.mask[i] {
+                if !fine_mask[i] {
                     continue;
                 }
                 let p = g.position[i];
@@ -294,8 +322,31 @@ fn reflection_error_split() {
                 let ray = Ray::segment(p + g.normal[i] * 1e-4, dir, 1e-3, f32::INFINITY);
                 let mut st = WorldStats::default();
                 // A miss sees the environment, which the cube map holds by direction.
-                seen[i] = truth.trace(&ray, &mut st).is_none_or(|h| sees(h.position));
+                seen_fine[i] = truth.trace(&ray, &mut st).is_none_or(|h| sees(h.position));
             }
+            if std::env::var("REFLECT_SPLIT_HIDDEN").is_ok() {
+                hidden_split(
+                    &scene,
+                    &reference,
+                    (&truth, &c),
+                    face,
+                    &o,
+                    &fine_mask,
+                    &seen_fine,
+                );
+            }
+            // A filtered pixel is seen when every reflecting ray of it is.
+            let (w, fw, sd) = (view.width as usize, camera.width as usize, side as usize);
+            let seen: Vec<bool> = (0..t.mask.len())
+                .map(|i| {
+                    let (x, y) = (i % w * sd, i / w * sd);
+                    t.mask[i]
+                        && (0..sd * sd).all(|k| {
+                            let f = (y + k / sd) * fw + x + k % sd;
+                            !fine_mask[f] || seen_fine[f]
+                        })
+                })
+                .collect();
             let share = seen.iter().filter(|s| **s).count() as f64
                 / t.mask.iter().filter(|m| **m).count().max(1) as f64;
             let m = |a: &parallax_core::Image<parallax_core::Rgb>,
@@ -303,8 +354,9 @@ fn reflection_error_split() {
                 masked_psnr(a, b, &seen).unwrap()
             };
             println!(
-                "{} face {face} {n_p}/{n_s}/1: C-T {:.2} dB over all reflective pixels; over the {:.1}% seen: C-T {:.2}, O-T (colour reconstruction) {:.2}, C-O (traced answer) {:.2}; A-T {:.2} where the {:.2}% of traced rays that miss the exact hit by > 5% take the oracle's answer",
+                "{} face {face} {n_p}/{n_s}/{n_b} {} spp: C-T {:.2} dB over all reflective pixels; over the {:.1}% seen: C-T {:.2}, O-T (colour reconstruction) {:.2}, C-O (traced answer) {:.2}; A-T {:.2} where the {:.2}% of traced rays that miss the exact hit by > 5% take the oracle's answer",
                 scene.name,
+                side * side,
                 masked_psnr(&ci.image, &t.image, &t.mask).unwrap(),
                 100.0 * share,
                 m(&ci.image, &t.image),
@@ -323,5 +375,111 @@ fn reflection_error_split() {
                 k(2, 0)
             );
         }
+    }
+}
+
+/// The reflective pixels (one ray each, unfiltered) split by what their centre reflection ray
+/// reaches: seen by the cube map's centre, or not seen — the side it hits faces away from the
+/// centre (no layer can hold it) or faces it but is occluded — and by material: share of the
+/// pixels, PSNR of `C` against `T`, share of the squared error (`REFLECT_SPLIT_HIDDEN=1`).
+fn hidden_split(
+    scene: &Scene,
+    reference: &parallax_synth::Reference,
+    (truth, c): (&BvhReflector, &CubeReflector),
+    face: u32,
+    o: &ReflectOptions,
+    mask: &[bool],
+    seen: &[bool],
+) {
+    let eye = reference.camera.frame.position;
+    let t = render_reflections(truth, reference, eye, face, o).unwrap();
+    let ci = render_reflections(c, reference, eye, face, o).unwrap();
+    let along = render_reflections(&AlongTheRay(truth), reference, eye, face, o).unwrap();
+    println!(
+        "  truth colouring hits whose seen side faces away from the centre by their radiance along the reflection ray: C-T {:.2} dB over all reflective pixels",
+        masked_psnr(&ci.image, &along.image, mask).unwrap()
+    );
+    let g = &reference.layers[0];
+    let mut classes: std::collections::BTreeMap<String, Vec<bool>> = Default::default();
+    for i in 0..g.len() {
+        if !mask[i] {
+            continue;
+        }
+        let key = if seen[i] {
+            "seen".to_string()
+        } else {
+            let p = g.position[i];
+            let dir = brdf::reflect((eye - p).normalize(), g.normal[i]);
+            let ray = Ray::segment(p + g.normal[i] * 1e-4, dir, 1e-3, f32::INFINITY);
+            let h = truth.trace(&ray, &mut WorldStats::default()).unwrap();
+            let m = &scene.materials[h.material_id as usize].name;
+            let facing = h.normal.dot(eye - h.position) > 0.0;
+            let side = if facing { "occluded" } else { "back-facing" };
+            format!("not seen, {side}, {m}")
+        };
+        classes.entry(key).or_insert_with(|| vec![false; g.len()])[i] = true;
+    }
+    let n_all = mask.iter().filter(|m| **m).count() as f64;
+    let rows: Vec<(String, f64, f64, f64)> = classes
+        .into_iter()
+        .map(|(k, m)| {
+            let n = m.iter().filter(|v| **v).count() as f64;
+            let p = masked_psnr(&ci.image, &t.image, &m).unwrap();
+            (k, n, p, n * 10f64.powf(-p / 10.0))
+        })
+        .collect();
+    let se: f64 = rows.iter().map(|r| r.3).sum();
+    println!(
+        "  1 ray per pixel: C-T {:.2} dB over all reflective pixels",
+        masked_psnr(&ci.image, &t.image, mask).unwrap()
+    );
+    for (k, n, p, e) in rows {
+        println!(
+            "  {k}: {:.2}% of the pixels, C-T {p:.2} dB, {:.1}% of the squared error",
+            100.0 * n / n_all,
+            100.0 * e / se
+        );
+    }
+}
+
+/// The BVH reflector, except that a hit whose side the ray sees faces away from the cube
+/// map's centre (no cube-map sample can hold it) is coloured by the radiance it sends back
+/// along the ray (the physical reflection) instead of by the shading of that side seen
+/// from the centre.
+struct AlongTheRay<'a, 'b>(&'b BvhReflector<'a>);
+
+impl Reflector for AlongTheRay<'_, '_> {
+    fn name(&self) -> String {
+        "bvh-along-the-ray".into()
+    }
+
+    fn scene(&self) -> &Scene {
+        self.0.scene()
+    }
+
+    fn trace(&self, ray: &Ray, stats: &mut WorldStats) -> Option<SurfaceHit> {
+        self.0.trace(ray, stats)
+    }
+
+    fn colour(&self, ray: &Ray, hit: &SurfaceHit) -> Vec3 {
+        if hit.normal.dot(self.0.eye - hit.position) > 0.0 {
+            return self.0.colour(ray, hit);
+        }
+        let h = parallax_bvh::Hit {
+            prim: hit.prim,
+            t: hit.t,
+            u: hit.barycentrics.x,
+            v: hit.barycentrics.y,
+        };
+        let mut rng = Shading::Fixed.rng(self.0.seed, 0, 0, 0);
+        self.0.shader.radiance_from_hit(*ray, h, &mut rng, &mut 0)
+    }
+
+    fn traces_extras(&self) -> bool {
+        true
+    }
+
+    fn plane_sample(&self, hit: &SurfaceHit, ray: &Ray, _: f32) -> (Vec3, f32) {
+        (self.colour(ray, hit), 1.0)
     }
 }
