@@ -23,7 +23,7 @@ use super::capture::{
     bucket_scale,
 };
 use super::clip::Poly;
-use super::setup::{SetupEntry, Setups, ViewXf};
+use super::setup::{Setups, ViewXf, WPlane};
 
 /// Relative margin on a clipped depth range.
 const DEPTH_REL_MARGIN: f64 = 1.0 / 65536.0;
@@ -112,22 +112,19 @@ fn widen(zlo: f64, zhi: f64, abs_margin: f64) -> (f32, f32) {
     (l.max(0.0), h)
 }
 
-/// The `w` range of a set-up triangle over cell column `[left, right]` of a row whose slab
-/// `[top, bottom]` cuts the triangle to `row` (`(min, max)` of its vertices).
+/// The `w` range of a triangle's plane `p` over cell column `[left, right]` of a row whose
+/// slab cuts the triangle to `row_w` (`(min, max)` of its vertices), with the plane's y terms
+/// over the slab already sorted (`y_lo <= y_hi`): the range over the cell's corners, cut to
+/// `row_w` (`row_w` itself if the two do not overlap after rounding).
 #[inline(always)]
-fn cell_w_range(
-    tri: &SetupEntry,
+fn plane_w_range(
+    p: &WPlane,
     row_w: (f64, f64),
     (left, right): (f64, f64),
-    (top, bottom): (f64, f64),
+    (y_lo, y_hi): (f64, f64),
 ) -> (f64, f64) {
-    let Some(p) = tri.plane else {
-        return row_w;
-    };
     let (ax, bx) = (p.px * left, p.px * right);
-    let (ay, by) = (p.py * top, p.py * bottom);
     let (x_lo, x_hi) = if ax < bx { (ax, bx) } else { (bx, ax) };
-    let (y_lo, y_hi) = if ay < by { (ay, by) } else { (by, ay) };
     let lo = p.p0 + x_lo + y_lo;
     let hi = p.p0 + x_hi + y_hi;
     let lo = if lo > row_w.0 { lo } else { row_w.0 };
@@ -228,43 +225,27 @@ fn fill_band_with(
         let Some((r0, r1)) = Grid::span(tri.y.0, tri.y.1, g.s, row0, row1) else {
             continue;
         };
-        for r in r0..=r1 {
+        for r in r0..r1 + 1 {
             let top = r as f64 * s - m;
             let bottom = ((r as f64 + 1.0) * s).min(xf.h) + m;
-            let Some(row) = row_span(poly, top, bottom) else {
-                continue;
+            // A polygon inside the slab is its own cut (the same points `row_span` would add).
+            let row = if tri.y.0 >= top && tri.y.1 <= bottom {
+                RowSpan { x: tri.x, w: tri.w }
+            } else {
+                match row_span(poly, top, bottom) {
+                    Some(row) => row,
+                    None => continue,
+                }
             };
             let Some((c0, c1)) = Grid::span(row.x.0, row.x.1, g.s, 0, g.cells_x) else {
                 continue;
             };
-            let row_poly = match opts.cell_depth {
-                CellDepth::Exact => {
-                    let mut p = Poly::EMPTY;
-                    p.v[..poly.len()].copy_from_slice(poly);
-                    p.n = poly.len();
-                    Some(p.clip_axis(1, top, 1.0).clip_axis(1, bottom, -1.0))
-                }
-                CellDepth::Corners => None,
-            };
-            for c in c0..=c1 {
-                let left = c as f64 * s - m;
-                let right = ((c as f64 + 1.0) * s).min(xf.w) + m;
-                // The cut is convex: the column overlaps it iff it overlaps its x range.
-                if right < row.x.0 || left > row.x.1 {
-                    continue;
-                }
-                let (wlo, whi) = match &row_poly {
-                    Some(rp) => match rp.z_range_in_strip(left, right) {
-                        Some(r) => r,
-                        None => continue,
-                    },
-                    None => cell_w_range(tri, row.w, (left, right), (top, bottom)),
-                };
-                // w = 1 / depth > 0 after the near clip.
+            // Fill Depth (§4.1.1) and the fragment of cell column `c` with `w` range
+            // `[wlo, whi]` (w = 1 / depth > 0 after the near clip).
+            let zbase = ((r - row0) * g.cells_x) as usize;
+            let mut emit = |c: u32, wlo: f64, whi: f64| {
                 let (zlo, zhi) = widen(1.0 / whi, 1.0 / wlo, tri.abs_margin);
-                let cell = (r - row0) * g.cells_x + c;
-                // Fill Depth (§4.1.1).
-                let k = cell as usize;
+                let k = zbase + c as usize;
                 if zlo < zmin[k] {
                     zmin[k] = zlo;
                 }
@@ -272,13 +253,55 @@ fn fill_band_with(
                     zmax[k] = zhi;
                 }
                 frags.push(Fragment {
-                    cell,
+                    cell: k as u32,
                     tri: t,
                     zlo,
                     zhi,
                     b0: 0,
                     b1: 0,
                 });
+            };
+            // Cell column `c`'s `[left, right]` (widened); the cut is convex, so the column
+            // overlaps it iff it overlaps its x range.
+            let column = |c: u32| {
+                let left = c as f64 * s - m;
+                let right = ((c as f64 + 1.0) * s).min(xf.w) + m;
+                (left, right, !(right < row.x.0 || left > row.x.1))
+            };
+            match (opts.cell_depth, tri.plane) {
+                (CellDepth::Exact, _) => {
+                    let mut p = Poly::EMPTY;
+                    p.v[..poly.len()].copy_from_slice(poly);
+                    p.n = poly.len();
+                    let rp = p.clip_axis(1, top, 1.0).clip_axis(1, bottom, -1.0);
+                    for c in c0..c1 + 1 {
+                        let (left, right, overlaps) = column(c);
+                        if let (true, Some((wlo, whi))) =
+                            (overlaps, rp.z_range_in_strip(left, right))
+                        {
+                            emit(c, wlo, whi);
+                        }
+                    }
+                }
+                (CellDepth::Corners, Some(p)) => {
+                    // The plane's y terms are the row's (`cell_w_range` with them hoisted).
+                    let (ay, by) = (p.py * top, p.py * bottom);
+                    let (y_lo, y_hi) = if ay < by { (ay, by) } else { (by, ay) };
+                    for c in c0..c1 + 1 {
+                        let (left, right, overlaps) = column(c);
+                        if overlaps {
+                            let (wlo, whi) = plane_w_range(&p, row.w, (left, right), (y_lo, y_hi));
+                            emit(c, wlo, whi);
+                        }
+                    }
+                }
+                (CellDepth::Corners, None) => {
+                    for c in c0..c1 + 1 {
+                        if column(c).2 {
+                            emit(c, row.w.0, row.w.1);
+                        }
+                    }
+                }
             }
         }
         unbilled += (frags.len() - before) as u64;
@@ -303,36 +326,33 @@ fn fill_band_with(
     // Counts per cell-bucket in `offsets[k]`; after the inclusive prefix sum `offsets[k]` is
     // bucket `k`'s end, and the fill (fragments in reverse, each entry decrementing its
     // bucket's end) leaves it at the bucket's start with the ids ascending in every bucket.
+    // The non-empty mask of a cell is the union of its fragments' bucket ranges.
     let mut offsets = vec![0u32; ncells * nb + 1];
+    let mut masks = vec![0u32; ncells];
     let mut total = 0u64;
     for f in frags.iter_mut() {
         let (b0, b1) = brange(f);
         (f.b0, f.b1) = (b0 as u16, b1 as u16);
         let base = f.cell as usize * nb;
-        for o in &mut offsets[base + b0..=base + b1] {
-            *o += 1;
+        if b0 == b1 {
+            offsets[base + b0] += 1;
+        } else {
+            for o in &mut offsets[base + b0..base + b1 + 1] {
+                *o += 1;
+            }
         }
+        masks[f.cell as usize] |= bucket_mask(b0 as u32, b1 as u32, g.buckets);
         total += (b1 - b0 + 1) as u64;
     }
     // Entries beyond fragments (triangles in several buckets) count against the budget too.
     let mut extra = total - frags.len() as u64;
     bill(budget, &mut extra, opts.max_entries)?;
     let cells = (0..ncells)
-        .map(|c| {
-            let counts = &offsets[c * nb..(c + 1) * nb];
-            let mask = counts
-                .iter()
-                .enumerate()
-                .filter(|&(_, &n)| n > 0)
-                .fold(0, |m, (b, _)| {
-                    m | bucket_mask(b as u32, b as u32, g.buckets)
-                });
-            CellRecord {
-                zmin: zmin[c],
-                zmax: zmax[c],
-                scale: scale[c],
-                mask,
-            }
+        .map(|c| CellRecord {
+            zmin: zmin[c],
+            zmax: zmax[c],
+            scale: scale[c],
+            mask: masks[c],
         })
         .collect();
     for k in 1..ncells * nb {
@@ -343,9 +363,15 @@ fn fill_band_with(
     for f in frags.iter().rev() {
         let (b0, b1) = (f.b0 as usize, f.b1 as usize);
         let base = f.cell as usize * nb;
-        for end in &mut offsets[base + b0..=base + b1] {
+        if b0 == b1 {
+            let end = &mut offsets[base + b0];
             *end -= 1;
             ids[*end as usize] = f.tri;
+        } else {
+            for end in &mut offsets[base + b0..base + b1 + 1] {
+                *end -= 1;
+                ids[*end as usize] = f.tri;
+            }
         }
     }
     Ok(BandOut {

@@ -48,6 +48,9 @@ pub(super) struct SetupEntry {
     pub abs_margin: f64,
     /// Film y range of the polygon.
     pub y: (f64, f64),
+    /// Film x and `w` ranges of the polygon (its row span when it lies inside one row slab).
+    pub x: (f64, f64),
+    pub w: (f64, f64),
 }
 
 /// The set-up triangles of one chunk of [`SETUP_CHUNK`] mesh triangles for one view.
@@ -248,10 +251,10 @@ impl ViewXf {
                 .extend(poly.verts().iter().map(|&v| self.project(v)));
         }
         let verts = &out.verts[v0..];
-        let y = verts
+        let (lo, hi) = verts
             .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-                (lo.min(v.y), hi.max(v.y))
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &v| {
+                (lo.min(v), hi.max(v))
             });
         // The farthest vertex from the eye, bounded by its 1-norm (no square root).
         let far = q.iter().map(|v| v.abs().element_sum()).fold(0.0, f64::max);
@@ -261,7 +264,9 @@ impl ViewXf {
             n: verts.len() as u32,
             plane: self.w_plane(&q),
             abs_margin: DEPTH_ABS_ULPS * f32::EPSILON as f64 * (far + world_mag + self.eye_mag),
-            y,
+            y: (lo.y, hi.y),
+            x: (lo.x, hi.x),
+            w: (lo.z, hi.z),
         });
     }
 
