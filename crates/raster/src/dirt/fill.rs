@@ -19,8 +19,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use glam::DVec3;
 
 use super::capture::{
-    CellDepth, CellRecord, DirtError, DirtOptions, FILM_MARGIN_PX, bucket_index, bucket_mask,
-    bucket_scale,
+    CellDepth, CellRecord, DirtError, DirtOptions, FILM_MARGIN_PX, bucket_mask, bucket_scale,
 };
 use super::clip::Poly;
 use super::setup::{Setups, ViewXf, WPlane};
@@ -52,24 +51,25 @@ pub(super) struct Grid {
 
 impl Grid {
     /// Cells a film interval `[v0, v1]` (widened by the margin) can touch, clamped to
-    /// `[lo, hi)`.
-    #[inline]
+    /// `[lo, hi)`: `max(floor((v0 - m) / s), lo) ..= min(floor((v1 + m) / s), hi - 1)`, computed
+    /// as `trunc` of the clamped quotients (the same integers: `lo` and `hi - 1` are integers,
+    /// and a clamped lower end is `>= lo >= 0`, where `floor` is `trunc`; an upper end below 0
+    /// is empty either way). `s` is a power of two, so `* (1 / s)` is the exact `/ s`.
+    #[inline(always)]
     pub fn span(v0: f64, v1: f64, s: u32, lo: u32, hi: u32) -> Option<(u32, u32)> {
         let m = FILM_MARGIN_PX;
-        let a = floor((v0 - m) / s as f64);
-        let b = floor((v1 + m) / s as f64);
-        let a = a.max(lo as f64);
-        let b = b.min(hi as f64 - 1.0);
-        (a <= b).then_some((a as u32, b as u32))
+        let inv = 1.0 / s as f64;
+        let (lo, top) = (lo as f64, hi as f64 - 1.0);
+        let a = (v0 - m) * inv;
+        let b = (v1 + m) * inv;
+        let a = if a > lo { a } else { lo };
+        let b = if b < top { b } else { top };
+        if !(b >= 0.0) {
+            return None;
+        }
+        let (a, b) = (a as u32, b as u32);
+        (a <= b).then_some((a, b))
     }
-}
-
-/// `x.floor()` for the film coordinates of the fill (finite, well inside the i64 range after
-/// the guard-band clip), without the library call `f64::floor` compiles to on baseline x86-64.
-#[inline(always)]
-fn floor(x: f64) -> f64 {
-    let i = x as i64 as f64;
-    if i > x { i - 1.0 } else { i }
 }
 
 /// Fragments counted locally between two updates of the shared entry budget.
@@ -316,12 +316,34 @@ fn fill_band_with(
     let scale: Vec<f32> = (0..ncells)
         .map(|c| bucket_scale(zmin[c], zmax[c], g.buckets))
         .collect();
+    // `bucket_index` with its clamp to `B - 1` done in f32 first (`B - 1` is an integer, so the
+    // same integer), which lets the conversion skip its saturation.
+    let last = g.buckets - 1;
+    let last_f = last as f32;
+    let index = |zmin: f32, scale: f32, z: f32| {
+        let v = (z - zmin) * scale;
+        if v > 0.0 {
+            if v < last_f {
+                v as u32 as usize
+            } else {
+                last as usize
+            }
+        } else {
+            0
+        }
+    };
     let brange = |f: &Fragment| {
         let c = f.cell as usize;
-        (
-            bucket_index(zmin[c], scale[c], g.buckets, f.zlo) as usize,
-            bucket_index(zmin[c], scale[c], g.buckets, f.zhi) as usize,
-        )
+        let (z0, sc) = (zmin[c], scale[c]);
+        (index(z0, sc, f.zlo), index(z0, sc, f.zhi))
+    };
+    // `bucket_mask(b0, b1, B)`: for `B <= 32` bits `b0..=b1` in one subtraction.
+    let mask_of = |b0: usize, b1: usize| {
+        if g.buckets <= 32 {
+            ((2u64 << b1) - (1u64 << b0)) as u32
+        } else {
+            bucket_mask(b0 as u32, b1 as u32, g.buckets)
+        }
     };
     // Counts per cell-bucket in `offsets[k]`; after the inclusive prefix sum `offsets[k]` is
     // bucket `k`'s end, and the fill (fragments in reverse, each entry decrementing its
@@ -341,7 +363,7 @@ fn fill_band_with(
                 *o += 1;
             }
         }
-        masks[f.cell as usize] |= bucket_mask(b0 as u32, b1 as u32, g.buckets);
+        masks[f.cell as usize] |= mask_of(b0, b1);
         total += (b1 - b0 + 1) as u64;
     }
     // Entries beyond fragments (triangles in several buckets) count against the budget too.

@@ -108,6 +108,17 @@ pub(super) struct ViewXf {
     pub w: f64,
     pub h: f64,
     planes: [(DVec3, f64); 5],
+    /// `Some` when every rotation row is a signed coordinate axis (the cube map's faces): row
+    /// `i` picks component `axes[i].0` of `p - eye` times `axes[i].1` (exactly its dot
+    /// product, up to the sign of a zero).
+    axes: Option<[(usize, f64); 3]>,
+}
+
+/// `(k, ±1)` if `r` is `±e_k` exactly.
+fn signed_axis(r: DVec3) -> Option<(usize, f64)> {
+    let a = r.to_array();
+    let k = (0..3).find(|&k| a[k].abs() == 1.0)?;
+    (0..3).all(|j| j == k || a[j] == 0.0).then_some((k, a[k]))
 }
 
 impl ViewXf {
@@ -152,12 +163,20 @@ impl ViewXf {
                 (DVec3::new(0.0, 1.0, ay_lo), 0.0),
                 (DVec3::new(0.0, -1.0, -ay_hi), 0.0),
             ],
+            axes: match rows.map(signed_axis) {
+                [Some(a), Some(b), Some(c)] => Some([a, b, c]),
+                _ => None,
+            },
         }
     }
 
     #[inline(always)]
     fn to_camera(&self, p: DVec3) -> DVec3 {
         let d = p - self.eye;
+        if let Some([a, b, c]) = self.axes {
+            let d = d.to_array();
+            return DVec3::new(a.1 * d[a.0], b.1 * d[b.0], c.1 * d[c.0]);
+        }
         DVec3::new(
             self.rows[0].dot(d),
             self.rows[1].dot(d),
@@ -165,18 +184,17 @@ impl ViewXf {
         )
     }
 
-    /// Signed distances of camera point `q` to the five clip planes (`>= 0` inside): the
-    /// planes of [`Self::planes`] written out (two non-zero terms each).
+    /// The outcode of camera point `q`: bit `k` set when it is outside clip plane `k` (signed
+    /// distance not `>= 0`) of `planes`, written out (two non-zero terms each).
     #[inline(always)]
-    fn plane_distances(&self, q: DVec3) -> [f64; 5] {
+    fn outcode(&self, q: DVec3) -> u32 {
         let [ax_lo, ax_hi, ay_lo, ay_hi] = self.slopes;
-        [
-            -q.z - self.near,
-            q.x + ax_lo * q.z,
-            -q.x - ax_hi * q.z,
-            q.y + ay_lo * q.z,
-            -q.y - ay_hi * q.z,
-        ]
+        let out = |d: f64| (!(d >= 0.0)) as u32;
+        out(-q.z - self.near)
+            | out(q.x + ax_lo * q.z) << 1
+            | out(-q.x - ax_hi * q.z) << 2
+            | out(q.y + ay_lo * q.z) << 3
+            | out(-q.y - ay_hi * q.z) << 4
     }
 
     /// Camera point (in front) -> (film x, film y, 1 / view depth); inverse of
@@ -207,8 +225,8 @@ impl ViewXf {
         })
     }
 
-    /// Sets triangle `t` up for the fill (module docs) and appends it to `out`, unless
-    /// nothing of it is left in the view (or it is not finite).
+    /// Sets triangle `t` (finite corners `p`) up for the fill (module docs) and appends it to
+    /// `out`, unless nothing of it is left in the view.
     #[inline(always)]
     fn setup_into(&self, t: usize, p: &[DVec3; 3], world_mag: f64, out: &mut SetupChunk) {
         let q = [
@@ -216,23 +234,13 @@ impl ViewXf {
             self.to_camera(p[1]),
             self.to_camera(p[2]),
         ];
-        if !q.iter().all(|v| v.is_finite()) {
+        // Outside one plane with all three corners: culled; else the planes some corner is
+        // outside of cut it.
+        let o = [self.outcode(q[0]), self.outcode(q[1]), self.outcode(q[2])];
+        if o[0] & o[1] & o[2] != 0 {
             return;
         }
-        // Which planes cut the triangle (a bit per plane), or cull it.
-        let dist = [
-            self.plane_distances(q[0]),
-            self.plane_distances(q[1]),
-            self.plane_distances(q[2]),
-        ];
-        let mut cut = 0u32;
-        for k in 0..5 {
-            match [dist[0][k] >= 0.0, dist[1][k] >= 0.0, dist[2][k] >= 0.0] {
-                [false, false, false] => return,
-                [true, true, true] => {}
-                _ => cut |= 1 << k,
-            }
-        }
+        let cut = o[0] | o[1] | o[2];
         let v0 = out.verts.len();
         if cut == 0 {
             out.verts
@@ -294,6 +302,11 @@ impl ViewXf {
                     .collect();
                 for t in c * SETUP_CHUNK..((c + 1) * SETUP_CHUNK).min(n) {
                     let [a, b, c] = mesh.triangle(t);
+                    // Finite corners have finite camera-space points in every view (f32
+                    // magnitudes cannot overflow the f64 transform).
+                    if !(a.is_finite() && b.is_finite() && c.is_finite()) {
+                        continue;
+                    }
                     let world_mag = a.abs().max(b.abs()).max(c.abs()).max_element() as f64;
                     let p = [a.as_dvec3(), b.as_dvec3(), c.as_dvec3()];
                     for (xf, o) in views.iter().zip(&mut out) {
