@@ -184,17 +184,23 @@ impl ViewXf {
         )
     }
 
-    /// The outcode of camera point `q`: bit `k` set when it is outside clip plane `k` (signed
-    /// distance not `>= 0`) of `planes`, written out (two non-zero terms each).
+    /// The outcode of camera point `q` against the four guard planes: bit `k` set when it is
+    /// outside clip plane `k` (signed distance not `>= 0`) of `planes`, `k = 1..5`, written out
+    /// (two non-zero terms each); bit 0, the near plane, is [`Self::near_out`].
     #[inline(always)]
-    fn outcode(&self, q: DVec3) -> u32 {
+    fn guard_outcode(&self, q: DVec3) -> u32 {
         let [ax_lo, ax_hi, ay_lo, ay_hi] = self.slopes;
         let out = |d: f64| (!(d >= 0.0)) as u32;
-        out(-q.z - self.near)
-            | out(q.x + ax_lo * q.z) << 1
+        out(q.x + ax_lo * q.z) << 1
             | out(-q.x - ax_hi * q.z) << 2
             | out(q.y + ay_lo * q.z) << 3
             | out(-q.y - ay_hi * q.z) << 4
+    }
+
+    /// 1 when camera point `q` is outside the near plane (plane 0 of `planes`), else 0.
+    #[inline(always)]
+    fn near_out(&self, q: DVec3) -> u32 {
+        (!(-q.z - self.near >= 0.0)) as u32
     }
 
     /// Camera point (in front) -> (film x, film y, 1 / view depth); inverse of
@@ -236,7 +242,20 @@ impl ViewXf {
         ];
         // Outside one plane with all three corners: culled; else the planes some corner is
         // outside of cut it.
-        let o = [self.outcode(q[0]), self.outcode(q[1]), self.outcode(q[2])];
+        // The near plane first: it alone culls most triangles behind a cube face.
+        let n = [
+            self.near_out(q[0]),
+            self.near_out(q[1]),
+            self.near_out(q[2]),
+        ];
+        if n[0] & n[1] & n[2] != 0 {
+            return;
+        }
+        let o = [
+            self.guard_outcode(q[0]) | n[0],
+            self.guard_outcode(q[1]) | n[1],
+            self.guard_outcode(q[2]) | n[2],
+        ];
         if o[0] & o[1] & o[2] != 0 {
             return;
         }
