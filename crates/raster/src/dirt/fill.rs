@@ -13,6 +13,13 @@
 //! twin: the exact range over the triangle cut to the cell (Sutherland-Hodgman's vertex set).
 //! Both are widened by a relative `2^-16` and the triangle's absolute margin (module docs of
 //! `dirt`).
+//!
+//! **Shortcuts that keep the capture bit for bit** (unit tests against the plain forms): a
+//! polygon inside one row slab is its own cut (its set-up x and `w` ranges, no clipping); the
+//! plane's y terms are taken once per row; cell spans are `trunc` of clamped quotients instead
+//! of `floor` calls (`Grid::span`); bucket indices clamp in f32 before converting
+//! (`fast_bucket_index`); a cell's non-empty mask is the union of its fragments' bucket ranges,
+//! gathered by the count pass.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -69,6 +76,29 @@ impl Grid {
         }
         let (a, b) = (a as u32, b as u32);
         (a <= b).then_some((a, b))
+    }
+}
+
+/// `bucket_index` of `capture` (the same integer for every input) with the clamp to `B - 1` done in f32
+/// before the conversion (`B - 1` is an integer), so the conversion needs no saturation.
+#[inline(always)]
+fn fast_bucket_index(zmin: f32, scale: f32, buckets: u32, z: f32) -> u32 {
+    let v = (z - zmin) * scale;
+    let last = buckets - 1;
+    if v > 0.0 {
+        if v < last as f32 { v as u32 } else { last }
+    } else {
+        0
+    }
+}
+
+/// [`bucket_mask`] (the same bits), for `B <= 32` as one subtraction of 64-bit powers of two.
+#[inline(always)]
+fn fast_bucket_mask(b0: u32, b1: u32, buckets: u32) -> u32 {
+    if buckets <= 32 {
+        ((2u64 << b1) - (1u64 << b0)) as u32
+    } else {
+        bucket_mask(b0, b1, buckets)
     }
 }
 
@@ -316,34 +346,13 @@ fn fill_band_with(
     let scale: Vec<f32> = (0..ncells)
         .map(|c| bucket_scale(zmin[c], zmax[c], g.buckets))
         .collect();
-    // `bucket_index` with its clamp to `B - 1` done in f32 first (`B - 1` is an integer, so the
-    // same integer), which lets the conversion skip its saturation.
-    let last = g.buckets - 1;
-    let last_f = last as f32;
-    let index = |zmin: f32, scale: f32, z: f32| {
-        let v = (z - zmin) * scale;
-        if v > 0.0 {
-            if v < last_f {
-                v as u32 as usize
-            } else {
-                last as usize
-            }
-        } else {
-            0
-        }
-    };
     let brange = |f: &Fragment| {
         let c = f.cell as usize;
         let (z0, sc) = (zmin[c], scale[c]);
-        (index(z0, sc, f.zlo), index(z0, sc, f.zhi))
-    };
-    // `bucket_mask(b0, b1, B)`: for `B <= 32` bits `b0..=b1` in one subtraction.
-    let mask_of = |b0: usize, b1: usize| {
-        if g.buckets <= 32 {
-            ((2u64 << b1) - (1u64 << b0)) as u32
-        } else {
-            bucket_mask(b0 as u32, b1 as u32, g.buckets)
-        }
+        (
+            fast_bucket_index(z0, sc, g.buckets, f.zlo) as usize,
+            fast_bucket_index(z0, sc, g.buckets, f.zhi) as usize,
+        )
     };
     // Counts per cell-bucket in `offsets[k]`; after the inclusive prefix sum `offsets[k]` is
     // bucket `k`'s end, and the fill (fragments in reverse, each entry decrementing its
@@ -363,7 +372,7 @@ fn fill_band_with(
                 *o += 1;
             }
         }
-        masks[f.cell as usize] |= mask_of(b0, b1);
+        masks[f.cell as usize] |= fast_bucket_mask(b0 as u32, b1 as u32, g.buckets);
         total += (b1 - b0 + 1) as u64;
     }
     // Entries beyond fragments (triangles in several buckets) count against the budget too.
@@ -403,4 +412,90 @@ fn fill_band_with(
         ids,
         fragments: frags.len() as u64,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::capture::bucket_index;
+    use super::*;
+
+    /// `Grid::span` as it was written first: `floor` of the widened ends, then clamped.
+    fn span_reference(v0: f64, v1: f64, s: u32, lo: u32, hi: u32) -> Option<(u32, u32)> {
+        let m = FILM_MARGIN_PX;
+        let a = ((v0 - m) / s as f64).floor().max(lo as f64);
+        let b = ((v1 + m) / s as f64).floor().min(hi as f64 - 1.0);
+        (a <= b).then_some((a as u32, b as u32))
+    }
+
+    /// Film values around the cell boundaries `k s` (exactly on them, one margin and one ulp
+    /// either side) and random ones, from left of the guard band to past the film.
+    fn film_values(s: u32, rng: &mut parallax_core::Rng) -> Vec<f64> {
+        let m = FILM_MARGIN_PX;
+        let mut v = vec![-3.0, -1.0, -m, 0.0, 1e300, -1e300];
+        for k in -1..=9 {
+            let b = (k * s as i32) as f64;
+            for x in [b, b - m, b + m, b - 2.0 * m, b + 2.0 * m] {
+                v.extend([x, x.next_up(), x.next_down()]);
+            }
+        }
+        v.extend((0..200).map(|_| rng.next_f32() as f64 * 10.0 * s as f64 - 3.0));
+        v
+    }
+
+    #[test]
+    fn span_equals_the_floor_reference() {
+        let mut rng = parallax_core::Rng::new(3, 1);
+        let mut cases = 0u64;
+        for s in [1, 2, 4, 8] {
+            let v = film_values(s, &mut rng);
+            for &v0 in &v {
+                for &v1 in &v {
+                    for (lo, hi) in [(0, 8), (2, 5), (0, 1), (3, 4), (7, 8)] {
+                        assert_eq!(
+                            Grid::span(v0, v1, s, lo, hi),
+                            span_reference(v0, v1, s, lo, hi),
+                            "v0 {v0} v1 {v1} s {s} lo {lo} hi {hi}"
+                        );
+                        cases += 1;
+                    }
+                }
+            }
+        }
+        assert!(cases > 500_000, "{cases}");
+    }
+
+    #[test]
+    fn fast_bucket_index_and_mask_equal_the_shared_ones() {
+        let mut rng = parallax_core::Rng::new(5, 2);
+        for buckets in [1, 2, 7, 16, 31, 32, 33, 64, 1000, 1024] {
+            for _ in 0..2000 {
+                let zmin = rng.next_f32() * 10.0;
+                let zmax = zmin + rng.next_f32() * [1e-6, 1.0, 100.0][rng.next_u32() as usize % 3];
+                let scale = bucket_scale(zmin, zmax, buckets);
+                let z = zmin - 1.0 + rng.next_f32() * (zmax - zmin + 2.0);
+                for z in [
+                    z,
+                    zmin,
+                    zmax,
+                    zmax.next_up(),
+                    zmin.next_down(),
+                    f32::INFINITY,
+                ] {
+                    assert_eq!(
+                        fast_bucket_index(zmin, scale, buckets, z),
+                        bucket_index(zmin, scale, buckets, z),
+                        "z {z} in [{zmin}, {zmax}], B {buckets}"
+                    );
+                }
+            }
+            for b0 in 0..buckets.min(40) {
+                for b1 in b0..buckets.min(40) {
+                    assert_eq!(
+                        fast_bucket_mask(b0, b1, buckets),
+                        bucket_mask(b0, b1, buckets)
+                    );
+                }
+            }
+        }
+    }
 }

@@ -4,7 +4,11 @@
 //! to `(film x, film y, w = 1 / view depth)`, and given the plane of `w` over the film.
 //!
 //! **Fast path.** Most triangles lie wholly inside all five clip planes (no clipping) or
-//! wholly outside one of them (culled); only the rest go through Sutherland-Hodgman.
+//! wholly outside one of them (culled); only the rest go through Sutherland-Hodgman. The test
+//! is by outcodes (a bit per plane and corner), the near plane first (it alone culls the
+//! triangles behind a cube face); a view whose rotation rows are signed coordinate axes (the
+//! cube faces) transforms by picking components instead of dot products (the same values);
+//! finiteness is checked once per triangle for all views.
 //!
 //! **The `w` plane.** A triangle's plane `n . q = d` in camera space meets the ray through film
 //! position `(x, y)`, direction `(u, v, -1)` with `u = a0 + x ax`, `v = b0 - y by`, at view
@@ -342,5 +346,58 @@ impl ViewXf {
             }
         }
         per_view
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+    use parallax_scene::camera::CubeMap;
+
+    /// Camera-space points and outcodes of the fast paths (axis rows, written-out planes)
+    /// equal the general rotation and the plane list on random points, for the six cube faces
+    /// (axis rows) and a general camera.
+    #[test]
+    fn fast_transform_and_outcodes_equal_the_general_ones() {
+        let cube = CubeMap {
+            eye: Vec3::new(0.5, -1.25, 3.0),
+            face: 16,
+        };
+        let desc = parallax_scene::CameraDesc::new(
+            Vec3::new(1.0, 2.0, 3.0),
+            Vec3::new(-2.0, 0.5, 0.0),
+            Vec3::Y,
+            50.0,
+        );
+        let mut views: Vec<Pinhole> = (0..6).map(|i| cube.face_camera(i)).collect();
+        views.push(Pinhole::new(&desc, 64, 32).unwrap());
+        let mut rng = parallax_core::Rng::new(9, 4);
+        let mut cut = [0u32; 5];
+        for (i, v) in views.iter().enumerate() {
+            let xf = ViewXf::new(v, 1e-3);
+            assert_eq!(xf.axes.is_some(), i < 6, "view {i}");
+            for _ in 0..5000 {
+                let mut c = || (rng.next_f32() as f64 - 0.5) * 20.0;
+                let p = DVec3::new(c(), c(), c());
+                let d = p - xf.eye;
+                let general = DVec3::new(xf.rows[0].dot(d), xf.rows[1].dot(d), xf.rows[2].dot(d));
+                let q = xf.to_camera(p);
+                assert_eq!(q, general, "view {i} point {p}");
+                let code = xf.near_out(q) | xf.guard_outcode(q);
+                let reference = xf.planes.iter().enumerate().fold(0, |c, (k, &(n, o))| {
+                    c | ((!(n.dot(q) + o >= 0.0)) as u32) << k
+                });
+                assert_eq!(code, reference, "view {i} point {q}");
+                for (k, c) in cut.iter_mut().enumerate() {
+                    *c += code >> k & 1;
+                }
+            }
+        }
+        // Every plane was crossed by some points, and not by all.
+        assert!(
+            cut.iter().all(|&c| c > 100 && c < 7 * 5000 - 100),
+            "{cut:?}"
+        );
     }
 }
