@@ -118,8 +118,7 @@ fn bill(budget: &AtomicU64, unbilled: &mut u64, max: u64) -> Result<(), DirtErro
 
 /// A band's share of the result.
 pub(super) struct BandOut {
-    /// `[zmin, zmax]` per cell.
-    pub bounds: Vec<[f32; 2]>,
+    /// Per cell: its bounds `[zmin, zmax]`, bucket scale and non-empty mask.
     pub cells: Vec<CellRecord>,
     /// Local exclusive prefix sums, `cells * B + 1`.
     pub offsets: Vec<u32>,
@@ -244,8 +243,17 @@ fn fill_band_with(
     let row0 = band * g.band_rows;
     let row1 = (row0 + g.band_rows).min(g.cells_y);
     let ncells = ((row1 - row0) * g.cells_x) as usize;
-    let mut zmin = vec![f32::INFINITY; ncells];
-    let mut zmax = vec![f32::NEG_INFINITY; ncells];
+    // Fill Depth writes each cell's bounds into its record; the count pass adds the scale and
+    // the mask.
+    let mut cells = vec![
+        CellRecord {
+            zmin: f32::INFINITY,
+            zmax: f32::NEG_INFINITY,
+            scale: 0.0,
+            mask: 0,
+        };
+        ncells
+    ];
     // Fragments not yet added to the shared budget.
     let mut unbilled = 0u64;
     for &e in entries {
@@ -276,11 +284,12 @@ fn fill_band_with(
             let mut emit = |c: u32, wlo: f64, whi: f64| {
                 let (zlo, zhi) = widen(1.0 / whi, 1.0 / wlo, tri.abs_margin);
                 let k = zbase + c as usize;
-                if zlo < zmin[k] {
-                    zmin[k] = zlo;
+                let cell = &mut cells[k];
+                if zlo < cell.zmin {
+                    cell.zmin = zlo;
                 }
-                if zhi > zmax[k] {
-                    zmax[k] = zhi;
+                if zhi > cell.zmax {
+                    cell.zmax = zhi;
                 }
                 frags.push(Fragment {
                     cell: k as u32,
@@ -343,26 +352,20 @@ fn fill_band_with(
 
     // Fill Primitives (§4.1.2): count per bucket (eq. 1a/1b), prefix sum, fill.
     let nb = g.buckets as usize;
-    let scale: Vec<f32> = (0..ncells)
-        .map(|c| bucket_scale(zmin[c], zmax[c], g.buckets))
-        .collect();
-    let brange = |f: &Fragment| {
-        let c = f.cell as usize;
-        let (z0, sc) = (zmin[c], scale[c]);
-        (
-            fast_bucket_index(z0, sc, g.buckets, f.zlo) as usize,
-            fast_bucket_index(z0, sc, g.buckets, f.zhi) as usize,
-        )
-    };
+    for c in &mut cells {
+        c.scale = bucket_scale(c.zmin, c.zmax, g.buckets);
+    }
     // Counts per cell-bucket in `offsets[k]`; after the inclusive prefix sum `offsets[k]` is
     // bucket `k`'s end, and the fill (fragments in reverse, each entry decrementing its
     // bucket's end) leaves it at the bucket's start with the ids ascending in every bucket.
     // The non-empty mask of a cell is the union of its fragments' bucket ranges.
     let mut offsets = vec![0u32; ncells * nb + 1];
-    let mut masks = vec![0u32; ncells];
     let mut total = 0u64;
     for f in frags.iter_mut() {
-        let (b0, b1) = brange(f);
+        let cell = &mut cells[f.cell as usize];
+        let b0 = fast_bucket_index(cell.zmin, cell.scale, g.buckets, f.zlo) as usize;
+        let b1 = fast_bucket_index(cell.zmin, cell.scale, g.buckets, f.zhi) as usize;
+        cell.mask |= fast_bucket_mask(b0 as u32, b1 as u32, g.buckets);
         (f.b0, f.b1) = (b0 as u16, b1 as u16);
         let base = f.cell as usize * nb;
         if b0 == b1 {
@@ -372,20 +375,11 @@ fn fill_band_with(
                 *o += 1;
             }
         }
-        masks[f.cell as usize] |= fast_bucket_mask(b0 as u32, b1 as u32, g.buckets);
         total += (b1 - b0 + 1) as u64;
     }
     // Entries beyond fragments (triangles in several buckets) count against the budget too.
     let mut extra = total - frags.len() as u64;
     bill(budget, &mut extra, opts.max_entries)?;
-    let cells = (0..ncells)
-        .map(|c| CellRecord {
-            zmin: zmin[c],
-            zmax: zmax[c],
-            scale: scale[c],
-            mask: masks[c],
-        })
-        .collect();
     for k in 1..ncells * nb {
         offsets[k] += offsets[k - 1];
     }
@@ -406,7 +400,6 @@ fn fill_band_with(
         }
     }
     Ok(BandOut {
-        bounds: zmin.into_iter().zip(zmax).map(|(a, b)| [a, b]).collect(),
         cells,
         offsets,
         ids,
