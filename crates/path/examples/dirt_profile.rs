@@ -11,7 +11,8 @@
 //! `N` times), `bvh` (the BVH build `N` times), `trace-dirt` / `trace-bvh` (the diffuse rays of
 //! `bench dirt` traced `N` times). 1024x512 film, the `bench dirt` defaults
 //! ([`DIRT_DEFAULTS`]; `DIRT_NOCAM` set: no camera view, the cube alone; `DIRT_FACE`,
-//! `DIRT_TILE`, `DIRT_BUCKETS`: other face size, `S`, `B`). One thread unless
+//! `DIRT_TILE`, `DIRT_BUCKETS`: other face size, `S`, `B`; `DIRT_STATS`: print each build's
+//! fragments, entries and a hash of its arrays). One thread unless
 //! `RAYON_NUM_THREADS` says otherwise.
 
 use glam::Vec3;
@@ -22,6 +23,29 @@ use parallax_raster::dirt::DirtViews;
 use parallax_scene::camera::{Camera, CameraOptions, ModelKind};
 use parallax_scene::{CameraDesc, Scene};
 use parallax_screen::{DirtCounters, DirtTracer};
+
+/// Fragments, entries and a hash of every view's arrays (ids, offsets, bounds), to compare
+/// two builds' captures (`DIRT_STATS` set).
+fn print_capture_stats(v: &DirtViews) {
+    use std::hash::{Hash, Hasher};
+    let views = v.camera.iter().chain(&v.cube.faces);
+    let (mut frags, mut entries) = (0u64, 0u64);
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    for c in views {
+        frags += c.stats().fragments;
+        entries += c.stats().entries;
+        c.ids().hash(&mut h);
+        c.offsets().hash(&mut h);
+        for b in c.mip_arrays().1 {
+            b[0].to_bits().hash(&mut h);
+            b[1].to_bits().hash(&mut h);
+        }
+    }
+    eprintln!(
+        "fragments {frags} entries {entries} hash {:016x}",
+        h.finish()
+    );
+}
 
 fn vec3(s: &str) -> Vec3 {
     let v: Vec<f32> = s.split(',').map(|x| x.parse().expect("number")).collect();
@@ -85,7 +109,11 @@ fn main() {
         "load" => {}
         "dirt" => {
             for _ in 0..n {
-                hits += std::hint::black_box(build()).stats.capture_bytes;
+                let v = std::hint::black_box(build());
+                hits += v.stats.capture_bytes;
+                if std::env::var_os("DIRT_STATS").is_some() {
+                    print_capture_stats(&v);
+                }
             }
         }
         "bvh" => {

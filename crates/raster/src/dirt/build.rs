@@ -230,9 +230,14 @@ fn finish(
         let base = ids.len() as u32;
         offsets.extend(o.offsets[..o.offsets.len() - 1].iter().map(|&x| x + base));
         ids.extend_from_slice(&o.ids);
-        bounds[cell0..cell0 + o.bounds.len()].copy_from_slice(&o.bounds);
+        for (b, c) in bounds[cell0..cell0 + o.cells.len()]
+            .iter_mut()
+            .zip(&o.cells)
+        {
+            *b = [c.zmin, c.zmax];
+        }
         cells.extend_from_slice(&o.cells);
-        cell0 += o.bounds.len();
+        cell0 += o.cells.len();
     }
     offsets.push(ids.len() as u32);
     drop(outs);

@@ -13,17 +13,23 @@
 //! twin: the exact range over the triangle cut to the cell (Sutherland-Hodgman's vertex set).
 //! Both are widened by a relative `2^-16` and the triangle's absolute margin (module docs of
 //! `dirt`).
+//!
+//! **Shortcuts that keep the capture bit for bit** (unit tests against the plain forms): a
+//! polygon inside one row slab is its own cut (its set-up x and `w` ranges, no clipping); the
+//! plane's y terms are taken once per row; cell spans are `trunc` of clamped quotients instead
+//! of `floor` calls (`Grid::span`); bucket indices clamp in f32 before converting
+//! (`fast_bucket_index`); a cell's non-empty mask is the union of its fragments' bucket ranges,
+//! gathered by the count pass.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::DVec3;
 
 use super::capture::{
-    CellDepth, CellRecord, DirtError, DirtOptions, FILM_MARGIN_PX, bucket_index, bucket_mask,
-    bucket_scale,
+    CellDepth, CellRecord, DirtError, DirtOptions, FILM_MARGIN_PX, bucket_mask, bucket_scale,
 };
 use super::clip::Poly;
-use super::setup::{SetupEntry, Setups, ViewXf};
+use super::setup::{Setups, ViewXf, WPlane};
 
 /// Relative margin on a clipped depth range.
 const DEPTH_REL_MARGIN: f64 = 1.0 / 65536.0;
@@ -52,24 +58,48 @@ pub(super) struct Grid {
 
 impl Grid {
     /// Cells a film interval `[v0, v1]` (widened by the margin) can touch, clamped to
-    /// `[lo, hi)`.
-    #[inline]
+    /// `[lo, hi)`: `max(floor((v0 - m) / s), lo) ..= min(floor((v1 + m) / s), hi - 1)`, computed
+    /// as `trunc` of the clamped quotients (the same integers: `lo` and `hi - 1` are integers,
+    /// and a clamped lower end is `>= lo >= 0`, where `floor` is `trunc`; an upper end below 0
+    /// is empty either way). `s` is a power of two, so `* (1 / s)` is the exact `/ s`.
+    #[inline(always)]
     pub fn span(v0: f64, v1: f64, s: u32, lo: u32, hi: u32) -> Option<(u32, u32)> {
         let m = FILM_MARGIN_PX;
-        let a = floor((v0 - m) / s as f64);
-        let b = floor((v1 + m) / s as f64);
-        let a = a.max(lo as f64);
-        let b = b.min(hi as f64 - 1.0);
-        (a <= b).then_some((a as u32, b as u32))
+        let inv = 1.0 / s as f64;
+        let (lo, top) = (lo as f64, hi as f64 - 1.0);
+        let a = (v0 - m) * inv;
+        let b = (v1 + m) * inv;
+        let a = if a > lo { a } else { lo };
+        let b = if b < top { b } else { top };
+        if !(b >= 0.0) {
+            return None;
+        }
+        let (a, b) = (a as u32, b as u32);
+        (a <= b).then_some((a, b))
     }
 }
 
-/// `x.floor()` for the film coordinates of the fill (finite, well inside the i64 range after
-/// the guard-band clip), without the library call `f64::floor` compiles to on baseline x86-64.
+/// `bucket_index` of `capture` (the same integer for every input) with the clamp to `B - 1` done in f32
+/// before the conversion (`B - 1` is an integer), so the conversion needs no saturation.
 #[inline(always)]
-fn floor(x: f64) -> f64 {
-    let i = x as i64 as f64;
-    if i > x { i - 1.0 } else { i }
+fn fast_bucket_index(zmin: f32, scale: f32, buckets: u32, z: f32) -> u32 {
+    let v = (z - zmin) * scale;
+    let last = buckets - 1;
+    if v > 0.0 {
+        if v < last as f32 { v as u32 } else { last }
+    } else {
+        0
+    }
+}
+
+/// [`bucket_mask`] (the same bits), for `B <= 32` as one subtraction of 64-bit powers of two.
+#[inline(always)]
+fn fast_bucket_mask(b0: u32, b1: u32, buckets: u32) -> u32 {
+    if buckets <= 32 {
+        ((2u64 << b1) - (1u64 << b0)) as u32
+    } else {
+        bucket_mask(b0, b1, buckets)
+    }
 }
 
 /// Fragments counted locally between two updates of the shared entry budget.
@@ -88,8 +118,7 @@ fn bill(budget: &AtomicU64, unbilled: &mut u64, max: u64) -> Result<(), DirtErro
 
 /// A band's share of the result.
 pub(super) struct BandOut {
-    /// `[zmin, zmax]` per cell.
-    pub bounds: Vec<[f32; 2]>,
+    /// Per cell: its bounds `[zmin, zmax]`, bucket scale and non-empty mask.
     pub cells: Vec<CellRecord>,
     /// Local exclusive prefix sums, `cells * B + 1`.
     pub offsets: Vec<u32>,
@@ -112,22 +141,19 @@ fn widen(zlo: f64, zhi: f64, abs_margin: f64) -> (f32, f32) {
     (l.max(0.0), h)
 }
 
-/// The `w` range of a set-up triangle over cell column `[left, right]` of a row whose slab
-/// `[top, bottom]` cuts the triangle to `row` (`(min, max)` of its vertices).
+/// The `w` range of a triangle's plane `p` over cell column `[left, right]` of a row whose
+/// slab cuts the triangle to `row_w` (`(min, max)` of its vertices), with the plane's y terms
+/// over the slab already sorted (`y_lo <= y_hi`): the range over the cell's corners, cut to
+/// `row_w` (`row_w` itself if the two do not overlap after rounding).
 #[inline(always)]
-fn cell_w_range(
-    tri: &SetupEntry,
+fn plane_w_range(
+    p: &WPlane,
     row_w: (f64, f64),
     (left, right): (f64, f64),
-    (top, bottom): (f64, f64),
+    (y_lo, y_hi): (f64, f64),
 ) -> (f64, f64) {
-    let Some(p) = tri.plane else {
-        return row_w;
-    };
     let (ax, bx) = (p.px * left, p.px * right);
-    let (ay, by) = (p.py * top, p.py * bottom);
     let (x_lo, x_hi) = if ax < bx { (ax, bx) } else { (bx, ax) };
-    let (y_lo, y_hi) = if ay < by { (ay, by) } else { (by, ay) };
     let lo = p.p0 + x_lo + y_lo;
     let hi = p.p0 + x_hi + y_hi;
     let lo = if lo > row_w.0 { lo } else { row_w.0 };
@@ -217,8 +243,17 @@ fn fill_band_with(
     let row0 = band * g.band_rows;
     let row1 = (row0 + g.band_rows).min(g.cells_y);
     let ncells = ((row1 - row0) * g.cells_x) as usize;
-    let mut zmin = vec![f32::INFINITY; ncells];
-    let mut zmax = vec![f32::NEG_INFINITY; ncells];
+    // Fill Depth writes each cell's bounds into its record; the count pass adds the scale and
+    // the mask.
+    let mut cells = vec![
+        CellRecord {
+            zmin: f32::INFINITY,
+            zmax: f32::NEG_INFINITY,
+            scale: 0.0,
+            mask: 0,
+        };
+        ncells
+    ];
     // Fragments not yet added to the shared budget.
     let mut unbilled = 0u64;
     for &e in entries {
@@ -228,57 +263,84 @@ fn fill_band_with(
         let Some((r0, r1)) = Grid::span(tri.y.0, tri.y.1, g.s, row0, row1) else {
             continue;
         };
-        for r in r0..=r1 {
+        for r in r0..r1 + 1 {
             let top = r as f64 * s - m;
             let bottom = ((r as f64 + 1.0) * s).min(xf.h) + m;
-            let Some(row) = row_span(poly, top, bottom) else {
-                continue;
+            // A polygon inside the slab is its own cut (the same points `row_span` would add).
+            let row = if tri.y.0 >= top && tri.y.1 <= bottom {
+                RowSpan { x: tri.x, w: tri.w }
+            } else {
+                match row_span(poly, top, bottom) {
+                    Some(row) => row,
+                    None => continue,
+                }
             };
             let Some((c0, c1)) = Grid::span(row.x.0, row.x.1, g.s, 0, g.cells_x) else {
                 continue;
             };
-            let row_poly = match opts.cell_depth {
-                CellDepth::Exact => {
-                    let mut p = Poly::EMPTY;
-                    p.v[..poly.len()].copy_from_slice(poly);
-                    p.n = poly.len();
-                    Some(p.clip_axis(1, top, 1.0).clip_axis(1, bottom, -1.0))
-                }
-                CellDepth::Corners => None,
-            };
-            for c in c0..=c1 {
-                let left = c as f64 * s - m;
-                let right = ((c as f64 + 1.0) * s).min(xf.w) + m;
-                // The cut is convex: the column overlaps it iff it overlaps its x range.
-                if right < row.x.0 || left > row.x.1 {
-                    continue;
-                }
-                let (wlo, whi) = match &row_poly {
-                    Some(rp) => match rp.z_range_in_strip(left, right) {
-                        Some(r) => r,
-                        None => continue,
-                    },
-                    None => cell_w_range(tri, row.w, (left, right), (top, bottom)),
-                };
-                // w = 1 / depth > 0 after the near clip.
+            // Fill Depth (§4.1.1) and the fragment of cell column `c` with `w` range
+            // `[wlo, whi]` (w = 1 / depth > 0 after the near clip).
+            let zbase = ((r - row0) * g.cells_x) as usize;
+            let mut emit = |c: u32, wlo: f64, whi: f64| {
                 let (zlo, zhi) = widen(1.0 / whi, 1.0 / wlo, tri.abs_margin);
-                let cell = (r - row0) * g.cells_x + c;
-                // Fill Depth (§4.1.1).
-                let k = cell as usize;
-                if zlo < zmin[k] {
-                    zmin[k] = zlo;
+                let k = zbase + c as usize;
+                let cell = &mut cells[k];
+                if zlo < cell.zmin {
+                    cell.zmin = zlo;
                 }
-                if zhi > zmax[k] {
-                    zmax[k] = zhi;
+                if zhi > cell.zmax {
+                    cell.zmax = zhi;
                 }
                 frags.push(Fragment {
-                    cell,
+                    cell: k as u32,
                     tri: t,
                     zlo,
                     zhi,
                     b0: 0,
                     b1: 0,
                 });
+            };
+            // Cell column `c`'s `[left, right]` (widened); the cut is convex, so the column
+            // overlaps it iff it overlaps its x range.
+            let column = |c: u32| {
+                let left = c as f64 * s - m;
+                let right = ((c as f64 + 1.0) * s).min(xf.w) + m;
+                (left, right, !(right < row.x.0 || left > row.x.1))
+            };
+            match (opts.cell_depth, tri.plane) {
+                (CellDepth::Exact, _) => {
+                    let mut p = Poly::EMPTY;
+                    p.v[..poly.len()].copy_from_slice(poly);
+                    p.n = poly.len();
+                    let rp = p.clip_axis(1, top, 1.0).clip_axis(1, bottom, -1.0);
+                    for c in c0..c1 + 1 {
+                        let (left, right, overlaps) = column(c);
+                        if let (true, Some((wlo, whi))) =
+                            (overlaps, rp.z_range_in_strip(left, right))
+                        {
+                            emit(c, wlo, whi);
+                        }
+                    }
+                }
+                (CellDepth::Corners, Some(p)) => {
+                    // The plane's y terms are the row's (`cell_w_range` with them hoisted).
+                    let (ay, by) = (p.py * top, p.py * bottom);
+                    let (y_lo, y_hi) = if ay < by { (ay, by) } else { (by, ay) };
+                    for c in c0..c1 + 1 {
+                        let (left, right, overlaps) = column(c);
+                        if overlaps {
+                            let (wlo, whi) = plane_w_range(&p, row.w, (left, right), (y_lo, y_hi));
+                            emit(c, wlo, whi);
+                        }
+                    }
+                }
+                (CellDepth::Corners, None) => {
+                    for c in c0..c1 + 1 {
+                        if column(c).2 {
+                            emit(c, row.w.0, row.w.1);
+                        }
+                    }
+                }
             }
         }
         unbilled += (frags.len() - before) as u64;
@@ -290,51 +352,34 @@ fn fill_band_with(
 
     // Fill Primitives (§4.1.2): count per bucket (eq. 1a/1b), prefix sum, fill.
     let nb = g.buckets as usize;
-    let scale: Vec<f32> = (0..ncells)
-        .map(|c| bucket_scale(zmin[c], zmax[c], g.buckets))
-        .collect();
-    let brange = |f: &Fragment| {
-        let c = f.cell as usize;
-        (
-            bucket_index(zmin[c], scale[c], g.buckets, f.zlo) as usize,
-            bucket_index(zmin[c], scale[c], g.buckets, f.zhi) as usize,
-        )
-    };
+    for c in &mut cells {
+        c.scale = bucket_scale(c.zmin, c.zmax, g.buckets);
+    }
     // Counts per cell-bucket in `offsets[k]`; after the inclusive prefix sum `offsets[k]` is
     // bucket `k`'s end, and the fill (fragments in reverse, each entry decrementing its
     // bucket's end) leaves it at the bucket's start with the ids ascending in every bucket.
+    // The non-empty mask of a cell is the union of its fragments' bucket ranges.
     let mut offsets = vec![0u32; ncells * nb + 1];
     let mut total = 0u64;
     for f in frags.iter_mut() {
-        let (b0, b1) = brange(f);
+        let cell = &mut cells[f.cell as usize];
+        let b0 = fast_bucket_index(cell.zmin, cell.scale, g.buckets, f.zlo) as usize;
+        let b1 = fast_bucket_index(cell.zmin, cell.scale, g.buckets, f.zhi) as usize;
+        cell.mask |= fast_bucket_mask(b0 as u32, b1 as u32, g.buckets);
         (f.b0, f.b1) = (b0 as u16, b1 as u16);
         let base = f.cell as usize * nb;
-        for o in &mut offsets[base + b0..=base + b1] {
-            *o += 1;
+        if b0 == b1 {
+            offsets[base + b0] += 1;
+        } else {
+            for o in &mut offsets[base + b0..base + b1 + 1] {
+                *o += 1;
+            }
         }
         total += (b1 - b0 + 1) as u64;
     }
     // Entries beyond fragments (triangles in several buckets) count against the budget too.
     let mut extra = total - frags.len() as u64;
     bill(budget, &mut extra, opts.max_entries)?;
-    let cells = (0..ncells)
-        .map(|c| {
-            let counts = &offsets[c * nb..(c + 1) * nb];
-            let mask = counts
-                .iter()
-                .enumerate()
-                .filter(|&(_, &n)| n > 0)
-                .fold(0, |m, (b, _)| {
-                    m | bucket_mask(b as u32, b as u32, g.buckets)
-                });
-            CellRecord {
-                zmin: zmin[c],
-                zmax: zmax[c],
-                scale: scale[c],
-                mask,
-            }
-        })
-        .collect();
     for k in 1..ncells * nb {
         offsets[k] += offsets[k - 1];
     }
@@ -343,16 +388,107 @@ fn fill_band_with(
     for f in frags.iter().rev() {
         let (b0, b1) = (f.b0 as usize, f.b1 as usize);
         let base = f.cell as usize * nb;
-        for end in &mut offsets[base + b0..=base + b1] {
+        if b0 == b1 {
+            let end = &mut offsets[base + b0];
             *end -= 1;
             ids[*end as usize] = f.tri;
+        } else {
+            for end in &mut offsets[base + b0..base + b1 + 1] {
+                *end -= 1;
+                ids[*end as usize] = f.tri;
+            }
         }
     }
     Ok(BandOut {
-        bounds: zmin.into_iter().zip(zmax).map(|(a, b)| [a, b]).collect(),
         cells,
         offsets,
         ids,
         fragments: frags.len() as u64,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::capture::bucket_index;
+    use super::*;
+
+    /// `Grid::span` as it was written first: `floor` of the widened ends, then clamped.
+    fn span_reference(v0: f64, v1: f64, s: u32, lo: u32, hi: u32) -> Option<(u32, u32)> {
+        let m = FILM_MARGIN_PX;
+        let a = ((v0 - m) / s as f64).floor().max(lo as f64);
+        let b = ((v1 + m) / s as f64).floor().min(hi as f64 - 1.0);
+        (a <= b).then_some((a as u32, b as u32))
+    }
+
+    /// Film values around the cell boundaries `k s` (exactly on them, one margin and one ulp
+    /// either side) and random ones, from left of the guard band to past the film.
+    fn film_values(s: u32, rng: &mut parallax_core::Rng) -> Vec<f64> {
+        let m = FILM_MARGIN_PX;
+        let mut v = vec![-3.0, -1.0, -m, 0.0, 1e300, -1e300];
+        for k in -1..=9 {
+            let b = (k * s as i32) as f64;
+            for x in [b, b - m, b + m, b - 2.0 * m, b + 2.0 * m] {
+                v.extend([x, x.next_up(), x.next_down()]);
+            }
+        }
+        v.extend((0..200).map(|_| rng.next_f32() as f64 * 10.0 * s as f64 - 3.0));
+        v
+    }
+
+    #[test]
+    fn span_equals_the_floor_reference() {
+        let mut rng = parallax_core::Rng::new(3, 1);
+        let mut cases = 0u64;
+        for s in [1, 2, 4, 8] {
+            let v = film_values(s, &mut rng);
+            for &v0 in &v {
+                for &v1 in &v {
+                    for (lo, hi) in [(0, 8), (2, 5), (0, 1), (3, 4), (7, 8)] {
+                        assert_eq!(
+                            Grid::span(v0, v1, s, lo, hi),
+                            span_reference(v0, v1, s, lo, hi),
+                            "v0 {v0} v1 {v1} s {s} lo {lo} hi {hi}"
+                        );
+                        cases += 1;
+                    }
+                }
+            }
+        }
+        assert!(cases > 500_000, "{cases}");
+    }
+
+    #[test]
+    fn fast_bucket_index_and_mask_equal_the_shared_ones() {
+        let mut rng = parallax_core::Rng::new(5, 2);
+        for buckets in [1, 2, 7, 16, 31, 32, 33, 64, 1000, 1024] {
+            for _ in 0..2000 {
+                let zmin = rng.next_f32() * 10.0;
+                let zmax = zmin + rng.next_f32() * [1e-6, 1.0, 100.0][rng.next_u32() as usize % 3];
+                let scale = bucket_scale(zmin, zmax, buckets);
+                let z = zmin - 1.0 + rng.next_f32() * (zmax - zmin + 2.0);
+                for z in [
+                    z,
+                    zmin,
+                    zmax,
+                    zmax.next_up(),
+                    zmin.next_down(),
+                    f32::INFINITY,
+                ] {
+                    assert_eq!(
+                        fast_bucket_index(zmin, scale, buckets, z),
+                        bucket_index(zmin, scale, buckets, z),
+                        "z {z} in [{zmin}, {zmax}], B {buckets}"
+                    );
+                }
+            }
+            for b0 in 0..buckets.min(40) {
+                for b1 in b0..buckets.min(40) {
+                    assert_eq!(
+                        fast_bucket_mask(b0, b1, buckets),
+                        bucket_mask(b0, b1, buckets)
+                    );
+                }
+            }
+        }
+    }
 }

@@ -4,7 +4,11 @@
 //! to `(film x, film y, w = 1 / view depth)`, and given the plane of `w` over the film.
 //!
 //! **Fast path.** Most triangles lie wholly inside all five clip planes (no clipping) or
-//! wholly outside one of them (culled); only the rest go through Sutherland-Hodgman.
+//! wholly outside one of them (culled); only the rest go through Sutherland-Hodgman. The test
+//! is by outcodes (a bit per plane and corner), the near plane first (it alone culls the
+//! triangles behind a cube face); a view whose rotation rows are signed coordinate axes (the
+//! cube faces) transforms by picking components instead of dot products (the same values);
+//! finiteness is checked once per triangle for all views.
 //!
 //! **The `w` plane.** A triangle's plane `n . q = d` in camera space meets the ray through film
 //! position `(x, y)`, direction `(u, v, -1)` with `u = a0 + x ax`, `v = b0 - y by`, at view
@@ -48,6 +52,9 @@ pub(super) struct SetupEntry {
     pub abs_margin: f64,
     /// Film y range of the polygon.
     pub y: (f64, f64),
+    /// Film x and `w` ranges of the polygon (its row span when it lies inside one row slab).
+    pub x: (f64, f64),
+    pub w: (f64, f64),
 }
 
 /// The set-up triangles of one chunk of [`SETUP_CHUNK`] mesh triangles for one view.
@@ -105,6 +112,17 @@ pub(super) struct ViewXf {
     pub w: f64,
     pub h: f64,
     planes: [(DVec3, f64); 5],
+    /// `Some` when every rotation row is a signed coordinate axis (the cube map's faces): row
+    /// `i` picks component `axes[i].0` of `p - eye` times `axes[i].1` (exactly its dot
+    /// product, up to the sign of a zero).
+    axes: Option<[(usize, f64); 3]>,
+}
+
+/// `(k, ±1)` if `r` is `±e_k` exactly.
+fn signed_axis(r: DVec3) -> Option<(usize, f64)> {
+    let a = r.to_array();
+    let k = (0..3).find(|&k| a[k].abs() == 1.0)?;
+    (0..3).all(|j| j == k || a[j] == 0.0).then_some((k, a[k]))
 }
 
 impl ViewXf {
@@ -149,12 +167,20 @@ impl ViewXf {
                 (DVec3::new(0.0, 1.0, ay_lo), 0.0),
                 (DVec3::new(0.0, -1.0, -ay_hi), 0.0),
             ],
+            axes: match rows.map(signed_axis) {
+                [Some(a), Some(b), Some(c)] => Some([a, b, c]),
+                _ => None,
+            },
         }
     }
 
     #[inline(always)]
     fn to_camera(&self, p: DVec3) -> DVec3 {
         let d = p - self.eye;
+        if let Some([a, b, c]) = self.axes {
+            let d = d.to_array();
+            return DVec3::new(a.1 * d[a.0], b.1 * d[b.0], c.1 * d[c.0]);
+        }
         DVec3::new(
             self.rows[0].dot(d),
             self.rows[1].dot(d),
@@ -162,18 +188,23 @@ impl ViewXf {
         )
     }
 
-    /// Signed distances of camera point `q` to the five clip planes (`>= 0` inside): the
-    /// planes of [`Self::planes`] written out (two non-zero terms each).
+    /// The outcode of camera point `q` against the four guard planes: bit `k` set when it is
+    /// outside clip plane `k` (signed distance not `>= 0`) of `planes`, `k = 1..5`, written out
+    /// (two non-zero terms each); bit 0, the near plane, is [`Self::near_out`].
     #[inline(always)]
-    fn plane_distances(&self, q: DVec3) -> [f64; 5] {
+    fn guard_outcode(&self, q: DVec3) -> u32 {
         let [ax_lo, ax_hi, ay_lo, ay_hi] = self.slopes;
-        [
-            -q.z - self.near,
-            q.x + ax_lo * q.z,
-            -q.x - ax_hi * q.z,
-            q.y + ay_lo * q.z,
-            -q.y - ay_hi * q.z,
-        ]
+        let out = |d: f64| (!(d >= 0.0)) as u32;
+        out(q.x + ax_lo * q.z) << 1
+            | out(-q.x - ax_hi * q.z) << 2
+            | out(q.y + ay_lo * q.z) << 3
+            | out(-q.y - ay_hi * q.z) << 4
+    }
+
+    /// 1 when camera point `q` is outside the near plane (plane 0 of `planes`), else 0.
+    #[inline(always)]
+    fn near_out(&self, q: DVec3) -> u32 {
+        (!(-q.z - self.near >= 0.0)) as u32
     }
 
     /// Camera point (in front) -> (film x, film y, 1 / view depth); inverse of
@@ -204,8 +235,8 @@ impl ViewXf {
         })
     }
 
-    /// Sets triangle `t` up for the fill (module docs) and appends it to `out`, unless
-    /// nothing of it is left in the view (or it is not finite).
+    /// Sets triangle `t` (finite corners `p`) up for the fill (module docs) and appends it to
+    /// `out`, unless nothing of it is left in the view.
     #[inline(always)]
     fn setup_into(&self, t: usize, p: &[DVec3; 3], world_mag: f64, out: &mut SetupChunk) {
         let q = [
@@ -213,23 +244,26 @@ impl ViewXf {
             self.to_camera(p[1]),
             self.to_camera(p[2]),
         ];
-        if !q.iter().all(|v| v.is_finite()) {
+        // Outside one plane with all three corners: culled; else the planes some corner is
+        // outside of cut it.
+        // The near plane first: it alone culls most triangles behind a cube face.
+        let n = [
+            self.near_out(q[0]),
+            self.near_out(q[1]),
+            self.near_out(q[2]),
+        ];
+        if n[0] & n[1] & n[2] != 0 {
             return;
         }
-        // Which planes cut the triangle (a bit per plane), or cull it.
-        let dist = [
-            self.plane_distances(q[0]),
-            self.plane_distances(q[1]),
-            self.plane_distances(q[2]),
+        let o = [
+            self.guard_outcode(q[0]) | n[0],
+            self.guard_outcode(q[1]) | n[1],
+            self.guard_outcode(q[2]) | n[2],
         ];
-        let mut cut = 0u32;
-        for k in 0..5 {
-            match [dist[0][k] >= 0.0, dist[1][k] >= 0.0, dist[2][k] >= 0.0] {
-                [false, false, false] => return,
-                [true, true, true] => {}
-                _ => cut |= 1 << k,
-            }
+        if o[0] & o[1] & o[2] != 0 {
+            return;
         }
+        let cut = o[0] | o[1] | o[2];
         let v0 = out.verts.len();
         if cut == 0 {
             out.verts
@@ -248,10 +282,10 @@ impl ViewXf {
                 .extend(poly.verts().iter().map(|&v| self.project(v)));
         }
         let verts = &out.verts[v0..];
-        let y = verts
+        let (lo, hi) = verts
             .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-                (lo.min(v.y), hi.max(v.y))
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &v| {
+                (lo.min(v), hi.max(v))
             });
         // The farthest vertex from the eye, bounded by its 1-norm (no square root).
         let far = q.iter().map(|v| v.abs().element_sum()).fold(0.0, f64::max);
@@ -261,7 +295,9 @@ impl ViewXf {
             n: verts.len() as u32,
             plane: self.w_plane(&q),
             abs_margin: DEPTH_ABS_ULPS * f32::EPSILON as f64 * (far + world_mag + self.eye_mag),
-            y,
+            y: (lo.y, hi.y),
+            x: (lo.x, hi.x),
+            w: (lo.z, hi.z),
         });
     }
 
@@ -289,6 +325,11 @@ impl ViewXf {
                     .collect();
                 for t in c * SETUP_CHUNK..((c + 1) * SETUP_CHUNK).min(n) {
                     let [a, b, c] = mesh.triangle(t);
+                    // Finite corners have finite camera-space points in every view (f32
+                    // magnitudes cannot overflow the f64 transform).
+                    if !(a.is_finite() && b.is_finite() && c.is_finite()) {
+                        continue;
+                    }
                     let world_mag = a.abs().max(b.abs()).max(c.abs()).max_element() as f64;
                     let p = [a.as_dvec3(), b.as_dvec3(), c.as_dvec3()];
                     for (xf, o) in views.iter().zip(&mut out) {
@@ -305,5 +346,58 @@ impl ViewXf {
             }
         }
         per_view
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+    use parallax_scene::camera::CubeMap;
+
+    /// Camera-space points and outcodes of the fast paths (axis rows, written-out planes)
+    /// equal the general rotation and the plane list on random points, for the six cube faces
+    /// (axis rows) and a general camera.
+    #[test]
+    fn fast_transform_and_outcodes_equal_the_general_ones() {
+        let cube = CubeMap {
+            eye: Vec3::new(0.5, -1.25, 3.0),
+            face: 16,
+        };
+        let desc = parallax_scene::CameraDesc::new(
+            Vec3::new(1.0, 2.0, 3.0),
+            Vec3::new(-2.0, 0.5, 0.0),
+            Vec3::Y,
+            50.0,
+        );
+        let mut views: Vec<Pinhole> = (0..6).map(|i| cube.face_camera(i)).collect();
+        views.push(Pinhole::new(&desc, 64, 32).unwrap());
+        let mut rng = parallax_core::Rng::new(9, 4);
+        let mut cut = [0u32; 5];
+        for (i, v) in views.iter().enumerate() {
+            let xf = ViewXf::new(v, 1e-3);
+            assert_eq!(xf.axes.is_some(), i < 6, "view {i}");
+            for _ in 0..5000 {
+                let mut c = || (rng.next_f32() as f64 - 0.5) * 20.0;
+                let p = DVec3::new(c(), c(), c());
+                let d = p - xf.eye;
+                let general = DVec3::new(xf.rows[0].dot(d), xf.rows[1].dot(d), xf.rows[2].dot(d));
+                let q = xf.to_camera(p);
+                assert_eq!(q, general, "view {i} point {p}");
+                let code = xf.near_out(q) | xf.guard_outcode(q);
+                let reference = xf.planes.iter().enumerate().fold(0, |c, (k, &(n, o))| {
+                    c | ((!(n.dot(q) + o >= 0.0)) as u32) << k
+                });
+                assert_eq!(code, reference, "view {i} point {q}");
+                for (k, c) in cut.iter_mut().enumerate() {
+                    *c += code >> k & 1;
+                }
+            }
+        }
+        // Every plane was crossed by some points, and not by all.
+        assert!(
+            cut.iter().all(|&c| c > 100 && c < 7 * 5000 - 100),
+            "{cut:?}"
+        );
     }
 }
