@@ -59,6 +59,7 @@ mod packet;
 mod packet64;
 mod packet8;
 mod packet_interval;
+mod packet_setup;
 mod reference;
 mod refit;
 mod stats;

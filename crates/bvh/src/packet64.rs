@@ -149,23 +149,24 @@ impl Bvh {
         if rays.len() <= PACKET_SIZE || self.nodes8.is_empty() {
             return self.packet64_by_groups(l, rays, out);
         }
+        for o in out.iter_mut().take(rays.len()) {
+            *o = None;
+        }
+        // One loop, not four inlined set-ups (code size), and no closures over the lanes
+        // (they would not inherit the target features).
+        let mut init = [const { MaybeUninit::<Packet>::uninit() }; GROUPS];
+        for (g, p) in init.iter_mut().enumerate() {
+            p.write(Packet::new(l, group(rays, g)));
+        }
+        // SAFETY: every element was written by the loop above.
+        let mut ps: [Packet; GROUPS] = unsafe { std::mem::transmute(init) };
         let mut valid = 0u64;
-        for (i, r) in rays.iter().enumerate() {
-            out[i] = None;
-            if r.is_valid() && r.t_min <= r.t_max {
-                valid |= 1 << i;
-            }
+        for (g, p) in ps.iter().enumerate() {
+            valid |= (p.valid as u64) << (PACKET_SIZE * g);
         }
         if valid == 0 {
             return;
         }
-        // No closures over the lanes here: they would not inherit the target features.
-        let mut ps = [
-            Packet::new(l, group(rays, 0), gbits(valid, 0)),
-            Packet::new(l, group(rays, 1), gbits(valid, 1)),
-            Packet::new(l, group(rays, 2), gbits(valid, 2)),
-            Packet::new(l, group(rays, 3), gbits(valid, 3)),
-        ];
         // The whole packet's interval: the union of the groups' ranges, if they share signs.
         let (mut lo, mut hi) = ([f32::INFINITY; 6], [f32::NEG_INFINITY; 6]);
         let (mut t_lo, mut t_hi) = (f32::INFINITY, f32::NEG_INFINITY);

@@ -104,11 +104,13 @@ impl Packet {
     /// as `Vec3::recip`, and the shear `d[kx] / d[kz]`, `d[ky] / d[kz]`, `1 / d[kz]` of
     /// `WatertightRay::new` (computed here in SIMD when all rays share the axis permutation;
     /// otherwise rays build their `WatertightRay` where they need it).
+    /// `valid`: the rays that are valid with `t_min <= t_max` (computed here, in lanes for a
+    /// full packet: the same comparisons as `Ray::is_valid`).
     #[inline(always)]
-    pub fn new<L: Lanes16>(l: L, rays: &[Ray], valid: u32) -> Self {
+    pub fn new<L: Lanes16>(l: L, rays: &[Ray]) -> Self {
         let z = F16([0.0; 16]);
         let mut p = Packet {
-            valid,
+            valid: 0,
             org: [z; 3],
             inv: [F16([1.0; 16]); 3],
             neg: [0; 3],
@@ -127,11 +129,71 @@ impl Packet {
             hi: [0.0; 6],
             t_range: (0.0, 0.0),
         };
+        let mut dir = [F16([1.0; 16]); 3];
+        let (valid, code, o0, same_org) = match <&[Ray; PACKET_SIZE]>::try_from(rays) {
+            Ok(r16) => p.load_lanes(l, r16, &mut dir),
+            Err(_) => p.load_scalar(rays, &mut dir),
+        };
+        p.valid = valid;
+        let one = l.splat(1.0);
+        let mut finite = valid;
+        let d = [l.load(&dir[0]), l.load(&dir[1]), l.load(&dir[2])];
+        for a in 0..3 {
+            let inv = l.div(one, d[a]);
+            l.store(inv, &mut p.inv[a]);
+            p.neg[a] = l.lt(inv, l.splat(0.0)) & valid;
+            finite &= l.lt(inv, l.splat(f32::INFINITY)) & l.gt(inv, l.splat(f32::NEG_INFINITY));
+        }
+        if let Some(code) = code {
+            let [kx, ky, kz] = axes_of_code(code);
+            let (dx, dy, dz) = (d[kx], d[ky], d[kz]);
+            l.store(l.div(dx, dz), &mut p.sx);
+            l.store(l.div(dy, dz), &mut p.sy);
+            l.store(l.div(one, dz), &mut p.sz);
+            p.perm = Some([kx, ky, kz]);
+        }
+        if same_org && valid != 0 {
+            p.org0 = Some(o0);
+        }
+        let uniform = (0..3).all(|a| p.neg[a] == 0 || p.neg[a] == valid);
+        if uniform && finite == valid && valid != 0 {
+            let mut lo = [0.0; 6];
+            let mut hi = [0.0; 6];
+            for a in 0..3 {
+                let (o, inv) = (l.load(&p.org[a]), l.load(&p.inv[a]));
+                lo[a] = l.hmin(valid, o);
+                hi[a] = l.hmax(valid, o);
+                lo[3 + a] = l.hmin(valid, inv);
+                hi[3 + a] = l.hmax(valid, inv);
+            }
+            let t_lo = l.hmin(valid, l.load(&p.t_min));
+            let t_hi = l.hmax(valid, l.load(&p.t_max));
+            p.interval = Some(p.interval(lo, hi, t_lo, t_hi));
+            (p.lo, p.hi, p.t_range) = (lo, hi, (t_lo, t_hi));
+        }
+        p
+    }
+
+    /// Loads up to 16 rays one by one into the SoA rows (invalid rays keep the defaults):
+    /// returns the valid rays, their common axis-permutation code (if any), the first valid
+    /// ray's origin and whether every valid ray has that origin bit for bit.
+    #[inline(always)]
+    fn load_scalar(
+        &mut self,
+        rays: &[Ray],
+        dir: &mut [F16; 3],
+    ) -> (u32, Option<u32>, [f32; 3], bool) {
+        let p = self;
+        let mut valid = 0u32;
+        for (i, r) in rays.iter().enumerate() {
+            if r.is_valid() && r.t_min <= r.t_max {
+                valid |= 1 << i;
+            }
+        }
         let mut same_org = true;
         let o0 = rays
             .get(valid.trailing_zeros() as usize)
             .map_or(glam::Vec3::ZERO, |r| r.origin);
-        let mut dir = [F16([1.0; 16]); 3];
         // The permutation as a code `2 kz + swapped` (one byte compare per ray).
         let (mut code_and, mut code_or) = (u32::MAX, 0u32);
         for (i, r) in rays.iter().enumerate() {
@@ -149,43 +211,31 @@ impl Packet {
             code_and &= c;
             code_or |= c;
         }
-        let one = l.splat(1.0);
-        let mut finite = valid;
-        let d = [l.load(&dir[0]), l.load(&dir[1]), l.load(&dir[2])];
+        let code = (code_and == code_or).then_some(code_or);
+        (valid, code, o0.to_array(), same_org)
+    }
+
+    /// [`Self::load_scalar`] for a full packet, in lanes (`packet_setup.rs`).
+    #[inline(always)]
+    fn load_lanes<L: Lanes16>(
+        &mut self,
+        l: L,
+        rays: &[Ray; PACKET_SIZE],
+        dir: &mut [F16; 3],
+    ) -> (u32, Option<u32>, [f32; 3], bool) {
+        let s = crate::packet_setup::rays16(l, rays);
+        let v = s.valid;
+        let (zero, one) = (l.splat(0.0), l.splat(1.0));
         for a in 0..3 {
-            let inv = l.div(one, d[a]);
-            l.store(inv, &mut p.inv[a]);
-            p.neg[a] = l.lt(inv, l.splat(0.0)) & valid;
-            finite &= l.lt(inv, l.splat(f32::INFINITY)) & l.gt(inv, l.splat(f32::NEG_INFINITY));
+            l.store(l.select(v, s.f[a], zero), &mut self.org[a]);
+            l.store(l.select(v, s.f[3 + a], one), &mut dir[a]);
         }
-        if code_and == code_or {
-            let [kx, ky, kz] = axes_of_code(code_or);
-            let (dx, dy, dz) = (d[kx], d[ky], d[kz]);
-            l.store(l.div(dx, dz), &mut p.sx);
-            l.store(l.div(dy, dz), &mut p.sy);
-            l.store(l.div(one, dz), &mut p.sz);
-            p.perm = Some([kx, ky, kz]);
-        }
-        if same_org {
-            p.org0 = Some(o0.to_array());
-        }
-        let uniform = (0..3).all(|a| p.neg[a] == 0 || p.neg[a] == valid);
-        if uniform && finite == valid {
-            let mut lo = [0.0; 6];
-            let mut hi = [0.0; 6];
-            for a in 0..3 {
-                let (o, inv) = (l.load(&p.org[a]), l.load(&p.inv[a]));
-                lo[a] = l.hmin(valid, o);
-                hi[a] = l.hmax(valid, o);
-                lo[3 + a] = l.hmin(valid, inv);
-                hi[3 + a] = l.hmax(valid, inv);
-            }
-            let t_lo = l.hmin(valid, l.load(&p.t_min));
-            let t_hi = l.hmax(valid, l.load(&p.t_max));
-            p.interval = Some(p.interval(lo, hi, t_lo, t_hi));
-            (p.lo, p.hi, p.t_range) = (lo, hi, (t_lo, t_hi));
-        }
-        p
+        l.store(l.select(v, s.f[6], zero), &mut self.t_min);
+        l.store(
+            l.select(v, s.f[7], l.splat(f32::NEG_INFINITY)),
+            &mut self.t_max,
+        );
+        (v, s.code, s.o0, s.same_org)
     }
 
     /// The interval bounds from the per-axis ranges `lo` / `hi` of the valid rays' origins
@@ -439,17 +489,17 @@ impl Bvh {
 
     #[inline(always)]
     pub(crate) fn packet8<L: Lanes16>(&self, l: L, rays: &[Ray], out: &mut [Option<Hit>]) {
-        let mut valid = 0u32;
-        for (i, r) in rays.iter().enumerate() {
-            out[i] = None;
-            if r.is_valid() && r.t_min <= r.t_max {
-                valid |= 1 << i;
-            }
+        for o in out.iter_mut().take(rays.len()) {
+            *o = None;
         }
-        if self.nodes8.is_empty() || valid == 0 {
+        if self.nodes8.is_empty() {
             return;
         }
-        let mut p = Packet::new(l, rays, valid);
+        let mut p = Packet::new(l, rays);
+        let valid = p.valid;
+        if valid == 0 {
+            return;
+        }
         let mut stack = [MaybeUninit::<Entry>::uninit(); STACK8_SIZE];
         let mut sp = 0usize;
         let mut cur = 0u32;
@@ -586,7 +636,7 @@ impl Bvh {
 /// The axis permutation of `WatertightRay::new` for direction `d` as a code `2 kz + swapped`
 /// (the same comparisons: `kz` the dominant axis, `kx, ky` swapped when `d[kz] < 0`).
 #[inline(always)]
-fn watertight_code(d: glam::Vec3) -> u32 {
+pub(crate) fn watertight_code(d: glam::Vec3) -> u32 {
     let a = d.abs();
     let kz = if a.x > a.y {
         if a.x > a.z { 0 } else { 2 }
