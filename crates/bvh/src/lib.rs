@@ -23,6 +23,9 @@
 //!   runtime detection, portable twin, `lanes16.rs`), with interval culling of whole packets
 //!   and a SIMD-over-rays triangle test; each ray's answer is exactly its single-ray answer.
 //!   `packet.rs` is the 4-wide predecessor ([`Bvh::closest_hit_packet4`]).
+//!   [`Bvh::closest_hit_packet64`] (`packet64.rs`): up to [`PACKET64_SIZE`] = 64 rays (an 8x8
+//!   camera tile as four 4x4 groups) share one stack and one interval test of the whole packet
+//!   per node, then one per group (`packet_interval.rs`); leaves and pops per group.
 //! - **Refit** ([`Bvh::refit`], `refit.rs`): new vertex positions, same topology (HVVR §5.2),
 //!   both trees.
 //! - **Beam culling** lives with HVVR in `parallax-vr` (`parallax_vr::beam`): it walks the
