@@ -10,6 +10,7 @@
 //! AVX-512F, so the safe methods below never run where the instructions do not exist.
 
 use glam::{BVec4A, Vec4};
+use parallax_core::Ray;
 
 use crate::traverse8::{NodeTest8, Portable8, RayBoxes8};
 
@@ -57,6 +58,24 @@ pub(crate) trait Lanes16: Copy {
     fn hmax(self, m: u32, v: Self::V) -> f32;
     /// Writes `x` into the lanes `m` of `a`.
     fn store_u32_masked(self, m: u32, a: &mut U16, x: u32);
+    /// `|a|` (the sign bit cleared).
+    fn abs(self, a: Self::V) -> Self::V;
+    /// Lanes whose bits are equal (`-0.0 != 0.0`, a NaN equals itself).
+    fn eq_bits(self, a: Self::V, b: Self::V) -> u32;
+    /// The fields of 16 rays, lane `i` = ray `i`: origin x, y, z, direction x, y, z, `t_min`,
+    /// `t_max`.
+    fn load_rays(self, rays: &[Ray; 16]) -> [Self::V; 8];
+}
+
+/// Field `k` of [`Lanes16::load_rays`] of `r`.
+#[inline(always)]
+fn ray_field(r: &Ray, k: usize) -> f32 {
+    match k {
+        0..3 => r.origin[k],
+        3..6 => r.dir[k - 3],
+        6 => r.t_min,
+        _ => r.t_max,
+    }
 }
 
 /// The portable twin.
@@ -193,6 +212,23 @@ impl Lanes16 for Portable16 {
             }
         }
     }
+    #[inline(always)]
+    fn abs(self, a: [Vec4; 4]) -> [Vec4; 4] {
+        a.map(Vec4::abs)
+    }
+    #[inline(always)]
+    fn eq_bits(self, a: [Vec4; 4], b: [Vec4; 4]) -> u32 {
+        let (mut x, mut y) = (F16([0.0; 16]), F16([0.0; 16]));
+        self.store(a, &mut x);
+        self.store(b, &mut y);
+        (0..16).fold(0, |m, i| {
+            m | ((x.0[i].to_bits() == y.0[i].to_bits()) as u32) << i
+        })
+    }
+    #[inline(always)]
+    fn load_rays(self, rays: &[Ray; 16]) -> [[Vec4; 4]; 8] {
+        std::array::from_fn(|k| self.load(&F16(std::array::from_fn(|i| ray_field(&rays[i], k)))))
+    }
 }
 
 /// AVX-512F lanes (a token: see the module docs).
@@ -213,6 +249,8 @@ impl Avx512 {
 #[cfg(target_arch = "x86_64")]
 mod avx512 {
     use std::arch::x86_64::*;
+
+    use parallax_core::Ray;
 
     use super::{Avx512, F16, Lanes16, U16};
 
@@ -319,6 +357,47 @@ mod avx512 {
                 _mm512_store_si512(p, v)
             }
         }
+        #[inline(always)]
+        fn abs(self, a: __m512) -> __m512 {
+            unsafe { _mm512_abs_ps(a) }
+        }
+        #[inline(always)]
+        fn eq_bits(self, a: __m512, b: __m512) -> u32 {
+            unsafe {
+                _mm512_cmpeq_epi32_mask(_mm512_castps_si512(a), _mm512_castps_si512(b)) as u32
+            }
+        }
+        #[inline(always)]
+        fn load_rays(self, rays: &[Ray; 16]) -> [__m512; 8] {
+            // Field offsets in bytes, gathered with byte scale from the slice's start.
+            const STRIDE: i32 = std::mem::size_of::<Ray>() as i32;
+            let base = rays.as_ptr() as *const u8;
+            let o = std::mem::offset_of!(Ray, origin) as i32;
+            let d = std::mem::offset_of!(Ray, dir) as i32;
+            let off = [
+                o,
+                o + 4,
+                o + 8,
+                d,
+                d + 4,
+                d + 8,
+                std::mem::offset_of!(Ray, t_min) as i32,
+                std::mem::offset_of!(Ray, t_max) as i32,
+            ];
+            // SAFETY: every offset is inside one of the 16 rays (glam's `Vec3` is three f32).
+            unsafe {
+                let idx = _mm512_mullo_epi32(
+                    _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15),
+                    _mm512_set1_epi32(STRIDE),
+                );
+                let mut out = [_mm512_setzero_ps(); 8];
+                for k in 0..8 {
+                    let ik = _mm512_add_epi32(idx, _mm512_set1_epi32(off[k]));
+                    out[k] = _mm512_i32gather_ps::<1>(ik, base as *const _);
+                }
+                out
+            }
+        }
     }
 }
 
@@ -386,6 +465,25 @@ mod tests {
                 assert_eq!(l.hmin(m, x).to_bits(), p.hmin(m, px).to_bits(), "{m:x}");
                 assert_eq!(l.hmax(m, x).to_bits(), p.hmax(m, px).to_bits(), "{m:x}");
             }
+            same(l.abs(x), p.abs(px));
+            assert_eq!(l.eq_bits(x, y), p.eq_bits(px, py));
+            assert_eq!(l.eq_bits(x, x), 0xFFFF);
+            let rays: [Ray; 16] = std::array::from_fn(|i| {
+                let f = i as f32;
+                Ray::segment(
+                    glam::Vec3::new(f, -f, 0.5 * f),
+                    glam::Vec3::new(1.0 + f, 2.0, -f),
+                    0.25 * f,
+                    10.0 + f,
+                )
+            });
+            let (lr, pr) = (l.load_rays(&rays), p.load_rays(&rays));
+            for k in 0..8 {
+                same(lr[k], pr[k]);
+            }
+            let mut f0 = F16([0.0; 16]);
+            p.store(pr[3], &mut f0);
+            assert_eq!(f0.0[5], rays[5].dir.x);
             let (mut u, mut w) = (idx, idx);
             l.store_u32_masked(0x0F0F, &mut u, 99);
             p.store_u32_masked(0x0F0F, &mut w, 99);

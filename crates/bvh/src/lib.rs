@@ -23,6 +23,9 @@
 //!   runtime detection, portable twin, `lanes16.rs`), with interval culling of whole packets
 //!   and a SIMD-over-rays triangle test; each ray's answer is exactly its single-ray answer.
 //!   `packet.rs` is the 4-wide predecessor ([`Bvh::closest_hit_packet4`]).
+//!   [`Bvh::closest_hit_packet64`] (`packet64.rs`): up to [`PACKET64_SIZE`] = 64 rays (an 8x8
+//!   camera tile as four 4x4 groups) share one stack and one interval test of the whole packet
+//!   per node, then one per group (`packet_interval.rs`); leaves and pops per group.
 //! - **Refit** ([`Bvh::refit`], `refit.rs`): new vertex positions, same topology (HVVR §5.2),
 //!   both trees.
 //! - **Beam culling** lives with HVVR in `parallax-vr` (`parallax_vr::beam`): it walks the
@@ -56,7 +59,10 @@ pub mod node;
 pub mod node8;
 mod options;
 mod packet;
+mod packet64;
 mod packet8;
+mod packet_interval;
+mod packet_setup;
 mod reference;
 mod refit;
 mod stats;
@@ -72,6 +78,7 @@ pub use node::{ChildRef, Node4};
 pub use node8::Node8;
 pub use options::{BuildOptions, BvhError};
 pub use packet8::PACKET_SIZE;
+pub use packet64::PACKET64_SIZE;
 pub use reference::{brute_force_all, brute_force_closest};
 pub use stats::{Counter, NoStats, TraversalStats};
 pub use tri::Tri;

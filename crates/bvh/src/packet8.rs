@@ -44,6 +44,7 @@ use crate::hit::Hit;
 use crate::lanes16::{F16, Lanes16, Portable16, U16};
 use crate::node::{is_leaf, leaf_count, leaf_first};
 use crate::node8::Node8;
+use crate::packet_interval::Interval;
 use crate::stats::NoStats;
 use crate::traverse::Best;
 use crate::traverse8::{RayBoxes8, STACK8_SIZE};
@@ -53,7 +54,7 @@ use crate::tri4::{Tri4Ray, blocks_for, lane_mask};
 pub const PACKET_SIZE: usize = 16;
 
 /// A subtree entered by at most this many rays of a packet is traversed ray by ray.
-const SINGLE_RAYS_BELOW: u32 = 2;
+pub(crate) const SINGLE_RAYS_BELOW: u32 = 2;
 /// With interval bounds, children passing the interval test keep the packet's whole mask (no
 /// per-ray child test): a ray that misses the child costs only lanes of the SIMD triangle test,
 /// which runs all 16 lanes anyway, and rays with a closer hit drop out at the pops
@@ -69,102 +70,9 @@ struct Entry {
     t: f32,
 }
 
-/// The packet's interval bounds, as 8-lane splats for the node's rows (module docs).
-struct Interval {
-    /// Per axis: the origin to subtract for the near / far row, and `(inv if d >= 0, inv if
-    /// d < 0)` for the near / far row.
-    o_near: [Vec4; 3],
-    o_far: [Vec4; 3],
-    inv_near: [(Vec4, Vec4); 3],
-    inv_far: [(Vec4, Vec4); 3],
-    /// Byte offsets of the near / far rows (`32 * (2 axis + sign)`).
-    near: [usize; 3],
-    far: [usize; 3],
-    t_min: Vec4,
-    /// The largest `t_max` of the packet's rays (refreshed after each leaf).
-    t_max: f32,
-}
-
-impl Interval {
-    /// The children (bit mask) that some ray of the packet may enter, and a lower bound of
-    /// their entry distances.
-    #[inline(always)]
-    fn test(&self, node: &Node8) -> (u32, [f32; 8]) {
-        let base = node.bounds.as_ptr() as *const u8;
-        let mut mask = 0;
-        let mut t = [0.0f32; 8];
-        let neg = |d: Vec4, (pos, negv): (Vec4, Vec4)| Vec4::select(d.cmplt(Vec4::ZERO), negv, pos);
-        for h in 0..2 {
-            // SAFETY: offsets are `32 * i + 16 * h`, `i < 6`, inside `bounds`.
-            let b = |off: usize| unsafe {
-                Vec4::from_slice(std::slice::from_raw_parts(
-                    base.add(off + 16 * h) as *const f32,
-                    4,
-                ))
-            };
-            let mut t_near = self.t_min;
-            let mut t_far = Vec4::splat(self.t_max);
-            for a in 0..3 {
-                let dn = b(self.near[a]) - self.o_near[a];
-                t_near = t_near.max(dn * neg(dn, self.inv_near[a]));
-                let df = b(self.far[a]) - self.o_far[a];
-                t_far = t_far.min(df * neg(df, self.inv_far[a]));
-            }
-            let hit = t_near.cmple(t_far * ROBUST_FAR_SCALE);
-            mask |= hit.bitmask() << (4 * h);
-            t[4 * h..4 * h + 4].copy_from_slice(&t_near.to_array());
-        }
-        (mask, t)
-    }
-
-    /// [`Self::test`] with 256-bit registers (the same operations lane for lane).
-    ///
-    /// # Safety
-    /// The CPU must support AVX2.
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    unsafe fn test_avx2(&self, node: &Node8) -> (u32, [f32; 8]) {
-        use std::arch::x86_64::*;
-        let base = node.bounds.as_ptr() as *const u8;
-        // SAFETY: AVX2 (caller); rows are 32-byte aligned at offsets `32 * i`, `i < 6`.
-        unsafe {
-            // Macros, not closures: closures do not inherit the caller's target features.
-            macro_rules! s {
-                ($v:expr) => {
-                    _mm256_set1_ps($v.x)
-                };
-            }
-            let zero = _mm256_setzero_ps();
-            let mut t_near = s!(self.t_min);
-            let mut t_far = _mm256_set1_ps(self.t_max);
-            for a in 0..3 {
-                let dn = _mm256_sub_ps(
-                    _mm256_load_ps(base.add(self.near[a]) as *const f32),
-                    s!(self.o_near[a]),
-                );
-                let (pos, neg) = self.inv_near[a];
-                let f = _mm256_blendv_ps(s!(pos), s!(neg), _mm256_cmp_ps::<_CMP_LT_OQ>(dn, zero));
-                t_near = _mm256_max_ps(t_near, _mm256_mul_ps(dn, f));
-                let df = _mm256_sub_ps(
-                    _mm256_load_ps(base.add(self.far[a]) as *const f32),
-                    s!(self.o_far[a]),
-                );
-                let (pos, neg) = self.inv_far[a];
-                let f = _mm256_blendv_ps(s!(pos), s!(neg), _mm256_cmp_ps::<_CMP_LT_OQ>(df, zero));
-                t_far = _mm256_min_ps(t_far, _mm256_mul_ps(df, f));
-            }
-            let far = _mm256_mul_ps(t_far, _mm256_set1_ps(ROBUST_FAR_SCALE));
-            let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(t_near, far);
-            let mut t = [0.0f32; 8];
-            _mm256_storeu_ps(t.as_mut_ptr(), t_near);
-            (_mm256_movemask_ps(hit) as u32, t)
-        }
-    }
-}
-
 /// A packet's rays in SoA form, with each ray's closest hit so far.
-struct Packet {
-    valid: u32,
+pub(crate) struct Packet {
+    pub valid: u32,
     org: [F16; 3],
     inv: [F16; 3],
     /// Lanes whose `1 / dir` is negative, per axis.
@@ -180,7 +88,15 @@ struct Packet {
     sy: F16,
     sz: F16,
     perm: Option<[usize; 3]>,
-    interval: Option<Interval>,
+    /// The origin all valid rays share, bit for bit (a pinhole camera's tile), if they do: the
+    /// triangle test then subtracts it once per vertex instead of once per lane.
+    org0: Option<[f32; 3]>,
+    pub interval: Option<Interval>,
+    /// With `interval`: per axis the valid rays' origin range (axes 0..3) and `1 / dir` range
+    /// (axes 3..6), and their `t_min` / `t_max` ranges (`packet64.rs` unites them).
+    pub lo: [f32; 6],
+    pub hi: [f32; 6],
+    pub t_range: (f32, f32),
 }
 
 impl Packet {
@@ -188,11 +104,13 @@ impl Packet {
     /// as `Vec3::recip`, and the shear `d[kx] / d[kz]`, `d[ky] / d[kz]`, `1 / d[kz]` of
     /// `WatertightRay::new` (computed here in SIMD when all rays share the axis permutation;
     /// otherwise rays build their `WatertightRay` where they need it).
+    /// `valid`: the rays that are valid with `t_min <= t_max` (computed here, in lanes for a
+    /// full packet: the same comparisons as `Ray::is_valid`).
     #[inline(always)]
-    fn new<L: Lanes16>(l: L, rays: &[Ray], valid: u32) -> Self {
+    pub fn new<L: Lanes16>(l: L, rays: &[Ray]) -> Self {
         let z = F16([0.0; 16]);
         let mut p = Packet {
-            valid,
+            valid: 0,
             org: [z; 3],
             inv: [F16([1.0; 16]); 3],
             neg: [0; 3],
@@ -205,25 +123,18 @@ impl Packet {
             sy: z,
             sz: z,
             perm: None,
+            org0: None,
             interval: None,
+            lo: [0.0; 6],
+            hi: [0.0; 6],
+            t_range: (0.0, 0.0),
         };
         let mut dir = [F16([1.0; 16]); 3];
-        // The permutation as a code `2 kz + swapped` (one byte compare per ray).
-        let (mut code_and, mut code_or) = (u32::MAX, 0u32);
-        for (i, r) in rays.iter().enumerate() {
-            if valid >> i & 1 == 0 {
-                continue;
-            }
-            for a in 0..3 {
-                p.org[a].0[i] = r.origin[a];
-                dir[a].0[i] = r.dir[a];
-            }
-            p.t_min.0[i] = r.t_min;
-            p.t_max.0[i] = r.t_max;
-            let c = watertight_code(r.dir);
-            code_and &= c;
-            code_or |= c;
-        }
+        let (valid, code, o0, same_org) = match <&[Ray; PACKET_SIZE]>::try_from(rays) {
+            Ok(r16) => p.load_lanes(l, r16, &mut dir),
+            Err(_) => p.load_scalar(rays, &mut dir),
+        };
+        p.valid = valid;
         let one = l.splat(1.0);
         let mut finite = valid;
         let d = [l.load(&dir[0]), l.load(&dir[1]), l.load(&dir[2])];
@@ -233,16 +144,19 @@ impl Packet {
             p.neg[a] = l.lt(inv, l.splat(0.0)) & valid;
             finite &= l.lt(inv, l.splat(f32::INFINITY)) & l.gt(inv, l.splat(f32::NEG_INFINITY));
         }
-        if code_and == code_or {
-            let [kx, ky, kz] = axes_of_code(code_or);
+        if let Some(code) = code {
+            let [kx, ky, kz] = axes_of_code(code);
             let (dx, dy, dz) = (d[kx], d[ky], d[kz]);
             l.store(l.div(dx, dz), &mut p.sx);
             l.store(l.div(dy, dz), &mut p.sy);
             l.store(l.div(one, dz), &mut p.sz);
             p.perm = Some([kx, ky, kz]);
         }
+        if same_org && valid != 0 {
+            p.org0 = Some(o0);
+        }
         let uniform = (0..3).all(|a| p.neg[a] == 0 || p.neg[a] == valid);
-        if uniform && finite == valid {
+        if uniform && finite == valid && valid != 0 {
             let mut lo = [0.0; 6];
             let mut hi = [0.0; 6];
             for a in 0..3 {
@@ -255,14 +169,79 @@ impl Packet {
             let t_lo = l.hmin(valid, l.load(&p.t_min));
             let t_hi = l.hmax(valid, l.load(&p.t_max));
             p.interval = Some(p.interval(lo, hi, t_lo, t_hi));
+            (p.lo, p.hi, p.t_range) = (lo, hi, (t_lo, t_hi));
         }
         p
+    }
+
+    /// Loads up to 16 rays one by one into the SoA rows (invalid rays keep the defaults):
+    /// returns the valid rays, their common axis-permutation code (if any), the first valid
+    /// ray's origin and whether every valid ray has that origin bit for bit.
+    #[inline(always)]
+    fn load_scalar(
+        &mut self,
+        rays: &[Ray],
+        dir: &mut [F16; 3],
+    ) -> (u32, Option<u32>, [f32; 3], bool) {
+        let p = self;
+        let mut valid = 0u32;
+        for (i, r) in rays.iter().enumerate() {
+            if r.is_valid() && r.t_min <= r.t_max {
+                valid |= 1 << i;
+            }
+        }
+        let mut same_org = true;
+        let o0 = rays
+            .get(valid.trailing_zeros() as usize)
+            .map_or(glam::Vec3::ZERO, |r| r.origin);
+        // The permutation as a code `2 kz + swapped` (one byte compare per ray).
+        let (mut code_and, mut code_or) = (u32::MAX, 0u32);
+        for (i, r) in rays.iter().enumerate() {
+            if valid >> i & 1 == 0 {
+                continue;
+            }
+            for a in 0..3 {
+                p.org[a].0[i] = r.origin[a];
+                dir[a].0[i] = r.dir[a];
+                same_org &= r.origin[a].to_bits() == o0[a].to_bits();
+            }
+            p.t_min.0[i] = r.t_min;
+            p.t_max.0[i] = r.t_max;
+            let c = watertight_code(r.dir);
+            code_and &= c;
+            code_or |= c;
+        }
+        let code = (code_and == code_or).then_some(code_or);
+        (valid, code, o0.to_array(), same_org)
+    }
+
+    /// [`Self::load_scalar`] for a full packet, in lanes (`packet_setup.rs`).
+    #[inline(always)]
+    fn load_lanes<L: Lanes16>(
+        &mut self,
+        l: L,
+        rays: &[Ray; PACKET_SIZE],
+        dir: &mut [F16; 3],
+    ) -> (u32, Option<u32>, [f32; 3], bool) {
+        let s = crate::packet_setup::rays16(l, rays);
+        let v = s.valid;
+        let (zero, one) = (l.splat(0.0), l.splat(1.0));
+        for a in 0..3 {
+            l.store(l.select(v, s.f[a], zero), &mut self.org[a]);
+            l.store(l.select(v, s.f[3 + a], one), &mut dir[a]);
+        }
+        l.store(l.select(v, s.f[6], zero), &mut self.t_min);
+        l.store(
+            l.select(v, s.f[7], l.splat(f32::NEG_INFINITY)),
+            &mut self.t_max,
+        );
+        (v, s.code, s.o0, s.same_org)
     }
 
     /// The interval bounds from the per-axis ranges `lo` / `hi` of the valid rays' origins
     /// (axes 0..3) and `1 / dir` (axes 3..6), and their `t_min` / `t_max` ranges.
     #[inline(always)]
-    fn interval(&self, lo: [f32; 6], hi: [f32; 6], t_min: f32, t_max: f32) -> Interval {
+    pub fn interval(&self, lo: [f32; 6], hi: [f32; 6], t_min: f32, t_max: f32) -> Interval {
         let mut iv = Interval {
             o_near: [Vec4::ZERO; 3],
             o_far: [Vec4::ZERO; 3],
@@ -331,9 +310,24 @@ impl Packet {
         (hit, t)
     }
 
+    /// The direction signs of the valid rays as bits (axis `a` negative: bit `a`), meaningful
+    /// when they agree (`interval` is some).
+    #[inline(always)]
+    pub fn sign_code(&self) -> u32 {
+        (0..3).map(|a| ((self.neg[a] != 0) as u32) << a).sum()
+    }
+
+    /// Sets the interval's `t_max` to the largest current `t_max` of the valid rays.
+    #[inline(always)]
+    pub fn refresh_interval<L: Lanes16>(&mut self, l: L) {
+        if let Some(iv) = &mut self.interval {
+            iv.t_max = l.hmax(self.valid, l.load(&self.t_max));
+        }
+    }
+
     /// Rays of `mask` that have not yet found a hit nearer than `t`.
     #[inline(always)]
-    fn not_beyond<L: Lanes16>(&self, l: L, mask: u32, t: f32) -> u32 {
+    pub fn not_beyond<L: Lanes16>(&self, l: L, mask: u32, t: f32) -> u32 {
         let bound = l.mul(l.load(&self.t_max), l.splat(ROBUST_FAR_SCALE));
         l.le(l.splat(t), bound) & mask
     }
@@ -344,6 +338,13 @@ impl Packet {
     #[inline(always)]
     fn project<L: Lanes16>(&self, l: L, k: [usize; 3], v: [f32; 3]) -> (L::V, L::V, L::V) {
         let [kx, ky, kz] = k;
+        if let Some(o) = self.org0 {
+            // `v - o` is the same f32 subtraction in every lane: done once.
+            let az = l.splat(v[kz] - o[kz]);
+            let x = l.sub(l.splat(v[kx] - o[kx]), l.mul(l.load(&self.sx), az));
+            let y = l.sub(l.splat(v[ky] - o[ky]), l.mul(l.load(&self.sy), az));
+            return (x, y, l.mul(l.load(&self.sz), az));
+        }
         let az = l.sub(l.splat(v[kz]), l.load(&self.org[kz]));
         let x = l.sub(
             l.sub(l.splat(v[kx]), l.load(&self.org[kx])),
@@ -418,7 +419,7 @@ impl Packet {
 
     /// Ray `i` finishes the subtree `root` alone (its closest hit so far carried over).
     #[inline(always)]
-    fn single_ray<L: Lanes16>(&mut self, bvh: &Bvh, l: L, rays: &[Ray], i: usize, root: u32) {
+    pub fn single_ray<L: Lanes16>(&mut self, bvh: &Bvh, l: L, rays: &[Ray], i: usize, root: u32) {
         let mut best = self.best(i);
         let mut t_max = self.t_max.0[i];
         // SAFETY: rays of a mask are valid, and valid rays were initialised.
@@ -429,7 +430,7 @@ impl Packet {
     }
 
     #[inline(always)]
-    fn best(&self, i: usize) -> Best {
+    pub fn best(&self, i: usize) -> Best {
         Best {
             t: if self.best_tri.0[i] == u32::MAX {
                 f32::INFINITY
@@ -487,18 +488,18 @@ impl Bvh {
     }
 
     #[inline(always)]
-    fn packet8<L: Lanes16>(&self, l: L, rays: &[Ray], out: &mut [Option<Hit>]) {
-        let mut valid = 0u32;
-        for (i, r) in rays.iter().enumerate() {
-            out[i] = None;
-            if r.is_valid() && r.t_min <= r.t_max {
-                valid |= 1 << i;
-            }
+    pub(crate) fn packet8<L: Lanes16>(&self, l: L, rays: &[Ray], out: &mut [Option<Hit>]) {
+        for o in out.iter_mut().take(rays.len()) {
+            *o = None;
         }
-        if self.nodes8.is_empty() || valid == 0 {
+        if self.nodes8.is_empty() {
             return;
         }
-        let mut p = Packet::new(l, rays, valid);
+        let mut p = Packet::new(l, rays);
+        let valid = p.valid;
+        if valid == 0 {
+            return;
+        }
         let mut stack = [MaybeUninit::<Entry>::uninit(); STACK8_SIZE];
         let mut sp = 0usize;
         let mut cur = 0u32;
@@ -596,7 +597,7 @@ impl Bvh {
     }
 
     #[inline(always)]
-    fn packet_leaf<L: Lanes16>(
+    pub(crate) fn packet_leaf<L: Lanes16>(
         &self,
         l: L,
         p: &mut Packet,
@@ -635,7 +636,7 @@ impl Bvh {
 /// The axis permutation of `WatertightRay::new` for direction `d` as a code `2 kz + swapped`
 /// (the same comparisons: `kz` the dominant axis, `kx, ky` swapped when `d[kz] < 0`).
 #[inline(always)]
-fn watertight_code(d: glam::Vec3) -> u32 {
+pub(crate) fn watertight_code(d: glam::Vec3) -> u32 {
     let a = d.abs();
     let kz = if a.x > a.y {
         if a.x > a.z { 0 } else { 2 }
@@ -661,7 +662,7 @@ fn axes_of_code(code: u32) -> [usize; 3] {
 
 #[cfg(target_arch = "x86_64")]
 #[inline]
-fn use_avx512() -> bool {
+pub(crate) fn use_avx512() -> bool {
     std::is_x86_feature_detected!("avx512f") && std::is_x86_feature_detected!("avx2")
 }
 

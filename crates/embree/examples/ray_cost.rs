@@ -5,9 +5,10 @@
 //! ```text
 //! cargo build --release -p parallax-embree --features embree --example ray_cost
 //! target/release/examples/ray_cost SCENE EYE TARGET FOV_Y METHOD MODE [WIDTH HEIGHT]
-//!   METHOD: bvh | bvh4 | packet | packet4 | embree1 | embree16 | stats (work counters) |
+//!   METHOD: bvh | bvh4 | packet | packet4 | packet64 | embree1 | embree16 | stats (work counters) |
 //!           build (build times) | a comma-separated list (interleaved A/B, best of 7)
-//!   MODE:   primary (pixel centres, 4x4 tiles) | random (cosine bounces from the primary hits)
+//!   MODE:   primary (pixel centres, 8x8 tiles of four 4x4 tiles; traced 64 rays at a time) |
+//!           random (cosine bounces from the primary hits)
 //! e.g. ray_cost ../shared/scenes/sponza_dabrovic/sponza_dabrovic.glb -9,3.5,0 8,5,0 60 bvh primary
 //! ```
 //!
@@ -46,12 +47,14 @@ fn main() {
     let bvh = Bvh::build(&scene.mesh);
     let cam = Pinhole::new(&desc, w, h).unwrap();
     let mut rays: Vec<Ray> = Vec::new();
-    for ty in (0..h).step_by(4) {
-        for tx in (0..w).step_by(4) {
-            for y in ty..(ty + 4).min(h) {
-                for x in tx..(tx + 4).min(w) {
-                    let f = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-                    rays.push(cam.generate_ray(f, Vec2::splat(0.5), 1).unwrap().ray);
+    for ty in (0..h).step_by(8) {
+        for tx in (0..w).step_by(8) {
+            for (gx, gy) in [(0, 0), (4, 0), (0, 4), (4, 4)] {
+                for y in (ty + gy)..(ty + gy + 4).min(h) {
+                    for x in (tx + gx)..(tx + gx + 4).min(w) {
+                        let f = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                        rays.push(cam.generate_ray(f, Vec2::splat(0.5), 1).unwrap().ray);
+                    }
                 }
             }
         }
@@ -114,7 +117,7 @@ fn main() {
             for (m, b) in methods.iter().zip(&mut best) {
                 let mut f = tracer(m, &bvh, &emb);
                 let c0 = parallax_core::cpu_time::thread_cpu_ns().unwrap();
-                std::hint::black_box(trace_all(&rays, &mut *f, 16));
+                std::hint::black_box(trace_all(&rays, &mut *f, 64));
                 *b = (*b).min(parallax_core::cpu_time::thread_cpu_ns().unwrap() - c0);
             }
         }
@@ -128,23 +131,27 @@ fn main() {
         return;
     }
     let mut f = tracer(method, &bvh, &emb);
-    let hits = trace_all(&rays, &mut *f, 16);
+    let hits = trace_all(&rays, &mut *f, 64);
     println!("{method} {mode}: {} rays, {hits} hits", rays.len());
 }
 
-/// The tracer of `method` over one chunk of at most 16 rays; returns the hits.
+/// The tracer of `method` over one chunk of at most 64 rays; returns the hits.
 fn tracer<'a>(
     method: &str,
     bvh: &'a Bvh,
     e: &'a EmbreeScene,
 ) -> Box<dyn FnMut(&[Ray]) -> usize + 'a> {
-    let mut hb = vec![None; 16];
-    let mut he = vec![None; 16];
+    let mut hb = vec![None; 64];
+    let mut he = vec![None; 64];
     match method {
         "bvh" => Box::new(|c| c.iter().filter(|r| bvh.closest_hit(r).is_some()).count()),
         "bvh4" => Box::new(|c| c.iter().filter(|r| bvh.closest_hit4(r).is_some()).count()),
         "packet" => Box::new(move |c| {
             bvh.closest_hit_packet(c, &mut hb);
+            hb[..c.len()].iter().filter(|h| h.is_some()).count()
+        }),
+        "packet64" => Box::new(move |c| {
+            bvh.closest_hit_packet64(c, &mut hb);
             hb[..c.len()].iter().filter(|h| h.is_some()).count()
         }),
         "packet4" => Box::new(move |c| {

@@ -53,9 +53,17 @@ pub struct RaysArgs {
     /// Embree's build quality for the traced scene: low, medium or high.
     #[arg(long, default_value = "high", value_parser = parse_quality)]
     pub embree_quality: parallax_embree::Quality,
+    /// Comma list of methods (default all): single, packet16, packet64, single4, packet4,
+    /// embree1, embree8, embree16, embree1m. `single` (the reference) always runs.
+    #[arg(long, value_delimiter = ',', value_parser = parse_method)]
+    pub methods: Vec<rays::Method>,
     /// Write the rows as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
+}
+
+fn parse_method(s: &str) -> Result<rays::Method, String> {
+    rays::Method::parse(s).ok_or_else(|| format!("unknown method {s}"))
 }
 
 fn parse_quality(s: &str) -> Result<parallax_embree::Quality, String> {
@@ -111,6 +119,7 @@ pub fn run(cmd: &BenchCommand, quiet: bool) -> Result<()> {
                 repeats: a.repeats,
                 msaa: !a.no_msaa,
                 embree_quality: a.embree_quality,
+                methods: a.methods.clone(),
             };
             let report = rays::run(&scene, &camera, &opts)?;
             let rows = report.rows;

@@ -3,9 +3,10 @@
 //! the same process.
 //!
 //! Ray sets ("modes"), generated up front (only tracing is timed):
-//! - `primary`: one ray per pixel centre, pixels in 4x4 tiles (tile after tile in scanline
-//!   order, scanline order within a tile), so 16 consecutive rays are one tile: the packets of
-//!   the packet methods (8 consecutive rays: half a tile, 4x2 pixels).
+//! - `primary`: one ray per pixel centre, pixels in 8x8 tiles (tile after tile in scanline
+//!   order), each tile as four 4x4 tiles (top left, top right, bottom left, bottom right; scanline
+//!   order within), so 16 consecutive rays are a 4x4 tile (the packets of the 16-ray methods; 8
+//!   consecutive rays: half a tile, 4x2 pixels) and 64 an 8x8 tile (`bvh packet64`).
 //! - `msaa16`: 16 subsample rays per pixel (the Sobol' (0,2) offsets of HVVR's sample sets,
 //!   Hunt et al. 2018 §5.1), a pixel's 16 subsamples consecutive: a packet is one pixel
 //!   (MSAA-style packets). Traced in bands of rows so memory stays bounded.
@@ -26,11 +27,12 @@
 //! | `repeats` | u32 | 3 | timed rounds per band (the best counts) |
 //! | `msaa` | bool | true | include the `msaa16` mode |
 //! | `embree_quality` | [`Quality`] | `High` | Embree's build quality for the traced scene |
+//! | `methods` | `Vec<Method>` | all | the traced methods (`bvh single`, the reference, always runs) |
 
 use std::time::Instant;
 
 use glam::Vec2;
-use parallax_bvh::{Bvh, BvhError, PACKET_SIZE};
+use parallax_bvh::{Bvh, BvhError, PACKET_SIZE, PACKET64_SIZE};
 use parallax_core::Ray;
 use parallax_core::cpu_time::{ms_between, process_cpu_ns};
 use parallax_core::math::Frame;
@@ -50,11 +52,13 @@ pub const MSAA_SPP: u32 = 16;
 const MSAA_BAND_ROWS: u32 = 45;
 
 /// Bench options (table in the module docs).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct RaysOptions {
     pub repeats: u32,
     pub msaa: bool,
     pub embree_quality: Quality,
+    /// Empty: every method.
+    pub methods: Vec<Method>,
 }
 
 impl Default for RaysOptions {
@@ -63,6 +67,7 @@ impl Default for RaysOptions {
             repeats: 3,
             msaa: true,
             embree_quality: Quality::High,
+            methods: Vec::new(),
         }
     }
 }
@@ -111,6 +116,8 @@ type Answer = Option<(u32, f32)>;
 pub enum Method {
     BvhSingle,
     BvhPacket16,
+    /// 64-ray packets (8x8 pixels as four 16-ray groups, `Bvh::closest_hit_packet64`).
+    BvhPacket64,
     /// The 4-wide tree's single rays and packets (the predecessors, for reference).
     BvhSingle4,
     BvhPacket4,
@@ -121,9 +128,10 @@ pub enum Method {
 }
 
 impl Method {
-    pub const ALL: [Method; 8] = [
+    pub const ALL: [Method; 9] = [
         Method::BvhSingle,
         Method::BvhPacket16,
+        Method::BvhPacket64,
         Method::BvhSingle4,
         Method::BvhPacket4,
         Method::EmbreeIntersect1,
@@ -136,6 +144,7 @@ impl Method {
         match self {
             Method::BvhSingle => "bvh single",
             Method::BvhPacket16 => "bvh packet16",
+            Method::BvhPacket64 => "bvh packet64",
             Method::BvhSingle4 => "bvh4 single",
             Method::BvhPacket4 => "bvh4 packet16",
             Method::EmbreeIntersect1 => "embree rtcIntersect1",
@@ -145,10 +154,37 @@ impl Method {
         }
     }
 
+    /// The short name of `--methods` (`single`, `packet16`, `packet64`, `single4`, `packet4`,
+    /// `embree1`, `embree8`, `embree16`, `embree1m`).
+    pub fn short_name(self) -> &'static str {
+        match self {
+            Method::BvhSingle => "single",
+            Method::BvhPacket16 => "packet16",
+            Method::BvhPacket64 => "packet64",
+            Method::BvhSingle4 => "single4",
+            Method::BvhPacket4 => "packet4",
+            Method::EmbreeIntersect1 => "embree1",
+            Method::EmbreeIntersect8 => "embree8",
+            Method::EmbreeIntersect16 => "embree16",
+            Method::EmbreeStream => "embree1m",
+        }
+    }
+
+    /// The method of a [`Self::short_name`] or [`Self::name`].
+    pub fn parse(s: &str) -> Option<Method> {
+        Method::ALL
+            .into_iter()
+            .find(|m| m.short_name() == s || m.name() == s)
+    }
+
     pub fn is_embree(self) -> bool {
         !matches!(
             self,
-            Method::BvhSingle | Method::BvhPacket16 | Method::BvhSingle4 | Method::BvhPacket4
+            Method::BvhSingle
+                | Method::BvhPacket16
+                | Method::BvhPacket64
+                | Method::BvhSingle4
+                | Method::BvhPacket4
         )
     }
 
@@ -171,6 +207,18 @@ impl Method {
             Method::BvhSingle4 => {
                 for (r, o) in rays.iter().zip(out) {
                     *o = ph(bvh.closest_hit4(r));
+                }
+            }
+            Method::BvhPacket64 => {
+                let mut tmp = [None; PACKET64_SIZE];
+                for (p, o) in rays
+                    .chunks(PACKET64_SIZE)
+                    .zip(out.chunks_mut(PACKET64_SIZE))
+                {
+                    bvh.closest_hit_packet64(p, &mut tmp);
+                    for (o, h) in o.iter_mut().zip(tmp) {
+                        *o = ph(h);
+                    }
                 }
             }
             Method::BvhPacket16 | Method::BvhPacket4 => {
@@ -204,12 +252,15 @@ impl Method {
     }
 }
 
-/// Primary rays through pixel centres in 4x4 tiles (module docs); pixels without a ray (outside
-/// a fisheye's circle) are skipped, which shortens their tile's packet.
+/// Primary rays through pixel centres in 8x8 tiles of four 4x4 tiles (module docs); pixels
+/// without a ray (outside a fisheye's circle, past the image's edge) are skipped, which
+/// shortens their tile's packet.
 pub fn primary_tiled(camera: &Camera) -> Vec<Ray> {
     let (w, h) = (camera.width(), camera.height());
-    let tiles: Vec<(u32, u32)> = (0..h.div_ceil(4))
-        .flat_map(|ty| (0..w.div_ceil(4)).map(move |tx| (4 * tx, 4 * ty)))
+    let tiles: Vec<(u32, u32)> = (0..h.div_ceil(8))
+        .flat_map(|ty| (0..w.div_ceil(8)).map(move |tx| (8 * tx, 8 * ty)))
+        .flat_map(|(x, y)| [(x, y), (x + 4, y), (x, y + 4), (x + 4, y + 4)])
+        .filter(|&(x, y)| x < w && y < h)
         .collect();
     tiles
         .par_iter()
@@ -396,6 +447,7 @@ pub fn run(scene: &Scene, camera: &Camera, opts: &RaysOptions) -> Result<RaysRep
     let methods: Vec<Method> = Method::ALL
         .into_iter()
         .filter(|m| embree.is_some() || !m.is_embree())
+        .filter(|m| *m == Method::BvhSingle || opts.methods.is_empty() || opts.methods.contains(m))
         .collect();
 
     let primary = primary_tiled(camera);

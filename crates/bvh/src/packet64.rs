@@ -1,0 +1,328 @@
+//! Large packets for coherent primary rays: up to [`PACKET64_SIZE`] = 64 rays (an 8x8 pixel
+//! tile, as four 16-ray groups of 4x4 pixels) walk the 8-wide tree together with one stack, in
+//! the manner of the large-packet tracers of Reshetov, Soupikov & Hurley 2005 (MLRTA) and
+//! Wald, Boulos & Shirley 2007 ("Ray tracing deformable scenes using dynamic bounding volume
+//! hierarchies": 8x8 packets over a BVH with whole-packet culling, SIMD over the rays still
+//! active), on the node and leaf kernels of the 16-ray packets (`packet8.rs`, `lanes16.rs`).
+//!
+//! - **Two-level interval culling**: at each node one 8-lane test of the whole packet's
+//!   interval bounds (`packet_interval.rs`, the union of the four groups' ranges) rejects the
+//!   children no ray can enter; each surviving child is then tested against the interval
+//!   bounds of each active group (one 8-lane test per group and node), and a child is entered
+//!   with the rays of the groups that pass. The node's load, the child ordering (near bound of
+//!   the whole packet) and the stack are paid once per 64 rays instead of once per 16.
+//! - **Per group at the leaves and pops**: each active group runs the 16-lane SIMD triangle
+//!   test (or its rays' 4-triangle test when few are active), and a popped entry keeps the rays
+//!   of each group whose closest hit is not nearer than that group's entry bound.
+//! - **Hybrid**: a subtree entered by at most `SINGLE_RAYS_BELOW` rays is finished ray by ray.
+//! - **Fallback**: when the groups do not share the direction signs, or some group has no
+//!   interval bounds (a zero direction component, mixed signs inside it), each group is traced
+//!   as its own 16-ray packet ([`Bvh::closest_hit_packet`]); slices of at most 16 rays too.
+//!
+//! | parameter | value | meaning |
+//! |---|---|---|
+//! | [`PACKET64_SIZE`] | 64 | rays per packet (longer slices are split) |
+//! | `GROUPS` | 4 | 16-ray groups per packet (ray `i` is lane `i % 16` of group `i / 16`) |
+//! | `GROUP_TESTS` | true | test each group's interval against the surviving children |
+//!
+//! **Invariant:** every ray's answer equals [`Bvh::closest_hit`] exactly (prim, t, u, v): both
+//! interval tests only cull children that the ray's own slab test culls (their ranges contain
+//! the ray's origin, `1 / dir`, `t_min` and current `t_max`), the pops only drop rays with a
+//! closer hit, and each ray keeps the lexicographic minimum of `(t, triangle index)` over the
+//! hits it finds. `tests/packets.rs` checks it for the AVX-512 lanes and the portable twin.
+
+use std::mem::MaybeUninit;
+
+use parallax_core::Ray;
+
+use crate::bvh::Bvh;
+use crate::hit::Hit;
+use crate::lanes16::{Lanes16, Portable16};
+use crate::node::{is_leaf, leaf_count, leaf_first};
+use crate::node8::Node8;
+use crate::packet_interval::Interval;
+use crate::packet8::{PACKET_SIZE, Packet, SINGLE_RAYS_BELOW};
+use crate::traverse8::STACK8_SIZE;
+
+/// Rays per large packet ([`Bvh::closest_hit_packet64`] splits longer slices).
+pub const PACKET64_SIZE: usize = 64;
+/// 16-ray groups per packet.
+const GROUPS: usize = PACKET64_SIZE / PACKET_SIZE;
+/// Test each active group's interval bounds against the children that pass the packet's.
+const GROUP_TESTS: bool = true;
+
+#[derive(Clone, Copy)]
+struct Entry64 {
+    child: u32,
+    /// Bit `i` = ray `i` of the packet.
+    mask: u64,
+    /// Per group, a lower bound of its rays' entry distances.
+    t: [f32; GROUPS],
+}
+
+/// Group `g`'s rays (empty past the end of the slice).
+#[inline(always)]
+fn group(rays: &[Ray], g: usize) -> &[Ray] {
+    let n = rays.len();
+    &rays[(PACKET_SIZE * g).min(n)..(PACKET_SIZE * (g + 1)).min(n)]
+}
+
+/// Group `g`'s bits of a packet mask.
+#[inline(always)]
+fn gbits(m: u64, g: usize) -> u32 {
+    (m >> (PACKET_SIZE * g)) as u32 & 0xFFFF
+}
+
+/// The interval test with 256-bit registers where the lanes prove AVX2.
+#[inline(always)]
+fn test<L: Lanes16>(iv: &Interval, node: &Node8) -> (u32, [f32; 8]) {
+    #[cfg(target_arch = "x86_64")]
+    if L::AVX2 {
+        // SAFETY: `L::AVX2` holds only for lanes made after detecting AVX2.
+        return unsafe { iv.test_avx2(node) };
+    }
+    iv.test(node)
+}
+
+impl Bvh {
+    /// Closest hits of up to [`PACKET64_SIZE`] coherent rays traced together (longer slices
+    /// are split into packets of 64); `out[i]` is exactly [`Bvh::closest_hit`] of `rays[i]`.
+    /// Made for an 8x8 pixel tile's camera rays ordered as four 4x4 tiles of 16 consecutive
+    /// rays (each 16 rays are one group); packets whose groups are not coherent fall back to
+    /// [`Bvh::closest_hit_packet`] per group. Uses AVX-512 where the CPU has it.
+    /// Panics if `out` is shorter than `rays`.
+    pub fn closest_hit_packet64(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+        assert!(
+            out.len() >= rays.len(),
+            "closest_hit_packet64: out too short"
+        );
+        for (r, o) in rays
+            .chunks(PACKET64_SIZE)
+            .zip(out.chunks_mut(PACKET64_SIZE))
+        {
+            #[cfg(target_arch = "x86_64")]
+            if crate::packet8::use_avx512() {
+                // SAFETY: AVX-512F and AVX2 were detected.
+                unsafe { self.packet64_avx512(r, o) };
+                continue;
+            }
+            self.packet64(Portable16, r, o);
+        }
+    }
+
+    /// [`Self::closest_hit_packet64`] with the portable lanes even where AVX-512 exists: the
+    /// twin the tests hold the AVX-512 path against.
+    pub fn closest_hit_packet64_portable(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+        assert!(
+            out.len() >= rays.len(),
+            "closest_hit_packet64: out too short"
+        );
+        for (r, o) in rays
+            .chunks(PACKET64_SIZE)
+            .zip(out.chunks_mut(PACKET64_SIZE))
+        {
+            self.packet64(Portable16, r, o);
+        }
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f,avx2")]
+    unsafe fn packet64_avx512(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+        // SAFETY: AVX-512F and AVX2 are enabled for this function (the caller detected them).
+        self.packet64(unsafe { crate::lanes16::Avx512::new() }, rays, out)
+    }
+
+    /// Each group as its own 16-ray packet.
+    #[inline(always)]
+    fn packet64_by_groups<L: Lanes16>(&self, l: L, rays: &[Ray], out: &mut [Option<Hit>]) {
+        for g in 0..GROUPS {
+            let r = group(rays, g);
+            if !r.is_empty() {
+                let o0 = PACKET_SIZE * g;
+                self.packet8(l, r, &mut out[o0..o0 + r.len()]);
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn packet64<L: Lanes16>(&self, l: L, rays: &[Ray], out: &mut [Option<Hit>]) {
+        if rays.len() <= PACKET_SIZE || self.nodes8.is_empty() {
+            return self.packet64_by_groups(l, rays, out);
+        }
+        for o in out.iter_mut().take(rays.len()) {
+            *o = None;
+        }
+        // One loop, not four inlined set-ups (code size), and no closures over the lanes
+        // (they would not inherit the target features).
+        let mut init = [const { MaybeUninit::<Packet>::uninit() }; GROUPS];
+        for (g, p) in init.iter_mut().enumerate() {
+            p.write(Packet::new(l, group(rays, g)));
+        }
+        // SAFETY: every element was written by the loop above.
+        let mut ps: [Packet; GROUPS] = unsafe { std::mem::transmute(init) };
+        let mut valid = 0u64;
+        for (g, p) in ps.iter().enumerate() {
+            valid |= (p.valid as u64) << (PACKET_SIZE * g);
+        }
+        if valid == 0 {
+            return;
+        }
+        // The whole packet's interval: the union of the groups' ranges, if they share signs.
+        let (mut lo, mut hi) = ([f32::INFINITY; 6], [f32::NEG_INFINITY; 6]);
+        let (mut t_lo, mut t_hi) = (f32::INFINITY, f32::NEG_INFINITY);
+        let mut signs = None;
+        let mut coherent = true;
+        let mut first = 0;
+        for g in (0..GROUPS).rev() {
+            let p = &ps[g];
+            if p.valid == 0 {
+                continue;
+            }
+            first = g;
+            let s = p.sign_code();
+            coherent &= p.interval.is_some() && *signs.get_or_insert(s) == s;
+            for a in 0..6 {
+                lo[a] = lo[a].min(p.lo[a]);
+                hi[a] = hi[a].max(p.hi[a]);
+            }
+            t_lo = t_lo.min(p.t_range.0);
+            t_hi = t_hi.max(p.t_range.1);
+        }
+        if !coherent {
+            return self.packet64_by_groups(l, rays, out);
+        }
+        let mut big = ps[first].interval(lo, hi, t_lo, t_hi);
+        let mut stack = [MaybeUninit::<Entry64>::uninit(); STACK8_SIZE];
+        let mut sp = 0usize;
+        let mut cur = 0u32;
+        let mut mask = valid;
+        loop {
+            if mask.count_ones() <= SINGLE_RAYS_BELOW {
+                let mut m = mask;
+                while m != 0 {
+                    let i = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    let g = i / PACKET_SIZE;
+                    ps[g].single_ray(self, l, group(rays, g), i % PACKET_SIZE, cur);
+                    ps[g].refresh_interval(l);
+                }
+                big.t_max = max_t(&ps);
+            } else if !is_leaf(cur) {
+                let node = &self.nodes8[cur as usize];
+                let (cand, t_ia) = test::<L>(&big, node);
+                let mut kid = [Entry64 {
+                    child: 0,
+                    mask: 0,
+                    t: [0.0; GROUPS],
+                }; 8];
+                let mut key = [0.0f32; 8];
+                let mut n = 0;
+                if cand != 0 {
+                    let mut gc = [0u32; GROUPS];
+                    let mut gt = [t_ia; GROUPS];
+                    for g in 0..GROUPS {
+                        if gbits(mask, g) == 0 {
+                            continue;
+                        }
+                        match &ps[g].interval {
+                            Some(iv) if GROUP_TESTS => (gc[g], gt[g]) = test::<L>(iv, node),
+                            _ => gc[g] = cand,
+                        }
+                    }
+                    let mut m = cand;
+                    while m != 0 {
+                        let c = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        let mut hits = 0u64;
+                        let mut t = [f32::INFINITY; GROUPS];
+                        for g in 0..GROUPS {
+                            if gc[g] >> c & 1 != 0 {
+                                hits |= mask & (0xFFFF << (PACKET_SIZE * g));
+                                t[g] = gt[g][c];
+                            }
+                        }
+                        if hits == 0 {
+                            continue;
+                        }
+                        // Insertion, far to near (by the whole packet's entry bound).
+                        let (e, k) = (
+                            Entry64 {
+                                child: node.child[c],
+                                mask: hits,
+                                t,
+                            },
+                            t_ia[c],
+                        );
+                        let mut j = n;
+                        while j > 0 && key[j - 1] < k {
+                            kid[j] = kid[j - 1];
+                            key[j] = key[j - 1];
+                            j -= 1;
+                        }
+                        kid[j] = e;
+                        key[j] = k;
+                        n += 1;
+                    }
+                }
+                if n != 0 {
+                    for e in &kid[..n - 1] {
+                        // `7 * depth8 < STACK8_SIZE` (checked at build): at most 7 per level.
+                        stack[sp] = MaybeUninit::new(*e);
+                        sp += 1;
+                    }
+                    cur = kid[n - 1].child;
+                    mask = kid[n - 1].mask;
+                    continue;
+                }
+            } else {
+                for g in 0..GROUPS {
+                    let gm = gbits(mask, g);
+                    if gm != 0 {
+                        let (first, count) = (leaf_first(cur), leaf_count(cur));
+                        self.packet_leaf(l, &mut ps[g], group(rays, g), first, count, gm);
+                        ps[g].refresh_interval(l);
+                    }
+                }
+                big.t_max = max_t(&ps);
+            }
+            loop {
+                if sp == 0 {
+                    for (i, o) in out.iter_mut().enumerate().take(rays.len()) {
+                        *o = ps[i / PACKET_SIZE]
+                            .best(i % PACKET_SIZE)
+                            .hit(&self.prim_ids);
+                    }
+                    return;
+                }
+                sp -= 1;
+                // SAFETY: entries below `sp` were written by the pushes above.
+                let e = unsafe { stack[sp].assume_init() };
+                let mut m = 0u64;
+                for g in 0..GROUPS {
+                    let gm = gbits(e.mask, g);
+                    if gm != 0 {
+                        let keep = ps[g].not_beyond(l, gm, e.t[g]);
+                        m |= (keep as u64) << (PACKET_SIZE * g);
+                    }
+                }
+                if m != 0 {
+                    cur = e.child;
+                    mask = m;
+                    break;
+                }
+            }
+        }
+    }
+}
+
+/// The largest current `t_max` over the groups' intervals (groups without rays: -inf).
+#[inline(always)]
+fn max_t(ps: &[Packet; GROUPS]) -> f32 {
+    let mut t = f32::NEG_INFINITY;
+    for p in ps {
+        if let Some(iv) = &p.interval {
+            t = t.max(iv.t_max);
+        }
+    }
+    t
+}
