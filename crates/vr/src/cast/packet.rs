@@ -28,6 +28,7 @@ use parallax_scene::camera::{Camera, Pinhole};
 
 use crate::SampleSet;
 use crate::beam::PreparedBeam;
+use crate::cast::lanes16::LaneReduce;
 use crate::cast::leaves::LeafBox;
 use crate::cast::stored::RayBuffer;
 /// Most rays per packet (the 16-lane set-up kernel, [`crate::cast::lanes16`]).
@@ -162,6 +163,61 @@ pub(crate) fn gen_n_film<L: Lanes>(
         valid,
     };
     (rays, bx)
+}
+
+/// [`gen_n_film`] for a full packet of one subsample per sample (`spp == 1`; `idx` the
+/// packet's `L::N` samples) of a pinhole or stereo camera, without the `(sample, k)` pairs:
+/// the samples' film positions and footprints gathered into lanes, `film + offsets[0] *
+/// footprint` lane-wise (the per-lane path's f32 operations), the film box by one lane
+/// minimum and maximum (equal to the per-lane path's box up to the sign of a zero, which no
+/// use of the box sees). `None` (the per-lane path decides) for other cameras, a NaN position
+/// or a packet across the stereo eyes.
+#[inline(always)]
+pub(crate) fn gen_spp1<L: LaneReduce>(
+    set: &SampleSet,
+    idx: &[u32],
+) -> Option<(RaysN<L>, (Vec2, Vec2))> {
+    let (mut x, mut y, mut f) = (
+        [0.0f32; MAX_LANES],
+        [0.0f32; MAX_LANES],
+        [0.0f32; MAX_LANES],
+    );
+    for (l, &i) in idx[..L::N].iter().enumerate() {
+        let s = &set.samples[i as usize];
+        (x[l], y[l], f[l]) = (s.film.x, s.film.y, s.footprint);
+    }
+    let o = set.offsets[0];
+    let fp = L::from_fn(|l| f[l]);
+    let fx = L::from_fn(|l| x[l]) + L::splat(o.x) * fp;
+    let fy = L::from_fn(|l| y[l]) + L::splat(o.y) * fp;
+    if L::bits(L::or(fx.ne(fx), fy.ne(fy))) != 0 {
+        return None;
+    }
+    let (lo, hi) = (
+        Vec2::new(fx.hmin(), fy.hmin()),
+        Vec2::new(fx.hmax(), fy.hmax()),
+    );
+    let full = (1u32 << L::N) - 1;
+    let (p, fx) = match &set.camera {
+        Camera::Pinhole(p) => (p, fx),
+        Camera::Stereo(rig) => {
+            // As `gen_n_film`: every lane in `[0, 2w]`, and all left or all right.
+            let w = rig.eye_width() as f32;
+            let inside = lo.x >= 0.0 && hi.x <= 2.0 * w;
+            let (left, right) = (hi.x < w, lo.x >= w);
+            if !(inside && (left || right)) {
+                return None;
+            }
+            if left {
+                (&rig.eyes[0], fx)
+            } else {
+                (&rig.eyes[1], fx - L::splat(w))
+            }
+        }
+        _ => return None,
+    };
+    let (o, d) = pinhole_n(p, fx, fy);
+    Some((RaysN { o, d, valid: full }, (lo, hi)))
 }
 
 /// [`gen_n`] for a full packet of one sample's consecutive subsamples `k0..k0 + N` (a pixel
