@@ -126,9 +126,11 @@ pub(super) fn closest_edges<L: LaneReduce>(
         for j in first..end {
             let tr = &tt.tris[j];
             // The affine packet test (`affine.rs`): every lane certainly out or in.
-            let class = match pbox {
-                Some(pb) if !tr.all_in => pb.classify(&tt.aff[j], tr.bound),
-                _ => PacketClass::Partial,
+            // A partial packet's edges certainly inside for every lane (`skip`) take no
+            // per-lane test (`PacketBox::classify_edges`).
+            let (class, skip) = match pbox {
+                Some(pb) if !tr.all_in => pb.classify_edges(&tt.aff[j], tr.bound),
+                _ => (PacketClass::Partial, 0),
             };
             if class == PacketClass::Out {
                 work.packet_out += 1;
@@ -151,7 +153,7 @@ pub(super) fn closest_edges<L: LaneReduce>(
                 work.packet_in += 1;
                 (ge, 0)
             } else {
-                edge_band(tr, rays.d, dinf, ge, cand)
+                edge_band(tr, rays.d, dinf, ge, cand, 7 & !skip)
             };
             let mut extra = 0u32;
             // Within the edge band: the watertight test decides coverage (~0.2% of pairs).
