@@ -225,31 +225,25 @@ impl Out<'_> {
     #[inline(always)]
     unsafe fn run(&self, (i, k0): (u32, u32), c: &ClosestN, n: usize) {
         let o = i as usize * self.spp + k0 as usize;
+        let n = n.min(MAX_LANES);
+        // SAFETY: the caller's; the two buffers do not overlap `c`, so the `t` run is one
+        // copy (a miss has `t = inf` in `c` already).
+        let prim = unsafe {
+            std::ptr::copy_nonoverlapping(c.t.as_ptr(), self.t.add(o), n);
+            std::slice::from_raw_parts_mut(self.prim.add(o), n)
+        };
         // One triangle on every lane (a pixel inside one triangle): one `prim_ids` look-up.
         let t0 = c.tri[0];
         if t0 != u32::MAX && c.tri[..n].iter().all(|&x| x == t0) {
-            let p = self.prim_ids[t0 as usize];
-            // SAFETY: the caller's.
-            unsafe {
-                for l in 0..n {
-                    *self.prim.add(o + l) = p;
-                    *self.t.add(o + l) = c.t[l];
-                }
-            }
+            prim.fill(self.prim_ids[t0 as usize]);
             return;
         }
-        // SAFETY: the caller's.
-        unsafe {
-            for l in 0..n {
-                let tri = c.tri[l];
-                let (p, bt) = if tri == u32::MAX {
-                    (NO_ID, f32::INFINITY)
-                } else {
-                    (self.prim_ids[tri as usize], c.t[l])
-                };
-                *self.prim.add(o + l) = p;
-                *self.t.add(o + l) = bt;
-            }
+        for (p, &tri) in prim.iter_mut().zip(&c.tri[..n]) {
+            *p = if tri == u32::MAX {
+                NO_ID
+            } else {
+                self.prim_ids[tri as usize]
+            };
         }
     }
 }
