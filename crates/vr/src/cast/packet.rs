@@ -580,3 +580,71 @@ pub(crate) unsafe fn run_packets_avx2(
         set, blocks, leaves, beam, slack, total, pair, write, fallback,
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use glam::{Vec3, Vec4};
+    use parallax_scene::CameraDesc;
+    use parallax_scene::camera::{Camera, CameraOptions, ModelKind};
+
+    use super::*;
+    use crate::cast::lanes16::V16;
+
+    /// `gen_spp1` equals the per-lane generator bit for bit (rays and film box) on random and
+    /// consecutive 1-spp packets of a pinhole and a stereo camera; it declines only packets
+    /// across the stereo eyes.
+    fn check<L: LaneReduce>(set: &SampleSet, seed: u64) -> (u32, u32) {
+        let (mut s, n) = (seed, set.samples.len() as u64);
+        let (mut some, mut none) = (0, 0);
+        for p in 0..400 {
+            let mut idx = [0u32; MAX_LANES];
+            for (l, i) in idx.iter_mut().enumerate().take(L::N) {
+                s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                *i = if p % 2 == 0 {
+                    (s >> 33) as u32 % n as u32
+                } else {
+                    ((p as u64 * 7 + l as u64) % n) as u32
+                };
+            }
+            let pairs: Vec<(u32, u32)> = idx[..L::N].iter().map(|&i| (i, 0)).collect();
+            let (want, wbox) = gen_n_film::<L>(set, None, &pairs);
+            let Some((got, (lo, hi))) = gen_spp1::<L>(set, &idx[..L::N]) else {
+                assert!(matches!(set.camera, Camera::Stereo(_)));
+                none += 1;
+                continue;
+            };
+            some += 1;
+            assert_eq!(got.valid, want.valid);
+            for a in 0..3 {
+                for l in 0..L::N {
+                    assert_eq!(got.o[a].get(l).to_bits(), want.o[a].get(l).to_bits());
+                    assert_eq!(got.d[a].get(l).to_bits(), want.d[a].get(l).to_bits());
+                }
+            }
+            assert_eq!(wbox, Some((lo, hi)));
+        }
+        (some, none)
+    }
+
+    #[test]
+    fn spp1_packets_equal_the_per_lane_generator() {
+        let desc = CameraDesc::new(
+            Vec3::new(0.3, -1.2, 2.0),
+            Vec3::new(1.0, 0.5, -3.0),
+            Vec3::Y,
+            50.0,
+        );
+        for kind in [ModelKind::Pinhole, ModelKind::Stereo] {
+            let cam = Camera::new(kind, &desc, 40, 24, &CameraOptions::default()).unwrap();
+            let set = SampleSet::grid(cam, 1);
+            let (some16, none16) = check::<V16>(&set, 1);
+            let (some4, _) = check::<Vec4>(&set, 2);
+            assert!(some16 > 100 && some4 > 100, "{kind:?}: {some16} {some4}");
+            if kind == ModelKind::Stereo {
+                assert!(none16 > 0, "no packet across the eyes");
+            }
+        }
+    }
+}
