@@ -4,7 +4,9 @@
 //! A packet is four (SSE, glam `Vec4`) or eight (AVX, behind runtime detection) consecutive
 //! subsample rays of a tile; the kernel is written once over the [`Lanes`] trait. Rays are generated in SIMD for the
 //! pinhole and stereo models (the f32 operations of `Pinhole::generate_ray`, lane by lane:
-//! bit-identical rays) and per lane otherwise. If the four rays share the permutation of the
+//! bit-identical rays) and per lane otherwise; the set-up kernel's full packets of one
+//! sample's subsamples (`gen_one_sample`) and of sixteen 1-spp samples (`gen_spp1`) take their
+//! film positions lane-wise too. If the four rays share the permutation of the
 //! watertight test (dominant axis and its sign, Woop et al. 2013 §3) — all but a few packets on
 //! the diagonals of the image — each triangle is tested against the four rays with the exact f32
 //! operations of `WatertightRay::intersect_within` per lane (vertex coordinates splatted, ray
