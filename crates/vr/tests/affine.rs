@@ -128,8 +128,9 @@ impl Rng {
 
 /// Checks every packet (one pixel's 16 subsamples, and 4 x 4-pixel blocks at 1 spp) of a
 /// pinhole around pixel `(px, py)` against `tri`: an `Out` packet has no lane the watertight
-/// test hits, an `In` packet has every lane hit. Returns `(out, in, partial)` counts.
-fn check_tri(set16: &SampleSet, set1: &SampleSet, tri: [Vec3; 3], counts: &mut [u64; 3]) {
+/// test hits, an `In` packet has every lane hit, an edge skipped for a partial packet
+/// (`classify_edges`) is positive on every lane. Counts `(out, in, partial, skipped edges)`.
+fn check_tri(set16: &SampleSet, set1: &SampleSet, tri: [Vec3; 3], counts: &mut [u64; 4]) {
     let Camera::Pinhole(p) = &set16.camera else {
         unreachable!()
     };
@@ -171,7 +172,17 @@ fn check_tri(set16: &SampleSet, set1: &SampleSet, tri: [Vec3; 3], counts: &mut [
                 let Some(ts) = TriSetup::new(tri, o, 0, 0, &cone) else {
                     continue;
                 };
-                let class = pb.classify(&fr.affine(&ts.n), ts.bound);
+                let (class, inside) = pb.classify_edges(&fr.affine(&ts.n), ts.bound);
+                assert_eq!(class, pb.classify(&fr.affine(&ts.n), ts.bound));
+                // An edge certainly inside for the packet is positive (in f64) on every ray.
+                for e in (0..3).filter(|e| inside >> e & 1 != 0) {
+                    assert_eq!(class, PacketClass::Partial);
+                    counts[3] += 1;
+                    for r in &rays {
+                        let v: f64 = (0..3).map(|k| ts.n[e][k] as f64 * r.dir[k] as f64).sum();
+                        assert!(v > 0.0, "edge {e} of {tri:?} skipped, value {v}");
+                    }
+                }
                 let hits = rays
                     .iter()
                     .filter(|r: &&Ray| {
@@ -217,7 +228,7 @@ fn packet_classification_never_contradicts_the_watertight_test() {
         _ => unreachable!(),
     };
     let mut rng = Rng(7);
-    let mut counts = [0u64; 3];
+    let mut counts = [0u64; 4];
     let sub = |rng: &mut Rng| {
         let i = (rng.next() * (w * h) as f32) as usize;
         let k = (rng.next() * 16.0) as usize;
@@ -263,8 +274,8 @@ fn packet_classification_never_contradicts_the_watertight_test() {
         }
     }
     eprintln!(
-        "packets out {} in {} partial {}",
-        counts[0], counts[1], counts[2]
+        "packets out {} in {} partial {} (edges skipped {})",
+        counts[0], counts[1], counts[2], counts[3]
     );
     assert!(counts.iter().all(|&c| c > 100), "{counts:?}");
 }

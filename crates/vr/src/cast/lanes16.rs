@@ -20,6 +20,9 @@ pub trait LaneReduce: Lanes {
     fn hmax(self) -> f32;
     /// Lanes `0..N` into `out[..N]`.
     fn write(self, out: &mut [f32]);
+    /// `out[l] = v` for the lanes `l` of `m`, the other entries unchanged (`out` holds at
+    /// least `N` entries): a packet's winners' triangle index without a loop over the bits.
+    fn set_u32(m: Self::M, v: u32, out: &mut [u32]);
 }
 
 #[inline(always)]
@@ -46,6 +49,27 @@ impl LaneReduce for Vec4 {
     fn write(self, out: &mut [f32]) {
         self.write_to_slice(&mut out[..4]);
     }
+    #[inline(always)]
+    fn set_u32(m: BVec4A, v: u32, out: &mut [u32]) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::x86_64::*;
+            let out = &mut out[..4];
+            // SAFETY: SSE2 (the x86_64 baseline); `out` holds 4 u32. A bitwise blend.
+            unsafe {
+                let p = out.as_mut_ptr() as *mut __m128i;
+                let m = _mm_castps_si128(__m128::from(m));
+                let x = _mm_and_si128(m, _mm_set1_epi32(v as i32));
+                _mm_storeu_si128(p, _mm_or_si128(x, _mm_andnot_si128(m, _mm_loadu_si128(p))));
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        for (l, o) in out[..4].iter_mut().enumerate() {
+            if m.test(l) {
+                *o = v;
+            }
+        }
+    }
 }
 
 impl LaneReduce for F8 {
@@ -60,6 +84,15 @@ impl LaneReduce for F8 {
     #[inline(always)]
     fn write(self, out: &mut [f32]) {
         out[..8].copy_from_slice(&self.0);
+    }
+    #[inline(always)]
+    fn set_u32(m: <F8 as Lanes>::M, v: u32, out: &mut [u32]) {
+        let b = <F8 as Lanes>::bits(m);
+        for (l, o) in out[..8].iter_mut().enumerate() {
+            if b >> l & 1 != 0 {
+                *o = v;
+            }
+        }
     }
 }
 
@@ -80,6 +113,12 @@ impl LaneReduce for V16 {
     fn write(self, out: &mut [f32]) {
         for (i, q) in self.0.iter().enumerate() {
             q.write_to_slice(&mut out[4 * i..4 * i + 4]);
+        }
+    }
+    #[inline(always)]
+    fn set_u32(m: M16, v: u32, out: &mut [u32]) {
+        for (i, q) in m.0.iter().enumerate() {
+            Vec4::set_u32(*q, v, &mut out[4 * i..4 * i + 4]);
         }
     }
 }

@@ -152,6 +152,18 @@ impl LaneReduce for Z16 {
         // SAFETY: module docs; `out` holds at least 16 f32.
         unsafe { _mm512_storeu_ps(out.as_mut_ptr(), self.0) }
     }
+    #[inline(always)]
+    fn set_u32(m: K16, v: u32, out: &mut [u32]) {
+        assert!(out.len() >= 16);
+        // SAFETY: module docs; `out` holds at least 16 u32, only the lanes of `m` are stored.
+        unsafe {
+            _mm512_mask_storeu_epi32(
+                out.as_mut_ptr() as *mut i32,
+                m.0,
+                _mm512_set1_epi32(v as i32),
+            )
+        }
+    }
 }
 
 #[cfg(test)]

@@ -4,7 +4,9 @@
 //! A packet is four (SSE, glam `Vec4`) or eight (AVX, behind runtime detection) consecutive
 //! subsample rays of a tile; the kernel is written once over the [`Lanes`] trait. Rays are generated in SIMD for the
 //! pinhole and stereo models (the f32 operations of `Pinhole::generate_ray`, lane by lane:
-//! bit-identical rays) and per lane otherwise. If the four rays share the permutation of the
+//! bit-identical rays) and per lane otherwise; the set-up kernel's full packets of one
+//! sample's subsamples (`gen_one_sample`) and of sixteen 1-spp samples (`gen_spp1`) take their
+//! film positions lane-wise too. If the four rays share the permutation of the
 //! watertight test (dominant axis and its sign, Woop et al. 2013 §3) — all but a few packets on
 //! the diagonals of the image — each triangle is tested against the four rays with the exact f32
 //! operations of `WatertightRay::intersect_within` per lane (vertex coordinates splatted, ray
@@ -28,6 +30,7 @@ use parallax_scene::camera::{Camera, Pinhole};
 
 use crate::SampleSet;
 use crate::beam::PreparedBeam;
+use crate::cast::lanes16::LaneReduce;
 use crate::cast::leaves::LeafBox;
 use crate::cast::stored::RayBuffer;
 /// Most rays per packet (the 16-lane set-up kernel, [`crate::cast::lanes16`]).
@@ -162,6 +165,61 @@ pub(crate) fn gen_n_film<L: Lanes>(
         valid,
     };
     (rays, bx)
+}
+
+/// [`gen_n_film`] for a full packet of one subsample per sample (`spp == 1`; `idx` the
+/// packet's `L::N` samples) of a pinhole or stereo camera, without the `(sample, k)` pairs:
+/// the samples' film positions and footprints gathered into lanes, `film + offsets[0] *
+/// footprint` lane-wise (the per-lane path's f32 operations), the film box by one lane
+/// minimum and maximum (equal to the per-lane path's box up to the sign of a zero, which no
+/// use of the box sees). `None` (the per-lane path decides) for other cameras, a NaN position
+/// or a packet across the stereo eyes.
+#[inline(always)]
+pub(crate) fn gen_spp1<L: LaneReduce>(
+    set: &SampleSet,
+    idx: &[u32],
+) -> Option<(RaysN<L>, (Vec2, Vec2))> {
+    let (mut x, mut y, mut f) = (
+        [0.0f32; MAX_LANES],
+        [0.0f32; MAX_LANES],
+        [0.0f32; MAX_LANES],
+    );
+    for (l, &i) in idx[..L::N].iter().enumerate() {
+        let s = &set.samples[i as usize];
+        (x[l], y[l], f[l]) = (s.film.x, s.film.y, s.footprint);
+    }
+    let o = set.offsets[0];
+    let fp = L::from_fn(|l| f[l]);
+    let fx = L::from_fn(|l| x[l]) + L::splat(o.x) * fp;
+    let fy = L::from_fn(|l| y[l]) + L::splat(o.y) * fp;
+    if L::bits(L::or(fx.ne(fx), fy.ne(fy))) != 0 {
+        return None;
+    }
+    let (lo, hi) = (
+        Vec2::new(fx.hmin(), fy.hmin()),
+        Vec2::new(fx.hmax(), fy.hmax()),
+    );
+    let full = (1u32 << L::N) - 1;
+    let (p, fx) = match &set.camera {
+        Camera::Pinhole(p) => (p, fx),
+        Camera::Stereo(rig) => {
+            // As `gen_n_film`: every lane in `[0, 2w]`, and all left or all right.
+            let w = rig.eye_width() as f32;
+            let inside = lo.x >= 0.0 && hi.x <= 2.0 * w;
+            let (left, right) = (hi.x < w, lo.x >= w);
+            if !(inside && (left || right)) {
+                return None;
+            }
+            if left {
+                (&rig.eyes[0], fx)
+            } else {
+                (&rig.eyes[1], fx - L::splat(w))
+            }
+        }
+        _ => return None,
+    };
+    let (o, d) = pinhole_n(p, fx, fy);
+    Some((RaysN { o, d, valid: full }, (lo, hi)))
 }
 
 /// [`gen_n`] for a full packet of one sample's consecutive subsamples `k0..k0 + N` (a pixel
@@ -523,4 +581,72 @@ pub(crate) unsafe fn run_packets_avx2(
     run_packets::<F8>(
         set, blocks, leaves, beam, slack, total, pair, write, fallback,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::{Vec3, Vec4};
+    use parallax_scene::CameraDesc;
+    use parallax_scene::camera::{Camera, CameraOptions, ModelKind};
+
+    use super::*;
+    use crate::cast::lanes16::V16;
+
+    /// `gen_spp1` equals the per-lane generator bit for bit (rays and film box) on random and
+    /// consecutive 1-spp packets of a pinhole and a stereo camera; it declines only packets
+    /// across the stereo eyes.
+    fn check<L: LaneReduce>(set: &SampleSet, seed: u64) -> (u32, u32) {
+        let (mut s, n) = (seed, set.samples.len() as u64);
+        let (mut some, mut none) = (0, 0);
+        for p in 0..400 {
+            let mut idx = [0u32; MAX_LANES];
+            for (l, i) in idx.iter_mut().enumerate().take(L::N) {
+                s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                *i = if p % 2 == 0 {
+                    (s >> 33) as u32 % n as u32
+                } else {
+                    ((p as u64 * 7 + l as u64) % n) as u32
+                };
+            }
+            let pairs: Vec<(u32, u32)> = idx[..L::N].iter().map(|&i| (i, 0)).collect();
+            let (want, wbox) = gen_n_film::<L>(set, None, &pairs);
+            let Some((got, (lo, hi))) = gen_spp1::<L>(set, &idx[..L::N]) else {
+                assert!(matches!(set.camera, Camera::Stereo(_)));
+                none += 1;
+                continue;
+            };
+            some += 1;
+            assert_eq!(got.valid, want.valid);
+            for a in 0..3 {
+                for l in 0..L::N {
+                    assert_eq!(got.o[a].get(l).to_bits(), want.o[a].get(l).to_bits());
+                    assert_eq!(got.d[a].get(l).to_bits(), want.d[a].get(l).to_bits());
+                }
+            }
+            assert_eq!(wbox, Some((lo, hi)));
+        }
+        (some, none)
+    }
+
+    #[test]
+    fn spp1_packets_equal_the_per_lane_generator() {
+        let desc = CameraDesc::new(
+            Vec3::new(0.3, -1.2, 2.0),
+            Vec3::new(1.0, 0.5, -3.0),
+            Vec3::Y,
+            50.0,
+        );
+        for kind in [ModelKind::Pinhole, ModelKind::Stereo] {
+            let cam = Camera::new(kind, &desc, 40, 24, &CameraOptions::default()).unwrap();
+            let set = SampleSet::grid(cam, 1);
+            let (some16, none16) = check::<V16>(&set, 1);
+            let (some4, _) = check::<Vec4>(&set, 2);
+            assert!(some16 > 100 && some4 > 100, "{kind:?}: {some16} {some4}");
+            if kind == ModelKind::Stereo {
+                assert!(none16 > 0, "no packet across the eyes");
+            }
+        }
+    }
 }

@@ -28,6 +28,15 @@
 //! (which reads the same `g . d` of the same float ray) is untouched: the buffer is identical
 //! to the one without this test (`tests/affine.rs` compares both, bit for bit).
 //!
+//! **Per-edge decisions** (the hierarchical test of a partial packet, `classify_edges`): an
+//! edge whose range lies above `tau_i` has, for every lane, a positive watertight edge function
+//! (step 2 below); the per-lane test then takes the smallest value over the other edges only.
+//! Its decisions are still the watertight test's: above the band every tested edge is
+//! certainly inside and the skipped ones are, below minus the band one tested edge is
+//! certainly outside, and within the band the watertight test decides. So the buffer is the
+//! same (`tests/affine.rs`). Skipped only when every `|n_i|_1 < 1e37`: no edge value overflows,
+//! so the minimum of a subset of finite values does not depend on the order.
+//!
 //! **The bound.** Notation: `U = 2^-24`; `n` the stored (float) covector, `n*` the exact
 //! `a_i x a_{i+1}` of the rounded `a_i`; `d` the float ray of a lane, `v` its float camera
 //! direction, `v*` the exact `v(f)` at the lane's float film position `f`; `rb >= max_j |B_j|_2`
@@ -218,6 +227,11 @@ pub enum PacketClass {
     Partial,
 }
 
+/// Edges are skipped per packet (`PacketBox::classify_edges`) only for triangles whose
+/// covectors all have `|n_i|_1` below this: every float edge value `n_i . d` (`|d_k| <= 1.01`)
+/// is then finite, so the smallest of any subset of them is independent of the order.
+const N1_SKIP: f32 = 1e37;
+
 /// `true` in lanes 0-2.
 const XYZ: glam::BVec4A = glam::BVec4A::from_array([true, true, true, false]);
 
@@ -282,6 +296,15 @@ impl PacketBox {
     /// the packet (module docs).
     #[inline(always)]
     pub fn classify(&self, a: &AffineTri, bound: f32) -> PacketClass {
+        self.classify_edges(a, bound).0
+    }
+
+    /// [`PacketBox::classify`] and, for a partial packet, the bits of the edges every ray of
+    /// the packet is certainly inside (edge `i`: bit `i`), whose per-lane test can be skipped
+    /// (module docs, "Per-edge decisions"); 0 for the other classes and for triangles with a
+    /// covector `|n_i|_1 >= 1e37` (no edge value may overflow where edges are skipped).
+    #[inline(always)]
+    pub fn classify_edges(&self, a: &AffineTri, bound: f32) -> (PacketClass, u32) {
         let c = a.mx * self.xc + a.my * self.yc - a.mz;
         let r = a.amx * self.rx + a.amy * self.ry;
         let tau = a.n1 * self.ka + Vec4::splat(bound * self.kb);
@@ -290,13 +313,15 @@ impl PacketBox {
         // Out: one edge with its largest value below -tau.
         let out = (hi + tau).cmplt(Vec4::ZERO) & XYZ;
         if out.any() {
-            return PacketClass::Out;
+            return (PacketClass::Out, 0);
         }
-        let inn = (lo - tau).cmpgt(Vec4::ZERO);
-        if inn.bitmask() & 7 == 7 {
-            PacketClass::In
+        let inn = (lo - tau).cmpgt(Vec4::ZERO).bitmask() & 7;
+        if inn == 7 {
+            (PacketClass::In, 0)
+        } else if inn != 0 && a.n1.cmplt(Vec4::splat(N1_SKIP)).bitmask() & 7 == 7 {
+            (PacketClass::Partial, inn)
         } else {
-            PacketClass::Partial
+            (PacketClass::Partial, 0)
         }
     }
 }

@@ -126,9 +126,11 @@ pub(super) fn closest_edges<L: LaneReduce>(
         for j in first..end {
             let tr = &tt.tris[j];
             // The affine packet test (`affine.rs`): every lane certainly out or in.
-            let class = match pbox {
-                Some(pb) if !tr.all_in => pb.classify(&tt.aff[j], tr.bound),
-                _ => PacketClass::Partial,
+            // A partial packet's edges certainly inside for every lane (`skip`) take no
+            // per-lane test (`PacketBox::classify_edges`).
+            let (class, skip) = match pbox {
+                Some(pb) if !tr.all_in => pb.classify_edges(&tt.aff[j], tr.bound),
+                _ => (PacketClass::Partial, 0),
             };
             if class == PacketClass::Out {
                 work.packet_out += 1;
@@ -151,7 +153,7 @@ pub(super) fn closest_edges<L: LaneReduce>(
                 work.packet_in += 1;
                 (ge, 0)
             } else {
-                edge_band(tr, rays.d, dinf, ge, cand)
+                edge_band(tr, rays.d, dinf, ge, cand, 7 & !skip)
             };
             let mut extra = 0u32;
             // Within the edge band: the watertight test decides coverage (~0.2% of pairs).
@@ -186,22 +188,24 @@ pub(super) fn closest_edges<L: LaneReduce>(
             if win == 0 {
                 continue;
             }
-            best = if win == gt {
-                L::select(gt_m, gd, best)
+            if win == gt {
+                // The winners are the mask's valid lanes: one blend each.
+                best = L::select(gt_m, gd, best);
+                L::set_u32(L::and(gt_m, valid_m), tr.tri, &mut out.tri);
             } else {
-                L::from_fn(|l| {
+                best = L::from_fn(|l| {
                     if win >> l & 1 != 0 {
                         gd.get(l)
                     } else {
                         best.get(l)
                     }
-                })
-            };
-            let mut w = win;
-            while w != 0 {
-                let l = w.trailing_zeros() as usize;
-                w &= w - 1;
-                out.tri[l] = tr.tri;
+                });
+                let mut w = win;
+                while w != 0 {
+                    let l = w.trailing_zeros() as usize;
+                    w &= w - 1;
+                    out.tri[l] = tr.tri;
+                }
             }
             changed = true;
         }
@@ -217,11 +221,8 @@ pub(super) fn closest_edges<L: LaneReduce>(
     }
     // Hit lanes: `t = 1 / best` (= `box_lim`); the others keep `inf`.
     if hit_lanes != 0 {
-        let mut t = [0.0f32; MAX_LANES];
-        box_lim.write(&mut t);
-        for (l, o) in out.t[..L::N].iter_mut().enumerate() {
-            *o = if hit_lanes >> l & 1 != 0 { t[l] } else { *o };
-        }
+        let hit_m = L::and(best.gt(zero), valid_m);
+        L::select(hit_m, box_lim, L::splat(f32::INFINITY)).write(&mut out.t);
     }
     out
 }

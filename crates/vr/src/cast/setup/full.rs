@@ -106,7 +106,7 @@ pub(super) fn closest_full<L: Lanes>(
             if cand_bits == 0 {
                 continue;
             }
-            let (inside, unsure) = edge_band(tr, rays.d, dinf, cand, cand_bits);
+            let (inside, unsure) = edge_band(tr, rays.d, dinf, cand, cand_bits, 7);
             let mut in_bits = L::bits(inside) & valid;
             let mut unsure = unsure;
             if in_bits | unsure == 0 {

@@ -24,8 +24,24 @@ pub(super) fn min_edge<L: Lanes>(n: &[[f32; 3]; 3], [dx, dy, dz]: [L; 3]) -> L {
         .min_or_rhs(dot_n(n[2], dx, dy, dz))
 }
 
+/// The smallest edge value `n_i . d` per lane over the edges `need` (bits `i`, not 0; the
+/// others are certainly inside for every lane: [`super::affine::PacketBox::classify_edges`]),
+/// in [`min_edge`]'s order (all values finite there, so any order gives the same minimum).
+#[inline(always)]
+pub(super) fn min_edge_of<L: Lanes>(n: &[[f32; 3]; 3], [dx, dy, dz]: [L; 3], need: u32) -> L {
+    match need {
+        1 => dot_n(n[0], dx, dy, dz),
+        2 => dot_n(n[1], dx, dy, dz),
+        4 => dot_n(n[2], dx, dy, dz),
+        3 => dot_n(n[0], dx, dy, dz).min_or_rhs(dot_n(n[1], dx, dy, dz)),
+        5 => dot_n(n[0], dx, dy, dz).min_or_rhs(dot_n(n[2], dx, dy, dz)),
+        6 => dot_n(n[1], dx, dy, dz).min_or_rhs(dot_n(n[2], dx, dy, dz)),
+        _ => min_edge(n, [dx, dy, dz]),
+    }
+}
+
 /// The edge test of the lanes `cand` (mask; `cand_bits` = its bits within the valid lanes)
-/// against `tr` (module docs of [`super`], "exact band"): the mask of lanes certainly inside
+/// over the edges `need` ([`min_edge_of`]; 7: all three) against `tr` (module docs of [`super`], "exact band"): the mask of lanes certainly inside
 /// (every edge value above the band `bound |d|_inf`, with `dinf` the packet's `|d|_inf`) and the
 /// bits of the lanes within the band, which only the watertight test decides.
 #[inline(always)]
@@ -35,11 +51,12 @@ pub(super) fn edge_band<L: Lanes>(
     dinf: f32,
     cand: L::M,
     cand_bits: u32,
+    need: u32,
 ) -> (L::M, u32) {
     if tr.all_in {
         return (cand, 0);
     }
-    let m = min_edge(&tr.n, d);
+    let m = min_edge_of(&tr.n, d, need);
     let b = L::splat(tr.bound * dinf);
     let inside = L::and(cand, m.gt(b));
     let rest = cand_bits & !L::bits(inside);

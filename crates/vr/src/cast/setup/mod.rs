@@ -148,7 +148,7 @@ use crate::beam::Beam;
 use crate::cast::lanes16::{LaneReduce, V16};
 #[cfg(target_arch = "x86_64")]
 use crate::cast::lanes512::Z16;
-use crate::cast::packet::{ClosestN, MAX_LANES, gen_n_film, sample_chunk};
+use crate::cast::packet::{ClosestN, MAX_LANES, gen_n_film, gen_spp1, sample_chunk};
 use crate::cast::stored::RayBuffer;
 use crate::samples::MAX_SPP;
 use affine::{FilmFrame, PacketBox};
@@ -225,36 +225,30 @@ impl Out<'_> {
     #[inline(always)]
     unsafe fn run(&self, (i, k0): (u32, u32), c: &ClosestN, n: usize) {
         let o = i as usize * self.spp + k0 as usize;
+        let n = n.min(MAX_LANES);
+        // SAFETY: the caller's; the two buffers do not overlap `c`, so the `t` run is one
+        // copy (a miss has `t = inf` in `c` already).
+        let prim = unsafe {
+            std::ptr::copy_nonoverlapping(c.t.as_ptr(), self.t.add(o), n);
+            std::slice::from_raw_parts_mut(self.prim.add(o), n)
+        };
         // One triangle on every lane (a pixel inside one triangle): one `prim_ids` look-up.
         let t0 = c.tri[0];
         if t0 != u32::MAX && c.tri[..n].iter().all(|&x| x == t0) {
-            let p = self.prim_ids[t0 as usize];
-            // SAFETY: the caller's.
-            unsafe {
-                for l in 0..n {
-                    *self.prim.add(o + l) = p;
-                    *self.t.add(o + l) = c.t[l];
-                }
-            }
+            prim.fill(self.prim_ids[t0 as usize]);
             return;
         }
-        // SAFETY: the caller's.
-        unsafe {
-            for l in 0..n {
-                let tri = c.tri[l];
-                let (p, bt) = if tri == u32::MAX {
-                    (NO_ID, f32::INFINITY)
-                } else {
-                    (self.prim_ids[tri as usize], c.t[l])
-                };
-                *self.prim.add(o + l) = p;
-                *self.t.add(o + l) = bt;
-            }
+        for (p, &tri) in prim.iter_mut().zip(&c.tri[..n]) {
+            *p = if tri == u32::MAX {
+                NO_ID
+            } else {
+                self.prim_ids[tri as usize]
+            };
         }
     }
 }
 
-/// Runs every subsample ray `0..total` of a tile (`pair(j)` = its `(sample, k)`) through the
+/// Runs every subsample ray `0..samples.len() * spp` of a tile (`pair(j)` = its `(sample, k)`) through the
 /// set-up kernel with `L::N` lanes; the results go to `out`.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
@@ -266,10 +260,11 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
     axis: usize,
     sign: f32,
     slack: f32,
-    total: usize,
+    samples: &[u32],
     pair: impl Fn(usize) -> (u32, u32),
     out: Out<'_>,
 ) -> SetupWork {
+    let total = samples.len() * set.spp as usize;
     let mut work = SetupWork::default();
     // The packet loop of `for_each_packet`, written out: the kernel must not sit in a closure
     // (no target features there: the AVX-512 lanes would be out-of-line calls, measured 3x
@@ -295,9 +290,37 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
             lanes[c] = (L::from_fn(|l| o[l].x), L::from_fn(|l| o[l].y));
         }
     }
+    // The set-up kernel on a packet (`rays`, `pbox`).
+    macro_rules! closest {
+        ($rays:expr, $pbox:expr) => {
+            if FULL {
+                full::closest_full($rays, blocks, &*tt, axis, sign, slack, &mut work)
+            } else {
+                edges::closest_edges($rays, blocks, tt, axis, sign, slack, $pbox, &mut work)
+            }
+        };
+    }
     let mut j = 0;
     while j < total {
         let n = (total - j).min(L::N);
+        // One subsample per sample: the packet's samples are `samples[j..j + n]`, its rays
+        // from their film positions in lanes (`gen_spp1`), no `(sample, k)` pairs.
+        let spp1 = if spp == 1 && n == L::N && stored.is_none() {
+            gen_spp1::<L>(set, &samples[j..j + n])
+        } else {
+            None
+        };
+        if let Some((rays, (lo, hi))) = spp1 {
+            let pbox = frame.and_then(|fr| PacketBox::new(&fr, lo.x, hi.x, lo.y, hi.y));
+            rays_n += n as u64;
+            let c = closest!(&rays, pbox.as_ref());
+            for (l, &i) in samples[j..j + n].iter().enumerate() {
+                // SAFETY: as below.
+                unsafe { out.one((i, 0), c.t[l], c.tri[l]) };
+            }
+            j += n;
+            continue;
+        }
         // `j` is a multiple of `L::N`: with `chunked` (`spp % L::N == 0`) a full packet is one
         // sample's aligned chunk `k0..k0 + L::N` (`pair(j) = (samples[j / spp], j % spp)`).
         let chunk = chunked && n == L::N;
@@ -338,20 +361,7 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
                 }
             }
         }
-        let c = if FULL {
-            full::closest_full(&rays, blocks, &*tt, axis, sign, slack, &mut work)
-        } else {
-            edges::closest_edges(
-                &rays,
-                blocks,
-                tt,
-                axis,
-                sign,
-                slack,
-                pbox.as_ref(),
-                &mut work,
-            )
-        };
+        let c = closest!(&rays, pbox.as_ref());
         // One sample's consecutive subsamples: `pair` maps consecutive `j` to `(sample, j % spp)`
         // (`test_tile_setup`), so a last lane at `k0 + n - 1` of the first lane's sample means
         // no wrap to the next sample in between.
@@ -422,11 +432,11 @@ macro_rules! isa_entry {
             axis: usize,
             sign: f32,
             slack: f32,
-            total: usize,
+            samples: &[u32],
             pair: impl Fn(usize) -> (u32, u32),
             out: Out<'_>,
         ) -> SetupWork {
-            run_setup::<$lanes, FULL>(set, stored, blocks, tt, axis, sign, slack, total, pair, out)
+            run_setup::<$lanes, FULL>(set, stored, blocks, tt, axis, sign, slack, samples, pair, out)
         }
     };
 }
@@ -479,7 +489,6 @@ pub unsafe fn test_tile_setup(
         }
     }
     let slack = 1e-5 * (scale.abs() + 1.0);
-    let total = samples.len() * spp;
     // Power-of-two spp (every preset) without an integer division per ray.
     let (shift, pow2) = (spp.trailing_zeros(), spp.is_power_of_two());
     let pair = |j: usize| {
@@ -501,10 +510,10 @@ pub unsafe fn test_tile_setup(
         ($f:ident $(, $l:ty)?) => {
             match exactness {
                 SetupExactness::Edges => {
-                    $f::<$($l,)? false>(set, stored, blocks, tt, axis, sign, slack, total, pair, out)
+                    $f::<$($l,)? false>(set, stored, blocks, tt, axis, sign, slack, samples, pair, out)
                 }
                 SetupExactness::Full => {
-                    $f::<$($l,)? true>(set, stored, blocks, tt, axis, sign, slack, total, pair, out)
+                    $f::<$($l,)? true>(set, stored, blocks, tt, axis, sign, slack, samples, pair, out)
                 }
             }
         };
