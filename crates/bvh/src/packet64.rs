@@ -92,6 +92,22 @@ impl Bvh {
     /// [`Bvh::closest_hit_packet`] per group. Uses AVX-512 where the CPU has it.
     /// Panics if `out` is shorter than `rays`.
     pub fn closest_hit_packet64(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+        #[cfg(target_arch = "x86_64")]
+        let avx512 = crate::packet8::use_avx512();
+        #[cfg(not(target_arch = "x86_64"))]
+        let avx512 = false;
+        self.packets64(rays, out, avx512);
+    }
+
+    /// [`Self::closest_hit_packet64`] with the portable lanes even where AVX-512 exists: the
+    /// twin the tests hold the AVX-512 path against.
+    pub fn closest_hit_packet64_portable(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+        self.packets64(rays, out, false);
+    }
+
+    /// `rays` in packets of [`PACKET64_SIZE`], through the AVX-512 lanes when `avx512` (which
+    /// the caller has detected) and the portable lanes otherwise.
+    fn packets64(&self, rays: &[Ray], out: &mut [Option<Hit>], avx512: bool) {
         assert!(
             out.len() >= rays.len(),
             "closest_hit_packet64: out too short"
@@ -101,26 +117,13 @@ impl Bvh {
             .zip(out.chunks_mut(PACKET64_SIZE))
         {
             #[cfg(target_arch = "x86_64")]
-            if crate::packet8::use_avx512() {
-                // SAFETY: AVX-512F and AVX2 were detected.
+            if avx512 {
+                // SAFETY: AVX-512F and AVX2 were detected by the caller.
                 unsafe { self.packet64_avx512(r, o) };
                 continue;
             }
-            self.packet64(Portable16, r, o);
-        }
-    }
-
-    /// [`Self::closest_hit_packet64`] with the portable lanes even where AVX-512 exists: the
-    /// twin the tests hold the AVX-512 path against.
-    pub fn closest_hit_packet64_portable(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
-        assert!(
-            out.len() >= rays.len(),
-            "closest_hit_packet64: out too short"
-        );
-        for (r, o) in rays
-            .chunks(PACKET64_SIZE)
-            .zip(out.chunks_mut(PACKET64_SIZE))
-        {
+            #[cfg(not(target_arch = "x86_64"))]
+            let _ = avx512;
             self.packet64(Portable16, r, o);
         }
     }

@@ -34,6 +34,25 @@ fn render_aa(
         .unwrap()
 }
 
+/// `mirrors-open` at 96x54 with its one-layer cube map of `FACE`² faces at the eye.
+fn mirrors_open_96x54() -> (Scene, Bvh, Pinhole, ReflectionCube) {
+    let scene = Scene::load("mirrors-open").unwrap();
+    let bvh = Bvh::build(&scene.mesh);
+    let camera = Pinhole::new(&scene.camera(None).unwrap(), 96, 54).unwrap();
+    let eye = camera.frame.position;
+    let desc = CameraDesc::new(eye, eye - Vec3::Z, Vec3::Y, 90.0);
+    let cube = ReflectionCube::capture(&scene, &bvh, &desc, FACE, 1, 0).unwrap();
+    (scene, bvh, camera, cube)
+}
+
+/// The quad-tree reflector over `cube` with surface thickness 0.1.
+fn thick_quadtree_reflector<'a>(scene: &'a Scene, cube: &'a ReflectionCube) -> CubeReflector<'a> {
+    let mut c =
+        CubeReflector::build(scene, cube, Method::QuadTree, &MethodOptions::default()).unwrap();
+    c.tracer.thickness = Some(0.1);
+    c
+}
+
 fn opts(n_p: u32, n_s: u32) -> ReflectOptions {
     ReflectOptions {
         n_p,
@@ -86,16 +105,9 @@ fn antialiased_truth_against_itself_is_exact_and_filters_match() {
 /// mirror images of the checkered ground alias on both sides).
 #[test]
 fn four_rays_per_pixel_score_above_one() {
-    let scene = Scene::load("mirrors-open").unwrap();
-    let bvh = Bvh::build(&scene.mesh);
-    let camera = Pinhole::new(&scene.camera(None).unwrap(), 96, 54).unwrap();
-    let eye = camera.frame.position;
-    let desc = CameraDesc::new(eye, eye - Vec3::Z, Vec3::Y, 90.0);
-    let cube = ReflectionCube::capture(&scene, &bvh, &desc, FACE, 1, 0).unwrap();
-    let mut c =
-        CubeReflector::build(&scene, &cube, Method::QuadTree, &MethodOptions::default()).unwrap();
-    c.tracer.thickness = Some(0.1);
-    let truth = BvhReflector::new(&scene, &bvh, eye, 0);
+    let (scene, bvh, camera, cube) = mirrors_open_96x54();
+    let c = thick_quadtree_reflector(&scene, &cube);
+    let truth = BvhReflector::new(&scene, &bvh, camera.frame.position, 0);
     let o = opts(1, 4);
     let psnr = |spp: u32| {
         let t = render_aa(&scene, &bvh, &camera, &truth, spp, &o);
@@ -115,16 +127,9 @@ fn four_rays_per_pixel_score_above_one() {
 /// looking every one up.
 #[test]
 fn tracing_low_weight_extra_samples() {
-    let scene = Scene::load("mirrors-open").unwrap();
-    let bvh = Bvh::build(&scene.mesh);
-    let camera = Pinhole::new(&scene.camera(None).unwrap(), 96, 54).unwrap();
-    let eye = camera.frame.position;
-    let desc = CameraDesc::new(eye, eye - Vec3::Z, Vec3::Y, 90.0);
-    let cube = ReflectionCube::capture(&scene, &bvh, &desc, FACE, 1, 0).unwrap();
-    let mut c =
-        CubeReflector::build(&scene, &cube, Method::QuadTree, &MethodOptions::default()).unwrap();
-    c.tracer.thickness = Some(0.1);
-    let truth = BvhReflector::new(&scene, &bvh, eye, 0);
+    let (scene, bvh, camera, cube) = mirrors_open_96x54();
+    let c = thick_quadtree_reflector(&scene, &cube);
+    let truth = BvhReflector::new(&scene, &bvh, camera.frame.position, 0);
     let t = render_aa(&scene, &bvh, &camera, &truth, 4, &opts(1, 8));
     let run = |trace_below: f32| {
         let o = ReflectOptions {
