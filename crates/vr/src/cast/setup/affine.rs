@@ -65,7 +65,19 @@
 //!    is covered by `2 U (|xl| + |xh|)` and a final `(1 + 8 U)`.
 //!
 //! Every U-term is doubled (first-order analysis, as `TriSetup::bound`); `Vmax`, `S`, `Delta`
-//! and `tau` are rounded up by `1.01`. NaN or infinite values make both comparisons false
+//! and `tau` are rounded up by `1.01`.
+//!
+//! **Per-frame factors.** `tau_i = |n_i|_1 ka + bound kb`: `ka`, `kb` depend on the packet only
+//! through `e_x`, `e_y` (increasing in the largest `|f|`) and `|xc| + rx`, `|yc| + ry` (which
+//! enter `Vmax` and `S`), and every float operation of them is monotone increasing in these.
+//! So [`FilmFrame`] computes them once, at the worst case of the eye's film rectangle
+//! `[0, w] x [0, h]` (`|f| = w`, `h`; `|xc| + rx <= (m + e + 4 U m)(1 + 8 U) 1.001`, `m` the
+//! largest `|x(f)|` over the rectangle, which bounds `max(|xl|, |xh|)` of every packet inside
+//! by the monotone evaluation; the factor 1.001 covers the packet's own centre / radius
+//! rounding, `~6 U`), and a packet whose film box lies inside the rectangle takes them with
+//! its centre and radius (radius with the rectangle's `e_x`, `e_y`): a box containing the
+//! per-packet one and a larger `tau`, so still rigorous. Other packets take the per-packet
+//! factors. NaN or infinite values make both comparisons false
 //! (partial: the per-lane test decides). Tests (`tests/affine.rs`): the classification never
 //! contradicts the watertight test on random and adversarial rays (rays through edges and
 //! shared vertices, grazing triangles), and whole casts equal the casts without it.
@@ -104,6 +116,14 @@ pub struct FilmFrame {
     /// `>= max_j |B_j|_2` and `>= max |B_jk|` (rounded up).
     rb: f32,
     bmax: f32,
+    /// The per-packet factors for every packet inside the eye's film rectangle `[0, w] x
+    /// [0, h]` (eye-local; module docs, "Per-frame factors"): `e_x`, `e_y`, `ka`, `kb` at the
+    /// rectangle's worst case; `region` false if they are not finite.
+    ex: f32,
+    ey: f32,
+    ka: f32,
+    kb: f32,
+    region: bool,
 }
 
 impl FilmFrame {
@@ -129,7 +149,7 @@ impl FilmFrame {
             .map(|r| r.abs().max_element())
             .fold(0.0, f32::max)
             * 1.001;
-        Some(FilmFrame {
+        let mut fr = FilmFrame {
             b: [
                 m.x_axis.extend(0.0),
                 m.y_axis.extend(0.0),
@@ -146,7 +166,64 @@ impl FilmFrame {
             fx_hi,
             rb,
             bmax,
-        })
+            ex: 0.0,
+            ey: 0.0,
+            ka: 0.0,
+            kb: 0.0,
+            region: false,
+        };
+        // The rectangle's worst case (module docs, "Per-frame factors"): `e_x`, `e_y` at
+        // `|f| = w`, `h`; `|xc| + rx` bounded by the largest `|x|` over the rectangle `m` as
+        // `(m + e + 4 U m)(1 + 8 U)`, with a margin of 1e-3 for the packets' own rounding.
+        let ex = fr.e_x(w);
+        let ey = fr.e_y(h);
+        let mx = fr.xf(0.0).abs().max(fr.xf(w).abs());
+        let my = fr.yf(0.0).abs().max(fr.yf(h).abs());
+        let ax = (mx + ex + 4.0 * U * mx) * (1.0 + 8.0 * U) * 1.001;
+        let ay = (my + ey + 4.0 * U * my) * (1.0 + 8.0 * U) * 1.001;
+        let (ka, kb) = fr.factors(ax, ay, ex, ey);
+        if [ex, ey, ka, kb, ax, ay].iter().all(|x| x.is_finite()) {
+            (fr.ex, fr.ey, fr.ka, fr.kb, fr.region) = (ex, ey, ka, kb, true);
+        }
+        Some(fr)
+    }
+
+    /// `x(f)` with the generator's float operations (monotone increasing in `f`).
+    #[inline(always)]
+    fn xf(&self, f: f32) -> f32 {
+        (2.0 * f / self.w - 1.0 + self.sx) * self.tx
+    }
+
+    /// `y(f)` with the generator's float operations (monotone decreasing in `f`).
+    #[inline(always)]
+    fn yf(&self, f: f32) -> f32 {
+        (1.0 - 2.0 * f / self.h + self.sy) * self.ty
+    }
+
+    /// The rounding `e_x` of `x(f)` for `|f| <= fxm` (module docs, step 1).
+    #[inline(always)]
+    fn e_x(&self, fxm: f32) -> f32 {
+        4.1 * U * self.tx * (2.0 * fxm / self.w + 1.0 + self.sx.abs()) * 1.01
+    }
+
+    /// The rounding `e_y` of `y(f)` for `|f| <= fym`.
+    #[inline(always)]
+    fn e_y(&self, fym: f32) -> f32 {
+        4.1 * U * self.ty * (2.0 * fym / self.h + 1.0 + self.sy.abs()) * 1.01
+    }
+
+    /// `(ka, kb)` of `tau = n1 ka + bound kb` for a camera box with `|xc| + rx <= ax`,
+    /// `|yc| + ry <= ay` and generator roundings `ex`, `ey` (module docs, steps 1-3; every
+    /// operation monotone increasing in the four arguments).
+    #[inline(always)]
+    fn factors(&self, ax: f32, ay: f32, ex: f32, ey: f32) -> (f32, f32) {
+        let vmax = (1.0 + ax * ax + ay * ay).sqrt() * 1.01;
+        let s = (ax + ay + 1.0) * 1.01;
+        // Doubled U-terms (module docs): Delta = rb (13.2 U + 6.94 (e_x + e_y)).
+        let delta = self.rb * (13.2 * U + 6.94 * (ex + ey)) * 1.01;
+        let ka = (vmax * delta + 18.2 * U * self.bmax * s) * 1.01;
+        let kb = vmax * (self.rb + delta) * 1.01;
+        (ka, kb)
     }
 
     /// The frame of the eye whose origin is `origin` and whose film holds the tile's first
@@ -257,28 +334,33 @@ impl PacketBox {
             (fx0 - fr.x0, fx1 - fr.x0)
         };
         // x(f) and y(f) with the generator's float operations (monotone: x up, y down).
-        let xf = |f: f32| (2.0 * f / fr.w - 1.0 + fr.sx) * fr.tx;
-        let yf = |f: f32| (1.0 - 2.0 * f / fr.h + fr.sy) * fr.ty;
-        let (xl, xh) = (xf(fx0), xf(fx1));
-        let (yl, yh) = (yf(fy1), yf(fy0));
-        let fxm = fx0.abs().max(fx1.abs());
-        let fym = fy0.abs().max(fy1.abs());
-        let ex = 4.1 * U * fr.tx * (2.0 * fxm / fr.w + 1.0 + fr.sx.abs()) * 1.01;
-        let ey = 4.1 * U * fr.ty * (2.0 * fym / fr.h + 1.0 + fr.sy.abs()) * 1.01;
+        let (xl, xh) = (fr.xf(fx0), fr.xf(fx1));
+        let (yl, yh) = (fr.yf(fy1), fr.yf(fy0));
         let side = |l: f32, h: f32, e: f32| {
             let c = 0.5 * (l + h);
             let r = (0.5 * (h - l) + e + 2.0 * U * (l.abs() + h.abs())) * (1.0 + 8.0 * U);
             (c, r)
         };
+        // Inside the eye's film rectangle: the frame's factors (module docs, "Per-frame
+        // factors"), no per-packet bound.
+        if fr.region && fx0 >= 0.0 && fx1 <= fr.w && fy0 >= 0.0 && fy1 <= fr.h {
+            let (xc, rx) = side(xl, xh, fr.ex);
+            let (yc, ry) = side(yl, yh, fr.ey);
+            return Some(PacketBox {
+                xc: Vec4::splat(xc),
+                yc: Vec4::splat(yc),
+                rx: Vec4::splat(rx),
+                ry: Vec4::splat(ry),
+                ka: Vec4::splat(fr.ka),
+                kb: fr.kb,
+            });
+        }
+        let fxm = fx0.abs().max(fx1.abs());
+        let fym = fy0.abs().max(fy1.abs());
+        let (ex, ey) = (fr.e_x(fxm), fr.e_y(fym));
         let (xc, rx) = side(xl, xh, ex);
         let (yc, ry) = side(yl, yh, ey);
-        let (ax, ay) = (xc.abs() + rx, yc.abs() + ry);
-        let vmax = (1.0 + ax * ax + ay * ay).sqrt() * 1.01;
-        let s = (ax + ay + 1.0) * 1.01;
-        // Doubled U-terms (module docs): Delta = rb (13.2 U + 6.94 (e_x + e_y)).
-        let delta = fr.rb * (13.2 * U + 6.94 * (ex + ey)) * 1.01;
-        let ka = (vmax * delta + 18.2 * U * fr.bmax * s) * 1.01;
-        let kb = vmax * (fr.rb + delta) * 1.01;
+        let (ka, kb) = fr.factors(xc.abs() + rx, yc.abs() + ry, ex, ey);
         if !(ka.is_finite() && kb.is_finite() && xc.is_finite() && yc.is_finite()) {
             return None;
         }

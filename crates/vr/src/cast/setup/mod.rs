@@ -217,6 +217,25 @@ impl Out<'_> {
         }
     }
 
+    /// Stores lane `l` of `c` as the one subsample of sample `idx[l]` (`spp == 1`: entry
+    /// `idx[l]`; a miss has `t = inf` in `c` and `tri = u32::MAX`, whose `prim_ids` look-up
+    /// fails to [`NO_ID`]).
+    ///
+    /// # Safety
+    /// As [`Out::one`], for the entries `idx`.
+    #[inline(always)]
+    unsafe fn spp1(&self, idx: &[u32], c: &ClosestN) {
+        debug_assert_eq!(self.spp, 1);
+        for (l, &i) in idx.iter().enumerate().take(MAX_LANES) {
+            let p = self.prim_ids.get(c.tri[l] as usize).copied();
+            // SAFETY: the caller's.
+            unsafe {
+                *self.prim.add(i as usize) = p.unwrap_or(NO_ID);
+                *self.t.add(i as usize) = c.t[l];
+            }
+        }
+    }
+
     /// Stores lanes `0..n` of `c`, the subsamples `k0..k0 + n` of sample `i` (contiguous
     /// entries; a miss has `t = inf` in `c` already).
     ///
@@ -314,10 +333,8 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
             let pbox = frame.and_then(|fr| PacketBox::new(&fr, lo.x, hi.x, lo.y, hi.y));
             rays_n += n as u64;
             let c = closest!(&rays, pbox.as_ref());
-            for (l, &i) in samples[j..j + n].iter().enumerate() {
-                // SAFETY: as below.
-                unsafe { out.one((i, 0), c.t[l], c.tri[l]) };
-            }
+            // SAFETY: as below.
+            unsafe { out.spp1(&samples[j..j + n], &c) };
             j += n;
             continue;
         }
@@ -484,8 +501,11 @@ pub unsafe fn test_tile_setup(
         let film_x = set.samples[samples[0] as usize].film.x;
         tt.frame = FilmFrame::of(set, tt.origin, film_x);
         if tt.frame.is_some() {
-            tt.aff.clear();
-            tt.aff.resize(tt.tris.len(), Default::default());
+            // Grown only: `refine_run` writes `aff[j]` before any read of it in this tile
+            // (every triangle of the lazy set-up is refined before its first test).
+            if tt.aff.len() < tt.tris.len() {
+                tt.aff.resize(tt.tris.len(), Default::default());
+            }
         }
     }
     let slack = 1e-5 * (scale.abs() + 1.0);
