@@ -99,15 +99,17 @@ impl LaneReduce for F8 {
 impl LaneReduce for V16 {
     #[inline(always)]
     fn hmin(self) -> f32 {
+        // `a < b ? a : b` per lane (`minps` on SSE2, NaN in either gives `b`), quarters
+        // pairwise, then the quarter's lanes.
         let q = self.0;
-        let sel = |a: Vec4, b: Vec4| Vec4::select(a.cmplt(b), a, b);
-        sel(sel(q[0], q[1]), sel(q[2], q[3])).hmin()
+        let m = |a: Vec4, b: Vec4| Lanes::min_or_rhs(a, b);
+        m(m(q[0], q[1]), m(q[2], q[3])).hmin()
     }
     #[inline(always)]
     fn hmax(self) -> f32 {
         let q = self.0;
-        let sel = |a: Vec4, b: Vec4| Vec4::select(a.cmpgt(b), a, b);
-        sel(sel(q[0], q[1]), sel(q[2], q[3])).hmax()
+        let m = |a: Vec4, b: Vec4| Lanes::max_or_rhs(a, b);
+        m(m(q[0], q[1]), m(q[2], q[3])).hmax()
     }
     #[inline(always)]
     fn write(self, out: &mut [f32]) {
@@ -266,6 +268,36 @@ pub(crate) mod tests {
     /// Bit-identical, or both NaN.
     pub(crate) fn same(a: f32, b: f32) -> bool {
         a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())
+    }
+
+    /// `hmin` / `hmax` equal the compare-and-select tree (`a < b ? a : b` pairwise over the
+    /// quarters, then within one) bit for bit, NaN and signed zeros included.
+    #[test]
+    fn reductions_are_the_select_tree() {
+        let sel = |a: f32, b: f32, lt: bool| {
+            if (a < b) == lt && (a < b || a > b) {
+                a
+            } else {
+                b
+            }
+        };
+        let tree = |x: &[f32; 16], lt: bool| {
+            let q: Vec<f32> = (0..4)
+                .map(|l| {
+                    let (a, b) = (sel(x[l], x[4 + l], lt), sel(x[8 + l], x[12 + l], lt));
+                    sel(a, b, lt)
+                })
+                .collect();
+            sel(sel(q[0], q[1], lt), sel(q[2], q[3], lt), lt)
+        };
+        for r in 0..16 {
+            for src in [A, B] {
+                let x: [f32; 16] = std::array::from_fn(|i| src[(i + r) % 16]);
+                let v = V16::from_fn(|i| x[i]);
+                assert!(same(v.hmin(), tree(&x, true)), "{x:?}");
+                assert!(same(v.hmax(), tree(&x, false)), "{x:?}");
+            }
+        }
     }
 
     #[test]

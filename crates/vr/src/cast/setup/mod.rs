@@ -367,9 +367,11 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
             (Some(fr), Some((lo, hi))) => PacketBox::new(fr, lo.x, hi.x, lo.y, hi.y),
             (Some(fr), None) => packet_box(fr, set, i0, batch, chunk.then(|| ranges[c])),
         };
-        rays_n += rays.valid.count_ones() as u64;
         // Invalid lanes get `d = 0`: `g . d = 0` is never a hit.
-        if rays.valid != (1 << n) - 1 {
+        if rays.valid == (1 << n) - 1 {
+            rays_n += n as u64;
+        } else {
+            rays_n += rays.valid.count_ones() as u64;
             for l in 0..n {
                 if rays.valid >> l & 1 == 0 {
                     for a in 0..3 {
