@@ -275,7 +275,7 @@ pub(crate) mod tests {
     #[test]
     fn reductions_are_the_select_tree() {
         let sel = |a: f32, b: f32, lt: bool| {
-            if (a < b) == lt && (a < b || a > b) {
+            if (lt && a < b) || (!lt && a > b) {
                 a
             } else {
                 b
