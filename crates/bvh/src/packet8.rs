@@ -20,9 +20,8 @@
 //!   way a ray is only ever dropped where its own test (or a pop against its closest hit)
 //!   culls it.
 //! - **Hybrid**: a subtree entered by at most `SINGLE_RAYS_BELOW` rays is finished ray by ray
-//!   with the single-ray loop, a leaf entered by at most `PER_RAY_LEAF_BELOW` rays tested ray
-//!   by ray (Benthin, Wald, Woop, Ernst & Mark 2012, "Combining single and packet-ray tracing
-//!   for arbitrary ray distributions on the Intel MIC architecture").
+//!   with the single-ray loop (Benthin, Wald, Woop, Ernst & Mark 2012, "Combining single and
+//!   packet-ray tracing for arbitrary ray distributions on the Intel MIC architecture").
 //! - **Leaves** (`packet_leaf.rs`): when all rays share the axis permutation of the watertight
 //!   test (Woop, Benthin & Wald 2013, §3), each triangle is tested against the 16 rays at once
 //!   with the operations of the scalar test lane for lane, on vertices laid out once per leaf

@@ -16,8 +16,10 @@
 //!   its ~100 AVX-512 instructions; notes, 2026-12-02 "cheaper packet triangle step".)
 //! - Lanes with an exactly-zero edge function go to the scalar test (its double-precision
 //!   recompute and edge tie-break).
-//! - A leaf entered by at most `PER_RAY_LEAF_BELOW` rays, or a packet whose rays differ in the
-//!   permutation, is tested ray by ray, four triangles per test (`tri4.rs`).
+//! - A packet whose rays differ in the permutation tests the leaf ray by ray, four triangles per
+//!   test (`tri4.rs`). With a common permutation the lanes are used however few rays enter the
+//!   leaf: a triangle over 16 lanes costs less than a 4-triangle block per ray with its set-up
+//!   (the threshold was 4 rays; 0, 2 and 4 measured in the notes, 2026-12-02).
 //!
 //! **Invariant:** every lane performs the f32 operations of
 //! [`WatertightRay::intersect_within`] on the same operands (`a = p - o`, `x = a[kx] - sx
@@ -34,9 +36,6 @@ use crate::lanes16::Lanes16;
 use crate::packet8::Packet;
 use crate::stats::NoStats;
 use crate::tri4::{Tri4, Tri4Ray, blocks_for, lane_mask};
-
-/// A leaf entered by at most this many rays is tested ray by ray (4 triangles per test).
-const PER_RAY_LEAF_BELOW: u32 = 4;
 
 /// A block laid out for one packet: `q[v][i][j]` is coordinate `k[i]` of vertex `v` of the
 /// block's triangle `j`, minus the packet's shared origin's `o[k[i]]` with `SHARED`.
@@ -174,7 +173,7 @@ impl Bvh {
         count: u32,
         mask: u32,
     ) {
-        if let Some(k) = p.perm.filter(|_| mask.count_ones() > PER_RAY_LEAF_BELOW) {
+        if let Some(k) = p.perm {
             match p.org0 {
                 Some(o) => self.leaf_lanes::<L, true>(l, p, rays, k, o, first, count, mask),
                 None => self.leaf_lanes::<L, false>(l, p, rays, k, [0.0; 3], first, count, mask),
