@@ -442,6 +442,26 @@ impl Bvh {
                     None => ((1u32 << node.num_children) - 1, [0.0; 8]),
                 };
                 let ia = p.interval.is_some();
+                if ia && PURE_INTERVAL {
+                    // Every candidate keeps the packet's mask: order by the entry bound alone,
+                    // with the single-ray loop's keys and sorting network (`traverse8.rs`).
+                    if cand != 0 {
+                        if cand & (cand - 1) == 0 {
+                            cur = node.child[cand.trailing_zeros() as usize];
+                            continue;
+                        }
+                        let ks = sorted_keys(cand, &t_ia);
+                        let n = cand.count_ones() as usize;
+                        for &k in ks[1..n].iter().rev() {
+                            let c = (k & 7) as usize;
+                            let (child, t) = (node.child[c], t_ia[c]);
+                            stack[sp] = MaybeUninit::new(Entry { child, mask, t });
+                            sp += 1;
+                        }
+                        cur = node.child[(ks[0] & 7) as usize];
+                        continue;
+                    }
+                }
                 let mut kid = [Entry {
                     child: 0,
                     mask: 0,
@@ -510,6 +530,63 @@ impl Bvh {
     }
 }
 
+/// The candidates `cand` (at least two) of a node as keys `ordered(t[c]) << 32 | c`, nearest
+/// first; slots from `cand.count_ones()` on hold `u64::MAX`. `ordered` maps f32 to u32 in the
+/// order of `<` (negative values reversed), so any order of equal or NaN bounds may result:
+/// the order only affects speed (module docs, invariant).
+#[inline(always)]
+fn sorted_keys(cand: u32, t: &[f32; 8]) -> [u64; 8] {
+    let mut ks = [u64::MAX; 8];
+    let mut n = 0;
+    let mut m = cand;
+    while m != 0 {
+        let c = m.trailing_zeros() as usize;
+        m &= m - 1;
+        let b = t[c].to_bits();
+        let o = if (b as i32) < 0 { !b } else { b | 1 << 31 };
+        ks[n] = (o as u64) << 32 | c as u64;
+        n += 1;
+    }
+    let sort2 = |ks: &mut [u64; 8], i: usize, j: usize| {
+        let (x, y) = (ks[i], ks[j]);
+        ks[i] = x.min(y);
+        ks[j] = x.max(y);
+    };
+    if n == 2 {
+        sort2(&mut ks, 0, 1);
+    } else if n <= 4 {
+        for (i, j) in [(0, 1), (2, 3), (0, 2), (1, 3), (1, 2)] {
+            sort2(&mut ks, i, j);
+        }
+    } else {
+        // Batcher's odd-even merge sort of eight (19 comparators; padding sorts last).
+        for (i, j) in [
+            (0, 1),
+            (2, 3),
+            (4, 5),
+            (6, 7),
+            (0, 2),
+            (1, 3),
+            (4, 6),
+            (5, 7),
+            (1, 2),
+            (5, 6),
+            (0, 4),
+            (1, 5),
+            (2, 6),
+            (3, 7),
+            (2, 4),
+            (3, 5),
+            (1, 2),
+            (3, 4),
+            (5, 6),
+        ] {
+            sort2(&mut ks, i, j);
+        }
+    }
+    ks
+}
+
 /// The axis permutation of `WatertightRay::new` for direction `d` as a code `2 kz + swapped`
 /// (the same comparisons: `kz` the dominant axis, `kx, ky` swapped when `d[kz] < 0`).
 #[inline(always)]
@@ -548,6 +625,40 @@ mod tests {
     use glam::Vec3;
     use parallax_core::Ray;
     use parallax_core::math::WatertightRay;
+
+    #[test]
+    fn sorted_keys_order_every_candidate_set() {
+        let mut s = 7u32;
+        for round in 0..40 {
+            let t: [f32; 8] = std::array::from_fn(|_| {
+                s = s.wrapping_mul(747796405).wrapping_add(2891336453);
+                // Some rounds with many equal values and negative bounds.
+                let r = (s >> 8) as f32 / (1 << 24) as f32;
+                if round % 4 == 0 {
+                    (r * 3.0).floor() - 1.0
+                } else {
+                    r * 10.0 - 2.0
+                }
+            });
+            for cand in 0u32..256 {
+                if cand.count_ones() < 2 {
+                    continue;
+                }
+                let ks = super::sorted_keys(cand, &t);
+                let n = cand.count_ones() as usize;
+                let lanes: Vec<usize> = ks[..n].iter().map(|&k| (k & 7) as usize).collect();
+                let mut seen = 0u32;
+                for &c in &lanes {
+                    seen |= 1 << c;
+                }
+                assert_eq!(seen, cand, "{cand:#x}: {lanes:?}");
+                assert!(ks[n..].iter().all(|&k| k == u64::MAX));
+                for w in lanes.windows(2) {
+                    assert!(t[w[0]] <= t[w[1]], "{cand:#x} {t:?} {lanes:?}");
+                }
+            }
+        }
+    }
 
     #[test]
     fn axes_match_the_watertight_ray() {
