@@ -535,7 +535,7 @@ impl Bvh {
 /// order of `<` (negative values reversed), so any order of equal or NaN bounds may result:
 /// the order only affects speed (module docs, invariant).
 #[inline(always)]
-fn sorted_keys(cand: u32, t: &[f32; 8]) -> [u64; 8] {
+pub(crate) fn sorted_keys(cand: u32, t: &[f32; 8]) -> [u64; 8] {
     let mut ks = [u64::MAX; 8];
     let mut n = 0;
     let mut m = cand;
