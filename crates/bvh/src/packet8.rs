@@ -11,7 +11,8 @@
 //!   box (the exact product is bilinear, so its extremes are at corners, and rounding is
 //!   monotone), and likewise an upper bound of the far-plane distances. One 8-lane test of
 //!   those bounds culls the children that no ray of the packet can enter, before any per-ray
-//!   work; its near bound also orders the children.
+//!   work; its near bound also orders the children (`u64` keys and sorting networks, as in the
+//!   single-ray loop: `sorted_keys`).
 //! - **Per-ray node test** for the remaining children of packets without interval bounds
 //!   (mixed direction signs, e.g. bounce rays): the single-ray slab test of `traverse8.rs`,
 //!   lane for lane (the same IEEE operations, near / far plane selected by the sign of each
