@@ -21,7 +21,8 @@
 //! - **Packets** ([`Bvh::closest_hit_packet`], `packet8.rs`): up to [`PACKET_SIZE`] = 16
 //!   coherent rays traverse the 8-wide tree together, one SIMD lane per ray (AVX-512 behind
 //!   runtime detection, portable twin, `lanes16.rs`), with interval culling of whole packets
-//!   and a SIMD-over-rays triangle test; each ray's answer is exactly its single-ray answer.
+//!   and a SIMD-over-rays triangle test (`packet_leaf.rs`); each ray's answer is exactly its
+//!   single-ray answer.
 //!   `packet.rs` is the 4-wide predecessor ([`Bvh::closest_hit_packet4`]).
 //!   [`Bvh::closest_hit_packet64`] (`packet64.rs`): up to [`PACKET64_SIZE`] = 64 rays (an 8x8
 //!   camera tile as four 4x4 groups) share one stack and one interval test of the whole packet
@@ -62,6 +63,7 @@ mod packet;
 mod packet64;
 mod packet8;
 mod packet_interval;
+mod packet_leaf;
 mod packet_setup;
 mod reference;
 mod refit;

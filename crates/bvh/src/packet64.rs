@@ -41,7 +41,7 @@ use crate::lanes16::{Lanes16, Portable16};
 use crate::node::{is_leaf, leaf_count, leaf_first};
 use crate::node8::Node8;
 use crate::packet_interval::Interval;
-use crate::packet8::{PACKET_SIZE, Packet, SINGLE_RAYS_BELOW};
+use crate::packet8::{PACKET_SIZE, Packet, SINGLE_RAYS_BELOW, sorted_keys};
 use crate::traverse8::STACK8_SIZE;
 
 /// Rays per large packet ([`Bvh::closest_hit_packet64`] splits longer slices).
@@ -218,8 +218,9 @@ impl Bvh {
                     mask: 0,
                     t: [0.0; GROUPS],
                 }; 8];
-                let mut key = [0.0f32; 8];
-                let mut n = 0;
+                // The children some group enters, by lane, then ordered by the whole packet's
+                // entry bound (keys and sorting networks of `packet8.rs`).
+                let mut entered = 0u32;
                 if cand != 0 {
                     let mut gc = [0u32; GROUPS];
                     let mut gt = [t_ia; GROUPS];
@@ -244,37 +245,31 @@ impl Bvh {
                                 t[g] = gt[g][c];
                             }
                         }
-                        if hits == 0 {
-                            continue;
-                        }
-                        // Insertion, far to near (by the whole packet's entry bound).
-                        let (e, k) = (
-                            Entry64 {
+                        if hits != 0 {
+                            kid[c] = Entry64 {
                                 child: node.child[c],
                                 mask: hits,
                                 t,
-                            },
-                            t_ia[c],
-                        );
-                        let mut j = n;
-                        while j > 0 && key[j - 1] < k {
-                            kid[j] = kid[j - 1];
-                            key[j] = key[j - 1];
-                            j -= 1;
+                            };
+                            entered |= 1 << c;
                         }
-                        kid[j] = e;
-                        key[j] = k;
-                        n += 1;
                     }
                 }
-                if n != 0 {
-                    for e in &kid[..n - 1] {
-                        // `7 * depth8 < STACK8_SIZE` (checked at build): at most 7 per level.
-                        stack[sp] = MaybeUninit::new(*e);
-                        sp += 1;
-                    }
-                    cur = kid[n - 1].child;
-                    mask = kid[n - 1].mask;
+                if entered != 0 {
+                    let first = if entered & (entered - 1) == 0 {
+                        entered.trailing_zeros() as usize
+                    } else {
+                        let ks = sorted_keys(entered, &t_ia);
+                        let n = entered.count_ones() as usize;
+                        for &k in ks[1..n].iter().rev() {
+                            // `7 * depth8 < STACK8_SIZE` (checked at build): at most 7 per level.
+                            stack[sp] = MaybeUninit::new(kid[(k & 7) as usize]);
+                            sp += 1;
+                        }
+                        (ks[0] & 7) as usize
+                    };
+                    cur = kid[first].child;
+                    mask = kid[first].mask;
                     continue;
                 }
             } else {

@@ -11,7 +11,8 @@
 //!   box (the exact product is bilinear, so its extremes are at corners, and rounding is
 //!   monotone), and likewise an upper bound of the far-plane distances. One 8-lane test of
 //!   those bounds culls the children that no ray of the packet can enter, before any per-ray
-//!   work; its near bound also orders the children.
+//!   work; its near bound also orders the children (`u64` keys and sorting networks, as in the
+//!   single-ray loop: `sorted_keys`).
 //! - **Per-ray node test** for the remaining children of packets without interval bounds
 //!   (mixed direction signs, e.g. bounce rays): the single-ray slab test of `traverse8.rs`,
 //!   lane for lane (the same IEEE operations, near / far plane selected by the sign of each
@@ -20,13 +21,13 @@
 //!   way a ray is only ever dropped where its own test (or a pop against its closest hit)
 //!   culls it.
 //! - **Hybrid**: a subtree entered by at most `SINGLE_RAYS_BELOW` rays is finished ray by ray
-//!   with the single-ray loop, a leaf entered by at most `PER_RAY_LEAF_BELOW` rays tested ray
-//!   by ray (Benthin, Wald, Woop, Ernst & Mark 2012, "Combining single and packet-ray tracing
-//!   for arbitrary ray distributions on the Intel MIC architecture").
-//! - **Leaves**: when all rays share the axis permutation of the watertight test (Woop,
-//!   Benthin & Wald 2013, §3), each triangle is tested against the 16 rays at once with the
-//!   operations of `tri4.rs` lane for lane (lanes with an exactly-zero edge function fall back
-//!   to the scalar double-precision test); otherwise each active ray runs its 4-triangle test.
+//!   with the single-ray loop (Benthin, Wald, Woop, Ernst & Mark 2012, "Combining single and
+//!   packet-ray tracing for arbitrary ray distributions on the Intel MIC architecture").
+//! - **Leaves** (`packet_leaf.rs`): when all rays share the axis permutation of the watertight
+//!   test (Woop, Benthin & Wald 2013, §3), each triangle is tested against the 16 rays at once
+//!   with the operations of the scalar test lane for lane, on vertices laid out once per leaf
+//!   block for the packet (lanes with an exactly-zero edge function fall back to the scalar
+//!   double-precision test); otherwise each active ray runs its 4-triangle test.
 //!
 //! **Invariant:** every ray's answer equals [`Bvh::closest_hit`] exactly (prim, t, u, v): the
 //! node tests only cull conservatively, and each ray keeps the lexicographic minimum of
@@ -48,7 +49,7 @@ use crate::packet_interval::Interval;
 use crate::stats::NoStats;
 use crate::traverse::Best;
 use crate::traverse8::{RayBoxes8, STACK8_SIZE};
-use crate::tri4::{Tri4Ray, blocks_for, lane_mask};
+use crate::tri4::Tri4Ray;
 
 /// Rays per packet ([`Bvh::closest_hit_packet`] splits longer slices).
 pub const PACKET_SIZE: usize = 16;
@@ -60,8 +61,6 @@ pub(crate) const SINGLE_RAYS_BELOW: u32 = 2;
 /// which runs all 16 lanes anyway, and rays with a closer hit drop out at the pops
 /// (`not_beyond`). Faster on Sponza, neutral on the classroom (notes).
 const PURE_INTERVAL: bool = true;
-/// A leaf entered by at most this many rays is tested ray by ray (4 triangles per test).
-const PER_RAY_LEAF_BELOW: u32 = 4;
 
 #[derive(Clone, Copy)]
 struct Entry {
@@ -73,24 +72,24 @@ struct Entry {
 /// A packet's rays in SoA form, with each ray's closest hit so far.
 pub(crate) struct Packet {
     pub valid: u32,
-    org: [F16; 3],
+    pub(crate) org: [F16; 3],
     inv: [F16; 3],
     /// Lanes whose `1 / dir` is negative, per axis.
     neg: [u32; 3],
-    t_min: F16,
+    pub(crate) t_min: F16,
     /// The closest hit so far (or the ray's `t_max`).
-    t_max: F16,
-    best_tri: U16,
-    best_u: F16,
-    best_v: F16,
+    pub(crate) t_max: F16,
+    pub(crate) best_tri: U16,
+    pub(crate) best_u: F16,
+    pub(crate) best_v: F16,
     /// The shear of the watertight test, per ray, and the common axis permutation if any.
-    sx: F16,
-    sy: F16,
-    sz: F16,
-    perm: Option<[usize; 3]>,
+    pub(crate) sx: F16,
+    pub(crate) sy: F16,
+    pub(crate) sz: F16,
+    pub(crate) perm: Option<[usize; 3]>,
     /// The origin all valid rays share, bit for bit (a pinhole camera's tile), if they do: the
     /// triangle test then subtracts it once per vertex instead of once per lane.
-    org0: Option<[f32; 3]>,
+    pub(crate) org0: Option<[f32; 3]>,
     pub interval: Option<Interval>,
     /// With `interval`: per axis the valid rays' origin range (axes 0..3) and `1 / dir` range
     /// (axes 3..6), and their `t_min` / `t_max` ranges (`packet64.rs` unites them).
@@ -332,91 +331,6 @@ impl Packet {
         l.le(l.splat(t), bound) & mask
     }
 
-    /// A vertex in each ray's sheared frame: `a = v - o; (a[kx] - sx a[kz], a[ky] - sy a[kz],
-    /// sz a[kz])`, the operations of `tri4.rs`. (A method, not a closure: closures do not
-    /// inherit the caller's target features, so their intrinsics would not inline.)
-    #[inline(always)]
-    fn project<L: Lanes16>(&self, l: L, k: [usize; 3], v: [f32; 3]) -> (L::V, L::V, L::V) {
-        let [kx, ky, kz] = k;
-        if let Some(o) = self.org0 {
-            // `v - o` is the same f32 subtraction in every lane: done once.
-            let az = l.splat(v[kz] - o[kz]);
-            let x = l.sub(l.splat(v[kx] - o[kx]), l.mul(l.load(&self.sx), az));
-            let y = l.sub(l.splat(v[ky] - o[ky]), l.mul(l.load(&self.sy), az));
-            return (x, y, l.mul(l.load(&self.sz), az));
-        }
-        let az = l.sub(l.splat(v[kz]), l.load(&self.org[kz]));
-        let x = l.sub(
-            l.sub(l.splat(v[kx]), l.load(&self.org[kx])),
-            l.mul(l.load(&self.sx), az),
-        );
-        let y = l.sub(
-            l.sub(l.splat(v[ky]), l.load(&self.org[ky])),
-            l.mul(l.load(&self.sy), az),
-        );
-        (x, y, l.mul(l.load(&self.sz), az))
-    }
-
-    /// The watertight test of one triangle against the rays of `mask` (all sharing the axis
-    /// permutation `k`), keeping each ray's lexicographically smallest `(t, index)`.
-    #[inline(always)]
-    fn triangle<L: Lanes16>(
-        &mut self,
-        l: L,
-        rays: &[Ray],
-        k: [usize; 3],
-        p: [[f32; 3]; 3],
-        tri: u32,
-        mask: u32,
-    ) {
-        let (ax, ay, az) = self.project(l, k, p[0]);
-        let (bx, by, bz) = self.project(l, k, p[1]);
-        let (cx, cy, cz) = self.project(l, k, p[2]);
-        let u = l.sub(l.mul(cx, by), l.mul(cy, bx));
-        let v = l.sub(l.mul(ax, cy), l.mul(ay, cx));
-        let w = l.sub(l.mul(bx, ay), l.mul(by, ax));
-        let zero = l.splat(0.0);
-        let exact = (l.eq(u, zero) | l.eq(v, zero) | l.eq(w, zero)) & mask;
-        let neg = l.lt(u, zero) | l.lt(v, zero) | l.lt(w, zero);
-        let pos = l.gt(u, zero) | l.gt(v, zero) | l.gt(w, zero);
-        let inside = !(neg & pos) & mask & !exact;
-        if inside != 0 {
-            let det = l.add(l.add(u, v), w);
-            let t_scaled = l.add(l.add(l.mul(u, az), l.mul(v, bz)), l.mul(w, cz));
-            let inv = l.div(l.splat(1.0), det);
-            let t = l.mul(t_scaled, inv);
-            let t_cur = l.load(&self.t_max);
-            // Rays with a hit already (`best_tri != u32::MAX`) also take a tie at `t_cur`
-            // with a lower index (`Best::limit` / `Best::offer`).
-            let has_hit = inside & !l.gt_u32(inside, &self.best_tri, u32::MAX - 1);
-            let closer = l.lt(t, t_cur) | (l.eq(t, t_cur) & l.gt_u32(has_hit, &self.best_tri, tri));
-            let acc = inside & l.ne(det, zero) & l.gt(t, l.load(&self.t_min)) & closer;
-            if acc != 0 {
-                let t_new = l.select(acc, t, t_cur);
-                l.store(t_new, &mut self.t_max);
-                let bu = l.select(acc, l.mul(v, inv), l.load(&self.best_u));
-                l.store(bu, &mut self.best_u);
-                let bv = l.select(acc, l.mul(w, inv), l.load(&self.best_v));
-                l.store(bv, &mut self.best_v);
-                l.store_u32_masked(acc, &mut self.best_tri, tri);
-            }
-        }
-        let mut m = exact;
-        while m != 0 {
-            let i = m.trailing_zeros() as usize;
-            m &= m - 1;
-            let mut best = self.best(i);
-            let mut t_max = self.t_max.0[i];
-            // SAFETY: rays of the mask are valid, and valid rays were initialised.
-            let wt = WatertightRay::new(&rays[i]);
-            let v3 = |q: [f32; 3]| glam::Vec3::from_array(q);
-            if let Some(h) = wt.intersect_within(v3(p[0]), v3(p[1]), v3(p[2]), best.limit(t_max)) {
-                best.offer(h.t, tri, h.u, h.v, &mut t_max);
-            }
-            self.set_best(i, best, t_max);
-        }
-    }
-
     /// Ray `i` finishes the subtree `root` alone (its closest hit so far carried over).
     #[inline(always)]
     pub fn single_ray<L: Lanes16>(&mut self, bvh: &Bvh, l: L, rays: &[Ray], i: usize, root: u32) {
@@ -444,7 +358,7 @@ impl Packet {
     }
 
     #[inline(always)]
-    fn set_best(&mut self, i: usize, b: Best, t_max: f32) {
+    pub(crate) fn set_best(&mut self, i: usize, b: Best, t_max: f32) {
         self.t_max.0[i] = t_max;
         self.best_tri.0[i] = b.tri;
         self.best_u.0[i] = b.u;
@@ -529,6 +443,26 @@ impl Bvh {
                     None => ((1u32 << node.num_children) - 1, [0.0; 8]),
                 };
                 let ia = p.interval.is_some();
+                if ia && PURE_INTERVAL {
+                    // Every candidate keeps the packet's mask: order by the entry bound alone,
+                    // with the single-ray loop's keys and sorting network (`traverse8.rs`).
+                    if cand != 0 {
+                        if cand & (cand - 1) == 0 {
+                            cur = node.child[cand.trailing_zeros() as usize];
+                            continue;
+                        }
+                        let ks = sorted_keys(cand, &t_ia);
+                        let n = cand.count_ones() as usize;
+                        for &k in ks[1..n].iter().rev() {
+                            let c = (k & 7) as usize;
+                            let (child, t) = (node.child[c], t_ia[c]);
+                            stack[sp] = MaybeUninit::new(Entry { child, mask, t });
+                            sp += 1;
+                        }
+                        cur = node.child[(ks[0] & 7) as usize];
+                        continue;
+                    }
+                }
                 let mut kid = [Entry {
                     child: 0,
                     mask: 0,
@@ -595,42 +529,63 @@ impl Bvh {
             }
         }
     }
+}
 
-    #[inline(always)]
-    pub(crate) fn packet_leaf<L: Lanes16>(
-        &self,
-        l: L,
-        p: &mut Packet,
-        rays: &[Ray],
-        first: u32,
-        count: u32,
-        mask: u32,
-    ) {
-        if let Some(k) = p.perm.filter(|_| mask.count_ones() > PER_RAY_LEAF_BELOW) {
-            for kb in 0..blocks_for(count) {
-                let b = &self.blocks[(first + kb) as usize];
-                let lanes = lane_mask(count, kb);
-                for j in 0..4 {
-                    if lanes >> j & 1 != 0 {
-                        let v = |q: usize| [b.p[q][0][j], b.p[q][1][j], b.p[q][2][j]];
-                        p.triangle(l, rays, k, [v(0), v(1), v(2)], b.tri[j], mask);
-                    }
-                }
-            }
-            return;
+/// The candidates `cand` (at least two) of a node as keys `ordered(t[c]) << 32 | c`, nearest
+/// first; slots from `cand.count_ones()` on hold `u64::MAX`. `ordered` maps f32 to u32 in the
+/// order of `<` (negative values reversed), so any order of equal or NaN bounds may result:
+/// the order only affects speed (module docs, invariant).
+#[inline(always)]
+pub(crate) fn sorted_keys(cand: u32, t: &[f32; 8]) -> [u64; 8] {
+    let mut ks = [u64::MAX; 8];
+    let mut n = 0;
+    let mut m = cand;
+    while m != 0 {
+        let c = m.trailing_zeros() as usize;
+        m &= m - 1;
+        let b = t[c].to_bits();
+        let o = if (b as i32) < 0 { !b } else { b | 1 << 31 };
+        ks[n] = (o as u64) << 32 | c as u64;
+        n += 1;
+    }
+    let sort2 = |ks: &mut [u64; 8], i: usize, j: usize| {
+        let (x, y) = (ks[i], ks[j]);
+        ks[i] = x.min(y);
+        ks[j] = x.max(y);
+    };
+    if n == 2 {
+        sort2(&mut ks, 0, 1);
+    } else if n <= 4 {
+        for (i, j) in [(0, 1), (2, 3), (0, 2), (1, 3), (1, 2)] {
+            sort2(&mut ks, i, j);
         }
-        let mut m = mask;
-        while m != 0 {
-            let i = m.trailing_zeros() as usize;
-            m &= m - 1;
-            let mut best = p.best(i);
-            let mut t_max = p.t_max.0[i];
-            // SAFETY: rays of the mask are valid, and valid rays were initialised.
-            let r4 = Tri4Ray::new(WatertightRay::new(&rays[i]));
-            self.leaf_closest(&r4, first, count, &mut t_max, &mut best, &mut NoStats);
-            p.set_best(i, best, t_max);
+    } else {
+        // Batcher's odd-even merge sort of eight (19 comparators; padding sorts last).
+        for (i, j) in [
+            (0, 1),
+            (2, 3),
+            (4, 5),
+            (6, 7),
+            (0, 2),
+            (1, 3),
+            (4, 6),
+            (5, 7),
+            (1, 2),
+            (5, 6),
+            (0, 4),
+            (1, 5),
+            (2, 6),
+            (3, 7),
+            (2, 4),
+            (3, 5),
+            (1, 2),
+            (3, 4),
+            (5, 6),
+        ] {
+            sort2(&mut ks, i, j);
         }
     }
+    ks
 }
 
 /// The axis permutation of `WatertightRay::new` for direction `d` as a code `2 kz + swapped`
@@ -671,6 +626,40 @@ mod tests {
     use glam::Vec3;
     use parallax_core::Ray;
     use parallax_core::math::WatertightRay;
+
+    #[test]
+    fn sorted_keys_order_every_candidate_set() {
+        let mut s = 7u32;
+        for round in 0..40 {
+            let t: [f32; 8] = std::array::from_fn(|_| {
+                s = s.wrapping_mul(747796405).wrapping_add(2891336453);
+                // Some rounds with many equal values and negative bounds.
+                let r = (s >> 8) as f32 / (1 << 24) as f32;
+                if round % 4 == 0 {
+                    (r * 3.0).floor() - 1.0
+                } else {
+                    r * 10.0 - 2.0
+                }
+            });
+            for cand in 0u32..256 {
+                if cand.count_ones() < 2 {
+                    continue;
+                }
+                let ks = super::sorted_keys(cand, &t);
+                let n = cand.count_ones() as usize;
+                let lanes: Vec<usize> = ks[..n].iter().map(|&k| (k & 7) as usize).collect();
+                let mut seen = 0u32;
+                for &c in &lanes {
+                    seen |= 1 << c;
+                }
+                assert_eq!(seen, cand, "{cand:#x}: {lanes:?}");
+                assert!(ks[n..].iter().all(|&k| k == u64::MAX));
+                for w in lanes.windows(2) {
+                    assert!(t[w[0]] <= t[w[1]], "{cand:#x} {t:?} {lanes:?}");
+                }
+            }
+        }
+    }
 
     #[test]
     fn axes_match_the_watertight_ray() {
