@@ -86,7 +86,10 @@ pub mod build;
 pub mod cascade;
 mod fixpoint;
 #[cfg(target_arch = "x86_64")]
+mod leaf_avx2;
+#[cfg(target_arch = "x86_64")]
 mod leaf_lanes;
+mod leaves;
 pub mod merge;
 mod merge_lanes;
 #[cfg(target_arch = "x86_64")]
