@@ -188,6 +188,38 @@ impl MergeCtx {
         out: &mut [Node],
         allow: impl Fn(u32) -> bool,
     ) {
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2 (checked).
+            unsafe { self.parent_row_avx2(child, l, qy, out, allow) }
+        } else {
+            self.parent_row_with(child, l, qy, out, allow)
+        }
+    }
+
+    /// [`Self::parent_row`] compiled with AVX2 enabled: the same operations in VEX
+    /// encodings (three-operand, so fewer register copies); no FMA is enabled, so nothing is
+    /// fused and the bits are those of the SSE2 code.
+    #[target_feature(enable = "avx2")]
+    fn parent_row_avx2(
+        &self,
+        child: &Level,
+        l: u32,
+        qy: u32,
+        out: &mut [Node],
+        allow: impl Fn(u32) -> bool,
+    ) {
+        self.parent_row_with(child, l, qy, out, allow)
+    }
+
+    #[inline(always)]
+    fn parent_row_with(
+        &self,
+        child: &Level,
+        l: u32,
+        qy: u32,
+        out: &mut [Node],
+        allow: impl Fn(u32) -> bool,
+    ) {
         let cw = child.w as usize;
         let y0 = 2 * qy as usize;
         let r0 = &child.nodes[y0 * cw..(y0 + 1) * cw];
@@ -214,7 +246,7 @@ impl MergeCtx {
 
     /// Parents `qx0 .. qx0 + out.len()` of row `qy`, level `l`, from their children
     /// `kids` (module docs).
-    #[inline]
+    #[inline(always)]
     fn parents4(
         &self,
         l: u32,
@@ -285,7 +317,7 @@ impl MergeCtx {
     /// `MergeCtx::merge` and `MergeCtx::proxy` of the candidate parents (`cand`: four
     /// plane children, allowed to merge) in lanes; `gx`, `gy`: the children's gradients.
     #[allow(clippy::too_many_arguments)]
-    #[inline]
+    #[inline(always)]
     fn merge4(
         &self,
         l: u32,
