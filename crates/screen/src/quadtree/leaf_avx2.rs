@@ -259,7 +259,7 @@ impl LeafMap4 {
 /// cases selected by masks; values not NaN, at most 65504 in magnitude); the half in each
 /// lane's low 16 bits.
 #[target_feature(enable = "avx2")]
-fn f16x8_encode(v: __m256) -> __m256i {
+pub(super) fn f16x8_encode(v: __m256) -> __m256i {
     let x = _mm256_castps_si256(v);
     let sign = _mm256_and_si256(_mm256_srli_epi32::<16>(x), _mm256_set1_epi32(0x8000));
     let a = _mm256_and_si256(x, _mm256_set1_epi32(0x7fff_ffff));
