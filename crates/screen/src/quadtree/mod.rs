@@ -103,6 +103,8 @@ mod setup;
 pub mod traverse;
 pub mod tree;
 #[cfg(target_arch = "x86_64")]
+mod trigger_avx2;
+#[cfg(target_arch = "x86_64")]
 mod trigger_lanes;
 
 pub use cascade::QuadTreeTracer;
