@@ -357,7 +357,7 @@ mod tests {
                     _ => v3(&mut rng, 1.0).normalize_or_zero(),
                 })
                 .collect();
-            let flags: Vec<bool> = (0..w).map(|_| rng.next() % 3 == 0).collect();
+            let flags: Vec<bool> = (0..w).map(|_| rng.next().is_multiple_of(3)).collect();
             for fl in [None, Some(&flags[..])] {
                 let soa: [Vec<f32>; 3] = [
                     cols.iter().map(|c| c.x).collect(),

@@ -439,7 +439,11 @@ mod tests {
                             let zc = z0 + ax * xc + ay * yc + rng.f(-noise, noise);
                             let gx = ax + rng.f(-noise, noise) * 100.0;
                             let gy = ay + rng.f(-noise, noise) * 100.0;
-                            let flags = if rng.next() % 8 == 0 { FLAG_CRACK } else { 0 };
+                            let flags = if rng.next().is_multiple_of(8) {
+                                FLAG_CRACK
+                            } else {
+                                0
+                            };
                             Node::plane_with_gradient(zc, gx, gy, cl, wf, hf, flags)
                                 .unwrap_or(Node::EMPTY)
                         }
@@ -451,7 +455,9 @@ mod tests {
                 h: ch,
                 nodes,
             };
-            let blocked: Vec<bool> = (0..pw * ph).map(|_| rng.next() % 10 == 0).collect();
+            let blocked: Vec<bool> = (0..pw * ph)
+                .map(|_| rng.next().is_multiple_of(10))
+                .collect();
             for qy in 0..ph {
                 let allow = |qx: u32| !blocked[(qy * pw + qx) as usize];
                 let mut four = vec![Node { a: 1, b: 1 }; pw as usize];
