@@ -28,9 +28,10 @@
 //! own f16/f32 rounding).
 //!
 //! Every level is built in parallel over rows (rayon). **Fast paths, same bits:** the leaves
-//! are made a row at a time (`Leaves`), their directions from per-column and per-row tables
-//! of the same products and `z` with [`UnitCube::z_of_depth`]'s constant terms computed once,
-//! the plane map and the node in SSE2 lanes (`leaf_lanes`);
+//! are made a row at a time (`leaves.rs`), their directions from per-column and per-row
+//! tables of the same products and `z` with [`UnitCube::z_of_depth`]'s constant terms
+//! computed once, four pixels at a time in AVX2 lanes (`leaf_avx2`, run-time detection) or
+//! one pixel at a time in SSE2 lanes (`leaf_lanes`);
 //! a level's merges run with four parents in lanes (`merge_rows`); without deeper layers the
 //! per-pixel plane levels come from level 1 down (`tree::plane_levels`); with deeper layers
 //! the pruning fixed point is computed incrementally (`fixpoint`), its pixel-plane trigger
@@ -44,6 +45,7 @@ use parallax_raster::normals::normals_from_depth;
 use rayon::prelude::*;
 
 use super::QuadTreeOptions;
+use super::leaves::Leaves;
 use super::merge::MergeCtx;
 use super::node::{FLAG_CRACK, Node};
 use super::prune::Blocked;
@@ -92,38 +94,7 @@ impl QuadTree {
                 )
             }
         };
-        let (tx, ty) = (cam.tan_half_x(), cam.tan_half_y);
-        let b = cam.frame.basis;
-        let (cw, ch) = (cam.width as f32, cam.height as f32);
-        let (n, f) = (cube.near as f64, cube.far as f64);
-        let leaves = Leaves {
-            cube,
-            depth: &layer.depth,
-            normals,
-            flags,
-            mt: cube.cube_to_world.transpose(),
-            #[cfg(target_arch = "x86_64")]
-            map: super::leaf_lanes::LeafMap::new(
-                &cube.cube_to_world.transpose(),
-                w as f32,
-                h as f32,
-            ),
-            // The world direction through a pixel centre, `basis * camera_dir(film)`, is
-            // `(x_axis dx + y_axis dy) + z_axis (-1)` (glam's `Mat3 * Vec3` order): its column
-            // and row terms are tabulated once, the same products, so the sum is the same
-            // bits.
-            col: (0..w)
-                .map(|i| b.x_axis * ((2.0 * (i as f32 + 0.5) / cw - 1.0 + cam.shift.x) * tx))
-                .collect(),
-            row: (0..h)
-                .map(|j| b.y_axis * ((1.0 - 2.0 * (j as f32 + 0.5) / ch + cam.shift.y) * ty))
-                .collect(),
-            back: b.z_axis * -1.0,
-            inv_near: 1.0 / n,
-            z_den: 1.0 / n - 1.0 / f,
-            wf: w as f32,
-            hf: h as f32,
-        };
+        let leaves = Leaves::new(cube, &layer.depth, normals, flags, w, h);
         let NormalSource::GBufferFlagged {
             min_rel_gap,
             max_rel_gap,
@@ -562,119 +533,6 @@ impl QuadTree {
         self.trigger_z = tz;
         mins
     }
-}
-
-/// The leaves of a G-buffer layer (§3.2, module docs), with what every pixel needs
-/// computed once: the transposed inverse cube map, the per-column and per-row terms of the
-/// pixel-centre directions, and [`UnitCube::z_of_depth`]'s constant terms (the same f64
-/// values, so the same bits).
-struct Leaves<'a> {
-    cube: &'a UnitCube,
-    depth: &'a [f32],
-    normals: &'a [Vec3],
-    /// Flag `O` per pixel (depth normals), if any.
-    flags: Option<&'a [bool]>,
-    mt: glam::DMat4,
-    /// `mt` and the node's scale for the lanes of `leaf_lanes`.
-    #[cfg(target_arch = "x86_64")]
-    map: super::leaf_lanes::LeafMap,
-    col: Vec<Vec3>,
-    row: Vec<Vec3>,
-    back: Vec3,
-    /// `1 / near` and `1 / near - 1 / far`, in f64.
-    inv_near: f64,
-    z_den: f64,
-    wf: f32,
-    hf: f32,
-}
-
-impl Leaves<'_> {
-    /// The leaves of pixel row `j` into `out[..W]`; `reference`: the pixel direction by
-    /// the camera's own function and [`UnitCube::z_of_depth`] (the definitions).
-    fn row(&self, out: &mut [Node], j: u32, reference: bool) {
-        if reference {
-            self.row_with::<true>(out, j)
-        } else {
-            self.row_with::<false>(out, j)
-        }
-    }
-
-    #[inline(always)]
-    fn row_with<const REFERENCE: bool>(&self, out: &mut [Node], j: u32) {
-        let w = self.col.len();
-        let k0 = j as usize * w;
-        let (depth, normals) = (&self.depth[k0..k0 + w], &self.normals[k0..k0 + w]);
-        let rj = self.row[j as usize];
-        let cam = &self.cube.camera;
-        for (i, o) in out[..w].iter_mut().enumerate() {
-            let d = depth[i];
-            let n = normals[i];
-            *o = if !(d.is_finite() && d > 0.0) || n == Vec3::ZERO {
-                Node::EMPTY
-            } else {
-                let dir = if REFERENCE {
-                    let film = glam::Vec2::new(i as f32 + 0.5, j as f32 + 0.5);
-                    cam.frame.dir_to_world(cam.camera_dir(film))
-                } else {
-                    (self.col[i] + rj) + self.back
-                };
-                let p = cam.frame.position + dir * d;
-                #[cfg(target_arch = "x86_64")]
-                if !REFERENCE {
-                    // The same map and node in SSE2 lanes (`leaf_lanes`).
-                    let f = if self.flags.is_some_and(|f| f[k0 + i]) {
-                        FLAG_CRACK
-                    } else {
-                        0
-                    };
-                    let z = ((self.inv_near - 1.0 / d as f64) / self.z_den) as f32;
-                    *o = self.map.leaf(p, n, z, f);
-                    continue;
-                }
-                match map_gradient(&self.mt, p, n) {
-                    None => Node::EMPTY,
-                    Some((gx, gy)) => {
-                        let f = if self.flags.is_some_and(|f| f[k0 + i]) {
-                            FLAG_CRACK
-                        } else {
-                            0
-                        };
-                        let z = if REFERENCE {
-                            self.cube.z_of_depth(d)
-                        } else {
-                            ((self.inv_near - 1.0 / d as f64) / self.z_den) as f32
-                        };
-                        Node::plane_with_gradient(z, gx, gy, 0, self.wf, self.hf, f)
-                            .unwrap_or(Node::EMPTY)
-                    }
-                }
-            };
-        }
-    }
-}
-
-/// The cube gradient `(dz/dx, dz/dy)` of the plane of [`UnitCube::map_plane`] with the
-/// transposed inverse map `mt` precomputed, in f64 from the unnormalised cube covector `q`
-/// (`-(q.x, q.y) / q.z`, infinite for a plane vertical in the cube; the node clamps it).
-/// `None` when degenerate (also when the plane is vertical *and* parallel to `x` or `y`
-/// with a zero numerator, `0 / 0`).
-#[inline]
-fn map_gradient(mt: &glam::DMat4, p: Vec3, n: Vec3) -> Option<(f32, f32)> {
-    let (p, n) = (p.as_dvec3(), n.as_dvec3());
-    let q = *mt * n.extend(-n.dot(p));
-    // `|q.xyz|` finite and > 0 (as `map_plane` asks), without its square root: the same
-    // answer, since the square root of a non-negative value is finite and positive exactly
-    // when the value is.
-    let len2 = q.truncate().length_squared();
-    if !(len2.is_finite() && len2 > 0.0) {
-        return None;
-    }
-    // Orientation-free: the gradient is the same for q and -q.
-    let g = |a: f64| {
-        let v = a / -q.z;
-        if v.is_nan() { None } else { Some(v as f32) }
-    };
-    Some((g(q.x)?, g(q.y)?))
 }
 
 /// Flag `O` of G-buffer leaves: [`crate::planes::crack_flags`] over the decoded leaf planes

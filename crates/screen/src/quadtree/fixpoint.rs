@@ -12,7 +12,7 @@
 //!   its leaves (`pixel_triggers_row`, no second pass over level 0); the pixel planes are
 //!   decoded from the leaves only where a deeper plane needs them (pixel centres tabulated
 //!   per column and row), not copied into a [`LayerPlanes`] first; on x86_64 four pixels
-//!   per step, one per lane (`trigger_lanes`), elsewhere each pixel's four footprint corners
+//!   per step, one per lane (`trigger_lanes`; eight with AVX2, `trigger_avx2`), elsewhere each pixel's four footprint corners
 //!   in lanes ([`super::cascade::pixel_trigger_lanes`]);
 //! - the blocked pixels are kept as a list too: pruning marks only their ancestors
 //!   ([`Blocked::List`]) and the unsafe pixels are marked through their ancestors only
@@ -328,6 +328,23 @@ pub(super) fn pixel_triggers_row(
     #[cfg(target_arch = "x86_64")]
     {
         let y = ((j as f32) / hf, ((j + 1) as f32) / hf, yc);
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // Eight pixels per step (`trigger_avx2`, same bits).
+            // SAFETY: the CPU has AVX2 (checked).
+            done = unsafe {
+                super::trigger_avx2::pixel_triggers_row8(
+                    tz,
+                    nodes,
+                    base,
+                    &cols.xe,
+                    &cols.xc,
+                    y,
+                    (wf, hf),
+                    deeper,
+                    &mut listed,
+                )
+            };
+        }
         while done + 4 <= tz.len() {
             let i = done;
             let t = super::trigger_lanes::pixel_triggers4(

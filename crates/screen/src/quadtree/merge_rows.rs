@@ -62,7 +62,7 @@ pub(super) fn f16x4(h: __m128i) -> Vec4 {
 
 /// The four parents' children as words: `a[k]`, `b[k]` hold child `k`'s `a` and `b` of the
 /// four parents, lane `p` = parent `p` (module docs).
-struct Kids {
+pub(super) struct Kids {
     a: [__m128i; 4],
     b: [__m128i; 4],
 }
@@ -71,7 +71,7 @@ impl Kids {
     /// The children of parents `qx0 .. qx0 + n` (`n <= 4`) from the child rows `r0`, `r1`;
     /// lanes beyond `n` hold empty nodes.
     #[inline(always)]
-    fn gather(r0: &[Node], r1: &[Node], qx0: usize, n: usize) -> Self {
+    pub(super) fn gather(r0: &[Node], r1: &[Node], qx0: usize, n: usize) -> Self {
         let pair = |r: &[Node], p: usize| -> __m128i {
             // SAFETY: SSE2 baseline; the load reads the two nodes `r[x..x + 2]` (checked).
             unsafe {
@@ -110,7 +110,7 @@ impl Kids {
 
     /// Per child, the lanes whose child is a plane node (sign bit of `a`), as a bit mask.
     #[inline(always)]
-    fn planes(&self, k: usize) -> u32 {
+    pub(super) fn planes(&self, k: usize) -> u32 {
         // SAFETY: SSE baseline.
         unsafe { _mm_movemask_ps(_mm_castsi128_ps(self.a[k])) as u32 }
     }
@@ -145,7 +145,7 @@ impl Kids {
 
     /// Child `k`'s `z_c` per lane ([`Node::zc`]).
     #[inline(always)]
-    fn zc(&self, k: usize) -> Vec4 {
+    pub(super) fn zc(&self, k: usize) -> Vec4 {
         // SAFETY: SSE2 baseline.
         unsafe {
             let m = _mm_set1_epi32(0x7fff_fffc);
@@ -155,7 +155,7 @@ impl Kids {
 
     /// Child `k`'s crack flag per lane, as a lane mask (all ones where set).
     #[inline(always)]
-    fn crack(&self, k: usize) -> __m128 {
+    pub(super) fn crack(&self, k: usize) -> __m128 {
         // SAFETY: SSE2 baseline.
         unsafe {
             let one = _mm_set1_epi32(FLAG_CRACK as i32);
@@ -165,16 +165,16 @@ impl Kids {
 
     /// Child `k`'s stored increments per lane ([`Node::increments`]).
     #[inline(always)]
-    fn increments(&self, k: usize) -> (Vec4, Vec4) {
+    pub(super) fn increments(&self, k: usize) -> (Vec4, Vec4) {
         // SAFETY: SSE2 baseline.
         unsafe { (f16x4(self.b[k]), f16x4(_mm_srli_epi32(self.b[k], 16))) }
     }
 }
 
 /// Child offsets `(dx, dy)` of the child positions, in the definition's order.
-const KID: [(usize, usize); 4] = [(0, 0), (1, 0), (0, 1), (1, 1)];
+pub(super) const KID: [(usize, usize); 4] = [(0, 0), (1, 0), (0, 1), (1, 1)];
 /// Footprint corner signs, in the definition's order.
-const CORNER: [(f32, f32); 4] = [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)];
+pub(super) const CORNER: [(f32, f32); 4] = [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)];
 
 impl MergeCtx {
     /// Row `qy` of level `l` (`out`: the row's nodes) from level `l - 1` (`child`), equal
@@ -195,26 +195,46 @@ impl MergeCtx {
         for (g, outs) in out.chunks_mut(4).enumerate() {
             let qx0 = 4 * g;
             let kids = Kids::gather(r0, r1, qx0, outs.len());
-            let any_plane = (0..4).fold(0, |m, k| m | kids.planes(k));
-            if any_plane == 0 {
-                // Only AABB children: their stored ranges.
-                if kids.all_empty() {
-                    outs.fill(Node::EMPTY);
-                    continue;
-                }
-                let ks = [0, 1, 2, 3].map(|k| kids.nodes(k));
-                for (p, o) in outs.iter_mut().enumerate() {
-                    *o = union((0..4).map(|k| ks[k][p].zrange()));
-                }
-                continue;
-            }
-            self.parents4(l, qx0 as u32, qy, &kids, outs, &allow);
+            self.group4(l, qx0 as u32, qy, &kids, outs, &allow, None);
         }
+    }
+
+    /// Parents `qx0 .. qx0 + out.len()` (at most four) of row `qy`, level `l`, from their
+    /// children `kids`; `pre`: the merges of the candidate parents if already computed
+    /// (`merge_rows8`; `None` in the lanes of parents that are not candidates or do not
+    /// merge), else computed here.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    pub(super) fn group4(
+        &self,
+        l: u32,
+        qx0: u32,
+        qy: u32,
+        kids: &Kids,
+        out: &mut [Node],
+        allow: &impl Fn(u32) -> bool,
+        pre: Option<[Option<Node>; 4]>,
+    ) {
+        let any_plane = (0..4).fold(0, |m, k| m | kids.planes(k));
+        if any_plane == 0 {
+            // Only AABB children: their stored ranges.
+            if kids.all_empty() {
+                out.fill(Node::EMPTY);
+                return;
+            }
+            let ks = [0, 1, 2, 3].map(|k| kids.nodes(k));
+            for (p, o) in out.iter_mut().enumerate() {
+                *o = union((0..4).map(|k| ks[k][p].zrange()));
+            }
+            return;
+        }
+        self.parents4(l, qx0, qy, kids, out, allow, pre);
     }
 
     /// Parents `qx0 .. qx0 + out.len()` of row `qy`, level `l`, from their children
     /// `kids` (module docs).
-    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
     fn parents4(
         &self,
         l: u32,
@@ -223,6 +243,7 @@ impl MergeCtx {
         kids: &Kids,
         out: &mut [Node],
         allow: &impl Fn(u32) -> bool,
+        pre: Option<[Option<Node>; 4]>,
     ) {
         let s = Vec4::splat;
         let cl = l - 1;
@@ -232,28 +253,43 @@ impl MergeCtx {
             f32::from_bits(self.wf.to_bits() - (cl << 23)),
             f32::from_bits(self.hf.to_bits() - (cl << 23)),
         );
-        let mut gx = [Vec4::ZERO; 4];
-        let mut gy = [Vec4::ZERO; 4];
-        for k in 0..4 {
-            let (ex, ey) = kids.increments(k);
-            gx[k] = ex * s(ws);
-            gy[k] = ey * s(hs);
-        }
+        // Decoded only where needed: not for a group whose merges `pre` brings and which
+        // all merged.
+        let grads = || {
+            let mut gx = [Vec4::ZERO; 4];
+            let mut gy = [Vec4::ZERO; 4];
+            for k in 0..4 {
+                let (ex, ey) = kids.increments(k);
+                gx[k] = ex * s(ws);
+                gy[k] = ey * s(hs);
+            }
+            (gx, gy)
+        };
         let n = out.len();
-        let all_planes = (0..4).fold(0xf, |m, k| m & kids.planes(k));
-        let cand =
-            |p: usize| p < n && !self.never && all_planes & (1 << p) != 0 && allow(qx0 + p as u32);
-        let cand = [cand(0), cand(1), cand(2), cand(3)];
-        let mut merged = [None; 4];
-        if cand.iter().any(|&c| c) {
-            merged = self.merge4(l, qx0, qy, kids, cand, &gx, &gy);
-        }
+        let mut g = None;
+        let merged = match pre {
+            Some(m) => m,
+            None => {
+                let all_planes = (0..4).fold(0xf, |m, k| m & kids.planes(k));
+                let cand = |p: usize| {
+                    p < n && !self.never && all_planes & (1 << p) != 0 && allow(qx0 + p as u32)
+                };
+                let cand = [cand(0), cand(1), cand(2), cand(3)];
+                let (gx, gy) = g.insert(grads());
+                if cand.iter().any(|&c| c) {
+                    self.merge4(l, qx0, qy, kids, cand, gx, gy)
+                } else {
+                    [None; 4]
+                }
+            }
+        };
         if merged[..n].iter().all(|m| m.is_some()) {
             for (o, m) in out.iter_mut().zip(merged) {
                 *o = m.expect("checked");
             }
             return;
         }
+        let (gx, gy) = g.unwrap_or_else(grads);
         // `MergeCtx::zrange` per child: the spread's divisions in lanes.
         let size = (1u32 << cl) as f32;
         let mut spread = [[0.0f32; 4]; 4];
@@ -285,7 +321,7 @@ impl MergeCtx {
     /// `MergeCtx::merge` and `MergeCtx::proxy` of the candidate parents (`cand`: four
     /// plane children, allowed to merge) in lanes; `gx`, `gy`: the children's gradients.
     #[allow(clippy::too_many_arguments)]
-    #[inline]
+    #[inline(always)]
     fn merge4(
         &self,
         l: u32,

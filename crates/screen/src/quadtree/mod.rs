@@ -8,7 +8,8 @@
 //! - [`merge`]: one pruning step (proxy plane or conservative AABB); `merge_lanes`: the same
 //!   step with the four children in `Vec4` lanes (same bits); `merge_rows`: a level's row
 //!   with four parents in SSE2 lanes (same bits, the build's fast path over whole levels on
-//!   x86_64);
+//!   x86_64), `merge_rows8`: eight parents in AVX2 lanes (same bits, run-time detection);
+//!   `leaves`: the leaves a row at a time, `leaf_avx2` four pixels in AVX2 lanes;
 //!   `fixpoint`: the cascade's pruning fixed point computed incrementally (same results as the
 //!   definition in `prune`, which [`QuadTreeTracer::build_reference`] runs);
 //! - [`traverse`]: the stackless traversal of §4 (exact plane hits, child by entry
@@ -86,16 +87,23 @@ pub mod build;
 pub mod cascade;
 mod fixpoint;
 #[cfg(target_arch = "x86_64")]
+mod leaf_avx2;
+#[cfg(target_arch = "x86_64")]
 mod leaf_lanes;
+mod leaves;
 pub mod merge;
 mod merge_lanes;
 #[cfg(target_arch = "x86_64")]
 mod merge_rows;
+#[cfg(target_arch = "x86_64")]
+mod merge_rows8;
 pub mod node;
 mod prune;
 mod setup;
 pub mod traverse;
 pub mod tree;
+#[cfg(target_arch = "x86_64")]
+mod trigger_avx2;
 #[cfg(target_arch = "x86_64")]
 mod trigger_lanes;
 

@@ -171,8 +171,8 @@ pub(super) fn prune(
                 let allow = |qx: u32| blocked.is_empty() || !blocked[(qy * pw + qx) as usize];
                 #[cfg(target_arch = "x86_64")]
                 if ctx.lanes {
-                    // Four parents per step, children straight from their two rows.
-                    ctx.parent_row(child, l, qy, row, allow);
+                    // Eight (AVX2) or four parents per step, children straight from their two rows.
+                    ctx.parent_row_fast(child, l, qy, row, allow);
                     return;
                 }
                 for (qx, out) in row.iter_mut().enumerate() {

@@ -1,0 +1,400 @@
+//! The leaves of four pixels of a row at a time in AVX2 lanes (Widmer et al. 2015, §3.2;
+//! the map is `leaves.rs`'s, one pixel per lane): the four depths and the per-column
+//! direction terms loaded as f32 vectors, the four normals transposed from their AoS `Vec3`s,
+//! the sample points in f32 lanes, then the cube covector `q`, `|q.xyz|^2`, the `z`
+//! division and the two gradient divisions in f64x4 lanes, and the slopes clamped and
+//! f16-encoded in the eight lanes of one register. Every lane does exactly the scalar
+//! definition's operations in its order (`leaf_lanes.rs` lists them: the direction
+//! `(col + row) + back`, `p = position + dir d`, glam's `DMat4 * DVec4` order
+//! `((X n.x + Y n.y) + Z n.z) + W w`, `z = (1/near - 1/d) / (1/near - 1/far)`, the slopes
+//! `q.x / -q.z`, `q.y / -q.z` rounded to f32 and times `1 / W`, `1 / H`): IEEE products,
+//! sums, divisions and roundings are correctly rounded per lane and nothing is fused (no FMA
+//! is enabled), so the nodes are the same bits. A pixel is empty under the same conditions,
+//! evaluated for all four lanes and combined into one mask: depth not finite or `<= 0`,
+//! normal zero, `|q.xyz|^2` not finite or `<= 0`, a NaN slope, `z` not finite or `< 0`.
+//! The test below compares rows with the one-pixel SSE2 path (`leaf_lanes`) on random and
+//! degenerate inputs; `tests/quadtree_build.rs` compares whole trees with the reference.
+
+use core::arch::x86_64::*;
+
+use glam::{DMat4, Vec3};
+
+use super::node::{FLAG_CRACK, Node};
+
+/// Largest finite f16.
+const F16_MAX: f32 = 65504.0;
+
+/// The constants of the four-pixel leaf map of one layer; exists only on CPUs with AVX2.
+pub(super) struct LeafMap4 {
+    /// `M^T`'s entries, `m[c][r]` = column `c`, row `r` (`x_axis` .. `w_axis`).
+    m: [[f64; 4]; 4],
+    position: Vec3,
+    back: Vec3,
+    inv_near: f64,
+    z_den: f64,
+    /// `1 / W`, `1 / H`: [`Node::plane_with_gradient`]'s scale at level 0.
+    scale: [f32; 2],
+}
+
+impl LeafMap4 {
+    /// The map of the transposed inverse cube map `mt` for a `wf x hf` layer seen from
+    /// `position` (`back` the direction terms' constant, `inv_near` / `z_den` those of
+    /// `z_of_depth`); `None` without AVX2.
+    pub(super) fn new(
+        mt: &DMat4,
+        position: Vec3,
+        back: Vec3,
+        inv_near: f64,
+        z_den: f64,
+        wf: f32,
+        hf: f32,
+    ) -> Option<Self> {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return None;
+        }
+        let size = 1.0f32;
+        Some(Self {
+            m: [mt.x_axis, mt.y_axis, mt.z_axis, mt.w_axis].map(|c| c.to_array()),
+            position,
+            back,
+            inv_near,
+            z_den,
+            scale: [size / wf, size / hf],
+        })
+    }
+
+    /// The leaves of the first `4 floor(W / 4)` pixels of a row of `W = out.len()` pixels
+    /// (`col` the per-column direction terms as x, y, z columns, `rj` the row's term,
+    /// `depth`, `normals`, `flags` the row's pixels); returns how many pixels it wrote.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2 (`self` exists only then).
+    pub(super) unsafe fn row(
+        &self,
+        col: [&[f32]; 3],
+        rj: Vec3,
+        depth: &[f32],
+        normals: &[Vec3],
+        flags: Option<&[bool]>,
+        out: &mut [Node],
+    ) -> usize {
+        // SAFETY: AVX2 by the caller's contract.
+        unsafe { self.row_avx2(col, rj, depth, normals, flags, out) }
+    }
+
+    #[target_feature(enable = "avx2")]
+    fn row_avx2(
+        &self,
+        col: [&[f32]; 3],
+        rj: Vec3,
+        depth: &[f32],
+        normals: &[Vec3],
+        flags: Option<&[bool]>,
+        out: &mut [Node],
+    ) -> usize {
+        let w = out.len();
+        let n4 = w & !3;
+        assert!(
+            depth.len() >= n4
+                && normals.len() >= n4
+                && col.iter().all(|c| c.len() >= n4)
+                && flags.is_none_or(|f| f.len() >= n4)
+        );
+        let m = &self.m;
+        let bc = |v: f64| _mm256_set1_pd(v);
+        let (m0, m1, m2, m3) = (m[0].map(bc), m[1].map(bc), m[2].map(bc), m[3].map(bc));
+        let s = |v: f32| _mm_set1_ps(v);
+        let (ox, oy, oz) = (s(self.position.x), s(self.position.y), s(self.position.z));
+        let (rx, ry, rz) = (s(rj.x), s(rj.y), s(rj.z));
+        let (bx, by, bz) = (s(self.back.x), s(self.back.y), s(self.back.z));
+        let (inv_near, z_den) = (bc(self.inv_near), bc(self.z_den));
+        let one = bc(1.0);
+        let neg = _mm256_set1_pd(-0.0);
+        let zero_ps = _mm_setzero_ps();
+        let inf_ps = _mm_set1_ps(f32::INFINITY);
+        let zero_pd = _mm256_setzero_pd();
+        let inf_pd = _mm256_set1_pd(f64::INFINITY);
+        let scale = _mm256_setr_ps(
+            self.scale[0],
+            self.scale[0],
+            self.scale[0],
+            self.scale[0],
+            self.scale[1],
+            self.scale[1],
+            self.scale[1],
+            self.scale[1],
+        );
+        let (lo, hi) = (_mm256_set1_ps(-F16_MAX), _mm256_set1_ps(F16_MAX));
+        let empty_a = _mm_set1_epi32(Node::EMPTY.a as i32);
+        let empty_b = _mm_set1_epi32(Node::EMPTY.b as i32);
+        let mut i = 0;
+        while i < n4 {
+            // SAFETY: `i + 4 <= n4` and every slice holds at least `n4` elements (asserted);
+            // a `Vec3` is three `f32`s (`repr(C)`), so four of them are 12 floats; `Node`
+            // is two `u32`s (`repr(C)`), so four of them are 32 bytes.
+            let (d, v0, v1, v2, cx, cy, cz, fl) = unsafe {
+                let np = normals.as_ptr().add(i) as *const f32;
+                (
+                    _mm_loadu_ps(depth.as_ptr().add(i)),
+                    _mm_loadu_ps(np),
+                    _mm_loadu_ps(np.add(4)),
+                    _mm_loadu_ps(np.add(8)),
+                    _mm_loadu_ps(col[0].as_ptr().add(i)),
+                    _mm_loadu_ps(col[1].as_ptr().add(i)),
+                    _mm_loadu_ps(col[2].as_ptr().add(i)),
+                    flags.map(|f| (f.as_ptr().add(i) as *const u32).read_unaligned()),
+                )
+            };
+            // AoS -> SoA: v0 = x0 y0 z0 x1, v1 = y1 z1 x2 y2, v2 = z2 x3 y3 z3.
+            let t = _mm_blend_ps::<0b0010>(_mm_blend_ps::<0b0100>(v0, v1), v2);
+            let nx = _mm_shuffle_ps::<0b01_10_11_00>(t, t);
+            let t = _mm_blend_ps::<0b0100>(_mm_blend_ps::<0b0010>(v1, v0), v2);
+            let ny = _mm_shuffle_ps::<0b10_11_00_01>(t, t);
+            let t = _mm_blend_ps::<0b0010>(_mm_blend_ps::<0b0100>(v2, v0), v1);
+            let nz = _mm_shuffle_ps::<0b11_00_01_10>(t, t);
+            // Empty: depth not in (0, inf) or normal zero.
+            let ok_d = _mm_and_ps(_mm_cmpgt_ps(d, zero_ps), _mm_cmplt_ps(d, inf_ps));
+            let n_zero = _mm_and_ps(
+                _mm_and_ps(_mm_cmpeq_ps(nx, zero_ps), _mm_cmpeq_ps(ny, zero_ps)),
+                _mm_cmpeq_ps(nz, zero_ps),
+            );
+            let ok32 = _mm_andnot_ps(n_zero, ok_d);
+            // `dir = (col + rj) + back`, `p = position + dir d`, in f32.
+            let px = _mm_add_ps(ox, _mm_mul_ps(_mm_add_ps(_mm_add_ps(cx, rx), bx), d));
+            let py = _mm_add_ps(oy, _mm_mul_ps(_mm_add_ps(_mm_add_ps(cy, ry), by), d));
+            let pz = _mm_add_ps(oz, _mm_mul_ps(_mm_add_ps(_mm_add_ps(cz, rz), bz), d));
+            let (px, py, pz) = (
+                _mm256_cvtps_pd(px),
+                _mm256_cvtps_pd(py),
+                _mm256_cvtps_pd(pz),
+            );
+            let (nx, ny, nz) = (
+                _mm256_cvtps_pd(nx),
+                _mm256_cvtps_pd(ny),
+                _mm256_cvtps_pd(nz),
+            );
+            // `w = -n·p`, `q = M^T (n, w)`.
+            let dot = _mm256_add_pd(
+                _mm256_add_pd(_mm256_mul_pd(nx, px), _mm256_mul_pd(ny, py)),
+                _mm256_mul_pd(nz, pz),
+            );
+            let ww = _mm256_xor_pd(dot, neg);
+            let q = |r: usize| {
+                _mm256_add_pd(
+                    _mm256_add_pd(
+                        _mm256_add_pd(_mm256_mul_pd(m0[r], nx), _mm256_mul_pd(m1[r], ny)),
+                        _mm256_mul_pd(m2[r], nz),
+                    ),
+                    _mm256_mul_pd(m3[r], ww),
+                )
+            };
+            let (qx, qy, qz) = (q(0), q(1), q(2));
+            let len2 = _mm256_add_pd(
+                _mm256_add_pd(_mm256_mul_pd(qx, qx), _mm256_mul_pd(qy, qy)),
+                _mm256_mul_pd(qz, qz),
+            );
+            let nqz = _mm256_xor_pd(qz, neg);
+            let gx = _mm256_div_pd(qx, nqz);
+            let gy = _mm256_div_pd(qy, nqz);
+            // `z = (1/near - 1/d) / (1/near - 1/far)`, rounded to f32.
+            let zc = _mm256_cvtpd_ps(_mm256_div_pd(
+                _mm256_sub_pd(inv_near, _mm256_div_pd(one, _mm256_cvtps_pd(d))),
+                z_den,
+            ));
+            // Empty: `|q|^2` not in (0, inf), a NaN slope, `z` not in [0, inf).
+            let ok64 = _mm256_andnot_pd(
+                _mm256_or_pd(
+                    _mm256_cmp_pd::<_CMP_UNORD_Q>(gx, gx),
+                    _mm256_cmp_pd::<_CMP_UNORD_Q>(gy, gy),
+                ),
+                _mm256_and_pd(
+                    _mm256_cmp_pd::<_CMP_GT_OQ>(len2, zero_pd),
+                    _mm256_cmp_pd::<_CMP_LT_OQ>(len2, inf_pd),
+                ),
+            );
+            // The f64 mask's lanes narrowed to 32 bits (each lane is all ones or zeros).
+            let ok64 = _mm256_castps256_ps128(_mm256_permutevar8x32_ps(
+                _mm256_castpd_ps(ok64),
+                _mm256_setr_epi32(0, 2, 4, 6, 0, 2, 4, 6),
+            ));
+            let ok_z = _mm_and_ps(_mm_cmpge_ps(zc, zero_ps), _mm_cmplt_ps(zc, inf_ps));
+            let ok = _mm_castps_si128(_mm_and_ps(_mm_and_ps(ok32, ok64), ok_z));
+            // The slopes: f32, scaled, clamped, f16.
+            let e = _mm256_set_m128(_mm256_cvtpd_ps(gy), _mm256_cvtpd_ps(gx));
+            let e = _mm256_min_ps(_mm256_max_ps(_mm256_mul_ps(e, scale), lo), hi);
+            let h = f16x8_encode(e);
+            let (hx, hy) = (_mm256_castsi256_si128(h), _mm256_extracti128_si256::<1>(h));
+            let b = _mm_or_si128(
+                _mm_and_si128(hx, _mm_set1_epi32(0xffff)),
+                _mm_slli_epi32::<16>(hy),
+            );
+            let bits = _mm_and_si128(
+                _mm_add_epi32(_mm_castps_si128(zc), _mm_set1_epi32(2)),
+                _mm_set1_epi32(!3),
+            );
+            let mut a = _mm_or_si128(_mm_set1_epi32(0x8000_0000u32 as i32), bits);
+            if let Some(f) = fl {
+                // Four `bool`s (0 or 1): flag `O` where set.
+                let set = _mm_cmpgt_epi32(
+                    _mm_cvtepu8_epi32(_mm_cvtsi32_si128(f as i32)),
+                    _mm_setzero_si128(),
+                );
+                a = _mm_or_si128(a, _mm_and_si128(set, _mm_set1_epi32(FLAG_CRACK as i32)));
+            }
+            let a = _mm_blendv_epi8(empty_a, a, ok);
+            let b = _mm_blendv_epi8(empty_b, b, ok);
+            // SAFETY: `out[i..i + 4]` is 32 bytes in bounds (above).
+            unsafe {
+                let op = out.as_mut_ptr().add(i) as *mut __m128i;
+                _mm_storeu_si128(op, _mm_unpacklo_epi32(a, b));
+                _mm_storeu_si128(op.add(1), _mm_unpackhi_epi32(a, b));
+            }
+            i += 4;
+        }
+        n4
+    }
+}
+
+/// `leaf_lanes::f16x4_encode` in eight lanes ([`super::node::f32_to_f16_bits`]'s three
+/// cases selected by masks; values not NaN, at most 65504 in magnitude); the half in each
+/// lane's low 16 bits.
+#[target_feature(enable = "avx2")]
+pub(super) fn f16x8_encode(v: __m256) -> __m256i {
+    let x = _mm256_castps_si256(v);
+    let sign = _mm256_and_si256(_mm256_srli_epi32::<16>(x), _mm256_set1_epi32(0x8000));
+    let a = _mm256_and_si256(x, _mm256_set1_epi32(0x7fff_ffff));
+    let magic_bits = ((127 - 15) + (23 - 10) + 1) << 23;
+    let magic = _mm256_castsi256_ps(_mm256_set1_epi32(magic_bits));
+    let sub = _mm256_sub_epi32(
+        _mm256_castps_si256(_mm256_add_ps(_mm256_castsi256_ps(a), magic)),
+        _mm256_set1_epi32(magic_bits),
+    );
+    let odd = _mm256_and_si256(_mm256_srli_epi32::<13>(a), _mm256_set1_epi32(1));
+    let bias = ((15u32.wrapping_sub(127)) << 23).wrapping_add(0xfff) as i32;
+    let normal = _mm256_srli_epi32::<13>(_mm256_add_epi32(
+        _mm256_add_epi32(a, _mm256_set1_epi32(bias)),
+        odd,
+    ));
+    // `a` is below 2^31, so the signed compares are the unsigned ones.
+    let is_inf = _mm256_cmpgt_epi32(a, _mm256_set1_epi32(0x477f_ffff));
+    let is_sub = _mm256_cmpgt_epi32(_mm256_set1_epi32(0x3880_0000), a);
+    let h = _mm256_or_si256(
+        _mm256_or_si256(
+            _mm256_and_si256(_mm256_set1_epi32(0x7c00), is_inf),
+            _mm256_and_si256(sub, is_sub),
+        ),
+        _mm256_andnot_si256(_mm256_or_si256(is_sub, is_inf), normal),
+    );
+    _mm256_or_si256(sign, h)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::quadtree::leaf_lanes::LeafMap;
+    use glam::DVec4;
+
+    /// A small deterministic generator (xorshift64*).
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> u64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+        }
+        fn f(&mut self, lo: f32, hi: f32) -> f32 {
+            lo + (hi - lo) * ((self.next() >> 40) as f32 / (1u64 << 24) as f32)
+        }
+    }
+
+    /// Rows of the AVX2 kernel equal the one-pixel SSE2 path (`leaf_lanes`, with the same
+    /// direction, sample point and `z` as `leaves.rs`) bit for bit: random pixels, and
+    /// depths / normals that are zero, negative, infinite, NaN, tiny or huge, normals
+    /// perpendicular to the view (infinite and 0/0 slopes), flags on and off.
+    #[test]
+    fn rows_equal_the_one_pixel_path() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            eprintln!("no AVX2: nothing to compare");
+            return;
+        }
+        let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+        let mut checked = 0usize;
+        for case in 0..64 {
+            // A random invertible-ish affine-projective `M^T`, camera, and row terms.
+            let mut col4 = || {
+                DVec4::new(
+                    rng.f(-2.0, 2.0) as f64,
+                    rng.f(-2.0, 2.0) as f64,
+                    rng.f(-2.0, 2.0) as f64,
+                    rng.f(-2.0, 2.0) as f64,
+                )
+            };
+            let mt = DMat4::from_cols(col4(), col4(), col4(), col4());
+            let v3 = |rng: &mut Rng, s: f32| Vec3::new(rng.f(-s, s), rng.f(-s, s), rng.f(-s, s));
+            let (position, back, rj) = (v3(&mut rng, 10.0), v3(&mut rng, 1.0), v3(&mut rng, 1.0));
+            let (near, far) = (0.05f64 + case as f64 * 0.01, 100.0f64);
+            let (inv_near, z_den) = (1.0 / near, 1.0 / near - 1.0 / far);
+            let w = 4 * 64 + (case % 4);
+            let (wf, hf) = (w as f32, 37.0f32);
+            let map4 = LeafMap4::new(&mt, position, back, inv_near, z_den, wf, hf).unwrap();
+            let map = LeafMap::new(&mt, wf, hf);
+            let cols: Vec<Vec3> = (0..w).map(|_| v3(&mut rng, 1.0)).collect();
+            let special = [0.0, -0.0, -1.0, f32::INFINITY, f32::NAN, 1e-30, 1e30, 0.01];
+            let depth: Vec<f32> = (0..w)
+                .map(|_| match rng.next() % 8 {
+                    0 => special[(rng.next() % 8) as usize],
+                    _ => rng.f(0.01, 50.0),
+                })
+                .collect();
+            let normals: Vec<Vec3> = (0..w)
+                .map(|i| match rng.next() % 8 {
+                    0 => Vec3::ZERO,
+                    1 => Vec3::new(-0.0, 0.0, -0.0),
+                    2 => Vec3::new(0.0, 0.0, f32::NAN),
+                    // Perpendicular to the pixel's view direction.
+                    3 => ((cols[i] + rj) + back).cross(Vec3::X),
+                    _ => v3(&mut rng, 1.0).normalize_or_zero(),
+                })
+                .collect();
+            let flags: Vec<bool> = (0..w).map(|_| rng.next().is_multiple_of(3)).collect();
+            for fl in [None, Some(&flags[..])] {
+                let soa: [Vec<f32>; 3] = [
+                    cols.iter().map(|c| c.x).collect(),
+                    cols.iter().map(|c| c.y).collect(),
+                    cols.iter().map(|c| c.z).collect(),
+                ];
+                let mut out = vec![Node { a: 1, b: 1 }; w];
+                let n = unsafe {
+                    map4.row(
+                        [&soa[0], &soa[1], &soa[2]],
+                        rj,
+                        &depth,
+                        &normals,
+                        fl,
+                        &mut out,
+                    )
+                };
+                assert_eq!(n, w & !3);
+                for i in 0..n {
+                    let (d, nn) = (depth[i], normals[i]);
+                    let want = if !(d.is_finite() && d > 0.0) || nn == Vec3::ZERO {
+                        Node::EMPTY
+                    } else {
+                        let p = position + ((cols[i] + rj) + back) * d;
+                        let z = ((inv_near - 1.0 / d as f64) / z_den) as f32;
+                        let f = if fl.is_some_and(|f| f[i]) {
+                            FLAG_CRACK
+                        } else {
+                            0
+                        };
+                        map.leaf(p, nn, z, f)
+                    };
+                    assert_eq!(out[i], want, "case {case} pixel {i}: d {d:e}, n {nn}");
+                    checked += usize::from(want != Node::EMPTY);
+                }
+            }
+        }
+        assert!(checked > 10_000, "{checked} plane leaves compared");
+    }
+}

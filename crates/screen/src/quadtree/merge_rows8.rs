@@ -1,0 +1,478 @@
+//! One row of a pruning level (Widmer et al. 2015, §3.3) with eight parents per step in
+//! AVX2 lanes: `merge_rows`' four-parent kernel (its module docs list the operations and
+//! their order) with the merge of the candidate parents — the child normals, their
+//! normalised sum, the cosines, the 16 corner projections and their largest deviation, the
+//! proxy — evaluated for eight parents in the lanes of `__m256`s. The children are gathered
+//! and decoded four parents at a time exactly as in `merge_rows` (`Kids`), then joined; the
+//! parents that do not merge take `merge_rows`' own per-group code (`MergeCtx::group4`) with
+//! the merges passed in. Every lane does the four-lane kernel's operations in its order —
+//! IEEE square root, division, products and sums are correctly rounded per lane, `minps` /
+//! `maxps` pick the same operand in 8 lanes as in 4, nothing is fused (no FMA is enabled) —
+//! so the nodes are the same bits; the pixel columns `2 (qx0 + p) + kx` and the parent
+//! columns `qx0 + p` are exact small integers in f32 whichever group they start from.
+//!
+//! `F8` / `M8` wrap `__m256` with `#[inline(always)]` methods and are only used inside
+//! [`MergeCtx::parent_row_fast`]'s AVX2 entry point (after `is_x86_feature_detected!`), so
+//! every intrinsic compiles to one instruction there. The test below compares rows of random
+//! levels with `merge_rows`' [`MergeCtx::parent_row`] (the SSE2 twin); the build's tests
+//! compare whole trees with the reference build.
+
+use core::arch::x86_64::*;
+use core::ops::{Add, Div, Mul, Neg, Sub};
+
+use glam::Vec4;
+
+use super::leaf_avx2::f16x8_encode;
+use super::merge::MergeCtx;
+use super::merge_rows::{CORNER, KID, Kids};
+use super::node::{FLAG_CRACK, Node};
+use super::tree::Level;
+
+/// Largest finite f16.
+const F16_MAX: f32 = 65504.0;
+
+/// Eight f32 lanes. SAFETY (every method): only called from code compiled with AVX2 that
+/// runs after AVX2 was detected (module docs).
+#[derive(Clone, Copy)]
+struct F8(__m256);
+
+/// A lane mask of `F8` (all ones or all zeros per lane).
+#[derive(Clone, Copy)]
+struct M8(__m256);
+
+macro_rules! op {
+    ($tr:ident, $f:ident, $i:ident) => {
+        impl $tr for F8 {
+            type Output = F8;
+            #[inline(always)]
+            fn $f(self, o: F8) -> F8 {
+                // SAFETY: AVX (module docs).
+                F8(unsafe { $i(self.0, o.0) })
+            }
+        }
+    };
+}
+op!(Add, add, _mm256_add_ps);
+op!(Sub, sub, _mm256_sub_ps);
+op!(Mul, mul, _mm256_mul_ps);
+op!(Div, div, _mm256_div_ps);
+
+impl Neg for F8 {
+    type Output = F8;
+    /// Sign flip, as glam's `Vec4` negation (`xorps` with `-0`).
+    #[inline(always)]
+    fn neg(self) -> F8 {
+        // SAFETY: AVX (module docs).
+        F8(unsafe { _mm256_xor_ps(_mm256_set1_ps(-0.0), self.0) })
+    }
+}
+
+impl F8 {
+    #[inline(always)]
+    fn splat(v: f32) -> F8 {
+        // SAFETY: AVX (module docs).
+        F8(unsafe { _mm256_set1_ps(v) })
+    }
+    /// Lanes 0-3 from `lo`, 4-7 from `hi`.
+    #[inline(always)]
+    fn join(lo: Vec4, hi: Vec4) -> F8 {
+        // SAFETY: AVX (module docs).
+        F8(unsafe { _mm256_set_m128(hi.into(), lo.into()) })
+    }
+    #[inline(always)]
+    fn lanes(v: [f32; 8]) -> F8 {
+        // SAFETY: AVX (module docs).
+        F8(unsafe { _mm256_loadu_ps(v.as_ptr()) })
+    }
+    #[inline(always)]
+    fn to_array(self) -> [f32; 8] {
+        let mut a = [0.0f32; 8];
+        // SAFETY: AVX (module docs); a 32-byte store into a 32-byte array.
+        unsafe { _mm256_storeu_ps(a.as_mut_ptr(), self.0) };
+        a
+    }
+    #[inline(always)]
+    fn sqrt(self) -> F8 {
+        // SAFETY: AVX (module docs).
+        F8(unsafe { _mm256_sqrt_ps(self.0) })
+    }
+    /// `minps(self, o)`, as glam's `Vec4::min`.
+    #[inline(always)]
+    fn min(self, o: F8) -> F8 {
+        // SAFETY: AVX (module docs).
+        F8(unsafe { _mm256_min_ps(self.0, o.0) })
+    }
+    /// `maxps(self, o)`: `self > o ? self : o` per lane.
+    #[inline(always)]
+    fn max_ps(self, o: F8) -> F8 {
+        // SAFETY: AVX (module docs).
+        F8(unsafe { _mm256_max_ps(self.0, o.0) })
+    }
+    /// `|self|` (sign bit cleared), as glam's `Vec4::abs`.
+    #[inline(always)]
+    fn abs(self) -> F8 {
+        // SAFETY: AVX (module docs).
+        F8(unsafe { _mm256_andnot_ps(_mm256_set1_ps(-0.0), self.0) })
+    }
+    #[inline(always)]
+    fn gt(self, o: F8) -> M8 {
+        // SAFETY: AVX (module docs).
+        M8(unsafe { _mm256_cmp_ps::<_CMP_GT_OS>(self.0, o.0) })
+    }
+    #[inline(always)]
+    fn lt(self, o: F8) -> M8 {
+        // SAFETY: AVX (module docs).
+        M8(unsafe { _mm256_cmp_ps::<_CMP_LT_OS>(self.0, o.0) })
+    }
+    #[inline(always)]
+    fn ge(self, o: F8) -> M8 {
+        // SAFETY: AVX (module docs).
+        M8(unsafe { _mm256_cmp_ps::<_CMP_GE_OS>(self.0, o.0) })
+    }
+    /// Lanes that are not NaN.
+    #[inline(always)]
+    fn ordered(self) -> M8 {
+        // SAFETY: AVX (module docs).
+        M8(unsafe { _mm256_cmp_ps::<_CMP_ORD_Q>(self.0, self.0) })
+    }
+    /// glam's `is_finite_mask`: `|self| < inf`.
+    #[inline(always)]
+    fn finite(self) -> M8 {
+        self.abs().lt(F8::splat(f32::INFINITY))
+    }
+    /// glam's `Vec4::select`: `(a & m) | (b & !m)`.
+    #[inline(always)]
+    fn select(m: M8, a: F8, b: F8) -> F8 {
+        // SAFETY: AVX (module docs).
+        F8(unsafe { _mm256_or_ps(_mm256_andnot_ps(m.0, b.0), _mm256_and_ps(a.0, m.0)) })
+    }
+}
+
+impl M8 {
+    #[inline(always)]
+    fn and(self, o: M8) -> M8 {
+        // SAFETY: AVX (module docs).
+        M8(unsafe { _mm256_and_ps(self.0, o.0) })
+    }
+    #[inline(always)]
+    fn bits(self) -> u32 {
+        // SAFETY: AVX (module docs).
+        unsafe { _mm256_movemask_ps(self.0) as u32 }
+    }
+}
+
+impl MergeCtx {
+    /// [`MergeCtx::parent_row`] (same arguments, same nodes), eight parents per step in
+    /// AVX2 lanes if the CPU has AVX2.
+    pub(super) fn parent_row_fast(
+        &self,
+        child: &Level,
+        l: u32,
+        qy: u32,
+        out: &mut [Node],
+        allow: impl Fn(u32) -> bool,
+    ) {
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2 (checked).
+            unsafe { self.parent_row8(child, l, qy, out, allow) }
+        } else {
+            self.parent_row(child, l, qy, out, allow)
+        }
+    }
+
+    #[target_feature(enable = "avx2")]
+    fn parent_row8(
+        &self,
+        child: &Level,
+        l: u32,
+        qy: u32,
+        out: &mut [Node],
+        allow: impl Fn(u32) -> bool,
+    ) {
+        let cw = child.w as usize;
+        let y0 = 2 * qy as usize;
+        let r0 = &child.nodes[y0 * cw..(y0 + 1) * cw];
+        let r1 = &child.nodes[(y0 + 1) * cw..(y0 + 2) * cw];
+        for (g, outs) in out.chunks_mut(8).enumerate() {
+            let qx0 = 8 * g;
+            let n = outs.len();
+            let (o_lo, o_hi) = outs.split_at_mut(n.min(4));
+            let lo = Kids::gather(r0, r1, qx0, o_lo.len());
+            let hi = Kids::gather(r0, r1, qx0 + 4, o_hi.len());
+            let mut planes = 0xff;
+            for k in 0..4 {
+                planes &= lo.planes(k) | (hi.planes(k) << 4);
+            }
+            let mut cand = [false; 8];
+            for (p, c) in cand.iter_mut().enumerate().take(n) {
+                *c = !self.never && planes & (1 << p) != 0 && allow((qx0 + p) as u32);
+            }
+            let merged = if cand.iter().any(|&c| c) {
+                self.merge8(l, qx0 as u32, qy, &lo, &hi, cand)
+            } else {
+                [None; 8]
+            };
+            let (m_lo, m_hi) = (
+                [merged[0], merged[1], merged[2], merged[3]],
+                [merged[4], merged[5], merged[6], merged[7]],
+            );
+            self.group4(l, qx0 as u32, qy, &lo, o_lo, &allow, Some(m_lo));
+            if !o_hi.is_empty() {
+                self.group4(l, qx0 as u32 + 4, qy, &hi, o_hi, &allow, Some(m_hi));
+            }
+        }
+    }
+
+    /// `merge_rows`' `merge4` for eight parents: lanes 0-3 the parents of `lo`, 4-7 those
+    /// of `hi` (`cand`: four plane children, allowed to merge).
+    #[inline(always)]
+    fn merge8(
+        &self,
+        l: u32,
+        qx0: u32,
+        qy: u32,
+        lo: &Kids,
+        hi: &Kids,
+        cand: [bool; 8],
+    ) -> [Option<Node>; 8] {
+        let s = F8::splat;
+        let cl = l - 1;
+        let (ws, hs) = (
+            f32::from_bits(self.wf.to_bits() - (cl << 23)),
+            f32::from_bits(self.hf.to_bits() - (cl << 23)),
+        );
+        let (mut gx, mut gy) = ([s(0.0); 4], [s(0.0); 4]);
+        // `Node::normal` per child, and their sum from `+0` in child order.
+        let (mut nx, mut ny, mut nz) = ([s(0.0); 4], [s(0.0); 4], [s(0.0); 4]);
+        let (mut sx, mut sy, mut sz) = (s(0.0), s(0.0), s(0.0));
+        for k in 0..4 {
+            let ((lx, ly), (hx, hy)) = (lo.increments(k), hi.increments(k));
+            gx[k] = F8::join(lx, hx) * s(ws);
+            gy[k] = F8::join(ly, hy) * s(hs);
+            let r = s(1.0) / (s(1.0) + gx[k] * gx[k] + gy[k] * gy[k]).sqrt();
+            (nx[k], ny[k], nz[k]) = (gx[k] * r, gy[k] * r, -r);
+            sx = sx + nx[k];
+            sy = sy + ny[k];
+            sz = sz + nz[k];
+        }
+        // `Vec3::normalize_or_zero`.
+        let rcp = s(1.0) / (sx * sx + sy * sy + sz * sz).sqrt();
+        let ok = rcp.finite().and(rcp.gt(s(0.0)));
+        let (nnx, nny, nnz) = (
+            F8::select(ok, sx * rcp, s(0.0)),
+            F8::select(ok, sy * rcp, s(0.0)),
+            F8::select(ok, sz * rcp, s(0.0)),
+        );
+        let mut min_cos = s(f32::INFINITY);
+        for k in 0..4 {
+            min_cos = min_cos.min(nx[k] * nnx + ny[k] * nny + nz[k] * nnz);
+        }
+        let cand_bits = (0..8).fold(0u32, |m, p| m | (u32::from(cand[p]) << p));
+        let valid = cand_bits & nnz.lt(s(-1e-6)).bits() & min_cos.gt(s(self.loosest_cos())).bits();
+        if valid == 0 {
+            return [None; 8];
+        }
+        // The 16 child corners projected on the proxy normal, child-major.
+        let size = (1u32 << cl) as f32;
+        let half = 0.5 * size;
+        let (hx, hy) = (half / self.wf, half / self.hf);
+        let init: f32 = core::iter::empty::<f32>().sum();
+        let mut acc = s(init);
+        let mut proj = [s(0.0); 16];
+        let steps = F8::lanes([0.0, 2.0, 4.0, 6.0, 8.0, 10.0, 12.0, 14.0]);
+        for (k, &(kx, ky)) in KID.iter().enumerate() {
+            let cx = s((2 * qx0 + kx as u32) as f32) + steps;
+            let xc = ((cx + s(0.5)) * s(size)) / s(self.wf);
+            let yc = s((((2 * qy + ky as u32) as f32 + 0.5) * size) / self.hf);
+            let zc = F8::join(lo.zc(k), hi.zc(k));
+            for (m, &(cx, cy)) in CORNER.iter().enumerate() {
+                let (dx, dy) = (cx * hx, cy * hy);
+                let (px, py, pz) = (xc + s(dx), yc + s(dy), zc + gx[k] * s(dx) + gy[k] * s(dy));
+                let v = nnx * px + nny * py + nnz * pz;
+                proj[4 * k + m] = v;
+                acc = acc + v;
+            }
+        }
+        // `MergeCtx::proxy`.
+        let c = acc / s(16.0);
+        let mut dm = s(0.0);
+        for v in proj {
+            dm = (v - c).abs().max_ps(dm);
+        }
+        let dmax = (dm / -nnz).to_array();
+        let psize = (1u32 << l) as f32;
+        let px = F8::lanes([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]);
+        let xc = ((s(qx0 as f32) + px + s(0.5)) * s(psize)) / s(self.wf);
+        let yc = s(((qy as f32 + 0.5) * psize) / self.hf);
+        let zcv = (c - nnx * xc - nny * yc) / nnz;
+        let zc = zcv.to_array();
+        let inv = s(-1.0) / nnz;
+        let min_cos = min_cos.to_array();
+        let mut crack = 0;
+        for k in 0..4 {
+            // SAFETY: SSE baseline.
+            crack |= unsafe {
+                _mm_movemask_ps(lo.crack(k)) as u32 | ((_mm_movemask_ps(hi.crack(k)) as u32) << 4)
+            };
+        }
+        // [`Node::plane_with_gradient`] of every lane: the increments `g (2^l / W)`,
+        // `g (2^l / H)`, `None` unless `z_c` is finite and `>= 0` and neither increment is
+        // NaN; clamped (`maxps` / `minps` are `clamp` for non-NaN values) and f16-encoded
+        // as in `leaf_avx2`; `z_c` rounded to 21 bits, the tag and flag `O`.
+        let size = (1u32 << l) as f32;
+        let (ex, ey) = (
+            (nnx * inv) * s(size / self.wf),
+            (nny * inv) * s(size / self.hf),
+        );
+        let (ok_node, a, b) = {
+            let ok = zcv
+                .finite()
+                .and(zcv.ge(s(0.0)))
+                .and(ex.ordered())
+                .and(ey.ordered());
+            let (lo_, hi_) = (s(-F16_MAX), s(F16_MAX));
+            let clamp = |e: F8| e.max_ps(lo_).min(hi_);
+            let (ex, ey) = (clamp(ex), clamp(ey));
+            let (mut a, mut b) = ([0u32; 8], [0u32; 8]);
+            // SAFETY: AVX2 (module docs); 32-byte stores into 32-byte arrays.
+            unsafe {
+                let (hx, hy) = (f16x8_encode(ex.0), f16x8_encode(ey.0));
+                let bv = _mm256_or_si256(
+                    _mm256_and_si256(hx, _mm256_set1_epi32(0xffff)),
+                    _mm256_slli_epi32::<16>(hy),
+                );
+                let bits = _mm256_and_si256(
+                    _mm256_add_epi32(_mm256_castps_si256(zcv.0), _mm256_set1_epi32(2)),
+                    _mm256_set1_epi32(!3),
+                );
+                let av = _mm256_or_si256(bits, _mm256_set1_epi32(0x8000_0000u32 as i32));
+                _mm256_storeu_si256(a.as_mut_ptr() as *mut __m256i, av);
+                _mm256_storeu_si256(b.as_mut_ptr() as *mut __m256i, bv);
+            }
+            (ok.bits(), a, b)
+        };
+        let mut res = [None; 8];
+        for (p, r) in res.iter_mut().enumerate() {
+            if valid & (1 << p) == 0 {
+                continue;
+            }
+            let u = if self.adaptive {
+                self.depth_fraction(zc[p])
+            } else {
+                0.0
+            };
+            if min_cos[p] > self.cos_thr(u) && dmax[p] < self.dist_thr(u) && ok_node & (1 << p) != 0
+            {
+                let flags = if (crack >> p) & 1 != 0 { FLAG_CRACK } else { 0 };
+                *r = Some(Node {
+                    a: a[p] | flags,
+                    b: b[p],
+                });
+            }
+        }
+        res
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small deterministic generator (xorshift64*).
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> u64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+        }
+        fn f(&mut self, lo: f32, hi: f32) -> f32 {
+            lo + (hi - lo) * ((self.next() >> 40) as f32 / (1u64 << 24) as f32)
+        }
+    }
+
+    /// Rows made eight parents per step equal `merge_rows`' four-parent rows (the SSE2
+    /// twin) node for node: random child levels 0-3 of near-coplanar plane patches (so most
+    /// parents merge, some fail the cosine or distance test), with empty and AABB children,
+    /// flagged planes, blocked parents, odd row widths, fixed and adaptive thresholds.
+    #[test]
+    fn rows_equal_the_four_parent_rows() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            eprintln!("no AVX2: nothing to compare");
+            return;
+        }
+        let mut rng = Rng(0x1234_5678_9abc_def1);
+        let (mut merged, mut total) = (0usize, 0usize);
+        for case in 0..48u32 {
+            let (wf, hf) = (1600.0f32, 900.0f32);
+            let ctx = MergeCtx {
+                wf,
+                hf,
+                cos_norm: [0.99, 0.9995, 0.95][case as usize % 3],
+                gamma_dist: [1e-3, 1e-4, 1e-2][case as usize % 3],
+                adaptive: case % 2 == 1,
+                near: 0.1,
+                far: 100.0,
+                crack_px: 0.5 * (case % 3) as f32,
+                never: case % 16 == 15,
+                lanes: true,
+            };
+            let cl = case % 4;
+            let l = cl + 1;
+            let pw = 1 + (rng.next() % 40) as u32;
+            let ph = 3u32;
+            let (cw, ch) = (2 * pw, 2 * ph);
+            // One plane per case, `z = z0 + ax x + ay y`, with noise per child.
+            let (z0, ax, ay) = (rng.f(0.2, 0.8), rng.f(-2.0, 2.0), rng.f(-2.0, 2.0));
+            let noise = [0.0, 1e-6, 1e-4, 1e-2][(case / 4) as usize % 4];
+            let nodes: Vec<Node> = (0..cw * ch)
+                .map(|k| {
+                    let (x, y) = (k % cw, k / cw);
+                    match rng.next() % 16 {
+                        0 => Node::EMPTY,
+                        1 => Node::aabb(rng.f(0.0, 0.5), rng.f(0.5, 1.0)),
+                        _ => {
+                            let size = (1u32 << cl) as f32;
+                            let (xc, yc) =
+                                ((x as f32 + 0.5) * size / wf, (y as f32 + 0.5) * size / hf);
+                            let zc = z0 + ax * xc + ay * yc + rng.f(-noise, noise);
+                            let gx = ax + rng.f(-noise, noise) * 100.0;
+                            let gy = ay + rng.f(-noise, noise) * 100.0;
+                            let flags = if rng.next().is_multiple_of(8) {
+                                FLAG_CRACK
+                            } else {
+                                0
+                            };
+                            Node::plane_with_gradient(zc, gx, gy, cl, wf, hf, flags)
+                                .unwrap_or(Node::EMPTY)
+                        }
+                    }
+                })
+                .collect();
+            let child = Level {
+                w: cw,
+                h: ch,
+                nodes,
+            };
+            let blocked: Vec<bool> = (0..pw * ph)
+                .map(|_| rng.next().is_multiple_of(10))
+                .collect();
+            for qy in 0..ph {
+                let allow = |qx: u32| !blocked[(qy * pw + qx) as usize];
+                let mut four = vec![Node { a: 1, b: 1 }; pw as usize];
+                let mut eight = vec![Node { a: 2, b: 2 }; pw as usize];
+                ctx.parent_row(&child, l, qy, &mut four, allow);
+                // SAFETY: AVX2 (checked above).
+                unsafe { ctx.parent_row8(&child, l, qy, &mut eight, allow) };
+                assert_eq!(four, eight, "case {case}, level {l}, row {qy}");
+                merged += four.iter().filter(|n| n.is_plane()).count();
+                total += four.len();
+            }
+        }
+        assert!(
+            merged > total / 4 && merged < total,
+            "{merged} of {total} parents merged"
+        );
+    }
+}

@@ -1,0 +1,345 @@
+//! The pixel planes' cascade trigger depths ([`super::cascade`], `pixel_trigger`) of a row,
+//! eight pixels per step in AVX2 lanes, one pixel per lane (run-time detection): the
+//! fast path of `fixpoint::pixel_triggers_row`, `trigger_lanes::pixel_triggers4` with
+//! eight lanes. Every lane does that kernel's operations in its order (its module docs list
+//! them: the own leaf's plane decoded as `decode_plane_at` at level 0, per deeper layer the
+//! covered and edge-on lanes, per footprint corner the deeper plane's `z`, the running
+//! minimum by the same compare-select, the own plane's signed distance against
+//! `-SAFE_MARGIN`, the trigger depth `max(front - margin, +0)` of unsafe lanes): IEEE
+//! products, sums and divisions are correctly rounded per lane, `maxps` picks the same
+//! operand in 8 lanes as in 4, nothing is fused (no FMA is enabled), so the trigger depths
+//! are the same bits. The f16 slopes are decoded four lanes at a time by `merge_rows`'
+//! `f16x4` and joined; the deeper layers' normals are transposed from their `Vec3`s four at
+//! a time (as in `leaf_avx2`). The test below compares rows with the four-lane kernel.
+
+use core::arch::x86_64::*;
+
+use glam::Vec3;
+
+use super::cascade::SAFE_MARGIN;
+use super::merge_rows::f16x4;
+use super::node::Node;
+use crate::LayerPlanes;
+
+/// `(m & a) | (b & !m)` per lane.
+#[inline]
+#[target_feature(enable = "avx2")]
+fn sel(m: __m256, a: __m256, b: __m256) -> __m256 {
+    _mm256_or_ps(_mm256_and_ps(m, a), _mm256_andnot_ps(m, b))
+}
+
+/// Four `Vec3`s at `p` as `(x, y, z)` lanes (`v0 = x0 y0 z0 x1`, `v1 = y1 z1 x2 y2`,
+/// `v2 = z2 x3 y3 z3`).
+///
+/// # Safety
+/// `p` must point to four readable `Vec3`s (12 `f32`s).
+#[inline]
+#[target_feature(enable = "avx2")]
+unsafe fn soa4(p: *const Vec3) -> (__m128, __m128, __m128) {
+    let p = p as *const f32;
+    // SAFETY: 12 readable floats (the caller's contract).
+    let (v0, v1, v2) = unsafe {
+        (
+            _mm_loadu_ps(p),
+            _mm_loadu_ps(p.add(4)),
+            _mm_loadu_ps(p.add(8)),
+        )
+    };
+    let t = _mm_blend_ps::<0b0010>(_mm_blend_ps::<0b0100>(v0, v1), v2);
+    let x = _mm_shuffle_ps::<0b01_10_11_00>(t, t);
+    let t = _mm_blend_ps::<0b0100>(_mm_blend_ps::<0b0010>(v1, v0), v2);
+    let y = _mm_shuffle_ps::<0b10_11_00_01>(t, t);
+    let t = _mm_blend_ps::<0b0010>(_mm_blend_ps::<0b0100>(v2, v0), v1);
+    let z = _mm_shuffle_ps::<0b11_00_01_10>(t, t);
+    (x, y, z)
+}
+
+/// The trigger depths of the first `8 floor(W / 8)` pixels of row `j` into `tz` (`W =
+/// tz.len()`), from the row's leaves `nodes`, the footprint edges `xe` (`i / W`, `W + 1`
+/// values), the pixel centres `xc`, the row's edges and centre `y = (y0, y1, yc)`, pixel
+/// `k0 + i` of the deeper layers; pushes the pixels (`k0 + i`) with a finite trigger depth
+/// on `listed`; returns how many pixels it did.
+///
+/// # Safety
+/// The CPU must have AVX2.
+#[allow(clippy::too_many_arguments)]
+#[target_feature(enable = "avx2")]
+pub(super) unsafe fn pixel_triggers_row8(
+    tz: &mut [f32],
+    nodes: &[Node],
+    k0: usize,
+    xe: &[f32],
+    xc: &[f32],
+    (y0, y1, yc): (f32, f32, f32),
+    (wf, hf): (f32, f32),
+    deeper: &[LayerPlanes],
+    listed: &mut Vec<u32>,
+) -> usize {
+    let w = tz.len();
+    let n8 = w & !7;
+    assert!(nodes.len() >= n8 && xe.len() > n8 && xc.len() >= n8);
+    assert!(
+        deeper
+            .iter()
+            .all(|pj| pj.normal.len() >= k0 + n8 && pj.offset.len() >= k0 + n8)
+    );
+    let s = _mm256_set1_ps;
+    let join = |lo: __m128, hi: __m128| _mm256_set_m128(hi, lo);
+    let neg0 = s(-0.0);
+    let (sy0, sy1, syc) = (s(y0), s(y1), s(yc));
+    let margin = s(-SAFE_MARGIN);
+    let mut i = 0;
+    while i < n8 {
+        let k = k0 + i;
+        // SAFETY: `i + 8 <= n8` and the slices hold `n8` (`xe`: `n8 + 1`) elements
+        // (asserted); `Node` is two `u32`s (`repr(C)`).
+        let (lo0, hi0, lo1, hi1, xcv, x0, x1) = unsafe {
+            let np = nodes.as_ptr().add(i) as *const f32;
+            (
+                _mm_loadu_ps(np),
+                _mm_loadu_ps(np.add(4)),
+                _mm_loadu_ps(np.add(8)),
+                _mm_loadu_ps(np.add(12)),
+                _mm256_loadu_ps(xc.as_ptr().add(i)),
+                _mm256_loadu_ps(xe.as_ptr().add(i)),
+                _mm256_loadu_ps(xe.as_ptr().add(i + 1)),
+            )
+        };
+        // The own planes (`decode_plane_at`, level 0), four lanes of `a` / `b` at a time.
+        let a_lo = _mm_castps_si128(_mm_shuffle_ps::<0b10_00_10_00>(lo0, hi0));
+        let b_lo = _mm_castps_si128(_mm_shuffle_ps::<0b11_01_11_01>(lo0, hi0));
+        let a_hi = _mm_castps_si128(_mm_shuffle_ps::<0b10_00_10_00>(lo1, hi1));
+        let b_hi = _mm_castps_si128(_mm_shuffle_ps::<0b11_01_11_01>(lo1, hi1));
+        let gx = _mm256_mul_ps(join(f16x4(b_lo).into(), f16x4(b_hi).into()), s(wf));
+        let gy = _mm256_mul_ps(
+            join(
+                f16x4(_mm_srli_epi32::<16>(b_lo)).into(),
+                f16x4(_mm_srli_epi32::<16>(b_hi)).into(),
+            ),
+            s(hf),
+        );
+        let a = _mm256_set_m128i(a_hi, a_lo);
+        let m = _mm256_max_ps(_mm256_andnot_ps(neg0, gx), _mm256_andnot_ps(neg0, gy));
+        let m = _mm256_max_ps(m, s(1.0));
+        let e = _mm256_and_si256(_mm256_castps_si256(m), _mm256_set1_epi32(0x7f80_0000));
+        let sc = _mm256_castsi256_ps(_mm256_sub_epi32(_mm256_set1_epi32(0x7f00_0000), e));
+        let (pnx, pny, pnz) = (
+            _mm256_mul_ps(gx, sc),
+            _mm256_mul_ps(gy, sc),
+            _mm256_xor_ps(neg0, sc),
+        );
+        let zc = _mm256_castsi256_ps(_mm256_and_si256(a, _mm256_set1_epi32(0x7fff_fffc)));
+        let pc = _mm256_add_ps(
+            _mm256_add_ps(_mm256_mul_ps(pnx, xcv), _mm256_mul_ps(pny, syc)),
+            _mm256_mul_ps(pnz, zc),
+        );
+        let plane = _mm256_castsi256_ps(_mm256_srai_epi32::<31>(a));
+        // The deeper layers (`trigger_lanes::triggers4`).
+        let corners = [(x0, sy0), (x1, sy0), (x0, sy1), (x1, sy1)];
+        let mut front = s(f32::INFINITY);
+        let mut bad = _mm256_setzero_ps();
+        for pj in deeper {
+            // SAFETY: pixels `k .. k + 8` of the deeper layer exist (asserted).
+            let (nx, ny, nz, cj) = unsafe {
+                let p = pj.normal.as_ptr().add(k);
+                let (lx, ly, lz) = soa4(p);
+                let (hx, hy, hz) = soa4(p.add(4));
+                (
+                    join(lx, hx),
+                    join(ly, hy),
+                    join(lz, hz),
+                    _mm256_loadu_ps(pj.offset.as_ptr().add(k)),
+                )
+            };
+            let z0 = _mm256_setzero_ps();
+            let covered = _mm256_or_ps(
+                _mm256_or_ps(
+                    _mm256_cmp_ps::<_CMP_NEQ_UQ>(nx, z0),
+                    _mm256_cmp_ps::<_CMP_NEQ_UQ>(ny, z0),
+                ),
+                _mm256_cmp_ps::<_CMP_NEQ_UQ>(nz, z0),
+            );
+            let edge = _mm256_andnot_ps(_mm256_cmp_ps::<_CMP_LT_OS>(nz, s(-1e-6)), covered);
+            bad = _mm256_or_ps(bad, edge);
+            front = sel(edge, z0, front);
+            let live = _mm256_andnot_ps(edge, covered);
+            if _mm256_movemask_ps(live) == 0 {
+                continue;
+            }
+            for &(x, y) in &corners {
+                let z = _mm256_div_ps(
+                    _mm256_sub_ps(
+                        _mm256_sub_ps(cj, _mm256_mul_ps(nx, x)),
+                        _mm256_mul_ps(ny, y),
+                    ),
+                    nz,
+                );
+                let lower = _mm256_and_ps(live, _mm256_cmp_ps::<_CMP_LT_OS>(z, front));
+                front = sel(lower, z, front);
+                let f = _mm256_sub_ps(
+                    _mm256_add_ps(
+                        _mm256_add_ps(_mm256_mul_ps(pnx, x), _mm256_mul_ps(pny, y)),
+                        _mm256_mul_ps(pnz, z),
+                    ),
+                    pc,
+                );
+                let safe = _mm256_and_ps(_mm256_cmp_ps::<_CMP_LE_OS>(f, margin), plane);
+                bad = _mm256_or_ps(bad, _mm256_andnot_ps(safe, live));
+            }
+        }
+        let t = _mm256_sub_ps(front, s(SAFE_MARGIN));
+        let t = sel(
+            _mm256_cmp_ps::<_CMP_GT_OS>(t, _mm256_setzero_ps()),
+            t,
+            _mm256_setzero_ps(),
+        );
+        let t = sel(bad, t, s(f32::INFINITY));
+        // SAFETY: `tz[i..i + 8]` is in bounds (`i + 8 <= n8 <= W`).
+        unsafe { _mm256_storeu_ps(tz.as_mut_ptr().add(i), t) };
+        // The finite ones: `|t| < inf`.
+        let fin = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LT_OQ>(
+            _mm256_andnot_ps(neg0, t),
+            s(f32::INFINITY),
+        ));
+        let mut bits = fin as u32;
+        while bits != 0 {
+            let d = bits.trailing_zeros() as usize;
+            listed.push((k + d) as u32);
+            bits &= bits - 1;
+        }
+        i += 8;
+    }
+    n8
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::quadtree::trigger_lanes::pixel_triggers4;
+
+    /// A small deterministic generator (xorshift64*).
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> u64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+        }
+        fn f(&mut self, lo: f32, hi: f32) -> f32 {
+            lo + (hi - lo) * ((self.next() >> 40) as f32 / (1u64 << 24) as f32)
+        }
+    }
+
+    /// Rows of the eight-lane kernel equal the four-lane kernel (`trigger_lanes`) bit for
+    /// bit, and list the same pixels: random own leaves (planes, empty, AABB, flagged) over
+    /// one or two deeper layers with covered, uncovered and edge-on pixels and planes in
+    /// front of and behind the own ones.
+    #[test]
+    fn rows_equal_the_four_lane_rows() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            eprintln!("no AVX2: nothing to compare");
+            return;
+        }
+        let mut rng = Rng(0x0bad_cafe_dead_beef);
+        let (wf, hf) = (1600.0f32, 900.0f32);
+        let (mut finite, mut total) = (0usize, 0usize);
+        for case in 0..64u32 {
+            let w = 8 * (1 + case as usize % 9) + (case as usize % 8);
+            let (j, rows) = (case % 3, 3u32);
+            let k0 = j as usize * w;
+            let nodes: Vec<Node> = (0..w)
+                .map(|_| match rng.next() % 8 {
+                    0 => Node::EMPTY,
+                    1 => Node::aabb(rng.f(0.0, 0.5), rng.f(0.5, 1.0)),
+                    _ => Node::plane_with_gradient(
+                        rng.f(0.0, 1.0),
+                        rng.f(-3.0, 3.0),
+                        rng.f(-3.0, 3.0),
+                        0,
+                        wf,
+                        hf,
+                        (rng.next() % 2) as u32,
+                    )
+                    .unwrap_or(Node::EMPTY),
+                })
+                .collect();
+            let deeper: Vec<LayerPlanes> = (0..1 + case % 2)
+                .map(|_| {
+                    let n = w * rows as usize;
+                    let normal: Vec<Vec3> = (0..n)
+                        .map(|_| match rng.next() % 8 {
+                            0 => Vec3::ZERO,
+                            1 => Vec3::new(1.0, 0.0, 0.0),
+                            2 => Vec3::new(0.6, 0.8, -1e-7),
+                            _ => Vec3::new(rng.f(-0.5, 0.5), rng.f(-0.5, 0.5), -1.0).normalize(),
+                        })
+                        .collect();
+                    let offset = (0..n).map(|_| rng.f(-1.2, 0.2)).collect();
+                    LayerPlanes {
+                        width: w as u32,
+                        height: rows,
+                        normal,
+                        offset,
+                        flag: vec![false; n],
+                    }
+                })
+                .collect();
+            let xe: Vec<f32> = (0..=w).map(|i| i as f32 / wf).collect();
+            let xc: Vec<f32> = (0..w).map(|i| ((i as f32 + 0.5) * 1.0) / wf).collect();
+            let y = (
+                (j as f32) / hf,
+                ((j + 1) as f32) / hf,
+                ((j as f32 + 0.5) * 1.0) / hf,
+            );
+            let mut tz = vec![0.0f32; w];
+            let mut listed = Vec::new();
+            // SAFETY: AVX2 (checked above).
+            let n = unsafe {
+                pixel_triggers_row8(
+                    &mut tz,
+                    &nodes,
+                    k0,
+                    &xe,
+                    &xc,
+                    y,
+                    (wf, hf),
+                    &deeper,
+                    &mut listed,
+                )
+            };
+            assert_eq!(n, w & !7);
+            let mut want = Vec::new();
+            for i in (0..n).step_by(4) {
+                let t = pixel_triggers4(
+                    k0 + i,
+                    &nodes[i..],
+                    &xe[i..],
+                    &xc[i..],
+                    y,
+                    (wf, hf),
+                    &deeper,
+                )
+                .to_array();
+                for d in 0..4 {
+                    assert_eq!(
+                        tz[i + d].to_bits(),
+                        t[d].to_bits(),
+                        "case {case} pixel {}",
+                        i + d
+                    );
+                    if t[d].is_finite() {
+                        want.push((k0 + i + d) as u32);
+                    }
+                }
+            }
+            assert_eq!(listed, want, "case {case}");
+            finite += want.len();
+            total += n;
+        }
+        assert!(
+            finite > total / 10 && finite < total,
+            "{finite} of {total} finite"
+        );
+    }
+}
