@@ -28,6 +28,7 @@ use glam::Vec2;
 use parallax_bvh::{Bvh, Hit};
 use parallax_core::image::GBuffer;
 use parallax_core::{Image, Rgb};
+use parallax_raster::raster::TriangleFilter;
 use parallax_raster::{RasterOptions, View, capture_layers, capture_layers_filtered};
 use parallax_render::score::Shading;
 use parallax_scene::Scene;
@@ -176,7 +177,7 @@ pub fn capture_reference_with(
     seed: u64,
 ) -> Result<Reference, SynthError> {
     let (gbuffers, colors, capture_ms, shade_ms) =
-        shaded_layers(scene, bvh, camera, layers, hidden, shading, seed)?;
+        shaded_layers(scene, bvh, camera, layers, hidden, None, shading, seed)?;
     let cube = UnitCube::fit_depths(camera, gbuffers.iter().map(|g| &g.depth[..]))?;
     Ok(Reference {
         camera: camera.clone(),
@@ -196,26 +197,34 @@ pub fn capture_reference_with(
 
 /// The layers of [`capture_reference_with`] and their colours, with the milliseconds of
 /// capturing and of shading; a view that sees nothing gives empty layers (environment
-/// colour), not an error.
+/// colour), not an error. `only` (when given) keeps the triangles it accepts out of nothing
+/// else: every layer, layer 0 included, rasterizes only them (the per-object cube maps of
+/// [`crate::reflect::objects`] leave their own object's far side out); `None` is the plain
+/// capture.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn shaded_layers(
     scene: &Scene,
     bvh: &Bvh,
     camera: &Pinhole,
     layers: usize,
     hidden: HiddenLayers,
+    only: Option<TriangleFilter>,
     shading: Shading,
     seed: u64,
 ) -> Result<(Vec<GBuffer>, Vec<Image<Rgb>>, f64, f64), SynthError> {
     let t = Instant::now();
     let view = View::from_pinhole(camera)?;
-    let capture = capture_layers(scene, &view, &RasterOptions::layers(layers))?;
+    let capture = match only {
+        None => capture_layers(scene, &view, &RasterOptions::layers(layers))?,
+        Some(f) => capture_layers_filtered(scene, &view, &RasterOptions::layers(layers), Some(f))?,
+    };
     let mut gbuffers = capture.layers.layers;
     if hidden == HiddenLayers::FrontFacing && layers > 1 {
         let eye = camera.frame.position;
         let mesh = &scene.mesh;
         let front = |prim: u32| {
             let [p0, _, _] = mesh.triangle(prim as usize);
-            mesh.geometric_normal(prim as usize).dot(eye - p0) > 0.0
+            mesh.geometric_normal(prim as usize).dot(eye - p0) > 0.0 && only.is_none_or(|f| f(prim))
         };
         let filtered =
             capture_layers_filtered(scene, &view, &RasterOptions::layers(layers), Some(&front))?;

@@ -20,7 +20,8 @@ use parallax_synth::dof::truth::masked_psnr;
 use parallax_synth::lightfield::{spp_side, supersampled};
 use parallax_synth::method::Method;
 use parallax_synth::reflect::{
-    BvhReflector, CubeReflector, ReflectOptions, ReflectionCube, Reflector, render_reflections,
+    BvhReflector, CubeAt, CubeMaps, CubeReflector, ReflectOptions, ReflectionCube, TruthColour,
+    render_reflections,
 };
 use parallax_synth::{MethodOptions, capture_reference};
 
@@ -57,6 +58,21 @@ pub struct ReflectArgs {
     /// cube map as paths instead (0: never, the paper's lookups).
     #[arg(long, default_value_t = 0.0)]
     pub trace_below: f32,
+    /// Where the cube maps are: camera (the paper: one cube map at the eye) or objects (NOT
+    /// the paper's method: one cube map at the centre of each reflective object's bounding
+    /// box, Umenhoffer et al. 2007; a ray is traced in the cube map of the object it leaves).
+    #[arg(long, default_value = "camera", value_parser = parse_cube_at)]
+    pub cube_at: CubeAt,
+    /// Also score against the physical truth: every BVH hit coloured by its radiance along the
+    /// reflection ray (not the paper's measurement; the default truth colours hits towards
+    /// the cube map's centre, as a cube-map sample holds them).
+    #[arg(long)]
+    pub physical_truth: bool,
+}
+
+fn parse_cube_at(s: &str) -> Result<CubeAt, String> {
+    s.parse()
+        .map_err(|e: parallax_synth::SynthError| e.to_string())
 }
 
 impl ReflectArgs {
@@ -150,20 +166,27 @@ pub fn run(a: &ReflectCmdArgs, quiet: bool) -> Result<()> {
     progress("view");
     let fine = supersampled(&camera, side);
     let reference = capture_reference(&scene, &bvh, &fine, 1, Shading::Fixed, a.synth.seed)?;
-    progress("cube map");
-    let cube = ReflectionCube::capture(
+    progress("cube map(s)");
+    let eye = camera.frame.position;
+    let cubes = CubeMaps::capture(
         &scene,
         &bvh,
-        &cube_desc(&camera),
+        a.reflect.cube_at,
+        eye,
         a.reflect.face,
         a.layers,
         a.synth.seed,
     )?;
-    let mut reflector = CubeReflector::build(&scene, &cube, a.method, &opts)?;
-    reflector.tracer.thickness = a.reflect.thickness()?;
+    if let Some(c) = cubes.centres()
+        && !quiet
+    {
+        for (name, p) in c.names.iter().zip(&c.centres) {
+            println!("cube map of {name} at ({:.3}, {:.3}, {:.3})", p.x, p.y, p.z);
+        }
+    }
+    let (reflector, times) = cubes.reflector(&scene, a.method, &opts, a.reflect.thickness()?)?;
     progress("reflections");
-    let eye = camera.frame.position;
-    let img = render_reflections(&reflector, &reference, eye, a.reflect.face, &ropts)?
+    let img = render_reflections(reflector.as_ref(), &reference, eye, a.reflect.face, &ropts)?
         .box_filtered(side)?;
     let mut written = Vec::new();
     let mut save = |name: &str, im: &parallax_core::Image<parallax_core::Rgb>| -> Result<()> {
@@ -177,14 +200,24 @@ pub fn run(a: &ReflectCmdArgs, quiet: bool) -> Result<()> {
         None
     } else {
         progress("BVH reflections");
-        let truth = BvhReflector::new(&scene, &bvh, eye, a.synth.seed);
+        let truth = cubes.truth(&scene, &bvh, eye, a.synth.seed, TruthColour::TowardsCube);
         let t = render_reflections(&truth, &reference, eye, a.reflect.face, &ropts)?
             .box_filtered(side)?;
         save("reflect.bvh.png", &t.image)?;
+        let physical = if a.reflect.physical_truth {
+            let truth = cubes.truth(&scene, &bvh, eye, a.synth.seed, TruthColour::AlongTheRay);
+            let t = render_reflections(&truth, &reference, eye, a.reflect.face, &ropts)?
+                .box_filtered(side)?;
+            save("reflect.bvh-physical.png", &t.image)?;
+            Some(masked_psnr(&img.image, &t.image, &t.mask)?)
+        } else {
+            None
+        };
         Some((
             masked_psnr(&img.image, &t.image, &t.mask)?,
             score(&img.image, &t.image)?,
             t.ms,
+            physical,
         ))
     };
     if !quiet {
@@ -192,8 +225,10 @@ pub fn run(a: &ReflectCmdArgs, quiet: bool) -> Result<()> {
             println!("wrote {}", p.display());
         }
         println!(
-            "{} {} layer(s), {}x{} ({} spp), faces {}^2, N_p/N_s/N_b {}/{}/{}: T_cm {:.1} ms (capture {:.1}, shade {:.1}, build {:.1}), T_ref {:.1} ms, T_rr {:.1} ms, {} reflective pixels, {:.2} Mrays/s{}",
+            "{} ({} cube map(s) at the {}) {} layer(s), {}x{} ({} spp), faces {}^2, N_p/N_s/N_b {}/{}/{}: T_cm {:.1} ms (capture {:.1}, shade {:.1}, build {:.1}), T_ref {:.1} ms, T_rr {:.1} ms, {} reflective pixels, {:.2} Mrays/s{}",
             reflector.name(),
+            cubes.count(),
+            cubes.at(),
             a.layers,
             a.width,
             a.height,
@@ -202,10 +237,10 @@ pub fn run(a: &ReflectCmdArgs, quiet: bool) -> Result<()> {
             a.n_p,
             a.n_s,
             a.n_b,
-            reflector.times.total_ms(),
-            reflector.times.capture_ms,
-            reflector.times.shade_ms,
-            reflector.times.build_ms,
+            times.total_ms(),
+            times.capture_ms,
+            times.shade_ms,
+            times.build_ms,
             reference.times.capture_ms + reference.times.shade_ms,
             img.ms,
             img.reflective_pixels(),
@@ -216,11 +251,16 @@ pub fn run(a: &ReflectCmdArgs, quiet: bool) -> Result<()> {
                 String::new()
             }
         );
-        if let Some((p, s, ms)) = scored {
+        if let Some((p, s, ms, physical)) = scored {
             println!(
                 "vs BVH reflections ({ms:.1} ms): PSNR {p:.2} dB over the reflective pixels, {:.2} dB over the image, SSIM {:.4}",
                 s.psnr, s.ssim
             );
+            if let Some(p) = physical {
+                println!(
+                    "vs physical BVH reflections (hits coloured along the ray): PSNR {p:.2} dB over the reflective pixels"
+                );
+            }
         }
     }
     Ok(())
@@ -313,14 +353,17 @@ pub fn bench(a: &ReflectBenchArgs, quiet: bool) -> Result<()> {
         reflect: a.reflect.options(a.synth.seed, 1, 0, 1)?,
         repeats: a.repeats.max(1),
         thickness: a.reflect.thickness()?,
+        cube_at: a.reflect.cube_at,
+        physical_truth: a.reflect.physical_truth,
     };
     let rows = bench_reflect::run(&scene, &bvh, &b, &reporter(quiet))?;
     if !quiet {
         println!(
-            "{} {}x{}, cube faces {}^2, sigma {}, offset {} px, thickness {}, {} threads, best of {} interleaved rounds\n",
+            "{} {}x{}, cube map(s) at the {}, cube faces {}^2, sigma {}, offset {} px, thickness {}, {} threads, best of {} interleaved rounds\n",
             scene.name,
             a.width,
             a.height,
+            b.cube_at,
             a.reflect.face,
             a.reflect.sigma,
             a.reflect.offset_px,
@@ -336,12 +379,14 @@ pub fn bench(a: &ReflectBenchArgs, quiet: bool) -> Result<()> {
 
 fn print_rows(rows: &[ReflectRow]) {
     println!(
-        "| method | layers | N_p/N_s/N_b | spp | dda steps | T_cm ms | T_ref ms | T_rr ms | T_rr CPU ms | FPS | Mrays/s | rays/px | nodes/ray | % cut | extra weight | trace-only Mrays/s | hit agreement | PSNR refl. dB | PSNR image dB | SSIM |"
+        "| method | layers | N_p/N_s/N_b | spp | dda steps | T_cm ms | T_ref ms | T_rr ms | T_rr CPU ms | FPS | Mrays/s | rays/px | nodes/ray | % cut | extra weight | trace-only Mrays/s | hit agreement | PSNR refl. dB | PSNR refl. phys. dB | PSNR image dB | SSIM |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!(
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+    );
     for r in rows {
         println!(
-            "| {} | {} | {}/{}/{} | {} | {} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} | {:.2} | {:.1} | {:.2} | {} | {:.2} | {:.3} | {} | {} | {:.4} |",
+            "| {} | {} | {}/{}/{} | {} | {} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} | {:.2} | {:.1} | {:.2} | {} | {:.2} | {:.3} | {} | {} | {} | {:.4} |",
             r.method,
             r.layers,
             r.n_p,
@@ -366,6 +411,7 @@ fn print_rows(rows: &[ReflectRow]) {
             } else {
                 format!("{:.2}", r.psnr)
             },
+            r.psnr_physical.map_or("-".into(), |p| format!("{p:.2}")),
             if r.method == "bvh" {
                 "(truth)".into()
             } else {

@@ -18,12 +18,20 @@
 //! ([`crate::reflect::ReflectionImage::box_filtered`]); the truth is the BVH reflector on the
 //! same rays with the same filter, so PSNR compares filtered images of identical ray sets.
 //! Ray counts and times are those of all the rays (`rays_per_pixel` per filtered pixel).
+//!
+//! **Cube maps at the objects** (`cube_at` = `objects`, **not the paper's method**,
+//! [`crate::reflect::objects`]): one cube map per reflective object (`T_cm` is all of them);
+//! `psnr` is then against the truth coloured towards the centre of the cube each ray is
+//! traced in. **Physical truth** (`physical_truth`, not the paper's measurement): a second
+//! BVH render colouring every hit by its radiance along the ray
+//! ([`crate::reflect::TruthColour::AlongTheRay`]) — the same image whatever the cube maps'
+//! placement — scored over the same pixels (`psnr_physical`).
 
 use glam::Vec3;
 use parallax_bvh::Bvh;
 use parallax_render::score::{Shading, score};
+use parallax_scene::Scene;
 use parallax_scene::camera::Pinhole;
-use parallax_scene::{CameraDesc, Scene};
 use serde::Serialize;
 
 use crate::SynthError;
@@ -33,8 +41,8 @@ use crate::lightfield::{spp_side, supersampled};
 use crate::method::{Method, MethodOptions};
 use crate::reflect::render::primary_rays;
 use crate::reflect::{
-    BvhReflector, CubeReflector, ReflectOptions, ReflectionCube, ReflectionImage, Reflector,
-    SurfaceHit, render_reflections,
+    CubeAt, CubeMaps, ReflectOptions, ReflectionImage, Reflector, SurfaceHit, TruthColour,
+    render_reflections,
 };
 use parallax_core::{Ray, WorldStats};
 use rayon::prelude::*;
@@ -47,6 +55,9 @@ pub const TABLE5: [(u32, u32, u32); 4] = [(1, 8, 1), (3, 8, 1), (3, 4, 3), (3, 8
 #[derive(Clone, Debug, Serialize)]
 pub struct ReflectRow {
     pub method: String,
+    /// Where the cube maps are (`camera`, the paper's, or `objects`) and how many.
+    pub cube_at: String,
+    pub cubes: usize,
     pub layers: usize,
     pub scene: String,
     pub width: u32,
@@ -88,6 +99,9 @@ pub struct ReflectRow {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lookup_weight: Option<f64>,
     pub psnr: f64,
+    /// PSNR over the reflective pixels against the physical truth (`--physical-truth`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub psnr_physical: Option<f64>,
     pub psnr_image: f64,
     pub ssim: f64,
 }
@@ -110,6 +124,12 @@ pub struct ReflectBench {
     /// Relative thickness of the cube map's surfaces ([`parallax_screen::CubeMapTracer::thickness`];
     /// `None`: the paper's occlusion volumes).
     pub thickness: Option<f32>,
+    /// Where the cube maps are (the paper: the camera; `objects` is not the paper's method,
+    /// [`crate::reflect::objects`]).
+    pub cube_at: CubeAt,
+    /// Also score against the physical truth ([`TruthColour::AlongTheRay`]: one more BVH
+    /// render per configuration), column `psnr_physical`.
+    pub physical_truth: bool,
 }
 
 /// Table 5 (module docs); `progress` gets a line per step.
@@ -129,35 +149,28 @@ pub fn run(
         references.push((spp, side, reference));
     }
     let eye = b.camera.frame.position;
-    let desc = CameraDesc::new(eye, eye - Vec3::Z, Vec3::Y, 90.0);
     let mut rows = Vec::new();
     for &layers in &b.layers {
         progress(&format!(
-            "cube map, {layers} layer(s), {0}x{0} faces",
-            b.face
+            "cube map(s) at the {}, {layers} layer(s), {1}x{1} faces",
+            b.cube_at, b.face
         ));
-        let cube = ReflectionCube::capture(scene, bvh, &desc, b.face, layers, seed)?;
+        let cubes = CubeMaps::capture(scene, bvh, b.cube_at, eye, b.face, layers, seed)?;
         let mut structures = Vec::new();
         if b.quadtree {
-            structures.push((
-                CubeReflector::build(scene, &cube, Method::QuadTree, &b.opts)?,
-                None,
-            ));
+            let (r, t) = cubes.reflector(scene, Method::QuadTree, &b.opts, b.thickness)?;
+            structures.push((r, None, t));
         }
         for &st in &b.dda_steps {
             let o = MethodOptions {
                 dda_max_steps: st,
                 ..b.opts
             };
-            structures.push((
-                CubeReflector::build(scene, &cube, Method::Dda, &o)?,
-                Some(st),
-            ));
+            let (r, t) = cubes.reflector(scene, Method::Dda, &o, b.thickness)?;
+            structures.push((r, Some(st), t));
         }
-        for (s, _) in &mut structures {
-            s.tracer.thickness = b.thickness;
-        }
-        let truth_tracer = BvhReflector::new(scene, bvh, eye, seed);
+        let truth_tracer = cubes.truth(scene, bvh, eye, seed, TruthColour::TowardsCube);
+        let physical = cubes.truth(scene, bvh, eye, seed, TruthColour::AlongTheRay);
         let runs = b
             .configs
             .iter()
@@ -173,9 +186,17 @@ pub fn run(
             };
             progress(&format!("{layers} layer(s), {n_p}/{n_s}/{n_b}, {spp} spp"));
             let mut reflectors: Vec<&dyn Reflector> = vec![&truth_tracer];
-            reflectors.extend(structures.iter().map(|(s, _)| s as &dyn Reflector));
+            reflectors.extend(structures.iter().map(|(s, _, _)| s.as_ref()));
             let best = best_of(&reflectors, reference, eye, b, &opts, side)?;
             let truth = &best[0];
+            let truth_physical = if b.physical_truth {
+                Some(
+                    render_reflections(&physical, reference, eye, b.face, &opts)?
+                        .box_filtered(side)?,
+                )
+            } else {
+                None
+            };
             let rays = primary_rays(scene, reference, eye, b.face, &opts)?;
             let traced = trace_only(&reflectors, &rays, b.repeats);
             let truth_hits = &traced[0].1;
@@ -184,8 +205,14 @@ pub fn run(
                 let (ms_trace, hits) = traced.next().expect("one per reflector");
                 let s = score(&img.image, &truth.image)?;
                 let n = img.reflective_pixels();
+                let psnr_physical = match &truth_physical {
+                    Some(t) => Some(masked_psnr(&img.image, &t.image, &t.mask)?),
+                    None => None,
+                };
                 Ok::<_, SynthError>(ReflectRow {
                     method: name,
+                    cube_at: b.cube_at.to_string(),
+                    cubes: cubes.count(),
                     layers,
                     scene: scene.name.clone(),
                     width: b.camera.width,
@@ -214,18 +241,19 @@ pub fn run(
                     agreement: agreement(&rays, hits, truth_hits),
                     lookup_weight: (img.lookups > 0).then(|| img.mean_lookup_weight()),
                     psnr: masked_psnr(&img.image, &truth.image, &truth.mask)?,
+                    psnr_physical,
                     psnr_image: s.psnr,
                     ssim: s.ssim,
                 })
             };
             rows.push(row("bvh".into(), truth, None, f64::NAN, f64::NAN)?);
-            for ((s, steps), img) in structures.iter().zip(&best[1..]) {
+            for ((s, steps, times), img) in structures.iter().zip(&best[1..]) {
                 rows.push(row(
                     s.name(),
                     img,
                     *steps,
-                    s.times.total_ms(),
-                    s.times.build_ms,
+                    times.total_ms(),
+                    times.build_ms,
                 )?);
             }
         }
@@ -261,7 +289,7 @@ fn best_of(
 /// rounds, the best wall ms and the hits of each.
 fn trace_only(
     reflectors: &[&dyn Reflector],
-    rays: &[Ray],
+    rays: &[(Ray, u32)],
     repeats: u32,
 ) -> Vec<(f64, Vec<Option<SurfaceHit>>)> {
     let mut out: Vec<(f64, Vec<Option<SurfaceHit>>)> =
@@ -275,7 +303,7 @@ fn trace_only(
                     let mut s = WorldStats::default();
                     chunk
                         .iter()
-                        .map(move |ray| r.trace(ray, &mut s))
+                        .map(move |(ray, from)| r.trace_from(ray, *from, &mut s))
                         .collect::<Vec<_>>()
                 })
                 .collect();
@@ -290,11 +318,15 @@ fn trace_only(
 
 /// The share of `rays` whose hit in `hits` lies within 5% of the distance of the hit in
 /// `truth` (or both miss).
-fn agreement(rays: &[Ray], hits: &[Option<SurfaceHit>], truth: &[Option<SurfaceHit>]) -> f64 {
+fn agreement(
+    rays: &[(Ray, u32)],
+    hits: &[Option<SurfaceHit>],
+    truth: &[Option<SurfaceHit>],
+) -> f64 {
     let ok = rays
         .iter()
         .zip(hits.iter().zip(truth))
-        .filter(|(ray, (a, b))| match (a, b) {
+        .filter(|((ray, _), (a, b))| match (a, b) {
             (Some(a), Some(b)) => {
                 (a.position - b.position).length() <= 0.05 * (b.position - ray.origin).length()
             }

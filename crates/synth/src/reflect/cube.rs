@@ -36,6 +36,7 @@ use glam::{UVec2, Vec3};
 use parallax_bvh::Bvh;
 use parallax_core::image::GBuffer;
 use parallax_core::{Ray, Rgb, WorldStats, WorldTracer};
+use parallax_raster::raster::TriangleFilter;
 use parallax_render::score::Shading;
 use parallax_scene::camera::{CameraModel, CubeMap};
 use parallax_scene::{CameraDesc, Scene};
@@ -92,6 +93,21 @@ impl ReflectionCube {
         layers: usize,
         seed: u64,
     ) -> Result<Self, SynthError> {
+        Self::capture_only(scene, bvh, eye, face, layers, seed, None)
+    }
+
+    /// [`Self::capture`] of the triangles `only` accepts (`None`: all; every layer, layer 0
+    /// included): a reflective object's own cube map leaves the object's far side out
+    /// ([`super::objects`]).
+    pub fn capture_only(
+        scene: &Scene,
+        bvh: &Bvh,
+        eye: &CameraDesc,
+        face: u32,
+        layers: usize,
+        seed: u64,
+        only: Option<TriangleFilter>,
+    ) -> Result<Self, SynthError> {
         if !(1..=MAX_FACE).contains(&face) {
             return Err(SynthError::Invalid(format!(
                 "cube face size must be in 1..={MAX_FACE} pixels, got {face}"
@@ -113,6 +129,7 @@ impl ReflectionCube {
                 &camera,
                 layers,
                 HiddenLayers::FrontFacing,
+                only,
                 Shading::Fixed,
                 seed,
             )?;
@@ -249,6 +266,7 @@ impl<'a> CubeReflector<'a> {
             barycentrics: g.barycentrics[i],
             sample: Some((face as u8, layer as u8, pixel)),
             occlusion,
+            cube: 0,
         })
     }
 

@@ -32,7 +32,14 @@
 //!
 //! **Ground truth** ([`truth`]): the same renderer with the BVH as [`Reflector`] — the same
 //! primary hits and sample directions, every segment traced exactly, extra samples traced as
-//! full paths, each surface coloured as a cube-map sample of it would be.
+//! full paths, each surface coloured as a cube-map sample of it would be (or, with
+//! [`TruthColour::AlongTheRay`], by its physical radiance along the ray).
+//!
+//! **Cube maps at the objects** ([`objects`], `--cube-at objects`; **not the paper's
+//! method**, Umenhoffer et al. 2007's placement, Fig. 12's comparison): one cube map at the
+//! centre of each reflective object instead of one at the camera; a ray is traced in the
+//! cube map of the object it leaves ([`Reflector::trace_from`]). [`setup::CubeMaps`] builds
+//! either placement, its reflectors and its truth.
 //!
 //! | parameter | type | default | meaning |
 //! |---|---|---|---|
@@ -51,7 +58,9 @@
 
 pub mod cube;
 pub mod lobe;
+pub mod objects;
 pub mod render;
+pub mod setup;
 pub mod truth;
 
 use glam::{UVec2, Vec2, Vec3};
@@ -62,8 +71,10 @@ use serde::Serialize;
 use crate::SynthError;
 pub use cube::{CubeReflector, CubeTimes, ReflectionCube};
 pub use lobe::Lobe;
+pub use objects::{CubeAt, CubeCentres, ObjectCubeReflector, ObjectCubes};
 pub use render::{ReflectionImage, render_reflections};
-pub use truth::BvhReflector;
+pub use setup::CubeMaps;
+pub use truth::{BvhReflector, TruthColour};
 
 /// Largest `n_p`.
 pub const MAX_PRIMARY: u32 = 1024;
@@ -160,6 +171,10 @@ pub struct SurfaceHit {
     /// The sampled hit is the inpainted answer of an occlusion volume (the ray passed behind
     /// the sample's surface), not a hit on it.
     pub occlusion: bool,
+    /// The cube map the ray was traced in (its index among the reflector's cube maps: 0 for
+    /// the one cube at the camera, the object's for [`CubeAt::Objects`]); the truth colours
+    /// the hit towards that cube's centre ([`TruthColour::TowardsCube`]).
+    pub cube: u16,
 }
 
 /// What answers the reflection renderer's rays: the cube map's structures or the BVH.
@@ -172,6 +187,14 @@ pub trait Reflector: Sync {
 
     /// The first surface along `ray`, counting the ray in `stats`.
     fn trace(&self, ray: &Ray, stats: &mut WorldStats) -> Option<SurfaceHit>;
+
+    /// [`Self::trace`] of a ray that leaves the surface of scene triangle `from` (the
+    /// renderer always says where its rays start): a reflector with one cube map per
+    /// reflective object ([`CubeAt::Objects`]) traces it in the cube map of `from`'s object.
+    fn trace_from(&self, ray: &Ray, from: u32, stats: &mut WorldStats) -> Option<SurfaceHit> {
+        let _ = from;
+        self.trace(ray, stats)
+    }
 
     /// The colour of `ray`'s hit `hit`: the radiance its point sends towards the cube map's
     /// eye (asked only where a path ends, so tracing alone does not pay for it).

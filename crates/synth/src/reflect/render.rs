@@ -127,8 +127,10 @@ impl Strata {
     }
 }
 
-/// A reflective primary surface: position, normal facing the eye, direction to the eye, lobe.
+/// A reflective primary surface: triangle, position, normal facing the eye, direction to the
+/// eye, lobe.
 struct Primary {
+    prim: u32,
     position: Vec3,
     normal: Vec3,
     wo: Vec3,
@@ -147,6 +149,7 @@ fn reflective(scene: &Scene, reference: &Reference, x: u32, y: u32) -> Option<Pr
     let wo = (reference.camera.frame.position - p).normalize();
     let n = g.normal[i];
     Some(Primary {
+        prim: g.primitive_id[i],
         position: p,
         normal: if n.dot(wo) < 0.0 { -n } else { n },
         wo,
@@ -214,7 +217,7 @@ impl Pass<'_> {
                 return Vec3::ZERO;
             }
             ray = self.ray_from(hit.position, hit.normal, dir);
-            first = r.trace(&ray, stats);
+            first = r.trace_from(&ray, hit.prim, stats);
         }
         Vec3::ZERO
     }
@@ -240,7 +243,7 @@ impl Pass<'_> {
                 continue;
             }
             let ray = self.ray_from(p, n, dir);
-            let first = r.trace(&ray, &mut c.stats);
+            let first = r.trace_from(&ray, v.prim, &mut c.stats);
             let k0 = i * (1 + extras);
             let traced = self.path(ray, first, w, &mut path_rng(k0), &mut c.stats);
             let (mut num, mut den) = (traced, 1.0f32);
@@ -270,7 +273,7 @@ impl Pass<'_> {
                     }
                     _ => {
                         c.extras_traced += looked_up.is_some() as u64;
-                        let first_j = r.trace(&ray_j, &mut c.stats);
+                        let first_j = r.trace_from(&ray_j, v.prim, &mut c.stats);
                         num +=
                             self.path(ray_j, first_j, w_j, &mut path_rng(k0 + 1 + j), &mut c.stats);
                         den += 1.0;
@@ -285,15 +288,15 @@ impl Pass<'_> {
 
 /// The first-segment rays of [`render_reflections`] with `opts` (every reflective pixel's
 /// `N_p` traced rays and its extra samples' rays, in pixel order; rays of zero weight and the
-/// strata of a traced ray of zero weight left out): the identical ray set every reflector is
-/// timed on.
+/// strata of a traced ray of zero weight left out), each with the triangle it leaves (for
+/// [`Reflector::trace_from`]): the identical ray set every reflector is timed on.
 pub fn primary_rays(
     scene: &Scene,
     reference: &Reference,
     eye: Vec3,
     face: u32,
     opts: &ReflectOptions,
-) -> Result<Vec<Ray>, SynthError> {
+) -> Result<Vec<(Ray, u32)>, SynthError> {
     opts.validate()?;
     let start = RayStart {
         offset_px: opts.offset_px,
@@ -301,7 +304,7 @@ pub fn primary_rays(
         face: face.max(1) as f32,
     };
     let (w, h) = (reference.width(), reference.height());
-    let rows: Vec<Vec<Ray>> = (0..h)
+    let rows: Vec<Vec<(Ray, u32)>> = (0..h)
         .into_par_iter()
         .map(|y| {
             let mut out = Vec::new();
@@ -319,7 +322,7 @@ pub fn primary_rays(
                         // A stratum whose traced direction is below the surface is skipped.
                         traced &= f.max_element() > 0.0;
                         if traced && f.max_element() > 0.0 {
-                            out.push(start.ray(v.position, v.normal, dir));
+                            out.push((start.ray(v.position, v.normal, dir), v.prim));
                         }
                     }
                 }
