@@ -292,21 +292,8 @@ pub(super) fn f16x8_encode(v: __m256) -> __m256i {
 mod tests {
     use super::*;
     use crate::quadtree::leaf_lanes::LeafMap;
+    use crate::quadtree::test_rng::Rng;
     use glam::DVec4;
-
-    /// A small deterministic generator (xorshift64*).
-    struct Rng(u64);
-    impl Rng {
-        fn next(&mut self) -> u64 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-        }
-        fn f(&mut self, lo: f32, hi: f32) -> f32 {
-            lo + (hi - lo) * ((self.next() >> 40) as f32 / (1u64 << 24) as f32)
-        }
-    }
 
     /// Rows of the AVX2 kernel equal the one-pixel SSE2 path (`leaf_lanes`, with the same
     /// direction, sample point and `z` as `leaves.rs`) bit for bit: random pixels, and

@@ -100,6 +100,8 @@ mod merge_rows8;
 pub mod node;
 mod prune;
 mod setup;
+#[cfg(test)]
+mod test_rng;
 pub mod traverse;
 pub mod tree;
 #[cfg(target_arch = "x86_64")]

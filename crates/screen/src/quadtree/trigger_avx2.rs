@@ -215,21 +215,8 @@ pub(super) unsafe fn pixel_triggers_row8(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::quadtree::test_rng::Rng;
     use crate::quadtree::trigger_lanes::pixel_triggers4;
-
-    /// A small deterministic generator (xorshift64*).
-    struct Rng(u64);
-    impl Rng {
-        fn next(&mut self) -> u64 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-        }
-        fn f(&mut self, lo: f32, hi: f32) -> f32 {
-            lo + (hi - lo) * ((self.next() >> 40) as f32 / (1u64 << 24) as f32)
-        }
-    }
 
     /// Rows of the eight-lane kernel equal the four-lane kernel (`trigger_lanes`) bit for
     /// bit, and list the same pixels: random own leaves (planes, empty, AABB, flagged) over
