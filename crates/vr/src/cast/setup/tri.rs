@@ -228,6 +228,7 @@ impl TriSetup {
             (cross(a[2], e[2]) * s).to_array(),
         ];
         // All nine finite iff the sum of the `x - x` is 0 (+0 for finite `x`, NaN otherwise).
+        #[allow(clippy::eq_op)] // `x - x` is the finiteness test, not a mistake
         let z: f32 = n.iter().flatten().map(|&x| x - x).sum();
         if z != 0.0 {
             return None;
