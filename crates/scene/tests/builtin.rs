@@ -286,6 +286,20 @@ fn shapes_are_closed_with_the_expected_volume() {
             1e-4,
         ),
         (
+            "tiled slab",
+            Box::new(|b| {
+                b.tiled_slab(
+                    &[-3.0, -1.0, 0.5, 2.0],
+                    &[0.0, 1.0, 4.0],
+                    [-0.25, 0.0],
+                    |_, _| 0,
+                    0,
+                )
+            }),
+            5.0 * 4.0 * 0.25,
+            1e-4,
+        ),
+        (
             "cylinder",
             Box::new(move |b| b.cylinder(Vec3::ONE, Vec3::new(1.0, 1.0, 3.0), 1.0, 1.0, n, 0)),
             polygon * 2.0,
@@ -348,6 +362,37 @@ fn shapes_are_closed_with_the_expected_volume() {
             assert!(
                 (v - expected).abs() <= tol * expected.max(1.0),
                 "{name}: volume {v}, expected {expected}"
+            );
+        }
+    }
+}
+
+#[test]
+fn tiled_floors_have_no_inner_walls() {
+    // Every triangle of a floor slab lies on its bounding box: adjacent tiles as separate boxes
+    // would leave coincident walls between them, surfaces no ray reaches that hidden depth
+    // layers nevertheless capture (black answers in cube-map reflections of the far ground).
+    for name in ["mirrors", "mirrors-open"] {
+        let s = Scene::load(name).unwrap();
+        let o = s
+            .mesh
+            .objects
+            .iter()
+            .find(|o| o.name == "solid:floor")
+            .unwrap();
+        let r = o.first_triangle as usize..(o.first_triangle + o.triangle_count) as usize;
+        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for i in r.clone() {
+            for p in s.mesh.triangle(i) {
+                (lo, hi) = (lo.min(p), hi.max(p));
+            }
+        }
+        for i in r {
+            let t = s.mesh.triangle(i);
+            let on = |a: usize, v: f32| t.iter().all(|p| p[a] == v);
+            assert!(
+                (0..3).any(|a| on(a, lo[a]) || on(a, hi[a])),
+                "{name}: floor triangle {i} {t:?} inside the slab"
             );
         }
     }

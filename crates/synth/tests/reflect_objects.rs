@@ -23,9 +23,9 @@ use parallax_synth::{Method, MethodOptions, capture_reference};
 /// Face size of the edge test's cube maps.
 const FACE: u32 = 256;
 /// Face size of the score test's: the concave mirror magnifies what its cube map holds, and at
-/// 256² faces the per-object cube maps score below the camera's on this 160x90 view (22.39 vs
-/// 22.87 dB); at 512² they score above (24.26 vs 23.64 dB towards the cube, 25.11 vs 24.37 dB
-/// physical, measured when this test was written).
+/// 256² faces the per-object cube maps score below the camera's on this 160x90 view (23.88 vs
+/// 24.25 dB towards the cube, 24.81 vs 24.98 dB physical); at 512² they score above (25.96 vs
+/// 24.19 dB towards the cube, 27.30 vs 25.04 dB physical; measured with the one-slab floor).
 const SCORE_FACE: u32 = 512;
 
 fn mirrors_open(w: u32, h: u32) -> (Scene, Bvh, Pinhole, Reference) {

@@ -70,22 +70,46 @@ pub(super) fn materials() -> Vec<Material> {
     ]
 }
 
-/// Floor tiles of `size` metres over `x` x `z`, alternating [`TILE_A`] / [`TILE_B`], closed
-/// slabs below y = 0 (the last row and column clipped to the bounds).
-pub(super) fn checker_floor(b: &mut MeshBuilder, x: [f32; 2], z: [f32; 2], size: f32) {
-    let nx = ((x[1] - x[0]) / size).ceil() as i32;
-    let nz = ((z[1] - z[0]) / size).ceil() as i32;
-    for i in 0..nx {
-        for k in 0..nz {
-            let x0 = x[0] + i as f32 * size;
-            let z0 = z[0] + k as f32 * size;
-            let (x1, z1) = ((x0 + size).min(x[1]), (z0 + size).min(z[1]));
-            let m = if (i + k) % 2 == 0 { TILE_A } else { TILE_B };
-            b.object(&format!("solid:tile.{i}.{k}"), |b| {
-                b.cuboid(Vec3::new(x0, -T, z0), Vec3::new(x1, 0.0, z1), m)
-            });
+/// Floor tiles of `size` metres over `x` x `z`, alternating [`TILE_A`] / [`TILE_B`] (the
+/// last row and column clipped to the bounds), surrounded by plain [`TILE_A`] ground out to
+/// `outer` metres from the origin when given: one closed slab below y = 0 (object
+/// `solid:floor`) whose top is split into the tiles, so no inner walls lie between them.
+pub(super) fn checker_floor(
+    b: &mut MeshBuilder,
+    x: [f32; 2],
+    z: [f32; 2],
+    size: f32,
+    outer: Option<f32>,
+) {
+    let lines = |[lo, hi]: [f32; 2]| {
+        let n = ((hi - lo) / size).ceil() as i32;
+        let mut v: Vec<f32> = (0..n).map(|i| lo + i as f32 * size).collect();
+        v.push(hi);
+        if let Some(o) = outer {
+            v.insert(0, -o);
+            v.push(o);
         }
-    }
+        v
+    };
+    let (xs, zs) = (lines(x), lines(z));
+    let ring = outer.is_some() as usize;
+    let (nx, nz) = (xs.len() - 1, zs.len() - 1);
+    b.object("solid:floor", |b| {
+        b.tiled_slab(
+            &xs,
+            &zs,
+            [-T, 0.0],
+            |i, k| {
+                let inner = i >= ring && i < nx - ring && k >= ring && k < nz - ring;
+                if inner && (i + k - 2 * ring) % 2 == 1 {
+                    TILE_B
+                } else {
+                    TILE_A
+                }
+            },
+            TILE_A,
+        )
+    });
 }
 
 /// A concave cylindrical mirror: a 6 cm shell on the circle of radius `r` about `c` (its
@@ -115,7 +139,7 @@ pub(super) fn concave_mirror(
 /// Builds the scene.
 pub fn build() -> Scene {
     let mut b = MeshBuilder::new();
-    checker_floor(&mut b, [-X, X], [Z_BACK, Z_FRONT], 1.0);
+    checker_floor(&mut b, [-X, X], [Z_BACK, Z_FRONT], 1.0, None);
     b.object("solid:ceiling", |b| {
         b.cuboid(
             Vec3::new(-X - T, Y, Z_BACK - T),

@@ -6,7 +6,7 @@
 //! | `cornell` | global illumination, a mirror and a glass sphere (reflection papers) | ~2.3k     |
 //! | `foliage` | depth complexity (leaves, grass, fence slats: 8-20+ layers per ray)  | ~132k     |
 //! | `mirrors` | reflections: a closed room with convex, concave and glossy mirrors   | ~9k       |
-//! | `mirrors-open` | reflections of what the camera sees: curved mirrors in the open (Widmer Fig. 11) | ~14k |
+//! | `mirrors-open` | reflections of what the camera sees: curved mirrors in the open (Widmer Fig. 11) | ~12k |
 //!
 //! `room:<file>` (and `room-mirror:<file>`, `room-glass:<file>`) stages a model file in a small
 //! room with a mirror, a glass sphere and shadow-casting lights ([`room`]).

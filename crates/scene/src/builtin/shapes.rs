@@ -5,7 +5,7 @@
 //! Conventions (checked by the unit tests below and by `tests/builtin.rs`):
 //! - Every triangle is counter-clockwise seen from outside: its right-hand normal
 //!   `(b - a) x (c - a)` points out of the solid.
-//! - The closed shapes ([`MeshBuilder::cuboid`], [`MeshBuilder::boxed`],
+//! - The closed shapes ([`MeshBuilder::cuboid`], [`MeshBuilder::tiled_slab`], [`MeshBuilder::boxed`],
 //!   [`MeshBuilder::cylinder`], [`MeshBuilder::sphere`], [`MeshBuilder::sheet`],
 //!   [`MeshBuilder::arch`], [`MeshBuilder::tetra`], [`MeshBuilder::strand`]) are watertight:
 //!   vertices are split where normals or uvs differ, but split copies carry bit-identical
@@ -110,6 +110,93 @@ impl MeshBuilder {
     pub fn cuboid(&mut self, min: Vec3, max: Vec3, material: u32) {
         let c = 0.5 * (min + max);
         self.boxed(Affine3A::from_translation(c), 0.5 * (max - min), material);
+    }
+
+    /// A closed axis-aligned slab from `y0` to `y1` over the grid lines `xs` x `zs`
+    /// (increasing): its top is one quad per grid cell with material `top(i, k)` (cell `i`
+    /// between `xs[i]` and `xs[i + 1]`), its bottom and sides are split at the same lines in
+    /// `side`. Unlike a row of [`Self::cuboid`]s it has no inner faces: adjacent boxes leave
+    /// coincident walls between them, which no ray can reach but which hidden depth layers
+    /// capture as surfaces behind the top. Uvs in metres, as boxes.
+    pub fn tiled_slab(
+        &mut self,
+        xs: &[f32],
+        zs: &[f32],
+        [y0, y1]: [f32; 2],
+        top: impl Fn(usize, usize) -> u32,
+        side: u32,
+    ) {
+        let (nx, nz) = (xs.len().saturating_sub(1), zs.len().saturating_sub(1));
+        if nx == 0 || nz == 0 {
+            return;
+        }
+        let uv = |a: f32, b: f32| Vec2::new(a, b);
+        for i in 0..nx {
+            let (x0, x1) = (xs[i], xs[i + 1]);
+            for k in 0..nz {
+                let (z0, z1) = (zs[k], zs[k + 1]);
+                self.flat_quad(
+                    [
+                        Vec3::new(x0, y1, z0),
+                        Vec3::new(x0, y1, z1),
+                        Vec3::new(x1, y1, z1),
+                        Vec3::new(x1, y1, z0),
+                    ],
+                    [uv(x0, z0), uv(x0, z1), uv(x1, z1), uv(x1, z0)],
+                    top(i, k),
+                );
+                self.flat_quad(
+                    [
+                        Vec3::new(x0, y0, z0),
+                        Vec3::new(x1, y0, z0),
+                        Vec3::new(x1, y0, z1),
+                        Vec3::new(x0, y0, z1),
+                    ],
+                    [uv(x0, z0), uv(x1, z0), uv(x1, z1), uv(x0, z1)],
+                    side,
+                );
+            }
+        }
+        let h = y1 - y0;
+        // The four sides, counter-clockwise seen from outside, one quad per grid segment.
+        for (x, outward) in [(xs[0], -1.0f32), (xs[nx], 1.0)] {
+            for k in 0..nz {
+                let (z0, z1) = if outward < 0.0 {
+                    (zs[k], zs[k + 1])
+                } else {
+                    (zs[k + 1], zs[k])
+                };
+                self.flat_quad(
+                    [
+                        Vec3::new(x, y0, z0),
+                        Vec3::new(x, y0, z1),
+                        Vec3::new(x, y1, z1),
+                        Vec3::new(x, y1, z0),
+                    ],
+                    [uv(z0, 0.0), uv(z1, 0.0), uv(z1, h), uv(z0, h)],
+                    side,
+                );
+            }
+        }
+        for (z, outward) in [(zs[0], -1.0f32), (zs[nz], 1.0)] {
+            for i in 0..nx {
+                let (x0, x1) = if outward < 0.0 {
+                    (xs[i], xs[i + 1])
+                } else {
+                    (xs[i + 1], xs[i])
+                };
+                self.flat_quad(
+                    [
+                        Vec3::new(x0, y0, z),
+                        Vec3::new(x0, y1, z),
+                        Vec3::new(x1, y1, z),
+                        Vec3::new(x1, y0, z),
+                    ],
+                    [uv(x0, 0.0), uv(x0, h), uv(x1, h), uv(x1, 0.0)],
+                    side,
+                );
+            }
+        }
     }
 
     /// The box `[-half, half]` placed by `xf` (closed; any invertible affine map).
