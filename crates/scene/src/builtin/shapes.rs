@@ -157,42 +157,27 @@ impl MeshBuilder {
                 );
             }
         }
-        let h = y1 - y0;
-        // The four sides, counter-clockwise seen from outside, one quad per grid segment.
-        for (x, outward) in [(xs[0], -1.0f32), (xs[nx], 1.0)] {
-            for k in 0..nz {
-                let (z0, z1) = if outward < 0.0 {
-                    (zs[k], zs[k + 1])
+        // The four sides, one quad per grid segment `a0 -> a1` along the side:
+        // `[P(a0, y0), P(a1, y0), P(a1, y1), P(a0, y1)]` faces -x on an x side and +z on a z side
+        // for increasing `a`, so the +x and -z sides walk their lines backwards.
+        let x_side = |x: f32| move |a: f32, y: f32| Vec3::new(x, y, a);
+        let z_side = |z: f32| move |a: f32, y: f32| Vec3::new(a, y, z);
+        let sides: [(&[f32], &dyn Fn(f32, f32) -> Vec3, bool); 4] = [
+            (zs, &x_side(xs[0]), false),
+            (zs, &x_side(xs[nx]), true),
+            (xs, &z_side(zs[0]), true),
+            (xs, &z_side(zs[nz]), false),
+        ];
+        for (lines, at, backwards) in sides {
+            for w in lines.windows(2) {
+                let (a0, a1) = if backwards {
+                    (w[1], w[0])
                 } else {
-                    (zs[k + 1], zs[k])
+                    (w[0], w[1])
                 };
                 self.flat_quad(
-                    [
-                        Vec3::new(x, y0, z0),
-                        Vec3::new(x, y0, z1),
-                        Vec3::new(x, y1, z1),
-                        Vec3::new(x, y1, z0),
-                    ],
-                    [uv(z0, 0.0), uv(z1, 0.0), uv(z1, h), uv(z0, h)],
-                    side,
-                );
-            }
-        }
-        for (z, outward) in [(zs[0], -1.0f32), (zs[nz], 1.0)] {
-            for i in 0..nx {
-                let (x0, x1) = if outward < 0.0 {
-                    (xs[i], xs[i + 1])
-                } else {
-                    (xs[i + 1], xs[i])
-                };
-                self.flat_quad(
-                    [
-                        Vec3::new(x0, y0, z),
-                        Vec3::new(x0, y1, z),
-                        Vec3::new(x1, y1, z),
-                        Vec3::new(x1, y0, z),
-                    ],
-                    [uv(x0, 0.0), uv(x0, h), uv(x1, h), uv(x1, 0.0)],
+                    [at(a0, y0), at(a1, y0), at(a1, y1), at(a0, y1)],
+                    [uv(a0, 0.0), uv(a1, 0.0), uv(a1, y1 - y0), uv(a0, y1 - y0)],
                     side,
                 );
             }
