@@ -11,7 +11,7 @@
 
 use glam::Vec3;
 
-use crate::build::{BNode, PrimRef};
+use crate::build::{BNode, BTree, PrimRef};
 use crate::node::{ChildRef, Node4};
 use crate::tri::Tri;
 use crate::tri4::{Tri4, blocks_for};
@@ -20,6 +20,7 @@ use crate::tri4::{Tri4, blocks_for};
 /// inner child of largest surface area by its two children, until there are `W` children or
 /// only leaves (module docs). Returns the children (the first `len` are set) and `len`.
 pub(crate) fn open_largest<'a, const W: usize>(
+    tree: &'a BTree,
     start: &[&'a BNode],
 ) -> ([Option<&'a BNode>; W], usize) {
     let mut kids: [Option<&BNode>; W] = [None; W];
@@ -38,8 +39,8 @@ pub(crate) fn open_largest<'a, const W: usize>(
         let Some(BNode::Inner { children, .. }) = kids[i] else {
             unreachable!()
         };
-        kids[i] = Some(&children[0]);
-        kids[len] = Some(&children[1]);
+        kids[i] = Some(tree.node(children[0]));
+        kids[len] = Some(tree.node(children[1]));
         len += 1;
     }
     (kids, len)
@@ -61,7 +62,7 @@ pub(crate) struct Collapsed {
 /// Collapses `root` (built over `refs`) into 4-wide nodes; `corners(id)` gives a triangle's
 /// vertices.
 pub(crate) fn collapse(
-    root: &BNode,
+    tree: &BTree,
     refs: &[PrimRef],
     corners: impl Fn(u32) -> [Vec3; 3],
 ) -> Collapsed {
@@ -75,19 +76,24 @@ pub(crate) fn collapse(
     };
     let mut ctx = Ctx {
         out: &mut out,
+        tree,
         refs,
         corners: &corners,
     };
+    let root = tree.node(tree.root);
     match root {
         // A tiny mesh: a root node with a single leaf lane.
         BNode::Leaf { .. } => ctx.emit(&[root], 1),
-        BNode::Inner { children, .. } => ctx.emit(&[&children[0], &children[1]], 1),
+        BNode::Inner { children, .. } => {
+            ctx.emit(&[tree.node(children[0]), tree.node(children[1])], 1)
+        }
     };
     out
 }
 
 struct Ctx<'a, F> {
     out: &'a mut Collapsed,
+    tree: &'a BTree,
     refs: &'a [PrimRef],
     corners: &'a F,
 }
@@ -99,7 +105,7 @@ impl<F: Fn(u32) -> [Vec3; 3]> Ctx<'_, F> {
         self.out.nodes.push(Node4::EMPTY);
         self.out.depth = self.out.depth.max(depth);
 
-        let (kids, len) = open_largest::<4>(start);
+        let (kids, len) = open_largest::<4>(self.tree, start);
 
         // Leaves first (HVVR §5), then inner children, each group in build order.
         let mut lane = 0;
@@ -115,11 +121,11 @@ impl<F: Fn(u32) -> [Vec3; 3]> Ctx<'_, F> {
                     .iter()
                     .enumerate()
                 {
-                    let tri = Tri::new((self.corners)(r.id));
+                    let tri = Tri::new((self.corners)(r.id()));
                     let index = self.out.tris.len() as u32;
                     self.out.blocks[first as usize + j / 4].set(j % 4, &tri, index);
                     self.out.tris.push(tri);
-                    self.out.prim_ids.push(r.id);
+                    self.out.prim_ids.push(r.id());
                 }
                 node.child[lane] = ChildRef::Leaf {
                     first,
@@ -134,7 +140,8 @@ impl<F: Fn(u32) -> [Vec3; 3]> Ctx<'_, F> {
         self.out.nodes[index] = node;
         for k in kids[..len].iter().flatten() {
             if let BNode::Inner { children, bounds } = k {
-                let child = self.emit(&[&children[0], &children[1]], depth + 1);
+                let (c0, c1) = (self.tree.node(children[0]), self.tree.node(children[1]));
+                let child = self.emit(&[c0, c1], depth + 1);
                 let n = &mut self.out.nodes[index];
                 n.child[lane] = ChildRef::Inner(child).encode();
                 n.set_child_bounds(lane, *bounds);

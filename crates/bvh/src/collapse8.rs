@@ -5,7 +5,7 @@
 //! the 4-wide collapse laid out (`Collapsed::leaf_blocks` maps a leaf to its first block), and
 //! both trees answer every query from the same triangle array.
 
-use crate::build::BNode;
+use crate::build::{BNode, BTree};
 use crate::collapse::open_largest;
 use crate::node::ChildRef;
 use crate::node8::Node8;
@@ -18,25 +18,33 @@ pub(crate) struct Collapsed8 {
 
 /// Collapses `root` into 8-wide nodes; `leaf_blocks[start]` is the first block of the binary
 /// leaf whose references start at `start`.
-pub(crate) fn collapse8(root: &BNode, leaf_blocks: &[u32], node_hint: usize) -> Collapsed8 {
+pub(crate) fn collapse8(tree: &BTree, leaf_blocks: &[u32], node_hint: usize) -> Collapsed8 {
     let mut out = Collapsed8 {
         nodes: Vec::with_capacity(node_hint),
         depth: 0,
     };
+    let root = tree.node(tree.root);
     match root {
-        BNode::Leaf { .. } => emit(&mut out, leaf_blocks, &[root], 1),
+        BNode::Leaf { .. } => emit(&mut out, tree, leaf_blocks, &[root], 1),
         BNode::Inner { children, .. } => {
-            emit(&mut out, leaf_blocks, &[&children[0], &children[1]], 1)
+            let (c0, c1) = (tree.node(children[0]), tree.node(children[1]));
+            emit(&mut out, tree, leaf_blocks, &[c0, c1], 1)
         }
     };
     out
 }
 
-fn emit(out: &mut Collapsed8, leaf_blocks: &[u32], start: &[&BNode], depth: u32) -> u32 {
+fn emit(
+    out: &mut Collapsed8,
+    tree: &BTree,
+    leaf_blocks: &[u32],
+    start: &[&BNode],
+    depth: u32,
+) -> u32 {
     let index = out.nodes.len();
     out.nodes.push(Node8::EMPTY);
     out.depth = out.depth.max(depth);
-    let (kids, len) = open_largest::<8>(start);
+    let (kids, len) = open_largest::<8>(tree, start);
     let mut node = Node8::EMPTY;
     let mut lane = 0;
     for k in kids[..len].iter().flatten() {
@@ -60,7 +68,8 @@ fn emit(out: &mut Collapsed8, leaf_blocks: &[u32], start: &[&BNode], depth: u32)
     out.nodes[index] = node;
     for k in kids[..len].iter().flatten() {
         if let BNode::Inner { children, bounds } = k {
-            let child = emit(out, leaf_blocks, &[&children[0], &children[1]], depth + 1);
+            let (c0, c1) = (tree.node(children[0]), tree.node(children[1]));
+            let child = emit(out, tree, leaf_blocks, &[c0, c1], depth + 1);
             let n = &mut out.nodes[index];
             n.child[lane] = ChildRef::Inner(child).encode();
             n.set_child_bounds(lane, *bounds);
