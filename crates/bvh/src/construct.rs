@@ -66,8 +66,13 @@ impl Bvh {
             })
             .collect();
         let tree = build::build_binary(&mut refs, &opts);
-        let c = collapse::collapse(&tree, &refs, |id| mesh.triangle(id as usize));
-        let c8 = collapse8::collapse8(&tree, &c.leaf_blocks, c.nodes.len() / 2 + 1);
+        // Both collapses only read the binary tree: the 8-wide one runs next to the 4-wide
+        // one and then points its leaves at the blocks the 4-wide one laid out.
+        let (c, mut c8) = rayon::join(
+            || collapse::collapse(&tree, &refs, |id| mesh.triangle(id as usize)),
+            || collapse8::collapse8(&tree, n / 6 + 1),
+        );
+        c8.point_leaves_at_blocks(&c.leaf_blocks);
         // The binary tree is freed here, inside the timed build.
         drop(tree);
         assert!(
