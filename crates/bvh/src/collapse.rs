@@ -25,23 +25,36 @@ pub(crate) fn open_largest<'a, const W: usize>(
     start: &[&'a BNode],
 ) -> ([Option<&'a BNode>; W], usize) {
     let mut kids: [Option<&BNode>; W] = [None; W];
-    for (k, s) in kids.iter_mut().zip(start) {
+    // The surface area of each inner child (computed once per child), `None` for leaves.
+    let mut area = [None; W];
+    let inner_area = |k: &BNode| match k {
+        BNode::Inner { bounds, .. } => Some(bounds.surface_area()),
+        BNode::Leaf { .. } => None,
+    };
+    for ((k, a), s) in kids.iter_mut().zip(&mut area).zip(start) {
         *k = Some(s);
+        *a = inner_area(s);
     }
     let mut len = start.len();
     while len < W {
-        let pick = (0..len)
-            .filter(|&i| matches!(kids[i], Some(BNode::Inner { .. })))
-            .max_by(|&a, &b| {
-                let area = |i: usize| kids[i].map_or(0.0, |k| k.bounds().surface_area());
-                area(a).total_cmp(&area(b))
-            });
-        let Some(i) = pick else { break };
+        // The last inner child of largest area (as `Iterator::max_by` picks among equals).
+        let mut pick: Option<(usize, f32)> = None;
+        for (i, a) in area[..len].iter().enumerate() {
+            if let Some(a) = *a
+                && pick.is_none_or(|(_, b)| a.total_cmp(&b).is_ge())
+            {
+                pick = Some((i, a));
+            }
+        }
+        let Some((i, _)) = pick else { break };
         let Some(BNode::Inner { children, .. }) = kids[i] else {
             unreachable!()
         };
-        kids[i] = Some(tree.node(children[0]));
-        kids[len] = Some(tree.node(children[1]));
+        let (c0, c1) = (tree.node(children[0]), tree.node(children[1]));
+        kids[i] = Some(c0);
+        area[i] = inner_area(c0);
+        kids[len] = Some(c1);
+        area[len] = inner_area(c1);
         len += 1;
     }
     (kids, len)
