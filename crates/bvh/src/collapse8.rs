@@ -76,6 +76,7 @@ fn emit(out: &mut Collapsed8, tree: &BTree, start: &[&BNode], depth: u32) -> u32
             lane += 1;
         }
     }
+    node.leaf_mask = (1u32 << lane) - 1;
     out.nodes[index] = node;
     for k in kids[..len].iter().flatten() {
         if let BNode::Inner { children, bounds } = k {
