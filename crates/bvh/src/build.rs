@@ -20,7 +20,7 @@
 //! [`MAX_SAH_DEPTH`], the node is split at the object median instead, so the depth is at most
 //! `MAX_SAH_DEPTH + log2(n)` and the traversal stack bound of `traverse.rs` holds.
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A, Vec4};
 use parallax_core::Aabb;
 use rayon::prelude::*;
 
@@ -31,24 +31,58 @@ pub(crate) const MAX_SAH_DEPTH: u32 = 48;
 /// Nodes with more triangles than this are binned in parallel chunks.
 pub(crate) const PAR_BIN_THRESHOLD: usize = 32 * 1024;
 
-/// A triangle reference: its bounds and its index in the scene's mesh.
+/// The `w` bits of [`PrimRef::lo`] are `id + ID_BIAS`: a normal float for every id below
+/// 2^27 (exponent field 1..=16), so the centroid's `w` lane (`lo + hi`, `hi.w = 0`) never
+/// computes with a denormal (which would cost a microcode assist per addition).
+const ID_BIAS: u32 = 1 << 23;
+
+/// A triangle reference, 32 bytes: its bounds as two 4-lane vectors (SSE min / max per
+/// reference and bin, as Embree's `PrimRef`) with its index in the scene's mesh in the
+/// fourth lane of `lo`.
 #[derive(Clone, Copy, Debug)]
+#[repr(C, align(32))]
 pub(crate) struct PrimRef {
-    pub min: Vec3,
-    pub max: Vec3,
-    pub id: u32,
+    lo: Vec4,
+    hi: Vec4,
 }
 
+const _: () = assert!(std::mem::size_of::<PrimRef>() == 32);
+
 impl PrimRef {
-    /// Twice the box centre (the factor 2 cancels in binning).
+    pub fn new(min: Vec3, max: Vec3, id: u32) -> Self {
+        debug_assert!((id as usize) < crate::node::MAX_TRIANGLES);
+        Self {
+            lo: min.extend(f32::from_bits(id + ID_BIAS)),
+            hi: max.extend(0.0),
+        }
+    }
+
+    /// The triangle's index in the mesh.
     #[inline(always)]
-    fn centroid2(&self) -> Vec3 {
-        self.min + self.max
+    pub fn id(&self) -> u32 {
+        self.lo.w.to_bits() - ID_BIAS
+    }
+
+    #[inline(always)]
+    fn min(&self) -> Vec3A {
+        Vec3A::from_vec4(self.lo)
+    }
+
+    #[inline(always)]
+    fn max(&self) -> Vec3A {
+        Vec3A::from_vec4(self.hi)
+    }
+
+    /// Twice the box centre (the factor 2 cancels in binning). Lane `w` is a normal float.
+    #[inline(always)]
+    fn centroid2(&self) -> Vec3A {
+        self.min() + self.max()
     }
 }
 
-/// A node of the binary build tree. Leaves index the partitioned reference array.
-#[derive(Debug)]
+/// A node of the binary build tree, in a flat arena ([`BTree`]). Leaves index the
+/// partitioned reference array; inner nodes index their two children in the arena.
+#[derive(Clone, Copy, Debug)]
 pub(crate) enum BNode {
     Leaf {
         bounds: Aabb,
@@ -57,7 +91,7 @@ pub(crate) enum BNode {
     },
     Inner {
         bounds: Aabb,
-        children: Box<[BNode; 2]>,
+        children: [u32; 2],
     },
 }
 
@@ -69,26 +103,59 @@ impl BNode {
     }
 }
 
-/// Builds the binary tree over `refs`, reordering them so that every leaf is a contiguous range.
-pub(crate) fn build_binary(refs: &mut [PrimRef], opts: &BuildOptions) -> BNode {
-    build_rec(refs, 0, 0, opts, &mut new_bins())
+/// The binary build tree: `2 n - 1` arena slots for `n` references (a subtree over the
+/// references `offset..offset + m` owns the slots `2 offset..2 (offset + m) - 1`, an inner
+/// node split after `k` of them sits at slot `2 (offset + k) - 1`, between its children's
+/// ranges, so the parallel recursion writes disjoint slices and no node is boxed). Slots
+/// of ranges that end as one leaf stay unused.
+pub(crate) struct BTree {
+    pub nodes: Vec<BNode>,
+    pub root: u32,
 }
 
-/// `scratch` holds the bins of the serial binning pass; one per thread of the recursion, so that
-/// a node neither zeroes nor copies all `3 * MAX_BINS` bins (only its own `nb` are reset).
+impl BTree {
+    #[inline(always)]
+    pub fn node(&self, i: u32) -> &BNode {
+        &self.nodes[i as usize]
+    }
+}
+
+const UNUSED: BNode = BNode::Leaf {
+    bounds: Aabb::EMPTY,
+    start: 0,
+    count: 0,
+};
+
+/// Builds the binary tree over `refs` (not empty), reordering them so that every leaf is a
+/// contiguous range.
+pub(crate) fn build_binary(refs: &mut [PrimRef], opts: &BuildOptions) -> BTree {
+    let mut nodes = vec![UNUSED; 2 * refs.len() - 1];
+    let root = build_rec(refs, 0, &mut nodes, 0, opts, &mut new_bins());
+    BTree { nodes, root }
+}
+
+/// Builds the subtree over `refs` (the references from `offset` on) into `arena`, the
+/// `2 refs.len() - 1` slots from `2 offset` on ([`BTree`]); returns its root's slot.
+/// `scratch` holds the bins of the serial binning pass; one per thread of the recursion, so
+/// that a node neither zeroes nor copies all `3 * MAX_BINS` bins (only its own `nb` are reset).
 fn build_rec(
     refs: &mut [PrimRef],
     offset: u32,
+    arena: &mut [BNode],
     depth: u32,
     opts: &BuildOptions,
     scratch: &mut Bins,
-) -> BNode {
+) -> u32 {
     let n = refs.len();
+    debug_assert_eq!(arena.len(), 2 * n - 1);
     let (bounds, cbounds) = node_bounds(refs);
-    let leaf = || BNode::Leaf {
-        bounds,
-        start: offset,
-        count: n as u32,
+    let mut leaf = || {
+        arena[0] = BNode::Leaf {
+            bounds,
+            start: offset,
+            count: n as u32,
+        };
+        2 * offset
     };
     if n <= 1 {
         return leaf();
@@ -106,33 +173,79 @@ fn build_rec(
     };
     let (l, r) = refs.split_at_mut(mid);
     let off_r = offset + mid as u32;
+    let (arena_l, rest) = arena.split_at_mut(2 * mid - 1);
+    let (slot, arena_r) = rest.split_first_mut().expect("2 n - 1 slots");
     let (a, b) = if n > opts.parallel_threshold {
         rayon::join(
-            || build_rec(l, offset, depth + 1, opts, scratch),
-            || build_rec(r, off_r, depth + 1, opts, &mut new_bins()),
+            || build_rec(l, offset, arena_l, depth + 1, opts, scratch),
+            || build_rec(r, off_r, arena_r, depth + 1, opts, &mut new_bins()),
         )
     } else {
         (
-            build_rec(l, offset, depth + 1, opts, scratch),
-            build_rec(r, off_r, depth + 1, opts, scratch),
+            build_rec(l, offset, arena_l, depth + 1, opts, scratch),
+            build_rec(r, off_r, arena_r, depth + 1, opts, scratch),
         )
     };
-    BNode::Inner {
+    *slot = BNode::Inner {
         bounds,
-        children: Box::new([a, b]),
-    }
+        children: [a, b],
+    };
+    2 * off_r - 1
 }
 
 /// Bounds of the references and of their (doubled) centroids.
 fn node_bounds(refs: &[PrimRef]) -> (Aabb, Aabb) {
-    let fold = |(b, c): (Aabb, Aabb), r: &PrimRef| {
+    let (b, c) = node_bounds_a(refs);
+    (b.aabb(), c.aabb())
+}
+
+/// A box in 4-lane vectors (lane `w` ignored). Its `min` / `max` are glam's `a < b ? a : b`
+/// and `a > b ? a : b` per lane, as `Vec3`'s, so the boxes equal those of `Aabb` bit for bit.
+#[derive(Clone, Copy)]
+struct BoxA {
+    min: Vec3A,
+    max: Vec3A,
+}
+
+impl BoxA {
+    const EMPTY: BoxA = BoxA {
+        min: Vec3A::INFINITY,
+        max: Vec3A::NEG_INFINITY,
+    };
+
+    #[inline(always)]
+    fn union(self, o: BoxA) -> BoxA {
+        BoxA {
+            min: self.min.min(o.min),
+            max: self.max.max(o.max),
+        }
+    }
+
+    #[inline(always)]
+    fn aabb(self) -> Aabb {
+        Aabb {
+            min: self.min.into(),
+            max: self.max.into(),
+        }
+    }
+}
+
+fn node_bounds_a(refs: &[PrimRef]) -> (BoxA, BoxA) {
+    let fold = |(b, c): (BoxA, BoxA), r: &PrimRef| {
+        let p = r.centroid2();
         (
-            Aabb::new(b.min.min(r.min), b.max.max(r.max)),
-            c.grow(r.centroid2()),
+            BoxA {
+                min: b.min.min(r.min()),
+                max: b.max.max(r.max()),
+            },
+            BoxA {
+                min: c.min.min(p),
+                max: c.max.max(p),
+            },
         )
     };
-    let union = |(b0, c0): (Aabb, Aabb), (b1, c1): (Aabb, Aabb)| (b0.union(b1), c0.union(c1));
-    let empty = (Aabb::EMPTY, Aabb::EMPTY);
+    let union = |(b0, c0): (BoxA, BoxA), (b1, c1): (BoxA, BoxA)| (b0.union(b1), c0.union(c1));
+    let empty = (BoxA::EMPTY, BoxA::EMPTY);
     if refs.len() > PAR_BIN_THRESHOLD {
         refs.par_chunks(8192)
             .map(|c| c.iter().fold(empty, fold))
@@ -144,12 +257,12 @@ fn node_bounds(refs: &[PrimRef]) -> (Aabb, Aabb) {
 
 #[derive(Clone, Copy)]
 struct Bin {
-    bounds: Aabb,
+    bounds: BoxA,
     count: u32,
 }
 
 const EMPTY_BIN: Bin = Bin {
-    bounds: Aabb::EMPTY,
+    bounds: BoxA::EMPTY,
     count: 0,
 };
 
@@ -164,8 +277,11 @@ fn new_bins() -> Bins {
 /// Maps doubled centroids to bin indices: `bin = floor((c - min) * scale)`, clamped.
 #[derive(Clone, Copy)]
 struct Binner {
-    min: Vec3,
-    scale: Vec3,
+    /// `w` = 0, so that the centroid's `w` lane stays a normal float (or 0) in `bin`.
+    min: Vec3A,
+    scale: Vec3A,
+    /// `bins - 1` in every lane.
+    last: Vec3A,
     bins: usize,
 }
 
@@ -176,24 +292,32 @@ impl Binner {
         let k = bins as f32 * (1.0 - 1e-6);
         let scale = Vec3::select(e.cmpgt(Vec3::ZERO), Vec3::splat(k) / e, Vec3::ZERO);
         Self {
-            min: cbounds.min,
-            scale,
+            min: Vec3A::from_vec4(cbounds.min.extend(0.0)),
+            scale: Vec3A::from_vec4(scale.extend(0.0)),
+            last: Vec3A::splat((bins - 1) as f32),
             bins,
         }
     }
 
-    /// Bin index per axis: `floor(f)` clamped to `0..bins`, NaN -> 0. The saturating
-    /// `f32 as i32` and an integer clamp give the same index as `(f as usize).min(bins - 1)` in
-    /// a fraction of the instructions (the `f32 as usize` casts were ~20% of the build).
+    /// Bin index per axis: `floor(f)` clamped to `0..bins`, NaN -> 0, i.e. the value of
+    /// `(f as i32).clamp(0, bins - 1)` ([`Binner::index`]) for every `f`, computed in lanes:
+    /// `last < f ? last : f` keeps a NaN, `x > 0 ? x : 0` turns it (and negatives) into 0, and
+    /// the truncation of a value in `0..=bins - 1` is its floor.
     #[inline(always)]
-    fn bin(&self, c: Vec3) -> [usize; 3] {
+    fn bin(&self, c: Vec3A) -> [usize; 3] {
         let f = (c - self.min) * self.scale;
-        [self.index(f.x), self.index(f.y), self.index(f.z)]
+        let g = self.last.min(f).max(Vec3A::ZERO);
+        let i = trunc3(g);
+        [
+            i[0] as usize & (MAX_BINS - 1),
+            i[1] as usize & (MAX_BINS - 1),
+            i[2] as usize & (MAX_BINS - 1),
+        ]
     }
 
     /// Bin index on one axis (the partition needs only the split axis).
     #[inline(always)]
-    fn bin_axis(&self, c: Vec3, axis: usize) -> usize {
+    fn bin_axis(&self, c: Vec3A, axis: usize) -> usize {
         self.index((c[axis] - self.min[axis]) * self.scale[axis])
     }
 
@@ -202,6 +326,31 @@ impl Binner {
         // `NaN as i32` is 0; the mask (a no-op, bins <= MAX_BINS = 32) drops bounds checks.
         (f as i32).clamp(0, self.bins as i32 - 1) as usize & (MAX_BINS - 1)
     }
+}
+
+/// Truncation of three lanes that hold values in `0..=31` (one `cvttps2dq` on x86-64; the
+/// portable twin's `as i32` gives the same values there).
+#[inline(always)]
+fn trunc3(g: Vec3A) -> [i32; 4] {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{__m128, __m128i, _mm_cvttps_epi32};
+        let v: __m128 = g.into();
+        // SAFETY: SSE2 is part of the x86-64 baseline.
+        let i: __m128i = unsafe { _mm_cvttps_epi32(v) };
+        // SAFETY: `__m128i` and `[i32; 4]` have the same size; every bit pattern is valid.
+        unsafe { std::mem::transmute::<__m128i, [i32; 4]>(i) }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        trunc3_portable(g)
+    }
+}
+
+#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+#[inline(always)]
+fn trunc3_portable(g: Vec3A) -> [i32; 4] {
+    [g.x as i32, g.y as i32, g.z as i32, 0]
 }
 
 /// Bins `refs` into fresh bins (the parallel chunks of large nodes).
@@ -218,10 +367,12 @@ fn bin_into(refs: &[PrimRef], binner: &Binner, bins: &mut Bins) {
     }
     for r in refs {
         let b = binner.bin(r.centroid2());
+        let (lo, hi) = (r.min(), r.max());
         for (axis_bins, &k) in bins.0.iter_mut().zip(&b) {
             let bin = &mut axis_bins[k];
             bin.count += 1;
-            bin.bounds = Aabb::new(bin.bounds.min.min(r.min), bin.bounds.max.max(r.max));
+            bin.bounds.min = bin.bounds.min.min(lo);
+            bin.bounds.max = bin.bounds.max.max(hi);
         }
     }
 }
@@ -270,13 +421,13 @@ fn sah_split(
         let mut right_cost = [0.0f32; MAX_BINS];
         let (mut acc, mut cnt) = (Aabb::EMPTY, 0u32);
         for i in (1..nb).rev() {
-            acc = acc.union(bins[i].bounds);
+            acc = acc.union(bins[i].bounds.aabb());
             cnt += bins[i].count;
             right_cost[i] = acc.surface_area() * cnt as f32;
         }
         let (mut acc, mut cnt) = (Aabb::EMPTY, 0u32);
         for i in 1..nb {
-            acc = acc.union(bins[i - 1].bounds);
+            acc = acc.union(bins[i - 1].bounds.aabb());
             cnt += bins[i - 1].count;
             if cnt == 0 || cnt as usize == n {
                 continue;
@@ -333,7 +484,7 @@ fn median_split(refs: &mut [PrimRef], cbounds: &Aabb) -> usize {
     refs.select_nth_unstable_by(mid, |a, b| {
         a.centroid2()[axis]
             .total_cmp(&b.centroid2()[axis])
-            .then(a.id.cmp(&b.id))
+            .then(a.id().cmp(&b.id()))
     });
     mid
 }
@@ -346,16 +497,18 @@ mod tests {
         points
             .iter()
             .enumerate()
-            .map(|(i, &p)| PrimRef {
-                min: p,
-                max: p + Vec3::splat(0.01),
-                id: i as u32,
-            })
+            .map(|(i, &p)| PrimRef::new(p, p + Vec3::splat(0.01), i as u32))
             .collect()
     }
 
-    fn check(node: &BNode, refs: &[PrimRef], max_leaf: usize, depth: u32) -> (usize, u32) {
-        match node {
+    fn check(
+        tree: &BTree,
+        node: u32,
+        refs: &[PrimRef],
+        max_leaf: usize,
+        depth: u32,
+    ) -> (usize, u32) {
+        match tree.node(node) {
             BNode::Leaf {
                 bounds,
                 start,
@@ -363,15 +516,16 @@ mod tests {
             } => {
                 assert!(*count as usize <= max_leaf.max(1));
                 for r in &refs[*start as usize..(*start + *count) as usize] {
-                    assert!(bounds.contains(r.min) && bounds.contains(r.max));
+                    assert!(bounds.contains(r.min().into()) && bounds.contains(r.max().into()));
                 }
                 (*count as usize, depth)
             }
             BNode::Inner { bounds, children } => {
-                let u = children[0].bounds().union(children[1].bounds());
+                let [c0, c1] = *children;
+                let u = tree.node(c0).bounds().union(tree.node(c1).bounds());
                 assert_eq!(u, *bounds);
-                let (a, da) = check(&children[0], refs, max_leaf, depth + 1);
-                let (b, db) = check(&children[1], refs, max_leaf, depth + 1);
+                let (a, da) = check(tree, c0, refs, max_leaf, depth + 1);
+                let (b, db) = check(tree, c1, refs, max_leaf, depth + 1);
                 (a + b, da.max(db))
             }
         }
@@ -388,11 +542,76 @@ mod tests {
         let mut refs = refs_of(&pts);
         let opts = BuildOptions::default();
         let root = build_binary(&mut refs, &opts);
-        let (count, _) = check(&root, &refs, opts.max_leaf_size, 0);
+        let (count, _) = check(&root, root.root, &refs, opts.max_leaf_size, 0);
         assert_eq!(count, 5000);
-        let mut ids: Vec<u32> = refs.iter().map(|r| r.id).collect();
+        let mut ids: Vec<u32> = refs.iter().map(|r| r.id()).collect();
         ids.sort_unstable();
         assert!(ids.iter().enumerate().all(|(i, &id)| id == i as u32));
+    }
+
+    #[test]
+    fn lane_bin_index_equals_the_scalar_clamp() {
+        let mut s = 11u32;
+        let mut rnd = || {
+            s = s.wrapping_mul(747796405).wrapping_add(2891336453);
+            s
+        };
+        let special = [
+            0.0,
+            -0.0,
+            0.5,
+            0.999_999_9,
+            1.0,
+            30.999_998,
+            31.0,
+            31.5,
+            32.0,
+            1e9,
+            3e9,
+            -0.5,
+            -1.0,
+            -3e9,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            f32::MIN_POSITIVE,
+        ];
+        for bins in [2usize, 5, 17, 32] {
+            let binner = Binner {
+                min: Vec3A::ZERO,
+                scale: Vec3A::ONE,
+                last: Vec3A::splat((bins - 1) as f32),
+                bins,
+            };
+            let mut check = |f: Vec3A| {
+                let b = binner.bin(f);
+                for axis in 0..3 {
+                    assert_eq!(b[axis], binner.index(f[axis]), "{f:?} {bins}");
+                    assert_eq!(b[axis], binner.bin_axis(f, axis), "{f:?} {bins}");
+                }
+                let g = binner.last.min(f).max(Vec3A::ZERO);
+                assert_eq!(trunc3(g)[..3], trunc3_portable(g)[..3], "{g:?}");
+            };
+            for &x in &special {
+                for &y in &special {
+                    check(Vec3A::new(x, y, special[(rnd() % 18) as usize]));
+                }
+            }
+            for _ in 0..100_000 {
+                let f = f32::from_bits(rnd());
+                let g = (rnd() % 4000) as f32 / 100.0 - 2.0;
+                check(Vec3A::new(f, g, -g));
+            }
+        }
+    }
+
+    #[test]
+    fn reference_ids_round_trip() {
+        for id in [0u32, 1, 12345, (1 << 23) - 1, 1 << 23, (1 << 27) - 1] {
+            let r = PrimRef::new(Vec3::ZERO, Vec3::ONE, id);
+            assert_eq!(r.id(), id);
+            assert!(r.centroid2().to_array().iter().all(|x| x.is_normal()));
+        }
     }
 
     #[test]
@@ -401,7 +620,7 @@ mod tests {
         let mut refs = refs_of(&pts);
         let opts = BuildOptions::default();
         let root = build_binary(&mut refs, &opts);
-        let (count, depth) = check(&root, &refs, opts.max_leaf_size, 0);
+        let (count, depth) = check(&root, root.root, &refs, opts.max_leaf_size, 0);
         assert_eq!(count, 1000);
         assert!(depth <= 10, "depth {depth}");
     }

@@ -10,8 +10,9 @@
 //! that preorder walk reaches them (HVVR §5, see `node.rs`).
 
 use glam::Vec3;
+use rayon::prelude::*;
 
-use crate::build::{BNode, PrimRef};
+use crate::build::{BNode, BTree, PrimRef};
 use crate::node::{ChildRef, Node4};
 use crate::tri::Tri;
 use crate::tri4::{Tri4, blocks_for};
@@ -20,26 +21,40 @@ use crate::tri4::{Tri4, blocks_for};
 /// inner child of largest surface area by its two children, until there are `W` children or
 /// only leaves (module docs). Returns the children (the first `len` are set) and `len`.
 pub(crate) fn open_largest<'a, const W: usize>(
+    tree: &'a BTree,
     start: &[&'a BNode],
 ) -> ([Option<&'a BNode>; W], usize) {
     let mut kids: [Option<&BNode>; W] = [None; W];
-    for (k, s) in kids.iter_mut().zip(start) {
+    // The surface area of each inner child (computed once per child), `None` for leaves.
+    let mut area = [None; W];
+    let inner_area = |k: &BNode| match k {
+        BNode::Inner { bounds, .. } => Some(bounds.surface_area()),
+        BNode::Leaf { .. } => None,
+    };
+    for ((k, a), s) in kids.iter_mut().zip(&mut area).zip(start) {
         *k = Some(s);
+        *a = inner_area(s);
     }
     let mut len = start.len();
     while len < W {
-        let pick = (0..len)
-            .filter(|&i| matches!(kids[i], Some(BNode::Inner { .. })))
-            .max_by(|&a, &b| {
-                let area = |i: usize| kids[i].map_or(0.0, |k| k.bounds().surface_area());
-                area(a).total_cmp(&area(b))
-            });
-        let Some(i) = pick else { break };
+        // The last inner child of largest area (as `Iterator::max_by` picks among equals).
+        let mut pick: Option<(usize, f32)> = None;
+        for (i, a) in area[..len].iter().enumerate() {
+            if let Some(a) = *a
+                && pick.is_none_or(|(_, b)| a.total_cmp(&b).is_ge())
+            {
+                pick = Some((i, a));
+            }
+        }
+        let Some((i, _)) = pick else { break };
         let Some(BNode::Inner { children, .. }) = kids[i] else {
             unreachable!()
         };
-        kids[i] = Some(&children[0]);
-        kids[len] = Some(&children[1]);
+        let (c0, c1) = (tree.node(children[0]), tree.node(children[1]));
+        kids[i] = Some(c0);
+        area[i] = inner_area(c0);
+        kids[len] = Some(c1);
+        area[len] = inner_area(c1);
         len += 1;
     }
     (kids, len)
@@ -58,69 +73,104 @@ pub(crate) struct Collapsed {
     pub leaf_blocks: Vec<u32>,
 }
 
-/// Collapses `root` (built over `refs`) into 4-wide nodes; `corners(id)` gives a triangle's
-/// vertices.
+/// Collapses `tree` (built over `refs`) into 4-wide nodes; `corners(id)` gives a triangle's
+/// vertices. A serial pass lays out the nodes and numbers the leaves' triangles and blocks in
+/// the order the preorder walk reaches them; the triangles and blocks are then gathered in
+/// parallel (each triangle and block is a function of its number alone, so the result does
+/// not depend on the threads).
 pub(crate) fn collapse(
-    root: &BNode,
+    tree: &BTree,
     refs: &[PrimRef],
-    corners: impl Fn(u32) -> [Vec3; 3],
+    corners: impl Fn(u32) -> [Vec3; 3] + Sync,
 ) -> Collapsed {
-    let mut out = Collapsed {
+    let mut ctx = Ctx {
+        tree,
         nodes: Vec::new(),
-        tris: Vec::with_capacity(refs.len()),
-        prim_ids: Vec::with_capacity(refs.len()),
-        blocks: Vec::with_capacity(refs.len() / 2),
         depth: 0,
         leaf_blocks: vec![u32::MAX; refs.len()],
+        order: Vec::with_capacity(refs.len()),
+        block_starts: Vec::with_capacity(refs.len() / 2),
     };
-    let mut ctx = Ctx {
-        out: &mut out,
-        refs,
-        corners: &corners,
-    };
+    let root = tree.node(tree.root);
     match root {
         // A tiny mesh: a root node with a single leaf lane.
         BNode::Leaf { .. } => ctx.emit(&[root], 1),
-        BNode::Inner { children, .. } => ctx.emit(&[&children[0], &children[1]], 1),
+        BNode::Inner { children, .. } => {
+            ctx.emit(&[tree.node(children[0]), tree.node(children[1])], 1)
+        }
     };
-    out
+    let Ctx {
+        nodes,
+        depth,
+        leaf_blocks,
+        order,
+        block_starts,
+        ..
+    } = ctx;
+    let tris: Vec<Tri> = order
+        .par_iter()
+        .with_min_len(1024)
+        .map(|&k| Tri::new(corners(refs[k as usize].id())))
+        .collect();
+    let prim_ids: Vec<u32> = order
+        .par_iter()
+        .with_min_len(4096)
+        .map(|&k| refs[k as usize].id())
+        .collect();
+    let blocks: Vec<Tri4> = block_starts
+        .par_iter()
+        .with_min_len(256)
+        .map(|&(first, count)| {
+            let mut b = Tri4::EMPTY;
+            for l in 0..count as usize {
+                let index = first + l as u32;
+                b.set(l, &tris[index as usize], index);
+            }
+            b
+        })
+        .collect();
+    Collapsed {
+        nodes,
+        tris,
+        prim_ids,
+        blocks,
+        depth,
+        leaf_blocks,
+    }
 }
 
-struct Ctx<'a, F> {
-    out: &'a mut Collapsed,
-    refs: &'a [PrimRef],
-    corners: &'a F,
+struct Ctx<'a> {
+    tree: &'a BTree,
+    nodes: Vec<Node4>,
+    depth: u32,
+    leaf_blocks: Vec<u32>,
+    /// The reference of each triangle, in leaf order.
+    order: Vec<u32>,
+    /// Per block: its first triangle and its number of used lanes (1..=4).
+    block_starts: Vec<(u32, u32)>,
 }
 
-impl<F: Fn(u32) -> [Vec3; 3]> Ctx<'_, F> {
+impl Ctx<'_> {
     /// Emits a node whose binary children are `start`; returns its index.
     fn emit(&mut self, start: &[&BNode], depth: u32) -> u32 {
-        let index = self.out.nodes.len();
-        self.out.nodes.push(Node4::EMPTY);
-        self.out.depth = self.out.depth.max(depth);
+        let index = self.nodes.len();
+        self.nodes.push(Node4::EMPTY);
+        self.depth = self.depth.max(depth);
 
-        let (kids, len) = open_largest::<4>(start);
+        let (kids, len) = open_largest::<4>(self.tree, start);
 
         // Leaves first (HVVR §5), then inner children, each group in build order.
         let mut lane = 0;
         let mut node = Node4::EMPTY;
         for k in kids[..len].iter().flatten() {
             if let BNode::Leaf { start, count, .. } = k {
-                let first = self.out.blocks.len() as u32;
-                self.out.leaf_blocks[*start as usize] = first;
-                self.out
-                    .blocks
-                    .extend((0..blocks_for(*count)).map(|_| Tri4::EMPTY));
-                for (j, r) in self.refs[*start as usize..(*start + *count) as usize]
-                    .iter()
-                    .enumerate()
-                {
-                    let tri = Tri::new((self.corners)(r.id));
-                    let index = self.out.tris.len() as u32;
-                    self.out.blocks[first as usize + j / 4].set(j % 4, &tri, index);
-                    self.out.tris.push(tri);
-                    self.out.prim_ids.push(r.id);
-                }
+                let first = self.block_starts.len() as u32;
+                self.leaf_blocks[*start as usize] = first;
+                let tri0 = self.order.len() as u32;
+                self.order.extend(*start..*start + *count);
+                self.block_starts.extend(
+                    (0..blocks_for(*count)).map(|b| (tri0 + 4 * b, (*count - 4 * b).min(4))),
+                );
                 node.child[lane] = ChildRef::Leaf {
                     first,
                     count: *count,
@@ -131,17 +181,18 @@ impl<F: Fn(u32) -> [Vec3; 3]> Ctx<'_, F> {
             }
         }
         // Record the leaf lanes now; inner lanes are written after their subtrees exist.
-        self.out.nodes[index] = node;
+        self.nodes[index] = node;
         for k in kids[..len].iter().flatten() {
             if let BNode::Inner { children, bounds } = k {
-                let child = self.emit(&[&children[0], &children[1]], depth + 1);
-                let n = &mut self.out.nodes[index];
+                let (c0, c1) = (self.tree.node(children[0]), self.tree.node(children[1]));
+                let child = self.emit(&[c0, c1], depth + 1);
+                let n = &mut self.nodes[index];
                 n.child[lane] = ChildRef::Inner(child).encode();
                 n.set_child_bounds(lane, *bounds);
                 lane += 1;
             }
         }
-        self.out.nodes[index].num_children = lane as u32;
+        self.nodes[index].num_children = lane as u32;
         index as u32
     }
 }

@@ -8,7 +8,8 @@
 //! | 0..192 | `bounds: [[f32; 8]; 6]` | `min_x, max_x, min_y, max_y, min_z, max_z`, one lane per child (SoA) |
 //! | 192..224 | `child: [u32; 8]` | child references, encoded as [`crate::ChildRef`] (leaves point into the shared block array) |
 //! | 224..228 | `num_children` | used lanes (1..=8); used lanes come first |
-//! | 228..256 | padding | zero |
+//! | 228..232 | `leaf_mask` | bit `i` set iff lane `i` is a leaf child (leaf lanes come first) |
+//! | 232..256 | padding | zero |
 //!
 //! One row of eight lanes is one AVX register (Embree's `BVH8` node, Wald et al. 2014 §3.1,
 //! uncompressed), so a ray tests all eight children with six 8-lane loads; the `[min, max]`
@@ -32,7 +33,10 @@ pub struct Node8 {
     pub bounds: [[f32; 8]; 6],
     pub child: [u32; 8],
     pub num_children: u32,
-    pub reserved: [u32; 7],
+    /// Bit `i` set iff lane `i` holds a leaf child: the traversal prefetches the triangle
+    /// blocks of the hit leaf lanes without testing each hit lane's reference.
+    pub leaf_mask: u32,
+    pub reserved: [u32; 6],
 }
 
 const _: () = assert!(std::mem::size_of::<Node8>() == 256);
@@ -51,7 +55,8 @@ impl Node8 {
         ],
         child: [EMPTY; 8],
         num_children: 0,
-        reserved: [0; 7],
+        leaf_mask: 0,
+        reserved: [0; 6],
     };
 
     /// Bounds of lane `i`.

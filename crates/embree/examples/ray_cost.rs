@@ -6,7 +6,8 @@
 //! cargo build --release -p parallax-embree --features embree --example ray_cost
 //! target/release/examples/ray_cost SCENE EYE TARGET FOV_Y METHOD MODE [WIDTH HEIGHT]
 //!   METHOD: bvh | bvh4 | packet | packet4 | packet64 | embree1 | embree16 | stats (work counters) |
-//!           build (build times) | a comma-separated list (interleaved A/B, best of 7)
+//!           build (build times) | treehash (a hash of both trees, the blocks and the prim ids:
+//!           equal hashes = the same BVH) | a comma-separated list (interleaved A/B, best of 7)
 //!   MODE:   primary (pixel centres, 8x8 tiles of four 4x4 tiles; traced 64 rays at a time) |
 //!           random (cosine bounces from the primary hits)
 //! e.g. ray_cost ../shared/scenes/sponza_dabrovic/sponza_dabrovic.glb -9,3.5,0 8,5,0 60 bvh primary
@@ -89,6 +90,25 @@ fn main() {
             theirs = theirs.min(t.elapsed().as_secs_f64() * 1e3);
         }
         println!("build: parallax {ours:.1} ms, Embree high {theirs:.1} ms (best of 5)");
+        return;
+    }
+    if method == "treehash" {
+        use std::hash::{Hash, Hasher};
+        // Debug formatting prints every f32 exactly (shortest round-trip form).
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        format!("{:?}", bvh.nodes()).hash(&mut h);
+        format!("{:?}", bvh.nodes8()).hash(&mut h);
+        format!("{:?}", bvh.blocks()).hash(&mut h);
+        format!("{:?}", bvh.triangles()).hash(&mut h);
+        bvh.prim_ids().hash(&mut h);
+        println!(
+            "tree: {} nodes4, {} nodes8, {} blocks, depth {}, hash {:016x}",
+            bvh.node_count(),
+            bvh.nodes8().len(),
+            bvh.blocks().len(),
+            bvh.depth(),
+            h.finish()
+        );
         return;
     }
     if method == "stats" {
