@@ -39,6 +39,8 @@ pub struct QuadTree {
     /// Per pixel (`W x H`), the trigger depth of unsafe pixels (cascade); empty when the
     /// layer is the last one.
     pub(crate) trigger_z: Vec<f32>,
+    /// The number of finite [`Self::trigger_z`] entries (unsafe pixels).
+    pub(crate) unsafe_count: usize,
     /// The highest level holding any plane node (0 when there is none; reported by the
     /// examples).
     pub(crate) plane_top: usize,
@@ -238,18 +240,16 @@ fn effective_levels_down_to(levels: &[Level], bottom: usize) -> Vec<u8> {
         let nodes = &levels[l].nodes;
         let parent = &cur;
         let mut next = vec![NO_PLANE; nodes.len()];
+        // Below the top level a level's width is even (`lw = 2 pw`): per parent, its two
+        // children of the row (a loop the compiler vectorises).
         next.par_chunks_mut(lw).enumerate().for_each(|(y, row)| {
-            let prow = &parent[(y / 2) * pw..];
+            let prow = &parent[(y / 2) * pw..(y / 2 + 1) * pw];
             let nrow = &nodes[y * lw..(y + 1) * lw];
-            for (x, v) in row.iter_mut().enumerate() {
-                let p = prow[x / 2];
-                *v = if p != NO_PLANE {
-                    p
-                } else if nrow[x].is_plane() {
-                    l as u8
-                } else {
-                    NO_PLANE
-                };
+            let own = |n: Node| if n.is_plane() { l as u8 } else { NO_PLANE };
+            for ((pair, kids), &p) in row.chunks_exact_mut(2).zip(nrow.chunks_exact(2)).zip(prow) {
+                let (a, b) = (own(kids[0]), own(kids[1]));
+                pair[0] = if p != NO_PLANE { p } else { a };
+                pair[1] = if p != NO_PLANE { p } else { b };
             }
         });
         cur = next;
@@ -272,9 +272,16 @@ pub(crate) fn plane_levels(levels: &[Level], w: u32, h: u32) -> Vec<u8> {
         .enumerate()
         .for_each(|(j, row)| {
             let prow = &e1[(j / 2) * w1..];
-            for (x, v) in row.iter_mut().enumerate() {
-                let p = prow[x / 2];
-                *v = if p == NO_PLANE { 0 } else { p };
+            // Per level-1 node its two pixels of the row (vectorised), then an odd last one.
+            let level = |p: u8| if p == NO_PLANE { 0 } else { p };
+            let mut pairs = row.chunks_exact_mut(2);
+            for (pair, &p) in (&mut pairs).zip(prow) {
+                let v = level(p);
+                pair[0] = v;
+                pair[1] = v;
+            }
+            if let [last] = pairs.into_remainder() {
+                *last = level(prow[(w as usize - 1) / 2]);
             }
         });
     pl
