@@ -50,7 +50,8 @@ use super::merge::MergeCtx;
 use super::node::{FLAG_CRACK, Node};
 use super::prune::Blocked;
 use super::tree::{
-    Level, NO_PLANE, QuadTree, Z_FLOOR_TABLE_MAX, Z_REGION_MIN_GAIN, Z_SKIP_MARGIN, plane_levels,
+    Level, NO_PLANE, QuadTree, Z_FLOOR_TABLE_MAX, Z_REGION_MIN_GAIN, Z_SKIP_MARGIN, init_row,
+    par_rows, plane_levels,
 };
 use crate::planes::layer_size;
 use crate::{LayerPlanes, NormalSource, ScreenError, UnitCube};
@@ -201,35 +202,50 @@ impl QuadTree {
         };
 
         // Level 0: leaves (§3.2).
+        // Every row is set empty right before its leaves are written (in cache, no fill pass
+        // over the level first), the padding rows below the image too.
         let (w0, h0) = (top_w << top, top_h << top);
-        let mut leaves = vec![Node::EMPTY; (w0 * h0) as usize];
+        let (n0, n_img, n_px) = ((w0 * h0) as usize, (w0 * h) as usize, (w * h) as usize);
+        let mut leaves: Vec<Node> = Vec::with_capacity(n0);
         // With deeper layers (fast path), each row's pixel-plane trigger depths right after
         // its leaves (`fixpoint`), and the pixels where they are finite.
         let mut px_triggers = None;
-        let image = &mut leaves[..(w0 * h) as usize];
+        let (image, padding) = leaves.spare_capacity_mut()[..n0].split_at_mut(n_img);
+        padding.par_chunks_mut(w0 as usize).for_each(|row| {
+            init_row(row, Node::EMPTY);
+        });
         if !deeper.is_empty() && !reference {
             let cols = super::fixpoint::Columns::new(w, wf);
-            // Every value is written by the row pass (zeroed pages, no fill).
-            let mut tz = vec![0.0f32; (w * h) as usize];
-            let mut fronts = vec![0.0f32; (w * h) as usize];
+            // Every value is written by the row pass.
+            let (mut tz, mut fronts) = (Vec::with_capacity(n_px), Vec::with_capacity(n_px));
             let listed: Vec<u32> = image
                 .par_chunks_mut(w0 as usize)
-                .zip(tz.par_chunks_mut(w as usize))
-                .zip(fronts.par_chunks_mut(w as usize))
+                .zip(tz.spare_capacity_mut()[..n_px].par_chunks_mut(w as usize))
+                .zip(fronts.spare_capacity_mut()[..n_px].par_chunks_mut(w as usize))
                 .enumerate()
                 .flat_map_iter(|(j, ((row, t), f))| {
                     let j = j as u32;
+                    let row = init_row(row, Node::EMPTY);
+                    let (t, f) = (init_row(t, 0.0f32), init_row(f, 0.0f32));
                     leaf_row(row, j);
                     super::fixpoint::pixel_triggers_row(t, f, row, j, &ctx, &cols, deeper)
                 })
                 .collect();
+            // SAFETY: the rows cover `0..n_px` and each was initialised by `init_row`.
+            unsafe {
+                tz.set_len(n_px);
+                fronts.set_len(n_px);
+            }
             px_triggers = Some((tz, listed, fronts));
         } else {
             image
                 .par_chunks_mut(w0 as usize)
                 .enumerate()
-                .for_each(|(j, row)| leaf_row(row, j as u32));
+                .for_each(|(j, row)| leaf_row(init_row(row, Node::EMPTY), j as u32));
         }
+        // SAFETY: the image rows and the padding rows cover `0..n0`, each initialised by
+        // `init_row`.
+        unsafe { leaves.set_len(n0) };
         let level0 = Level {
             w: w0,
             h: h0,
@@ -287,15 +303,11 @@ impl QuadTree {
             plane_levels(&tree.levels, w, h)
         } else {
             let w0 = tree.levels[0].w as usize;
-            let mut pl = vec![0u8; (w * h) as usize];
-            pl.par_chunks_mut(w as usize)
-                .enumerate()
-                .for_each(|(j, row)| {
-                    for (v, &l) in row.iter_mut().zip(&eff[j * w0..]) {
-                        *v = if l == NO_PLANE { 0 } else { l };
-                    }
-                });
-            pl
+            par_rows((w * h) as usize, w as usize, 0u8, |j, row| {
+                for (v, &l) in row.iter_mut().zip(&eff[j * w0..]) {
+                    *v = if l == NO_PLANE { 0 } else { l };
+                }
+            })
         };
         // After `mark_unsafe` (it lowers AABB ranges to trigger depths).
         tree.set_z_floors(&ctx, &top_tz);
