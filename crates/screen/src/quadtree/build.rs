@@ -216,7 +216,8 @@ impl QuadTree {
         });
         if !deeper.is_empty() && !reference {
             let cols = super::fixpoint::Columns::new(w, wf);
-            // Every value is written by the row pass.
+            // Every value is written by the row pass; the rows are set to `+inf` first (a
+            // store loop in cache; a zero value would be a `memset` call per row).
             let (mut tz, mut fronts) = (Vec::with_capacity(n_px), Vec::with_capacity(n_px));
             let listed: Vec<u32> = image
                 .par_chunks_mut(w0 as usize)
@@ -226,7 +227,7 @@ impl QuadTree {
                 .flat_map_iter(|(j, ((row, t), f))| {
                     let j = j as u32;
                     let row = init_row(row, Node::EMPTY);
-                    let (t, f) = (init_row(t, 0.0f32), init_row(f, 0.0f32));
+                    let (t, f) = (init_row(t, f32::INFINITY), init_row(f, f32::INFINITY));
                     leaf_row(row, j);
                     super::fixpoint::pixel_triggers_row(t, f, row, j, &ctx, &cols, deeper)
                 })

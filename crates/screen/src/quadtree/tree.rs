@@ -353,33 +353,32 @@ pub(crate) fn decoded_planes(
         .zip(flag.spare_capacity_mut()[..n].par_chunks_mut(w as usize))
         .enumerate()
         .for_each(|(j, ((nrow, orow), frow))| {
-            let (nrow, orow, frow) = (
-                init_row(nrow, Vec3::ZERO),
-                init_row(orow, 0.0f32),
-                init_row(frow, false),
-            );
             // The previous pixel's node and its decoded plane: a merged node covers a run of
             // pixels of the row, decoded once (the decode is a function of the node and its
-            // position only).
+            // position only). Every pixel of the row is written (zero where no plane).
             let mut last: Option<((Node, u32, u32, u32), Vec3, f32)> = None;
-            for i in 0..w {
-                if let Some(key) = node_of(i, j as u32) {
-                    let (nn, c) = match last {
-                        Some((k, nn, c)) if k == key => (nn, c),
-                        _ => {
-                            let (node, l, qx, qy) = key;
-                            let (nn, c) = decode_plane(node, l, qx, qy, wf, hf);
-                            last = Some((key, nn, c));
-                            (nn, c)
-                        }
-                    };
-                    nrow[i as usize] = nn;
-                    orow[i as usize] = c;
-                    frow[i as usize] = key.0.flags() & FLAG_CRACK != 0;
-                }
+            for (i, ((nv, ov), fv)) in nrow.iter_mut().zip(orow).zip(frow).enumerate() {
+                let (nn, c, f) = match node_of(i as u32, j as u32) {
+                    Some(key) => {
+                        let (nn, c) = match last {
+                            Some((k, nn, c)) if k == key => (nn, c),
+                            _ => {
+                                let (node, l, qx, qy) = key;
+                                let (nn, c) = decode_plane(node, l, qx, qy, wf, hf);
+                                last = Some((key, nn, c));
+                                (nn, c)
+                            }
+                        };
+                        (nn, c, key.0.flags() & FLAG_CRACK != 0)
+                    }
+                    None => (Vec3::ZERO, 0.0, false),
+                };
+                nv.write(nn);
+                ov.write(c);
+                fv.write(f);
             }
         });
-    // SAFETY: the rows cover `0..n` and each was initialised by `init_row`.
+    // SAFETY: the rows cover `0..n` (`w` values each) and every value was written above.
     unsafe {
         normal.set_len(n);
         offset.set_len(n);
