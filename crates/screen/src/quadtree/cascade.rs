@@ -264,7 +264,8 @@ pub(crate) fn deeper_front(
             continue;
         }
         let (nj, cj) = (pj.normal[idx], pj.offset[idx]);
-        if !(nj.z < -1e-6) {
+        // Edge-on: `!(nj.z < -1e-6)`.
+        if nj.z >= -1e-6 || nj.z.is_nan() {
             return f32::NEG_INFINITY;
         }
         for (x, y) in [(x0, y0), (x1, y0), (x0, y1), (x1, y1)] {
@@ -304,7 +305,7 @@ pub(crate) fn proxy_safe_front(
 ) -> f32 {
     const G: f64 = 1e-6;
     let (nx, ny, nz, c) = (n.x as f64, n.y as f64, n.z as f64, c as f64);
-    if !(nz < 0.0) {
+    if nz >= 0.0 || nz.is_nan() {
         return f32::INFINITY;
     }
     let m = (nx * x_lo as f64).max(nx * x_hi as f64) + (ny * y_lo as f64).max(ny * y_hi as f64) - c;
