@@ -50,7 +50,8 @@ use super::merge::MergeCtx;
 use super::node::{FLAG_CRACK, Node};
 use super::prune::Blocked;
 use super::tree::{
-    Level, NO_PLANE, QuadTree, Z_FLOOR_TABLE_MAX, Z_REGION_MIN_GAIN, Z_SKIP_MARGIN, plane_levels,
+    Level, NO_PLANE, QuadTree, Z_FLOOR_TABLE_MAX, Z_REGION_MIN_GAIN, Z_SKIP_MARGIN, init_row,
+    par_rows, plane_levels,
 };
 use crate::planes::layer_size;
 use crate::{LayerPlanes, NormalSource, ScreenError, UnitCube};
@@ -201,32 +202,51 @@ impl QuadTree {
         };
 
         // Level 0: leaves (§3.2).
+        // Every row is set empty right before its leaves are written (in cache, no fill pass
+        // over the level first), the padding rows below the image too.
         let (w0, h0) = (top_w << top, top_h << top);
-        let mut leaves = vec![Node::EMPTY; (w0 * h0) as usize];
+        let (n0, n_img, n_px) = ((w0 * h0) as usize, (w0 * h) as usize, (w * h) as usize);
+        let mut leaves: Vec<Node> = Vec::with_capacity(n0);
         // With deeper layers (fast path), each row's pixel-plane trigger depths right after
         // its leaves (`fixpoint`), and the pixels where they are finite.
         let mut px_triggers = None;
-        let image = &mut leaves[..(w0 * h) as usize];
+        let (image, padding) = leaves.spare_capacity_mut()[..n0].split_at_mut(n_img);
+        padding.par_chunks_mut(w0 as usize).for_each(|row| {
+            init_row(row, Node::EMPTY);
+        });
         if !deeper.is_empty() && !reference {
             let cols = super::fixpoint::Columns::new(w, wf);
-            let mut tz = vec![f32::INFINITY; (w * h) as usize];
+            // Every value is written by the row pass; the rows are set to `+inf` first (a
+            // store loop in cache; a zero value would be a `memset` call per row).
+            let (mut tz, mut fronts) = (Vec::with_capacity(n_px), Vec::with_capacity(n_px));
             let listed: Vec<u32> = image
                 .par_chunks_mut(w0 as usize)
-                .zip(tz.par_chunks_mut(w as usize))
+                .zip(tz.spare_capacity_mut()[..n_px].par_chunks_mut(w as usize))
+                .zip(fronts.spare_capacity_mut()[..n_px].par_chunks_mut(w as usize))
                 .enumerate()
-                .flat_map_iter(|(j, (row, t))| {
+                .flat_map_iter(|(j, ((row, t), f))| {
                     let j = j as u32;
+                    let row = init_row(row, Node::EMPTY);
+                    let (t, f) = (init_row(t, f32::INFINITY), init_row(f, f32::INFINITY));
                     leaf_row(row, j);
-                    super::fixpoint::pixel_triggers_row(t, row, j, &ctx, &cols, deeper)
+                    super::fixpoint::pixel_triggers_row(t, f, row, j, &ctx, &cols, deeper)
                 })
                 .collect();
-            px_triggers = Some((tz, listed));
+            // SAFETY: the rows cover `0..n_px` and each was initialised by `init_row`.
+            unsafe {
+                tz.set_len(n_px);
+                fronts.set_len(n_px);
+            }
+            px_triggers = Some((tz, listed, fronts));
         } else {
             image
                 .par_chunks_mut(w0 as usize)
                 .enumerate()
-                .for_each(|(j, row)| leaf_row(row, j as u32));
+                .for_each(|(j, row)| leaf_row(init_row(row, Node::EMPTY), j as u32));
         }
+        // SAFETY: the image rows and the padding rows cover `0..n0`, each initialised by
+        // `init_row`.
+        unsafe { leaves.set_len(n0) };
         let level0 = Level {
             w: w0,
             h: h0,
@@ -252,6 +272,7 @@ impl QuadTree {
             levels,
             crack_px: opts.crack_dilation,
             trigger_z: Vec::new(),
+            unsafe_count: 0,
             plane_top: 0,
             plane_level: Vec::new(),
             z_floor: 0.0,
@@ -267,8 +288,15 @@ impl QuadTree {
             .unwrap_or(0);
         let top_tz = match unsafe_px {
             _ if tz.is_empty() => Vec::new(),
-            Some(px) => tree.mark_unsafe_listed(tz, &px),
-            None => tree.mark_unsafe(tz),
+            Some(px) => {
+                // The listed pixels are exactly those with a finite trigger depth.
+                tree.unsafe_count = px.len();
+                tree.mark_unsafe_listed(tz, &px)
+            }
+            None => {
+                tree.unsafe_count = tz.iter().filter(|z| z.is_finite()).count();
+                tree.mark_unsafe(tz)
+            }
         };
         // `mark_unsafe` changes flags and AABB ranges but no node kinds: `eff` (the effective
         // levels, top-down, one pass per level, instead of a climb per pixel) still holds.
@@ -276,15 +304,11 @@ impl QuadTree {
             plane_levels(&tree.levels, w, h)
         } else {
             let w0 = tree.levels[0].w as usize;
-            let mut pl = vec![0u8; (w * h) as usize];
-            pl.par_chunks_mut(w as usize)
-                .enumerate()
-                .for_each(|(j, row)| {
-                    for (v, &l) in row.iter_mut().zip(&eff[j * w0..]) {
-                        *v = if l == NO_PLANE { 0 } else { l };
-                    }
-                });
-            pl
+            par_rows((w * h) as usize, w as usize, 0u8, |j, row| {
+                for (v, &l) in row.iter_mut().zip(&eff[j * w0..]) {
+                    *v = if l == NO_PLANE { 0 } else { l };
+                }
+            })
         };
         // After `mark_unsafe` (it lowers AABB ranges to trigger depths).
         tree.set_z_floors(&ctx, &top_tz);
@@ -494,41 +518,43 @@ impl QuadTree {
 
 impl QuadTree {
     /// [`Self::mark_unsafe`] given the unsafe pixels `px` (indices `j W + i`, those with a
-    /// finite `tz`, any order): only their ancestors are visited, level by level. The same
-    /// nodes are marked with the same minima: the trigger depths are `+0` or positive and
-    /// never NaN, so their minimum does not depend on the order it is taken in.
+    /// finite `tz`, any order): only their ancestors are visited. Per level, a dense array
+    /// of the nodes' smallest trigger depth below them is filled from the listed pixels (no
+    /// sort), then each listed pixel's ancestor is marked with it — the same nodes with the
+    /// same minima as [`Self::mark_unsafe`] (the trigger depths are `+0` or positive and
+    /// never NaN, so their minimum does not depend on the order it is taken in; marking a
+    /// node again with the same value changes nothing).
     pub(crate) fn mark_unsafe_listed(&mut self, tz: Vec<f32>, px: &[u32]) -> Vec<f32> {
-        let w = self.width;
-        // (row, column, smallest trigger depth below) of the marked nodes of a level.
-        let mut cur: Vec<(u32, u32, f32)> =
-            px.iter().map(|&k| (k / w, k % w, tz[k as usize])).collect();
+        let (w, nl) = (self.width, self.levels.len());
         let l0 = &mut self.levels[0];
-        for &(y, x, m) in &cur {
-            l0.nodes[(y * l0.w + x) as usize].mark_unsafe(m);
+        for &k in px {
+            let (y, x) = (k / w, k % w);
+            l0.nodes[(y * l0.w + x) as usize].mark_unsafe(tz[k as usize]);
         }
-        let mut next: Vec<(u32, u32, f32)> = Vec::with_capacity(cur.len());
-        for l in 1..self.levels.len() {
-            for v in &mut cur {
-                (v.0, v.1) = (v.0 >> 1, v.1 >> 1);
+        let mut mins: Vec<f32> = Vec::new();
+        if nl == 1 {
+            mins.resize(l0.nodes.len(), f32::INFINITY);
+            for &k in px {
+                let (y, x) = (k / w, k % w);
+                mins[(y * l0.w + x) as usize] = tz[k as usize];
             }
-            cur.sort_unstable_by_key(|&(y, x, _)| (y, x));
-            next.clear();
-            for &(y, x, m) in &cur {
-                match next.last_mut() {
-                    Some(last) if (last.0, last.1) == (y, x) => last.2 = last.2.min(m),
-                    _ => next.push((y, x, m)),
+        }
+        for l in 1..nl {
+            let lv = &mut self.levels[l];
+            mins.clear();
+            mins.resize(lv.nodes.len(), f32::INFINITY);
+            let lw = lv.w;
+            let at = |k: u32| (((k / w) >> l) * lw + ((k % w) >> l)) as usize;
+            for &k in px {
+                let (m, t) = (&mut mins[at(k)], tz[k as usize]);
+                if t < *m {
+                    *m = t;
                 }
             }
-            let lv = &mut self.levels[l];
-            for &(y, x, m) in &next {
-                lv.nodes[(y * lv.w + x) as usize].mark_unsafe(m);
+            for &k in px {
+                let i = at(k);
+                lv.nodes[i].mark_unsafe(mins[i]);
             }
-            std::mem::swap(&mut cur, &mut next);
-        }
-        let top = &self.levels[self.levels.len() - 1];
-        let mut mins = vec![f32::INFINITY; top.nodes.len()];
-        for &(y, x, m) in &cur {
-            mins[(y * top.w + x) as usize] = m;
         }
         self.trigger_z = tz;
         mins

@@ -153,7 +153,7 @@ impl QuadTreeTracer {
                 eff.insert(0, tree.effective_planes());
             }
             build_ms[k] = t.elapsed().as_secs_f64() * 1e3;
-            unsafe_pixels[k] = tree.trigger_z.iter().filter(|z| z.is_finite()).count();
+            unsafe_pixels[k] = tree.unsafe_count;
             trees[k] = Some(tree);
         }
         let trees: Vec<QuadTree> = trees.into_iter().map(|t| t.unwrap()).collect();
@@ -244,6 +244,79 @@ fn pixel_trigger(
         }
         bad
     })
+}
+
+/// The *deeper front* of pixel `idx` with footprint `(x0, x1, y0, y1)`: the smallest
+/// footprint-corner `z` of the `deeper` layers' planes there, computed as
+/// [`pixel_trigger`] computes them (`plane_z`), `+inf` where no deeper layer has a plane,
+/// `-inf` where a deeper plane is edge-on (`!(n.z < -1e-6)`) or a corner `z` is NaN. It does
+/// not depend on this layer's plane: the leaf pass stores it so that the fixed point can
+/// certify pixels safe against a merged proxy plane without their corners
+/// ([`proxy_safe_front`]).
+pub(crate) fn deeper_front(
+    idx: usize,
+    (x0, x1, y0, y1): (f32, f32, f32, f32),
+    deeper: &[LayerPlanes],
+) -> f32 {
+    let mut front = f32::INFINITY;
+    for pj in deeper {
+        if !pj.covered(idx) {
+            continue;
+        }
+        let (nj, cj) = (pj.normal[idx], pj.offset[idx]);
+        // Edge-on: `!(nj.z < -1e-6)`.
+        if nj.z >= -1e-6 || nj.z.is_nan() {
+            return f32::NEG_INFINITY;
+        }
+        for (x, y) in [(x0, y0), (x1, y0), (x0, y1), (x1, y1)] {
+            let z = plane_z(nj, cj, x, y);
+            if z.is_nan() {
+                return f32::NEG_INFINITY;
+            }
+            if z < front {
+                front = z;
+            }
+        }
+    }
+    front
+}
+
+/// A threshold `T` for plane `(n, c)` (`N·P = c`, as the trigger tests evaluate it) over the
+/// footprint rectangle `[x_lo, x_hi] x [y_lo, y_hi]` (`0 <= x, y <= 1`): every pixel in it
+/// whose [`deeper_front`] is `>= T` has an infinite trigger depth against this plane
+/// (`+inf` when `n.z >= 0` or a value is not finite: no pixel is certified).
+///
+/// *Proof.* The trigger test evaluates `f = ((n.x x + n.y y) + n.z z) - c` in f32 at a
+/// corner `(x, y)` of the footprint with a deeper plane's corner `z >= front >= T >= 0`; it
+/// is safe iff `f <= -SAFE_MARGIN`. Three products and three sums, no fused operations:
+/// `|f - f_exact| <= g (|n.x| + |n.y| + |n.z| z + |c|)` with `g = 1e-6` (above `4 u / (1 - 4
+/// u)`, `u = 2^-24`). With `n.z < 0`, `f_exact = n.x x + n.y y + n.z z - c <= M - |n.z| z`,
+/// `M = max(n.x x_lo, n.x x_hi) + max(n.y y_lo, n.y y_hi) - c`. So `f <= M + g A - |n.z| (1 -
+/// g) z` (`A = |n.x| + |n.y| + |c|`), decreasing in `z`; at `z = T = (M + g A + 2e-6) /
+/// (|n.z| (1 - g))` it is `-2e-6 < -SAFE_MARGIN`. `T` is computed in f64 (exact products of
+/// f32 values, sums with errors ~1e-16 far inside the 1e-6 of slack) and rounded up to
+/// f32; it is clamped to `>= 0` (the error bound used `z >= 0`). A NaN corner `z` or an
+/// edge-on deeper plane gives `front = -inf`, never certified; an overflowing `n.z z` gives
+/// `f = -inf`, safe.
+pub(crate) fn proxy_safe_front(
+    (n, c): (Vec3, f32),
+    (x_lo, x_hi): (f32, f32),
+    (y_lo, y_hi): (f32, f32),
+) -> f32 {
+    const G: f64 = 1e-6;
+    let (nx, ny, nz, c) = (n.x as f64, n.y as f64, n.z as f64, c as f64);
+    if nz >= 0.0 || nz.is_nan() {
+        return f32::INFINITY;
+    }
+    let m = (nx * x_lo as f64).max(nx * x_hi as f64) + (ny * y_lo as f64).max(ny * y_hi as f64) - c;
+    let a = nx.abs() + ny.abs() + c.abs();
+    let t = (m + G * a + 2e-6) / (-nz * (1.0 - G));
+    if !t.is_finite() {
+        return f32::INFINITY;
+    }
+    // Rounded up: a relative 1e-6 above any f32 rounding of a positive value.
+    let t = (t.max(0.0) * (1.0 + 1e-6) + 1e-30) as f32;
+    if t.is_finite() { t } else { f32::INFINITY }
 }
 
 /// [`pixel_trigger`] with the four footprint corners in the lanes of `xs`, `ys`
@@ -475,5 +548,92 @@ impl ScreenTracer for QuadTreeTracer {
     fn trace(&self, ray: &Ray, stats: &mut TraceStats) -> TraceResult {
         stats.rays += 1;
         self.trace_impl(ray, stats).0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::quadtree::node::{Node, decode_plane};
+    use crate::quadtree::test_rng::Rng;
+
+    /// [`proxy_safe_front`] certifies only pixels the definition finds safe: random merged
+    /// nodes (levels 1-5, random gentle slopes) over one or two deeper layers whose planes lie a
+    /// little (down to 1e-7) or far behind the node's plane, cross it, or are edge-on or
+    /// missing; every pixel whose [`deeper_front`] reaches the node's threshold has an
+    /// infinite [`pixel_trigger`] against the node's decoded plane.
+    #[test]
+    fn certified_pixels_are_safe() {
+        let (w, h) = (64u32, 48u32);
+        let (wf, hf) = (w as f32, h as f32);
+        let mut rng = Rng(0x5eed_0f_c0ffee);
+        let (mut certified, mut total) = (0usize, 0usize);
+        for case in 0..400u32 {
+            let l = 1 + case % 5;
+            let (qx, qy) = (rng.next() as u32 % (w >> l), rng.next() as u32 % (h >> l));
+            let zc = rng.f(0.05, 0.95);
+            let (gx, gy) = (rng.f(-0.1, 0.1), rng.f(-0.1, 0.1));
+            let Some(node) = Node::plane_with_gradient(zc, gx, gy, l, wf, hf, 0) else {
+                continue;
+            };
+            let (n, c) = decode_plane(node, l, qx, qy, wf, hf);
+            let (x0, y0) = (qx << l, qy << l);
+            let (x1, y1) = (((qx + 1) << l).min(w), ((qy + 1) << l).min(h));
+            let n_px = (w * h) as usize;
+            // Deeper planes: the node's plane pushed back by a random gap (some negative),
+            // tilted a little.
+            let deeper: Vec<LayerPlanes> = (0..1 + case % 2)
+                .map(|_| {
+                    let mut normal = vec![Vec3::ZERO; n_px];
+                    let mut offset = vec![0.0f32; n_px];
+                    for j in y0..y1 {
+                        for i in x0..x1 {
+                            let k = (j * w + i) as usize;
+                            let gap = match rng.next() % 6 {
+                                0 => -rng.f(0.0, 1e-3),
+                                1 => rng.f(0.0, 1e-5),
+                                2 => rng.f(0.0, 1e-7),
+                                _ => rng.f(0.0, 0.2),
+                            };
+                            let nj = match rng.next() % 16 {
+                                0 => Vec3::ZERO,
+                                1 => Vec3::new(0.6, 0.8, -1e-7),
+                                _ => (n + Vec3::new(rng.f(-1e-3, 1e-3), rng.f(-1e-3, 1e-3), 0.0))
+                                    .normalize(),
+                            };
+                            let p = Vec3::new(i as f32 / wf, j as f32 / hf, 0.0);
+                            let zp = plane_z(n, c, p.x, p.y) + gap;
+                            normal[k] = nj;
+                            offset[k] = nj.dot(Vec3::new(p.x, p.y, zp));
+                        }
+                    }
+                    LayerPlanes {
+                        width: w,
+                        height: h,
+                        normal,
+                        offset,
+                        flag: vec![false; n_px],
+                    }
+                })
+                .collect();
+            for j in y0..y1 {
+                let (fy0, fy1) = (j as f32 / hf, (j + 1) as f32 / hf);
+                let t = proxy_safe_front((n, c), (x0 as f32 / wf, x1 as f32 / wf), (fy0, fy1));
+                for i in x0..x1 {
+                    let k = (j * w + i) as usize;
+                    let fp = (i as f32 / wf, (i + 1) as f32 / wf, fy0, fy1);
+                    total += 1;
+                    if deeper_front(k, fp, &deeper) >= t {
+                        certified += 1;
+                        let tz = pixel_trigger(k, fp, Some((n, c)), &deeper);
+                        assert_eq!(tz, f32::INFINITY, "case {case} pixel ({i}, {j})");
+                    }
+                }
+            }
+        }
+        assert!(
+            certified > total / 8 && certified < total,
+            "{certified} of {total} certified"
+        );
     }
 }

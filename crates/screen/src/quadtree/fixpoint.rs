@@ -35,7 +35,7 @@
 use glam::Vec4;
 use rayon::prelude::*;
 
-use super::cascade::pixel_trigger_lanes;
+use super::cascade::{deeper_front, pixel_trigger_lanes, proxy_safe_front};
 use super::merge::MergeCtx;
 use super::node::{Node, decode_plane, decode_plane_at};
 use super::prune::Blocked;
@@ -46,15 +46,15 @@ use crate::LayerPlanes;
 /// effective levels of the final levels (`levels[0].w x levels[0].h`,
 /// [`super::QuadTree::effective_levels`]), and the unsafe pixels (indices `j W + i` of the
 /// finite trigger depths, ascending). `deeper` is not empty; `(tz, listed)`: the trigger
-/// depths of the pixel planes and the pixels where they are finite, ascending (computed with
-/// the leaves, [`pixel_triggers_row`] per row).
+/// depths of the pixel planes and the pixels where they are finite, ascending, and the
+/// pixels' deeper fronts (computed with the leaves, [`pixel_triggers_row`] per row).
 pub(super) fn fixed_point(
     ctx: &MergeCtx,
     level0: Level,
     nlev: u32,
     (w, h): (u32, u32),
     deeper: &[LayerPlanes],
-    (mut tz, mut listed): (Vec<f32>, Vec<u32>),
+    (mut tz, mut listed, fronts): (Vec<f32>, Vec<u32>, Vec<f32>),
 ) -> (Vec<Level>, Vec<f32>, Vec<u8>, Option<Vec<u32>>) {
     // The pixels with a finite trigger depth, i.e. the blocked ones, in a list and a map.
     let mut blocked = vec![false; (w * h) as usize];
@@ -68,7 +68,7 @@ pub(super) fn fixed_point(
     }
     // Trigger depths of the effective planes: the pixel planes' except under merged nodes,
     // which hold no blocked pixel, so only they can be newly unsafe.
-    let mut newly = merged_triggers(&mut tz, ctx, w, deeper, &blocked, &levels, &eff);
+    let mut newly = merged_triggers(&mut tz, &fronts, ctx, w, deeper, &blocked, &levels, &eff);
     while !newly.is_empty() {
         for &k in &newly {
             blocked[k as usize] = true;
@@ -221,11 +221,16 @@ impl Columns {
 /// The trigger depths (`tz`, `W x H`, rows in parallel) of the pixels under merged nodes
 /// (effective level `eff > 0`) against `deeper`, from their effective node's decoded plane
 /// ([`decode_plane`]); other pixels keep their value. The pixels of one effective node in a
-/// row are one run (they all have its level): its plane is decoded once per run. Returns the
-/// pixels (indices `j W + i`, ascending) that got a finite trigger depth and are not marked
-/// in `blocked`.
+/// row are one run (they all have its level): its plane is decoded once per run. A run
+/// whose pixels' deeper fronts (`fronts`, [`deeper_front`]) all reach the run's certificate
+/// threshold ([`proxy_safe_front`]) is safe against its plane without evaluating its
+/// corners: its pixels keep `+inf` (they are not blocked, so their pixel planes' trigger
+/// depth is `+inf`); likewise per group of four and per pixel. Returns the pixels (indices
+/// `j W + i`, ascending) that got a finite trigger depth and are not marked in `blocked`.
+#[allow(clippy::too_many_arguments)]
 fn merged_triggers(
     tz: &mut [f32],
+    fronts: &[f32],
     ctx: &MergeCtx,
     w: u32,
     deeper: &[LayerPlanes],
@@ -241,6 +246,7 @@ fn merged_triggers(
         .flat_map_iter(|(j, row)| {
             let base = j * wu;
             let er = &eff[j * w0..j * w0 + wu];
+            let fr = &fronts[base..base + wu];
             let j = j as u32;
             let ys = Vec4::new(j as f32, j as f32, (j + 1) as f32, (j + 1) as f32) / hf;
             let mut newly = Vec::new();
@@ -248,6 +254,15 @@ fn merged_triggers(
             while i < wu {
                 let l = er[i];
                 if l == NO_PLANE || l == 0 {
+                    // Eight levels of 0 or `NO_PLANE` at once (each byte `b` is `(b & 1)
+                    // 255` then), else one.
+                    if i % 8 == 0 && i + 8 <= wu {
+                        let v = u64::from_le_bytes(er[i..i + 8].try_into().unwrap());
+                        if (v & 0x0101_0101_0101_0101) * 255 == v {
+                            i += 8;
+                            continue;
+                        }
+                    }
                     i += 1;
                     continue;
                 }
@@ -256,6 +271,11 @@ fn merged_triggers(
                 let lv = &levels[l as usize];
                 let p = decode_plane(lv.nodes[(qy * lv.w + qx) as usize], l, qx, qy, wf, hf);
                 let end = (((qx + 1) << l) as usize).min(wu);
+                let t_run = proxy_safe_front(p, (cols.xe[i], cols.xe[end]), (ys.x, ys.z));
+                if certified(&fr[i..end], t_run) {
+                    i = end;
+                    continue;
+                }
                 // Two runs of two pixels (level 1) starting at a multiple of 4: four pixels
                 // in lanes, each pair with its node's plane (`trigger_lanes`, same bits).
                 #[cfg(target_arch = "x86_64")]
@@ -281,6 +301,10 @@ fn merged_triggers(
                 if l >= 2 {
                     let y = ((j as f32) / hf, ((j + 1) as f32) / hf);
                     while i + 4 <= end {
+                        if certified(&fr[i..i + 4], t_run) {
+                            i += 4;
+                            continue;
+                        }
                         let t = super::trigger_lanes::merged_triggers4(
                             base + i,
                             p,
@@ -293,6 +317,9 @@ fn merged_triggers(
                     }
                 }
                 for (ii, t) in row.iter_mut().enumerate().take(end).skip(i) {
+                    if fr[ii] >= t_run {
+                        continue;
+                    }
                     let k = base + ii;
                     *t = pixel_trigger_lanes(k, cols.xs[ii], ys, || Some(p), deeper);
                     if t.is_finite() && !blocked[k] {
@@ -306,11 +333,19 @@ fn merged_triggers(
         .collect()
 }
 
+/// Whether every deeper front in `f` reaches `t` (no early exit: vectorised).
+#[inline]
+fn certified(f: &[f32], t: f32) -> bool {
+    f.iter().fold(true, |all, &v| all & (v >= t))
+}
+
 /// The pixel planes' trigger depths of row `j` (`tz`, `W` values) from the row's leaves
-/// `nodes` (the build runs it right after the row's leaves, while they are in cache).
-/// Returns the row's pixels with a finite trigger depth.
+/// `nodes` (the build runs it right after the row's leaves, while they are in cache), and
+/// the row's deeper fronts (`fronts`, [`deeper_front`]). Returns the row's pixels with a
+/// finite trigger depth.
 pub(super) fn pixel_triggers_row(
     tz: &mut [f32],
+    fronts: &mut [f32],
     nodes: &[Node],
     j: u32,
     ctx: &MergeCtx,
@@ -334,6 +369,7 @@ pub(super) fn pixel_triggers_row(
             done = unsafe {
                 super::trigger_avx2::pixel_triggers_row8(
                     tz,
+                    fronts,
                     nodes,
                     base,
                     &cols.xe,
@@ -347,7 +383,7 @@ pub(super) fn pixel_triggers_row(
         }
         while done + 4 <= tz.len() {
             let i = done;
-            let t = super::trigger_lanes::pixel_triggers4(
+            let (t, f) = super::trigger_lanes::pixel_triggers4(
                 base + i,
                 &nodes[i..],
                 &cols.xe[i..],
@@ -355,9 +391,9 @@ pub(super) fn pixel_triggers_row(
                 y,
                 (wf, hf),
                 deeper,
-            )
-            .to_array();
-            for (d, v) in t.into_iter().enumerate() {
+            );
+            fronts[i..i + 4].copy_from_slice(&f.to_array());
+            for (d, v) in t.to_array().into_iter().enumerate() {
                 tz[i + d] = v;
                 if v.is_finite() {
                     listed.push((base + i + d) as u32);
@@ -387,6 +423,7 @@ pub(super) fn pixel_triggers_row(
         if t.is_finite() {
             listed.push(k as u32);
         }
+        fronts[i] = deeper_front(k, (cols.xe[i], cols.xe[i + 1], ys.x, ys.z), deeper);
     }
     listed
 }

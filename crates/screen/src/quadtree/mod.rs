@@ -10,6 +10,7 @@
 //!   with four parents in SSE2 lanes (same bits, the build's fast path over whole levels on
 //!   x86_64), `merge_rows8`: eight parents in AVX2 lanes (same bits, run-time detection);
 //!   `leaves`: the leaves a row at a time, `leaf_avx2` four pixels in AVX2 lanes;
+//!   `eff_lanes`: a row of effective levels sixteen nodes per step (SSE2, same bytes);
 //!   `fixpoint`: the cascade's pruning fixed point computed incrementally (same results as the
 //!   definition in `prune`, which [`QuadTreeTracer::build_reference`] runs);
 //! - [`traverse`]: the stackless traversal of §4 (exact plane hits, child by entry
@@ -85,6 +86,8 @@
 mod batch;
 pub mod build;
 pub mod cascade;
+#[cfg(target_arch = "x86_64")]
+mod eff_lanes;
 mod fixpoint;
 #[cfg(target_arch = "x86_64")]
 mod leaf_avx2;

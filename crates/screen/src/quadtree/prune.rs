@@ -8,7 +8,7 @@ use rayon::prelude::*;
 
 use super::merge::MergeCtx;
 use super::node::Node;
-use super::tree::{Level, decoded_planes, effective_levels};
+use super::tree::{Level, decoded_planes, effective_levels, par_rows};
 use crate::LayerPlanes;
 
 /// The cascade's pruning fixed point by its definition (the slow twin of
@@ -162,24 +162,21 @@ pub(super) fn prune(
             }
         }
         let blocked = &blocked;
-        let mut nodes = vec![Node::EMPTY; (pw * ph) as usize];
-        nodes
-            .par_chunks_mut(pw as usize)
-            .enumerate()
-            .for_each(|(qy, row)| {
-                let qy = qy as u32;
-                let allow = |qx: u32| blocked.is_empty() || !blocked[(qy * pw + qx) as usize];
-                #[cfg(target_arch = "x86_64")]
-                if ctx.lanes {
-                    // Eight (AVX2) or four parents per step, children straight from their two rows.
-                    ctx.parent_row_fast(child, l, qy, row, allow);
-                    return;
-                }
-                for (qx, out) in row.iter_mut().enumerate() {
-                    let qx = qx as u32;
-                    *out = parent_of(ctx, child, l, qx, qy, allow(qx));
-                }
-            });
+        // Each row set empty in cache right before its parents are written.
+        let nodes = par_rows((pw * ph) as usize, pw as usize, Node::EMPTY, |qy, row| {
+            let qy = qy as u32;
+            let allow = |qx: u32| blocked.is_empty() || !blocked[(qy * pw + qx) as usize];
+            #[cfg(target_arch = "x86_64")]
+            if ctx.lanes {
+                // Eight (AVX2) or four parents per step, children straight from their two rows.
+                ctx.parent_row_fast(child, l, qy, row, allow);
+                return;
+            }
+            for (qx, out) in row.iter_mut().enumerate() {
+                let qx = qx as u32;
+                *out = parent_of(ctx, child, l, qx, qy, allow(qx));
+            }
+        });
         levels.push(Level {
             w: pw,
             h: ph,

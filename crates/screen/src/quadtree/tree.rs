@@ -8,6 +8,8 @@
 //! below it over its footprint, widened by [`Z_EPS`]); `z_floor <= ` every entry of
 //! `z_floor_rect` and `z_floor_dir`.
 
+use std::mem::MaybeUninit;
+
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -39,6 +41,8 @@ pub struct QuadTree {
     /// Per pixel (`W x H`), the trigger depth of unsafe pixels (cascade); empty when the
     /// layer is the last one.
     pub(crate) trigger_z: Vec<f32>,
+    /// The number of finite [`Self::trigger_z`] entries (unsafe pixels).
+    pub(crate) unsafe_count: usize,
     /// The highest level holding any plane node (0 when there is none; reported by the
     /// examples).
     pub(crate) plane_top: usize,
@@ -237,24 +241,35 @@ fn effective_levels_down_to(levels: &[Level], bottom: usize) -> Vec<u8> {
         let (lw, pw) = (levels[l].w as usize, levels[l + 1].w as usize);
         let nodes = &levels[l].nodes;
         let parent = &cur;
-        let mut next = vec![NO_PLANE; nodes.len()];
-        next.par_chunks_mut(lw).enumerate().for_each(|(y, row)| {
-            let prow = &parent[(y / 2) * pw..];
+        // Below the top level a level's width is even (`lw = 2 pw`).
+        cur = par_rows(nodes.len(), lw, NO_PLANE, |y, row| {
+            let prow = &parent[(y / 2) * pw..(y / 2 + 1) * pw];
             let nrow = &nodes[y * lw..(y + 1) * lw];
-            for (x, v) in row.iter_mut().enumerate() {
-                let p = prow[x / 2];
-                *v = if p != NO_PLANE {
-                    p
-                } else if nrow[x].is_plane() {
-                    l as u8
-                } else {
-                    NO_PLANE
-                };
-            }
+            #[cfg(target_arch = "x86_64")]
+            let done = super::eff_lanes::eff_row16(row, prow, nrow, l as u8);
+            #[cfg(not(target_arch = "x86_64"))]
+            let done = 0;
+            eff_row(row, prow, nrow, l as u8, done);
         });
-        cur = next;
     }
     cur
+}
+
+/// One row of [`effective_levels`] at level `l` from position `from` on: `row[x]` = the
+/// parent's effective level `prow[x / 2]` unless that is [`NO_PLANE`], else `l` where node
+/// `nrow[x]` is a plane, else [`NO_PLANE`] (the definition; `eff_lanes` does sixteen nodes
+/// per step).
+pub(crate) fn eff_row(row: &mut [u8], prow: &[u8], nrow: &[Node], l: u8, from: usize) {
+    for (x, (v, n)) in row.iter_mut().zip(nrow).enumerate().skip(from) {
+        let p = prow[x / 2];
+        *v = if p != NO_PLANE {
+            p
+        } else if n.is_plane() {
+            l
+        } else {
+            NO_PLANE
+        };
+    }
 }
 
 /// [`QuadTree::plane_level`] (`w x h` pixels) of the levels `levels`: the effective levels
@@ -262,26 +277,60 @@ fn effective_levels_down_to(levels: &[Level], bottom: usize) -> Vec<u8> {
 /// no plane ancestor-or-self is its own effective node or has none, 0 either way, so level 0
 /// itself is not read.
 pub(crate) fn plane_levels(levels: &[Level], w: u32, h: u32) -> Vec<u8> {
-    let mut pl = vec![0u8; (w * h) as usize];
     if levels.len() == 1 {
-        return pl;
+        return vec![0u8; (w * h) as usize];
     }
     let e1 = effective_levels_down_to(levels, 1);
     let w1 = levels[1].w as usize;
-    pl.par_chunks_mut(w as usize)
-        .enumerate()
-        .for_each(|(j, row)| {
-            let prow = &e1[(j / 2) * w1..];
-            for (x, v) in row.iter_mut().enumerate() {
-                let p = prow[x / 2];
-                *v = if p == NO_PLANE { 0 } else { p };
-            }
-        });
-    pl
+    par_rows((w * h) as usize, w as usize, 0u8, |j, row| {
+        let prow = &e1[(j / 2) * w1..];
+        // Per level-1 node its two pixels of the row (vectorised), then an odd last one.
+        let level = |p: u8| if p == NO_PLANE { 0 } else { p };
+        let mut pairs = row.chunks_exact_mut(2);
+        for (pair, &p) in (&mut pairs).zip(prow) {
+            let v = level(p);
+            pair[0] = v;
+            pair[1] = v;
+        }
+        if let [last] = pairs.into_remainder() {
+            *last = level(prow[(w as usize - 1) / 2]);
+        }
+    })
 }
 
 /// [`QuadTree::effective_levels`]: no plane node above or at this node.
 pub(crate) const NO_PLANE: u8 = u8::MAX;
+
+/// Sets every element of `row` (part of a `Vec`'s spare capacity) to `value` and returns it
+/// initialised. The build's full-resolution arrays are set a row at a time right before the
+/// row is written (the row is then in cache) instead of by a fill or zeroing pass over the
+/// whole allocation first ([`par_rows`]).
+#[inline]
+pub(crate) fn init_row<T: Copy>(row: &mut [MaybeUninit<T>], value: T) -> &mut [T] {
+    for x in row.iter_mut() {
+        x.write(value);
+    }
+    // SAFETY: every element was just initialised; `MaybeUninit<T>` has `T`'s layout.
+    unsafe { &mut *(row as *mut [MaybeUninit<T>] as *mut [T]) }
+}
+
+/// A vector of `len` values made in parallel by rows of `row_len` (the last may be
+/// shorter): row `r` is set to `value` ([`init_row`]) and handed to `f(r, row)`.
+pub(crate) fn par_rows<T: Copy + Send + Sync>(
+    len: usize,
+    row_len: usize,
+    value: T,
+    f: impl Fn(usize, &mut [T]) + Sync + Send,
+) -> Vec<T> {
+    let mut v = Vec::with_capacity(len);
+    v.spare_capacity_mut()[..len]
+        .par_chunks_mut(row_len.max(1))
+        .enumerate()
+        .for_each(|(r, row)| f(r, init_row(row, value)));
+    // SAFETY: the rows cover `0..len` and each was initialised by `init_row`.
+    unsafe { v.set_len(len) };
+    v
+}
 
 /// Per pixel `(i, j)` of a `w x h` layer, the decoded plane of the node `node_of(i, j)`
 /// (`(node, level, qx, qy)`, or `None` for no plane) in [`LayerPlanes`] form, rows in parallel.
@@ -293,36 +342,48 @@ pub(crate) fn decoded_planes(
     node_of: impl Fn(u32, u32) -> Option<(Node, u32, u32, u32)> + Sync,
 ) -> LayerPlanes {
     let n = (w * h) as usize;
-    let mut normal = vec![Vec3::ZERO; n];
-    let mut offset = vec![0.0; n];
-    let mut flag = vec![false; n];
-    normal
+    let (mut normal, mut offset, mut flag) = (
+        Vec::with_capacity(n),
+        Vec::with_capacity(n),
+        Vec::with_capacity(n),
+    );
+    normal.spare_capacity_mut()[..n]
         .par_chunks_mut(w as usize)
-        .zip(offset.par_chunks_mut(w as usize))
-        .zip(flag.par_chunks_mut(w as usize))
+        .zip(offset.spare_capacity_mut()[..n].par_chunks_mut(w as usize))
+        .zip(flag.spare_capacity_mut()[..n].par_chunks_mut(w as usize))
         .enumerate()
         .for_each(|(j, ((nrow, orow), frow))| {
             // The previous pixel's node and its decoded plane: a merged node covers a run of
             // pixels of the row, decoded once (the decode is a function of the node and its
-            // position only).
+            // position only). Every pixel of the row is written (zero where no plane).
             let mut last: Option<((Node, u32, u32, u32), Vec3, f32)> = None;
-            for i in 0..w {
-                if let Some(key) = node_of(i, j as u32) {
-                    let (nn, c) = match last {
-                        Some((k, nn, c)) if k == key => (nn, c),
-                        _ => {
-                            let (node, l, qx, qy) = key;
-                            let (nn, c) = decode_plane(node, l, qx, qy, wf, hf);
-                            last = Some((key, nn, c));
-                            (nn, c)
-                        }
-                    };
-                    nrow[i as usize] = nn;
-                    orow[i as usize] = c;
-                    frow[i as usize] = key.0.flags() & FLAG_CRACK != 0;
-                }
+            for (i, ((nv, ov), fv)) in nrow.iter_mut().zip(orow).zip(frow).enumerate() {
+                let (nn, c, f) = match node_of(i as u32, j as u32) {
+                    Some(key) => {
+                        let (nn, c) = match last {
+                            Some((k, nn, c)) if k == key => (nn, c),
+                            _ => {
+                                let (node, l, qx, qy) = key;
+                                let (nn, c) = decode_plane(node, l, qx, qy, wf, hf);
+                                last = Some((key, nn, c));
+                                (nn, c)
+                            }
+                        };
+                        (nn, c, key.0.flags() & FLAG_CRACK != 0)
+                    }
+                    None => (Vec3::ZERO, 0.0, false),
+                };
+                nv.write(nn);
+                ov.write(c);
+                fv.write(f);
             }
         });
+    // SAFETY: the rows cover `0..n` (`w` values each) and every value was written above.
+    unsafe {
+        normal.set_len(n);
+        offset.set_len(n);
+        flag.set_len(n);
+    }
     LayerPlanes {
         width: w,
         height: h,

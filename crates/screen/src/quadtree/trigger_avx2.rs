@@ -58,7 +58,9 @@ unsafe fn soa4(p: *const Vec3) -> (__m128, __m128, __m128) {
 /// tz.len()`), from the row's leaves `nodes`, the footprint edges `xe` (`i / W`, `W + 1`
 /// values), the pixel centres `xc`, the row's edges and centre `y = (y0, y1, yc)`, pixel
 /// `k0 + i` of the deeper layers; pushes the pixels (`k0 + i`) with a finite trigger depth
-/// on `listed`; returns how many pixels it did.
+/// on `listed`; writes the pixels' deeper fronts (`cascade::deeper_front`, as
+/// `trigger_lanes::pixel_triggers4` computes them) into `fronts`; returns how many pixels it
+/// did.
 ///
 /// # Safety
 /// The CPU must have AVX2.
@@ -66,6 +68,7 @@ unsafe fn soa4(p: *const Vec3) -> (__m128, __m128, __m128) {
 #[target_feature(enable = "avx2")]
 pub(super) unsafe fn pixel_triggers_row8(
     tz: &mut [f32],
+    fronts: &mut [f32],
     nodes: &[Node],
     k0: usize,
     xe: &[f32],
@@ -77,7 +80,7 @@ pub(super) unsafe fn pixel_triggers_row8(
 ) -> usize {
     let w = tz.len();
     let n8 = w & !7;
-    assert!(nodes.len() >= n8 && xe.len() > n8 && xc.len() >= n8);
+    assert!(nodes.len() >= n8 && xe.len() > n8 && xc.len() >= n8 && fronts.len() >= n8);
     assert!(
         deeper
             .iter()
@@ -138,6 +141,8 @@ pub(super) unsafe fn pixel_triggers_row8(
         let corners = [(x0, sy0), (x1, sy0), (x0, sy1), (x1, sy1)];
         let mut front = s(f32::INFINITY);
         let mut bad = _mm256_setzero_ps();
+        // Lanes with an edge-on deeper plane or a NaN corner `z`: deeper front `-inf`.
+        let mut void = _mm256_setzero_ps();
         for pj in deeper {
             // SAFETY: pixels `k .. k + 8` of the deeper layer exist (asserted).
             let (nx, ny, nz, cj) = unsafe {
@@ -161,6 +166,7 @@ pub(super) unsafe fn pixel_triggers_row8(
             );
             let edge = _mm256_andnot_ps(_mm256_cmp_ps::<_CMP_LT_OS>(nz, s(-1e-6)), covered);
             bad = _mm256_or_ps(bad, edge);
+            void = _mm256_or_ps(void, edge);
             front = sel(edge, z0, front);
             let live = _mm256_andnot_ps(edge, covered);
             if _mm256_movemask_ps(live) == 0 {
@@ -173,6 +179,10 @@ pub(super) unsafe fn pixel_triggers_row8(
                         _mm256_mul_ps(ny, y),
                     ),
                     nz,
+                );
+                void = _mm256_or_ps(
+                    void,
+                    _mm256_and_ps(live, _mm256_cmp_ps::<_CMP_UNORD_Q>(z, z)),
                 );
                 let lower = _mm256_and_ps(live, _mm256_cmp_ps::<_CMP_LT_OS>(z, front));
                 front = sel(lower, z, front);
@@ -194,8 +204,15 @@ pub(super) unsafe fn pixel_triggers_row8(
             _mm256_setzero_ps(),
         );
         let t = sel(bad, t, s(f32::INFINITY));
-        // SAFETY: `tz[i..i + 8]` is in bounds (`i + 8 <= n8 <= W`).
-        unsafe { _mm256_storeu_ps(tz.as_mut_ptr().add(i), t) };
+        // SAFETY: `tz[i..i + 8]` and `fronts[i..i + 8]` are in bounds (`i + 8 <= n8 <= W`,
+        // asserted).
+        unsafe {
+            _mm256_storeu_ps(tz.as_mut_ptr().add(i), t);
+            _mm256_storeu_ps(
+                fronts.as_mut_ptr().add(i),
+                sel(void, s(f32::NEG_INFINITY), front),
+            );
+        }
         // The finite ones: `|t| < inf`.
         let fin = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LT_OQ>(
             _mm256_andnot_ps(neg0, t),
@@ -280,11 +297,13 @@ mod tests {
                 ((j as f32 + 0.5) * 1.0) / hf,
             );
             let mut tz = vec![0.0f32; w];
+            let mut fronts = vec![0.0f32; w];
             let mut listed = Vec::new();
             // SAFETY: AVX2 (checked above).
             let n = unsafe {
                 pixel_triggers_row8(
                     &mut tz,
+                    &mut fronts,
                     &nodes,
                     k0,
                     &xe,
@@ -298,7 +317,7 @@ mod tests {
             assert_eq!(n, w & !7);
             let mut want = Vec::new();
             for i in (0..n).step_by(4) {
-                let t = pixel_triggers4(
+                let (t, f) = pixel_triggers4(
                     k0 + i,
                     &nodes[i..],
                     &xe[i..],
@@ -306,9 +325,21 @@ mod tests {
                     y,
                     (wf, hf),
                     &deeper,
-                )
-                .to_array();
+                );
+                let (t, f) = (t.to_array(), f.to_array());
                 for d in 0..4 {
+                    assert_eq!(
+                        fronts[i + d].to_bits(),
+                        f[d].to_bits(),
+                        "case {case} pixel {} (deeper front)",
+                        i + d
+                    );
+                    let def = crate::quadtree::cascade::deeper_front(
+                        k0 + i + d,
+                        (xe[i + d], xe[i + d + 1], y.0, y.1),
+                        &deeper,
+                    );
+                    assert_eq!(f[d].to_bits(), def.to_bits(), "case {case} pixel {}", i + d);
                     assert_eq!(
                         tz[i + d].to_bits(),
                         t[d].to_bits(),

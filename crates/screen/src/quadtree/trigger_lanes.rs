@@ -56,7 +56,8 @@ fn load4(v: &[f32]) -> Vec4 {
 
 /// The trigger depths of the pixels `k .. k + 4` (row `j`, columns `i .. i + 4`) from their
 /// leaves `nodes` (4), the footprint edges `xe[i .. i + 5]` (`x / W`), the pixel centres
-/// `xc[i .. i + 4]`, the row's edges `y0`, `y1` and centre `yc` (module docs).
+/// `xc[i .. i + 4]`, the row's edges `y0`, `y1` and centre `yc` (module docs); and the
+/// pixels' deeper fronts ([`super::cascade::deeper_front`], same bits).
 #[allow(clippy::too_many_arguments)]
 #[inline]
 pub(super) fn pixel_triggers4(
@@ -67,7 +68,7 @@ pub(super) fn pixel_triggers4(
     (y0, y1, yc): (f32, f32, f32),
     (wf, hf): (f32, f32),
     deeper: &[LayerPlanes],
-) -> Vec4 {
+) -> (Vec4, Vec4) {
     let s = Vec4::splat;
     let nodes = &nodes[..4];
     // The own planes (`decode_plane_at`, level 0: the scale `w 2^-0` is `w`).
@@ -113,7 +114,7 @@ pub(super) fn merged_triggers4(
 ) -> Vec4 {
     let s = Vec4::splat;
     let all = unsafe { _mm_castsi128_ps(_mm_set1_epi32(-1)) };
-    triggers4(k, (s(n.x), s(n.y), s(n.z), s(c), all), xe, y, deeper)
+    triggers4(k, (s(n.x), s(n.y), s(n.z), s(c), all), xe, y, deeper).0
 }
 
 /// [`merged_triggers4`] of two runs of two pixels: plane `a` in the first two lanes, `b`
@@ -136,12 +137,14 @@ pub(super) fn merged_pair_triggers4(
         two(ca, cb),
         all,
     );
-    triggers4(k, planes, xe, y, deeper)
+    triggers4(k, planes, xe, y, deeper).0
 }
 
 /// The trigger depths of the pixels `k .. k + 4` with their own planes `(n.x, n.y, n.z, c)`
 /// per lane and a lane mask of the pixels that have one, the footprint edges `xe[i .. i +
-/// 5]` and the row's edges `y0`, `y1` (module docs).
+/// 5]` and the row's edges `y0`, `y1` (module docs); and the pixels' deeper fronts
+/// ([`super::cascade::deeper_front`]: `front`, or `-inf` where a deeper plane is edge-on or
+/// a corner `z` is NaN).
 #[inline(always)]
 fn triggers4(
     k: usize,
@@ -149,12 +152,14 @@ fn triggers4(
     xe: &[f32],
     (y0, y1): (f32, f32),
     deeper: &[LayerPlanes],
-) -> Vec4 {
+) -> (Vec4, Vec4) {
     let s = Vec4::splat;
     let (x0, x1) = (load4(&xe[..4]), load4(&xe[1..5]));
     let corners = [(x0, y0), (x1, y0), (x0, y1), (x1, y1)];
     let mut front = s(f32::INFINITY);
     let mut bad = unsafe { _mm_setzero_ps() };
+    // Lanes with an edge-on deeper plane or a NaN corner `z`: deeper front `-inf`.
+    let mut void = unsafe { _mm_setzero_ps() };
     for pj in deeper {
         let n = &pj.normal[k..k + 4];
         let (nx, ny, nz) = (
@@ -173,6 +178,7 @@ fn triggers4(
             // `!(nj.z < -1e-6)`: unsafe, `front = 0`.
             let edge = _mm_andnot_ps(_mm_cmplt_ps(nz.into(), _mm_set1_ps(-1e-6)), covered);
             bad = _mm_or_ps(bad, edge);
+            void = _mm_or_ps(void, edge);
             front = sel(edge, Vec4::ZERO, front);
             let live = _mm_andnot_ps(edge, covered);
             if _mm_movemask_ps(live) == 0 {
@@ -180,6 +186,7 @@ fn triggers4(
             }
             for &(x, y) in &corners {
                 let z = (cj - nx * x - ny * s(y)) / nz;
+                void = _mm_or_ps(void, _mm_and_ps(live, _mm_cmpunord_ps(z.into(), z.into())));
                 let lower = _mm_and_ps(live, _mm_cmplt_ps(z.into(), front.into()));
                 front = sel(lower, z, front);
                 let f = pnx * x + pny * s(y) + pnz * z - pc;
@@ -190,5 +197,8 @@ fn triggers4(
     }
     let t = front - s(SAFE_MARGIN);
     let t = unsafe { sel(_mm_cmpgt_ps(t.into(), _mm_setzero_ps()), t, Vec4::ZERO) };
-    sel(bad, t, s(f32::INFINITY))
+    (
+        sel(bad, t, s(f32::INFINITY)),
+        sel(void, s(f32::NEG_INFINITY), front),
+    )
 }
