@@ -23,6 +23,15 @@ pub trait LaneReduce: Lanes {
     /// `out[l] = v` for the lanes `l` of `m`, the other entries unchanged (`out` holds at
     /// least `N` entries): a packet's winners' triangle index without a loop over the bits.
     fn set_u32(m: Self::M, v: u32, out: &mut [u32]);
+    /// Runs per interval test of the set-up kernels' run walk (`cast/setup/edges.rs`): 4
+    /// (one SSE register per axis and bound), 16 for [`crate::cast::lanes512::Z16`] (one
+    /// AVX-512 register). The walk's decisions are the same for either (`kernel.rs`).
+    const RUN_GROUP: usize = 4;
+    /// Lanes `0..N` from `a[..N]` (`N <= 16`).
+    #[inline(always)]
+    fn load16(a: &[f32; 16]) -> Self {
+        Self::from_fn(|l| a[l])
+    }
 }
 
 #[inline(always)]
@@ -122,6 +131,10 @@ impl LaneReduce for V16 {
         for (i, q) in m.0.iter().enumerate() {
             Vec4::set_u32(*q, v, &mut out[4 * i..4 * i + 4]);
         }
+    }
+    #[inline(always)]
+    fn load16(a: &[f32; 16]) -> Self {
+        V16([0, 1, 2, 3].map(|i| Vec4::from_slice(&a[4 * i..4 * i + 4])))
     }
 }
 
