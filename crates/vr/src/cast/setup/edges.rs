@@ -109,7 +109,7 @@ pub(super) fn closest_edges<L: LaneReduce>(
         let count = (nseg - base).min(group);
         let mut run_lim = lim_max;
         let mut bits = if interval {
-            packet.reach_group(&tt.runs4, &tt.runs16, g, lim_max)
+            packet.reach_group(&tt.runs16, g, lim_max)
         } else {
             u32::MAX
         };
@@ -119,7 +119,7 @@ pub(super) fn closest_edges<L: LaneReduce>(
         while bits != 0 {
             if group == 16 && run_lim != lim_max {
                 run_lim = lim_max;
-                bits &= packet.reach_group(&tt.runs4, &tt.runs16, g, lim_max);
+                bits &= packet.reach_group(&tt.runs16, g, lim_max);
                 if bits == 0 {
                     break;
                 }
@@ -208,7 +208,12 @@ pub(super) fn closest_edges<L: LaneReduce>(
                 }
                 let gt_m = L::and(inn_m, gd.gt(best));
                 let gt = L::bits(gt_m) & valid;
-                let mut win = gt | (extra & L::bits(gd.gt(best)));
+                // (The second mask only for band lanes the watertight test accepted: rare.)
+                let mut win = if extra == 0 {
+                    gt
+                } else {
+                    gt | (extra & L::bits(gd.gt(best)))
+                };
                 // Ties (equal `1/t`, a hit so far): the lower triangle index wins.
                 let mut tie = ib & !win;
                 while tie != 0 {

@@ -6,7 +6,7 @@ use glam::{BVec4A, Vec4};
 use parallax_core::math::ROBUST_FAR_SCALE;
 use parallax_core::simd::{Lanes, max_or_rhs, min_or_rhs};
 
-use super::tri::{RunBoxes4, RunBoxes16, Segment, TriSetup};
+use super::tri::{RunBoxes16, Segment, TriSetup};
 use crate::cast::lanes16::LaneReduce;
 
 /// `n . d` per lane in the scalar order of [`super::tri::dot3`] (no FMA: plain functions, not closures,
@@ -201,20 +201,24 @@ impl<L: Lanes> PacketSlab<L> {
         t_near <= t_far * ROBUST_FAR_SCALE
     }
 
-    /// [`PacketSlab::interval_reaches`] of the four runs of `rb` at once (one lane per run):
-    /// bit `r` set iff the test of run `r` is true. Per lane the same products, `minps` /
+    /// [`PacketSlab::interval_reaches`] of the four runs `4q..4q + 4` of `rb` at once (one
+    /// lane per run): bit `r` set iff the test of run `4q + r` is true. Per lane the same products, `minps` /
     /// `maxps` over values that are never NaN (exact up to the sign of a zero, which the final
     /// compare does not see), the entry's `max` with 0 and the exit's `min` with `lim`: the
     /// same decision per run. Every bit without an interval.
     #[inline(always)]
-    pub(super) fn interval_reaches4(&self, rb: &RunBoxes4, lim: f32) -> u32 {
+    pub(super) fn interval_reaches4(&self, rb: &RunBoxes16, q: usize, lim: f32) -> u32 {
         let Some(iv) = &self.interval else {
             return 0xF;
         };
         let mut t_near = Vec4::ZERO;
         let mut t_far = Vec4::splat(lim);
         for a in 0..3 {
-            let (lo, hi) = (Vec4::from_array(rb.lo[a]), Vec4::from_array(rb.hi[a]));
+            let k = (q & 3) * 4;
+            let (lo, hi) = (
+                Vec4::from_slice(&rb.lo[a][k..k + 4]),
+                Vec4::from_slice(&rb.hi[a][k..k + 4]),
+            );
             let (n, f) = if iv.sneg[a] { (hi, lo) } else { (lo, hi) };
             t_near = t_near.max((n * iv.s0[a]).min(n * iv.s1[a]));
             t_far = t_far.min((f * iv.s0[a]).max(f * iv.s1[a]));
@@ -251,23 +255,18 @@ impl<L: Lanes> PacketSlab<L> {
         L::bits(t_near.le(t_far * L::splat(ROBUST_FAR_SCALE)))
     }
 
-    /// The interval test of run group `g` of `L::RUN_GROUP` runs (`runs4[g]` or `runs16[g]`)
-    /// at `lim`: bit `r` for run `g * RUN_GROUP + r` (runs past the list's end may be set).
+    /// The interval test of run group `g` of `L::RUN_GROUP` runs (`runs16[g]`, or quarter
+    /// `g % 4` of `runs16[g / 4]`) at `lim`: bit `r` for run `g * RUN_GROUP + r` (runs past
+    /// the list's end may be set).
     #[inline(always)]
-    pub(super) fn reach_group(
-        &self,
-        runs4: &[RunBoxes4],
-        runs16: &[RunBoxes16],
-        g: usize,
-        lim: f32,
-    ) -> u32
+    pub(super) fn reach_group(&self, runs16: &[RunBoxes16], g: usize, lim: f32) -> u32
     where
         L: LaneReduce,
     {
         if L::RUN_GROUP == 16 {
             self.interval_reaches16(&runs16[g], lim)
         } else {
-            self.interval_reaches4(&runs4[g], lim)
+            self.interval_reaches4(&runs16[g / 4], g % 4, lim)
         }
     }
 
@@ -348,7 +347,8 @@ mod tests {
             if !p.has_interval() {
                 continue;
             }
-            let mut rb = RunBoxes4::default();
+            let mut rb = RunBoxes16::default();
+            let q = (f() * 4.0) as usize % 4;
             let mut segs = [None; 4];
             for (r, seg) in segs.iter_mut().enumerate() {
                 let s = 10f32.powi((f() * 8.0) as i32 - 3);
@@ -357,8 +357,8 @@ mod tests {
                 let lo = Vec4::new(c[0] - h[0], c[1] - h[1], c[2] - h[2], 0.0);
                 let hi = Vec4::new(c[0] + h[0], c[1] + h[1], c[2] + h[2], 0.0);
                 for a in 0..3 {
-                    rb.lo[a][r] = lo[a];
-                    rb.hi[a][r] = hi[a];
+                    rb.lo[a][4 * q + r] = lo[a];
+                    rb.hi[a][4 * q + r] = hi[a];
                 }
                 *seg = Some(Segment {
                     end: 0,
@@ -368,7 +368,7 @@ mod tests {
                 });
             }
             for lim in [f32::INFINITY, 0.0, f() * 10.0, f() * 1e4] {
-                let bits = p.interval_reaches4(&rb, lim);
+                let bits = p.interval_reaches4(&rb, q, lim);
                 for (r, seg) in segs.iter().enumerate() {
                     let one = p.interval_reaches(seg.as_ref().unwrap(), lim);
                     assert_eq!(bits >> r & 1 != 0, one, "{rb:?} {lim}");
