@@ -31,6 +31,25 @@
 //!   test for coverage and depth (their `1/t` is the watertight `t`'s), so they cannot turn
 //!   a hit into a miss.
 //!
+//! - **The result does not depend on the triangle order.** Per lane the kernel returns the
+//!   maximum, over the triangles that cover the lane (coverage decided exactly, above), of
+//!   the pair `(1/t, -triangle index)` in lexicographic order, with `1/t` the lane's `g . d`
+//!   (the watertight `1/t` for ill-conditioned triangles) and only positive `1/t` counted: a
+//!   triangle replaces the best iff its value is larger, or equal with a lower index. Each
+//!   pair is a fixed function of the float ray and the set-up triangle, and a maximum is
+//!   order-independent, so visiting the triangles in any order, or skipping any whose pair
+//!   cannot exceed the best (the early exit by near depth, the run boxes' slab and interval
+//!   tests at the best's `t`), gives the same buffer bit for bit. This is why the packet
+//!   widths (4, 8, 16 lanes) and the run walk below agree, and what a walk with the tile's
+//!   triangles outside and its packets inside would rely on.
+//! - **Run walk.** The runs (one per leaf, near-depth order) are tested `RUN_GROUP` at a
+//!   time by the packet's interval test (`kernel.rs`: 4 runs per SSE register, 16 per
+//!   AVX-512 register), and only the runs it passes are visited, by their bits; a run is
+//!   tested again alone (16-run groups: the rest of the group in one pass) after the best
+//!   so far moved its limit. The early exit is checked at each group's first run and at
+//!   every visited run: the runs' near depths ascend, so the walk stops before the same
+//!   first entered run as a check at every run (the same work counters).
+//!
 //! [`crate::SetupExactness::Full`] (`cast/setup/mod.rs`) adds the depth band and the watertight
 //! `t` of every winner: bit-identical to per-ray traversal, at ~1.5x the cost of this kernel
 //! (measurements in `docs/notes/vr.md`).
@@ -90,13 +109,10 @@ pub(super) fn closest_edges<L: LaneReduce>(
     } else {
         valid.count_ones() as u64
     };
-    // The walk over the runs in near-depth order, `L::RUN_GROUP` runs at a time: the
-    // interval test of the group's runs at `run_lim` (one pass, `reach_group`), then only
-    // the runs it passes, bit by bit. `lim_max` only decreases and the test is monotone in
-    // it, so a run failing at `run_lim` fails at `lim_max`; a run passing is tested again if
-    // `lim_max` changed since (16-run groups: the rest of the group in one pass). The early
-    // exit is checked at the group's first run and at every run entered: the runs' `near`
-    // ascend, so this stops before the same first entered run as a check at every run.
+    // The run walk (module docs): the interval test of the group's runs at `run_lim` (one
+    // pass, `reach_group`), then only the runs it passes, bit by bit. `lim_max` only
+    // decreases and the test is monotone in it, so a run failing at `run_lim` fails at
+    // `lim_max`; a run passing is tested again if `lim_max` changed since.
     let nseg = tt.segs.len();
     let group = L::RUN_GROUP;
     let interval = packet.has_interval();
