@@ -271,8 +271,17 @@ pub fn tile_cull<C: Classify4>(bvh: &Bvh, cls: &C, entries: &[Entry], s: &mut Cu
             }
         }
     }
+    // `near` by `total_cmp`, then `leaf`, as one integer key: the same order.
     s.leaves
-        .sort_unstable_by(|x, y| x.near.total_cmp(&y.near).then(x.leaf.cmp(&y.leaf)));
+        .sort_unstable_by_key(|x| (total_order_key(x.near) as u64) << 32 | x.leaf as u64);
+}
+
+/// An unsigned key whose order is [`f32::total_cmp`]'s (its sign-magnitude to two's-complement
+/// flip, then the sign bit flipped for an unsigned comparison).
+#[inline(always)]
+fn total_order_key(x: f32) -> u32 {
+    let b = x.to_bits() as i32;
+    ((b ^ ((((b >> 31) as u32) >> 1) as i32)) as u32) ^ 0x8000_0000
 }
 
 /// Every leaf under inner node `root` (a subtree the beam contains).
@@ -310,6 +319,49 @@ fn collect_all(
             } else if sp < stack.len() {
                 stack[sp] = c;
                 sp += 1;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::total_order_key;
+
+    /// The key orders like `f32::total_cmp` on zeros, subnormals, infinities, NaNs of both
+    /// signs and random bit patterns.
+    #[test]
+    fn total_order_key_is_total_cmp() {
+        let mut v = vec![
+            0.0f32,
+            -0.0,
+            f32::MIN_POSITIVE,
+            -f32::MIN_POSITIVE,
+            1e-45,
+            -1e-45,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            -f32::NAN,
+            1.0,
+            -1.0,
+            f32::MAX,
+            f32::MIN,
+        ];
+        let mut x = 0x2545_f491_4f6c_dd1du64;
+        for _ in 0..2000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            v.push(f32::from_bits(x as u32));
+        }
+        for a in &v {
+            for b in v.iter().step_by(7) {
+                assert_eq!(
+                    a.total_cmp(b),
+                    total_order_key(*a).cmp(&total_order_key(*b)),
+                    "{a} {b}"
+                );
             }
         }
     }

@@ -23,6 +23,15 @@ pub trait LaneReduce: Lanes {
     /// `out[l] = v` for the lanes `l` of `m`, the other entries unchanged (`out` holds at
     /// least `N` entries): a packet's winners' triangle index without a loop over the bits.
     fn set_u32(m: Self::M, v: u32, out: &mut [u32]);
+    /// Runs per interval test of the set-up kernels' run walk (`cast/setup/edges.rs`): 4
+    /// (one SSE register per axis and bound), 16 for [`crate::cast::lanes512::Z16`] (one
+    /// AVX-512 register). The walk's decisions are the same for either (`kernel.rs`).
+    const RUN_GROUP: usize = 4;
+    /// Lanes `0..N` from `a[..N]` (`N <= 16`).
+    #[inline(always)]
+    fn load16(a: &[f32; 16]) -> Self {
+        Self::from_fn(|l| a[l])
+    }
 }
 
 #[inline(always)]
@@ -123,6 +132,18 @@ impl LaneReduce for V16 {
             Vec4::set_u32(*q, v, &mut out[4 * i..4 * i + 4]);
         }
     }
+    #[inline(always)]
+    fn load16(a: &[f32; 16]) -> Self {
+        V16([0, 1, 2, 3].map(|i| Vec4::from_slice(&a[4 * i..4 * i + 4])))
+    }
+}
+
+/// The bits of a [`M16`] quarter by quarter (`movmskps` each): the reference of
+/// `V16::bits`.
+#[inline(always)]
+pub fn bits_by_quarter(m: M16) -> u32 {
+    let b = |i: usize| <Vec4 as Lanes>::bits(m.0[i]) << (4 * i);
+    b(0) | b(1) | b(2) | b(3)
 }
 
 /// Sixteen lanes: lane `i` is `self.0[i / 4][i % 4]`.
@@ -211,10 +232,27 @@ impl Lanes for V16 {
             a.0[3] | b.0[3],
         ])
     }
+    /// The four quarters' lane masks (every lane all ones or all zeros) packed with signed
+    /// saturation to sixteen bytes, one byte-sign mask (`packssdw`, `packsswb`, `pmovmskb`,
+    /// SSE2: the x86-64 baseline): bit `i` = lane `i`, as [`bits_by_quarter`].
+    #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     fn bits(m: M16) -> u32 {
-        let b = |i: usize| <Vec4 as Lanes>::bits(m.0[i]) << (4 * i);
-        b(0) | b(1) | b(2) | b(3)
+        use std::arch::x86_64::{
+            __m128, _mm_castps_si128, _mm_movemask_epi8, _mm_packs_epi16, _mm_packs_epi32,
+        };
+        let [a, b, c, d] = m.0.map(__m128::from);
+        // SAFETY: SSE2 intrinsics on registers only (SSE2 is part of the x86-64 baseline).
+        unsafe {
+            let lo = _mm_packs_epi32(_mm_castps_si128(a), _mm_castps_si128(b));
+            let hi = _mm_packs_epi32(_mm_castps_si128(c), _mm_castps_si128(d));
+            _mm_movemask_epi8(_mm_packs_epi16(lo, hi)) as u32
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    #[inline(always)]
+    fn bits(m: M16) -> u32 {
+        bits_by_quarter(m)
     }
     #[inline(always)]
     fn select(m: M16, a: Self, b: Self) -> Self {
@@ -272,6 +310,30 @@ pub(crate) mod tests {
 
     /// `hmin` / `hmax` equal the compare-and-select tree (`a < b ? a : b` pairwise over the
     /// quarters, then within one) bit for bit, NaN and signed zeros included.
+    #[test]
+    fn bits_are_the_quarters_bits() {
+        let mut x = 0x2545_f491_4f6c_dd1du64;
+        for _ in 0..5000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let a = V16::from_fn(|i| (x >> (2 * i) & 3) as f32 - 1.0);
+            let b = V16::from_fn(|i| (x >> (2 * i + 32) & 3) as f32 - 1.0);
+            for m in [
+                a.lt(b),
+                a.ge(b),
+                a.eq(b),
+                a.ne(b),
+                V16::and(a.lt(b), a.ne(b)),
+            ] {
+                assert_eq!(V16::bits(m), bits_by_quarter(m));
+            }
+        }
+        let zero = V16::splat(0.0);
+        assert_eq!(V16::bits(zero.eq(zero)), 0xFFFF);
+        assert_eq!(V16::bits(zero.ne(zero)), 0);
+    }
+
     #[test]
     fn reductions_are_the_select_tree() {
         let sel = |a: f32, b: f32, lt: bool| {

@@ -138,6 +138,12 @@ impl Lanes for Z16 {
 }
 
 impl LaneReduce for Z16 {
+    const RUN_GROUP: usize = 16;
+    #[inline(always)]
+    fn load16(a: &[f32; 16]) -> Self {
+        // SAFETY: module docs; `a` holds 16 f32.
+        Z16(unsafe { _mm512_loadu_ps(a.as_ptr()) })
+    }
     #[inline(always)]
     fn hmin(self) -> f32 {
         self.quarters().hmin()

@@ -31,6 +31,25 @@
 //!   test for coverage and depth (their `1/t` is the watertight `t`'s), so they cannot turn
 //!   a hit into a miss.
 //!
+//! - **The result does not depend on the triangle order.** Per lane the kernel returns the
+//!   maximum, over the triangles that cover the lane (coverage decided exactly, above), of
+//!   the pair `(1/t, -triangle index)` in lexicographic order, with `1/t` the lane's `g . d`
+//!   (the watertight `1/t` for ill-conditioned triangles) and only positive `1/t` counted: a
+//!   triangle replaces the best iff its value is larger, or equal with a lower index. Each
+//!   pair is a fixed function of the float ray and the set-up triangle, and a maximum is
+//!   order-independent, so visiting the triangles in any order, or skipping any whose pair
+//!   cannot exceed the best (the early exit by near depth, the run boxes' slab and interval
+//!   tests at the best's `t`), gives the same buffer bit for bit. This is why the packet
+//!   widths (4, 8, 16 lanes) and the run walk below agree, and what a walk with the tile's
+//!   triangles outside and its packets inside would rely on.
+//! - **Run walk.** The runs (one per leaf, near-depth order) are tested `RUN_GROUP` at a
+//!   time by the packet's interval test (`kernel.rs`: 4 runs per SSE register, 16 per
+//!   AVX-512 register), and only the runs it passes are visited, by their bits; a run is
+//!   tested again alone (16-run groups: the rest of the group in one pass) after the best
+//!   so far moved its limit. The early exit is checked at each group's first run and at
+//!   every visited run: the runs' near depths ascend, so the walk stops before the same
+//!   first entered run as a check at every run (the same work counters).
+//!
 //! [`crate::SetupExactness::Full`] (`cast/setup/mod.rs`) adds the depth band and the watertight
 //! `t` of every winner: bit-identical to per-ray traversal, at ~1.5x the cost of this kernel
 //! (measurements in `docs/notes/vr.md`).
@@ -71,7 +90,6 @@ pub(super) fn closest_edges<L: LaneReduce>(
     };
     let mut hit_lanes = 0u32;
     let mut exit_depth = f32::INFINITY;
-    let mut start = 0usize;
     let oa = tt.origin[axis];
     let mut box_lim = L::splat(f32::INFINITY);
     let one = L::splat(1.0);
@@ -91,138 +109,169 @@ pub(super) fn closest_edges<L: LaneReduce>(
     } else {
         valid.count_ones() as u64
     };
-    // `run_bits`: the interval test of the four runs `si & !3..` at `run_lim`. `lim_max` only
+    // The run walk (module docs): the interval test of the group's runs at `run_lim` (one
+    // pass, `reach_group`), then only the runs it passes, bit by bit. `lim_max` only
     // decreases and the test is monotone in it, so a run failing at `run_lim` fails at
-    // `lim_max`; a run passing is tested again alone if `lim_max` changed since.
-    let (mut run_lim, mut run_bits) = (f32::INFINITY, 0u32);
-    for si in 0..tt.segs.len() {
-        // (The run's box is read only when tested: a copy of the segment costs more.)
-        let (near, end) = (tt.segs[si].near, tt.segs[si].end as usize);
-        if hit_lanes == valid && near > exit_depth + slack {
+    // `lim_max`; a run passing is tested again if `lim_max` changed since.
+    let nseg = tt.segs.len();
+    let group = L::RUN_GROUP;
+    let interval = packet.has_interval();
+    let mut base = 0usize;
+    'walk: while base < nseg {
+        if hit_lanes == valid && tt.segs[base].near > exit_depth + slack {
             break;
         }
-        let first = start;
-        start = end;
-        // The BVH's robust slab test (Ize 2013 far scaling) of the packet on the run's box.
-        // The packet's interval test first (one scalar test per packet); 16-lane packets
-        // skip the per-lane test behind it (fewer instructions, measured: docs/notes/vr.md).
-        // The interval test four runs at a time (`runs4`), again after a change of `lim_max`.
-        let reach = if packet.has_interval() {
-            if si & 3 == 0 {
-                run_lim = lim_max;
-                run_bits = packet.interval_reaches4(&tt.runs4[si / 4], lim_max);
-            }
-            run_bits >> (si & 3) & 1 != 0
-                && (run_lim == lim_max || packet.interval_reaches(&tt.segs[si], lim_max))
-                && (L::N >= 16 || packet.reaches(&tt.segs[si], box_lim, valid))
+        let g = base / group;
+        let count = (nseg - base).min(group);
+        let mut run_lim = lim_max;
+        let mut bits = if interval {
+            packet.reach_group(&tt.runs16, g, lim_max)
         } else {
-            packet.reaches(&tt.segs[si], box_lim, valid)
+            u32::MAX
         };
-        if !reach {
-            continue;
-        }
-        work.tri_tests += (end - first) as u64;
-        work.pair_tests += (end - first) as u64 * lanes;
-        let mut changed = false;
-        // The full bands of the run's lazy triangles, four at a time (every triangle of an
-        // entered run is reached: the loop below never stops early).
-        if tt.tris[first].rho.is_nan() {
-            refine_run(tt, first, end, blocks);
-        }
-        for j in first..end {
-            let tr = &tt.tris[j];
-            // The affine packet test (`affine.rs`): every lane certainly out or in.
-            // A partial packet's edges certainly inside for every lane (`skip`) take no
-            // per-lane test (`PacketBox::classify_edges`).
-            let (class, skip) = match pbox {
-                Some(pb) if !tr.all_in => pb.classify_edges(&tt.aff[j], tr.bound),
-                _ => (PacketClass::Partial, 0),
-            };
-            if class == PacketClass::Out {
-                work.packet_out += 1;
-                continue;
-            }
-            let gd = dot_n(tr.g, dx, dy, dz);
-            if tr.rho > RHO_MAX {
-                // Ill-conditioned: the watertight test decides coverage and depth.
-                changed |=
-                    ill_conditioned(rays, blocks, tr, valid, dinf, &mut best, &mut out, work);
-                continue;
-            }
-            let ge = gd.ge(best);
-            let cand = L::bits(ge) & valid;
-            if cand == 0 {
-                continue;
-            }
-            // Certainly inside (a mask), plus the band's lanes the watertight test accepts.
-            let (inn_m, mut unsure) = if class == PacketClass::In {
-                work.packet_in += 1;
-                (ge, 0)
-            } else {
-                edge_band(tr, rays.d, dinf, ge, cand, 7 & !skip)
-            };
-            let mut extra = 0u32;
-            // Within the edge band: the watertight test decides coverage (~0.2% of pairs).
-            if unsure != 0 {
-                work.edge_band += unsure.count_ones() as u64;
-                work.exact_tests += unsure.count_ones() as u64;
-            }
-            while unsure != 0 {
-                let l = unsure.trailing_zeros() as usize;
-                unsure &= unsure - 1;
-                let wt = &WatertightRay::new(&rays.lane(l));
-                if exact_t(wt, blocks, tr.src).is_some() {
-                    extra |= 1 << l;
+        bits &= (1u32 << count) - 1;
+        let gbase = base;
+        base += group;
+        while bits != 0 {
+            if group == 16 && run_lim != lim_max {
+                run_lim = lim_max;
+                bits &= packet.reach_group(&tt.runs16, g, lim_max);
+                if bits == 0 {
+                    break;
                 }
             }
-            let ib = (L::bits(inn_m) & valid) | extra;
-            if ib == 0 {
-                continue;
+            let si = gbase + bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            // (The run's box is read only when tested: a copy of the segment costs more.)
+            let (near, end) = (tt.segs[si].near, tt.segs[si].end as usize);
+            if hit_lanes == valid && near > exit_depth + slack {
+                break 'walk;
             }
-            let gt_m = L::and(inn_m, gd.gt(best));
-            let gt = L::bits(gt_m) & valid;
-            let mut win = gt | (extra & L::bits(gd.gt(best)));
-            // Ties (equal `1/t`, a hit so far): the lower triangle index wins.
-            let mut tie = ib & !win;
-            while tie != 0 {
-                let l = tie.trailing_zeros() as usize;
-                tie &= tie - 1;
-                if out.tri[l] != u32::MAX && tr.tri < out.tri[l] {
-                    win |= 1 << l;
-                }
-            }
-            if win == 0 {
-                continue;
-            }
-            if win == gt {
-                // The winners are the mask's valid lanes: one blend each.
-                best = L::select(gt_m, gd, best);
-                L::set_u32(L::and(gt_m, valid_m), tr.tri, &mut out.tri);
+            // The BVH's robust slab test (Ize 2013 far scaling) of the packet on the run's
+            // box: the packet's interval test first (above); 16-lane packets skip the per-lane
+            // test behind it (fewer instructions, measured: docs/notes/vr.md).
+            let reach = if interval {
+                (run_lim == lim_max || packet.interval_reaches(&tt.segs[si], lim_max))
+                    && (L::N >= 16 || packet.reaches(&tt.segs[si], box_lim, valid))
             } else {
-                best = L::from_fn(|l| {
-                    if win >> l & 1 != 0 {
-                        gd.get(l)
-                    } else {
-                        best.get(l)
+                packet.reaches(&tt.segs[si], box_lim, valid)
+            };
+            if !reach {
+                continue;
+            }
+            let first = if si == 0 {
+                0
+            } else {
+                tt.segs[si - 1].end as usize
+            };
+            work.tri_tests += (end - first) as u64;
+            work.pair_tests += (end - first) as u64 * lanes;
+            let mut changed = false;
+            // The full bands of the run's lazy triangles, four at a time (every triangle of an
+            // entered run is reached: the loop below never stops early).
+            if tt.tris[first].rho.is_nan() {
+                refine_run(tt, first, end, blocks);
+            }
+            for j in first..end {
+                let tr = &tt.tris[j];
+                // The affine packet test (`affine.rs`): every lane certainly out or in.
+                // A partial packet's edges certainly inside for every lane (`skip`) take no
+                // per-lane test (`PacketBox::classify_edges`).
+                let (class, skip) = match pbox {
+                    Some(pb) if !tr.all_in => pb.classify_edges(&tt.aff[j], tr.bound),
+                    _ => (PacketClass::Partial, 0),
+                };
+                if class == PacketClass::Out {
+                    work.packet_out += 1;
+                    continue;
+                }
+                let gd = dot_n(tr.g, dx, dy, dz);
+                if tr.rho > RHO_MAX {
+                    // Ill-conditioned: the watertight test decides coverage and depth.
+                    changed |=
+                        ill_conditioned(rays, blocks, tr, valid, dinf, &mut best, &mut out, work);
+                    continue;
+                }
+                let ge = gd.ge(best);
+                let cand = L::bits(ge) & valid;
+                if cand == 0 {
+                    continue;
+                }
+                // Certainly inside (a mask), plus the band's lanes the watertight test accepts.
+                let (inn_m, mut unsure) = if class == PacketClass::In {
+                    work.packet_in += 1;
+                    (ge, 0)
+                } else {
+                    edge_band(tr, rays.d, dinf, ge, cand, 7 & !skip)
+                };
+                let mut extra = 0u32;
+                // Within the edge band: the watertight test decides coverage (~0.2% of pairs).
+                if unsure != 0 {
+                    work.edge_band += unsure.count_ones() as u64;
+                    work.exact_tests += unsure.count_ones() as u64;
+                }
+                while unsure != 0 {
+                    let l = unsure.trailing_zeros() as usize;
+                    unsure &= unsure - 1;
+                    let wt = &WatertightRay::new(&rays.lane(l));
+                    if exact_t(wt, blocks, tr.src).is_some() {
+                        extra |= 1 << l;
                     }
-                });
-                let mut w = win;
-                while w != 0 {
-                    let l = w.trailing_zeros() as usize;
-                    w &= w - 1;
-                    out.tri[l] = tr.tri;
                 }
+                let ib = (L::bits(inn_m) & valid) | extra;
+                if ib == 0 {
+                    continue;
+                }
+                let gt_m = L::and(inn_m, gd.gt(best));
+                let gt = L::bits(gt_m) & valid;
+                // (The second mask only for band lanes the watertight test accepted: rare.)
+                let mut win = if extra == 0 {
+                    gt
+                } else {
+                    gt | (extra & L::bits(gd.gt(best)))
+                };
+                // Ties (equal `1/t`, a hit so far): the lower triangle index wins.
+                let mut tie = ib & !win;
+                while tie != 0 {
+                    let l = tie.trailing_zeros() as usize;
+                    tie &= tie - 1;
+                    if out.tri[l] != u32::MAX && tr.tri < out.tri[l] {
+                        win |= 1 << l;
+                    }
+                }
+                if win == 0 {
+                    continue;
+                }
+                if win == gt {
+                    // The winners are the mask's valid lanes: one blend each.
+                    best = L::select(gt_m, gd, best);
+                    L::set_u32(L::and(gt_m, valid_m), tr.tri, &mut out.tri);
+                } else {
+                    best = L::from_fn(|l| {
+                        if win >> l & 1 != 0 {
+                            gd.get(l)
+                        } else {
+                            best.get(l)
+                        }
+                    });
+                    let mut w = win;
+                    while w != 0 {
+                        let l = w.trailing_zeros() as usize;
+                        w &= w - 1;
+                        out.tri[l] = tr.tri;
+                    }
+                }
+                changed = true;
             }
-            changed = true;
-        }
-        if changed {
-            // `1 / best` once per packet (the same IEEE division as per lane); a lane has a
-            // hit iff its best `1/t` is positive (every win raises `best` above 0).
-            box_lim = one / best;
-            hit_lanes = L::bits(best.gt(zero)) & valid;
-            let depth = sign_v * (oa_v + box_lim * rays.d[axis]);
-            exit_depth = L::select(valid_m, depth, L::splat(f32::NEG_INFINITY)).hmax();
-            lim_max = L::select(valid_m, box_lim, L::splat(f32::NEG_INFINITY)).hmax();
+            if changed {
+                // `1 / best` once per packet (the same IEEE division as per lane); a lane has a
+                // hit iff its best `1/t` is positive (every win raises `best` above 0).
+                box_lim = one / best;
+                hit_lanes = L::bits(best.gt(zero)) & valid;
+                let depth = sign_v * (oa_v + box_lim * rays.d[axis]);
+                exit_depth = L::select(valid_m, depth, L::splat(f32::NEG_INFINITY)).hmax();
+                lim_max = L::select(valid_m, box_lim, L::splat(f32::NEG_INFINITY)).hmax();
+            }
         }
     }
     // Hit lanes: `t = 1 / best` (= `box_lim`); the others keep `inf`.

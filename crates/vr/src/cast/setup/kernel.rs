@@ -6,7 +6,7 @@ use glam::{BVec4A, Vec4};
 use parallax_core::math::ROBUST_FAR_SCALE;
 use parallax_core::simd::{Lanes, max_or_rhs, min_or_rhs};
 
-use super::tri::{RunBoxes4, Segment, TriSetup};
+use super::tri::{RunBoxes16, Segment, TriSetup};
 use crate::cast::lanes16::LaneReduce;
 
 /// `n . d` per lane in the scalar order of [`super::tri::dot3`] (no FMA: plain functions, not closures,
@@ -201,20 +201,24 @@ impl<L: Lanes> PacketSlab<L> {
         t_near <= t_far * ROBUST_FAR_SCALE
     }
 
-    /// [`PacketSlab::interval_reaches`] of the four runs of `rb` at once (one lane per run):
-    /// bit `r` set iff the test of run `r` is true. Per lane the same products, `minps` /
+    /// [`PacketSlab::interval_reaches`] of the four runs `4q..4q + 4` of `rb` at once (one
+    /// lane per run): bit `r` set iff the test of run `4q + r` is true. Per lane the same products, `minps` /
     /// `maxps` over values that are never NaN (exact up to the sign of a zero, which the final
     /// compare does not see), the entry's `max` with 0 and the exit's `min` with `lim`: the
     /// same decision per run. Every bit without an interval.
     #[inline(always)]
-    pub(super) fn interval_reaches4(&self, rb: &RunBoxes4, lim: f32) -> u32 {
+    pub(super) fn interval_reaches4(&self, rb: &RunBoxes16, q: usize, lim: f32) -> u32 {
         let Some(iv) = &self.interval else {
             return 0xF;
         };
         let mut t_near = Vec4::ZERO;
         let mut t_far = Vec4::splat(lim);
         for a in 0..3 {
-            let (lo, hi) = (Vec4::from_array(rb.lo[a]), Vec4::from_array(rb.hi[a]));
+            let k = (q & 3) * 4;
+            let (lo, hi) = (
+                Vec4::from_slice(&rb.lo[a][k..k + 4]),
+                Vec4::from_slice(&rb.hi[a][k..k + 4]),
+            );
             let (n, f) = if iv.sneg[a] { (hi, lo) } else { (lo, hi) };
             t_near = t_near.max((n * iv.s0[a]).min(n * iv.s1[a]));
             t_far = t_far.min((f * iv.s0[a]).max(f * iv.s1[a]));
@@ -222,6 +226,48 @@ impl<L: Lanes> PacketSlab<L> {
         t_near
             .cmple(t_far * Vec4::splat(ROBUST_FAR_SCALE))
             .bitmask()
+    }
+
+    /// [`PacketSlab::interval_reaches4`] of the sixteen runs of `rb` at once in the lanes of
+    /// `L` (sixteen lanes: one AVX-512 register per axis and bound with
+    /// [`crate::cast::lanes512::Z16`]): bit `r` set iff the test of run `r` is true. Per lane
+    /// the same products and `a < b ? a : b` / `a > b ? a : b` selects (`min_or_rhs` /
+    /// `max_or_rhs`: `minps` / `maxps`, as glam's `Vec4::min` / `max` there) in the same
+    /// order: the same bits, run for run (tested below). Every bit without an interval.
+    #[inline(always)]
+    pub(super) fn interval_reaches16(&self, rb: &RunBoxes16, lim: f32) -> u32
+    where
+        L: LaneReduce,
+    {
+        debug_assert_eq!(L::N, 16);
+        let Some(iv) = &self.interval else {
+            return 0xFFFF;
+        };
+        let mut t_near = L::splat(0.0);
+        let mut t_far = L::splat(lim);
+        for a in 0..3 {
+            let (lo, hi) = (L::load16(&rb.lo[a]), L::load16(&rb.hi[a]));
+            let (n, f) = if iv.sneg[a] { (hi, lo) } else { (lo, hi) };
+            let (s0, s1) = (L::splat(iv.s0[a].x), L::splat(iv.s1[a].x));
+            t_near = t_near.max_or_rhs((n * s0).min_or_rhs(n * s1));
+            t_far = t_far.min_or_rhs((f * s0).max_or_rhs(f * s1));
+        }
+        L::bits(t_near.le(t_far * L::splat(ROBUST_FAR_SCALE)))
+    }
+
+    /// The interval test of run group `g` of `L::RUN_GROUP` runs (`runs16[g]`, or quarter
+    /// `g % 4` of `runs16[g / 4]`) at `lim`: bit `r` for run `g * RUN_GROUP + r` (runs past
+    /// the list's end may be set).
+    #[inline(always)]
+    pub(super) fn reach_group(&self, runs16: &[RunBoxes16], g: usize, lim: f32) -> u32
+    where
+        L: LaneReduce,
+    {
+        if L::RUN_GROUP == 16 {
+            self.interval_reaches16(&runs16[g], lim)
+        } else {
+            self.interval_reaches4(&runs16[g / 4], g % 4, lim)
+        }
     }
 
     /// The BVH's robust slab test (Ize 2013 far scaling) of the packet on a run's box: true
@@ -301,7 +347,8 @@ mod tests {
             if !p.has_interval() {
                 continue;
             }
-            let mut rb = RunBoxes4::default();
+            let mut rb = RunBoxes16::default();
+            let q = (f() * 4.0) as usize % 4;
             let mut segs = [None; 4];
             for (r, seg) in segs.iter_mut().enumerate() {
                 let s = 10f32.powi((f() * 8.0) as i32 - 3);
@@ -310,8 +357,8 @@ mod tests {
                 let lo = Vec4::new(c[0] - h[0], c[1] - h[1], c[2] - h[2], 0.0);
                 let hi = Vec4::new(c[0] + h[0], c[1] + h[1], c[2] + h[2], 0.0);
                 for a in 0..3 {
-                    rb.lo[a][r] = lo[a];
-                    rb.hi[a][r] = hi[a];
+                    rb.lo[a][4 * q + r] = lo[a];
+                    rb.hi[a][4 * q + r] = hi[a];
                 }
                 *seg = Some(Segment {
                     end: 0,
@@ -321,7 +368,7 @@ mod tests {
                 });
             }
             for lim in [f32::INFINITY, 0.0, f() * 10.0, f() * 1e4] {
-                let bits = p.interval_reaches4(&rb, lim);
+                let bits = p.interval_reaches4(&rb, q, lim);
                 for (r, seg) in segs.iter().enumerate() {
                     let one = p.interval_reaches(seg.as_ref().unwrap(), lim);
                     assert_eq!(bits >> r & 1 != 0, one, "{rb:?} {lim}");
@@ -334,5 +381,82 @@ mod tests {
             reached > tested / 50 && reached < tested * 49 / 50,
             "{reached} {tested}"
         );
+    }
+
+    /// The sixteen-run interval test (`V16`, and `Z16` where AVX-512F is detected) decides
+    /// every run as the one-run test, on the packets and boxes of the four-run test above,
+    /// including unused lanes past the last run (zero boxes, as in `TileTris::runs16`).
+    #[test]
+    fn interval_reaches16_equals_per_run() {
+        let mut x = 0x9e37_79b9_7f4a_7c15u64;
+        let mut f = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let (mut tested, mut reached) = (0, 0);
+        for _ in 0..1500 {
+            let base = [f() - 0.5, f() - 0.5, f() - 0.5]
+                .map(|c| if c.abs() < 0.05 { c * 1e-3 } else { c });
+            let spread = 10f32.powi(-(((f() * 5.0) as i32) + 1));
+            let dl: [[f32; 16]; 3] =
+                [0, 1, 2].map(|a| std::array::from_fn(|_| base[a] + (f() - 0.5) * spread));
+            let d = dl.map(|x| V16::from_fn(|l| x[l]));
+            let p = PacketSlab::<V16>::with_interval(d);
+            if !p.has_interval() {
+                continue;
+            }
+            let used = 1 + (f() * 16.0) as usize % 16;
+            let mut rb = RunBoxes16::default();
+            let mut segs = [Segment {
+                end: 0,
+                near: 0.0,
+                lo: Vec4::ZERO,
+                hi: Vec4::ZERO,
+            }; 16];
+            for (r, seg) in segs.iter_mut().enumerate().take(used) {
+                let s = 10f32.powi((f() * 8.0) as i32 - 3);
+                let c = [f() - 0.5, f() - 0.5, f() - 0.5].map(|v| v * 4.0 * s);
+                let h = [f(), f(), f()].map(|v| v * s);
+                seg.lo = Vec4::new(c[0] - h[0], c[1] - h[1], c[2] - h[2], 0.0);
+                seg.hi = Vec4::new(c[0] + h[0], c[1] + h[1], c[2] + h[2], 0.0);
+                for a in 0..3 {
+                    rb.lo[a][r] = seg.lo[a];
+                    rb.hi[a][r] = seg.hi[a];
+                }
+            }
+            for lim in [f32::INFINITY, 0.0, f() * 10.0, f() * 1e4] {
+                let bits = p.interval_reaches16(&rb, lim);
+                for (r, seg) in segs.iter().enumerate() {
+                    let one = p.interval_reaches(seg, lim);
+                    assert_eq!(bits >> r & 1 != 0, one, "{rb:?} {lim}");
+                    tested += 1;
+                    reached += one as u32;
+                }
+                #[cfg(target_arch = "x86_64")]
+                if std::arch::is_x86_feature_detected!("avx512f") {
+                    // SAFETY: AVX-512F was detected.
+                    assert_eq!(unsafe { z16_bits(dl, &rb, lim) }, bits);
+                }
+            }
+        }
+        assert!(
+            reached > tested / 50 && reached < tested * 49 / 50,
+            "{reached} {tested}"
+        );
+    }
+
+    /// [`PacketSlab::interval_reaches16`] with `Z16` lanes.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    fn z16_bits(dl: [[f32; 16]; 3], rb: &RunBoxes16, lim: f32) -> u32 {
+        use crate::cast::lanes512::Z16;
+        let d = [
+            Z16::load16(&dl[0]),
+            Z16::load16(&dl[1]),
+            Z16::load16(&dl[2]),
+        ];
+        PacketSlab::<Z16>::with_interval(d).interval_reaches16(rb, lim)
     }
 }

@@ -25,7 +25,7 @@ use parallax_core::math::watertight_permutation;
 use parallax_core::simd::Lanes;
 
 use super::tri::{
-    BeamCorners, Cone, CornerClass, RHO_MAX, RunBoxes4, SQRT3, Segment, TileTris, TriSetup, U,
+    BeamCorners, Cone, CornerClass, RHO_MAX, RunBoxes16, SQRT3, Segment, TileTris, TriSetup, U,
 };
 use crate::beam::{Beam, LeafRef};
 
@@ -267,7 +267,7 @@ fn begin(beam: &Beam, origin: Vec3, out: &mut TileTris) -> Option<BeamCorners> {
     out.frame = None;
     out.tris.clear();
     out.segs.clear();
-    out.runs4.clear();
+    out.runs16.clear();
     out.rho_max = 0.0;
     let corners = BeamCorners::new(beam);
     let cone = Cone::of(corners.as_ref());
@@ -297,13 +297,13 @@ fn end_run(out: &mut TileTris, r: &LeafRef, bx: Aabb) {
             lo: lo.extend(0.0),
             hi: hi.extend(0.0),
         });
-        if k % 4 == 0 {
-            out.runs4.push(RunBoxes4::default());
+        if k.is_multiple_of(16) {
+            out.runs16.push(RunBoxes16::default());
         }
-        let rb = out.runs4.last_mut().expect("pushed above");
+        let rb = out.runs16.last_mut().expect("pushed above");
         for a in 0..3 {
-            rb.lo[a][k % 4] = lo[a];
-            rb.hi[a][k % 4] = hi[a];
+            rb.lo[a][k % 16] = lo[a];
+            rb.hi[a][k % 16] = hi[a];
         }
     }
 }
@@ -615,12 +615,12 @@ mod tests {
             }
             let c = |t: &TileTris| (t.counts.all_out, t.counts.partial, t.counts.all_in);
             assert_eq!(c(&a), c(&b));
-            assert_eq!(a.runs4.len(), a.segs.len().div_ceil(4));
+            assert_eq!(a.runs16.len(), a.segs.len().div_ceil(16));
             for (k, x) in a.segs.iter().enumerate() {
-                let rb = &a.runs4[k / 4];
+                let rb16 = &a.runs16[k / 16];
                 for ax in 0..3 {
-                    assert_eq!(rb.lo[ax][k % 4].to_bits(), x.lo[ax].to_bits());
-                    assert_eq!(rb.hi[ax][k % 4].to_bits(), x.hi[ax].to_bits());
+                    assert_eq!(rb16.lo[ax][k % 16].to_bits(), x.lo[ax].to_bits());
+                    assert_eq!(rb16.hi[ax][k % 16].to_bits(), x.hi[ax].to_bits());
                 }
             }
             assert_eq!((a.perm, a.rho_max.to_bits()), (b.perm, b.rho_max.to_bits()));

@@ -373,13 +373,24 @@ pub struct Segment {
     pub hi: Vec4,
 }
 
-/// The boxes of four consecutive runs `segs[4k..4k + 4]` ([`Segment::lo`], [`Segment::hi`]),
-/// per axis one lane per run: the packet's interval test of four runs in one pass
-/// (`PacketSlab::interval_reaches4` in `cast/setup/kernel.rs`). Lanes past the last run are 0.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct RunBoxes4 {
-    pub lo: [[f32; 4]; 3],
-    pub hi: [[f32; 4]; 3],
+/// The boxes of sixteen consecutive runs `segs[16k..16k + 16]` ([`Segment::lo`],
+/// [`Segment::hi`]), per axis one lane per run: the packet's interval test of sixteen runs in
+/// one AVX-512 register per axis and bound (`PacketSlab::interval_reaches16` in
+/// `cast/setup/kernel.rs`), or of each quarter's four runs in one SSE register
+/// (`PacketSlab::interval_reaches4`). Lanes past the last run are 0.
+#[derive(Clone, Copy, Debug)]
+pub struct RunBoxes16 {
+    pub lo: [[f32; 16]; 3],
+    pub hi: [[f32; 16]; 3],
+}
+
+impl Default for RunBoxes16 {
+    fn default() -> Self {
+        RunBoxes16 {
+            lo: [[0.0; 16]; 3],
+            hi: [[0.0; 16]; 3],
+        }
+    }
 }
 
 /// Counts of the corner classification.
@@ -396,8 +407,8 @@ pub struct TileTris {
     pub origin: Vec3,
     pub tris: Vec<TriSetup>,
     pub segs: Vec<Segment>,
-    /// `runs4[k]`: the boxes of `segs[4k..4k + 4]`.
-    pub runs4: Vec<RunBoxes4>,
+    /// `runs16[k]`: the boxes of `segs[16k..16k + 16]`.
+    pub runs16: Vec<RunBoxes16>,
     pub counts: SetupCounts,
     /// The largest depth band `rho` of the list's well-conditioned triangles.
     pub rho_max: f32,
