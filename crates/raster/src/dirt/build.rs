@@ -1,10 +1,17 @@
 //! The DIRT build (§4.1): triangle setup and binning to screen bands, then per band (in
 //! parallel, each band owning its cell rows) the conservative rasterization with per-cell
 //! depth ranges (Fig. 6a), Fill Depth (§4.1.1) and the count / prefix-sum / fill of the
-//! buckets (§4.1.2, eq. 1) (`fill`); finally the bands are concatenated into the flat CSR
-//! arrays and the mip chain is built. Several views of one mesh (the camera view and the cube
+//! buckets (§4.1.2, eq. 1) (`fill`); finally the bands are copied into the flat CSR arrays
+//! and the mip chain is built. Several views of one mesh (the camera view and the cube
 //! faces of [`super::DirtViews`]) share one setup pass over the mesh ([`build_views`]); a
 //! view's set-up triangles stay in the chunks the parallel setup made them in.
+//!
+//! **Parallel shape.** No stage runs view by view: binning is parallel over the views, the
+//! fill over every band of every view in one loop, the assembly (the bands' arrays
+//! concatenated) and the mip chain over the views, so a view's serial work overlaps the
+//! others'. A band's
+//! output does not depend on which thread fills it or when, so the capture is bit for bit the
+//! same at any thread count.
 
 use std::sync::atomic::AtomicU64;
 use std::time::Instant;
@@ -106,12 +113,22 @@ pub(super) fn build(
     let grid = grid(view, opts)?;
     let xf = ViewXf::new(view, opts.near as f64);
     let setups = xf.setup_all(mesh);
-    finish(mesh, view, opts, grid, &xf, setups, ms(t_start))
+    let caps = finish_views(
+        mesh,
+        std::slice::from_ref(view),
+        opts,
+        vec![grid],
+        std::slice::from_ref(&xf),
+        vec![setups],
+        t_start,
+    )?;
+    Ok(caps.into_iter().next().expect("one view"))
 }
 
-/// The captures of several views of one mesh (the cube map's faces), with the triangle setup
-/// done in one pass over the mesh for all of them ([`ViewXf::setup_all_views`]); each face's
-/// entry budget is what the faces before it left of `opts.max_entries`.
+/// The captures of several views of one mesh (the camera view and the cube map's faces),
+/// with the triangle setup done in one pass over the mesh for all of them
+/// ([`ViewXf::setup_all_views`]) and every later stage parallel over all views at once
+/// ([`finish_views`]); `opts.max_entries` bounds the entries of all views together.
 pub(super) fn build_views(
     mesh: &TriangleMesh,
     views: &[Pinhole],
@@ -127,41 +144,33 @@ pub(super) fn build_views(
         .map(|v| ViewXf::new(v, opts.near as f64))
         .collect();
     let setups = ViewXf::setup_all_views(&xfs, mesh);
-    let setup_ms = ms(t_start) / views.len().max(1) as f64;
-    let mut left = opts.max_entries;
-    let mut out = Vec::with_capacity(views.len());
-    for (((view, grid), xf), setups) in views.iter().zip(grids).zip(&xfs).zip(setups) {
-        let face_opts = DirtOptions {
-            max_entries: left.max(1),
-            ..*opts
-        };
-        let cap = finish(mesh, view, &face_opts, grid, xf, setups, setup_ms)?;
-        left = left.saturating_sub(cap.stats.entries);
-        out.push(cap);
-    }
-    Ok(out)
+    finish_views(mesh, views, opts, grids, &xfs, setups, t_start)
 }
 
-/// Binning, fill and assembly of one view from its set-up triangles (`setup_before` ms were
-/// spent setting them up).
-#[allow(clippy::too_many_arguments)]
-fn finish(
-    mesh: &TriangleMesh,
-    view: &Pinhole,
-    opts: &DirtOptions,
-    grid: Grid,
-    xf: &ViewXf,
-    setups: Setups,
-    setup_before: f64,
-) -> Result<DirtCapture, DirtError> {
-    let t_start = Instant::now();
-    let (s, cells_x, cells_y, band_rows) = (grid.s, grid.cells_x, grid.cells_y, grid.band_rows);
-    let cell_count = cells_x as u64 * cells_y as u64;
-    let bands = cells_y.div_ceil(band_rows);
-    let ntri = mesh.triangle_count();
+/// One view's set-up triangles binned to its screen bands: band `b`'s keys (ascending, so
+/// in triangle order) are `entries[band_start[b]..band_start[b + 1]]`.
+struct Bins {
+    band_start: Vec<u32>,
+    entries: Vec<u32>,
+    /// Set-up triangles whose clipped projection touches a cell row of the view.
+    in_view: u64,
+}
 
-    // 1. Binning: which bands each set-up triangle's clipped projection touches.
-    let t_bin = Instant::now();
+impl Bins {
+    fn bands(&self) -> u32 {
+        self.band_start.len() as u32 - 1
+    }
+
+    fn band(&self, b: u32) -> &[u32] {
+        &self.entries
+            [self.band_start[b as usize] as usize..self.band_start[b as usize + 1] as usize]
+    }
+}
+
+/// Which bands each set-up triangle's clipped projection touches.
+fn bin(setups: &Setups, grid: &Grid) -> Bins {
+    let (s, cells_y, band_rows) = (grid.s, grid.cells_y, grid.band_rows);
+    let bands = cells_y.div_ceil(band_rows);
     let spans: Vec<(u32, u32, u32)> = setups
         .iter()
         .map(|(key, e)| {
@@ -183,110 +192,194 @@ fn finish(
     for b in 0..bands as usize {
         band_start[b + 1] += band_start[b];
     }
-    let mut band_entries = vec![0u32; band_start[bands as usize] as usize];
+    let mut entries = vec![0u32; band_start[bands as usize] as usize];
     let mut cursor = band_start.clone();
     for &(key, b0, b1) in &spans {
         for b in b0..=b1 {
-            band_entries[cursor[b as usize] as usize] = key;
+            entries[cursor[b as usize] as usize] = key;
             cursor[b as usize] += 1;
         }
     }
-    drop(spans);
-    let setup_ms = setup_before + ms(t_bin);
+    Bins {
+        band_start,
+        entries,
+        in_view,
+    }
+}
 
-    // 2. Per band: clip, Fill Depth, count / prefix / fill.
-    let t_fill = Instant::now();
-    let budget = AtomicU64::new(0);
-    let job = FillJob {
-        setups: &setups,
-        xf,
-        grid: &grid,
-        opts,
-        budget: &budget,
-    };
-    let outs: Vec<Result<BandOut, DirtError>> = (0..bands)
-        .into_par_iter()
-        .map(|band| {
-            let entries = &band_entries
-                [band_start[band as usize] as usize..band_start[band as usize + 1] as usize];
-            fill_band(&job, band, entries)
+/// `wall` ms split over the views in proportion to their measured `work` (evenly if none).
+fn shares(wall: f64, work: &[f64]) -> Vec<f64> {
+    let total: f64 = work.iter().sum();
+    work.iter()
+        .map(|&w| {
+            if total > 0.0 {
+                wall * w / total
+            } else {
+                wall / work.len() as f64
+            }
+        })
+        .collect()
+}
+
+/// Binning, fill and assembly of every view from its set-up triangles (the setup started at
+/// `t_start`). Binning is parallel over the views, the fill over every band of every view in
+/// one loop (the camera view's bands first: they are the largest), the assembly and the mip
+/// chain over the views. Each stage's wall time is split over the views in proportion to
+/// their work in it (the setup's evenly), so the views' `total_ms` add up to the build's.
+fn finish_views(
+    mesh: &TriangleMesh,
+    views: &[Pinhole],
+    opts: &DirtOptions,
+    grids: Vec<Grid>,
+    xfs: &[ViewXf],
+    setups: Vec<Setups>,
+    t_start: Instant,
+) -> Result<Vec<DirtCapture>, DirtError> {
+    let nv = views.len();
+    let setup_ms = ms(t_start);
+    let timed = |t: Instant| ms(t);
+
+    // 1. Binning: which bands each set-up triangle's clipped projection touches.
+    let t_bin = Instant::now();
+    let bins: Vec<(Bins, f64)> = setups
+        .par_iter()
+        .zip(&grids)
+        .map(|(s, g)| {
+            let t = Instant::now();
+            let b = bin(s, g);
+            (b, timed(t))
         })
         .collect();
-    let outs: Vec<BandOut> = outs.into_iter().collect::<Result<_, _>>()?;
-    let fill_ms = ms(t_fill);
+    let bin_ms = shares(ms(t_bin), &bins.iter().map(|b| b.1).collect::<Vec<_>>());
 
-    // 3. Assemble the flat arrays.
-    let t_asm = Instant::now();
-    let entries: u64 = outs.iter().map(|o| o.ids.len() as u64).sum();
-    let fragments: u64 = outs.iter().map(|o| o.fragments).sum();
-    let (levels, texels) = mip::layout(cells_x, cells_y);
-    let mut bounds = vec![mip::EMPTY; texels];
-    let nb = opts.buckets as usize;
-    let mut offsets = Vec::with_capacity(cell_count as usize * nb + 1);
-    let mut ids = Vec::with_capacity(entries as usize);
-    let mut cells = Vec::with_capacity(cell_count as usize);
-    let mut cell0 = 0usize;
-    for o in &outs {
-        let base = ids.len() as u32;
-        offsets.extend(o.offsets[..o.offsets.len() - 1].iter().map(|&x| x + base));
-        ids.extend_from_slice(&o.ids);
-        for (b, c) in bounds[cell0..cell0 + o.cells.len()]
-            .iter_mut()
-            .zip(&o.cells)
-        {
-            *b = [c.zmin, c.zmax];
-        }
-        cells.extend_from_slice(&o.cells);
-        cell0 += o.cells.len();
-    }
-    offsets.push(ids.len() as u32);
-    drop(outs);
-    let assemble_ms = ms(t_asm);
-
-    // 4. Mipmap Depth.
-    let t_mip = Instant::now();
-    mip::build_chain(&levels, &mut bounds);
-    let recip_bounds = mip::reciprocal(&bounds);
-    let mip_ms = ms(t_mip);
-
-    let nonempty_cells = bounds[..cell_count as usize]
+    // 2. Per band of every view: clip, Fill Depth, count / prefix / fill; one entry budget
+    // for all views.
+    let t_fill = Instant::now();
+    let budget = AtomicU64::new(0);
+    let jobs: Vec<(usize, u32)> = bins
         .iter()
-        .filter(|z| z[0].is_finite())
-        .count() as u64;
-    let mut cap = DirtCapture {
-        view: view.clone(),
-        opts: *opts,
-        cells_x,
-        cells_y,
-        offsets,
-        ids,
-        levels,
-        bounds,
-        recip_bounds,
-        cells,
-        stats: DirtStats {
-            width: view.width,
-            height: view.height,
-            tile_size: s,
-            buckets: opts.buckets,
-            cells_x,
-            cells_y,
-            triangles: ntri as u64,
-            triangles_in_view: in_view,
-            fragments,
-            entries,
-            nonempty_cells,
-            bytes: 0,
-            setup_ms,
-            fill_ms,
-            assemble_ms,
-            mip_ms,
-            total_ms: 0.0,
-        },
-    };
-    cap.stats.bytes = cap.bytes();
-    cap.stats.total_ms = setup_before + ms(t_start);
-    Ok(cap)
+        .enumerate()
+        .flat_map(|(v, (b, _))| (0..b.bands()).map(move |band| (v, band)))
+        .collect();
+    let outs: Vec<Result<(BandOut, f64), DirtError>> = jobs
+        .par_iter()
+        .map(|&(v, band)| {
+            let t = Instant::now();
+            let job = FillJob {
+                setups: &setups[v],
+                xf: &xfs[v],
+                grid: &grids[v],
+                opts,
+                budget: &budget,
+            };
+            fill_band(&job, band, bins[v].0.band(band)).map(|o| (o, timed(t)))
+        })
+        .collect();
+    let outs: Vec<(BandOut, f64)> = outs.into_iter().collect::<Result<_, _>>()?;
+    let fill_wall = ms(t_fill);
+    drop(setups);
+
+    // 3. Per view (views in parallel): assemble the flat arrays, Mipmap Depth.
+    let t_asm = Instant::now();
+    let mut fill_work = vec![0.0; nv];
+    let mut per_view: Vec<Vec<BandOut>> = (0..nv).map(|_| Vec::new()).collect();
+    for ((v, _), (o, t)) in jobs.iter().zip(outs) {
+        fill_work[*v] += t;
+        per_view[*v].push(o);
+    }
+    let fill_ms = shares(fill_wall, &fill_work);
+    let ntri = mesh.triangle_count() as u64;
+    let caps: Vec<(DirtCapture, f64, f64)> = per_view
+        .into_par_iter()
+        .zip(views)
+        .zip(&grids)
+        .zip(&bins)
+        .map(|(((outs, view), g), (bins, _))| {
+            let t = Instant::now();
+            let cell_count = g.cells_x as usize * g.cells_y as usize;
+            let entries: usize = outs.iter().map(|o| o.ids.len()).sum();
+            let fragments: u64 = outs.iter().map(|o| o.fragments).sum();
+            let (levels, texels) = mip::layout(g.cells_x, g.cells_y);
+            let mut bounds = vec![mip::EMPTY; texels];
+            let mut offsets = Vec::with_capacity(cell_count * g.buckets as usize + 1);
+            let mut ids = Vec::with_capacity(entries);
+            let mut cells = Vec::with_capacity(cell_count);
+            let mut cell0 = 0usize;
+            for o in &outs {
+                let base = ids.len() as u32;
+                offsets.extend(o.offsets[..o.offsets.len() - 1].iter().map(|&x| x + base));
+                ids.extend_from_slice(&o.ids);
+                for (b, c) in bounds[cell0..cell0 + o.cells.len()]
+                    .iter_mut()
+                    .zip(&o.cells)
+                {
+                    *b = [c.zmin, c.zmax];
+                }
+                cells.extend_from_slice(&o.cells);
+                cell0 += o.cells.len();
+            }
+            offsets.push(ids.len() as u32);
+            drop(outs);
+            let assemble = timed(t);
+            let t = Instant::now();
+            mip::build_chain(&levels, &mut bounds);
+            let recip_bounds = mip::reciprocal(&bounds);
+            let nonempty_cells = bounds[..cell_count]
+                .iter()
+                .filter(|z| z[0].is_finite())
+                .count() as u64;
+            let mut cap = DirtCapture {
+                view: view.clone(),
+                opts: *opts,
+                cells_x: g.cells_x,
+                cells_y: g.cells_y,
+                offsets,
+                ids,
+                levels,
+                bounds,
+                recip_bounds,
+                cells,
+                stats: DirtStats {
+                    width: view.width,
+                    height: view.height,
+                    tile_size: g.s,
+                    buckets: g.buckets,
+                    cells_x: g.cells_x,
+                    cells_y: g.cells_y,
+                    triangles: ntri,
+                    triangles_in_view: bins.in_view,
+                    fragments,
+                    entries: entries as u64,
+                    nonempty_cells,
+                    bytes: 0,
+                    setup_ms: 0.0,
+                    fill_ms: 0.0,
+                    assemble_ms: 0.0,
+                    mip_ms: 0.0,
+                    total_ms: 0.0,
+                },
+            };
+            cap.stats.bytes = cap.bytes();
+            (cap, assemble, timed(t))
+        })
+        .collect();
+    // The assembly and the mips ran together: their wall time split by their work.
+    let asm_wall = ms(t_asm);
+    let work: Vec<f64> = caps.iter().flat_map(|c| [c.1, c.2]).collect();
+    let split = shares(asm_wall, &work);
+    Ok(caps
+        .into_iter()
+        .enumerate()
+        .map(|(v, (mut cap, _, _))| {
+            let st = &mut cap.stats;
+            st.setup_ms = setup_ms / nv as f64 + bin_ms[v];
+            st.fill_ms = fill_ms[v];
+            st.assemble_ms = split[2 * v];
+            st.mip_ms = split[2 * v + 1];
+            st.total_ms = st.setup_ms + st.fill_ms + st.assemble_ms + st.mip_ms;
+            cap
+        })
+        .collect())
 }
 
 fn ms(t: Instant) -> f64 {

@@ -16,8 +16,8 @@ pub struct DirtCube {
 
 impl DirtCube {
     /// Builds the six faces (the triangle setup in one pass over the mesh for all faces, the
-    /// rest face by face, each in parallel internally). `opts.max_entries` bounds the entries
-    /// of the whole cube.
+    /// fill of every band of every face in one parallel loop). `opts.max_entries` bounds the
+    /// entries of the whole cube.
     pub fn build(
         mesh: &TriangleMesh,
         cube: &CubeMap,
