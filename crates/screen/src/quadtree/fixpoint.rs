@@ -363,9 +363,11 @@ pub(super) fn pixel_triggers_row(
     #[cfg(target_arch = "x86_64")]
     {
         let y = ((j as f32) / hf, ((j + 1) as f32) / hf, yc);
-        if std::arch::is_x86_feature_detected!("avx2") {
+        if std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("f16c")
+        {
             // Eight pixels per step (`trigger_avx2`, same bits).
-            // SAFETY: the CPU has AVX2 (checked).
+            // SAFETY: the CPU has AVX2 and F16C (checked).
             done = unsafe {
                 super::trigger_avx2::pixel_triggers_row8(
                     tz,
