@@ -19,9 +19,11 @@
 //!   (`QuadTree::mark_unsafe_listed`; ~1 % of the pixels on atrium);
 //! - a pixel whose effective node is its own leaf (level 0) or none has the pixel planes'
 //!   trigger depth: only pixels under merged nodes are evaluated against their proxy plane,
-//!   by runs (the pixels of one effective node in a row all have its level: one decode per
-//!   run, `merged_triggers`); on x86_64 runs of level >= 2 four pixels per step and two
-//!   adjacent level-1 runs together, one pixel per lane (`trigger_lanes`);
+//!   by runs (the pixels of one effective node in a row all have its level; a merged node
+//!   has the same run in both rows of a pair `2m`, `2m + 1`: one decode and one certificate
+//!   per node and pair of rows, `merged_triggers`); on x86_64 runs of level >= 2 four
+//!   pixels per step and two adjacent level-1 runs together, one pixel per lane
+//!   (`trigger_lanes`);
 //! - a rebuild only recomputes the ancestors of the newly blocked pixels: every other node
 //!   has the same children and the same "may merge" answer as before. A recomputed node may
 //!   not merge (it covers a blocked pixel), so it is an AABB or empty;
@@ -218,15 +220,19 @@ impl Columns {
     }
 }
 
-/// The trigger depths (`tz`, `W x H`, rows in parallel) of the pixels under merged nodes
-/// (effective level `eff > 0`) against `deeper`, from their effective node's decoded plane
-/// ([`decode_plane`]); other pixels keep their value. The pixels of one effective node in a
-/// row are one run (they all have its level): its plane is decoded once per run. A run
-/// whose pixels' deeper fronts (`fronts`, [`deeper_front`]) all reach the run's certificate
-/// threshold ([`proxy_safe_front`]) is safe against its plane without evaluating its
-/// corners: its pixels keep `+inf` (they are not blocked, so their pixel planes' trigger
-/// depth is `+inf`); likewise per group of four and per pixel. Returns the pixels (indices
-/// `j W + i`, ascending) that got a finite trigger depth and are not marked in `blocked`.
+/// The trigger depths (`tz`, `W x H`, pairs of rows in parallel) of the pixels under merged
+/// nodes (effective level `eff > 0`) against `deeper`, from their effective node's decoded
+/// plane ([`decode_plane`]); other pixels keep their value. The pixels of one effective node
+/// in a row are one run (they all have its level). A merged node (level >= 1) covers both
+/// rows `2m`, `2m + 1` of a pair with the same run, so the runs are found in the pair's
+/// first row and each node's plane is decoded once per pair. A run whose pixels' deeper
+/// fronts (`fronts`, [`deeper_front`]) all reach the certificate threshold
+/// ([`proxy_safe_front`]) over the node's footprint in both rows is safe against its plane
+/// without evaluating its corners: its pixels keep `+inf` (they are not blocked, so their
+/// pixel planes' trigger depth is `+inf`). Otherwise each row is done as a row of its own
+/// (`merged_run`: the threshold over the row, then groups of four and pixels). Returns the
+/// pixels (indices `j W + i`, ascending) that got a finite trigger depth and are not marked
+/// in `blocked`.
 #[allow(clippy::too_many_arguments)]
 fn merged_triggers(
     tz: &mut [f32],
@@ -241,15 +247,36 @@ fn merged_triggers(
     let cols = Columns::new(w, ctx.wf);
     let (wf, hf) = (ctx.wf, ctx.hf);
     let (wu, w0) = (w as usize, levels[0].w as usize);
-    tz.par_chunks_mut(wu)
+    let run = RunCtx {
+        cols: &cols,
+        wf,
+        hf,
+        wu,
+        deeper,
+        blocked,
+        levels,
+    };
+    tz.par_chunks_mut(2 * wu)
         .enumerate()
-        .flat_map_iter(|(j, row)| {
+        .flat_map_iter(|(m, rows)| {
+            let j = 2 * m;
             let base = j * wu;
+            // Row `j`'s effective levels: its runs of level >= 1 are row `j + 1`'s.
             let er = &eff[j * w0..j * w0 + wu];
-            let fr = &fronts[base..base + wu];
+            let (row0, row1) = rows.split_at_mut(wu);
+            let fr0 = &fronts[base..base + wu];
+            let fr1 = if row1.is_empty() {
+                &[][..]
+            } else {
+                &fronts[base + wu..base + 2 * wu]
+            };
             let j = j as u32;
-            let ys = Vec4::new(j as f32, j as f32, (j + 1) as f32, (j + 1) as f32) / hf;
-            let mut newly = Vec::new();
+            // The pair's `y` range (row `j`'s alone when it has no second row).
+            let y_pair = (
+                (j as f32) / hf,
+                ((j + 1 + !row1.is_empty() as u32) as f32) / hf,
+            );
+            let (mut newly0, mut newly1) = (Vec::new(), Vec::new());
             let mut i = 0;
             while i < wu {
                 let l = er[i];
@@ -271,66 +298,139 @@ fn merged_triggers(
                 let lv = &levels[l as usize];
                 let p = decode_plane(lv.nodes[(qy * lv.w + qx) as usize], l, qx, qy, wf, hf);
                 let end = (((qx + 1) << l) as usize).min(wu);
-                let t_run = proxy_safe_front(p, (cols.xe[i], cols.xe[end]), (ys.x, ys.z));
-                if certified(&fr[i..end], t_run) {
+                let t_pair = proxy_safe_front(p, (cols.xe[i], cols.xe[end]), y_pair);
+                if certified(&fr0[i..end], t_pair) && certified(&fr1[i..end.min(fr1.len())], t_pair)
+                {
                     i = end;
                     continue;
                 }
-                // Two runs of two pixels (level 1) starting at a multiple of 4: four pixels
-                // in lanes, each pair with its node's plane (`trigger_lanes`, same bits).
-                #[cfg(target_arch = "x86_64")]
-                if l == 1 && i % 4 == 0 && i + 4 <= wu && er[i + 2] == 1 {
-                    let q = lv.nodes[(qy * lv.w + qx + 1) as usize];
-                    let pb = decode_plane(q, l, qx + 1, qy, wf, hf);
-                    let y = ((j as f32) / hf, ((j + 1) as f32) / hf);
-                    let t = super::trigger_lanes::merged_pair_triggers4(
-                        base + i,
-                        p,
-                        pb,
-                        &cols.xe[i..],
-                        y,
-                        deeper,
-                    );
-                    store_triggers4(t, base + i, &mut row[i..], blocked, &mut newly);
+                let next0 = run.merged_run(row0, fr0, er, j, (i, end), (l, qx, qy), p, &mut newly0);
+                let next1 = if row1.is_empty() {
+                    next0
+                } else {
+                    run.merged_run(row1, fr1, er, j + 1, (i, end), (l, qx, qy), p, &mut newly1)
+                };
+                // One row may have done two level-1 runs in lanes where the other's first
+                // run was certified: the other row's second run on its own, as that row's
+                // scan would have come to it.
+                let next = next0.max(next1);
+                for (row, fr, jr, next_r, newly) in [
+                    (&mut *row0, fr0, j, next0, &mut newly0),
+                    (&mut *row1, fr1, j + 1, next1, &mut newly1),
+                ] {
+                    let mut n = next_r;
+                    while n < next {
+                        let qx = n as u32 >> l;
+                        let p =
+                            decode_plane(lv.nodes[(qy * lv.w + qx) as usize], l, qx, qy, wf, hf);
+                        let end = (((qx + 1) << l) as usize).min(wu);
+                        n = run.merged_run(row, fr, er, jr, (n, end), (l, qx, qy), p, newly);
+                    }
+                }
+                i = next;
+            }
+            newly0.append(&mut newly1);
+            newly0
+        })
+        .collect()
+}
+
+/// What [`merged_triggers`]' rows share.
+struct RunCtx<'a> {
+    cols: &'a Columns,
+    wf: f32,
+    hf: f32,
+    wu: usize,
+    deeper: &'a [LayerPlanes],
+    blocked: &'a [bool],
+    levels: &'a [Level],
+}
+
+impl RunCtx<'_> {
+    /// The trigger depths of row `j`'s run `i .. end` of the merged node `(l, qx, qy)` with
+    /// the decoded plane `p` into `row` (the row's trigger depths; `fr` its deeper fronts,
+    /// `er` the effective levels of the pair's first row, whose runs of level >= 1 are this
+    /// row's): the run is certified as a whole, then per group of four and per pixel, the
+    /// rest evaluated exactly; on x86_64 two level-1 runs starting at a multiple of 4 are
+    /// done together in lanes. Pushes the pixels that got a finite trigger depth and are not
+    /// blocked on `newly`; returns the end of what it did (`end`, or `i + 4` for two level-1
+    /// runs).
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn merged_run(
+        &self,
+        row: &mut [f32],
+        fr: &[f32],
+        er: &[u8],
+        j: u32,
+        (mut i, end): (usize, usize),
+        (l, qx, qy): (u32, u32, u32),
+        p: (glam::Vec3, f32),
+        newly: &mut Vec<u32>,
+    ) -> usize {
+        let (cols, wf, hf, wu, deeper, blocked) = (
+            self.cols,
+            self.wf,
+            self.hf,
+            self.wu,
+            self.deeper,
+            self.blocked,
+        );
+        let base = j as usize * wu;
+        let ys = Vec4::new(j as f32, j as f32, (j + 1) as f32, (j + 1) as f32) / hf;
+        let t_run = proxy_safe_front(p, (cols.xe[i], cols.xe[end]), (ys.x, ys.z));
+        if certified(&fr[i..end], t_run) {
+            return end;
+        }
+        // Two runs of two pixels (level 1) starting at a multiple of 4: four pixels in
+        // lanes, each pair with its node's plane (`trigger_lanes`, same bits).
+        #[cfg(target_arch = "x86_64")]
+        if l == 1 && i % 4 == 0 && i + 4 <= wu && er[i + 2] == 1 {
+            let lv = &self.levels[l as usize];
+            let q = lv.nodes[(qy * lv.w + qx + 1) as usize];
+            let pb = decode_plane(q, l, qx + 1, qy, wf, hf);
+            let y = ((j as f32) / hf, ((j + 1) as f32) / hf);
+            let t = super::trigger_lanes::merged_pair_triggers4(
+                base + i,
+                p,
+                pb,
+                &cols.xe[i..],
+                y,
+                deeper,
+            );
+            store_triggers4(t, base + i, &mut row[i..], blocked, newly);
+            return i + 4;
+        }
+        // Runs of 4 pixels or more (levels >= 2, starting at a multiple of 4): four pixels
+        // per step in lanes (`trigger_lanes`, same bits).
+        #[cfg(target_arch = "x86_64")]
+        if l >= 2 {
+            let y = ((j as f32) / hf, ((j + 1) as f32) / hf);
+            while i + 4 <= end {
+                if certified(&fr[i..i + 4], t_run) {
                     i += 4;
                     continue;
                 }
-                // Runs of 4 pixels or more (levels >= 2, starting at a multiple of 4): four
-                // pixels per step in lanes (`trigger_lanes`, same bits).
-                #[cfg(target_arch = "x86_64")]
-                if l >= 2 {
-                    let y = ((j as f32) / hf, ((j + 1) as f32) / hf);
-                    while i + 4 <= end {
-                        if certified(&fr[i..i + 4], t_run) {
-                            i += 4;
-                            continue;
-                        }
-                        let t = super::trigger_lanes::merged_triggers4(
-                            base + i,
-                            p,
-                            &cols.xe[i..],
-                            y,
-                            deeper,
-                        );
-                        store_triggers4(t, base + i, &mut row[i..], blocked, &mut newly);
-                        i += 4;
-                    }
-                }
-                for (ii, t) in row.iter_mut().enumerate().take(end).skip(i) {
-                    if fr[ii] >= t_run {
-                        continue;
-                    }
-                    let k = base + ii;
-                    *t = pixel_trigger_lanes(k, cols.xs[ii], ys, || Some(p), deeper);
-                    if t.is_finite() && !blocked[k] {
-                        newly.push(k as u32);
-                    }
-                }
-                i = end;
+                let t =
+                    super::trigger_lanes::merged_triggers4(base + i, p, &cols.xe[i..], y, deeper);
+                store_triggers4(t, base + i, &mut row[i..], blocked, newly);
+                i += 4;
             }
-            newly
-        })
-        .collect()
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = (er, qx, qy, wf, l);
+        for (ii, t) in row.iter_mut().enumerate().take(end).skip(i) {
+            if fr[ii] >= t_run {
+                continue;
+            }
+            let k = base + ii;
+            *t = pixel_trigger_lanes(k, cols.xs[ii], ys, || Some(p), deeper);
+            if t.is_finite() && !blocked[k] {
+                newly.push(k as u32);
+            }
+        }
+        end
+    }
 }
 
 /// Whether every deeper front in `f` reaches `t` (no early exit: vectorised).
@@ -363,9 +463,11 @@ pub(super) fn pixel_triggers_row(
     #[cfg(target_arch = "x86_64")]
     {
         let y = ((j as f32) / hf, ((j + 1) as f32) / hf, yc);
-        if std::arch::is_x86_feature_detected!("avx2") {
+        if std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("f16c")
+        {
             // Eight pixels per step (`trigger_avx2`, same bits).
-            // SAFETY: the CPU has AVX2 (checked).
+            // SAFETY: the CPU has AVX2 and F16C (checked).
             done = unsafe {
                 super::trigger_avx2::pixel_triggers_row8(
                     tz,

@@ -8,16 +8,19 @@
 //! `-SAFE_MARGIN`, the trigger depth `max(front - margin, +0)` of unsafe lanes): IEEE
 //! products, sums and divisions are correctly rounded per lane, `maxps` picks the same
 //! operand in 8 lanes as in 4, nothing is fused (no FMA is enabled), so the trigger depths
-//! are the same bits. The f16 slopes are decoded four lanes at a time by `merge_rows`'
-//! `f16x4` and joined; the deeper layers' normals are transposed from their `Vec3`s four at
-//! a time (as in `leaf_avx2`). The test below compares rows with the four-lane kernel.
+//! are the same bits. The f16 slopes are decoded eight lanes at a time by F16C's
+//! `vcvtph2ps`, which equals `f16x4` (and `node::f16_bits_to_f32`) for every finite half,
+//! subnormals included; plane nodes hold only finite halves (the slopes are clamped to
+//! `±65504` before encoding), and lanes whose leaf is not a plane (whose `b` word is no
+//! pair of halves) are masked out of the safety test and do not enter the deeper front. The
+//! deeper layers' normals are transposed from their `Vec3`s eight at a time (`soa8`). The
+//! test below compares rows with the four-lane kernel.
 
 use core::arch::x86_64::*;
 
 use glam::Vec3;
 
 use super::cascade::SAFE_MARGIN;
-use super::merge_rows::f16x4;
 use super::node::Node;
 use crate::LayerPlanes;
 
@@ -28,29 +31,31 @@ fn sel(m: __m256, a: __m256, b: __m256) -> __m256 {
     _mm256_or_ps(_mm256_and_ps(m, a), _mm256_andnot_ps(m, b))
 }
 
-/// Four `Vec3`s at `p` as `(x, y, z)` lanes (`v0 = x0 y0 z0 x1`, `v1 = y1 z1 x2 y2`,
-/// `v2 = z2 x3 y3 z3`).
+/// Eight `Vec3`s at `p` as `(x, y, z)` lanes, pixels `0..4` in the low halves: the
+/// 128-bit rows `v0 = x0 y0 z0 x1`, `v1 = y1 z1 x2 y2`, `v2 = z2 x3 y3 z3` of the first four
+/// and the same of the last four are loaded as the two halves of three 256-bit registers
+/// and transposed together (six blends, three shuffles).
 ///
 /// # Safety
-/// `p` must point to four readable `Vec3`s (12 `f32`s).
+/// `p` must point to eight readable `Vec3`s (24 `f32`s).
 #[inline]
 #[target_feature(enable = "avx2")]
-unsafe fn soa4(p: *const Vec3) -> (__m128, __m128, __m128) {
+unsafe fn soa8(p: *const Vec3) -> (__m256, __m256, __m256) {
     let p = p as *const f32;
-    // SAFETY: 12 readable floats (the caller's contract).
+    // SAFETY: 24 readable floats (the caller's contract).
     let (v0, v1, v2) = unsafe {
         (
-            _mm_loadu_ps(p),
-            _mm_loadu_ps(p.add(4)),
-            _mm_loadu_ps(p.add(8)),
+            _mm256_loadu2_m128(p.add(12), p),
+            _mm256_loadu2_m128(p.add(16), p.add(4)),
+            _mm256_loadu2_m128(p.add(20), p.add(8)),
         )
     };
-    let t = _mm_blend_ps::<0b0010>(_mm_blend_ps::<0b0100>(v0, v1), v2);
-    let x = _mm_shuffle_ps::<0b01_10_11_00>(t, t);
-    let t = _mm_blend_ps::<0b0100>(_mm_blend_ps::<0b0010>(v1, v0), v2);
-    let y = _mm_shuffle_ps::<0b10_11_00_01>(t, t);
-    let t = _mm_blend_ps::<0b0010>(_mm_blend_ps::<0b0100>(v2, v0), v1);
-    let z = _mm_shuffle_ps::<0b11_00_01_10>(t, t);
+    let t = _mm256_blend_ps::<0b0010_0010>(_mm256_blend_ps::<0b0100_0100>(v0, v1), v2);
+    let x = _mm256_shuffle_ps::<0b01_10_11_00>(t, t);
+    let t = _mm256_blend_ps::<0b0100_0100>(_mm256_blend_ps::<0b0010_0010>(v1, v0), v2);
+    let y = _mm256_shuffle_ps::<0b10_11_00_01>(t, t);
+    let t = _mm256_blend_ps::<0b0010_0010>(_mm256_blend_ps::<0b0100_0100>(v2, v0), v1);
+    let z = _mm256_shuffle_ps::<0b11_00_01_10>(t, t);
     (x, y, z)
 }
 
@@ -63,9 +68,9 @@ unsafe fn soa4(p: *const Vec3) -> (__m128, __m128, __m128) {
 /// did.
 ///
 /// # Safety
-/// The CPU must have AVX2.
+/// The CPU must have AVX2 and F16C.
 #[allow(clippy::too_many_arguments)]
-#[target_feature(enable = "avx2")]
+#[target_feature(enable = "avx2,f16c")]
 pub(super) unsafe fn pixel_triggers_row8(
     tz: &mut [f32],
     fronts: &mut [f32],
@@ -87,7 +92,7 @@ pub(super) unsafe fn pixel_triggers_row8(
             .all(|pj| pj.normal.len() >= k0 + n8 && pj.offset.len() >= k0 + n8)
     );
     let s = _mm256_set1_ps;
-    let join = |lo: __m128, hi: __m128| _mm256_set_m128(hi, lo);
+    let halves = _mm_setr_epi8(0, 1, 4, 5, 8, 9, 12, 13, 2, 3, 6, 7, 10, 11, 14, 15);
     let neg0 = s(-0.0);
     let (sy0, sy1, syc) = (s(y0), s(y1), s(yc));
     let margin = s(-SAFE_MARGIN);
@@ -113,14 +118,14 @@ pub(super) unsafe fn pixel_triggers_row8(
         let b_lo = _mm_castps_si128(_mm_shuffle_ps::<0b11_01_11_01>(lo0, hi0));
         let a_hi = _mm_castps_si128(_mm_shuffle_ps::<0b10_00_10_00>(lo1, hi1));
         let b_hi = _mm_castps_si128(_mm_shuffle_ps::<0b11_01_11_01>(lo1, hi1));
-        let gx = _mm256_mul_ps(join(f16x4(b_lo).into(), f16x4(b_hi).into()), s(wf));
-        let gy = _mm256_mul_ps(
-            join(
-                f16x4(_mm_srli_epi32::<16>(b_lo)).into(),
-                f16x4(_mm_srli_epi32::<16>(b_hi)).into(),
-            ),
-            s(hf),
-        );
+        // The f16 slopes, eight lanes at a time by F16C (the same values as `f16x4` for
+        // every finite half, module docs): per node, `b`'s low half is `gx`, its high half
+        // `gy`; one byte shuffle per four nodes puts the `gx` halves in the low eight bytes
+        // and the `gy` halves in the high eight.
+        let t_lo = _mm_shuffle_epi8(b_lo, halves);
+        let t_hi = _mm_shuffle_epi8(b_hi, halves);
+        let gx = _mm256_mul_ps(_mm256_cvtph_ps(_mm_unpacklo_epi64(t_lo, t_hi)), s(wf));
+        let gy = _mm256_mul_ps(_mm256_cvtph_ps(_mm_unpackhi_epi64(t_lo, t_hi)), s(hf));
         let a = _mm256_set_m128i(a_hi, a_lo);
         let m = _mm256_max_ps(_mm256_andnot_ps(neg0, gx), _mm256_andnot_ps(neg0, gy));
         let m = _mm256_max_ps(m, s(1.0));
@@ -145,14 +150,9 @@ pub(super) unsafe fn pixel_triggers_row8(
         let mut void = _mm256_setzero_ps();
         for pj in deeper {
             // SAFETY: pixels `k .. k + 8` of the deeper layer exist (asserted).
-            let (nx, ny, nz, cj) = unsafe {
-                let p = pj.normal.as_ptr().add(k);
-                let (lx, ly, lz) = soa4(p);
-                let (hx, hy, hz) = soa4(p.add(4));
+            let ((nx, ny, nz), cj) = unsafe {
                 (
-                    join(lx, hx),
-                    join(ly, hy),
-                    join(lz, hz),
+                    soa8(pj.normal.as_ptr().add(k)),
                     _mm256_loadu_ps(pj.offset.as_ptr().add(k)),
                 )
             };
@@ -235,14 +235,48 @@ mod tests {
     use crate::quadtree::test_rng::Rng;
     use crate::quadtree::trigger_lanes::pixel_triggers4;
 
+    /// F16C's conversion equals `f16_bits_to_f32` (and `f16x4`) for every finite half.
+    #[test]
+    fn f16c_decodes_every_finite_half_as_the_definition() {
+        if !(std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("f16c"))
+        {
+            eprintln!("no AVX2 and F16C: nothing to compare");
+            return;
+        }
+        #[target_feature(enable = "avx2,f16c")]
+        fn cvt8(h: [u16; 8]) -> [f32; 8] {
+            // SAFETY: reads and writes eight-element arrays.
+            unsafe {
+                let mut out = [0.0f32; 8];
+                let v = _mm_loadu_si128(h.as_ptr() as *const __m128i);
+                _mm256_storeu_ps(out.as_mut_ptr(), _mm256_cvtph_ps(v));
+                out
+            }
+        }
+        for h0 in (0..=u16::MAX).step_by(8) {
+            let h: [u16; 8] = core::array::from_fn(|d| h0 + d as u16);
+            // SAFETY: the CPU has AVX2 and F16C (checked).
+            let got = unsafe { cvt8(h) };
+            for d in 0..8 {
+                if h[d] & 0x7c00 != 0x7c00 {
+                    let want = crate::quadtree::node::f16_bits_to_f32(h[d]);
+                    assert_eq!(got[d].to_bits(), want.to_bits(), "{:#x}", h[d]);
+                }
+            }
+        }
+    }
+
     /// Rows of the eight-lane kernel equal the four-lane kernel (`trigger_lanes`) bit for
     /// bit, and list the same pixels: random own leaves (planes, empty, AABB, flagged) over
     /// one or two deeper layers with covered, uncovered and edge-on pixels and planes in
     /// front of and behind the own ones.
     #[test]
     fn rows_equal_the_four_lane_rows() {
-        if !std::arch::is_x86_feature_detected!("avx2") {
-            eprintln!("no AVX2: nothing to compare");
+        if !(std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("f16c"))
+        {
+            eprintln!("no AVX2 and F16C: nothing to compare");
             return;
         }
         let mut rng = Rng(0x0bad_cafe_dead_beef);
@@ -256,6 +290,17 @@ mod tests {
                 .map(|_| match rng.next() % 8 {
                     0 => Node::EMPTY,
                     1 => Node::aabb(rng.f(0.0, 0.5), rng.f(0.5, 1.0)),
+                    // Slopes clamped to the f16 maximum, subnormal halves, ordinary ones.
+                    2 => Node::plane_with_gradient(
+                        rng.f(0.0, 1.0),
+                        rng.f(-1e9, 1e9),
+                        rng.f(-5e-2, 5e-2),
+                        0,
+                        wf,
+                        hf,
+                        (rng.next() % 2) as u32,
+                    )
+                    .unwrap_or(Node::EMPTY),
                     _ => Node::plane_with_gradient(
                         rng.f(0.0, 1.0),
                         rng.f(-3.0, 3.0),
