@@ -62,6 +62,9 @@ pub(crate) trait Lanes16: Copy {
     fn abs(self, a: Self::V) -> Self::V;
     /// Lanes whose bits are equal (`-0.0 != 0.0`, a NaN equals itself).
     fn eq_bits(self, a: Self::V, b: Self::V) -> u32;
+    /// Lanes where `a`, `b` and `c` have the same sign bit (`-0.0` and a NaN by their sign
+    /// bits): for values that are neither zero nor NaN, "all three `< 0` or all `> 0`".
+    fn same_sign(self, a: Self::V, b: Self::V, c: Self::V) -> u32;
     /// The fields of 16 rays, lane `i` = ray `i`: origin x, y, z, direction x, y, z, `t_min`,
     /// `t_max`.
     fn load_rays(self, rays: &[Ray; 16]) -> [Self::V; 8];
@@ -224,6 +227,19 @@ impl Lanes16 for Portable16 {
         (0..16).fold(0, |m, i| {
             m | ((x.0[i].to_bits() == y.0[i].to_bits()) as u32) << i
         })
+    }
+    #[inline(always)]
+    fn same_sign(self, a: [Vec4; 4], b: [Vec4; 4], c: [Vec4; 4]) -> u32 {
+        let mut m = 0;
+        for g in 0..4 {
+            let (x, y, z) = (
+                a[g].is_negative_bitmask(),
+                b[g].is_negative_bitmask(),
+                c[g].is_negative_bitmask(),
+            );
+            m |= (x & y & z | !(x | y | z) & 0xF) << (4 * g);
+        }
+        m
     }
     #[inline(always)]
     fn load_rays(self, rays: &[Ray; 16]) -> [[Vec4; 4]; 8] {
@@ -391,6 +407,18 @@ mod avx512 {
             }
         }
         #[inline(always)]
+        fn same_sign(self, a: __m512, b: __m512, c: __m512) -> u32 {
+            unsafe {
+                // Truth table 0x81: set where the three bits are 000 or 111.
+                let e = _mm512_ternarylogic_epi32::<0x81>(
+                    _mm512_castps_si512(a),
+                    _mm512_castps_si512(b),
+                    _mm512_castps_si512(c),
+                );
+                _mm512_cmplt_epi32_mask(e, _mm512_setzero_si512()) as u32
+            }
+        }
+        #[inline(always)]
         fn load_rays(self, rays: &[Ray; 16]) -> [__m512; 8] {
             // A `Ray` is eight f32 (origin, dir, t_min, t_max), so the 16 rays are eight
             // 512-bit loads (`r[j]`: rays 2j and 2j + 1) transposed by three rounds of
@@ -493,6 +521,15 @@ mod tests {
             same(l.abs(x), p.abs(px));
             assert_eq!(l.eq_bits(x, y), p.eq_bits(px, py));
             assert_eq!(l.eq_bits(x, x), 0xFFFF);
+            let mut cv = vals;
+            cv.rotate_left(7);
+            let (z, pz) = (l.load(&F16(cv)), p.load(&F16(cv)));
+            assert_eq!(l.same_sign(x, y, z), p.same_sign(px, py, pz));
+            for (i, ((&u, &v), &w)) in vals.iter().zip(&bv).zip(&cv).enumerate() {
+                let signs = [u, v, w].map(f32::is_sign_negative);
+                let want = signs[0] == signs[1] && signs[1] == signs[2];
+                assert_eq!(p.same_sign(px, py, pz) >> i & 1 != 0, want, "lane {i}");
+            }
             let rays: [Ray; 16] = std::array::from_fn(|i| {
                 let f = i as f32;
                 Ray::segment(
