@@ -62,6 +62,9 @@ pub(crate) trait Lanes16: Copy {
     fn abs(self, a: Self::V) -> Self::V;
     /// Lanes whose bits are equal (`-0.0 != 0.0`, a NaN equals itself).
     fn eq_bits(self, a: Self::V, b: Self::V) -> u32;
+    /// Lanes where `a`, `b` and `c` have the same sign bit (`-0.0` and a NaN by their sign
+    /// bits): for values that are neither zero nor NaN, "all three `< 0` or all `> 0`".
+    fn same_sign(self, a: Self::V, b: Self::V, c: Self::V) -> u32;
     /// The fields of 16 rays, lane `i` = ray `i`: origin x, y, z, direction x, y, z, `t_min`,
     /// `t_max`.
     fn load_rays(self, rays: &[Ray; 16]) -> [Self::V; 8];
@@ -226,6 +229,19 @@ impl Lanes16 for Portable16 {
         })
     }
     #[inline(always)]
+    fn same_sign(self, a: [Vec4; 4], b: [Vec4; 4], c: [Vec4; 4]) -> u32 {
+        let mut m = 0;
+        for g in 0..4 {
+            let (x, y, z) = (
+                a[g].is_negative_bitmask(),
+                b[g].is_negative_bitmask(),
+                c[g].is_negative_bitmask(),
+            );
+            m |= (x & y & z | !(x | y | z) & 0xF) << (4 * g);
+        }
+        m
+    }
+    #[inline(always)]
     fn load_rays(self, rays: &[Ray; 16]) -> [[Vec4; 4]; 8] {
         std::array::from_fn(|k| self.load(&F16(std::array::from_fn(|i| ray_field(&rays[i], k)))))
     }
@@ -253,6 +269,29 @@ mod avx512 {
     use parallax_core::Ray;
 
     use super::{Avx512, F16, Lanes16, U16};
+
+    /// The permute indices of [`Lanes16::load_rays`]: per round, for the output that takes the
+    /// bit `y` (0, 1) of the field number, lane `p` of it reads lane `idx & 15` of the pair's
+    /// first (`idx < 16`) or second register. Register number / lane bits, most significant
+    /// first (`i` the ray, `k` the field): loads `(i3 i2 i1) / (i0 k2 k1 k0)`; round 0 ->
+    /// `(k2 i2 i1) / (i3 i0 k1 k0)`; round 1 -> `(k2 k1 i1) / (i3 i2 i0 k0)`; round 2 ->
+    /// `(k2 k1 k0) / (i3 i2 i1 i0)`, i.e. register `k`, lane `i`.
+    const TRANSPOSE: [[[i32; 16]; 2]; 3] = {
+        let mut t = [[[0; 16]; 2]; 3];
+        let mut y = 0;
+        while y < 2 {
+            let mut p = 0;
+            while p < 16 {
+                let [b0, b1, b2, b3] = [p & 1, (p >> 1) & 1, (p >> 2) & 1, p >> 3];
+                t[0][y as usize][p as usize] = 16 * b3 + 8 * b2 + 4 * y + 2 * b1 + b0;
+                t[1][y as usize][p as usize] = 16 * b2 + 8 * b3 + 4 * b1 + 2 * y + b0;
+                t[2][y as usize][p as usize] = 16 * b1 + 8 * b3 + 4 * b2 + 2 * b0 + y;
+                p += 1;
+            }
+            y += 1;
+        }
+        t
+    };
 
     // SAFETY (every method): a value of `Avx512` exists only where AVX-512F was detected
     // (`Avx512::new`); loads and stores are of 64-byte aligned `F16` / `U16`.
@@ -368,34 +407,48 @@ mod avx512 {
             }
         }
         #[inline(always)]
-        fn load_rays(self, rays: &[Ray; 16]) -> [__m512; 8] {
-            // Field offsets in bytes, gathered with byte scale from the slice's start.
-            const STRIDE: i32 = std::mem::size_of::<Ray>() as i32;
-            let base = rays.as_ptr() as *const u8;
-            let o = std::mem::offset_of!(Ray, origin) as i32;
-            let d = std::mem::offset_of!(Ray, dir) as i32;
-            let off = [
-                o,
-                o + 4,
-                o + 8,
-                d,
-                d + 4,
-                d + 8,
-                std::mem::offset_of!(Ray, t_min) as i32,
-                std::mem::offset_of!(Ray, t_max) as i32,
-            ];
-            // SAFETY: every offset is inside one of the 16 rays (glam's `Vec3` is three f32).
+        fn same_sign(self, a: __m512, b: __m512, c: __m512) -> u32 {
             unsafe {
-                let idx = _mm512_mullo_epi32(
-                    _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15),
-                    _mm512_set1_epi32(STRIDE),
+                // Truth table 0x81: set where the three bits are 000 or 111.
+                let e = _mm512_ternarylogic_epi32::<0x81>(
+                    _mm512_castps_si512(a),
+                    _mm512_castps_si512(b),
+                    _mm512_castps_si512(c),
                 );
-                let mut out = [_mm512_setzero_ps(); 8];
-                for k in 0..8 {
-                    let ik = _mm512_add_epi32(idx, _mm512_set1_epi32(off[k]));
-                    out[k] = _mm512_i32gather_ps::<1>(ik, base as *const _);
+                _mm512_cmplt_epi32_mask(e, _mm512_setzero_si512()) as u32
+            }
+        }
+        #[inline(always)]
+        fn load_rays(self, rays: &[Ray; 16]) -> [__m512; 8] {
+            // A `Ray` is eight f32 (origin, dir, t_min, t_max), so the 16 rays are eight
+            // 512-bit loads (`r[j]`: rays 2j and 2j + 1) transposed by three rounds of
+            // two-source permutes (`TRANSPOSE`); no gathers.
+            const _: () = assert!(std::mem::size_of::<Ray>() == 32);
+            const _: () = assert!(std::mem::offset_of!(Ray, origin) == 0);
+            const _: () = assert!(std::mem::offset_of!(Ray, dir) == 12);
+            const _: () = assert!(std::mem::offset_of!(Ray, t_min) == 24);
+            const _: () = assert!(std::mem::offset_of!(Ray, t_max) == 28);
+            let base = rays.as_ptr() as *const f32;
+            // SAFETY: the eight loads cover the 512 bytes of the 16 rays.
+            unsafe {
+                let mut r: [__m512; 8] = std::array::from_fn(|j| _mm512_loadu_ps(base.add(16 * j)));
+                for (round, idx) in TRANSPOSE.iter().enumerate() {
+                    let (lo, hi) = (
+                        _mm512_loadu_si512(idx[0].as_ptr() as *const _),
+                        _mm512_loadu_si512(idx[1].as_ptr() as *const _),
+                    );
+                    // Round `round` pairs the registers that differ in bit `2 - round` of
+                    // their number; the outputs keep the pair's slots (`y = 0` low).
+                    let bit = 4 >> round;
+                    let mut next = r;
+                    for a in (0..8).filter(|a| a & bit == 0) {
+                        let (x, y) = (r[a], r[a | bit]);
+                        next[a] = _mm512_permutex2var_ps(x, lo, y);
+                        next[a | bit] = _mm512_permutex2var_ps(x, hi, y);
+                    }
+                    r = next;
                 }
-                out
+                r
             }
         }
     }
@@ -468,6 +521,15 @@ mod tests {
             same(l.abs(x), p.abs(px));
             assert_eq!(l.eq_bits(x, y), p.eq_bits(px, py));
             assert_eq!(l.eq_bits(x, x), 0xFFFF);
+            let mut cv = vals;
+            cv.rotate_left(7);
+            let (z, pz) = (l.load(&F16(cv)), p.load(&F16(cv)));
+            assert_eq!(l.same_sign(x, y, z), p.same_sign(px, py, pz));
+            for (i, ((&u, &v), &w)) in vals.iter().zip(&bv).zip(&cv).enumerate() {
+                let signs = [u, v, w].map(f32::is_sign_negative);
+                let want = signs[0] == signs[1] && signs[1] == signs[2];
+                assert_eq!(p.same_sign(px, py, pz) >> i & 1 != 0, want, "lane {i}");
+            }
             let rays: [Ray; 16] = std::array::from_fn(|i| {
                 let f = i as f32;
                 Ray::segment(

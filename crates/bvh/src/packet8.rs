@@ -105,10 +105,15 @@ impl Packet {
     /// otherwise rays build their `WatertightRay` where they need it).
     /// `valid`: the rays that are valid with `t_min <= t_max` (computed here, in lanes for a
     /// full packet: the same comparisons as `Ray::is_valid`).
+    /// Built in `slot` (a packet is ~1.4 kB: returning it by value cost a copy per packet).
     #[inline(always)]
-    pub fn new<L: Lanes16>(l: L, rays: &[Ray]) -> Self {
+    pub fn init<'a, L: Lanes16>(
+        slot: &'a mut MaybeUninit<Self>,
+        l: L,
+        rays: &[Ray],
+    ) -> &'a mut Self {
         let z = F16([0.0; 16]);
-        let mut p = Packet {
+        let p = slot.write(Packet {
             valid: 0,
             org: [z; 3],
             inv: [F16([1.0; 16]); 3],
@@ -127,7 +132,7 @@ impl Packet {
             lo: [0.0; 6],
             hi: [0.0; 6],
             t_range: (0.0, 0.0),
-        };
+        });
         let mut dir = [F16([1.0; 16]); 3];
         let (valid, code, o0, same_org) = match <&[Ray; PACKET_SIZE]>::try_from(rays) {
             Ok(r16) => p.load_lanes(l, r16, &mut dir),
@@ -409,7 +414,8 @@ impl Bvh {
         if self.nodes8.is_empty() {
             return;
         }
-        let mut p = Packet::new(l, rays);
+        let mut slot = MaybeUninit::uninit();
+        let p = Packet::init(&mut slot, l, rays);
         let valid = p.valid;
         if valid == 0 {
             return;
@@ -505,7 +511,7 @@ impl Bvh {
                     continue;
                 }
             } else {
-                self.packet_leaf(l, &mut p, rays, leaf_first(cur), leaf_count(cur), mask);
+                self.packet_leaf(l, p, rays, leaf_first(cur), leaf_count(cur), mask);
                 if let Some(iv) = &mut p.interval {
                     iv.t_max = l.hmax(p.valid, l.load(&p.t_max));
                 }

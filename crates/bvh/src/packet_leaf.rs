@@ -15,7 +15,12 @@
 //!   the permutation, subtracted the origin in scalar and broadcast each result: about 45 of
 //!   its ~100 AVX-512 instructions; notes, 2026-12-02 "cheaper packet triangle step".)
 //! - Lanes with an exactly-zero edge function go to the scalar test (its double-precision
-//!   recompute and edge tie-break).
+//!   recompute and edge tie-break). The others are inside when `u, v, w` share their sign bit
+//!   (`Lanes16::same_sign`: one `vpternlogd` and one compare with AVX-512), which is the
+//!   scalar test's "no negative and positive edge function together" for nonzero values. A
+//!   lane with a NaN edge function may be classified otherwise than by the scalar compares,
+//!   but its `det` and `t` are then NaN, and a NaN `t` is never accepted (`t > t_min` is
+//!   false), as in the scalar test: only the work done differs.
 //! - A packet whose rays differ in the permutation tests the leaf ray by ray, four triangles per
 //!   test (`tri4.rs`). With a common permutation the lanes are used however few rays enter the
 //!   leaf: a triangle over 16 lanes costs less than a 4-triangle block per ray with its set-up
@@ -117,9 +122,9 @@ impl Packet {
         let w = l.sub(l.mul(bx, ay), l.mul(by, ax));
         let zero = l.splat(0.0);
         let exact = (l.eq(u, zero) | l.eq(v, zero) | l.eq(w, zero)) & mask;
-        let neg = l.lt(u, zero) | l.lt(v, zero) | l.lt(w, zero);
-        let pos = l.gt(u, zero) | l.gt(v, zero) | l.gt(w, zero);
-        let inside = !(neg & pos) & mask & !exact;
+        // Without zeros, "not both a negative and a positive edge function" is "one sign
+        // bit": `same_sign` (module docs, NaN lanes).
+        let inside = l.same_sign(u, v, w) & mask & !exact;
         if inside != 0 {
             let sz = l.load(&self.sz);
             let (az, bz, cz) = (l.mul(sz, a_z), l.mul(sz, b_z), l.mul(sz, c_z));

@@ -1,5 +1,5 @@
-//! The set-up of a full 16-ray packet in lanes (`packet8.rs`, `Packet::new`): the rays' fields
-//! gathered into lanes ([`Lanes16::load_rays`]), their validity, the common axis permutation of
+//! The set-up of a full 16-ray packet in lanes (`packet8.rs`, `Packet::init`): the rays' fields
+//! loaded into lanes ([`Lanes16::load_rays`]), their validity, the common axis permutation of
 //! the watertight test and whether they share one origin, with the comparisons of the scalar
 //! code (`Ray::is_valid`, `watertight_code` in `packet8.rs`) lane for lane, so the packet is
 //! the same as the one the scalar loop builds.
