@@ -60,7 +60,7 @@
 //! the BVH's test on the same f32 corners, so `t` and barycentrics are bit-identical to the
 //! BVH's.
 
-use parallax_raster::dirt::{DirtCapture, bucket_index, bucket_mask};
+use parallax_raster::dirt::{DirtCapture, bucket_index};
 
 use super::tri4::Query;
 use super::view::{MAX_LEVELS, ViewConsts, ViewRay};
@@ -279,7 +279,7 @@ fn walk_dir<const UX: bool, const UY: bool, const W_FALLS: bool>(
             let b_a = bucket_index(rec.zmin, rec.scale, nb, 1.0 / w_l);
             let b_b = bucket_index(rec.zmin, rec.scale, nb, 1.0 / w_exit);
             // Skip the cell when every bucket of the range is empty (null head pointers).
-            if rec.mask & bucket_mask(b_a.min(b_b), b_a.max(b_b), nb) != 0 {
+            if any_bucket(rec.mask, b_a.min(b_b), b_a.max(b_b), nb) {
                 let cell = Cell {
                     index,
                     zmin: rec.zmin,
@@ -360,7 +360,7 @@ struct Cell {
     /// The cell's eq. 1 constants (its record).
     zmin: f32,
     scale: f32,
-    /// Its non-empty buckets ([`bucket_mask`]).
+    /// Its non-empty buckets ([`parallax_raster::dirt::bucket_mask`]).
     mask: u32,
     /// The buckets of the ray's depth at entry and at exit.
     buckets: (u32, u32),
@@ -387,7 +387,7 @@ fn trace_cell(
     let ascending = b_a <= b_b;
     let mut b = b_a;
     loop {
-        if c.mask & bucket_mask(b, b, nb) != 0 {
+        if any_bucket(c.mask, b, b, nb) {
             q.counters.buckets += 1;
             let k = base + b as usize;
             if q.test(&ids[offsets[k] as usize..offsets[k + 1] as usize]) {
@@ -410,6 +410,20 @@ fn trace_cell(
             b -= 1;
         }
     }
+}
+
+/// Whether `mask` (a cell's non-empty buckets, [`parallax_raster::dirt::bucket_mask`]) has a bit of buckets
+/// `b0..=b1` (`b0 <= b1 < buckets`): `mask & bucket_mask(b0, b1, buckets) != 0` in two
+/// shifts (the bits at and above `b0`'s, then only the `b1 - b0 + 1` lowest kept).
+#[inline(always)]
+fn any_bucket(mask: u32, b0: u32, b1: u32, buckets: u32) -> bool {
+    let (lo, hi) = if buckets <= 32 {
+        (b0, b1)
+    } else {
+        let g = buckets.div_ceil(32);
+        (b0 / g, b1 / g)
+    };
+    ((mask >> (lo & 31)) << ((31 - (hi - lo)) & 31)) != 0
 }
 
 /// `floor(f)` clamped to `[0, n)`.
@@ -449,4 +463,38 @@ fn refine<const UP: bool>(c: u32, t: u32, level: u32, f: f32, n: u32) -> u32 {
     let f = if f > 0.0 { f as u32 } else { 0 };
     let f = f.clamp(lo, hi);
     if UP { f.max(c) } else { f.min(c) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use parallax_raster::dirt::bucket_mask;
+
+    /// [`any_bucket`] is the mask test by [`bucket_mask`].
+    #[test]
+    fn any_bucket_is_the_mask_test() {
+        let masks = [
+            0u32,
+            1,
+            0x8000_0000,
+            u32::MAX,
+            0x0001_0000,
+            0x5555_5555,
+            0xa0a0_0001,
+            0x0000_0ff0,
+        ];
+        for buckets in [1u32, 2, 7, 16, 31, 32, 33, 48, 64, 100, 255] {
+            for b0 in 0..buckets {
+                for b1 in b0..buckets {
+                    for &m in &masks {
+                        assert_eq!(
+                            any_bucket(m, b0, b1, buckets),
+                            m & bucket_mask(b0, b1, buckets) != 0,
+                            "mask {m:#x} buckets {b0}..={b1} of {buckets}"
+                        );
+                    }
+                }
+            }
+        }
+    }
 }
