@@ -276,8 +276,8 @@ fn walk_dir<const UX: bool, const UY: bool, const W_FALLS: bool>(
             let index = cy as usize * vc.cells_x as usize + cx as usize;
             let rec = &records[index];
             let nb = vc.buckets;
-            let b_a = bucket_index(rec.zmin, rec.scale, nb, 1.0 / w_l);
-            let b_b = bucket_index(rec.zmin, rec.scale, nb, 1.0 / w_exit);
+            let b_a = bucket_at(rec.zmin, rec.scale, nb, 1.0 / w_l);
+            let b_b = bucket_at(rec.zmin, rec.scale, nb, 1.0 / w_exit);
             // Skip the cell when every bucket of the range is empty (null head pointers).
             if any_bucket(rec.mask, b_a.min(b_b), b_a.max(b_b), nb) {
                 let cell = Cell {
@@ -412,6 +412,28 @@ fn trace_cell(
     }
 }
 
+/// [`bucket_index`] (eq. 1) with the conversion done by `cvttss2si` on 64 bits, which needs
+/// no saturation fix-ups: for `v > 0` below `2^63` it is `floor(v)`, above (and `+inf`) it is
+/// `i64::MIN`, `2^63` as `u64`; either way the `min` with `buckets - 1` gives what the
+/// saturating `v as u32` gives. Tested equal to [`bucket_index`].
+#[inline(always)]
+fn bucket_at(zmin: f32, scale: f32, buckets: u32, z: f32) -> u32 {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_cvttss_si64, _mm_set_ss};
+        let v = (z - zmin) * scale;
+        if v > 0.0 {
+            // SAFETY: SSE is part of the x86_64 baseline.
+            let i = unsafe { _mm_cvttss_si64(_mm_set_ss(v)) } as u64;
+            i.min(buckets as u64 - 1) as u32
+        } else {
+            0
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    bucket_index(zmin, scale, buckets, z)
+}
+
 /// Whether `mask` (a cell's non-empty buckets, [`parallax_raster::dirt::bucket_mask`]) has a bit of buckets
 /// `b0..=b1` (`b0 <= b1 < buckets`): `mask & bucket_mask(b0, b1, buckets) != 0` in two
 /// shifts (the bits at and above `b0`'s, then only the `b1 - b0 + 1` lowest kept).
@@ -469,6 +491,43 @@ fn refine<const UP: bool>(c: u32, t: u32, level: u32, f: f32, n: u32) -> u32 {
 mod tests {
     use super::*;
     use parallax_raster::dirt::bucket_mask;
+
+    /// [`bucket_at`] is [`bucket_index`].
+    #[test]
+    fn bucket_at_is_bucket_index() {
+        let zs = [
+            0.0f32,
+            -1.0,
+            0.5,
+            1.0,
+            1.000_001,
+            2.5,
+            3.999_999,
+            4.0,
+            7.75,
+            100.0,
+            1e9,
+            4.3e9,
+            1e19,
+            1e30,
+            f32::MAX,
+            f32::INFINITY,
+            f32::NAN,
+        ];
+        for buckets in [1u32, 2, 16, 32, 255, 1 << 20] {
+            for &(zmin, scale) in &[(0.0f32, 1.0f32), (1.0, 0.37), (0.25, 16.0), (2.0, 1e-3)] {
+                for &z in &zs {
+                    for z in [z, z + zmin, z * 0.5 + zmin] {
+                        assert_eq!(
+                            bucket_at(zmin, scale, buckets, z),
+                            bucket_index(zmin, scale, buckets, z),
+                            "z {z} zmin {zmin} scale {scale} buckets {buckets}"
+                        );
+                    }
+                }
+            }
+        }
+    }
 
     /// [`any_bucket`] is the mask test by [`bucket_mask`].
     #[test]
