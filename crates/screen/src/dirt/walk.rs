@@ -60,7 +60,7 @@
 //! the BVH's test on the same f32 corners, so `t` and barycentrics are bit-identical to the
 //! BVH's.
 
-use parallax_raster::dirt::{DirtCapture, bucket_index, bucket_mask};
+use parallax_raster::dirt::{DirtCapture, bucket_index};
 
 use super::tri4::Query;
 use super::view::{MAX_LEVELS, ViewConsts, ViewRay};
@@ -76,15 +76,13 @@ pub(crate) enum WalkEnd {
 
 /// One film axis of the projected segment: boundary `k` (in cells) is crossed at
 /// `λ = k inv + c` (`inv = 1 / (x_b - x_a)`, `c = -x_a inv`); an axis the ray does not move
-/// along has `inv = 0`, `c = +inf`, so every crossing is at `+inf`.
+/// along has `inv = 0`, `c = +inf`, so every crossing is at `+inf` and the walk never steps
+/// it (a step needs a crossing before the segment's end, `λ < 1`). The direction (`up`) is
+/// not stored: the walk is specialised on it.
 #[derive(Clone, Copy)]
 struct Axis {
     inv: f32,
     c: f32,
-    /// 1 when the ray moves towards higher cell indices.
-    up: u32,
-    /// The ray moves along this axis.
-    moving: bool,
 }
 
 impl Axis {
@@ -92,27 +90,21 @@ impl Axis {
     const STILL: Axis = Axis {
         inv: 0.0,
         c: f32::INFINITY,
-        up: 0,
-        moving: false,
     };
 
-    /// The axis of a segment from `a` to `b` (cells). Below `MIN_SPAN` cells the axis does
-    /// not move (its film span is far inside the capture's film margin, and `1 / span` stays
-    /// finite with room for `k inv`).
+    /// The axis of a segment from `a` to `b` (cells), and whether the ray moves towards
+    /// higher cell indices. Below `MIN_SPAN` cells the axis does not move (its film span is
+    /// far inside the capture's film margin, and `1 / span` stays finite with room for
+    /// `k inv`).
     #[inline(always)]
-    fn new(a: f32, b: f32) -> Axis {
+    fn new(a: f32, b: f32) -> (Axis, bool) {
         const MIN_SPAN: f32 = 1e-30;
         let span = b - a;
         if span.abs() <= MIN_SPAN || span.is_nan() {
-            return Axis::STILL;
+            return (Axis::STILL, span > 0.0);
         }
         let inv = 1.0 / span;
-        Axis {
-            inv,
-            c: -a * inv,
-            up: (span > 0.0) as u32,
-            moving: true,
-        }
+        (Axis { inv, c: -a * inv }, span > 0.0)
     }
 
     /// `λ` of the crossing of boundary `k`.
@@ -211,12 +203,38 @@ pub(crate) fn walk(
         return WalkEnd::Continue;
     }
     q.counters.views += 1;
+    let seg = Segment::new(vc, r, t_start, t_end);
+    let (xs, x_up) = Axis::new(seg.x, seg.x + seg.dx);
+    let (ys, y_up) = Axis::new(seg.y, seg.y + seg.dy);
+    // The loop specialised on the ray's film direction and on the sign of `dw` (fewer live
+    // values and no selects per texel).
+    let f = match (x_up, y_up, seg.dw < 0.0) {
+        (false, false, false) => walk_dir::<false, false, false>,
+        (false, false, true) => walk_dir::<false, false, true>,
+        (false, true, false) => walk_dir::<false, true, false>,
+        (false, true, true) => walk_dir::<false, true, true>,
+        (true, false, false) => walk_dir::<true, false, false>,
+        (true, false, true) => walk_dir::<true, false, true>,
+        (true, true, false) => walk_dir::<true, true, false>,
+        (true, true, true) => walk_dir::<true, true, true>,
+    };
+    f(vc, cap, r, &seg, xs, ys, q)
+}
+
+/// The walk of [`walk`] for one film direction (`UX`, `UY`: the ray moves towards higher
+/// cell indices) and sign of `dw` (`W_FALLS`: `w` decreases along the segment).
+#[inline(never)]
+fn walk_dir<const UX: bool, const UY: bool, const W_FALLS: bool>(
+    vc: &ViewConsts,
+    cap: &DirtCapture,
+    r: &ViewRay,
+    seg: &Segment,
+    mut xs: Axis,
+    mut ys: Axis,
+    q: &mut Query,
+) -> WalkEnd {
     let bounds = cap.recip_mip();
     let records = cap.cell_records();
-    let seg = Segment::new(vc, r, t_start, t_end);
-    let mut xs = Axis::new(seg.x, seg.x + seg.dx);
-    let mut ys = Axis::new(seg.y, seg.y + seg.dy);
-    let w_falls = seg.dw < 0.0;
 
     // The start cell (clamped onto the grid: the start may lie on the frustum's boundary).
     let mut cx = cell_index(seg.x, vc.cells_x);
@@ -225,19 +243,20 @@ pub(crate) fn walk(
     let mut l = 0.0f32;
     let mut w_l = seg.w;
     let mut hit_l = HitLambda::NONE;
-    let mut texels = 0u64;
+    // Iterations left (the bound `max_steps`), counted down.
+    let mut left = vc.max_steps;
     let mut end = None;
 
-    while texels < vc.max_steps as u64 {
-        texels += 1;
+    while left > 0 {
+        left -= 1;
         let (tx, ty) = (cx >> level, cy >> level);
         // Where the ray leaves the texel: its next column and row boundaries (in cells).
-        let (kx, ky) = ((tx + xs.up) << level, (ty + ys.up) << level);
+        let (kx, ky) = ((tx + UX as u32) << level, (ty + UY as u32) << level);
         let l_col = xs.cross(kx);
         let l_row = ys.cross(ky);
         let l_exit = fmax(fmin(fmin(l_col, l_row), 1.0), l);
         let w_exit = seg.w_at(l_exit);
-        let (w_lo, w_hi) = if w_falls {
+        let (w_lo, w_hi) = if W_FALLS {
             (w_exit, w_l)
         } else {
             (w_l, w_exit)
@@ -257,10 +276,10 @@ pub(crate) fn walk(
             let index = cy as usize * vc.cells_x as usize + cx as usize;
             let rec = &records[index];
             let nb = vc.buckets;
-            let b_a = bucket_index(rec.zmin, rec.scale, nb, 1.0 / w_l);
-            let b_b = bucket_index(rec.zmin, rec.scale, nb, 1.0 / w_exit);
+            let b_a = bucket_at(rec.zmin, rec.scale, nb, 1.0 / w_l);
+            let b_b = bucket_at(rec.zmin, rec.scale, nb, 1.0 / w_exit);
             // Skip the cell when every bucket of the range is empty (null head pointers).
-            if rec.mask & bucket_mask(b_a.min(b_b), b_a.max(b_b), nb) != 0 {
+            if any_bucket(rec.mask, b_a.min(b_b), b_a.max(b_b), nb) {
                 let cell = Cell {
                     index,
                     zmin: rec.zmin,
@@ -269,7 +288,7 @@ pub(crate) fn walk(
                     buckets: (b_a, b_b),
                     l_exit,
                 };
-                if trace_cell(vc, cap, r, &seg, &cell, &mut hit_l, q) {
+                if trace_cell(vc, cap, r, seg, &cell, &mut hit_l, q) {
                     end = Some(WalkEnd::Done);
                     break;
                 }
@@ -282,18 +301,18 @@ pub(crate) fn walk(
         }
         let lv = level as u32;
         if l_col <= l_row {
-            cx = next_cell(cx, kx, &mut xs, vc.cells_x);
+            cx = next_cell::<UX>(cx, kx, &mut xs, vc.cells_x);
             if l_row == l_col {
-                cy = next_cell(cy, ky, &mut ys, vc.cells_y);
+                cy = next_cell::<UY>(cy, ky, &mut ys, vc.cells_y);
             } else if level > 0 {
                 let y = seg.y + l_exit * seg.dy;
-                cy = refine(cy, ty, lv, &ys, y, vc.cells_y);
+                cy = refine::<UY>(cy, ty, lv, y, vc.cells_y);
             }
         } else {
-            cy = next_cell(cy, ky, &mut ys, vc.cells_y);
+            cy = next_cell::<UY>(cy, ky, &mut ys, vc.cells_y);
             if level > 0 {
                 let x = seg.x + l_exit * seg.dx;
-                cx = refine(cx, tx, lv, &xs, x, vc.cells_x);
+                cx = refine::<UX>(cx, tx, lv, x, vc.cells_x);
             }
         }
         l = l_exit;
@@ -304,7 +323,7 @@ pub(crate) fn walk(
             level += 1;
         }
     }
-    q.counters.texels += texels;
+    q.counters.texels += (vc.max_steps - left) as u64;
     end.unwrap_or_else(|| {
         q.counters.truncated += 1;
         WalkEnd::Continue
@@ -341,7 +360,7 @@ struct Cell {
     /// The cell's eq. 1 constants (its record).
     zmin: f32,
     scale: f32,
-    /// Its non-empty buckets ([`bucket_mask`]).
+    /// Its non-empty buckets ([`parallax_raster::dirt::bucket_mask`]).
     mask: u32,
     /// The buckets of the ray's depth at entry and at exit.
     buckets: (u32, u32),
@@ -368,7 +387,7 @@ fn trace_cell(
     let ascending = b_a <= b_b;
     let mut b = b_a;
     loop {
-        if c.mask & bucket_mask(b, b, nb) != 0 {
+        if any_bucket(c.mask, b, b, nb) {
             q.counters.buckets += 1;
             let k = base + b as usize;
             if q.test(&ids[offsets[k] as usize..offsets[k + 1] as usize]) {
@@ -393,22 +412,57 @@ fn trace_cell(
     }
 }
 
+/// [`bucket_index`] (eq. 1) with the conversion done by `cvttss2si` on 64 bits, which needs
+/// no saturation fix-ups: for `v > 0` below `2^63` it is `floor(v)`, above (and `+inf`) it is
+/// `i64::MIN`, `2^63` as `u64`; either way the `min` with `buckets - 1` gives what the
+/// saturating `v as u32` gives. Tested equal to [`bucket_index`].
+#[inline(always)]
+fn bucket_at(zmin: f32, scale: f32, buckets: u32, z: f32) -> u32 {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_cvttss_si64, _mm_set_ss};
+        let v = (z - zmin) * scale;
+        if v > 0.0 {
+            // SAFETY: SSE is part of the x86_64 baseline.
+            let i = unsafe { _mm_cvttss_si64(_mm_set_ss(v)) } as u64;
+            i.min(buckets as u64 - 1) as u32
+        } else {
+            0
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    bucket_index(zmin, scale, buckets, z)
+}
+
+/// Whether `mask` (a cell's non-empty buckets, [`parallax_raster::dirt::bucket_mask`]) has a bit of buckets
+/// `b0..=b1` (`b0 <= b1 < buckets`): `mask & bucket_mask(b0, b1, buckets) != 0` in two
+/// shifts (the bits at and above `b0`'s, then only the `b1 - b0 + 1` lowest kept).
+#[inline(always)]
+fn any_bucket(mask: u32, b0: u32, b1: u32, buckets: u32) -> bool {
+    let (lo, hi) = if buckets <= 32 {
+        (b0, b1)
+    } else {
+        let g = buckets.div_ceil(32);
+        (b0 / g, b1 / g)
+    };
+    ((mask >> (lo & 31)) << ((31 - (hi - lo)) & 31)) != 0
+}
+
 /// `floor(f)` clamped to `[0, n)`.
 #[inline(always)]
 fn cell_index(f: f32, n: u32) -> u32 {
     if f > 0.0 { (f as u32).min(n - 1) } else { 0 }
 }
 
-/// The cell across boundary `k` (in cells) in the axis' direction. Off the grid before the
-/// end of the walk's interval (clipped to the frustum), the ray runs along the film's edge
-/// within rounding of it (its film direction is numerically undecided): it stays in the edge
-/// cells and the axis stops stepping.
+/// The cell across boundary `k` (in cells) in the ray's direction along the axis (`UP`:
+/// towards higher indices). Only called for an axis whose crossing comes before the
+/// segment's end, so a moving one. Off the grid before the end of the walk's interval
+/// (clipped to the frustum), the ray runs along the film's edge within rounding of it (its
+/// film direction is numerically undecided): it stays in the edge cells and the axis stops
+/// stepping.
 #[inline(always)]
-fn next_cell(c: u32, k: u32, axis: &mut Axis, n: u32) -> u32 {
-    if !axis.moving {
-        return c;
-    }
-    if axis.up == 1 {
+fn next_cell<const UP: bool>(c: u32, k: u32, axis: &mut Axis, n: u32) -> u32 {
+    if UP {
         if k < n {
             return k;
         }
@@ -420,15 +474,86 @@ fn next_cell(c: u32, k: u32, axis: &mut Axis, n: u32) -> u32 {
 }
 
 /// The cell coordinate (along the axis the ray did not leave through) at the exit of texel `t`
-/// at `level`: `floor(f)` kept inside the texel and never behind `c` in the ray's direction.
+/// at `level`: `floor(f)` kept inside the texel and never behind `c` in the ray's direction
+/// (`UP`). The same on an axis that does not step (`Axis::STILL`): `f` is the ray's film
+/// position there as on a moving axis (on an axis still from the start it floors to the start
+/// cell; on one stopped at the grid's edge it is within rounding of that edge).
 #[inline(always)]
-fn refine(c: u32, t: u32, level: u32, axis: &Axis, f: f32, n: u32) -> u32 {
-    if !axis.moving {
-        return c;
-    }
+fn refine<const UP: bool>(c: u32, t: u32, level: u32, f: f32, n: u32) -> u32 {
     let lo = t << level;
     let hi = (((t + 1) << level) - 1).min(n - 1);
     let f = if f > 0.0 { f as u32 } else { 0 };
     let f = f.clamp(lo, hi);
-    if axis.up == 1 { f.max(c) } else { f.min(c) }
+    if UP { f.max(c) } else { f.min(c) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use parallax_raster::dirt::bucket_mask;
+
+    /// [`bucket_at`] is [`bucket_index`].
+    #[test]
+    fn bucket_at_is_bucket_index() {
+        let zs = [
+            0.0f32,
+            -1.0,
+            0.5,
+            1.0,
+            1.000_001,
+            2.5,
+            3.999_999,
+            4.0,
+            7.75,
+            100.0,
+            1e9,
+            4.3e9,
+            1e19,
+            1e30,
+            f32::MAX,
+            f32::INFINITY,
+            f32::NAN,
+        ];
+        for buckets in [1u32, 2, 16, 32, 255, 1 << 20] {
+            for &(zmin, scale) in &[(0.0f32, 1.0f32), (1.0, 0.37), (0.25, 16.0), (2.0, 1e-3)] {
+                for &z in &zs {
+                    for z in [z, z + zmin, z * 0.5 + zmin] {
+                        assert_eq!(
+                            bucket_at(zmin, scale, buckets, z),
+                            bucket_index(zmin, scale, buckets, z),
+                            "z {z} zmin {zmin} scale {scale} buckets {buckets}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    /// [`any_bucket`] is the mask test by [`bucket_mask`].
+    #[test]
+    fn any_bucket_is_the_mask_test() {
+        let masks = [
+            0u32,
+            1,
+            0x8000_0000,
+            u32::MAX,
+            0x0001_0000,
+            0x5555_5555,
+            0xa0a0_0001,
+            0x0000_0ff0,
+        ];
+        for buckets in [1u32, 2, 7, 16, 31, 32, 33, 48, 64, 100, 255] {
+            for b0 in 0..buckets {
+                for b1 in b0..buckets {
+                    for &m in &masks {
+                        assert_eq!(
+                            any_bucket(m, b0, b1, buckets),
+                            m & bucket_mask(b0, b1, buckets) != 0,
+                            "mask {m:#x} buckets {b0}..={b1} of {buckets}"
+                        );
+                    }
+                }
+            }
+        }
+    }
 }
