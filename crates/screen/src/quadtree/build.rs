@@ -47,11 +47,11 @@ use rayon::prelude::*;
 use super::QuadTreeOptions;
 use super::leaves::Leaves;
 use super::merge::MergeCtx;
-use super::node::{FLAG_CRACK, Node};
+use super::node::{FLAG_CRACK, NO_PLANE, Node};
 use super::prune::Blocked;
 use super::tree::{
-    Level, NO_PLANE, QuadTree, Z_FLOOR_TABLE_MAX, Z_REGION_MIN_GAIN, Z_SKIP_MARGIN, init_row,
-    par_rows, plane_levels,
+    Level, QuadTree, Z_FLOOR_TABLE_MAX, Z_REGION_MIN_GAIN, Z_SKIP_MARGIN, init_row, par_rows,
+    plane_levels,
 };
 use crate::planes::layer_size;
 use crate::{LayerPlanes, NormalSource, ScreenError, UnitCube};

@@ -1,14 +1,13 @@
 //! One row of effective levels ([`super::tree::effective_levels`]) sixteen nodes per step in
 //! SSE2 lanes (part of the x86_64 baseline): per node, its parent's effective level if that
 //! is not [`NO_PLANE`], else the node's level `l` if it is a plane node, else [`NO_PLANE`] —
-//! byte for byte the values of the scalar definition `tree::eff_row` (test below). The
-//! nodes' plane tags (sign bits of their first words) become byte masks by arithmetic
-//! shifts and two saturating packs; the parents' bytes are doubled by one unpack.
+//! byte for byte the values of the scalar definition `tree::eff_row` (the twin test is in
+//! `tree.rs`). The nodes' plane tags (sign bits of their first words) become byte masks by
+//! arithmetic shifts and two saturating packs; the parents' bytes are doubled by one unpack.
 
 use core::arch::x86_64::*;
 
-use super::node::Node;
-use super::tree::NO_PLANE;
+use super::node::{NO_PLANE, Node};
 
 /// `row[x]` for `x < n` from the parents' effective levels `prow` (node `x`'s parent is
 /// `prow[x / 2]`) and the nodes `nrow` of level `l`; `n` = the largest multiple of 16 with
@@ -45,50 +44,4 @@ pub(super) fn eff_row16(row: &mut [u8], prow: &[u8], nrow: &[Node], l: u8) -> us
         }
     }
     n
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::quadtree::test_rng::Rng;
-    use crate::quadtree::tree::eff_row;
-
-    /// Random rows (plane, AABB and empty nodes; parents with and without an effective
-    /// level; lengths not multiples of 16) equal the scalar definition byte for byte.
-    #[test]
-    fn rows_equal_the_scalar_rows() {
-        let mut rng = Rng(0x00ef_f1ec_7175_0001);
-        for case in 0..200usize {
-            let lw = 2 * (1 + case % 40);
-            let l = (case % 9) as u8;
-            let nrow: Vec<Node> = (0..lw)
-                .map(|_| match rng.next() % 3 {
-                    0 => Node::EMPTY,
-                    1 => Node::aabb(rng.f(0.0, 0.5), rng.f(0.5, 1.0)),
-                    _ => Node::plane_with_gradient(
-                        rng.f(0.0, 1.0),
-                        rng.f(-1.0, 1.0),
-                        rng.f(-1.0, 1.0),
-                        0,
-                        64.0,
-                        64.0,
-                        (rng.next() % 4) as u32,
-                    )
-                    .unwrap_or(Node::EMPTY),
-                })
-                .collect();
-            let prow: Vec<u8> = (0..lw / 2)
-                .map(|_| match rng.next() % 3 {
-                    0 => l + 1 + (rng.next() % 3) as u8,
-                    _ => NO_PLANE,
-                })
-                .collect();
-            let (mut fast, mut want) = (vec![0u8; lw], vec![0u8; lw]);
-            let n = eff_row16(&mut fast, &prow, &nrow, l);
-            assert_eq!(n, lw & !15);
-            eff_row(&mut fast, &prow, &nrow, l, n);
-            eff_row(&mut want, &prow, &nrow, l, 0);
-            assert_eq!(fast, want, "case {case}");
-        }
-    }
 }

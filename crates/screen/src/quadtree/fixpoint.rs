@@ -39,9 +39,10 @@ use rayon::prelude::*;
 
 use super::cascade::{deeper_front, pixel_trigger_lanes, proxy_safe_front};
 use super::merge::MergeCtx;
+use super::node::NO_PLANE;
 use super::node::{Node, decode_plane, decode_plane_at};
 use super::prune::Blocked;
-use super::tree::{Level, NO_PLANE, effective_levels};
+use super::tree::{Level, effective_levels};
 use crate::LayerPlanes;
 
 /// The levels after pruning to the fixed point, the trigger depths (`W x H`) and the

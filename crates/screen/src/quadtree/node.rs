@@ -52,6 +52,10 @@
 
 use glam::Vec3;
 
+/// An effective level ([`super::QuadTree::effective_levels`]): no plane node above or at this
+/// node.
+pub(crate) const NO_PLANE: u8 = u8::MAX;
+
 /// Plane flag: the paper's `O`, "close to a depth discontinuity" (§3.2): the plane is
 /// tested over a footprint dilated backwards along the ray ([`super::QuadTreeOptions::crack_dilation`]).
 pub const FLAG_CRACK: u32 = 1;
