@@ -325,23 +325,32 @@ mod tests {
     use super::*;
     use crate::cast::lanes16::V16;
 
+    /// Uniform floats in [0, 1) from an xorshift stream seeded with `x`.
+    fn uniform(mut x: u64) -> impl FnMut() -> f32 {
+        move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 40) as f32 / (1u64 << 24) as f32
+        }
+    }
+
+    /// A packet's base direction (near-axis components shrunk) and its lanes' spread.
+    fn packet_direction(f: &mut impl FnMut() -> f32) -> ([f32; 3], f32) {
+        let base =
+            [f() - 0.5, f() - 0.5, f() - 0.5].map(|c| if c.abs() < 0.05 { c * 1e-3 } else { c });
+        (base, 10f32.powi(-(((f() * 5.0) as i32) + 1)))
+    }
+
     /// The four-run interval test decides every run as the one-run test, on packets of nearby
     /// directions (random signs, near-axis components) and boxes from tiny to huge, straddling
     /// the origin's planes, with limits from 0 to infinity.
     #[test]
     fn interval_reaches4_equals_per_run() {
-        let mut x = 0x2545_f491_4f6c_dd1du64;
-        let mut f = move || {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            (x >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut f = uniform(0x2545_f491_4f6c_dd1d);
         let (mut tested, mut reached) = (0, 0);
         for _ in 0..3000 {
-            let base = [f() - 0.5, f() - 0.5, f() - 0.5]
-                .map(|c| if c.abs() < 0.05 { c * 1e-3 } else { c });
-            let spread = 10f32.powi(-(((f() * 5.0) as i32) + 1));
+            let (base, spread) = packet_direction(&mut f);
             let d = [0, 1, 2].map(|a| V16::from_fn(|_| base[a] + (f() - 0.5) * spread));
             let p = PacketSlab::<V16>::with_interval(d);
             if !p.has_interval() {
@@ -388,18 +397,10 @@ mod tests {
     /// including unused lanes past the last run (zero boxes, as in `TileTris::runs16`).
     #[test]
     fn interval_reaches16_equals_per_run() {
-        let mut x = 0x9e37_79b9_7f4a_7c15u64;
-        let mut f = move || {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            (x >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut f = uniform(0x9e37_79b9_7f4a_7c15);
         let (mut tested, mut reached) = (0, 0);
         for _ in 0..1500 {
-            let base = [f() - 0.5, f() - 0.5, f() - 0.5]
-                .map(|c| if c.abs() < 0.05 { c * 1e-3 } else { c });
-            let spread = 10f32.powi(-(((f() * 5.0) as i32) + 1));
+            let (base, spread) = packet_direction(&mut f);
             let dl: [[f32; 16]; 3] =
                 [0, 1, 2].map(|a| std::array::from_fn(|_| base[a] + (f() - 0.5) * spread));
             let d = dl.map(|x| V16::from_fn(|l| x[l]));
