@@ -118,6 +118,12 @@ impl BTree {
     pub fn node(&self, i: u32) -> &BNode {
         &self.nodes[i as usize]
     }
+
+    /// The two nodes of an inner node's `children`.
+    #[inline(always)]
+    pub fn children(&self, [a, b]: [u32; 2]) -> [&BNode; 2] {
+        [self.node(a), self.node(b)]
+    }
 }
 
 const UNUSED: BNode = BNode::Leaf {

@@ -50,7 +50,7 @@ pub(crate) fn open_largest<'a, const W: usize>(
         let Some(BNode::Inner { children, .. }) = kids[i] else {
             unreachable!()
         };
-        let (c0, c1) = (tree.node(children[0]), tree.node(children[1]));
+        let [c0, c1] = tree.children(*children);
         kids[i] = Some(c0);
         area[i] = inner_area(c0);
         kids[len] = Some(c1);
@@ -95,9 +95,7 @@ pub(crate) fn collapse(
     match root {
         // A tiny mesh: a root node with a single leaf lane.
         BNode::Leaf { .. } => ctx.emit(&[root], 1),
-        BNode::Inner { children, .. } => {
-            ctx.emit(&[tree.node(children[0]), tree.node(children[1])], 1)
-        }
+        BNode::Inner { children, .. } => ctx.emit(&tree.children(*children), 1),
     };
     let Ctx {
         nodes,
@@ -184,8 +182,7 @@ impl Ctx<'_> {
         self.nodes[index] = node;
         for k in kids[..len].iter().flatten() {
             if let BNode::Inner { children, bounds } = k {
-                let (c0, c1) = (self.tree.node(children[0]), self.tree.node(children[1]));
-                let child = self.emit(&[c0, c1], depth + 1);
+                let child = self.emit(&self.tree.children(*children), depth + 1);
                 let n = &mut self.nodes[index];
                 n.child[lane] = ChildRef::Inner(child).encode();
                 n.set_child_bounds(lane, *bounds);

@@ -45,10 +45,7 @@ pub(crate) fn collapse8(tree: &BTree, node_hint: usize) -> Collapsed8 {
     let root = tree.node(tree.root);
     match root {
         BNode::Leaf { .. } => emit(&mut out, tree, &[root], 1),
-        BNode::Inner { children, .. } => {
-            let (c0, c1) = (tree.node(children[0]), tree.node(children[1]));
-            emit(&mut out, tree, &[c0, c1], 1)
-        }
+        BNode::Inner { children, .. } => emit(&mut out, tree, &tree.children(*children), 1),
     };
     out
 }
@@ -80,8 +77,7 @@ fn emit(out: &mut Collapsed8, tree: &BTree, start: &[&BNode], depth: u32) -> u32
     out.nodes[index] = node;
     for k in kids[..len].iter().flatten() {
         if let BNode::Inner { children, bounds } = k {
-            let (c0, c1) = (tree.node(children[0]), tree.node(children[1]));
-            let child = emit(out, tree, &[c0, c1], depth + 1);
+            let child = emit(out, tree, &tree.children(*children), depth + 1);
             let n = &mut out.nodes[index];
             n.child[lane] = ChildRef::Inner(child).encode();
             n.set_child_bounds(lane, *bounds);

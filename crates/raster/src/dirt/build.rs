@@ -237,7 +237,6 @@ fn finish_views(
 ) -> Result<Vec<DirtCapture>, DirtError> {
     let nv = views.len();
     let setup_ms = ms(t_start);
-    let timed = |t: Instant| ms(t);
 
     // 1. Binning: which bands each set-up triangle's clipped projection touches.
     let t_bin = Instant::now();
@@ -247,7 +246,7 @@ fn finish_views(
         .map(|(s, g)| {
             let t = Instant::now();
             let b = bin(s, g);
-            (b, timed(t))
+            (b, ms(t))
         })
         .collect();
     let bin_ms = shares(ms(t_bin), &bins.iter().map(|b| b.1).collect::<Vec<_>>());
@@ -272,7 +271,7 @@ fn finish_views(
                 opts,
                 budget: &budget,
             };
-            fill_band(&job, band, bins[v].0.band(band)).map(|o| (o, timed(t)))
+            fill_band(&job, band, bins[v].0.band(band)).map(|o| (o, ms(t)))
         })
         .collect();
     let outs: Vec<(BandOut, f64)> = outs.into_iter().collect::<Result<_, _>>()?;
@@ -295,72 +294,7 @@ fn finish_views(
         .zip(&grids)
         .zip(&bins)
         .map(|(((outs, view), g), (bins, _))| {
-            let t = Instant::now();
-            let cell_count = g.cells_x as usize * g.cells_y as usize;
-            let entries: usize = outs.iter().map(|o| o.ids.len()).sum();
-            let fragments: u64 = outs.iter().map(|o| o.fragments).sum();
-            let (levels, texels) = mip::layout(g.cells_x, g.cells_y);
-            let mut bounds = vec![mip::EMPTY; texels];
-            let mut offsets = Vec::with_capacity(cell_count * g.buckets as usize + 1);
-            let mut ids = Vec::with_capacity(entries);
-            let mut cells = Vec::with_capacity(cell_count);
-            let mut cell0 = 0usize;
-            for o in &outs {
-                let base = ids.len() as u32;
-                offsets.extend(o.offsets[..o.offsets.len() - 1].iter().map(|&x| x + base));
-                ids.extend_from_slice(&o.ids);
-                for (b, c) in bounds[cell0..cell0 + o.cells.len()]
-                    .iter_mut()
-                    .zip(&o.cells)
-                {
-                    *b = [c.zmin, c.zmax];
-                }
-                cells.extend_from_slice(&o.cells);
-                cell0 += o.cells.len();
-            }
-            offsets.push(ids.len() as u32);
-            drop(outs);
-            let assemble = timed(t);
-            let t = Instant::now();
-            mip::build_chain(&levels, &mut bounds);
-            let recip_bounds = mip::reciprocal(&bounds);
-            let nonempty_cells = bounds[..cell_count]
-                .iter()
-                .filter(|z| z[0].is_finite())
-                .count() as u64;
-            let mut cap = DirtCapture {
-                view: view.clone(),
-                opts: *opts,
-                cells_x: g.cells_x,
-                cells_y: g.cells_y,
-                offsets,
-                ids,
-                levels,
-                bounds,
-                recip_bounds,
-                cells,
-                stats: DirtStats {
-                    width: view.width,
-                    height: view.height,
-                    tile_size: g.s,
-                    buckets: g.buckets,
-                    cells_x: g.cells_x,
-                    cells_y: g.cells_y,
-                    triangles: ntri,
-                    triangles_in_view: bins.in_view,
-                    fragments,
-                    entries: entries as u64,
-                    nonempty_cells,
-                    bytes: 0,
-                    setup_ms: 0.0,
-                    fill_ms: 0.0,
-                    assemble_ms: 0.0,
-                    mip_ms: 0.0,
-                    total_ms: 0.0,
-                },
-            };
-            cap.stats.bytes = cap.bytes();
-            (cap, assemble, timed(t))
+            assemble_view(outs, view, g, opts, bins.in_view, ntri)
         })
         .collect();
     // The assembly and the mips ran together: their wall time split by their work.
@@ -384,4 +318,83 @@ fn finish_views(
 
 fn ms(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
+}
+
+/// One view's capture from its bands' outputs (in band order): the flat CSR arrays, the
+/// depth bounds and their mip chain, the counters (times left zero); with the assembly's and
+/// the mips' thread time.
+fn assemble_view(
+    outs: Vec<BandOut>,
+    view: &Pinhole,
+    g: &Grid,
+    opts: &DirtOptions,
+    in_view: u64,
+    ntri: u64,
+) -> (DirtCapture, f64, f64) {
+    let t = Instant::now();
+    let cell_count = g.cells_x as usize * g.cells_y as usize;
+    let entries: usize = outs.iter().map(|o| o.ids.len()).sum();
+    let fragments: u64 = outs.iter().map(|o| o.fragments).sum();
+    let (levels, texels) = mip::layout(g.cells_x, g.cells_y);
+    let mut bounds = vec![mip::EMPTY; texels];
+    let mut offsets = Vec::with_capacity(cell_count * g.buckets as usize + 1);
+    let mut ids = Vec::with_capacity(entries);
+    let mut cells = Vec::with_capacity(cell_count);
+    let mut cell0 = 0usize;
+    for o in &outs {
+        let base = ids.len() as u32;
+        offsets.extend(o.offsets[..o.offsets.len() - 1].iter().map(|&x| x + base));
+        ids.extend_from_slice(&o.ids);
+        for (b, c) in bounds[cell0..cell0 + o.cells.len()]
+            .iter_mut()
+            .zip(&o.cells)
+        {
+            *b = [c.zmin, c.zmax];
+        }
+        cells.extend_from_slice(&o.cells);
+        cell0 += o.cells.len();
+    }
+    offsets.push(ids.len() as u32);
+    drop(outs);
+    let assemble = ms(t);
+    let t = Instant::now();
+    mip::build_chain(&levels, &mut bounds);
+    let recip_bounds = mip::reciprocal(&bounds);
+    let nonempty_cells = bounds[..cell_count]
+        .iter()
+        .filter(|z| z[0].is_finite())
+        .count() as u64;
+    let mut cap = DirtCapture {
+        view: view.clone(),
+        opts: *opts,
+        cells_x: g.cells_x,
+        cells_y: g.cells_y,
+        offsets,
+        ids,
+        levels,
+        bounds,
+        recip_bounds,
+        cells,
+        stats: DirtStats {
+            width: view.width,
+            height: view.height,
+            tile_size: g.s,
+            buckets: g.buckets,
+            cells_x: g.cells_x,
+            cells_y: g.cells_y,
+            triangles: ntri,
+            triangles_in_view: in_view,
+            fragments,
+            entries: entries as u64,
+            nonempty_cells,
+            bytes: 0,
+            setup_ms: 0.0,
+            fill_ms: 0.0,
+            assemble_ms: 0.0,
+            mip_ms: 0.0,
+            total_ms: 0.0,
+        },
+    };
+    cap.stats.bytes = cap.bytes();
+    (cap, assemble, ms(t))
 }
