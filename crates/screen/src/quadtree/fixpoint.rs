@@ -379,7 +379,9 @@ impl RunCtx<'_> {
         );
         let base = j as usize * wu;
         let ys = Vec4::new(j as f32, j as f32, (j + 1) as f32, (j + 1) as f32) / hf;
-        let t_run = proxy_safe_front(p, (cols.xe[i], cols.xe[end]), (ys.x, ys.z));
+        // The row's top and bottom edge (the same f32 quotients as `ys`' lanes).
+        let y = (ys.x, ys.z);
+        let t_run = proxy_safe_front(p, (cols.xe[i], cols.xe[end]), y);
         if certified(&fr[i..end], t_run) {
             return end;
         }
@@ -390,7 +392,6 @@ impl RunCtx<'_> {
             let lv = &self.levels[l as usize];
             let q = lv.nodes[(qy * lv.w + qx + 1) as usize];
             let pb = decode_plane(q, l, qx + 1, qy, wf, hf);
-            let y = ((j as f32) / hf, ((j + 1) as f32) / hf);
             let t = super::trigger_lanes::merged_pair_triggers4(
                 base + i,
                 p,
@@ -406,7 +407,6 @@ impl RunCtx<'_> {
         // per step in lanes (`trigger_lanes`, same bits).
         #[cfg(target_arch = "x86_64")]
         if l >= 2 {
-            let y = ((j as f32) / hf, ((j + 1) as f32) / hf);
             while i + 4 <= end {
                 if certified(&fr[i..i + 4], t_run) {
                     i += 4;
