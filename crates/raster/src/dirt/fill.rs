@@ -79,17 +79,13 @@ impl Grid {
     }
 }
 
-/// `bucket_index` of `capture` (the same integer for every input) with the clamp to `B - 1` done in f32
-/// before the conversion (`B - 1` is an integer), so the conversion needs no saturation.
+/// `bucket_index` of `capture` (the same integer for every input) with the clamps to
+/// `[0, B - 1]` done in f32 before the conversion (`B - 1` is an integer) and without
+/// branches (`max` drops a NaN, a `-0` converts to 0).
 #[inline(always)]
 fn fast_bucket_index(zmin: f32, scale: f32, buckets: u32, z: f32) -> u32 {
     let v = (z - zmin) * scale;
-    let last = buckets - 1;
-    if v > 0.0 {
-        if v < last as f32 { v as u32 } else { last }
-    } else {
-        0
-    }
+    v.max(0.0).min((buckets - 1) as f32) as u32
 }
 
 /// [`bucket_mask`] (the same bits), for `B <= 32` as one subtraction of 64-bit powers of two.
@@ -126,18 +122,24 @@ pub(super) struct BandOut {
     pub fragments: u64,
 }
 
-/// Widens `[zlo, zhi]` by the margins and rounds outward to f32.
+/// `if take { a } else { b }` on the bits, without a branch: `widen`'s rounding goes either
+/// way about equally often, so a branch there is mispredicted about every other fragment.
+#[inline(always)]
+fn select_bits(take: bool, a: f32, b: f32) -> f32 {
+    let m = (take as u32).wrapping_neg();
+    f32::from_bits((a.to_bits() & m) | (b.to_bits() & !m))
+}
+
+/// Widens `[zlo, zhi]` by the margins and rounds outward to f32 (each end stepped one f32
+/// outward where the conversion rounded inward; branch-free, the same bits as the plain
+/// form `widen_reference` of the tests).
 #[inline]
 fn widen(zlo: f64, zhi: f64, abs_margin: f64) -> (f32, f32) {
     let lo = zlo * (1.0 - DEPTH_REL_MARGIN) - abs_margin;
     let hi = zhi * (1.0 + DEPTH_REL_MARGIN) + abs_margin;
-    let (mut l, mut h) = (lo as f32, hi as f32);
-    if (l as f64) > lo {
-        l = l.next_down();
-    }
-    if (h as f64) < hi {
-        h = h.next_up();
-    }
+    let (l, h) = (lo as f32, hi as f32);
+    let l = select_bits((l as f64) > lo, l.next_down(), l);
+    let h = select_bits((h as f64) < hi, h.next_up(), h);
     (l.max(0.0), h)
 }
 
@@ -285,12 +287,9 @@ fn fill_band_with(
                 let (zlo, zhi) = widen(1.0 / whi, 1.0 / wlo, tri.abs_margin);
                 let k = zbase + c as usize;
                 let cell = &mut cells[k];
-                if zlo < cell.zmin {
-                    cell.zmin = zlo;
-                }
-                if zhi > cell.zmax {
-                    cell.zmax = zhi;
-                }
+                // Branch-free (a new triangle in a cell is nearer or farther unpredictably).
+                cell.zmin = select_bits(zlo < cell.zmin, zlo, cell.zmin);
+                cell.zmax = select_bits(zhi > cell.zmax, zhi, cell.zmax);
                 frags.push(Fragment {
                     cell: k as u32,
                     tri: t,
@@ -380,8 +379,11 @@ fn fill_band_with(
     // Entries beyond fragments (triangles in several buckets) count against the budget too.
     let mut extra = total - frags.len() as u64;
     bill(budget, &mut extra, opts.max_entries)?;
-    for k in 1..ncells * nb {
-        offsets[k] += offsets[k - 1];
+    // The running sum kept in a register (not reloaded from the previous slot).
+    let mut sum = 0u32;
+    for o in &mut offsets[..ncells * nb] {
+        sum += *o;
+        *o = sum;
     }
     offsets[ncells * nb] = total as u32;
     let mut ids = vec![0u32; total as usize];
@@ -455,6 +457,70 @@ mod tests {
             }
         }
         assert!(cases > 500_000, "{cases}");
+    }
+
+    /// `widen` as it was written first, with branches.
+    fn widen_reference(zlo: f64, zhi: f64, abs_margin: f64) -> (f32, f32) {
+        let lo = zlo * (1.0 - DEPTH_REL_MARGIN) - abs_margin;
+        let hi = zhi * (1.0 + DEPTH_REL_MARGIN) + abs_margin;
+        let (mut l, mut h) = (lo as f32, hi as f32);
+        if (l as f64) > lo {
+            l = l.next_down();
+        }
+        if (h as f64) < hi {
+            h = h.next_up();
+        }
+        (l.max(0.0), h)
+    }
+
+    /// The branch-free `widen` gives the same bits as the plain form on random depths, on
+    /// f32 values and their neighbours in f64 (conversions exact or rounding either way), and
+    /// on zeros, negatives, huge values, infinities and NaN.
+    #[test]
+    fn widen_equals_the_plain_form() {
+        let mut rng = parallax_core::Rng::new(7, 3);
+        let mut z: Vec<f64> = vec![
+            0.0,
+            -0.0,
+            -1.0,
+            1e-300,
+            f32::MAX as f64,
+            f32::MAX as f64 * 1.5,
+            1e300,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+        ];
+        for _ in 0..20_000 {
+            let f = rng.next_f32() * [1e-3, 1.0, 100.0, 1e6][rng.next_u32() as usize % 4];
+            let v = f as f64;
+            z.extend([
+                v,
+                v * (1.0 + 1e-12),
+                v * (1.0 - 1e-12),
+                v.next_up(),
+                v.next_down(),
+            ]);
+            z.push(rng.next_f32() as f64 * 50.0 + rng.next_f32() as f64 * 1e-9);
+        }
+        let margins = [0.0, 1e-7, 3.8e-6, 1.0];
+        let mut stepped = [0u64; 2];
+        for (i, &a) in z.iter().enumerate() {
+            let b = z[(i * 7919 + 13) % z.len()];
+            for &m in &margins {
+                let (l, h) = widen(a, b, m);
+                let (rl, rh) = widen_reference(a, b, m);
+                assert_eq!(
+                    (l.to_bits(), h.to_bits()),
+                    (rl.to_bits(), rh.to_bits()),
+                    "{a} {b} {m}"
+                );
+                let lo = a * (1.0 - DEPTH_REL_MARGIN) - m;
+                stepped[((lo as f32) as f64 > lo) as usize] += 1;
+            }
+        }
+        // Both roundings occur often (the case the branch-free form is for).
+        assert!(stepped[0] > 50_000 && stepped[1] > 50_000, "{stepped:?}");
     }
 
     #[test]
