@@ -8,7 +8,8 @@
 //! is by outcodes (a bit per plane and corner), the near plane first (it alone culls the
 //! triangles behind a cube face); a view whose rotation rows are signed coordinate axes (the
 //! cube faces) transforms by picking components instead of dot products (the same values);
-//! finiteness is checked once per triangle for all views.
+//! finiteness is checked once per triangle for all views, and so are the corners' offsets
+//! from the eye for views that share it (the camera view and the cube faces around its eye).
 //!
 //! **The `w` plane.** A triangle's plane `n . q = d` in camera space meets the ray through film
 //! position `(x, y)`, direction `(u, v, -1)` with `u = a0 + x ax`, `v = b0 - y by`, at view
@@ -174,13 +175,19 @@ impl ViewXf {
         }
     }
 
-    #[inline(always)]
+    #[cfg(test)]
     fn to_camera(&self, p: DVec3) -> DVec3 {
-        let d = p - self.eye;
+        self.rotate((p - self.eye).to_array())
+    }
+
+    /// Camera-space point of the world offset `d = p - eye` (the rotation rows, or the picked
+    /// components of an axis view).
+    #[inline(always)]
+    fn rotate(&self, d: [f64; 3]) -> DVec3 {
         if let Some([a, b, c]) = self.axes {
-            let d = d.to_array();
             return DVec3::new(a.1 * d[a.0], b.1 * d[b.0], c.1 * d[c.0]);
         }
+        let d = DVec3::from_array(d);
         DVec3::new(
             self.rows[0].dot(d),
             self.rows[1].dot(d),
@@ -235,15 +242,11 @@ impl ViewXf {
         })
     }
 
-    /// Sets triangle `t` (finite corners `p`) up for the fill (module docs) and appends it to
-    /// `out`, unless nothing of it is left in the view.
+    /// Sets triangle `t` up for the fill (module docs) and appends it to `out`, unless nothing
+    /// of it is left in the view; `d` are its finite corners minus the view's eye.
     #[inline(always)]
-    fn setup_into(&self, t: usize, p: &[DVec3; 3], world_mag: f64, out: &mut SetupChunk) {
-        let q = [
-            self.to_camera(p[0]),
-            self.to_camera(p[1]),
-            self.to_camera(p[2]),
-        ];
+    fn setup_into(&self, t: usize, d: &[[f64; 3]; 3], world_mag: f64, out: &mut SetupChunk) {
+        let q = [self.rotate(d[0]), self.rotate(d[1]), self.rotate(d[2])];
         // Outside one plane with all three corners: culled; else the planes some corner is
         // outside of cut it.
         // The near plane first: it alone culls most triangles behind a cube face.
@@ -313,6 +316,10 @@ impl ViewXf {
     /// kept in order; `out[i]` is view `i`'s.
     pub fn setup_all_views(views: &[ViewXf], mesh: &TriangleMesh) -> Vec<Setups> {
         let n = mesh.triangle_count();
+        // View `k` has the eye of view `k - 1`.
+        let same_eye: Vec<bool> = (0..views.len())
+            .map(|k| k > 0 && views[k].eye == views[k - 1].eye)
+            .collect();
         let chunks: Vec<Vec<SetupChunk>> = (0..n.div_ceil(SETUP_CHUNK))
             .into_par_iter()
             .map(|c| {
@@ -332,8 +339,14 @@ impl ViewXf {
                     }
                     let world_mag = a.abs().max(b.abs()).max(c.abs()).max_element() as f64;
                     let p = [a.as_dvec3(), b.as_dvec3(), c.as_dvec3()];
-                    for (xf, o) in views.iter().zip(&mut out) {
-                        xf.setup_into(t, &p, world_mag, o);
+                    // The corners' offsets from the eye, computed once for the views that
+                    // share it (the camera view and the cube faces share the camera's).
+                    let mut d = [[0.0; 3]; 3];
+                    for (k, (xf, o)) in views.iter().zip(&mut out).enumerate() {
+                        if k == 0 || !same_eye[k] {
+                            d = p.map(|p| (p - xf.eye).to_array());
+                        }
+                        xf.setup_into(t, &d, world_mag, o);
                     }
                 }
                 out
