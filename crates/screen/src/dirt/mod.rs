@@ -6,6 +6,8 @@
 //!   and expressed in it (§4.2.1 "Screen-space ray tracing");
 //! - `walk`: Hi-Z over the min-max mips and bucket tracing in the finest cells (Algorithm 1),
 //!   with the argument why the answer is exact;
+//! - `slabs`: per mip texel, the mask of occupied reciprocal-depth slabs (from the cells'
+//!   non-empty buckets), the walk's second skip test, and why a skip by it is exact;
 //! - `tri4`: the ray-triangle tests of a bucket, four triangles at a time, and the per-ray
 //!   mailbox;
 //! - this file: the multi-view driver (§4.2.1: "If no valid hit is found within the current
@@ -44,6 +46,7 @@
 //! `docs/notes/dirt.md`.
 
 mod best;
+mod slabs;
 mod tri4;
 mod view;
 mod walk;
@@ -56,6 +59,7 @@ use parallax_scene::camera::CubeMap;
 
 use best::Best;
 pub use best::DirtCounters;
+use slabs::Slabs;
 use tri4::Query;
 use view::{Exit, ViewConsts, ViewRay};
 use walk::{WalkEnd, walk};
@@ -66,6 +70,8 @@ pub struct DirtTracer {
     views: DirtViews,
     /// The camera view's constants (if any), then the six faces'.
     consts: Vec<ViewConsts>,
+    /// The views' mip texels with their depth-slab masks (`slabs`), in the order of `consts`.
+    slabs: Vec<Slabs>,
     /// Per cube face, the face across its left, right, top and bottom film edges.
     neighbours: [[usize; 4]; 6],
 }
@@ -74,6 +80,7 @@ impl DirtTracer {
     /// A tracer over a built capture.
     pub fn new(views: DirtViews) -> DirtTracer {
         let consts = views.views().map(ViewConsts::new).collect();
+        let slabs = views.views().map(Slabs::new).collect();
         let neighbours = std::array::from_fn(|i| {
             let b = views.cube.cube.face_camera(i).frame.basis;
             [-b.x_axis, b.x_axis, b.y_axis, -b.y_axis].map(CubeMap::face_of)
@@ -81,6 +88,7 @@ impl DirtTracer {
         DirtTracer {
             views,
             consts,
+            slabs,
             neighbours,
         }
     }
@@ -137,7 +145,7 @@ impl DirtTracer {
                     return;
                 }
                 let cap = self.views.camera.as_ref().expect("camera view");
-                if walk(vc, cap, &vr, a, b, q) == WalkEnd::Done || accepted(q, b) {
+                if walk(vc, cap, &self.slabs[0], &vr, a, b, q) == WalkEnd::Done || accepted(q, b) {
                     return;
                 }
                 self.trace_cube(ray, b, t1, q);
@@ -167,7 +175,8 @@ impl DirtTracer {
             let Some((lo, hi, exit)) = vc.clip_exit(&vr, s, s1).filter(|&(lo, ..)| lo <= s) else {
                 break;
             };
-            let end = walk(vc, &self.views.cube.faces[f], &vr, lo, hi, q);
+            let faces = &self.views.cube.faces;
+            let end = walk(vc, &faces[f], &self.slabs[first + f], &vr, lo, hi, q);
             if end == WalkEnd::Done || accepted(q, hi) {
                 return WalkEnd::Done;
             }
@@ -213,6 +222,7 @@ impl DirtTracer {
             let end = walk(
                 &self.consts[first + f],
                 &self.views.cube.faces[f],
+                &self.slabs[first + f],
                 &vr,
                 lo,
                 hi,

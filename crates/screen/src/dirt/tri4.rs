@@ -23,7 +23,7 @@ use parallax_raster::dirt::DirtTri;
 use super::best::{Best, DirtCounters};
 
 /// Slots of the per-ray mailbox (a power of two).
-const MAILBOX: usize = 32;
+const MAILBOX: usize = 64;
 
 /// What a walk needs about the ray and its answer so far.
 pub(crate) struct Query<'a> {

@@ -17,8 +17,10 @@
 //! texel `(cx >> L, cy >> L)` is left at `λ_exit` (the first of its column or row boundary
 //! crossings in the ray's film direction, or the end of the segment); the ray's `w` over
 //! `[λ, λ_exit]` is the interval between its values at the two ends. Disjoint from the
-//! texel's reciprocal bounds: the texel is skipped, the walk moves to `λ_exit` and one level
-//! up. Overlapping above level 0: one level down. At level 0: the cell's record (bounds, eq. 1
+//! texel's reciprocal bounds, or (`slabs`) its slabs of `w` missing every occupied slab of the
+//! texel: the texel is skipped, the walk moves to `λ_exit` and one level up (a skip by the
+//! slabs drops only cells whose buckets at the ray's depths are all empty, `slabs` module
+//! docs). Overlapping above level 0: one level down. At level 0: the cell's record (bounds, eq. 1
 //! scale, non-empty bucket mask), the buckets of the ray's depth span there, and if any of
 //! them holds a triangle, bucket tracing; then on to `λ_exit`.
 //!
@@ -62,6 +64,7 @@
 
 use parallax_raster::dirt::{DirtCapture, bucket_index};
 
+use super::slabs::{Slabs, slab};
 use super::tri4::Query;
 use super::view::{MAX_LEVELS, ViewConsts, ViewRay};
 
@@ -193,6 +196,7 @@ fn fmax(a: f32, b: f32) -> f32 {
 pub(crate) fn walk(
     vc: &ViewConsts,
     cap: &DirtCapture,
+    slabs: &Slabs,
     r: &ViewRay,
     t_start: f32,
     t_end: f32,
@@ -218,7 +222,7 @@ pub(crate) fn walk(
         (true, true, false) => walk_dir::<true, true, false>,
         (true, true, true) => walk_dir::<true, true, true>,
     };
-    f(vc, cap, r, &seg, xs, ys, q)
+    f(vc, cap, slabs, r, &seg, xs, ys, q)
 }
 
 /// The walk of [`walk`] for one film direction (`UX`, `UY`: the ray moves towards higher
@@ -227,13 +231,15 @@ pub(crate) fn walk(
 fn walk_dir<const UX: bool, const UY: bool, const W_FALLS: bool>(
     vc: &ViewConsts,
     cap: &DirtCapture,
+    slabs: &Slabs,
     r: &ViewRay,
     seg: &Segment,
     mut xs: Axis,
     mut ys: Axis,
     q: &mut Query,
 ) -> WalkEnd {
-    let bounds = cap.recip_mip();
+    let texels = slabs.texels.as_slice();
+    let (shift, base) = (slabs.shift, slabs.base);
     let records = cap.cell_records();
 
     // The start cell (clamped onto the grid: the start may lie on the frustum's boundary).
@@ -265,8 +271,12 @@ fn walk_dir<const UX: bool, const UY: bool, const W_FALLS: bool>(
         let texel = vc.level_offset[lv_i] as usize
             + ty as usize * vc.level_width[lv_i] as usize
             + tx as usize;
-        let [lo, hi] = bounds[texel];
-        let overlaps = w_hi >= lo && w_lo <= hi;
+        let t = &texels[texel];
+        // The min-max bounds, then the depth slabs (`slabs`).
+        let overlaps = w_hi >= t.lo && w_lo <= t.hi && {
+            let (a, b) = (slab(w_lo, shift, base), slab(w_hi, shift, base));
+            (t.slabs >> a) << (63 - (b - a)) != 0
+        };
         if overlaps {
             if level > 0 {
                 level -= 1;
