@@ -55,6 +55,7 @@ mod collapse;
 mod collapse8;
 mod construct;
 mod hit;
+mod keys8;
 mod lanes16;
 pub mod node;
 pub mod node8;

@@ -18,8 +18,9 @@
 //! scaling covers; Embree's `b * inv - o * inv` has an absolute error in `o * inv` that it does
 //! not (notes: docs/notes/bvh.md). Leaves are the shared 4-triangle blocks (`tri4.rs`), tested
 //! by a `LeafTest8` step (a trait, not a closure, so that it inlines into the AVX2 kernel with
-//! its target features). Hit children are ordered by `u64` keys built in lanes (AVX2: the
-//! entry distances interleaved with the child row), only for nodes with a hit child.
+//! its target features). Hit children are ordered by `u64` keys compressed to the hit lanes
+//! (`keys8.rs`: branch-free with AVX2), only for nodes with two or more hit children: two by
+//! one compare, three or four by a 5-comparator network, more by insertion sort.
 //!
 //! **Invariant:** every query returns exactly what its 4-wide twin returns
 //! ([`Bvh::closest_hit4`], ...): the node test only culls (conservatively), and the closest hit
@@ -33,6 +34,7 @@ use parallax_core::math::{ROBUST_FAR_SCALE, WatertightRay};
 
 use crate::bvh::Bvh;
 use crate::hit::Hit;
+use crate::keys8;
 use crate::node::{is_leaf, leaf_count, leaf_first};
 use crate::node8::Node8;
 use crate::stats::{Counter, NoStats, TraversalStats};
@@ -73,15 +75,16 @@ impl RayBoxes8 {
 }
 
 /// An 8-lane slab test: the hit mask (bit i = lane i) and the entry distances (`Dist`, in
-/// registers where the test has them), then, only for nodes with a hit child (the child
-/// references are the node's fourth cache line), the stack keys of the eight lanes,
-/// `t_near bits << 32 | child`: meaningful in hit lanes only (the traversal reads no other);
-/// the distances of hit lanes are `>= t_min`, so their bits order as the floats where
-/// `t_min >= 0`.
+/// registers where the test has them), then, only for nodes with two or more hit children
+/// (the child references are the node's fourth cache line), the stack keys of the hit lanes,
+/// `t_near bits << 32 | child`, compressed: entry `j < mask.count_ones()` is the key of the
+/// `j`-th hit lane in lane order, the other entries are `0`. The distances of hit lanes are
+/// `>= t_min`, so their bits order as the floats where `t_min >= 0`; a key is never `0`
+/// (child `0` is the root, no node's child), so the padding sorts below every key.
 pub(crate) trait NodeTest8 {
     type Dist: Copy;
     fn test(&self, node: &Node8, t_max: f32) -> (u32, Self::Dist);
-    fn keys(&self, node: &Node8, t: Self::Dist) -> [u64; 8];
+    fn hit_keys(&self, node: &Node8, t: Self::Dist, mask: u32) -> [u64; 8];
 }
 
 /// The portable twin: two 4-lane halves.
@@ -91,8 +94,8 @@ impl NodeTest8 for Portable8 {
     type Dist = [f32; 8];
 
     #[inline(always)]
-    fn keys(&self, node: &Node8, t: [f32; 8]) -> [u64; 8] {
-        std::array::from_fn(|c| (t[c].to_bits() as u64) << 32 | node.child[c] as u64)
+    fn hit_keys(&self, node: &Node8, t: [f32; 8], mask: u32) -> [u64; 8] {
+        keys8::compress_keys(t, &node.child, mask)
     }
 
     #[inline(always)]
@@ -161,23 +164,9 @@ impl NodeTest8 for Avx2Boxes8 {
     type Dist = std::arch::x86_64::__m256;
 
     #[inline(always)]
-    fn keys(&self, node: &Node8, t_near: Self::Dist) -> [u64; 8] {
-        use std::arch::x86_64::*;
-        // SAFETY: AVX2 was detected (`new`); `child` is 32-byte aligned (offset 192 of the
-        // 64-byte aligned node).
-        unsafe {
-            // Interleave the children (low halves) with the distance bits (high halves), then
-            // restore lane order: `lo` = keys 0, 1 | 4, 5, `hi` = 2, 3 | 6, 7.
-            let child = _mm256_load_si256(node.child.as_ptr() as *const __m256i);
-            let tb = _mm256_castps_si256(t_near);
-            let lo = _mm256_unpacklo_epi32(child, tb);
-            let hi = _mm256_unpackhi_epi32(child, tb);
-            let mut keys = [0u64; 8];
-            let kp = keys.as_mut_ptr() as *mut __m256i;
-            _mm256_storeu_si256(kp, _mm256_permute2x128_si256::<0x20>(lo, hi));
-            _mm256_storeu_si256(kp.add(1), _mm256_permute2x128_si256::<0x31>(lo, hi));
-            keys
-        }
+    fn hit_keys(&self, node: &Node8, t_near: Self::Dist, mask: u32) -> [u64; 8] {
+        // SAFETY: AVX2 was detected (`new`).
+        unsafe { keys8::compress_keys_avx2(t_near, &node.child, mask) }
     }
 
     #[inline(always)]
@@ -330,91 +319,72 @@ impl Bvh {
                 stats.node(node.num_children);
                 let (mask, dist) = nt.test(node, t_max);
                 if mask != 0 {
-                    let keys = nt.keys(node, dist);
-                    // SAFETY: `c < 8`.
-                    let key = |c: usize| unsafe { *keys.get_unchecked(c) };
                     // Leaf children come first (`node8.rs`): start the loads of the hit leaves'
                     // triangle blocks now, so their misses overlap the work until they are
                     // tested.
                     if PREFETCH_LEAVES {
                         self.prefetch_leaves(node, mask);
                     }
-                    let rest = mask & (mask - 1);
-                    if rest == 0 {
+                    if mask & (mask - 1) == 0 {
                         cur = node.child[mask.trailing_zeros() as usize];
                         continue;
                     }
-                    // SAFETY (pushes below): a node pushes at most 7 entries and
-                    // `7 * depth8 < STACK8_SIZE` (checked at build).
+                    // Two or more: the hit keys compressed into `ks` (padding `0`).
+                    let mut ks = nt.hit_keys(node, dist, mask);
+                    let n = mask.count_ones() as usize;
+                    // SAFETY (stores below): a node pushes at most 7 entries and writes at most
+                    // 8 slots from `sp`, `sp + 8 <= 7 * depth8 + 1 < STACK8_SIZE` (checked at
+                    // build); the entries above the first `n - 1` are overwritten by later
+                    // pushes. `n - 1 < 8` indexes `ks`.
                     if !ORDERED {
-                        let mut m = rest;
-                        while m != 0 {
-                            let c = m.trailing_zeros() as usize;
-                            m &= m - 1;
-                            unsafe { *stack.get_unchecked_mut(sp) = MaybeUninit::new(key(c)) };
-                            sp += 1;
+                        for (i, &k) in ks[1..].iter().enumerate() {
+                            unsafe { *stack.get_unchecked_mut(sp + i) = MaybeUninit::new(k) };
                         }
-                        cur = node.child[mask.trailing_zeros() as usize];
+                        sp += n - 1;
+                        cur = ks[0] as u32;
                         continue;
                     }
-                    if rest & (rest - 1) == 0 {
-                        let (a, b) = (
-                            key(mask.trailing_zeros() as usize),
-                            key(rest.trailing_zeros() as usize),
-                        );
+                    if n == 2 {
+                        let (a, b) = (ks[0], ks[1]);
                         unsafe { *stack.get_unchecked_mut(sp) = MaybeUninit::new(a.max(b)) };
                         sp += 1;
                         cur = a.min(b) as u32;
                         continue;
                     }
-                    // Three or more: the hit keys compressed into `ks` (padding sorts last).
-                    let mut ks = [u64::MAX; 8];
-                    let mut n = 0;
-                    let mut m = mask;
-                    while m != 0 {
-                        // SAFETY: at most 8 hit lanes.
-                        unsafe { *ks.get_unchecked_mut(n) = key(m.trailing_zeros() as usize) };
-                        m &= m - 1;
-                        n += 1;
-                    }
+                    // Far to near (the padding `0` sorts last), push all but the nearest.
                     let sort2 = |ks: &mut [u64; 8], i: usize, j: usize| {
                         let (x, y) = (ks[i], ks[j]);
-                        ks[i] = x.min(y);
-                        ks[j] = x.max(y);
+                        ks[i] = x.max(y);
+                        ks[j] = x.min(y);
                     };
                     if n <= 4 {
-                        // Three or four: a 5-comparator network, push far to near.
+                        // Three or four: a 5-comparator network.
                         sort2(&mut ks, 0, 1);
                         sort2(&mut ks, 2, 3);
                         sort2(&mut ks, 0, 2);
                         sort2(&mut ks, 1, 3);
                         sort2(&mut ks, 1, 2);
-                        unsafe { *stack.get_unchecked_mut(sp) = MaybeUninit::new(ks[3]) };
-                        sp += n - 3;
-                        unsafe { *stack.get_unchecked_mut(sp) = MaybeUninit::new(ks[2]) };
-                        unsafe { *stack.get_unchecked_mut(sp + 1) = MaybeUninit::new(ks[1]) };
-                        sp += 2;
-                        cur = ks[0] as u32;
-                        continue;
-                    }
-                    // Five to eight: insertion sort, far to near, then push all but the nearest.
-                    for i in 1..n {
-                        let k = ks[i];
-                        let mut j = i;
-                        while j > 0 && ks[j - 1] < k {
-                            ks[j] = ks[j - 1];
-                            j -= 1;
+                        for (i, &k) in ks[..3].iter().enumerate() {
+                            unsafe { *stack.get_unchecked_mut(sp + i) = MaybeUninit::new(k) };
                         }
-                        ks[j] = k;
-                    }
-                    // All eight slots (no length-dependent copy: that became a `memcpy` call);
-                    // the entries above the first `n - 1` are overwritten by later pushes.
-                    // SAFETY: `sp + 8 <= 7 * depth8 + 1 < STACK8_SIZE` (checked at build).
-                    for (i, &k) in ks.iter().enumerate() {
-                        unsafe { *stack.get_unchecked_mut(sp + i) = MaybeUninit::new(k) };
+                    } else {
+                        // Five to eight: insertion sort.
+                        for i in 1..n {
+                            let k = ks[i];
+                            let mut j = i;
+                            while j > 0 && ks[j - 1] < k {
+                                ks[j] = ks[j - 1];
+                                j -= 1;
+                            }
+                            ks[j] = k;
+                        }
+                        // All eight slots (no length-dependent copy: that became a `memcpy`).
+                        for (i, &k) in ks.iter().enumerate() {
+                            unsafe { *stack.get_unchecked_mut(sp + i) = MaybeUninit::new(k) };
+                        }
                     }
                     sp += n - 1;
-                    cur = ks[n - 1] as u32;
+                    cur = unsafe { *ks.get_unchecked(n - 1) } as u32;
                     continue;
                 }
             } else {
@@ -505,7 +475,7 @@ impl Bvh {
     }
 
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
+    #[target_feature(enable = "avx2,popcnt")]
     unsafe fn closest8_avx2<C: Counter>(&self, ray: &Ray, stats: &mut C) -> Option<Hit> {
         // SAFETY: AVX2 is enabled for this function (the caller detected it).
         let nt = unsafe { Avx2Boxes8::new(RayBoxes8::new(ray)) };
@@ -533,7 +503,7 @@ impl Bvh {
     }
 
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
+    #[target_feature(enable = "avx2,popcnt")]
     unsafe fn any8_avx2<C: Counter>(&self, ray: &Ray, stats: &mut C) -> bool {
         // SAFETY: AVX2 is enabled for this function (the caller detected it).
         let nt = unsafe { Avx2Boxes8::new(RayBoxes8::new(ray)) };
@@ -562,7 +532,7 @@ impl Bvh {
     }
 
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
+    #[target_feature(enable = "avx2,popcnt")]
     unsafe fn all8_avx2<C: Counter>(&self, ray: &Ray, out: &mut Vec<Hit>, s: &mut C) {
         // SAFETY: AVX2 is enabled for this function (the caller detected it).
         let nt = unsafe { Avx2Boxes8::new(RayBoxes8::new(ray)) };
@@ -626,5 +596,5 @@ impl Bvh {
 #[cfg(target_arch = "x86_64")]
 #[inline]
 pub(crate) fn use_avx2() -> bool {
-    std::is_x86_feature_detected!("avx2")
+    std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("popcnt")
 }

@@ -49,6 +49,9 @@ pub trait Lanes:
     fn or(a: Self::M, b: Self::M) -> Self::M;
     /// Bit `i` set iff lane `i` of the mask is set.
     fn bits(m: Self::M) -> u32;
+    /// Bit `i` set iff lane `i` has its sign bit set (`-0.0`, negative numbers, NaNs with the
+    /// sign bit): one `movmskps` on SSE / AVX, no compare.
+    fn sign_bits(self) -> u32;
     fn select(m: Self::M, a: Self, b: Self) -> Self;
 }
 
@@ -127,6 +130,10 @@ impl Lanes for f32 {
     #[inline(always)]
     fn bits(m: bool) -> u32 {
         m as u32
+    }
+    #[inline(always)]
+    fn sign_bits(self) -> u32 {
+        self.is_sign_negative() as u32
     }
     #[inline(always)]
     fn select(m: bool, a: Self, b: Self) -> Self {
@@ -225,6 +232,10 @@ impl Lanes for Vec4 {
     #[inline(always)]
     fn bits(m: BVec4A) -> u32 {
         m.bitmask()
+    }
+    #[inline(always)]
+    fn sign_bits(self) -> u32 {
+        self.is_negative_bitmask()
     }
     #[inline(always)]
     fn select(m: BVec4A, a: Self, b: Self) -> Self {
@@ -345,6 +356,14 @@ impl Lanes for F8 {
         b
     }
     #[inline(always)]
+    fn sign_bits(self) -> u32 {
+        let mut b = 0;
+        for i in 0..8 {
+            b |= (self.0[i].to_bits() >> 31) << i;
+        }
+        b
+    }
+    #[inline(always)]
     #[allow(clippy::needless_range_loop)]
     fn select(m: M8, a: Self, b: Self) -> Self {
         let mut r = [0.0f32; 8];
@@ -395,6 +414,16 @@ pub fn assert_lanes_match_scalar<L: Lanes>(a: L, b: L, xs: &[f32], ys: &[f32]) {
         assert_eq!(bit(a.ge(b)), x >= y, "ge lane {i}");
         assert_eq!(bit(a.eq(b)), x == y, "eq lane {i}");
         assert_eq!(bit(a.ne(b)), x != y, "ne lane {i}");
+        assert_eq!(
+            a.sign_bits() >> i & 1 == 1,
+            x.is_sign_negative(),
+            "sign lane {i}"
+        );
+        assert_eq!(
+            b.sign_bits() >> i & 1 == 1,
+            y.is_sign_negative(),
+            "sign lane {i}"
+        );
         assert_eq!(bit(L::or(a.lt(b), a.eq(b))), x <= y, "or lane {i}");
         assert_eq!(bit(L::and(a.le(b), a.ge(b))), x == y, "and lane {i}");
         assert!(

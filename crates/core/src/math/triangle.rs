@@ -42,20 +42,18 @@ use crate::simd::Lanes;
 #[inline(always)]
 pub fn watertight_permutation(d: Vec3) -> [usize; 3] {
     let a = d.abs();
-    let kz = if a.x > a.y {
-        if a.x > a.z { 0 } else { 2 }
-    } else if a.y > a.z {
-        1
+    // `a.x > a.y ? (a.x > a.z ? 0 : 2) : (a.y > a.z ? 1 : 2)` as selects of the three
+    // compares, and the swap as a select: no branch to mispredict per ray.
+    let (xy, xz, yz) = (a.x > a.y, a.x > a.z, a.y > a.z);
+    let kz = if xy {
+        2 * !xz as usize
     } else {
-        2
+        2 - yz as usize
     };
     let kx = (kz + 1) % 3;
     let ky = (kx + 1) % 3;
-    if d[kz] < 0.0 {
-        [ky, kx, kz]
-    } else {
-        [kx, ky, kz]
-    }
+    let swap = d.to_array()[kz] < 0.0;
+    [if swap { ky } else { kx }, if swap { kx } else { ky }, kz]
 }
 
 /// Woop et al. 2013, §3: a vertex in the ray's sheared frame, where the ray is the +z axis.
@@ -102,8 +100,12 @@ pub struct WatertightLanes<L> {
     pub e: [L; 3],
     /// Lanes with an edge function exactly `0.0`: only the scalar test decides them.
     pub exact: u32,
-    /// Lanes where no two edge functions have opposite signs (the ray is inside if also
-    /// `det != 0`). Meaningless for `exact` lanes.
+    /// Lanes where the three edge functions have the same sign bit: for nonzero, non-NaN
+    /// values exactly "no two of opposite signs" of the scalar test (the ray is inside if also
+    /// `det != 0`). Meaningless for `exact` lanes (a zero's sign bit says nothing). A lane with
+    /// a NaN edge function may be classified either way, but its `det` and `t` are NaN, so
+    /// every caller's `t > t_min` (or `t > 0`) rejects it, as the scalar test does: only the
+    /// work differs, never a result.
     pub same_sign: u32,
 }
 
@@ -128,13 +130,13 @@ pub fn watertight_lanes<L: Lanes>(a: [L; 3], b: [L; 3], c: [L; 3]) -> Watertight
     let zero = L::splat(0.0);
     let [u, v, w] = e;
     let exact = L::bits(L::or(L::or(u.eq(zero), v.eq(zero)), w.eq(zero)));
-    let neg = L::or(L::or(u.lt(zero), v.lt(zero)), w.lt(zero));
-    let pos = L::or(L::or(u.gt(zero), v.gt(zero)), w.gt(zero));
+    // Same sign bit in all three (module docs of `WatertightLanes::same_sign`).
+    let (su, sv, sw) = (u.sign_bits(), v.sign_bits(), w.sign_bits());
     let all = (1u32 << L::N) - 1;
     WatertightLanes {
         e,
         exact,
-        same_sign: !L::bits(L::and(neg, pos)) & all,
+        same_sign: !((su ^ sv) | (su ^ sw)) & all,
     }
 }
 
@@ -329,6 +331,48 @@ pub fn intersect_triangle_moller(ray: &Ray, p0: Vec3, p1: Vec3, p2: Vec3) -> Opt
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The branch-free permutation equals the paper's nested form, over ties, signed zeros,
+    /// infinities and NaN components.
+    #[test]
+    fn permutation_equals_the_nested_form() {
+        let nested = |d: Vec3| {
+            let a = d.abs();
+            let kz = if a.x > a.y {
+                if a.x > a.z { 0 } else { 2 }
+            } else if a.y > a.z {
+                1
+            } else {
+                2
+            };
+            let kx = (kz + 1) % 3;
+            let ky = (kx + 1) % 3;
+            if d[kz] < 0.0 {
+                [ky, kx, kz]
+            } else {
+                [kx, ky, kz]
+            }
+        };
+        let vals = [
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            2.0,
+            -2.0,
+            f32::INFINITY,
+            -f32::INFINITY,
+            f32::NAN,
+        ];
+        for &x in &vals {
+            for &y in &vals {
+                for &z in &vals {
+                    let d = Vec3::new(x, y, z);
+                    assert_eq!(watertight_permutation(d), nested(d), "{d:?}");
+                }
+            }
+        }
+    }
 
     fn hit(o: Vec3, d: Vec3, p: [Vec3; 3]) -> Option<TriangleHit> {
         WatertightRay::new(&Ray::new(o, d)).intersect(p[0], p[1], p[2])

@@ -255,6 +255,11 @@ impl Lanes for V16 {
         bits_by_quarter(m)
     }
     #[inline(always)]
+    fn sign_bits(self) -> u32 {
+        let q = |i: usize| self.0[i].is_negative_bitmask() << (4 * i);
+        q(0) | q(1) | q(2) | q(3)
+    }
+    #[inline(always)]
     fn select(m: M16, a: Self, b: Self) -> Self {
         let q = |i: usize| <Vec4 as Lanes>::select(m.0[i], a.0[i], b.0[i]);
         V16([q(0), q(1), q(2), q(3)])

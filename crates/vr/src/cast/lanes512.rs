@@ -131,6 +131,13 @@ impl Lanes for Z16 {
         m.0 as u32
     }
     #[inline(always)]
+    fn sign_bits(self) -> u32 {
+        // SAFETY: module docs. Signed compare of the bit patterns with zero: the sign bits.
+        unsafe {
+            _mm512_cmplt_epi32_mask(_mm512_castps_si512(self.0), _mm512_setzero_si512()) as u32
+        }
+    }
+    #[inline(always)]
     fn select(m: K16, a: Self, b: Self) -> Self {
         // SAFETY: module docs (lanes of `m` from `a`, the others from `b`).
         Z16(unsafe { _mm512_mask_blend_ps(m.0, b.0, a.0) })
