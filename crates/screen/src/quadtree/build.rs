@@ -521,16 +521,16 @@ impl QuadTree {
     /// node again with the same value changes nothing).
     pub(crate) fn mark_unsafe_listed(&mut self, tz: Vec<f32>, px: &[u32]) -> Vec<f32> {
         let (w, nl) = (self.width, self.levels.len());
+        // The pixels' coordinates, one division each (not one per level and pass).
+        let xy: Vec<(u32, u32)> = px.iter().map(|&k| (k % w, k / w)).collect();
         let l0 = &mut self.levels[0];
-        for &k in px {
-            let (y, x) = (k / w, k % w);
+        for (&k, &(x, y)) in px.iter().zip(&xy) {
             l0.nodes[(y * l0.w + x) as usize].mark_unsafe(tz[k as usize]);
         }
         let mut mins: Vec<f32> = Vec::new();
         if nl == 1 {
             mins.resize(l0.nodes.len(), f32::INFINITY);
-            for &k in px {
-                let (y, x) = (k / w, k % w);
+            for (&k, &(x, y)) in px.iter().zip(&xy) {
                 mins[(y * l0.w + x) as usize] = tz[k as usize];
             }
         }
@@ -546,15 +546,15 @@ impl QuadTree {
                 mins.par_chunks_mut(lw as usize)
                     .for_each(|r| r.fill(f32::INFINITY));
             }
-            let at = |k: u32| (((k / w) >> l) * lw + ((k % w) >> l)) as usize;
-            for &k in px {
-                let (m, t) = (&mut mins[at(k)], tz[k as usize]);
+            let at = |(x, y): (u32, u32)| ((y >> l) * lw + (x >> l)) as usize;
+            for (&k, &p) in px.iter().zip(&xy) {
+                let (m, t) = (&mut mins[at(p)], tz[k as usize]);
                 if t < *m {
                     *m = t;
                 }
             }
-            for &k in px {
-                let i = at(k);
+            for &p in &xy {
+                let i = at(p);
                 lv.nodes[i].mark_unsafe(mins[i]);
             }
         }

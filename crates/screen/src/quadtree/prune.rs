@@ -132,6 +132,11 @@ pub(super) fn prune(
     h: u32,
 ) -> Vec<Level> {
     let mut blocked: Vec<bool> = Vec::new();
+    // The listed pixels' coordinates, one division each (not one per level).
+    let xy: Vec<(u32, u32)> = match blocked_px {
+        Blocked::List(px) => px.iter().map(|&k| (k % w, k / w)).collect(),
+        _ => Vec::new(),
+    };
     let mut levels = vec![level0];
     for l in 1..nlev {
         let child = levels.last().unwrap();
@@ -160,12 +165,11 @@ pub(super) fn prune(
                     });
                 blocked = next;
             }
-            Blocked::List(px) => {
+            Blocked::List(_) => {
                 // The same nodes: the ancestors at level `l` of the blocked pixels.
                 let mut next = vec![false; (pw * ph) as usize];
-                for &k in px {
-                    let (x, y) = ((k % w) >> l, (k / w) >> l);
-                    next[(y * pw + x) as usize] = true;
+                for &(x, y) in &xy {
+                    next[((y >> l) * pw + (x >> l)) as usize] = true;
                 }
                 blocked = next;
             }
