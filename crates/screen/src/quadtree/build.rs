@@ -47,7 +47,7 @@ use rayon::prelude::*;
 use super::QuadTreeOptions;
 use super::leaves::Leaves;
 use super::merge::MergeCtx;
-use super::node::{FLAG_CRACK, NO_PLANE, Node};
+use super::node::{FLAG_CRACK, Node};
 use super::prune::Blocked;
 use super::tree::{
     Level, QuadTree, Z_FLOOR_TABLE_MAX, Z_REGION_MIN_GAIN, Z_SKIP_MARGIN, init_row, par_rows,
@@ -298,17 +298,12 @@ impl QuadTree {
                 tree.mark_unsafe(tz)
             }
         };
-        // `mark_unsafe` changes flags and AABB ranges but no node kinds: `eff` (the effective
-        // levels, top-down, one pass per level, instead of a climb per pixel) still holds.
+        // `mark_unsafe` changes flags and AABB ranges but no node kinds: `eff` (the plane
+        // levels of the fixed point's final levels) still holds.
         tree.plane_level = if eff.is_empty() {
             plane_levels(&tree.levels, w, h)
         } else {
-            let w0 = tree.levels[0].w as usize;
-            par_rows((w * h) as usize, w as usize, 0u8, |j, row| {
-                for (v, &l) in row.iter_mut().zip(&eff[j * w0..]) {
-                    *v = if l == NO_PLANE { 0 } else { l };
-                }
-            })
+            eff
         };
         // After `mark_unsafe` (it lowers AABB ranges to trigger depths).
         tree.set_z_floors(&ctx, &top_tz);
@@ -526,33 +521,40 @@ impl QuadTree {
     /// node again with the same value changes nothing).
     pub(crate) fn mark_unsafe_listed(&mut self, tz: Vec<f32>, px: &[u32]) -> Vec<f32> {
         let (w, nl) = (self.width, self.levels.len());
+        // The pixels' coordinates, one division each (not one per level and pass).
+        let xy: Vec<(u32, u32)> = px.iter().map(|&k| (k % w, k / w)).collect();
         let l0 = &mut self.levels[0];
-        for &k in px {
-            let (y, x) = (k / w, k % w);
+        for (&k, &(x, y)) in px.iter().zip(&xy) {
             l0.nodes[(y * l0.w + x) as usize].mark_unsafe(tz[k as usize]);
         }
         let mut mins: Vec<f32> = Vec::new();
         if nl == 1 {
             mins.resize(l0.nodes.len(), f32::INFINITY);
-            for &k in px {
-                let (y, x) = (k / w, k % w);
+            for (&k, &(x, y)) in px.iter().zip(&xy) {
                 mins[(y * l0.w + x) as usize] = tz[k as usize];
             }
         }
         for l in 1..nl {
             let lv = &mut self.levels[l];
-            mins.clear();
-            mins.resize(lv.nodes.len(), f32::INFINITY);
-            let lw = lv.w;
-            let at = |k: u32| (((k / w) >> l) * lw + ((k % w) >> l)) as usize;
-            for &k in px {
-                let (m, t) = (&mut mins[at(k)], tz[k as usize]);
+            // The dense minima set to `+inf` in parallel rows (level 1's is the largest;
+            // the levels above shrink, so its allocation is reused).
+            let (len, lw) = (lv.nodes.len(), lv.w);
+            if l == 1 {
+                mins = par_rows(len, lw as usize, f32::INFINITY, |_, _| {});
+            } else {
+                mins.truncate(len);
+                mins.par_chunks_mut(lw as usize)
+                    .for_each(|r| r.fill(f32::INFINITY));
+            }
+            let at = |(x, y): (u32, u32)| ((y >> l) * lw + (x >> l)) as usize;
+            for (&k, &p) in px.iter().zip(&xy) {
+                let (m, t) = (&mut mins[at(p)], tz[k as usize]);
                 if t < *m {
                     *m = t;
                 }
             }
-            for &k in px {
-                let i = at(k);
+            for &p in &xy {
+                let i = at(p);
                 lv.nodes[i].mark_unsafe(mins[i]);
             }
         }

@@ -17,6 +17,10 @@
 //! - the blocked pixels are kept as a list too: pruning marks only their ancestors
 //!   ([`Blocked::List`]) and the unsafe pixels are marked through their ancestors only
 //!   (`QuadTree::mark_unsafe_listed`; ~1 % of the pixels on atrium);
+//! - the effective levels are kept as the tree's plane levels (`W x H`, 0 where the
+//!   pixel's effective node is its own leaf or where it has none, [`plane_levels`]): made
+//!   from level 1 down, so level 0 (the largest array) is not read again, and they are the
+//!   finished tree's [`super::QuadTree::plane_levels`] without a conversion pass;
 //! - a pixel whose effective node is its own leaf (level 0) or none has the pixel planes'
 //!   trigger depth: only pixels under merged nodes are evaluated against their proxy plane,
 //!   by runs (the pixels of one effective node in a row all have its level; a merged node
@@ -42,12 +46,12 @@ use super::merge::MergeCtx;
 use super::node::NO_PLANE;
 use super::node::{Node, decode_plane, decode_plane_at};
 use super::prune::Blocked;
-use super::tree::{Level, effective_levels};
+use super::tree::{Level, plane_levels};
 use crate::LayerPlanes;
 
-/// The levels after pruning to the fixed point, the trigger depths (`W x H`) and the
-/// effective levels of the final levels (`levels[0].w x levels[0].h`,
-/// [`super::QuadTree::effective_levels`]), and the unsafe pixels (indices `j W + i` of the
+/// The levels after pruning to the fixed point, the trigger depths (`W x H`), the plane
+/// levels of the final levels (`W x H`, [`plane_levels`]: the effective level, 0 where that
+/// is the pixel's own leaf or where it has none), and the unsafe pixels (indices `j W + i` of the
 /// finite trigger depths, ascending). `deeper` is not empty; `(tz, listed)`: the trigger
 /// depths of the pixel planes and the pixels where they are finite, ascending, and the
 /// pixels' deeper fronts (computed with the leaves, [`pixel_triggers_row`] per row).
@@ -65,7 +69,7 @@ pub(super) fn fixed_point(
         blocked[k as usize] = true;
     }
     let mut levels = super::prune::prune(ctx, level0, nlev, Blocked::List(&listed), w, h);
-    let mut eff = effective_levels(&levels);
+    let mut eff = plane_levels(&levels, w, h);
     if ctx.never {
         return (levels, tz, eff, Some(listed));
     }
@@ -128,7 +132,6 @@ fn refill(
         }
     }
     let (wf, hf) = (ctx.wf, ctx.hf);
-    let w0 = levels[0].w;
     // Per footprint, the pixels' new trigger depths (in parallel), written afterwards.
     let vals: Vec<Vec<(u32, f32)>> = kids
         .par_iter()
@@ -168,11 +171,14 @@ fn refill(
             out
         })
         .collect();
+    // A plane node's footprint lies inside the image (padding nodes are empty, and a
+    // plane node's descendants are all planes); clipped to it all the same.
     for &(l, qx, qy) in &kids {
         let (x0, y0) = (qx << l, qy << l);
-        for y in y0..((qy + 1) << l) {
-            let row = (y * w0) as usize;
-            eff[row + x0 as usize..row + ((qx + 1) << l) as usize].fill(l as u8);
+        let (x1, y1) = (((qx + 1) << l).min(w), ((qy + 1) << l).min(h));
+        for y in y0..y1 {
+            let row = (y * w) as usize;
+            eff[row + x0 as usize..row + x1 as usize].fill(l as u8);
         }
     }
     let mut newly = Vec::new();
@@ -222,7 +228,7 @@ impl Columns {
 }
 
 /// The trigger depths (`tz`, `W x H`, pairs of rows in parallel) of the pixels under merged
-/// nodes (effective level `eff > 0`) against `deeper`, from their effective node's decoded
+/// nodes (plane level `eff > 0`, `W x H`) against `deeper`, from their effective node's decoded
 /// plane ([`decode_plane`]); other pixels keep their value. The pixels of one effective node
 /// in a row are one run (they all have its level). A merged node (level >= 1) covers both
 /// rows `2m`, `2m + 1` of a pair with the same run, so the runs are found in the pair's
@@ -247,7 +253,7 @@ fn merged_triggers(
 ) -> Vec<u32> {
     let cols = Columns::new(w, ctx.wf);
     let (wf, hf) = (ctx.wf, ctx.hf);
-    let (wu, w0) = (w as usize, levels[0].w as usize);
+    let wu = w as usize;
     let run = RunCtx {
         cols: &cols,
         wf,
@@ -263,7 +269,7 @@ fn merged_triggers(
             let j = 2 * m;
             let base = j * wu;
             // Row `j`'s effective levels: its runs of level >= 1 are row `j + 1`'s.
-            let er = &eff[j * w0..j * w0 + wu];
+            let er = &eff[j * wu..(j + 1) * wu];
             let (row0, row1) = rows.split_at_mut(wu);
             let fr0 = &fronts[base..base + wu];
             let fr1 = if row1.is_empty() {

@@ -2,12 +2,14 @@
 //! leaves, one [`MergeCtx::parent`] per node, in parallel over rows; and the cascade's
 //! pruning fixed point by its definition (the slow twin of [`super::fixpoint`]).
 //!
-//! **Invariants:** a node containing a blocked pixel never merges; level 0 is not changed.
+//! **Invariants:** a node containing a blocked pixel never merges; level 0 is not changed;
+//! a node over padding only (beyond `ceil(W / 2^l) x ceil(H / 2^l)` at level `l`) is
+//! empty, so the fast path writes it without reading its children.
 
 use rayon::prelude::*;
 
 use super::merge::MergeCtx;
-use super::node::Node;
+use super::node::{NO_PLANE, Node};
 use super::tree::{Level, decoded_planes, effective_levels, par_rows};
 use crate::LayerPlanes;
 
@@ -20,7 +22,8 @@ use crate::LayerPlanes;
 /// the traversal tests (a deeper plane in front of it: found by proptest,
 /// `quadtree_cascade.rs`). Such pixels are blocked too and the levels rebuilt; the set only
 /// grows, so this ends (in practice after one extra pass, or none). Returns the levels, the
-/// trigger depths and the effective levels.
+/// trigger depths and the plane levels (`W x H`: the effective level of every pixel by the
+/// top-down definition, 0 where that is its own leaf or where it has none).
 pub(super) fn fixed_point_reference(
     ctx: &MergeCtx,
     level0: Level,
@@ -76,7 +79,13 @@ pub(super) fn fixed_point_reference(
         }
     };
     let eff = effective_levels(&levels);
-    (levels, tz, eff)
+    let w0 = levels[0].w as usize;
+    let plane_level = par_rows((w * h) as usize, w as usize, 0u8, |j, row| {
+        for (v, &l) in row.iter_mut().zip(&eff[j * w0..]) {
+            *v = if l == NO_PLANE { 0 } else { l };
+        }
+    });
+    (levels, tz, plane_level)
 }
 
 /// Node `(qx, qy)` at level `l` from its four children in `child` (level `l - 1`), merged
@@ -123,6 +132,11 @@ pub(super) fn prune(
     h: u32,
 ) -> Vec<Level> {
     let mut blocked: Vec<bool> = Vec::new();
+    // The listed pixels' coordinates, one division each (not one per level).
+    let xy: Vec<(u32, u32)> = match blocked_px {
+        Blocked::List(px) => px.iter().map(|&k| (k % w, k / w)).collect(),
+        _ => Vec::new(),
+    };
     let mut levels = vec![level0];
     for l in 1..nlev {
         let child = levels.last().unwrap();
@@ -151,25 +165,33 @@ pub(super) fn prune(
                     });
                 blocked = next;
             }
-            Blocked::List(px) => {
+            Blocked::List(_) => {
                 // The same nodes: the ancestors at level `l` of the blocked pixels.
                 let mut next = vec![false; (pw * ph) as usize];
-                for &k in px {
-                    let (x, y) = ((k % w) >> l, (k / w) >> l);
-                    next[(y * pw + x) as usize] = true;
+                for &(x, y) in &xy {
+                    next[((y >> l) * pw + (x >> l)) as usize] = true;
                 }
                 blocked = next;
             }
         }
         let blocked = &blocked;
+        // The parents over the image (`ceil(W / 2^l) x ceil(H / 2^l)`); the others have only
+        // padding children, which are empty at every level, so they are empty.
+        let (iw, ih) = (((w - 1) >> l) + 1, ((h - 1) >> l) + 1);
         // Each row set empty in cache right before its parents are written.
         let nodes = par_rows((pw * ph) as usize, pw as usize, Node::EMPTY, |qy, row| {
             let qy = qy as u32;
             let allow = |qx: u32| blocked.is_empty() || !blocked[(qy * pw + qx) as usize];
             #[cfg(target_arch = "x86_64")]
             if ctx.lanes {
-                // Eight (AVX2) or four parents per step, children straight from their two rows.
-                ctx.parent_row_fast(child, l, qy, row, allow);
+                // Padding parents stay empty (set by `par_rows`; their children are not read).
+                if qy < ih {
+                    // Eight (AVX2) or four parents per step, children straight from their
+                    // two rows.
+                    let n = (iw as usize).min(row.len());
+                    let row = &mut row[..n];
+                    ctx.parent_row_fast(child, l, qy, row, allow);
+                }
                 return;
             }
             for (qx, out) in row.iter_mut().enumerate() {
