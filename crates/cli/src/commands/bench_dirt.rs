@@ -133,13 +133,13 @@ fn print(r: &DirtBenchReport) {
         r.options.repeats
     );
     println!(
-        "Build (ms; DIRT stages: triangle buffer / camera view / cube; capture setup / fill / assemble / mip)\n"
+        "Build (ms; DIRT stages: triangle buffer / camera view / cube / tracer (slab masks); capture setup / fill / assemble / mip)\n"
     );
     println!("| scene | method | triangles | build ms | vs BVH | stages | capture stages | MiB |");
     println!("|---|---|---|---|---|---|---|---|");
     for b in &r.build {
         println!(
-            "| {} | {} | {} | {:.1} | {:.2}x | {:.1} / {:.1} / {:.1} | {:.1} / {:.1} / {:.1} / {:.1} | {:.1} |",
+            "| {} | {} | {} | {:.1} | {:.2}x | {:.1} / {:.1} / {:.1} / {:.1} | {:.1} / {:.1} / {:.1} / {:.1} | {:.1} |",
             b.scene,
             b.method,
             b.triangles,
@@ -148,6 +148,7 @@ fn print(r: &DirtBenchReport) {
             b.ms_triangles,
             b.ms_camera,
             b.ms_cube,
+            b.ms_tracer,
             b.ms_setup,
             b.ms_fill,
             b.ms_assemble,

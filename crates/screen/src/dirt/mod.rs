@@ -56,6 +56,7 @@ use parallax_core::math::WatertightRay;
 use parallax_core::{Ray, WorldHit, WorldStats, WorldTracer};
 use parallax_raster::dirt::DirtViews;
 use parallax_scene::camera::CubeMap;
+use rayon::prelude::*;
 
 use best::Best;
 pub use best::DirtCounters;
@@ -80,7 +81,10 @@ impl DirtTracer {
     /// A tracer over a built capture.
     pub fn new(views: DirtViews) -> DirtTracer {
         let consts = views.views().map(ViewConsts::new).collect();
-        let slabs = views.views().map(Slabs::new).collect();
+        // The views' masks are independent: built side by side (`bench dirt` times this
+        // construction as part of DIRT's build).
+        let captures: Vec<_> = views.views().collect();
+        let slabs = captures.into_par_iter().map(Slabs::new).collect();
         let neighbours = std::array::from_fn(|i| {
             let b = views.cube.cube.face_camera(i).frame.basis;
             [-b.x_axis, b.x_axis, b.y_axis, -b.y_axis].map(CubeMap::face_of)
@@ -91,6 +95,15 @@ impl DirtTracer {
             slabs,
             neighbours,
         }
+    }
+
+    /// Bytes of the walk's own copy of the mip texels (reciprocal bounds and slab mask),
+    /// beside the capture's [`DirtViews::bytes`].
+    pub fn texel_bytes(&self) -> u64 {
+        self.slabs
+            .iter()
+            .map(|s| std::mem::size_of_val(s.texels.as_slice()) as u64)
+            .sum()
     }
 
     /// The capture this tracer reads.
