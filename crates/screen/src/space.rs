@@ -264,7 +264,7 @@ impl UnitCube {
         let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
         let b = m.x_axis * d.x + m.y_axis * d.y + m.z_axis * d.z;
         let a = m.x_axis * o.x + m.y_axis * o.y + m.z_axis * o.z + m.w_axis;
-        let (mut lo, mut hi) = (ray.t_min.max(0.0) as f64, ray.t_max as f64);
+        let (mut lo, mut hi) = (t_start(ray.t_min), ray.t_max as f64);
         let (near, far) = (self.near as f64, self.far as f64);
         // Each face: alpha + beta t >= 0.
         let faces = [
@@ -309,6 +309,14 @@ impl UnitCube {
             w1: h1.w,
         })
     }
+}
+
+/// The clip's start parameter `max(t_min, 0)` with `+0` for `t_min = -0` (what `maxss` with
+/// `0` as its second operand gives, as `f32::max` compiled here; spelled out because the
+/// sign of a zero `f32::max` returns is not specified and differs between inlining sites).
+#[inline(always)]
+pub(crate) fn t_start(t_min: f32) -> f64 {
+    (if t_min > 0.0 { t_min } else { 0.0 }) as f64
 }
 
 #[cfg(test)]

@@ -337,6 +337,7 @@ pub fn bench(a: &DofBenchArgs, quiet: bool) -> Result<()> {
         );
         print_rows("Table 4", &all, false);
         print_dda_minimal(&all);
+        print_vs_dda(&all);
     }
     if a.converged > 0 {
         let mut seen = Vec::new();
@@ -489,5 +490,54 @@ fn print_dda_minimal(rows: &[bench_dof::DofRow]) {
                 parallax_synth::bench::warp::DDA_EQUIV_EXTRA_PCT
             );
         }
+    }
+}
+
+/// Quad-tree against the DDA in the same run, per layer count and `N_pri` (plain lens
+/// sampling): the DDA at the step bound of its sweep with the best PSNR (its best quality),
+/// CPU times and their ratio next to both methods' PSNR / SSIM. "Equal quality" holds where
+/// the DDA's best PSNR reaches the quad-tree's; where it does not, the ratio compares the
+/// quad-tree's better image with the DDA's best one.
+fn print_vs_dda(rows: &[bench_dof::DofRow]) {
+    let ok = |r: &&bench_dof::DofRow| r.error.is_none() && r.n_sec == 1;
+    let qts: Vec<&bench_dof::DofRow> = rows
+        .iter()
+        .filter(ok)
+        .filter(|r| r.method == "quadtree")
+        .collect();
+    let mut header = false;
+    for q in qts {
+        let best = rows
+            .iter()
+            .filter(ok)
+            .filter(|r| r.method == "dda" && r.layers == q.layers && r.n_pri == q.n_pri)
+            .max_by(|a, b| a.psnr.total_cmp(&b.psnr));
+        let Some(d) = best else { continue };
+        if !header {
+            println!("\nQuad-tree vs the DDA at its best step bound (same run, CPU ms)\n");
+            println!(
+                "| layers | N_pri | quad-tree PSNR dB / SSIM | quad-tree CPU ms | DDA steps | DDA PSNR dB / SSIM | DDA CPU ms | CPU ratio quad-tree / DDA | DDA reaches the quad-tree's PSNR |"
+            );
+            println!("|---|---|---|---|---|---|---|---|---|");
+            header = true;
+        }
+        println!(
+            "| {} | {} | {:.2} / {:.4} | {:.1} | {} | {:.2} / {:.4} | {:.1} | {:.3} | {} |",
+            q.layers,
+            q.n_pri,
+            q.psnr,
+            q.ssim,
+            q.ms_dof_cpu,
+            d.dda_max_steps.map_or("-".into(), |n| n.to_string()),
+            d.psnr,
+            d.ssim,
+            d.ms_dof_cpu,
+            q.ms_dof_cpu / d.ms_dof_cpu,
+            if d.psnr >= q.psnr {
+                "yes".to_string()
+            } else {
+                format!("no ({:+.2} dB)", d.psnr - q.psnr)
+            }
+        );
     }
 }

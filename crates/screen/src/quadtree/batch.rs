@@ -50,16 +50,33 @@ impl QuadTreeTracer {
         }
     }
 
+    /// The f64 cube clips of at most [`BATCH`] rays, two at a time
+    /// ([`crate::UnitCube::clip_ray_pair`]: the bits of [`crate::UnitCube::clip_ray`]).
+    #[inline(always)]
+    fn clip_phase(&self, rays: &[Ray]) -> [Option<CubeSegment>; BATCH] {
+        debug_assert!(rays.len() <= BATCH);
+        let mut segs: [Option<CubeSegment>; BATCH] = [None; BATCH];
+        for (seg, ray) in segs.chunks_exact_mut(2).zip(rays.chunks(2)) {
+            match ray {
+                [r0, r1] => {
+                    let [s0, s1] = self.cube.clip_ray_pair(r0, r1);
+                    seg[0] = s0;
+                    seg[1] = s1;
+                }
+                [r0] => seg[0] = self.cube.clip_ray(r0),
+                _ => {}
+            }
+        }
+        segs
+    }
+
     /// At most [`BATCH`] rays through several layers (or with inpainting): clip, set-up, then
     /// the cascade of [`QuadTreeTracer::trace_ray`] ray by ray.
     #[inline(always)]
     fn cascade_phases(&self, rays: &[Ray], out: &mut [TraceResult], stats: &mut TraceStats) {
         debug_assert!(rays.len() <= BATCH && rays.len() == out.len());
         let t0 = &self.trees[0];
-        let mut segs: [Option<CubeSegment>; BATCH] = [None; BATCH];
-        for (seg, ray) in segs.iter_mut().zip(rays) {
-            *seg = self.cube.clip_ray(ray);
-        }
+        let segs = self.clip_phase(rays);
         let mut setups: [Option<RaySetup>; BATCH] = [None; BATCH];
         for (rs, seg) in setups.iter_mut().zip(&segs) {
             *rs = seg.as_ref().map(|seg| RaySetup::new(seg, t0.wf, t0.hf));
@@ -80,10 +97,7 @@ impl QuadTreeTracer {
         debug_assert!(rays.len() <= BATCH && rays.len() == out.len());
         let t0 = &self.trees[0];
         let q = Query::WHOLE;
-        let mut segs: [Option<CubeSegment>; BATCH] = [None; BATCH];
-        for (seg, ray) in segs.iter_mut().zip(rays) {
-            *seg = self.cube.clip_ray(ray);
-        }
+        let segs = self.clip_phase(rays);
         let mut started: [Option<(RaySetup, Option<LayerStart>)>; BATCH] = [None; BATCH];
         for (st, seg) in started.iter_mut().zip(&segs) {
             if let Some(seg) = seg {
