@@ -320,12 +320,13 @@ pub(crate) fn t_start(t_min: f32) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use glam::Vec2;
     use parallax_scene::CameraDesc;
 
-    fn cube() -> UnitCube {
+    /// A shifted 64x48 camera's cube, near 0.5, far 20 (also `space_pair`'s tests).
+    pub(crate) fn cube() -> UnitCube {
         let desc = CameraDesc::new(
             Vec3::new(0.3, 1.0, 4.0),
             Vec3::new(0.0, 0.8, 0.0),

@@ -176,10 +176,8 @@ impl UnitCube {
 mod tests {
     use glam::{Vec2, Vec3};
     use parallax_core::Ray;
-    use parallax_scene::CameraDesc;
-    use parallax_scene::camera::Pinhole;
 
-    use crate::{CubeSegment, UnitCube};
+    use crate::CubeSegment;
 
     /// Every field's bits (`==` would let a signed zero or a NaN pass).
     fn bits(s: &Option<CubeSegment>) -> Option<[u64; 10]> {
@@ -211,16 +209,8 @@ mod tests {
 
     #[test]
     fn pair_equals_scalar() {
-        let desc = CameraDesc::new(
-            Vec3::new(0.3, 1.0, 4.0),
-            Vec3::new(0.0, 0.8, 0.0),
-            Vec3::Y,
-            50.0,
-        );
-        let cam = Pinhole::new(&desc, 64, 48)
-            .unwrap()
-            .with_shift(Vec2::new(0.1, -0.05));
-        let cube = UnitCube::new(&cam, 0.5, 20.0).unwrap();
+        let cube = crate::space::tests::cube();
+        let cam = &cube.camera;
         let eye = cam.frame.position;
         let mut rng = Xs(0x9e37_79b9_7f4a_7c15);
         let mut rays = Vec::new();
