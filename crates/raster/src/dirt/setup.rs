@@ -343,7 +343,7 @@ impl ViewXf {
                     // share it (the camera view and the cube faces share the camera's).
                     let mut d = [[0.0; 3]; 3];
                     for (k, (xf, o)) in views.iter().zip(&mut out).enumerate() {
-                        if k == 0 || !same_eye[k] {
+                        if !same_eye[k] {
                             d = p.map(|p| (p - xf.eye).to_array());
                         }
                         xf.setup_into(t, &d, world_mag, o);

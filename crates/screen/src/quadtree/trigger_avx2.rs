@@ -235,13 +235,20 @@ mod tests {
     use crate::quadtree::test_rng::Rng;
     use crate::quadtree::trigger_lanes::pixel_triggers4;
 
+    /// Whether this CPU runs the kernels under test (says so when it does not).
+    fn avx2_f16c() -> bool {
+        let ok = std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("f16c");
+        if !ok {
+            eprintln!("no AVX2 and F16C: nothing to compare");
+        }
+        ok
+    }
+
     /// F16C's conversion equals `f16_bits_to_f32` (and `f16x4`) for every finite half.
     #[test]
     fn f16c_decodes_every_finite_half_as_the_definition() {
-        if !(std::arch::is_x86_feature_detected!("avx2")
-            && std::arch::is_x86_feature_detected!("f16c"))
-        {
-            eprintln!("no AVX2 and F16C: nothing to compare");
+        if !avx2_f16c() {
             return;
         }
         #[target_feature(enable = "avx2,f16c")]
@@ -273,10 +280,7 @@ mod tests {
     /// front of and behind the own ones.
     #[test]
     fn rows_equal_the_four_lane_rows() {
-        if !(std::arch::is_x86_feature_detected!("avx2")
-            && std::arch::is_x86_feature_detected!("f16c"))
-        {
-            eprintln!("no AVX2 and F16C: nothing to compare");
+        if !avx2_f16c() {
             return;
         }
         let mut rng = Rng(0x0bad_cafe_dead_beef);
