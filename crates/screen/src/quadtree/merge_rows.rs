@@ -115,6 +115,18 @@ impl Kids {
         unsafe { _mm_movemask_ps(_mm_castsi128_ps(self.a[k])) as u32 }
     }
 
+    /// The children's `a` words (`[k]`: child `k` of the four parents in lanes).
+    #[inline(always)]
+    pub(super) fn words_a(&self) -> [__m128i; 4] {
+        self.a
+    }
+
+    /// Child `k`'s `b` words of the four parents in lanes.
+    #[inline(always)]
+    pub(super) fn word_b(&self, k: usize) -> __m128i {
+        self.b[k]
+    }
+
     /// Whether every child of every lane is [`Node::EMPTY`].
     #[inline(always)]
     fn all_empty(&self) -> bool {

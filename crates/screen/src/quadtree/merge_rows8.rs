@@ -161,9 +161,30 @@ impl M8 {
     }
 }
 
+/// Child `k`'s stored increments ([`Kids::increments`]) of the eight parents of `lo`
+/// (lanes 0-3) and `hi` (lanes 4-7), by F16C: `vcvtph2ps` equals `f16x4` (and
+/// `node::f16_bits_to_f32`) for every finite half (test in `trigger_avx2`), and plane
+/// nodes hold only finite halves (slopes clamped to `±65504` before encoding); the lanes of
+/// other children are not read. Per node, `b`'s low half is `x`, its high half `y`: one
+/// byte shuffle per four nodes puts the `x` halves in the low eight bytes and the `y`
+/// halves in the high eight.
+#[inline(always)]
+fn increments8(lo: &Kids, hi: &Kids, k: usize) -> (F8, F8) {
+    // SAFETY: AVX2 and F16C (module docs).
+    unsafe {
+        let halves = _mm_setr_epi8(0, 1, 4, 5, 8, 9, 12, 13, 2, 3, 6, 7, 10, 11, 14, 15);
+        let t_lo = _mm_shuffle_epi8(lo.word_b(k), halves);
+        let t_hi = _mm_shuffle_epi8(hi.word_b(k), halves);
+        (
+            F8(_mm256_cvtph_ps(_mm_unpacklo_epi64(t_lo, t_hi))),
+            F8(_mm256_cvtph_ps(_mm_unpackhi_epi64(t_lo, t_hi))),
+        )
+    }
+}
+
 impl MergeCtx {
     /// [`MergeCtx::parent_row`] (same arguments, same nodes), eight parents per step in
-    /// AVX2 lanes if the CPU has AVX2.
+    /// AVX2 lanes if the CPU has AVX2 and F16C.
     pub(super) fn parent_row_fast(
         &self,
         child: &Level,
@@ -172,15 +193,17 @@ impl MergeCtx {
         out: &mut [Node],
         allow: impl Fn(u32) -> bool,
     ) {
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2 (checked).
+        if std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("f16c")
+        {
+            // SAFETY: the CPU has AVX2 and F16C (checked).
             unsafe { self.parent_row8(child, l, qy, out, allow) }
         } else {
             self.parent_row(child, l, qy, out, allow)
         }
     }
 
-    #[target_feature(enable = "avx2")]
+    #[target_feature(enable = "avx2,f16c")]
     fn parent_row8(
         &self,
         child: &Level,
@@ -207,11 +230,33 @@ impl MergeCtx {
             for (p, c) in cand.iter_mut().enumerate().take(n) {
                 *c = !self.never && planes & (1 << p) != 0 && allow((qx0 + p) as u32);
             }
-            let merged = if cand.iter().any(|&c| c) {
+            let (mask, av, bv) = if cand.iter().any(|&c| c) {
                 self.merge8(l, qx0 as u32, qy, &lo, &hi, cand)
             } else {
-                [None; 8]
+                let z = _mm256_setzero_si256();
+                (0, z, z)
             };
+            if mask == 0xff {
+                // All eight merged (so `n == 8`): the nodes `(a, b)` interleaved and stored.
+                let (ul, uh) = (_mm256_unpacklo_epi32(av, bv), _mm256_unpackhi_epi32(av, bv));
+                // SAFETY: `outs` holds eight nodes, 64 bytes (`Node` is two `u32`s,
+                // `repr(C)`).
+                unsafe {
+                    let op = outs.as_mut_ptr() as *mut __m256i;
+                    _mm256_storeu_si256(op, _mm256_permute2x128_si256::<0x20>(ul, uh));
+                    _mm256_storeu_si256(op.add(1), _mm256_permute2x128_si256::<0x31>(ul, uh));
+                }
+                continue;
+            }
+            let (mut a, mut b) = ([0u32; 8], [0u32; 8]);
+            // SAFETY: 32-byte stores into 32-byte arrays.
+            unsafe {
+                _mm256_storeu_si256(a.as_mut_ptr() as *mut __m256i, av);
+                _mm256_storeu_si256(b.as_mut_ptr() as *mut __m256i, bv);
+            }
+            let merged: [Option<Node>; 8] = core::array::from_fn(|p| {
+                (mask & (1 << p) != 0).then_some(Node { a: a[p], b: b[p] })
+            });
             let (m_lo, m_hi) = (
                 [merged[0], merged[1], merged[2], merged[3]],
                 [merged[4], merged[5], merged[6], merged[7]],
@@ -224,7 +269,8 @@ impl MergeCtx {
     }
 
     /// `merge_rows`' `merge4` for eight parents: lanes 0-3 the parents of `lo`, 4-7 those
-    /// of `hi` (`cand`: four plane children, allowed to merge).
+    /// of `hi` (`cand`: four plane children, allowed to merge). Returns the lanes that
+    /// merged as a bit mask and their nodes' `a` and `b` words (other lanes: garbage).
     #[inline(always)]
     fn merge8(
         &self,
@@ -234,7 +280,7 @@ impl MergeCtx {
         lo: &Kids,
         hi: &Kids,
         cand: [bool; 8],
-    ) -> [Option<Node>; 8] {
+    ) -> (u32, __m256i, __m256i) {
         let s = F8::splat;
         let cl = l - 1;
         let (ws, hs) = (
@@ -246,9 +292,9 @@ impl MergeCtx {
         let (mut nx, mut ny, mut nz) = ([s(0.0); 4], [s(0.0); 4], [s(0.0); 4]);
         let (mut sx, mut sy, mut sz) = (s(0.0), s(0.0), s(0.0));
         for k in 0..4 {
-            let ((lx, ly), (hx, hy)) = (lo.increments(k), hi.increments(k));
-            gx[k] = F8::join(lx, hx) * s(ws);
-            gy[k] = F8::join(ly, hy) * s(hs);
+            let (ex, ey) = increments8(lo, hi, k);
+            gx[k] = ex * s(ws);
+            gy[k] = ey * s(hs);
             let r = s(1.0) / (s(1.0) + gx[k] * gx[k] + gy[k] * gy[k]).sqrt();
             (nx[k], ny[k], nz[k]) = (gx[k] * r, gy[k] * r, -r);
             sx = sx + nx[k];
@@ -270,7 +316,9 @@ impl MergeCtx {
         let cand_bits = (0..8).fold(0u32, |m, p| m | (u32::from(cand[p]) << p));
         let valid = cand_bits & nnz.lt(s(-1e-6)).bits() & min_cos.gt(s(self.loosest_cos())).bits();
         if valid == 0 {
-            return [None; 8];
+            // SAFETY: AVX (module docs).
+            let z = unsafe { _mm256_setzero_si256() };
+            return (0, z, z);
         }
         // The 16 child corners projected on the proxy normal, child-major.
         let size = (1u32 << cl) as f32;
@@ -299,78 +347,69 @@ impl MergeCtx {
         for v in proj {
             dm = (v - c).abs().max_ps(dm);
         }
-        let dmax = (dm / -nnz).to_array();
+        let dmax = dm / -nnz;
         let psize = (1u32 << l) as f32;
         let px = F8::lanes([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]);
         let xc = ((s(qx0 as f32) + px + s(0.5)) * s(psize)) / s(self.wf);
         let yc = s(((qy as f32 + 0.5) * psize) / self.hf);
         let zcv = (c - nnx * xc - nny * yc) / nnz;
-        let zc = zcv.to_array();
         let inv = s(-1.0) / nnz;
-        let min_cos = min_cos.to_array();
-        let mut crack = 0;
-        for k in 0..4 {
-            // SAFETY: SSE baseline.
-            crack |= unsafe {
-                _mm_movemask_ps(lo.crack(k)) as u32 | ((_mm_movemask_ps(hi.crack(k)) as u32) << 4)
-            };
-        }
         // [`Node::plane_with_gradient`] of every lane: the increments `g (2^l / W)`,
         // `g (2^l / H)`, `None` unless `z_c` is finite and `>= 0` and neither increment is
         // NaN; clamped (`maxps` / `minps` are `clamp` for non-NaN values) and f16-encoded
-        // as in `leaf_avx2`; `z_c` rounded to 21 bits, the tag and flag `O`.
+        // as in `leaf_avx2`; `z_c` rounded to 21 bits, the tag, and flag `O` where a
+        // child has it.
         let size = (1u32 << l) as f32;
         let (ex, ey) = (
             (nnx * inv) * s(size / self.wf),
             (nny * inv) * s(size / self.hf),
         );
-        let (ok_node, a, b) = {
-            let ok = zcv
-                .finite()
-                .and(zcv.ge(s(0.0)))
-                .and(ex.ordered())
-                .and(ey.ordered());
-            let (lo_, hi_) = (s(-F16_MAX), s(F16_MAX));
-            let clamp = |e: F8| e.max_ps(lo_).min(hi_);
-            let (ex, ey) = (clamp(ex), clamp(ey));
-            let (mut a, mut b) = ([0u32; 8], [0u32; 8]);
-            // SAFETY: AVX2 (module docs); 32-byte stores into 32-byte arrays.
-            unsafe {
-                let (hx, hy) = (f16x8_encode(ex.0), f16x8_encode(ey.0));
-                let bv = _mm256_or_si256(
-                    _mm256_and_si256(hx, _mm256_set1_epi32(0xffff)),
-                    _mm256_slli_epi32::<16>(hy),
-                );
-                let bits = _mm256_and_si256(
-                    _mm256_add_epi32(_mm256_castps_si256(zcv.0), _mm256_set1_epi32(2)),
-                    _mm256_set1_epi32(!3),
-                );
-                let av = _mm256_or_si256(bits, _mm256_set1_epi32(0x8000_0000u32 as i32));
-                _mm256_storeu_si256(a.as_mut_ptr() as *mut __m256i, av);
-                _mm256_storeu_si256(b.as_mut_ptr() as *mut __m256i, bv);
-            }
-            (ok.bits(), a, b)
+        let ok_node = zcv
+            .finite()
+            .and(zcv.ge(s(0.0)))
+            .and(ex.ordered())
+            .and(ey.ordered())
+            .bits();
+        let (lo_, hi_) = (s(-F16_MAX), s(F16_MAX));
+        let clamp = |e: F8| e.max_ps(lo_).min(hi_);
+        let (ex, ey) = (clamp(ex), clamp(ey));
+        // SAFETY: AVX2 (module docs).
+        let (av, bv) = unsafe {
+            let (hx, hy) = (f16x8_encode(ex.0), f16x8_encode(ey.0));
+            let bv = _mm256_or_si256(
+                _mm256_and_si256(hx, _mm256_set1_epi32(0xffff)),
+                _mm256_slli_epi32::<16>(hy),
+            );
+            let bits = _mm256_and_si256(
+                _mm256_add_epi32(_mm256_castps_si256(zcv.0), _mm256_set1_epi32(2)),
+                _mm256_set1_epi32(!3),
+            );
+            let (la, ha) = (lo.words_a(), hi.words_a());
+            let or4 =
+                |w: [__m128i; 4]| _mm_or_si128(_mm_or_si128(w[0], w[1]), _mm_or_si128(w[2], w[3]));
+            let crack = _mm256_and_si256(
+                _mm256_set_m128i(or4(ha), or4(la)),
+                _mm256_set1_epi32(FLAG_CRACK as i32),
+            );
+            let tag = _mm256_set1_epi32(0x8000_0000u32 as i32);
+            (_mm256_or_si256(_mm256_or_si256(bits, tag), crack), bv)
         };
-        let mut res = [None; 8];
-        for (p, r) in res.iter_mut().enumerate() {
-            if valid & (1 << p) == 0 {
-                continue;
-            }
-            let u = if self.adaptive {
-                self.depth_fraction(zc[p])
-            } else {
-                0.0
-            };
-            if min_cos[p] > self.cos_thr(u) && dmax[p] < self.dist_thr(u) && ok_node & (1 << p) != 0
-            {
-                let flags = if (crack >> p) & 1 != 0 { FLAG_CRACK } else { 0 };
-                *r = Some(Node {
-                    a: a[p] | flags,
-                    b: b[p],
-                });
-            }
-        }
-        res
+        let thr = if self.adaptive {
+            // Per lane, the thresholds at the proxy's depth.
+            let (zc, min_cos, dmax) = (zcv.to_array(), min_cos.to_array(), dmax.to_array());
+            (0..8).fold(0u32, |m, p| {
+                if valid & (1 << p) == 0 {
+                    return m;
+                }
+                let u = self.depth_fraction(zc[p]);
+                let ok = min_cos[p] > self.cos_thr(u) && dmax[p] < self.dist_thr(u);
+                m | (u32::from(ok) << p)
+            })
+        } else {
+            // `cos_thr(0)`, `dist_thr(0)`: the fixed thresholds.
+            min_cos.gt(s(self.cos_norm)).bits() & dmax.lt(s(self.gamma_dist)).bits()
+        };
+        (valid & thr & ok_node, av, bv)
     }
 }
 
@@ -381,12 +420,15 @@ mod tests {
 
     /// Rows made eight parents per step equal `merge_rows`' four-parent rows (the SSE2
     /// twin) node for node: random child levels 0-3 of near-coplanar plane patches (so most
-    /// parents merge, some fail the cosine or distance test), with empty and AABB children,
+    /// parents merge, some fail the cosine or distance test; some nearly flat, with
+    /// f16-subnormal increments), with empty and AABB children, planes with clamped slopes,
     /// flagged planes, blocked parents, odd row widths, fixed and adaptive thresholds.
     #[test]
     fn rows_equal_the_four_parent_rows() {
-        if !std::arch::is_x86_feature_detected!("avx2") {
-            eprintln!("no AVX2: nothing to compare");
+        if !(std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("f16c"))
+        {
+            eprintln!("no AVX2 and F16C: nothing to compare");
             return;
         }
         let mut rng = Rng(0x1234_5678_9abc_def1);
@@ -411,7 +453,9 @@ mod tests {
             let ph = 3u32;
             let (cw, ch) = (2 * pw, 2 * ph);
             // One plane per case, `z = z0 + ax x + ay y`, with noise per child.
-            let (z0, ax, ay) = (rng.f(0.2, 0.8), rng.f(-2.0, 2.0), rng.f(-2.0, 2.0));
+            // Every fifth case nearly flat: the increments are f16-subnormal halves.
+            let amp = if case % 5 == 4 { 1e-2 } else { 2.0 };
+            let (z0, ax, ay) = (rng.f(0.2, 0.8), rng.f(-amp, amp), rng.f(-amp, amp));
             let noise = [0.0, 1e-6, 1e-4, 1e-2][(case / 4) as usize % 4];
             let nodes: Vec<Node> = (0..cw * ch)
                 .map(|k| {
@@ -419,6 +463,17 @@ mod tests {
                     match rng.next() % 16 {
                         0 => Node::EMPTY,
                         1 => Node::aabb(rng.f(0.0, 0.5), rng.f(0.5, 1.0)),
+                        // Slopes clamped to the f16 maximum.
+                        2 => Node::plane_with_gradient(
+                            rng.f(0.2, 0.8),
+                            rng.f(-1e9, 1e9),
+                            rng.f(-1e9, 1e9),
+                            cl,
+                            wf,
+                            hf,
+                            0,
+                        )
+                        .unwrap_or(Node::EMPTY),
                         _ => {
                             let size = (1u32 << cl) as f32;
                             let (xc, yc) =
@@ -450,7 +505,7 @@ mod tests {
                 let mut four = vec![Node { a: 1, b: 1 }; pw as usize];
                 let mut eight = vec![Node { a: 2, b: 2 }; pw as usize];
                 ctx.parent_row(&child, l, qy, &mut four, allow);
-                // SAFETY: AVX2 (checked above).
+                // SAFETY: AVX2 and F16C (checked above).
                 unsafe { ctx.parent_row8(&child, l, qy, &mut eight, allow) };
                 assert_eq!(four, eight, "case {case}, level {l}, row {qy}");
                 merged += four.iter().filter(|n| n.is_plane()).count();
