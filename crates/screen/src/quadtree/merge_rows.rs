@@ -32,7 +32,7 @@ use glam::{BVec4A, Vec4};
 
 use super::merge::{MergeCtx, plane_range, union};
 use super::node::{FLAG_CRACK, Node};
-use super::tree::Level;
+use super::tree::{Level, Z_EPS};
 
 /// Lane-wise IEEE square root (`sqrtps`).
 #[inline(always)]
@@ -143,6 +143,45 @@ impl Kids {
         }
     }
 
+    /// [`union`] of the four children's stored ranges per lane (every child an AABB node),
+    /// into `out` (at most four parents) — unless a word is NaN or `-0` (then `false`,
+    /// nothing written, the caller takes the definition; see [`union_lanes`]).
+    #[inline(always)]
+    fn aabb_union(&self, out: &mut [Node]) -> bool {
+        let mut special = 0;
+        let ranges = [0, 1, 2, 3].map(|k| {
+            special |= self.special(k);
+            // SAFETY: SSE2 baseline.
+            unsafe { (_mm_castsi128_ps(self.a[k]), _mm_castsi128_ps(self.b[k])) }
+        });
+        if special != 0 {
+            return false;
+        }
+        let (a, b) = union_lanes(ranges);
+        for (p, o) in out.iter_mut().enumerate() {
+            *o = Node { a: a[p], b: b[p] };
+        }
+        true
+    }
+
+    /// The lanes whose child `k` is an AABB node with a NaN or `-0` word, as a bit mask.
+    #[inline(always)]
+    fn special(&self, k: usize) -> u32 {
+        // SAFETY: SSE2 baseline.
+        unsafe {
+            let neg0 = _mm_set1_epi32(i32::MIN);
+            let (a, b) = (_mm_castsi128_ps(self.a[k]), _mm_castsi128_ps(self.b[k]));
+            let m = _mm_or_si128(
+                _mm_castps_si128(_mm_or_ps(_mm_cmpunord_ps(a, a), _mm_cmpunord_ps(b, b))),
+                _mm_or_si128(
+                    _mm_cmpeq_epi32(self.a[k], neg0),
+                    _mm_cmpeq_epi32(self.b[k], neg0),
+                ),
+            );
+            (_mm_movemask_ps(_mm_castsi128_ps(m)) as u32) & !self.planes(k)
+        }
+    }
+
     /// Child `k` of every lane as nodes.
     #[inline(always)]
     fn nodes(&self, k: usize) -> [Node; 4] {
@@ -188,6 +227,38 @@ pub(super) const KID: [(usize, usize); 4] = [(0, 0), (1, 0), (0, 1), (1, 1)];
 /// Footprint corner signs, in the definition's order.
 pub(super) const CORNER: [(f32, f32); 4] = [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)];
 
+/// [`union`] of four children's ranges `(lo, hi)` per lane, as the `a` and `b` words of
+/// the four parents, by `minps` / `maxps` from `(+inf, -inf)`. The ranges must hold no NaN
+/// and no `-0`: then `minps` / `maxps` equal `f32::min` / `f32::max` in any operand order
+/// (no two different words compare equal), so the ranges, the emptiness test `lo > hi` and
+/// [`Node::aabb`] (`zmin > 0 ? zmin : 0`, `zmax` not NaN) are the definition's bits.
+#[inline(always)]
+fn union_lanes(ranges: [(__m128, __m128); 4]) -> ([u32; 4], [u32; 4]) {
+    // SAFETY: SSE2 baseline; 16-byte stores into 16-byte arrays.
+    unsafe {
+        let (mut lo, mut hi) = (_mm_set1_ps(f32::INFINITY), _mm_set1_ps(f32::NEG_INFINITY));
+        for (a, b) in ranges {
+            lo = _mm_min_ps(a, lo);
+            hi = _mm_max_ps(b, hi);
+        }
+        let e = Node::EMPTY;
+        let empty = _mm_castps_si128(_mm_cmpgt_ps(lo, hi));
+        let zmin = _mm_castps_si128(_mm_and_ps(_mm_cmpgt_ps(lo, _mm_setzero_ps()), lo));
+        let a = _mm_or_si128(
+            _mm_and_si128(empty, _mm_set1_epi32(e.a as i32)),
+            _mm_andnot_si128(empty, zmin),
+        );
+        let b = _mm_or_si128(
+            _mm_and_si128(empty, _mm_set1_epi32(e.b as i32)),
+            _mm_andnot_si128(empty, _mm_castps_si128(hi)),
+        );
+        let (mut aw, mut bw) = ([0u32; 4], [0u32; 4]);
+        _mm_storeu_si128(aw.as_mut_ptr() as *mut __m128i, a);
+        _mm_storeu_si128(bw.as_mut_ptr() as *mut __m128i, b);
+        (aw, bw)
+    }
+}
+
 impl MergeCtx {
     /// Row `qy` of level `l` (`out`: the row's nodes) from level `l - 1` (`child`), equal
     /// node for node to [`MergeCtx::parent`] of each parent's four children; `allow(qx)`:
@@ -232,6 +303,9 @@ impl MergeCtx {
             // Only AABB children: their stored ranges.
             if kids.all_empty() {
                 out.fill(Node::EMPTY);
+                return;
+            }
+            if kids.aabb_union(out) {
                 return;
             }
             let ks = [0, 1, 2, 3].map(|k| kids.nodes(k));
@@ -304,7 +378,7 @@ impl MergeCtx {
         let (gx, gy) = g.unwrap_or_else(grads);
         // `MergeCtx::zrange` per child: the spread's divisions in lanes.
         let size = (1u32 << cl) as f32;
-        let mut spread = [[0.0f32; 4]; 4];
+        let mut spread = [Vec4::ZERO; 4];
         for k in 0..4 {
             // SAFETY: SSE baseline.
             let half = Vec4::from(unsafe {
@@ -312,9 +386,44 @@ impl MergeCtx {
                 let (dil, none) = (s(0.5 * size + self.crack_px), s(0.5 * size + 0.0));
                 _mm_or_ps(_mm_and_ps(m, dil.into()), _mm_andnot_ps(m, none.into()))
             });
-            spread[k] =
-                ((gx[k].abs() * half) / s(self.wf) + (gy[k].abs() * half) / s(self.hf)).to_array();
+            spread[k] = (gx[k].abs() * half) / s(self.wf) + (gy[k].abs() * half) / s(self.hf);
         }
+        let special = (0..4).fold(0, |m, k| m | kids.special(k));
+        if special == 0 {
+            // Per child, `plane_range(z_c, spread)` of a plane child (`[0, 1]` for a spread
+            // that is not finite; `z_c` and a finite spread give finite values, and neither
+            // `lo - Z_EPS` nor `hi + Z_EPS` is `-0`, so `maxps` / `minps` are the clamp) or
+            // an AABB child's stored range, then their union in lanes.
+            let ranges = [0, 1, 2, 3].map(|k| {
+                // SAFETY: SSE2 baseline.
+                unsafe {
+                    let plane = _mm_castsi128_ps(_mm_srai_epi32::<31>(kids.a[k]));
+                    let (zc, sp): (__m128, __m128) = (kids.zc(k).into(), spread[k].into());
+                    let finite = _mm_cmplt_ps(
+                        _mm_andnot_ps(_mm_set1_ps(-0.0), sp),
+                        _mm_set1_ps(f32::INFINITY),
+                    );
+                    let (zero, one, eps) = (_mm_setzero_ps(), _mm_set1_ps(1.0), _mm_set1_ps(Z_EPS));
+                    let clamp = |v: __m128| _mm_min_ps(_mm_max_ps(v, zero), one);
+                    let lo = clamp(_mm_sub_ps(_mm_sub_ps(zc, sp), eps));
+                    let hi = clamp(_mm_add_ps(_mm_add_ps(zc, sp), eps));
+                    let sel = |m: __m128, a: __m128, b: __m128| {
+                        _mm_or_ps(_mm_and_ps(m, a), _mm_andnot_ps(m, b))
+                    };
+                    let (lo, hi) = (sel(finite, lo, zero), sel(finite, hi, one));
+                    (
+                        sel(plane, lo, _mm_castsi128_ps(kids.a[k])),
+                        sel(plane, hi, _mm_castsi128_ps(kids.b[k])),
+                    )
+                }
+            });
+            let (a, b) = union_lanes(ranges);
+            for (p, o) in out.iter_mut().enumerate() {
+                *o = merged[p].unwrap_or(Node { a: a[p], b: b[p] });
+            }
+            return;
+        }
+        let spread = spread.map(|v| v.to_array());
         let ks = [0, 1, 2, 3].map(|k| kids.nodes(k));
         for (p, o) in out.iter_mut().enumerate() {
             *o = merged[p].unwrap_or_else(|| {
@@ -438,5 +547,159 @@ impl MergeCtx {
             }
         }
         res
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::quadtree::test_rng::Rng;
+
+    /// Rows of four parents in lanes equal the scalar definition ([`MergeCtx::parent`]
+    /// with `lanes == false`) node for node, with the unions of the parents that do not
+    /// merge in lanes: random child levels 0-3 mixing plane children (near-coplanar,
+    /// clamped and f16-maximum slopes, flagged) with empty and AABB
+    /// children (some inverted, from `0`, up to `+inf`), blocked parents, odd widths.
+    #[test]
+    fn rows_equal_the_definition() {
+        let mut rng = Rng(0x0dd5_eed5_1234_4321);
+        let (mut planes, mut boxes) = (0usize, 0usize);
+        for case in 0..64u32 {
+            let (wf, hf) = (1600.0f32, 900.0f32);
+            let ctx = MergeCtx {
+                wf,
+                hf,
+                cos_norm: [0.99, 0.9995, 0.95][case as usize % 3],
+                gamma_dist: [1e-3, 1e-4, 1e-2][case as usize % 3],
+                adaptive: case % 2 == 1,
+                near: 0.1,
+                far: 100.0,
+                crack_px: 0.5 * (case % 3) as f32,
+                never: case % 16 == 15,
+                lanes: true,
+            };
+            let def = MergeCtx {
+                lanes: false,
+                ..ctx
+            };
+            let cl = case % 4;
+            let l = cl + 1;
+            let pw = 1 + (rng.next() % 40) as u32;
+            let ph = 3u32;
+            let (cw, ch) = (2 * pw, 2 * ph);
+            let (z0, ax, ay) = (rng.f(0.2, 0.8), rng.f(-2.0, 2.0), rng.f(-2.0, 2.0));
+            let nodes: Vec<Node> = (0..cw * ch)
+                .map(|k| {
+                    let (x, y) = (k % cw, k / cw);
+                    let size = (1u32 << cl) as f32;
+                    let (xc, yc) = ((x as f32 + 0.5) * size / wf, (y as f32 + 0.5) * size / hf);
+                    let flags = if rng.next().is_multiple_of(8) {
+                        FLAG_CRACK
+                    } else {
+                        0
+                    };
+                    let g = rng.f(-1e9, 1e9);
+                    match rng.next() % 10 {
+                        0 => Node::EMPTY,
+                        1 => Node::aabb(rng.f(0.0, 0.5), rng.f(0.5, 1.0)),
+                        2 => Node::aabb(rng.f(0.5, 1.0), rng.f(0.0, 0.5)),
+                        3 => Node::aabb(0.0, f32::INFINITY),
+                        4 => Node::plane_with_gradient(rng.f(0.0, 1.0), g, -g, cl, wf, hf, flags)
+                            .unwrap_or(Node::EMPTY),
+                        // The f16 maximum as both increments.
+                        5 => Node::plane(rng.f(0.0, 1.0), 65504.0, 65504.0, flags)
+                            .unwrap_or(Node::EMPTY),
+                        _ => Node::plane_with_gradient(
+                            z0 + ax * xc + ay * yc + rng.f(-1e-4, 1e-4),
+                            ax + rng.f(-1e-2, 1e-2),
+                            ay + rng.f(-1e-2, 1e-2),
+                            cl,
+                            wf,
+                            hf,
+                            flags,
+                        )
+                        .unwrap_or(Node::EMPTY),
+                    }
+                })
+                .collect();
+            let child = Level {
+                w: cw,
+                h: ch,
+                nodes,
+            };
+            let blocked: Vec<bool> = (0..pw * ph)
+                .map(|_| rng.next().is_multiple_of(10))
+                .collect();
+            for qy in 0..ph {
+                let allow = |qx: u32| !blocked[(qy * pw + qx) as usize];
+                let mut row = vec![Node { a: 1, b: 1 }; pw as usize];
+                ctx.parent_row(&child, l, qy, &mut row, allow);
+                for (qx, got) in row.iter().enumerate() {
+                    let qx = qx as u32;
+                    let want =
+                        crate::quadtree::prune::parent_of(&def, &child, l, qx, qy, allow(qx));
+                    assert_eq!(*got, want, "case {case}, level {l}, parent ({qx}, {qy})");
+                    planes += usize::from(want.is_plane());
+                    boxes += usize::from(!want.is_plane() && want != Node::EMPTY);
+                }
+            }
+        }
+        assert!(
+            planes > 50 && boxes > 500,
+            "{planes} plane and {boxes} AABB parents"
+        );
+    }
+
+    /// The lane union of AABB children equals the definition's [`union`] node for node:
+    /// random ranges (empty, inverted, zero-width, from `0`, up to `+inf`), rows of one to
+    /// four parents; groups holding a NaN or `-0` word are left to the definition.
+    #[test]
+    fn aabb_union_equals_the_definition() {
+        let mut rng = Rng(0x5eed_0abb_0c0d_e001);
+        let (mut done, mut left) = (0usize, 0usize);
+        for case in 0..4000u32 {
+            let n = 1 + (case % 4) as usize;
+            let mut kid = |rng: &mut Rng| match rng.next() % 8 {
+                0 => Node::EMPTY,
+                1 => Node::aabb(0.0, rng.f(0.0, 1.0)),
+                2 => {
+                    let z = rng.f(0.0, 1.0);
+                    Node::aabb(z, z)
+                }
+                3 => Node::aabb(rng.f(0.5, 1.0), rng.f(0.0, 0.5)),
+                4 if case % 50 == 0 => Node {
+                    a: 0x7fc0_0000,
+                    b: 0x3f00_0000,
+                },
+                5 if case % 50 == 1 => Node {
+                    a: 0x3e00_0000,
+                    b: 0x8000_0000,
+                },
+                6 => Node::aabb(rng.f(0.0, 1.0), f32::INFINITY),
+                _ => Node::aabb(rng.f(0.0, 0.6), rng.f(0.4, 1.0)),
+            };
+            // Two child rows of eight nodes (four parents), all AABB children.
+            let r0: Vec<Node> = (0..8).map(|_| kid(&mut rng)).collect();
+            let r1: Vec<Node> = (0..8).map(|_| kid(&mut rng)).collect();
+            let kids = Kids::gather(&r0, &r1, 0, n);
+            let mut out = vec![Node { a: 1, b: 1 }; n];
+            if !kids.aabb_union(&mut out) {
+                left += 1;
+                continue;
+            }
+            for (p, o) in out.iter().enumerate() {
+                let want = union(
+                    [r0[2 * p], r0[2 * p + 1], r1[2 * p], r1[2 * p + 1]]
+                        .iter()
+                        .map(|c| c.zrange()),
+                );
+                assert_eq!(*o, want, "case {case}, parent {p}");
+                done += 1;
+            }
+        }
+        assert!(
+            done > 5000 && left > 0,
+            "{done} parents compared, {left} groups left"
+        );
     }
 }
