@@ -1,9 +1,11 @@
-//! The leaves of four pixels of a row at a time in AVX2 lanes (Widmer et al. 2015, §3.2;
+//! The leaves of four pixels of a row at a time in AVX2 lanes (AVX2 and F16C, run-time
+//! detection; Widmer et al. 2015, §3.2;
 //! the map is `leaves.rs`'s, one pixel per lane): the four depths and the per-column
 //! direction terms loaded as f32 vectors, the four normals transposed from their AoS `Vec3`s,
 //! the sample points in f32 lanes, then the cube covector `q`, `|q.xyz|^2`, the `z`
 //! division and the two gradient divisions in f64x4 lanes, and the slopes clamped and
-//! f16-encoded in the eight lanes of one register. Every lane does exactly the scalar
+//! f16-encoded in the eight lanes of one register (`vcvtps2ph`, round to nearest even: the
+//! definition's rounding, compared for the whole domain by a test). Every lane does exactly the scalar
 //! definition's operations in its order (`leaf_lanes.rs` lists them: the direction
 //! `(col + row) + back`, `p = position + dir d`, glam's `DMat4 * DVec4` order
 //! `((X n.x + Y n.y) + Z n.z) + W w`, `z = (1/near - 1/d) / (1/near - 1/far)`, the slopes
@@ -24,7 +26,8 @@ use super::node::{FLAG_CRACK, Node};
 /// Largest finite f16.
 const F16_MAX: f32 = 65504.0;
 
-/// The constants of the four-pixel leaf map of one layer; exists only on CPUs with AVX2.
+/// The constants of the four-pixel leaf map of one layer; exists only on CPUs with AVX2
+/// and F16C.
 pub(super) struct LeafMap4 {
     /// `M^T`'s entries, `m[c][r]` = column `c`, row `r` (`x_axis` .. `w_axis`).
     m: [[f64; 4]; 4],
@@ -39,7 +42,7 @@ pub(super) struct LeafMap4 {
 impl LeafMap4 {
     /// The map of the transposed inverse cube map `mt` for a `wf x hf` layer seen from
     /// `position` (`back` the direction terms' constant, `inv_near` / `z_den` those of
-    /// `z_of_depth`); `None` without AVX2.
+    /// `z_of_depth`); `None` without AVX2 and F16C.
     pub(super) fn new(
         mt: &DMat4,
         position: Vec3,
@@ -49,7 +52,9 @@ impl LeafMap4 {
         wf: f32,
         hf: f32,
     ) -> Option<Self> {
-        if !std::arch::is_x86_feature_detected!("avx2") {
+        if !(std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("f16c"))
+        {
             return None;
         }
         let size = 1.0f32;
@@ -68,7 +73,7 @@ impl LeafMap4 {
     /// `depth`, `normals`, `flags` the row's pixels); returns how many pixels it wrote.
     ///
     /// # Safety
-    /// The CPU must have AVX2 (`self` exists only then).
+    /// The CPU must have AVX2 and F16C (`self` exists only then).
     pub(super) unsafe fn row(
         &self,
         col: [&[f32]; 3],
@@ -78,11 +83,11 @@ impl LeafMap4 {
         flags: Option<&[bool]>,
         out: &mut [Node],
     ) -> usize {
-        // SAFETY: AVX2 by the caller's contract.
+        // SAFETY: AVX2 and F16C by the caller's contract.
         unsafe { self.row_avx2(col, rj, depth, normals, flags, out) }
     }
 
-    #[target_feature(enable = "avx2")]
+    #[target_feature(enable = "avx2,f16c")]
     fn row_avx2(
         &self,
         col: [&[f32]; 3],
@@ -222,12 +227,9 @@ impl LeafMap4 {
             // The slopes: f32, scaled, clamped, f16.
             let e = _mm256_set_m128(_mm256_cvtpd_ps(gy), _mm256_cvtpd_ps(gx));
             let e = _mm256_min_ps(_mm256_max_ps(_mm256_mul_ps(e, scale), lo), hi);
-            let h = f16x8_encode(e);
-            let (hx, hy) = (_mm256_castsi256_si128(h), _mm256_extracti128_si256::<1>(h));
-            let b = _mm_or_si128(
-                _mm_and_si128(hx, _mm_set1_epi32(0xffff)),
-                _mm_slli_epi32::<16>(hy),
-            );
+            // Halves `x0..x3, y0..y3`, interleaved into the words `x | y << 16`.
+            let h = f16x8(e);
+            let b = _mm_unpacklo_epi16(h, _mm_unpackhi_epi64(h, h));
             let bits = _mm_and_si128(
                 _mm_add_epi32(_mm_castps_si128(zc), _mm_set1_epi32(2)),
                 _mm_set1_epi32(!3),
@@ -255,45 +257,79 @@ impl LeafMap4 {
     }
 }
 
-/// `leaf_lanes::f16x4_encode` in eight lanes ([`super::node::f32_to_f16_bits`]'s three
-/// cases selected by masks; values not NaN, at most 65504 in magnitude); the half in each
-/// lane's low 16 bits.
-#[target_feature(enable = "avx2")]
-pub(super) fn f16x8_encode(v: __m256) -> __m256i {
-    let x = _mm256_castps_si256(v);
-    let sign = _mm256_and_si256(_mm256_srli_epi32::<16>(x), _mm256_set1_epi32(0x8000));
-    let a = _mm256_and_si256(x, _mm256_set1_epi32(0x7fff_ffff));
-    let magic_bits = ((127 - 15) + (23 - 10) + 1) << 23;
-    let magic = _mm256_castsi256_ps(_mm256_set1_epi32(magic_bits));
-    let sub = _mm256_sub_epi32(
-        _mm256_castps_si256(_mm256_add_ps(_mm256_castsi256_ps(a), magic)),
-        _mm256_set1_epi32(magic_bits),
-    );
-    let odd = _mm256_and_si256(_mm256_srli_epi32::<13>(a), _mm256_set1_epi32(1));
-    let bias = ((15u32.wrapping_sub(127)) << 23).wrapping_add(0xfff) as i32;
-    let normal = _mm256_srli_epi32::<13>(_mm256_add_epi32(
-        _mm256_add_epi32(a, _mm256_set1_epi32(bias)),
-        odd,
-    ));
-    // `a` is below 2^31, so the signed compares are the unsigned ones.
-    let is_inf = _mm256_cmpgt_epi32(a, _mm256_set1_epi32(0x477f_ffff));
-    let is_sub = _mm256_cmpgt_epi32(_mm256_set1_epi32(0x3880_0000), a);
-    let h = _mm256_or_si256(
-        _mm256_or_si256(
-            _mm256_and_si256(_mm256_set1_epi32(0x7c00), is_inf),
-            _mm256_and_si256(sub, is_sub),
-        ),
-        _mm256_andnot_si256(_mm256_or_si256(is_sub, is_inf), normal),
-    );
-    _mm256_or_si256(sign, h)
+/// [`super::node::f32_to_f16_bits`] of eight lanes (values not NaN, at most 65504 in
+/// magnitude), by F16C's `vcvtps2ph` with rounding to nearest even: the definition is that
+/// rounding (normal halves by the rebiased exponent and the round-to-even carry,
+/// subnormal halves by the exact magic-number addition), and the test below compares the
+/// two for every non-negative value of the domain and a set of negative ones. The halves
+/// in the eight 16-bit lanes of the result.
+#[target_feature(enable = "avx2,f16c")]
+pub(super) fn f16x8(v: __m256) -> __m128i {
+    _mm256_cvtps_ph::<_MM_FROUND_TO_NEAREST_INT>(v)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::quadtree::leaf_lanes::LeafMap;
+    use crate::quadtree::node::{f16_bits_to_f32, f32_to_f16_bits};
     use crate::quadtree::test_rng::Rng;
     use glam::DVec4;
+
+    /// `vcvtps2ph` equals `f32_to_f16_bits` for every non-negative f32 up to 65504 (all
+    /// of them), and for their negatives on a spread of values and the subnormal and
+    /// rounding boundaries.
+    #[test]
+    fn f16c_encodes_as_the_definition() {
+        if !(std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("f16c"))
+        {
+            eprintln!("no AVX2 and F16C: nothing to compare");
+            return;
+        }
+        #[target_feature(enable = "avx2,f16c")]
+        fn cvt8(v: [f32; 8]) -> [u16; 8] {
+            let mut out = [0u16; 8];
+            // SAFETY: reads and writes eight-element arrays.
+            unsafe {
+                let h = f16x8(_mm256_loadu_ps(v.as_ptr()));
+                _mm_storeu_si128(out.as_mut_ptr() as *mut __m128i, h);
+            }
+            out
+        }
+        let check = |v: [f32; 8]| {
+            // SAFETY: the CPU has AVX2 and F16C (checked).
+            let got = unsafe { cvt8(v) };
+            for (x, h) in v.iter().zip(got) {
+                assert_eq!(h, f32_to_f16_bits(*x), "{x:e} ({:#x})", x.to_bits());
+            }
+        };
+        let top = F16_MAX.to_bits();
+        let mut k = 0u32;
+        while k <= top {
+            check(core::array::from_fn(|d| {
+                f32::from_bits((k + d as u32).min(top))
+            }));
+            k += 8;
+        }
+        // Negative values: a spread, and around every half and every midpoint of halves.
+        let mut neg: Vec<f32> = (0..(1u32 << 20))
+            .map(|k| -f32::from_bits(k.wrapping_mul(4099) % (top + 1)))
+            .collect();
+        for h in 0..0x7bffu16 {
+            let (a, b) = (f16_bits_to_f32(h), f16_bits_to_f32(h + 1));
+            let m = 0.5 * (a + b);
+            for v in [a, m, b] {
+                for d in [-1i32, 0, 1] {
+                    let x = f32::from_bits((v.to_bits() as i32 + d).max(0) as u32).min(F16_MAX);
+                    neg.push(-x);
+                }
+            }
+        }
+        for c in neg.chunks(8) {
+            check(core::array::from_fn(|d| c.get(d).copied().unwrap_or(-0.0)));
+        }
+    }
 
     /// Rows of the AVX2 kernel equal the one-pixel SSE2 path (`leaf_lanes`, with the same
     /// direction, sample point and `z` as `leaves.rs`) bit for bit: random pixels, and
@@ -301,8 +337,10 @@ mod tests {
     /// perpendicular to the view (infinite and 0/0 slopes), flags on and off.
     #[test]
     fn rows_equal_the_one_pixel_path() {
-        if !std::arch::is_x86_feature_detected!("avx2") {
-            eprintln!("no AVX2: nothing to compare");
+        if !(std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("f16c"))
+        {
+            eprintln!("no AVX2 and F16C: nothing to compare");
             return;
         }
         let mut rng = Rng(0x9e37_79b9_7f4a_7c15);

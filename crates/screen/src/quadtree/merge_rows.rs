@@ -659,7 +659,7 @@ mod tests {
         let (mut done, mut left) = (0usize, 0usize);
         for case in 0..4000u32 {
             let n = 1 + (case % 4) as usize;
-            let mut kid = |rng: &mut Rng| match rng.next() % 8 {
+            let kid = |rng: &mut Rng| match rng.next() % 8 {
                 0 => Node::EMPTY,
                 1 => Node::aabb(0.0, rng.f(0.0, 1.0)),
                 2 => {

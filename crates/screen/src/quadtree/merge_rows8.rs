@@ -22,7 +22,7 @@ use core::ops::{Add, Div, Mul, Neg, Sub};
 
 use glam::Vec4;
 
-use super::leaf_avx2::f16x8_encode;
+use super::leaf_avx2::f16x8;
 use super::merge::MergeCtx;
 use super::merge_rows::{CORNER, KID, Kids};
 use super::node::{FLAG_CRACK, Node};
@@ -375,11 +375,9 @@ impl MergeCtx {
         let (ex, ey) = (clamp(ex), clamp(ey));
         // SAFETY: AVX2 (module docs).
         let (av, bv) = unsafe {
-            let (hx, hy) = (f16x8_encode(ex.0), f16x8_encode(ey.0));
-            let bv = _mm256_or_si256(
-                _mm256_and_si256(hx, _mm256_set1_epi32(0xffff)),
-                _mm256_slli_epi32::<16>(hy),
-            );
+            // The halves of `x` and `y`, interleaved into the words `x | y << 16`.
+            let (hx, hy) = (f16x8(ex.0), f16x8(ey.0));
+            let bv = _mm256_set_m128i(_mm_unpackhi_epi16(hx, hy), _mm_unpacklo_epi16(hx, hy));
             let bits = _mm256_and_si256(
                 _mm256_add_epi32(_mm256_castps_si256(zcv.0), _mm256_set1_epi32(2)),
                 _mm256_set1_epi32(!3),
