@@ -22,9 +22,15 @@
 //! - the proxy's centre `z`, slopes and the thresholds per lane; the node itself is encoded
 //!   per merged lane by the same [`Node::plane_with_gradient`].
 //!
-//! Parents that do not merge get the union of their children's conservative ranges by the
-//! definition's own [`union`] (its `f32::min` / `f32::max` folds, in child order), with the
-//! plane children's spreads computed in lanes as [`MergeCtx::zrange`] does.
+//! Parents that do not merge get the union of their children's conservative ranges
+//! (§3.3's AABB nodes), in lanes: the plane children's spreads as [`MergeCtx::zrange`]
+//! computes them, their ranges as `plane_range` (the clamp by `maxps` / `minps`), an AABB
+//! child's stored range, then `union_lanes` (`minps` / `maxps` folds, the emptiness test and
+//! [`Node::aabb`]). No range holds a NaN or `-0` (a plane range is a clamped sum of a finite
+//! `z_c`, a finite spread and `±Z_EPS`; a group with an AABB word that is NaN or `-0` takes
+//! the definition's own [`union`]), and then `minps` / `maxps` equal the definition's
+//! `f32::min` / `f32::max` folds in child order, so the nodes are the same bits (tests below:
+//! rows against the scalar [`MergeCtx::parent`], the lane union against [`union`]).
 
 use core::arch::x86_64::*;
 

@@ -2,10 +2,15 @@
 //! AVX2 lanes: `merge_rows`' four-parent kernel (its module docs list the operations and
 //! their order) with the merge of the candidate parents — the child normals, their
 //! normalised sum, the cosines, the 16 corner projections and their largest deviation, the
-//! proxy — evaluated for eight parents in the lanes of `__m256`s. The children are gathered
-//! and decoded four parents at a time exactly as in `merge_rows` (`Kids`), then joined; the
-//! parents that do not merge take `merge_rows`' own per-group code (`MergeCtx::group4`) with
-//! the merges passed in. Every lane does the four-lane kernel's operations in its order —
+//! proxy — evaluated for eight parents in the lanes of `__m256`s (AVX2 and F16C, run-time
+//! detection). The children are gathered four parents at a time as in `merge_rows`
+//! (`Kids`), their f16 slopes decoded eight at a time by F16C (`vcvtph2ps`, equal to the
+//! definition for every finite half; plane nodes hold only finite halves) and the proxy's
+//! slopes encoded by `vcvtps2ph` (`leaf_avx2::f16x8`, the definition's rounding); the fixed
+//! thresholds (`cos_norm`, `gamma_dist`) and flag `O` are applied in lanes, the adaptive
+//! ones per lane. When all eight parents merge, their nodes are stored straight from the
+//! lanes; otherwise the parents take `merge_rows`' own per-group code
+//! (`MergeCtx::group4`) with the merges passed in. Every lane does the four-lane kernel's operations in its order —
 //! IEEE square root, division, products and sums are correctly rounded per lane, `minps` /
 //! `maxps` pick the same operand in 8 lanes as in 4, nothing is fused (no FMA is enabled) —
 //! so the nodes are the same bits; the pixel columns `2 (qx0 + p) + kx` and the parent

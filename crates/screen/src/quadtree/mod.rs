@@ -8,8 +8,9 @@
 //! - [`merge`]: one pruning step (proxy plane or conservative AABB); `merge_lanes`: the same
 //!   step with the four children in `Vec4` lanes (same bits); `merge_rows`: a level's row
 //!   with four parents in SSE2 lanes (same bits, the build's fast path over whole levels on
-//!   x86_64), `merge_rows8`: eight parents in AVX2 lanes (same bits, run-time detection);
-//!   `leaves`: the leaves a row at a time, `leaf_avx2` four pixels in AVX2 lanes;
+//!   x86_64), `merge_rows8`: eight parents in AVX2 lanes (with F16C; same bits, run-time
+//!   detection);
+//!   `leaves`: the leaves a row at a time, `leaf_avx2` four pixels in AVX2 lanes (with F16C);
 //!   `eff_lanes`: a row of effective levels sixteen nodes per step (SSE2, same bytes);
 //!   `fixpoint`: the cascade's pruning fixed point computed incrementally (same results as the
 //!   definition in `prune`, which [`QuadTreeTracer::build_reference`] runs);
