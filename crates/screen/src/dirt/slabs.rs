@@ -126,7 +126,7 @@ impl Texel {
     /// A texel over `[lo, hi]` with no slab occupied: `lo` raised to `+0` if below, the
     /// finest shift whose slabs from `lo`'s cover `hi`.
     fn new(lo: f32, hi: f32) -> Texel {
-        if !(lo <= hi) {
+        if lo > hi || lo.is_nan() || hi.is_nan() {
             return Texel { lo, hi, slabs: 0 };
         }
         let lo = if lo > 0.0 { lo } else { 0.0 };
