@@ -375,8 +375,9 @@ struct Cell {
 }
 
 /// Bucket tracing in one cell whose range of buckets holds a triangle (Alg. 1 lines 7-22);
-/// true when the answer is known. Not inlined: the walk's loop keeps its state in registers.
-#[inline(never)]
+/// true when the answer is known. Inlined into the walk's loop (a call would store and reload
+/// the walk's state around it: every XMM register is caller-saved).
+#[inline(always)]
 fn trace_cell(
     vc: &ViewConsts,
     cap: &DirtCapture,
