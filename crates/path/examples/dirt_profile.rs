@@ -141,6 +141,22 @@ fn main() {
                     .count() as u64;
             }
         }
+        "dump-rays" => {
+            // The diffuse rays as little-endian f32 (origin, dir, t_min, t_max), to
+            // `DIRT_RAYS_OUT`.
+            let path = std::env::var("DIRT_RAYS_OUT").expect("DIRT_RAYS_OUT");
+            let mut bytes = Vec::with_capacity(diffuse.len() * 32);
+            for r in diffuse {
+                for x in [
+                    r.origin.x, r.origin.y, r.origin.z, r.dir.x, r.dir.y, r.dir.z, r.t_min, r.t_max,
+                ] {
+                    bytes.extend_from_slice(&x.to_le_bytes());
+                }
+            }
+            std::fs::write(path, bytes).expect("write rays");
+            hits = eye.x.to_bits() as u64;
+            eprintln!("eye {eye:?}");
+        }
         m => panic!("unknown mode {m}"),
     }
     println!("{} diffuse rays, {hits}", diffuse.len());

@@ -12,6 +12,11 @@
 //! rule, so the answer equals the scalar loop's ([`Query::test_scalar`], the slow twin, tested
 //! equal in this module's tests).
 //!
+//! **Corners.** The four triangles' corners are turned into lanes by three 4x4 transposes of
+//! unaligned 16-byte loads (`gather`: SSE, the x86_64 baseline; one component at a time
+//! elsewhere, the portable twin, tested bit-equal): moves only, so the lanes hold the very
+//! corners.
+//!
 //! **Mailbox.** Triangles tested lately (direct-mapped by id) are skipped: a triangle listed in
 //! many cells and buckets along the ray is tested once per stay in its slot. Its answer would
 //! be the same again, and it was offered to `best` already, so skipping it is exact.
@@ -116,15 +121,7 @@ impl<'a> Query<'a> {
         // Padding lanes repeat lane 0 (masked off below).
         let tri = |l: usize| &self.tris[ids[if l < n { l } else { 0 }] as usize];
         let t = [tri(0), tri(1), tri(2), tri(3)];
-        let soa = |corner: fn(&DirtTri) -> Vec3| {
-            let p = t.map(corner);
-            [
-                Vec4::new(p[0].x, p[1].x, p[2].x, p[3].x),
-                Vec4::new(p[0].y, p[1].y, p[2].y, p[3].y),
-                Vec4::new(p[0].z, p[1].z, p[2].z, p[3].z),
-            ]
-        };
-        let corners = [soa(|t| t.p0), soa(|t| t.p1), soa(|t| t.p2)];
+        let corners = gather(t);
         let (kx, ky, kz) = (self.wt.kx, self.wt.ky, self.wt.kz);
         let project = |p: &[Vec4; 3]| shear_vertex([p[kx], p[ky], p[kz]], self.org, self.shear);
         let (va, vb, vc) = (
@@ -173,11 +170,110 @@ impl<'a> Query<'a> {
     }
 }
 
+/// The corners of four triangles as lanes, `[corner][axis]` (lane `l`: triangle `t[l]`).
+#[inline(always)]
+fn gather(t: [&DirtTri; 4]) -> [[Vec4; 3]; 3] {
+    #[cfg(target_arch = "x86_64")]
+    {
+        gather_sse(t)
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        gather_scalar(t)
+    }
+}
+
+/// [`gather`] one component at a time (the portable twin).
+#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+#[inline(always)]
+fn gather_scalar(t: [&DirtTri; 4]) -> [[Vec4; 3]; 3] {
+    let soa = |corner: fn(&DirtTri) -> Vec3| {
+        let p = t.map(corner);
+        [
+            Vec4::new(p[0].x, p[1].x, p[2].x, p[3].x),
+            Vec4::new(p[0].y, p[1].y, p[2].y, p[3].y),
+            Vec4::new(p[0].z, p[1].z, p[2].z, p[3].z),
+        ]
+    };
+    [soa(|t| t.p0), soa(|t| t.p1), soa(|t| t.p2)]
+}
+
+/// [`gather`] as three 4x4 transposes of unaligned loads (SSE, part of the x86_64 baseline:
+/// no run-time dispatch needed): floats 0-3 of each triangle hold `p0` (and `p1.x`), floats
+/// 3-6 `p1` (and `p2.x`), floats 5-8 `p1.z` and `p2`. Moves only: bit-identical to
+/// [`gather_scalar`] (tested).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn gather_sse(t: [&DirtTri; 4]) -> [[Vec4; 3]; 3] {
+    use std::arch::x86_64::{
+        _mm_loadu_ps, _mm_movehl_ps, _mm_movelh_ps, _mm_unpackhi_ps, _mm_unpacklo_ps,
+    };
+    const _: () = assert!(std::mem::size_of::<DirtTri>() == 36);
+    // SAFETY: SSE is part of the x86_64 baseline; `DirtTri` is `repr(C)`, nine `f32` (three
+    // `repr(C)` `Vec3`, size checked above), and the loads at floats `k <= 5` read floats
+    // `k..k + 4` of the triangle.
+    let rows = |k: usize| unsafe {
+        let [a, b, c, d] = t.map(|tri| _mm_loadu_ps((tri as *const DirtTri as *const f32).add(k)));
+        // `(a0, b0, a1, b1)`, `(c0, d0, c1, d1)`, `(a2, b2, a3, b3)`, `(c2, d2, c3, d3)`.
+        let (lo01, lo23) = (_mm_unpacklo_ps(a, b), _mm_unpacklo_ps(c, d));
+        let (hi01, hi23) = (_mm_unpackhi_ps(a, b), _mm_unpackhi_ps(c, d));
+        [
+            _mm_movelh_ps(lo01, lo23),
+            _mm_movehl_ps(lo23, lo01),
+            _mm_movelh_ps(hi01, hi23),
+            _mm_movehl_ps(hi23, hi01),
+        ]
+    };
+    let [x0, y0, z0, _] = rows(0);
+    let [x1, y1, z1, _] = rows(3);
+    let [_, x2, y2, z2] = rows(5);
+    [[x0, y0, z0], [x1, y1, z1], [x2, y2, z2]].map(|c| c.map(Vec4::from))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use parallax_core::Ray;
     use parallax_core::sampling::Rng;
+
+    /// The SSE gather moves the very bits of the scalar one, on finite, infinite, NaN and
+    /// negative-zero corners.
+    #[test]
+    fn gather_equals_scalar() {
+        let mut rng = Rng::for_pixel(11, 4, 5, 6);
+        let special = [
+            0.0f32,
+            -0.0,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            1e-42,
+        ];
+        let tris: Vec<DirtTri> = (0..64)
+            .map(|i| {
+                let mut c = [0.0f32; 9];
+                for (k, x) in c.iter_mut().enumerate() {
+                    *x = if (i + k) % 7 == 0 {
+                        special[(i + k) % special.len()]
+                    } else {
+                        (rng.next_f32() - 0.5) * 100.0
+                    };
+                }
+                DirtTri {
+                    p0: Vec3::new(c[0], c[1], c[2]),
+                    p1: Vec3::new(c[3], c[4], c[5]),
+                    p2: Vec3::new(c[6], c[7], c[8]),
+                }
+            })
+            .collect();
+        let bits = |g: [[Vec4; 3]; 3]| g.map(|c| c.map(|v| v.to_array().map(f32::to_bits)));
+        for w in tris.windows(4) {
+            let t = [&w[0], &w[1], &w[2], &w[3]];
+            assert_eq!(bits(gather(t)), bits(gather_scalar(t)));
+            let r = [&w[3], &w[3], &w[0], &w[2]];
+            assert_eq!(bits(gather(r)), bits(gather_scalar(r)));
+        }
+    }
 
     /// The 4-wide test and its scalar twin give the same answer (bit for bit) on random
     /// triangle lists, including shared edges and vertices (exactly-zero edge functions) and

@@ -64,7 +64,7 @@
 
 use parallax_raster::dirt::{DirtCapture, bucket_index};
 
-use super::slabs::{Slabs, slab};
+use super::slabs::Slabs;
 use super::tri4::Query;
 use super::view::{MAX_LEVELS, ViewConsts, ViewRay};
 
@@ -239,7 +239,6 @@ fn walk_dir<const UX: bool, const UY: bool, const W_FALLS: bool>(
     q: &mut Query,
 ) -> WalkEnd {
     let texels = slabs.texels.as_slice();
-    let (shift, base) = (slabs.shift, slabs.base);
     let records = cap.cell_records();
 
     // The start cell (clamped onto the grid: the start may lie on the frustum's boundary).
@@ -273,10 +272,7 @@ fn walk_dir<const UX: bool, const UY: bool, const W_FALLS: bool>(
             + tx as usize;
         let t = &texels[texel];
         // The min-max bounds, then the depth slabs (`slabs`).
-        let overlaps = w_hi >= t.lo && w_lo <= t.hi && {
-            let (a, b) = (slab(w_lo, shift, base), slab(w_hi, shift, base));
-            (t.slabs >> a) << (63 - (b - a)) != 0
-        };
+        let overlaps = w_hi >= t.lo && w_lo <= t.hi && t.meets(w_lo, w_hi);
         if overlaps {
             if level > 0 {
                 level -= 1;
@@ -379,8 +375,9 @@ struct Cell {
 }
 
 /// Bucket tracing in one cell whose range of buckets holds a triangle (Alg. 1 lines 7-22);
-/// true when the answer is known. Not inlined: the walk's loop keeps its state in registers.
-#[inline(never)]
+/// true when the answer is known. Inlined into the walk's loop (a call would store and reload
+/// the walk's state around it: every XMM register is caller-saved).
+#[inline(always)]
 fn trace_cell(
     vc: &ViewConsts,
     cap: &DirtCapture,

@@ -1,0 +1,102 @@
+//! Traces rays from a file through DIRT (for instruction-count profiles of the tracer alone,
+//! built without the path crate): `dirt_trace SCENE RAYS N [EYE TARGET FOV_Y]` with `RAYS` written by
+//! `dirt_profile SCENE dump-rays 1` (`DIRT_RAYS_OUT`), the same camera, film and DIRT options
+//! as `dirt_profile` (`bench dirt`'s defaults). Prints the counters and a hash of the hits.
+//!
+//! ```sh
+//! valgrind --tool=callgrind --toggle-collect='*closest_hit_counted*' \
+//!     target/release/examples/dirt_trace atrium /tmp/atrium.rays 1
+//! ```
+
+use std::hash::{Hash, Hasher};
+
+use glam::{Vec2, Vec3};
+use parallax_core::Ray;
+use parallax_raster::dirt::{CellDepth, DirtOptions, DirtViews, DirtViewsOptions};
+use parallax_scene::camera::{Camera, CameraModel, CameraOptions, ModelKind};
+use parallax_scene::{CameraDesc, Scene};
+use parallax_screen::{DirtCounters, DirtTracer};
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    if args.len() < 4 {
+        eprintln!("usage: dirt_trace SCENE RAYS N");
+        std::process::exit(2);
+    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build_global()
+        .expect("thread pool");
+    let scene = Scene::load(&args[1]).expect("scene");
+    let bytes = std::fs::read(&args[2]).expect("rays");
+    let n: u32 = args[3].parse().expect("N");
+    let f = |i: usize| f32::from_le_bytes(bytes[4 * i..4 * i + 4].try_into().expect("4 bytes"));
+    let rays: Vec<Ray> = (0..bytes.len() / 32)
+        .map(|k| {
+            let b = 8 * k;
+            Ray {
+                origin: Vec3::new(f(b), f(b + 1), f(b + 2)),
+                dir: Vec3::new(f(b + 3), f(b + 4), f(b + 5)),
+                t_min: f(b + 6),
+                t_max: f(b + 7),
+            }
+        })
+        .collect();
+    let vec3 = |s: &str| {
+        let v: Vec<f32> = s.split(',').map(|x| x.parse().expect("number")).collect();
+        Vec3::new(v[0], v[1], v[2])
+    };
+    let desc = if args.len() >= 7 {
+        CameraDesc::new(
+            vec3(&args[4]),
+            vec3(&args[5]),
+            Vec3::Y,
+            args[6].parse().expect("fov"),
+        )
+    } else {
+        scene.camera(None).expect("camera")
+    };
+    let camera = Camera::new(
+        ModelKind::Pinhole,
+        &desc,
+        1024,
+        512,
+        &CameraOptions::default(),
+    )
+    .expect("camera");
+    let pinhole = match &camera {
+        Camera::Pinhole(p) => Some(p),
+        _ => None,
+    };
+    let film = Vec2::new(camera.width() as f32, camera.height() as f32) * 0.5;
+    let eye = camera
+        .generate_ray(film, Vec2::splat(0.5), 1)
+        .map_or(Vec3::ZERO, |r| r.ray.origin);
+    // `bench dirt`'s defaults (`parallax_path::tracers::DIRT_DEFAULTS`).
+    let opts = DirtViewsOptions {
+        face_size: 128,
+        capture: DirtOptions {
+            tile_size: 4,
+            buckets: 16,
+            near: 1e-4,
+            max_entries: 1 << 28,
+            cell_depth: CellDepth::Corners,
+        },
+    };
+    let dirt = DirtTracer::new(DirtViews::build(&scene.mesh, pinhole, eye, &opts).expect("dirt"));
+    let mut c = DirtCounters::default();
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    let mut hits = 0u64;
+    for _ in 0..n {
+        for r in &rays {
+            if let Some(hit) = dirt.closest_hit_counted(r, &mut c) {
+                hits += 1;
+                (hit.prim, hit.t.to_bits()).hash(&mut h);
+            } else {
+                u32::MAX.hash(&mut h);
+            }
+        }
+    }
+    eprintln!("{c:?}");
+    println!("{} rays, {hits} hits, hash {:016x}", rays.len(), h.finish());
+}
