@@ -1,17 +1,20 @@
-//! The DIRT build (§4.1): triangle setup and binning to screen bands, then per band (in
-//! parallel, each band owning its cell rows) the conservative rasterization with per-cell
-//! depth ranges (Fig. 6a), Fill Depth (§4.1.1) and the count / prefix-sum / fill of the
-//! buckets (§4.1.2, eq. 1) (`fill`); finally the bands are copied into the flat CSR arrays
-//! and the mip chain is built. Several views of one mesh (the camera view and the cube
-//! faces of [`super::DirtViews`]) share one setup pass over the mesh ([`build_views`]); a
-//! view's set-up triangles stay in the chunks the parallel setup made them in.
+//! The DIRT build (§4.1): each triangle is set up (transform, near / guard clip,
+//! projection, `w` plane: `setup`) and rasterized right after, while the set-up triangle is
+//! in registers (conservative rasterization with per-cell depth ranges, Fig. 6a: `fill`),
+//! in parallel chunks of the mesh, each chunk's fragments kept per view and per screen band;
+//! then per band (in parallel, each band owning its cell rows, reading its fragments chunk
+//! by chunk) Fill Depth (§4.1.1) and the count / prefix-sum / fill of the buckets (§4.1.2,
+//! eq. 1); finally the bands are copied into the flat CSR arrays and the mip chain is
+//! built. Several views of one mesh (the camera view and the cube faces of
+//! [`super::DirtViews`]) share one setup pass over the mesh ([`build_views`]).
 //!
-//! **Parallel shape.** No stage runs view by view: binning is parallel over the views, the
-//! fill over every band of every view in one loop, the assembly (the bands' arrays
-//! concatenated) and the mip chain over the views, so a view's serial work overlaps the
-//! others'. A band's
-//! output does not depend on which thread fills it or when, so the capture is bit for bit the
-//! same at any thread count.
+//! **Parallel shape.** No stage runs view by view: the setup and rasterization are parallel
+//! over chunks of the mesh (every view of a triangle in turn), the band fill over every band
+//! of every view in one loop, the assembly (the bands' arrays concatenated) and the mip chain
+//! over the views, so a view's serial work overlaps the others'. Within a band the fragments
+//! are in triangle order (chunks in mesh order, each chunk's in triangle order), as a serial
+//! build makes them, so a band's output does not depend on which thread fills it or when:
+//! the capture is bit for bit the same at any thread count.
 
 use std::sync::atomic::AtomicU64;
 use std::time::Instant;
@@ -23,9 +26,11 @@ use rayon::prelude::*;
 use super::capture::{
     DirtCapture, DirtError, DirtOptions, DirtStats, MAX_BUCKETS, MAX_CELL_BUCKETS, MAX_TILE_SIZE,
 };
-use super::fill::{BandOut, FillJob, Grid, fill_band};
+use super::fill::{
+    BILL_EVERY, BandOut, FillJob, Grid, RawFrag, ViewFrags, bill, fill_band, raster,
+};
 use super::mip;
-use super::setup::{Setups, ViewXf};
+use super::setup::{SETUP_CHUNK, ViewXf};
 
 /// Target number of screen bands (a band = whole cell rows, so bands concatenate in order).
 const TARGET_BANDS: u32 = 64;
@@ -109,26 +114,14 @@ pub(super) fn build(
     view: &Pinhole,
     opts: &DirtOptions,
 ) -> Result<DirtCapture, DirtError> {
-    let t_start = Instant::now();
-    let grid = grid(view, opts)?;
-    let xf = ViewXf::new(view, opts.near as f64);
-    let setups = xf.setup_all(mesh);
-    let caps = finish_views(
-        mesh,
-        std::slice::from_ref(view),
-        opts,
-        vec![grid],
-        std::slice::from_ref(&xf),
-        vec![setups],
-        t_start,
-    )?;
+    let caps = build_views(mesh, std::slice::from_ref(view), opts)?;
     Ok(caps.into_iter().next().expect("one view"))
 }
 
-/// The captures of several views of one mesh (the camera view and the cube map's faces),
-/// with the triangle setup done in one pass over the mesh for all of them
-/// ([`ViewXf::setup_all_views`]) and every later stage parallel over all views at once
-/// ([`finish_views`]); `opts.max_entries` bounds the entries of all views together.
+/// The captures of several views of one mesh (the camera view and the cube map's faces):
+/// the triangle setup and rasterization in one pass over the mesh for all of them
+/// ([`setup_and_raster`]), then every later stage parallel over all views at once;
+/// `opts.max_entries` bounds the entries of all views together.
 pub(super) fn build_views(
     mesh: &TriangleMesh,
     views: &[Pinhole],
@@ -143,68 +136,70 @@ pub(super) fn build_views(
         .iter()
         .map(|v| ViewXf::new(v, opts.near as f64))
         .collect();
-    let setups = ViewXf::setup_all_views(&xfs, mesh);
-    finish_views(mesh, views, opts, grids, &xfs, setups, t_start)
+    let budget = AtomicU64::new(0);
+    let frags = setup_and_raster(mesh, &xfs, &grids, opts, &budget)?;
+    finish_views(mesh, views, opts, &grids, frags, &budget, t_start)
 }
 
-/// One view's set-up triangles binned to its screen bands: band `b`'s keys (ascending, so
-/// in triangle order) are `entries[band_start[b]..band_start[b + 1]]`.
-struct Bins {
-    band_start: Vec<u32>,
-    entries: Vec<u32>,
-    /// Set-up triangles whose clipped projection touches a cell row of the view.
-    in_view: u64,
+thread_local! {
+    /// Each worker's per-view, per-band fragment buffers of a chunk (no allocation once warm).
+    static RAW: std::cell::RefCell<Vec<Vec<Vec<RawFrag>>>> =
+        const { std::cell::RefCell::new(Vec::new()) };
 }
 
-impl Bins {
-    fn bands(&self) -> u32 {
-        self.band_start.len() as u32 - 1
-    }
-
-    fn band(&self, b: u32) -> &[u32] {
-        &self.entries
-            [self.band_start[b as usize] as usize..self.band_start[b as usize + 1] as usize]
-    }
-}
-
-/// Which bands each set-up triangle's clipped projection touches.
-fn bin(setups: &Setups, grid: &Grid) -> Bins {
-    let (s, cells_y, band_rows) = (grid.s, grid.cells_y, grid.band_rows);
-    let bands = cells_y.div_ceil(band_rows);
-    let spans: Vec<(u32, u32, u32)> = setups
-        .iter()
-        .map(|(key, e)| {
-            Grid::span(e.y.0, e.y.1, s, 0, cells_y).map_or((key, 1, 0), |(r0, r1)| {
-                (key, r0 / band_rows, r1 / band_rows)
+/// Every triangle of `mesh` set up and rasterized for each view right after its setup (the
+/// set-up triangle never leaves the registers and the stack), in parallel chunks of
+/// [`SETUP_CHUNK`] triangles; per view, its chunks' fragments grouped by band
+/// (`out[view][chunk]`). The fragments are billed to `budget` as they are made.
+fn setup_and_raster(
+    mesh: &TriangleMesh,
+    xfs: &[ViewXf],
+    grids: &[Grid],
+    opts: &DirtOptions,
+    budget: &AtomicU64,
+) -> Result<Vec<Vec<ViewFrags>>, DirtError> {
+    let n = mesh.triangle_count();
+    let same_eye = ViewXf::same_eyes(xfs);
+    let chunks: Vec<Result<Vec<ViewFrags>, DirtError>> = (0..n.div_ceil(SETUP_CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            RAW.with_borrow_mut(|raw| {
+                raw.resize_with(xfs.len(), Vec::new);
+                for (r, g) in raw.iter_mut().zip(grids) {
+                    r.resize_with(g.bands() as usize, Vec::new);
+                    r.iter_mut().for_each(Vec::clear);
+                }
+                let mut in_view = vec![0u64; xfs.len()];
+                let mut unbilled = 0u64;
+                let range = c * SETUP_CHUNK..((c + 1) * SETUP_CHUNK).min(n);
+                ViewXf::setup_range(xfs, &same_eye, mesh, range, |v, e, poly| {
+                    let out = &mut raw[v];
+                    if let Some(n) = raster(e, poly, &grids[v], &xfs[v], opts.cell_depth, out) {
+                        in_view[v] += 1;
+                        unbilled += n as u64;
+                    }
+                    if unbilled >= BILL_EVERY {
+                        bill(budget, &mut unbilled, opts.max_entries)?;
+                    }
+                    Ok(())
+                })?;
+                bill(budget, &mut unbilled, opts.max_entries)?;
+                Ok(raw
+                    .iter()
+                    .zip(grids)
+                    .zip(in_view)
+                    .map(|((r, _), iv)| ViewFrags::concat(&r[..], iv))
+                    .collect())
             })
         })
         .collect();
-    let mut band_start = vec![0u32; bands as usize + 1];
-    let mut in_view = 0u64;
-    for &(_, b0, b1) in &spans {
-        if b0 <= b1 {
-            in_view += 1;
-            for b in b0..=b1 {
-                band_start[b as usize + 1] += 1;
-            }
+    let mut per_view: Vec<Vec<ViewFrags>> = xfs.iter().map(|_| Vec::new()).collect();
+    for chunk in chunks {
+        for (v, f) in per_view.iter_mut().zip(chunk?) {
+            v.push(f);
         }
     }
-    for b in 0..bands as usize {
-        band_start[b + 1] += band_start[b];
-    }
-    let mut entries = vec![0u32; band_start[bands as usize] as usize];
-    let mut cursor = band_start.clone();
-    for &(key, b0, b1) in &spans {
-        for b in b0..=b1 {
-            entries[cursor[b as usize] as usize] = key;
-            cursor[b as usize] += 1;
-        }
-    }
-    Bins {
-        band_start,
-        entries,
-        in_view,
-    }
+    Ok(per_view)
 }
 
 /// `wall` ms split over the views in proportion to their measured `work` (evenly if none).
@@ -221,64 +216,53 @@ fn shares(wall: f64, work: &[f64]) -> Vec<f64> {
         .collect()
 }
 
-/// Binning, fill and assembly of every view from its set-up triangles (the setup started at
-/// `t_start`). Binning is parallel over the views, the fill over every band of every view in
-/// one loop (the camera view's bands first: they are the largest), the assembly and the mip
-/// chain over the views. Each stage's wall time is split over the views in proportion to
-/// their work in it (the setup's evenly), so the views' `total_ms` add up to the build's.
+/// Fill and assembly of every view from its rasterized fragments (the setup and
+/// rasterization started at `t_start`). The fill is one parallel loop over every band of
+/// every view (the camera view's bands first: they are the largest), the assembly and the
+/// mip chain run over the views in parallel. Each stage's wall time is split over the views
+/// in proportion to their work in it (the setup's evenly), so the views' `total_ms` add up to
+/// the build's.
 fn finish_views(
     mesh: &TriangleMesh,
     views: &[Pinhole],
     opts: &DirtOptions,
-    grids: Vec<Grid>,
-    xfs: &[ViewXf],
-    setups: Vec<Setups>,
+    grids: &[Grid],
+    frags: Vec<Vec<ViewFrags>>,
+    budget: &AtomicU64,
     t_start: Instant,
 ) -> Result<Vec<DirtCapture>, DirtError> {
     let nv = views.len();
     let setup_ms = ms(t_start);
 
-    // 1. Binning: which bands each set-up triangle's clipped projection touches.
-    let t_bin = Instant::now();
-    let bins: Vec<(Bins, f64)> = setups
-        .par_iter()
-        .zip(&grids)
-        .map(|(s, g)| {
-            let t = Instant::now();
-            let b = bin(s, g);
-            (b, ms(t))
-        })
-        .collect();
-    let bin_ms = shares(ms(t_bin), &bins.iter().map(|b| b.1).collect::<Vec<_>>());
-
-    // 2. Per band of every view: clip, Fill Depth, count / prefix / fill; one entry budget
-    // for all views.
+    // Per band of every view: Fill Depth, count / prefix / fill.
     let t_fill = Instant::now();
-    let budget = AtomicU64::new(0);
-    let jobs: Vec<(usize, u32)> = bins
+    let jobs: Vec<(usize, u32)> = grids
         .iter()
         .enumerate()
-        .flat_map(|(v, (b, _))| (0..b.bands()).map(move |band| (v, band)))
+        .flat_map(|(v, g)| (0..g.bands()).map(move |band| (v, band)))
         .collect();
     let outs: Vec<Result<(BandOut, f64), DirtError>> = jobs
         .par_iter()
         .map(|&(v, band)| {
             let t = Instant::now();
             let job = FillJob {
-                setups: &setups[v],
-                xf: &xfs[v],
+                chunks: &frags[v],
                 grid: &grids[v],
                 opts,
-                budget: &budget,
+                budget,
             };
-            fill_band(&job, band, bins[v].0.band(band)).map(|o| (o, ms(t)))
+            fill_band(&job, band).map(|o| (o, ms(t)))
         })
         .collect();
     let outs: Vec<(BandOut, f64)> = outs.into_iter().collect::<Result<_, _>>()?;
     let fill_wall = ms(t_fill);
-    drop(setups);
+    let in_view: Vec<u64> = frags
+        .iter()
+        .map(|v| v.iter().map(|c| c.in_view).sum())
+        .collect();
+    drop(frags);
 
-    // 3. Per view (views in parallel): assemble the flat arrays, Mipmap Depth.
+    // Per view (views in parallel): assemble the flat arrays, Mipmap Depth.
     let t_asm = Instant::now();
     let mut fill_work = vec![0.0; nv];
     let mut per_view: Vec<Vec<BandOut>> = (0..nv).map(|_| Vec::new()).collect();
@@ -291,11 +275,9 @@ fn finish_views(
     let caps: Vec<(DirtCapture, f64, f64)> = per_view
         .into_par_iter()
         .zip(views)
-        .zip(&grids)
-        .zip(&bins)
-        .map(|(((outs, view), g), (bins, _))| {
-            assemble_view(outs, view, g, opts, bins.in_view, ntri)
-        })
+        .zip(grids)
+        .zip(&in_view)
+        .map(|(((outs, view), g), &in_view)| assemble_view(outs, view, g, opts, in_view, ntri))
         .collect();
     // The assembly and the mips ran together: their wall time split by their work.
     let asm_wall = ms(t_asm);
@@ -306,7 +288,7 @@ fn finish_views(
         .enumerate()
         .map(|(v, (mut cap, _, _))| {
             let st = &mut cap.stats;
-            st.setup_ms = setup_ms / nv as f64 + bin_ms[v];
+            st.setup_ms = setup_ms / nv as f64;
             st.fill_ms = fill_ms[v];
             st.assemble_ms = split[2 * v];
             st.mip_ms = split[2 * v + 1];

@@ -79,9 +79,10 @@ pub struct DirtStats {
     /// Cells with at least one triangle.
     pub nonempty_cells: u64,
     pub bytes: u64,
-    /// Triangle setup (transform, near/guard clip, projection) and binning to screen bands.
+    /// Triangle setup (transform, near/guard clip, projection) and the rasterization right
+    /// after it (cells and depth ranges of every triangle, kept per screen band).
     pub setup_ms: f64,
-    /// Per-cell clipping, depth bounds and bucket fill (parallel over bands).
+    /// Depth bounds and bucket fill (parallel over bands).
     pub fill_ms: f64,
     /// Concatenating the bands into the flat arrays.
     pub assemble_ms: f64,

@@ -1,6 +1,8 @@
-//! One screen band of the DIRT build: conservative rasterization of its triangles into its
-//! cells with each cell-triangle pair's view-depth range (DIRT Fig. 6a), "Fill Depth" (§4.1.1)
-//! and "Fill Primitives" (§4.1.2, eq. 1) as count / prefix sum / fill.
+//! The DIRT build's rasterization and band fill: conservative rasterization of a set-up
+//! triangle into the view's cells with each cell-triangle pair's view-depth range (DIRT Fig.
+//! 6a; [`raster`], called right after the triangle's setup, its fragments kept per screen
+//! band), then per band "Fill Depth" (§4.1.1) and "Fill Primitives" (§4.1.2, eq. 1) as count /
+//! prefix sum / fill ([`fill_band`]).
 //!
 //! **Coverage.** For each cell row the triangle's projection touches, the polygon is cut to the
 //! row's slab (widened by [`FILM_MARGIN_PX`]); every cell column in the x range of that cut
@@ -17,8 +19,9 @@
 //! **Shortcuts that keep the capture bit for bit** (unit tests against the plain forms): a
 //! polygon inside one row slab is its own cut (its set-up x and `w` ranges, no clipping); the
 //! plane's y terms are taken once per row; cell spans are `trunc` of clamped quotients instead
-//! of `floor` calls (`Grid::span`); bucket indices clamp in f32 before converting
-//! (`fast_bucket_index`); a cell's non-empty mask is the union of its fragments' bucket ranges,
+//! of `floor` calls (`Grid::span`); bucket indices by the saturating conversion and an
+//! integer clamp (`fast_bucket_index`); `widen`'s outward steps on the bits (`down_then_clamped`,
+//! `up_of_below`); a cell's non-empty mask is the union of its fragments' bucket ranges,
 //! gathered by the count pass.
 
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -29,7 +32,7 @@ use super::capture::{
     CellDepth, CellRecord, DirtError, DirtOptions, FILM_MARGIN_PX, bucket_mask, bucket_scale,
 };
 use super::clip::Poly;
-use super::setup::{Setups, ViewXf, WPlane};
+use super::setup::{SetupEntry, ViewXf, WPlane};
 
 /// Relative margin on a clipped depth range.
 const DEPTH_REL_MARGIN: f64 = 1.0 / 65536.0;
@@ -77,15 +80,20 @@ impl Grid {
         let (a, b) = (a as u32, b as u32);
         (a <= b).then_some((a, b))
     }
+
+    /// Screen bands of the grid.
+    pub fn bands(&self) -> u32 {
+        self.cells_y.div_ceil(self.band_rows)
+    }
 }
 
-/// `bucket_index` of `capture` (the same integer for every input) with the clamps to
-/// `[0, B - 1]` done in f32 before the conversion (`B - 1` is an integer) and without
-/// branches (`max` drops a NaN, a `-0` converts to 0).
+/// `bucket_index` of `capture` (the same integer for every input) without branches: the
+/// saturating conversion maps a negative value or a NaN to 0 and a huge one to `u32::MAX`,
+/// then the integer clamp to `B - 1` (the same as clamping in f32 first: `B - 1` is an
+/// integer and the conversion truncates).
 #[inline(always)]
 fn fast_bucket_index(zmin: f32, scale: f32, buckets: u32, z: f32) -> u32 {
-    let v = (z - zmin) * scale;
-    v.max(0.0).min((buckets - 1) as f32) as u32
+    (((z - zmin) * scale) as u32).min(buckets - 1)
 }
 
 /// [`bucket_mask`] (the same bits), for `B <= 32` as one subtraction of 64-bit powers of two.
@@ -99,12 +107,12 @@ fn fast_bucket_mask(b0: u32, b1: u32, buckets: u32) -> u32 {
 }
 
 /// Fragments counted locally between two updates of the shared entry budget.
-const BILL_EVERY: u64 = 4096;
+pub(super) const BILL_EVERY: u64 = 4096;
 
 /// Adds `*unbilled` entries to the shared `budget` (and zeroes it); the build fails once the
 /// total exceeds `max`.
 #[inline]
-fn bill(budget: &AtomicU64, unbilled: &mut u64, max: u64) -> Result<(), DirtError> {
+pub(super) fn bill(budget: &AtomicU64, unbilled: &mut u64, max: u64) -> Result<(), DirtError> {
     let n = std::mem::take(unbilled);
     if budget.fetch_add(n, Ordering::Relaxed) + n > max {
         return Err(DirtError::TooLarge { max });
@@ -138,9 +146,32 @@ fn widen(zlo: f64, zhi: f64, abs_margin: f64) -> (f32, f32) {
     let lo = zlo * (1.0 - DEPTH_REL_MARGIN) - abs_margin;
     let hi = zhi * (1.0 + DEPTH_REL_MARGIN) + abs_margin;
     let (l, h) = (lo as f32, hi as f32);
-    let l = select_bits((l as f64) > lo, l.next_down(), l);
-    let h = select_bits((h as f64) < hi, h.next_up(), h);
+    let l = select_bits((l as f64) > lo, down_then_clamped(l), l);
+    let h = select_bits((h as f64) < hi, up_of_below(h), h);
     (l.max(0.0), h)
+}
+
+/// A value whose `max(0.0)` equals `l.next_down().max(0.0)`, for an `l` that is not NaN or
+/// `-inf`: for `l > 0` (`+inf` included) the next f32 below, one less in the bits; for
+/// `l <= 0` the next value below is negative, so -1 does as well.
+#[inline(always)]
+fn down_then_clamped(l: f32) -> f32 {
+    select_bits(l > 0.0, f32::from_bits(l.to_bits().wrapping_sub(1)), -1.0)
+}
+
+/// `h.next_up()` for an `h` that is not NaN or `+inf`: one more in the bits of a value
+/// `>= +0`, one less in those of a value `< -0`, the smallest positive subnormal for `-0`.
+#[inline(always)]
+fn up_of_below(h: f32) -> f32 {
+    let b = h.to_bits();
+    let up = if b >> 31 == 0 {
+        b + 1
+    } else if b == 0x8000_0000 {
+        1
+    } else {
+        b - 1
+    };
+    f32::from_bits(up)
 }
 
 /// The `w` range of a triangle's plane `p` over cell column `[left, right]` of a row whose
@@ -201,13 +232,147 @@ fn row_span(verts: &[DVec3], top: f64, bottom: f64) -> Option<RowSpan> {
     (x.0 <= x.1).then_some(RowSpan { x, w })
 }
 
+/// A cell-triangle pair of the rasterization: the cell's index in the view (row-major), the
+/// triangle and its widened view-depth range.
+#[derive(Clone, Copy, Default)]
+pub(super) struct RawFrag {
+    cell: u32,
+    tri: u32,
+    zlo: f32,
+    zhi: f32,
+}
+
+/// Conservative rasterization of one set-up triangle (`e`, its clipped projection `poly`)
+/// into the cells of the whole view (module docs: row slabs, then columns, with each cell's
+/// `w` range), appending its fragments of screen band `b` to `out[b]` in row-major order.
+/// Returns the number of fragments, or `None` when its projection touches no cell row of the
+/// view.
+#[inline(always)]
+pub(super) fn raster(
+    e: &SetupEntry,
+    poly: &[DVec3],
+    g: &Grid,
+    xf: &ViewXf,
+    cell_depth: CellDepth,
+    out: &mut [Vec<RawFrag>],
+) -> Option<u32> {
+    let m = FILM_MARGIN_PX;
+    let s = g.s as f64;
+    let t = e.tri;
+    let (r0, r1) = Grid::span(e.y.0, e.y.1, g.s, 0, g.cells_y)?;
+    let mut n = 0u32;
+    for r in r0..r1 + 1 {
+        let top = r as f64 * s - m;
+        let bottom = ((r as f64 + 1.0) * s).min(xf.h) + m;
+        // A polygon inside the slab is its own cut (the same points `row_span` would add).
+        let row = if e.y.0 >= top && e.y.1 <= bottom {
+            RowSpan { x: e.x, w: e.w }
+        } else {
+            match row_span(poly, top, bottom) {
+                Some(row) => row,
+                None => continue,
+            }
+        };
+        let Some((c0, c1)) = Grid::span(row.x.0, row.x.1, g.s, 0, g.cells_x) else {
+            continue;
+        };
+        // The fragment of cell column `c` with `w` range `[wlo, whi]` (w = 1 / depth > 0
+        // after the near clip).
+        let rbase = r * g.cells_x;
+        let out = &mut out[(r / g.band_rows) as usize];
+        let mut emit = |c: u32, wlo: f64, whi: f64| {
+            let (zlo, zhi) = widen(1.0 / whi, 1.0 / wlo, e.abs_margin);
+            n += 1;
+            out.push(RawFrag {
+                cell: rbase + c,
+                tri: t,
+                zlo,
+                zhi,
+            });
+        };
+        // Cell column `c`'s `[left, right]` (widened); the cut is convex, so the column
+        // overlaps it iff it overlaps its x range.
+        let column = |c: u32| {
+            let left = c as f64 * s - m;
+            let right = ((c as f64 + 1.0) * s).min(xf.w) + m;
+            (left, right, !(right < row.x.0 || left > row.x.1))
+        };
+        match (cell_depth, e.plane) {
+            (CellDepth::Exact, _) => {
+                let mut p = Poly::EMPTY;
+                p.v[..poly.len()].copy_from_slice(poly);
+                p.n = poly.len();
+                let rp = p.clip_axis(1, top, 1.0).clip_axis(1, bottom, -1.0);
+                for c in c0..c1 + 1 {
+                    let (left, right, overlaps) = column(c);
+                    if let (true, Some((wlo, whi))) = (overlaps, rp.z_range_in_strip(left, right)) {
+                        emit(c, wlo, whi);
+                    }
+                }
+            }
+            (CellDepth::Corners, Some(p)) => {
+                // The plane's y terms are the row's (`cell_w_range` with them hoisted).
+                let (ay, by) = (p.py * top, p.py * bottom);
+                let (y_lo, y_hi) = if ay < by { (ay, by) } else { (by, ay) };
+                for c in c0..c1 + 1 {
+                    let (left, right, overlaps) = column(c);
+                    if overlaps {
+                        let (wlo, whi) = plane_w_range(&p, row.w, (left, right), (y_lo, y_hi));
+                        emit(c, wlo, whi);
+                    }
+                }
+            }
+            (CellDepth::Corners, None) => {
+                for c in c0..c1 + 1 {
+                    if column(c).2 {
+                        emit(c, row.w.0, row.w.1);
+                    }
+                }
+            }
+        }
+    }
+    Some(n)
+}
+
+/// One view's fragments of one chunk of triangles, grouped by screen band (band `b`'s are
+/// `frags[band_start[b]..band_start[b + 1]]`, in triangle order within the band).
+#[derive(Default)]
+pub(super) struct ViewFrags {
+    pub frags: Vec<RawFrag>,
+    pub band_start: Vec<u32>,
+    /// Triangles whose clipped projection touches a cell row of the view.
+    pub in_view: u64,
+}
+
+impl ViewFrags {
+    /// The bands' fragments (`bands[b]`, in triangle order) concatenated.
+    pub fn concat(bands: &[Vec<RawFrag>], in_view: u64) -> ViewFrags {
+        let mut band_start = Vec::with_capacity(bands.len() + 1);
+        band_start.push(0u32);
+        let mut frags = Vec::with_capacity(bands.iter().map(Vec::len).sum());
+        for b in bands {
+            frags.extend_from_slice(b);
+            band_start.push(frags.len() as u32);
+        }
+        ViewFrags {
+            frags,
+            band_start,
+            in_view,
+        }
+    }
+
+    fn band(&self, b: u32) -> &[RawFrag] {
+        &self.frags[self.band_start[b as usize] as usize..self.band_start[b as usize + 1] as usize]
+    }
+}
+
 /// What every band of one view's fill reads.
 pub(super) struct FillJob<'a> {
-    pub setups: &'a Setups,
-    pub xf: &'a ViewXf,
+    /// The view's fragments, chunk by chunk in triangle order.
+    pub chunks: &'a [ViewFrags],
     pub grid: &'a Grid,
     pub opts: &'a DirtOptions,
-    /// Entries of the view (all bands) so far, against `opts.max_entries`.
+    /// Entries of all views so far, against `opts.max_entries`.
     pub budget: &'a AtomicU64,
 }
 
@@ -217,12 +382,11 @@ thread_local! {
         const { std::cell::RefCell::new(Vec::new()) };
 }
 
-/// Rasterizes the band's set-up triangles (`entries`: keys into the setups, ascending
-/// triangle ids) into its cells.
-pub(super) fn fill_band(job: &FillJob, band: u32, entries: &[u32]) -> Result<BandOut, DirtError> {
+/// Fill Depth and Fill Primitives of band `band` from its fragments.
+pub(super) fn fill_band(job: &FillJob, band: u32) -> Result<BandOut, DirtError> {
     FRAGMENTS.with_borrow_mut(|frags| {
         frags.clear();
-        fill_band_with(job, band, entries, frags)
+        fill_band_with(job, band, frags)
     })
 }
 
@@ -230,23 +394,20 @@ pub(super) fn fill_band(job: &FillJob, band: u32, entries: &[u32]) -> Result<Ban
 fn fill_band_with(
     job: &FillJob,
     band: u32,
-    entries: &[u32],
     frags: &mut Vec<Fragment>,
 ) -> Result<BandOut, DirtError> {
     let FillJob {
-        setups,
-        xf,
+        chunks,
         grid: g,
         opts,
         budget,
     } = *job;
-    let m = FILM_MARGIN_PX;
-    let s = g.s as f64;
     let row0 = band * g.band_rows;
     let row1 = (row0 + g.band_rows).min(g.cells_y);
     let ncells = ((row1 - row0) * g.cells_x) as usize;
-    // Fill Depth writes each cell's bounds into its record; the count pass adds the scale and
-    // the mask.
+    let cell0 = row0 * g.cells_x;
+    // Fill Depth (§4.1.1) writes each cell's bounds into its record; the count pass adds the
+    // scale and the mask.
     let mut cells = vec![
         CellRecord {
             zmin: f32::INFINITY,
@@ -256,98 +417,23 @@ fn fill_band_with(
         };
         ncells
     ];
-    // Fragments not yet added to the shared budget.
-    let mut unbilled = 0u64;
-    for &e in entries {
-        let (tri, poly) = setups.get(e);
-        let t = tri.tri;
-        let before = frags.len();
-        let Some((r0, r1)) = Grid::span(tri.y.0, tri.y.1, g.s, row0, row1) else {
-            continue;
-        };
-        for r in r0..r1 + 1 {
-            let top = r as f64 * s - m;
-            let bottom = ((r as f64 + 1.0) * s).min(xf.h) + m;
-            // A polygon inside the slab is its own cut (the same points `row_span` would add).
-            let row = if tri.y.0 >= top && tri.y.1 <= bottom {
-                RowSpan { x: tri.x, w: tri.w }
-            } else {
-                match row_span(poly, top, bottom) {
-                    Some(row) => row,
-                    None => continue,
-                }
-            };
-            let Some((c0, c1)) = Grid::span(row.x.0, row.x.1, g.s, 0, g.cells_x) else {
-                continue;
-            };
-            // Fill Depth (§4.1.1) and the fragment of cell column `c` with `w` range
-            // `[wlo, whi]` (w = 1 / depth > 0 after the near clip).
-            let zbase = ((r - row0) * g.cells_x) as usize;
-            let mut emit = |c: u32, wlo: f64, whi: f64| {
-                let (zlo, zhi) = widen(1.0 / whi, 1.0 / wlo, tri.abs_margin);
-                let k = zbase + c as usize;
-                let cell = &mut cells[k];
-                // Branch-free (a new triangle in a cell is nearer or farther unpredictably).
-                cell.zmin = select_bits(zlo < cell.zmin, zlo, cell.zmin);
-                cell.zmax = select_bits(zhi > cell.zmax, zhi, cell.zmax);
-                frags.push(Fragment {
-                    cell: k as u32,
-                    tri: t,
-                    zlo,
-                    zhi,
-                    b0: 0,
-                    b1: 0,
-                });
-            };
-            // Cell column `c`'s `[left, right]` (widened); the cut is convex, so the column
-            // overlaps it iff it overlaps its x range.
-            let column = |c: u32| {
-                let left = c as f64 * s - m;
-                let right = ((c as f64 + 1.0) * s).min(xf.w) + m;
-                (left, right, !(right < row.x.0 || left > row.x.1))
-            };
-            match (opts.cell_depth, tri.plane) {
-                (CellDepth::Exact, _) => {
-                    let mut p = Poly::EMPTY;
-                    p.v[..poly.len()].copy_from_slice(poly);
-                    p.n = poly.len();
-                    let rp = p.clip_axis(1, top, 1.0).clip_axis(1, bottom, -1.0);
-                    for c in c0..c1 + 1 {
-                        let (left, right, overlaps) = column(c);
-                        if let (true, Some((wlo, whi))) =
-                            (overlaps, rp.z_range_in_strip(left, right))
-                        {
-                            emit(c, wlo, whi);
-                        }
-                    }
-                }
-                (CellDepth::Corners, Some(p)) => {
-                    // The plane's y terms are the row's (`cell_w_range` with them hoisted).
-                    let (ay, by) = (p.py * top, p.py * bottom);
-                    let (y_lo, y_hi) = if ay < by { (ay, by) } else { (by, ay) };
-                    for c in c0..c1 + 1 {
-                        let (left, right, overlaps) = column(c);
-                        if overlaps {
-                            let (wlo, whi) = plane_w_range(&p, row.w, (left, right), (y_lo, y_hi));
-                            emit(c, wlo, whi);
-                        }
-                    }
-                }
-                (CellDepth::Corners, None) => {
-                    for c in c0..c1 + 1 {
-                        if column(c).2 {
-                            emit(c, row.w.0, row.w.1);
-                        }
-                    }
-                }
-            }
-        }
-        unbilled += (frags.len() - before) as u64;
-        if unbilled >= BILL_EVERY {
-            bill(budget, &mut unbilled, opts.max_entries)?;
+    for ch in chunks {
+        for f in ch.band(band) {
+            let k = f.cell - cell0;
+            let cell = &mut cells[k as usize];
+            // Branch-free (a new triangle in a cell is nearer or farther unpredictably).
+            cell.zmin = select_bits(f.zlo < cell.zmin, f.zlo, cell.zmin);
+            cell.zmax = select_bits(f.zhi > cell.zmax, f.zhi, cell.zmax);
+            frags.push(Fragment {
+                cell: k,
+                tri: f.tri,
+                zlo: f.zlo,
+                zhi: f.zhi,
+                b0: 0,
+                b1: 0,
+            });
         }
     }
-    bill(budget, &mut unbilled, opts.max_entries)?;
 
     // Fill Primitives (§4.1.2): count per bucket (eq. 1a/1b), prefix sum, fill.
     let nb = g.buckets as usize;
@@ -376,7 +462,8 @@ fn fill_band_with(
         }
         total += (b1 - b0 + 1) as u64;
     }
-    // Entries beyond fragments (triangles in several buckets) count against the budget too.
+    // Entries beyond fragments (triangles in several buckets) count against the budget too
+    // (the fragments were billed by the rasterization).
     let mut extra = total - frags.len() as u64;
     bill(budget, &mut extra, opts.max_entries)?;
     // The running sum kept in a register (not reloaded from the previous slot).

@@ -8,7 +8,7 @@
 //! | `tile_size` | u32 | 1 | `S = 2^m`: one list per `S x S` pixel tile (conservative rasterization, "ADS downscaling", §4.1); 1 = per pixel |
 //! | `buckets` | u32 | 8 | `B` uniform depth buckets per cell over `[zmin, zmax]` (§4.1.2, eq. 1) |
 //! | `near` | f32 | 1e-4 | near plane (view depth); surface closer than this is not captured |
-//! | `max_entries` | u64 | 2^28 | bound on list entries (of all views built together): the build fails instead of allocating more (a band checks it every 4096 fragments, so each worker holds at most that many more before it fails) |
+//! | `max_entries` | u64 | 2^28 | bound on list entries (of all views built together): the build fails instead of allocating more (the rasterization checks it every 4096 fragments, so each worker holds at most that many more before it fails) |
 //! | `cell_depth` | [`CellDepth`] | `Corners` | how a triangle's depth range in a cell is bounded |
 //!
 //! **What a cell holds.** Each triangle is clipped against the near plane, projected, and

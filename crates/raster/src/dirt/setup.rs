@@ -22,7 +22,6 @@
 use glam::DVec3;
 use parallax_scene::TriangleMesh;
 use parallax_scene::camera::Pinhole;
-use rayon::prelude::*;
 
 use super::clip::Poly;
 
@@ -42,13 +41,11 @@ pub(super) struct WPlane {
     pub py: f64,
 }
 
-/// A set-up triangle: its clipped projection is `Setups::verts[v0..v0 + n]` (vertices
-/// `(film x, film y, w)`), with its `w` plane and the absolute depth margin for it.
+/// A set-up triangle (its clipped projection, vertices `(film x, film y, w)`, is the
+/// [`Poly`] [`ViewXf::setup`] wrote), with its `w` plane and the absolute depth margin for it.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct SetupEntry {
     pub tri: u32,
-    pub v0: u32,
-    pub n: u32,
     pub plane: Option<WPlane>,
     pub abs_margin: f64,
     /// Film y range of the polygon.
@@ -58,45 +55,8 @@ pub(super) struct SetupEntry {
     pub w: (f64, f64),
 }
 
-/// The set-up triangles of one chunk of [`SETUP_CHUNK`] mesh triangles for one view.
-#[derive(Default)]
-pub(super) struct SetupChunk {
-    pub entries: Vec<SetupEntry>,
-    pub verts: Vec<DVec3>,
-}
-
-/// Every triangle of a mesh set up once for one view, in triangle order (culled ones left
-/// out), so the bands of the fill share the work. Kept in the chunks the parallel setup made
-/// them in (no copy into one array); an entry is named by a key `chunk << CHUNK_BITS | index`.
-#[derive(Default)]
-pub(super) struct Setups {
-    chunks: Vec<SetupChunk>,
-}
-
-impl Setups {
-    /// Entry `key` and its polygon.
-    #[inline]
-    pub fn get(&self, key: u32) -> (&SetupEntry, &[DVec3]) {
-        let c = &self.chunks[(key >> CHUNK_BITS) as usize];
-        let e = &c.entries[(key & ((1 << CHUNK_BITS) - 1)) as usize];
-        (e, &c.verts[e.v0 as usize..(e.v0 + e.n) as usize])
-    }
-
-    /// Every entry with its key, in triangle order.
-    pub fn iter(&self) -> impl Iterator<Item = (u32, &SetupEntry)> {
-        self.chunks.iter().enumerate().flat_map(|(c, chunk)| {
-            chunk
-                .entries
-                .iter()
-                .enumerate()
-                .map(move |(i, e)| (((c as u32) << CHUNK_BITS) | i as u32, e))
-        })
-    }
-}
-
-/// Triangles per task of [`ViewXf::setup_all`] (`2^CHUNK_BITS`).
-const CHUNK_BITS: u32 = 11;
-const SETUP_CHUNK: usize = 1 << CHUNK_BITS;
+/// Triangles per task of the fused setup and rasterization (`build.rs`).
+pub(super) const SETUP_CHUNK: usize = 1 << 11;
 
 /// The view in f64: rotation rows (camera space = R (p - eye)), projection constants and the
 /// near + guard clip planes (camera space, `n . q + d >= 0` inside).
@@ -147,6 +107,10 @@ impl ViewXf {
             b.y_axis.as_dvec3(),
             b.z_axis.as_dvec3(),
         ];
+        let axes = match rows.map(signed_axis) {
+            [Some(a), Some(b), Some(c)] => Some([a, b, c]),
+            _ => None,
+        };
         ViewXf {
             rows,
             slopes: [ax_lo, ax_hi, ay_lo, ay_hi],
@@ -168,10 +132,7 @@ impl ViewXf {
                 (DVec3::new(0.0, 1.0, ay_lo), 0.0),
                 (DVec3::new(0.0, -1.0, -ay_hi), 0.0),
             ],
-            axes: match rows.map(signed_axis) {
-                [Some(a), Some(b), Some(c)] => Some([a, b, c]),
-                _ => None,
-            },
+            axes,
         }
     }
 
@@ -242,10 +203,17 @@ impl ViewXf {
         })
     }
 
-    /// Sets triangle `t` up for the fill (module docs) and appends it to `out`, unless nothing
-    /// of it is left in the view; `d` are its finite corners minus the view's eye.
+    /// Sets triangle `t` up for the fill (module docs): its entry, with its clipped
+    /// projection written to `poly`, or `None` when nothing of it is left in the view; `d` are
+    /// its finite corners minus the view's eye.
     #[inline(always)]
-    fn setup_into(&self, t: usize, d: &[[f64; 3]; 3], world_mag: f64, out: &mut SetupChunk) {
+    pub fn setup(
+        &self,
+        t: usize,
+        d: &[[f64; 3]; 3],
+        world_mag: f64,
+        poly: &mut Poly,
+    ) -> Option<SetupEntry> {
         let q = [self.rotate(d[0]), self.rotate(d[1]), self.rotate(d[2])];
         // Outside one plane with all three corners: culled; else the planes some corner is
         // outside of cut it.
@@ -256,7 +224,7 @@ impl ViewXf {
             self.near_out(q[2]),
         ];
         if n[0] & n[1] & n[2] != 0 {
-            return;
+            return None;
         }
         let o = [
             self.guard_outcode(q[0]) | n[0],
@@ -264,101 +232,89 @@ impl ViewXf {
             self.guard_outcode(q[2]) | n[2],
         ];
         if o[0] & o[1] & o[2] != 0 {
-            return;
+            return None;
         }
         let cut = o[0] | o[1] | o[2];
-        let v0 = out.verts.len();
         if cut == 0 {
-            out.verts
-                .extend([self.project(q[0]), self.project(q[1]), self.project(q[2])]);
+            poly.v[0] = self.project(q[0]);
+            poly.v[1] = self.project(q[1]);
+            poly.v[2] = self.project(q[2]);
+            poly.n = 3;
         } else {
-            let mut poly = Poly::from_triangle(q);
+            let mut p = Poly::from_triangle(q);
             for (k, &(n, d)) in self.planes.iter().enumerate() {
                 if cut >> k & 1 != 0 {
-                    poly = poly.clip_plane(n, d);
-                    if poly.n == 0 {
-                        return;
+                    p = p.clip_plane(n, d);
+                    if p.n == 0 {
+                        return None;
                     }
                 }
             }
-            out.verts
-                .extend(poly.verts().iter().map(|&v| self.project(v)));
+            for (o, &v) in poly.v.iter_mut().zip(p.verts()) {
+                *o = self.project(v);
+            }
+            poly.n = p.n;
         }
-        let verts = &out.verts[v0..];
-        let (lo, hi) = verts
+        let (lo, hi) = poly
+            .verts()
             .iter()
             .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &v| {
                 (lo.min(v), hi.max(v))
             });
         // The farthest vertex from the eye, bounded by its 1-norm (no square root).
         let far = q.iter().map(|v| v.abs().element_sum()).fold(0.0, f64::max);
-        out.entries.push(SetupEntry {
+        Some(SetupEntry {
             tri: t as u32,
-            v0: v0 as u32,
-            n: verts.len() as u32,
             plane: self.w_plane(&q),
             abs_margin: DEPTH_ABS_ULPS * f32::EPSILON as f64 * (far + world_mag + self.eye_mag),
             y: (lo.y, hi.y),
             x: (lo.x, hi.x),
             w: (lo.z, hi.z),
-        });
+        })
     }
 
-    /// Every triangle of `mesh` set up, in parallel chunks kept in order.
-    pub fn setup_all(&self, mesh: &TriangleMesh) -> Setups {
-        Self::setup_all_views(std::slice::from_ref(self), mesh)
-            .pop()
-            .expect("one view")
-    }
-
-    /// Every triangle of `mesh` set up for each of `views` in one pass over the mesh (each
-    /// triangle's corners are read and converted once for all views), in parallel chunks
-    /// kept in order; `out[i]` is view `i`'s.
-    pub fn setup_all_views(views: &[ViewXf], mesh: &TriangleMesh) -> Vec<Setups> {
-        let n = mesh.triangle_count();
-        // View `k` has the eye of view `k - 1`.
-        let same_eye: Vec<bool> = (0..views.len())
-            .map(|k| k > 0 && views[k].eye == views[k - 1].eye)
-            .collect();
-        let chunks: Vec<Vec<SetupChunk>> = (0..n.div_ceil(SETUP_CHUNK))
-            .into_par_iter()
-            .map(|c| {
-                let mut out: Vec<SetupChunk> = views
-                    .iter()
-                    .map(|_| SetupChunk {
-                        entries: Vec::with_capacity(SETUP_CHUNK),
-                        verts: Vec::with_capacity(3 * SETUP_CHUNK),
-                    })
-                    .collect();
-                for t in c * SETUP_CHUNK..((c + 1) * SETUP_CHUNK).min(n) {
-                    let [a, b, c] = mesh.triangle(t);
-                    // Finite corners have finite camera-space points in every view (f32
-                    // magnitudes cannot overflow the f64 transform).
-                    if !(a.is_finite() && b.is_finite() && c.is_finite()) {
-                        continue;
-                    }
-                    let world_mag = a.abs().max(b.abs()).max(c.abs()).max_element() as f64;
-                    let p = [a.as_dvec3(), b.as_dvec3(), c.as_dvec3()];
-                    // The corners' offsets from the eye, computed once for the views that
-                    // share it (the camera view and the cube faces share the camera's).
-                    let mut d = [[0.0; 3]; 3];
-                    for (k, (xf, o)) in views.iter().zip(&mut out).enumerate() {
-                        if !same_eye[k] {
-                            d = p.map(|p| (p - xf.eye).to_array());
-                        }
-                        xf.setup_into(t, &d, world_mag, o);
-                    }
+    /// Triangles `range` of `mesh` set up for each of `views`, in triangle order (each
+    /// triangle for every view in turn): `f(view, entry, polygon)` for each one left in a
+    /// view; stops at `f`'s first error. Each triangle's corners are read and converted once
+    /// for all views, and their offsets from the eye once for the views that share it
+    /// (`same_eye[k]`: view `k` has the eye of view `k - 1`; the camera view and the cube
+    /// faces around its eye).
+    #[inline(always)]
+    pub fn setup_range<E>(
+        views: &[ViewXf],
+        same_eye: &[bool],
+        mesh: &TriangleMesh,
+        range: std::ops::Range<usize>,
+        mut f: impl FnMut(usize, &SetupEntry, &[DVec3]) -> Result<(), E>,
+    ) -> Result<(), E> {
+        let mut poly = Poly::EMPTY;
+        for t in range {
+            let [a, b, c] = mesh.triangle(t);
+            // Finite corners have finite camera-space points in every view (f32
+            // magnitudes cannot overflow the f64 transform).
+            if !(a.is_finite() && b.is_finite() && c.is_finite()) {
+                continue;
+            }
+            let world_mag = a.abs().max(b.abs()).max(c.abs()).max_element() as f64;
+            let p = [a.as_dvec3(), b.as_dvec3(), c.as_dvec3()];
+            let mut d = [[0.0; 3]; 3];
+            for (k, xf) in views.iter().enumerate() {
+                if !same_eye[k] {
+                    d = p.map(|p| (p - xf.eye).to_array());
                 }
-                out
-            })
-            .collect();
-        let mut per_view: Vec<Setups> = views.iter().map(|_| Setups::default()).collect();
-        for chunk in chunks {
-            for (v, c) in per_view.iter_mut().zip(chunk) {
-                v.chunks.push(c);
+                if let Some(e) = xf.setup(t, &d, world_mag, &mut poly) {
+                    f(k, &e, poly.verts())?;
+                }
             }
         }
-        per_view
+        Ok(())
+    }
+
+    /// `same_eye` of [`Self::setup_range`] for `views`.
+    pub fn same_eyes(views: &[ViewXf]) -> Vec<bool> {
+        (0..views.len())
+            .map(|k| k > 0 && views[k].eye == views[k - 1].eye)
+            .collect()
     }
 }
 
