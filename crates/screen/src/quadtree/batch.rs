@@ -31,7 +31,7 @@ use crate::{CubeSegment, ScreenTracer, TraceResult, TraceStats};
 /// Rays per phase of [`QuadTreeTracer::trace_batch`].
 pub const BATCH: usize = 8;
 const _: () = assert!(
-    BATCH % 4 == 0,
+    BATCH.is_multiple_of(4),
     "the clip phase takes four rays at a time"
 );
 
