@@ -19,6 +19,11 @@
 //! divider's throughput being what a batch of short rays waits on, and the face branches
 //! (mispredicted where a ray's exit face changes) disappear. Off x86_64 the pair is two
 //! scalar clips (the portable twin).
+//!
+//! [`UnitCube::clip_ray_quad`] does the same for four rays in the four lanes of AVX `f64`
+//! `ymm` registers (run-time CPU check; the twin is two pairs): the 8 divisions of four rays
+//! are 8 `vdivpd`, and the face and end-point arithmetic is shared by four rays instead of
+//! two.
 
 use glam::Vec3;
 use parallax_core::Ray;
@@ -170,6 +175,159 @@ impl UnitCube {
             [lane(0), lane(1)]
         }
     }
+
+    /// [`Self::clip_ray`] of four rays: the same results bit for bit. With AVX (checked at
+    /// run time) the four rays are the four lanes of `f64` `ymm` registers, every lane doing
+    /// the scalar clip's operations as [`Self::clip_ray_pair`]'s two; otherwise (and off
+    /// x86_64) two [`Self::clip_ray_pair`]s, the portable twin.
+    #[inline]
+    pub fn clip_ray_quad(&self, r: &[Ray; 4]) -> [Option<CubeSegment>; 4] {
+        #[cfg(target_arch = "x86_64")]
+        {
+            let ok = |r: &Ray| r.is_valid() && !r.t_min.is_nan() && !r.t_max.is_nan();
+            if std::arch::is_x86_feature_detected!("avx") && r.iter().all(ok) {
+                // SAFETY: AVX is available (checked above).
+                return unsafe { self.clip_quad_avx(r) };
+            }
+        }
+        self.clip_ray_quad_twin(r)
+    }
+
+    /// The portable twin of [`Self::clip_ray_quad`]: two pairs.
+    #[inline]
+    pub fn clip_ray_quad_twin(&self, r: &[Ray; 4]) -> [Option<CubeSegment>; 4] {
+        let [a, b] = self.clip_ray_pair(&r[0], &r[1]);
+        let [c, d] = self.clip_ray_pair(&r[2], &r[3]);
+        [a, b, c, d]
+    }
+
+    /// The lanes of [`Self::clip_ray_quad`] for four valid rays (module docs: the pair's
+    /// operations, four lanes wide).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn clip_quad_avx(&self, r: &[Ray; 4]) -> [Option<CubeSegment>; 4] {
+        use std::arch::x86_64::*;
+        // SAFETY (whole body): AVX is enabled for this function; the stores write
+        // four-element arrays.
+        unsafe {
+            let m = &self.world_to_cube;
+            // Lane `i` is `r[i]`; `f32 -> f64` is exact (`cvtps2pd` = `as f64`).
+            let quad = |f: fn(&Ray) -> f32| {
+                _mm256_cvtps_pd(_mm_set_ps(f(&r[3]), f(&r[2]), f(&r[1]), f(&r[0])))
+            };
+            let (ox, oy, oz) = (
+                quad(|r| r.origin.x),
+                quad(|r| r.origin.y),
+                quad(|r| r.origin.z),
+            );
+            let (dx, dy, dz) = (quad(|r| r.dir.x), quad(|r| r.dir.y), quad(|r| r.dir.z));
+            let s = _mm256_set1_pd;
+            let b = |c: usize| {
+                _mm256_add_pd(
+                    _mm256_add_pd(
+                        _mm256_mul_pd(s(m.x_axis[c]), dx),
+                        _mm256_mul_pd(s(m.y_axis[c]), dy),
+                    ),
+                    _mm256_mul_pd(s(m.z_axis[c]), dz),
+                )
+            };
+            let a = |c: usize| {
+                _mm256_add_pd(
+                    _mm256_add_pd(
+                        _mm256_add_pd(
+                            _mm256_mul_pd(s(m.x_axis[c]), ox),
+                            _mm256_mul_pd(s(m.y_axis[c]), oy),
+                        ),
+                        _mm256_mul_pd(s(m.z_axis[c]), oz),
+                    ),
+                    s(m.w_axis[c]),
+                )
+            };
+            let (bx, by, bz, bw) = (b(0), b(1), b(2), b(3));
+            let (ax, ay, az, aw) = (a(0), a(1), a(2), a(3));
+            // `t_start`: `t_min` where `t_min > 0`, else `+0` (an `and` with the mask).
+            let tmin = _mm_set_ps(r[3].t_min, r[2].t_min, r[1].t_min, r[0].t_min);
+            let tmin = _mm_and_ps(_mm_cmpgt_ps(tmin, _mm_setzero_ps()), tmin);
+            let mut lo = _mm256_cvtps_pd(tmin);
+            let mut hi = quad(|r| r.t_max);
+            let (near, far) = (s(self.near as f64), s(self.far as f64));
+            let zero = _mm256_setzero_pd();
+            let sign = s(-0.0);
+            let neg = |v: __m256d| _mm256_xor_pd(v, sign);
+            let faces = [
+                (_mm256_sub_pd(aw, near), bw),
+                (_mm256_sub_pd(far, aw), neg(bw)),
+                (ax, bx),
+                (_mm256_sub_pd(aw, ax), _mm256_sub_pd(bw, bx)),
+                (ay, by),
+                (_mm256_sub_pd(aw, ay), _mm256_sub_pd(bw, by)),
+            ];
+            let mut empty = zero;
+            for (alpha, beta) in faces {
+                let root = _mm256_div_pd(neg(alpha), beta);
+                let up = _mm256_cmp_pd::<_CMP_GT_OQ>(beta, zero);
+                let down = _mm256_cmp_pd::<_CMP_LT_OQ>(beta, zero);
+                let up_lo = _mm256_and_pd(up, _mm256_cmp_pd::<_CMP_GT_OQ>(root, lo));
+                lo = _mm256_blendv_pd(lo, root, up_lo);
+                let down_hi = _mm256_and_pd(down, _mm256_cmp_pd::<_CMP_LT_OQ>(root, hi));
+                hi = _mm256_blendv_pd(hi, root, down_hi);
+                empty = _mm256_or_pd(
+                    empty,
+                    _mm256_andnot_pd(
+                        _mm256_or_pd(up, down),
+                        _mm256_cmp_pd::<_CMP_LT_OQ>(alpha, zero),
+                    ),
+                );
+            }
+            let abs_hi = _mm256_andnot_pd(sign, hi);
+            let keep = _mm256_andnot_pd(
+                empty,
+                _mm256_and_pd(
+                    _mm256_cmp_pd::<_CMP_LT_OQ>(lo, hi),
+                    _mm256_cmp_pd::<_CMP_LT_OQ>(abs_hi, s(f64::INFINITY)),
+                ),
+            );
+            let keep = _mm256_movemask_pd(keep);
+            if keep == 0 {
+                return [None; 4];
+            }
+            let at = |t: __m256d| {
+                (
+                    _mm256_add_pd(ax, _mm256_mul_pd(bx, t)),
+                    _mm256_add_pd(ay, _mm256_mul_pd(by, t)),
+                    _mm256_add_pd(az, _mm256_mul_pd(bz, t)),
+                    _mm256_add_pd(aw, _mm256_mul_pd(bw, t)),
+                )
+            };
+            let one = s(1.0);
+            let c01 = |v: __m256d| _mm256_cvtpd_ps(_mm256_min_pd(_mm256_max_pd(v, zero), one));
+            let point = |h: (__m256d, __m256d, __m256d, __m256d)| {
+                let r = _mm256_div_pd(one, h.3);
+                let mut out = [[0.0f32; 4]; 3];
+                _mm_storeu_ps(out[0].as_mut_ptr(), c01(_mm256_mul_pd(h.0, r)));
+                _mm_storeu_ps(out[1].as_mut_ptr(), c01(_mm256_mul_pd(h.1, r)));
+                _mm_storeu_ps(out[2].as_mut_ptr(), c01(_mm256_mul_pd(h.2, r)));
+                let mut w = [0.0f64; 4];
+                _mm256_storeu_pd(w.as_mut_ptr(), h.3);
+                (out, w)
+            };
+            let (p0, w0) = point(at(lo));
+            let (p1, w1) = point(at(hi));
+            let mut t = [[0.0f32; 4]; 2];
+            _mm_storeu_ps(t[0].as_mut_ptr(), _mm256_cvtpd_ps(lo));
+            _mm_storeu_ps(t[1].as_mut_ptr(), _mm256_cvtpd_ps(hi));
+            std::array::from_fn(|i| {
+                (keep & (1 << i) != 0).then(|| CubeSegment {
+                    p0: Vec3::new(p0[0][i], p0[1][i], p0[2][i]),
+                    p1: Vec3::new(p1[0][i], p1[1][i], p1[2][i]),
+                    t0: t[0][i],
+                    t1: t[1][i],
+                    w0: w0[i],
+                    w1: w1[i],
+                })
+            })
+        }
+    }
 }
 
 #[cfg(test)]
@@ -208,7 +366,7 @@ mod tests {
     }
 
     #[test]
-    fn pair_equals_scalar() {
+    fn pair_and_quad_equal_scalar() {
         let cube = crate::space::tests::cube();
         let cam = &cube.camera;
         let eye = cam.frame.position;
@@ -253,6 +411,15 @@ mod tests {
         rays.push(bad);
         rays.push(Ray::new(eye, Vec3::ZERO));
         let mut clipped = 0;
+        for w in rays.windows(4) {
+            let w: &[Ray; 4] = w.try_into().unwrap();
+            let (quad, twin) = (cube.clip_ray_quad(w), cube.clip_ray_quad_twin(w));
+            for ((r, q), t) in w.iter().zip(&quad).zip(&twin) {
+                let one = cube.clip_ray(r);
+                assert_eq!(bits(&one), bits(q), "{r:?}");
+                assert_eq!(bits(&one), bits(t), "{r:?}");
+            }
+        }
         for w in rays.windows(2) {
             let pair = cube.clip_ray_pair(&w[0], &w[1]);
             for (r, p) in w.iter().zip(&pair) {

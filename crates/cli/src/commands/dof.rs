@@ -495,7 +495,9 @@ fn print_dda_minimal(rows: &[bench_dof::DofRow]) {
 
 /// Quad-tree against the DDA in the same run, per layer count and `N_pri` (plain lens
 /// sampling): the DDA at the step bound of its sweep with the best PSNR (its best quality),
-/// CPU times and their ratio next to both methods' PSNR / SSIM. "Equal quality" holds where
+/// CPU times and their ratio next to both methods' PSNR / SSIM: the ratio of the best rounds,
+/// and the median (and range) of the ratios round by round (the two ran back to back in each
+/// round, `bench_dof::run`: robust to load changes between rounds). "Equal quality" holds where
 /// the DDA's best PSNR reaches the quad-tree's; where it does not, the ratio compares the
 /// quad-tree's better image with the DDA's best one.
 fn print_vs_dda(rows: &[bench_dof::DofRow]) {
@@ -516,13 +518,29 @@ fn print_vs_dda(rows: &[bench_dof::DofRow]) {
         if !header {
             println!("\nQuad-tree vs the DDA at its best step bound (same run, CPU ms)\n");
             println!(
-                "| layers | N_pri | quad-tree PSNR dB / SSIM | quad-tree CPU ms | DDA steps | DDA PSNR dB / SSIM | DDA CPU ms | CPU ratio quad-tree / DDA | DDA reaches the quad-tree's PSNR |"
+                "| layers | N_pri | quad-tree PSNR dB / SSIM | quad-tree CPU ms | DDA steps | DDA PSNR dB / SSIM | DDA CPU ms | CPU ratio quad-tree / DDA (best of rounds each) | median of per-round ratios | per-round range | DDA reaches the quad-tree's PSNR |"
             );
-            println!("|---|---|---|---|---|---|---|---|---|");
+            println!("|---|---|---|---|---|---|---|---|---|---|---|");
             header = true;
         }
+        let mut ratios: Vec<f64> = q
+            .ms_dof_cpu_rounds
+            .iter()
+            .zip(&d.ms_dof_cpu_rounds)
+            .map(|(a, b)| a / b)
+            .collect();
+        ratios.sort_by(f64::total_cmp);
+        let median = match ratios.len() {
+            0 => f64::NAN,
+            n if n % 2 == 1 => ratios[n / 2],
+            n => 0.5 * (ratios[n / 2 - 1] + ratios[n / 2]),
+        };
+        let range = match (ratios.first(), ratios.last()) {
+            (Some(a), Some(b)) => format!("{a:.3}-{b:.3}"),
+            _ => "-".into(),
+        };
         println!(
-            "| {} | {} | {:.2} / {:.4} | {:.1} | {} | {:.2} / {:.4} | {:.1} | {:.3} | {} |",
+            "| {} | {} | {:.2} / {:.4} | {:.1} | {} | {:.2} / {:.4} | {:.1} | {:.3} | {median:.3} | {range} | {} |",
             q.layers,
             q.n_pri,
             q.psnr,

@@ -17,7 +17,9 @@
 //! With one layer in cascade mode (the common case of depth of field) the layer's start is
 //! part of the second phase; with several layers or inpainting the cascade runs ray by ray
 //! after the clip and set-up phases (a deeper layer's window depends on the layer before).
-//! The opt-in f32 clip traces the rays one by one.
+//! The clip phase takes four rays at a time ([`crate::UnitCube::clip_ray_quad`], SIMD lanes
+//! with every lane doing the one-ray operations). The opt-in f32 clip traces the rays one by
+//! one.
 
 use parallax_core::Ray;
 
@@ -28,6 +30,10 @@ use crate::{CubeSegment, ScreenTracer, TraceResult, TraceStats};
 
 /// Rays per phase of [`QuadTreeTracer::trace_batch`].
 pub const BATCH: usize = 8;
+const _: () = assert!(
+    BATCH.is_multiple_of(4),
+    "the clip phase takes four rays at a time"
+);
 
 impl QuadTreeTracer {
     /// Traces `rays[i]` into `out[i]` (equal lengths), adding the work to `stats`: the same
@@ -50,14 +56,25 @@ impl QuadTreeTracer {
         }
     }
 
-    /// The f64 cube clips of at most [`BATCH`] rays, two at a time
-    /// ([`crate::UnitCube::clip_ray_pair`]: the bits of [`crate::UnitCube::clip_ray`]).
+    /// The f64 cube clips of at most [`BATCH`] rays, four at a time
+    /// ([`crate::UnitCube::clip_ray_quad`]; a remainder in a pair and alone: all the bits of
+    /// [`crate::UnitCube::clip_ray`]).
     #[inline(always)]
     fn clip_phase(&self, rays: &[Ray]) -> [Option<CubeSegment>; BATCH] {
         debug_assert!(rays.len() <= BATCH);
         let mut segs: [Option<CubeSegment>; BATCH] = [None; BATCH];
-        for (seg, ray) in segs.chunks_exact_mut(2).zip(rays.chunks(2)) {
+        for (seg, ray) in segs.chunks_exact_mut(4).zip(rays.chunks(4)) {
             match ray {
+                [_, _, _, _] => {
+                    let quad: &[Ray; 4] = ray.try_into().expect("four rays");
+                    seg.copy_from_slice(&self.cube.clip_ray_quad(quad));
+                }
+                [r0, r1, r2] => {
+                    let [s0, s1] = self.cube.clip_ray_pair(r0, r1);
+                    seg[0] = s0;
+                    seg[1] = s1;
+                    seg[2] = self.cube.clip_ray(r2);
+                }
                 [r0, r1] => {
                     let [s0, s1] = self.cube.clip_ray_pair(r0, r1);
                     seg[0] = s0;

@@ -12,7 +12,10 @@
 //!
 //! **Interleaved rounds** (as `bench warp`): all structures of a layer count are built
 //! first, then each of `repeats` rounds renders every entrant once; `ms_dof` is the best
-//! round. Mrays/s = lens rays (`N_pri` per pixel, secondaries not counted: they are not
+//! round. Within a round the entrants run grouped by `N_pri / N_sec` (so the quad-tree and
+//! the DDA at the same lens rays run back to back), and every second round in the reverse
+//! order (A B, then B A: a load change during a round weighs on both sides alike);
+//! `ms_dof_cpu_rounds` keeps every round's CPU time for per-round ratios. Mrays/s = lens rays (`N_pri` per pixel, secondaries not counted: they are not
 //! traced) / `T_dof`.
 //!
 //! **Fig. 8** ([`equal_time`]): with `N_sec > 1` an image costs more than `N_pri` lens rays
@@ -114,6 +117,9 @@ pub struct DofRow {
     /// CPU milliseconds of the rendering threads, best round (the time column to compare
     /// methods by on a loaded machine).
     pub ms_dof_cpu: f64,
+    /// The CPU milliseconds of every round, in round order (per-round ratios between
+    /// entries: rows of one layer count ran in the same rounds).
+    pub ms_dof_cpu_rounds: Vec<f64>,
     /// `1000 / (T_ref + T_dof)`.
     pub fps: f64,
     /// Lens rays per second of `T_dof` (millions).
@@ -198,8 +204,20 @@ pub fn run(
         }
         let mut images: Vec<Result<DofImage, String>> =
             idx.iter().map(|_| Err("not run".to_string())).collect();
+        let mut rounds_cpu: Vec<Vec<f64>> = idx.iter().map(|_| Vec::new()).collect();
+        // Grouped by lens rays, inpainting last (stable otherwise), reversed every
+        // second round (module docs).
+        let mut order: Vec<usize> = (0..idx.len()).collect();
+        order.sort_by_key(|&k| {
+            let e = &entries[idx[k]];
+            (e.n_pri, e.n_sec, e.inpaint)
+        });
         for round in 0..bench.repeats.max(1) {
-            for (k, &i) in idx.iter().enumerate() {
+            if round > 0 {
+                order.reverse();
+            }
+            for &k in &order {
+                let i = idx[k];
                 let e = &entries[i];
                 let b = built
                     .iter()
@@ -228,7 +246,11 @@ pub fn run(
                     warp: opts.warp,
                     secondary_resample: bench.secondary_resample,
                 };
-                match (render_dof(st, &r, &bench.setup.lens, &o), &mut images[k]) {
+                let img = render_dof(st, &r, &bench.setup.lens, &o);
+                if let Ok(img) = &img {
+                    rounds_cpu[k].push(img.cpu_ms);
+                }
+                match (img, &mut images[k]) {
                     (Ok(img), Ok(best)) => {
                         best.ms = best.ms.min(img.ms);
                         best.cpu_ms = best.cpu_ms.min(img.cpu_ms);
@@ -245,7 +267,9 @@ pub fn run(
                 .find(|b| b.key == e.structure_key())
                 .expect("built");
             let img = std::mem::replace(&mut images[k], Err(String::new()));
-            out[i] = Some(finish(scene, bench, e, &r, b.build_ms, img, truth, &mask));
+            let mut done = finish(scene, bench, e, &r, b.build_ms, img, truth, &mask);
+            done.0.ms_dof_cpu_rounds = std::mem::take(&mut rounds_cpu[k]);
+            out[i] = Some(done);
         }
     }
     Ok(out
