@@ -38,7 +38,7 @@ use crate::keys8;
 use crate::node::{is_leaf, leaf_count, leaf_first};
 use crate::node8::Node8;
 use crate::stats::{Counter, NoStats, TraversalStats};
-use crate::traverse::{Best, pop_closer, sort_hits};
+use crate::traverse::{Best, pop_closer, sort_dedup_hits};
 use crate::tri4::Tri4Ray;
 use parallax_core::simd::{max_or_rhs, min_or_rhs};
 
@@ -448,7 +448,7 @@ impl Bvh {
             out,
         };
         self.traverse8::<C, T, false>(nt, 0, ray.t_max, stats, &mut leaf);
-        sort_hits(out);
+        sort_dedup_hits(leaf.out);
     }
 }
 

@@ -5,7 +5,7 @@ mod common;
 
 use common::*;
 use glam::Vec3;
-use parallax_bvh::Bvh;
+use parallax_bvh::{BuildOptions, Bvh};
 use parallax_core::Ray;
 use parallax_scene::TriangleMesh;
 
@@ -21,6 +21,19 @@ fn targets(mesh: &TriangleMesh) -> Vec<Vec3> {
         }
     }
     t
+}
+
+/// The BVH with the default build and with spatial splits forced everywhere (alpha 0, large
+/// budget, one triangle per leaf: most triangles are cut into pieces).
+fn builds(mesh: &TriangleMesh) -> [Bvh; 2] {
+    let spatial = BuildOptions {
+        spatial_splits: true,
+        split_alpha: 0.0,
+        split_budget: 4.0,
+        max_leaf_size: 1,
+        ..Default::default()
+    };
+    [Bvh::build(mesh), Bvh::build_with(mesh, &spatial)]
 }
 
 fn closed_convex_meshes() -> Vec<(&'static str, TriangleMesh)> {
@@ -39,7 +52,7 @@ fn rays_from_outside_through_vertices_and_edges_hit_twice() {
     let mut rng = Rng::new(21);
     let mut hits = Vec::new();
     for (name, mesh) in closed_convex_meshes() {
-        let bvh = Bvh::build(&mesh);
+        for bvh in &builds(&mesh) {
         for p in targets(&mesh) {
             for _ in 0..3 {
                 let inner = rng.vec3_in(Vec3::splat(-0.4), Vec3::splat(0.4));
@@ -53,13 +66,14 @@ fn rays_from_outside_through_vertices_and_edges_hit_twice() {
             }
         }
     }
+    }
 }
 
 /// From outside in any direction: all-hits counts are even (0 or 2 for a convex mesh).
 #[test]
 fn random_rays_from_outside_hit_an_even_number_of_times() {
     for (name, mesh) in closed_convex_meshes() {
-        let bvh = Bvh::build(&mesh);
+        for bvh in &builds(&mesh) {
         let mut rng = Rng::new(5);
         let mut out = Vec::new();
         let mut crossing = 0;
@@ -79,6 +93,7 @@ fn random_rays_from_outside_hit_an_even_number_of_times() {
         }
         assert!(crossing > 500, "{name}: {crossing}");
     }
+    }
 }
 
 /// Axis-parallel and diagonal rays pass exactly (bit-exactly, in the sheared frame) through the
@@ -86,7 +101,7 @@ fn random_rays_from_outside_hit_an_even_number_of_times() {
 #[test]
 fn exact_axis_and_diagonal_rays_through_cube_edges_and_corners() {
     let mesh = cube();
-    let bvh = Bvh::build(&mesh);
+    for bvh in &builds(&mesh) {
     let c = [-1.0f32, -0.5, 0.0, 0.5, 1.0];
     for axis in 0..3 {
         for &a in &c {
@@ -120,6 +135,7 @@ fn exact_axis_and_diagonal_rays_through_cube_edges_and_corners() {
         }
     }
 }
+}
 
 /// From inside a closed convex mesh every ray hits exactly once, also through vertices and
 /// edge midpoints.
@@ -127,7 +143,7 @@ fn exact_axis_and_diagonal_rays_through_cube_edges_and_corners() {
 fn rays_from_inside_hit_exactly_once() {
     let mut rng = Rng::new(77);
     for (name, mesh) in closed_convex_meshes() {
-        let bvh = Bvh::build(&mesh);
+        for bvh in &builds(&mesh) {
         let mut out = Vec::new();
         let mut rays: Vec<Ray> = targets(&mesh)
             .into_iter()
@@ -159,6 +175,7 @@ fn rays_from_inside_hit_exactly_once() {
             assert_eq!(out.len(), 1, "{name}: {out:?} for {r:?}");
         }
     }
+    }
 }
 
 /// A fine grid (many shared edges and vertices in one plane): rays through every vertex and
@@ -166,7 +183,7 @@ fn rays_from_inside_hit_exactly_once() {
 #[test]
 fn grid_vertices_and_edges_are_hit_exactly_once() {
     let mesh = grid(16);
-    let bvh = Bvh::build(&mesh);
+    for bvh in &builds(&mesh) {
     let mut out = Vec::new();
     for p in targets(&mesh) {
         if p.x.abs() >= 1.0 || p.z.abs() >= 1.0 {
@@ -183,4 +200,5 @@ fn grid_vertices_and_edges_are_hit_exactly_once() {
             check_closest(&bvh, &mesh, &r, "grid");
         }
     }
+}
 }
