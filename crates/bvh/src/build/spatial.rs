@@ -5,15 +5,21 @@
 //! Per node (§4):
 //! - the binned object split of the parent module, and the surface area `λ` of the overlap of
 //!   its two children's boxes;
-//! - if `λ > α · A(root)` (§4.5, `split_alpha`) and duplication budget is left, a spatial split:
-//!   `SPATIAL_BINS` equal-width bins per axis over the node's box; each reference records an
-//!   entry in the bin of its minimum and an exit in the bin of its maximum, and is clipped to
-//!   every bin it crosses ("chopped" into exact pieces, §4.2: the box of the triangle's part on
-//!   each side of a plane, intersected with the reference's box); a sweep gives
-//!   `A(left) N(entries left) + A(right) N(exits right)` per plane;
+//! - if `λ > α · A(root)` (§4.5, `split_alpha`), the node has at least [`MIN_SPATIAL_REFS`]
+//!   references and duplication budget is left, a spatial split: up to `SPATIAL_BINS`
+//!   equal-width bins per axis over the node's box (`4 + n / 20`, as the object bins); each
+//!   reference records an entry in the bin of its minimum and an exit in the bin of its
+//!   maximum, and grows every bin it crosses by its box clipped to the bin's slab; a sweep
+//!   gives `A(left) N(entries left) + A(right) N(exits right)` per plane (§4.2);
 //! - the cheaper of the two (or a leaf) is taken. A spatial split sends each reference that
-//!   straddles the plane to both sides with its clipped boxes, unless moving it whole to one side
+//!   straddles the plane to both sides with "chopped" boxes (the box of the triangle's part on
+//!   that side, intersected with the reference's box, §4.2), unless moving it whole to one side
 //!   is cheaper ("reference unsplitting", §4.4).
+//!
+//! The binning clips boxes, not triangles (the paper chops the triangle in every bin it
+//! crosses): on Sponza and the classroom that estimate chose trees with the same nodes per ray
+//! as exact chopping (within 0.3%) at a fraction of the binning cost (`docs/notes/bvh.md`).
+//! The partition always chops exactly.
 //!
 //! **Exact bounds.** The piece of a reference on one side of a plane is bounded by the
 //! triangle's vertices on that side and its edges' crossings of the plane; the crossings are
@@ -44,6 +50,11 @@ use crate::options::BuildOptions;
 /// fewer, as the object bins (`4 + n / 20`): a reference is clipped once per boundary it
 /// crosses, and in small nodes most references cross most bins.
 const SPATIAL_BINS: usize = 16;
+
+/// Nodes with fewer references do not try spatial splits. Measured (`docs/notes/bvh.md`,
+/// 2026-12-03): the splits taken are in large nodes, and the nodes below 256 references
+/// held most of the binning work while changing nodes per ray by under 1%.
+const MIN_SPATIAL_REFS: usize = 256;
 
 /// Triangle corners by reference id.
 pub(crate) type Corners<'a> = &'a (dyn Fn(u32) -> [Vec3; 3] + Sync);
@@ -117,10 +128,17 @@ fn build_rec(
         }
     };
     // The left side keeps its references at the front; the right side's (now at
-    // `n_l..n_l + n_r`) move to the start of its capacity range.
+    // `n_l..n_l + n_r`) move to the start of its capacity range. A left side too small for
+    // spatial splits gets no spare slots (the right side then stays where it is).
     let spare = cap - n_l - n_r;
-    let c_l = n_l + (spare as u64 * n_l as u64 / (n_l + n_r) as u64) as usize;
-    refs.copy_within(n_l..n_l + n_r, c_l);
+    let c_l = if n_l >= MIN_SPATIAL_REFS {
+        n_l + (spare as u64 * n_l as u64 / (n_l + n_r) as u64) as usize
+    } else {
+        n_l
+    };
+    if c_l != n_l {
+        refs.copy_within(n_l..n_l + n_r, c_l);
+    }
     let (l, r) = refs.split_at_mut(c_l);
     let off_r = offset + c_l as u32;
     let (arena_l, rest) = arena.split_at_mut(2 * c_l - 1);
@@ -158,7 +176,7 @@ fn split(
     let o = find_object_split(&refs[..n], cbounds, opts, scratch);
     let mut best = o.cost;
     let mut spatial = None;
-    if o.cost.is_finite() && n < refs.len() {
+    if o.cost.is_finite() && n < refs.len() && n >= MIN_SPATIAL_REFS {
         let bins = &scratch.0[o.axis][..o.binner.bins];
         let side = |r: &[super::Bin]| r.iter().fold(BoxA::EMPTY, |b, x| b.union(x.bounds));
         let (bl, br) = (side(&bins[..o.split]), side(&bins[o.split..]));
@@ -167,7 +185,7 @@ fn split(
             max: bl.max.min(br.max),
         };
         if overlap.aabb().surface_area() > ctx.min_overlap
-            && let Some(s) = find_spatial_split(&refs[..n], bounds, ctx)
+            && let Some(s) = find_spatial_split(&refs[..n], bounds)
             && s.cost < best
             && (s.n_l + s.n_r) as usize <= refs.len()
         {
@@ -260,36 +278,46 @@ struct SpatialSplit {
     n_r: u32,
 }
 
-fn bin_spatial(refs: &[PrimRef], grid: &Grid, ctx: &Ctx) -> SBins {
+fn bin_spatial(refs: &[PrimRef], grid: &Grid) -> SBins {
     let mut bins = [[EMPTY_SBIN; SPATIAL_BINS]; 3];
+    let [b_x, b_y, b_z] = &mut bins;
     for r in refs {
-        let bx = BoxA {
-            min: r.min(),
-            max: r.max(),
-        };
-        let mut tri = None;
-        for (a, axis_bins) in bins.iter_mut().enumerate() {
-            if grid.scale[a] == 0.0 {
-                continue;
-            }
-            let (b0, b1) = (grid.bin(bx.min[a], a), grid.bin(bx.max[a], a));
-            axis_bins[b0].enter += 1;
-            axis_bins[b1].exit += 1;
-            if b0 == b1 {
-                axis_bins[b0].bounds = axis_bins[b0].bounds.union(bx);
-                continue;
-            }
-            let tri = tri.get_or_insert_with(|| (ctx.corners)(r.id()));
-            let mut rest = bx;
-            for (i, bin) in axis_bins.iter_mut().enumerate().take(b1).skip(b0) {
-                let (l, rr) = split_box(tri, rest, a, grid.plane(i + 1, a));
-                bin.bounds = bin.bounds.union(l);
-                rest = rr;
-            }
-            axis_bins[b1].bounds = axis_bins[b1].bounds.union(rest);
-        }
+        bin_axis::<0>(r, b_x, grid);
+        bin_axis::<1>(r, b_y, grid);
+        bin_axis::<2>(r, b_z, grid);
     }
     bins
+}
+
+/// Bins one reference on axis `A`: an entry, an exit, and in every bin it crosses its box
+/// clipped to the bin's slab (module docs: the binning does not clip the triangle).
+#[inline(always)]
+fn bin_axis<const A: usize>(r: &PrimRef, bins: &mut [SBin; SPATIAL_BINS], grid: &Grid) {
+    if grid.scale[A] == 0.0 {
+        return;
+    }
+    let bx = BoxA {
+        min: r.min(),
+        max: r.max(),
+    };
+    let (b0, b1) = (grid.bin(bx.min[A], A), grid.bin(bx.max[A], A));
+    bins[b0].enter += 1;
+    bins[b1].exit += 1;
+    if b0 == b1 {
+        bins[b0].bounds = bins[b0].bounds.union(bx);
+        return;
+    }
+    for i in b0..=b1 {
+        let mut p = bx;
+        if i > b0 {
+            p.min[A] = grid.plane(i, A).max(bx.min[A]);
+        }
+        if i < b1 {
+            p.max[A] = grid.plane(i + 1, A).min(bx.max[A]);
+        }
+        let bin = &mut bins[i & (SPATIAL_BINS - 1)];
+        bin.bounds = bin.bounds.union(p);
+    }
 }
 
 fn merge_sbins(mut a: SBins, b: SBins) -> SBins {
@@ -301,14 +329,14 @@ fn merge_sbins(mut a: SBins, b: SBins) -> SBins {
     a
 }
 
-fn find_spatial_split(refs: &[PrimRef], bounds: &Aabb, ctx: &Ctx) -> Option<SpatialSplit> {
+fn find_spatial_split(refs: &[PrimRef], bounds: &Aabb) -> Option<SpatialSplit> {
     let grid = Grid::new(bounds, SPATIAL_BINS.min(4 + refs.len() / 20));
     let bins = if refs.len() > PAR_BIN_THRESHOLD {
         refs.par_chunks(8192)
-            .map(|c| bin_spatial(c, &grid, ctx))
+            .map(|c| bin_spatial(c, &grid))
             .reduce(|| [[EMPTY_SBIN; SPATIAL_BINS]; 3], merge_sbins)
     } else {
-        bin_spatial(refs, &grid, ctx)
+        bin_spatial(refs, &grid)
     };
     let mut best: Option<SpatialSplit> = None;
     for (axis, bins) in bins.iter().enumerate() {
@@ -426,13 +454,28 @@ fn is_empty(b: BoxA) -> bool {
 /// intersected with `bx` (the box of the part of the triangle the reference stands for);
 /// conservative (module docs). A side without a part of the triangle gets an empty box.
 fn split_box(tri: &[Vec3; 3], bx: BoxA, a: usize, pos: f32) -> (BoxA, BoxA) {
+    let tri = tri.map(Vec3A::from);
+    match a {
+        0 => split_box_axis::<0>(&tri, bx, pos),
+        1 => split_box_axis::<1>(&tri, bx, pos),
+        _ => split_box_axis::<2>(&tri, bx, pos),
+    }
+}
+
+/// [`split_box`] on the axis `A`.
+#[inline(always)]
+fn split_box_axis<const A: usize>(tri: &[Vec3A; 3], bx: BoxA, pos: f32) -> (BoxA, BoxA) {
     let (mut l, mut r) = (BoxA::EMPTY, BoxA::EMPTY);
     // Relative widening of the crossings on the two other axes (zero on the split axis).
-    let mut pad = Vec3A::splat(1.0 / (1 << 18) as f32);
-    pad[a] = 0.0;
+    let pad = Vec3A::select(
+        glam::BVec3A::new(A == 0, A == 1, A == 2),
+        Vec3A::ZERO,
+        Vec3A::splat(1.0 / (1 << 18) as f32),
+    );
+    let on_plane = glam::BVec3A::new(A == 0, A == 1, A == 2);
     for k in 0..3 {
-        let (v, w) = (Vec3A::from(tri[k]), Vec3A::from(tri[(k + 1) % 3]));
-        let (va, wa) = (v[a], w[a]);
+        let (v, w) = (tri[k], tri[(k + 1) % 3]);
+        let (va, wa) = (v[A], w[A]);
         if va <= pos {
             l = l.grow(v);
         }
@@ -441,8 +484,7 @@ fn split_box(tri: &[Vec3; 3], bx: BoxA, a: usize, pos: f32) -> (BoxA, BoxA) {
         }
         if (va < pos && wa > pos) || (va > pos && wa < pos) {
             let t = ((pos - va) / (wa - va)).clamp(0.0, 1.0);
-            let mut p = v + (w - v) * t;
-            p[a] = pos;
+            let p = Vec3A::select(on_plane, Vec3A::splat(pos), v + (w - v) * t);
             let m = v.abs().max(w.abs()) * pad;
             let c = BoxA {
                 min: p - m,
