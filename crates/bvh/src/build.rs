@@ -643,7 +643,7 @@ mod tests {
                 last: Vec3A::splat((bins - 1) as f32),
                 bins,
             };
-            let mut check = |f: Vec3A| {
+            let check = |f: Vec3A| {
                 let b = binner.bin(f);
                 for axis in 0..3 {
                     assert_eq!(b[axis], binner.index(f[axis]), "{f:?} {bins}");
