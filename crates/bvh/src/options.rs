@@ -61,7 +61,11 @@ impl BuildOptions {
             intersection_cost: finite_pos(self.intersection_cost, 1.0),
             parallel_threshold: self.parallel_threshold.max(64),
             spatial_splits: self.spatial_splits,
-            split_alpha: if self.split_alpha >= 0.0 { self.split_alpha } else { 1e-5 },
+            split_alpha: if self.split_alpha >= 0.0 {
+                self.split_alpha
+            } else {
+                1e-5
+            },
             split_budget: if self.split_budget.is_finite() {
                 self.split_budget.clamp(0.0, 4.0)
             } else {

@@ -541,7 +541,8 @@ impl Bvh {
 
     /// The closest intersection with `ray` in `(t_min, t_max)`, or `None`. Both faces of a
     /// triangle are hit. Invalid rays (non-finite, zero direction) hit nothing. Exact ties in
-    /// `t` go to the lower index in [`Bvh::triangles`]. Traverses the 8-wide tree (AVX2 node
+    /// `t` go to the lower index in [`Bvh::triangles`] (with spatial splits: to one of the
+    /// tied triangles, [`BuildOptions`](crate::BuildOptions)). Traverses the 8-wide tree (AVX2 node
     /// test where the CPU has it).
     pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
         self.closest_hit8(ray, &mut NoStats)

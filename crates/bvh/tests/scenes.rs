@@ -55,6 +55,14 @@ fn check_scene_with(scene: &Scene, random: usize, w: u32, h: u32, opts: &BuildOp
         .sum();
     rays.par_iter().step_by(10).for_each(|r| {
         check_all(&bvh, mesh, r, &scene.name);
+        // The 4-wide twin: the same hit list, the closest hit at the same `t`.
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        bvh.all_hits(r, &mut a);
+        bvh.all_hits4(r, &mut b);
+        assert_eq!(a, b, "{}: all_hits4 for {r:?}", scene.name);
+        let t = |h: Option<parallax_bvh::Hit>| h.map(|h| h.t);
+        assert_eq!(t(bvh.closest_hit(r)), t(bvh.closest_hit4(r)), "{}", scene.name);
+        assert_eq!(bvh.any_hit(r), bvh.any_hit4(r), "{}", scene.name);
     });
     if mesh.triangle_count() > 0 {
         assert!(hits > 0, "{}: no ray hit anything", scene.name);
@@ -114,8 +122,20 @@ fn japanese_classroom_spatial_splits() {
 
 #[test]
 fn small_and_builtin_scenes_spatial_splits() {
-    check_scene_with(&load("stanford_bunny/bun_zipper.ply"), 600, 24, 18, &spatial());
-    check_scene_with(&load("box_textured/BoxTextured.glb"), 2000, 32, 24, &spatial());
+    check_scene_with(
+        &load("stanford_bunny/bun_zipper.ply"),
+        600,
+        24,
+        18,
+        &spatial(),
+    );
+    check_scene_with(
+        &load("box_textured/BoxTextured.glb"),
+        2000,
+        32,
+        24,
+        &spatial(),
+    );
     for name in parallax_scene::builtin::NAMES.iter() {
         let scene = parallax_scene::builtin::by_name(name).unwrap();
         check_scene_with(&scene, 1000, 32, 24, &spatial());

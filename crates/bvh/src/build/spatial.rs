@@ -200,7 +200,16 @@ fn split(
         return None;
     }
     if let Some(s) = spatial {
-        return Some(spatial_partition(refs, n, &s, ctx));
+        let (n_l, n_r) = spatial_partition(refs, n, &s, ctx);
+        if n_l > 0 && n_r > 0 {
+            return Some((n_l, n_r));
+        }
+        // Chopping (a side without a part of some triangle) and unsplitting moved every
+        // reference to one side: split those (still covering the node) at the median.
+        let m = n_l + n_r;
+        let (_, cb) = node_bounds(&refs[..m]);
+        let mid = median_split(&mut refs[..m], &cb);
+        return Some((mid, m - mid));
     }
     let mid = if o.cost.is_finite() {
         object_partition(&mut refs[..n], &o, cbounds)
@@ -382,7 +391,12 @@ fn find_spatial_split(refs: &[PrimRef], bounds: &Aabb) -> Option<SpatialSplit> {
 /// when that is cheaper (unsplitting, §4.4), else its clipped pieces go to both. Returns the
 /// side sizes (their sum fits `refs.len()`: the sweep's counts bound it, and the caller checked
 /// them).
-fn spatial_partition(refs: &mut [PrimRef], n: usize, s: &SpatialSplit, ctx: &Ctx) -> (usize, usize) {
+fn spatial_partition(
+    refs: &mut [PrimRef],
+    n: usize,
+    s: &SpatialSplit,
+    ctx: &Ctx,
+) -> (usize, usize) {
     let (a, pos) = (s.axis, s.grid.plane(s.split, s.axis));
     let (mut lb, mut rb) = (s.left, s.right);
     let (mut nl, mut nr) = (s.n_l as f32, s.n_r as f32);
