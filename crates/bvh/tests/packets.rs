@@ -165,20 +165,20 @@ fn check_scene_bvh(scene: &Scene, bvh: &Bvh, w: u32, h: u32) {
     let mut hits = 0;
     for (tw, th) in [(4, 4), (4, 2), (3, 3)] {
         for p in tiles(scene, w, h, tw, th) {
-            hits += check_packet(&bvh, &p, &scene.name);
+            hits += check_packet(bvh, &p, &scene.name);
         }
     }
     for p in pixel_subsamples(scene, w / 2, h / 2) {
-        hits += check_packet(&bvh, &p, &scene.name);
+        hits += check_packet(bvh, &p, &scene.name);
     }
     assert!(hits > 0, "{}", scene.name);
     let mut hits64 = 0;
     for p in tiles64(scene, w, h) {
-        hits64 += check_packet64(&bvh, &p, &scene.name);
+        hits64 += check_packet64(bvh, &p, &scene.name);
     }
     // Whole rows of 8x8 tiles in one call (several packets per slice).
     let all: Vec<Ray> = tiles64(scene, w, h).concat();
-    assert_eq!(check_packet64(&bvh, &all, &scene.name), hits64);
+    assert_eq!(check_packet64(bvh, &all, &scene.name), hits64);
     assert!(hits64 > 0, "{}", scene.name);
 }
 

@@ -61,7 +61,12 @@ fn check_scene_with(scene: &Scene, random: usize, w: u32, h: u32, opts: &BuildOp
         bvh.all_hits4(r, &mut b);
         assert_eq!(a, b, "{}: all_hits4 for {r:?}", scene.name);
         let t = |h: Option<parallax_bvh::Hit>| h.map(|h| h.t);
-        assert_eq!(t(bvh.closest_hit(r)), t(bvh.closest_hit4(r)), "{}", scene.name);
+        assert_eq!(
+            t(bvh.closest_hit(r)),
+            t(bvh.closest_hit4(r)),
+            "{}",
+            scene.name
+        );
         assert_eq!(bvh.any_hit(r), bvh.any_hit4(r), "{}", scene.name);
     });
     if mesh.triangle_count() > 0 {

@@ -58,9 +58,9 @@ fn rays_from_outside_through_vertices_and_edges_hit_twice() {
                     let inner = rng.vec3_in(Vec3::splat(-0.4), Vec3::splat(0.4));
                     let o = p + (p - inner).normalize() * rng.range(0.5, 3.0);
                     let r = Ray::new(o, p - o);
-                    let h = check_closest(&bvh, &mesh, &r, name);
+                    let h = check_closest(bvh, &mesh, &r, name);
                     assert!(h.is_some(), "{name}: slipped through at {p}");
-                    let n = check_all(&bvh, &mesh, &r, name);
+                    let n = check_all(bvh, &mesh, &r, name);
                     bvh.all_hits(&r, &mut hits);
                     assert_eq!(n, 2, "{name}: {n} hits aiming at {p}: {hits:?}");
                 }
@@ -114,11 +114,11 @@ fn exact_axis_and_diagonal_rays_through_cube_edges_and_corners() {
                         let mut d = Vec3::ZERO;
                         d[axis] = sign;
                         let r = Ray::new(o, d);
-                        let n = check_all(&bvh, &mesh, &r, "cube axis");
+                        let n = check_all(bvh, &mesh, &r, "cube axis");
                         assert!(n.is_multiple_of(2), "{n} hits for {r:?}");
                         if a.abs() < 1.0 && b.abs() < 1.0 {
                             assert_eq!(n, 2, "{r:?}");
-                            assert!(check_closest(&bvh, &mesh, &r, "cube axis").is_some());
+                            assert!(check_closest(bvh, &mesh, &r, "cube axis").is_some());
                         }
                     }
                 }
@@ -130,7 +130,7 @@ fn exact_axis_and_diagonal_rays_through_cube_edges_and_corners() {
                 for sz in [-1.0f32, 1.0] {
                     let d = Vec3::new(sx, sy, sz);
                     let r = Ray::new(-3.0 * d, d);
-                    assert_eq!(check_all(&bvh, &mesh, &r, "cube diagonal"), 2, "{r:?}");
+                    assert_eq!(check_all(bvh, &mesh, &r, "cube diagonal"), 2, "{r:?}");
                 }
             }
         }
@@ -168,7 +168,7 @@ fn rays_from_inside_hit_exactly_once() {
             }
             for r in &rays {
                 assert!(
-                    check_closest(&bvh, &mesh, r, name).is_some(),
+                    check_closest(bvh, &mesh, r, name).is_some(),
                     "{name}: escaped {r:?}"
                 );
                 bvh.all_hits(r, &mut out);
@@ -197,7 +197,7 @@ fn grid_vertices_and_edges_are_hit_exactly_once() {
                 let r = Ray::new(p - d * 2.0, d);
                 bvh.all_hits(&r, &mut out);
                 assert_eq!(out.len(), 1, "{p} {d}: {out:?}");
-                check_closest(&bvh, &mesh, &r, "grid");
+                check_closest(bvh, &mesh, &r, "grid");
             }
         }
     }
