@@ -26,6 +26,9 @@ use rayon::prelude::*;
 
 use crate::options::{BuildOptions, MAX_BINS};
 
+mod spatial;
+pub(crate) use spatial::build_binary_spatial;
+
 /// Below this depth the binned SAH decides; deeper nodes split at the object median.
 pub(crate) const MAX_SAH_DEPTH: u32 = 48;
 /// Nodes with more triangles than this are binned in parallel chunks.
@@ -71,6 +74,15 @@ impl PrimRef {
     #[inline(always)]
     fn max(&self) -> Vec3A {
         Vec3A::from_vec4(self.hi)
+    }
+
+    /// The same triangle with the box `b` (a clipped piece, `spatial.rs`).
+    #[inline(always)]
+    fn with_box(&self, b: BoxA) -> Self {
+        Self {
+            lo: b.min.extend(self.lo.w),
+            hi: b.max.extend(0.0),
+        }
     }
 
     /// Twice the box centre (the factor 2 cancels in binning). Lane `w` is a normal float.
@@ -224,6 +236,14 @@ impl BoxA {
         BoxA {
             min: self.min.min(o.min),
             max: self.max.max(o.max),
+        }
+    }
+
+    #[inline(always)]
+    fn grow(self, p: Vec3A) -> BoxA {
+        BoxA {
+            min: self.min.min(p),
+            max: self.max.max(p),
         }
     }
 
@@ -393,15 +413,23 @@ fn merge_bins(mut a: Bins, b: Bins) -> Bins {
     a
 }
 
-/// Finds the best binned SAH split and partitions `refs`; returns the split position, or `None`
-/// when a leaf is cheaper (and allowed by the leaf size).
-fn sah_split(
-    refs: &mut [PrimRef],
-    bounds: &Aabb,
+/// The best binned object split of a node: its unnormalised SAH cost (`A(left) N(left) +
+/// A(right) N(right)`, infinite when no bin boundary separates the centroids), its axis, the
+/// first bin of its right side and the binner. The bins stay in the caller's scratch.
+struct ObjectSplit {
+    cost: f32,
+    axis: usize,
+    split: usize,
+    binner: Binner,
+}
+
+/// Bins `refs` by centroid into `scratch` and sweeps the bin boundaries (module docs).
+fn find_object_split(
+    refs: &[PrimRef],
     cbounds: &Aabb,
     opts: &BuildOptions,
     scratch: &mut Bins,
-) -> Option<usize> {
+) -> ObjectSplit {
     let n = refs.len();
     // Fewer bins for smaller nodes, as Embree's binner (`BinMapping`: `min(BINS, 4 + 0.05 N)`):
     // most nodes are small, and a 32-bin sweep over a few triangles dominated build profiles.
@@ -444,23 +472,49 @@ fn sah_split(
             }
         }
     }
+    ObjectSplit {
+        cost: best.0,
+        axis: best.1,
+        split: best.2,
+        binner,
+    }
+}
+
+/// Partitions `refs` by the object split `o` (whose cost is finite); returns the size of the
+/// left side, falling back to the object median when one side would be empty.
+fn object_partition(refs: &mut [PrimRef], o: &ObjectSplit, cbounds: &Aabb) -> usize {
+    let n = refs.len();
+    let (binner, axis, split) = (&o.binner, o.axis, o.split);
+    let mid = partition(refs, |r| binner.bin_axis(r.centroid2(), axis) < split);
+    if mid == 0 || mid == n {
+        return median_split(refs, cbounds);
+    }
+    mid
+}
+
+/// Finds the best binned SAH split and partitions `refs`; returns the split position, or `None`
+/// when a leaf is cheaper (and allowed by the leaf size).
+fn sah_split(
+    refs: &mut [PrimRef],
+    bounds: &Aabb,
+    cbounds: &Aabb,
+    opts: &BuildOptions,
+    scratch: &mut Bins,
+) -> Option<usize> {
+    let n = refs.len();
+    let o = find_object_split(refs, cbounds, opts, scratch);
     let area = bounds.surface_area();
-    let split_cost = opts.traversal_cost * area + opts.intersection_cost * best.0;
+    let split_cost = opts.traversal_cost * area + opts.intersection_cost * o.cost;
     let leaf_cost = opts.intersection_cost * area * n as f32;
     if n <= opts.max_leaf_size && leaf_cost <= split_cost {
         return None;
     }
-    if !best.0.is_finite() {
+    if !o.cost.is_finite() {
         // No split separates the centroids (cannot happen with a non-zero centroid extent, but
         // keep the build total): fall back to the median.
         return Some(median_split(refs, cbounds));
     }
-    let (axis, split) = (best.1, best.2);
-    let mid = partition(refs, |r| binner.bin_axis(r.centroid2(), axis) < split);
-    if mid == 0 || mid == n {
-        return Some(median_split(refs, cbounds));
-    }
-    Some(mid)
+    Some(object_partition(refs, &o, cbounds))
 }
 
 /// In-place partition: elements satisfying `left` first; returns their count.
@@ -589,7 +643,7 @@ mod tests {
                 last: Vec3A::splat((bins - 1) as f32),
                 bins,
             };
-            let mut check = |f: Vec3A| {
+            let check = |f: Vec3A| {
                 let b = binner.bin(f);
                 for axis in 0..3 {
                     assert_eq!(b[axis], binner.index(f[axis]), "{f:?} {bins}");

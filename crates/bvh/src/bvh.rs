@@ -23,6 +23,8 @@ pub struct Bvh {
     pub(crate) blocks: Vec<tri4::Tri4>,
     pub(crate) bounds: Aabb,
     pub(crate) depth: u32,
+    /// Triangles of the mesh (the triangle copies can be more: spatial splits duplicate).
+    pub(crate) prim_count: usize,
     pub(crate) build_time: Duration,
 }
 
@@ -37,8 +39,14 @@ impl Bvh {
         &self.nodes8
     }
 
-    /// Number of triangles indexed.
+    /// Number of triangles indexed (the mesh's triangles).
     pub fn triangle_count(&self) -> usize {
+        self.prim_count
+    }
+
+    /// Number of triangle copies in the leaves ([`Bvh::triangles`]): the triangle count, plus
+    /// the duplicates of a build with spatial splits.
+    pub fn reference_count(&self) -> usize {
         self.tris.len()
     }
 

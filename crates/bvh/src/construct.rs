@@ -54,6 +54,7 @@ impl Bvh {
                 blocks: Vec::new(),
                 bounds: Aabb::EMPTY,
                 depth: 0,
+                prim_count: 0,
                 build_time: start.elapsed(),
             });
         }
@@ -65,7 +66,11 @@ impl Bvh {
                 build::PrimRef::new(a.min(b).min(c), a.max(b).max(c), i as u32)
             })
             .collect();
-        let tree = build::build_binary(&mut refs, &opts);
+        let tree = if opts.spatial_splits {
+            build::build_binary_spatial(&mut refs, &|id| mesh.triangle(id as usize), &opts)
+        } else {
+            build::build_binary(&mut refs, &opts)
+        };
         // Both collapses only read the binary tree: the 8-wide one runs next to the 4-wide
         // one and then points its leaves at the blocks the 4-wide one laid out.
         let (c, mut c8) = rayon::join(
@@ -91,6 +96,7 @@ impl Bvh {
             blocks: c.blocks,
             bounds,
             depth: c.depth,
+            prim_count: n,
             build_time: start.elapsed(),
         })
     }

@@ -2,7 +2,9 @@
 //! every image-space result of parallax is scored against.
 //!
 //! - **Build** ([`Bvh::build`]): binned SAH over triangle centroids (Wald 2007), parallel with
-//!   rayon, producing a binary tree that is collapsed twice by opening the children of largest
+//!   rayon, optionally with spatial splits ([`BuildOptions::spatial_splits`]: SBVH, Stich,
+//!   Friedrich & Dietrich 2009, `build/spatial.rs`; a triangle may then sit in several leaves
+//!   and every query still reports it once), producing a binary tree that is collapsed twice by opening the children of largest
 //!   surface area (Wald, Benthin & Boulos 2008; Ernst & Greiner 2008): into 4-wide nodes
 //!   (`collapse.rs`) and into 8-wide nodes (`collapse8.rs`) over the same leaves.
 //! - **Layouts**: [`Node4`] (`node.rs`), 128-byte SoA nodes in depth-first preorder with leaf
@@ -42,6 +44,8 @@
 //! **Invariant:** for any ray, [`Bvh::closest_hit`] returns a hit at the same `t` as
 //! [`brute_force_closest`] (the same triangle unless two are hit at the same `t`), and
 //! [`Bvh::all_hits`] the same set as [`brute_force_all`]: the BVH only culls, never decides.
+//! (With spatial splits, exact ties in `t` between different triangles go to one of them, not
+//! necessarily the lowest index, and the twins agree on `t` but may differ on such ties.)
 //! Every fast path (8-wide AVX2, 16-lane AVX-512 packets, the 4-wide tree) returns bit for bit
 //! what its twin returns (`tests/simd_twins.rs`, `tests/packets.rs`).
 //!

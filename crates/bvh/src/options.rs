@@ -16,6 +16,14 @@ pub(crate) const MAX_BINS: usize = 32;
 /// | `traversal_cost` | f32 | 1.0 | SAH cost of visiting a node, relative to... |
 /// | `intersection_cost` | f32 | 1.0 | ...the cost of one triangle test |
 /// | `parallel_threshold` | usize | 4096 | nodes above this many triangles build their children in parallel |
+/// | `spatial_splits` | bool | false | also consider spatial splits (SBVH, Stich et al. 2009; `build.rs`) |
+/// | `split_alpha` | f32 | 1e-5 | SBVH: try spatial splits where the object split's child overlap exceeds this fraction of the root's area |
+/// | `split_budget` | f32 | 0.3 | SBVH: most duplicated references, as a fraction of the triangle count, clamped to 0..=4 |
+///
+/// With `spatial_splits`, a triangle can sit in several leaves: [`crate::Bvh::triangles`]
+/// then holds more entries than the mesh has triangles (the queries report each primitive
+/// once), and exact ties in `t` between different triangles go to one of them (no longer
+/// to the lowest index: which copy a ray reaches depends on the traversal order).
 #[derive(Clone, Debug, PartialEq)]
 pub struct BuildOptions {
     pub bins: usize,
@@ -23,6 +31,9 @@ pub struct BuildOptions {
     pub traversal_cost: f32,
     pub intersection_cost: f32,
     pub parallel_threshold: usize,
+    pub spatial_splits: bool,
+    pub split_alpha: f32,
+    pub split_budget: f32,
 }
 
 impl Default for BuildOptions {
@@ -33,6 +44,9 @@ impl Default for BuildOptions {
             traversal_cost: 1.0,
             intersection_cost: 1.0,
             parallel_threshold: 4096,
+            spatial_splits: false,
+            split_alpha: 1e-5,
+            split_budget: 0.3,
         }
     }
 }
@@ -46,6 +60,17 @@ impl BuildOptions {
             traversal_cost: finite_pos(self.traversal_cost, 1.0),
             intersection_cost: finite_pos(self.intersection_cost, 1.0),
             parallel_threshold: self.parallel_threshold.max(64),
+            spatial_splits: self.spatial_splits,
+            split_alpha: if self.split_alpha >= 0.0 {
+                self.split_alpha
+            } else {
+                1e-5
+            },
+            split_budget: if self.split_budget.is_finite() {
+                self.split_budget.clamp(0.0, 4.0)
+            } else {
+                0.3
+            },
         }
     }
 }

@@ -25,9 +25,9 @@ impl Bvh {
     /// rebuild then.
     pub fn refit(&mut self, mesh: &TriangleMesh) -> Result<Duration, BvhError> {
         let start = Instant::now();
-        if mesh.triangle_count() != self.prim_ids.len() {
+        if mesh.triangle_count() != self.prim_count {
             return Err(BvhError::TopologyChanged {
-                built: self.prim_ids.len(),
+                built: self.prim_count,
                 given: mesh.triangle_count(),
             });
         }

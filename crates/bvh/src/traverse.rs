@@ -394,7 +394,7 @@ impl Bvh {
             self.leaf_all(&wt, first, count, out, stats);
             false
         });
-        sort_hits(out);
+        sort_dedup_hits(out);
     }
 
     /// [`Bvh::closest_hit`] over the 4-wide tree (the twin of the 8-wide traversal; same
@@ -434,6 +434,14 @@ impl Bvh {
 /// Sorts hits by `t`, then by primitive (allocation-free).
 pub(crate) fn sort_hits(hits: &mut [Hit]) {
     hits.sort_unstable_by(|a, b| a.t.total_cmp(&b.t).then(a.prim.cmp(&b.prim)));
+}
+
+/// Sorts hits as [`sort_hits`] and drops repeats of a primitive: a triangle that spatial
+/// splits put in several leaves is hit at the same `t` in each (same triangle, same ray),
+/// so its repeats end up next to each other.
+pub(crate) fn sort_dedup_hits(hits: &mut Vec<Hit>) {
+    sort_hits(hits);
+    hits.dedup_by(|a, b| a.prim == b.prim && a.t == b.t);
 }
 
 /// The closest hit so far: `(t, index in the triangle array)` compared lexicographically.

@@ -38,7 +38,7 @@ use crate::keys8;
 use crate::node::{is_leaf, leaf_count, leaf_first};
 use crate::node8::Node8;
 use crate::stats::{Counter, NoStats, TraversalStats};
-use crate::traverse::{Best, pop_closer, sort_hits};
+use crate::traverse::{Best, pop_closer, sort_dedup_hits};
 use crate::tri4::Tri4Ray;
 use parallax_core::simd::{max_or_rhs, min_or_rhs};
 
@@ -448,7 +448,7 @@ impl Bvh {
             out,
         };
         self.traverse8::<C, T, false>(nt, 0, ray.t_max, stats, &mut leaf);
-        sort_hits(out);
+        sort_dedup_hits(leaf.out);
     }
 }
 
@@ -541,7 +541,8 @@ impl Bvh {
 
     /// The closest intersection with `ray` in `(t_min, t_max)`, or `None`. Both faces of a
     /// triangle are hit. Invalid rays (non-finite, zero direction) hit nothing. Exact ties in
-    /// `t` go to the lower index in [`Bvh::triangles`]. Traverses the 8-wide tree (AVX2 node
+    /// `t` go to the lower index in [`Bvh::triangles`] (with spatial splits: to one of the
+    /// tied triangles, [`BuildOptions`](crate::BuildOptions)). Traverses the 8-wide tree (AVX2 node
     /// test where the CPU has it).
     pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
         self.closest_hit8(ray, &mut NoStats)

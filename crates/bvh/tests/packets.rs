@@ -14,7 +14,7 @@ mod common;
 
 use common::*;
 use glam::{Vec2, Vec3};
-use parallax_bvh::{Bvh, Hit, PACKET_SIZE, PACKET64_SIZE};
+use parallax_bvh::{BuildOptions, Bvh, Hit, PACKET_SIZE, PACKET64_SIZE};
 use parallax_core::Ray;
 use parallax_scene::Scene;
 use parallax_scene::camera::{CameraModel, Pinhole};
@@ -149,24 +149,36 @@ fn pixel_subsamples(scene: &Scene, w: u32, h: u32) -> Vec<Vec<Ray>> {
 }
 
 fn check_scene(scene: &Scene, w: u32, h: u32) {
-    let bvh = Bvh::build(&scene.mesh);
+    check_scene_bvh(scene, &Bvh::build(&scene.mesh), w, h);
+}
+
+/// [`check_scene`] on a BVH built with spatial splits (duplicated references).
+fn check_scene_spatial(scene: &Scene, w: u32, h: u32) {
+    let opts = BuildOptions {
+        spatial_splits: true,
+        ..Default::default()
+    };
+    check_scene_bvh(scene, &Bvh::build_with(&scene.mesh, &opts), w, h);
+}
+
+fn check_scene_bvh(scene: &Scene, bvh: &Bvh, w: u32, h: u32) {
     let mut hits = 0;
     for (tw, th) in [(4, 4), (4, 2), (3, 3)] {
         for p in tiles(scene, w, h, tw, th) {
-            hits += check_packet(&bvh, &p, &scene.name);
+            hits += check_packet(bvh, &p, &scene.name);
         }
     }
     for p in pixel_subsamples(scene, w / 2, h / 2) {
-        hits += check_packet(&bvh, &p, &scene.name);
+        hits += check_packet(bvh, &p, &scene.name);
     }
     assert!(hits > 0, "{}", scene.name);
     let mut hits64 = 0;
     for p in tiles64(scene, w, h) {
-        hits64 += check_packet64(&bvh, &p, &scene.name);
+        hits64 += check_packet64(bvh, &p, &scene.name);
     }
     // Whole rows of 8x8 tiles in one call (several packets per slice).
     let all: Vec<Ray> = tiles64(scene, w, h).concat();
-    assert_eq!(check_packet64(&bvh, &all, &scene.name), hits64);
+    assert_eq!(check_packet64(bvh, &all, &scene.name), hits64);
     assert!(hits64 > 0, "{}", scene.name);
 }
 
@@ -174,6 +186,7 @@ fn check_scene(scene: &Scene, w: u32, h: u32) {
 fn builtin_scenes_camera_tiles() {
     for name in parallax_scene::builtin::NAMES.iter() {
         check_scene(&parallax_scene::builtin::by_name(name).unwrap(), 37, 22);
+        check_scene_spatial(&parallax_scene::builtin::by_name(name).unwrap(), 37, 22);
     }
 }
 
@@ -185,6 +198,7 @@ fn sponza_camera_tiles() {
     );
     let scene = Scene::load(&path).unwrap();
     check_scene(&scene, 45, 30);
+    check_scene_spatial(&scene, 45, 30);
 }
 
 #[test]

@@ -75,12 +75,35 @@ fn build_options_do_not_change_results() {
             traversal_cost: f32::NAN,
             intersection_cost: -1.0,
             parallel_threshold: 0,
+            ..Default::default()
+        },
+        // Spatial splits: no budget, every overlap (alpha 0), a large budget, invalid values.
+        BuildOptions {
+            spatial_splits: true,
+            split_budget: 0.0,
+            ..Default::default()
+        },
+        BuildOptions {
+            spatial_splits: true,
+            split_alpha: 0.0,
+            split_budget: 4.0,
+            max_leaf_size: 1,
+            parallel_threshold: 0,
+            ..Default::default()
+        },
+        BuildOptions {
+            spatial_splits: true,
+            split_alpha: f32::NAN,
+            split_budget: f32::INFINITY,
+            bins: 3,
+            ..Default::default()
         },
     ] {
         let bvh = Bvh::build_with(&mesh, &opts);
         assert_eq!(bvh.triangle_count(), 2000);
         for r in &rays {
             check_closest(&bvh, &mesh, r, &format!("{opts:?}"));
+            check_all(&bvh, &mesh, r, &format!("{opts:?}"));
         }
     }
 }

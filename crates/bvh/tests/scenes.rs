@@ -5,7 +5,7 @@ mod common;
 
 use common::*;
 use glam::{Vec2, Vec3};
-use parallax_bvh::Bvh;
+use parallax_bvh::{BuildOptions, Bvh};
 use parallax_core::Ray;
 use parallax_scene::Scene;
 use parallax_scene::camera::{CameraModel, Pinhole};
@@ -29,9 +29,25 @@ fn rays_for(scene: &Scene, random: usize, w: u32, h: u32) -> Vec<Ray> {
 }
 
 fn check_scene(scene: &Scene, random: usize, w: u32, h: u32) {
+    check_scene_with(scene, random, w, h, &BuildOptions::default());
+}
+
+/// The build with spatial splits (SBVH).
+fn spatial() -> BuildOptions {
+    BuildOptions {
+        spatial_splits: true,
+        ..Default::default()
+    }
+}
+
+/// `check_scene` for a build with `opts`; returns the BVH.
+fn check_scene_with(scene: &Scene, random: usize, w: u32, h: u32, opts: &BuildOptions) -> Bvh {
     let mesh = &scene.mesh;
-    let bvh = Bvh::build(mesh);
+    let bvh = Bvh::build_with(mesh, opts);
     assert_eq!(bvh.triangle_count(), mesh.triangle_count());
+    if !opts.spatial_splits {
+        assert_eq!(bvh.reference_count(), mesh.triangle_count());
+    }
     let rays = rays_for(scene, random, w, h);
     let hits: usize = rays
         .par_iter()
@@ -39,6 +55,19 @@ fn check_scene(scene: &Scene, random: usize, w: u32, h: u32) {
         .sum();
     rays.par_iter().step_by(10).for_each(|r| {
         check_all(&bvh, mesh, r, &scene.name);
+        // The 4-wide twin: the same hit list, the closest hit at the same `t`.
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        bvh.all_hits(r, &mut a);
+        bvh.all_hits4(r, &mut b);
+        assert_eq!(a, b, "{}: all_hits4 for {r:?}", scene.name);
+        let t = |h: Option<parallax_bvh::Hit>| h.map(|h| h.t);
+        assert_eq!(
+            t(bvh.closest_hit(r)),
+            t(bvh.closest_hit4(r)),
+            "{}",
+            scene.name
+        );
+        assert_eq!(bvh.any_hit(r), bvh.any_hit4(r), "{}", scene.name);
     });
     if mesh.triangle_count() > 0 {
         assert!(hits > 0, "{}: no ray hit anything", scene.name);
@@ -53,6 +82,7 @@ fn check_scene(scene: &Scene, random: usize, w: u32, h: u32) {
         bvh.build_time().as_secs_f64() * 1e3,
         rays.len()
     );
+    bvh
 }
 
 fn load(rel: &str) -> Scene {
@@ -76,6 +106,45 @@ fn japanese_classroom() {
         12,
         9,
     );
+}
+
+/// Spatial splits: closest / any / all hits still equal brute force (each primitive reported
+/// once), on the scenes whose large tilted triangles get split.
+#[test]
+fn sponza_spatial_splits() {
+    let scene = load("sponza_dabrovic/sponza_dabrovic.glb");
+    let bvh = check_scene_with(&scene, 400, 16, 12, &spatial());
+    // The build did split references (Sponza is the scene SBVH is for).
+    assert!(bvh.reference_count() > scene.mesh.triangle_count());
+}
+
+#[test]
+fn japanese_classroom_spatial_splits() {
+    let scene = load("japanese_classroom/japanese_classroom.glb");
+    let bvh = check_scene_with(&scene, 400, 16, 12, &spatial());
+    assert!(bvh.reference_count() > scene.mesh.triangle_count());
+}
+
+#[test]
+fn small_and_builtin_scenes_spatial_splits() {
+    check_scene_with(
+        &load("stanford_bunny/bun_zipper.ply"),
+        600,
+        24,
+        18,
+        &spatial(),
+    );
+    check_scene_with(
+        &load("box_textured/BoxTextured.glb"),
+        2000,
+        32,
+        24,
+        &spatial(),
+    );
+    for name in parallax_scene::builtin::NAMES.iter() {
+        let scene = parallax_scene::builtin::by_name(name).unwrap();
+        check_scene_with(&scene, 1000, 32, 24, &spatial());
+    }
 }
 
 #[test]

@@ -16,7 +16,7 @@
 //! Under valgrind the CPU model has no AVX-512, so both sides run their AVX2 kernels there.
 
 use glam::{Vec2, Vec3};
-use parallax_bvh::{Bvh, TraversalStats};
+use parallax_bvh::{BuildOptions, Bvh, TraversalStats};
 use parallax_core::Ray;
 use parallax_core::math::Frame;
 use parallax_core::sampling::{Rng, warp};
@@ -45,7 +45,17 @@ fn main() {
     let (method, mode) = (a[5].as_str(), a[6].as_str());
     let w: u32 = a.get(7).map_or(1280, |s| s.parse().unwrap());
     let h: u32 = a.get(8).map_or(720, |s| s.parse().unwrap());
-    let bvh = Bvh::build(&scene.mesh);
+    // `BVH_SPATIAL=1` builds with spatial splits (SBVH); `BVH_SPLIT_ALPHA`, `BVH_SPLIT_BUDGET`
+    // override their parameters.
+    let env = |k: &str| std::env::var(k).ok().and_then(|v| v.parse::<f32>().ok());
+    let d = BuildOptions::default();
+    let opts = BuildOptions {
+        spatial_splits: std::env::var("BVH_SPATIAL").is_ok_and(|v| v == "1"),
+        split_alpha: env("BVH_SPLIT_ALPHA").unwrap_or(d.split_alpha),
+        split_budget: env("BVH_SPLIT_BUDGET").unwrap_or(d.split_budget),
+        ..d
+    };
+    let bvh = Bvh::build_with(&scene.mesh, &opts);
     let cam = Pinhole::new(&desc, w, h).unwrap();
     let mut rays: Vec<Ray> = Vec::new();
     for ty in (0..h).step_by(8) {
@@ -83,7 +93,7 @@ fn main() {
         let (mut ours, mut theirs) = (f64::INFINITY, f64::INFINITY);
         for _ in 0..5 {
             let t = std::time::Instant::now();
-            std::hint::black_box(Bvh::build(&scene.mesh));
+            std::hint::black_box(Bvh::build_with(&scene.mesh, &opts));
             ours = ours.min(t.elapsed().as_secs_f64() * 1e3);
             let t = std::time::Instant::now();
             std::hint::black_box(EmbreeScene::new(&scene.mesh, Options::default()).unwrap());
@@ -102,7 +112,8 @@ fn main() {
         format!("{:?}", bvh.triangles()).hash(&mut h);
         bvh.prim_ids().hash(&mut h);
         println!(
-            "tree: {} nodes4, {} nodes8, {} blocks, depth {}, hash {:016x}",
+            "tree: {} references, {} nodes4, {} nodes8, {} blocks, depth {}, hash {:016x}",
+            bvh.reference_count(),
             bvh.node_count(),
             bvh.nodes8().len(),
             bvh.blocks().len(),

@@ -57,6 +57,9 @@ pub struct RaysArgs {
     /// embree1, embree8, embree16, embree1m. `single` (the reference) always runs.
     #[arg(long, value_delimiter = ',', value_parser = parse_method)]
     pub methods: Vec<rays::Method>,
+    /// Build parallax's BVH with spatial splits (SBVH).
+    #[arg(long)]
+    pub spatial_splits: bool,
     /// Write the rows as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -120,6 +123,10 @@ pub fn run(cmd: &BenchCommand, quiet: bool) -> Result<()> {
                 msaa: !a.no_msaa,
                 embree_quality: a.embree_quality,
                 methods: a.methods.clone(),
+                bvh: parallax_bvh::BuildOptions {
+                    spatial_splits: a.spatial_splits,
+                    ..Default::default()
+                },
             };
             let report = rays::run(&scene, &camera, &opts)?;
             let rows = report.rows;

@@ -28,11 +28,12 @@
 //! | `msaa` | bool | true | include the `msaa16` mode |
 //! | `embree_quality` | [`Quality`] | `High` | Embree's build quality for the traced scene |
 //! | `methods` | `Vec<Method>` | all | the traced methods (`bvh single`, the reference, always runs) |
+//! | `bvh` | [`BuildOptions`] | default | parallax's BVH build (e.g. spatial splits) |
 
 use std::time::Instant;
 
 use glam::Vec2;
-use parallax_bvh::{Bvh, BvhError, PACKET_SIZE, PACKET64_SIZE};
+use parallax_bvh::{BuildOptions, Bvh, BvhError, PACKET_SIZE, PACKET64_SIZE};
 use parallax_core::Ray;
 use parallax_core::cpu_time::{ms_between, process_cpu_ns};
 use parallax_core::math::Frame;
@@ -59,6 +60,7 @@ pub struct RaysOptions {
     pub embree_quality: Quality,
     /// Empty: every method.
     pub methods: Vec<Method>,
+    pub bvh: BuildOptions,
 }
 
 impl Default for RaysOptions {
@@ -68,6 +70,7 @@ impl Default for RaysOptions {
             msaa: true,
             embree_quality: Quality::High,
             methods: Vec::new(),
+            bvh: BuildOptions::default(),
         }
     }
 }
@@ -405,7 +408,7 @@ pub fn run(scene: &Scene, camera: &Camera, opts: &RaysOptions) -> Result<RaysRep
     let mut bvh = None;
     for _ in 0..2 {
         let t = Instant::now();
-        bvh = Some(Bvh::try_build(&scene.mesh)?);
+        bvh = Some(Bvh::try_build_with(&scene.mesh, &opts.bvh)?);
         bvh_ms = bvh_ms.min(t.elapsed().as_secs_f64() * 1e3);
     }
     let bvh = bvh.expect("built");
