@@ -7,7 +7,7 @@
 //! `../shared/scenes/sponza_dabrovic/sponza_dabrovic.glb` from the repository root; `edges` =
 //! the set-up kernel with [`SetupExactness::Edges`] (default), `full` = with
 //! [`SetupExactness::Full`], `watertight` = the watertight kernel, `edges-plain` = `edges`
-//! without the affine packet test). Optional further arguments:
+//! without the affine packet test, `edges-affine` = `edges` with it on the AVX-512 kernel too). Optional further arguments:
 //! `lanes` (8th, default 4: `CastOptions::lanes`) and a head pose `eye target fov_y` (9th-11th,
 //! e.g. `-9,3.5,0 8,5,0 60`; default the scene's camera).
 
@@ -32,7 +32,9 @@ fn main() {
     let (test, exactness) = match mode.as_str() {
         "watertight" => (SampleTest::Watertight, SetupExactness::Full),
         "full" => (SampleTest::TileSetup, SetupExactness::Full),
-        "edges" | "setup" | "edges-plain" => (SampleTest::TileSetup, SetupExactness::Edges),
+        "edges" | "setup" | "edges-plain" | "edges-affine" => {
+            (SampleTest::TileSetup, SetupExactness::Edges)
+        }
         m => panic!("unknown mode {m:?}: edges, full or watertight"),
     };
     // `beam-only` as the 7th argument skips the per-ray baseline (for instruction counts).
@@ -75,6 +77,8 @@ fn main() {
             avx512: !arg(8, "4").ends_with("sse"),
             // `edges-plain`: without the affine packet test (`cast/setup/affine.rs`).
             affine: mode != "edges-plain",
+            // `edges-affine`: the affine packet test on the AVX-512 kernel too.
+            affine_avx512: mode == "edges-affine",
         };
         let mut beam = VisibilityBuffer::new(&set);
         let mut reference = VisibilityBuffer::new(&set);

@@ -88,6 +88,11 @@ pub struct Hierarchy {
     /// The set it was built for: sample count and spp (checked by the caster).
     pub sample_count: usize,
     pub spp: u32,
+    /// At one subsample per sample: every sample's film position and footprint in `order`
+    /// (`film[0][p]`, `film[1][p]`, `film[2][p]` = x, y, footprint of sample `order[p]`), so
+    /// that the caster's 1-spp packets (sixteen consecutive samples of a tile) load their
+    /// film lanes contiguously instead of gathering them through `order`; empty at other spp.
+    pub film: [Vec<f32>; 3],
 }
 
 /// The view (stereo eye, cube face) a film position belongs to.
@@ -277,7 +282,16 @@ impl Hierarchy {
             tiles.extend(t);
             blocks.push(b);
         }
+        let film = if set.spp == 1 {
+            let at = |f: fn(&crate::samples::Sample) -> f32| {
+                order.iter().map(|&i| f(&set.samples[i as usize])).collect()
+            };
+            [at(|s| s.film.x), at(|s| s.film.y), at(|s| s.footprint)]
+        } else {
+            Default::default()
+        };
         Ok(Hierarchy {
+            film,
             order,
             tiles,
             blocks,

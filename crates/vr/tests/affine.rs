@@ -31,9 +31,11 @@ fn same_with_and_without(bvh: &Bvh, set: &SampleSet, label: &str) -> (u64, u64) 
     cast_opts(bvh, set, &h, &mut reference, plain);
     let (mut decided, mut tests) = (0, 0);
     for (lanes, avx512) in [(4, true), (8, true), (16, false), (16, true)] {
+        // The AVX-512 kernel takes the packet test only when asked (`affine_avx512`).
         let opts = CastOptions {
             lanes,
             avx512,
+            affine_avx512: avx512,
             ..CastOptions::default()
         };
         assert!(opts.affine);

@@ -100,6 +100,16 @@ fn grid_tiles_are_16_by_8_from_8_spp() {
         assert_eq!(tile_samples(spp), tile);
         assert_eq!(h.tiles.len(), 256 * 128 / tile, "spp {spp}");
         assert_eq!(h.blocks.len(), 4);
+        // The 1-spp film lanes: sample `order[p]`'s film position and footprint at `p`.
+        if spp == 1 {
+            for (p, &i) in h.order.iter().enumerate() {
+                let s = &set.samples[i as usize];
+                let got = [h.film[0][p], h.film[1][p], h.film[2][p]];
+                assert_eq!(got, [s.film.x, s.film.y, s.footprint]);
+            }
+        } else {
+            assert!(h.film.iter().all(Vec::is_empty));
+        }
         for t in &h.tiles {
             let (mut lo, mut hi) = (Vec2::INFINITY, Vec2::NEG_INFINITY);
             for &i in &h.order[t.start as usize..(t.start + t.len) as usize] {

@@ -32,6 +32,12 @@ pub trait LaneReduce: Lanes {
     fn load16(a: &[f32; 16]) -> Self {
         Self::from_fn(|l| a[l])
     }
+    /// Lanes `0..N` from `a[..N]` (panics if `a` is shorter): contiguous loads where the lane
+    /// type has them.
+    #[inline(always)]
+    fn load_n(a: &[f32]) -> Self {
+        Self::from_fn(|l| a[l])
+    }
 }
 
 #[inline(always)]
@@ -44,6 +50,10 @@ fn max2(a: f32, b: f32) -> f32 {
 }
 
 impl LaneReduce for Vec4 {
+    #[inline(always)]
+    fn load_n(a: &[f32]) -> Self {
+        Vec4::from_slice(&a[..4])
+    }
     #[inline(always)]
     fn hmin(self) -> f32 {
         let a = self.to_array();
@@ -135,6 +145,11 @@ impl LaneReduce for V16 {
     #[inline(always)]
     fn load16(a: &[f32; 16]) -> Self {
         V16([0, 1, 2, 3].map(|i| Vec4::from_slice(&a[4 * i..4 * i + 4])))
+    }
+    #[inline(always)]
+    fn load_n(a: &[f32]) -> Self {
+        let a: &[f32; 16] = a[..16].try_into().expect("16 lanes");
+        Self::load16(a)
     }
 }
 

@@ -152,6 +152,11 @@ impl LaneReduce for Z16 {
         Z16(unsafe { _mm512_loadu_ps(a.as_ptr()) })
     }
     #[inline(always)]
+    fn load_n(a: &[f32]) -> Self {
+        let a: &[f32; 16] = a[..16].try_into().expect("16 lanes");
+        Self::load16(a)
+    }
+    #[inline(always)]
     fn hmin(self) -> f32 {
         self.quarters().hmin()
     }

@@ -96,8 +96,13 @@ pub struct CastOptions {
     pub avx512: bool,
     /// Run the affine packet test (`cast/setup/affine.rs`) before the per-lane edge test of
     /// the set-up kernel with [`SetupExactness::Edges`] (pinhole and stereo tiles): the same
-    /// buffer bit for bit, fewer instructions.
+    /// buffer bit for bit, fewer instructions — on the SSE, AVX2 and 16-lane twin kernels; the
+    /// AVX-512 kernel takes it only with `affine_avx512`.
     pub affine: bool,
+    /// Run the affine packet test on the AVX-512 kernel too (with `affine`). Off by default:
+    /// there a packet's per-lane edge test is one register per edge, and the packet test costs
+    /// more than it saves (thread CPU time, `docs/notes/vr.md`); the buffer is the same.
+    pub affine_avx512: bool,
 }
 
 impl Default for CastOptions {
@@ -111,6 +116,7 @@ impl Default for CastOptions {
             exactness: SetupExactness::Edges,
             avx512: true,
             affine: true,
+            affine_avx512: false,
         }
     }
 }
@@ -183,6 +189,7 @@ pub fn cast_with(
             exactness: SetupExactness::Full,
             avx512: true,
             affine: false,
+            affine_avx512: false,
         },
     )
 }
@@ -289,8 +296,8 @@ fn cast_from(
                 let a = Instant::now();
                 let tb = PreparedBeam::new(&tile.beam, scale);
                 tile_cull(bvh, &SimdBeam::new(&tb), &entries, scratch);
-                let samples =
-                    &hierarchy.order[tile.start as usize..(tile.start + tile.len) as usize];
+                let range = tile.start as usize..(tile.start + tile.len) as usize;
+                let samples = &hierarchy.order[range.clone()];
                 let origin = match opts.test {
                     SampleTest::TileSetup => shared_origin(&tile.beam),
                     SampleTest::Watertight => None,
@@ -298,6 +305,9 @@ fn cast_from(
                 if let Some(o) = origin {
                     let lazy = opts.exactness == SetupExactness::Edges;
                     setup_tile(blocks_, &scratch.leaves, &tile.beam, o, lazy, tt);
+                    // The 1-spp film lanes of these samples (`Hierarchy::film`).
+                    let film = (hierarchy.film[0].len() == set.samples.len())
+                        .then(|| hierarchy.film.each_ref().map(|v| &v[range.clone()]));
                     let b = Instant::now();
                     // SAFETY: as below.
                     let w = unsafe {
@@ -307,6 +317,7 @@ fn cast_from(
                             blocks_,
                             prim_ids,
                             samples,
+                            film,
                             tt,
                             &tile.beam,
                             scale,
@@ -314,6 +325,7 @@ fn cast_from(
                             opts.avx512,
                             opts.exactness,
                             opts.affine,
+                            opts.affine_avx512,
                             ptr.prim,
                             ptr.t,
                         )

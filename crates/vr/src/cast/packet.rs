@@ -169,7 +169,9 @@ pub(crate) fn gen_n_film<L: Lanes>(
 
 /// [`gen_n_film`] for a full packet of one subsample per sample (`spp == 1`; `idx` the
 /// packet's `L::N` samples) of a pinhole or stereo camera, without the `(sample, k)` pairs:
-/// the samples' film positions and footprints gathered into lanes, `film + offsets[0] *
+/// the samples' film positions and footprints in lanes — loaded from `film` (the packet's
+/// `[x, y, footprint]` in `idx` order, [`crate::Hierarchy::film`]: contiguous loads) when
+/// given, else gathered through `idx` — then `film + offsets[0] *
 /// footprint` lane-wise (the per-lane path's f32 operations), the film box by one lane
 /// minimum and maximum (equal to the per-lane path's box up to the sign of a zero, which no
 /// use of the box sees). `None` (the per-lane path decides) for other cameras, a NaN position
@@ -177,21 +179,30 @@ pub(crate) fn gen_n_film<L: Lanes>(
 #[inline(always)]
 pub(crate) fn gen_spp1<L: LaneReduce>(
     set: &SampleSet,
+    film: Option<[&[f32]; 3]>,
     idx: &[u32],
 ) -> Option<(RaysN<L>, (Vec2, Vec2))> {
-    let (mut x, mut y, mut f) = (
-        [0.0f32; MAX_LANES],
-        [0.0f32; MAX_LANES],
-        [0.0f32; MAX_LANES],
-    );
-    for (l, &i) in idx[..L::N].iter().enumerate() {
-        let s = &set.samples[i as usize];
-        (x[l], y[l], f[l]) = (s.film.x, s.film.y, s.footprint);
-    }
+    let (x, y, fp) = if let Some([x, y, f]) = film {
+        (L::load_n(x), L::load_n(y), L::load_n(f))
+    } else {
+        let (mut x, mut y, mut f) = (
+            [0.0f32; MAX_LANES],
+            [0.0f32; MAX_LANES],
+            [0.0f32; MAX_LANES],
+        );
+        for (l, &i) in idx[..L::N].iter().enumerate() {
+            let s = &set.samples[i as usize];
+            (x[l], y[l], f[l]) = (s.film.x, s.film.y, s.footprint);
+        }
+        (
+            L::from_fn(|l| x[l]),
+            L::from_fn(|l| y[l]),
+            L::from_fn(|l| f[l]),
+        )
+    };
     let o = set.offsets[0];
-    let fp = L::from_fn(|l| f[l]);
-    let fx = L::from_fn(|l| x[l]) + L::splat(o.x) * fp;
-    let fy = L::from_fn(|l| y[l]) + L::splat(o.y) * fp;
+    let fx = x + L::splat(o.x) * fp;
+    let fy = y + L::splat(o.y) * fp;
     if L::bits(L::or(fx.ne(fx), fy.ne(fy))) != 0 {
         return None;
     }
@@ -593,8 +604,9 @@ mod tests {
     use crate::cast::lanes16::V16;
 
     /// `gen_spp1` equals the per-lane generator bit for bit (rays and film box) on random and
-    /// consecutive 1-spp packets of a pinhole and a stereo camera; it declines only packets
-    /// across the stereo eyes.
+    /// consecutive 1-spp packets of a pinhole and a stereo camera, gathering through the
+    /// indices and loading contiguous film lanes alike; it declines only packets across the
+    /// stereo eyes.
     fn check<L: LaneReduce>(set: &SampleSet, seed: u64) -> (u32, u32) {
         let (mut s, n) = (seed, set.samples.len() as u64);
         let (mut some, mut none) = (0, 0);
@@ -612,11 +624,28 @@ mod tests {
             }
             let pairs: Vec<(u32, u32)> = idx[..L::N].iter().map(|&i| (i, 0)).collect();
             let (want, wbox) = gen_n_film::<L>(set, None, &pairs);
-            let Some((got, (lo, hi))) = gen_spp1::<L>(set, &idx[..L::N]) else {
+            // The same packet from contiguous film lanes (`Hierarchy::film`'s layout).
+            let soa = [
+                idx.map(|i| set.samples[i as usize].film.x),
+                idx.map(|i| set.samples[i as usize].film.y),
+                idx.map(|i| set.samples[i as usize].footprint),
+            ];
+            let film = [&soa[0][..L::N], &soa[1][..L::N], &soa[2][..L::N]];
+            let loaded = gen_spp1::<L>(set, Some(film), &idx[..L::N]);
+            let Some((got, (lo, hi))) = gen_spp1::<L>(set, None, &idx[..L::N]) else {
                 assert!(matches!(set.camera, Camera::Stereo(_)));
+                assert!(loaded.is_none());
                 none += 1;
                 continue;
             };
+            let (lgot, lbox) = loaded.expect("the same packet");
+            assert_eq!(lbox, (lo, hi));
+            for a in 0..3 {
+                for l in 0..L::N {
+                    assert_eq!(lgot.d[a].get(l).to_bits(), got.d[a].get(l).to_bits());
+                    assert_eq!(lgot.o[a].get(l).to_bits(), got.o[a].get(l).to_bits());
+                }
+            }
             some += 1;
             assert_eq!(got.valid, want.valid);
             for a in 0..3 {

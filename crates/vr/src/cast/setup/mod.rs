@@ -127,6 +127,7 @@
 //! | `lanes` | usize | 16 | rays per packet: 4 (SSE), 8 (AVX2 if detected, else 4) or 16 (four SSE registers, [`crate::cast::lanes16`]) |
 //! | [`RHO_MAX`] | f32 | 0.05 | depth band above which a triangle always takes the watertight test |
 //! | `affine` | bool | true | the affine packet test ([`affine`]) before the per-lane edge test (`Edges` only) |
+//! | `affine_avx512` | bool | false | the affine packet test on the AVX-512 kernel too (slower there, `docs/notes/vr.md`) |
 //!
 //! Measurements (speed of `Edges` and `Full` against the kernel without a band, 4 vs 8 lanes,
 //! where the time goes): `docs/notes/vr.md`.
@@ -280,6 +281,7 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
     sign: f32,
     slack: f32,
     samples: &[u32],
+    film: Option<[&[f32]; 3]>,
     pair: impl Fn(usize) -> (u32, u32),
     out: Out<'_>,
 ) -> SetupWork {
@@ -325,7 +327,8 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
         // One subsample per sample: the packet's samples are `samples[j..j + n]`, its rays
         // from their film positions in lanes (`gen_spp1`), no `(sample, k)` pairs.
         let spp1 = if spp == 1 && n == L::N && stored.is_none() {
-            gen_spp1::<L>(set, &samples[j..j + n])
+            let f = film.map(|f| f.map(|v| &v[j..j + n]));
+            gen_spp1::<L>(set, f, &samples[j..j + n])
         } else {
             None
         };
@@ -452,10 +455,13 @@ macro_rules! isa_entry {
             sign: f32,
             slack: f32,
             samples: &[u32],
+            film: Option<[&[f32]; 3]>,
             pair: impl Fn(usize) -> (u32, u32),
             out: Out<'_>,
         ) -> SetupWork {
-            run_setup::<$lanes, FULL>(set, stored, blocks, tt, axis, sign, slack, samples, pair, out)
+            run_setup::<$lanes, FULL>(
+                set, stored, blocks, tt, axis, sign, slack, samples, film, pair, out,
+            )
         }
     };
 }
@@ -475,7 +481,10 @@ isa_entry!(
 /// Tests every subsample ray of the tile `samples` against the set-up list `tt` (built from
 /// `blocks`) and writes the closest hits, packets of 16 rays (`lanes == 16`: one AVX-512
 /// register if detected and `avx512`, else four SSE registers), 8 (AVX2, if detected and
-/// `lanes == 8`) or 4. Every choice gives the same buffer.
+/// `lanes == 8`) or 4. Every choice gives the same buffer. `affine`: the affine packet test
+/// (`Edges`), on the AVX-512 kernel only with `affine_avx512`. `film`: the samples' film lanes
+/// at 1 spp ([`crate::Hierarchy::film`], `[x, y, footprint]` in `samples` order), read by
+/// the 1-spp packets instead of a gather through `samples`; `None` gathers.
 ///
 /// # Safety
 /// As [`crate::cast::intersect::test_tile`]: `prim` and `t` valid for `set.ray_count()` elements,
@@ -487,6 +496,7 @@ pub unsafe fn test_tile_setup(
     blocks: &[Tri4],
     prim_ids: &[u32],
     samples: &[u32],
+    film: Option<[&[f32]; 3]>,
     tt: &mut TileTris,
     beam: &Beam,
     scale: f32,
@@ -494,10 +504,18 @@ pub unsafe fn test_tile_setup(
     avx512: bool,
     exactness: SetupExactness,
     affine: bool,
+    affine_avx512: bool,
     prim: *mut u32,
     t: *mut f32,
 ) -> SetupWork {
     let spp = set.spp as usize;
+    #[cfg(target_arch = "x86_64")]
+    let z16 = lanes == 16 && avx512 && std::arch::is_x86_feature_detected!("avx512f");
+    #[cfg(not(target_arch = "x86_64"))]
+    let z16 = false;
+    // The AVX-512 kernel's per-lane edge test is one register per edge: the affine packet
+    // test pays there only when asked for (`CastOptions::affine_avx512`).
+    let affine = affine && (!z16 || affine_avx512);
     tt.frame = None;
     if affine && exactness == SetupExactness::Edges && !samples.is_empty() {
         let film_x = set.samples[samples[0] as usize].film.x;
@@ -532,10 +550,10 @@ pub unsafe fn test_tile_setup(
         ($f:ident $(, $l:ty)?) => {
             match exactness {
                 SetupExactness::Edges => {
-                    $f::<$($l,)? false>(set, stored, blocks, tt, axis, sign, slack, samples, pair, out)
+                    $f::<$($l,)? false>(set, stored, blocks, tt, axis, sign, slack, samples, film, pair, out)
                 }
                 SetupExactness::Full => {
-                    $f::<$($l,)? true>(set, stored, blocks, tt, axis, sign, slack, samples, pair, out)
+                    $f::<$($l,)? true>(set, stored, blocks, tt, axis, sign, slack, samples, film, pair, out)
                 }
             }
         };
@@ -546,7 +564,7 @@ pub unsafe fn test_tile_setup(
         return unsafe { run!(run_setup_avx2) };
     }
     #[cfg(target_arch = "x86_64")]
-    if lanes == 16 && avx512 && std::arch::is_x86_feature_detected!("avx512f") {
+    if z16 {
         // SAFETY: AVX-512F was detected.
         return unsafe { run!(run_setup_avx512) };
     }
