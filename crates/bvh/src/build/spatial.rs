@@ -519,23 +519,31 @@ fn split_box_axis<const A: usize>(tri: &[Vec3A; 3], bx: BoxA, pos: f32) -> (BoxA
 mod tests {
     use super::*;
 
+    /// Uniform values in `[-half, half)` from a 32-bit LCG.
+    fn uniform(seed: u32, half: f32) -> impl FnMut() -> f32 {
+        let mut s = seed;
+        move || {
+            s = s.wrapping_mul(747796405).wrapping_add(2891336453);
+            (s >> 8) as f32 / (1 << 24) as f32 * 2.0 * half - half
+        }
+    }
+
+    /// A random triangle and its bounding box.
+    fn triangle_and_box(rnd: &mut impl FnMut() -> f32) -> ([Vec3; 3], BoxA) {
+        let mut corner = || Vec3::new(rnd(), rnd(), rnd());
+        let tri = [corner(), corner(), corner()];
+        let bx = BoxA {
+            min: Vec3A::from(tri[0].min(tri[1]).min(tri[2])),
+            max: Vec3A::from(tri[0].max(tri[1]).max(tri[2])),
+        };
+        (tri, bx)
+    }
+
     #[test]
     fn split_boxes_contain_the_triangle_parts() {
-        let mut s = 3u32;
-        let mut rnd = || {
-            s = s.wrapping_mul(747796405).wrapping_add(2891336453);
-            (s >> 8) as f32 / (1 << 24) as f32 * 200.0 - 100.0
-        };
+        let mut rnd = uniform(3, 100.0);
         for _ in 0..20_000 {
-            let tri = [
-                Vec3::new(rnd(), rnd(), rnd()),
-                Vec3::new(rnd(), rnd(), rnd()),
-                Vec3::new(rnd(), rnd(), rnd()),
-            ];
-            let bx = BoxA {
-                min: Vec3A::from(tri[0].min(tri[1]).min(tri[2])),
-                max: Vec3A::from(tri[0].max(tri[1]).max(tri[2])),
-            };
+            let (tri, bx) = triangle_and_box(&mut rnd);
             let a = (rnd().abs() as usize) % 3;
             let pos = rnd();
             let (l, r) = split_box(&tri, bx, a, pos);
@@ -565,21 +573,9 @@ mod tests {
     #[test]
     fn crossing_points_on_the_plane_lie_in_both_boxes() {
         // The exact crossing of each edge (in f64) must lie in both boxes.
-        let mut s = 5u32;
-        let mut rnd = || {
-            s = s.wrapping_mul(747796405).wrapping_add(2891336453);
-            (s >> 8) as f32 / (1 << 24) as f32 * 2000.0 - 1000.0
-        };
+        let mut rnd = uniform(5, 1000.0);
         for _ in 0..50_000 {
-            let tri = [
-                Vec3::new(rnd(), rnd(), rnd()),
-                Vec3::new(rnd(), rnd(), rnd()),
-                Vec3::new(rnd(), rnd(), rnd()),
-            ];
-            let bx = BoxA {
-                min: Vec3A::from(tri[0].min(tri[1]).min(tri[2])),
-                max: Vec3A::from(tri[0].max(tri[1]).max(tri[2])),
-            };
+            let (tri, bx) = triangle_and_box(&mut rnd);
             let a = 1;
             let pos = rnd() * 0.5;
             let (l, r) = split_box(&tri, bx, a, pos);

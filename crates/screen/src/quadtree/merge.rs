@@ -23,6 +23,27 @@ pub(crate) struct MergeCtx {
     pub(crate) lanes: bool,
 }
 
+#[cfg(test)]
+impl MergeCtx {
+    /// Settings of the lane kernels' twin tests, varied by `case`: the three fixed threshold
+    /// pairs, fixed and adaptive thresholds, crack dilation 0 / 0.5 / 1 px, and every
+    /// sixteenth case a build that never merges; evaluated in lanes, at 1600x900.
+    pub(crate) fn test_case(case: u32) -> Self {
+        MergeCtx {
+            wf: 1600.0,
+            hf: 900.0,
+            cos_norm: [0.99, 0.9995, 0.95][case as usize % 3],
+            gamma_dist: [1e-3, 1e-4, 1e-2][case as usize % 3],
+            adaptive: case % 2 == 1,
+            near: 0.1,
+            far: 100.0,
+            crack_px: 0.5 * (case % 3) as f32,
+            never: case % 16 == 15,
+            lanes: true,
+        }
+    }
+}
+
 impl MergeCtx {
     /// Conservative `[zmin, zmax]` of a node over its footprint.
     pub(crate) fn zrange(&self, node: Node, level: u32) -> (f32, f32) {

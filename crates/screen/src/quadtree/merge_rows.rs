@@ -571,19 +571,8 @@ mod tests {
         let mut rng = Rng(0x0dd5_eed5_1234_4321);
         let (mut planes, mut boxes) = (0usize, 0usize);
         for case in 0..64u32 {
-            let (wf, hf) = (1600.0f32, 900.0f32);
-            let ctx = MergeCtx {
-                wf,
-                hf,
-                cos_norm: [0.99, 0.9995, 0.95][case as usize % 3],
-                gamma_dist: [1e-3, 1e-4, 1e-2][case as usize % 3],
-                adaptive: case % 2 == 1,
-                near: 0.1,
-                far: 100.0,
-                crack_px: 0.5 * (case % 3) as f32,
-                never: case % 16 == 15,
-                lanes: true,
-            };
+            let ctx = MergeCtx::test_case(case);
+            let (wf, hf) = (ctx.wf, ctx.hf);
             let def = MergeCtx {
                 lanes: false,
                 ..ctx

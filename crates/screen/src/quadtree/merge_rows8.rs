@@ -437,19 +437,8 @@ mod tests {
         let mut rng = Rng(0x1234_5678_9abc_def1);
         let (mut merged, mut total) = (0usize, 0usize);
         for case in 0..48u32 {
-            let (wf, hf) = (1600.0f32, 900.0f32);
-            let ctx = MergeCtx {
-                wf,
-                hf,
-                cos_norm: [0.99, 0.9995, 0.95][case as usize % 3],
-                gamma_dist: [1e-3, 1e-4, 1e-2][case as usize % 3],
-                adaptive: case % 2 == 1,
-                near: 0.1,
-                far: 100.0,
-                crack_px: 0.5 * (case % 3) as f32,
-                never: case % 16 == 15,
-                lanes: true,
-            };
+            let ctx = MergeCtx::test_case(case);
+            let (wf, hf) = (ctx.wf, ctx.hf);
             let cl = case % 4;
             let l = cl + 1;
             let pw = 1 + (rng.next() % 40) as u32;
