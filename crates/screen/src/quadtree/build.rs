@@ -216,8 +216,7 @@ impl QuadTree {
         });
         if !deeper.is_empty() && !reference {
             let cols = super::fixpoint::Columns::new(w, wf);
-            // Every value is written by the row pass; the rows are set to `+inf` first (a
-            // store loop in cache; a zero value would be a `memset` call per row).
+            // Every value is written by the row pass (`pixel_triggers_row`).
             let (mut tz, mut fronts) = (Vec::with_capacity(n_px), Vec::with_capacity(n_px));
             let listed: Vec<u32> = image
                 .par_chunks_mut(w0 as usize)
@@ -227,12 +226,11 @@ impl QuadTree {
                 .flat_map_iter(|(j, ((row, t), f))| {
                     let j = j as u32;
                     let row = init_row(row, Node::EMPTY);
-                    let (t, f) = (init_row(t, f32::INFINITY), init_row(f, f32::INFINITY));
                     leaf_row(row, j);
                     super::fixpoint::pixel_triggers_row(t, f, row, j, &ctx, &cols, deeper)
                 })
                 .collect();
-            // SAFETY: the rows cover `0..n_px` and each was initialised by `init_row`.
+            // SAFETY: the rows cover `0..n_px` and `pixel_triggers_row` wrote every value.
             unsafe {
                 tz.set_len(n_px);
                 fronts.set_len(n_px);
@@ -514,26 +512,30 @@ impl QuadTree {
 impl QuadTree {
     /// [`Self::mark_unsafe`] given the unsafe pixels `px` (indices `j W + i`, those with a
     /// finite `tz`, any order): only their ancestors are visited. Per level, a dense array
-    /// of the nodes' smallest trigger depth below them is filled from the listed pixels (no
-    /// sort), then each listed pixel's ancestor is marked with it — the same nodes with the
-    /// same minima as [`Self::mark_unsafe`] (the trigger depths are `+0` or positive and
-    /// never NaN, so their minimum does not depend on the order it is taken in; marking a
-    /// node again with the same value changes nothing).
+    /// of the nodes' smallest trigger depth below them is filled from the nodes listed for
+    /// the level below (no sort): at level 1 the listed pixels, above it the distinct nodes
+    /// the level below marked (a node is listed when its minimum is first lowered from
+    /// `+inf`), and each listed node is marked once with its minimum — the same nodes with
+    /// the same minima as [`Self::mark_unsafe`] (the trigger depths are `+0` or positive and
+    /// never NaN, so their minimum does not depend on the order or grouping it is taken in;
+    /// marking a node again with the same value changes nothing).
     pub(crate) fn mark_unsafe_listed(&mut self, tz: Vec<f32>, px: &[u32]) -> Vec<f32> {
         let (w, nl) = (self.width, self.levels.len());
-        // The pixels' coordinates, one division each (not one per level and pass).
-        let xy: Vec<(u32, u32)> = px.iter().map(|&k| (k % w, k / w)).collect();
+        // The pixels' coordinates and trigger depths, one division each.
+        let mut cur: Vec<(u32, u32, f32)> =
+            px.iter().map(|&k| (k % w, k / w, tz[k as usize])).collect();
         let l0 = &mut self.levels[0];
-        for (&k, &(x, y)) in px.iter().zip(&xy) {
-            l0.nodes[(y * l0.w + x) as usize].mark_unsafe(tz[k as usize]);
+        for &(x, y, t) in &cur {
+            l0.nodes[(y * l0.w + x) as usize].mark_unsafe(t);
         }
         let mut mins: Vec<f32> = Vec::new();
         if nl == 1 {
             mins.resize(l0.nodes.len(), f32::INFINITY);
-            for (&k, &(x, y)) in px.iter().zip(&xy) {
-                mins[(y * l0.w + x) as usize] = tz[k as usize];
+            for &(x, y, t) in &cur {
+                mins[(y * l0.w + x) as usize] = t;
             }
         }
+        let mut next: Vec<(u32, u32, f32)> = Vec::with_capacity(cur.len());
         for l in 1..nl {
             let lv = &mut self.levels[l];
             // The dense minima set to `+inf` in parallel rows (level 1's is the largest;
@@ -546,17 +548,23 @@ impl QuadTree {
                 mins.par_chunks_mut(lw as usize)
                     .for_each(|r| r.fill(f32::INFINITY));
             }
-            let at = |(x, y): (u32, u32)| ((y >> l) * lw + (x >> l)) as usize;
-            for (&k, &p) in px.iter().zip(&xy) {
-                let (m, t) = (&mut mins[at(p)], tz[k as usize]);
+            next.clear();
+            for &(x, y, t) in &cur {
+                let (x, y) = (x >> 1, y >> 1);
+                let m = &mut mins[(y * lw + x) as usize];
+                if *m == f32::INFINITY {
+                    next.push((x, y, 0.0));
+                }
                 if t < *m {
                     *m = t;
                 }
             }
-            for &p in &xy {
-                let i = at(p);
-                lv.nodes[i].mark_unsafe(mins[i]);
+            for e in next.iter_mut() {
+                let i = (e.1 * lw + e.0) as usize;
+                e.2 = mins[i];
+                lv.nodes[i].mark_unsafe(e.2);
             }
+            core::mem::swap(&mut cur, &mut next);
         }
         self.trigger_z = tz;
         mins

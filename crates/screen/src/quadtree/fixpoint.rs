@@ -38,6 +38,8 @@
 //!
 //! **Invariants:** the blocked set only grows, so the loop ends; level 0 is never changed.
 
+use core::mem::MaybeUninit;
+
 use glam::Vec4;
 use rayon::prelude::*;
 
@@ -448,11 +450,12 @@ fn certified(f: &[f32], t: f32) -> bool {
 
 /// The pixel planes' trigger depths of row `j` (`tz`, `W` values) from the row's leaves
 /// `nodes` (the build runs it right after the row's leaves, while they are in cache), and
-/// the row's deeper fronts (`fronts`, [`deeper_front`]). Returns the row's pixels with a
-/// finite trigger depth.
+/// the row's deeper fronts (`fronts`, [`deeper_front`]); every value of `tz` and `fronts` is
+/// written (they may be uninitialised before). Returns the row's pixels with a finite
+/// trigger depth.
 pub(super) fn pixel_triggers_row(
-    tz: &mut [f32],
-    fronts: &mut [f32],
+    tz: &mut [MaybeUninit<f32>],
+    fronts: &mut [MaybeUninit<f32>],
     nodes: &[Node],
     j: u32,
     ctx: &MergeCtx,
@@ -501,9 +504,11 @@ pub(super) fn pixel_triggers_row(
                 (wf, hf),
                 deeper,
             );
-            fronts[i..i + 4].copy_from_slice(&f.to_array());
+            for (d, v) in f.to_array().into_iter().enumerate() {
+                fronts[i + d].write(v);
+            }
             for (d, v) in t.to_array().into_iter().enumerate() {
-                tz[i + d] = v;
+                tz[i + d].write(v);
                 if v.is_finite() {
                     listed.push((base + i + d) as u32);
                 }
@@ -519,7 +524,7 @@ pub(super) fn pixel_triggers_row(
         .skip(done)
     {
         let k = base + i;
-        *t = pixel_trigger_lanes(
+        let t = *t.write(pixel_trigger_lanes(
             k,
             xs,
             ys,
@@ -528,11 +533,15 @@ pub(super) fn pixel_triggers_row(
                     .then(|| decode_plane_at(node, 0, xc, yc, wf, hf))
             },
             deeper,
-        );
+        ));
         if t.is_finite() {
             listed.push(k as u32);
         }
-        fronts[i] = deeper_front(k, (cols.xe[i], cols.xe[i + 1], ys.x, ys.z), deeper);
+        fronts[i].write(deeper_front(
+            k,
+            (cols.xe[i], cols.xe[i + 1], ys.x, ys.z),
+            deeper,
+        ));
     }
     listed
 }

@@ -17,19 +17,13 @@
 //! test below compares rows with the four-lane kernel.
 
 use core::arch::x86_64::*;
+use core::mem::MaybeUninit;
 
 use glam::Vec3;
 
 use super::cascade::SAFE_MARGIN;
 use super::node::Node;
 use crate::LayerPlanes;
-
-/// `(m & a) | (b & !m)` per lane.
-#[inline]
-#[target_feature(enable = "avx2")]
-fn sel(m: __m256, a: __m256, b: __m256) -> __m256 {
-    _mm256_or_ps(_mm256_and_ps(m, a), _mm256_andnot_ps(m, b))
-}
 
 /// Eight `Vec3`s at `p` as `(x, y, z)` lanes, pixels `0..4` in the low halves: the
 /// 128-bit rows `v0 = x0 y0 z0 x1`, `v1 = y1 z1 x2 y2`, `v2 = z2 x3 y3 z3` of the first four
@@ -60,7 +54,7 @@ unsafe fn soa8(p: *const Vec3) -> (__m256, __m256, __m256) {
 }
 
 /// The trigger depths of the first `8 floor(W / 8)` pixels of row `j` into `tz` (`W =
-/// tz.len()`), from the row's leaves `nodes`, the footprint edges `xe` (`i / W`, `W + 1`
+/// tz.len()`; the kernel only writes `tz` and `fronts`, so they may be uninitialised), from the row's leaves `nodes`, the footprint edges `xe` (`i / W`, `W + 1`
 /// values), the pixel centres `xc`, the row's edges and centre `y = (y0, y1, yc)`, pixel
 /// `k0 + i` of the deeper layers; pushes the pixels (`k0 + i`) with a finite trigger depth
 /// on `listed`; writes the pixels' deeper fronts (`cascade::deeper_front`, as
@@ -72,8 +66,8 @@ unsafe fn soa8(p: *const Vec3) -> (__m256, __m256, __m256) {
 #[allow(clippy::too_many_arguments)]
 #[target_feature(enable = "avx2,f16c")]
 pub(super) unsafe fn pixel_triggers_row8(
-    tz: &mut [f32],
-    fronts: &mut [f32],
+    tz: &mut [MaybeUninit<f32>],
+    fronts: &mut [MaybeUninit<f32>],
     nodes: &[Node],
     k0: usize,
     xe: &[f32],
@@ -142,12 +136,25 @@ pub(super) unsafe fn pixel_triggers_row8(
             _mm256_mul_ps(pnz, zc),
         );
         let plane = _mm256_castsi256_ps(_mm256_srai_epi32::<31>(a));
-        // The deeper layers (`trigger_lanes::triggers4`).
-        let corners = [(x0, sy0), (x1, sy0), (x0, sy1), (x1, sy1)];
+        // The deeper layers (`trigger_lanes::triggers4`), the four footprint corners
+        // `(x0, y0), (x1, y0), (x0, y1), (x1, y1)` in that order. The products and
+        // differences two corners share are computed once (the same operations on the
+        // same operands, so the same bits), and the own plane's `pnx x + pny y` of each
+        // corner once for all deeper layers.
+        let (px0, px1) = (_mm256_mul_ps(pnx, x0), _mm256_mul_ps(pnx, x1));
+        let (py0, py1) = (_mm256_mul_ps(pny, sy0), _mm256_mul_ps(pny, sy1));
+        let q = [
+            _mm256_add_ps(px0, py0),
+            _mm256_add_ps(px1, py0),
+            _mm256_add_ps(px0, py1),
+            _mm256_add_ps(px1, py1),
+        ];
         let mut front = s(f32::INFINITY);
         let mut bad = _mm256_setzero_ps();
         // Lanes with an edge-on deeper plane or a NaN corner `z`: deeper front `-inf`.
         let mut void = _mm256_setzero_ps();
+        // Lanes where the own plane is not a plane: every live lane is unsafe.
+        let not_plane = _mm256_xor_ps(plane, _mm256_castsi256_ps(_mm256_set1_epi32(-1)));
         for pj in deeper {
             // SAFETY: pixels `k .. k + 8` of the deeper layer exist (asserted).
             let ((nx, ny, nz), cj) = unsafe {
@@ -167,50 +174,51 @@ pub(super) unsafe fn pixel_triggers_row8(
             let edge = _mm256_andnot_ps(_mm256_cmp_ps::<_CMP_LT_OS>(nz, s(-1e-6)), covered);
             bad = _mm256_or_ps(bad, edge);
             void = _mm256_or_ps(void, edge);
-            front = sel(edge, z0, front);
+            front = _mm256_blendv_ps(front, z0, edge);
             let live = _mm256_andnot_ps(edge, covered);
             if _mm256_movemask_ps(live) == 0 {
                 continue;
             }
-            for &(x, y) in &corners {
-                let z = _mm256_div_ps(
-                    _mm256_sub_ps(
-                        _mm256_sub_ps(cj, _mm256_mul_ps(nx, x)),
-                        _mm256_mul_ps(ny, y),
-                    ),
-                    nz,
-                );
-                void = _mm256_or_ps(
-                    void,
-                    _mm256_and_ps(live, _mm256_cmp_ps::<_CMP_UNORD_Q>(z, z)),
-                );
-                let lower = _mm256_and_ps(live, _mm256_cmp_ps::<_CMP_LT_OS>(z, front));
-                front = sel(lower, z, front);
-                let f = _mm256_sub_ps(
-                    _mm256_add_ps(
-                        _mm256_add_ps(_mm256_mul_ps(pnx, x), _mm256_mul_ps(pny, y)),
-                        _mm256_mul_ps(pnz, z),
-                    ),
-                    pc,
-                );
-                let safe = _mm256_and_ps(_mm256_cmp_ps::<_CMP_LE_OS>(f, margin), plane);
-                bad = _mm256_or_ps(bad, _mm256_andnot_ps(safe, live));
+            // `z = (cj - nx x - ny y) / nz` per corner, left to right.
+            let (c0, c1) = (
+                _mm256_sub_ps(cj, _mm256_mul_ps(nx, x0)),
+                _mm256_sub_ps(cj, _mm256_mul_ps(nx, x1)),
+            );
+            let (ny0, ny1) = (_mm256_mul_ps(ny, sy0), _mm256_mul_ps(ny, sy1));
+            let z = [
+                _mm256_div_ps(_mm256_sub_ps(c0, ny0), nz),
+                _mm256_div_ps(_mm256_sub_ps(c1, ny0), nz),
+                _mm256_div_ps(_mm256_sub_ps(c0, ny1), nz),
+                _mm256_div_ps(_mm256_sub_ps(c1, ny1), nz),
+            ];
+            // A NaN at any corner (`unord` of two operands: either is NaN).
+            let nan = _mm256_or_ps(
+                _mm256_cmp_ps::<_CMP_UNORD_Q>(z[0], z[1]),
+                _mm256_cmp_ps::<_CMP_UNORD_Q>(z[2], z[3]),
+            );
+            void = _mm256_or_ps(void, _mm256_and_ps(live, nan));
+            // A corner is unsafe where `f <= -margin` fails (NaN included); a live lane is
+            // bad where its own leaf is no plane or some corner is unsafe: `live & !(le &
+            // plane)` ORed over the corners.
+            let mut unsafe_any = not_plane;
+            for c in 0..4 {
+                let lower = _mm256_and_ps(live, _mm256_cmp_ps::<_CMP_LT_OS>(z[c], front));
+                front = _mm256_blendv_ps(front, z[c], lower);
+                let f = _mm256_sub_ps(_mm256_add_ps(q[c], _mm256_mul_ps(pnz, z[c])), pc);
+                unsafe_any = _mm256_or_ps(unsafe_any, _mm256_cmp_ps::<_CMP_NLE_UQ>(f, margin));
             }
+            bad = _mm256_or_ps(bad, _mm256_and_ps(live, unsafe_any));
         }
         let t = _mm256_sub_ps(front, s(SAFE_MARGIN));
-        let t = sel(
-            _mm256_cmp_ps::<_CMP_GT_OS>(t, _mm256_setzero_ps()),
-            t,
-            _mm256_setzero_ps(),
-        );
-        let t = sel(bad, t, s(f32::INFINITY));
+        let t = _mm256_and_ps(_mm256_cmp_ps::<_CMP_GT_OS>(t, _mm256_setzero_ps()), t);
+        let t = _mm256_blendv_ps(s(f32::INFINITY), t, bad);
         // SAFETY: `tz[i..i + 8]` and `fronts[i..i + 8]` are in bounds (`i + 8 <= n8 <= W`,
         // asserted).
         unsafe {
-            _mm256_storeu_ps(tz.as_mut_ptr().add(i), t);
+            _mm256_storeu_ps(tz.as_mut_ptr().add(i) as *mut f32, t);
             _mm256_storeu_ps(
-                fronts.as_mut_ptr().add(i),
-                sel(void, s(f32::NEG_INFINITY), front),
+                fronts.as_mut_ptr().add(i) as *mut f32,
+                _mm256_blendv_ps(front, s(f32::NEG_INFINITY), void),
             );
         }
         // The finite ones: `|t| < inf`.
@@ -345,8 +353,8 @@ mod tests {
                 ((j + 1) as f32) / hf,
                 ((j as f32 + 0.5) * 1.0) / hf,
             );
-            let mut tz = vec![0.0f32; w];
-            let mut fronts = vec![0.0f32; w];
+            let mut tz = vec![MaybeUninit::new(0.0f32); w];
+            let mut fronts = vec![MaybeUninit::new(0.0f32); w];
             let mut listed = Vec::new();
             // SAFETY: AVX2 (checked above).
             let n = unsafe {
@@ -364,6 +372,13 @@ mod tests {
                 )
             };
             assert_eq!(n, w & !7);
+            // SAFETY: initialised above (and written by the kernel).
+            let (tz, fronts): (Vec<f32>, Vec<f32>) = unsafe {
+                (
+                    tz.iter().map(|v| v.assume_init()).collect(),
+                    fronts.iter().map(|v| v.assume_init()).collect(),
+                )
+            };
             let mut want = Vec::new();
             for i in (0..n).step_by(4) {
                 let (t, f) = pixel_triggers4(
