@@ -23,7 +23,7 @@ use std::time::Instant;
 use glam::{Vec2, Vec3};
 use parallax_bvh::Bvh;
 use parallax_core::{Aabb, WorldTracer};
-use parallax_raster::dirt::{DirtOptions, DirtViews, DirtViewsOptions};
+use parallax_raster::dirt::{DirtViews, DirtViewsOptions};
 use parallax_raster::ldc::{LayeredDepthCube, LdcOptions, LdcStats};
 use parallax_raster::{CubeCapture, RasterOptions};
 use parallax_scene::camera::{Camera, CameraModel, CubeMap};
@@ -123,18 +123,8 @@ pub struct TracerOptions {
     pub cubemap: CubeMapSettings,
 }
 
-/// DIRT's configuration for path tracing: 128^2 cube faces, 4 x 4 tiles, 16 buckets (the
-/// fastest trace of `bench dirt`'s sweeps at a build close to the BVH's; docs/notes/dirt.md).
-pub const DIRT_DEFAULTS: DirtViewsOptions = DirtViewsOptions {
-    face_size: 128,
-    capture: DirtOptions {
-        tile_size: 4,
-        buckets: 16,
-        near: 1e-4,
-        max_entries: 1 << 28,
-        cell_depth: parallax_raster::dirt::CellDepth::Corners,
-    },
-};
+/// DIRT's configuration for path tracing ([`DirtViewsOptions::TRACING`]).
+pub const DIRT_DEFAULTS: DirtViewsOptions = DirtViewsOptions::TRACING;
 
 impl Default for TracerOptions {
     fn default() -> Self {
@@ -229,6 +219,7 @@ pub fn build_tracer(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use parallax_raster::dirt::DirtOptions;
 
     #[test]
     fn names_round_trip_and_unknown_names_list_the_known() {

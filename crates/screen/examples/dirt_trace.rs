@@ -12,7 +12,7 @@ use std::hash::{Hash, Hasher};
 
 use glam::{Vec2, Vec3};
 use parallax_core::Ray;
-use parallax_raster::dirt::{CellDepth, DirtOptions, DirtViews, DirtViewsOptions};
+use parallax_raster::dirt::{DirtViews, DirtViewsOptions};
 use parallax_scene::camera::{Camera, CameraModel, CameraOptions, ModelKind};
 use parallax_scene::{CameraDesc, Scene};
 use parallax_screen::{DirtCounters, DirtTracer};
@@ -72,17 +72,8 @@ fn main() {
     let eye = camera
         .generate_ray(film, Vec2::splat(0.5), 1)
         .map_or(Vec3::ZERO, |r| r.ray.origin);
-    // `bench dirt`'s defaults (`parallax_path::tracers::DIRT_DEFAULTS`).
-    let opts = DirtViewsOptions {
-        face_size: 128,
-        capture: DirtOptions {
-            tile_size: 4,
-            buckets: 16,
-            near: 1e-4,
-            max_entries: 1 << 28,
-            cell_depth: CellDepth::Corners,
-        },
-    };
+    // `bench dirt`'s configuration (`parallax_path::tracers::DIRT_DEFAULTS`).
+    let opts = DirtViewsOptions::TRACING;
     let dirt = DirtTracer::new(DirtViews::build(&scene.mesh, pinhole, eye, &opts).expect("dirt"));
     let mut c = DirtCounters::default();
     let mut h = std::collections::hash_map::DefaultHasher::new();

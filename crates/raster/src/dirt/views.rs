@@ -35,6 +35,22 @@ pub struct DirtViewsOptions {
     pub capture: DirtOptions,
 }
 
+impl DirtViewsOptions {
+    /// The configuration tracing uses: 128^2 cube faces, 4 x 4 tiles, 16 buckets (the
+    /// fastest trace of `bench dirt`'s sweeps at a build close to the BVH's;
+    /// docs/notes/dirt.md).
+    pub const TRACING: DirtViewsOptions = DirtViewsOptions {
+        face_size: 128,
+        capture: DirtOptions {
+            tile_size: 4,
+            buckets: 16,
+            near: 1e-4,
+            max_entries: 1 << 28,
+            cell_depth: super::CellDepth::Corners,
+        },
+    };
+}
+
 impl Default for DirtViewsOptions {
     fn default() -> Self {
         Self {
