@@ -24,8 +24,8 @@ use rayon::prelude::*;
 use crate::cast::intersect::test_tile;
 use crate::cast::leaves::{LeafBox, LeafGroup, group_leaves};
 use crate::cast::setup::{
-    SampleTest, SetupCounts, SetupExactness, SetupWork, TileTris, setup_tile, shared_origin,
-    test_tile_setup,
+    SampleTest, SetupCounts, SetupExactness, SetupLanes, SetupWork, TileTris, setup_tile_with,
+    shared_origin, test_tile_setup,
 };
 use crate::cast::stored::RayBuffer;
 use crate::{Hierarchy, SampleSet, VisibilityBuffer};
@@ -92,7 +92,8 @@ pub struct CastOptions {
     /// kernel, which is always exact).
     pub exactness: SetupExactness,
     /// Run 16-lane set-up packets in one AVX-512 register when the CPU has AVX-512F (else, or
-    /// when false, four SSE registers: the portable twin, the same buffer bit for bit).
+    /// when false, four SSE registers: the portable twin, the same buffer bit for bit); the
+    /// per-tile triangle set-up likewise in 16 AVX-512 lanes, else 4 SSE lanes (the same list).
     pub avx512: bool,
     /// Run the affine packet test (`cast/setup/affine.rs`) before the per-lane edge test of
     /// the set-up kernel with [`SetupExactness::Edges`] (pinhole and stereo tiles): the same
@@ -304,7 +305,13 @@ fn cast_from(
                 };
                 if let Some(o) = origin {
                     let lazy = opts.exactness == SetupExactness::Edges;
-                    setup_tile(blocks_, &scratch.leaves, &tile.beam, o, lazy, tt);
+                    // The set-up's lanes follow the kernel's: the same list either way.
+                    let sl = if opts.avx512 {
+                        SetupLanes::Avx512
+                    } else {
+                        SetupLanes::Sse4
+                    };
+                    setup_tile_with(sl, blocks_, &scratch.leaves, &tile.beam, o, lazy, tt);
                     // The 1-spp film lanes of these samples (`Hierarchy::film`).
                     let film = (hierarchy.film[0].len() == set.samples.len())
                         .then(|| hierarchy.film.each_ref().map(|v| &v[range.clone()]));

@@ -80,8 +80,10 @@
 //! certainly in, with a rigorous error bound — or leaves it to the per-lane test; the buffer is
 //! the same bit for bit (`tests/affine.rs`).
 //!
-//! **Set-up in lanes** (`cast/setup/tile.rs`): the `Edges` set-up (lazy band, classification)
-//! runs four consecutive triangles of the tile list at once in SSE registers, and the full
+//! **Set-up in lanes** (`cast/setup/tile.rs`, `cast/setup/lazy.rs`): the `Edges` set-up (lazy
+//! band, classification) runs sixteen consecutive triangles of the tile list at once in one
+//! AVX-512 register per value where the CPU has AVX-512F (four in SSE registers elsewhere, or
+//! with `CastOptions::avx512` false), and the full
 //! bands of a run's triangles four at a time when a packet first enters the run; per lane the
 //! scalar operations in the scalar order, so the list is bit-identical to the scalar twin's
 //! (tested there). `Full` sets up one triangle at a time.
@@ -136,6 +138,7 @@ pub mod affine;
 pub mod edges;
 pub mod full;
 mod kernel;
+mod lazy;
 mod tile;
 mod tri;
 
@@ -155,7 +158,7 @@ use crate::samples::MAX_SPP;
 use affine::{FilmFrame, PacketBox};
 
 pub use kernel::SetupWork;
-pub use tile::{setup_tile, setup_tile_scalar};
+pub use tile::{SetupLanes, setup_tile, setup_tile_scalar, setup_tile_with};
 pub use tri::{
     BeamCorners, Cone, CornerClass, EdgeClass, RHO_MAX, Segment, SetupCounts, TileTris, TriSetup,
     dot3, exact_closest, exact_t, shared_origin,

@@ -1,33 +1,46 @@
 //! The per-tile set-up of a tile's triangle list (HVVR, Hunt et al. 2018, §5.5: "triangle setup
-//! ... tile-corner classification", module docs of [`super`]) four triangles at a time: the
+//! ... tile-corner classification", module docs of [`super`]) `L::N` triangles at a time: the
 //! tile's triangles, in list order, are gathered from the BVH's leaf blocks ([`Tri4`]) into
-//! packs of four consecutive ones (across blocks and leaves: Sponza's leaf blocks hold ~2.2
-//! triangles on average), set up together in SSE registers ([`LazySetup4`]), classified
-//! against the tile's corners in the same registers, and the kept triangles appended to the
-//! tile's list in order, each leaf's run closed after its last triangle ([`setup_tile`]).
+//! packs of `L::N` consecutive ones (across blocks and leaves: Sponza's leaf blocks hold ~2.2
+//! triangles on average), set up together in lanes ([`LazySetupN`], `cast/setup/lazy.rs`: 16
+//! AVX-512 lanes where the CPU has them, else 4 SSE lanes), classified against the tile's
+//! corners in the same registers, and the kept triangles appended to the tile's list in order,
+//! each leaf's run closed after its last triangle ([`setup_tile`]). Runs' full bands are
+//! computed four triangles at a time in SSE lanes ([`refine_run`]).
 //!
-//! **Invariant: the same bits as the scalar set-up.** Every lane runs exactly the operations of
-//! [`TriSetup::new_with`] (lazy band) and [`BeamCorners::classify`] in the same order: IEEE
-//! single-precision `+ - * /` per lane, never contracted into FMAs (Rust does not contract),
-//! constants folded the same way, negation and `|x|` as sign-bit operations, `max` only where
-//! no operand can be NaN. The rejection tests are equivalent decisions (`D = 0` or not finite,
-//! `g` or the nine covector entries not finite). So the list, its bands and its
-//! classification equal the scalar twin's ([`setup_tile_scalar`]) bit for bit, and the run
-//! boxes ([`Segment`]) are equal (taken per triangle before the run: a `0` and `-0` may swap,
-//! which no slab-test comparison sees); the tests below compare both on random and adversarial
-//! triangles. The non-lazy set-up ([`crate::SetupExactness::Full`]) stays scalar.
+//! **Invariant: the same bits as the scalar set-up**, for every lane type. Every lane runs
+//! exactly the operations of [`TriSetup::new_with`] (lazy band) and [`BeamCorners::classify`]
+//! (and [`TriSetup::new`]'s band in [`bands4`]) in the same order: IEEE single-precision
+//! `+ - * /` per lane, never contracted into FMAs (Rust does not contract), constants folded
+//! the same way, negation and `|x|` as sign-bit operations or their equivalents on every
+//! value a kept lane sees (`cast/setup/lazy.rs`), `max` only where no operand can be NaN. The
+//! rejection tests are equivalent decisions (`D = 0` or not finite, `g` or the nine covector
+//! entries not finite). So the list, its bands and its classification equal the scalar
+//! twin's ([`setup_tile_scalar`]) bit for bit, and the run boxes ([`Segment`]) are equal
+//! (taken per triangle before the run: a `0` and `-0` may swap, which no slab-test comparison
+//! sees); the tests below compare both, for each lane type the CPU runs, on random and
+//! adversarial triangles. The non-lazy set-up ([`crate::SetupExactness::Full`]) stays scalar.
+//!
+//! | name | value | meaning |
+//! |---|---|---|
+//! | `PREFETCH_LEAVES` | 8 | leaves ahead whose triangle blocks are prefetched |
+//! | [`SetupLanes`] | `Avx512` | lane type of the lazy set-up (`Sse4`: the portable twin) |
 
-use glam::{BVec4A, Vec3, Vec4};
+use glam::{Vec3, Vec4};
 use parallax_bvh::Tri4;
 use parallax_bvh::node::{leaf_count, leaf_first};
 use parallax_core::Aabb;
 use parallax_core::math::watertight_permutation;
 use parallax_core::simd::Lanes;
 
+use super::lazy::{LazySetupN, PACK, cross, dot, sub3};
 use super::tri::{
     BeamCorners, Cone, CornerClass, RHO_MAX, RunBoxes16, SQRT3, Segment, TileTris, TriSetup, U,
 };
 use crate::beam::{Beam, LeafRef};
+use crate::cast::lanes16::LaneReduce;
+#[cfg(target_arch = "x86_64")]
+use crate::cast::lanes512::Z16;
 
 /// Leaves ahead of the set-up's gather whose triangle blocks are prefetched ([`prefetch_leaf`]).
 const PREFETCH_LEAVES: usize = 8;
@@ -57,131 +70,15 @@ fn prefetch_leaf(blocks: &[Tri4], r: u32) {
     let _ = (blocks, r);
 }
 
-/// `a x b` per lane, component by component as the scalar `cross`.
-#[inline(always)]
-fn cross4(a: [Vec4; 3], b: [Vec4; 3]) -> [Vec4; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-#[inline(always)]
-fn sub3(a: [Vec4; 3], b: [Vec4; 3]) -> [Vec4; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-/// `((a_x b_x + a_y b_y) + a_z b_z)` per lane (the scalar `dot3` / `Vec3::dot` order).
-#[inline(always)]
-fn dot4(a: [Vec4; 3], b: [Vec4; 3]) -> Vec4 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
 /// `(|x| + |y|) + |z|` per lane.
 #[inline(always)]
 fn l1_4(a: [Vec4; 3]) -> Vec4 {
     a[0].abs() + a[1].abs() + a[2].abs()
 }
 
+/// Lane `l` of [`LazySetupN::arrays`] as a [`TriSetup`] (lazy: `rho` NaN).
 #[inline(always)]
-fn finite3(a: [Vec4; 3]) -> BVec4A {
-    a[0].is_finite_mask() & a[1].is_finite_mask() & a[2].is_finite_mask()
-}
-
-/// The lazy set-up of the four lanes of a block ([`TriSetup::new_with`] with `lazy`, per lane).
-#[derive(Clone, Copy, Debug)]
-pub struct LazySetup4 {
-    /// `n[i][axis]`: edge covector `i`.
-    pub n: [[Vec4; 3]; 3],
-    pub g: [Vec4; 3],
-    pub bound: Vec4,
-    /// Lanes the scalar set-up keeps (`Some`).
-    pub ok: u32,
-}
-
-impl LazySetup4 {
-    /// The lanes of `p` (`p[vertex][axis]`, lane = triangle) set up for rays from `o` within
-    /// a cone of chord radius `radius`.
-    #[inline(always)]
-    pub fn new(p: &[[Vec4; 3]; 3], o: Vec3, radius: f32) -> Self {
-        let os = [Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z)];
-        let a = [sub3(p[0], os), sub3(p[1], os), sub3(p[2], os)];
-        let e = [sub3(a[1], a[0]), sub3(a[2], a[1]), sub3(a[0], a[2])];
-        let nrm = cross4(e[0], [-e[2][0], -e[2][1], -e[2][2]]);
-        let d = dot4(nrm, a[0]);
-        let mut ok = d.cmpne(Vec4::ZERO) & d.is_finite_mask();
-        let g = [nrm[0] / d, nrm[1] / d, nrm[2] / d];
-        ok &= finite3(g);
-        let s = Vec4::select(d.cmpgt(Vec4::ZERO), Vec4::ONE, -Vec4::ONE);
-        let sc = |c: [Vec4; 3]| [c[0] * s, c[1] * s, c[2] * s];
-        let n = [
-            sc(cross4(a[0], e[0])),
-            sc(cross4(a[1], e[1])),
-            sc(cross4(a[2], e[2])),
-        ];
-        ok &= finite3(n[0]) & finite3(n[1]) & finite3(n[2]);
-        // The lazy band of `TriSetup::new_with`, term by term. (`max` of the 1-norms: no NaN in
-        // a kept lane, whose `a_i` are finite.)
-        let aa = l1_4(a[0]).max(l1_4(a[1])).max(l1_4(a[2]));
-        let pp = Vec4::splat(SQRT3 * 1.4143) * aa * Vec4::splat(1.0 + radius) * Vec4::splat(1.01);
-        let ep = Vec4::splat(U) * (Vec4::splat(2.02) * aa + Vec4::splat(1.01) * pp);
-        let w = Vec4::splat(2.0) * (Vec4::splat(2.0) * ep * pp) + Vec4::splat(4.04 * U) * pp * pp;
-        let p = Vec4::splat(6.1 * U) * aa * (Vec4::splat(2.0) * aa) * Vec4::splat(1.01);
-        let bound = Vec4::splat(2.0) * (w + p) * Vec4::splat(1.01);
-        let bound = Vec4::select(bound.is_finite_mask(), bound, Vec4::INFINITY);
-        LazySetup4 {
-            n,
-            g,
-            bound,
-            ok: ok.bitmask(),
-        }
-    }
-
-    /// [`BeamCorners::classify`] per lane: the masks of the lanes all out and all in.
-    #[inline(always)]
-    pub fn classify(&self, c: &BeamCorners) -> (u32, u32) {
-        let cm = Vec4::splat(c.cmax.max_element());
-        let cmax = [
-            Vec4::splat(c.cmax.x),
-            Vec4::splat(c.cmax.y),
-            Vec4::splat(c.cmax.z),
-        ];
-        let corners =
-            c.c.map(|x| [Vec4::splat(x.x), Vec4::splat(x.y), Vec4::splat(x.z)]);
-        let mut out_any = BVec4A::splat(false);
-        let mut all_in = BVec4A::splat(true);
-        for e in &self.n {
-            let tol = self.bound * cm
-                + Vec4::splat(3.1 * U) * dot4([e[0].abs(), e[1].abs(), e[2].abs()], cmax);
-            let ntol = -tol;
-            let (mut out, mut inn) = (BVec4A::splat(true), BVec4A::splat(true));
-            for cc in &corners {
-                let v = dot4(*e, *cc);
-                out &= v.cmplt(ntol);
-                inn &= v.cmpgt(tol);
-            }
-            out_any |= out;
-            all_in &= inn;
-        }
-        (out_any.bitmask(), all_in.bitmask() & !out_any.bitmask())
-    }
-
-    /// The lanes as arrays: `[n_0 x, y, z, n_1 .., n_2 .., g x, y, z, bound][lane]`.
-    #[inline(always)]
-    pub fn arrays(&self) -> [[f32; 4]; 13] {
-        let n = &self.n;
-        [
-            n[0][0], n[0][1], n[0][2], n[1][0], n[1][1], n[1][2], n[2][0], n[2][1], n[2][2],
-            self.g[0], self.g[1], self.g[2], self.bound,
-        ]
-        .map(|v| v.to_array())
-    }
-}
-
-/// Lane `l` of [`LazySetup4::arrays`] as a [`TriSetup`] (lazy: `rho` NaN).
-#[inline(always)]
-fn lane_of(x: &[[f32; 4]; 13], l: usize, tri: u32, src: u32, all_in: bool) -> TriSetup {
+fn lane_of(x: &[[f32; PACK]; 13], l: usize, tri: u32, src: u32, all_in: bool) -> TriSetup {
     TriSetup {
         n: [
             [x[0][l], x[1][l], x[2][l]],
@@ -200,7 +97,7 @@ fn lane_of(x: &[[f32; 4]; 13], l: usize, tri: u32, src: u32, all_in: bool) -> Tr
 /// `|v|^2 = (x x + y y) + z z` per lane (`Vec3::length_squared`).
 #[inline(always)]
 fn lsq4(v: [Vec4; 3]) -> Vec4 {
-    dot4(v, v)
+    dot(v, v)
 }
 
 /// `f32::max(acc, x)` for `acc` never NaN (`maxps(x, acc)`: `x` if `x > acc`, else `acc`).
@@ -218,12 +115,12 @@ pub fn bands4(p: &[[Vec4; 3]; 3], o: Vec3, cone: &Cone) -> (Vec4, Vec4) {
     let os = [sp(o.x), sp(o.y), sp(o.z)];
     let a = [sub3(p[0], os), sub3(p[1], os), sub3(p[2], os)];
     let e = [sub3(a[1], a[0]), sub3(a[2], a[1]), sub3(a[0], a[2])];
-    let nrm = cross4(e[0], [-e[2][0], -e[2][1], -e[2][2]]);
-    let d = dot4(nrm, a[0]);
+    let nrm = cross(e[0], [-e[2][0], -e[2][1], -e[2][2]]);
+    let d = dot(nrm, a[0]);
     let c = [sp(cone.centre.x), sp(cone.centre.y), sp(cone.centre.z)];
     let r = sp(cone.radius);
     let psi_of = |ai: [Vec4; 3]| {
-        let (x, y) = (cross4(ai, c), [ai[0] * r, ai[1] * r, ai[2] * r]);
+        let (x, y) = (cross(ai, c), [ai[0] * r, ai[1] * r, ai[2] * r]);
         sp(SQRT3) * Lanes::sqrt(sp(2.0) * (lsq4(x) + lsq4(y))) * sp(1.001)
     };
     let psi = [psi_of(a[0]), psi_of(a[1]), psi_of(a[2])];
@@ -336,10 +233,35 @@ fn end_run(out: &mut TileTris, r: &LeafRef, bx: Aabb) {
     }
 }
 
+/// The lane type of the lazy set-up ([`setup_tile_with`]): every choice gives the same list.
+/// (No AVX2 tier: `F8`'s plain loops took 38% more set-up instructions than the SSE lanes,
+/// `docs/notes/vr.md`.)
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SetupLanes {
+    /// Four SSE lanes (glam `Vec4`): the portable twin.
+    Sse4,
+    /// Sixteen AVX-512 lanes (`Z16`), if the CPU has AVX-512F (else [`SetupLanes::Sse4`]).
+    Avx512,
+}
+
 /// Sets up every triangle of the tile list `leaves` (near-depth order) for rays from `origin`
-/// within `beam`, dropping all-out triangles (module docs of [`super`]); the lazy set-up four
-/// triangles at a time (`LazySetup4`, `cast/setup/tile.rs`), the full one scalar.
+/// within `beam`, dropping all-out triangles (module docs of [`super`]); the lazy set-up
+/// `L::N` triangles at a time in the widest lanes the CPU has ([`LazySetupN`], module docs),
+/// the full one scalar.
 pub fn setup_tile(
+    blocks: &[Tri4],
+    leaves: &[LeafRef],
+    beam: &Beam,
+    origin: Vec3,
+    lazy: bool,
+    out: &mut TileTris,
+) {
+    setup_tile_with(SetupLanes::Avx512, blocks, leaves, beam, origin, lazy, out);
+}
+
+/// [`setup_tile`] with the lanes `lanes` (or the widest the CPU has below them).
+pub fn setup_tile_with(
+    lanes: SetupLanes,
     blocks: &[Tri4],
     leaves: &[LeafRef],
     beam: &Beam,
@@ -350,6 +272,43 @@ pub fn setup_tile(
     if !lazy {
         return setup_tile_scalar(blocks, leaves, beam, origin, lazy, out);
     }
+    #[cfg(target_arch = "x86_64")]
+    if lanes == SetupLanes::Avx512 && std::arch::is_x86_feature_detected!("avx512f") {
+        // SAFETY: AVX-512F was detected.
+        return unsafe { setup_tile_avx512(blocks, leaves, beam, origin, out) };
+    }
+    let _ = lanes;
+    setup_tile_lanes::<Vec4>(blocks, leaves, beam, origin, out)
+}
+
+/// [`setup_tile_lanes`] with sixteen AVX-512 lanes.
+///
+/// # Safety
+/// The CPU must support AVX-512F.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn setup_tile_avx512(
+    blocks: &[Tri4],
+    leaves: &[LeafRef],
+    beam: &Beam,
+    origin: Vec3,
+    out: &mut TileTris,
+) {
+    setup_tile_lanes::<Z16>(blocks, leaves, beam, origin, out)
+}
+
+/// The lazy [`setup_tile`] in lanes `L`: packs of `L::N` consecutive triangles of the tile
+/// list (across blocks and leaves) set up and classified together ([`LazySetupN`]), the kept
+/// ones appended in list order, each leaf's run closed after its last triangle. (No closure
+/// calls a lane operation: module docs of `cast/setup/lazy.rs`.)
+#[inline(always)]
+fn setup_tile_lanes<L: LaneReduce>(
+    blocks: &[Tri4],
+    leaves: &[LeafRef],
+    beam: &Beam,
+    origin: Vec3,
+    out: &mut TileTris,
+) {
     let corners = begin(beam, origin, out);
     let radius = out.cone.radius;
     // The tile's triangles in list order (`4 * block + lane`) and each leaf's end in it.
@@ -372,35 +331,54 @@ pub fn setup_tile(
         }
         ends.push(ents.len() as u32);
     }
-    // Packs of four consecutive triangles (across blocks and leaves), set up together; the
-    // kept ones appended in order, each leaf's run closed when its last triangle is done.
     let mut li = 0usize;
     let mut bx = Aabb::EMPTY;
-    for (pi, pack) in ents.chunks(4).enumerate() {
-        let mut p = [[[0.0f32; 4]; 3]; 3];
+    let mut pa = [[[0.0f32; PACK]; 3]; 3];
+    let mut x = [[0.0f32; PACK]; 13];
+    let mut mn = [[0.0f32; PACK]; 3];
+    let mut mx = [[0.0f32; PACK]; 3];
+    for (pi, pack) in ents.chunks(L::N).enumerate() {
         for (l, &src) in pack.iter().enumerate() {
             let b = &blocks[(src >> 2) as usize];
             let ln = (src & 3) as usize;
             for v in 0..3 {
                 for a in 0..3 {
-                    p[v][a][l] = b.p[v][a].as_ref()[ln];
+                    pa[v][a][l] = b.p[v][a].as_ref()[ln];
                 }
             }
         }
-        let p = p.map(|v| v.map(Vec4::from_array));
-        let s = LazySetup4::new(&p, origin, radius);
-        let (outm, inm) = corners.map_or((0, 0), |c| s.classify(&c));
+        let mut p = [[L::splat(0.0); 3]; 3];
+        for v in 0..3 {
+            for a in 0..3 {
+                p[v][a] = L::load_n(&pa[v][a]);
+            }
+        }
+        let s = LazySetupN::new(&p, origin, radius);
+        let (outm, inm) = match &corners {
+            Some(c) => s.classify(c),
+            None => (0, 0),
+        };
         let valid = (1u32 << pack.len()) - 1;
         let keep = valid & s.ok & !outm;
         out.counts.all_out += (valid & !keep).count_ones() as u64;
         out.counts.all_in += (keep & inm).count_ones() as u64;
         out.counts.partial += (keep & !inm).count_ones() as u64;
-        let x = s.arrays();
-        // Per lane the triangle's box (`Aabb::grow`'s `min` / `max` of its vertices).
-        let mn = [0, 1, 2].map(|a| p[0][a].min(p[1][a]).min(p[2][a]).to_array());
-        let mx = [0, 1, 2].map(|a| p[0][a].max(p[1][a]).max(p[2][a]).to_array());
+        if keep != 0 {
+            s.arrays(&mut x);
+            // Per lane the triangle's box (`Aabb::grow`'s `min` / `max` of its vertices).
+            for a in 0..3 {
+                p[0][a]
+                    .min_or_rhs(p[1][a])
+                    .min_or_rhs(p[2][a])
+                    .write(&mut mn[a]);
+                p[0][a]
+                    .max_or_rhs(p[1][a])
+                    .max_or_rhs(p[2][a])
+                    .write(&mut mx[a]);
+            }
+        }
         for (l, &src) in pack.iter().enumerate() {
-            let q = (4 * pi + l) as u32;
+            let q = (L::N * pi + l) as u32;
             while ends[li] == q {
                 end_run(out, &leaves[li], bx);
                 bx = Aabb::EMPTY;
@@ -586,8 +564,10 @@ mod tests {
                 Cone::of(Some(&corners))
             };
             for (bi, b) in blocks.iter().enumerate() {
-                let s4 = LazySetup4::new(&b.p, o, cone.radius);
+                let s4 = LazySetupN::<Vec4>::new(&b.p, o, cone.radius);
                 let (outm, inm) = s4.classify(&corners);
+                let mut x = [[0.0f32; PACK]; 13];
+                s4.arrays(&mut x);
                 for l in 0..4 {
                     lanes += 1;
                     let v = [b.vertex(l, 0), b.vertex(l, 1), b.vertex(l, 2)];
@@ -600,7 +580,7 @@ mod tests {
                     assert_eq!(class == CornerClass::AllOut, outm >> l & 1 != 0, "{v:?}");
                     assert_eq!(class == CornerClass::AllIn, inm >> l & 1 != 0, "{v:?}");
                     s.all_in = class == CornerClass::AllIn;
-                    let t = lane_of(&s4.arrays(), l, 7, src, s.all_in);
+                    let t = lane_of(&x, l, 7, src, s.all_in);
                     assert_eq!(bits(&s), bits(&t), "{v:?} {o:?}");
                 }
             }
@@ -633,9 +613,19 @@ mod tests {
             } else {
                 beam(&mut rng, o)
             };
-            let (mut a, mut b) = (TileTris::default(), TileTris::default());
-            setup_tile(&blocks, &leaves, &bm, o, true, &mut a);
+            let mut b = TileTris::default();
             setup_tile_scalar(&blocks, &leaves, &bm, o, true, &mut b);
+            for lanes in [SetupLanes::Sse4, SetupLanes::Avx512] {
+                let mut a = TileTris::default();
+                setup_tile_with(lanes, &blocks, &leaves, &bm, o, true, &mut a);
+                same_lists(&a, &b);
+            }
+        }
+    }
+
+    /// `a` and `b` hold the same list: bit for bit, run boxes equal as values.
+    fn same_lists(a: &TileTris, b: &TileTris) {
+        {
             assert_eq!(a.tris.len(), b.tris.len());
             for (x, y) in a.tris.iter().zip(&b.tris) {
                 assert_eq!(bits(x), bits(y));
@@ -648,7 +638,7 @@ mod tests {
                 assert_eq!((x.lo, x.hi), (y.lo, y.hi));
             }
             let c = |t: &TileTris| (t.counts.all_out, t.counts.partial, t.counts.all_in);
-            assert_eq!(c(&a), c(&b));
+            assert_eq!(c(a), c(b));
             assert_eq!(a.runs16.len(), a.segs.len().div_ceil(16));
             for (k, x) in a.segs.iter().enumerate() {
                 let rb16 = &a.runs16[k / 16];
