@@ -246,8 +246,8 @@ pub enum SetupLanes {
 
 /// Sets up every triangle of the tile list `leaves` (near-depth order) for rays from `origin`
 /// within `beam`, dropping all-out triangles (module docs of [`super`]); the lazy set-up
-/// `L::N` triangles at a time in the widest lanes the CPU has ([`LazySetupN`], module docs),
-/// the full one scalar.
+/// `L::N` triangles at a time in the widest lanes the CPU has (`LazySetupN`,
+/// `cast/setup/lazy.rs`), the full one scalar.
 pub fn setup_tile(
     blocks: &[Tri4],
     leaves: &[LeafRef],
