@@ -182,15 +182,25 @@ impl UnitCube {
     /// x86_64) two [`Self::clip_ray_pair`]s, the portable twin.
     #[inline]
     pub fn clip_ray_quad(&self, r: &[Ray; 4]) -> [Option<CubeSegment>; 4] {
+        let mut out = [None; 4];
+        self.clip_ray_quad_into(r, &mut out);
+        out
+    }
+
+    /// [`Self::clip_ray_quad`] written into `out` (the batches' clip phase: the segments go
+    /// straight into the caller's array, not through a returned copy).
+    #[inline]
+    pub fn clip_ray_quad_into(&self, r: &[Ray; 4], out: &mut [Option<CubeSegment>; 4]) {
         #[cfg(target_arch = "x86_64")]
         {
             let ok = |r: &Ray| r.is_valid() && !r.t_min.is_nan() && !r.t_max.is_nan();
             if std::arch::is_x86_feature_detected!("avx") && r.iter().all(ok) {
                 // SAFETY: AVX is available (checked above).
-                return unsafe { self.clip_quad_avx(r) };
+                unsafe { self.clip_quad_avx(r, out) };
+                return;
             }
         }
-        self.clip_ray_quad_twin(r)
+        *out = self.clip_ray_quad_twin(r);
     }
 
     /// The portable twin of [`Self::clip_ray_quad`]: two pairs.
@@ -205,7 +215,7 @@ impl UnitCube {
     /// operations, four lanes wide).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx")]
-    unsafe fn clip_quad_avx(&self, r: &[Ray; 4]) -> [Option<CubeSegment>; 4] {
+    unsafe fn clip_quad_avx(&self, r: &[Ray; 4], out: &mut [Option<CubeSegment>; 4]) {
         use std::arch::x86_64::*;
         // SAFETY (whole body): AVX is enabled for this function; the stores write
         // four-element arrays.
@@ -289,7 +299,8 @@ impl UnitCube {
             );
             let keep = _mm256_movemask_pd(keep);
             if keep == 0 {
-                return [None; 4];
+                *out = [None; 4];
+                return;
             }
             let at = |t: __m256d| {
                 (
@@ -316,16 +327,22 @@ impl UnitCube {
             let mut t = [[0.0f32; 4]; 2];
             _mm_storeu_ps(t[0].as_mut_ptr(), _mm256_cvtpd_ps(lo));
             _mm_storeu_ps(t[1].as_mut_ptr(), _mm256_cvtpd_ps(hi));
-            std::array::from_fn(|i| {
-                (keep & (1 << i) != 0).then(|| CubeSegment {
-                    p0: Vec3::new(p0[0][i], p0[1][i], p0[2][i]),
-                    p1: Vec3::new(p1[0][i], p1[1][i], p1[2][i]),
-                    t0: t[0][i],
-                    t1: t[1][i],
-                    w0: w0[i],
-                    w1: w1[i],
-                })
-            })
+            // A plain loop, not `array::from_fn`: its closure is not inlined into this
+            // `target_feature` function (a call per lane).
+            for (i, o) in out.iter_mut().enumerate() {
+                *o = if keep & (1 << i) != 0 {
+                    Some(CubeSegment {
+                        p0: Vec3::new(p0[0][i], p0[1][i], p0[2][i]),
+                        p1: Vec3::new(p1[0][i], p1[1][i], p1[2][i]),
+                        t0: t[0][i],
+                        t1: t[1][i],
+                        w0: w0[i],
+                        w1: w1[i],
+                    })
+                } else {
+                    None
+                };
+            }
         }
     }
 }
@@ -414,10 +431,15 @@ mod tests {
         for w in rays.windows(4) {
             let w: &[Ray; 4] = w.try_into().unwrap();
             let (quad, twin) = (cube.clip_ray_quad(w), cube.clip_ray_quad_twin(w));
-            for ((r, q), t) in w.iter().zip(&quad).zip(&twin) {
+            // The in-place form overwrites every slot (here pre-filled with a segment).
+            let mut into = [cube.clip_ray(&Ray::new(eye, Vec3::NEG_Z)); 4];
+            assert!(into[0].is_some());
+            cube.clip_ray_quad_into(w, &mut into);
+            for (((r, q), t), i) in w.iter().zip(&quad).zip(&twin).zip(&into) {
                 let one = cube.clip_ray(r);
                 assert_eq!(bits(&one), bits(q), "{r:?}");
                 assert_eq!(bits(&one), bits(t), "{r:?}");
+                assert_eq!(bits(&one), bits(i), "{r:?}");
             }
         }
         for w in rays.windows(2) {

@@ -17,9 +17,10 @@
 //! With one layer in cascade mode (the common case of depth of field) the layer's start is
 //! part of the second phase; with several layers or inpainting the cascade runs ray by ray
 //! after the clip and set-up phases (a deeper layer's window depends on the layer before).
-//! The clip phase takes four rays at a time ([`crate::UnitCube::clip_ray_quad`], SIMD lanes
-//! with every lane doing the one-ray operations). The opt-in f32 clip traces the rays one by
-//! one.
+//! The clip phase takes four rays at a time ([`crate::UnitCube::clip_ray_quad_into`]: SIMD
+//! lanes with every lane doing the one-ray operations, the segments written straight into the
+//! phase's array), and the set-up is built in place in the array the walks read. The opt-in
+//! f32 clip traces the rays one by one.
 
 use parallax_core::Ray;
 
@@ -56,18 +57,18 @@ impl QuadTreeTracer {
         }
     }
 
-    /// The f64 cube clips of at most [`BATCH`] rays, four at a time
+    /// The f64 cube clips of at most [`BATCH`] rays into `segs`, four at a time
     /// ([`crate::UnitCube::clip_ray_quad`]; a remainder in a pair and alone: all the bits of
     /// [`crate::UnitCube::clip_ray`]).
     #[inline(always)]
-    fn clip_phase(&self, rays: &[Ray]) -> [Option<CubeSegment>; BATCH] {
+    fn clip_phase(&self, rays: &[Ray], segs: &mut [Option<CubeSegment>; BATCH]) {
         debug_assert!(rays.len() <= BATCH);
-        let mut segs: [Option<CubeSegment>; BATCH] = [None; BATCH];
         for (seg, ray) in segs.chunks_exact_mut(4).zip(rays.chunks(4)) {
             match ray {
                 [_, _, _, _] => {
                     let quad: &[Ray; 4] = ray.try_into().expect("four rays");
-                    seg.copy_from_slice(&self.cube.clip_ray_quad(quad));
+                    let seg: &mut [Option<CubeSegment>; 4] = seg.try_into().expect("four segments");
+                    self.cube.clip_ray_quad_into(quad, seg);
                 }
                 [r0, r1, r2] => {
                     let [s0, s1] = self.cube.clip_ray_pair(r0, r1);
@@ -84,7 +85,6 @@ impl QuadTreeTracer {
                 _ => {}
             }
         }
-        segs
     }
 
     /// At most [`BATCH`] rays through several layers (or with inpainting): clip, set-up, then
@@ -93,7 +93,8 @@ impl QuadTreeTracer {
     fn cascade_phases(&self, rays: &[Ray], out: &mut [TraceResult], stats: &mut TraceStats) {
         debug_assert!(rays.len() <= BATCH && rays.len() == out.len());
         let t0 = &self.trees[0];
-        let segs = self.clip_phase(rays);
+        let mut segs: [Option<CubeSegment>; BATCH] = [None; BATCH];
+        self.clip_phase(rays, &mut segs);
         let mut setups: [Option<RaySetup>; BATCH] = [None; BATCH];
         for (rs, seg) in setups.iter_mut().zip(&segs) {
             *rs = seg.as_ref().map(|seg| RaySetup::new(seg, t0.wf, t0.hf));
@@ -114,12 +115,14 @@ impl QuadTreeTracer {
         debug_assert!(rays.len() <= BATCH && rays.len() == out.len());
         let t0 = &self.trees[0];
         let q = Query::WHOLE;
-        let segs = self.clip_phase(rays);
+        let mut segs: [Option<CubeSegment>; BATCH] = [None; BATCH];
+        self.clip_phase(rays, &mut segs);
         let mut started: [Option<(RaySetup, Option<LayerStart>)>; BATCH] = [None; BATCH];
         for (st, seg) in started.iter_mut().zip(&segs) {
             if let Some(seg) = seg {
-                let rs = RaySetup::new(seg, t0.wf, t0.hf);
-                *st = Some((rs, t0.layer_start(&rs, &q)));
+                // Set up in place (no copy of the set-up into the array).
+                let (rs, start) = st.insert((RaySetup::new(seg, t0.wf, t0.hf), None));
+                *start = t0.layer_start(rs, &q);
             }
         }
         for (i, (ray, o)) in rays.iter().zip(out.iter_mut()).enumerate() {

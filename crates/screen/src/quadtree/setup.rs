@@ -29,14 +29,11 @@ pub struct RaySetup {
     /// Grid-space origin and direction (`x W`, `y H`).
     pub o: [f32; 2],
     pub dg: [f32; 2],
-    /// Slab origin and reciprocal of the traversal loop: `o` and `inv`, except on an axis
-    /// with `dg == 0`, where they are the start pixel's centre and `+inf` (see
-    /// [`Self::slabs`]).
-    pub(super) so: [f32; 2],
-    pub(super) sinv: [f32; 2],
     /// The slab of both axes as one 4-lane operation (`x` near, `y` near, `x` far, `y`
     /// far; [`Self::slabs`]): per-lane sides `[tie_x, tie_y, 1 - tie_x, 1 - tie_y]`, origins
-    /// `[so_x, so_y, so_x, so_y]` and reciprocals likewise.
+    /// `[so_x, so_y, so_x, so_y]` and reciprocals likewise. The slab origin and reciprocal
+    /// `so`, `sinv` of an axis are `o` and `1 / dg`, except on an axis with `dg == 0`,
+    /// where they are the start pixel's centre and `+inf` ([`Self::new`]).
     pub(super) side4: Vec4,
     pub(super) so4: Vec4,
     pub(super) sinv4: Vec4,
@@ -67,8 +64,6 @@ impl RaySetup {
             d,
             o,
             dg,
-            so: o,
-            sinv: inv,
             side4: Vec4::new(tie[0], tie[1], 1.0 - tie[0], 1.0 - tie[1]),
             so4: Vec4::ZERO,
             sinv4: Vec4::ZERO,
@@ -90,23 +85,24 @@ impl RaySetup {
         // a per-node test. (A node of the padding beyond the image
         // may miss the centre; it is empty, and the parameters the traversal takes from its
         // slab — `t_out` and the exit edge — are the same.)
+        let (mut so, mut sinv) = (o, inv);
         if dg[0] == 0.0 || dg[1] == 0.0 {
-            r.axis_parallel(w, h);
+            r.axis_parallel(w, h, &mut so, &mut sinv);
         }
-        r.so4 = Vec4::new(r.so[0], r.so[1], r.so[0], r.so[1]);
-        r.sinv4 = Vec4::new(r.sinv[0], r.sinv[1], r.sinv[0], r.sinv[1]);
+        r.so4 = Vec4::new(so[0], so[1], so[0], so[1]);
+        r.sinv4 = Vec4::new(sinv[0], sinv[1], sinv[0], sinv[1]);
         r
     }
 
     /// The `dg == 0` axes of [`Self::new`] (common: a horizontal stereo baseline makes
     /// every epipolar segment horizontal).
     #[inline(always)]
-    fn axis_parallel(&mut self, w: f32, h: f32) {
+    fn axis_parallel(&mut self, w: f32, h: f32, so: &mut [f32; 2], sinv: &mut [f32; 2]) {
         for (a, hi) in [(0, w as u32 - 1), (1, h as u32 - 1)] {
             if self.dg[a] == 0.0 {
                 self.pcell[a] = self.cell0(a, hi);
-                self.so[a] = self.pcell[a] as f32 + 0.5;
-                self.sinv[a] = f32::INFINITY;
+                so[a] = self.pcell[a] as f32 + 0.5;
+                sinv[a] = f32::INFINITY;
                 self.par[a] = true;
                 // `floor(o)` for `o >= 0` (saturating: NaN and negatives to 0, which keeps
                 // the descent test below: `o < 0` is below every mid line `m >= 1`).
