@@ -75,6 +75,30 @@ fn main() {
     // `bench dirt`'s configuration (`parallax_path::tracers::DIRT_DEFAULTS`).
     let opts = DirtViewsOptions::TRACING;
     let dirt = DirtTracer::new(DirtViews::build(&scene.mesh, pinhole, eye, &opts).expect("dirt"));
+    if std::env::var_os("DIRT_AB").is_some() {
+        // In-process interleaved timing: the x86-64-v3 copy against the portable twin.
+        let base = dirt.clone().portable();
+        let pass = |t: &DirtTracer| {
+            let mut c = DirtCounters::default();
+            let start = std::time::Instant::now();
+            let mut hits = 0u64;
+            for r in &rays {
+                hits += t.closest_hit_counted(r, &mut c).is_some() as u64;
+            }
+            (start.elapsed().as_secs_f64(), hits)
+        };
+        let (mut sa, mut sb) = (0.0, 0.0);
+        for _ in 0..n {
+            let (a, ha) = pass(&base);
+            let (b, hb) = pass(&dirt);
+            assert_eq!(ha, hb);
+            println!("portable {a:.4} s  v3 {b:.4} s  ratio {:.4}", b / a);
+            sa += a;
+            sb += b;
+        }
+        println!("v3 {} total ratio {:.4}", dirt.is_v3(), sb / sa);
+        return;
+    }
     let mut c = DirtCounters::default();
     let mut h = std::collections::hash_map::DefaultHasher::new();
     let mut hits = 0u64;

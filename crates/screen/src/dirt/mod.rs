@@ -33,7 +33,12 @@
 //!   lower index in its leaf order) and hits closer to the eye than the capture's near plane;
 //! - every loop is bounded: a view's walk by `max_steps` (`view.rs`) derived from its grid size
 //!   (walks cut by it are counted in [`WorldStats::truncated`]); at most seven views per ray;
-//! - invalid rays ([`Ray::is_valid`] false) and rays that leave every view miss.
+//! - invalid rays ([`Ray::is_valid`] false) and rays that leave every view miss;
+//! - the tracer runs one of two compiled copies of the same source, picked once per tracer
+//!   (`Isa::detect`): the build's baseline (the portable twin, [`DirtTracer::portable`]) or,
+//!   where the CPU has them, x86-64-v3's AVX2, BMI1/2 and LZCNT (VEX three-operand float ops,
+//!   `shlx`/`shrx` for the walk's variable shifts; no FMA, and Rust never contracts a multiply
+//!   and an add): the same operations, so the same answers and counters, tested equal.
 //!
 //! | parameter | type | default | meaning |
 //! |---|---|---|---|
@@ -62,7 +67,7 @@ use best::Best;
 pub use best::DirtCounters;
 use slabs::Slabs;
 use tri4::Query;
-use view::{Exit, ViewConsts, ViewRay};
+use view::{Exit, Isa, ViewConsts, ViewRay};
 use walk::{WalkEnd, walk};
 
 /// DIRT behind the world-space tracer interface (module docs).
@@ -75,6 +80,8 @@ pub struct DirtTracer {
     slabs: Vec<Slabs>,
     /// Per cube face, the face across its left, right, top and bottom film edges.
     neighbours: [[usize; 4]; 6],
+    /// The instruction set the tracer runs on (the same results on each).
+    isa: Isa,
 }
 
 impl DirtTracer {
@@ -94,6 +101,7 @@ impl DirtTracer {
             consts,
             slabs,
             neighbours,
+            isa: Isa::detect(),
         }
     }
 
@@ -104,6 +112,22 @@ impl DirtTracer {
             .iter()
             .map(|s| std::mem::size_of_val(s.texels.as_slice()) as u64)
             .sum()
+    }
+
+    /// The same tracer on the build's baseline instruction set: the portable twin of the
+    /// x86-64-v3 copy ([`Self::new`] picks the best copy the CPU runs; both give the same
+    /// answers and counters). For tests and for in-process comparisons of the two.
+    pub fn portable(mut self) -> DirtTracer {
+        self.isa = Isa::Baseline;
+        for vc in &mut self.consts {
+            vc.isa = Isa::Baseline;
+        }
+        self
+    }
+
+    /// Whether this tracer runs its x86-64-v3 copy (AVX2, BMI1/2, LZCNT).
+    pub fn is_v3(&self) -> bool {
+        self.isa == Isa::X86V3
     }
 
     /// The capture this tracer reads.
@@ -128,6 +152,27 @@ impl DirtTracer {
     }
 
     fn trace(&self, ray: &Ray, any: bool, counters: &mut DirtCounters) -> Best {
+        #[cfg(target_arch = "x86_64")]
+        if self.isa == Isa::X86V3 {
+            // SAFETY: `Isa::X86V3` is only chosen when the CPU has the features.
+            return unsafe { self.trace_v3(ray, any, counters) };
+        }
+        self.trace_body(ray, any, counters)
+    }
+
+    /// [`Self::trace`] compiled for x86-64-v3 (the same source and results; `walk`'s module
+    /// docs of its own copy).
+    ///
+    /// # Safety
+    /// The CPU must have the features ([`Isa::detect`]).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
+    unsafe fn trace_v3(&self, ray: &Ray, any: bool, counters: &mut DirtCounters) -> Best {
+        self.trace_body(ray, any, counters)
+    }
+
+    #[inline(always)]
+    fn trace_body(&self, ray: &Ray, any: bool, counters: &mut DirtCounters) -> Best {
         if !ray.is_valid() {
             return Best::NONE;
         }
@@ -146,6 +191,7 @@ impl DirtTracer {
         q.best
     }
 
+    #[inline(always)]
     fn trace_views(&self, ray: &Ray, t0: f32, t1: f32, q: &mut Query) {
         let camera = self.has_camera().then(|| {
             let vc = &self.consts[0];
@@ -174,6 +220,7 @@ impl DirtTracer {
     /// edge's plane, so the next interval starts exactly where the last one ended). Where that
     /// does not continue the interval without a gap (a start or exit on a face corner within
     /// rounding, or the near plane), every face is clipped instead ([`Self::trace_cube_all`]).
+    #[inline(always)]
     fn trace_cube(&self, ray: &Ray, s0: f32, s1: f32, q: &mut Query) -> WalkEnd {
         if !(s0 < s1) {
             return WalkEnd::Continue;

@@ -73,9 +73,37 @@ impl<'a> Query<'a> {
     }
 
     /// Tests the triangles `ids` not tested lately, four at a time; true when an occlusion
-    /// query found a hit.
-    #[inline]
-    pub fn test(&mut self, ids: &[u32]) -> bool {
+    /// query found a hit. `V3`: run the copy compiled for x86-64-v3 (the caller runs on a CPU
+    /// that has it: the walk's copy of the same name); the same source and results.
+    #[inline(always)]
+    pub fn test<const V3: bool>(&mut self, ids: &[u32]) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if V3 {
+            // SAFETY: `V3` is only set in the walk's x86-64-v3 copy, chosen by `Isa::detect`.
+            return unsafe { self.test_v3(ids) };
+        }
+        self.test_baseline(ids)
+    }
+
+    /// [`Self::test`] for the build's baseline instruction set (the portable twin).
+    #[inline(never)]
+    fn test_baseline(&mut self, ids: &[u32]) -> bool {
+        self.test_body(ids)
+    }
+
+    /// [`Self::test`] compiled for x86-64-v3 (AVX2, BMI1/2, LZCNT; no FMA).
+    ///
+    /// # Safety
+    /// The CPU must have those features.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(never)]
+    #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
+    unsafe fn test_v3(&mut self, ids: &[u32]) -> bool {
+        self.test_body(ids)
+    }
+
+    #[inline(always)]
+    fn test_body(&mut self, ids: &[u32]) -> bool {
         let mut block = [0u32; 4];
         let mut n = 0;
         for &id in ids {
@@ -232,6 +260,7 @@ fn gather_sse(t: [&DirtTri; 4]) -> [[Vec4; 3]; 3] {
 
 #[cfg(test)]
 mod tests {
+    use super::super::view::Isa;
     use super::*;
     use parallax_core::Ray;
     use parallax_core::sampling::Rng;
@@ -277,7 +306,7 @@ mod tests {
 
     /// The 4-wide test and its scalar twin give the same answer (bit for bit) on random
     /// triangle lists, including shared edges and vertices (exactly-zero edge functions) and
-    /// occlusion queries.
+    /// occlusion queries; and so does the x86-64-v3 copy where the CPU runs it.
     #[test]
     fn four_wide_equals_scalar() {
         let mut rng = Rng::for_pixel(7, 1, 2, 3);
@@ -320,13 +349,26 @@ mod tests {
                 rays.push(Ray::new(v(3.0), d.normalize()));
             }
         }
+        let v3 = Isa::detect() == Isa::X86V3;
         let mut hits = 0;
         for ray in &rays {
             for any in [false, true] {
                 for len in [1, 3, 4, 5, 8, 13, ids.len()] {
                     let wt = WatertightRay::new(ray);
                     let (mut a, mut b) = (Query::new(wt, &tris, any), Query::new(wt, &tris, any));
-                    let (ra, rb) = (a.test(&ids[..len]), b.test_scalar(&ids[..len]));
+                    let (ra, rb) = (a.test::<false>(&ids[..len]), b.test_scalar(&ids[..len]));
+                    if v3 {
+                        // The x86-64-v3 copy: the same answer and counters bit for bit.
+                        let mut c = Query::new(wt, &tris, any);
+                        let rc = c.test::<true>(&ids[..len]);
+                        assert_eq!(ra, rc);
+                        let (x, y) = (a.best, c.best);
+                        assert_eq!(
+                            (x.prim, x.t.to_bits(), x.u.to_bits(), x.v.to_bits()),
+                            (y.prim, y.t.to_bits(), y.u.to_bits(), y.v.to_bits()),
+                        );
+                        assert_eq!(a.counters, c.counters);
+                    }
                     if any {
                         assert_eq!(ra, rb);
                         assert_eq!(a.best.found(), b.best.found());

@@ -43,6 +43,33 @@ pub(crate) struct ViewConsts {
     pub level_width: [u32; MAX_LEVELS],
     /// Bound on loop iterations of one traversal of this view.
     pub max_steps: u32,
+    /// The instruction set the walk of this view runs on.
+    pub isa: Isa,
+}
+
+/// Which compiled copy of the walk runs (`walk`): the same source and results either way.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Isa {
+    /// The build's baseline (the portable twin).
+    Baseline,
+    /// x86-64 with AVX2, BMI1/2 and LZCNT.
+    X86V3,
+}
+
+impl Isa {
+    /// The best copy this CPU runs.
+    pub fn detect() -> Isa {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("bmi1")
+            && std::arch::is_x86_feature_detected!("bmi2")
+            && std::arch::is_x86_feature_detected!("lzcnt")
+            && std::arch::is_x86_feature_detected!("popcnt")
+        {
+            return Isa::X86V3;
+        }
+        Isa::Baseline
+    }
 }
 
 impl ViewConsts {
@@ -83,6 +110,7 @@ impl ViewConsts {
             level_offset: std::array::from_fn(|k| levels.get(k).map_or(0, |l| l.offset as u32)),
             level_width: std::array::from_fn(|k| levels.get(k).map_or(0, |l| l.width)),
             max_steps,
+            isa: Isa::detect(),
         }
     }
 

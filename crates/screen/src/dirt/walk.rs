@@ -66,7 +66,7 @@ use parallax_raster::dirt::{DirtCapture, bucket_index};
 
 use super::slabs::Slabs;
 use super::tri4::Query;
-use super::view::{MAX_LEVELS, ViewConsts, ViewRay};
+use super::view::{Isa, MAX_LEVELS, ViewConsts, ViewRay};
 
 /// How a walk ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -212,7 +212,23 @@ pub(crate) fn walk(
     let (ys, y_up) = Axis::new(seg.y, seg.y + seg.dy);
     // The loop specialised on the ray's film direction and on the sign of `dw` (fewer live
     // values and no selects per texel).
-    let f = match (x_up, y_up, seg.dw < 0.0) {
+    let dir = (x_up, y_up, seg.dw < 0.0);
+    #[cfg(target_arch = "x86_64")]
+    if vc.isa == Isa::X86V3 {
+        let f = match dir {
+            (false, false, false) => walk_dir_v3::<false, false, false>,
+            (false, false, true) => walk_dir_v3::<false, false, true>,
+            (false, true, false) => walk_dir_v3::<false, true, false>,
+            (false, true, true) => walk_dir_v3::<false, true, true>,
+            (true, false, false) => walk_dir_v3::<true, false, false>,
+            (true, false, true) => walk_dir_v3::<true, false, true>,
+            (true, true, false) => walk_dir_v3::<true, true, false>,
+            (true, true, true) => walk_dir_v3::<true, true, true>,
+        };
+        // SAFETY: `Isa::X86V3` is only chosen when the CPU has the features (`Isa::detect`).
+        return unsafe { f(vc, cap, slabs, r, &seg, xs, ys, q) };
+    }
+    let f = match dir {
         (false, false, false) => walk_dir::<false, false, false>,
         (false, false, true) => walk_dir::<false, false, true>,
         (false, true, false) => walk_dir::<false, true, false>,
@@ -226,9 +242,52 @@ pub(crate) fn walk(
 }
 
 /// The walk of [`walk`] for one film direction (`UX`, `UY`: the ray moves towards higher
-/// cell indices) and sign of `dw` (`W_FALLS`: `w` decreases along the segment).
+/// cell indices) and sign of `dw` (`W_FALLS`: `w` decreases along the segment), compiled for
+/// the build's baseline instruction set (the portable twin of [`walk_dir_v3`]).
 #[inline(never)]
+#[allow(clippy::too_many_arguments)]
 fn walk_dir<const UX: bool, const UY: bool, const W_FALLS: bool>(
+    vc: &ViewConsts,
+    cap: &DirtCapture,
+    slabs: &Slabs,
+    r: &ViewRay,
+    seg: &Segment,
+    xs: Axis,
+    ys: Axis,
+    q: &mut Query,
+) -> WalkEnd {
+    walk_body::<UX, UY, W_FALLS, false>(vc, cap, slabs, r, seg, xs, ys, q)
+}
+
+/// [`walk_dir`] compiled for x86-64-v3's integer and vector extensions (AVX2, BMI1/2, LZCNT):
+/// the same source, so the same operations and results (Rust never contracts a multiply and
+/// an add into an FMA, and FMA is not enabled); the variable shifts of the texel and slab
+/// arithmetic become `shlx`/`shrx` (no `cl` shuffles), the float ops three-operand VEX forms.
+///
+/// # Safety
+/// The CPU must have the enabled features ([`Isa::detect`]).
+#[cfg(target_arch = "x86_64")]
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+#[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
+unsafe fn walk_dir_v3<const UX: bool, const UY: bool, const W_FALLS: bool>(
+    vc: &ViewConsts,
+    cap: &DirtCapture,
+    slabs: &Slabs,
+    r: &ViewRay,
+    seg: &Segment,
+    xs: Axis,
+    ys: Axis,
+    q: &mut Query,
+) -> WalkEnd {
+    walk_body::<UX, UY, W_FALLS, true>(vc, cap, slabs, r, seg, xs, ys, q)
+}
+
+/// The loop of [`walk_dir`] (inlined into each instruction-set copy; `V3`: the copy of
+/// [`walk_dir_v3`], whose bucket tracing calls the triangle tests' x86-64-v3 copy).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn walk_body<const UX: bool, const UY: bool, const W_FALLS: bool, const V3: bool>(
     vc: &ViewConsts,
     cap: &DirtCapture,
     slabs: &Slabs,
@@ -294,7 +353,7 @@ fn walk_dir<const UX: bool, const UY: bool, const W_FALLS: bool>(
                     buckets: (b_a, b_b),
                     l_exit,
                 };
-                if trace_cell(vc, cap, r, seg, &cell, &mut hit_l, q) {
+                if trace_cell::<V3>(vc, cap, r, seg, &cell, &mut hit_l, q) {
                     end = Some(WalkEnd::Done);
                     break;
                 }
@@ -378,7 +437,7 @@ struct Cell {
 /// true when the answer is known. Inlined into the walk's loop (a call would store and reload
 /// the walk's state around it: every XMM register is caller-saved).
 #[inline(always)]
-fn trace_cell(
+fn trace_cell<const V3: bool>(
     vc: &ViewConsts,
     cap: &DirtCapture,
     r: &ViewRay,
@@ -397,7 +456,7 @@ fn trace_cell(
         if any_bucket(c.mask, b, b, nb) {
             q.counters.buckets += 1;
             let k = base + b as usize;
-            if q.test(&ids[offsets[k] as usize..offsets[k + 1] as usize]) {
+            if q.test::<V3>(&ids[offsets[k] as usize..offsets[k + 1] as usize]) {
                 return true;
             }
         }
