@@ -73,34 +73,36 @@ fn compare(bvh: &Bvh, dirt: &DirtTracer, rays: &[Ray]) -> Agreement {
     a
 }
 
-/// The tracer's instruction-set copies (`DirtTracer::portable` against the copy `new` picks)
-/// give bit-identical answers and identical counters on every ray, closest hit and occlusion.
-/// Returns the rays compared.
-fn twins_agree(dirt: &DirtTracer, rays: &[Ray]) -> usize {
-    let base = dirt.clone().portable();
-    for ray in rays {
-        let (mut ca, mut cb) = (DirtCounters::default(), DirtCounters::default());
-        let key = |h: Option<WorldHit>| {
-            h.map(|h| {
-                (
-                    h.prim,
-                    h.t.to_bits(),
-                    h.barycentrics.x.to_bits(),
-                    h.barycentrics.y.to_bits(),
-                )
-            })
-        };
-        let a = key(dirt.closest_hit_counted(ray, &mut ca));
-        let b = key(base.closest_hit_counted(ray, &mut cb));
-        assert_eq!(a, b, "{ray:?}");
-        assert_eq!(
-            dirt.occluded_counted(ray, &mut ca),
-            base.occluded_counted(ray, &mut cb),
-            "{ray:?}"
-        );
-        assert_eq!(ca, cb, "{ray:?}");
+/// The tracer's instruction-set copies (`DirtTracer::copies`: the portable twin and every copy
+/// the CPU runs) give bit-identical answers and identical counters on every ray, closest hit
+/// and occlusion.
+fn twins_agree(dirt: &DirtTracer, rays: &[Ray]) {
+    let copies = dirt.copies();
+    let key = |h: Option<WorldHit>| {
+        h.map(|h| {
+            (
+                h.prim,
+                h.t.to_bits(),
+                h.barycentrics.x.to_bits(),
+                h.barycentrics.y.to_bits(),
+            )
+        })
+    };
+    let base = &copies[0].1;
+    for (name, copy) in &copies[1..] {
+        for ray in rays {
+            let (mut ca, mut cb) = (DirtCounters::default(), DirtCounters::default());
+            let a = key(copy.closest_hit_counted(ray, &mut ca));
+            let b = key(base.closest_hit_counted(ray, &mut cb));
+            assert_eq!(a, b, "{name} {ray:?}");
+            assert_eq!(
+                copy.occluded_counted(ray, &mut ca),
+                base.occluded_counted(ray, &mut cb),
+                "{name} {ray:?}"
+            );
+            assert_eq!(ca, cb, "{name} {ray:?}");
+        }
     }
-    rays.len()
 }
 
 fn soup(tris: &[[[f32; 3]; 3]]) -> TriangleMesh {

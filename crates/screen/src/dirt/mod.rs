@@ -34,11 +34,12 @@
 //! - every loop is bounded: a view's walk by `max_steps` (`view.rs`) derived from its grid size
 //!   (walks cut by it are counted in [`WorldStats::truncated`]); at most seven views per ray;
 //! - invalid rays ([`Ray::is_valid`] false) and rays that leave every view miss;
-//! - the tracer runs one of two compiled copies of the same source, picked once per tracer
-//!   (`Isa::detect`): the build's baseline (the portable twin, [`DirtTracer::portable`]) or,
-//!   where the CPU has them, x86-64-v3's AVX2, BMI1/2 and LZCNT (VEX three-operand float ops,
-//!   `shlx`/`shrx` for the walk's variable shifts; no FMA, and Rust never contracts a multiply
-//!   and an add): the same operations, so the same answers and counters, tested equal.
+//! - the tracer runs one of three compiled copies of the same source, picked once per tracer
+//!   (`Isa::detect`): the build's baseline (the portable twin), or where the CPU has them
+//!   x86-64-v3's AVX2, BMI1/2 and LZCNT (VEX three-operand float ops, `shlx`/`shrx` for the
+//!   walk's variable shifts), or those and AVX-512 F/VL/BW/DQ (32 vector registers). No FMA is
+//!   enabled and Rust never contracts a multiply and an add: the same operations, so the same
+//!   answers and counters on each ([`DirtTracer::copies`], tested equal).
 //!
 //! | parameter | type | default | meaning |
 //! |---|---|---|---|
@@ -114,20 +115,26 @@ impl DirtTracer {
             .sum()
     }
 
-    /// The same tracer on the build's baseline instruction set: the portable twin of the
-    /// x86-64-v3 copy ([`Self::new`] picks the best copy the CPU runs; both give the same
-    /// answers and counters). For tests and for in-process comparisons of the two.
-    pub fn portable(mut self) -> DirtTracer {
-        self.isa = Isa::Baseline;
-        for vc in &mut self.consts {
-            vc.isa = Isa::Baseline;
-        }
-        self
-    }
-
-    /// Whether this tracer runs its x86-64-v3 copy (AVX2, BMI1/2, LZCNT).
-    pub fn is_v3(&self) -> bool {
-        self.isa == Isa::X86V3
+    /// The same tracer on every compiled copy this CPU runs (module docs), the build's
+    /// baseline (the portable twin) first, the copy [`Self::new`] picks last: the same answers
+    /// and counters on each. For tests and for in-process comparisons of the copies.
+    pub fn copies(&self) -> Vec<(&'static str, DirtTracer)> {
+        Isa::available()
+            .into_iter()
+            .map(|isa| {
+                let mut t = self.clone();
+                t.isa = isa;
+                for vc in &mut t.consts {
+                    vc.isa = isa;
+                }
+                let name = match isa {
+                    Isa::Baseline => "baseline",
+                    Isa::X86V3 => "x86-64-v3",
+                    Isa::X86V4 => "x86-64-v3+avx512",
+                };
+                (name, t)
+            })
+            .collect()
     }
 
     /// The capture this tracer reads.
@@ -153,21 +160,32 @@ impl DirtTracer {
 
     fn trace(&self, ray: &Ray, any: bool, counters: &mut DirtCounters) -> Best {
         #[cfg(target_arch = "x86_64")]
-        if self.isa == Isa::X86V3 {
-            // SAFETY: `Isa::X86V3` is only chosen when the CPU has the features.
-            return unsafe { self.trace_v3(ray, any, counters) };
+        match self.isa {
+            // SAFETY: `Isa::detect` chose the copy: the CPU has its features.
+            Isa::X86V4 => return unsafe { self.trace_v4(ray, any, counters) },
+            Isa::X86V3 => return unsafe { self.trace_v3(ray, any, counters) },
+            Isa::Baseline => {}
         }
         self.trace_body(ray, any, counters)
     }
 
-    /// [`Self::trace`] compiled for x86-64-v3 (the same source and results; `walk`'s module
-    /// docs of its own copy).
+    /// [`Self::trace`] compiled for x86-64-v3 (module docs).
     ///
     /// # Safety
-    /// The CPU must have the features ([`Isa::detect`]).
+    /// The CPU must have the features (`Isa::detect`).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
     unsafe fn trace_v3(&self, ray: &Ray, any: bool, counters: &mut DirtCounters) -> Best {
+        self.trace_body(ray, any, counters)
+    }
+
+    /// [`Self::trace`] compiled for x86-64-v3 and AVX-512 F/VL/BW/DQ (module docs).
+    ///
+    /// # Safety
+    /// The CPU must have the features (`Isa::detect`).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt,avx512f,avx512vl,avx512bw,avx512dq")]
+    unsafe fn trace_v4(&self, ray: &Ray, any: bool, counters: &mut DirtCounters) -> Best {
         self.trace_body(ray, any, counters)
     }
 

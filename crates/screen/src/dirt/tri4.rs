@@ -26,6 +26,7 @@ use parallax_core::math::{WatertightRay, shear_vertex, watertight_lanes};
 use parallax_raster::dirt::DirtTri;
 
 use super::best::{Best, DirtCounters};
+use super::view::Isa;
 
 /// Slots of the per-ray mailbox (a power of two).
 const MAILBOX: usize = 64;
@@ -73,14 +74,19 @@ impl<'a> Query<'a> {
     }
 
     /// Tests the triangles `ids` not tested lately, four at a time; true when an occlusion
-    /// query found a hit. `V3`: run the copy compiled for x86-64-v3 (the caller runs on a CPU
-    /// that has it: the walk's copy of the same name); the same source and results.
+    /// query found a hit. `ISA`: the `Isa` of the copy to run (the caller's: the CPU has it);
+    /// the same source and results on each.
     #[inline(always)]
-    pub fn test<const V3: bool>(&mut self, ids: &[u32]) -> bool {
+    pub fn test<const ISA: u8>(&mut self, ids: &[u32]) -> bool {
         #[cfg(target_arch = "x86_64")]
-        if V3 {
-            // SAFETY: `V3` is only set in the walk's x86-64-v3 copy, chosen by `Isa::detect`.
-            return unsafe { self.test_v3(ids) };
+        {
+            // SAFETY: the walk's copies pass their own `Isa`, chosen by `Isa::detect`.
+            if ISA == Isa::X86V4 as u8 {
+                return unsafe { self.test_v4(ids) };
+            }
+            if ISA == Isa::X86V3 as u8 {
+                return unsafe { self.test_v3(ids) };
+            }
         }
         self.test_baseline(ids)
     }
@@ -99,6 +105,17 @@ impl<'a> Query<'a> {
     #[inline(never)]
     #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
     unsafe fn test_v3(&mut self, ids: &[u32]) -> bool {
+        self.test_body(ids)
+    }
+
+    /// [`Self::test`] compiled for x86-64-v3 and AVX-512 F/VL/BW/DQ.
+    ///
+    /// # Safety
+    /// The CPU must have those features.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(never)]
+    #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt,avx512f,avx512vl,avx512bw,avx512dq")]
+    unsafe fn test_v4(&mut self, ids: &[u32]) -> bool {
         self.test_body(ids)
     }
 
@@ -260,7 +277,6 @@ fn gather_sse(t: [&DirtTri; 4]) -> [[Vec4; 3]; 3] {
 
 #[cfg(test)]
 mod tests {
-    use super::super::view::Isa;
     use super::*;
     use parallax_core::Ray;
     use parallax_core::sampling::Rng;
@@ -349,18 +365,21 @@ mod tests {
                 rays.push(Ray::new(v(3.0), d.normalize()));
             }
         }
-        let v3 = Isa::detect() == Isa::X86V3;
         let mut hits = 0;
         for ray in &rays {
             for any in [false, true] {
                 for len in [1, 3, 4, 5, 8, 13, ids.len()] {
                     let wt = WatertightRay::new(ray);
                     let (mut a, mut b) = (Query::new(wt, &tris, any), Query::new(wt, &tris, any));
-                    let (ra, rb) = (a.test::<false>(&ids[..len]), b.test_scalar(&ids[..len]));
-                    if v3 {
-                        // The x86-64-v3 copy: the same answer and counters bit for bit.
+                    let (ra, rb) = (a.test::<0>(&ids[..len]), b.test_scalar(&ids[..len]));
+                    for isa in Isa::available() {
+                        // Every copy the CPU runs: the same answer and counters bit for bit.
                         let mut c = Query::new(wt, &tris, any);
-                        let rc = c.test::<true>(&ids[..len]);
+                        let rc = match isa {
+                            Isa::Baseline => c.test::<0>(&ids[..len]),
+                            Isa::X86V3 => c.test::<1>(&ids[..len]),
+                            Isa::X86V4 => c.test::<2>(&ids[..len]),
+                        };
                         assert_eq!(ra, rc);
                         let (x, y) = (a.best, c.best);
                         assert_eq!(
