@@ -581,3 +581,34 @@ fn views_are_deterministic_across_thread_counts() {
     }
     assert_eq!(a.views().count(), 7);
 }
+
+/// The views are set up and rasterized together: each view is billed that stage's wall time
+/// in proportion to its fragments, so the views' `setup_ms` are proportional to their
+/// fragment counts (and the camera view, with most fragments, gets the largest share).
+#[test]
+fn setup_time_is_billed_by_fragments() {
+    let scene = Scene::load("atrium").unwrap();
+    let desc = scene.camera(None).unwrap();
+    let cam = Pinhole::new(&desc, 256, 128).unwrap();
+    let o = DirtViewsOptions {
+        face_size: 32,
+        capture: opts(1, 8),
+    };
+    let views = DirtViews::build(&scene.mesh, Some(&cam), desc.eye, &o).unwrap();
+    let st: Vec<_> = views.views().map(|v| v.stats().clone()).collect();
+    let (ms, frags): (f64, u64) = st
+        .iter()
+        .map(|s| (s.setup_ms, s.fragments))
+        .fold((0.0, 0), |(a, b), (m, f)| (a + m, b + f));
+    assert!(ms > 0.0 && frags > 0);
+    for s in &st {
+        let want = ms * s.fragments as f64 / frags as f64;
+        assert!(
+            (s.setup_ms - want).abs() <= 1e-9 * ms,
+            "{} ms for {} of {frags} fragments (want {want})",
+            s.setup_ms,
+            s.fragments
+        );
+    }
+    assert!(st[0].fragments > st[1].fragments && st[0].setup_ms > st[1].setup_ms);
+}

@@ -75,6 +75,49 @@ fn main() {
     // `bench dirt`'s configuration (`parallax_path::tracers::DIRT_DEFAULTS`).
     let opts = DirtViewsOptions::TRACING;
     let dirt = DirtTracer::new(DirtViews::build(&scene.mesh, pinhole, eye, &opts).expect("dirt"));
+    if std::env::var_os("DIRT_AB").is_some() {
+        // In-process interleaved timing of the tracer's compiled copies (the portable twin
+        // first), each pass over all rays; ratios against the portable twin.
+        let copies = dirt.copies();
+        // Chunks of 4096 rays, every copy in turn on each chunk (rotating who goes first), so
+        // that load from other processes falls on all copies alike.
+        let chunk = |t: &DirtTracer, rays: &[Ray]| {
+            let mut c = DirtCounters::default();
+            let start = std::time::Instant::now();
+            let mut hits = 0u64;
+            for r in rays {
+                hits += t.closest_hit_counted(r, &mut c).is_some() as u64;
+            }
+            (start.elapsed().as_secs_f64(), hits)
+        };
+        let mut sums = vec![0.0; copies.len()];
+        for pass in 0..n as usize {
+            let before = sums.clone();
+            for (i, part) in rays.chunks(4096).enumerate() {
+                let mut first = None;
+                for j in 0..copies.len() {
+                    let k = (i + j + pass) % copies.len();
+                    let (s, hits) = chunk(&copies[k].1, part);
+                    assert_eq!(*first.get_or_insert(hits), hits);
+                    sums[k] += s;
+                }
+            }
+            let line: Vec<String> = copies
+                .iter()
+                .enumerate()
+                .map(|(k, (name, _))| format!("{name} {:.4} s", sums[k] - before[k]))
+                .collect();
+            println!("{}", line.join("  "));
+        }
+        for (k, (name, _)) in copies.iter().enumerate() {
+            println!(
+                "{name}: total {:.4} s, ratio {:.4}",
+                sums[k],
+                sums[k] / sums[0]
+            );
+        }
+        return;
+    }
     let mut c = DirtCounters::default();
     let mut h = std::collections::hash_map::DefaultHasher::new();
     let mut hits = 0u64;

@@ -8,11 +8,11 @@ use glam::{Mat3, Vec2, Vec3};
 use parallax_bvh::Bvh;
 use parallax_core::math::Frame;
 use parallax_core::sampling::{Rng, warp};
-use parallax_core::{Ray, WorldStats, WorldTracer};
+use parallax_core::{Ray, WorldHit, WorldStats, WorldTracer};
 use parallax_raster::dirt::{DirtError, DirtOptions, DirtViews, DirtViewsOptions};
 use parallax_scene::camera::{CameraFrame, CameraModel, Pinhole};
 use parallax_scene::{CameraDesc, Scene, TriangleMesh};
-use parallax_screen::DirtTracer;
+use parallax_screen::{DirtCounters, DirtTracer};
 use proptest::prelude::*;
 
 /// How DIRT's answers compare with the BVH's over a set of rays.
@@ -71,6 +71,38 @@ fn compare(bvh: &Bvh, dirt: &DirtTracer, rays: &[Ray]) -> Agreement {
     }
     a.truncated = stats.truncated;
     a
+}
+
+/// The tracer's instruction-set copies (`DirtTracer::copies`: the portable twin and every copy
+/// the CPU runs) give bit-identical answers and identical counters on every ray, closest hit
+/// and occlusion.
+fn twins_agree(dirt: &DirtTracer, rays: &[Ray]) {
+    let copies = dirt.copies();
+    let key = |h: Option<WorldHit>| {
+        h.map(|h| {
+            (
+                h.prim,
+                h.t.to_bits(),
+                h.barycentrics.x.to_bits(),
+                h.barycentrics.y.to_bits(),
+            )
+        })
+    };
+    let base = &copies[0].1;
+    for (name, copy) in &copies[1..] {
+        for ray in rays {
+            let (mut ca, mut cb) = (DirtCounters::default(), DirtCounters::default());
+            let a = key(copy.closest_hit_counted(ray, &mut ca));
+            let b = key(base.closest_hit_counted(ray, &mut cb));
+            assert_eq!(a, b, "{name} {ray:?}");
+            assert_eq!(
+                copy.occluded_counted(ray, &mut ca),
+                base.occluded_counted(ray, &mut cb),
+                "{name} {ray:?}"
+            );
+            assert_eq!(ca, cb, "{name} {ray:?}");
+        }
+    }
 }
 
 fn soup(tris: &[[[f32; 3]; 3]]) -> TriangleMesh {
@@ -149,6 +181,7 @@ proptest! {
             };
             rays.push(ray);
         }
+        twins_agree(&dirt, &rays);
         let a = compare(&bvh, &dirt, &rays);
         prop_assert!(a.differ.is_empty(), "{} differences, first: {}", a.differ.len(), a.differ[0]);
         prop_assert_eq!(a.occlusion_differ, 0);
@@ -230,6 +263,7 @@ fn check_scene(name: &str, scene: &Scene, desc: &CameraDesc, opts: &DirtViewsOpt
     let views = DirtViews::build(&scene.mesh, Some(&cam), desc.eye, opts).unwrap();
     let dirt = DirtTracer::new(views);
     for (kind, rays) in ray_sets(scene, &bvh, &cam) {
+        twins_agree(&dirt, &rays);
         let a = compare(&bvh, &dirt, &rays);
         println!(
             "{name} {kind}: {} rays, {:.5} same, {} ties, {} differ, {} occlusion differ",

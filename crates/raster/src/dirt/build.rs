@@ -220,8 +220,8 @@ fn shares(wall: f64, work: &[f64]) -> Vec<f64> {
 /// rasterization started at `t_start`). The fill is one parallel loop over every band of
 /// every view (the camera view's bands first: they are the largest), the assembly and the
 /// mip chain run over the views in parallel. Each stage's wall time is split over the views
-/// in proportion to their work in it (the setup's evenly), so the views' `total_ms` add up to
-/// the build's.
+/// in proportion to their work in it (the setup and rasterization's by the views' fragments),
+/// so the views' `total_ms` add up to the build's.
 fn finish_views(
     mesh: &TriangleMesh,
     views: &[Pinhole],
@@ -260,6 +260,13 @@ fn finish_views(
         .iter()
         .map(|v| v.iter().map(|c| c.in_view).sum())
         .collect();
+    // The setup and rasterization ran for all views at once: their wall time split by each
+    // view's fragments (the rasterization's output, most of its work).
+    let frag_work: Vec<f64> = frags
+        .iter()
+        .map(|v| v.iter().map(|c| c.frags.len() as f64).sum())
+        .collect();
+    let setup_ms = shares(setup_ms, &frag_work);
     drop(frags);
 
     // Per view (views in parallel): assemble the flat arrays, Mipmap Depth.
@@ -288,7 +295,7 @@ fn finish_views(
         .enumerate()
         .map(|(v, (mut cap, _, _))| {
             let st = &mut cap.stats;
-            st.setup_ms = setup_ms / nv as f64;
+            st.setup_ms = setup_ms[v];
             st.fill_ms = fill_ms[v];
             st.assemble_ms = split[2 * v];
             st.mip_ms = split[2 * v + 1];

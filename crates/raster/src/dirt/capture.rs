@@ -80,7 +80,9 @@ pub struct DirtStats {
     pub nonempty_cells: u64,
     pub bytes: u64,
     /// Triangle setup (transform, near/guard clip, projection) and the rasterization right
-    /// after it (cells and depth ranges of every triangle, kept per screen band).
+    /// after it (cells and depth ranges of every triangle, kept per screen band). Views built
+    /// together (`DirtViews`) share this stage: each is billed its wall time in proportion to
+    /// the view's fragments.
     pub setup_ms: f64,
     /// Depth bounds and bucket fill (parallel over bands).
     pub fill_ms: f64,

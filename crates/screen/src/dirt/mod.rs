@@ -33,7 +33,13 @@
 //!   lower index in its leaf order) and hits closer to the eye than the capture's near plane;
 //! - every loop is bounded: a view's walk by `max_steps` (`view.rs`) derived from its grid size
 //!   (walks cut by it are counted in [`WorldStats::truncated`]); at most seven views per ray;
-//! - invalid rays ([`Ray::is_valid`] false) and rays that leave every view miss.
+//! - invalid rays ([`Ray::is_valid`] false) and rays that leave every view miss;
+//! - the tracer runs one of three compiled copies of the same source, picked once per tracer
+//!   (`Isa::detect`): the build's baseline (the portable twin), or where the CPU has them
+//!   x86-64-v3's AVX2, BMI1/2 and LZCNT (VEX three-operand float ops, `shlx`/`shrx` for the
+//!   walk's variable shifts), or those and AVX-512 F/VL/BW/DQ (32 vector registers). No FMA is
+//!   enabled and Rust never contracts a multiply and an add: the same operations, so the same
+//!   answers and counters on each ([`DirtTracer::copies`], tested equal).
 //!
 //! | parameter | type | default | meaning |
 //! |---|---|---|---|
@@ -62,7 +68,7 @@ use best::Best;
 pub use best::DirtCounters;
 use slabs::Slabs;
 use tri4::Query;
-use view::{Exit, ViewConsts, ViewRay};
+use view::{Exit, Isa, ViewConsts, ViewRay};
 use walk::{WalkEnd, walk};
 
 /// DIRT behind the world-space tracer interface (module docs).
@@ -75,6 +81,8 @@ pub struct DirtTracer {
     slabs: Vec<Slabs>,
     /// Per cube face, the face across its left, right, top and bottom film edges.
     neighbours: [[usize; 4]; 6],
+    /// The instruction set the tracer runs on (the same results on each).
+    isa: Isa,
 }
 
 impl DirtTracer {
@@ -94,6 +102,7 @@ impl DirtTracer {
             consts,
             slabs,
             neighbours,
+            isa: Isa::detect(),
         }
     }
 
@@ -104,6 +113,28 @@ impl DirtTracer {
             .iter()
             .map(|s| std::mem::size_of_val(s.texels.as_slice()) as u64)
             .sum()
+    }
+
+    /// The same tracer on every compiled copy this CPU runs (module docs), the build's
+    /// baseline (the portable twin) first, the copy [`Self::new`] picks last: the same answers
+    /// and counters on each. For tests and for in-process comparisons of the copies.
+    pub fn copies(&self) -> Vec<(&'static str, DirtTracer)> {
+        Isa::available()
+            .into_iter()
+            .map(|isa| {
+                let mut t = self.clone();
+                t.isa = isa;
+                for vc in &mut t.consts {
+                    vc.isa = isa;
+                }
+                let name = match isa {
+                    Isa::Baseline => "baseline",
+                    Isa::X86V3 => "x86-64-v3",
+                    Isa::X86V4 => "x86-64-v3+avx512",
+                };
+                (name, t)
+            })
+            .collect()
     }
 
     /// The capture this tracer reads.
@@ -128,6 +159,38 @@ impl DirtTracer {
     }
 
     fn trace(&self, ray: &Ray, any: bool, counters: &mut DirtCounters) -> Best {
+        #[cfg(target_arch = "x86_64")]
+        match self.isa {
+            // SAFETY: `Isa::detect` chose the copy: the CPU has its features.
+            Isa::X86V4 => return unsafe { self.trace_v4(ray, any, counters) },
+            Isa::X86V3 => return unsafe { self.trace_v3(ray, any, counters) },
+            Isa::Baseline => {}
+        }
+        self.trace_body(ray, any, counters)
+    }
+
+    /// [`Self::trace`] compiled for x86-64-v3 (module docs).
+    ///
+    /// # Safety
+    /// The CPU must have the features (`Isa::detect`).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
+    unsafe fn trace_v3(&self, ray: &Ray, any: bool, counters: &mut DirtCounters) -> Best {
+        self.trace_body(ray, any, counters)
+    }
+
+    /// [`Self::trace`] compiled for x86-64-v3 and AVX-512 F/VL/BW/DQ (module docs).
+    ///
+    /// # Safety
+    /// The CPU must have the features (`Isa::detect`).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt,avx512f,avx512vl,avx512bw,avx512dq")]
+    unsafe fn trace_v4(&self, ray: &Ray, any: bool, counters: &mut DirtCounters) -> Best {
+        self.trace_body(ray, any, counters)
+    }
+
+    #[inline(always)]
+    fn trace_body(&self, ray: &Ray, any: bool, counters: &mut DirtCounters) -> Best {
         if !ray.is_valid() {
             return Best::NONE;
         }
@@ -146,6 +209,7 @@ impl DirtTracer {
         q.best
     }
 
+    #[inline(always)]
     fn trace_views(&self, ray: &Ray, t0: f32, t1: f32, q: &mut Query) {
         let camera = self.has_camera().then(|| {
             let vc = &self.consts[0];
@@ -174,6 +238,7 @@ impl DirtTracer {
     /// edge's plane, so the next interval starts exactly where the last one ended). Where that
     /// does not continue the interval without a gap (a start or exit on a face corner within
     /// rounding, or the near plane), every face is clipped instead ([`Self::trace_cube_all`]).
+    #[inline(always)]
     fn trace_cube(&self, ray: &Ray, s0: f32, s1: f32, q: &mut Query) -> WalkEnd {
         if !(s0 < s1) {
             return WalkEnd::Continue;

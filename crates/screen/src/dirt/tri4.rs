@@ -26,6 +26,7 @@ use parallax_core::math::{WatertightRay, shear_vertex, watertight_lanes};
 use parallax_raster::dirt::DirtTri;
 
 use super::best::{Best, DirtCounters};
+use super::view::Isa;
 
 /// Slots of the per-ray mailbox (a power of two).
 const MAILBOX: usize = 64;
@@ -73,9 +74,53 @@ impl<'a> Query<'a> {
     }
 
     /// Tests the triangles `ids` not tested lately, four at a time; true when an occlusion
-    /// query found a hit.
-    #[inline]
-    pub fn test(&mut self, ids: &[u32]) -> bool {
+    /// query found a hit. `ISA`: the `Isa` of the copy to run (the caller's: the CPU has it);
+    /// the same source and results on each.
+    #[inline(always)]
+    pub fn test<const ISA: u8>(&mut self, ids: &[u32]) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        {
+            // SAFETY: the walk's copies pass their own `Isa`, chosen by `Isa::detect`.
+            if ISA == Isa::X86V4 as u8 {
+                return unsafe { self.test_v4(ids) };
+            }
+            if ISA == Isa::X86V3 as u8 {
+                return unsafe { self.test_v3(ids) };
+            }
+        }
+        self.test_baseline(ids)
+    }
+
+    /// [`Self::test`] for the build's baseline instruction set (the portable twin).
+    #[inline(never)]
+    fn test_baseline(&mut self, ids: &[u32]) -> bool {
+        self.test_body(ids)
+    }
+
+    /// [`Self::test`] compiled for x86-64-v3 (AVX2, BMI1/2, LZCNT; no FMA).
+    ///
+    /// # Safety
+    /// The CPU must have those features.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(never)]
+    #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
+    unsafe fn test_v3(&mut self, ids: &[u32]) -> bool {
+        self.test_body(ids)
+    }
+
+    /// [`Self::test`] compiled for x86-64-v3 and AVX-512 F/VL/BW/DQ.
+    ///
+    /// # Safety
+    /// The CPU must have those features.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(never)]
+    #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt,avx512f,avx512vl,avx512bw,avx512dq")]
+    unsafe fn test_v4(&mut self, ids: &[u32]) -> bool {
+        self.test_body(ids)
+    }
+
+    #[inline(always)]
+    fn test_body(&mut self, ids: &[u32]) -> bool {
         let mut block = [0u32; 4];
         let mut n = 0;
         for &id in ids {
@@ -277,7 +322,7 @@ mod tests {
 
     /// The 4-wide test and its scalar twin give the same answer (bit for bit) on random
     /// triangle lists, including shared edges and vertices (exactly-zero edge functions) and
-    /// occlusion queries.
+    /// occlusion queries; and so does the x86-64-v3 copy where the CPU runs it.
     #[test]
     fn four_wide_equals_scalar() {
         let mut rng = Rng::for_pixel(7, 1, 2, 3);
@@ -326,7 +371,23 @@ mod tests {
                 for len in [1, 3, 4, 5, 8, 13, ids.len()] {
                     let wt = WatertightRay::new(ray);
                     let (mut a, mut b) = (Query::new(wt, &tris, any), Query::new(wt, &tris, any));
-                    let (ra, rb) = (a.test(&ids[..len]), b.test_scalar(&ids[..len]));
+                    let (ra, rb) = (a.test::<0>(&ids[..len]), b.test_scalar(&ids[..len]));
+                    for isa in Isa::available() {
+                        // Every copy the CPU runs: the same answer and counters bit for bit.
+                        let mut c = Query::new(wt, &tris, any);
+                        let rc = match isa {
+                            Isa::Baseline => c.test::<0>(&ids[..len]),
+                            Isa::X86V3 => c.test::<1>(&ids[..len]),
+                            Isa::X86V4 => c.test::<2>(&ids[..len]),
+                        };
+                        assert_eq!(ra, rc);
+                        let (x, y) = (a.best, c.best);
+                        assert_eq!(
+                            (x.prim, x.t.to_bits(), x.u.to_bits(), x.v.to_bits()),
+                            (y.prim, y.t.to_bits(), y.u.to_bits(), y.v.to_bits()),
+                        );
+                        assert_eq!(a.counters, c.counters);
+                    }
                     if any {
                         assert_eq!(ra, rb);
                         assert_eq!(a.best.found(), b.best.found());

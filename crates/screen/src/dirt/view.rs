@@ -43,6 +43,44 @@ pub(crate) struct ViewConsts {
     pub level_width: [u32; MAX_LEVELS],
     /// Bound on loop iterations of one traversal of this view.
     pub max_steps: u32,
+    /// The instruction set the walk of this view runs on.
+    pub isa: Isa,
+}
+
+/// Which compiled copy of the tracer runs (`walk`): the same source and results on each.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+#[repr(u8)]
+pub(crate) enum Isa {
+    /// The build's baseline (the portable twin).
+    Baseline = 0,
+    /// x86-64-v3: AVX2, BMI1/2, LZCNT, POPCNT.
+    X86V3 = 1,
+    /// x86-64-v3 and AVX-512 F/VL/BW/DQ: 32 vector registers for the walk's float state.
+    X86V4 = 2,
+}
+
+impl Isa {
+    /// Every copy this CPU runs, the best last.
+    pub fn available() -> Vec<Isa> {
+        let mut v = vec![Isa::Baseline];
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::is_x86_feature_detected as has;
+            if has!("avx2") && has!("bmi1") && has!("bmi2") && has!("lzcnt") && has!("popcnt") {
+                v.push(Isa::X86V3);
+                if has!("avx512f") && has!("avx512vl") && has!("avx512bw") && has!("avx512dq") {
+                    v.push(Isa::X86V4);
+                }
+            }
+        }
+        v
+    }
+
+    /// The best copy this CPU runs.
+    pub fn detect() -> Isa {
+        *Isa::available().last().expect("baseline")
+    }
 }
 
 impl ViewConsts {
@@ -83,6 +121,7 @@ impl ViewConsts {
             level_offset: std::array::from_fn(|k| levels.get(k).map_or(0, |l| l.offset as u32)),
             level_width: std::array::from_fn(|k| levels.get(k).map_or(0, |l| l.width)),
             max_steps,
+            isa: Isa::detect(),
         }
     }
 

@@ -66,7 +66,7 @@ use parallax_raster::dirt::{DirtCapture, bucket_index};
 
 use super::slabs::Slabs;
 use super::tri4::Query;
-use super::view::{MAX_LEVELS, ViewConsts, ViewRay};
+use super::view::{Isa, MAX_LEVELS, ViewConsts, ViewRay};
 
 /// How a walk ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -212,23 +212,97 @@ pub(crate) fn walk(
     let (ys, y_up) = Axis::new(seg.y, seg.y + seg.dy);
     // The loop specialised on the ray's film direction and on the sign of `dw` (fewer live
     // values and no selects per texel).
-    let f = match (x_up, y_up, seg.dw < 0.0) {
-        (false, false, false) => walk_dir::<false, false, false>,
-        (false, false, true) => walk_dir::<false, false, true>,
-        (false, true, false) => walk_dir::<false, true, false>,
-        (false, true, true) => walk_dir::<false, true, true>,
-        (true, false, false) => walk_dir::<true, false, false>,
-        (true, false, true) => walk_dir::<true, false, true>,
-        (true, true, false) => walk_dir::<true, true, false>,
-        (true, true, true) => walk_dir::<true, true, true>,
-    };
+    let dir = (x_up, y_up, seg.dw < 0.0);
+    macro_rules! by_dir {
+        ($f:ident) => {
+            match dir {
+                (false, false, false) => $f::<false, false, false>,
+                (false, false, true) => $f::<false, false, true>,
+                (false, true, false) => $f::<false, true, false>,
+                (false, true, true) => $f::<false, true, true>,
+                (true, false, false) => $f::<true, false, false>,
+                (true, false, true) => $f::<true, false, true>,
+                (true, true, false) => $f::<true, true, false>,
+                (true, true, true) => $f::<true, true, true>,
+            }
+        };
+    }
+    #[cfg(target_arch = "x86_64")]
+    match vc.isa {
+        Isa::X86V4 => {
+            let f = by_dir!(walk_dir_v4);
+            // SAFETY: `Isa::X86V4` is only chosen when the CPU has the features (`Isa::detect`).
+            return unsafe { f(vc, cap, slabs, r, &seg, xs, ys, q) };
+        }
+        Isa::X86V3 => {
+            let f = by_dir!(walk_dir_v3);
+            // SAFETY: as above, for `Isa::X86V3`.
+            return unsafe { f(vc, cap, slabs, r, &seg, xs, ys, q) };
+        }
+        Isa::Baseline => {}
+    }
+    let f = by_dir!(walk_dir);
     f(vc, cap, slabs, r, &seg, xs, ys, q)
 }
 
-/// The walk of [`walk`] for one film direction (`UX`, `UY`: the ray moves towards higher
-/// cell indices) and sign of `dw` (`W_FALLS`: `w` decreases along the segment).
-#[inline(never)]
-fn walk_dir<const UX: bool, const UY: bool, const W_FALLS: bool>(
+/// Defines a copy of the walk for one film direction (`UX`, `UY`: the ray moves towards
+/// higher cell indices) and sign of `dw` (`W_FALLS`: `w` decreases along the segment), for one
+/// instruction set: the same source ([`walk_body`]), so the same operations and results (Rust
+/// never contracts a multiply and an add into an FMA).
+macro_rules! walk_copy {
+    ($(#[$attr:meta])* $name:ident, $isa:expr, $($unsafe:ident)?) => {
+        $(#[$attr])*
+        #[inline(never)]
+        #[allow(clippy::too_many_arguments)]
+        $($unsafe)? fn $name<const UX: bool, const UY: bool, const W_FALLS: bool>(
+            vc: &ViewConsts,
+            cap: &DirtCapture,
+            slabs: &Slabs,
+            r: &ViewRay,
+            seg: &Segment,
+            xs: Axis,
+            ys: Axis,
+            q: &mut Query,
+        ) -> WalkEnd {
+            walk_body::<UX, UY, W_FALLS, { $isa as u8 }>(vc, cap, slabs, r, seg, xs, ys, q)
+        }
+    };
+}
+
+walk_copy!(
+    /// The build's baseline instruction set (the portable twin).
+    walk_dir,
+    Isa::Baseline,
+);
+walk_copy!(
+    /// x86-64-v3 (AVX2, BMI1/2, LZCNT): the variable shifts of the texel and slab arithmetic
+    /// become `shlx`/`shrx`, the float ops three-operand VEX forms.
+    ///
+    /// # Safety
+    /// The CPU must have the enabled features (`Isa::detect`).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
+    walk_dir_v3,
+    Isa::X86V3,
+    unsafe
+);
+walk_copy!(
+    /// x86-64-v3 and AVX-512 F/VL/BW/DQ (EVEX: 32 vector registers for the float state).
+    ///
+    /// # Safety
+    /// The CPU must have the enabled features (`Isa::detect`).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt,avx512f,avx512vl,avx512bw,avx512dq")]
+    walk_dir_v4,
+    Isa::X86V4,
+    unsafe
+);
+
+/// The loop of the walk (inlined into each instruction-set copy; `ISA`: the copy's `Isa`, whose
+/// bucket tracing calls the triangle tests' copy of the same instruction set).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn walk_body<const UX: bool, const UY: bool, const W_FALLS: bool, const ISA: u8>(
     vc: &ViewConsts,
     cap: &DirtCapture,
     slabs: &Slabs,
@@ -294,7 +368,7 @@ fn walk_dir<const UX: bool, const UY: bool, const W_FALLS: bool>(
                     buckets: (b_a, b_b),
                     l_exit,
                 };
-                if trace_cell(vc, cap, r, seg, &cell, &mut hit_l, q) {
+                if trace_cell::<ISA>(vc, cap, r, seg, &cell, &mut hit_l, q) {
                     end = Some(WalkEnd::Done);
                     break;
                 }
@@ -378,7 +452,7 @@ struct Cell {
 /// true when the answer is known. Inlined into the walk's loop (a call would store and reload
 /// the walk's state around it: every XMM register is caller-saved).
 #[inline(always)]
-fn trace_cell(
+fn trace_cell<const ISA: u8>(
     vc: &ViewConsts,
     cap: &DirtCapture,
     r: &ViewRay,
@@ -397,7 +471,7 @@ fn trace_cell(
         if any_bucket(c.mask, b, b, nb) {
             q.counters.buckets += 1;
             let k = base + b as usize;
-            if q.test(&ids[offsets[k] as usize..offsets[k + 1] as usize]) {
+            if q.test::<ISA>(&ids[offsets[k] as usize..offsets[k + 1] as usize]) {
                 return true;
             }
         }
