@@ -11,6 +11,11 @@
 //! cost(leaf)  = C_isect * A(node) * N(node)
 //! ```
 //!
+//! where `N` counts a node's triangles in blocks of `sah_block_size` (`ceil(n / 4)` by
+//! default, as Embree's `sahBlockSize`): the traversal tests a leaf four triangles at a time
+//! (`tri4.rs`), so a leaf of four costs what a leaf of one does, and the SAH keeps leaves of
+//! up to four (and, where cheaper, eight) triangles instead of splitting them into
+//! half-empty blocks (about 40% fewer nodes and blocks on the scenes, `docs/notes/bvh.md`).
 //! (left unnormalised so that zero-area nodes of degenerate triangles need no division), and the
 //! triangle references are partitioned in place. Parallelism (Wald 2007 §4): the two children of
 //! a node with more than `parallel_threshold` triangles are built with `rayon::join`, and the two
@@ -413,6 +418,13 @@ fn merge_bins(mut a: Bins, b: Bins) -> Bins {
     a
 }
 
+/// The SAH's intersection count of `cnt` triangles in leaves tested `block` triangles at a
+/// time: `ceil(cnt / block)` (`block = 1`: the triangle count).
+#[inline(always)]
+pub(crate) fn sah_count(cnt: u32, block: usize) -> f32 {
+    cnt.div_ceil(block as u32) as f32
+}
+
 /// The best binned object split of a node: its unnormalised SAH cost (`A(left) N(left) +
 /// A(right) N(right)`, infinite when no bin boundary separates the centroids), its axis, the
 /// first bin of its right side and the binner. The bins stay in the caller's scratch.
@@ -457,7 +469,7 @@ fn find_object_split(
         for i in (1..nb).rev() {
             acc = acc.union(bins[i].bounds.aabb());
             cnt += bins[i].count;
-            right_cost[i] = acc.surface_area() * cnt as f32;
+            right_cost[i] = acc.surface_area() * sah_count(cnt, opts.sah_block_size);
         }
         let (mut acc, mut cnt) = (Aabb::EMPTY, 0u32);
         for i in 1..nb {
@@ -466,7 +478,7 @@ fn find_object_split(
             if cnt == 0 || cnt as usize == n {
                 continue;
             }
-            let cost = acc.surface_area() * cnt as f32 + right_cost[i];
+            let cost = acc.surface_area() * sah_count(cnt, opts.sah_block_size) + right_cost[i];
             if cost < best.0 {
                 best = (cost, axis, i);
             }
@@ -505,7 +517,7 @@ fn sah_split(
     let o = find_object_split(refs, cbounds, opts, scratch);
     let area = bounds.surface_area();
     let split_cost = opts.traversal_cost * area + opts.intersection_cost * o.cost;
-    let leaf_cost = opts.intersection_cost * area * n as f32;
+    let leaf_cost = opts.intersection_cost * area * sah_count(n as u32, opts.sah_block_size);
     if n <= opts.max_leaf_size && leaf_cost <= split_cost {
         return None;
     }

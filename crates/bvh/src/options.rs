@@ -12,9 +12,10 @@ pub(crate) const MAX_BINS: usize = 32;
 /// | parameter | type | default | meaning |
 /// |---|---|---|---|
 /// | `bins` | usize | 32 | SAH bins per axis (Wald 2007 uses 16-32), clamped to 2..=32 |
-/// | `max_leaf_size` | usize | 4 | most triangles per leaf, clamped to 1..=15 |
+/// | `max_leaf_size` | usize | 8 | most triangles per leaf (two blocks of four), clamped to 1..=15 |
 /// | `traversal_cost` | f32 | 1.0 | SAH cost of visiting a node, relative to... |
-/// | `intersection_cost` | f32 | 1.0 | ...the cost of one triangle test |
+/// | `intersection_cost` | f32 | 1.0 | ...the cost of one triangle test (of one block of `sah_block_size`) |
+/// | `sah_block_size` | usize | 4 | the SAH counts a leaf's triangles in blocks of this many (`ceil(n / size)`), clamped to 1..=4 |
 /// | `parallel_threshold` | usize | 4096 | nodes above this many triangles build their children in parallel |
 /// | `spatial_splits` | bool | false | also consider spatial splits (SBVH, Stich et al. 2009; `build.rs`) |
 /// | `split_alpha` | f32 | 1e-5 | SBVH: try spatial splits where the object split's child overlap exceeds this fraction of the root's area |
@@ -30,6 +31,7 @@ pub struct BuildOptions {
     pub max_leaf_size: usize,
     pub traversal_cost: f32,
     pub intersection_cost: f32,
+    pub sah_block_size: usize,
     pub parallel_threshold: usize,
     pub spatial_splits: bool,
     pub split_alpha: f32,
@@ -40,9 +42,10 @@ impl Default for BuildOptions {
     fn default() -> Self {
         Self {
             bins: 32,
-            max_leaf_size: 4,
+            max_leaf_size: 8,
             traversal_cost: 1.0,
             intersection_cost: 1.0,
+            sah_block_size: 4,
             parallel_threshold: 4096,
             spatial_splits: false,
             split_alpha: 1e-5,
@@ -59,6 +62,7 @@ impl BuildOptions {
             max_leaf_size: self.max_leaf_size.clamp(1, node::MAX_LEAF_SIZE),
             traversal_cost: finite_pos(self.traversal_cost, 1.0),
             intersection_cost: finite_pos(self.intersection_cost, 1.0),
+            sah_block_size: self.sah_block_size.clamp(1, 4),
             parallel_threshold: self.parallel_threshold.max(64),
             spatial_splits: self.spatial_splits,
             split_alpha: if self.split_alpha >= 0.0 {

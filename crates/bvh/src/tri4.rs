@@ -10,7 +10,9 @@
 //! `Vec3` component index in the hot code. `tri[l]` is the index of the lane's triangle in
 //! [`crate::Bvh::triangles`] (`u32::MAX` for padding lanes; padding coordinates are zero and the
 //! lane is masked off by the leaf's count). 160 bytes per block, as Embree's `Triangle4`
-//! (176 bytes with precomputed edges).
+//! (176 bytes with precomputed edges), 32-byte aligned: 160 = 5 x 32, so every block of the
+//! array spans exactly three cache lines (16-byte alignment let every other block straddle
+//! four).
 //!
 //! ## Exactness
 //!
@@ -30,7 +32,7 @@ use crate::tri::Tri;
 
 /// Four triangles, structure of arrays (module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C, align(16))]
+#[repr(C, align(32))]
 pub struct Tri4 {
     /// `p[vertex][axis]`, lane `l` = triangle `l` of the block.
     pub p: [[Vec4; 3]; 3],

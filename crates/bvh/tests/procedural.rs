@@ -77,6 +77,22 @@ fn build_options_do_not_change_results() {
             parallel_threshold: 0,
             ..Default::default()
         },
+        // The SAH per triangle (the earlier default), and out-of-range block sizes (clamped).
+        BuildOptions {
+            sah_block_size: 1,
+            max_leaf_size: 4,
+            ..Default::default()
+        },
+        BuildOptions {
+            sah_block_size: 0,
+            ..Default::default()
+        },
+        BuildOptions {
+            sah_block_size: 100,
+            max_leaf_size: 15,
+            spatial_splits: true,
+            ..Default::default()
+        },
         // Spatial splits: no budget, every overlap (alpha 0), a large budget, invalid values.
         BuildOptions {
             spatial_splits: true,
@@ -265,7 +281,8 @@ fn structure_invariants_and_stats() {
                     assert_eq!(bvh.nodes()[c as usize].bounds(), b);
                 }
                 parallax_bvh::ChildRef::Leaf { first, count } => {
-                    assert!((1..=4).contains(&count));
+                    let max_leaf = BuildOptions::default().max_leaf_size as u32;
+                    assert!((1..=max_leaf).contains(&count));
                     for t in &bvh.triangles()[bvh.leaf_triangles(first, count)] {
                         let tb = t.bounds();
                         assert!(b.contains(tb.min) && b.contains(tb.max));
@@ -301,16 +318,19 @@ fn structure_invariants_and_stats() {
     }
     assert!(seen8.iter().all(|&c| c == 1));
     assert_eq!(bvh.nodes8()[0].bounds(), mesh.bounds());
+    // (261 vs 354 nodes here: leaves of up to eight leave fewer 4-wide nodes to merge.)
     assert!(
-        bvh.nodes8().len() * 3 < bvh.node_count() * 2,
-        "8-wide is not wider"
+        bvh.nodes8().len() * 4 < bvh.node_count() * 3,
+        "8-wide is not wider: {} vs {}",
+        bvh.nodes8().len(),
+        bvh.node_count()
     );
     assert_eq!(bvh.bounds(), mesh.bounds());
     assert!(bvh.bytes() >= bvh.node_count() * 128 + 3000 * 40);
-    // A 4-wide tree over 3000 triangles in leaves of <= 4 needs at least 250 nodes; SAH trees
+    // A 4-wide tree over 3000 triangles in leaves of <= 8 needs at least 94 nodes; SAH trees
     // are far from degenerate (depth well below the object count).
     assert!(
-        bvh.node_count() >= 250 && bvh.depth() <= 20,
+        bvh.node_count() >= 94 && bvh.depth() <= 20,
         "{} {}",
         bvh.node_count(),
         bvh.depth()
@@ -335,4 +355,36 @@ fn structure_invariants_and_stats() {
     // query does no more work than a closest-hit query.
     assert!(s.per_ray(s.triangle_tests) < 150.0, "{s:?}");
     assert!(any.triangle_tests <= s.triangle_tests, "{any:?} vs {s:?}");
+}
+
+/// The SAH in blocks of four (the default) packs leaves to the 4-triangle blocks the traversal
+/// tests: on a triangle soup it needs fewer nodes and fewer blocks than the SAH per triangle
+/// with leaves of at most four (measured on the scenes: about 40% fewer of both), and both
+/// trees answer every query as brute force does (above).
+#[test]
+fn sah_in_blocks_packs_leaves() {
+    let mesh = soup(4000, 0.05, 11);
+    let per_tri = Bvh::build_with(
+        &mesh,
+        &BuildOptions {
+            sah_block_size: 1,
+            max_leaf_size: 4,
+            ..Default::default()
+        },
+    );
+    let blocks = Bvh::build(&mesh);
+    let (n1, n4) = (per_tri.nodes8().len(), blocks.nodes8().len());
+    let (b1, b4) = (per_tri.blocks().len(), blocks.blocks().len());
+    assert!(
+        n4 < n1 && b4 < b1,
+        "nodes8 {n1} -> {n4}, blocks {b1} -> {b4}"
+    );
+    // Lanes used: the references over four lanes per block.
+    let fill = |b: &Bvh| b.reference_count() as f64 / (4 * b.blocks().len()) as f64;
+    assert!(
+        fill(&blocks) > fill(&per_tri),
+        "{} vs {}",
+        fill(&per_tri),
+        fill(&blocks)
+    );
 }

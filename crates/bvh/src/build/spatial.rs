@@ -42,7 +42,7 @@ use rayon::prelude::*;
 
 use super::{
     BNode, BTree, Bins, BoxA, MAX_SAH_DEPTH, PAR_BIN_THRESHOLD, PrimRef, UNUSED, find_object_split,
-    median_split, new_bins, node_bounds, object_partition,
+    median_split, new_bins, node_bounds, object_partition, sah_count,
 };
 use crate::options::BuildOptions;
 
@@ -185,7 +185,7 @@ fn split(
             max: bl.max.min(br.max),
         };
         if overlap.aabb().surface_area() > ctx.min_overlap
-            && let Some(s) = find_spatial_split(&refs[..n], bounds)
+            && let Some(s) = find_spatial_split(&refs[..n], bounds, opts.sah_block_size)
             && s.cost < best
             && (s.n_l + s.n_r) as usize <= refs.len()
         {
@@ -195,7 +195,7 @@ fn split(
     }
     let area = bounds.surface_area();
     let split_cost = opts.traversal_cost * area + opts.intersection_cost * best;
-    let leaf_cost = opts.intersection_cost * area * n as f32;
+    let leaf_cost = opts.intersection_cost * area * sah_count(n as u32, opts.sah_block_size);
     if n <= opts.max_leaf_size && leaf_cost <= split_cost {
         return None;
     }
@@ -338,7 +338,7 @@ fn merge_sbins(mut a: SBins, b: SBins) -> SBins {
     a
 }
 
-fn find_spatial_split(refs: &[PrimRef], bounds: &Aabb) -> Option<SpatialSplit> {
+fn find_spatial_split(refs: &[PrimRef], bounds: &Aabb, block: usize) -> Option<SpatialSplit> {
     let grid = Grid::new(bounds, SPATIAL_BINS.min(4 + refs.len() / 20));
     let bins = if refs.len() > PAR_BIN_THRESHOLD {
         refs.par_chunks(8192)
@@ -358,7 +358,7 @@ fn find_spatial_split(refs: &[PrimRef], bounds: &Aabb) -> Option<SpatialSplit> {
         for i in (1..nb).rev() {
             acc = acc.union(bins[i].bounds);
             cnt += bins[i].exit;
-            right[i] = (acc, cnt, acc.aabb().surface_area() * cnt as f32);
+            right[i] = (acc, cnt, acc.aabb().surface_area() * sah_count(cnt, block));
         }
         let (mut acc, mut cnt) = (BoxA::EMPTY, 0u32);
         for i in 1..nb {
@@ -368,7 +368,7 @@ fn find_spatial_split(refs: &[PrimRef], bounds: &Aabb) -> Option<SpatialSplit> {
             if cnt == 0 || rn == 0 {
                 continue;
             }
-            let cost = acc.aabb().surface_area() * cnt as f32 + rc;
+            let cost = acc.aabb().surface_area() * sah_count(cnt, block) + rc;
             if best.as_ref().is_none_or(|b| cost < b.cost) {
                 best = Some(SpatialSplit {
                     cost,
