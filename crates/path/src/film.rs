@@ -22,6 +22,19 @@ impl Tile {
         self.w as usize * self.h as usize
     }
 
+    /// Tile-local pixel indices in blocks of `b x b` pixels (blocks row-major over the tile,
+    /// pixels row-major in each block, blocks clipped at the tile's edges): every pixel once.
+    pub fn block_order(&self, b: u32) -> impl Iterator<Item = usize> + use<> {
+        let (w, h) = (self.w, self.h);
+        let b = b.max(1);
+        (0..h).step_by(b as usize).flat_map(move |by| {
+            (0..w).step_by(b as usize).flat_map(move |bx| {
+                (by..(by + b).min(h))
+                    .flat_map(move |y| (bx..(bx + b).min(w)).map(move |x| (y * w + x) as usize))
+            })
+        })
+    }
+
     /// Image coordinates of tile-local pixel `i` (row-major in the tile).
     #[inline]
     pub fn coords(&self, i: usize) -> (u32, u32) {
@@ -148,6 +161,27 @@ impl Film {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn block_order_visits_every_pixel_once_block_by_block() {
+        let tile = Tile {
+            x0: 32,
+            y0: 64,
+            w: 10,
+            h: 7,
+        };
+        let order: Vec<usize> = tile.block_order(4).collect();
+        let mut sorted = order.clone();
+        sorted.sort_unstable();
+        assert_eq!(sorted, (0..70).collect::<Vec<_>>());
+        // The first block: rows 0..4 of columns 0..4; the third clipped to columns 8..10.
+        assert_eq!(&order[..5], &[0, 1, 2, 3, 10]);
+        assert_eq!(&order[32..34], &[8, 9]);
+        assert_eq!(
+            tile.block_order(1).collect::<Vec<_>>(),
+            (0..70).collect::<Vec<_>>()
+        );
+    }
 
     #[test]
     fn tiles_cover_the_film_once_and_statistics_are_per_pixel() {

@@ -13,13 +13,15 @@
 //! - [`render`]: progressive passes, a sample count or a time budget; [`film`]: mean,
 //!   variance and count per pixel; [`record`]: every ray and its hit, for comparisons;
 //! - [`lighting`]: light overrides and the default sky; [`light_sampler`]: light choice and
-//!   densities; [`mis`]; [`tracers`]: the `--tracer` factory;
+//!   densities; [`mis`]; [`tracers`]: the `--tracer` factory; [`bvh_tracer`]: the BVH as
+//!   the path tracer calls it (packets for a pinhole's camera rays);
 //! - [`mod@bench`]: `parallax bench path`; [`export`]: the scene as a Mitsuba 3 cross-check reads it.
 //!
 //! **Invariant:** nothing here knows which structure answers its rays; every structure is
 //! compared on identical rays.
 
 pub mod bench;
+pub mod bvh_tracer;
 pub mod error;
 pub mod estimator;
 pub mod export;

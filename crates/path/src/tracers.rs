@@ -4,7 +4,7 @@
 //!
 //! | name | structure | hits | built from |
 //! |---|---|---|---|
-//! | `bvh` | binned-SAH 4-wide BVH ([`parallax_bvh::Bvh`]) | exact | the scene's triangles |
+//! | `bvh` | binned-SAH 8-wide BVH ([`parallax_bvh::Bvh`], called through [`BvhTracer`]: packets for a pinhole's camera rays) | exact | the scene's triangles |
 //! | `dirt` | DIRT's per-view primitive lists ([`parallax_screen::DirtTracer`], Vardis et al. 2017) | exact | a capture of the camera's view (a pinhole camera; other models: none) and of a cube map around the camera |
 //! | `ldc` | two-level layered depth cube ([`parallax_screen::ldc::LdcTracer`], Bürger et al. 2007) | sampled | three all-layers LDIs of the scene box at [`LdcSettings::resolution`] |
 //! | `cubemap` | one quad-tree per face of a cube map at the camera ([`parallax_screen::CubeMapTracer`], Widmer et al. 2015, §5.4) | sampled | [`CubeMapSettings::layers`] depth-peeled layers (every surface) of six [`CubeMapSettings::face`]² faces |
@@ -32,6 +32,7 @@ use parallax_screen::ldc::{LdcTraceOptions, LdcTracer};
 use parallax_screen::{CubeMapTracer, DirtTracer, QuadTreeOptions};
 use serde::Serialize;
 
+use crate::bvh_tracer::BvhTracer;
 use crate::error::{PathError, Result};
 
 /// Which structure answers the path tracer's rays.
@@ -175,7 +176,7 @@ pub fn build_tracer(
         TracerKind::Bvh => {
             let bvh = Bvh::try_build(&scene.mesh).map_err(|e| failed(&e))?;
             let bytes = bvh.bytes();
-            (Box::new(bvh), bytes, None, None)
+            (Box::new(BvhTracer::new(bvh)), bytes, None, None)
         }
         TracerKind::Dirt => {
             let pinhole = match camera {

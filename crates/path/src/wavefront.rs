@@ -20,6 +20,7 @@
 //! |---|---|---|
 //! | `seed` | u64 | seed of the per-pixel streams `Rng::for_pixel(seed, x, y, sample)` |
 //! | tile | [`Tile`] | the pixels one wavefront covers (from the film) |
+//! | [`CAMERA_BLOCK`] | u32 | 4: camera paths start in 4x4 pixel blocks (coherent packets) |
 //!
 //! **Invariants:** a path's random numbers come from its own stream (channel `c > 0` of a
 //! per-channel camera from the seed mixed with `c`); paths of sample `s + 1` start after every
@@ -95,6 +96,10 @@ fn prefetch_attributes(scene: &Scene, hits: &[Option<WorldHit>]) {
     let _ = (scene, hits);
 }
 
+/// Edge of the pixel blocks the camera paths are laid out in (4x4: one 16-ray packet of
+/// [`parallax_bvh::PACKET_SIZE`]).
+pub const CAMERA_BLOCK: u32 = 4;
+
 /// The fixed inputs of every wavefront of a render.
 pub struct Wavefront<'a> {
     pub scene: &'a Scene,
@@ -131,11 +136,13 @@ fn ns_since(t: u64) -> u64 {
 
 impl<'a> Wavefront<'a> {
     /// Seeds the camera paths of sample `s` over `tile` into `scratch.paths` and counts the
-    /// sample at every pixel.
+    /// sample at every pixel. Pixels go in [`CAMERA_BLOCK`]² blocks, so that a pinhole's camera
+    /// rays reach the tracer as coherent packets (a pixel's sums do not depend on the order in
+    /// which pixels are visited).
     fn camera_paths(&self, tile: &Tile, s: u32, film: &mut TileFilm, scratch: &mut Scratch<'a>) {
         let channels = self.camera.channel_count();
         scratch.paths.clear();
-        for i in 0..tile.pixels() {
+        for i in tile.block_order(CAMERA_BLOCK) {
             let (x, y) = tile.coords(i);
             film.count_sample(i);
             let mut rng = Rng::for_pixel(self.seed, x, y, s);
