@@ -292,9 +292,10 @@ pub fn build_bench(a: &BuildBenchArgs, quiet: bool) -> Result<()> {
                 spread(&one.cpu_ratio_rounds)
             );
             println!(
-                "fixed point (layer 0 of 2) / 1-layer build: {:.2}x best rounds, {} per round; its effective planes {:.2} ms (by a climb per pixel: {:.2} ms)",
+                "fixed point (layer 0 of 2) / 1-layer build: {:.2}x best rounds, {} per round, {} per round in process CPU; its effective planes {:.2} ms (by a climb per pixel: {:.2} ms)",
                 fixed.ms_build / one.ms_build,
                 spread(&fixed.over_one_layer_rounds),
+                spread(&fixed.cpu_over_one_layer_rounds),
                 fixed.ms_effective_planes,
                 fixed.ms_effective_planes_climb
             );

@@ -57,6 +57,8 @@ pub struct BuildRow {
     /// Per-round `build / the same round's 1-layer build`: median, min, max (1 for the
     /// 1-layer row; layer 0 of 2 is the fixed point's ratio).
     pub over_one_layer_rounds: Spread,
+    /// The same in process CPU time (`QuadTreeTracer::build_cpu_ms` of both builds).
+    pub cpu_over_one_layer_rounds: Spread,
     pub nodes: usize,
     pub plane_nodes: usize,
     pub threads: usize,
@@ -149,6 +151,8 @@ pub fn run(
     let mut build1 = Vec::with_capacity(rounds);
     let (mut cpu_stream, mut cpu_build1) = (Vec::with_capacity(rounds), Vec::with_capacity(rounds));
     let mut build2: [Vec<f64>; 2] = [Vec::with_capacity(rounds), Vec::with_capacity(rounds)];
+    let mut cpu_tree1 = Vec::with_capacity(rounds);
+    let mut cpu_tree2: [Vec<f64>; 2] = [Vec::with_capacity(rounds), Vec::with_capacity(rounds)];
     let mut trees: (Option<QuadTreeTracer>, Option<QuadTreeTracer>) = (None, None);
     for round in 0..rounds {
         progress(&format!("round {}", round + 1));
@@ -165,8 +169,12 @@ pub fn run(
         let one = QuadTreeTracer::build(&reference.cube, &layers[..1], &q)?;
         cpu_build1.push(ms_between(c, process_cpu_ns()));
         build1.push(one.build_ms()[0]);
+        cpu_tree1.push(one.build_cpu_ms()[0]);
         let two = QuadTreeTracer::build(&reference.cube, &layers[..2], &q)?;
         for (b, m) in build2.iter_mut().zip(two.build_ms()) {
+            b.push(m);
+        }
+        for (b, m) in cpu_tree2.iter_mut().zip(two.build_cpu_ms()) {
             b.push(m);
         }
         trees = (Some(one), Some(two));
@@ -184,7 +192,7 @@ pub fn run(
         std::hint::black_box(two.trees[0].effective_planes_by_climbing());
         climb = climb.min(t.elapsed().as_secs_f64() * 1e3);
     }
-    let row = |layers: usize, tree: usize, ms: &[f64], t: &QuadTreeTracer| BuildRow {
+    let row = |layers: usize, tree: usize, ms: &[f64], cpu: &[f64], t: &QuadTreeTracer| BuildRow {
         method: "quadtree".into(),
         layers,
         tree,
@@ -202,6 +210,7 @@ pub fn run(
             Vec::new()
         }),
         over_one_layer_rounds: Spread::of(&per_round(ms, &build1)),
+        cpu_over_one_layer_rounds: Spread::of(&per_round(cpu, &cpu_tree1)),
         nodes: t.trees[tree].node_count(),
         plane_nodes: t.trees[tree].plane_node_count(),
         threads: rayon::current_num_threads(),
@@ -217,9 +226,9 @@ pub fn run(
         },
     };
     Ok(vec![
-        row(1, 0, &build1, &one),
-        row(2, 0, &build2[0], &two),
-        row(2, 1, &build2[1], &two),
+        row(1, 0, &build1, &cpu_tree1, &one),
+        row(2, 0, &build2[0], &cpu_tree2[0], &two),
+        row(2, 1, &build2[1], &cpu_tree2[1], &two),
     ])
 }
 
