@@ -258,7 +258,7 @@ pub fn build_bench(a: &BuildBenchArgs, quiet: bool) -> Result<()> {
         parallax_synth::bench::build::run(&scene, &bvh, &cam, &opts, a.repeats, &reporter(quiet))?;
     if !quiet {
         println!(
-            "{} {}x{}, cube near {}, {} threads, best of {} interleaved rounds",
+            "{} {}x{}, cube near {}, {} threads, {} interleaved rounds (best round of each; per-round ratios: median [min, max])",
             scene.name,
             a.size.width,
             a.size.height,
@@ -266,18 +266,36 @@ pub fn build_bench(a: &BuildBenchArgs, quiet: bool) -> Result<()> {
             rayon::current_num_threads(),
             a.repeats.max(1)
         );
-        println!("| layers | tree | build ms | stream ms | build / stream | nodes | plane nodes |");
-        println!("|---|---|---|---|---|---|---|");
+        println!(
+            "| layers | tree | build ms | stream ms | build / stream (best) | build / stream per round | nodes | plane nodes |"
+        );
+        println!("|---|---|---|---|---|---|---|---|");
+        let spread = |s: &parallax_synth::bench::build::Spread| {
+            format!("{:.2}x [{:.2}, {:.2}]", s.median, s.min, s.max)
+        };
         for r in &rows {
             println!(
-                "| {} | {} | {:.2} | {:.3} | {:.1}x | {} | {} |",
-                r.layers, r.tree, r.ms_build, r.ms_stream, r.ratio, r.nodes, r.plane_nodes
+                "| {} | {} | {:.2} | {:.3} | {:.1}x | {} | {} | {} |",
+                r.layers,
+                r.tree,
+                r.ms_build,
+                r.ms_stream,
+                r.ratio,
+                spread(&r.ratio_rounds),
+                r.nodes,
+                r.plane_nodes
             );
         }
         if let [one, fixed, _] = &rows[..] {
             println!(
-                "fixed point (layer 0 of 2) / 1-layer build: {:.2}x; its effective planes {:.2} ms (by a climb per pixel: {:.2} ms)",
+                "1-layer build / stream in process CPU per round: {}",
+                spread(&one.cpu_ratio_rounds)
+            );
+            println!(
+                "fixed point (layer 0 of 2) / 1-layer build: {:.2}x best rounds, {} per round, {} per round in process CPU; its effective planes {:.2} ms (by a climb per pixel: {:.2} ms)",
                 fixed.ms_build / one.ms_build,
+                spread(&fixed.over_one_layer_rounds),
+                spread(&fixed.cpu_over_one_layer_rounds),
                 fixed.ms_effective_planes,
                 fixed.ms_effective_planes_climb
             );

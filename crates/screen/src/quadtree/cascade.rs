@@ -80,6 +80,7 @@
 use std::time::Instant;
 
 use glam::{UVec2, Vec3, Vec4};
+use parallax_core::cpu_time::{ms_between, process_cpu_ns};
 use parallax_core::{GBuffer, Ray};
 use rayon::prelude::*;
 
@@ -102,6 +103,7 @@ pub struct QuadTreeTracer {
     pub trees: Vec<QuadTree>,
     pub opts: QuadTreeOptions,
     build_ms: Vec<f64>,
+    build_cpu_ms: Vec<f64>,
     unsafe_pixels: Vec<usize>,
     /// The f32 cube clip shared with the baselines ([`Self::with_f32_clip`]).
     clip: Clip,
@@ -144,15 +146,17 @@ impl QuadTreeTracer {
         let nl = layers.len();
         let mut trees: Vec<Option<QuadTree>> = vec![None; nl];
         let mut build_ms = vec![0.0; nl];
+        let mut build_cpu_ms = vec![0.0; nl];
         let mut unsafe_pixels = vec![0; nl];
         let mut eff: Vec<LayerPlanes> = Vec::new(); // layers k+1.. in order
         for k in (0..nl).rev() {
-            let t = Instant::now();
+            let (t, c) = (Instant::now(), process_cpu_ns());
             let tree = QuadTree::build_cascaded(cube, &layers[k], opts, &eff, reference)?;
             if k > 0 {
                 eff.insert(0, tree.effective_planes());
             }
             build_ms[k] = t.elapsed().as_secs_f64() * 1e3;
+            build_cpu_ms[k] = ms_between(c, process_cpu_ns());
             unsafe_pixels[k] = tree.unsafe_count;
             trees[k] = Some(tree);
         }
@@ -162,6 +166,7 @@ impl QuadTreeTracer {
             trees,
             opts: *opts,
             build_ms,
+            build_cpu_ms,
             unsafe_pixels,
             clip: Clip::new(cube),
             f32_clip: false,
@@ -183,6 +188,13 @@ impl QuadTreeTracer {
     /// layer's share of the cascade flags), measured inside [`Self::build`].
     pub fn build_ms(&self) -> Vec<f64> {
         self.build_ms.clone()
+    }
+
+    /// Process CPU time per layer in ms (all threads, rayon's idle spinning included; NaN
+    /// where the clock is unavailable), over the same span as [`Self::build_ms`]: less
+    /// sensitive than wall time to other jobs on the machine.
+    pub fn build_cpu_ms(&self) -> Vec<f64> {
+        self.build_cpu_ms.clone()
     }
 
     /// Bytes of all trees' node arrays.

@@ -473,19 +473,38 @@ pub(super) fn pixel_triggers_row(
     #[cfg(target_arch = "x86_64")]
     {
         let y = ((j as f32) / hf, ((j + 1) as f32) / hf, yc);
-        if std::arch::is_x86_feature_detected!("avx2")
-            && std::arch::is_x86_feature_detected!("f16c")
-        {
-            // Eight pixels per step (`trigger_avx2`, same bits).
-            // SAFETY: the CPU has AVX2 and F16C (checked).
+        if super::trigger_avx512::available() {
+            // Sixteen pixels per step (`trigger_avx512`, same bits).
+            // SAFETY: the CPU has what the kernel needs (checked).
             done = unsafe {
-                super::trigger_avx2::pixel_triggers_row8(
+                super::trigger_avx512::pixel_triggers_row16(
                     tz,
                     fronts,
                     nodes,
                     base,
                     &cols.xe,
                     &cols.xc,
+                    y,
+                    (wf, hf),
+                    deeper,
+                    &mut listed,
+                )
+            };
+        }
+        if std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("f16c")
+        {
+            // Eight pixels per step (`trigger_avx2`, same bits).
+            // SAFETY: the CPU has AVX2 and F16C (checked); the slices from `done` on are
+            // the row's rest.
+            done += unsafe {
+                super::trigger_avx2::pixel_triggers_row8(
+                    &mut tz[done..],
+                    &mut fronts[done..],
+                    &nodes[done..],
+                    base + done,
+                    &cols.xe[done..],
+                    &cols.xc[done..],
                     y,
                     (wf, hf),
                     deeper,

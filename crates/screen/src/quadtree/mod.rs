@@ -111,6 +111,8 @@ pub mod tree;
 #[cfg(target_arch = "x86_64")]
 mod trigger_avx2;
 #[cfg(target_arch = "x86_64")]
+mod trigger_avx512;
+#[cfg(target_arch = "x86_64")]
 mod trigger_lanes;
 
 pub use cascade::QuadTreeTracer;

@@ -15,6 +15,7 @@
 use std::time::Instant;
 
 use parallax_bvh::Bvh;
+use parallax_core::cpu_time::{ms_between, process_cpu_ns};
 use parallax_core::image::GBuffer;
 use parallax_scene::Scene;
 use parallax_scene::camera::Pinhole;
@@ -41,8 +42,23 @@ pub struct BuildRow {
     pub ms_build: f64,
     /// Best-round milliseconds of streaming this layer's depth + normals once.
     pub ms_stream: f64,
-    /// `ms_build / ms_stream`.
+    /// `ms_build / ms_stream` (best rounds, possibly of different rounds).
     pub ratio: f64,
+    /// Every round's build ms of this tree, in round order.
+    pub ms_build_rounds: Vec<f64>,
+    /// Every round's stream ms of this layer, in round order.
+    pub ms_stream_rounds: Vec<f64>,
+    /// Per-round `build / stream` (the same round's two times): median, min, max.
+    pub ratio_rounds: Spread,
+    /// Per-round process-CPU `build / stream` of the same round: median, min, max (the
+    /// 1-layer row only; NaN elsewhere, as the 2-layer build's CPU time is not split by
+    /// layer).
+    pub cpu_ratio_rounds: Spread,
+    /// Per-round `build / the same round's 1-layer build`: median, min, max (1 for the
+    /// 1-layer row; layer 0 of 2 is the fixed point's ratio).
+    pub over_one_layer_rounds: Spread,
+    /// The same in process CPU time (`QuadTreeTracer::build_cpu_ms` of both builds).
+    pub cpu_over_one_layer_rounds: Spread,
     pub nodes: usize,
     pub plane_nodes: usize,
     pub threads: usize,
@@ -51,6 +67,41 @@ pub struct BuildRow {
     /// 2-layer build only (`NaN` elsewhere).
     pub ms_effective_planes: f64,
     pub ms_effective_planes_climb: f64,
+}
+
+/// Median and range of per-round ratios.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Spread {
+    pub median: f64,
+    pub min: f64,
+    pub max: f64,
+}
+
+impl Spread {
+    /// Of `v` (NaN entries ignored; all NaN when none is left). The median of an even count
+    /// is the mean of the middle two.
+    pub fn of(v: &[f64]) -> Self {
+        let mut s: Vec<f64> = v.iter().copied().filter(|x| !x.is_nan()).collect();
+        if s.is_empty() {
+            return Self {
+                median: f64::NAN,
+                min: f64::NAN,
+                max: f64::NAN,
+            };
+        }
+        s.sort_by(f64::total_cmp);
+        let n = s.len();
+        let median = if n % 2 == 1 {
+            s[n / 2]
+        } else {
+            0.5 * (s[n / 2 - 1] + s[n / 2])
+        };
+        Self {
+            median,
+            min: s[0],
+            max: s[n - 1],
+        }
+    }
 }
 
 /// XOR of every bit of the layer's depths and normals (module docs, "Stream").
@@ -93,25 +144,42 @@ pub fn run(
         gamma_dist: q.gamma_dist * crate::method::gamma_dist_scale(&reference.cube, layers)?,
         ..q
     };
-    let mut stream = [f64::INFINITY; 2];
-    let mut build1 = f64::INFINITY;
-    let mut build2 = [f64::INFINITY; 2];
+    // Per round: the streams of layers 0 and 1, the 1-layer build, the 2-layer build's
+    // layer 0 and layer 1 (module docs, "One round").
+    let rounds = repeats.max(1) as usize;
+    let mut stream: [Vec<f64>; 2] = [Vec::with_capacity(rounds), Vec::with_capacity(rounds)];
+    let mut build1 = Vec::with_capacity(rounds);
+    let (mut cpu_stream, mut cpu_build1) = (Vec::with_capacity(rounds), Vec::with_capacity(rounds));
+    let mut build2: [Vec<f64>; 2] = [Vec::with_capacity(rounds), Vec::with_capacity(rounds)];
+    let mut cpu_tree1 = Vec::with_capacity(rounds);
+    let mut cpu_tree2: [Vec<f64>; 2] = [Vec::with_capacity(rounds), Vec::with_capacity(rounds)];
     let mut trees: (Option<QuadTreeTracer>, Option<QuadTreeTracer>) = (None, None);
-    for round in 0..repeats.max(1) {
+    for round in 0..rounds {
         progress(&format!("round {}", round + 1));
         for (k, s) in stream.iter_mut().enumerate() {
+            let c = process_cpu_ns();
             let t = Instant::now();
             std::hint::black_box(stream_layer(&layers[k]));
-            *s = s.min(t.elapsed().as_secs_f64() * 1e3);
+            s.push(t.elapsed().as_secs_f64() * 1e3);
+            if k == 0 {
+                cpu_stream.push(ms_between(c, process_cpu_ns()));
+            }
         }
+        let c = process_cpu_ns();
         let one = QuadTreeTracer::build(&reference.cube, &layers[..1], &q)?;
-        build1 = build1.min(one.build_ms()[0]);
+        cpu_build1.push(ms_between(c, process_cpu_ns()));
+        build1.push(one.build_ms()[0]);
+        cpu_tree1.push(one.build_cpu_ms()[0]);
         let two = QuadTreeTracer::build(&reference.cube, &layers[..2], &q)?;
         for (b, m) in build2.iter_mut().zip(two.build_ms()) {
-            *b = b.min(m);
+            b.push(m);
+        }
+        for (b, m) in cpu_tree2.iter_mut().zip(two.build_cpu_ms()) {
+            b.push(m);
         }
         trees = (Some(one), Some(two));
     }
+    let best = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
     let (one, two) = (trees.0.expect("a round"), trees.1.expect("a round"));
     // The fixed point's inner step, fast path against its definition (interleaved).
     progress("effective planes");
@@ -124,15 +192,25 @@ pub fn run(
         std::hint::black_box(two.trees[0].effective_planes_by_climbing());
         climb = climb.min(t.elapsed().as_secs_f64() * 1e3);
     }
-    let row = |layers: usize, tree: usize, ms: f64, t: &QuadTreeTracer| BuildRow {
+    let row = |layers: usize, tree: usize, ms: &[f64], cpu: &[f64], t: &QuadTreeTracer| BuildRow {
         method: "quadtree".into(),
         layers,
         tree,
         width: camera.width,
         height: camera.height,
-        ms_build: ms,
-        ms_stream: stream[tree],
-        ratio: ms / stream[tree],
+        ms_build: best(ms),
+        ms_stream: best(&stream[tree]),
+        ratio: best(ms) / best(&stream[tree]),
+        ms_build_rounds: ms.to_vec(),
+        ms_stream_rounds: stream[tree].clone(),
+        ratio_rounds: Spread::of(&per_round(ms, &stream[tree])),
+        cpu_ratio_rounds: Spread::of(&if layers == 1 {
+            per_round(&cpu_build1, &cpu_stream)
+        } else {
+            Vec::new()
+        }),
+        over_one_layer_rounds: Spread::of(&per_round(ms, &build1)),
+        cpu_over_one_layer_rounds: Spread::of(&per_round(cpu, &cpu_tree1)),
         nodes: t.trees[tree].node_count(),
         plane_nodes: t.trees[tree].plane_node_count(),
         threads: rayon::current_num_threads(),
@@ -148,8 +226,28 @@ pub fn run(
         },
     };
     Ok(vec![
-        row(1, 0, build1, &one),
-        row(2, 0, build2[0], &two),
-        row(2, 1, build2[1], &two),
+        row(1, 0, &build1, &cpu_tree1, &one),
+        row(2, 0, &build2[0], &cpu_tree2[0], &two),
+        row(2, 1, &build2[1], &cpu_tree2[1], &two),
     ])
+}
+
+/// `a[r] / b[r]` per round.
+fn per_round(a: &[f64], b: &[f64]) -> Vec<f64> {
+    a.iter().zip(b).map(|(x, y)| x / y).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spread_is_median_and_range() {
+        let s = Spread::of(&[3.0, 1.0, 2.0]);
+        assert_eq!((s.median, s.min, s.max), (2.0, 1.0, 3.0));
+        let s = Spread::of(&[4.0, f64::NAN, 1.0, 2.0, 3.0]);
+        assert_eq!((s.median, s.min, s.max), (2.5, 1.0, 4.0));
+        assert!(Spread::of(&[f64::NAN]).median.is_nan());
+        assert_eq!(per_round(&[6.0, 8.0], &[2.0, 4.0]), vec![3.0, 2.0]);
+    }
 }
