@@ -15,6 +15,7 @@ pub mod math;
 pub mod metrics;
 pub mod sampling;
 pub mod simd;
+pub mod spread;
 pub mod world;
 
 pub use error::{CoreError, Result};

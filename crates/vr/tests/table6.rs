@@ -1,6 +1,7 @@
 //! `bench vr`'s Table 6 (`parallax_vr::bench::table6`) on a tiny frame: every ray tracer answers
 //! the beam caster's rays (same rays, same order of magnitude of agreement), the packet rows say
-//! what a packet is, and without Embree the report says how to enable it.
+//! what a packet is, every round's time is kept with the per-round speed-ups, and without
+//! Embree the report says how to enable it.
 
 use parallax_bvh::Bvh;
 use parallax_scene::Scene;
@@ -15,7 +16,7 @@ fn table6_rows_agree_with_the_beam_caster() {
         width: 64,
         height: 32,
         spp: vec![1, 16],
-        repeats: 1,
+        repeats: 2,
     };
     let r = run(&scene, &bvh, &head, &opts).unwrap();
     assert_eq!(r.embree_missing.is_some(), !parallax_embree::ENABLED);
@@ -27,6 +28,22 @@ fn table6_rows_agree_with_the_beam_caster() {
         // The beam caster's default kernel differs from per-ray traversal only in depth ties.
         assert!(row.same_t >= 0.999, "{row:?}");
         assert!(row.same_prim >= 0.99, "{row:?}");
+        // Every round is kept; the best is the least; per-round speed-ups are ordered.
+        assert_eq!(row.ms_trace_rounds.len(), 2, "{row:?}");
+        let least = row
+            .ms_trace_rounds
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min);
+        assert_eq!(row.ms_trace, least, "{row:?}");
+        let s = row.beam_speedup_rounds;
+        assert!(
+            s.min > 0.0 && s.min <= s.median && s.median <= s.max,
+            "{row:?}"
+        );
+        if row.method == "beam" {
+            assert_eq!((s.min, s.max), (1.0, 1.0), "{row:?}");
+        }
     }
     let packet = |spp, m: &str| {
         r.rows

@@ -75,40 +75,7 @@ pub struct BuildRow {
     pub ms_effective_planes_climb: f64,
 }
 
-/// Median and range of per-round ratios.
-#[derive(Clone, Copy, Debug, Serialize)]
-pub struct Spread {
-    pub median: f64,
-    pub min: f64,
-    pub max: f64,
-}
-
-impl Spread {
-    /// Of `v` (NaN entries ignored; all NaN when none is left). The median of an even count
-    /// is the mean of the middle two.
-    pub fn of(v: &[f64]) -> Self {
-        let mut s: Vec<f64> = v.iter().copied().filter(|x| !x.is_nan()).collect();
-        if s.is_empty() {
-            return Self {
-                median: f64::NAN,
-                min: f64::NAN,
-                max: f64::NAN,
-            };
-        }
-        s.sort_by(f64::total_cmp);
-        let n = s.len();
-        let median = if n % 2 == 1 {
-            s[n / 2]
-        } else {
-            0.5 * (s[n / 2 - 1] + s[n / 2])
-        };
-        Self {
-            median,
-            min: s[0],
-            max: s[n - 1],
-        }
-    }
-}
+pub use parallax_core::spread::Spread;
 
 /// XOR of every bit of the layer's depths and normals (module docs, "Stream"): both arrays read
 /// as plain 32-bit words (`bytemuck`), so the fold is a vector XOR per load and the pass runs

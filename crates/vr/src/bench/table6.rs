@@ -16,7 +16,10 @@
 //!
 //! Timing: rounds; in each round the beam caster casts the frame, then every band is
 //! generated and traced by each ray tracer in turn (round robin, all rayon threads, chunks of
-//! [`CHUNK`] rays); per method the best round's total counts. Agreement: per ray tracer, the
+//! [`CHUNK`] rays); per method the best round's total counts, and each round's speed-up of the
+//! beam caster over each ray tracer (the same round's two times) is reported as a median and
+//! range ([`Spread`]): a host whose speed drifts between rounds moves both times of a round
+//! alike. Agreement: per ray tracer, the
 //! fraction of rays whose primitive (or miss) equals the beam caster's (`same_prim`), or
 //! whose hit lies at the same distance within 1e-5 relative (`same_t`: a shared edge or a
 //! coplanar copy).
@@ -25,11 +28,12 @@
 //! |---|---|---|---|
 //! | `width`, `height` | u32 | 2160, 1200 | both eyes' film (each eye `width / 2`) |
 //! | `spp` | `Vec<u32>` | `--msaa` | subsamples per pixel (1, 4, 8, 16, 32) |
-//! | `repeats` | u32 | 3 | timed rounds (the best counts) |
+//! | `repeats` | u32 | 3 | timed rounds (the best counts; the per-round speed-ups use all) |
 
 use std::time::Instant;
 
 use parallax_bvh::{Bvh, PACKET_SIZE};
+use parallax_core::spread::Spread;
 use parallax_core::{NO_ID, Ray};
 use parallax_embree::{EmbreeHit, EmbreeScene, Options};
 use parallax_scene::camera::CameraModel;
@@ -70,8 +74,12 @@ pub struct Table6Row {
     /// Best round (ms, wall): the whole cast for the beam caster, tracing only for the others.
     pub ms_trace: f64,
     pub mrays_per_s: f64,
-    /// The beam caster's throughput over this method's.
+    /// The beam caster's throughput over this method's (best rounds of each).
     pub beam_speedup: f64,
+    /// The same per round (the round's beam cast against the round's trace): median, min, max.
+    pub beam_speedup_rounds: Spread,
+    /// Every round's ms (the field `ms_trace` is the least of them), in round order.
+    pub ms_trace_rounds: Vec<f64>,
     /// Fraction of rays with the beam caster's primitive (or both miss).
     pub same_prim: f64,
     /// Fraction with the same primitive or a hit at the same `t` (1e-5 relative).
@@ -231,8 +239,8 @@ pub fn run(
             VisibilityBuffer::new(&sets[1]),
         ];
         let rays: u64 = sets.iter().map(|s| s.ray_count() as u64).sum();
-        let mut best_beam = f64::INFINITY;
-        let mut best = vec![f64::INFINITY; tracers.len()];
+        let mut beam_rounds = Vec::new();
+        let mut rounds: Vec<Vec<f64>> = vec![Vec::new(); tracers.len()];
         let mut tally = vec![Tally::default(); tracers.len()];
         let mut traced = 0u64;
         let mut answers: Vec<Vec<Answer>> = vec![Vec::new(); tracers.len()];
@@ -247,7 +255,7 @@ pub fn run(
                     &mut out[e],
                 )?;
             }
-            best_beam = best_beam.min(t0.elapsed().as_secs_f64() * 1e3);
+            beam_rounds.push(t0.elapsed().as_secs_f64() * 1e3);
             let mut sum = vec![0.0f64; tracers.len()];
             for (e, set) in sets.iter().enumerate() {
                 let h = set.camera.height();
@@ -273,38 +281,52 @@ pub fn run(
                     }
                 }
             }
-            for (b, s) in best.iter_mut().zip(sum) {
-                *b = b.min(s);
+            for (r, s) in rounds.iter_mut().zip(sum) {
+                r.push(s);
             }
         }
+        let least = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
+        let best_beam = least(&beam_rounds);
         let beam_mrays = rays as f64 / (best_beam * 1e3);
-        let row = |method: &str, packet: String, ms: f64, n: u64, t: Tally| Table6Row {
-            scene: scene.name.clone(),
-            method: method.into(),
-            packet,
-            width: opts.width,
-            height: opts.height,
-            samples_per_pixel: spp,
-            rays: n,
-            ms_trace: ms,
-            mrays_per_s: n as f64 / (ms * 1e3),
-            beam_speedup: beam_mrays / (n as f64 / (ms * 1e3)),
-            same_prim: t.same as f64 / n.max(1) as f64,
-            same_t: t.same_t as f64 / n.max(1) as f64,
-            threads,
+        // Per round: (this method's ms / its rays) over (the beam's ms / its rays).
+        let speedups = |ms: &[f64], n: u64| -> Vec<f64> {
+            ms.iter()
+                .zip(&beam_rounds)
+                .map(|(m, b)| (m / n.max(1) as f64) / (b / rays.max(1) as f64))
+                .collect()
+        };
+        let row = |method: &str, packet: String, ms_rounds: &[f64], n: u64, t: Tally| {
+            let ms = least(ms_rounds);
+            Table6Row {
+                scene: scene.name.clone(),
+                method: method.into(),
+                packet,
+                width: opts.width,
+                height: opts.height,
+                samples_per_pixel: spp,
+                rays: n,
+                ms_trace: ms,
+                mrays_per_s: n as f64 / (ms * 1e3),
+                beam_speedup: beam_mrays / (n as f64 / (ms * 1e3)),
+                beam_speedup_rounds: Spread::of(&speedups(ms_rounds, n)),
+                ms_trace_rounds: ms_rounds.to_vec(),
+                same_prim: t.same as f64 / n.max(1) as f64,
+                same_t: t.same_t as f64 / n.max(1) as f64,
+                threads,
+            }
         };
         let full = Tally {
             same: rays,
             same_t: rays,
         };
-        rows.push(row("beam", "tile".into(), best_beam, rays, full));
+        rows.push(row("beam", "tile".into(), &beam_rounds, rays, full));
         for (ti, &t) in tracers.iter().enumerate() {
             let packet = if t.packets() {
                 packet_name(spp)
             } else {
                 "single ray".into()
             };
-            rows.push(row(t.name(), packet, best[ti], traced, tally[ti]));
+            rows.push(row(t.name(), packet, &rounds[ti], traced, tally[ti]));
         }
     }
     Ok(Table6Report {
@@ -332,12 +354,12 @@ fn agreement(a: &[Answer], idx: &[u32], beam: &VisibilityBuffer) -> (u64, u64) {
 /// The rows as a Markdown table (and the hint when Embree is missing).
 pub fn markdown(r: &Table6Report) -> String {
     let mut s = String::from(
-        "| spp | method | packet | rays | ms | Mrays/s | beam speed-up | same prim | same t |\n\
-         |---|---|---|---|---|---|---|---|---|\n",
+        "| spp | method | packet | rays | ms | Mrays/s | beam speed-up | per round: median [min, max] | same prim | same t |\n\
+         |---|---|---|---|---|---|---|---|---|---|\n",
     );
     for x in &r.rows {
         s += &format!(
-            "| {} | {} | {} | {} | {:.1} | {:.2} | {:.2}x | {:.4}% | {:.4}% |\n",
+            "| {} | {} | {} | {} | {:.1} | {:.2} | {:.2}x | {:.2}x [{:.2}, {:.2}] | {:.4}% | {:.4}% |\n",
             x.samples_per_pixel,
             x.method,
             x.packet,
@@ -345,6 +367,9 @@ pub fn markdown(r: &Table6Report) -> String {
             x.ms_trace,
             x.mrays_per_s,
             x.beam_speedup,
+            x.beam_speedup_rounds.median,
+            x.beam_speedup_rounds.min,
+            x.beam_speedup_rounds.max,
             100.0 * x.same_prim,
             100.0 * x.same_t,
         );
