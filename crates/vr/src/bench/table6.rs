@@ -285,8 +285,7 @@ pub fn run(
                 r.push(s);
             }
         }
-        let least = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
-        let best_beam = least(&beam_rounds);
+        let best_beam = Spread::of(&beam_rounds).min;
         let beam_mrays = rays as f64 / (best_beam * 1e3);
         // Per round: (this method's ms / its rays) over (the beam's ms / its rays).
         let speedups = |ms: &[f64], n: u64| -> Vec<f64> {
@@ -296,7 +295,7 @@ pub fn run(
                 .collect()
         };
         let row = |method: &str, packet: String, ms_rounds: &[f64], n: u64, t: Tally| {
-            let ms = least(ms_rounds);
+            let ms = Spread::of(ms_rounds).min;
             Table6Row {
                 scene: scene.name.clone(),
                 method: method.into(),
