@@ -1,7 +1,7 @@
 //! End-to-end runs of `parallax capture` on the Cornell box at tiny sizes: files, EXR
 //! channels and sizes, layer ordering, `--stats` JSON, and clean errors on bad input.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use parallax_core::image::exr::{ExrImage, read_exr};
 
@@ -9,7 +9,7 @@ mod common;
 
 use common::{parallax, stderr};
 
-fn out_dir(name: &str) -> PathBuf {
+fn out_dir(name: &str) -> common::TestDir {
     common::out_dir("capture", name)
 }
 

@@ -1,12 +1,10 @@
 //! End-to-end runs of the `parallax` binary on built-in scenes, and its error cases.
 
-use std::path::PathBuf;
-
 mod common;
 
 use common::{parallax, stderr};
 
-fn out_dir(name: &str) -> PathBuf {
+fn out_dir(name: &str) -> common::TestDir {
     common::out_dir("cli", name)
 }
 

@@ -4,7 +4,7 @@ mod common;
 
 use common::{parallax, stderr};
 
-fn out_dir(name: &str) -> std::path::PathBuf {
+fn out_dir(name: &str) -> common::TestDir {
     common::out_dir("path", name)
 }
 

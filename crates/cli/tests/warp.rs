@@ -2,13 +2,11 @@
 //! upsample | compression` at tiny sizes with the brute-force tracer: files, printed scores,
 //! JSON rows, unavailable methods as rows, and clean errors on bad input.
 
-use std::path::PathBuf;
-
 mod common;
 
 use common::{parallax, stderr};
 
-fn out_dir(name: &str) -> PathBuf {
+fn out_dir(name: &str) -> common::TestDir {
     common::out_dir("warp", name)
 }
 
