@@ -10,7 +10,8 @@
 //!   directional lights; Russian roulette as Mitsuba 3's `path` integrator;
 //! - [`wavefront`]: DIRT's deferred traversal (trace, fetch, shade, occlusion passes per
 //!   bounce over a tile of pixels);
-//! - [`render`]: progressive passes, a sample count or a time budget; [`film`]: mean,
+//! - [`render`]: a sample count or a time budget; [`schedule`]: one sample of one tile per
+//!   work unit, handed to the workers without barriers; [`film`]: mean,
 //!   variance and count per pixel; [`record`]: every ray and its hit, for comparisons;
 //! - [`lighting`]: light overrides and the default sky; [`light_sampler`]: light choice and
 //!   densities; [`mis`]; [`tracers`]: the `--tracer` factory; [`bvh_tracer`]: the BVH as
@@ -33,6 +34,7 @@ pub mod options;
 pub mod record;
 pub mod render;
 pub mod reproject;
+pub mod schedule;
 pub mod secondary;
 pub mod stats;
 pub mod tracers;

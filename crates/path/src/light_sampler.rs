@@ -165,6 +165,7 @@ impl<'a> LightSampler<'a> {
     }
 
     /// One delta light seen from `p`, chosen by power with `u`.
+    #[inline]
     pub fn sample_delta(&self, p: Vec3, u: f32) -> Option<LightSample> {
         if self.delta.is_empty() {
             return None;

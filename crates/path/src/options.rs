@@ -3,7 +3,7 @@
 //! | name | type | default | meaning |
 //! |---|---|---|---|
 //! | `spp` | u32 | 16 | samples (paths) per pixel; with a time budget, the most that are taken |
-//! | `time_budget` | `Option<f64>` | none | seconds: render whole passes until the budget is spent |
+//! | `time_budget` | `Option<f64>` | none | seconds: one more sample of every pixel while, at the rate measured so far, it ends within the budget ([`crate::schedule`]) |
 //! | `seed` | u64 | 0 | seed of the per-pixel random streams |
 //! | `max_depth` | u32 | 16 | longest path in segments, as Mitsuba 3's `max_depth` (1 = emitters seen directly, 2 = direct light) |
 //! | `rr_depth` | u32 | 5 | depth from which Russian roulette may end a path (Mitsuba 3's `rr_depth`) |

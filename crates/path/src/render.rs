@@ -1,12 +1,12 @@
-//! The progressive render: passes of samples over every tile until the sample count or the
-//! time budget is reached.
+//! The render: every tile's samples, up to a sample count or for as long as a time budget
+//! allows.
 //!
-//! Pass sizes double (1, 1, 2, 4, ... samples per pixel) so that a time budget is met closely:
-//! after each pass the time per sample is known, and the next pass takes only as many samples
-//! as fit in the time left (none: stop). At least one sample per pixel is always taken. Passes
-//! never split a sample, so every pixel has the same count, and because the film adds samples in
-//! index order (see [`crate::film`]) the image is the one a single pass of that many samples
-//! gives, bit for bit, at any thread count.
+//! The units of work (one sample of one tile) go to the workers as [`crate::schedule`] hands
+//! them out: no barrier between samples, and with a time budget one more sample of every pixel
+//! (a round) is started only when the rate measured so far says it ends within the budget. At
+//! least one sample per pixel is always taken. A round is never split, so every pixel has the
+//! same count, and because the film adds samples in index order (see [`crate::film`]) the
+//! image is the one a sample count of that many gives, bit for bit, at any thread count.
 
 use std::ops::Range;
 use std::time::Instant;
@@ -14,15 +14,15 @@ use std::time::Instant;
 use parallax_core::{Image, Rgb, WorldTracer};
 use parallax_scene::Scene;
 use parallax_scene::camera::{Camera, CameraModel};
-use rayon::prelude::*;
 
 use crate::error::Result;
 use crate::estimator::Integrator;
 use crate::film::Film;
 use crate::options::PathOptions;
 use crate::record::PathRecord;
+use crate::schedule::{self, Target};
 use crate::stats::PathStats;
-use crate::wavefront::{Scratch, Wavefront};
+use crate::wavefront::Wavefront;
 
 /// A finished render.
 pub struct PathOutput {
@@ -80,8 +80,9 @@ impl<'a> PathTracer<'a> {
         Film::new(self.camera.width(), self.camera.height(), self.opts.tile)
     }
 
-    /// Adds samples `samples` of every pixel to `film`; `progress(n)` is called with the pixel
-    /// samples each finished tile added. Returns the pass's statistics and, with `record`,
+    /// Adds samples `samples` of every pixel to `film` (every tile of which holds samples
+    /// `..samples.start`); `progress(n)` is called with the pixel samples each finished unit
+    /// added. Returns the pass's statistics and, with `record`,
     /// every ray it traced.
     pub fn render_samples(
         &self,
@@ -90,37 +91,28 @@ impl<'a> PathTracer<'a> {
         record: bool,
         progress: &(dyn Fn(u64) + Sync),
     ) -> (PathStats, Option<PathRecord>) {
-        let wf = Wavefront {
+        let (stats, _, rec) = schedule::run(
+            &self.wavefront(),
+            film,
+            samples.start,
+            Target::Fixed(samples.end),
+            record,
+            progress,
+        );
+        (stats, rec)
+    }
+
+    fn wavefront(&self) -> Wavefront<'_> {
+        Wavefront {
             scene: self.scene,
             camera: self.camera,
             tracer: self.tracer,
             integrator: &self.integrator,
             seed: self.opts.seed,
-        };
-        let count = samples.len() as u64;
-        let per_tile: Vec<(PathStats, Option<PathRecord>)> = film
-            .tiles
-            .par_iter_mut()
-            .map_init(Scratch::default, |scratch, tf| {
-                let mut stats = PathStats::default();
-                let mut rec = record.then(PathRecord::default);
-                wf.run_tile(tf, samples.clone(), scratch, &mut stats, rec.as_mut());
-                progress(tf.tile.pixels() as u64 * count);
-                (stats, rec)
-            })
-            .collect();
-        let mut stats = PathStats::default();
-        let mut all = record.then(PathRecord::default);
-        for (s, r) in per_tile {
-            stats.merge(&s);
-            if let (Some(a), Some(r)) = (all.as_mut(), r) {
-                a.append(r);
-            }
         }
-        (stats, all)
     }
 
-    /// The progressive render (see the module docs).
+    /// The render (see the module docs).
     pub fn render(&self, progress: &(dyn Fn(u64) + Sync)) -> PathOutput {
         self.render_impl(false, progress).0
     }
@@ -138,32 +130,16 @@ impl<'a> PathTracer<'a> {
     ) -> (PathOutput, Option<PathRecord>) {
         let start = Instant::now();
         let mut film = self.film();
-        let mut stats = PathStats::default();
-        let mut all = record.then(PathRecord::default);
-        let target = self.opts.spp;
-        let mut done = 0u32;
-        let mut pass = 1u32;
-        while done < target {
-            let n = pass.min(target - done);
-            let (s, r) = self.render_samples(&mut film, done..done + n, record, progress);
-            stats.merge(&s);
-            if let (Some(a), Some(r)) = (all.as_mut(), r) {
-                a.append(r);
-            }
-            done += n;
-            let elapsed = start.elapsed().as_secs_f64();
-            pass = match self.opts.time_budget {
-                Some(budget) => {
-                    let per_sample = elapsed / done as f64;
-                    let fit = ((budget - elapsed) / per_sample).floor();
-                    if fit < 1.0 {
-                        break;
-                    }
-                    (fit as u32).min(done.max(1))
-                }
-                None => done,
-            };
-        }
+        let target = match self.opts.time_budget {
+            Some(budget) => Target::Budget {
+                max: self.opts.spp,
+                budget,
+                start,
+            },
+            None => Target::Fixed(self.opts.spp),
+        };
+        let (stats, done, all) =
+            schedule::run(&self.wavefront(), &mut film, 0, target, record, progress);
         let out = PathOutput {
             image: film.mean(),
             variance: film.variance_of_mean(),

@@ -51,6 +51,9 @@ pub struct PathStats {
     pub bounces: Vec<BounceStats>,
     /// The tracer's counters over all rays.
     pub world: WorldStats,
+    /// Wall-clock nanoseconds the workers spent rendering tiles, summed over the workers:
+    /// threads x render seconds minus this is the time workers had no tile to render.
+    pub work_ns: u64,
 }
 
 impl Default for PathStats {
@@ -59,6 +62,7 @@ impl Default for PathStats {
             paths: 0,
             bounces: vec![BounceStats::default(); TRACKED_BOUNCES],
             world: WorldStats::default(),
+            work_ns: 0,
         }
     }
 }
@@ -77,6 +81,7 @@ impl PathStats {
             a.add(b);
         }
         self.world += o.world;
+        self.work_ns += o.work_ns;
     }
 
     /// Closest-hit plus shadow rays.

@@ -105,6 +105,49 @@ fn passes_and_time_budgets_do_not_change_the_image() {
 }
 
 #[test]
+fn budgeted_units_give_the_image_of_their_sample_count_at_any_thread_count() {
+    // 40x24 with 16-pixel tiles: 6 tiles, fewer than the units in flight at 3 threads near the
+    // end of a round, so workers run ahead into the next round while others finish.
+    let (scene, cam) = setup("cornell", ModelKind::Pinhole);
+    let bvh = Bvh::build(&scene.mesh);
+    let base = PathOptions {
+        spp: 48,
+        seed: 5,
+        tile: 16,
+        ..PathOptions::default()
+    };
+    for threads in [1, 2, 3] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let (timed, fixed) = pool.install(|| {
+            let budget = PathOptions {
+                time_budget: Some(0.03),
+                ..base.clone()
+            };
+            let timed = PathTracer::new(&scene, &cam, &bvh, budget)
+                .unwrap()
+                .render(&|_| {});
+            let fixed = PathOptions {
+                spp: timed.spp,
+                ..base.clone()
+            };
+            let fixed = PathTracer::new(&scene, &cam, &bvh, fixed)
+                .unwrap()
+                .render(&|_| {});
+            (timed, fixed)
+        });
+        assert!(timed.spp >= 1 && timed.spp <= 48);
+        assert!(timed.counts.data().iter().all(|&n| n == timed.spp));
+        assert_eq!(bits(&timed.image), bits(&fixed.image), "{threads} threads");
+        assert_eq!(bits(&timed.variance), bits(&fixed.variance));
+        assert_eq!(timed.stats.paths, 40 * 24 * timed.spp as u64);
+        assert!(timed.stats.work_ns > 0);
+    }
+}
+
+#[test]
 fn the_ray_record_is_reproducible_and_matches_the_statistics() {
     let (scene, cam) = setup("atrium", ModelKind::Pinhole);
     let bvh = Bvh::build(&scene.mesh);
