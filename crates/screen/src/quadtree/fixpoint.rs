@@ -14,9 +14,11 @@
 //!   per column and row), not copied into a [`LayerPlanes`] first; on x86_64 four pixels
 //!   per step, one per lane (`trigger_lanes`; eight with AVX2, `trigger_avx2`), elsewhere each pixel's four footprint corners
 //!   in lanes ([`super::cascade::pixel_trigger_lanes`]);
-//! - the blocked pixels are kept as a list too: pruning marks only their ancestors
-//!   ([`Blocked::List`]) and the unsafe pixels are marked through their ancestors only
-//!   (`QuadTree::mark_unsafe_listed`; ~1 % of the pixels on atrium);
+//! - the blocked pixels are kept as a list, not a `W x H` map: pruning marks only their
+//!   ancestors ([`Blocked::List`]) and the unsafe pixels are marked through their ancestors
+//!   only (`QuadTree::mark_unsafe_listed`; ~1 % of the pixels on atrium); the pixels the
+//!   passes below evaluate are never blocked ones, except pixels whose trigger depth is
+//!   their pixel plane's (finite only if listed), so no lookup is needed;
 //! - the effective levels are kept as the tree's plane levels (`W x H`, 0 where the
 //!   pixel's effective node is its own leaf or where it has none, [`plane_levels`]): made
 //!   from level 1 down, so level 0 (the largest array) is not read again, and they are the

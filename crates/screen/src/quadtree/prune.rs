@@ -1,6 +1,8 @@
 //! Bottom-up pruning of a whole tree (Widmer et al. 2015, §3.3): the levels above the
 //! leaves, one [`MergeCtx::parent`] per node, in parallel over rows; and the cascade's
-//! pruning fixed point by its definition (the slow twin of [`super::fixpoint`]).
+//! pruning fixed point by its definition (the slow twin of [`super::fixpoint`]). The lane
+//! kernels learn which parents of a row may merge from the row's blocked flags ([`Allow`],
+//! eight parents at a time by one multiplication).
 //!
 //! **Invariants:** a node containing a blocked pixel never merges; level 0 is not changed;
 //! a node over padding only (beyond `ceil(W / 2^l) x ceil(H / 2^l)` at level `l`) is
@@ -249,4 +251,27 @@ fn leaf_planes(level0: &Level, w: u32, h: u32, wf: f32, hf: f32) -> LayerPlanes 
         let node = level0.nodes[(j * level0.w + i) as usize];
         node.is_plane().then_some((node, 0, i, j))
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Allow;
+
+    /// `Allow::mask8` equals `Allow::get` per parent for every pattern of eight flags, at
+    /// every offset of a row, including the row's last parents (fewer than eight left).
+    #[test]
+    fn mask8_equals_the_flags() {
+        assert_eq!(Allow(None).mask8(5), 0xff);
+        for pattern in 0..=255u32 {
+            let row: Vec<bool> = (0..21).map(|i| (pattern >> (i % 8)) & 1 == 1).collect();
+            let allow = Allow(Some(&row));
+            for qx0 in 0..row.len() {
+                let want = (0..8).fold(0, |m, p| {
+                    let ok = qx0 + p >= row.len() || allow.get((qx0 + p) as u32);
+                    m | (u32::from(ok) << p)
+                });
+                assert_eq!(allow.mask8(qx0), want, "pattern {pattern:#x}, offset {qx0}");
+            }
+        }
+    }
 }
