@@ -14,9 +14,11 @@
 //!   per column and row), not copied into a [`LayerPlanes`] first; on x86_64 four pixels
 //!   per step, one per lane (`trigger_lanes`; eight with AVX2, `trigger_avx2`), elsewhere each pixel's four footprint corners
 //!   in lanes ([`super::cascade::pixel_trigger_lanes`]);
-//! - the blocked pixels are kept as a list too: pruning marks only their ancestors
-//!   ([`Blocked::List`]) and the unsafe pixels are marked through their ancestors only
-//!   (`QuadTree::mark_unsafe_listed`; ~1 % of the pixels on atrium);
+//! - the blocked pixels are kept as a list, not a `W x H` map: pruning marks only their
+//!   ancestors ([`Blocked::List`]) and the unsafe pixels are marked through their ancestors
+//!   only (`QuadTree::mark_unsafe_listed`; ~1 % of the pixels on atrium); the pixels the
+//!   passes below evaluate are never blocked ones, except pixels whose trigger depth is
+//!   their pixel plane's (finite only if listed), so no lookup is needed;
 //! - the effective levels are kept as the tree's plane levels (`W x H`, 0 where the
 //!   pixel's effective node is its own leaf or where it has none, [`plane_levels`]): made
 //!   from level 1 down, so level 0 (the largest array) is not read again, and they are the
@@ -65,11 +67,10 @@ pub(super) fn fixed_point(
     deeper: &[LayerPlanes],
     (mut tz, mut listed, fronts): (Vec<f32>, Vec<u32>, Vec<f32>),
 ) -> (Vec<Level>, Vec<f32>, Vec<u8>, Option<Vec<u32>>) {
-    // The pixels with a finite trigger depth, i.e. the blocked ones, in a list and a map.
-    let mut blocked = vec![false; (w * h) as usize];
-    for &k in &listed {
-        blocked[k as usize] = true;
-    }
+    // The pixels with a finite trigger depth are the blocked ones (`listed`). No map of
+    // them is needed: a pixel under a merged node is not blocked (its node would not have
+    // merged, and the set only grows), and a pixel whose effective node is its own leaf
+    // gets the trigger depth of its pixel plane, finite only if it was listed from the start.
     let mut levels = super::prune::prune(ctx, level0, nlev, Blocked::List(&listed), w, h);
     let mut eff = plane_levels(&levels, w, h);
     if ctx.never {
@@ -77,23 +78,11 @@ pub(super) fn fixed_point(
     }
     // Trigger depths of the effective planes: the pixel planes' except under merged nodes,
     // which hold no blocked pixel, so only they can be newly unsafe.
-    let mut newly = merged_triggers(&mut tz, &fronts, ctx, w, deeper, &blocked, &levels, &eff);
+    let mut newly = merged_triggers(&mut tz, &fronts, ctx, w, deeper, &levels, &eff);
     while !newly.is_empty() {
-        for &k in &newly {
-            blocked[k as usize] = true;
-        }
         listed.extend_from_slice(&newly);
         let dissolved = reprune(ctx, &mut levels, &newly, w);
-        newly = refill(
-            &mut tz,
-            &mut eff,
-            ctx,
-            (w, h),
-            deeper,
-            &blocked,
-            &levels,
-            &dissolved,
-        );
+        newly = refill(&mut tz, &mut eff, ctx, (w, h), deeper, &levels, &dissolved);
     }
     // A pixel blocked after a proxy made it unsafe may be safe against its own plane.
     listed.retain(|&k| tz[k as usize].is_finite());
@@ -103,7 +92,9 @@ pub(super) fn fixed_point(
 
 /// After a rebuild: the effective levels and trigger depths of the pixels under the
 /// `dissolved` nodes (recomputed nodes that were planes; `(level, qx, qy)`), and the pixels
-/// that became unsafe there and are not yet blocked. A dissolved node's ancestors are
+/// that became unsafe there and are not yet blocked (under a still-plane child of level >= 1:
+/// its pixels are not blocked; a child of level 0 is a pixel whose trigger depth is its
+/// pixel plane's, finite only if it is blocked). A dissolved node's ancestors are
 /// recomputed too (they are ancestors of the same newly blocked pixels), so they are not
 /// planes; each child of a dissolved node that is still a plane (was not recomputed: every
 /// child of a plane node is a plane, and recomputed nodes are not) is now the topmost plane
@@ -117,7 +108,6 @@ fn refill(
     ctx: &MergeCtx,
     (w, h): (u32, u32),
     deeper: &[LayerPlanes],
-    blocked: &[bool],
     levels: &[Level],
     dissolved: &[(u32, u32, u32)],
 ) -> Vec<u32> {
@@ -184,10 +174,12 @@ fn refill(
         }
     }
     let mut newly = Vec::new();
-    for (k, t) in vals.into_iter().flatten() {
-        tz[k as usize] = t;
-        if t.is_finite() && !blocked[k as usize] {
-            newly.push(k);
+    for (&(l, _, _), vals) in kids.iter().zip(vals) {
+        for (k, t) in vals {
+            tz[k as usize] = t;
+            if l > 0 && t.is_finite() {
+                newly.push(k);
+            }
         }
     }
     newly
@@ -232,7 +224,8 @@ impl Columns {
 /// The trigger depths (`tz`, `W x H`, pairs of rows in parallel) of the pixels under merged
 /// nodes (plane level `eff > 0`, `W x H`) against `deeper`, from their effective node's decoded
 /// plane ([`decode_plane`]); other pixels keep their value. The pixels of one effective node
-/// in a row are one run (they all have its level). A merged node (level >= 1) covers both
+/// in a row are one run (they all have its level); none of them is blocked (a node over a
+/// blocked pixel does not merge). A merged node (level >= 1) covers both
 /// rows `2m`, `2m + 1` of a pair with the same run, so the runs are found in the pair's
 /// first row and each node's plane is decoded once per pair. A run whose pixels' deeper
 /// fronts (`fronts`, [`deeper_front`]) all reach the certificate threshold
@@ -240,8 +233,7 @@ impl Columns {
 /// without evaluating its corners: its pixels keep `+inf` (they are not blocked, so their
 /// pixel planes' trigger depth is `+inf`). Otherwise each row is done as a row of its own
 /// (`merged_run`: the threshold over the row, then groups of four and pixels). Returns the
-/// pixels (indices `j W + i`, ascending) that got a finite trigger depth and are not marked
-/// in `blocked`.
+/// pixels (indices `j W + i`, ascending) that got a finite trigger depth.
 #[allow(clippy::too_many_arguments)]
 fn merged_triggers(
     tz: &mut [f32],
@@ -249,7 +241,6 @@ fn merged_triggers(
     ctx: &MergeCtx,
     w: u32,
     deeper: &[LayerPlanes],
-    blocked: &[bool],
     levels: &[Level],
     eff: &[u8],
 ) -> Vec<u32> {
@@ -262,7 +253,6 @@ fn merged_triggers(
         hf,
         wu,
         deeper,
-        blocked,
         levels,
     };
     tz.par_chunks_mut(2 * wu)
@@ -351,7 +341,6 @@ struct RunCtx<'a> {
     hf: f32,
     wu: usize,
     deeper: &'a [LayerPlanes],
-    blocked: &'a [bool],
     levels: &'a [Level],
 }
 
@@ -361,8 +350,7 @@ impl RunCtx<'_> {
     /// `er` the effective levels of the pair's first row, whose runs of level >= 1 are this
     /// row's): the run is certified as a whole, then per group of four and per pixel, the
     /// rest evaluated exactly; on x86_64 two level-1 runs starting at a multiple of 4 are
-    /// done together in lanes. Pushes the pixels that got a finite trigger depth and are not
-    /// blocked on `newly`; returns the end of what it did (`end`, or `i + 4` for two level-1
+    /// done together in lanes. Pushes the pixels that got a finite trigger depth on `newly`; returns the end of what it did (`end`, or `i + 4` for two level-1
     /// runs).
     #[allow(clippy::too_many_arguments)]
     #[inline]
@@ -377,14 +365,7 @@ impl RunCtx<'_> {
         p: (glam::Vec3, f32),
         newly: &mut Vec<u32>,
     ) -> usize {
-        let (cols, wf, hf, wu, deeper, blocked) = (
-            self.cols,
-            self.wf,
-            self.hf,
-            self.wu,
-            self.deeper,
-            self.blocked,
-        );
+        let (cols, wf, hf, wu, deeper) = (self.cols, self.wf, self.hf, self.wu, self.deeper);
         let base = j as usize * wu;
         let ys = Vec4::new(j as f32, j as f32, (j + 1) as f32, (j + 1) as f32) / hf;
         // The row's top and bottom edge (the same f32 quotients as `ys`' lanes).
@@ -408,7 +389,7 @@ impl RunCtx<'_> {
                 y,
                 deeper,
             );
-            store_triggers4(t, base + i, &mut row[i..], blocked, newly);
+            store_triggers4(t, base + i, &mut row[i..], newly);
             return i + 4;
         }
         // Runs of 4 pixels or more (levels >= 2, starting at a multiple of 4): four pixels
@@ -422,7 +403,7 @@ impl RunCtx<'_> {
                 }
                 let t =
                     super::trigger_lanes::merged_triggers4(base + i, p, &cols.xe[i..], y, deeper);
-                store_triggers4(t, base + i, &mut row[i..], blocked, newly);
+                store_triggers4(t, base + i, &mut row[i..], newly);
                 i += 4;
             }
         }
@@ -434,7 +415,7 @@ impl RunCtx<'_> {
             }
             let k = base + ii;
             *t = pixel_trigger_lanes(k, cols.xs[ii], ys, || Some(p), deeper);
-            if t.is_finite() && !blocked[k] {
+            if t.is_finite() {
                 newly.push(k as u32);
             }
         }
@@ -590,19 +571,13 @@ fn reprune(ctx: &MergeCtx, levels: &mut [Level], newly: &[u32], w: u32) -> Vec<(
 }
 
 /// Stores four lanes' trigger depths of pixels `k0..k0 + 4` in `row[..4]` and lists those
-/// that became finite (newly blocked) and were not blocked before.
+/// that became finite (newly blocked).
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn store_triggers4(
-    t: glam::Vec4,
-    k0: usize,
-    row: &mut [f32],
-    blocked: &[bool],
-    newly: &mut Vec<u32>,
-) {
+fn store_triggers4(t: glam::Vec4, k0: usize, row: &mut [f32], newly: &mut Vec<u32>) {
     for (d, v) in t.to_array().into_iter().enumerate() {
         row[d] = v;
-        if v.is_finite() && !blocked[k0 + d] {
+        if v.is_finite() {
             newly.push((k0 + d) as u32);
         }
     }

@@ -267,15 +267,15 @@ fn union_lanes(ranges: [(__m128, __m128); 4]) -> ([u32; 4], [u32; 4]) {
 
 impl MergeCtx {
     /// Row `qy` of level `l` (`out`: the row's nodes) from level `l - 1` (`child`), equal
-    /// node for node to [`MergeCtx::parent`] of each parent's four children; `allow(qx)`:
-    /// whether parent `qx` may merge (contains no blocked pixel).
+    /// node for node to [`MergeCtx::parent`] of each parent's four children; `allow`: which
+    /// parents may merge (contain no blocked pixel).
     pub(super) fn parent_row(
         &self,
         child: &Level,
         l: u32,
         qy: u32,
         out: &mut [Node],
-        allow: impl Fn(u32) -> bool,
+        allow: super::prune::Allow,
     ) {
         let cw = child.w as usize;
         let y0 = 2 * qy as usize;
@@ -284,7 +284,7 @@ impl MergeCtx {
         for (g, outs) in out.chunks_mut(4).enumerate() {
             let qx0 = 4 * g;
             let kids = Kids::gather(r0, r1, qx0, outs.len());
-            self.group4(l, qx0 as u32, qy, &kids, outs, &allow, None);
+            self.group4(l, qx0 as u32, qy, &kids, outs, allow, None);
         }
     }
 
@@ -301,7 +301,7 @@ impl MergeCtx {
         qy: u32,
         kids: &Kids,
         out: &mut [Node],
-        allow: &impl Fn(u32) -> bool,
+        allow: super::prune::Allow,
         pre: Option<[Option<Node>; 4]>,
     ) {
         let any_plane = (0..4).fold(0, |m, k| m | kids.planes(k));
@@ -334,7 +334,7 @@ impl MergeCtx {
         qy: u32,
         kids: &Kids,
         out: &mut [Node],
-        allow: &impl Fn(u32) -> bool,
+        allow: super::prune::Allow,
         pre: Option<[Option<Node>; 4]>,
     ) {
         let s = Vec4::splat;
@@ -364,7 +364,7 @@ impl MergeCtx {
             None => {
                 let all_planes = (0..4).fold(0xf, |m, k| m & kids.planes(k));
                 let cand = |p: usize| {
-                    p < n && !self.never && all_planes & (1 << p) != 0 && allow(qx0 + p as u32)
+                    p < n && !self.never && all_planes & (1 << p) != 0 && allow.get(qx0 + p as u32)
                 };
                 let cand = [cand(0), cand(1), cand(2), cand(3)];
                 let (gx, gy) = g.insert(grads());
@@ -559,6 +559,7 @@ impl MergeCtx {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::quadtree::prune::{Allow, parent_of};
     use crate::quadtree::test_rng::Rng;
 
     /// Rows of four parents in lanes equal the scalar definition ([`MergeCtx::parent`]
@@ -626,13 +627,12 @@ mod tests {
                 .map(|_| rng.next().is_multiple_of(10))
                 .collect();
             for qy in 0..ph {
-                let allow = |qx: u32| !blocked[(qy * pw + qx) as usize];
+                let allow = Allow(Some(&blocked[(qy * pw) as usize..((qy + 1) * pw) as usize]));
                 let mut row = vec![Node { a: 1, b: 1 }; pw as usize];
                 ctx.parent_row(&child, l, qy, &mut row, allow);
                 for (qx, got) in row.iter().enumerate() {
                     let qx = qx as u32;
-                    let want =
-                        crate::quadtree::prune::parent_of(&def, &child, l, qx, qy, allow(qx));
+                    let want = parent_of(&def, &child, l, qx, qy, allow.get(qx));
                     assert_eq!(*got, want, "case {case}, level {l}, parent ({qx}, {qy})");
                     planes += usize::from(want.is_plane());
                     boxes += usize::from(!want.is_plane() && want != Node::EMPTY);

@@ -31,6 +31,7 @@ use super::leaf_avx2::f16x8;
 use super::merge::MergeCtx;
 use super::merge_rows::{CORNER, KID, Kids};
 use super::node::{FLAG_CRACK, Node};
+use super::prune::Allow;
 use super::tree::Level;
 
 /// Largest finite f16.
@@ -196,7 +197,7 @@ impl MergeCtx {
         l: u32,
         qy: u32,
         out: &mut [Node],
-        allow: impl Fn(u32) -> bool,
+        allow: Allow,
     ) {
         if std::arch::is_x86_feature_detected!("avx2")
             && std::arch::is_x86_feature_detected!("f16c")
@@ -209,14 +210,7 @@ impl MergeCtx {
     }
 
     #[target_feature(enable = "avx2,f16c")]
-    fn parent_row8(
-        &self,
-        child: &Level,
-        l: u32,
-        qy: u32,
-        out: &mut [Node],
-        allow: impl Fn(u32) -> bool,
-    ) {
+    fn parent_row8(&self, child: &Level, l: u32, qy: u32, out: &mut [Node], allow: Allow) {
         let cw = child.w as usize;
         let y0 = 2 * qy as usize;
         let r0 = &child.nodes[y0 * cw..(y0 + 1) * cw];
@@ -231,9 +225,10 @@ impl MergeCtx {
             for k in 0..4 {
                 planes &= lo.planes(k) | (hi.planes(k) << 4);
             }
+            let planes = planes & allow.mask8(qx0);
             let mut cand = [false; 8];
             for (p, c) in cand.iter_mut().enumerate().take(n) {
-                *c = !self.never && planes & (1 << p) != 0 && allow((qx0 + p) as u32);
+                *c = !self.never && planes & (1 << p) != 0;
             }
             let (mask, av, bv) = if cand.iter().any(|&c| c) {
                 self.merge8(l, qx0 as u32, qy, &lo, &hi, cand)
@@ -266,9 +261,9 @@ impl MergeCtx {
                 [merged[0], merged[1], merged[2], merged[3]],
                 [merged[4], merged[5], merged[6], merged[7]],
             );
-            self.group4(l, qx0 as u32, qy, &lo, o_lo, &allow, Some(m_lo));
+            self.group4(l, qx0 as u32, qy, &lo, o_lo, allow, Some(m_lo));
             if !o_hi.is_empty() {
-                self.group4(l, qx0 as u32 + 4, qy, &hi, o_hi, &allow, Some(m_hi));
+                self.group4(l, qx0 as u32 + 4, qy, &hi, o_hi, allow, Some(m_hi));
             }
         }
     }
@@ -493,7 +488,7 @@ mod tests {
                 .map(|_| rng.next().is_multiple_of(10))
                 .collect();
             for qy in 0..ph {
-                let allow = |qx: u32| !blocked[(qy * pw + qx) as usize];
+                let allow = Allow(Some(&blocked[(qy * pw) as usize..((qy + 1) * pw) as usize]));
                 let mut four = vec![Node { a: 1, b: 1 }; pw as usize];
                 let mut eight = vec![Node { a: 2, b: 2 }; pw as usize];
                 ctx.parent_row(&child, l, qy, &mut four, allow);

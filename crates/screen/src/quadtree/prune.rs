@@ -1,6 +1,8 @@
 //! Bottom-up pruning of a whole tree (Widmer et al. 2015, §3.3): the levels above the
 //! leaves, one [`MergeCtx::parent`] per node, in parallel over rows; and the cascade's
-//! pruning fixed point by its definition (the slow twin of [`super::fixpoint`]).
+//! pruning fixed point by its definition (the slow twin of [`super::fixpoint`]). The lane
+//! kernels learn which parents of a row may merge from the row's blocked flags ([`Allow`],
+//! eight parents at a time by one multiplication).
 //!
 //! **Invariants:** a node containing a blocked pixel never merges; level 0 is not changed;
 //! a node over padding only (beyond `ceil(W / 2^l) x ceil(H / 2^l)` at level `l`) is
@@ -110,6 +112,38 @@ pub(super) fn parent_of(
     ctx.parent(l, qx, qy, cl, &kids, &pos, allow)
 }
 
+/// Which parents of one row may merge (contain no blocked pixel): all (`None`), or those
+/// whose flag in the row's blocked flags (one `bool` per parent of the level's row, parent
+/// `qx` at index `qx`) is false.
+#[derive(Clone, Copy)]
+pub(super) struct Allow<'a>(pub(super) Option<&'a [bool]>);
+
+impl Allow<'_> {
+    /// Whether parent `qx` may merge.
+    #[inline(always)]
+    pub(super) fn get(self, qx: u32) -> bool {
+        self.0.is_none_or(|b| !b[qx as usize])
+    }
+
+    /// Bit `p` (`p < 8`) set iff parent `qx0 + p` may merge (bits of parents beyond the row:
+    /// set). Eight flags are one little-endian `u64` of 0 / 1 bytes; the product by
+    /// `0x0102_0408_1020_4080` puts byte `i`'s bit at bit `56 + i` (its terms `2^(8i + 7j +
+    /// 7)` have distinct exponents, so nothing carries).
+    #[inline(always)]
+    pub(super) fn mask8(self, qx0: usize) -> u32 {
+        let Some(b) = self.0 else { return 0xff };
+        if let Some(eight) = b.get(qx0..qx0 + 8) {
+            let eight: &[bool; 8] = eight.try_into().expect("eight flags");
+            let v = u64::from_le_bytes(eight.map(u8::from));
+            let blocked = (v & 0x0101_0101_0101_0101).wrapping_mul(0x0102_0408_1020_4080) >> 56;
+            return !(blocked as u32) & 0xff;
+        }
+        (0..8).fold(0, |m, p| {
+            m | (u32::from(b.get(qx0 + p).is_none_or(|&x| !x)) << p)
+        })
+    }
+}
+
 /// The pixels (of a `W x H` layer) no node may merge over.
 #[derive(Clone, Copy)]
 pub(super) enum Blocked<'a> {
@@ -181,7 +215,10 @@ pub(super) fn prune(
         // Each row set empty in cache right before its parents are written.
         let nodes = par_rows((pw * ph) as usize, pw as usize, Node::EMPTY, |qy, row| {
             let qy = qy as u32;
-            let allow = |qx: u32| blocked.is_empty() || !blocked[(qy * pw + qx) as usize];
+            let allow = Allow(
+                (!blocked.is_empty())
+                    .then(|| &blocked[(qy * pw) as usize..((qy + 1) * pw) as usize]),
+            );
             #[cfg(target_arch = "x86_64")]
             if ctx.lanes {
                 // Padding parents stay empty (set by `par_rows`; their children are not read).
@@ -196,7 +233,7 @@ pub(super) fn prune(
             }
             for (qx, out) in row.iter_mut().enumerate() {
                 let qx = qx as u32;
-                *out = parent_of(ctx, child, l, qx, qy, allow(qx));
+                *out = parent_of(ctx, child, l, qx, qy, allow.get(qx));
             }
         });
         levels.push(Level {
@@ -214,4 +251,27 @@ fn leaf_planes(level0: &Level, w: u32, h: u32, wf: f32, hf: f32) -> LayerPlanes 
         let node = level0.nodes[(j * level0.w + i) as usize];
         node.is_plane().then_some((node, 0, i, j))
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Allow;
+
+    /// `Allow::mask8` equals `Allow::get` per parent for every pattern of eight flags, at
+    /// every offset of a row, including the row's last parents (fewer than eight left).
+    #[test]
+    fn mask8_equals_the_flags() {
+        assert_eq!(Allow(None).mask8(5), 0xff);
+        for pattern in 0..=255u32 {
+            let row: Vec<bool> = (0..21).map(|i| (pattern >> (i % 8)) & 1 == 1).collect();
+            let allow = Allow(Some(&row));
+            for qx0 in 0..row.len() {
+                let want = (0..8).fold(0, |m, p| {
+                    let ok = qx0 + p >= row.len() || allow.get((qx0 + p) as u32);
+                    m | (u32::from(ok) << p)
+                });
+                assert_eq!(allow.mask8(qx0), want, "pattern {pattern:#x}, offset {qx0}");
+            }
+        }
+    }
 }
