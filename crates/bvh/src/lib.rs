@@ -16,7 +16,8 @@
 //!   the robust far scaling of Ize 2013, children near-to-far, and the watertight triangle test
 //!   of Woop, Benthin & Wald 2013 ([`WatertightRay`]) on four leaf triangles at once (SoA blocks
 //!   [`Tri4`], `tri4.rs`; lanes with an exactly-zero edge function fall back to the scalar
-//!   test): closest hit, any hit, all hits. `traverse.rs` is the same loop over the 4-wide tree
+//!   test; for closest hits a leaf of two blocks is tested in one 8-lane pass, `lanes8.rs`):
+//!   closest hit, any hit, all hits. `traverse.rs` is the same loop over the 4-wide tree
 //!   ([`Bvh::closest_hit4`], ...), kept as the twin; `closest_hit_scalar` / `any_hit_scalar` use
 //!   the per-triangle scalar test. `_with_stats` variants count the work ([`TraversalStats`]).
 //!   Closest-hit ties in `t` go to the lower triangle index.
@@ -61,6 +62,7 @@ mod construct;
 mod hit;
 mod keys8;
 mod lanes16;
+mod lanes8;
 pub mod node;
 pub mod node8;
 mod options;

@@ -12,6 +12,12 @@
 //! hit    = t_near <= t_far
 //! ```
 //!
+//! computed as `(o_x - near_x) * (-inv_x)`: negation is exact and IEEE subtraction and
+//! multiplication are sign-symmetric, so every product is the same value (a zero product may
+//! have the other sign; `max(x, acc)` returns `acc` on equal zeros, so `t_near` is
+//! bit-identical whenever `t_min >= 0`, and the hit mask always is), while the bounds row
+//! becomes the memory operand of the subtraction (one load instruction fewer per row).
+//!
 //! (`vmaxps` / `vminps` return the second operand when one is NaN, exactly as `maxps` /
 //! `minps`, so a ray on a slab plane with a zero direction component is handled as in
 //! `simd.rs`). No FMA: `(b - o) * inv` rounds twice, each a relative error, which the far
@@ -26,6 +32,7 @@
 //! ([`Bvh::closest_hit4`], ...): the node test only culls (conservatively), and the closest hit
 //! is the lexicographic minimum of `(t, triangle index)` whatever the visiting order.
 
+use std::marker::PhantomData;
 use std::mem::MaybeUninit;
 
 use glam::Vec4;
@@ -35,6 +42,7 @@ use parallax_core::math::{ROBUST_FAR_SCALE, WatertightRay};
 use crate::bvh::Bvh;
 use crate::hit::Hit;
 use crate::keys8;
+use crate::lanes8::Pair8;
 use crate::node::{is_leaf, leaf_count, leaf_first};
 use crate::node8::Node8;
 use crate::stats::{Counter, NoStats, TraversalStats};
@@ -50,7 +58,9 @@ pub(crate) const STACK8_SIZE: usize = 576;
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct RayBoxes8 {
     org: [f32; 3],
-    inv: [f32; 3],
+    /// `-1 / dir`: the slab distances are `(o - b) * (-1 / d)`, equal to `(b - o) * (1 / d)`
+    /// (negation is exact), with the bounds row as the subtraction's memory operand.
+    neg_inv: [f32; 3],
     /// Byte offsets into `Node8::bounds` of the near / far plane rows (`32 * (2 axis + sign)`).
     near: [usize; 3],
     far: [usize; 3],
@@ -66,7 +76,7 @@ impl RayBoxes8 {
         let (sx, sy, sz) = (neg(inv.x), neg(inv.y), neg(inv.z));
         Self {
             org: ray.origin.to_array(),
-            inv: inv.to_array(),
+            neg_inv: (-inv).to_array(),
             near: [32 * sx, 32 * (2 + sy), 32 * (4 + sz)],
             far: [32 * (1 - sx), 32 * (3 - sy), 32 * (5 - sz)],
             t_min: ray.t_min,
@@ -83,6 +93,9 @@ impl RayBoxes8 {
 /// (child `0` is the root, no node's child), so the padding sorts below every key.
 pub(crate) trait NodeTest8 {
     type Dist: Copy;
+    /// The lanes of the closest-hit leaf step's two-block triangle test (`lanes8.rs`): AVX2
+    /// where the node test is, the portable twin elsewhere.
+    type Pair: Pair8;
     fn test(&self, node: &Node8, t_max: f32) -> (u32, Self::Dist);
     fn hit_keys(&self, node: &Node8, t: Self::Dist, mask: u32) -> [u64; 8];
 }
@@ -92,6 +105,7 @@ pub(crate) struct Portable8(pub RayBoxes8);
 
 impl NodeTest8 for Portable8 {
     type Dist = [f32; 8];
+    type Pair = parallax_core::simd::F8;
 
     #[inline(always)]
     fn hit_keys(&self, node: &Node8, t: [f32; 8], mask: u32) -> [u64; 8] {
@@ -113,13 +127,13 @@ impl NodeTest8 for Portable8 {
                 ))
             };
             let o = rb.org.map(Vec4::splat);
-            let i = rb.inv.map(Vec4::splat);
-            let tnx = (b(rb.near[0]) - o[0]) * i[0];
-            let tny = (b(rb.near[1]) - o[1]) * i[1];
-            let tnz = (b(rb.near[2]) - o[2]) * i[2];
-            let tfx = (b(rb.far[0]) - o[0]) * i[0];
-            let tfy = (b(rb.far[1]) - o[1]) * i[1];
-            let tfz = (b(rb.far[2]) - o[2]) * i[2];
+            let i = rb.neg_inv.map(Vec4::splat);
+            let tnx = (o[0] - b(rb.near[0])) * i[0];
+            let tny = (o[1] - b(rb.near[1])) * i[1];
+            let tnz = (o[2] - b(rb.near[2])) * i[2];
+            let tfx = (o[0] - b(rb.far[0])) * i[0];
+            let tfy = (o[1] - b(rb.far[1])) * i[1];
+            let tfz = (o[2] - b(rb.far[2])) * i[2];
             let t_near = max_or_rhs(tnz, max_or_rhs(tny, max_or_rhs(tnx, Vec4::splat(rb.t_min))));
             let t_far = min_or_rhs(tfz, min_or_rhs(tfy, min_or_rhs(tfx, Vec4::splat(t_max))));
             let t_far = t_far * ROBUST_FAR_SCALE;
@@ -136,6 +150,7 @@ impl NodeTest8 for Portable8 {
 pub(crate) struct Avx2Boxes8 {
     rb: RayBoxes8,
     org: [std::arch::x86_64::__m256; 3],
+    /// `-1 / dir` ([`RayBoxes8`]).
     inv: [std::arch::x86_64::__m256; 3],
 }
 
@@ -149,7 +164,7 @@ impl Avx2Boxes8 {
         // SAFETY: AVX is available (caller).
         unsafe {
             let [ox, oy, oz] = rb.org;
-            let [ix, iy, iz] = rb.inv;
+            let [ix, iy, iz] = rb.neg_inv;
             Self {
                 org: [_mm256_set1_ps(ox), _mm256_set1_ps(oy), _mm256_set1_ps(oz)],
                 inv: [_mm256_set1_ps(ix), _mm256_set1_ps(iy), _mm256_set1_ps(iz)],
@@ -162,6 +177,7 @@ impl Avx2Boxes8 {
 #[cfg(target_arch = "x86_64")]
 impl NodeTest8 for Avx2Boxes8 {
     type Dist = std::arch::x86_64::__m256;
+    type Pair = crate::lanes8::A8;
 
     #[inline(always)]
     fn hit_keys(&self, node: &Node8, t_near: Self::Dist, mask: u32) -> [u64; 8] {
@@ -184,12 +200,12 @@ impl NodeTest8 for Avx2Boxes8 {
                 };
             }
             let (o, i) = (&self.org, &self.inv);
-            let tnx = _mm256_mul_ps(_mm256_sub_ps(b!(rb.near[0]), o[0]), i[0]);
-            let tny = _mm256_mul_ps(_mm256_sub_ps(b!(rb.near[1]), o[1]), i[1]);
-            let tnz = _mm256_mul_ps(_mm256_sub_ps(b!(rb.near[2]), o[2]), i[2]);
-            let tfx = _mm256_mul_ps(_mm256_sub_ps(b!(rb.far[0]), o[0]), i[0]);
-            let tfy = _mm256_mul_ps(_mm256_sub_ps(b!(rb.far[1]), o[1]), i[1]);
-            let tfz = _mm256_mul_ps(_mm256_sub_ps(b!(rb.far[2]), o[2]), i[2]);
+            let tnx = _mm256_mul_ps(_mm256_sub_ps(o[0], b!(rb.near[0])), i[0]);
+            let tny = _mm256_mul_ps(_mm256_sub_ps(o[1], b!(rb.near[1])), i[1]);
+            let tnz = _mm256_mul_ps(_mm256_sub_ps(o[2], b!(rb.near[2])), i[2]);
+            let tfx = _mm256_mul_ps(_mm256_sub_ps(o[0], b!(rb.far[0])), i[0]);
+            let tfy = _mm256_mul_ps(_mm256_sub_ps(o[1], b!(rb.far[1])), i[1]);
+            let tfz = _mm256_mul_ps(_mm256_sub_ps(o[2], b!(rb.far[2])), i[2]);
             let t_near = _mm256_max_ps(
                 tnz,
                 _mm256_max_ps(tny, _mm256_max_ps(tnx, _mm256_set1_ps(rb.t_min))),
@@ -236,16 +252,18 @@ pub(crate) trait LeafTest8<C: Counter> {
 
 /// Closest hit: keeps the lexicographic minimum of `(t, triangle index)` in `best`, and the
 /// traversal's `t_max` after the last leaf in `t`.
-struct ClosestLeaf<'a> {
+struct ClosestLeaf<'a, L> {
     r4: &'a Tri4Ray,
     best: &'a mut Best,
     t: f32,
+    /// The lanes of the two-block leaf test.
+    lanes: PhantomData<L>,
 }
 
-impl<C: Counter> LeafTest8<C> for ClosestLeaf<'_> {
+impl<C: Counter, L: Pair8> LeafTest8<C> for ClosestLeaf<'_, L> {
     #[inline(always)]
     fn test(&mut self, bvh: &Bvh, first: u32, count: u32, t_max: &mut f32, stats: &mut C) -> bool {
-        bvh.leaf_closest(self.r4, first, count, t_max, self.best, stats);
+        bvh.leaf_closest8::<C, L>(self.r4, first, count, t_max, self.best, stats);
         self.t = *t_max;
         false
     }
@@ -443,10 +461,11 @@ impl Bvh {
         best: &mut Best,
         stats: &mut C,
     ) {
-        let mut leaf = ClosestLeaf {
+        let mut leaf = ClosestLeaf::<T::Pair> {
             r4,
             best,
             t: *t_max,
+            lanes: PhantomData,
         };
         self.traverse8::<C, T, true>(nt, root, *t_max, stats, &mut leaf);
         *t_max = leaf.t;

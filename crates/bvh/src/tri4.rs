@@ -22,11 +22,17 @@
 //! SSE lanes round exactly like scalar f32 and Rust never contracts to FMA, so every lane
 //! computes bit-identical `u, v, w, t`. Lanes where an edge function is exactly `0.0` need the
 //! double-precision recompute and the edge tie-break rule: they are reported in a mask and the
-//! caller runs the scalar [`WatertightRay::intersect_within`] on them. glam's `Vec4` is SSE2 on
+//! caller runs the scalar [`WatertightRay::intersect_within`] on them. `Tri4Ray::intersect2`
+//! runs the same generic arithmetic on the two blocks of a leaf at once in eight lanes
+//! (`lanes8.rs`: one AVX register, or the portable `F8`), lane for lane the bits of the two
+//! 4-lane tests (tested below against them, on grid coordinates where many edge functions are
+//! exactly zero). glam's `Vec4` is SSE2 on
 //! x86_64 and plain scalar f32 elsewhere (the portable fallback, same arithmetic).
 
 use glam::{Vec3, Vec4};
 use parallax_core::math::{WatertightRay, shear_vertex, watertight_lanes};
+
+use crate::lanes8::Pair8;
 
 use crate::tri::Tri;
 
@@ -67,6 +73,12 @@ impl Tri4 {
     }
 }
 
+/// Row `axis` of vertex `v` of two blocks as one lane value (lanes `0..4` from `b0`).
+#[inline(always)]
+fn pair_row<L: Pair8>(b0: &Tri4, b1: &Tri4, v: usize, axis: usize) -> L {
+    L::halves(&b0.p[v][axis], &b1.p[v][axis])
+}
+
 /// Number of blocks a leaf of `count` triangles occupies.
 #[inline(always)]
 pub const fn blocks_for(count: u32) -> u32 {
@@ -90,6 +102,18 @@ pub struct Tri4Hits {
     pub t: Vec4,
     pub u: Vec4,
     pub v: Vec4,
+}
+
+/// Lane-wise results of [`Tri4Ray::intersect2`]: lanes `0..4` are block 0, `4..8` block 1.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Tri8Hits {
+    /// Lanes hit with `t_min < t < t_lim` (decided in f32, no edge function exactly zero).
+    pub hit: u32,
+    /// Lanes that need the scalar test (an edge function is exactly zero).
+    pub exact: u32,
+    pub t: [f32; 8],
+    pub u: [f32; 8],
+    pub v: [f32; 8],
 }
 
 /// A ray prepared for the 4-triangle test: the permutation and shear of Woop et al. 2013, §3,
@@ -123,6 +147,79 @@ impl Tri4Ray {
             sz: Vec4::splat(wt.sz),
             t_min: Vec4::splat(wt.t_min),
             wt,
+        }
+    }
+
+    /// [`Self::intersect`] on two blocks at once, in eight lanes `L` (`lanes8.rs`: one AVX
+    /// register in the AVX2 kernel): lane `l < 4` is lane `l` of `b0`, lane `l + 4` lane `l`
+    /// of `b1`; `mask` has eight bits. Per lane the very f32 operations of [`Self::intersect`]
+    /// (the same generic `shear_vertex`, `watertight_lanes` and `distance`), so `t, u, v` are
+    /// bit-identical to those of the two 4-lane tests. No closures (module docs of
+    /// `lanes8.rs`).
+    #[inline(always)]
+    pub(crate) fn intersect2<L: Pair8>(
+        &self,
+        b0: &Tri4,
+        b1: &Tri4,
+        mask: u32,
+        t_lim: f32,
+    ) -> Tri8Hits {
+        let [kx, ky, kz] = self.k;
+        let wt = &self.wt;
+        let o = [
+            L::splat(self.org[0].x),
+            L::splat(self.org[1].x),
+            L::splat(self.org[2].x),
+        ];
+        let shear = [L::splat(wt.sx), L::splat(wt.sy), L::splat(wt.sz)];
+        // `kx, ky, kz < 3` (`new`): in bounds.
+        let va = shear_vertex(
+            [
+                pair_row(b0, b1, 0, kx),
+                pair_row(b0, b1, 0, ky),
+                pair_row(b0, b1, 0, kz),
+            ],
+            o,
+            shear,
+        );
+        let vb = shear_vertex(
+            [
+                pair_row(b0, b1, 1, kx),
+                pair_row(b0, b1, 1, ky),
+                pair_row(b0, b1, 1, kz),
+            ],
+            o,
+            shear,
+        );
+        let vc = shear_vertex(
+            [
+                pair_row(b0, b1, 2, kx),
+                pair_row(b0, b1, 2, ky),
+                pair_row(b0, b1, 2, kz),
+            ],
+            o,
+            shear,
+        );
+        let r = watertight_lanes::<L>(va, vb, vc);
+        let exact = r.exact & mask;
+        if r.same_sign & mask & !exact == 0 {
+            // No lane can hit: skip the division (the common case).
+            return Tri8Hits {
+                hit: 0,
+                exact,
+                t: [0.0; 8],
+                u: [0.0; 8],
+                v: [0.0; 8],
+            };
+        }
+        let d = r.distance(va[2], vb[2], vc[2]);
+        let in_range = L::bits(L::and(d.t.gt(L::splat(wt.t_min)), d.t.lt(L::splat(t_lim))));
+        Tri8Hits {
+            hit: r.same_sign & d.nonzero & in_range & mask & !exact,
+            exact,
+            t: d.t.to_array(),
+            u: (r.e[1] * d.inv_det).to_array(),
+            v: (r.e[2] * d.inv_det).to_array(),
         }
     }
 
@@ -174,5 +271,107 @@ impl Tri4Ray {
             u: r.e[1] * d.inv_det,
             v: r.e[2] * d.inv_det,
         }
+    }
+}
+
+#[cfg(test)]
+mod pair_tests {
+    use glam::Vec3;
+    use parallax_core::Ray;
+    use parallax_core::math::WatertightRay;
+    use parallax_core::sampling::Rng;
+    use parallax_core::simd::F8;
+
+    use super::{Tri4, Tri4Ray};
+    use crate::lanes8::Pair8;
+    use crate::tri::Tri;
+
+    /// Coordinates on a coarse grid (many exactly-zero edge functions) or anywhere.
+    fn coord(rng: &mut Rng, grid: bool) -> f32 {
+        if grid {
+            rng.next_bounded(5) as f32 - 2.0
+        } else {
+            rng.next_f32() * 4.0 - 2.0
+        }
+    }
+
+    /// `intersect2::<L>` against the two 4-lane tests it replaces: the same hit and exact
+    /// masks, and bit-identical `t, u, v` on hit lanes. Returns the numbers of hit and exact
+    /// lanes seen.
+    fn check<L: Pair8>() -> (u32, u32) {
+        let mut rng = Rng::new(17, 3);
+        let (mut hits, mut exact) = (0, 0);
+        for case in 0..4000 {
+            let grid = case % 2 == 0;
+            let mut blocks = [Tri4::EMPTY; 2];
+            for (k, b) in blocks.iter_mut().enumerate() {
+                for l in 0..4 {
+                    let mut v = || {
+                        let (x, y) = (coord(&mut rng, grid), coord(&mut rng, grid));
+                        Vec3::new(x, y, coord(&mut rng, grid))
+                    };
+                    let t = Tri::new([v(), v(), v()]);
+                    b.set(l, &t, (4 * k + l) as u32);
+                }
+            }
+            let o = Vec3::new(coord(&mut rng, grid), coord(&mut rng, grid), -5.0);
+            let d = if grid {
+                [Vec3::Z, Vec3::X, Vec3::new(0.0, -1.0, 1.0)][case / 2 % 3]
+            } else {
+                Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, 1.0)
+            };
+            let r4 = Tri4Ray::new(WatertightRay::new(&Ray::new(o, d)));
+            let count = 5 + rng.next_bounded(4);
+            let mask = 0xF | ((1 << (count - 4)) - 1) << 4;
+            let t_lim = if case % 3 == 0 { 6.0 } else { f32::INFINITY };
+            let h = r4.intersect2::<L>(&blocks[0], &blocks[1], mask, t_lim);
+            for k in 0..2 {
+                let q = r4.intersect(&blocks[k], mask >> (4 * k) & 0xF, t_lim);
+                assert_eq!(h.hit >> (4 * k) & 0xF, q.hit, "case {case} block {k} hit");
+                assert_eq!(
+                    h.exact >> (4 * k) & 0xF,
+                    q.exact,
+                    "case {case} block {k} exact"
+                );
+                for l in 0..4 {
+                    if q.hit >> l & 1 != 0 {
+                        let i = 4 * k + l;
+                        assert_eq!(h.t[i].to_bits(), q.t[l].to_bits(), "case {case} t {i}");
+                        assert_eq!(h.u[i].to_bits(), q.u[l].to_bits(), "case {case} u {i}");
+                        assert_eq!(h.v[i].to_bits(), q.v[l].to_bits(), "case {case} v {i}");
+                    }
+                }
+            }
+            hits += h.hit.count_ones();
+            exact += h.exact.count_ones();
+        }
+        (hits, exact)
+    }
+
+    #[test]
+    fn pair_test_matches_two_block_tests_portable() {
+        let (hits, exact) = check::<F8>();
+        assert!(
+            hits > 500 && exact > 2000,
+            "{hits} hits, {exact} exact lanes"
+        );
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn pair_test_matches_two_block_tests_avx2() {
+        if !std::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        #[target_feature(enable = "avx2")]
+        unsafe fn run() -> (u32, u32) {
+            check::<crate::lanes8::A8>()
+        }
+        // SAFETY: AVX2 detected above.
+        let (hits, exact) = unsafe { run() };
+        assert!(
+            hits > 500 && exact > 2000,
+            "{hits} hits, {exact} exact lanes"
+        );
     }
 }
