@@ -314,6 +314,13 @@ fn walk_body<const UX: bool, const UY: bool, const W_FALLS: bool, const ISA: u8>
 ) -> WalkEnd {
     let texels = slabs.texels.as_slice();
     let records = cap.cell_records();
+    // The unchecked texel and record reads below rely on these (`ViewConsts::new` checks the
+    // level table against the grid; the texels and records must be this view's).
+    assert!(
+        texels.len() == vc.texel_count
+            && records.len() == vc.cells_x as usize * vc.cells_y as usize,
+        "view constants, texels and records of different views"
+    );
 
     // The start cell (clamped onto the grid: the start may lie on the frustum's boundary).
     let mut cx = cell_index(seg.x, vc.cells_x);
@@ -340,11 +347,15 @@ fn walk_body<const UX: bool, const UY: bool, const W_FALLS: bool, const ISA: u8>
         } else {
             (w_l, w_exit)
         };
-        let lv_i = level & (MAX_LEVELS - 1);
-        let texel = vc.level_offset[lv_i] as usize
-            + ty as usize * vc.level_width[lv_i] as usize
-            + tx as usize;
-        let t = &texels[texel];
+        // Loop invariant: `cx < cells_x`, `cy < cells_y` (`cell_index`, `next_cell` and
+        // `refine` keep the cell on the grid) and `level <= top`, so `(tx, ty)` is a texel of
+        // level `level` and `texel < texels.len()` (`ViewConsts::new`'s checks).
+        debug_assert!(cx < vc.cells_x && cy < vc.cells_y && level <= vc.top);
+        let lv = vc.levels[level & (MAX_LEVELS - 1)];
+        let texel = (lv as u32) as usize + ty as usize * (lv >> 32) as usize + tx as usize;
+        debug_assert!(texel < texels.len());
+        // SAFETY: `texel < texels.len()` by the loop invariant above.
+        let t = unsafe { texels.get_unchecked(texel) };
         // The min-max bounds, then the depth slabs (`slabs`).
         let overlaps = w_hi >= t.lo && w_lo <= t.hi && t.meets(w_lo, w_hi);
         if overlaps {
@@ -354,7 +365,9 @@ fn walk_body<const UX: bool, const UY: bool, const W_FALLS: bool, const ISA: u8>
             }
             q.counters.cells += 1;
             let index = cy as usize * vc.cells_x as usize + cx as usize;
-            let rec = &records[index];
+            // SAFETY: `index < cells_x * cells_y = records.len()` (the loop invariant, and
+            // the assertion before the loop).
+            let rec = unsafe { records.get_unchecked(index) };
             let nb = vc.buckets;
             let b_a = bucket_at(rec.zmin, rec.scale, nb, 1.0 / w_l);
             let b_b = bucket_at(rec.zmin, rec.scale, nb, 1.0 / w_exit);
