@@ -106,7 +106,10 @@ impl ViewConsts {
         // `(cx, cy)` on the grid is under texel `(cx >> k, cy >> k)` of level `k`, inside
         // that level's rows, and the records are one per cell.
         assert!(cells_x >= 1 && cells_y >= 1, "empty grid");
-        assert_eq!(cap.cell_records().len(), cells_x as usize * cells_y as usize);
+        assert_eq!(
+            cap.cell_records().len(),
+            cells_x as usize * cells_y as usize
+        );
         for (k, l) in levels.iter().enumerate() {
             assert!(
                 l.width == cells_x.div_ceil(1 << k)

@@ -192,7 +192,9 @@ fn fmax(a: f32, b: f32) -> f32 {
 }
 
 /// Walks view `cap` (constants `vc`) along `r` over `[t_start, t_end]` (inside the view's
-/// frustum), updating `q.best`.
+/// frustum), updating `q.best`. Inlined into the tracer's copies (`DirtTracer::trace`), so
+/// the segment's set-up runs on the copy's instruction set too.
+#[inline(always)]
 pub(crate) fn walk(
     vc: &ViewConsts,
     cap: &DirtCapture,
