@@ -28,7 +28,6 @@
 //! | levels | `L >= 1` | a level-1 scan tests level-0 cells (bounds and slabs; the records follow) |
 
 use super::segment::{Axis, Segment, fmax, fmin, refine};
-use super::view::ViewConsts;
 
 /// A texel known to overlap the ray, whose children a scan tests.
 pub(super) struct Parent {
@@ -71,11 +70,12 @@ pub(super) enum Scan {
 /// across a middle boundary, `refine` on the other axis), without going back up to `p`
 /// between them. The first that overlaps is returned with the walk's state at its entry; the
 /// walk goes on there at level `L - 1`. The middle column's crossing is computed only when
-/// the ray starts in the near column (likewise rows); the far side's exit is `p`'s.
+/// the ray starts in the near column (likewise rows); the far side's exit is `p`'s. `cells`:
+/// the grid's size.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub(super) fn scan_children<const UX: bool, const UY: bool>(
-    vc: &ViewConsts,
+    cells: (u32, u32),
     seg: &Segment,
     xs: &Axis,
     ys: &Axis,
@@ -93,7 +93,7 @@ pub(super) fn scan_children<const UX: bool, const UY: bool>(
     let mut near_y = ((cy >> m) & 1) == (!UY) as u32;
     // Towards higher indices the far child must be on the grid (towards lower ones the near
     // child is the odd one, so the far one exists).
-    if (UX && near_x && kmx >= vc.cells_x) || (UY && near_y && kmy >= vc.cells_y) {
+    if (UX && near_x && kmx >= cells.0) || (UY && near_y && kmy >= cells.1) {
         return (Scan::Edge, 0);
     }
     let mut lc = if near_x { xs.cross(kmx) } else { p.l_col };
@@ -113,11 +113,11 @@ pub(super) fn scan_children<const UX: bool, const UY: bool>(
             match pending {
                 Some((true, at)) if m > 0 => {
                     let y = seg.y + at * seg.dy;
-                    cy = refine::<UY>(cy, cy >> m, m as u32, y, vc.cells_y);
+                    cy = refine::<UY>(cy, cy >> m, m as u32, y, cells.1);
                 }
                 Some((false, at)) if m > 0 => {
                     let x = seg.x + at * seg.dx;
-                    cx = refine::<UX>(cx, cx >> m, m as u32, x, vc.cells_x);
+                    cx = refine::<UX>(cx, cx >> m, m as u32, x, cells.0);
                 }
                 _ => {}
             }
@@ -169,4 +169,168 @@ pub(super) fn scan_children<const UX: bool, const UY: bool>(
         w = w_exit;
     }
     (Scan::None, tested)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dirt::segment::next_cell;
+
+    /// The plain walk at level `m` from `(cx, cy)` over the children of the level-`m + 1`
+    /// texel it starts in: each child's crossings recomputed, each move's `refine` done at once,
+    /// the first child `test` accepts returned (the walk's steps before child scans).
+    #[allow(clippy::too_many_arguments)]
+    fn plain<const UX: bool, const UY: bool>(
+        seg: &Segment,
+        mut xs: Axis,
+        mut ys: Axis,
+        cells: (u32, u32),
+        m: usize,
+        (mut cx, mut cy): (u32, u32),
+        (mut l, mut w): (f32, f32),
+        test: &impl Fn(u32, u32, usize, f32, f32) -> bool,
+    ) -> Option<[u32; 4]> {
+        let parent = (cx >> (m + 1), cy >> (m + 1));
+        loop {
+            let (tx, ty) = (cx >> m, cy >> m);
+            let (kx, ky) = ((tx + UX as u32) << m, (ty + UY as u32) << m);
+            let (lc, lr) = (xs.cross(kx), ys.cross(ky));
+            let l_exit = fmax(fmin(fmin(lc, lr), 1.0), l);
+            let w_exit = seg.w_at(l_exit);
+            if test(cx, cy, m, w, w_exit) {
+                return Some([cx, cy, l.to_bits(), l_exit.to_bits()]);
+            }
+            if l_exit >= 1.0 {
+                return None;
+            }
+            if lc <= lr {
+                cx = next_cell::<UX>(cx, kx, &mut xs, cells.0);
+                if lr == lc {
+                    cy = next_cell::<UY>(cy, ky, &mut ys, cells.1);
+                } else if m > 0 {
+                    let y = seg.y + l_exit * seg.dy;
+                    cy = refine::<UY>(cy, ty, m as u32, y, cells.1);
+                }
+            } else {
+                cy = next_cell::<UY>(cy, ky, &mut ys, cells.1);
+                if m > 0 {
+                    let x = seg.x + l_exit * seg.dx;
+                    cx = refine::<UX>(cx, tx, m as u32, x, cells.0);
+                }
+            }
+            if (cx >> (m + 1), cy >> (m + 1)) != parent {
+                return None;
+            }
+            (l, w) = (l_exit, w_exit);
+        }
+    }
+
+    /// A scan returns the child the plain walk at the level below finds first, with the same
+    /// cell, entry and exit `λ` (bits), on random segments, levels and overlap patterns
+    /// (every direction; ties of the two crossings included by segments through corners).
+    fn scan_is_the_plain_walk<const UX: bool, const UY: bool>(seed: u64) -> (u32, u32) {
+        let mut state = seed;
+        let mut next = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 33) as u32
+        };
+        let cells = (37u32, 29u32);
+        let (mut compared, mut found) = (0, 0);
+        for case in 0..20_000 {
+            let m = (next() % 4) as usize;
+            // A start inside the grid, a film direction of the given signs (whole cells for a
+            // quarter of the cases: crossings that tie).
+            let snap = case % 4 == 0;
+            let f = |v: u32, n: u32| {
+                if snap {
+                    (v % n) as f32
+                } else {
+                    (v % (n * 1024)) as f32 / 1024.0
+                }
+            };
+            let (x, y) = (f(next(), cells.0), f(next(), cells.1));
+            let span = |up: bool, v: u32| {
+                let d = if snap {
+                    (v % 16) as f32
+                } else {
+                    (v % 16384) as f32 / 1024.0
+                };
+                if up { d } else { -d }
+            };
+            let (dx, dy) = (span(UX, next()), span(UY, next()));
+            let (x1, y1) = (x + dx, y + dy);
+            // Inside the grid to the end (the walk's interval is clipped to the view).
+            if x1 <= 0.0 || y1 <= 0.0 || x1 >= cells.0 as f32 || y1 >= cells.1 as f32 {
+                continue;
+            }
+            let seg = Segment::from_parts(x, y, dx, dy, 0.5, -0.25);
+            let ((xs, _), (ys, _)) = (Axis::new(x, x1), Axis::new(y, y1));
+            let (cx, cy) = ((x as u32).min(cells.0 - 1), (y as u32).min(cells.1 - 1));
+            let salt = next();
+            let test = |cx: u32, cy: u32, m: usize, _: f32, _: f32| {
+                ((cx >> m).wrapping_mul(73) ^ (cy >> m).wrapping_mul(151) ^ salt) % 3 == 0
+            };
+            let (tx, ty) = (cx >> (m + 1), cy >> (m + 1));
+            let (kx, ky) = ((tx + UX as u32) << (m + 1), (ty + UY as u32) << (m + 1));
+            let p = Parent {
+                tx,
+                ty,
+                level: m + 1,
+                kx,
+                ky,
+                l_col: xs.cross(kx),
+                l_row: ys.cross(ky),
+            };
+            let want = plain::<UX, UY>(&seg, xs, ys, cells, m, (cx, cy), (0.0, 0.5), &test);
+            let got =
+                match scan_children::<UX, UY>(cells, &seg, &xs, &ys, &p, cx, cy, 0.0, 0.5, &test).0
+                {
+                    Scan::Edge => continue,
+                    Scan::None => None,
+                    Scan::Child(c) => {
+                        assert_eq!(
+                            (c.kx, c.ky),
+                            (
+                                ((c.cx >> m) + UX as u32) << m,
+                                ((c.cy >> m) + UY as u32) << m
+                            )
+                        );
+                        assert_eq!(
+                            (c.l_col.to_bits(), c.l_row.to_bits()),
+                            (xs.cross(c.kx).to_bits(), ys.cross(c.ky).to_bits())
+                        );
+                        assert_eq!(c.w_exit.to_bits(), seg.w_at(c.l_exit).to_bits());
+                        Some([c.cx, c.cy, c.l.to_bits(), c.l_exit.to_bits()])
+                    }
+                };
+            assert_eq!(
+                got, want,
+                "case {case}: m {m}, start ({x}, {y}), span ({dx}, {dy})"
+            );
+            compared += 1;
+            found += got.is_some() as u32;
+        }
+        (compared, found)
+    }
+
+    #[test]
+    fn scans_equal_the_plain_walk() {
+        for (k, (compared, found)) in [
+            scan_is_the_plain_walk::<false, false>(1),
+            scan_is_the_plain_walk::<false, true>(2),
+            scan_is_the_plain_walk::<true, false>(3),
+            scan_is_the_plain_walk::<true, true>(4),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            // Enough cases of both outcomes in every direction.
+            assert!(
+                compared > 5_000 && found > 1_000 && compared - found > 1_000,
+                "direction {k}: {compared} compared, {found} found"
+            );
+        }
+    }
 }

@@ -94,6 +94,24 @@ impl Segment {
         }
     }
 
+    /// A segment from its film start, film span, `w` at the start and `w` span (the `t`
+    /// mapping left empty: for tests of the walk's steps).
+    #[cfg(test)]
+    pub(super) fn from_parts(x: f32, y: f32, dx: f32, dy: f32, w: f32, dw: f32) -> Segment {
+        Segment {
+            x,
+            y,
+            dx,
+            dy,
+            w,
+            dw,
+            t_a: 0.0,
+            t_b: 0.0,
+            dt: 0.0,
+            z_b: 0.0,
+        }
+    }
+
     /// Reciprocal depth at `λ` (monotone in `λ`).
     #[inline(always)]
     pub(super) fn w_at(&self, l: f32) -> f32 {

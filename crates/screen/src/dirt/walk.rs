@@ -270,8 +270,18 @@ fn walk_body<const UX: bool, const UY: bool, const W_FALLS: bool, const ISA: u8>
                     l_col,
                     l_row,
                 };
-                let scan =
-                    scan_children::<UX, UY>(vc, seg, &xs, &ys, &parent, cx, cy, l, w_l, &test);
+                let scan = scan_children::<UX, UY>(
+                    (vc.cells_x, vc.cells_y),
+                    seg,
+                    &xs,
+                    &ys,
+                    &parent,
+                    cx,
+                    cy,
+                    l,
+                    w_l,
+                    &test,
+                );
                 scanned += scan.1;
                 match scan.0 {
                     Scan::Child(c) => {
