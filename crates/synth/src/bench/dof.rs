@@ -142,6 +142,10 @@ pub struct DofRow {
     pub psnr_self: f64,
     /// Fig. 8: PSNR of plain lens sampling at the same `T_dof` (NaN when not computed).
     pub psnr_equal_time: f64,
+    /// The equal-quality comparison with the DDA (quad-tree rows of `bench dof
+    /// --equal-quality`, [`super::dof_equal`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub equal_quality: Option<super::dof_equal::EqualQuality>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,
 }
