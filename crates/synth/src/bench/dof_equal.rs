@@ -29,9 +29,8 @@
 //! | `dda_max_steps` | the bench's tuned DDA bound | the DDA's step bound |
 
 use parallax_core::spread::Spread;
-use serde::Serialize;
 
-use super::dof::{DofEntry, DofRow};
+use super::dof::{DofEntry, DofRow, EqualQuality};
 use crate::method::Method;
 
 /// Lens rays per pixel of the equal-quality sweep (both methods, `N_sec = 1`).
@@ -56,29 +55,6 @@ pub fn entries(layers: &[usize], n_pri: &[u32], dda_max_steps: u32) -> Vec<DofEn
         }
     }
     v
-}
-
-/// The DDA's CPU time at a quad-tree row's PSNR, and the ratio (module docs). JSON: the
-/// `equal_quality` object of the quad-tree's [`DofRow`].
-#[derive(Clone, Debug, Serialize)]
-pub struct EqualQuality {
-    pub dda_max_steps: u32,
-    /// `N_pri` of the two DDA rows bracketing the quad-tree's PSNR (`None`: outside the
-    /// DDA's measured range).
-    pub dda_n_pri_bracket: Option<[u32; 2]>,
-    /// Their PSNR (dB).
-    pub dda_psnr_bracket: Option<[f64; 2]>,
-    /// The DDA's interpolated CPU ms at the quad-tree's PSNR, from the best rounds (NaN
-    /// when not bracketed).
-    pub ms_dda_cpu_at_psnr: f64,
-    /// `ms_dof_cpu / ms_dda_cpu_at_psnr`: quad-tree over DDA CPU time at equal PSNR.
-    pub cpu_ratio: f64,
-    /// The same ratio per round (that round's times only).
-    pub cpu_ratio_rounds: Vec<f64>,
-    pub cpu_ratio_spread: Spread,
-    /// Whether the DDA's / the quad-tree's PSNR rises strictly with `N_pri` over the sweep.
-    pub dda_psnr_rising: bool,
-    pub quadtree_psnr_rising: bool,
 }
 
 /// The CPU time at `psnr` on `curve` (`(psnr, ms)` ordered by `N_pri`): `exp` of the
