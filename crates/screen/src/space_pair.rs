@@ -348,14 +348,14 @@ impl UnitCube {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use glam::{Vec2, Vec3};
     use parallax_core::Ray;
 
-    use crate::CubeSegment;
+    use crate::{CubeSegment, UnitCube};
 
     /// Every field's bits (`==` would let a signed zero or a NaN pass).
-    fn bits(s: &Option<CubeSegment>) -> Option<[u64; 10]> {
+    pub(crate) fn bits(s: &Option<CubeSegment>) -> Option<[u64; 10]> {
         s.map(|s| {
             [
                 s.p0.x.to_bits() as u64,
@@ -382,9 +382,10 @@ mod tests {
         }
     }
 
-    #[test]
-    fn pair_and_quad_equal_scalar() {
-        let cube = crate::space::tests::cube();
+    /// Random rays from the eye, near it, anywhere and along axes, with varied bounds;
+    /// rays through the cube's corners and along its faces; rays the scalar clip rejects
+    /// (also `space_oct`'s test).
+    pub(crate) fn test_rays(cube: &UnitCube) -> Vec<Ray> {
         let cam = &cube.camera;
         let eye = cam.frame.position;
         let mut rng = Xs(0x9e37_79b9_7f4a_7c15);
@@ -427,6 +428,14 @@ mod tests {
         bad.t_max = f32::NAN;
         rays.push(bad);
         rays.push(Ray::new(eye, Vec3::ZERO));
+        rays
+    }
+
+    #[test]
+    fn pair_and_quad_equal_scalar() {
+        let cube = crate::space::tests::cube();
+        let eye = cube.camera.frame.position;
+        let rays = test_rays(&cube);
         let mut clipped = 0;
         for w in rays.windows(4) {
             let w: &[Ray; 4] = w.try_into().unwrap();

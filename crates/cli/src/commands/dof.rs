@@ -12,6 +12,7 @@ use parallax_core::image::png;
 use parallax_render::score::score;
 use parallax_scene::camera::ThinLens;
 use parallax_synth::bench::dof as bench_dof;
+use parallax_synth::bench::dof_equal;
 use parallax_synth::dof::setup::guard_px;
 use parallax_synth::dof::truth::thin_lens_truth;
 use parallax_synth::dof::{
@@ -266,6 +267,18 @@ pub struct DofBenchArgs {
     /// quad-tree with the largest layer count).
     #[arg(long)]
     pub fig8: bool,
+    /// Instead of Table 4: the quad-tree and the DDA (at --equal-quality-dda-steps) at the
+    /// lens-ray counts of --equal-quality-n-pri in the same interleaved rounds, and the DDA's
+    /// CPU time interpolated at each quad-tree row's PSNR (time at equal quality).
+    #[arg(long)]
+    pub equal_quality: bool,
+    /// --equal-quality: comma list of lens rays per pixel (N_sec 1) of both methods.
+    #[arg(long, value_delimiter = ',', default_value = "2,3,4,5,6,8,10,12", value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub equal_quality_n_pri: Vec<u32>,
+    /// --equal-quality: the DDA's step bound (default: the first --dda-sweep value, else
+    /// --dda-max-steps).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=10_000_000))]
+    pub equal_quality_dda_steps: Option<u32>,
     /// Fig. 8: lens rays per pixel of the quad-tree's own converged image (noise reference).
     #[arg(long, default_value_t = 256)]
     pub own_spp: u32,
@@ -317,9 +330,25 @@ pub fn bench(a: &DofBenchArgs, quiet: bool) -> Result<()> {
     if steps.is_empty() {
         steps.push(opts.dda_max_steps);
     }
-    let entries = bench_dof::table4_entries(&layers, &steps, &methods);
+    let eq_steps = a.equal_quality_dda_steps.unwrap_or(steps[0]);
+    let entries = if a.equal_quality {
+        ensure!(
+            methods.contains(&Method::QuadTree) && methods.contains(&Method::Dda),
+            "--equal-quality compares the quad-tree with the DDA: --method needs both"
+        );
+        ensure!(
+            !a.equal_quality_n_pri.is_empty(),
+            "--equal-quality-n-pri needs at least one value"
+        );
+        dof_equal::entries(&layers, &a.equal_quality_n_pri, eq_steps)
+    } else {
+        bench_dof::table4_entries(&layers, &steps, &methods)
+    };
     let rows = bench_dof::run(&scene, &bvh, &b, &entries, &opts, &truth, &progress)?;
     let mut all: Vec<bench_dof::DofRow> = rows.into_iter().map(|(r, _)| r).collect();
+    if a.equal_quality {
+        dof_equal::analyse(&mut all, eq_steps);
+    }
     if !quiet {
         println!(
             "{} {}x{} (guard {} px), aperture {} m, focus {:.2} m, sigma {}, truth {} spp, cube near {}, {} threads, best of {} interleaved rounds",
@@ -335,9 +364,17 @@ pub fn bench(a: &DofBenchArgs, quiet: bool) -> Result<()> {
             rayon::current_num_threads(),
             b.repeats
         );
-        print_rows("Table 4", &all, false);
-        print_dda_minimal(&all);
-        print_vs_dda(&all);
+        if a.equal_quality {
+            print_rows("Equal-quality sweep (plain lens sampling)", &all, false);
+            println!(
+                "\nQuad-tree vs the DDA at equal quality (same run, CPU ms; DDA time interpolated on log time vs PSNR between its rows bracketing the quad-tree's PSNR, never extrapolated)\n"
+            );
+            println!("{}", dof_equal::markdown(&all));
+        } else {
+            print_rows("Table 4", &all, false);
+            print_dda_minimal(&all);
+            print_vs_dda(&all);
+        }
     }
     if a.converged > 0 {
         let mut seen = Vec::new();

@@ -212,11 +212,17 @@ impl QuadTree {
         // level whose nodes exceed the segment's screen extent, or at the topmost plane
         // ancestor.
         let (cx, cy) = (ray.start_cell(0, s, w - 1), ray.start_cell(1, s, h - 1));
-        let ext = ray.dg[0].abs().max(ray.dg[1].abs()) * (q.s_hi - s);
+        // Plain compares (`dg` is finite: the segment's ends are clamped to the cube).
+        let ext = fmax(ray.dg[0].abs(), ray.dg[1].abs()) * (q.s_hi - s);
         let mut l = if ext < 1e6 {
+            // `0 <= ext` (`s <= q.s_hi` here), so `ext + 2` is in `[2, 1e6 + 2)`.
+            debug_assert!(ext >= 0.0);
+            // SAFETY: `ext + 2` is in `[2, 1e6 + 2)` (above): it truncates to an in-range
+            // `u32` (no saturation code needed, unlike `as`).
+            let e = unsafe { (ext + 2.0).to_int_unchecked::<u32>() };
             // ~ceil(log2(ext + 2)) without libm, one level lower: measured fewer visits
             // (the z-entry descent below skips the start box's front part anyway).
-            ((32 - ((ext + 2.0) as u32).leading_zeros()) as usize)
+            ((32 - e.leading_zeros()) as usize)
                 .saturating_sub(1)
                 .min(top)
         } else {
@@ -224,7 +230,10 @@ impl QuadTree {
         };
         // The topmost plane ancestor of the start pixel, precomputed per pixel at build
         // time (one load instead of one node load per level above `l`).
-        let pl = self.plane_level[(cy * w + cx) as usize] as usize;
+        debug_assert!(cx < w && cy < h && self.plane_level.len() == (w * h) as usize);
+        // SAFETY: `cx <= W - 1` and `cy <= H - 1` (the start cells' clamps), and the table
+        // holds `W x H` entries (debug-asserted).
+        let pl = unsafe { *self.plane_level.get_unchecked((cy * w + cx) as usize) } as usize;
         if pl > l {
             // A real (predicted) branch, not a select: the start node's index then need not
             // wait for this load.
@@ -484,7 +493,9 @@ impl QuadTree {
     /// The regional `z` floor of a ray over `[q.s_lo, q.s_hi]`: the entry of
     /// [`Self::z_floor_rect`] for the rectangle of top-level nodes spanned by the pixels at
     /// both ends (the segment is straight, so every image pixel it crosses lies in that
-    /// rectangle; clamping to the image keeps that). Needs a non-empty table.
+    /// rectangle; clamping to the image keeps that), or the global floor where the start
+    /// node's own entry is the global floor (then so is the rectangle's: no end cells
+    /// needed). Needs a non-empty table.
     #[inline(always)]
     fn region_floor(&self, ray: &RaySetup, q: &Query) -> f32 {
         let top = self.levels.len() - 1;
@@ -504,6 +515,17 @@ impl QuadTree {
         }
         let xa = ray.start_cell(0, q.s_lo, wm) >> top;
         let ya = ray.start_cell(1, q.s_lo, hm) >> top;
+        // Pre-test on the start node alone (its one-node rectangle): every rectangle holding
+        // it has a floor at most that node's (a minimum over more nodes; the table's rounding
+        // to the global floor is monotone), so where that is the global floor the
+        // rectangle's is too, and the end cells and the rectangle's index are not needed.
+        let k1 = (((ya * th + ya) * tw + xa) * tw + xa) as usize;
+        debug_assert!(k1 < self.z_floor_rect.len());
+        // SAFETY: `xa <= (W - 1) >> top < tw`, `ya < th`: `k1 < tw^2 th^2` (debug-asserted).
+        let f1 = unsafe { *self.z_floor_rect.get_unchecked(k1) };
+        if f1 <= self.z_floor {
+            return self.z_floor;
+        }
         let xb = ray.cell_in(0, q.s_hi, 0, wm) >> top;
         let yb = ray.cell_in(1, q.s_hi, 0, hm) >> top;
         let (c0, c1) = (xa.min(xb), xa.max(xb));

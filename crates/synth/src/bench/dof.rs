@@ -27,6 +27,7 @@
 //! `own_spp`, no secondaries): its noise alone, without the layers' bias.
 
 use parallax_bvh::Bvh;
+use parallax_core::spread::Spread;
 use parallax_core::{Image, Rgb};
 use parallax_render::score::{Shading, score};
 use parallax_scene::Scene;
@@ -142,8 +143,35 @@ pub struct DofRow {
     pub psnr_self: f64,
     /// Fig. 8: PSNR of plain lens sampling at the same `T_dof` (NaN when not computed).
     pub psnr_equal_time: f64,
+    /// The equal-quality comparison with the DDA (quad-tree rows of `bench dof
+    /// --equal-quality`, [`super::dof_equal`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub equal_quality: Option<EqualQuality>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,
+}
+
+/// The DDA's CPU time at a quad-tree row's PSNR, and the ratio ([`super::dof_equal`]). JSON:
+/// the `equal_quality` object of the quad-tree's [`DofRow`].
+#[derive(Clone, Debug, Serialize)]
+pub struct EqualQuality {
+    pub dda_max_steps: u32,
+    /// `N_pri` of the two DDA rows bracketing the quad-tree's PSNR (`None`: outside the
+    /// DDA's measured range).
+    pub dda_n_pri_bracket: Option<[u32; 2]>,
+    /// Their PSNR (dB).
+    pub dda_psnr_bracket: Option<[f64; 2]>,
+    /// The DDA's interpolated CPU ms at the quad-tree's PSNR, from the best rounds (NaN
+    /// when not bracketed).
+    pub ms_dda_cpu_at_psnr: f64,
+    /// `ms_dof_cpu / ms_dda_cpu_at_psnr`: quad-tree over DDA CPU time at equal PSNR.
+    pub cpu_ratio: f64,
+    /// The same ratio per round (that round's times only).
+    pub cpu_ratio_rounds: Vec<f64>,
+    pub cpu_ratio_spread: Spread,
+    /// Whether the DDA's / the quad-tree's PSNR rises strictly with `N_pri` over the sweep.
+    pub dda_psnr_rising: bool,
+    pub quadtree_psnr_rising: bool,
 }
 
 /// A built structure and the entries tracing it.

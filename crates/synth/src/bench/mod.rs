@@ -7,6 +7,7 @@ use crate::method::{Method, MethodOptions};
 pub mod build;
 pub mod compression;
 pub mod dof;
+pub mod dof_equal;
 pub mod input;
 pub mod reflect;
 pub mod trace;
