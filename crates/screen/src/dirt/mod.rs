@@ -6,9 +6,6 @@
 //!   and expressed in it (§4.2.1 "Screen-space ray tracing");
 //! - `walk`: Hi-Z over the min-max mips and bucket tracing in the finest cells (Algorithm 1),
 //!   with the argument why the answer is exact;
-//! - `cell`: bucket tracing in one level-0 cell;
-//! - `segment`: the ray's segment projected onto a view's cell grid, the moves between cells;
-//! - `scan`: the walk's descent, the children of an overlapping texel tested in ray order;
 //! - `slabs`: per mip texel, the mask of occupied reciprocal-depth slabs (from the cells'
 //!   non-empty buckets), the walk's second skip test, and why a skip by it is exact;
 //! - `tri4`: the ray-triangle tests of a bucket, four triangles at a time, and the per-ray
@@ -55,9 +52,6 @@
 //! `docs/notes/dirt.md`.
 
 mod best;
-mod cell;
-mod scan;
-mod segment;
 mod slabs;
 mod tri4;
 mod view;

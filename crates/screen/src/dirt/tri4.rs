@@ -47,9 +47,6 @@ pub(crate) struct Query<'a> {
 }
 
 impl<'a> Query<'a> {
-    /// Inlined into the tracer's copies (`DirtTracer::trace`): the mailbox's reset in the
-    /// copy's widest stores.
-    #[inline(always)]
     pub fn new(wt: WatertightRay, tris: &'a [DirtTri], any: bool) -> Self {
         let o = wt.origin;
         Query {

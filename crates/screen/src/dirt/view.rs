@@ -38,11 +38,9 @@ pub(crate) struct ViewConsts {
     pub buckets: u32,
     /// Index of the top mip level.
     pub top: usize,
-    /// Per mip level, its first texel in the flat bounds array (low 32 bits) and its width
-    /// (high 32 bits): one load per texel visit.
-    pub levels: [u64; MAX_LEVELS],
-    /// Texels of the whole mip chain (the length of the flat bounds array).
-    pub texel_count: usize,
+    /// Per mip level, its first texel in the flat bounds array and its width.
+    pub level_offset: [u32; MAX_LEVELS],
+    pub level_width: [u32; MAX_LEVELS],
     /// Bound on loop iterations of one traversal of this view.
     pub max_steps: u32,
     /// The instruction set the walk of this view runs on.
@@ -102,23 +100,6 @@ impl ViewConsts {
             levels.len() <= MAX_LEVELS && bounds.len() <= u32::MAX as usize,
             "mip chain too large"
         );
-        // The walk indexes texels and cell records without bounds checks (`walk`): a cell
-        // `(cx, cy)` on the grid is under texel `(cx >> k, cy >> k)` of level `k`, inside
-        // that level's rows, and the records are one per cell.
-        assert!(cells_x >= 1 && cells_y >= 1, "empty grid");
-        assert_eq!(
-            cap.cell_records().len(),
-            cells_x as usize * cells_y as usize
-        );
-        for (k, l) in levels.iter().enumerate() {
-            assert!(
-                l.width == cells_x.div_ceil(1 << k)
-                    && l.height == cells_y.div_ceil(1 << k)
-                    && l.offset + l.width as usize * l.height as usize <= bounds.len(),
-                "mip level {k} does not cover the grid"
-            );
-        }
-        assert!(levels.last().is_some_and(|l| l.width == 1 && l.height == 1));
         // Every iteration either descends a level or leaves a texel; leaving moves the cell
         // one step in x or y in the ray's (monotone) film direction, and at most `top` levels
         // are descended per move.
@@ -137,12 +118,8 @@ impl ViewConsts {
             cells_y,
             buckets: cap.buckets(),
             top,
-            levels: std::array::from_fn(|k| {
-                levels
-                    .get(k)
-                    .map_or(0, |l| l.offset as u64 | (l.width as u64) << 32)
-            }),
-            texel_count: bounds.len(),
+            level_offset: std::array::from_fn(|k| levels.get(k).map_or(0, |l| l.offset as u32)),
+            level_width: std::array::from_fn(|k| levels.get(k).map_or(0, |l| l.width)),
             max_steps,
             isa: Isa::detect(),
         }

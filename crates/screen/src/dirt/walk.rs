@@ -20,14 +20,12 @@
 //! texel's reciprocal bounds, or (`slabs`) its slabs of `w` missing every occupied slab of the
 //! texel: the texel is skipped, the walk moves to `λ_exit` and one level up (a skip by the
 //! slabs drops only cells whose buckets at the ray's depths are all empty, `slabs` module
-//! docs). Overlapping above level 0: down by child scans (`scan`: the texel's children along
-//! the ray tested in ray order, the walk going on at the first that overlaps, or leaving the
-//! texel when none does). At level 0: the cell's record (bounds, eq. 1
+//! docs). Overlapping above level 0: one level down. At level 0: the cell's record (bounds, eq. 1
 //! scale, non-empty bucket mask), the buckets of the ray's depth span there, and if any of
 //! them holds a triangle, bucket tracing; then on to `λ_exit`.
 //!
 //! **Bucket tracing.** The ray's depth span in the cell gives the bucket range by eq. 1
-//! (`parallax_raster::dirt::bucket_index`, the capture's own function); buckets are visited in ray order (towards
+//! ([`bucket_index`], the capture's own function); buckets are visited in ray order (towards
 //! the far plane: ascending; towards the eye: descending), the empty ones skipped by the
 //! record's mask, and every triangle listed in them is
 //! tested with the watertight test, four at a time (`tri4`: the lanes of
@@ -64,11 +62,8 @@
 //! the BVH's test on the same f32 corners, so `t` and barycentrics are bit-identical to the
 //! BVH's.
 
-use parallax_raster::dirt::DirtCapture;
+use parallax_raster::dirt::{DirtCapture, bucket_index};
 
-use super::cell::{Cell, HitLambda, any_bucket, bucket_at, trace_cell};
-use super::scan::{Parent, Scan, scan_children};
-use super::segment::{Axis, Segment, cell_index, fmax, fmin, next_cell, refine};
 use super::slabs::Slabs;
 use super::tri4::Query;
 use super::view::{Isa, MAX_LEVELS, ViewConsts, ViewRay};
@@ -82,10 +77,122 @@ pub(crate) enum WalkEnd {
     Continue,
 }
 
-/// Walks view `cap` (constants `vc`) along `r` over `[t_start, t_end]` (inside the view's
-/// frustum), updating `q.best`. Inlined into the tracer's copies (`DirtTracer::trace`), so
-/// the segment's set-up runs on the copy's instruction set too.
+/// One film axis of the projected segment: boundary `k` (in cells) is crossed at
+/// `λ = k inv + c` (`inv = 1 / (x_b - x_a)`, `c = -x_a inv`); an axis the ray does not move
+/// along has `inv = 0`, `c = +inf`, so every crossing is at `+inf` and the walk never steps
+/// it (a step needs a crossing before the segment's end, `λ < 1`). The direction (`up`) is
+/// not stored: the walk is specialised on it.
+#[derive(Clone, Copy)]
+struct Axis {
+    inv: f32,
+    c: f32,
+}
+
+impl Axis {
+    /// An axis the ray does not move along.
+    const STILL: Axis = Axis {
+        inv: 0.0,
+        c: f32::INFINITY,
+    };
+
+    /// The axis of a segment from `a` to `b` (cells), and whether the ray moves towards
+    /// higher cell indices. Below `MIN_SPAN` cells the axis does not move (its film span is
+    /// far inside the capture's film margin, and `1 / span` stays finite with room for
+    /// `k inv`).
+    #[inline(always)]
+    fn new(a: f32, b: f32) -> (Axis, bool) {
+        const MIN_SPAN: f32 = 1e-30;
+        let span = b - a;
+        if span.abs() <= MIN_SPAN || span.is_nan() {
+            return (Axis::STILL, span > 0.0);
+        }
+        let inv = 1.0 / span;
+        (Axis { inv, c: -a * inv }, span > 0.0)
+    }
+
+    /// `λ` of the crossing of boundary `k`.
+    #[inline(always)]
+    fn cross(&self, k: u32) -> f32 {
+        k as f32 * self.inv + self.c
+    }
+}
+
+/// The ray's clipped segment `[t_a, t_b]` projected onto the view's cell grid: film position
+/// (in cells) and reciprocal view depth `w = 1 / depth` are affine in the screen-space
+/// parameter `λ in [0, 1]` (module docs).
+struct Segment {
+    x: f32,
+    y: f32,
+    dx: f32,
+    dy: f32,
+    w: f32,
+    dw: f32,
+    /// The ends in `t`, `t_b - t_a` and the depth at `t_b`, to map a hit's `t` to `λ`.
+    t_a: f32,
+    t_b: f32,
+    dt: f32,
+    z_b: f32,
+}
+
+impl Segment {
+    #[inline(always)]
+    fn new(vc: &ViewConsts, r: &ViewRay, t_a: f32, t_b: f32) -> Segment {
+        let (z_a, z_b) = (r.depth(t_a), r.depth(t_b));
+        let (w_a, w_b) = (1.0 / z_a, 1.0 / z_b);
+        let film = |t: f32, w: f32| {
+            let (u, v) = ((r.o.x + t * r.d.x) * w, (r.o.y + t * r.d.y) * w);
+            ((u - vc.a0) * vc.cells_per_u, (vc.b0 - v) * vc.cells_per_v)
+        };
+        let (x_a, y_a) = film(t_a, w_a);
+        let (x_b, y_b) = film(t_b, w_b);
+        Segment {
+            x: x_a,
+            y: y_a,
+            dx: x_b - x_a,
+            dy: y_b - y_a,
+            w: w_a,
+            dw: w_b - w_a,
+            t_a,
+            t_b,
+            dt: t_b - t_a,
+            z_b,
+        }
+    }
+
+    /// Reciprocal depth at `λ` (monotone in `λ`).
+    #[inline(always)]
+    fn w_at(&self, l: f32) -> f32 {
+        self.w + l * self.dw
+    }
+
+    /// `λ` of the ray point at `t`: `(t - t_a) z_b / ((t_b - t_a) z(t))` inside the segment
+    /// (at most 1), 0 before it, `+inf` after it.
+    #[inline]
+    fn lambda_of(&self, r: &ViewRay, t: f32) -> f32 {
+        if t <= self.t_a {
+            0.0
+        } else if t <= self.t_b {
+            fmin((t - self.t_a) * self.z_b / (self.dt * r.depth(t)), 1.0)
+        } else {
+            f32::INFINITY
+        }
+    }
+}
+
+/// `min` and `max` of two finite-or-infinite, non-NaN floats (plain comparisons; `f32::min`
+/// pays for NaN handling the walk never needs).
 #[inline(always)]
+fn fmin(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
+}
+
+#[inline(always)]
+fn fmax(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
+}
+
+/// Walks view `cap` (constants `vc`) along `r` over `[t_start, t_end]` (inside the view's
+/// frustum), updating `q.best`.
 pub(crate) fn walk(
     vc: &ViewConsts,
     cap: &DirtCapture,
@@ -207,13 +314,6 @@ fn walk_body<const UX: bool, const UY: bool, const W_FALLS: bool, const ISA: u8>
 ) -> WalkEnd {
     let texels = slabs.texels.as_slice();
     let records = cap.cell_records();
-    // The unchecked texel and record reads below rely on these (`ViewConsts::new` checks the
-    // level table against the grid; the texels and records must be this view's).
-    assert!(
-        texels.len() == vc.texel_count
-            && records.len() == vc.cells_x as usize * vc.cells_y as usize,
-        "view constants, texels and records of different views"
-    );
 
     // The start cell (clamped onto the grid: the start may lie on the frustum's boundary).
     let mut cx = cell_index(seg.x, vc.cells_x);
@@ -226,94 +326,35 @@ fn walk_body<const UX: bool, const UY: bool, const W_FALLS: bool, const ISA: u8>
     let mut left = vc.max_steps;
     let mut end = None;
 
-    // Texels tested by child scans (below), besides one per loop iteration.
-    let mut scanned = 0u64;
-    // Whether the texel at `(cx, cy, level)` over `[λ0, λ1]` (`w` from `w0` to `w1`) may hold a
-    // cell to trace: its min-max bounds, then its depth slabs (`slabs`).
-    let test = |cx: u32, cy: u32, level: usize, w0: f32, w1: f32| {
-        let (w_lo, w_hi) = if W_FALLS { (w1, w0) } else { (w0, w1) };
-        let (tx, ty) = (cx >> level, cy >> level);
-        // Loop invariant: `cx < cells_x`, `cy < cells_y` (`cell_index`, `next_cell` and
-        // `refine` keep the cell on the grid) and `level <= top`, so `(tx, ty)` is a texel of
-        // level `level` and `texel < texels.len()` (`ViewConsts::new`'s checks).
-        debug_assert!(cx < vc.cells_x && cy < vc.cells_y && level <= vc.top);
-        let lv = vc.levels[level & (MAX_LEVELS - 1)];
-        let texel = (lv as u32) as usize + ty as usize * (lv >> 32) as usize + tx as usize;
-        debug_assert!(texel < texels.len());
-        // SAFETY: `texel < texels.len()` by the loop invariant above.
-        let t = unsafe { texels.get_unchecked(texel) };
-        w_hi >= t.lo && w_lo <= t.hi && t.meets(w_lo, w_hi)
-    };
-
     while left > 0 {
         left -= 1;
-        let (mut tx, mut ty) = (cx >> level, cy >> level);
+        let (tx, ty) = (cx >> level, cy >> level);
         // Where the ray leaves the texel: its next column and row boundaries (in cells).
-        let (mut kx, mut ky) = ((tx + UX as u32) << level, (ty + UY as u32) << level);
-        let mut l_col = xs.cross(kx);
-        let mut l_row = ys.cross(ky);
-        let mut l_exit = fmax(fmin(fmin(l_col, l_row), 1.0), l);
-        let mut w_exit = seg.w_at(l_exit);
-        let mut overlaps = test(cx, cy, level, w_l, w_exit);
-        let mut stay = false;
+        let (kx, ky) = ((tx + UX as u32) << level, (ty + UY as u32) << level);
+        let l_col = xs.cross(kx);
+        let l_row = ys.cross(ky);
+        let l_exit = fmax(fmin(fmin(l_col, l_row), 1.0), l);
+        let w_exit = seg.w_at(l_exit);
+        let (w_lo, w_hi) = if W_FALLS {
+            (w_exit, w_l)
+        } else {
+            (w_l, w_exit)
+        };
+        let lv_i = level & (MAX_LEVELS - 1);
+        let texel = vc.level_offset[lv_i] as usize
+            + ty as usize * vc.level_width[lv_i] as usize
+            + tx as usize;
+        let t = &texels[texel];
+        // The min-max bounds, then the depth slabs (`slabs`).
+        let overlaps = w_hi >= t.lo && w_lo <= t.hi && t.meets(w_lo, w_hi);
         if overlaps {
-            // Down to level 0 by child scans: the children of the overlapping texel along
-            // the ray, in ray order, up to the first that overlaps (`scan_children`).
-            let mut fallback = false;
-            while level > 0 {
-                let parent = Parent {
-                    tx,
-                    ty,
-                    level,
-                    kx,
-                    ky,
-                    l_col,
-                    l_row,
-                };
-                let scan = scan_children::<UX, UY>(
-                    (vc.cells_x, vc.cells_y),
-                    seg,
-                    &xs,
-                    &ys,
-                    &parent,
-                    cx,
-                    cy,
-                    l,
-                    w_l,
-                    &test,
-                );
-                scanned += scan.1;
-                match scan.0 {
-                    Scan::Child(c) => {
-                        level -= 1;
-                        (cx, cy, l, w_l) = (c.cx, c.cy, c.l, c.w);
-                        (l_col, l_row, l_exit, w_exit) = (c.l_col, c.l_row, c.l_exit, c.w_exit);
-                        (tx, ty) = (cx >> level, cy >> level);
-                        (kx, ky) = (c.kx, c.ky);
-                    }
-                    Scan::None => {
-                        overlaps = false;
-                        stay = true;
-                        break;
-                    }
-                    Scan::Edge => {
-                        fallback = true;
-                        break;
-                    }
-                }
-            }
-            if fallback {
-                // A far child off the grid: one level down, the plain Hi-Z step.
+            if level > 0 {
                 level -= 1;
                 continue;
             }
-        }
-        if overlaps {
             q.counters.cells += 1;
             let index = cy as usize * vc.cells_x as usize + cx as usize;
-            // SAFETY: `index < cells_x * cells_y = records.len()` (the loop invariant, and
-            // the assertion before the loop).
-            let rec = unsafe { records.get_unchecked(index) };
+            let rec = &records[index];
             let nb = vc.buckets;
             let b_a = bucket_at(rec.zmin, rec.scale, nb, 1.0 / w_l);
             let b_b = bucket_at(rec.zmin, rec.scale, nb, 1.0 / w_exit);
@@ -358,14 +399,242 @@ fn walk_body<const UX: bool, const UY: bool, const W_FALLS: bool, const ISA: u8>
         w_l = w_exit;
         // Up a level after a skip (Hi-Z); after tracing a cell the ray is among surfaces,
         // where the next cell is likely to overlap too: stay at the finest level.
-        if !overlaps && !stay && level < vc.top {
+        if !overlaps && level < vc.top {
             level += 1;
         }
     }
-    q.counters.texels += scanned;
     q.counters.texels += (vc.max_steps - left) as u64;
     end.unwrap_or_else(|| {
         q.counters.truncated += 1;
         WalkEnd::Continue
     })
+}
+
+/// `λ` of the best hit so far, computed once per best hit.
+struct HitLambda {
+    t: f32,
+    l: f32,
+}
+
+impl HitLambda {
+    const NONE: HitLambda = HitLambda {
+        t: f32::NAN,
+        l: 0.0,
+    };
+
+    #[inline]
+    fn get(&mut self, seg: &Segment, r: &ViewRay, t: f32) -> f32 {
+        if self.t != t {
+            *self = HitLambda {
+                t,
+                l: seg.lambda_of(r, t),
+            };
+        }
+        self.l
+    }
+}
+
+/// A level-0 cell the walk traces.
+struct Cell {
+    index: usize,
+    /// The cell's eq. 1 constants (its record).
+    zmin: f32,
+    scale: f32,
+    /// Its non-empty buckets ([`parallax_raster::dirt::bucket_mask`]).
+    mask: u32,
+    /// The buckets of the ray's depth at entry and at exit.
+    buckets: (u32, u32),
+    /// `λ` where the ray leaves the cell.
+    l_exit: f32,
+}
+
+/// Bucket tracing in one cell whose range of buckets holds a triangle (Alg. 1 lines 7-22);
+/// true when the answer is known. Inlined into the walk's loop (a call would store and reload
+/// the walk's state around it: every XMM register is caller-saved).
+#[inline(always)]
+fn trace_cell<const ISA: u8>(
+    vc: &ViewConsts,
+    cap: &DirtCapture,
+    r: &ViewRay,
+    seg: &Segment,
+    c: &Cell,
+    hit_l: &mut HitLambda,
+    q: &mut Query,
+) -> bool {
+    let (lo, scale, nb) = (c.zmin, c.scale, vc.buckets);
+    let (b_a, b_b) = c.buckets;
+    let (offsets, ids) = (cap.offsets(), cap.ids());
+    let base = c.index * nb as usize;
+    let ascending = b_a <= b_b;
+    let mut b = b_a;
+    loop {
+        if any_bucket(c.mask, b, b, nb) {
+            q.counters.buckets += 1;
+            let k = base + b as usize;
+            if q.test::<ISA>(&ids[offsets[k] as usize..offsets[k + 1] as usize]) {
+                return true;
+            }
+        }
+        if q.best.found() && hit_l.get(seg, r, q.best.t) <= c.l_exit {
+            // Accept once the walk has reached the hit's bucket (module docs).
+            let bb = bucket_index(lo, scale, nb, r.depth(q.best.t));
+            if (ascending && bb <= b) || (!ascending && bb >= b) {
+                return true;
+            }
+        }
+        if b == b_b {
+            return false;
+        }
+        if ascending {
+            b += 1;
+        } else {
+            b -= 1;
+        }
+    }
+}
+
+/// [`bucket_index`] (eq. 1) with the conversion done by `cvttss2si` on 64 bits, which needs
+/// no saturation fix-ups: for `v > 0` below `2^63` it is `floor(v)`, above (and `+inf`) it is
+/// `i64::MIN`, `2^63` as `u64`; either way the `min` with `buckets - 1` gives what the
+/// saturating `v as u32` gives. Tested equal to [`bucket_index`].
+#[inline(always)]
+fn bucket_at(zmin: f32, scale: f32, buckets: u32, z: f32) -> u32 {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_cvttss_si64, _mm_set_ss};
+        let v = (z - zmin) * scale;
+        if v > 0.0 {
+            // SAFETY: SSE is part of the x86_64 baseline.
+            let i = unsafe { _mm_cvttss_si64(_mm_set_ss(v)) } as u64;
+            i.min(buckets as u64 - 1) as u32
+        } else {
+            0
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    bucket_index(zmin, scale, buckets, z)
+}
+
+/// Whether `mask` (a cell's non-empty buckets, [`parallax_raster::dirt::bucket_mask`]) has a bit of buckets
+/// `b0..=b1` (`b0 <= b1 < buckets`): `mask & bucket_mask(b0, b1, buckets) != 0` in two
+/// shifts (the bits at and above `b0`'s, then only the `b1 - b0 + 1` lowest kept).
+#[inline(always)]
+fn any_bucket(mask: u32, b0: u32, b1: u32, buckets: u32) -> bool {
+    let (lo, hi) = if buckets <= 32 {
+        (b0, b1)
+    } else {
+        let g = buckets.div_ceil(32);
+        (b0 / g, b1 / g)
+    };
+    ((mask >> (lo & 31)) << ((31 - (hi - lo)) & 31)) != 0
+}
+
+/// `floor(f)` clamped to `[0, n)`.
+#[inline(always)]
+fn cell_index(f: f32, n: u32) -> u32 {
+    if f > 0.0 { (f as u32).min(n - 1) } else { 0 }
+}
+
+/// The cell across boundary `k` (in cells) in the ray's direction along the axis (`UP`:
+/// towards higher indices). Only called for an axis whose crossing comes before the
+/// segment's end, so a moving one. Off the grid before the end of the walk's interval
+/// (clipped to the frustum), the ray runs along the film's edge within rounding of it (its
+/// film direction is numerically undecided): it stays in the edge cells and the axis stops
+/// stepping.
+#[inline(always)]
+fn next_cell<const UP: bool>(c: u32, k: u32, axis: &mut Axis, n: u32) -> u32 {
+    if UP {
+        if k < n {
+            return k;
+        }
+    } else if k > 0 {
+        return k - 1;
+    }
+    *axis = Axis::STILL;
+    c
+}
+
+/// The cell coordinate (along the axis the ray did not leave through) at the exit of texel `t`
+/// at `level`: `floor(f)` kept inside the texel and never behind `c` in the ray's direction
+/// (`UP`). The same on an axis that does not step (`Axis::STILL`): `f` is the ray's film
+/// position there as on a moving axis (on an axis still from the start it floors to the start
+/// cell; on one stopped at the grid's edge it is within rounding of that edge).
+#[inline(always)]
+fn refine<const UP: bool>(c: u32, t: u32, level: u32, f: f32, n: u32) -> u32 {
+    let lo = t << level;
+    let hi = (((t + 1) << level) - 1).min(n - 1);
+    let f = if f > 0.0 { f as u32 } else { 0 };
+    let f = f.clamp(lo, hi);
+    if UP { f.max(c) } else { f.min(c) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use parallax_raster::dirt::bucket_mask;
+
+    /// [`bucket_at`] is [`bucket_index`].
+    #[test]
+    fn bucket_at_is_bucket_index() {
+        let zs = [
+            0.0f32,
+            -1.0,
+            0.5,
+            1.0,
+            1.000_001,
+            2.5,
+            3.999_999,
+            4.0,
+            7.75,
+            100.0,
+            1e9,
+            4.3e9,
+            1e19,
+            1e30,
+            f32::MAX,
+            f32::INFINITY,
+            f32::NAN,
+        ];
+        for buckets in [1u32, 2, 16, 32, 255, 1 << 20] {
+            for &(zmin, scale) in &[(0.0f32, 1.0f32), (1.0, 0.37), (0.25, 16.0), (2.0, 1e-3)] {
+                for &z in &zs {
+                    for z in [z, z + zmin, z * 0.5 + zmin] {
+                        assert_eq!(
+                            bucket_at(zmin, scale, buckets, z),
+                            bucket_index(zmin, scale, buckets, z),
+                            "z {z} zmin {zmin} scale {scale} buckets {buckets}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    /// [`any_bucket`] is the mask test by [`bucket_mask`].
+    #[test]
+    fn any_bucket_is_the_mask_test() {
+        let masks = [
+            0u32,
+            1,
+            0x8000_0000,
+            u32::MAX,
+            0x0001_0000,
+            0x5555_5555,
+            0xa0a0_0001,
+            0x0000_0ff0,
+        ];
+        for buckets in [1u32, 2, 7, 16, 31, 32, 33, 48, 64, 100, 255] {
+            for b0 in 0..buckets {
+                for b1 in b0..buckets {
+                    for &m in &masks {
+                        assert_eq!(
+                            any_bucket(m, b0, b1, buckets),
+                            m & bucket_mask(b0, b1, buckets) != 0,
+                            "mask {m:#x} buckets {b0}..={b1} of {buckets}"
+                        );
+                    }
+                }
+            }
+        }
+    }
 }
