@@ -35,7 +35,6 @@ pub mod minmax;
 pub mod planes;
 pub mod quadtree;
 pub mod space;
-mod space_oct;
 mod space_pair;
 pub mod tracer;
 

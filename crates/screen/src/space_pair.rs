@@ -348,14 +348,14 @@ impl UnitCube {
 }
 
 #[cfg(test)]
-pub(crate) mod tests {
+mod tests {
     use glam::{Vec2, Vec3};
     use parallax_core::Ray;
 
-    use crate::{CubeSegment, UnitCube};
+    use crate::CubeSegment;
 
     /// Every field's bits (`==` would let a signed zero or a NaN pass).
-    pub(crate) fn bits(s: &Option<CubeSegment>) -> Option<[u64; 10]> {
+    fn bits(s: &Option<CubeSegment>) -> Option<[u64; 10]> {
         s.map(|s| {
             [
                 s.p0.x.to_bits() as u64,
@@ -382,10 +382,9 @@ pub(crate) mod tests {
         }
     }
 
-    /// Random rays from the eye, near it, anywhere and along axes, with varied bounds;
-    /// rays through the cube's corners and along its faces; rays the scalar clip rejects
-    /// (also `space_oct`'s test).
-    pub(crate) fn test_rays(cube: &UnitCube) -> Vec<Ray> {
+    #[test]
+    fn pair_and_quad_equal_scalar() {
+        let cube = crate::space::tests::cube();
         let cam = &cube.camera;
         let eye = cam.frame.position;
         let mut rng = Xs(0x9e37_79b9_7f4a_7c15);
@@ -428,14 +427,6 @@ pub(crate) mod tests {
         bad.t_max = f32::NAN;
         rays.push(bad);
         rays.push(Ray::new(eye, Vec3::ZERO));
-        rays
-    }
-
-    #[test]
-    fn pair_and_quad_equal_scalar() {
-        let cube = crate::space::tests::cube();
-        let eye = cube.camera.frame.position;
-        let rays = test_rays(&cube);
         let mut clipped = 0;
         for w in rays.windows(4) {
             let w: &[Ray; 4] = w.try_into().unwrap();

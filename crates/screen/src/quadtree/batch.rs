@@ -17,11 +17,9 @@
 //! With one layer in cascade mode (the common case of depth of field) the layer's start is
 //! part of the second phase; with several layers or inpainting the cascade runs ray by ray
 //! after the clip and set-up phases (a deeper layer's window depends on the layer before).
-//! The clip phase takes a full batch's eight rays at once ([`crate::UnitCube::clip_ray_oct_into`]:
-//! AVX-512 lanes, else two fours) and a shorter batch four at a time
-//! ([`crate::UnitCube::clip_ray_quad_into`]): SIMD lanes with every lane doing the one-ray
-//! operations, the segments written straight into the phase's array; the set-up is built in
-//! place in the array the walks read. The opt-in
+//! The clip phase takes four rays at a time ([`crate::UnitCube::clip_ray_quad_into`]: SIMD
+//! lanes with every lane doing the one-ray operations, the segments written straight into the
+//! phase's array), and the set-up is built in place in the array the walks read. The opt-in
 //! f32 clip traces the rays one by one.
 
 use parallax_core::Ray;
@@ -59,18 +57,12 @@ impl QuadTreeTracer {
         }
     }
 
-    /// The f64 cube clips of at most [`BATCH`] rays into `segs`: eight at once
-    /// ([`crate::UnitCube::clip_ray_oct_into`]), else four at a time
-    /// ([`crate::UnitCube::clip_ray_quad`]; a remainder in a pair and alone): all the bits of
-    /// [`crate::UnitCube::clip_ray`].
+    /// The f64 cube clips of at most [`BATCH`] rays into `segs`, four at a time
+    /// ([`crate::UnitCube::clip_ray_quad`]; a remainder in a pair and alone: all the bits of
+    /// [`crate::UnitCube::clip_ray`]).
     #[inline(always)]
     fn clip_phase(&self, rays: &[Ray], segs: &mut [Option<CubeSegment>; BATCH]) {
         debug_assert!(rays.len() <= BATCH);
-        if let (Ok(oct), Some(seg)) = (<&[Ray; 8]>::try_from(rays), segs.first_chunk_mut::<8>()) {
-            // A full batch: eight lanes with AVX-512 (else two fours, the twin).
-            self.cube.clip_ray_oct_into(oct, seg);
-            return;
-        }
         for (seg, ray) in segs.chunks_exact_mut(4).zip(rays.chunks(4)) {
             match ray {
                 [_, _, _, _] => {
