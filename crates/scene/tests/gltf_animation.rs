@@ -123,7 +123,8 @@ fn strip(interp: &str, weights: Weights) -> (GltfBuf, Value) {
 }
 
 fn save_and_load(name: &str, b: &GltfBuf, doc: Value) -> Result<Scene, SceneError> {
-    let d = tmp_dir(name);
+    let folder = tmp_dir(name);
+    let d = folder.path();
     load_file(&write(&d, "a.gltf", &b.finish(doc)))
 }
 

@@ -168,7 +168,8 @@ fn box_textured_gltf_and_glb_give_identical_meshes() {
 
 #[test]
 fn box_textured_loads_with_an_upper_case_extension() {
-    let d = tmp("upper");
+    let folder = tmp("upper");
+    let d = folder.path();
     let p = d.join("BOX.GLTF");
     std::fs::copy(scenes().join("box_textured/BoxTextured.gltf"), &p).unwrap();
     assert_eq!(load(&p).mesh.triangle_count(), 12);
@@ -307,7 +308,8 @@ const TRI: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
 
 #[test]
 fn external_bin_and_data_uri_buffers_load_the_same_triangle() {
-    let d = tmp("external");
+    let folder = tmp("external");
+    let d = folder.path();
     let (json, bin) = triangle_gltf(TRI, [0, 1, 2], "sub/../tri data.bin");
     std::fs::create_dir_all(d.join("sub")).unwrap();
     write(&d, "tri data.bin", &bin);
@@ -404,7 +406,8 @@ fn hierarchy_gltf() -> (Value, Vec<u8>) {
 /// a skin.
 #[test]
 fn node_transforms_materials_cameras_and_lights() {
-    let d = tmp("hierarchy");
+    let folder = tmp("hierarchy");
+    let d = folder.path();
     let (json, bin) = hierarchy_gltf();
     write(&d, "h.bin", &bin);
     let s = load(&write(&d, "h.gltf", json.to_string()));
@@ -468,7 +471,8 @@ fn node_transforms_materials_cameras_and_lights() {
 
 #[test]
 fn truncated_glb_is_a_parse_error() {
-    let d = tmp("truncated");
+    let folder = tmp("truncated");
+    let d = folder.path();
     let full = std::fs::read(scenes().join("box_textured/BoxTextured.glb")).unwrap();
     for n in [0, 7, 11, 20, 1000, full.len() - 1] {
         let (e, msg) = load_err(&write(&d, "cut.glb", &full[..n]));
@@ -495,7 +499,8 @@ proptest::proptest! {
     fn corrupted_glb_never_panics(
         flips in proptest::collection::vec((0usize..1 << 16, proptest::prelude::any::<u8>()), 1..6)
     ) {
-        let d = tmp("corrupt");
+        let folder = tmp("corrupt");
+        let d = folder.path();
         let mut bytes = std::fs::read(scenes().join("box_textured/BoxTextured.glb")).unwrap();
         let n = bytes.len();
         for (i, b) in flips {
@@ -512,7 +517,8 @@ proptest::proptest! {
     fn gltf_with_changed_numbers_never_panics(
         edits in proptest::collection::vec((0usize..1 << 16, 0u8..10), 1..4)
     ) {
-        let d = tmp("digits");
+        let folder = tmp("digits");
+        let d = folder.path();
         let (json, bin) = hierarchy_gltf();
         write(&d, "h.bin", &bin);
         let mut text = json.to_string().into_bytes();
@@ -528,7 +534,8 @@ proptest::proptest! {
 
 #[test]
 fn missing_bin_names_the_file() {
-    let d = tmp("missing");
+    let folder = tmp("missing");
+    let d = folder.path();
     let (json, _) = triangle_gltf(TRI, [0, 1, 2], "missing.bin");
     let (e, msg) = load_err(&write(&d, "m.gltf", json.to_string()));
     assert!(matches!(e, SceneError::BadReference { .. }), "{msg}");
@@ -540,7 +547,8 @@ fn missing_bin_names_the_file() {
 
 #[test]
 fn nan_position_is_invalid() {
-    let d = tmp("nan");
+    let folder = tmp("nan");
+    let d = folder.path();
     let (json, bin) = triangle_gltf(
         [[0.0; 3], [f32::NAN, 0.0, 0.0], [0.0, 1.0, 0.0]],
         [0, 1, 2],
@@ -557,7 +565,8 @@ fn nan_position_is_invalid() {
 
 #[test]
 fn out_of_range_index_is_invalid() {
-    let d = tmp("range");
+    let folder = tmp("range");
+    let d = folder.path();
     let (json, bin) = triangle_gltf(TRI, [0, 1, 7], "r.bin");
     write(&d, "r.bin", &bin);
     let (e, msg) = load_err(&write(&d, "r.gltf", json.to_string()));
@@ -570,7 +579,8 @@ fn out_of_range_index_is_invalid() {
 
 #[test]
 fn accessor_past_the_buffer_end_is_invalid() {
-    let d = tmp("overrun");
+    let folder = tmp("overrun");
+    let d = folder.path();
     let (mut json, bin) = triangle_gltf(TRI, [0, 1, 2], "o.bin");
     json["accessors"][0]["count"] = json!(1000);
     write(&d, "o.bin", &bin);
@@ -581,7 +591,8 @@ fn accessor_past_the_buffer_end_is_invalid() {
 
 #[test]
 fn references_escaping_the_scene_folder_are_refused() {
-    let d = tmp("escape");
+    let folder = tmp("escape");
+    let d = folder.path();
     let inner = d.join("scene");
     std::fs::create_dir_all(&inner).unwrap();
     let (_, bin) = triangle_gltf(TRI, [0, 1, 2], "");
@@ -600,7 +611,8 @@ fn references_escaping_the_scene_folder_are_refused() {
 
 #[test]
 fn unsupported_extension_and_missing_file() {
-    let d = tmp("ext");
+    let folder = tmp("ext");
+    let d = folder.path();
     let (e, msg) = load_err(&write(&d, "scene.fbx", "x"));
     assert!(matches!(e, SceneError::UnsupportedFormat { .. }), "{msg}");
     assert!(msg.contains("scene.fbx"), "{msg}");

@@ -14,7 +14,8 @@ use files::{load, load_err, tmp, write};
 
 #[test]
 fn obj_with_mtl_materials_and_texture() {
-    let d = tmp("obj");
+    let folder = tmp("obj");
+    let d = folder.path();
     let mut img = image::RgbImage::new(2, 1);
     img.put_pixel(0, 0, image::Rgb([255, 128, 0]));
     img.save(d.join("tex.png")).unwrap();
@@ -60,7 +61,8 @@ fn obj_with_mtl_materials_and_texture() {
 
 #[test]
 fn obj_without_its_mtl_uses_the_default_material() {
-    let d = tmp("obj-nomtl");
+    let folder = tmp("obj-nomtl");
+    let d = folder.path();
     let s = load(&write(
         &d,
         "a.obj",
@@ -72,7 +74,8 @@ fn obj_without_its_mtl_uses_the_default_material() {
 
 #[test]
 fn obj_mtl_outside_the_folder_is_refused() {
-    let d = tmp("obj-escape");
+    let folder = tmp("obj-escape");
+    let d = folder.path();
     write(&d, "evil.mtl", "newmtl a\nKd 1 1 1\n");
     std::fs::create_dir_all(d.join("in")).unwrap();
     let p = write(
@@ -87,7 +90,8 @@ fn obj_mtl_outside_the_folder_is_refused() {
 
 #[test]
 fn malformed_obj_is_a_parse_error() {
-    let d = tmp("obj-bad");
+    let folder = tmp("obj-bad");
+    let d = folder.path();
     let (e, msg) = load_err(&write(
         &d,
         "bad.obj",
@@ -119,7 +123,8 @@ const PLY_HEAD: &str = "ply\nformat ascii 1.0\ncomment test\nelement vertex 5\n\
 
 #[test]
 fn ply_polygons_become_triangle_fans() {
-    let d = tmp("ply");
+    let folder = tmp("ply");
+    let d = folder.path();
     let body = "0 0 0 0 0 2 1\n1 0 0 0 0 2 1\n1 1 0 0 0 2 1\n0 1 0 0 0 2 1\n0 0 1 0 0 2 1\n\
                 4 0 1 2 3\n3 0 1 4\n0 1\n";
     let s = load(&write(&d, "quad.ply", format!("{PLY_HEAD}{body}")));
@@ -131,7 +136,8 @@ fn ply_polygons_become_triangle_fans() {
 
 #[test]
 fn malformed_ply_is_a_parse_error() {
-    let d = tmp("ply-bad");
+    let folder = tmp("ply-bad");
+    let d = folder.path();
     let body = "0 0 0 0 0 1 1\n1 0 zero 0 0 1 1\n";
     let (e, msg) = load_err(&write(&d, "bad.ply", format!("{PLY_HEAD}{body}")));
     assert!(matches!(e, SceneError::Parse { .. }), "{msg}");

@@ -10,15 +10,12 @@ pub fn scenes() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes")
 }
 
-/// A fresh, empty temporary folder for one test.
-pub fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!(
-        "parallax-scene-loaders-{}/{name}",
-        std::process::id()
-    ));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh, empty temporary folder for one test, removed when dropped.
+pub fn tmp(name: &str) -> tempfile::TempDir {
+    tempfile::Builder::new()
+        .prefix(&format!("parallax-scene-loaders-{name}-"))
+        .tempdir()
+        .unwrap()
 }
 
 pub fn load(p: &Path) -> Scene {

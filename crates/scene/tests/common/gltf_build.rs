@@ -106,12 +106,12 @@ pub fn base64(bytes: &[u8]) -> String {
     s
 }
 
-/// A fresh temporary folder for one test.
-pub fn tmp_dir(name: &str) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("parallax-gltf-anim-{}/{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh temporary folder for one test, removed when dropped.
+pub fn tmp_dir(name: &str) -> tempfile::TempDir {
+    tempfile::Builder::new()
+        .prefix(&format!("parallax-gltf-anim-{name}-"))
+        .tempdir()
+        .unwrap()
 }
 
 /// Writes `text` to `dir/name` and returns the path.
