@@ -124,8 +124,9 @@ fn rays(mesh: &TriangleMesh, seed: u64) -> Vec<Ray> {
 
 #[test]
 fn skinned_tube_refits_like_a_fresh_build() {
-    let d = tmp_dir("bvh-refit-skin");
-    let scene = Scene::load(write(&d, "tube.gltf", &skinned_tube()).to_str().unwrap()).unwrap();
+    let folder = tmp_dir("bvh-refit-skin");
+    let d = folder.path();
+    let scene = Scene::load(write(d, "tube.gltf", &skinned_tube()).to_str().unwrap()).unwrap();
     let anim = Animation::for_scene(&scene);
     assert_eq!(anim.kind(), "gltf");
     assert_eq!(
