@@ -125,7 +125,7 @@ fn strip(interp: &str, weights: Weights) -> (GltfBuf, Value) {
 fn save_and_load(name: &str, b: &GltfBuf, doc: Value) -> Result<Scene, SceneError> {
     let folder = tmp_dir(name);
     let d = folder.path();
-    load_file(&write(&d, "a.gltf", &b.finish(doc)))
+    load_file(&write(d, "a.gltf", &b.finish(doc)))
 }
 
 /// The bone-1 angle at `t` (looped over 2 s) for each interpolation, from the spec's formulas.

@@ -312,11 +312,11 @@ fn external_bin_and_data_uri_buffers_load_the_same_triangle() {
     let d = folder.path();
     let (json, bin) = triangle_gltf(TRI, [0, 1, 2], "sub/../tri data.bin");
     std::fs::create_dir_all(d.join("sub")).unwrap();
-    write(&d, "tri data.bin", &bin);
-    let ext = load(&write(&d, "ext.gltf", json.to_string()));
+    write(d, "tri data.bin", &bin);
+    let ext = load(&write(d, "ext.gltf", json.to_string()));
     let uri = format!("data:application/octet-stream;base64,{}", base64(&bin));
     let (json, _) = triangle_gltf(TRI, [0, 1, 2], &uri);
-    let inline = load(&write(&d, "inline.gltf", json.to_string()));
+    let inline = load(&write(d, "inline.gltf", json.to_string()));
     assert_eq!(ext.mesh, inline.mesh);
     assert_eq!(ext.mesh.positions, TRI.map(Vec3::from).to_vec());
     assert_eq!(ext.mesh.indices, vec![[0, 1, 2]]);
@@ -325,10 +325,7 @@ fn external_bin_and_data_uri_buffers_load_the_same_triangle() {
     assert_eq!(ext.mesh.normals, vec![Vec3::ZERO; 3]);
     // Percent-encoded file names resolve too.
     let (json, _) = triangle_gltf(TRI, [0, 1, 2], "tri%20data.bin");
-    assert_eq!(
-        load(&write(&d, "pct.gltf", json.to_string())).mesh,
-        ext.mesh
-    );
+    assert_eq!(load(&write(d, "pct.gltf", json.to_string())).mesh, ext.mesh);
 }
 
 /// The glTF of `node_transforms_materials_cameras_and_lights` (json, h.bin).
@@ -409,8 +406,8 @@ fn node_transforms_materials_cameras_and_lights() {
     let folder = tmp("hierarchy");
     let d = folder.path();
     let (json, bin) = hierarchy_gltf();
-    write(&d, "h.bin", &bin);
-    let s = load(&write(&d, "h.gltf", json.to_string()));
+    write(d, "h.bin", &bin);
+    let s = load(&write(d, "h.gltf", json.to_string()));
     let m = &s.mesh;
     // 1 list triangle + 2 strip triangles; the points primitive is skipped.
     assert_eq!(m.triangle_count(), 3);
@@ -475,14 +472,14 @@ fn truncated_glb_is_a_parse_error() {
     let d = folder.path();
     let full = std::fs::read(scenes().join("box_textured/BoxTextured.glb")).unwrap();
     for n in [0, 7, 11, 20, 1000, full.len() - 1] {
-        let (e, msg) = load_err(&write(&d, "cut.glb", &full[..n]));
+        let (e, msg) = load_err(&write(d, "cut.glb", &full[..n]));
         assert!(matches!(e, SceneError::Parse { .. }), "{n} bytes: {msg}");
         assert!(msg.contains("truncated"), "{n} bytes: {msg}");
     }
     // Many more prefixes (every header and chunk-header byte, then a stride through the
     // chunks; file writes cost milliseconds here): a parse error, never a panic.
     for n in (0..64).chain((64..full.len()).step_by(61)) {
-        match load_file(&write(&d, "cut.glb", &full[..n])) {
+        match load_file(&write(d, "cut.glb", &full[..n])) {
             Err(SceneError::Parse { message, .. }) => {
                 assert!(message.contains("truncated"), "{n} bytes: {message}")
             }
@@ -506,7 +503,7 @@ proptest::proptest! {
         for (i, b) in flips {
             bytes[i % n] = b;
         }
-        if let Ok(s) = load_file(&write(&d, "c.glb", &bytes)) {
+        if let Ok(s) = load_file(&write(d, "c.glb", &bytes)) {
             proptest::prop_assert!(s.validate().is_ok());
         }
     }
@@ -520,13 +517,13 @@ proptest::proptest! {
         let folder = tmp("digits");
         let d = folder.path();
         let (json, bin) = hierarchy_gltf();
-        write(&d, "h.bin", &bin);
+        write(d, "h.bin", &bin);
         let mut text = json.to_string().into_bytes();
         let digits: Vec<usize> = (0..text.len()).filter(|&i| text[i].is_ascii_digit()).collect();
         for (i, v) in edits {
             text[digits[i % digits.len()]] = b'0' + v;
         }
-        if let Ok(s) = load_file(&write(&d, "h.gltf", &text)) {
+        if let Ok(s) = load_file(&write(d, "h.gltf", &text)) {
             proptest::prop_assert!(s.validate().is_ok());
         }
     }
@@ -537,7 +534,7 @@ fn missing_bin_names_the_file() {
     let folder = tmp("missing");
     let d = folder.path();
     let (json, _) = triangle_gltf(TRI, [0, 1, 2], "missing.bin");
-    let (e, msg) = load_err(&write(&d, "m.gltf", json.to_string()));
+    let (e, msg) = load_err(&write(d, "m.gltf", json.to_string()));
     assert!(matches!(e, SceneError::BadReference { .. }), "{msg}");
     assert!(
         msg.contains("missing.bin") && msg.contains("cannot open"),
@@ -554,8 +551,8 @@ fn nan_position_is_invalid() {
         [0, 1, 2],
         "n.bin",
     );
-    write(&d, "n.bin", &bin);
-    let (e, msg) = load_err(&write(&d, "n.gltf", json.to_string()));
+    write(d, "n.bin", &bin);
+    let (e, msg) = load_err(&write(d, "n.gltf", json.to_string()));
     assert!(matches!(e, SceneError::Invalid { .. }), "{msg}");
     assert!(
         msg.contains("non-finite") && msg.contains("vertex 1") && msg.contains("tri"),
@@ -568,8 +565,8 @@ fn out_of_range_index_is_invalid() {
     let folder = tmp("range");
     let d = folder.path();
     let (json, bin) = triangle_gltf(TRI, [0, 1, 7], "r.bin");
-    write(&d, "r.bin", &bin);
-    let (e, msg) = load_err(&write(&d, "r.gltf", json.to_string()));
+    write(d, "r.bin", &bin);
+    let (e, msg) = load_err(&write(d, "r.gltf", json.to_string()));
     assert!(matches!(e, SceneError::Invalid { .. }), "{msg}");
     assert!(
         msg.contains("index 7") && msg.contains("out of range") && msg.contains("mesh 0"),
@@ -583,8 +580,8 @@ fn accessor_past_the_buffer_end_is_invalid() {
     let d = folder.path();
     let (mut json, bin) = triangle_gltf(TRI, [0, 1, 2], "o.bin");
     json["accessors"][0]["count"] = json!(1000);
-    write(&d, "o.bin", &bin);
-    let (e, msg) = load_err(&write(&d, "o.gltf", json.to_string()));
+    write(d, "o.bin", &bin);
+    let (e, msg) = load_err(&write(d, "o.gltf", json.to_string()));
     assert!(matches!(e, SceneError::Invalid { .. }), "{msg}");
     assert!(msg.contains("do not fit"), "{msg}");
 }
@@ -596,7 +593,7 @@ fn references_escaping_the_scene_folder_are_refused() {
     let inner = d.join("scene");
     std::fs::create_dir_all(&inner).unwrap();
     let (_, bin) = triangle_gltf(TRI, [0, 1, 2], "");
-    let secret = write(&d, "secret.bin", &bin); // exists, so only the check can refuse it
+    let secret = write(d, "secret.bin", &bin); // exists, so only the check can refuse it
     for (uri, what) in [
         ("../secret.bin".to_string(), "climbs out"),
         (secret.display().to_string(), "absolute"),
@@ -613,7 +610,7 @@ fn references_escaping_the_scene_folder_are_refused() {
 fn unsupported_extension_and_missing_file() {
     let folder = tmp("ext");
     let d = folder.path();
-    let (e, msg) = load_err(&write(&d, "scene.fbx", "x"));
+    let (e, msg) = load_err(&write(d, "scene.fbx", "x"));
     assert!(matches!(e, SceneError::UnsupportedFormat { .. }), "{msg}");
     assert!(msg.contains("scene.fbx"), "{msg}");
     let (e, msg) = load_err(&d.join("absent.glb"));

@@ -31,7 +31,7 @@ fn obj_with_mtl_materials_and_texture() {
         v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 2\n\
         o quad\nusemtl tex\nf 1/1/1 2/2/1 3/3/1 4/4/1\n\
         o tri\nusemtl red\nf 1 2 3\nusemtl mirror\nf 1 3 4\nusemtl glass\nf 1 2 4\n";
-    let s = load(&write(&d, "scene.obj", obj));
+    let s = load(&write(d, "scene.obj", obj));
     assert_eq!(s.name, "scene");
     assert_eq!(s.mesh.triangle_count(), 5);
     assert_eq!(s.materials.len(), 4);
@@ -76,7 +76,7 @@ fn obj_without_its_mtl_uses_the_default_material() {
 fn obj_mtl_outside_the_folder_is_refused() {
     let folder = tmp("obj-escape");
     let d = folder.path();
-    write(&d, "evil.mtl", "newmtl a\nKd 1 1 1\n");
+    write(d, "evil.mtl", "newmtl a\nKd 1 1 1\n");
     std::fs::create_dir_all(d.join("in")).unwrap();
     let p = write(
         &d.join("in"),
@@ -127,7 +127,7 @@ fn ply_polygons_become_triangle_fans() {
     let d = folder.path();
     let body = "0 0 0 0 0 2 1\n1 0 0 0 0 2 1\n1 1 0 0 0 2 1\n0 1 0 0 0 2 1\n0 0 1 0 0 2 1\n\
                 4 0 1 2 3\n3 0 1 4\n0 1\n";
-    let s = load(&write(&d, "quad.ply", format!("{PLY_HEAD}{body}")));
+    let s = load(&write(d, "quad.ply", format!("{PLY_HEAD}{body}")));
     assert_eq!(s.mesh.indices, vec![[0, 1, 2], [0, 2, 3], [0, 1, 4]]);
     assert_eq!(s.mesh.normals, vec![Vec3::Z; 5]);
     assert_eq!(s.mesh.positions[4], Vec3::Z);
@@ -139,17 +139,17 @@ fn malformed_ply_is_a_parse_error() {
     let folder = tmp("ply-bad");
     let d = folder.path();
     let body = "0 0 0 0 0 1 1\n1 0 zero 0 0 1 1\n";
-    let (e, msg) = load_err(&write(&d, "bad.ply", format!("{PLY_HEAD}{body}")));
+    let (e, msg) = load_err(&write(d, "bad.ply", format!("{PLY_HEAD}{body}")));
     assert!(matches!(e, SceneError::Parse { .. }), "{msg}");
     assert!(
         msg.contains("malformed PLY") && msg.contains("vertex"),
         "{msg}"
     );
-    let (e, msg) = load_err(&write(&d, "notply.ply", "hello\n"));
+    let (e, msg) = load_err(&write(d, "notply.ply", "hello\n"));
     assert!(matches!(e, SceneError::Parse { .. }), "{msg}");
     let body = "0 0 0 0 0 1 1\n1 0 0 0 0 1 1\n1 1 0 0 0 1 1\n0 1 0 0 0 1 1\n0 0 1 0 0 1 1\n\
                 3 0 1 9\n3 0 1 2\n0 1\n";
-    let (e, msg) = load_err(&write(&d, "range.ply", format!("{PLY_HEAD}{body}")));
+    let (e, msg) = load_err(&write(d, "range.ply", format!("{PLY_HEAD}{body}")));
     assert!(matches!(e, SceneError::Invalid { .. }), "{msg}");
     assert!(msg.contains("face 0 uses vertex 9"), "{msg}");
 }
