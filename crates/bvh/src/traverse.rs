@@ -23,7 +23,7 @@ use crate::hit::Hit;
 use crate::lanes8::Pair8;
 use crate::node::{Node4, is_leaf, leaf_count, leaf_first};
 use crate::stats::{Counter, NoStats, TraversalStats};
-use crate::tri4::{Tri4Ray, blocks_for, lane_mask};
+use crate::tri4::{Tri4, Tri4Ray, blocks_for, lane_mask};
 use parallax_core::simd::{max_or_rhs, min_or_rhs};
 
 /// Traversal stack entries.
@@ -287,10 +287,7 @@ impl Bvh {
             while m != 0 {
                 let l = m.trailing_zeros() as usize;
                 m &= m - 1;
-                let (p0, p1, p2) = (b.vertex(l, 0), b.vertex(l, 1), b.vertex(l, 2));
-                if let Some(h) = r4.wt.intersect_within(p0, p1, p2, best.limit(*t_max)) {
-                    best.offer(h.t, b.tri[l], h.u, h.v, t_max);
-                }
+                offer_exact(r4, b, l, best, t_max);
             }
         }
     }
@@ -335,11 +332,7 @@ impl Bvh {
         while m != 0 {
             let l = m.trailing_zeros() as usize;
             m &= m - 1;
-            let (b, i) = (if l < 4 { b0 } else { b1 }, l & 3);
-            let (p0, p1, p2) = (b.vertex(i, 0), b.vertex(i, 1), b.vertex(i, 2));
-            if let Some(h) = r4.wt.intersect_within(p0, p1, p2, best.limit(*t_max)) {
-                best.offer(h.t, b.tri[i], h.u, h.v, t_max);
-            }
+            offer_exact(r4, if l < 4 { b0 } else { b1 }, l & 3, best, t_max);
         }
     }
 
@@ -491,6 +484,16 @@ pub(crate) fn sort_hits(hits: &mut [Hit]) {
 pub(crate) fn sort_dedup_hits(hits: &mut Vec<Hit>) {
     sort_hits(hits);
     hits.dedup_by(|a, b| a.prim == b.prim && a.t == b.t);
+}
+
+/// Lane `i` of block `b`, which the SIMD test left to the scalar watertight test (its
+/// exact-zero lanes): tested against `best`'s limit and offered to it.
+#[inline(always)]
+fn offer_exact(r4: &Tri4Ray, b: &Tri4, i: usize, best: &mut Best, t_max: &mut f32) {
+    let (p0, p1, p2) = (b.vertex(i, 0), b.vertex(i, 1), b.vertex(i, 2));
+    if let Some(h) = r4.wt.intersect_within(p0, p1, p2, best.limit(*t_max)) {
+        best.offer(h.t, b.tri[i], h.u, h.v, t_max);
+    }
 }
 
 /// The closest hit so far: `(t, index in the triangle array)` compared lexicographically.

@@ -371,35 +371,25 @@ mod tests {
                 let mut tz = vec![MaybeUninit::new(0.0f32); w];
                 let mut fronts = vec![MaybeUninit::new(0.0f32); w];
                 let mut listed = Vec::new();
+                let kernel = if sixteen {
+                    pixel_triggers_row16
+                } else {
+                    pixel_triggers_row8
+                };
                 // SAFETY: AVX-512 and AVX2 + F16C (checked above).
                 let n = unsafe {
-                    if sixteen {
-                        pixel_triggers_row16(
-                            &mut tz,
-                            &mut fronts,
-                            &nodes,
-                            k0,
-                            &xe,
-                            &xc,
-                            y,
-                            (wf, hf),
-                            &deeper,
-                            &mut listed,
-                        )
-                    } else {
-                        pixel_triggers_row8(
-                            &mut tz,
-                            &mut fronts,
-                            &nodes,
-                            k0,
-                            &xe,
-                            &xc,
-                            y,
-                            (wf, hf),
-                            &deeper,
-                            &mut listed,
-                        )
-                    }
+                    kernel(
+                        &mut tz,
+                        &mut fronts,
+                        &nodes,
+                        k0,
+                        &xe,
+                        &xc,
+                        y,
+                        (wf, hf),
+                        &deeper,
+                        &mut listed,
+                    )
                 };
                 // SAFETY: initialised above (and written by the kernel).
                 let bits = |v: &[MaybeUninit<f32>]| -> Vec<u32> {
