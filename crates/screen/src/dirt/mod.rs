@@ -111,7 +111,7 @@ impl DirtTracer {
     pub fn texel_bytes(&self) -> u64 {
         self.slabs
             .iter()
-            .map(|s| std::mem::size_of_val(s.quads.as_slice()) as u64)
+            .map(|s| std::mem::size_of_val(s.texels.as_slice()) as u64)
             .sum()
     }
 

@@ -49,8 +49,6 @@
 
 use parallax_raster::dirt::DirtCapture;
 
-use super::view::MAX_LEVELS;
-
 /// Slabs per texel (mask bits `0..SLABS`; the bits above hold the texel's shift).
 pub(crate) const SLABS: u32 = 56;
 
@@ -150,74 +148,15 @@ impl Texel {
     }
 }
 
-/// Four texels of one level in one 64-byte line: the 2x2 block under one texel of the level
-/// above (row `y & 1`, column `x & 1`).
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C, align(64))]
-pub(crate) struct Quad(pub [Texel; 4]);
-
-/// Where one level's quads are: the first and the quads per row (`ceil(width / 2)`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub(crate) struct QuadLevel {
-    pub offset: u32,
-    pub per_row: u32,
-}
-
-/// The slab-masked texels of one view, each level in 2x2 blocks ([`Quad`]): a texel's
-/// children share one cache line, and so do most of the texels a walk visits one after the
-/// other at a level (a 2x2 block instead of four in a row). A level of odd width or height
-/// is padded with empty texels, which the walk never reads (its cell stays on the grid).
+/// The slab-masked texels of one view (layout of `DirtCapture::recip_mip`).
 #[derive(Clone, Debug)]
 pub(crate) struct Slabs {
-    pub quads: Vec<Quad>,
-    pub levels: [QuadLevel; MAX_LEVELS],
+    pub texels: Vec<Texel>,
 }
 
 impl Slabs {
-    /// Texel `(x, y)` of `level` (`x`, `y` inside the level).
-    #[inline(always)]
-    pub fn texel(&self, level: usize, x: u32, y: u32) -> &Texel {
-        let l = self.levels[level & (MAX_LEVELS - 1)];
-        let q = l.offset as usize + (y >> 1) as usize * l.per_row as usize + (x >> 1) as usize;
-        &self.quads[q].0[(((y & 1) << 1) | (x & 1)) as usize]
-    }
-
     /// The slab masks of every texel of `cap`.
     pub fn new(cap: &DirtCapture) -> Slabs {
-        let texels = Self::row_major(cap);
-        let (mips, _) = cap.mip_arrays();
-        assert!(mips.len() <= MAX_LEVELS, "mip chain too large");
-        let mut levels = [QuadLevel::default(); MAX_LEVELS];
-        let mut quads = Vec::new();
-        for (k, l) in mips.iter().enumerate() {
-            let per_row = l.width.div_ceil(2);
-            levels[k] = QuadLevel {
-                offset: u32::try_from(quads.len()).expect("mip chain too large"),
-                per_row,
-            };
-            let empty = Texel {
-                lo: f32::INFINITY,
-                hi: f32::NEG_INFINITY,
-                slabs: 0,
-            };
-            for qy in 0..l.height.div_ceil(2) {
-                for qx in 0..per_row {
-                    quads.push(Quad(std::array::from_fn(|i| {
-                        let (x, y) = (2 * qx + (i as u32 & 1), 2 * qy + (i as u32 >> 1));
-                        if x < l.width && y < l.height {
-                            texels[l.offset + (y * l.width + x) as usize]
-                        } else {
-                            empty
-                        }
-                    })));
-                }
-            }
-        }
-        Slabs { quads, levels }
-    }
-
-    /// The texels, row-major per level (layout of `DirtCapture::recip_mip`).
-    fn row_major(cap: &DirtCapture) -> Vec<Texel> {
         let recip = cap.recip_mip();
         let (levels, _) = cap.mip_arrays();
         let mut texels: Vec<Texel> = recip.iter().map(|&[lo, hi]| Texel::new(lo, hi)).collect();
@@ -295,7 +234,7 @@ impl Slabs {
                 }
             }
         }
-        texels
+        Slabs { texels }
     }
 }
 
@@ -387,16 +326,6 @@ mod tests {
             let views = DirtViews::build(&m, None, Vec3::ZERO, &opts).expect("build");
             for cap in &views.cube.faces {
                 let s = Slabs::new(cap);
-                // The 2x2 blocks hold the row-major texels.
-                let rows = Slabs::row_major(cap);
-                for (k, l) in cap.mip_arrays().0.iter().enumerate() {
-                    for ty in 0..l.height {
-                        for tx in 0..l.width {
-                            let t = rows[l.offset + (ty * l.width + tx) as usize];
-                            assert_eq!(*s.texel(k, tx, ty), t, "level {k} ({tx}, {ty})");
-                        }
-                    }
-                }
                 let (levels, _) = cap.mip_arrays();
                 let (cw, _) = cap.cells();
                 for (i, rec) in cap.cell_records().iter().enumerate() {
@@ -418,8 +347,9 @@ mod tests {
                         let trace = rec.mask
                             & parallax_raster::dirt::bucket_mask(b0.min(b1), b0.max(b1), buckets)
                             != 0;
-                        for k in 0..levels.len() {
-                            let hit = s.texel(k, x >> k, y >> k).meets(w0, w1);
+                        for (k, l) in levels.iter().enumerate() {
+                            let t = l.offset + ((y >> k) * l.width + (x >> k)) as usize;
+                            let hit = s.texels[t].meets(w0, w1);
                             assert!(!trace || hit, "cell {i} level {k} [{w0}, {w1}]");
                             if k == 0 {
                                 traced += trace as u64;

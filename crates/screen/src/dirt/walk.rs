@@ -66,7 +66,7 @@ use parallax_raster::dirt::{DirtCapture, bucket_index};
 
 use super::slabs::Slabs;
 use super::tri4::Query;
-use super::view::{Isa, ViewConsts, ViewRay};
+use super::view::{Isa, MAX_LEVELS, ViewConsts, ViewRay};
 
 /// How a walk ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -312,6 +312,7 @@ fn walk_body<const UX: bool, const UY: bool, const W_FALLS: bool, const ISA: u8>
     mut ys: Axis,
     q: &mut Query,
 ) -> WalkEnd {
+    let texels = slabs.texels.as_slice();
     let records = cap.cell_records();
 
     // The start cell (clamped onto the grid: the start may lie on the frustum's boundary).
@@ -339,7 +340,11 @@ fn walk_body<const UX: bool, const UY: bool, const W_FALLS: bool, const ISA: u8>
         } else {
             (w_l, w_exit)
         };
-        let t = slabs.texel(level, tx, ty);
+        let lv_i = level & (MAX_LEVELS - 1);
+        let texel = vc.level_offset[lv_i] as usize
+            + ty as usize * vc.level_width[lv_i] as usize
+            + tx as usize;
+        let t = &texels[texel];
         // The min-max bounds, then the depth slabs (`slabs`).
         let overlaps = w_hi >= t.lo && w_lo <= t.hi && t.meets(w_lo, w_hi);
         if overlaps {
