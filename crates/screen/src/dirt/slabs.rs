@@ -152,6 +152,7 @@ impl Texel {
 #[derive(Clone, Debug)]
 pub(crate) struct Slabs {
     pub texels: Vec<Texel>,
+    pub ids: Vec<u32>,
 }
 
 impl Slabs {
@@ -234,7 +235,7 @@ impl Slabs {
                 }
             }
         }
-        Slabs { texels }
+        Slabs { texels, ids: Vec::new() }
     }
 }
 
