@@ -83,9 +83,6 @@ pub struct DirtTracer {
     neighbours: [[usize; 4]; 6],
     /// The instruction set the tracer runs on (the same results on each).
     isa: Isa,
-    /// The triangles in Morton order of their centroids; `old_id[new]` the scene's index.
-    tris: Vec<parallax_raster::dirt::DirtTri>,
-    old_id: Vec<u32>,
 }
 
 impl DirtTracer {
@@ -95,37 +92,7 @@ impl DirtTracer {
         // The views' masks are independent: built side by side (`bench dirt` times this
         // construction as part of DIRT's build).
         let captures: Vec<_> = views.views().collect();
-        let src = views.triangles.as_slice();
-        let b = views.triangles.bounds();
-        let (lo, ext) = (b.min, (b.max - b.min).max(Vec3::splat(1e-30)));
-        let spread = |v: u32| {
-            let mut x = v as u64 & 0x3ff;
-            x = (x | (x << 16)) & 0x0300_00ff;
-            x = (x | (x << 8)) & 0x0300_f00f;
-            x = (x | (x << 4)) & 0x030c_30c3;
-            (x | (x << 2)) & 0x0924_9249
-        };
-        let mut keys: Vec<(u64, u32)> = src
-            .iter()
-            .enumerate()
-            .map(|(i, t)| {
-                let c = ((t.p0 + t.p1 + t.p2) / 3.0 - lo) / ext * 1023.0;
-                let c = c.clamp(Vec3::ZERO, Vec3::splat(1023.0));
-                let m = spread(c.x as u32) | (spread(c.y as u32) << 1) | (spread(c.z as u32) << 2);
-                (m, i as u32)
-            })
-            .collect();
-        keys.sort_unstable();
-        let old_id: Vec<u32> = keys.iter().map(|k| k.1).collect();
-        let mut new_id = vec![0u32; src.len()];
-        for (n, &o) in old_id.iter().enumerate() {
-            new_id[o as usize] = n as u32;
-        }
-        let tris = old_id.iter().map(|&o| src[o as usize]).collect();
-        let mut slabs: Vec<Slabs> = captures.into_par_iter().map(Slabs::new).collect();
-        for (s, cap) in slabs.iter_mut().zip(views.views()) {
-            s.ids = cap.ids().iter().map(|&i| new_id[i as usize]).collect();
-        }
+        let slabs = captures.into_par_iter().map(Slabs::new).collect();
         let neighbours = std::array::from_fn(|i| {
             let b = views.cube.cube.face_camera(i).frame.basis;
             [-b.x_axis, b.x_axis, b.y_axis, -b.y_axis].map(CubeMap::face_of)
@@ -136,8 +103,6 @@ impl DirtTracer {
             slabs,
             neighbours,
             isa: Isa::detect(),
-            tris,
-            old_id,
         }
     }
 
@@ -185,7 +150,7 @@ impl DirtTracer {
     pub fn closest_hit_counted(&self, ray: &Ray, counters: &mut DirtCounters) -> Option<WorldHit> {
         let b = self.trace(ray, false, counters);
         b.found()
-            .then(|| WorldHit::exact(ray, b.t, self.old_id[b.prim as usize], Vec2::new(b.u, b.v)))
+            .then(|| WorldHit::exact(ray, b.t, b.prim, Vec2::new(b.u, b.v)))
     }
 
     /// Occlusion, with DIRT's own work counters.
@@ -238,7 +203,7 @@ impl DirtTracer {
             return Best::NONE;
         };
         let wt = WatertightRay::new(ray);
-        let mut q = Query::new(wt, &self.tris, any);
+        let mut q = Query::new(wt, self.views.triangles.as_slice(), any);
         self.trace_views(ray, t0, t1, &mut q);
         *counters += q.counters;
         q.best

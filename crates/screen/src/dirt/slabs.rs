@@ -152,7 +152,6 @@ impl Texel {
 #[derive(Clone, Debug)]
 pub(crate) struct Slabs {
     pub texels: Vec<Texel>,
-    pub ids: Vec<u32>,
 }
 
 impl Slabs {
@@ -235,7 +234,7 @@ impl Slabs {
                 }
             }
         }
-        Slabs { texels, ids: Vec::new() }
+        Slabs { texels }
     }
 }
 

@@ -368,7 +368,7 @@ fn walk_body<const UX: bool, const UY: bool, const W_FALLS: bool, const ISA: u8>
                     buckets: (b_a, b_b),
                     l_exit,
                 };
-                if trace_cell::<ISA>(vc, cap, &slabs.ids, r, seg, &cell, &mut hit_l, q) {
+                if trace_cell::<ISA>(vc, cap, r, seg, &cell, &mut hit_l, q) {
                     end = Some(WalkEnd::Done);
                     break;
                 }
@@ -452,11 +452,9 @@ struct Cell {
 /// true when the answer is known. Inlined into the walk's loop (a call would store and reload
 /// the walk's state around it: every XMM register is caller-saved).
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
 fn trace_cell<const ISA: u8>(
     vc: &ViewConsts,
     cap: &DirtCapture,
-    ids: &[u32],
     r: &ViewRay,
     seg: &Segment,
     c: &Cell,
@@ -465,7 +463,7 @@ fn trace_cell<const ISA: u8>(
 ) -> bool {
     let (lo, scale, nb) = (c.zmin, c.scale, vc.buckets);
     let (b_a, b_b) = c.buckets;
-    let offsets = cap.offsets();
+    let (offsets, ids) = (cap.offsets(), cap.ids());
     let base = c.index * nb as usize;
     let ascending = b_a <= b_b;
     let mut b = b_a;
