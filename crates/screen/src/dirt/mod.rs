@@ -52,6 +52,7 @@
 //! `docs/notes/dirt.md`.
 
 mod best;
+mod cells;
 mod slabs;
 mod tri4;
 mod view;
@@ -66,6 +67,7 @@ use rayon::prelude::*;
 
 use best::Best;
 pub use best::DirtCounters;
+use cells::CellLines;
 use slabs::Slabs;
 use tri4::Query;
 use view::{Exit, Isa, ViewConsts, ViewRay};
@@ -79,6 +81,8 @@ pub struct DirtTracer {
     consts: Vec<ViewConsts>,
     /// The views' mip texels with their depth-slab masks (`slabs`), in the order of `consts`.
     slabs: Vec<Slabs>,
+    /// The views' level-0 cells, one cache line each (`cells`), in the order of `consts`.
+    cells: Vec<CellLines>,
     /// Per cube face, the face across its left, right, top and bottom film edges.
     neighbours: [[usize; 4]; 6],
     /// The instruction set the tracer runs on (the same results on each).
@@ -92,7 +96,10 @@ impl DirtTracer {
         // The views' masks are independent: built side by side (`bench dirt` times this
         // construction as part of DIRT's build).
         let captures: Vec<_> = views.views().collect();
-        let slabs = captures.into_par_iter().map(Slabs::new).collect();
+        let (slabs, cells) = captures
+            .into_par_iter()
+            .map(|cap| (Slabs::new(cap), CellLines::new(cap)))
+            .unzip();
         let neighbours = std::array::from_fn(|i| {
             let b = views.cube.cube.face_camera(i).frame.basis;
             [-b.x_axis, b.x_axis, b.y_axis, -b.y_axis].map(CubeMap::face_of)
@@ -101,6 +108,7 @@ impl DirtTracer {
             views,
             consts,
             slabs,
+            cells,
             neighbours,
             isa: Isa::detect(),
         }
@@ -222,7 +230,9 @@ impl DirtTracer {
                     return;
                 }
                 let cap = self.views.camera.as_ref().expect("camera view");
-                if walk(vc, cap, &self.slabs[0], &vr, a, b, q) == WalkEnd::Done || accepted(q, b) {
+                if walk(vc, cap, &self.slabs[0], &self.cells[0], &vr, a, b, q) == WalkEnd::Done
+                    || accepted(q, b)
+                {
                     return;
                 }
                 self.trace_cube(ray, b, t1, q);
@@ -254,7 +264,16 @@ impl DirtTracer {
                 break;
             };
             let faces = &self.views.cube.faces;
-            let end = walk(vc, &faces[f], &self.slabs[first + f], &vr, lo, hi, q);
+            let end = walk(
+                vc,
+                &faces[f],
+                &self.slabs[first + f],
+                &self.cells[first + f],
+                &vr,
+                lo,
+                hi,
+                q,
+            );
             if end == WalkEnd::Done || accepted(q, hi) {
                 return WalkEnd::Done;
             }
@@ -301,6 +320,7 @@ impl DirtTracer {
                 &self.consts[first + f],
                 &self.views.cube.faces[f],
                 &self.slabs[first + f],
+                &self.cells[first + f],
                 &vr,
                 lo,
                 hi,

@@ -64,6 +64,7 @@
 
 use parallax_raster::dirt::{DirtCapture, bucket_index};
 
+use super::cells::{CellLine, CellLines};
 use super::slabs::Slabs;
 use super::tri4::Query;
 use super::view::{Isa, MAX_LEVELS, ViewConsts, ViewRay};
@@ -193,10 +194,12 @@ fn fmax(a: f32, b: f32) -> f32 {
 
 /// Walks view `cap` (constants `vc`) along `r` over `[t_start, t_end]` (inside the view's
 /// frustum), updating `q.best`.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn walk(
     vc: &ViewConsts,
     cap: &DirtCapture,
     slabs: &Slabs,
+    cells: &CellLines,
     r: &ViewRay,
     t_start: f32,
     t_end: f32,
@@ -232,17 +235,17 @@ pub(crate) fn walk(
         Isa::X86V4 => {
             let f = by_dir!(walk_dir_v4);
             // SAFETY: `Isa::X86V4` is only chosen when the CPU has the features (`Isa::detect`).
-            return unsafe { f(vc, cap, slabs, r, &seg, xs, ys, q) };
+            return unsafe { f(vc, cap, slabs, cells, r, &seg, xs, ys, q) };
         }
         Isa::X86V3 => {
             let f = by_dir!(walk_dir_v3);
             // SAFETY: as above, for `Isa::X86V3`.
-            return unsafe { f(vc, cap, slabs, r, &seg, xs, ys, q) };
+            return unsafe { f(vc, cap, slabs, cells, r, &seg, xs, ys, q) };
         }
         Isa::Baseline => {}
     }
     let f = by_dir!(walk_dir);
-    f(vc, cap, slabs, r, &seg, xs, ys, q)
+    f(vc, cap, slabs, cells, r, &seg, xs, ys, q)
 }
 
 /// Defines a copy of the walk for one film direction (`UX`, `UY`: the ray moves towards
@@ -258,13 +261,14 @@ macro_rules! walk_copy {
             vc: &ViewConsts,
             cap: &DirtCapture,
             slabs: &Slabs,
+            cells: &CellLines,
             r: &ViewRay,
             seg: &Segment,
             xs: Axis,
             ys: Axis,
             q: &mut Query,
         ) -> WalkEnd {
-            walk_body::<UX, UY, W_FALLS, { $isa as u8 }>(vc, cap, slabs, r, seg, xs, ys, q)
+            walk_body::<UX, UY, W_FALLS, { $isa as u8 }>(vc, cap, slabs, cells, r, seg, xs, ys, q)
         }
     };
 }
@@ -306,6 +310,7 @@ fn walk_body<const UX: bool, const UY: bool, const W_FALLS: bool, const ISA: u8>
     vc: &ViewConsts,
     cap: &DirtCapture,
     slabs: &Slabs,
+    cells: &CellLines,
     r: &ViewRay,
     seg: &Segment,
     mut xs: Axis,
@@ -313,7 +318,7 @@ fn walk_body<const UX: bool, const UY: bool, const W_FALLS: bool, const ISA: u8>
     q: &mut Query,
 ) -> WalkEnd {
     let texels = slabs.texels.as_slice();
-    let records = cap.cell_records();
+    let lines = cells.lines.as_slice();
 
     // The start cell (clamped onto the grid: the start may lie on the frustum's boundary).
     let mut cx = cell_index(seg.x, vc.cells_x);
@@ -354,7 +359,7 @@ fn walk_body<const UX: bool, const UY: bool, const W_FALLS: bool, const ISA: u8>
             }
             q.counters.cells += 1;
             let index = cy as usize * vc.cells_x as usize + cx as usize;
-            let rec = &records[index];
+            let rec = &lines[index];
             let nb = vc.buckets;
             let b_a = bucket_at(rec.zmin, rec.scale, nb, 1.0 / w_l);
             let b_b = bucket_at(rec.zmin, rec.scale, nb, 1.0 / w_exit);
@@ -368,7 +373,7 @@ fn walk_body<const UX: bool, const UY: bool, const W_FALLS: bool, const ISA: u8>
                     buckets: (b_a, b_b),
                     l_exit,
                 };
-                if trace_cell::<ISA>(vc, cap, r, seg, &cell, &mut hit_l, q) {
+                if trace_cell::<ISA>(vc, cap, cells, rec, r, seg, &cell, &mut hit_l, q) {
                     end = Some(WalkEnd::Done);
                     break;
                 }
@@ -452,9 +457,12 @@ struct Cell {
 /// true when the answer is known. Inlined into the walk's loop (a call would store and reload
 /// the walk's state around it: every XMM register is caller-saved).
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn trace_cell<const ISA: u8>(
     vc: &ViewConsts,
     cap: &DirtCapture,
+    cells: &CellLines,
+    line: &CellLine,
     r: &ViewRay,
     seg: &Segment,
     c: &Cell,
@@ -464,14 +472,13 @@ fn trace_cell<const ISA: u8>(
     let (lo, scale, nb) = (c.zmin, c.scale, vc.buckets);
     let (b_a, b_b) = c.buckets;
     let (offsets, ids) = (cap.offsets(), cap.ids());
-    let base = c.index * nb as usize;
     let ascending = b_a <= b_b;
     let mut b = b_a;
     loop {
         if any_bucket(c.mask, b, b, nb) {
             q.counters.buckets += 1;
-            let k = base + b as usize;
-            if q.test::<ISA>(&ids[offsets[k] as usize..offsets[k + 1] as usize]) {
+            let (start, end) = cells.bucket(line, c.index, b, nb, offsets);
+            if q.test::<ISA>(&ids[start..end]) {
                 return true;
             }
         }
