@@ -222,11 +222,13 @@ def main():
     # acceleration structure build.
     render_mitsuba(mi, dr, export, a.spp, seed + 1, moment=False)
     t_ours, t_mit = ours_stats["seconds"], float("inf")
+    round_pairs = []
     for r in range(a.rounds):
         st = run_parallax(a, os.path.join(a.out, "timing.exr"), a.spp, seed + 10 + r)
         t_ours = min(t_ours, st["seconds"])
         _, t = render_mitsuba(mi, dr, export, a.spp, seed + 2, moment=False)
         t_mit = min(t_mit, t)
+        round_pairs.append({"seconds_ours": st["seconds"], "seconds_mitsuba": t})
     paths = a.width * a.height * a.spp
 
     result = {
@@ -241,6 +243,11 @@ def main():
         "paths_per_s_ours": paths / t_ours, "paths_per_s_mitsuba": paths / t_mit,
     }
     result["agree"] = bool(abs(d_mean) <= 3 * d_se and abs(lum_rel) <= 0.01)
+    # Every interleaved round, ours then Mitsuba's (on a loaded host the pairs, not the best of
+    # each, say whether a difference holds).
+    for p in round_pairs:
+        p["paths_per_s_ratio"] = p["seconds_mitsuba"] / p["seconds_ours"]
+    result["rounds_timed"] = round_pairs
 
     if not a.skip_reference:
         ref_spp = a.reference_spp or 16 * a.spp
@@ -265,6 +272,12 @@ def main():
             "seconds_ours_equal_time": eq_stats["seconds"],
             "efficiency_ratio": (rmse(mit) ** 2 * t_mit) / (rmse(ours) ** 2 * t_ours),
         })
+        # The equal-time RMSE ratio each timed round predicts (error ~ 1/sqrt(paths): the
+        # equal-spp ratio times sqrt(paths/s Mitsuba / ours)); less noisy on a loaded host than
+        # the one budget run above.
+        spp_ratio = rmse(ours) / rmse(mit)
+        for p in round_pairs:
+            p["rmse_equal_time_ratio_predicted"] = spp_ratio * (p["paths_per_s_ratio"] ** -0.5)
 
     with open(os.path.join(a.out, "result.json"), "w") as f:
         json.dump(result, f, indent=2)
