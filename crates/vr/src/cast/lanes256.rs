@@ -328,7 +328,6 @@ impl Lanes for Y16 {
 }
 
 impl LaneReduce for Y16 {
-    const RUN_GROUP: usize = 16;
     #[inline(always)]
     fn load16(a: &[f32; 16]) -> Self {
         // SAFETY: module docs; `a` holds 16 f32.

@@ -42,7 +42,7 @@ use crate::beam::{Beam, LeafRef};
 use crate::cast::isa::Isa;
 use crate::cast::lanes16::LaneReduce;
 #[cfg(target_arch = "x86_64")]
-use crate::cast::lanes256::Y16;
+use crate::cast::lanes256::Y8;
 #[cfg(target_arch = "x86_64")]
 use crate::cast::lanes512::Z16;
 
@@ -300,7 +300,7 @@ unsafe fn setup_tile_avx2(
     origin: Vec3,
     out: &mut TileTris,
 ) {
-    setup_tile_lanes::<Y16>(blocks, leaves, beam, origin, out)
+    setup_tile_lanes::<Y8>(blocks, leaves, beam, origin, out)
 }
 
 /// [`setup_tile_lanes`] with sixteen AVX-512 lanes.
