@@ -8,7 +8,8 @@
 //! the set-up kernel with [`SetupExactness::Edges`] (default), `full` = with
 //! [`SetupExactness::Full`], `watertight` = the watertight kernel, `edges-plain` = `edges`
 //! without the affine packet test, `edges-affine` = `edges` with it on the AVX-512 kernel too). Optional further arguments:
-//! `lanes` (8th, default 4: `CastOptions::lanes`) and a head pose `eye target fov_y` (9th-11th,
+//! `lanes` (8th, default 4: `CastOptions::lanes`; a suffix `sse` / `avx2` caps `CastOptions::isa`
+//! at that tier, e.g. `16sse` the portable twin) and a head pose `eye target fov_y` (9th-11th,
 //! e.g. `-9,3.5,0 8,5,0 60`; default the scene's camera).
 
 use parallax_bvh::Bvh;
@@ -16,8 +17,8 @@ use parallax_core::cpu_time::{ms_between, thread_cpu_ns};
 use parallax_scene::Scene;
 use parallax_scene::camera::{Camera, CameraOptions, ModelKind};
 use parallax_vr::{
-    CastOptions, Hierarchy, SampleSet, SampleTest, SetupExactness, VisibilityBuffer, cast_opts,
-    trace_per_ray,
+    CastOptions, Hierarchy, Isa, SampleSet, SampleTest, SetupExactness, VisibilityBuffer,
+    cast_opts, trace_per_ray,
 };
 
 fn main() {
@@ -71,10 +72,18 @@ fn main() {
         let hier = Hierarchy::build(&set).unwrap();
         let opts = CastOptions {
             test,
-            // `16sse`: the portable 16-lane twin instead of AVX-512.
-            lanes: arg(8, "4").trim_end_matches("sse").parse().unwrap(),
+            // `16sse`: the portable 16-lane twin (SSE tier); `16avx2`: at most the AVX2 tier.
+            lanes: arg(8, "4")
+                .trim_end_matches("sse")
+                .trim_end_matches("avx2")
+                .parse()
+                .unwrap(),
             exactness,
-            avx512: !arg(8, "4").ends_with("sse"),
+            isa: match arg(8, "4") {
+                l if l.ends_with("sse") => Isa::Sse,
+                l if l.ends_with("avx2") => Isa::Avx2,
+                _ => Isa::Avx512,
+            },
             // `edges-plain`: without the affine packet test (`cast/setup/affine.rs`).
             affine: mode != "edges-plain",
             // `edges-affine`: the affine packet test on the AVX-512 kernel too.

@@ -41,7 +41,7 @@
 //! | `test` | [`SampleTest`] | `TileSetup` | the sample test (tiles without a shared origin, e.g. thin lens, always take the watertight kernel) |
 //! | `lanes` | usize | 16 | rays per SIMD packet: 4 (SSE), 8 (AVX2 if detected), 16 (set-up kernel: one AVX-512 or four SSE registers, one pixel at 16 spp), 1 (one ray against four leaf boxes) |
 //! | `exactness` | [`SetupExactness`] | `Edges` | how exactly the set-up kernel reproduces per-ray traversal |
-//! | `avx512` | bool | true | 16-lane set-up packets in one AVX-512 register where the CPU has AVX-512F (else the four-SSE-register twin; the same buffer) |
+//! | `isa` | [`Isa`] | `Avx512` | the widest instruction-set tier of the set-up kernel's 16-lane packets and the per-tile set-up: one AVX-512 register where the CPU has AVX-512F, else two AVX registers where it has AVX2, else four SSE registers (`Isa::Sse`: the portable twin); the same buffer |
 //! | `affine` | bool | true | the affine packet test before the set-up kernel's per-lane edge test (`Edges`, pinhole and stereo tiles; [`cast::setup::affine`]): decides whole packets against a triangle with a rigorous error bound; the same buffer; not on the AVX-512 kernel unless `affine_avx512` |
 //! | `affine_avx512` | bool | false | the affine packet test on the AVX-512 kernel too (there it costs more than it saves, `docs/notes/vr.md`) |
 //!
@@ -62,7 +62,7 @@ pub mod visibility;
 
 pub use cast::setup::{SampleTest, SetupExactness};
 pub use cast::stored::RayBuffer;
-pub use cast::{CastOptions, CastStats, cast, cast_opts, cast_stored, cast_with};
+pub use cast::{CastOptions, CastStats, Isa, cast, cast_opts, cast_stored, cast_with};
 pub use hierarchy::{Block, Hierarchy, HierarchyError, Tile};
 pub use patterns::PatternError;
 pub use samples::{Sample, SampleSet};

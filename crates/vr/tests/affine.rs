@@ -11,7 +11,7 @@ use parallax_scene::camera::{Camera, CameraOptions, ModelKind};
 use parallax_scene::{CameraDesc, Scene};
 use parallax_vr::cast::setup::affine::{FilmFrame, PacketBox, PacketClass};
 use parallax_vr::cast::setup::{Cone, TriSetup};
-use parallax_vr::{CastOptions, Hierarchy, SampleSet, VisibilityBuffer, cast_opts};
+use parallax_vr::{CastOptions, Hierarchy, Isa, SampleSet, VisibilityBuffer, cast_opts};
 
 fn camera(scene: &Scene, kind: ModelKind, w: u32, h: u32) -> Camera {
     let desc = scene.camera(None).unwrap();
@@ -30,12 +30,23 @@ fn same_with_and_without(bvh: &Bvh, set: &SampleSet, label: &str) -> (u64, u64) 
     let mut reference = VisibilityBuffer::new(set);
     cast_opts(bvh, set, &h, &mut reference, plain);
     let (mut decided, mut tests) = (0, 0);
-    for (lanes, avx512) in [(4, true), (8, true), (16, false), (16, true)] {
+    for (lanes, isa) in [
+        (4, Isa::Sse),
+        (8, Isa::Sse),
+        (8, Isa::Avx2),
+        (16, Isa::Sse),
+        (16, Isa::Avx2),
+        (16, Isa::Avx512),
+    ] {
+        if isa.available() != isa {
+            eprintln!("{label}: {isa:?} not detected, not compared");
+            continue;
+        }
         // The AVX-512 kernel takes the packet test only when asked (`affine_avx512`).
         let opts = CastOptions {
             lanes,
-            avx512,
-            affine_avx512: avx512,
+            isa,
+            affine_avx512: isa == Isa::Avx512,
             ..CastOptions::default()
         };
         assert!(opts.affine);
@@ -51,7 +62,7 @@ fn same_with_and_without(bvh: &Bvh, set: &SampleSet, label: &str) -> (u64, u64) 
             .count();
         assert_eq!(
             diff, 0,
-            "{label}: {lanes} lanes (avx512 {avx512}): {diff} entries differ"
+            "{label}: {lanes} lanes ({isa:?}): {diff} entries differ"
         );
         decided += st.setup_packet_out + st.setup_packet_in;
         tests += st.tri_tests;

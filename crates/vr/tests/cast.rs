@@ -6,8 +6,8 @@ use parallax_bvh::Bvh;
 use parallax_scene::Scene;
 use parallax_scene::camera::{Camera, CameraOptions, ModelKind};
 use parallax_vr::{
-    CastOptions, Hierarchy, RayBuffer, SampleSet, SampleTest, SetupExactness, VisibilityBuffer,
-    cast, cast_opts, cast_stored, cast_with, trace_per_ray,
+    CastOptions, Hierarchy, Isa, RayBuffer, SampleSet, SampleTest, SetupExactness,
+    VisibilityBuffer, cast, cast_opts, cast_stored, cast_with, trace_per_ray,
 };
 
 const W: u32 = 96;
@@ -214,16 +214,20 @@ fn check_setup(
         cast_opts(bvh, set, &h, &mut other, CastOptions { lanes, ..opts });
         assert_eq!(other, setup, "{label}: {lanes} lanes");
     }
-    // The portable 16-lane twin (four SSE registers) equals the AVX-512 lanes (the default
-    // where the CPU has them) bit for bit.
-    let mut portable = VisibilityBuffer::new(set);
-    let sse = CastOptions {
-        lanes: 16,
-        avx512: false,
-        ..opts
-    };
-    cast_opts(bvh, set, &h, &mut portable, sse);
-    assert_eq!(portable, setup, "{label}: 16 portable lanes");
+    // Every instruction-set tier this CPU has (the portable twin: four SSE registers per
+    // 16-lane packet, 4-lane set-up; AVX2: two AVX registers, 8-lane set-up; AVX-512) equals
+    // the default (the widest) bit for bit, for 16- and 8-lane packets.
+    for isa in [Isa::Sse, Isa::Avx2, Isa::Avx512] {
+        if isa.available() != isa {
+            eprintln!("{label}: {isa:?} not detected, not compared");
+            continue;
+        }
+        for lanes in [16, 8] {
+            let mut tier = VisibilityBuffer::new(set);
+            cast_opts(bvh, set, &h, &mut tier, CastOptions { lanes, isa, ..opts });
+            assert_eq!(tier, setup, "{label}: {lanes} lanes, {isa:?}");
+        }
+    }
     let mut reference = VisibilityBuffer::new(set);
     trace_per_ray(bvh, set, &mut reference);
     let (diff_ref, t_ref) = mismatches(&setup, &reference);

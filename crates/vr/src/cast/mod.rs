@@ -7,7 +7,9 @@
 //! the CPU threads, block after block.
 
 pub mod intersect;
+pub mod isa;
 pub mod lanes16;
+pub(crate) mod lanes256;
 pub(crate) mod lanes512;
 pub mod leaves;
 pub mod packet;
@@ -22,10 +24,11 @@ use parallax_bvh::Bvh;
 use rayon::prelude::*;
 
 use crate::cast::intersect::test_tile;
+pub use crate::cast::isa::Isa;
 use crate::cast::leaves::{LeafBox, LeafGroup, group_leaves};
 use crate::cast::setup::{
-    SampleTest, SetupCounts, SetupExactness, SetupLanes, SetupWork, TileTris, setup_tile_with,
-    shared_origin, test_tile_setup,
+    SampleTest, SetupCounts, SetupExactness, SetupWork, TileTris, setup_tile_with, shared_origin,
+    test_tile_setup,
 };
 use crate::cast::stored::RayBuffer;
 use crate::{Hierarchy, SampleSet, VisibilityBuffer};
@@ -80,10 +83,10 @@ pub struct CastStats {
 }
 
 /// The caster's sample-test choice: the kernel and the SIMD width of its ray packets (`4` SSE,
-/// `8` AVX2 when detected (else 4), `16` one AVX-512 register (`avx512` and detected) or four
-/// SSE registers — set-up kernel only, the
+/// `8` AVX2 when detected (else 4), `16` in the widest lanes `isa` allows and the CPU has —
+/// one AVX-512 register, two AVX registers or four SSE registers — set-up kernel only, the
 /// watertight kernel treats it as `4`; `1` one ray at a time — watertight kernel only; the
-/// set-up kernel treats `1` as `4`). Every width gives the same buffer.
+/// set-up kernel treats `1` as `4`). Every width and tier gives the same buffer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct CastOptions {
     pub test: SampleTest,
@@ -91,10 +94,11 @@ pub struct CastOptions {
     /// How exactly the set-up kernel reproduces per-ray traversal (ignored by the watertight
     /// kernel, which is always exact).
     pub exactness: SetupExactness,
-    /// Run 16-lane set-up packets in one AVX-512 register when the CPU has AVX-512F (else, or
-    /// when false, four SSE registers: the portable twin, the same buffer bit for bit); the
-    /// per-tile triangle set-up likewise in 16 AVX-512 lanes, else 4 SSE lanes (the same list).
-    pub avx512: bool,
+    /// The widest instruction-set tier of the set-up kernel's 16-lane packets and of the
+    /// per-tile triangle set-up ([`Isa`], `cast/isa.rs`): the widest the CPU has at or below it
+    /// runs ([`Isa::available`]); [`Isa::Sse`] selects the portable twin (four SSE registers,
+    /// 4-lane set-up). Every tier gives the same buffer bit for bit.
+    pub isa: Isa,
     /// Run the affine packet test (`cast/setup/affine.rs`) before the per-lane edge test of
     /// the set-up kernel with [`SetupExactness::Edges`] (pinhole and stereo tiles): the same
     /// buffer bit for bit, fewer instructions — on the SSE, AVX2 and 16-lane twin kernels; the
@@ -115,7 +119,7 @@ impl Default for CastOptions {
             test: SampleTest::TileSetup,
             lanes: 16,
             exactness: SetupExactness::Edges,
-            avx512: true,
+            isa: Isa::Avx512,
             affine: true,
             affine_avx512: false,
         }
@@ -188,7 +192,7 @@ pub fn cast_with(
             test: SampleTest::Watertight,
             lanes,
             exactness: SetupExactness::Full,
-            avx512: true,
+            isa: Isa::Avx512,
             affine: false,
             affine_avx512: false,
         },
@@ -234,6 +238,8 @@ fn cast_from(
     opts: CastOptions,
 ) -> CastStats {
     let lanes = opts.lanes;
+    // The tier that runs (one detection per cast).
+    let isa = opts.isa.available();
     let wall = Instant::now();
     assert!(
         hierarchy.sample_count == set.samples.len()
@@ -305,13 +311,8 @@ fn cast_from(
                 };
                 if let Some(o) = origin {
                     let lazy = opts.exactness == SetupExactness::Edges;
-                    // The set-up's lanes follow the kernel's: the same list either way.
-                    let sl = if opts.avx512 {
-                        SetupLanes::Avx512
-                    } else {
-                        SetupLanes::Sse4
-                    };
-                    setup_tile_with(sl, blocks_, &scratch.leaves, &tile.beam, o, lazy, tt);
+                    // The set-up's lanes follow the kernel's tier: the same list either way.
+                    setup_tile_with(isa, blocks_, &scratch.leaves, &tile.beam, o, lazy, tt);
                     // The 1-spp film lanes of these samples (`Hierarchy::film`).
                     let film = (hierarchy.film[0].len() == set.samples.len())
                         .then(|| hierarchy.film.each_ref().map(|v| &v[range.clone()]));
@@ -329,7 +330,7 @@ fn cast_from(
                             &tile.beam,
                             scale,
                             lanes,
-                            opts.avx512,
+                            isa,
                             opts.exactness,
                             opts.affine,
                             opts.affine_avx512,

@@ -82,13 +82,15 @@
 //!
 //! **Set-up in lanes** (`cast/setup/tile.rs`, `cast/setup/lazy.rs`): the `Edges` set-up (lazy
 //! band, classification) runs sixteen consecutive triangles of the tile list at once in one
-//! AVX-512 register per value where the CPU has AVX-512F (four in SSE registers elsewhere, or
-//! with `CastOptions::avx512` false), and the full
+//! AVX-512 register per value where the CPU has AVX-512F, eight in one AVX register where it
+//! has AVX2, four in SSE registers elsewhere or with `CastOptions::isa` at [`Isa::Sse`]
+//! (`cast/isa.rs`), and the full
 //! bands of a run's triangles four at a time when a packet first enters the run; per lane the
 //! scalar operations in the scalar order, so the list is bit-identical to the scalar twin's
 //! (tested there). `Full` sets up one triangle at a time.
 //!
-//! The sample test then runs packets of 4 (SSE), 8 (AVX2) or 16 (four SSE registers) rays over the set-up list in the
+//! The sample test then runs packets of 4 (SSE), 8 (AVX2) or 16 (one AVX-512, two AVX or four
+//! SSE registers) rays over the set-up list in the
 //! tile list's near-depth order, leaf by leaf; a triangle whose `g . d` is below every lane's
 //! best so far costs one 3-term dot product; the packet stops once every ray has a hit nearer
 //! than the next leaf's near depth (as the watertight kernel). Beyond the paper (its GPU threads
@@ -126,7 +128,8 @@
 //! | name | type | default | meaning |
 //! |---|---|---|---|
 //! | `exactness` | [`SetupExactness`] | `Edges` | which bands decide by the watertight test |
-//! | `lanes` | usize | 16 | rays per packet: 4 (SSE), 8 (AVX2 if detected, else 4) or 16 (four SSE registers, [`crate::cast::lanes16`]) |
+//! | `lanes` | usize | 16 | rays per packet: 4 (SSE), 8 (AVX2 if detected and allowed, else 4) or 16 |
+//! | `isa` | [`Isa`] | the widest detected | lanes of 16-ray packets: one AVX-512 register, two AVX registers, four SSE registers ([`crate::cast::lanes16`], the portable twin) |
 //! | [`RHO_MAX`] | f32 | 0.05 | depth band above which a triangle always takes the watertight test |
 //! | `affine` | bool | true | the affine packet test ([`affine`]) before the per-lane edge test (`Edges` only) |
 //! | `affine_avx512` | bool | false | the affine packet test on the AVX-512 kernel too (slower there, `docs/notes/vr.md`) |
@@ -145,11 +148,13 @@ mod tri;
 use glam::{Vec2, Vec4};
 use parallax_bvh::Tri4;
 use parallax_core::NO_ID;
-use parallax_core::simd::F8;
 
 use crate::SampleSet;
 use crate::beam::Beam;
+use crate::cast::isa::Isa;
 use crate::cast::lanes16::{LaneReduce, V16};
+#[cfg(target_arch = "x86_64")]
+use crate::cast::lanes256::{Y8, Y16};
 #[cfg(target_arch = "x86_64")]
 use crate::cast::lanes512::Z16;
 use crate::cast::packet::{ClosestN, MAX_LANES, gen_n_film, gen_spp1, sample_chunk};
@@ -158,7 +163,7 @@ use crate::samples::MAX_SPP;
 use affine::{FilmFrame, PacketBox};
 
 pub use kernel::SetupWork;
-pub use tile::{SetupLanes, setup_tile, setup_tile_scalar, setup_tile_with};
+pub use tile::{setup_tile, setup_tile_scalar, setup_tile_with};
 pub use tri::{
     BeamCorners, Cone, CornerClass, EdgeClass, RHO_MAX, Segment, SetupCounts, TileTris, TriSetup,
     dot3, exact_closest, exact_t, shared_origin,
@@ -469,10 +474,16 @@ macro_rules! isa_entry {
     };
 }
 isa_entry!(
-    /// [`run_setup`] with eight AVX2 lanes.
+    /// [`run_setup`] with eight AVX2 lanes ([`Y8`], one register per packet).
     run_setup_avx2,
-    "avx2",
-    F8
+    "avx2,bmi1,bmi2,lzcnt,popcnt",
+    Y8
+);
+isa_entry!(
+    /// [`run_setup`] with sixteen AVX2 lanes ([`Y16`], two registers per packet).
+    run_setup_avx2_16,
+    "avx2,bmi1,bmi2,lzcnt,popcnt",
+    Y16
 );
 isa_entry!(
     /// [`run_setup`] with sixteen AVX-512 lanes ([`Z16`], one register per packet).
@@ -483,8 +494,9 @@ isa_entry!(
 
 /// Tests every subsample ray of the tile `samples` against the set-up list `tt` (built from
 /// `blocks`) and writes the closest hits, packets of 16 rays (`lanes == 16`: one AVX-512
-/// register if detected and `avx512`, else four SSE registers), 8 (AVX2, if detected and
-/// `lanes == 8`) or 4. Every choice gives the same buffer. `affine`: the affine packet test
+/// register if `isa` is [`Isa::Avx512`], two AVX registers if [`Isa::Avx2`], else four SSE
+/// registers), 8 (`lanes == 8` and `isa` at least [`Isa::Avx2`]: one AVX register) or 4. `isa`
+/// must be a tier the CPU has ([`Isa::available`]). Every choice gives the same buffer. `affine`: the affine packet test
 /// (`Edges`), on the AVX-512 kernel only with `affine_avx512`. `film`: the samples' film lanes
 /// at 1 spp ([`crate::Hierarchy::film`], `[x, y, footprint]` in `samples` order), read by
 /// the 1-spp packets instead of a gather through `samples`; `None` gathers.
@@ -504,7 +516,7 @@ pub unsafe fn test_tile_setup(
     beam: &Beam,
     scale: f32,
     lanes: usize,
-    avx512: bool,
+    isa: Isa,
     exactness: SetupExactness,
     affine: bool,
     affine_avx512: bool,
@@ -512,10 +524,8 @@ pub unsafe fn test_tile_setup(
     t: *mut f32,
 ) -> SetupWork {
     let spp = set.spp as usize;
-    #[cfg(target_arch = "x86_64")]
-    let z16 = lanes == 16 && avx512 && std::arch::is_x86_feature_detected!("avx512f");
-    #[cfg(not(target_arch = "x86_64"))]
-    let z16 = false;
+    debug_assert!(isa <= isa.available(), "{isa:?} not detected");
+    let z16 = lanes == 16 && isa == Isa::Avx512;
     // The AVX-512 kernel's per-lane edge test is one register per edge: the affine packet
     // test pays there only when asked for (`CastOptions::affine_avx512`).
     let affine = affine && (!z16 || affine_avx512);
@@ -562,14 +572,19 @@ pub unsafe fn test_tile_setup(
         };
     }
     #[cfg(target_arch = "x86_64")]
-    if lanes == 8 && std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: AVX2 was detected.
+    if lanes == 8 && isa >= Isa::Avx2 {
+        // SAFETY: the caller's `isa` is available: AVX2 (and the bit instructions) detected.
         return unsafe { run!(run_setup_avx2) };
     }
     #[cfg(target_arch = "x86_64")]
     if z16 {
-        // SAFETY: AVX-512F was detected.
+        // SAFETY: the caller's `isa` is available: AVX-512F detected.
         return unsafe { run!(run_setup_avx512) };
+    }
+    #[cfg(target_arch = "x86_64")]
+    if lanes == 16 && isa == Isa::Avx2 {
+        // SAFETY: the caller's `isa` is available: AVX2 (and the bit instructions) detected.
+        return unsafe { run!(run_setup_avx2_16) };
     }
     if lanes == 16 {
         return run!(run_setup, V16);

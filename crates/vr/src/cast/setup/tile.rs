@@ -3,7 +3,8 @@
 //! tile's triangles, in list order, are gathered from the BVH's leaf blocks ([`Tri4`]) into
 //! packs of `L::N` consecutive ones (across blocks and leaves: Sponza's leaf blocks hold ~2.2
 //! triangles on average), set up together in lanes ([`LazySetupN`], `cast/setup/lazy.rs`: 16
-//! AVX-512 lanes where the CPU has them, else 4 SSE lanes), classified against the tile's
+//! AVX-512 lanes where the CPU has them, else 8 AVX lanes where it has AVX2, else 4 SSE lanes;
+//! `cast/isa.rs`), classified against the tile's
 //! corners in the same registers, and the kept triangles appended to the tile's list in order,
 //! each leaf's run closed after its last triangle ([`setup_tile`]). Runs' full bands are
 //! computed four triangles at a time in SSE lanes ([`refine_run`]).
@@ -24,7 +25,7 @@
 //! | name | value | meaning |
 //! |---|---|---|
 //! | `PREFETCH_LEAVES` | 8 | leaves ahead whose triangle blocks are prefetched |
-//! | [`SetupLanes`] | `Avx512` | lane type of the lazy set-up (`Sse4`: the portable twin) |
+//! | `isa` | [`Isa::available`] | lanes of the lazy set-up: 16 AVX-512, 8 AVX, 4 SSE (`Isa::Sse`: the portable twin) |
 
 use glam::{Vec3, Vec4};
 use parallax_bvh::Tri4;
@@ -38,7 +39,10 @@ use super::tri::{
     BeamCorners, Cone, CornerClass, RHO_MAX, RunBoxes16, SQRT3, Segment, TileTris, TriSetup, U,
 };
 use crate::beam::{Beam, LeafRef};
+use crate::cast::isa::Isa;
 use crate::cast::lanes16::LaneReduce;
+#[cfg(target_arch = "x86_64")]
+use crate::cast::lanes256::Y8;
 #[cfg(target_arch = "x86_64")]
 use crate::cast::lanes512::Z16;
 
@@ -233,17 +237,6 @@ fn end_run(out: &mut TileTris, r: &LeafRef, bx: Aabb) {
     }
 }
 
-/// The lane type of the lazy set-up ([`setup_tile_with`]): every choice gives the same list.
-/// (No AVX2 tier: `F8`'s plain loops took 38% more set-up instructions than the SSE lanes,
-/// `docs/notes/vr.md`.)
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SetupLanes {
-    /// Four SSE lanes (glam `Vec4`): the portable twin.
-    Sse4,
-    /// Sixteen AVX-512 lanes (`Z16`), if the CPU has AVX-512F (else [`SetupLanes::Sse4`]).
-    Avx512,
-}
-
 /// Sets up every triangle of the tile list `leaves` (near-depth order) for rays from `origin`
 /// within `beam`, dropping all-out triangles (module docs of [`super`]); the lazy set-up
 /// `L::N` triangles at a time in the widest lanes the CPU has (`LazySetupN`,
@@ -256,12 +249,22 @@ pub fn setup_tile(
     lazy: bool,
     out: &mut TileTris,
 ) {
-    setup_tile_with(SetupLanes::Avx512, blocks, leaves, beam, origin, lazy, out);
+    setup_tile_with(
+        Isa::Avx512.available(),
+        blocks,
+        leaves,
+        beam,
+        origin,
+        lazy,
+        out,
+    );
 }
 
-/// [`setup_tile`] with the lanes `lanes` (or the widest the CPU has below them).
+/// [`setup_tile`] in the lanes of the tier `isa` (one the CPU has, [`Isa::available`]): 16
+/// AVX-512 lanes, 8 AVX lanes or 4 SSE lanes (the portable twin). Every tier gives the same
+/// list.
 pub fn setup_tile_with(
-    lanes: SetupLanes,
+    isa: Isa,
     blocks: &[Tri4],
     leaves: &[LeafRef],
     beam: &Beam,
@@ -272,13 +275,32 @@ pub fn setup_tile_with(
     if !lazy {
         return setup_tile_scalar(blocks, leaves, beam, origin, lazy, out);
     }
+    debug_assert!(isa <= isa.available(), "{isa:?} not detected");
     #[cfg(target_arch = "x86_64")]
-    if lanes == SetupLanes::Avx512 && std::arch::is_x86_feature_detected!("avx512f") {
-        // SAFETY: AVX-512F was detected.
-        return unsafe { setup_tile_avx512(blocks, leaves, beam, origin, out) };
+    match isa {
+        // SAFETY: the caller's `isa` is available: AVX-512F detected.
+        Isa::Avx512 => return unsafe { setup_tile_avx512(blocks, leaves, beam, origin, out) },
+        // SAFETY: the caller's `isa` is available: AVX2 (and the bit instructions) detected.
+        Isa::Avx2 => return unsafe { setup_tile_avx2(blocks, leaves, beam, origin, out) },
+        Isa::Sse => {}
     }
-    let _ = lanes;
     setup_tile_lanes::<Vec4>(blocks, leaves, beam, origin, out)
+}
+
+/// [`setup_tile_lanes`] with eight AVX lanes.
+///
+/// # Safety
+/// The CPU must support the AVX2 tier ([`crate::cast::isa::avx2_detected`]).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
+unsafe fn setup_tile_avx2(
+    blocks: &[Tri4],
+    leaves: &[LeafRef],
+    beam: &Beam,
+    origin: Vec3,
+    out: &mut TileTris,
+) {
+    setup_tile_lanes::<Y8>(blocks, leaves, beam, origin, out)
 }
 
 /// [`setup_tile_lanes`] with sixteen AVX-512 lanes.
@@ -615,9 +637,14 @@ mod tests {
             };
             let mut b = TileTris::default();
             setup_tile_scalar(&blocks, &leaves, &bm, o, true, &mut b);
-            for lanes in [SetupLanes::Sse4, SetupLanes::Avx512] {
+            // Every tier this CPU has (the AVX ones only where detected).
+            for isa in [Isa::Sse, Isa::Avx2, Isa::Avx512] {
+                if isa.available() != isa {
+                    eprintln!("{isa:?} not detected: its set-up lanes are not tested here");
+                    continue;
+                }
                 let mut a = TileTris::default();
-                setup_tile_with(lanes, &blocks, &leaves, &bm, o, true, &mut a);
+                setup_tile_with(isa, &blocks, &leaves, &bm, o, true, &mut a);
                 same_lists(&a, &b);
             }
         }
