@@ -55,12 +55,6 @@ pub(crate) trait Lanes16: Copy {
     fn gt(self, a: Self::V, b: Self::V) -> u32;
     fn eq(self, a: Self::V, b: Self::V) -> u32;
     fn ne(self, a: Self::V, b: Self::V) -> u32;
-    /// Lanes where `a`, `b` or `c` equals zero (`eq` with `0.0`, or-ed).
-    #[inline(always)]
-    fn any_zero(self, a: Self::V, b: Self::V, c: Self::V) -> u32 {
-        let zero = self.splat(0.0);
-        self.eq(a, zero) | self.eq(b, zero) | self.eq(c, zero)
-    }
     /// `m ? a : b` per lane.
     fn select(self, m: u32, a: Self::V, b: Self::V) -> Self::V;
     /// Lanes `i` of `m` with `idx[i] > x` (unsigned).
@@ -528,11 +522,6 @@ mod tests {
         assert_eq!(l.gt(x, y), p.gt(px, py));
         assert_eq!(l.eq(x, y), p.eq(px, py));
         assert_eq!(l.ne(x, y), p.ne(px, py));
-        let mut zv = vals;
-        zv.rotate_left(5);
-        let (z, pz) = (l.load(&F16(zv)), p.load(&F16(zv)));
-        assert_eq!(l.any_zero(x, y, z), p.any_zero(px, py, pz));
-        assert_ne!(p.any_zero(px, py, pz), 0);
         let idx = U16(std::array::from_fn(|i| (i as u32 * 7) % 11));
         assert_eq!(l.gt_u32(0xFFF0, &idx, 5), p.gt_u32(0xFFF0, &idx, 5));
         // Lanes without NaN or zeros (the sign of a zero minimum is unspecified).

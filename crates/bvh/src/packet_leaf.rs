@@ -121,7 +121,7 @@ impl Packet {
         let v = l.sub(l.mul(ax, cy), l.mul(ay, cx));
         let w = l.sub(l.mul(bx, ay), l.mul(by, ax));
         let zero = l.splat(0.0);
-        let exact = l.any_zero(u, v, w) & mask;
+        let exact = (l.eq(u, zero) | l.eq(v, zero) | l.eq(w, zero)) & mask;
         // Without zeros, "not both a negative and a positive edge function" is "one sign
         // bit": `same_sign` (module docs, NaN lanes).
         let inside = l.same_sign(u, v, w) & mask & !exact;

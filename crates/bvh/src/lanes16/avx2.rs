@@ -186,24 +186,6 @@ impl Lanes16 for Avx2 {
         self.cmp::<_CMP_NEQ_UQ>(a, b)
     }
     #[inline(always)]
-    fn any_zero(self, a: V2, b: V2, c: V2) -> u32 {
-        // The three compares or-ed as vectors: one `vmovmskps` per half, not three.
-        unsafe {
-            let zero = _mm256_setzero_ps();
-            let mut z = [zero; 2];
-            for (h, zh) in z.iter_mut().enumerate() {
-                *zh = _mm256_or_ps(
-                    _mm256_or_ps(
-                        _mm256_cmp_ps::<_CMP_EQ_OQ>(a[h], zero),
-                        _mm256_cmp_ps::<_CMP_EQ_OQ>(b[h], zero),
-                    ),
-                    _mm256_cmp_ps::<_CMP_EQ_OQ>(c[h], zero),
-                );
-            }
-            self.signs(z)
-        }
-    }
-    #[inline(always)]
     fn select(self, m: u32, a: V2, b: V2) -> V2 {
         let k = self.mask_vectors(m);
         unsafe {
