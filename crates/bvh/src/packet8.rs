@@ -55,7 +55,7 @@ use crate::tri4::Tri4Ray;
 pub const PACKET_SIZE: usize = 16;
 
 /// A subtree entered by at most this many rays of a packet is traversed ray by ray.
-pub(crate) const SINGLE_RAYS_BELOW: u32 = 4;
+pub(crate) const SINGLE_RAYS_BELOW: u32 = 2;
 /// With interval bounds, children passing the interval test keep the packet's whole mask (no
 /// per-ray child test): a ray that misses the child costs only lanes of the SIMD triangle test,
 /// which runs all 16 lanes anyway, and rays with a closer hit drop out at the pops
