@@ -138,8 +138,8 @@ impl Lanes16 for Portable16 {
     }
     #[inline(always)]
     fn store(self, v: [Vec4; 4], a: &mut F16) {
-        for g in 0..4 {
-            v[g].write_to_slice(&mut a.0[4 * g..4 * g + 4]);
+        for (g, vg) in v.iter().enumerate() {
+            vg.write_to_slice(&mut a.0[4 * g..4 * g + 4]);
         }
     }
     #[inline(always)]

@@ -101,6 +101,7 @@ impl Bvh {
     /// The 64-ray traversal of up to [`PACKET64_SIZE`] rays on lanes `l` (module docs; the
     /// entry points and the choice of lanes are in `packet_lanes.rs`).
     #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // the loop index addresses several arrays in step
     pub(crate) fn packet64<L: Lanes16>(&self, l: L, rays: &[Ray], out: &mut [Option<Hit>]) {
         if rays.len() <= PACKET_SIZE || self.nodes8.is_empty() {
             return self.packet64_by_groups(l, rays, out);

@@ -107,6 +107,7 @@ impl Packet {
     /// full packet: the same comparisons as `Ray::is_valid`).
     /// Built in `slot` (a packet is ~1.4 kB: returning it by value cost a copy per packet).
     #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // the loop index addresses several arrays in step
     pub fn init<'a, L: Lanes16>(
         slot: &'a mut MaybeUninit<Self>,
         l: L,
@@ -221,6 +222,7 @@ impl Packet {
 
     /// [`Self::load_scalar`] for a full packet, in lanes (`packet_setup.rs`).
     #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // the loop index addresses several arrays in step
     fn load_lanes<L: Lanes16>(
         &mut self,
         l: L,

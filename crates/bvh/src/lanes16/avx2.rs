@@ -224,9 +224,9 @@ impl Lanes16 for Avx2 {
         unsafe {
             let p = a.0.as_mut_ptr() as *mut __m256i;
             let xv = _mm256_castsi256_ps(_mm256_set1_epi32(x as i32));
-            for h in 0..2 {
+            for (h, kh) in k.iter().enumerate() {
                 let old = _mm256_castsi256_ps(_mm256_load_si256(p.add(h)));
-                let new = _mm256_blendv_ps(old, xv, _mm256_castsi256_ps(k[h]));
+                let new = _mm256_blendv_ps(old, xv, _mm256_castsi256_ps(*kh));
                 _mm256_store_si256(p.add(h), _mm256_castps_si256(new));
             }
         }
@@ -262,6 +262,7 @@ impl Lanes16 for Avx2 {
             !self.signs(d) & 0xFFFF
         }
     }
+    #[allow(clippy::needless_range_loop)] // the loop index addresses several arrays in step
     #[inline(always)]
     fn load_rays(self, rays: &[Ray; 16]) -> [V2; 8] {
         // A `Ray` is eight f32 (origin, dir, t_min, t_max): one 256-bit load per ray, and per
