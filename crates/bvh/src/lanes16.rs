@@ -1,18 +1,25 @@
 //! Sixteen f32 lanes, one per ray of a packet: the vector operations the packet traversal
-//! (`packet8.rs`) is written in, for AVX-512 (one 512-bit register, behind runtime detection)
-//! and a portable twin (four glam `Vec4`s: SSE2 on x86_64, scalar elsewhere).
+//! (`packet8.rs`) is written in, for AVX-512 (one 512-bit register), AVX2 (two 256-bit
+//! registers, `lanes16/avx2.rs`), both behind runtime detection (`packet_lanes.rs`), and a
+//! portable twin (four glam `Vec4`s: SSE2 on x86_64, scalar elsewhere).
 //!
 //! Each operation is the same IEEE operation on every lane in both versions, so the two give
 //! bit-identical results: `max(a, b)` / `min(a, b)` return `b` when either is NaN (`maxps` /
 //! `minps` semantics, see `simd.rs`); comparisons are ordered (false on NaN) except `ne`
 //! (true on NaN, as `cmpneq`); no fused multiply-add. A value of an implementing type is a
 //! token: the AVX-512 one can only be made by [`Avx512::new`], which is `unsafe` and requires
-//! AVX-512F, so the safe methods below never run where the instructions do not exist.
+//! AVX-512F (the AVX2 one likewise by `Avx2::new`), so the safe methods below never run where
+//! the instructions do not exist.
 
 use glam::{BVec4A, Vec4};
 use parallax_core::Ray;
 
 use crate::traverse8::{NodeTest8, Portable8, RayBoxes8};
+
+#[cfg(target_arch = "x86_64")]
+mod avx2;
+#[cfg(target_arch = "x86_64")]
+pub(crate) use avx2::Avx2;
 
 /// Sixteen values aligned for one 512-bit load.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -131,8 +138,8 @@ impl Lanes16 for Portable16 {
     }
     #[inline(always)]
     fn store(self, v: [Vec4; 4], a: &mut F16) {
-        for g in 0..4 {
-            v[g].write_to_slice(&mut a.0[4 * g..4 * g + 4]);
+        for (g, vg) in v.iter().enumerate() {
+            vg.write_to_slice(&mut a.0[4 * g..4 * g + 4]);
         }
     }
     #[inline(always)]
@@ -464,92 +471,95 @@ mod tests {
         #[cfg(target_arch = "x86_64")]
         if std::is_x86_feature_detected!("avx512f") {
             // SAFETY: detected.
-            unsafe { check(Avx512::new()) };
+            check_against_portable(unsafe { Avx512::new() });
         }
-        check(Portable16);
-        fn check<L: Lanes16>(l: L) {
-            let vals = [
-                0.0,
-                -0.0,
-                1.0,
-                -1.5,
-                f32::NAN,
-                f32::INFINITY,
-                -f32::INFINITY,
-                3.0e-39,
-                7.25,
-                -2.0,
-                f32::NAN,
-                1e30,
-                0.5,
-                -0.0,
-                2.0,
-                1.0,
-            ];
-            let a = F16(vals);
-            let mut bv = vals;
-            bv.rotate_left(3);
-            let b = F16(bv);
-            let p = Portable16;
-            let (x, y) = (l.load(&a), l.load(&b));
-            let (px, py) = (p.load(&a), p.load(&b));
-            let same = |v: L::V, w: [Vec4; 4]| {
-                let (mut o, mut q) = (F16([0.0; 16]), F16([0.0; 16]));
-                l.store(v, &mut o);
-                p.store(w, &mut q);
-                assert_eq!(o.0.map(f32::to_bits), q.0.map(f32::to_bits));
-            };
-            same(l.add(x, y), p.add(px, py));
-            same(l.sub(x, y), p.sub(px, py));
-            same(l.mul(x, y), p.mul(px, py));
-            same(l.div(x, y), p.div(px, py));
-            same(l.max(x, y), p.max(px, py));
-            same(l.min(x, y), p.min(px, py));
-            same(l.select(0xA5C3, x, y), p.select(0xA5C3, px, py));
-            assert_eq!(l.le(x, y), p.le(px, py));
-            assert_eq!(l.lt(x, y), p.lt(px, py));
-            assert_eq!(l.gt(x, y), p.gt(px, py));
-            assert_eq!(l.eq(x, y), p.eq(px, py));
-            assert_eq!(l.ne(x, y), p.ne(px, py));
-            let idx = U16(std::array::from_fn(|i| (i as u32 * 7) % 11));
-            assert_eq!(l.gt_u32(0xFFF0, &idx, 5), p.gt_u32(0xFFF0, &idx, 5));
-            // Lanes without NaN or zeros (the sign of a zero minimum is unspecified).
-            for m in [0, 0xDBEC, 0x000C, 0x0800] {
-                assert_eq!(l.hmin(m, x).to_bits(), p.hmin(m, px).to_bits(), "{m:x}");
-                assert_eq!(l.hmax(m, x).to_bits(), p.hmax(m, px).to_bits(), "{m:x}");
-            }
-            same(l.abs(x), p.abs(px));
-            assert_eq!(l.eq_bits(x, y), p.eq_bits(px, py));
-            assert_eq!(l.eq_bits(x, x), 0xFFFF);
-            let mut cv = vals;
-            cv.rotate_left(7);
-            let (z, pz) = (l.load(&F16(cv)), p.load(&F16(cv)));
-            assert_eq!(l.same_sign(x, y, z), p.same_sign(px, py, pz));
-            for (i, ((&u, &v), &w)) in vals.iter().zip(&bv).zip(&cv).enumerate() {
-                let signs = [u, v, w].map(f32::is_sign_negative);
-                let want = signs[0] == signs[1] && signs[1] == signs[2];
-                assert_eq!(p.same_sign(px, py, pz) >> i & 1 != 0, want, "lane {i}");
-            }
-            let rays: [Ray; 16] = std::array::from_fn(|i| {
-                let f = i as f32;
-                Ray::segment(
-                    glam::Vec3::new(f, -f, 0.5 * f),
-                    glam::Vec3::new(1.0 + f, 2.0, -f),
-                    0.25 * f,
-                    10.0 + f,
-                )
-            });
-            let (lr, pr) = (l.load_rays(&rays), p.load_rays(&rays));
-            for k in 0..8 {
-                same(lr[k], pr[k]);
-            }
-            let mut f0 = F16([0.0; 16]);
-            p.store(pr[3], &mut f0);
-            assert_eq!(f0.0[5], rays[5].dir.x);
-            let (mut u, mut w) = (idx, idx);
-            l.store_u32_masked(0x0F0F, &mut u, 99);
-            p.store_u32_masked(0x0F0F, &mut w, 99);
-            assert_eq!(u, w);
+        check_against_portable(Portable16);
+    }
+
+    /// Every operation of `l` against [`Portable16`], bit for bit, NaN rules included
+    /// (`avx2.rs` runs it for the AVX2 lanes).
+    pub(super) fn check_against_portable<L: Lanes16>(l: L) {
+        let vals = [
+            0.0,
+            -0.0,
+            1.0,
+            -1.5,
+            f32::NAN,
+            f32::INFINITY,
+            -f32::INFINITY,
+            3.0e-39,
+            7.25,
+            -2.0,
+            f32::NAN,
+            1e30,
+            0.5,
+            -0.0,
+            2.0,
+            1.0,
+        ];
+        let a = F16(vals);
+        let mut bv = vals;
+        bv.rotate_left(3);
+        let b = F16(bv);
+        let p = Portable16;
+        let (x, y) = (l.load(&a), l.load(&b));
+        let (px, py) = (p.load(&a), p.load(&b));
+        let same = |v: L::V, w: [Vec4; 4]| {
+            let (mut o, mut q) = (F16([0.0; 16]), F16([0.0; 16]));
+            l.store(v, &mut o);
+            p.store(w, &mut q);
+            assert_eq!(o.0.map(f32::to_bits), q.0.map(f32::to_bits));
+        };
+        same(l.add(x, y), p.add(px, py));
+        same(l.sub(x, y), p.sub(px, py));
+        same(l.mul(x, y), p.mul(px, py));
+        same(l.div(x, y), p.div(px, py));
+        same(l.max(x, y), p.max(px, py));
+        same(l.min(x, y), p.min(px, py));
+        same(l.select(0xA5C3, x, y), p.select(0xA5C3, px, py));
+        assert_eq!(l.le(x, y), p.le(px, py));
+        assert_eq!(l.lt(x, y), p.lt(px, py));
+        assert_eq!(l.gt(x, y), p.gt(px, py));
+        assert_eq!(l.eq(x, y), p.eq(px, py));
+        assert_eq!(l.ne(x, y), p.ne(px, py));
+        let idx = U16(std::array::from_fn(|i| (i as u32 * 7) % 11));
+        assert_eq!(l.gt_u32(0xFFF0, &idx, 5), p.gt_u32(0xFFF0, &idx, 5));
+        // Lanes without NaN or zeros (the sign of a zero minimum is unspecified).
+        for m in [0, 0xDBEC, 0x000C, 0x0800] {
+            assert_eq!(l.hmin(m, x).to_bits(), p.hmin(m, px).to_bits(), "{m:x}");
+            assert_eq!(l.hmax(m, x).to_bits(), p.hmax(m, px).to_bits(), "{m:x}");
         }
+        same(l.abs(x), p.abs(px));
+        assert_eq!(l.eq_bits(x, y), p.eq_bits(px, py));
+        assert_eq!(l.eq_bits(x, x), 0xFFFF);
+        let mut cv = vals;
+        cv.rotate_left(7);
+        let (z, pz) = (l.load(&F16(cv)), p.load(&F16(cv)));
+        assert_eq!(l.same_sign(x, y, z), p.same_sign(px, py, pz));
+        for (i, ((&u, &v), &w)) in vals.iter().zip(&bv).zip(&cv).enumerate() {
+            let signs = [u, v, w].map(f32::is_sign_negative);
+            let want = signs[0] == signs[1] && signs[1] == signs[2];
+            assert_eq!(p.same_sign(px, py, pz) >> i & 1 != 0, want, "lane {i}");
+        }
+        let rays: [Ray; 16] = std::array::from_fn(|i| {
+            let f = i as f32;
+            Ray::segment(
+                glam::Vec3::new(f, -f, 0.5 * f),
+                glam::Vec3::new(1.0 + f, 2.0, -f),
+                0.25 * f,
+                10.0 + f,
+            )
+        });
+        let (lr, pr) = (l.load_rays(&rays), p.load_rays(&rays));
+        for k in 0..8 {
+            same(lr[k], pr[k]);
+        }
+        let mut f0 = F16([0.0; 16]);
+        p.store(pr[3], &mut f0);
+        assert_eq!(f0.0[5], rays[5].dir.x);
+        let (mut u, mut w) = (idx, idx);
+        l.store_u32_masked(0x0F0F, &mut u, 99);
+        p.store_u32_masked(0x0F0F, &mut w, 99);
+        assert_eq!(u, w);
     }
 }

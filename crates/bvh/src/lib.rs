@@ -22,8 +22,8 @@
 //!   the per-triangle scalar test. `_with_stats` variants count the work ([`TraversalStats`]).
 //!   Closest-hit ties in `t` go to the lower triangle index.
 //! - **Packets** ([`Bvh::closest_hit_packet`], `packet8.rs`): up to [`PACKET_SIZE`] = 16
-//!   coherent rays traverse the 8-wide tree together, one SIMD lane per ray (AVX-512 behind
-//!   runtime detection, portable twin, `lanes16.rs`), with interval culling of whole packets
+//!   coherent rays traverse the 8-wide tree together, one SIMD lane per ray (AVX-512 or AVX2
+//!   behind runtime detection, portable twin, `lanes16.rs`; [`PacketLanes`]), with interval culling of whole packets
 //!   and a SIMD-over-rays triangle test (`packet_leaf.rs`); each ray's answer is exactly its
 //!   single-ray answer.
 //!   `packet.rs` is the 4-wide predecessor ([`Bvh::closest_hit_packet4`]).
@@ -47,7 +47,7 @@
 //! [`Bvh::all_hits`] the same set as [`brute_force_all`]: the BVH only culls, never decides.
 //! (With spatial splits, exact ties in `t` between different triangles go to one of them, not
 //! necessarily the lowest index, and the twins agree on `t` but may differ on such ties.)
-//! Every fast path (8-wide AVX2, 16-lane AVX-512 packets, the 4-wide tree) returns bit for bit
+//! Every fast path (8-wide AVX2, 16-lane AVX-512 and AVX2 packets, the 4-wide tree) returns bit for bit
 //! what its twin returns (`tests/simd_twins.rs`, `tests/packets.rs`).
 //!
 //! Measurements and what was tried and dropped: `docs/notes/bvh.md`.
@@ -70,6 +70,7 @@ mod packet;
 mod packet64;
 mod packet8;
 mod packet_interval;
+mod packet_lanes;
 mod packet_leaf;
 mod packet_setup;
 mod reference;
@@ -86,6 +87,7 @@ pub use hit::Hit;
 pub use node::{ChildRef, Node4};
 pub use node8::Node8;
 pub use options::{BuildOptions, BvhError};
+pub use packet_lanes::PacketLanes;
 pub use packet8::PACKET_SIZE;
 pub use packet64::PACKET64_SIZE;
 pub use reference::{brute_force_all, brute_force_closest};

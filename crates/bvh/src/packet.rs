@@ -231,6 +231,7 @@ impl Bvh {
     }
 
     #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // the loop index addresses several arrays in step
     fn packet16_impl<const AVX2: bool>(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
         let mut valid = 0u32;
         for (i, r) in rays.iter().enumerate() {

@@ -29,7 +29,8 @@
 //! interval tests only cull children that the ray's own slab test culls (their ranges contain
 //! the ray's origin, `1 / dir`, `t_min` and current `t_max`), the pops only drop rays with a
 //! closer hit, and each ray keeps the lexicographic minimum of `(t, triangle index)` over the
-//! hits it finds. `tests/packets.rs` checks it for the AVX-512 lanes and the portable twin.
+//! hits it finds. `tests/packets.rs` checks it for every lane type the CPU supports (AVX-512,
+//! AVX2) and the portable twin.
 
 use std::mem::MaybeUninit;
 
@@ -37,7 +38,7 @@ use parallax_core::Ray;
 
 use crate::bvh::Bvh;
 use crate::hit::Hit;
-use crate::lanes16::{Lanes16, Portable16};
+use crate::lanes16::Lanes16;
 use crate::node::{is_leaf, leaf_count, leaf_first};
 use crate::node8::Node8;
 use crate::packet_interval::Interval;
@@ -85,56 +86,6 @@ fn test<L: Lanes16>(iv: &Interval, node: &Node8) -> (u32, [f32; 8]) {
 }
 
 impl Bvh {
-    /// Closest hits of up to [`PACKET64_SIZE`] coherent rays traced together (longer slices
-    /// are split into packets of 64); `out[i]` is exactly [`Bvh::closest_hit`] of `rays[i]`.
-    /// Made for an 8x8 pixel tile's camera rays ordered as four 4x4 tiles of 16 consecutive
-    /// rays (each 16 rays are one group); packets whose groups are not coherent fall back to
-    /// [`Bvh::closest_hit_packet`] per group. Uses AVX-512 where the CPU has it.
-    /// Panics if `out` is shorter than `rays`.
-    pub fn closest_hit_packet64(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
-        #[cfg(target_arch = "x86_64")]
-        let avx512 = crate::packet8::use_avx512();
-        #[cfg(not(target_arch = "x86_64"))]
-        let avx512 = false;
-        self.packets64(rays, out, avx512);
-    }
-
-    /// [`Self::closest_hit_packet64`] with the portable lanes even where AVX-512 exists: the
-    /// twin the tests hold the AVX-512 path against.
-    pub fn closest_hit_packet64_portable(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
-        self.packets64(rays, out, false);
-    }
-
-    /// `rays` in packets of [`PACKET64_SIZE`], through the AVX-512 lanes when `avx512` (which
-    /// the caller has detected) and the portable lanes otherwise.
-    fn packets64(&self, rays: &[Ray], out: &mut [Option<Hit>], avx512: bool) {
-        assert!(
-            out.len() >= rays.len(),
-            "closest_hit_packet64: out too short"
-        );
-        for (r, o) in rays
-            .chunks(PACKET64_SIZE)
-            .zip(out.chunks_mut(PACKET64_SIZE))
-        {
-            #[cfg(target_arch = "x86_64")]
-            if avx512 {
-                // SAFETY: AVX-512F and AVX2 were detected by the caller.
-                unsafe { self.packet64_avx512(r, o) };
-                continue;
-            }
-            #[cfg(not(target_arch = "x86_64"))]
-            let _ = avx512;
-            self.packet64(Portable16, r, o);
-        }
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f,avx2")]
-    unsafe fn packet64_avx512(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
-        // SAFETY: AVX-512F and AVX2 are enabled for this function (the caller detected them).
-        self.packet64(unsafe { crate::lanes16::Avx512::new() }, rays, out)
-    }
-
     /// Each group as its own 16-ray packet.
     #[inline(always)]
     fn packet64_by_groups<L: Lanes16>(&self, l: L, rays: &[Ray], out: &mut [Option<Hit>]) {
@@ -147,8 +98,11 @@ impl Bvh {
         }
     }
 
+    /// The 64-ray traversal of up to [`PACKET64_SIZE`] rays on lanes `l` (module docs; the
+    /// entry points and the choice of lanes are in `packet_lanes.rs`).
     #[inline(always)]
-    fn packet64<L: Lanes16>(&self, l: L, rays: &[Ray], out: &mut [Option<Hit>]) {
+    #[allow(clippy::needless_range_loop)] // the loop index addresses several arrays in step
+    pub(crate) fn packet64<L: Lanes16>(&self, l: L, rays: &[Ray], out: &mut [Option<Hit>]) {
         if rays.len() <= PACKET_SIZE || self.nodes8.is_empty() {
             return self.packet64_by_groups(l, rays, out);
         }

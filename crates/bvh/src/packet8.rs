@@ -1,6 +1,6 @@
 //! Packet traversal of the 8-wide tree: up to [`PACKET_SIZE`] = 16 coherent rays walk the tree
-//! together, one SIMD lane per ray (AVX-512: one register per 16 rays; the portable twin on
-//! four `Vec4`s, `lanes16.rs`). Wald, Slusallek, Benthin & Wagner 2001 (packets), Reshetov,
+//! together, one SIMD lane per ray (AVX-512: one register per 16 rays; AVX2: two; the portable
+//! twin on four `Vec4`s; `lanes16.rs`, chosen at run time in `packet_lanes.rs`). Wald, Slusallek, Benthin & Wagner 2001 (packets), Reshetov,
 //! Soupikov & Hurley 2005 and Wald et al. 2007 (interval / frustum culling of whole packets),
 //! in the wide-node form of Embree's `rtcIntersect16` (Wald et al. 2014, §4.2).
 //!
@@ -42,7 +42,7 @@ use parallax_core::math::{ROBUST_FAR_SCALE, WatertightRay};
 
 use crate::bvh::Bvh;
 use crate::hit::Hit;
-use crate::lanes16::{F16, Lanes16, Portable16, U16};
+use crate::lanes16::{F16, Lanes16, U16};
 use crate::node::{is_leaf, leaf_count, leaf_first};
 use crate::node8::Node8;
 use crate::packet_interval::Interval;
@@ -107,6 +107,7 @@ impl Packet {
     /// full packet: the same comparisons as `Ray::is_valid`).
     /// Built in `slot` (a packet is ~1.4 kB: returning it by value cost a copy per packet).
     #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // the loop index addresses several arrays in step
     pub fn init<'a, L: Lanes16>(
         slot: &'a mut MaybeUninit<Self>,
         l: L,
@@ -221,6 +222,7 @@ impl Packet {
 
     /// [`Self::load_scalar`] for a full packet, in lanes (`packet_setup.rs`).
     #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // the loop index addresses several arrays in step
     fn load_lanes<L: Lanes16>(
         &mut self,
         l: L,
@@ -372,40 +374,8 @@ impl Packet {
 }
 
 impl Bvh {
-    /// Closest hits of up to [`PACKET_SIZE`] coherent rays traced together (longer slices are
-    /// split into packets of [`PACKET_SIZE`]); `out[i]` is exactly [`Bvh::closest_hit`] of
-    /// `rays[i]`. Fast when the rays are coherent (a pixel tile's or one pixel's camera rays);
-    /// incoherent rays are better traced one by one. Uses AVX-512 where the CPU has it.
-    /// Panics if `out` is shorter than `rays`.
-    pub fn closest_hit_packet(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
-        assert!(out.len() >= rays.len(), "closest_hit_packet: out too short");
-        for (r, o) in rays.chunks(PACKET_SIZE).zip(out.chunks_mut(PACKET_SIZE)) {
-            #[cfg(target_arch = "x86_64")]
-            if use_avx512() {
-                // SAFETY: AVX-512F was detected.
-                unsafe { self.packet8_avx512(r, o) };
-                continue;
-            }
-            self.packet8(Portable16, r, o);
-        }
-    }
-
-    /// [`Self::closest_hit_packet`] with the portable lanes even where AVX-512 exists: the
-    /// twin the tests hold the AVX-512 path against.
-    pub fn closest_hit_packet_portable(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
-        assert!(out.len() >= rays.len(), "closest_hit_packet: out too short");
-        for (r, o) in rays.chunks(PACKET_SIZE).zip(out.chunks_mut(PACKET_SIZE)) {
-            self.packet8(Portable16, r, o);
-        }
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f,avx2")]
-    unsafe fn packet8_avx512(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
-        // SAFETY: AVX-512F and AVX2 are enabled for this function (the caller detected them).
-        self.packet8(unsafe { crate::lanes16::Avx512::new() }, rays, out)
-    }
-
+    /// The 16-ray traversal of up to [`PACKET_SIZE`] rays on lanes `l` (module docs; the
+    /// entry points and the choice of lanes are in `packet_lanes.rs`).
     #[inline(always)]
     pub(crate) fn packet8<L: Lanes16>(&self, l: L, rays: &[Ray], out: &mut [Option<Hit>]) {
         for o in out.iter_mut().take(rays.len()) {
@@ -619,12 +589,6 @@ fn axes_of_code(code: u32) -> [usize; 3] {
     } else {
         [kx, ky, kz]
     }
-}
-
-#[cfg(target_arch = "x86_64")]
-#[inline]
-pub(crate) fn use_avx512() -> bool {
-    std::is_x86_feature_detected!("avx512f") && std::is_x86_feature_detected!("avx2")
 }
 
 #[cfg(test)]

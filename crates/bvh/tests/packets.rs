@@ -1,12 +1,13 @@
-//! The packet traversals against single rays: `closest_hit_packet` (8-wide tree, AVX-512 lanes
-//! where the CPU has them, and its portable twin) and `closest_hit_packet4` (4-wide tree, AVX2
+//! The packet traversals against single rays: `closest_hit_packet` (8-wide tree, the fastest
+//! lanes the CPU has, every supported lane type (`PacketLanes`: AVX2, AVX-512) against the
+//! portable twin bit for bit) and `closest_hit_packet4` (4-wide tree, AVX2
 //! and portable) return exactly `closest_hit` for every ray (prim, t, u, v bit for bit), for
 //! camera rays grouped in 4x4, 4x2 and 3x3 pixel tiles and one pixel's 16 subsamples on the
 //! built-in scenes and Sponza (interval culling and the SIMD-over-rays triangle test), for
 //! partially filled packets, packets with invalid rays (inactive lanes), packets of incoherent
 //! rays (mixed signs and axis permutations), rays through shared vertices from one origin
 //! (exact lanes), and slices longer than one packet. `closest_hit_packet64` (64-ray packets of
-//! four 16-ray groups, AVX-512 and portable) likewise, on 8x8 pixel tiles of 4x4 groups (edge
+//! four 16-ray groups, every supported lane type and portable) likewise, on 8x8 pixel tiles of 4x4 groups (edge
 //! tiles partial), packets whose groups look in different octants or have zero direction
 //! components (the per-group fallback), random rays, rays that miss, and shared-vertex rays.
 
@@ -14,7 +15,7 @@ mod common;
 
 use common::*;
 use glam::{Vec2, Vec3};
-use parallax_bvh::{BuildOptions, Bvh, Hit, PACKET_SIZE, PACKET64_SIZE};
+use parallax_bvh::{BuildOptions, Bvh, Hit, PACKET_SIZE, PACKET64_SIZE, PacketLanes};
 use parallax_core::Ray;
 use parallax_scene::Scene;
 use parallax_scene::camera::{CameraModel, Pinhole};
@@ -56,9 +57,21 @@ fn check_packet(bvh: &Bvh, packet: &[Ray], what: &str) -> usize {
         packet.len()
     ];
     bvh.closest_hit_packet(packet, &mut out);
-    // The portable (SSE / scalar) node test, the twin of the AVX2 one.
+    // The portable (SSE / scalar) lanes, the twin of the SIMD ones.
     let mut portable = vec![None; packet.len()];
     bvh.closest_hit_packet_portable(packet, &mut portable);
+    // Every lane type the CPU runs (AVX2, AVX-512) against the portable twin, bit for bit.
+    for lanes in PacketLanes::supported() {
+        let mut simd = vec![None; packet.len()];
+        bvh.closest_hit_packet_with(lanes, packet, &mut simd);
+        for (i, r) in packet.iter().enumerate() {
+            assert_eq!(
+                bits(simd[i]),
+                bits(portable[i]),
+                "{what}, {lanes:?} lanes: {r:?}"
+            );
+        }
+    }
     let mut four = vec![None; packet.len()];
     bvh.closest_hit_packet4(packet, &mut four);
     let mut four_portable = vec![None; packet.len()];
@@ -87,6 +100,17 @@ fn check_packet64(bvh: &Bvh, rays: &[Ray], what: &str) -> usize {
     bvh.closest_hit_packet64(rays, &mut out);
     let mut portable = vec![None; rays.len()];
     bvh.closest_hit_packet64_portable(rays, &mut portable);
+    for lanes in PacketLanes::supported() {
+        let mut simd = vec![None; rays.len()];
+        bvh.closest_hit_packet64_with(lanes, rays, &mut simd);
+        for (i, r) in rays.iter().enumerate() {
+            assert_eq!(
+                bits(simd[i]),
+                bits(portable[i]),
+                "{what}, packet64 {lanes:?} lanes, ray {i}: {r:?}"
+            );
+        }
+    }
     let mut hits = 0;
     for (i, r) in rays.iter().enumerate() {
         let single = bvh.closest_hit(r);

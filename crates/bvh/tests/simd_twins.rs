@@ -4,13 +4,15 @@
 //! ([`Bvh::closest_hit4`], ...), and the 4-wide SIMD leaf test against the scalar
 //! per-triangle test ([`Bvh::closest_hit_scalar`], [`Bvh::any_hit_scalar`]), on rays that hit interiors and on
 //! rays aimed exactly at shared vertices and edges (where the SIMD lanes fall back to the
-//! scalar double-precision test and its tie-break), with leaves of 1, 4 and 15 triangles.
+//! scalar double-precision test and its tie-break), with leaves of 1, 4 and 15 triangles; and
+//! the packet traversals ([`Bvh::closest_hit_packet_with`], [`Bvh::closest_hit_packet64_with`])
+//! on every lane type the CPU supports (AVX2, AVX-512, portable) against single rays.
 
 mod common;
 
 use common::*;
 use glam::{Vec2, Vec3};
-use parallax_bvh::{BuildOptions, Bvh};
+use parallax_bvh::{BuildOptions, Bvh, PacketLanes};
 use parallax_core::Ray;
 use parallax_scene::TriangleMesh;
 use parallax_scene::camera::{CameraModel, Pinhole};
@@ -88,7 +90,31 @@ fn check_twins(bvh: &Bvh, rays: &[Ray], what: &str) -> usize {
         );
         hits += fast.is_some() as usize;
     }
+    check_packet_twins(bvh, rays, what);
     hits
+}
+
+/// The packet traversals (16 and 64 rays per packet, consecutive rays) on every lane type the
+/// CPU supports against the portable lanes and against single rays, bit for bit.
+fn check_packet_twins(bvh: &Bvh, rays: &[Ray], what: &str) {
+    let bits = |h: Option<parallax_bvh::Hit>| {
+        h.map(|h| (h.prim, h.t.to_bits(), h.u.to_bits(), h.v.to_bits()))
+    };
+    let single: Vec<_> = rays.iter().map(|r| bits(bvh.closest_hit(r))).collect();
+    for lanes in PacketLanes::supported() {
+        let mut out = vec![None; rays.len()];
+        bvh.closest_hit_packet_with(lanes, rays, &mut out);
+        let mut out64 = vec![None; rays.len()];
+        bvh.closest_hit_packet64_with(lanes, rays, &mut out64);
+        for (i, r) in rays.iter().enumerate() {
+            assert_eq!(bits(out[i]), single[i], "{what}: {lanes:?} packet, {r:?}");
+            assert_eq!(
+                bits(out64[i]),
+                single[i],
+                "{what}: {lanes:?} packet64, {r:?}"
+            );
+        }
+    }
 }
 
 fn meshes() -> Vec<(&'static str, TriangleMesh)> {
@@ -129,12 +155,14 @@ fn exact_lanes_on_grid_vertices() {
     let mesh = grid(8);
     let bvh = Bvh::build(&mesh);
     let mut rays = Vec::new();
-    for p in &mesh.positions {
-        for d in [
-            -Vec3::Y,
-            Vec3::new(0.25, -1.0, 0.5),
-            Vec3::new(-0.5, -1.0, 0.0),
-        ] {
+    // Direction by direction: consecutive rays share it, so packets of them take the interval
+    // test and the 16-lane triangle test, whose exactly-zero lanes go to the scalar test.
+    for d in [
+        -Vec3::Y,
+        Vec3::new(0.25, -1.0, 0.5),
+        Vec3::new(-0.5, -1.0, 0.0),
+    ] {
+        for p in &mesh.positions {
             rays.push(Ray::new(*p - d * 2.0, d));
         }
     }
