@@ -114,21 +114,6 @@ pub(crate) trait NodeTest8 {
     ) {
         bvh.leaf_closest8::<C, Self::Pair>(r4, first, count, t_max, best, stats);
     }
-
-    /// The any-hit leaf step of this test's kernel ([`Bvh::leaf_any8`] on [`Self::Pair`]
-    /// lanes), inlined by default.
-    #[inline(always)]
-    fn leaf_any<C: Counter>(
-        &self,
-        bvh: &Bvh,
-        r4: &Tri4Ray,
-        first: u32,
-        count: u32,
-        t_max: f32,
-        stats: &mut C,
-    ) -> bool {
-        bvh.leaf_any8::<C, Self::Pair>(r4, first, count, t_max, stats)
-    }
 }
 
 /// The portable twin: two 4-lane halves.
@@ -317,17 +302,15 @@ impl<C: Counter, T: NodeTest8> LeafTest8<C> for ClosestLeaf<'_, T> {
 }
 
 /// Any hit: stops at the first hit.
-struct AnyLeaf<'a, T> {
-    /// The node test, whose kernel's leaf step this runs ([`NodeTest8::leaf_any`]).
-    nt: &'a T,
+struct AnyLeaf {
     r4: Tri4Ray,
     found: bool,
 }
 
-impl<C: Counter, T: NodeTest8> LeafTest8<C> for AnyLeaf<'_, T> {
+impl<C: Counter> LeafTest8<C> for AnyLeaf {
     #[inline(always)]
     fn test(&mut self, bvh: &Bvh, first: u32, count: u32, t_max: &mut f32, stats: &mut C) -> bool {
-        self.found = self.nt.leaf_any(bvh, &self.r4, first, count, *t_max, stats);
+        self.found = bvh.leaf_any(&self.r4, first, count, *t_max, stats);
         self.found
     }
 }
@@ -523,7 +506,6 @@ impl Bvh {
     #[inline(always)]
     fn any8<C: Counter, T: NodeTest8>(&self, nt: &T, ray: &Ray, stats: &mut C) -> bool {
         let mut leaf = AnyLeaf {
-            nt,
             r4: Tri4Ray::new(WatertightRay::new(ray)),
             found: false,
         };
