@@ -63,6 +63,8 @@ mod hit;
 mod keys8;
 mod lanes16;
 mod lanes8;
+#[cfg(target_arch = "x86_64")]
+mod leaf8;
 pub mod node;
 pub mod node8;
 mod options;

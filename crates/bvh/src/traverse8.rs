@@ -32,7 +32,6 @@
 //! ([`Bvh::closest_hit4`], ...): the node test only culls (conservatively), and the closest hit
 //! is the lexicographic minimum of `(t, triangle index)` whatever the visiting order.
 
-use std::marker::PhantomData;
 use std::mem::MaybeUninit;
 
 use glam::Vec4;
@@ -98,6 +97,23 @@ pub(crate) trait NodeTest8 {
     type Pair: Pair8;
     fn test(&self, node: &Node8, t_max: f32) -> (u32, Self::Dist);
     fn hit_keys(&self, node: &Node8, t: Self::Dist, mask: u32) -> [u64; 8];
+
+    /// The closest-hit leaf step of this test's kernel ([`Bvh::leaf_closest8`] on
+    /// [`Self::Pair`] lanes), inlined by default.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn leaf_closest<C: Counter>(
+        &self,
+        bvh: &Bvh,
+        r4: &Tri4Ray,
+        first: u32,
+        count: u32,
+        t_max: &mut f32,
+        best: &mut Best,
+        stats: &mut C,
+    ) {
+        bvh.leaf_closest8::<C, Self::Pair>(r4, first, count, t_max, best, stats);
+    }
 }
 
 /// The portable twin: two 4-lane halves.
@@ -186,6 +202,21 @@ impl NodeTest8 for Avx2Boxes8 {
     }
 
     #[inline(always)]
+    fn leaf_closest<C: Counter>(
+        &self,
+        bvh: &Bvh,
+        r4: &Tri4Ray,
+        first: u32,
+        count: u32,
+        t_max: &mut f32,
+        best: &mut Best,
+        stats: &mut C,
+    ) {
+        // SAFETY: AVX2 was detected (`new`).
+        unsafe { crate::leaf8::leaf_closest8_avx2(bvh, r4, first, count, t_max, best, stats) }
+    }
+
+    #[inline(always)]
     fn test(&self, node: &Node8, t_max: f32) -> (u32, Self::Dist) {
         use std::arch::x86_64::*;
         let rb = &self.rb;
@@ -252,18 +283,19 @@ pub(crate) trait LeafTest8<C: Counter> {
 
 /// Closest hit: keeps the lexicographic minimum of `(t, triangle index)` in `best`, and the
 /// traversal's `t_max` after the last leaf in `t`.
-struct ClosestLeaf<'a, L> {
+struct ClosestLeaf<'a, T> {
+    /// The node test, whose kernel's leaf step this runs ([`NodeTest8::leaf_closest`]).
+    nt: &'a T,
     r4: &'a Tri4Ray,
     best: &'a mut Best,
     t: f32,
-    /// The lanes of the two-block leaf test.
-    lanes: PhantomData<L>,
 }
 
-impl<C: Counter, L: Pair8> LeafTest8<C> for ClosestLeaf<'_, L> {
+impl<C: Counter, T: NodeTest8> LeafTest8<C> for ClosestLeaf<'_, T> {
     #[inline(always)]
     fn test(&mut self, bvh: &Bvh, first: u32, count: u32, t_max: &mut f32, stats: &mut C) -> bool {
-        bvh.leaf_closest8::<C, L>(self.r4, first, count, t_max, self.best, stats);
+        let nt = self.nt;
+        nt.leaf_closest(bvh, self.r4, first, count, t_max, self.best, stats);
         self.t = *t_max;
         false
     }
@@ -461,11 +493,11 @@ impl Bvh {
         best: &mut Best,
         stats: &mut C,
     ) {
-        let mut leaf = ClosestLeaf::<T::Pair> {
+        let mut leaf = ClosestLeaf {
+            nt,
             r4,
             best,
             t: *t_max,
-            lanes: PhantomData,
         };
         self.traverse8::<C, T, true>(nt, root, *t_max, stats, &mut leaf);
         *t_max = leaf.t;

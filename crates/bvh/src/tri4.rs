@@ -325,8 +325,8 @@ mod pair_tests {
             let mask = 0xF | ((1 << (count - 4)) - 1) << 4;
             let t_lim = if case % 3 == 0 { 6.0 } else { f32::INFINITY };
             let h = r4.intersect2::<L>(&blocks[0], &blocks[1], mask, t_lim);
-            for k in 0..2 {
-                let q = r4.intersect(&blocks[k], mask >> (4 * k) & 0xF, t_lim);
+            for (k, block) in blocks.iter().enumerate() {
+                let q = r4.intersect(block, mask >> (4 * k) & 0xF, t_lim);
                 assert_eq!(h.hit >> (4 * k) & 0xF, q.hit, "case {case} block {k} hit");
                 assert_eq!(
                     h.exact >> (4 * k) & 0xF,

@@ -6,6 +6,7 @@
 //! cargo build --release -p parallax-embree --features embree --example ray_cost
 //! target/release/examples/ray_cost SCENE EYE TARGET FOV_Y METHOD MODE [WIDTH HEIGHT]
 //!   METHOD: bvh | bvh4 | packet | packet4 | packet64 | embree1 | embree16 | stats (work counters) |
+//!           any (`Bvh::any_hit`) | embree_occluded (`rtcOccluded1`) |
 //!           build (build times) | treehash (a hash of both trees, the blocks and the prim ids:
 //!           equal hashes = the same BVH) | a comma-separated list (interleaved A/B, best of 7)
 //!   MODE:   primary (pixel centres, 8x8 tiles of four 4x4 tiles; traced 64 rays at a time) |
@@ -196,6 +197,14 @@ fn tracer<'a>(
             e.closest_hits(c, &mut he);
             he[..c.len()].iter().filter(|h| h.is_some()).count()
         }),
+        "any" => Box::new(|c| c.iter().filter(|r| bvh.any_hit(r)).count()),
+        "embree_occluded" => {
+            let mut occ = vec![false; 64];
+            Box::new(move |c| {
+                e.occluded(c, &mut occ);
+                occ[..c.len()].iter().filter(|&&o| o).count()
+            })
+        }
         "embree16" => Box::new(move |c| {
             e.closest_hit_packets(c, 16, &mut he);
             he[..c.len()].iter().filter(|h| h.is_some()).count()
