@@ -16,6 +16,14 @@ use parallax_core::Ray;
 
 use crate::traverse8::{NodeTest8, Portable8, RayBoxes8};
 
+// The SIMD lanes' `load_rays` (AVX-512 here, AVX2 in `lanes16/avx2.rs`) read a `Ray` as eight
+// f32: origin, dir, t_min, t_max.
+const _: () = assert!(std::mem::size_of::<Ray>() == 32);
+const _: () = assert!(std::mem::offset_of!(Ray, origin) == 0);
+const _: () = assert!(std::mem::offset_of!(Ray, dir) == 12);
+const _: () = assert!(std::mem::offset_of!(Ray, t_min) == 24);
+const _: () = assert!(std::mem::offset_of!(Ray, t_max) == 28);
+
 #[cfg(target_arch = "x86_64")]
 mod avx2;
 #[cfg(target_arch = "x86_64")]
@@ -430,11 +438,6 @@ mod avx512 {
             // A `Ray` is eight f32 (origin, dir, t_min, t_max), so the 16 rays are eight
             // 512-bit loads (`r[j]`: rays 2j and 2j + 1) transposed by three rounds of
             // two-source permutes (`TRANSPOSE`); no gathers.
-            const _: () = assert!(std::mem::size_of::<Ray>() == 32);
-            const _: () = assert!(std::mem::offset_of!(Ray, origin) == 0);
-            const _: () = assert!(std::mem::offset_of!(Ray, dir) == 12);
-            const _: () = assert!(std::mem::offset_of!(Ray, t_min) == 24);
-            const _: () = assert!(std::mem::offset_of!(Ray, t_max) == 28);
             let base = rays.as_ptr() as *const f32;
             // SAFETY: the eight loads cover the 512 bytes of the 16 rays.
             unsafe {

@@ -268,11 +268,6 @@ impl Lanes16 for Avx2 {
         // A `Ray` is eight f32 (origin, dir, t_min, t_max): one 256-bit load per ray, and per
         // half of the packet an 8x8 transpose (unpack pairs of rays, shuffle quads, swap
         // 128-bit halves); no gathers.
-        const _: () = assert!(std::mem::size_of::<Ray>() == 32);
-        const _: () = assert!(std::mem::offset_of!(Ray, origin) == 0);
-        const _: () = assert!(std::mem::offset_of!(Ray, dir) == 12);
-        const _: () = assert!(std::mem::offset_of!(Ray, t_min) == 24);
-        const _: () = assert!(std::mem::offset_of!(Ray, t_max) == 28);
         let base = rays.as_ptr() as *const f32;
         let mut out = [[unsafe { _mm256_setzero_ps() }; 2]; 8];
         for h in 0..2 {

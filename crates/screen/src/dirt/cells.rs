@@ -121,24 +121,9 @@ mod tests {
     /// (B = 16: compact; B = 48: the capture's offsets).
     #[test]
     fn lines_give_the_capture_ranges() {
-        use glam::Vec3;
-        use parallax_core::sampling::Rng;
         use parallax_raster::dirt::{DirtOptions, DirtViews, DirtViewsOptions};
-        use parallax_scene::TriangleMesh;
-        let mut rng = Rng::for_pixel(1, 2, 3, 4);
-        let mut r = |s: f32| (rng.next_f32() - 0.5) * s;
-        let mut m = TriangleMesh::default();
-        for _ in 0..300 {
-            let c = Vec3::new(r(20.0), r(20.0), r(20.0));
-            let base = m.positions.len() as u32;
-            for _ in 0..3 {
-                m.positions.push(c + Vec3::new(r(2.0), r(2.0), r(2.0)));
-                m.normals.push(Vec3::ZERO);
-                m.uvs.push(glam::Vec2::ZERO);
-            }
-            m.indices.push([base, base + 1, base + 2]);
-            m.material_ids.push(0);
-        }
+        let mut rng = parallax_core::sampling::Rng::for_pixel(1, 2, 3, 4);
+        let m = super::super::test_soup::random_soup(&mut rng, 300);
         for (buckets, compact) in [(16u32, true), (48, false)] {
             let opts = DirtViewsOptions {
                 face_size: 32,
@@ -148,7 +133,7 @@ mod tests {
                     ..DirtOptions::default()
                 },
             };
-            let views = DirtViews::build(&m, None, Vec3::ZERO, &opts).expect("build");
+            let views = DirtViews::build(&m, None, glam::Vec3::ZERO, &opts).expect("build");
             for cap in &views.cube.faces {
                 let lines = CellLines::new(cap);
                 assert_eq!(lines.compact, compact);

@@ -56,6 +56,8 @@
 mod best;
 mod cells;
 mod slabs;
+#[cfg(test)]
+mod test_soup;
 mod tri4;
 mod view;
 mod walk;

@@ -295,24 +295,10 @@ mod tests {
     /// and the masks skip most of the ranges the bounds alone would not.
     #[test]
     fn skips_only_cells_the_walk_would_not_trace() {
-        use glam::Vec3;
-        use parallax_core::sampling::Rng;
         use parallax_raster::dirt::{DirtOptions, DirtViews, DirtViewsOptions, bucket_index};
-        use parallax_scene::TriangleMesh;
-        let mut rng = Rng::for_pixel(3, 5, 7, 11);
+        let mut rng = parallax_core::sampling::Rng::for_pixel(3, 5, 7, 11);
+        let m = super::super::test_soup::random_soup(&mut rng, 300);
         let mut r = |s: f32| (rng.next_f32() - 0.5) * s;
-        let mut m = TriangleMesh::default();
-        for _ in 0..300 {
-            let c = Vec3::new(r(20.0), r(20.0), r(20.0));
-            let base = m.positions.len() as u32;
-            for _ in 0..3 {
-                m.positions.push(c + Vec3::new(r(2.0), r(2.0), r(2.0)));
-                m.normals.push(Vec3::ZERO);
-                m.uvs.push(glam::Vec2::ZERO);
-            }
-            m.indices.push([base, base + 1, base + 2]);
-            m.material_ids.push(0);
-        }
         let (mut traced, mut bounds_only, mut skipped) = (0u64, 0u64, 0u64);
         for buckets in [16u32, 48] {
             let opts = DirtViewsOptions {
@@ -323,7 +309,7 @@ mod tests {
                     ..DirtOptions::default()
                 },
             };
-            let views = DirtViews::build(&m, None, Vec3::ZERO, &opts).expect("build");
+            let views = DirtViews::build(&m, None, glam::Vec3::ZERO, &opts).expect("build");
             for cap in &views.cube.faces {
                 let s = Slabs::new(cap);
                 let (levels, _) = cap.mip_arrays();
