@@ -59,8 +59,8 @@ use parallax_core::math::WatertightRay;
 use parallax_core::simd::Lanes;
 
 use super::affine::{PacketBox, PacketClass};
+use super::bands::refine_run;
 use super::kernel::{PacketSlab, SetupWork, dot_n, edge_band, min_edge};
-use super::tile::refine_run;
 use super::tri::{RHO_MAX, TileTris, exact_t};
 use crate::cast::lanes16::LaneReduce;
 use crate::cast::packet::{ClosestN, MAX_LANES, RaysN};

@@ -138,6 +138,7 @@
 //! where the time goes): `docs/notes/vr.md`.
 
 pub mod affine;
+mod bands;
 pub mod edges;
 pub mod full;
 mod kernel;

@@ -7,11 +7,11 @@
 //! `cast/isa.rs`), classified against the tile's
 //! corners in the same registers, and the kept triangles appended to the tile's list in order,
 //! each leaf's run closed after its last triangle ([`setup_tile`]). Runs' full bands are
-//! computed four triangles at a time in SSE lanes ([`refine_run`]).
+//! computed four triangles at a time in SSE lanes (`cast/setup/bands.rs`).
 //!
 //! **Invariant: the same bits as the scalar set-up**, for every lane type. Every lane runs
 //! exactly the operations of [`TriSetup::new_with`] (lazy band) and [`BeamCorners::classify`]
-//! (and [`TriSetup::new`]'s band in [`bands4`]) in the same order: IEEE single-precision
+//! (and [`TriSetup::new`]'s band in `bands.rs`) in the same order: IEEE single-precision
 //! `+ - * /` per lane, never contracted into FMAs (Rust does not contract), constants folded
 //! the same way, negation and `|x|` as sign-bit operations or their equivalents on every
 //! value a kept lane sees (`cast/setup/lazy.rs`), `max` only where no operand can be NaN. The
@@ -32,11 +32,10 @@ use parallax_bvh::Tri4;
 use parallax_bvh::node::{leaf_count, leaf_first};
 use parallax_core::Aabb;
 use parallax_core::math::watertight_permutation;
-use parallax_core::simd::Lanes;
 
-use super::lazy::{LazySetupN, PACK, cross, dot, sub3};
+use super::lazy::{LazySetupN, PACK};
 use super::tri::{
-    BeamCorners, Cone, CornerClass, RHO_MAX, RunBoxes16, SQRT3, Segment, TileTris, TriSetup, U,
+    BeamCorners, Cone, CornerClass, RHO_MAX, RunBoxes16, Segment, TileTris, TriSetup,
 };
 use crate::beam::{Beam, LeafRef};
 use crate::cast::isa::Isa;
@@ -74,12 +73,6 @@ fn prefetch_leaf(blocks: &[Tri4], r: u32) {
     let _ = (blocks, r);
 }
 
-/// `(|x| + |y|) + |z|` per lane.
-#[inline(always)]
-fn l1_4(a: [Vec4; 3]) -> Vec4 {
-    a[0].abs() + a[1].abs() + a[2].abs()
-}
-
 /// Lane `l` of [`LazySetupN::arrays`] as a [`TriSetup`] (lazy: `rho` NaN).
 #[inline(always)]
 fn lane_of(x: &[[f32; PACK]; 13], l: usize, tri: u32, src: u32, all_in: bool) -> TriSetup {
@@ -95,98 +88,6 @@ fn lane_of(x: &[[f32; PACK]; 13], l: usize, tri: u32, src: u32, all_in: bool) ->
         bound: x[12][l],
         rho: f32::NAN,
         all_in,
-    }
-}
-
-/// `|v|^2 = (x x + y y) + z z` per lane (`Vec3::length_squared`).
-#[inline(always)]
-fn lsq4(v: [Vec4; 3]) -> Vec4 {
-    dot(v, v)
-}
-
-/// `f32::max(acc, x)` for `acc` never NaN (`maxps(x, acc)`: `x` if `x > acc`, else `acc`).
-#[inline(always)]
-fn fmax4(acc: Vec4, x: Vec4) -> Vec4 {
-    x.max(acc)
-}
-
-/// The full bands of four triangles (`p[vertex][axis]`, lane = triangle) for rays from `o`
-/// within `cone`: per lane `(bound, rho)` of [`TriSetup::new`] (the non-lazy branch of
-/// [`TriSetup::new_with`]), operation by operation.
-#[inline(always)]
-pub fn bands4(p: &[[Vec4; 3]; 3], o: Vec3, cone: &Cone) -> (Vec4, Vec4) {
-    let sp = Vec4::splat;
-    let os = [sp(o.x), sp(o.y), sp(o.z)];
-    let a = [sub3(p[0], os), sub3(p[1], os), sub3(p[2], os)];
-    let e = [sub3(a[1], a[0]), sub3(a[2], a[1]), sub3(a[0], a[2])];
-    let nrm = cross(e[0], [-e[2][0], -e[2][1], -e[2][2]]);
-    let d = dot(nrm, a[0]);
-    let c = [sp(cone.centre.x), sp(cone.centre.y), sp(cone.centre.z)];
-    let r = sp(cone.radius);
-    let psi_of = |ai: [Vec4; 3]| {
-        let (x, y) = (cross(ai, c), [ai[0] * r, ai[1] * r, ai[2] * r]);
-        sp(SQRT3) * Lanes::sqrt(sp(2.0) * (lsq4(x) + lsq4(y))) * sp(1.001)
-    };
-    let psi = [psi_of(a[0]), psi_of(a[1]), psi_of(a[2])];
-    let amax = a.map(|x| x[0].abs().max(x[1].abs().max(x[2].abs())));
-    let ep = [0, 1, 2].map(|i| sp(U) * (sp(2.02) * amax[i] + sp(1.01) * psi[i]));
-    let (mut bound, mut wsum) = (Vec4::ZERO, Vec4::ZERO);
-    for i in 0..3 {
-        let (b, cc) = (i, (i + 1) % 3);
-        let w = sp(2.0) * (ep[cc] * psi[b] + ep[b] * psi[cc]) + sp(4.04 * U) * psi[b] * psi[cc];
-        let pr = sp(6.1 * U) * l1_4(a[i]) * l1_4(e[i]);
-        bound = fmax4(bound, w + pr);
-        wsum += w;
-    }
-    let bound = sp(2.0) * bound;
-    let amax_sq = fmax4(fmax4(fmax4(Vec4::ZERO, lsq4(a[0])), lsq4(a[1])), lsq4(a[2]));
-    let dabs = d.abs();
-    let sigma_kappa = Lanes::sqrt(amax_sq * lsq4(e[0]) * lsq4(e[2])) * sp(1.001) / dabs;
-    let lsq_e = fmax4(fmax4(fmax4(Vec4::ZERO, lsq4(e[0])), lsq4(e[1])), lsq4(e[2]));
-    let lambda = Lanes::sqrt(lsq_e) * sp(1.001);
-    let rho =
-        sp(2.0) * (sp(SQRT3) * lambda * wsum / dabs + sp(14.0 * U) * sigma_kappa + sp(11.0 * U));
-    let rho = Vec4::select(
-        rho.is_finite_mask() & rho.cmple(sp(RHO_MAX)),
-        rho,
-        Vec4::INFINITY,
-    );
-    let bound = Vec4::select(bound.is_finite_mask(), bound, Vec4::INFINITY);
-    (bound, rho)
-}
-
-/// [`TileTris::refine`] of every lazy triangle of `tt.tris[first..end]` (a run), four at a
-/// time ([`bands4`]); the affine forms per triangle.
-#[inline(never)]
-pub fn refine_run(tt: &mut TileTris, first: usize, end: usize, blocks: &[Tri4]) {
-    let mut j = first;
-    while j < end {
-        let k = (end - j).min(4);
-        let mut p = [[[0.0f32; 4]; 3]; 3];
-        for l in 0..k {
-            let src = tt.tris[j + l].src;
-            let b = &blocks[(src >> 2) as usize];
-            let ln = (src & 3) as usize;
-            for v in 0..3 {
-                for a in 0..3 {
-                    p[v][a][l] = b.p[v][a].as_ref()[ln];
-                }
-            }
-        }
-        let (bound, rho) = bands4(&p.map(|v| v.map(Vec4::from_array)), tt.origin, &tt.cone);
-        let (bound, rho) = (bound.to_array(), rho.to_array());
-        for l in 0..k {
-            let s = &mut tt.tris[j + l];
-            if !s.rho.is_nan() {
-                continue;
-            }
-            s.bound = bound[l];
-            s.rho = rho[l];
-            if let (Some(fr), Some(a)) = (&tt.frame, tt.aff.get_mut(j + l)) {
-                *a = fr.affine(&s.n);
-            }
-        }
-        j += k;
     }
 }
 
@@ -475,6 +376,7 @@ pub fn setup_tile_scalar(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cast::setup::bands::refine_run;
     use parallax_bvh::node::ChildRef;
 
     /// xorshift64*, deterministic.
