@@ -21,7 +21,7 @@
 //! | [`BOUNDS`] | 24 | bucket bounds per line: `B <= 23` buckets |
 //! | bound type | `u16` | at most 65 535 ids in one cell |
 
-use parallax_raster::dirt::{DirtCapture, DirtTri, DirtViews};
+use parallax_raster::dirt::DirtCapture;
 
 /// Bucket bounds a line holds (`B + 1` of them are used).
 pub(crate) const BOUNDS: usize = 24;
@@ -49,50 +49,11 @@ pub(crate) struct CellLines {
     /// Whether `bounds` hold the bucket ranges (module docs); if not, read the capture's
     /// offsets.
     pub compact: bool,
-    /// The capture's ids renumbered by [`Order`] (same lists, same ranges).
-    pub ids: Vec<u32>,
-}
-
-/// The triangle buffer renumbered in the order the views' lists first reference the
-/// triangles (the camera view's cells row by row, each cell's buckets front to back, then the
-/// cube faces'; triangles no list holds last): the triangles of one bucket, and of
-/// neighbouring cells, lie on consecutive cache lines.
-#[derive(Clone, Debug)]
-pub(crate) struct Order {
-    /// The triangles, `tris[new_id[i]]` being the capture's triangle `i`.
-    pub tris: Vec<DirtTri>,
-    /// The capture's index of each renumbered triangle.
-    pub old_id: Vec<u32>,
-    pub new_id: Vec<u32>,
-}
-
-impl Order {
-    pub fn new(views: &DirtViews) -> Order {
-        let src = views.triangles.as_slice();
-        let mut new_id = vec![u32::MAX; src.len()];
-        let mut old_id = Vec::with_capacity(src.len());
-        let mut visit = |i: u32| {
-            if new_id[i as usize] == u32::MAX {
-                new_id[i as usize] = old_id.len() as u32;
-                old_id.push(i);
-            }
-        };
-        for cap in views.views() {
-            cap.ids().iter().for_each(|&i| visit(i));
-        }
-        (0..src.len() as u32).for_each(visit);
-        let tris = old_id.iter().map(|&i| src[i as usize]).collect();
-        Order {
-            tris,
-            old_id,
-            new_id,
-        }
-    }
 }
 
 impl CellLines {
     /// The lines of `cap`'s cells.
-    pub fn new(cap: &DirtCapture, new_id: &[u32]) -> CellLines {
+    pub fn new(cap: &DirtCapture) -> CellLines {
         let nb = cap.buckets() as usize;
         let offsets = cap.offsets();
         let fits = nb < BOUNDS
@@ -122,7 +83,6 @@ impl CellLines {
         CellLines {
             lines,
             compact: fits,
-            ids: cap.ids().iter().map(|&i| new_id[i as usize]).collect(),
         }
     }
 
@@ -174,8 +134,7 @@ mod tests {
             };
             let views = DirtViews::build(&m, None, glam::Vec3::ZERO, &opts).expect("build");
             for cap in &views.cube.faces {
-                let ident: Vec<u32> = (0..views.triangles.as_slice().len() as u32).collect();
-                let lines = CellLines::new(cap, &ident);
+                let lines = CellLines::new(cap);
                 assert_eq!(lines.compact, compact);
                 let offsets = cap.offsets();
                 for (c, rec) in cap.cell_records().iter().enumerate() {

@@ -71,7 +71,7 @@ use rayon::prelude::*;
 
 use best::Best;
 pub use best::DirtCounters;
-use cells::{CellLines, Order};
+use cells::CellLines;
 use slabs::Slabs;
 use tri4::Query;
 use view::{Exit, Isa, ViewConsts, ViewRay};
@@ -91,8 +91,6 @@ pub struct DirtTracer {
     neighbours: [[usize; 4]; 6],
     /// The instruction set the tracer runs on (the same results on each).
     isa: Isa,
-    /// The triangles in the order the lists first reference them (`cells::Order`).
-    order: Order,
 }
 
 impl DirtTracer {
@@ -102,10 +100,9 @@ impl DirtTracer {
         // The views' masks are independent: built side by side (`bench dirt` times this
         // construction as part of DIRT's build).
         let captures: Vec<_> = views.views().collect();
-        let order = Order::new(&views);
         let (slabs, cells) = captures
             .into_par_iter()
-            .map(|cap| (Slabs::new(cap), CellLines::new(cap, &order.new_id)))
+            .map(|cap| (Slabs::new(cap), CellLines::new(cap)))
             .unzip();
         let neighbours = std::array::from_fn(|i| {
             let b = views.cube.cube.face_camera(i).frame.basis;
@@ -118,7 +115,6 @@ impl DirtTracer {
             cells,
             neighbours,
             isa: Isa::detect(),
-            order,
         }
     }
 
@@ -174,14 +170,8 @@ impl DirtTracer {
     /// The closest hit, with DIRT's own work counters.
     pub fn closest_hit_counted(&self, ray: &Ray, counters: &mut DirtCounters) -> Option<WorldHit> {
         let b = self.trace(ray, false, counters);
-        b.found().then(|| {
-            WorldHit::exact(
-                ray,
-                b.t,
-                self.order.old_id[b.prim as usize],
-                Vec2::new(b.u, b.v),
-            )
-        })
+        b.found()
+            .then(|| WorldHit::exact(ray, b.t, b.prim, Vec2::new(b.u, b.v)))
     }
 
     /// Occlusion, with DIRT's own work counters.
@@ -234,7 +224,7 @@ impl DirtTracer {
             return Best::NONE;
         };
         let wt = WatertightRay::new(ray);
-        let mut q = Query::new(wt, &self.order.tris, any);
+        let mut q = Query::new(wt, self.views.triangles.as_slice(), any);
         self.trace_views(ray, t0, t1, &mut q);
         *counters += q.counters;
         q.best
