@@ -23,8 +23,16 @@
 
 use parallax_raster::dirt::DirtCapture;
 
-/// Bucket bounds a line holds (`B + 1` of them are used).
-pub(crate) const BOUNDS: usize = 24;
+/// Bucket ends a line holds: compact lines need `B <= ENDS`.
+pub(crate) const ENDS: usize = 16;
+/// Ids a line holds: a cell with at most this many list entries has them in its line.
+pub(crate) const INLINE: usize = 8;
+/// The mask bit of a cell with more than 255 entries (its ranges from the capture's offsets).
+/// Above every bucket's bit for `B <= ENDS`, so the walk's mask tests never see it.
+pub(crate) const WIDE: u32 = 1 << 31;
+/// `u32` words of a line, and the word of its first inline id.
+const WORDS: usize = 16;
+const INLINE_WORD: usize = 8;
 
 /// One level-0 cell (module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -32,22 +40,29 @@ pub(crate) const BOUNDS: usize = 24;
 pub(crate) struct CellLine {
     pub zmin: f32,
     pub scale: f32,
-    /// Non-empty buckets ([`parallax_raster::dirt::bucket_mask`]).
+    /// Non-empty buckets ([`parallax_raster::dirt::bucket_mask`]), and [`WIDE`].
     pub mask: u32,
-    /// The cell's first id (`offsets[c B]`).
+    /// Where the cell's ids start: in [`CellLines::ids`] when compact (this line's own
+    /// `ids` or the overflow after the lines), else in the capture's ids (`offsets[c B]`).
     pub first: u32,
-    /// Bucket `b`'s ids start at `first + bounds[b]` (`b in 0..=B`; zero where unused).
-    pub bounds: [u16; BOUNDS],
+    /// Bucket `b`'s ids end at `first + ends[b]` and start where bucket `b - 1`'s end (`0`
+    /// for `b = 0`); compact lines of cells that are not [`WIDE`] only.
+    pub ends: [u8; ENDS],
+    /// The cell's ids when it has at most [`INLINE`] of them (compact lines only).
+    pub ids: [u32; INLINE],
 }
 
-const _: () = assert!(std::mem::size_of::<CellLine>() == 64);
+const _: () = assert!(std::mem::size_of::<CellLine>() == 4 * WORDS);
+const _: () = assert!(std::mem::offset_of!(CellLine, ids) == 4 * INLINE_WORD);
 
 /// The lines of one view's cells (row-major, as the capture's records).
 #[derive(Clone, Debug)]
 pub(crate) struct CellLines {
+    /// One line per cell, then (compact) the ids of the cells that do not fit their line,
+    /// cell after cell, on further lines.
     pub lines: Vec<CellLine>,
-    /// Whether `bounds` hold the bucket ranges (module docs); if not, read the capture's
-    /// offsets.
+    /// Whether the lines hold the bucket ranges and ids (module docs); if not, read the
+    /// capture's offsets and ids.
     pub compact: bool,
 }
 
@@ -56,37 +71,74 @@ impl CellLines {
     pub fn new(cap: &DirtCapture) -> CellLines {
         let nb = cap.buckets() as usize;
         let offsets = cap.offsets();
-        let fits = nb < BOUNDS
-            && (0..cap.cell_records().len())
-                .all(|c| offsets[(c + 1) * nb] - offsets[c * nb] <= u16::MAX as u32);
-        let lines = cap
+        let all = cap.ids();
+        let cells = cap.cell_records().len();
+        let overflow: usize = (0..cells)
+            .map(|c| (offsets[(c + 1) * nb] - offsets[c * nb]) as usize)
+            .filter(|&n| n > INLINE)
+            .sum();
+        let compact = nb <= ENDS && (cells + overflow.div_ceil(WORDS)) * WORDS <= u32::MAX as usize;
+        let mut next = cells * WORDS;
+        let mut spill: Vec<(usize, usize)> = Vec::new();
+        let mut lines: Vec<CellLine> = cap
             .cell_records()
             .iter()
             .enumerate()
             .map(|(c, rec)| {
-                let first = offsets[c * nb];
-                let mut bounds = [0u16; BOUNDS];
-                if fits {
-                    for (b, d) in bounds.iter_mut().take(nb + 1).enumerate() {
-                        *d = (offsets[c * nb + b] - first) as u16;
-                    }
-                }
-                CellLine {
+                let (s, e) = (offsets[c * nb] as usize, offsets[(c + 1) * nb] as usize);
+                let mut line = CellLine {
                     zmin: rec.zmin,
                     scale: rec.scale,
                     mask: rec.mask,
-                    first,
-                    bounds,
+                    first: s as u32,
+                    ends: [0; ENDS],
+                    ids: [0; INLINE],
+                };
+                if !compact {
+                    return line;
                 }
+                if e - s <= INLINE {
+                    line.first = (c * WORDS + INLINE_WORD) as u32;
+                    line.ids[..e - s].copy_from_slice(&all[s..e]);
+                } else {
+                    line.first = next as u32;
+                    next += e - s;
+                    spill.push((s, e));
+                }
+                if e - s <= u8::MAX as usize {
+                    for (b, end) in line.ends.iter_mut().take(nb).enumerate() {
+                        *end = (offsets[c * nb + b + 1] as usize - s) as u8;
+                    }
+                } else {
+                    line.mask |= WIDE;
+                }
+                line
             })
             .collect();
-        CellLines {
-            lines,
-            compact: fits,
+        if compact {
+            lines.resize(cells + overflow.div_ceil(WORDS), CellLine::ZERO);
+            let words = words_mut(&mut lines);
+            let mut at = cells * WORDS;
+            for (s, e) in spill {
+                words[at..at + e - s].copy_from_slice(&all[s..e]);
+                at += e - s;
+            }
+        }
+        CellLines { lines, compact }
+    }
+
+    /// The ids the ranges of [`Self::bucket`] index: the lines' words when compact, else the
+    /// capture's.
+    #[inline(always)]
+    pub fn ids<'a>(&'a self, cap: &'a DirtCapture) -> &'a [u32] {
+        if self.compact {
+            words(&self.lines)
+        } else {
+            cap.ids()
         }
     }
 
-    /// The ids range of bucket `b` of cell `index` (`offsets` the capture's).
+    /// The range in [`Self::ids`] of bucket `b` of cell `index` (`offsets` the capture's).
     #[inline(always)]
     pub fn bucket(
         &self,
@@ -96,19 +148,52 @@ impl CellLines {
         nb: u32,
         offsets: &[u32],
     ) -> (usize, usize) {
-        if self.compact {
-            // `b < B <= BOUNDS - 1` when compact: the `min` changes no valid bucket and lets
-            // the compiler drop both bounds checks (a `% BOUNDS` did the same with a division).
-            let b = (b as usize).min(BOUNDS - 2);
+        if self.compact && line.mask & WIDE == 0 {
+            // `b < B <= ENDS` when compact: the `min` changes no valid bucket and lets the
+            // compiler drop the bounds checks.
+            let b = (b as usize).min(ENDS - 1);
             let first = line.first as usize;
-            (
-                first + line.bounds[b] as usize,
-                first + line.bounds[b + 1] as usize,
-            )
+            let start = if b > 0 { line.ends[b - 1] } else { 0 };
+            (first + start as usize, first + line.ends[b] as usize)
         } else {
             let k = index * nb as usize + b as usize;
-            (offsets[k] as usize, offsets[k + 1] as usize)
+            let (s, e) = (offsets[k] as usize, offsets[k + 1] as usize);
+            if self.compact {
+                // A wide cell: its ids start at `first` in the overflow.
+                let base = offsets[index * nb as usize] as usize;
+                let first = line.first as usize;
+                (first + s - base, first + e - base)
+            } else {
+                (s, e)
+            }
         }
+    }
+}
+
+impl CellLine {
+    const ZERO: CellLine = CellLine {
+        zmin: 0.0,
+        scale: 0.0,
+        mask: 0,
+        first: 0,
+        ends: [0; ENDS],
+        ids: [0; INLINE],
+    };
+}
+
+/// The lines as `u32` words.
+fn words(lines: &[CellLine]) -> &[u32] {
+    // SAFETY: `CellLine` is `repr(C)`, 16 words with no padding (asserted above), of `f32`,
+    // `u32` and `u8` fields: every bit pattern is a valid `u32` and a valid line; the
+    // alignment of 64 exceeds `u32`'s.
+    unsafe { std::slice::from_raw_parts(lines.as_ptr().cast::<u32>(), lines.len() * WORDS) }
+}
+
+/// The lines as mutable `u32` words ([`words`]).
+fn words_mut(lines: &mut [CellLine]) -> &mut [u32] {
+    // SAFETY: as in `words`; the borrow is exclusive.
+    unsafe {
+        std::slice::from_raw_parts_mut(lines.as_mut_ptr().cast::<u32>(), lines.len() * WORDS)
     }
 }
 
@@ -137,17 +222,19 @@ mod tests {
                 let lines = CellLines::new(cap);
                 assert_eq!(lines.compact, compact);
                 let offsets = cap.offsets();
+                let ids = lines.ids(cap);
                 for (c, rec) in cap.cell_records().iter().enumerate() {
                     let line = &lines.lines[c];
                     assert_eq!(
-                        (line.zmin, line.scale, line.mask),
+                        (line.zmin, line.scale, line.mask & !WIDE),
                         (rec.zmin, rec.scale, rec.mask)
                     );
                     for b in 0..buckets {
                         let k = c * buckets as usize + b as usize;
+                        let (s, e) = lines.bucket(line, c, b, buckets, offsets);
                         assert_eq!(
-                            lines.bucket(line, c, b, buckets, offsets),
-                            (offsets[k] as usize, offsets[k + 1] as usize),
+                            &ids[s..e],
+                            &cap.ids()[offsets[k] as usize..offsets[k + 1] as usize],
                             "cell {c} bucket {b}"
                         );
                     }

@@ -471,7 +471,7 @@ fn trace_cell<const ISA: u8>(
 ) -> bool {
     let (lo, scale, nb) = (c.zmin, c.scale, vc.buckets);
     let (b_a, b_b) = c.buckets;
-    let (offsets, ids) = (cap.offsets(), cap.ids());
+    let (offsets, ids) = (cap.offsets(), cells.ids(cap));
     let ascending = b_a <= b_b;
     let mut b = b_a;
     loop {
