@@ -73,7 +73,7 @@ use best::Best;
 pub use best::DirtCounters;
 use cells::CellLines;
 use slabs::Slabs;
-use tri4::Query;
+use tri4::{LineTri, Query};
 use view::{Exit, Isa, ViewConsts, ViewRay};
 use walk::{WalkEnd, walk};
 
@@ -91,6 +91,8 @@ pub struct DirtTracer {
     neighbours: [[usize; 4]; 6],
     /// The instruction set the tracer runs on (the same results on each).
     isa: Isa,
+    /// The triangle buffer, one triangle a cache line.
+    tris: Vec<LineTri>,
 }
 
 impl DirtTracer {
@@ -109,6 +111,12 @@ impl DirtTracer {
             [-b.x_axis, b.x_axis, b.y_axis, -b.y_axis].map(CubeMap::face_of)
         });
         DirtTracer {
+            tris: views
+                .triangles
+                .as_slice()
+                .iter()
+                .map(|&t| LineTri { t })
+                .collect(),
             views,
             consts,
             slabs,
@@ -224,7 +232,7 @@ impl DirtTracer {
             return Best::NONE;
         };
         let wt = WatertightRay::new(ray);
-        let mut q = Query::new(wt, self.views.triangles.as_slice(), any);
+        let mut q = Query::new(wt, &self.tris, any);
         self.trace_views(ray, t0, t1, &mut q);
         *counters += q.counters;
         q.best
