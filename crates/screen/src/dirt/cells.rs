@@ -192,7 +192,9 @@ fn words(lines: &[CellLine]) -> &[u32] {
 /// The lines as mutable `u32` words ([`words`]).
 fn words_mut(lines: &mut [CellLine]) -> &mut [u32] {
     // SAFETY: as in `words`; the borrow is exclusive.
-    unsafe { std::slice::from_raw_parts_mut(lines.as_mut_ptr().cast::<u32>(), lines.len() * WORDS) }
+    unsafe {
+        std::slice::from_raw_parts_mut(lines.as_mut_ptr().cast::<u32>(), lines.len() * WORDS)
+    }
 }
 
 #[cfg(test)]

@@ -73,7 +73,7 @@ use best::Best;
 pub use best::DirtCounters;
 use cells::CellLines;
 use slabs::Slabs;
-use tri4::{LineTri, Query};
+use tri4::Query;
 use view::{Exit, Isa, ViewConsts, ViewRay};
 use walk::{WalkEnd, walk};
 
@@ -91,8 +91,6 @@ pub struct DirtTracer {
     neighbours: [[usize; 4]; 6],
     /// The instruction set the tracer runs on (the same results on each).
     isa: Isa,
-    /// The triangle buffer, one triangle a cache line.
-    tris: Vec<LineTri>,
 }
 
 impl DirtTracer {
@@ -111,12 +109,6 @@ impl DirtTracer {
             [-b.x_axis, b.x_axis, b.y_axis, -b.y_axis].map(CubeMap::face_of)
         });
         DirtTracer {
-            tris: views
-                .triangles
-                .as_slice()
-                .iter()
-                .map(|&t| LineTri { t })
-                .collect(),
             views,
             consts,
             slabs,
@@ -232,7 +224,7 @@ impl DirtTracer {
             return Best::NONE;
         };
         let wt = WatertightRay::new(ray);
-        let mut q = Query::new(wt, &self.tris, any);
+        let mut q = Query::new(wt, self.views.triangles.as_slice(), any);
         self.trace_views(ray, t0, t1, &mut q);
         *counters += q.counters;
         q.best

@@ -31,13 +31,6 @@ use super::view::Isa;
 /// Slots of the per-ray mailbox (a power of two).
 const MAILBOX: usize = 64;
 
-/// A triangle alone on its cache line (a random read touches one line, not two).
-#[derive(Clone, Copy, Debug)]
-#[repr(C, align(64))]
-pub(crate) struct LineTri {
-    pub t: DirtTri,
-}
-
 /// What a walk needs about the ray and its answer so far.
 pub(crate) struct Query<'a> {
     pub wt: WatertightRay,
@@ -45,7 +38,7 @@ pub(crate) struct Query<'a> {
     org: [Vec4; 3],
     shear: [Vec4; 3],
     t_min: Vec4,
-    pub tris: &'a [LineTri],
+    pub tris: &'a [DirtTri],
     /// Occlusion query: stop at the first hit.
     pub any: bool,
     pub best: Best,
@@ -54,7 +47,7 @@ pub(crate) struct Query<'a> {
 }
 
 impl<'a> Query<'a> {
-    pub fn new(wt: WatertightRay, tris: &'a [LineTri], any: bool) -> Self {
+    pub fn new(wt: WatertightRay, tris: &'a [DirtTri], any: bool) -> Self {
         let o = wt.origin;
         Query {
             org: [wt.kx, wt.ky, wt.kz].map(|k| Vec4::splat(o[k])),
@@ -154,7 +147,7 @@ impl<'a> Query<'a> {
                 continue;
             }
             self.counters.tests += 1;
-            let tri = &self.tris[id as usize].t;
+            let tri = &self.tris[id as usize];
             let lim = self.best.limit(self.wt.t_max);
             if let Some(h) = self.wt.intersect_within(tri.p0, tri.p1, tri.p2, lim) {
                 self.best.offer(h.t, id, h.u, h.v);
@@ -171,7 +164,7 @@ impl<'a> Query<'a> {
     fn test4(&mut self, ids: &[u32; 4], n: usize) -> bool {
         self.counters.tests += n as u64;
         // Padding lanes repeat lane 0 (masked off below).
-        let tri = |l: usize| &self.tris[ids[if l < n { l } else { 0 }] as usize].t;
+        let tri = |l: usize| &self.tris[ids[if l < n { l } else { 0 }] as usize];
         let t = [tri(0), tri(1), tri(2), tri(3)];
         let corners = gather(t);
         let (kx, ky, kz) = (self.wt.kx, self.wt.ky, self.wt.kz);
