@@ -75,7 +75,7 @@ impl CellLines {
         let cells = cap.cell_records().len();
         let overflow: usize = (0..cells)
             .map(|c| (offsets[(c + 1) * nb] - offsets[c * nb]) as usize)
-            .filter(|&n| n > INLINE)
+            .map(|n| n.saturating_sub(INLINE))
             .sum();
         let compact = nb <= ENDS && (cells + overflow.div_ceil(WORDS)) * WORDS <= u32::MAX as usize;
         let mut next = cells * WORDS;
@@ -97,13 +97,14 @@ impl CellLines {
                 if !compact {
                     return line;
                 }
+                let own = (e - s).min(INLINE);
+                line.ids[..own].copy_from_slice(&all[s..s + own]);
                 if e - s <= INLINE {
                     line.first = (c * WORDS + INLINE_WORD) as u32;
-                    line.ids[..e - s].copy_from_slice(&all[s..e]);
                 } else {
-                    line.first = next as u32;
-                    next += e - s;
-                    spill.push((s, e));
+                    line.first = (next - INLINE) as u32;
+                    next += e - s - INLINE;
+                    spill.push((s + INLINE, e));
                 }
                 if e - s <= u8::MAX as usize {
                     for (b, end) in line.ends.iter_mut().take(nb).enumerate() {
@@ -138,7 +139,9 @@ impl CellLines {
         }
     }
 
-    /// The range in [`Self::ids`] of bucket `b` of cell `index` (`offsets` the capture's).
+    /// The ranges in [`Self::ids`] of bucket `b` of cell `index` (`offsets` the capture's):
+    /// its entries among the cell's first [`INLINE`] (in the line), then the others (in the
+    /// overflow); either may be empty.
     #[inline(always)]
     pub fn bucket(
         &self,
@@ -147,26 +150,29 @@ impl CellLines {
         b: u32,
         nb: u32,
         offsets: &[u32],
-    ) -> (usize, usize) {
-        if self.compact && line.mask & WIDE == 0 {
+    ) -> [(usize, usize); 2] {
+        // The bucket's entries among the cell's.
+        let (s, e) = if self.compact && line.mask & WIDE == 0 {
             // `b < B <= ENDS` when compact: the `min` changes no valid bucket and lets the
             // compiler drop the bounds checks.
             let b = (b as usize).min(ENDS - 1);
-            let first = line.first as usize;
             let start = if b > 0 { line.ends[b - 1] } else { 0 };
-            (first + start as usize, first + line.ends[b] as usize)
+            (start as usize, line.ends[b] as usize)
         } else {
             let k = index * nb as usize + b as usize;
             let (s, e) = (offsets[k] as usize, offsets[k + 1] as usize);
-            if self.compact {
-                // A wide cell: its ids start at `first` in the overflow.
-                let base = offsets[index * nb as usize] as usize;
-                let first = line.first as usize;
-                (first + s - base, first + e - base)
-            } else {
-                (s, e)
+            if !self.compact {
+                return [(s, e), (e, e)];
             }
-        }
+            let base = offsets[index * nb as usize] as usize;
+            (s - base, e - base)
+        };
+        let own = index * WORDS + INLINE_WORD;
+        let first = line.first as usize;
+        [
+            (own + s.min(INLINE), own + e.min(INLINE)),
+            (first + s.max(INLINE), first + e.max(INLINE)),
+        ]
     }
 }
 
@@ -192,9 +198,7 @@ fn words(lines: &[CellLine]) -> &[u32] {
 /// The lines as mutable `u32` words ([`words`]).
 fn words_mut(lines: &mut [CellLine]) -> &mut [u32] {
     // SAFETY: as in `words`; the borrow is exclusive.
-    unsafe {
-        std::slice::from_raw_parts_mut(lines.as_mut_ptr().cast::<u32>(), lines.len() * WORDS)
-    }
+    unsafe { std::slice::from_raw_parts_mut(lines.as_mut_ptr().cast::<u32>(), lines.len() * WORDS) }
 }
 
 #[cfg(test)]
@@ -231,9 +235,9 @@ mod tests {
                     );
                     for b in 0..buckets {
                         let k = c * buckets as usize + b as usize;
-                        let (s, e) = lines.bucket(line, c, b, buckets, offsets);
+                        let [(s0, e0), (s1, e1)] = lines.bucket(line, c, b, buckets, offsets);
                         assert_eq!(
-                            &ids[s..e],
+                            [&ids[s0..e0], &ids[s1..e1]].concat(),
                             &cap.ids()[offsets[k] as usize..offsets[k + 1] as usize],
                             "cell {c} bucket {b}"
                         );

@@ -477,8 +477,10 @@ fn trace_cell<const ISA: u8>(
     loop {
         if any_bucket(c.mask, b, b, nb) {
             q.counters.buckets += 1;
-            let (start, end) = cells.bucket(line, c.index, b, nb, offsets);
-            if q.test::<ISA>(&ids[start..end]) {
+            // The bucket's entries in the cell's line, then in the overflow (`cells`).
+            let [(s0, e0), (s1, e1)] = cells.bucket(line, c.index, b, nb, offsets);
+            if (s0 < e0 && q.test::<ISA>(&ids[s0..e0])) || (s1 < e1 && q.test::<ISA>(&ids[s1..e1]))
+            {
                 return true;
             }
         }
