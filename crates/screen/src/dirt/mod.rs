@@ -8,8 +8,8 @@
 //!   with the argument why the answer is exact;
 //! - `slabs`: per mip texel, the mask of occupied reciprocal-depth slabs (from the cells'
 //!   non-empty buckets), the walk's second skip test, and why a skip by it is exact;
-//! - `cells`: one cache line per finest cell (its record and bucket starts), the walk's read
-//!   of a cell before its ids;
+//! - `cells`: one cache line per finest cell (its record, bucket ends and first list
+//!   entries; the rest of the lists after the lines), the walk's read of a cell and its ids;
 //! - `tri4`: the ray-triangle tests of a bucket, four triangles at a time, and the per-ray
 //!   mailbox;
 //! - this file: the multi-view driver (§4.2.1: "If no valid hit is found within the current
@@ -127,7 +127,8 @@ impl DirtTracer {
             .sum()
     }
 
-    /// Bytes of the walk's own line per level-0 cell (`cells`: record and bucket starts),
+    /// Bytes of the walk's own line per level-0 cell (`cells`: record, bucket ends, the lists'
+    /// entries in the lines and after them),
     /// beside the capture's [`DirtViews::bytes`].
     pub fn cell_line_bytes(&self) -> u64 {
         self.cells

@@ -78,23 +78,35 @@ impl<'a> Query<'a> {
     /// the same source and results on each.
     #[inline(always)]
     pub fn test<const ISA: u8>(&mut self, ids: &[u32]) -> bool {
+        self.test_in::<ISA, u32>(0, ids)
+    }
+
+    /// [`Self::test`] on the triangles `base + d` for the entries `d` of `ids` (`u16` list
+    /// entries relative to a cell's base, `cells`).
+    #[inline(always)]
+    pub fn test16<const ISA: u8>(&mut self, base: u32, ids: &[u16]) -> bool {
+        self.test_in::<ISA, u16>(base, ids)
+    }
+
+    #[inline(always)]
+    fn test_in<const ISA: u8, T: Copy + Into<u32>>(&mut self, base: u32, ids: &[T]) -> bool {
         #[cfg(target_arch = "x86_64")]
         {
             // SAFETY: the walk's copies pass their own `Isa`, chosen by `Isa::detect`.
             if ISA == Isa::X86V4 as u8 {
-                return unsafe { self.test_v4(ids) };
+                return unsafe { self.test_v4(base, ids) };
             }
             if ISA == Isa::X86V3 as u8 {
-                return unsafe { self.test_v3(ids) };
+                return unsafe { self.test_v3(base, ids) };
             }
         }
-        self.test_baseline(ids)
+        self.test_baseline(base, ids)
     }
 
     /// [`Self::test`] for the build's baseline instruction set (the portable twin).
     #[inline(never)]
-    fn test_baseline(&mut self, ids: &[u32]) -> bool {
-        self.test_body(ids)
+    fn test_baseline<T: Copy + Into<u32>>(&mut self, base: u32, ids: &[T]) -> bool {
+        self.test_body(base, ids)
     }
 
     /// [`Self::test`] compiled for x86-64-v3 (AVX2, BMI1/2, LZCNT; no FMA).
@@ -104,8 +116,8 @@ impl<'a> Query<'a> {
     #[cfg(target_arch = "x86_64")]
     #[inline(never)]
     #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
-    unsafe fn test_v3(&mut self, ids: &[u32]) -> bool {
-        self.test_body(ids)
+    unsafe fn test_v3<T: Copy + Into<u32>>(&mut self, base: u32, ids: &[T]) -> bool {
+        self.test_body(base, ids)
     }
 
     /// [`Self::test`] compiled for x86-64-v3 and AVX-512 F/VL/BW/DQ.
@@ -115,15 +127,16 @@ impl<'a> Query<'a> {
     #[cfg(target_arch = "x86_64")]
     #[inline(never)]
     #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt,avx512f,avx512vl,avx512bw,avx512dq")]
-    unsafe fn test_v4(&mut self, ids: &[u32]) -> bool {
-        self.test_body(ids)
+    unsafe fn test_v4<T: Copy + Into<u32>>(&mut self, base: u32, ids: &[T]) -> bool {
+        self.test_body(base, ids)
     }
 
     #[inline(always)]
-    fn test_body(&mut self, ids: &[u32]) -> bool {
+    fn test_body<T: Copy + Into<u32>>(&mut self, base: u32, ids: &[T]) -> bool {
         let mut block = [0u32; 4];
         let mut n = 0;
-        for &id in ids {
+        for &d in ids {
+            let id = base + d.into();
             if self.seen(id) {
                 continue;
             }
@@ -322,7 +335,8 @@ mod tests {
 
     /// The 4-wide test and its scalar twin give the same answer (bit for bit) on random
     /// triangle lists, including shared edges and vertices (exactly-zero edge functions) and
-    /// occlusion queries; and so does the x86-64-v3 copy where the CPU runs it.
+    /// occlusion queries; and so does the x86-64-v3 copy where the CPU runs it, and each copy
+    /// on `u16` entries relative to a base.
     #[test]
     fn four_wide_equals_scalar() {
         let mut rng = Rng::for_pixel(7, 1, 2, 3);
@@ -387,6 +401,26 @@ mod tests {
                             (y.prim, y.t.to_bits(), y.u.to_bits(), y.v.to_bits()),
                         );
                         assert_eq!(a.counters, c.counters);
+                        // The `u16` entries relative to a base: the same triangles.
+                        let base = ids[len / 2];
+                        let rel: Vec<u16> = ids[len / 2..len]
+                            .iter()
+                            .map(|&i| (i - base) as u16)
+                            .collect();
+                        let (mut d, mut e) =
+                            (Query::new(wt, &tris, any), Query::new(wt, &tris, any));
+                        let rd = match isa {
+                            Isa::Baseline => d.test16::<0>(base, &rel),
+                            Isa::X86V3 => d.test16::<1>(base, &rel),
+                            Isa::X86V4 => d.test16::<2>(base, &rel),
+                        };
+                        assert_eq!(rd, e.test::<0>(&ids[len / 2..len]));
+                        let (x, y) = (d.best, e.best);
+                        assert_eq!(
+                            (x.prim, x.t.to_bits(), x.u.to_bits(), x.v.to_bits()),
+                            (y.prim, y.t.to_bits(), y.u.to_bits(), y.v.to_bits()),
+                        );
+                        assert_eq!(d.counters, e.counters);
                     }
                     if any {
                         assert_eq!(ra, rb);

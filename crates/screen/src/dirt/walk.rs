@@ -64,7 +64,7 @@
 
 use parallax_raster::dirt::{DirtCapture, bucket_index};
 
-use super::cells::{CellLine, CellLines};
+use super::cells::{CellLine, CellLines, Entries};
 use super::slabs::Slabs;
 use super::tri4::Query;
 use super::view::{Isa, MAX_LEVELS, ViewConsts, ViewRay};
@@ -471,16 +471,20 @@ fn trace_cell<const ISA: u8>(
 ) -> bool {
     let (lo, scale, nb) = (c.zmin, c.scale, vc.buckets);
     let (b_a, b_b) = c.buckets;
-    let (offsets, ids) = (cap.offsets(), cells.ids(cap));
+    let (offsets, ids, halves) = (cap.offsets(), cap.ids(), cells.halves());
     let ascending = b_a <= b_b;
     let mut b = b_a;
     loop {
         if any_bucket(c.mask, b, b, nb) {
             q.counters.buckets += 1;
-            // The bucket's entries in the cell's line, then in the overflow (`cells`).
-            let [(s0, e0), (s1, e1)] = cells.bucket(line, c.index, b, nb, offsets);
-            if (s0 < e0 && q.test::<ISA>(&ids[s0..e0])) || (s1 < e1 && q.test::<ISA>(&ids[s1..e1]))
-            {
+            let found = match cells.bucket(line, c.index, b, nb, offsets) {
+                // The bucket's entries in the cell's line, then after the lines (`cells`).
+                Entries::Packed { base, ranges } => ranges
+                    .iter()
+                    .any(|&(s, e)| s < e && q.test16::<ISA>(base, &halves[s..e])),
+                Entries::Capture(s, e) => q.test::<ISA>(&ids[s..e]),
+            };
+            if found {
                 return true;
             }
         }
