@@ -527,7 +527,7 @@ fn memory_rows(name: &str, camera: &Camera, tracer: &DirtTracer) -> Vec<MemoryRo
             11.0 * cells as f64,
             bounds_bytes + tracer.texel_bytes() + tracer.cell_line_bytes(),
             &format!(
-                "{texels} texels over all mip levels, [min, max] f32 and its reciprocal [1 / max, 1 / min]; + a 16-byte cell record (bounds, bucket scale, bucket mask) per cell; + the walk's 16-byte texel per mip texel (reciprocal bounds and depth-slab mask); + the walk's 64-byte line per cell (the record and the cell's bucket starts)"
+                "{texels} texels over all mip levels, [min, max] f32 and its reciprocal [1 / max, 1 / min]; + a 16-byte cell record (bounds, bucket scale, bucket mask) per cell; + the walk's 16-byte texel per mip texel (reciprocal bounds and depth-slab mask); + the walk's 64-byte line per cell (the record, bucket ends and first 14 list entries as u16) and the lists' further entries after the lines"
             ),
         ),
         row(

@@ -2,32 +2,34 @@
 //! the cell's depth range for eq. 1, then the bucket's primitive list): one 64-byte line per
 //! cell with the cell's record (`CellRecord`: `zmin`, the eq. 1 scale, the non-empty bucket
 //! mask), where each of its buckets' entries end, *and* the cell's first [`INLINE`] list
-//! entries; the entries after those follow the lines, cell after cell ("the overflow").
+//! entries, each a `u16` relative to the cell's smallest triangle id; the entries after those
+//! follow the lines, cell after cell ("the overflow"), in the same form.
 //!
 //! The capture keeps the records (16 bytes a cell), the CSR offsets (`B + 1` `u32` a cell)
-//! and the ids in three arrays, so a traced cell costs up to three dependent cache misses
-//! before its triangles: the record, the offsets, the bucket's ids. On a CPU whose L2 holds
-//! none of them (a 512 KiB L2 against ~0.5 MiB of records, ~2.2 MiB of offsets and ~1.7 MiB
-//! of ids for the atrium's camera view at 1024x512, tile 4, `B = 16`) all miss; here a bucket
-//! among the cell's first entries costs the line alone, a later one the line and one line of
-//! the overflow.
+//! and the ids (`u32`) in three arrays, so a traced cell costs up to three dependent cache
+//! misses before its triangles: the record, the offsets, the bucket's ids. On a CPU whose L2
+//! holds none of them (a 512 KiB L2 against ~0.5 MiB of records, ~2.2 MiB of offsets and
+//! ~1.7 MiB of ids for the atrium's camera view at 1024x512, tile 4, `B = 16`) all miss; here
+//! a bucket among the cell's first entries costs the line alone, a later one the line and one
+//! line of the overflow (half the bytes of `u32` ids).
 //!
 //! **Layout** (compact lines, `B <= ENDS`): `ends[b]` is the end of bucket `b` among the
 //! cell's entries (`offsets[c B + b + 1] - offsets[c B]`, a `u8`; bucket `b` starts at
-//! `ends[b - 1]`, or 0). Entry `i < INLINE` of the cell is `ids[i]` of its line; entry
-//! `i >= INLINE` is word `first + i` of the lines seen as `u32` words ([`CellLines::ids`]).
-//! A bucket's entries are then at most two ranges of those words ([`CellLines::bucket`]),
-//! together exactly the capture's range in the same order. A cell with more than 255 entries
-//! is marked [`WIDE`] in its mask: its bucket bounds come from the capture's offsets, its
-//! entries are stored the same way. When `B > ENDS` the lines are not compact: they carry
-//! the record only, and the walk reads the capture's offsets and ids (same ranges).
+//! `ends[b - 1]`, or 0). Entry `i` of the cell is triangle `base + d` with `d` the line's
+//! `ids[i]` for `i < INLINE`, else half `first + i` of the lines seen as `u16` halves
+//! ([`CellLines::halves`]). A bucket's entries are then at most two ranges of halves
+//! ([`CellLines::bucket`]), together exactly the capture's range in the same order. A cell
+//! with more than 255 entries, or whose ids lie more than `u16::MAX` apart, is marked
+//! [`WIDE`] in its mask: its ranges and ids are the capture's. When `B > ENDS` the lines are
+//! not compact: they carry the record only, and the walk reads the capture's offsets and ids
+//! (same ranges).
 //!
 //! | parameter | value | meaning |
 //! |---|---|---|
 //! | line size | 64 bytes | one cache line per cell (`repr(align(64))`) |
 //! | [`ENDS`] | 16 | bucket ends per line (`u8`): compact for `B <= 16` |
-//! | [`INLINE`] | 8 | list entries in the line |
-//! | [`WIDE`] | mask bit 31 | a cell of more than 255 entries (bounds from the capture) |
+//! | [`INLINE`] | 14 | list entries (`u16`) in the line |
+//! | [`WIDE`] | mask bit 31 | a cell read from the capture (> 255 entries or an id span > `u16::MAX`) |
 
 use parallax_raster::dirt::DirtCapture;
 

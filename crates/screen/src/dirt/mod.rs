@@ -9,7 +9,8 @@
 //! - `slabs`: per mip texel, the mask of occupied reciprocal-depth slabs (from the cells'
 //!   non-empty buckets), the walk's second skip test, and why a skip by it is exact;
 //! - `cells`: one cache line per finest cell (its record, bucket ends and first list
-//!   entries; the rest of the lists after the lines), the walk's read of a cell and its ids;
+//!   entries as `u16`; the rest of the lists after the lines), the walk's read of a cell and
+//!   its ids;
 //! - `tri4`: the ray-triangle tests of a bucket, four triangles at a time, and the per-ray
 //!   mailbox;
 //! - this file: the multi-view driver (§4.2.1: "If no valid hit is found within the current
