@@ -27,10 +27,7 @@
 //! the error bound of condition 3 refers to what the tree actually stores (up to the proxy's
 //! own f16/f32 rounding).
 //!
-//! Every level is built in parallel over rows (rayon); the fast path builds the leaves and
-//! levels 1-4 in bands of 16 pixel rows instead, one task per band (`bands`), and the
-//! levels above level by level, those of at most 4096 nodes on the calling thread
-//! (`prune::prune_from`). **Fast paths, same bits:** the leaves
+//! Every level is built in parallel over rows (rayon). **Fast paths, same bits:** the leaves
 //! are made a row at a time (`leaves.rs`), their directions from per-column and per-row
 //! tables of the same products and `z` with [`UnitCube::z_of_depth`]'s constant terms
 //! computed once, four pixels at a time in AVX2 lanes (`leaf_avx2`, run-time detection) or
@@ -204,80 +201,66 @@ impl QuadTree {
             lanes: !reference,
         };
 
+        // Level 0: leaves (§3.2).
+        // Every row is set empty right before its leaves are written (in cache, no fill pass
+        // over the level first), the padding rows below the image too.
         let (w0, h0) = (top_w << top, top_h << top);
-        let (levels, tz, eff, unsafe_px) = 'levels: {
-            // Fast path: the leaves and the lowest levels in bands of rows (`bands`).
-            #[cfg(target_arch = "x86_64")]
-            if !reference {
-                break 'levels super::bands::banded(
-                    &ctx,
-                    (w, h),
-                    (w0, h0),
-                    nlev,
-                    deeper,
-                    &leaf_row,
-                );
+        let (n0, n_img, n_px) = ((w0 * h0) as usize, (w0 * h) as usize, (w * h) as usize);
+        let mut leaves: Vec<Node> = Vec::with_capacity(n0);
+        // With deeper layers (fast path), each row's pixel-plane trigger depths right after
+        // its leaves (`fixpoint`), and the pixels where they are finite.
+        let mut px_triggers = None;
+        let (image, padding) = leaves.spare_capacity_mut()[..n0].split_at_mut(n_img);
+        padding.par_chunks_mut(w0 as usize).for_each(|row| {
+            init_row(row, Node::EMPTY);
+        });
+        if !deeper.is_empty() && !reference {
+            let cols = super::fixpoint::Columns::new(w, wf);
+            // Every value is written by the row pass (`pixel_triggers_row`).
+            let (mut tz, mut fronts) = (Vec::with_capacity(n_px), Vec::with_capacity(n_px));
+            let listed: Vec<u32> = image
+                .par_chunks_mut(w0 as usize)
+                .zip(tz.spare_capacity_mut()[..n_px].par_chunks_mut(w as usize))
+                .zip(fronts.spare_capacity_mut()[..n_px].par_chunks_mut(w as usize))
+                .enumerate()
+                .flat_map_iter(|(j, ((row, t), f))| {
+                    let j = j as u32;
+                    let row = init_row(row, Node::EMPTY);
+                    leaf_row(row, j);
+                    super::fixpoint::pixel_triggers_row(t, f, row, j, &ctx, &cols, deeper)
+                })
+                .collect();
+            // SAFETY: the rows cover `0..n_px` and `pixel_triggers_row` wrote every value.
+            unsafe {
+                tz.set_len(n_px);
+                fronts.set_len(n_px);
             }
-            // Level 0: leaves (§3.2).
-            // Every row is set empty right before its leaves are written (in cache, no fill pass
-            // over the level first), the padding rows below the image too.
-            let (n0, n_img, n_px) = ((w0 * h0) as usize, (w0 * h) as usize, (w * h) as usize);
-            let mut leaves: Vec<Node> = Vec::with_capacity(n0);
-            // With deeper layers (fast path), each row's pixel-plane trigger depths right after
-            // its leaves (`fixpoint`), and the pixels where they are finite.
-            let mut px_triggers = None;
-            let (image, padding) = leaves.spare_capacity_mut()[..n0].split_at_mut(n_img);
-            padding.par_chunks_mut(w0 as usize).for_each(|row| {
-                init_row(row, Node::EMPTY);
-            });
-            if !deeper.is_empty() && !reference {
-                let cols = super::fixpoint::Columns::new(w, wf);
-                // Every value is written by the row pass (`pixel_triggers_row`).
-                let (mut tz, mut fronts) = (Vec::with_capacity(n_px), Vec::with_capacity(n_px));
-                let listed: Vec<u32> = image
-                    .par_chunks_mut(w0 as usize)
-                    .zip(tz.spare_capacity_mut()[..n_px].par_chunks_mut(w as usize))
-                    .zip(fronts.spare_capacity_mut()[..n_px].par_chunks_mut(w as usize))
-                    .enumerate()
-                    .flat_map_iter(|(j, ((row, t), f))| {
-                        let j = j as u32;
-                        let row = init_row(row, Node::EMPTY);
-                        leaf_row(row, j);
-                        super::fixpoint::pixel_triggers_row(t, f, row, j, &ctx, &cols, deeper)
-                    })
-                    .collect();
-                // SAFETY: the rows cover `0..n_px` and `pixel_triggers_row` wrote every value.
-                unsafe {
-                    tz.set_len(n_px);
-                    fronts.set_len(n_px);
-                }
-                px_triggers = Some((tz, listed, fronts));
-            } else {
-                image
-                    .par_chunks_mut(w0 as usize)
-                    .enumerate()
-                    .for_each(|(j, row)| leaf_row(init_row(row, Node::EMPTY), j as u32));
-            }
-            // SAFETY: the image rows and the padding rows cover `0..n0`, each initialised by
-            // `init_row`.
-            unsafe { leaves.set_len(n0) };
-            let level0 = Level {
-                w: w0,
-                h: h0,
-                nodes: leaves,
-            };
-            if deeper.is_empty() {
-                let levels = super::prune::prune(&ctx, level0, nlev, Blocked::None, w, h);
-                // No cascade: the plane levels straight from level 1 (`plane_levels`).
-                (levels, Vec::new(), Vec::new(), None)
-            } else if reference {
-                let (levels, tz, eff) =
-                    super::prune::fixed_point_reference(&ctx, level0, nlev, (w, h), deeper);
-                (levels, tz, eff, None)
-            } else {
-                let px = px_triggers.expect("computed with the leaves");
-                super::fixpoint::fixed_point(&ctx, vec![level0], nlev, (w, h), deeper, px)
-            }
+            px_triggers = Some((tz, listed, fronts));
+        } else {
+            image
+                .par_chunks_mut(w0 as usize)
+                .enumerate()
+                .for_each(|(j, row)| leaf_row(init_row(row, Node::EMPTY), j as u32));
+        }
+        // SAFETY: the image rows and the padding rows cover `0..n0`, each initialised by
+        // `init_row`.
+        unsafe { leaves.set_len(n0) };
+        let level0 = Level {
+            w: w0,
+            h: h0,
+            nodes: leaves,
+        };
+        let (levels, tz, eff, unsafe_px) = if deeper.is_empty() {
+            let levels = super::prune::prune(&ctx, level0, nlev, Blocked::None, w, h);
+            // No cascade: the plane levels straight from level 1 (`plane_levels`).
+            (levels, Vec::new(), Vec::new(), None)
+        } else if reference {
+            let (levels, tz, eff) =
+                super::prune::fixed_point_reference(&ctx, level0, nlev, (w, h), deeper);
+            (levels, tz, eff, None)
+        } else {
+            let px = px_triggers.expect("computed with the leaves");
+            super::fixpoint::fixed_point(&ctx, level0, nlev, (w, h), deeper, px)
         };
         let mut tree = Self {
             width: w,

@@ -61,7 +61,7 @@ use crate::LayerPlanes;
 /// pixels' deeper fronts (computed with the leaves, [`pixel_triggers_row`] per row).
 pub(super) fn fixed_point(
     ctx: &MergeCtx,
-    low: Vec<Level>,
+    level0: Level,
     nlev: u32,
     (w, h): (u32, u32),
     deeper: &[LayerPlanes],
@@ -71,7 +71,7 @@ pub(super) fn fixed_point(
     // them is needed: a pixel under a merged node is not blocked (its node would not have
     // merged, and the set only grows), and a pixel whose effective node is its own leaf
     // gets the trigger depth of its pixel plane, finite only if it was listed from the start.
-    let mut levels = super::prune::prune_from(ctx, low, nlev, Blocked::List(&listed), w, h);
+    let mut levels = super::prune::prune(ctx, level0, nlev, Blocked::List(&listed), w, h);
     let mut eff = plane_levels(&levels, w, h);
     if ctx.never {
         return (levels, tz, eff, Some(listed));

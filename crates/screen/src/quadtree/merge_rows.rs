@@ -38,7 +38,7 @@ use glam::{BVec4A, Vec4};
 
 use super::merge::{MergeCtx, plane_range, union};
 use super::node::{FLAG_CRACK, Node};
-use super::tree::Z_EPS;
+use super::tree::{Level, Z_EPS};
 
 /// Lane-wise IEEE square root (`sqrtps`).
 #[inline(always)]
@@ -155,12 +155,11 @@ impl Kids {
     #[inline(always)]
     fn aabb_union(&self, out: &mut [Node]) -> bool {
         let mut special = 0;
-        let mut range = |k: usize| {
+        let ranges = [0, 1, 2, 3].map(|k| {
             special |= self.special(k);
             // SAFETY: SSE2 baseline.
             unsafe { (_mm_castsi128_ps(self.a[k]), _mm_castsi128_ps(self.b[k])) }
-        };
-        let ranges = [range(0), range(1), range(2), range(3)];
+        });
         if special != 0 {
             return false;
         }
@@ -198,8 +197,7 @@ impl Kids {
             _mm_storeu_si128(a.as_mut_ptr() as *mut __m128i, self.a[k]);
             _mm_storeu_si128(b.as_mut_ptr() as *mut __m128i, self.b[k]);
         }
-        let n = |p: usize| Node { a: a[p], b: b[p] };
-        [n(0), n(1), n(2), n(3)]
+        [0, 1, 2, 3].map(|p| Node { a: a[p], b: b[p] })
     }
 
     /// Child `k`'s `z_c` per lane ([`Node::zc`]).
@@ -273,12 +271,16 @@ impl MergeCtx {
     /// parents may merge (contain no blocked pixel).
     pub(super) fn parent_row(
         &self,
-        (r0, r1): (&[Node], &[Node]),
+        child: &Level,
         l: u32,
         qy: u32,
         out: &mut [Node],
         allow: super::prune::Allow,
     ) {
+        let cw = child.w as usize;
+        let y0 = 2 * qy as usize;
+        let r0 = &child.nodes[y0 * cw..(y0 + 1) * cw];
+        let r1 = &child.nodes[(y0 + 1) * cw..(y0 + 2) * cw];
         for (g, outs) in out.chunks_mut(4).enumerate() {
             let qx0 = 4 * g;
             let kids = Kids::gather(r0, r1, qx0, outs.len());
@@ -312,7 +314,7 @@ impl MergeCtx {
             if kids.aabb_union(out) {
                 return;
             }
-            let ks = [kids.nodes(0), kids.nodes(1), kids.nodes(2), kids.nodes(3)];
+            let ks = [0, 1, 2, 3].map(|k| kids.nodes(k));
             for (p, o) in out.iter_mut().enumerate() {
                 *o = union((0..4).map(|k| ks[k][p].zrange()));
             }
@@ -398,7 +400,7 @@ impl MergeCtx {
             // that is not finite; `z_c` and a finite spread give finite values, and neither
             // `lo - Z_EPS` nor `hi + Z_EPS` is `-0`, so `maxps` / `minps` are the clamp) or
             // an AABB child's stored range, then their union in lanes.
-            let range = |k: usize| {
+            let ranges = [0, 1, 2, 3].map(|k| {
                 // SAFETY: SSE2 baseline.
                 unsafe {
                     let plane = _mm_castsi128_ps(_mm_srai_epi32::<31>(kids.a[k]));
@@ -420,8 +422,7 @@ impl MergeCtx {
                         sel(plane, hi, _mm_castsi128_ps(kids.b[k])),
                     )
                 }
-            };
-            let ranges = [range(0), range(1), range(2), range(3)];
+            });
             let (a, b) = union_lanes(ranges);
             for (p, o) in out.iter_mut().enumerate() {
                 *o = merged[p].unwrap_or(Node { a: a[p], b: b[p] });
@@ -429,7 +430,7 @@ impl MergeCtx {
             return;
         }
         let spread = spread.map(|v| v.to_array());
-        let ks = [kids.nodes(0), kids.nodes(1), kids.nodes(2), kids.nodes(3)];
+        let ks = [0, 1, 2, 3].map(|k| kids.nodes(k));
         for (p, o) in out.iter_mut().enumerate() {
             *o = merged[p].unwrap_or_else(|| {
                 union((0..4).map(|k| {
@@ -560,7 +561,6 @@ mod tests {
     use super::*;
     use crate::quadtree::prune::{Allow, parent_of};
     use crate::quadtree::test_rng::Rng;
-    use crate::quadtree::tree::Level;
 
     /// Rows of four parents in lanes equal the scalar definition ([`MergeCtx::parent`]
     /// with `lanes == false`) node for node, with the unions of the parents that do not
@@ -629,7 +629,7 @@ mod tests {
             for qy in 0..ph {
                 let allow = Allow(Some(&blocked[(qy * pw) as usize..((qy + 1) * pw) as usize]));
                 let mut row = vec![Node { a: 1, b: 1 }; pw as usize];
-                ctx.parent_row(child.child_rows(qy), l, qy, &mut row, allow);
+                ctx.parent_row(&child, l, qy, &mut row, allow);
                 for (qx, got) in row.iter().enumerate() {
                     let qx = qx as u32;
                     let want = parent_of(&def, &child, l, qx, qy, allow.get(qx));

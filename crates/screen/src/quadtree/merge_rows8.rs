@@ -32,6 +32,7 @@ use super::merge::MergeCtx;
 use super::merge_rows::{CORNER, KID, Kids};
 use super::node::{FLAG_CRACK, Node};
 use super::prune::Allow;
+use super::tree::Level;
 
 /// Largest finite f16.
 const F16_MAX: f32 = 65504.0;
@@ -192,7 +193,7 @@ impl MergeCtx {
     /// AVX2 lanes if the CPU has AVX2 and F16C.
     pub(super) fn parent_row_fast(
         &self,
-        rows: (&[Node], &[Node]),
+        child: &Level,
         l: u32,
         qy: u32,
         out: &mut [Node],
@@ -202,21 +203,18 @@ impl MergeCtx {
             && std::arch::is_x86_feature_detected!("f16c")
         {
             // SAFETY: the CPU has AVX2 and F16C (checked).
-            unsafe { self.parent_row8(rows, l, qy, out, allow) }
+            unsafe { self.parent_row8(child, l, qy, out, allow) }
         } else {
-            self.parent_row(rows, l, qy, out, allow)
+            self.parent_row(child, l, qy, out, allow)
         }
     }
 
     #[target_feature(enable = "avx2,f16c")]
-    fn parent_row8(
-        &self,
-        (r0, r1): (&[Node], &[Node]),
-        l: u32,
-        qy: u32,
-        out: &mut [Node],
-        allow: Allow,
-    ) {
+    fn parent_row8(&self, child: &Level, l: u32, qy: u32, out: &mut [Node], allow: Allow) {
+        let cw = child.w as usize;
+        let y0 = 2 * qy as usize;
+        let r0 = &child.nodes[y0 * cw..(y0 + 1) * cw];
+        let r1 = &child.nodes[(y0 + 1) * cw..(y0 + 2) * cw];
         for (g, outs) in out.chunks_mut(8).enumerate() {
             let qx0 = 8 * g;
             let n = outs.len();
@@ -417,7 +415,6 @@ impl MergeCtx {
 mod tests {
     use super::*;
     use crate::quadtree::test_rng::Rng;
-    use crate::quadtree::tree::Level;
 
     /// Rows made eight parents per step equal `merge_rows`' four-parent rows (the SSE2
     /// twin) node for node: random child levels 0-3 of near-coplanar plane patches (so most
@@ -494,9 +491,9 @@ mod tests {
                 let allow = Allow(Some(&blocked[(qy * pw) as usize..((qy + 1) * pw) as usize]));
                 let mut four = vec![Node { a: 1, b: 1 }; pw as usize];
                 let mut eight = vec![Node { a: 2, b: 2 }; pw as usize];
-                ctx.parent_row(child.child_rows(qy), l, qy, &mut four, allow);
+                ctx.parent_row(&child, l, qy, &mut four, allow);
                 // SAFETY: AVX2 and F16C (checked above).
-                unsafe { ctx.parent_row8(child.child_rows(qy), l, qy, &mut eight, allow) };
+                unsafe { ctx.parent_row8(&child, l, qy, &mut eight, allow) };
                 assert_eq!(four, eight, "case {case}, level {l}, row {qy}");
                 merged += four.iter().filter(|n| n.is_plane()).count();
                 total += four.len();

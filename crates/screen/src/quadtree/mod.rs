@@ -84,8 +84,6 @@
 //!
 //! Measurements, and what was tried and dropped: `docs/notes/quadtree.md`.
 
-#[cfg(target_arch = "x86_64")]
-mod bands;
 mod batch;
 pub mod build;
 pub mod cascade;

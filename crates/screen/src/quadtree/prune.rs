@@ -165,32 +165,14 @@ pub(super) fn prune(
     w: u32,
     h: u32,
 ) -> Vec<Level> {
-    prune_from(ctx, vec![level0], nlev, blocked_px, w, h)
-}
-
-/// Levels at most this large are pruned on the calling thread (a parallel pass would cost
-/// more in scheduling than it saves).
-const SERIAL_NODES: u32 = 4096;
-
-/// [`prune`] on top of the levels `levels` (level 0 and the levels pruned from it so far,
-/// with the same blocked pixels): levels `levels.len()..nlev`. `Blocked::Pixels` only from
-/// level 0 (its per-level flags are grown level by level).
-pub(super) fn prune_from(
-    ctx: &MergeCtx,
-    mut levels: Vec<Level>,
-    nlev: u32,
-    blocked_px: Blocked,
-    w: u32,
-    h: u32,
-) -> Vec<Level> {
-    assert!(levels.len() == 1 || !matches!(blocked_px, Blocked::Pixels(_)));
     let mut blocked: Vec<bool> = Vec::new();
     // The listed pixels' coordinates, one division each (not one per level).
     let xy: Vec<(u32, u32)> = match blocked_px {
         Blocked::List(px) => px.iter().map(|&k| (k % w, k / w)).collect(),
         _ => Vec::new(),
     };
-    for l in levels.len() as u32..nlev {
+    let mut levels = vec![level0];
+    for l in 1..nlev {
         let child = levels.last().unwrap();
         let (pw, ph) = (child.w / 2, child.h / 2);
         match blocked_px {
@@ -231,7 +213,7 @@ pub(super) fn prune_from(
         // padding children, which are empty at every level, so they are empty.
         let (iw, ih) = (((w - 1) >> l) + 1, ((h - 1) >> l) + 1);
         // Each row set empty in cache right before its parents are written.
-        let parent_row = |qy: usize, row: &mut [Node]| {
+        let nodes = par_rows((pw * ph) as usize, pw as usize, Node::EMPTY, |qy, row| {
             let qy = qy as u32;
             let allow = Allow(
                 (!blocked.is_empty())
@@ -245,7 +227,7 @@ pub(super) fn prune_from(
                     // two rows.
                     let n = (iw as usize).min(row.len());
                     let row = &mut row[..n];
-                    ctx.parent_row_fast(child.child_rows(qy), l, qy, row, allow);
+                    ctx.parent_row_fast(child, l, qy, row, allow);
                 }
                 return;
             }
@@ -253,17 +235,7 @@ pub(super) fn prune_from(
                 let qx = qx as u32;
                 *out = parent_of(ctx, child, l, qx, qy, allow.get(qx));
             }
-        };
-        let (len, pwu) = ((pw * ph) as usize, pw as usize);
-        let nodes = if pw * ph <= SERIAL_NODES {
-            let mut nodes = vec![Node::EMPTY; len];
-            for (qy, row) in nodes.chunks_mut(pwu.max(1)).enumerate() {
-                parent_row(qy, row);
-            }
-            nodes
-        } else {
-            par_rows(len, pwu, Node::EMPTY, parent_row)
-        };
+        });
         levels.push(Level {
             w: pw,
             h: ph,

@@ -27,17 +27,6 @@ pub struct Level {
     pub nodes: Vec<Node>,
 }
 
-impl Level {
-    /// The two rows `2 qy` and `2 qy + 1`: the children of parent row `qy` of the level
-    /// above.
-    #[inline]
-    pub(crate) fn child_rows(&self, qy: u32) -> (&[Node], &[Node]) {
-        let (cw, y0) = (self.w as usize, 2 * qy as usize);
-        let (r0, r1) = self.nodes[y0 * cw..(y0 + 2) * cw].split_at(cw);
-        (r0, r1)
-    }
-}
-
 /// The quad-tree of one captured layer (§3).
 #[derive(Clone, Debug, PartialEq)]
 pub struct QuadTree {
