@@ -103,6 +103,16 @@ fn fast_build_equals_the_reference_build() {
         },
         ..lossy
     };
+    // Fewer levels than the image needs (`max_levels` 3 and 1: a top level of 4 x 4-pixel
+    // nodes, and the leaves alone).
+    let shallow = QuadTreeOptions {
+        max_levels: 3,
+        ..lossy
+    };
+    let flat = QuadTreeOptions {
+        max_levels: 1,
+        ..lossy
+    };
     let all = [
         QuadTreeOptions::default(),
         QuadTreeOptions::lossless(),
@@ -110,6 +120,8 @@ fn fast_build_equals_the_reference_build() {
         loose,
         flagged,
         depth,
+        shallow,
+        flat,
     ];
     let mut trees = 0;
     for (seed, (w, h)) in [
@@ -139,5 +151,5 @@ fn fast_build_equals_the_reference_build() {
             }
         }
     }
-    assert_eq!(trees, 4 * 2 * 6 * 6);
+    assert_eq!(trees, 4 * 2 * 8 * 6);
 }
