@@ -47,6 +47,7 @@ pub mod clip;
 mod cube;
 mod fill;
 pub mod mip;
+mod pair;
 mod setup;
 mod triangles;
 mod views;
