@@ -32,7 +32,6 @@ use super::capture::{
     CellDepth, CellRecord, DirtError, DirtOptions, FILM_MARGIN_PX, bucket_mask, bucket_scale,
 };
 use super::clip::Poly;
-use super::pair::{div2, recip2};
 use super::setup::{SetupEntry, ViewXf, WPlane};
 
 /// Relative margin on a clipped depth range.
@@ -222,16 +221,10 @@ fn row_span(verts: &[DVec3], top: f64, bottom: f64) -> Option<RowSpan> {
         if b.y >= top && b.y <= bottom {
             add(b.x, b.z);
         }
-        // The edge's crossings of the two lines, both divisions in one.
-        let cross = |line: f64| (a.y < line && b.y > line) || (a.y > line && b.y < line);
-        let (at_top, at_bottom) = (cross(top), cross(bottom));
-        if at_top || at_bottom {
-            let dy = b.y - a.y;
-            let (tt, tb) = div2(top - a.y, bottom - a.y, dy, dy);
-            for (crosses, t) in [(at_top, tt), (at_bottom, tb)] {
-                if crosses {
-                    add(a.x + (b.x - a.x) * t, a.z + (b.z - a.z) * t);
-                }
+        for line in [top, bottom] {
+            if (a.y < line && b.y > line) || (a.y > line && b.y < line) {
+                let t = (line - a.y) / (b.y - a.y);
+                add(a.x + (b.x - a.x) * t, a.z + (b.z - a.z) * t);
             }
         }
         a = b;
@@ -288,8 +281,7 @@ pub(super) fn raster(
         let rbase = r * g.cells_x;
         let out = &mut out[(r / g.band_rows) as usize];
         let mut emit = |c: u32, wlo: f64, whi: f64| {
-            let (zlo, zhi) = recip2(whi, wlo);
-            let (zlo, zhi) = widen(zlo, zhi, e.abs_margin);
+            let (zlo, zhi) = widen(1.0 / whi, 1.0 / wlo, e.abs_margin);
             n += 1;
             out.push(RawFrag {
                 cell: rbase + c,

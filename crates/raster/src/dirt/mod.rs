@@ -47,7 +47,6 @@ pub mod clip;
 mod cube;
 mod fill;
 pub mod mip;
-mod pair;
 mod setup;
 mod triangles;
 mod views;

@@ -24,7 +24,6 @@ use parallax_scene::TriangleMesh;
 use parallax_scene::camera::Pinhole;
 
 use super::clip::Poly;
-use super::pair::{div2, recip2};
 
 /// Guard band (pixels) around the film: triangles are clipped to it in camera space before
 /// projection, so projected coordinates stay small (well conditioned) whatever the near plane.
@@ -180,12 +179,7 @@ impl ViewXf {
     /// `Pinhole::camera_dir` (as `(u - a0) / ax` and `(b0 - v) / by` of the slopes `u, v`).
     #[inline(always)]
     fn project(&self, q: DVec3) -> DVec3 {
-        self.project_with(q, 1.0 / -q.z)
-    }
-
-    /// [`Self::project`] with `inv = 1 / -q.z` given.
-    #[inline(always)]
-    fn project_with(&self, q: DVec3, inv: f64) -> DVec3 {
+        let inv = 1.0 / -q.z;
         let [a0, inv_ax, b0, inv_by] = self.film;
         DVec3::new((q.x * inv - a0) * inv_ax, (b0 - q.y * inv) * inv_by, inv)
     }
@@ -202,11 +196,10 @@ impl ViewXf {
         // u = a0 + ax x, v = b0 - by y with the projection of `project`.
         let [a0, inv_ax, b0, inv_by] = self.film;
         let inv_d = 1.0 / d;
-        let (px, py) = div2(n.x * inv_d, -n.y * inv_d, inv_ax, inv_by);
         Some(WPlane {
             p0: (n.x * a0 + n.y * b0 - n.z) * inv_d,
-            px,
-            py,
+            px: n.x * inv_d / inv_ax,
+            py: -n.y * inv_d / inv_by,
         })
     }
 
@@ -243,9 +236,8 @@ impl ViewXf {
         }
         let cut = o[0] | o[1] | o[2];
         if cut == 0 {
-            let (inv0, inv1) = recip2(-q[0].z, -q[1].z);
-            poly.v[0] = self.project_with(q[0], inv0);
-            poly.v[1] = self.project_with(q[1], inv1);
+            poly.v[0] = self.project(q[0]);
+            poly.v[1] = self.project(q[1]);
             poly.v[2] = self.project(q[2]);
             poly.n = 3;
         } else {
