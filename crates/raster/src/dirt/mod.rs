@@ -46,6 +46,7 @@ mod capture;
 pub mod clip;
 mod cube;
 mod fill;
+mod frags;
 pub mod mip;
 mod setup;
 mod triangles;
