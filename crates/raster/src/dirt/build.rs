@@ -26,8 +26,9 @@ use rayon::prelude::*;
 use super::capture::{
     DirtCapture, DirtError, DirtOptions, DirtStats, MAX_BUCKETS, MAX_CELL_BUCKETS, MAX_TILE_SIZE,
 };
-use super::fill::{BILL_EVERY, BandOut, FillJob, Grid, bill, fill_band, raster};
-use super::frags::{ViewFrags, recycle, take_sets};
+use super::fill::{
+    BILL_EVERY, BandOut, FillJob, Grid, RawFrag, ViewFrags, bill, fill_band, raster,
+};
 use super::mip;
 use super::setup::{SETUP_CHUNK, ViewXf};
 
@@ -140,6 +141,12 @@ pub(super) fn build_views(
     finish_views(mesh, views, opts, &grids, frags, &budget, t_start)
 }
 
+thread_local! {
+    /// Each worker's per-view, per-band fragment buffers of a chunk (no allocation once warm).
+    static RAW: std::cell::RefCell<Vec<Vec<Vec<RawFrag>>>> =
+        const { std::cell::RefCell::new(Vec::new()) };
+}
+
 /// Every triangle of `mesh` set up and rasterized for each view right after its setup (the
 /// set-up triangle never leaves the registers and the stack), in parallel chunks of
 /// [`SETUP_CHUNK`] triangles; per view, its chunks' fragments grouped by band
@@ -156,28 +163,34 @@ fn setup_and_raster(
     let chunks: Vec<Result<Vec<ViewFrags>, DirtError>> = (0..n.div_ceil(SETUP_CHUNK))
         .into_par_iter()
         .map(|c| {
-            // Per view, per band: this chunk's fragments (the buffers of an earlier build).
-            let mut raw = take_sets(grids.iter().map(|g| g.bands() as usize));
-            let mut in_view = vec![0u64; xfs.len()];
-            let mut unbilled = 0u64;
-            let range = c * SETUP_CHUNK..((c + 1) * SETUP_CHUNK).min(n);
-            ViewXf::setup_range(xfs, &same_eye, mesh, range, |v, e, poly| {
-                let out = &mut raw[v];
-                if let Some(n) = raster(e, poly, &grids[v], &xfs[v], opts.cell_depth, out) {
-                    in_view[v] += 1;
-                    unbilled += n as u64;
+            RAW.with_borrow_mut(|raw| {
+                raw.resize_with(xfs.len(), Vec::new);
+                for (r, g) in raw.iter_mut().zip(grids) {
+                    r.resize_with(g.bands() as usize, Vec::new);
+                    r.iter_mut().for_each(Vec::clear);
                 }
-                if unbilled >= BILL_EVERY {
-                    bill(budget, &mut unbilled, opts.max_entries)?;
-                }
-                Ok(())
-            })?;
-            bill(budget, &mut unbilled, opts.max_entries)?;
-            Ok(raw
-                .into_iter()
-                .zip(in_view)
-                .map(|(bands, in_view)| ViewFrags { bands, in_view })
-                .collect())
+                let mut in_view = vec![0u64; xfs.len()];
+                let mut unbilled = 0u64;
+                let range = c * SETUP_CHUNK..((c + 1) * SETUP_CHUNK).min(n);
+                ViewXf::setup_range(xfs, &same_eye, mesh, range, |v, e, poly| {
+                    let out = &mut raw[v];
+                    if let Some(n) = raster(e, poly, &grids[v], &xfs[v], opts.cell_depth, out) {
+                        in_view[v] += 1;
+                        unbilled += n as u64;
+                    }
+                    if unbilled >= BILL_EVERY {
+                        bill(budget, &mut unbilled, opts.max_entries)?;
+                    }
+                    Ok(())
+                })?;
+                bill(budget, &mut unbilled, opts.max_entries)?;
+                Ok(raw
+                    .iter()
+                    .zip(grids)
+                    .zip(in_view)
+                    .map(|((r, _), iv)| ViewFrags::concat(&r[..], iv))
+                    .collect())
+            })
         })
         .collect();
     let mut per_view: Vec<Vec<ViewFrags>> = xfs.iter().map(|_| Vec::new()).collect();
@@ -251,10 +264,10 @@ fn finish_views(
     // view's fragments (the rasterization's output, most of its work).
     let frag_work: Vec<f64> = frags
         .iter()
-        .map(|v| v.iter().map(|c| c.len() as f64).sum())
+        .map(|v| v.iter().map(|c| c.frags.len() as f64).sum())
         .collect();
     let setup_ms = shares(setup_ms, &frag_work);
-    recycle(frags);
+    drop(frags);
 
     // Per view (views in parallel): assemble the flat arrays, Mipmap Depth.
     let t_asm = Instant::now();

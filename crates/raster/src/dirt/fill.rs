@@ -32,7 +32,6 @@ use super::capture::{
     CellDepth, CellRecord, DirtError, DirtOptions, FILM_MARGIN_PX, bucket_mask, bucket_scale,
 };
 use super::clip::Poly;
-use super::frags::ViewFrags;
 use super::setup::{SetupEntry, ViewXf, WPlane};
 
 /// Relative margin on a clipped depth range.
@@ -333,6 +332,38 @@ pub(super) fn raster(
         }
     }
     Some(n)
+}
+
+/// One view's fragments of one chunk of triangles, grouped by screen band (band `b`'s are
+/// `frags[band_start[b]..band_start[b + 1]]`, in triangle order within the band).
+#[derive(Default)]
+pub(super) struct ViewFrags {
+    pub frags: Vec<RawFrag>,
+    pub band_start: Vec<u32>,
+    /// Triangles whose clipped projection touches a cell row of the view.
+    pub in_view: u64,
+}
+
+impl ViewFrags {
+    /// The bands' fragments (`bands[b]`, in triangle order) concatenated.
+    pub fn concat(bands: &[Vec<RawFrag>], in_view: u64) -> ViewFrags {
+        let mut band_start = Vec::with_capacity(bands.len() + 1);
+        band_start.push(0u32);
+        let mut frags = Vec::with_capacity(bands.iter().map(Vec::len).sum());
+        for b in bands {
+            frags.extend_from_slice(b);
+            band_start.push(frags.len() as u32);
+        }
+        ViewFrags {
+            frags,
+            band_start,
+            in_view,
+        }
+    }
+
+    fn band(&self, b: u32) -> &[RawFrag] {
+        &self.frags[self.band_start[b as usize] as usize..self.band_start[b as usize + 1] as usize]
+    }
 }
 
 /// What every band of one view's fill reads.

@@ -46,7 +46,6 @@ mod capture;
 pub mod clip;
 mod cube;
 mod fill;
-mod frags;
 pub mod mip;
 mod setup;
 mod triangles;
