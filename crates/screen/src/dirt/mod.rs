@@ -97,13 +97,12 @@ impl DirtTracer {
     /// A tracer over a built capture.
     pub fn new(views: DirtViews) -> DirtTracer {
         let consts = views.views().map(ViewConsts::new).collect();
-        // The views' masks and lines are independent: built side by side, a view's two as
-        // two tasks (the camera view's are most of the work; `bench dirt` times this
+        // The views' masks are independent: built side by side (`bench dirt` times this
         // construction as part of DIRT's build).
         let captures: Vec<_> = views.views().collect();
         let (slabs, cells) = captures
             .into_par_iter()
-            .map(|cap| rayon::join(|| Slabs::new(cap), || CellLines::new(cap)))
+            .map(|cap| (Slabs::new(cap), CellLines::new(cap)))
             .unzip();
         let neighbours = std::array::from_fn(|i| {
             let b = views.cube.cube.face_camera(i).frame.basis;
