@@ -12,7 +12,8 @@
 //! `bench dirt` traced `N` times). 1024x512 film, the `bench dirt` defaults
 //! ([`DIRT_DEFAULTS`]; `DIRT_NOCAM` set: no camera view, the cube alone; `DIRT_FACE`,
 //! `DIRT_TILE`, `DIRT_BUCKETS`: other face size, `S`, `B`; `DIRT_STATS`: print each build's
-//! fragments, entries and a hash of its arrays). One thread unless
+//! fragments, entries and a hash of its arrays; `DIRT_TIME`: the min and median CPU time of
+//! the `dirt` / `bvh` builds). One thread unless
 //! `RAYON_NUM_THREADS` says otherwise.
 
 use glam::Vec3;
@@ -44,6 +45,33 @@ fn print_capture_stats(v: &DirtViews) {
     eprintln!(
         "fragments {frags} entries {entries} hash {:016x}",
         h.finish()
+    );
+}
+
+/// CPU time of every thread of the process so far, ns (the first field of each thread's
+/// `/proc/self/task/*/schedstat`: time on a CPU; other processes' time is not in it).
+fn cpu_ns() -> u64 {
+    let Ok(dir) = std::fs::read_dir("/proc/self/task") else {
+        return 0;
+    };
+    dir.filter_map(|t| std::fs::read_to_string(t.ok()?.path().join("schedstat")).ok())
+        .filter_map(|s| s.split_whitespace().next()?.parse::<u64>().ok())
+        .sum()
+}
+
+/// Min and median CPU ms of the builds (`DIRT_TIME` set): on a loaded host the minimum is
+/// the build least disturbed by other processes' cache traffic.
+fn print_cpu(cpu: &mut [u64]) {
+    if std::env::var_os("DIRT_TIME").is_none() || cpu.is_empty() {
+        return;
+    }
+    cpu.sort_unstable();
+    let ms = |x: u64| x as f64 * 1e-6;
+    eprintln!(
+        "cpu ms per build: min {:.2} median {:.2} of {}",
+        ms(cpu[0]),
+        ms(cpu[cpu.len() / 2]),
+        cpu.len()
     );
 }
 
@@ -108,19 +136,27 @@ fn main() {
     match args[2].as_str() {
         "load" => {}
         "dirt" => {
+            let mut cpu = Vec::with_capacity(n as usize);
             for _ in 0..n {
+                let t0 = cpu_ns();
                 let v = std::hint::black_box(build());
+                cpu.push(cpu_ns() - t0);
                 hits += v.stats.capture_bytes;
                 if std::env::var_os("DIRT_STATS").is_some() {
                     print_capture_stats(&v);
                 }
             }
+            print_cpu(&mut cpu);
         }
         "bvh" => {
+            let mut cpu = Vec::with_capacity(n as usize);
             for _ in 0..n {
+                let t0 = cpu_ns();
                 hits += std::hint::black_box(Bvh::try_build(&scene.mesh).expect("bvh")).node_count()
                     as u64;
+                cpu.push(cpu_ns() - t0);
             }
+            print_cpu(&mut cpu);
         }
         "trace-dirt" => {
             let dirt = DirtTracer::new(build());

@@ -131,7 +131,7 @@ impl Texel {
         }
         let lo = if lo > 0.0 { lo } else { 0.0 };
         let (a, b) = (lo.to_bits(), hi.to_bits());
-        let mut s = 0;
+        let mut s = first_shift(a, b);
         while s < 31 && (b >> s) - (a >> s) >= SLABS {
             s += 1;
         }
@@ -238,6 +238,19 @@ impl Slabs {
     }
 }
 
+/// Where [`Texel::new`]'s search for the finest shift may start (the same shift as from 0):
+/// for `s < bitlen(b - a) - 6`, `(b >> s) - (a >> s) >= (b - a) >> s >= 2^6 > SLABS`, so every
+/// step below it continues the search.
+#[inline(always)]
+fn first_shift(a: u32, b: u32) -> u32 {
+    const _: () = assert!(SLABS <= 64);
+    if b >= a {
+        (32 - (b - a).leading_zeros()).saturating_sub(6)
+    } else {
+        0
+    }
+}
+
 /// `σ(w)` for a partition `(shift, base)` (module docs).
 #[inline(always)]
 pub(crate) fn slab(w: f32, shift: u32, base: u32) -> u32 {
@@ -248,6 +261,43 @@ pub(crate) fn slab(w: f32, shift: u32, base: u32) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The search for the finest shift started at `first_shift` ends where the search from 0
+    /// does, on random bounds of every magnitude and on zeros, subnormals and infinities.
+    #[test]
+    fn first_shift_skips_only_continuing_steps() {
+        let reference = |a: u32, b: u32| {
+            let mut s = 0;
+            while s < 31 && (b >> s) - (a >> s) >= SLABS {
+                s += 1;
+            }
+            s
+        };
+        let mut rng = parallax_core::sampling::Rng::for_pixel(1, 2, 3, 4);
+        let mut v = vec![0.0f32, -0.0, 1e-45, 1e-38, 1.0, 3.0e38, f32::INFINITY];
+        for _ in 0..2000 {
+            let m = [1e-30, 1e-3, 1.0, 1e4, 1e30][rng.next_u32() as usize % 5];
+            let x = rng.next_f32() * m;
+            v.extend([x, x.next_up(), f32::from_bits(x.to_bits() + 55)]);
+        }
+        let mut checked = 0u64;
+        for &lo in &v {
+            for k in 0..60 {
+                let hi = v[(lo.to_bits() as usize + k * 7919) % v.len()];
+                if lo > hi {
+                    continue;
+                }
+                let (a, b) = (lo.to_bits(), hi.to_bits());
+                let mut s = first_shift(a, b);
+                while s < 31 && (b >> s) - (a >> s) >= SLABS {
+                    s += 1;
+                }
+                assert_eq!(s, reference(a, b), "[{lo}, {hi}]");
+                checked += 1;
+            }
+        }
+        assert!(checked > 50_000, "{checked}");
+    }
 
     /// `σ` is monotone over non-negative `w`, puts `lo` in slab 0 and `hi` in the last slab at
     /// most, and each slab's bit-pattern range holds exactly the reciprocal depths of the
