@@ -23,10 +23,11 @@
 //! `simd.rs`). No FMA: `(b - o) * inv` rounds twice, each a relative error, which the far
 //! scaling covers; Embree's `b * inv - o * inv` has an absolute error in `o * inv` that it does
 //! not (notes: docs/notes/bvh.md). Leaves are the shared 4-triangle blocks (`tri4.rs`), tested
-//! by a `LeafTest8` step (`leaf8.rs`; a trait, not a closure, so that it inlines into the AVX2 kernel with
-//! its target features). Hit children are ordered by `u64` keys compressed to the hit lanes
+//! by a `LeafTest8` step (`leaf8.rs`; a trait, not a closure, so that it inlines into the AVX2
+//! kernel with its target features). Hit children are ordered by `u64` keys compressed to the hit lanes
 //! (`keys8.rs`: branch-free with AVX2), only for nodes with two or more hit children: two by
-//! one compare, three or four by a 5-comparator network, more by insertion sort.
+//! one compare (their two keys read directly, `keys8::pair_keys`), three or four by a
+//! 5-comparator network, more by insertion sort.
 //!
 //! **Invariant:** every query returns exactly what its 4-wide twin returns
 //! ([`Bvh::closest_hit4`], ...): the node test only culls (conservatively), and the closest hit
@@ -102,6 +103,9 @@ pub(crate) trait NodeTest8 {
     /// every vector register, that is one load per value instead of a spill and a reload.
     fn reload(&self) -> Self;
     fn hit_keys(&self, node: &Node8, t: Self::Dist, mask: u32) -> [u64; 8];
+    /// The keys of the two hit lanes of a two-bit `mask`, in lane order (`hit_keys`' first two
+    /// entries).
+    fn pair_keys(&self, node: &Node8, t: Self::Dist, mask: u32) -> (u64, u64);
 
     /// The closest-hit leaf step of this test's kernel ([`ClosestCtx::leaf`] on
     /// [`Self::Pair`] lanes) for leaf reference `leaf`. Inlined by default.
@@ -126,6 +130,11 @@ impl NodeTest8 for Portable8 {
     #[inline(always)]
     fn hit_keys(&self, node: &Node8, t: [f32; 8], mask: u32) -> [u64; 8] {
         keys8::compress_keys(t, &node.child, mask)
+    }
+
+    #[inline(always)]
+    fn pair_keys(&self, node: &Node8, t: [f32; 8], mask: u32) -> (u64, u64) {
+        keys8::pair_keys(&t, &node.child, mask)
     }
 
     #[inline(always)]
@@ -220,6 +229,12 @@ impl NodeTest8 for Avx2Boxes8 {
     fn hit_keys(&self, node: &Node8, t_near: Self::Dist, mask: u32) -> [u64; 8] {
         // SAFETY: AVX2 was detected (`new`).
         unsafe { keys8::compress_keys_avx2(t_near, &node.child, mask) }
+    }
+
+    #[inline(always)]
+    fn pair_keys(&self, node: &Node8, t_near: Self::Dist, mask: u32) -> (u64, u64) {
+        // SAFETY: AVX2 was detected (`new`).
+        unsafe { keys8::pair_keys_avx2(t_near, &node.child, mask) }
     }
 
     #[inline(always)]
@@ -366,26 +381,26 @@ impl Bvh {
                         cur = node.child[mask.trailing_zeros() as usize];
                         continue;
                     }
-                    // Two or more: the hit keys compressed into `ks` (padding `0`).
-                    let mut ks = nt.hit_keys(node, dist, mask);
                     let n = mask.count_ones() as usize;
-                    // SAFETY (stores below): a node pushes at most 7 entries and writes at most
-                    // 8 slots from `sp`, `sp + 8 <= 7 * depth8 + 1 < STACK8_SIZE` (checked at
-                    // build); the entries above the first `n - 1` are overwritten by later
-                    // pushes. `n - 1 < 8` indexes `ks`.
+                    if ORDERED && n == 2 {
+                        // SAFETY (this store and those below): a node pushes at most 7
+                        // entries and writes at most 8 slots from `sp`, `sp + 8 <= 7 * depth8 +
+                        // 1 < STACK8_SIZE` (checked at build); the entries above the first
+                        // `n - 1` are overwritten by later pushes. `n - 1 < 8` indexes `ks`.
+                        let (a, b) = nt.pair_keys(node, dist, mask);
+                        unsafe { *stack.get_unchecked_mut(sp) = MaybeUninit::new(a.max(b)) };
+                        sp += 1;
+                        cur = a.min(b) as u32;
+                        continue;
+                    }
+                    // Otherwise the hit keys compressed into `ks` (padding `0`).
+                    let mut ks = nt.hit_keys(node, dist, mask);
                     if !ORDERED {
                         for (i, &k) in ks[1..].iter().enumerate() {
                             unsafe { *stack.get_unchecked_mut(sp + i) = MaybeUninit::new(k) };
                         }
                         sp += n - 1;
                         cur = ks[0] as u32;
-                        continue;
-                    }
-                    if n == 2 {
-                        let (a, b) = (ks[0], ks[1]);
-                        unsafe { *stack.get_unchecked_mut(sp) = MaybeUninit::new(a.max(b)) };
-                        sp += 1;
-                        cur = a.min(b) as u32;
                         continue;
                     }
                     // Far to near (the padding `0` sorts last), push all but the nearest.
