@@ -37,7 +37,6 @@ use crate::lanes8::Pair8;
 use crate::node::{leaf_count, leaf_first};
 use crate::stats::Counter;
 use crate::traverse::Best;
-use crate::traverse8::NodeTest8;
 use crate::tri4::{Tri4, Tri4Ray, blocks_for, lane_mask};
 use parallax_core::math::WatertightRay;
 
@@ -185,19 +184,10 @@ pub(crate) trait LeafTest8<C: Counter> {
 /// Closest hit: keeps the lexicographic minimum of `(t, triangle index)` and the traversal's
 /// `t_max` in `ctx`.
 pub(crate) struct ClosestLeaf<'a, T> {
-    /// The node test, whose kernel's leaf step this runs ([`NodeTest8::leaf_closest`]).
+    /// The node test, whose kernel's leaf step this runs (`NodeTest8::leaf_closest`; the
+    /// `LeafTest8` implementation is in `traverse8.rs`).
     pub nt: &'a T,
     pub ctx: ClosestCtx<'a>,
-}
-
-impl<C: Counter, T: NodeTest8> LeafTest8<C> for ClosestLeaf<'_, T> {
-    const CALLS: bool = true;
-    #[inline(always)]
-    fn test(&mut self, _: &Bvh, leaf: u32, t_max: &mut f32, stats: &mut C) -> bool {
-        self.nt.leaf_closest(&mut self.ctx, leaf, stats);
-        *t_max = self.ctx.t_max;
-        false
-    }
 }
 
 /// Any hit: stops at the first hit.

@@ -24,9 +24,9 @@
 //! scaling covers; Embree's `b * inv - o * inv` has an absolute error in `o * inv` that it does
 //! not (notes: docs/notes/bvh.md). Leaves are the shared 4-triangle blocks (`tri4.rs`), tested
 //! by a `LeafTest8` step (`leaf8.rs`; a trait, not a closure, so that it inlines into the AVX2
-//! kernel with its target features). Hit children are ordered by `u64` keys compressed to the hit lanes
-//! (`keys8.rs`: branch-free with AVX2), only for nodes with two or more hit children: two by
-//! one compare (their two keys read directly, `keys8::pair_keys`), three or four by a
+//! kernel with its target features). Hit children are ordered by `u64` keys compressed to the
+//! hit lanes (`keys8.rs`: branch-free with AVX2), only for nodes with two or more hit children:
+//! two by one compare (their two keys read directly, `keys8::pair_keys`), three or four by a
 //! 5-comparator network, more by insertion sort.
 //!
 //! **Invariant:** every query returns exactly what its 4-wide twin returns
@@ -300,6 +300,16 @@ fn prefetch_child_line(node: &Node8) {
     let _ = node;
 }
 
+impl<C: Counter, T: NodeTest8> LeafTest8<C> for ClosestLeaf<'_, T> {
+    const CALLS: bool = true;
+    #[inline(always)]
+    fn test(&mut self, _: &Bvh, leaf: u32, t_max: &mut f32, stats: &mut C) -> bool {
+        self.nt.leaf_closest(&mut self.ctx, leaf, stats);
+        *t_max = self.ctx.t_max;
+        false
+    }
+}
+
 #[inline(always)]
 fn ray_ok(ray: &Ray) -> bool {
     ray.is_valid() && ray.t_min <= ray.t_max
@@ -333,7 +343,8 @@ impl Bvh {
     }
 
     /// The 8-wide traversal kernel (the 4-wide `traverse` with eight lanes): `leaf.test(bvh,
-    /// leaf, t_max, stats)` tests the leaf of reference `leaf`, may shrink `t_max`, returns `true` to stop. With
+    /// leaf, t_max, stats)` tests the leaf of reference `leaf`, may shrink `t_max`, returns
+    /// `true` to stop. With
     /// `ORDERED`, hit children are visited near-to-far (two: one compare; three or four: a
     /// 5-comparator network on the compressed keys; more: insertion sort), otherwise in lane
     /// order.
