@@ -282,10 +282,6 @@ impl NodeTest8 for Avx2Boxes8 {
 /// Whether the traversal prefetches the blocks of hit leaf children (notes: docs/notes/bvh.md).
 const PREFETCH_LEAVES: bool = true;
 
-/// Whether the closest-hit traversal prefetches the bounds of the farther of two hit inner
-/// children as it pushes it.
-const PREFETCH_FAR_CHILD: bool = true;
-
 /// Whether the traversal prefetches a node's child references (its fourth cache line) as it
 /// enters the node, so that a miss on that line overlaps the slab test instead of following it
 /// (the references are read only once the hit mask is known).
@@ -403,22 +399,6 @@ impl Bvh {
                         // 1 < STACK8_SIZE` (checked at build); the entries above the first
                         // `n - 1` are overwritten by later pushes. `n - 1 < 8` indexes `ks`.
                         let (a, b) = nt.pair_keys(node, dist, mask);
-                        let far = a.max(b) as u32;
-                        if PREFETCH_FAR_CHILD && !is_leaf(far) {
-                            // The farther child, visited after the nearer one's subtree: its
-                            // bounds lines now, so that its misses overlap that subtree.
-                            let p = nodes.wrapping_add(far as usize) as *const i8;
-                            #[cfg(target_arch = "x86_64")]
-                            // SAFETY: prefetches never fault; the address is only a hint.
-                            unsafe {
-                                use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-                                _mm_prefetch::<_MM_HINT_T0>(p);
-                                _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(64));
-                                _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(128));
-                            }
-                            #[cfg(not(target_arch = "x86_64"))]
-                            let _ = p;
-                        }
                         unsafe { *stack.get_unchecked_mut(sp) = MaybeUninit::new(a.max(b)) };
                         sp += 1;
                         cur = a.min(b) as u32;
