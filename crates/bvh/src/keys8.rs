@@ -16,6 +16,9 @@
 //! |---|---|
 //! | [`COMPRESS`] | 256 rows of 8 one-byte lane indices (2 KB) |
 //! | instructions (AVX2) | ~14, no branch |
+//!
+//! Two hit lanes (the most frequent case of several) take [`pair_keys`] instead: the two
+//! lanes by `tzcnt`, their keys read directly (one store of the distance row with AVX2).
 
 /// `COMPRESS[m]`, byte `j`: the lane of the `j`-th set bit of `m` (low bits first); bytes at
 /// and above `m.count_ones()` are `0`.
@@ -86,6 +89,36 @@ pub(crate) unsafe fn compress_keys_avx2(
     }
 }
 
+/// The keys of the two lanes of a two-bit `mask`, in lane order: [`compress_keys`]' first two
+/// entries, without the compression (the traversal's most frequent case of several hits).
+#[inline(always)]
+pub(crate) fn pair_keys(t: &[f32; 8], child: &[u32; 8], mask: u32) -> (u64, u64) {
+    debug_assert_eq!(mask.count_ones(), 2);
+    let (i, j) = (
+        mask.trailing_zeros() as usize & 7,
+        (mask & mask.wrapping_sub(1)).trailing_zeros() as usize & 7,
+    );
+    let key = |c: usize| (t[c].to_bits() as u64) << 32 | child[c] as u64;
+    (key(i), key(j))
+}
+
+/// [`pair_keys`] of AVX2 distances: one store of the row, two scalar reads.
+///
+/// # Safety
+/// The CPU must support AVX.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub(crate) unsafe fn pair_keys_avx2(
+    t: std::arch::x86_64::__m256,
+    child: &[u32; 8],
+    mask: u32,
+) -> (u64, u64) {
+    let mut ts = [0f32; 8];
+    // SAFETY: AVX (caller); `ts` holds 8 f32.
+    unsafe { std::arch::x86_64::_mm256_storeu_ps(ts.as_mut_ptr(), t) };
+    pair_keys(&ts, child, mask)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -94,7 +127,7 @@ mod tests {
     struct Row([u32; 8]);
 
     /// Every mask: the portable keys are the hit lanes' keys in lane order, then zeros; the
-    /// AVX2 keys equal them bit for bit.
+    /// AVX2 keys equal them bit for bit; for two-bit masks, the pair keys are the first two.
     #[test]
     fn compressed_keys_of_every_mask() {
         let t = [0.5f32, 0.0, 3.0, 1e-30, 7.25, f32::INFINITY, 2.0, 1e30];
@@ -107,6 +140,22 @@ mod tests {
                     .get(j)
                     .map_or(0, |&c| (t[c].to_bits() as u64) << 32 | child.0[c] as u64);
                 assert_eq!(*k, want, "mask {mask:#x} entry {j}");
+            }
+            if mask.count_ones() == 2 {
+                assert_eq!(
+                    pair_keys(&t, &child.0, mask),
+                    (ks[0], ks[1]),
+                    "mask {mask:#x}"
+                );
+                #[cfg(target_arch = "x86_64")]
+                if std::is_x86_feature_detected!("avx") {
+                    // SAFETY: AVX detected.
+                    let kp = unsafe {
+                        let tv = std::arch::x86_64::_mm256_loadu_ps(t.as_ptr());
+                        pair_keys_avx2(tv, &child.0, mask)
+                    };
+                    assert_eq!(kp, (ks[0], ks[1]), "mask {mask:#x}: AVX pair keys");
+                }
             }
             #[cfg(target_arch = "x86_64")]
             if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("popcnt") {

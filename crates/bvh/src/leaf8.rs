@@ -1,31 +1,226 @@
-//! The AVX2 single-ray kernel's closest-hit leaf step (`traverse8.rs`), compiled out of line:
-//! the leaf's blocks tested by the 4-lane watertight test, or both blocks of a leaf of five to
-//! eight triangles by one 8-lane test (Woop et al. 2013; `tri4.rs`, `lanes8.rs`).
+//! The leaf steps of the 8-wide single-ray traversal (`traverse8.rs`; [`LeafTest8`]: closest,
+//! any and all hits). The closest-hit step: the leaf's
+//! blocks tested by the 4-lane watertight test, or both blocks of a leaf of five to eight
+//! triangles by one 8-lane test (Woop et al. 2013; `tri4.rs`, `lanes8.rs`), the closest hit
+//! kept in a [`ClosestCtx`].
 //!
-//! Why out of line: inlined into the traversal loop, the leaf step's many live values took the
-//! vector and general registers, and the node loop (~12 nodes per bounce ray against ~2.4
-//! leaves) reloaded its six broadcast ray rows (`org`, `-1 / dir`) and six plane offsets from
-//! the stack at every node. As a call, the loop keeps them in registers and saves them around
-//! the call instead, once per leaf (all vector registers are caller-saved in the System V
-//! ABI). The function carries the kernel's target features (`avx2,popcnt`), so its 8-lane test
-//! is the AVX2 `A8` and its 4-lane test SSE, the same instructions as when inlined.
+//! **One context pointer.** Everything the step reads or updates besides the leaf reference
+//! is one [`ClosestCtx`]: the triangle blocks, the prepared ray, the traversal's `t_max`, the
+//! closest hit so far and its tie-break limit ([`Best::limit`], kept current when a hit is
+//! accepted instead of recomputed per block). The AVX2 kernel calls the step out of line
+//! ([`leaf_closest8_avx2`]: the context and the leaf reference); the
+//! portable kernel inlines the same generic step ([`ClosestCtx::leaf`]) on `F8` lanes.
+//!
+//! Why out of line in the AVX2 kernel: inlined into the traversal loop, the leaf step's many
+//! live values took the vector and general registers, and the node loop (~12 nodes per bounce
+//! ray against ~2.4 leaves) reloaded its six broadcast ray rows (`org`, `-1 / dir`) and six
+//! plane offsets from the stack at every node. As a call, the loop keeps them in registers and
+//! saves them around the call instead, once per leaf (all vector registers are caller-saved in
+//! the System V ABI). The function carries the kernel's target features (`avx2,popcnt`), so its
+//! 8-lane test is the AVX2 `A8` and its 4-lane test SSE, the same instructions as when inlined.
 //!
 //! | query | leaf step in the AVX2 kernel | in the portable kernel |
 //! |---|---|---|
-//! | closest hit | [`leaf_closest8_avx2`] (a call) | `Bvh::leaf_closest8` on `F8`, inlined |
+//! | closest hit | [`leaf_closest8_avx2`] (a call) | [`ClosestCtx::leaf`] on `F8`, inlined |
 //! | any hit | `Bvh::leaf_any`, inlined (a call measured slower: an any-hit ray ends at its first hit leaf) | the same |
 //! | all hits | `Bvh::leaf_all`, inlined | the same |
 //!
-//! **Invariant:** the call computes exactly what the inlined step computed (the same function,
-//! `Bvh::leaf_closest8::<_, A8>`): results are bit-identical to the portable kernel's
-//! (`tests/simd_twins.rs`) and to the 4-wide tree's.
+//! **Invariant:** the step computes, block for block, what `Bvh::leaf_closest` computes (the
+//! same lane tests under the same limit, hits offered to the same [`Best`]): results are
+//! bit-identical to the portable kernel's (`tests/simd_twins.rs`), to the 4-wide tree's and to
+//! the scalar test's (the closest hit is the lexicographic minimum of `(t, triangle)` over the
+//! hits in range, whatever order they are offered in).
 
 use crate::bvh::Bvh;
+use crate::hit::Hit;
+use crate::lanes8::Pair8;
+use crate::node::{leaf_count, leaf_first};
 use crate::stats::Counter;
 use crate::traverse::Best;
-use crate::tri4::Tri4Ray;
+use crate::tri4::{Tri4, Tri4Ray, blocks_for, lane_mask};
+use parallax_core::math::WatertightRay;
 
-/// The AVX2 kernel's closest-hit leaf step: [`Bvh::leaf_closest8`] on `A8` lanes, out of line
+/// The closest-hit state of one ray's traversal, behind the one pointer the leaf step takes
+/// (module docs).
+pub(crate) struct ClosestCtx<'a> {
+    pub bvh: &'a Bvh,
+    pub r4: &'a Tri4Ray,
+    pub best: Best,
+    /// The traversal's `t_max`: the ray's, then `best.t` once something was hit.
+    pub t_max: f32,
+    /// `best.limit(t_max)` for the traversal's current `t_max` (which is `best.t` once
+    /// something was hit): updated whenever a hit is accepted.
+    limit: f32,
+}
+
+impl<'a> ClosestCtx<'a> {
+    /// The state for a traversal at `t_max` that already found `best` (`t_max == best.t` if
+    /// `best` holds a hit).
+    #[inline(always)]
+    pub fn new(bvh: &'a Bvh, r4: &'a Tri4Ray, best: Best, t_max: f32) -> Self {
+        Self {
+            bvh,
+            r4,
+            best,
+            t_max,
+            limit: best.limit(t_max),
+        }
+    }
+
+    /// [`Best::offer`], keeping the limit current.
+    #[inline(always)]
+    fn offer(&mut self, t: f32, tri: u32, u: f32, v: f32) {
+        let b = &self.best;
+        if t < b.t || (t == b.t && tri < b.tri) || b.tri == u32::MAX {
+            self.best = Best { t, tri, u, v };
+            self.t_max = t;
+            self.limit = t.next_up();
+        }
+    }
+
+    /// Block `i` of the triangle array.
+    #[inline(always)]
+    fn block(&self, i: u32) -> &'a Tri4 {
+        let blocks = &self.bvh.blocks;
+        debug_assert!((i as usize) < blocks.len());
+        // SAFETY: leaf references index their blocks (build invariant, as node references
+        // index the node array; refit keeps the topology).
+        unsafe { blocks.get_unchecked(i as usize) }
+    }
+
+    /// Lane `l` of `b` left to the scalar test (an exactly-zero edge function), as
+    /// `traverse.rs`' `offer_exact`.
+    #[inline(always)]
+    fn offer_exact(&mut self, b: &Tri4, l: usize) {
+        let (p0, p1, p2) = (b.vertex(l, 0), b.vertex(l, 1), b.vertex(l, 2));
+        if let Some(h) = self.r4.wt.intersect_within(p0, p1, p2, self.limit) {
+            self.offer(h.t, b.tri[l], h.u, h.v);
+        }
+    }
+
+    /// The closest-hit step of leaf reference `leaf` (may shrink `t_max`). Lanes `L` for the
+    /// two-block test (`lanes8.rs`). One block (up to four triangles) and two blocks (five
+    /// to eight) are tested without a loop, their lane masks `(1 << count) - 1` (the masks
+    /// of `lane_mask` side by side); larger leaves (only with `max_leaf_size > 8`) block by
+    /// block, as is an empty leaf.
+    #[inline(always)]
+    pub fn leaf<C: Counter, L: Pair8>(&mut self, leaf: u32, stats: &mut C) {
+        let (first, count) = (leaf_first(leaf), leaf_count(leaf));
+        // `count - 1` wraps for an empty leaf, which takes the (empty) block loop.
+        if count.wrapping_sub(1) < 4 {
+            self.block4(self.block(first), (1 << count) - 1, stats);
+        } else if count.wrapping_sub(1) < 8 {
+            self.pair::<C, L>(first, (1 << count) - 1, stats);
+        } else {
+            for k in 0..blocks_for(count) {
+                self.block4(self.block(first + k), lane_mask(count, k), stats);
+            }
+        }
+    }
+
+    /// The lanes `mask` (eight bits) of blocks `first` and `first + 1` in one 8-lane test.
+    #[inline(always)]
+    fn pair<C: Counter, L: Pair8>(&mut self, first: u32, mask: u32, stats: &mut C) {
+        let (b0, b1) = (self.block(first), self.block(first + 1));
+        let h = self.r4.intersect2::<L>(b0, b1, mask, self.limit);
+        for l in 0..8 {
+            if mask >> l & 1 != 0 {
+                stats.triangle(h.hit >> l & 1 != 0);
+            }
+        }
+        let mut m = h.hit;
+        while m != 0 {
+            let l = m.trailing_zeros() as usize;
+            m &= m - 1;
+            let b = if l < 4 { b0 } else { b1 };
+            self.offer(h.t[l], b.tri[l & 3], h.u[l], h.v[l]);
+        }
+        let mut m = h.exact;
+        while m != 0 {
+            let l = m.trailing_zeros() as usize;
+            m &= m - 1;
+            self.offer_exact(if l < 4 { b0 } else { b1 }, l & 3);
+        }
+    }
+
+    /// The lanes `mask` (four bits) of block `b` in one 4-lane test.
+    #[inline(always)]
+    fn block4<C: Counter>(&mut self, b: &Tri4, mask: u32, stats: &mut C) {
+        let h = self.r4.intersect(b, mask, self.limit);
+        for l in 0..4 {
+            if mask >> l & 1 != 0 {
+                stats.triangle(h.hit >> l & 1 != 0);
+            }
+        }
+        if h.hit != 0 {
+            let (t, u, v) = (h.t.to_array(), h.u.to_array(), h.v.to_array());
+            let mut m = h.hit;
+            while m != 0 {
+                let l = m.trailing_zeros() as usize;
+                m &= m - 1;
+                self.offer(t[l], b.tri[l], u[l], v[l]);
+            }
+        }
+        let mut m = h.exact;
+        while m != 0 {
+            let l = m.trailing_zeros() as usize;
+            m &= m - 1;
+            self.offer_exact(b, l);
+        }
+    }
+}
+
+/// The leaf step of `Bvh::traverse8`: a struct with an `#[inline(always)]` method, not a
+/// closure, so that it inlines into the AVX2 traversal and is compiled with its target features
+/// (closures do not inherit them, and a leaf closure became an out-of-line SSE call per leaf).
+pub(crate) trait LeafTest8<C: Counter> {
+    /// Whether the step may be an out-of-line call (the traversal then re-reads the node
+    /// test's values after each leaf, `NodeTest8::reload`).
+    const CALLS: bool = false;
+    /// Tests the leaf of reference `leaf`, may shrink `t_max`; `true` stops the traversal.
+    fn test(&mut self, bvh: &Bvh, leaf: u32, t_max: &mut f32, stats: &mut C) -> bool;
+}
+
+/// Closest hit: keeps the lexicographic minimum of `(t, triangle index)` and the traversal's
+/// `t_max` in `ctx`.
+pub(crate) struct ClosestLeaf<'a, T> {
+    /// The node test, whose kernel's leaf step this runs (`NodeTest8::leaf_closest`; the
+    /// `LeafTest8` implementation is in `traverse8.rs`).
+    pub nt: &'a T,
+    pub ctx: ClosestCtx<'a>,
+}
+
+/// Any hit: stops at the first hit.
+pub(crate) struct AnyLeaf {
+    pub r4: Tri4Ray,
+    pub found: bool,
+}
+
+impl<C: Counter> LeafTest8<C> for AnyLeaf {
+    #[inline(always)]
+    fn test(&mut self, bvh: &Bvh, leaf: u32, t_max: &mut f32, stats: &mut C) -> bool {
+        let (first, count) = (leaf_first(leaf), leaf_count(leaf));
+        self.found = bvh.leaf_any(&self.r4, first, count, *t_max, stats);
+        self.found
+    }
+}
+
+/// All hits: appends every hit to `out`.
+pub(crate) struct AllLeaf<'a> {
+    pub wt: WatertightRay,
+    pub out: &'a mut Vec<Hit>,
+}
+
+impl<C: Counter> LeafTest8<C> for AllLeaf<'_> {
+    #[inline(always)]
+    fn test(&mut self, bvh: &Bvh, leaf: u32, _: &mut f32, stats: &mut C) -> bool {
+        let (first, count) = (leaf_first(leaf), leaf_count(leaf));
+        bvh.leaf_all(&self.wt, first, count, self.out, stats);
+        false
+    }
+}
+
+/// The AVX2 kernel's closest-hit leaf step: [`ClosestCtx::leaf`] on `A8` lanes, out of line
 /// (module docs).
 ///
 /// # Safety
@@ -34,13 +229,9 @@ use crate::tri4::Tri4Ray;
 #[target_feature(enable = "avx2,popcnt")]
 #[inline(never)]
 pub(crate) unsafe fn leaf_closest8_avx2<C: Counter>(
-    bvh: &Bvh,
-    r4: &Tri4Ray,
-    first: u32,
-    count: u32,
-    t_max: &mut f32,
-    best: &mut Best,
+    ctx: &mut ClosestCtx,
+    leaf: u32,
     stats: &mut C,
 ) {
-    bvh.leaf_closest8::<C, crate::lanes8::A8>(r4, first, count, t_max, best, stats);
+    ctx.leaf::<C, crate::lanes8::A8>(leaf, stats)
 }

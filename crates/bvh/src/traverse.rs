@@ -20,7 +20,6 @@ use parallax_core::math::WatertightRay;
 
 use crate::bvh::Bvh;
 use crate::hit::Hit;
-use crate::lanes8::Pair8;
 use crate::node::{Node4, is_leaf, leaf_count, leaf_first};
 use crate::stats::{Counter, NoStats, TraversalStats};
 use crate::tri4::{Tri4, Tri4Ray, blocks_for, lane_mask};
@@ -289,50 +288,6 @@ impl Bvh {
                 m &= m - 1;
                 offer_exact(r4, b, l, best, t_max);
             }
-        }
-    }
-
-    /// [`Self::leaf_closest`] with the two blocks of a leaf of five to eight triangles in one
-    /// 8-lane test ([`Tri4Ray::intersect2`], lanes `L`), then its exact-zero lanes by the
-    /// scalar test. The closest hit is the lexicographic minimum of `(t, triangle)` over the
-    /// hits in range whatever order they are offered in, so the result is that of the block
-    /// loop (only the limit of the second block's test is looser).
-    #[inline(always)]
-    pub(crate) fn leaf_closest8<C: Counter, L: Pair8>(
-        &self,
-        r4: &Tri4Ray,
-        first: u32,
-        count: u32,
-        t_max: &mut f32,
-        best: &mut Best,
-        stats: &mut C,
-    ) {
-        if blocks_for(count) != 2 {
-            return self.leaf_closest(r4, first, count, t_max, best, stats);
-        }
-        let (b0, b1) = (
-            &self.blocks[first as usize],
-            &self.blocks[first as usize + 1],
-        );
-        let mask = lane_mask(count, 0) | lane_mask(count, 1) << 4;
-        let h = r4.intersect2::<L>(b0, b1, mask, best.limit(*t_max));
-        for l in 0..8 {
-            if mask >> l & 1 != 0 {
-                stats.triangle(h.hit >> l & 1 != 0);
-            }
-        }
-        let mut m = h.hit;
-        while m != 0 {
-            let l = m.trailing_zeros() as usize;
-            m &= m - 1;
-            let b = if l < 4 { b0 } else { b1 };
-            best.offer(h.t[l], b.tri[l & 3], h.u[l], h.v[l], t_max);
-        }
-        let mut m = h.exact;
-        while m != 0 {
-            let l = m.trailing_zeros() as usize;
-            m &= m - 1;
-            offer_exact(r4, if l < 4 { b0 } else { b1 }, l & 3, best, t_max);
         }
     }
 

@@ -23,10 +23,11 @@
 //! `simd.rs`). No FMA: `(b - o) * inv` rounds twice, each a relative error, which the far
 //! scaling covers; Embree's `b * inv - o * inv` has an absolute error in `o * inv` that it does
 //! not (notes: docs/notes/bvh.md). Leaves are the shared 4-triangle blocks (`tri4.rs`), tested
-//! by a `LeafTest8` step (a trait, not a closure, so that it inlines into the AVX2 kernel with
-//! its target features). Hit children are ordered by `u64` keys compressed to the hit lanes
-//! (`keys8.rs`: branch-free with AVX2), only for nodes with two or more hit children: two by
-//! one compare, three or four by a 5-comparator network, more by insertion sort.
+//! by a `LeafTest8` step (`leaf8.rs`; a trait, not a closure, so that it inlines into the AVX2
+//! kernel with its target features). Hit children are ordered by `u64` keys compressed to the
+//! hit lanes (`keys8.rs`: branch-free with AVX2), only for nodes with two or more hit children:
+//! two by one compare (their two keys read directly, `keys8::pair_keys`), three or four by a
+//! 5-comparator network, more by insertion sort.
 //!
 //! **Invariant:** every query returns exactly what its 4-wide twin returns
 //! ([`Bvh::closest_hit4`], ...): the node test only culls (conservatively), and the closest hit
@@ -42,7 +43,8 @@ use crate::bvh::Bvh;
 use crate::hit::Hit;
 use crate::keys8;
 use crate::lanes8::Pair8;
-use crate::node::{is_leaf, leaf_count, leaf_first};
+use crate::leaf8::{AllLeaf, AnyLeaf, ClosestCtx, ClosestLeaf, LeafTest8};
+use crate::node::{is_leaf, leaf_first};
 use crate::node8::Node8;
 use crate::stats::{Counter, NoStats, TraversalStats};
 use crate::traverse::{Best, pop_closer, sort_dedup_hits};
@@ -96,23 +98,20 @@ pub(crate) trait NodeTest8 {
     /// where the node test is, the portable twin elsewhere.
     type Pair: Pair8;
     fn test(&self, node: &Node8, t_max: f32) -> (u32, Self::Dist);
+    /// A copy whose values the node test reads are loaded from `self` at this point of the
+    /// program, not kept in registers from an earlier read: after a call, which clobbers
+    /// every vector register, that is one load per value instead of a spill and a reload.
+    fn reload(&self) -> Self;
     fn hit_keys(&self, node: &Node8, t: Self::Dist, mask: u32) -> [u64; 8];
+    /// The keys of the two hit lanes of a two-bit `mask`, in lane order (`hit_keys`' first two
+    /// entries).
+    fn pair_keys(&self, node: &Node8, t: Self::Dist, mask: u32) -> (u64, u64);
 
-    /// The closest-hit leaf step of this test's kernel ([`Bvh::leaf_closest8`] on
-    /// [`Self::Pair`] lanes), inlined by default.
+    /// The closest-hit leaf step of this test's kernel ([`ClosestCtx::leaf`] on
+    /// [`Self::Pair`] lanes) for leaf reference `leaf`. Inlined by default.
     #[inline(always)]
-    #[allow(clippy::too_many_arguments)]
-    fn leaf_closest<C: Counter>(
-        &self,
-        bvh: &Bvh,
-        r4: &Tri4Ray,
-        first: u32,
-        count: u32,
-        t_max: &mut f32,
-        best: &mut Best,
-        stats: &mut C,
-    ) {
-        bvh.leaf_closest8::<C, Self::Pair>(r4, first, count, t_max, best, stats);
+    fn leaf_closest<C: Counter>(&self, ctx: &mut ClosestCtx, leaf: u32, stats: &mut C) {
+        ctx.leaf::<C, Self::Pair>(leaf, stats)
     }
 }
 
@@ -124,8 +123,18 @@ impl NodeTest8 for Portable8 {
     type Pair = parallax_core::simd::F8;
 
     #[inline(always)]
+    fn reload(&self) -> Self {
+        Portable8(self.0)
+    }
+
+    #[inline(always)]
     fn hit_keys(&self, node: &Node8, t: [f32; 8], mask: u32) -> [u64; 8] {
         keys8::compress_keys(t, &node.child, mask)
+    }
+
+    #[inline(always)]
+    fn pair_keys(&self, node: &Node8, t: [f32; 8], mask: u32) -> (u64, u64) {
+        keys8::pair_keys(&t, &node.child, mask)
     }
 
     #[inline(always)]
@@ -195,6 +204,27 @@ impl NodeTest8 for Avx2Boxes8 {
     type Dist = std::arch::x86_64::__m256;
     type Pair = crate::lanes8::A8;
 
+    /// Volatile loads of the rows, plane offsets and `t_min` the test reads (the compiler
+    /// may neither merge them with earlier reads nor move them); the other fields are copies.
+    #[inline(always)]
+    fn reload(&self) -> Self {
+        use std::ptr::read_volatile as rv;
+        let rb = &self.rb;
+        // SAFETY: every pointer is a reference to a field of `self`.
+        unsafe {
+            Self {
+                org: [rv(&self.org[0]), rv(&self.org[1]), rv(&self.org[2])],
+                inv: [rv(&self.inv[0]), rv(&self.inv[1]), rv(&self.inv[2])],
+                rb: RayBoxes8 {
+                    near: [rv(&rb.near[0]), rv(&rb.near[1]), rv(&rb.near[2])],
+                    far: [rv(&rb.far[0]), rv(&rb.far[1]), rv(&rb.far[2])],
+                    t_min: rv(&rb.t_min),
+                    ..*rb
+                },
+            }
+        }
+    }
+
     #[inline(always)]
     fn hit_keys(&self, node: &Node8, t_near: Self::Dist, mask: u32) -> [u64; 8] {
         // SAFETY: AVX2 was detected (`new`).
@@ -202,18 +232,15 @@ impl NodeTest8 for Avx2Boxes8 {
     }
 
     #[inline(always)]
-    fn leaf_closest<C: Counter>(
-        &self,
-        bvh: &Bvh,
-        r4: &Tri4Ray,
-        first: u32,
-        count: u32,
-        t_max: &mut f32,
-        best: &mut Best,
-        stats: &mut C,
-    ) {
+    fn pair_keys(&self, node: &Node8, t_near: Self::Dist, mask: u32) -> (u64, u64) {
         // SAFETY: AVX2 was detected (`new`).
-        unsafe { crate::leaf8::leaf_closest8_avx2(bvh, r4, first, count, t_max, best, stats) }
+        unsafe { keys8::pair_keys_avx2(t_near, &node.child, mask) }
+    }
+
+    #[inline(always)]
+    fn leaf_closest<C: Counter>(&self, ctx: &mut ClosestCtx, leaf: u32, stats: &mut C) {
+        // SAFETY: AVX2 was detected (`new`).
+        unsafe { crate::leaf8::leaf_closest8_avx2(ctx, leaf, stats) }
     }
 
     #[inline(always)]
@@ -273,58 +300,12 @@ fn prefetch_child_line(node: &Node8) {
     let _ = node;
 }
 
-/// The leaf step of [`Bvh::traverse8`]: a struct with an `#[inline(always)]` method, not a
-/// closure, so that it inlines into the AVX2 traversal and is compiled with its target features
-/// (closures do not inherit them, and a leaf closure became an out-of-line SSE call per leaf).
-pub(crate) trait LeafTest8<C: Counter> {
-    /// Tests leaf `(first, count)`, may shrink `t_max`; `true` stops the traversal.
-    fn test(&mut self, bvh: &Bvh, first: u32, count: u32, t_max: &mut f32, stats: &mut C) -> bool;
-}
-
-/// Closest hit: keeps the lexicographic minimum of `(t, triangle index)` in `best`, and the
-/// traversal's `t_max` after the last leaf in `t`.
-struct ClosestLeaf<'a, T> {
-    /// The node test, whose kernel's leaf step this runs ([`NodeTest8::leaf_closest`]).
-    nt: &'a T,
-    r4: &'a Tri4Ray,
-    best: &'a mut Best,
-    t: f32,
-}
-
 impl<C: Counter, T: NodeTest8> LeafTest8<C> for ClosestLeaf<'_, T> {
+    const CALLS: bool = true;
     #[inline(always)]
-    fn test(&mut self, bvh: &Bvh, first: u32, count: u32, t_max: &mut f32, stats: &mut C) -> bool {
-        let nt = self.nt;
-        nt.leaf_closest(bvh, self.r4, first, count, t_max, self.best, stats);
-        self.t = *t_max;
-        false
-    }
-}
-
-/// Any hit: stops at the first hit.
-struct AnyLeaf {
-    r4: Tri4Ray,
-    found: bool,
-}
-
-impl<C: Counter> LeafTest8<C> for AnyLeaf {
-    #[inline(always)]
-    fn test(&mut self, bvh: &Bvh, first: u32, count: u32, t_max: &mut f32, stats: &mut C) -> bool {
-        self.found = bvh.leaf_any(&self.r4, first, count, *t_max, stats);
-        self.found
-    }
-}
-
-/// All hits: appends every hit to `out`.
-struct AllLeaf<'a> {
-    wt: WatertightRay,
-    out: &'a mut Vec<Hit>,
-}
-
-impl<C: Counter> LeafTest8<C> for AllLeaf<'_> {
-    #[inline(always)]
-    fn test(&mut self, bvh: &Bvh, first: u32, count: u32, _: &mut f32, stats: &mut C) -> bool {
-        bvh.leaf_all(&self.wt, first, count, self.out, stats);
+    fn test(&mut self, _: &Bvh, leaf: u32, t_max: &mut f32, stats: &mut C) -> bool {
+        self.nt.leaf_closest(&mut self.ctx, leaf, stats);
+        *t_max = self.ctx.t_max;
         false
     }
 }
@@ -361,26 +342,37 @@ impl Bvh {
         let _ = (node, mask);
     }
 
-    /// The 8-wide traversal kernel (the 4-wide `traverse` with eight lanes): `leaf.test(first,
-    /// count, t_max, stats)` tests a leaf, may shrink `t_max`, returns `true` to stop. With
+    /// The 8-wide traversal kernel (the 4-wide `traverse` with eight lanes): `leaf.test(bvh,
+    /// leaf, t_max, stats)` tests the leaf of reference `leaf`, may shrink `t_max`, returns
+    /// `true` to stop. With
     /// `ORDERED`, hit children are visited near-to-far (two: one compare; three or four: a
     /// 5-comparator network on the compressed keys; more: insertion sort), otherwise in lane
     /// order.
     #[inline(always)]
-    fn traverse8<C: Counter, T: NodeTest8, const ORDERED: bool>(
+    fn traverse8<C: Counter, T: NodeTest8, L: LeafTest8<C>, const ORDERED: bool>(
         &self,
         nt: &T,
         root: u32,
         mut t_max: f32,
         stats: &mut C,
-        leaf: &mut impl LeafTest8<C>,
+        leaf: &mut L,
     ) {
         let mut stack = [MaybeUninit::<u64>::uninit(); STACK8_SIZE];
         let mut sp = 0usize;
         let mut cur = root;
         let nodes = self.nodes8.as_ptr();
         loop {
-            if !is_leaf(cur) {
+            // A leaf step that is a call clobbers every vector register: the node test's ray
+            // values are read again here, once per leaf, rather than spilled around the call or
+            // reloaded at every pop (`NodeTest8::reload`).
+            let reloaded;
+            let nt = if L::CALLS {
+                reloaded = nt.reload();
+                &reloaded
+            } else {
+                nt
+            };
+            while !is_leaf(cur) {
                 debug_assert!((cur as usize) < self.nodes8.len());
                 // SAFETY: inner child references index the node array (build invariant).
                 let node = unsafe { &*nodes.add(cur as usize) };
@@ -400,26 +392,26 @@ impl Bvh {
                         cur = node.child[mask.trailing_zeros() as usize];
                         continue;
                     }
-                    // Two or more: the hit keys compressed into `ks` (padding `0`).
-                    let mut ks = nt.hit_keys(node, dist, mask);
                     let n = mask.count_ones() as usize;
-                    // SAFETY (stores below): a node pushes at most 7 entries and writes at most
-                    // 8 slots from `sp`, `sp + 8 <= 7 * depth8 + 1 < STACK8_SIZE` (checked at
-                    // build); the entries above the first `n - 1` are overwritten by later
-                    // pushes. `n - 1 < 8` indexes `ks`.
+                    if ORDERED && n == 2 {
+                        // SAFETY (this store and those below): a node pushes at most 7
+                        // entries and writes at most 8 slots from `sp`, `sp + 8 <= 7 * depth8 +
+                        // 1 < STACK8_SIZE` (checked at build); the entries above the first
+                        // `n - 1` are overwritten by later pushes. `n - 1 < 8` indexes `ks`.
+                        let (a, b) = nt.pair_keys(node, dist, mask);
+                        unsafe { *stack.get_unchecked_mut(sp) = MaybeUninit::new(a.max(b)) };
+                        sp += 1;
+                        cur = a.min(b) as u32;
+                        continue;
+                    }
+                    // Otherwise the hit keys compressed into `ks` (padding `0`).
+                    let mut ks = nt.hit_keys(node, dist, mask);
                     if !ORDERED {
                         for (i, &k) in ks[1..].iter().enumerate() {
                             unsafe { *stack.get_unchecked_mut(sp + i) = MaybeUninit::new(k) };
                         }
                         sp += n - 1;
                         cur = ks[0] as u32;
-                        continue;
-                    }
-                    if n == 2 {
-                        let (a, b) = (ks[0], ks[1]);
-                        unsafe { *stack.get_unchecked_mut(sp) = MaybeUninit::new(a.max(b)) };
-                        sp += 1;
-                        cur = a.min(b) as u32;
                         continue;
                     }
                     // Far to near (the padding `0` sorts last), push all but the nearest.
@@ -458,11 +450,14 @@ impl Bvh {
                     cur = unsafe { *ks.get_unchecked(n - 1) } as u32;
                     continue;
                 }
-            } else {
-                stats.leaf();
-                if leaf.test(self, leaf_first(cur), leaf_count(cur), &mut t_max, stats) {
-                    return;
+                match pop_closer(&stack, &mut sp, t_max) {
+                    Some(next) => cur = next,
+                    None => return,
                 }
+            }
+            stats.leaf();
+            if leaf.test(self, cur, &mut t_max, stats) {
+                return;
             }
             match pop_closer(&stack, &mut sp, t_max) {
                 Some(next) => cur = next,
@@ -495,12 +490,11 @@ impl Bvh {
     ) {
         let mut leaf = ClosestLeaf {
             nt,
-            r4,
-            best,
-            t: *t_max,
+            ctx: ClosestCtx::new(self, r4, *best, *t_max),
         };
-        self.traverse8::<C, T, true>(nt, root, *t_max, stats, &mut leaf);
-        *t_max = leaf.t;
+        self.traverse8::<C, T, _, true>(nt, root, *t_max, stats, &mut leaf);
+        *t_max = leaf.ctx.t_max;
+        *best = leaf.ctx.best;
     }
 
     #[inline(always)]
@@ -509,7 +503,7 @@ impl Bvh {
             r4: Tri4Ray::new(WatertightRay::new(ray)),
             found: false,
         };
-        self.traverse8::<C, T, false>(nt, 0, ray.t_max, stats, &mut leaf);
+        self.traverse8::<C, T, _, false>(nt, 0, ray.t_max, stats, &mut leaf);
         leaf.found
     }
 
@@ -519,7 +513,7 @@ impl Bvh {
             wt: WatertightRay::new(ray),
             out,
         };
-        self.traverse8::<C, T, false>(nt, 0, ray.t_max, stats, &mut leaf);
+        self.traverse8::<C, T, _, false>(nt, 0, ray.t_max, stats, &mut leaf);
         sort_dedup_hits(leaf.out);
     }
 }

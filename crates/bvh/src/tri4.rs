@@ -74,9 +74,17 @@ impl Tri4 {
 }
 
 /// Row `axis` of vertex `v` of two blocks as one lane value (lanes `0..4` from `b0`).
+/// `v < 3`, `axis < 3` (the callers' permutation, checked in [`Tri4Ray::new`]).
 #[inline(always)]
 fn pair_row<L: Pair8>(b0: &Tri4, b1: &Tri4, v: usize, axis: usize) -> L {
-    L::halves(&b0.p[v][axis], &b1.p[v][axis])
+    debug_assert!(v < 3 && axis < 3);
+    // SAFETY: `v < 3` and `axis < 3` (above) index `p: [[Vec4; 3]; 3]`.
+    unsafe {
+        L::halves(
+            b0.p.get_unchecked(v).get_unchecked(axis),
+            b1.p.get_unchecked(v).get_unchecked(axis),
+        )
+    }
 }
 
 /// Number of blocks a leaf of `count` triangles occupies.
