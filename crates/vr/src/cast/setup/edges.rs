@@ -172,13 +172,19 @@ pub(super) fn closest_edges<L: LaneReduce>(
             if tt.tris[first].rho.is_nan() {
                 refine_run(tt, first, end, blocks);
             }
-            for j in first..end {
-                let tr = &tt.tris[j];
+            // The run's triangles and affine forms as slices of one length: no bounds check
+            // per triangle.
+            let tris = &tt.tris[first..end];
+            let affs = match pbox {
+                Some(_) => &tt.aff[first..end],
+                None => &[],
+            };
+            for (k, tr) in tris.iter().enumerate() {
                 // The affine packet test (`affine.rs`): every lane certainly out or in.
                 // A partial packet's edges certainly inside for every lane (`skip`) take no
                 // per-lane test (`PacketBox::classify_edges`).
-                let (class, skip) = match pbox {
-                    Some(pb) if !tr.all_in => pb.classify_edges(&tt.aff[j], tr.bound),
+                let (class, skip) = match (pbox, affs.get(k)) {
+                    (Some(pb), Some(a)) if !tr.all_in => pb.classify_edges(a, tr.bound),
                     _ => (PacketClass::Partial, 0),
                 };
                 if class == PacketClass::Out {

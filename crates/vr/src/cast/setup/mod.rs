@@ -262,17 +262,20 @@ impl Out<'_> {
             std::slice::from_raw_parts_mut(self.prim.add(o), n)
         };
         // One triangle on every lane (a pixel inside one triangle): one `prim_ids` look-up.
+        // (A full packet folds all lanes without an early exit: one vector compare.)
         let t0 = c.tri[0];
-        if t0 != u32::MAX && c.tri[..n].iter().all(|&x| x == t0) {
+        let same = if n == MAX_LANES {
+            c.tri.iter().fold(0, |a, &x| a | (x ^ t0)) == 0
+        } else {
+            c.tri[..n].iter().all(|&x| x == t0)
+        };
+        if t0 != u32::MAX && same {
             prim.fill(self.prim_ids[t0 as usize]);
             return;
         }
+        // A miss (`u32::MAX`) fails the look-up to `NO_ID`, as in `Out::spp1`.
         for (p, &tri) in prim.iter_mut().zip(&c.tri[..n]) {
-            *p = if tri == u32::MAX {
-                NO_ID
-            } else {
-                self.prim_ids[tri as usize]
-            };
+            *p = self.prim_ids.get(tri as usize).copied().unwrap_or(NO_ID);
         }
     }
 }
