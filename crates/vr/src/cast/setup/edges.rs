@@ -43,8 +43,8 @@
 //!   widths (4, 8, 16 lanes) and the run walk below agree, and what a walk with the tile's
 //!   triangles outside and its packets inside would rely on.
 //! - **Run walk.** The runs (one per leaf, near-depth order) are tested `RUN_GROUP` at a
-//!   time by the packet's interval test (`kernel.rs`: 4 runs per SSE register, 16 per
-//!   AVX-512 register), and only the runs it passes are visited, by their bits; a run is
+//!   time by the packet's interval test (`kernel.rs`: 4 runs per SSE register, 8 per AVX
+//!   register, 16 per AVX-512 register), and only the runs it passes are visited, by their bits; a run is
 //!   tested again alone (16-run groups: the rest of the group in one pass) after the best
 //!   so far moved its limit. The early exit is checked at each group's first run and at
 //!   every visited run: the runs' near depths ascend, so the walk stops before the same
