@@ -7,7 +7,7 @@
 //! `../shared/scenes/sponza_dabrovic/sponza_dabrovic.glb` from the repository root; `edges` =
 //! the set-up kernel with [`SetupExactness::Edges`] (default), `full` = with
 //! [`SetupExactness::Full`], `watertight` = the watertight kernel, `edges-plain` = `edges`
-//! without the affine packet test, `edges-affine` = `edges` with it on the AVX-512 kernel too). Optional further arguments:
+//! without the affine packet test, `edges-affine` = `edges` with it on every kernel: `CastOptions::affine_always`). Optional further arguments:
 //! `lanes` (8th, default 4: `CastOptions::lanes`; a suffix `sse` / `avx2` caps `CastOptions::isa`
 //! at that tier, e.g. `16sse` the portable twin) and a head pose `eye target fov_y` (9th-11th,
 //! e.g. `-9,3.5,0 8,5,0 60`; default the scene's camera).
@@ -86,8 +86,8 @@ fn main() {
             },
             // `edges-plain`: without the affine packet test (`cast/setup/affine.rs`).
             affine: mode != "edges-plain",
-            // `edges-affine`: the affine packet test on the AVX-512 kernel too.
-            affine_avx512: mode == "edges-affine",
+            // `edges-affine`: the affine packet test on every kernel.
+            affine_always: mode == "edges-affine",
         };
         let mut beam = VisibilityBuffer::new(&set);
         let mut reference = VisibilityBuffer::new(&set);

@@ -24,8 +24,9 @@ pub trait LaneReduce: Lanes {
     /// least `N` entries): a packet's winners' triangle index without a loop over the bits.
     fn set_u32(m: Self::M, v: u32, out: &mut [u32]);
     /// Runs per interval test of the set-up kernels' run walk (`cast/setup/edges.rs`): 4
-    /// (one SSE register per axis and bound), 16 for `lanes512::Z16` (one
-    /// AVX-512 register). The walk's decisions are the same for either (`kernel.rs`).
+    /// (one SSE register per axis and bound), 8 for `lanes256::Y16` (one AVX register), 16
+    /// for `lanes512::Z16` (one AVX-512 register). The walk's decisions are the same for any
+    /// (`kernel.rs`).
     const RUN_GROUP: usize = 4;
     /// Lanes `0..N` from `a[..N]` (`N <= 16`).
     #[inline(always)]

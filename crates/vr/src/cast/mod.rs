@@ -102,12 +102,14 @@ pub struct CastOptions {
     /// Run the affine packet test (`cast/setup/affine.rs`) before the per-lane edge test of
     /// the set-up kernel with [`SetupExactness::Edges`] (pinhole and stereo tiles): the same
     /// buffer bit for bit, fewer instructions — on the SSE, AVX2 and 16-lane twin kernels; the
-    /// AVX-512 kernel takes it only with `affine_avx512`.
+    /// AVX-512 kernel, and the AVX2 16-lane kernel at 1 spp, take it only with `affine_always`.
     pub affine: bool,
-    /// Run the affine packet test on the AVX-512 kernel too (with `affine`). Off by default:
-    /// there a packet's per-lane edge test is one register per edge, and the packet test costs
-    /// more than it saves (thread CPU time, `docs/notes/vr.md`); the buffer is the same.
-    pub affine_avx512: bool,
+    /// Run the affine packet test (with `affine`) on the AVX-512 kernel and on the AVX2 16-lane
+    /// kernel at 1 spp too. Off by default: on AVX-512 a packet's per-lane edge test is one
+    /// register per edge, and at 1 spp an AVX2 packet is a 4 x 4-pixel block that the packet
+    /// test rarely decides whole: there it costs more than it saves (`docs/notes/vr.md`); the
+    /// buffer is the same.
+    pub affine_always: bool,
 }
 
 impl Default for CastOptions {
@@ -121,7 +123,7 @@ impl Default for CastOptions {
             exactness: SetupExactness::Edges,
             isa: Isa::Avx512,
             affine: true,
-            affine_avx512: false,
+            affine_always: false,
         }
     }
 }
@@ -194,7 +196,7 @@ pub fn cast_with(
             exactness: SetupExactness::Full,
             isa: Isa::Avx512,
             affine: false,
-            affine_avx512: false,
+            affine_always: false,
         },
     )
 }
@@ -333,7 +335,7 @@ fn cast_from(
                             isa,
                             opts.exactness,
                             opts.affine,
-                            opts.affine_avx512,
+                            opts.affine_always,
                             ptr.prim,
                             ptr.t,
                         )

@@ -43,8 +43,8 @@
 //!   widths (4, 8, 16 lanes) and the run walk below agree, and what a walk with the tile's
 //!   triangles outside and its packets inside would rely on.
 //! - **Run walk.** The runs (one per leaf, near-depth order) are tested `RUN_GROUP` at a
-//!   time by the packet's interval test (`kernel.rs`: 4 runs per SSE register, 16 per
-//!   AVX-512 register), and only the runs it passes are visited, by their bits; a run is
+//!   time by the packet's interval test (`kernel.rs`: 4 runs per SSE register, 8 per AVX
+//!   register, 16 per AVX-512 register), and only the runs it passes are visited, by their bits; a run is
 //!   tested again alone (16-run groups: the rest of the group in one pass) after the best
 //!   so far moved its limit. The early exit is checked at each group's first run and at
 //!   every visited run: the runs' near depths ascend, so the walk stops before the same
@@ -172,13 +172,19 @@ pub(super) fn closest_edges<L: LaneReduce>(
             if tt.tris[first].rho.is_nan() {
                 refine_run(tt, first, end, blocks);
             }
-            for j in first..end {
-                let tr = &tt.tris[j];
+            // The run's triangles and affine forms as slices of one length: no bounds check
+            // per triangle.
+            let tris = &tt.tris[first..end];
+            let affs = match pbox {
+                Some(_) => &tt.aff[first..end],
+                None => &[],
+            };
+            for (k, tr) in tris.iter().enumerate() {
                 // The affine packet test (`affine.rs`): every lane certainly out or in.
                 // A partial packet's edges certainly inside for every lane (`skip`) take no
                 // per-lane test (`PacketBox::classify_edges`).
-                let (class, skip) = match pbox {
-                    Some(pb) if !tr.all_in => pb.classify_edges(&tt.aff[j], tr.bound),
+                let (class, skip) = match (pbox, affs.get(k)) {
+                    (Some(pb), Some(a)) if !tr.all_in => pb.classify_edges(a, tr.bound),
                     _ => (PacketClass::Partial, 0),
                 };
                 if class == PacketClass::Out {

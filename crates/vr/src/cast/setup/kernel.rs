@@ -255,19 +255,52 @@ impl<L: Lanes> PacketSlab<L> {
         L::bits(t_near.le(t_far * L::splat(ROBUST_FAR_SCALE)))
     }
 
-    /// The interval test of run group `g` of `L::RUN_GROUP` runs (`runs16[g]`, or quarter
-    /// `g % 4` of `runs16[g / 4]`) at `lim`: bit `r` for run `g * RUN_GROUP + r` (runs past
-    /// the list's end may be set).
+    /// [`PacketSlab::interval_reaches16`] of the eight runs `8h..8h + 8` of `rb` (`h` = 0, 1)
+    /// at once in the lanes of `M` (eight lanes: one AVX register per axis and bound with
+    /// [`crate::cast::lanes256::Y8`]): the same products and selects in the same order, so
+    /// bit `r` is bit `8h + r` of the sixteen-run test (tested below). Every bit without an
+    /// interval.
+    #[inline(always)]
+    pub(super) fn interval_reaches8<M: LaneReduce>(
+        &self,
+        rb: &RunBoxes16,
+        h: usize,
+        lim: f32,
+    ) -> u32 {
+        debug_assert_eq!(M::N, 8);
+        let Some(iv) = &self.interval else {
+            return 0xFF;
+        };
+        let k = (h & 1) * 8;
+        let mut t_near = M::splat(0.0);
+        let mut t_far = M::splat(lim);
+        for a in 0..3 {
+            let (lo, hi) = (M::load_n(&rb.lo[a][k..]), M::load_n(&rb.hi[a][k..]));
+            let (n, f) = if iv.sneg[a] { (hi, lo) } else { (lo, hi) };
+            let (s0, s1) = (M::splat(iv.s0[a].x), M::splat(iv.s1[a].x));
+            t_near = t_near.max_or_rhs((n * s0).min_or_rhs(n * s1));
+            t_far = t_far.min_or_rhs((f * s0).max_or_rhs(f * s1));
+        }
+        M::bits(t_near.le(t_far * M::splat(ROBUST_FAR_SCALE)))
+    }
+
+    /// The interval test of run group `g` of `L::RUN_GROUP` runs (`runs16[g]`, half `g % 2`
+    /// of `runs16[g / 2]`, or quarter `g % 4` of `runs16[g / 4]`) at `lim`: bit `r` for run
+    /// `g * RUN_GROUP + r` (runs past the list's end may be set).
     #[inline(always)]
     pub(super) fn reach_group(&self, runs16: &[RunBoxes16], g: usize, lim: f32) -> u32
     where
         L: LaneReduce,
     {
         if L::RUN_GROUP == 16 {
-            self.interval_reaches16(&runs16[g], lim)
-        } else {
-            self.interval_reaches4(&runs16[g / 4], g % 4, lim)
+            return self.interval_reaches16(&runs16[g], lim);
         }
+        // Eight runs only for `Y16` (x86-64, inside its AVX2 entry point).
+        #[cfg(target_arch = "x86_64")]
+        if L::RUN_GROUP == 8 {
+            return self.interval_reaches8::<crate::cast::lanes256::Y8>(&runs16[g / 2], g % 2, lim);
+        }
+        self.interval_reaches4(&runs16[g / 4], g % 4, lim)
     }
 
     /// The BVH's robust slab test (Ize 2013 far scaling) of the packet on a run's box: true
@@ -393,12 +426,13 @@ mod tests {
     }
 
     /// The sixteen-run interval test (`V16`, and `Z16` where AVX-512F is detected) decides
-    /// every run as the one-run test, on the packets and boxes of the four-run test above,
+    /// every run as the one-run test, and each half of it equals the eight-run test (`Y8`,
+    /// where AVX2 is detected), on the packets and boxes of the four-run test above,
     /// including unused lanes past the last run (zero boxes, as in `TileTris::runs16`).
     #[test]
     fn interval_reaches16_equals_per_run() {
         let mut f = uniform(0x9e37_79b9_7f4a_7c15);
-        let (mut tested, mut reached) = (0, 0);
+        let (mut tested, mut reached, mut halves) = (0, 0, 0);
         for _ in 0..1500 {
             let (base, spread) = packet_direction(&mut f);
             let dl: [[f32; 16]; 3] =
@@ -440,12 +474,42 @@ mod tests {
                     // SAFETY: AVX-512F was detected.
                     assert_eq!(unsafe { z16_bits(dl, &rb, lim) }, bits);
                 }
+                #[cfg(target_arch = "x86_64")]
+                if crate::cast::isa::avx2_detected() {
+                    for h in 0..2 {
+                        // SAFETY: AVX2 was detected.
+                        let b8 = unsafe { y8_bits(dl, &rb, h, lim) };
+                        assert_eq!(b8, bits >> (8 * h) & 0xFF, "{rb:?} {lim} half {h}");
+                        halves += 1;
+                    }
+                }
             }
         }
         assert!(
             reached > tested / 50 && reached < tested * 49 / 50,
             "{reached} {tested}"
         );
+        #[cfg(target_arch = "x86_64")]
+        if crate::cast::isa::avx2_detected() {
+            assert!(halves > 0);
+        } else {
+            eprintln!("AVX2 not detected: the eight-run test not compared");
+        }
+        let _ = halves;
+    }
+
+    /// [`PacketSlab::interval_reaches8`] with `Y8` lanes on the interval of the sixteen-lane
+    /// packet `dl` (`Y16`, as the AVX2 kernel runs it).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn y8_bits(dl: [[f32; 16]; 3], rb: &RunBoxes16, h: usize, lim: f32) -> u32 {
+        use crate::cast::lanes256::{Y8, Y16};
+        let d = [
+            Y16::load16(&dl[0]),
+            Y16::load16(&dl[1]),
+            Y16::load16(&dl[2]),
+        ];
+        PacketSlab::<Y16>::with_interval(d).interval_reaches8::<Y8>(rb, h, lim)
     }
 
     /// [`PacketSlab::interval_reaches16`] with `Z16` lanes.

@@ -132,7 +132,7 @@
 //! | `isa` | [`Isa`] | the widest detected | lanes of 16-ray packets: one AVX-512 register, two AVX registers, four SSE registers ([`crate::cast::lanes16`], the portable twin) |
 //! | [`RHO_MAX`] | f32 | 0.05 | depth band above which a triangle always takes the watertight test |
 //! | `affine` | bool | true | the affine packet test ([`affine`]) before the per-lane edge test (`Edges` only) |
-//! | `affine_avx512` | bool | false | the affine packet test on the AVX-512 kernel too (slower there, `docs/notes/vr.md`) |
+//! | `affine_always` | bool | false | the affine packet test on the AVX-512 kernel and the AVX2 16-lane kernel at 1 spp too (slower there, `docs/notes/vr.md`) |
 //!
 //! Measurements (speed of `Edges` and `Full` against the kernel without a band, 4 vs 8 lanes,
 //! where the time goes): `docs/notes/vr.md`.
@@ -262,17 +262,20 @@ impl Out<'_> {
             std::slice::from_raw_parts_mut(self.prim.add(o), n)
         };
         // One triangle on every lane (a pixel inside one triangle): one `prim_ids` look-up.
+        // (A full packet folds all lanes without an early exit: one vector compare.)
         let t0 = c.tri[0];
-        if t0 != u32::MAX && c.tri[..n].iter().all(|&x| x == t0) {
+        let same = if n == MAX_LANES {
+            c.tri.iter().fold(0, |a, &x| a | (x ^ t0)) == 0
+        } else {
+            c.tri[..n].iter().all(|&x| x == t0)
+        };
+        if t0 != u32::MAX && same {
             prim.fill(self.prim_ids[t0 as usize]);
             return;
         }
+        // A miss (`u32::MAX`) fails the look-up to `NO_ID`, as in `Out::spp1`.
         for (p, &tri) in prim.iter_mut().zip(&c.tri[..n]) {
-            *p = if tri == u32::MAX {
-                NO_ID
-            } else {
-                self.prim_ids[tri as usize]
-            };
+            *p = self.prim_ids.get(tri as usize).copied().unwrap_or(NO_ID);
         }
     }
 }
@@ -498,7 +501,8 @@ isa_entry!(
 /// register if `isa` is [`Isa::Avx512`], two AVX registers if [`Isa::Avx2`], else four SSE
 /// registers), 8 (`lanes == 8` and `isa` at least [`Isa::Avx2`]: one AVX register) or 4. `isa`
 /// must be a tier the CPU has ([`Isa::available`]). Every choice gives the same buffer. `affine`: the affine packet test
-/// (`Edges`), on the AVX-512 kernel only with `affine_avx512`. `film`: the samples' film lanes
+/// (`Edges`), on the AVX-512 kernel and on the AVX2 16-lane kernel at 1 spp only with
+/// `affine_always`. `film`: the samples' film lanes
 /// at 1 spp ([`crate::Hierarchy::film`], `[x, y, footprint]` in `samples` order), read by
 /// the 1-spp packets instead of a gather through `samples`; `None` gathers.
 ///
@@ -520,16 +524,18 @@ pub unsafe fn test_tile_setup(
     isa: Isa,
     exactness: SetupExactness,
     affine: bool,
-    affine_avx512: bool,
+    affine_always: bool,
     prim: *mut u32,
     t: *mut f32,
 ) -> SetupWork {
     let spp = set.spp as usize;
     debug_assert!(isa <= isa.available(), "{isa:?} not detected");
     let z16 = lanes == 16 && isa == Isa::Avx512;
-    // The AVX-512 kernel's per-lane edge test is one register per edge: the affine packet
-    // test pays there only when asked for (`CastOptions::affine_avx512`).
-    let affine = affine && (!z16 || affine_avx512);
+    // The AVX-512 kernel's per-lane edge test is one register per edge, and the AVX2 16-lane
+    // kernel's 1-spp packets (4 x 4-pixel blocks) are rarely decided whole: the affine packet
+    // test pays there only when asked for (`CastOptions::affine_always`).
+    let y16_spp1 = lanes == 16 && isa == Isa::Avx2 && spp == 1;
+    let affine = affine && ((!z16 && !y16_spp1) || affine_always);
     tt.frame = None;
     if affine && exactness == SetupExactness::Edges && !samples.is_empty() {
         let film_x = set.samples[samples[0] as usize].film.x;
