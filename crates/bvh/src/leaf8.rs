@@ -123,11 +123,7 @@ impl<'a> ClosestCtx<'a> {
     fn pair<C: Counter, L: Pair8>(&mut self, first: u32, mask: u32, stats: &mut C) {
         let (b0, b1) = (self.block(first), self.block(first + 1));
         let h = self.r4.intersect2::<L>(b0, b1, mask, self.limit);
-        for l in 0..8 {
-            if mask >> l & 1 != 0 {
-                stats.triangle(h.hit >> l & 1 != 0);
-            }
-        }
+        stats.triangles(mask, h.hit);
         let mut m = h.hit;
         while m != 0 {
             let l = m.trailing_zeros() as usize;
@@ -147,11 +143,7 @@ impl<'a> ClosestCtx<'a> {
     #[inline(always)]
     fn block4<C: Counter>(&mut self, b: &Tri4, mask: u32, stats: &mut C) {
         let h = self.r4.intersect(b, mask, self.limit);
-        for l in 0..4 {
-            if mask >> l & 1 != 0 {
-                stats.triangle(h.hit >> l & 1 != 0);
-            }
-        }
+        stats.triangles(mask, h.hit);
         if h.hit != 0 {
             let (t, u, v) = (h.t.to_array(), h.u.to_array(), h.v.to_array());
             let mut m = h.hit;

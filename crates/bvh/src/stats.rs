@@ -65,6 +65,17 @@ pub trait Counter {
     fn node(&mut self, boxes: u32);
     fn leaf(&mut self);
     fn triangle(&mut self, hit: bool);
+    /// One [`Counter::triangle`] per set bit of `tested` (lanes of a SIMD triangle test), hit
+    /// where `hit` has the bit too. Inlines to nothing for [`NoStats`].
+    #[inline(always)]
+    fn triangles(&mut self, tested: u32, hit: u32) {
+        let mut m = tested;
+        while m != 0 {
+            let l = m.trailing_zeros();
+            m &= m - 1;
+            self.triangle(hit >> l & 1 != 0);
+        }
+    }
 }
 
 /// The no-op counter of the fast path.

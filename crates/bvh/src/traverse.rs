@@ -268,11 +268,7 @@ impl Bvh {
             let b = &self.blocks[(first + k) as usize];
             let mask = lane_mask(count, k);
             let h = r4.intersect(b, mask, best.limit(*t_max));
-            for l in 0..4 {
-                if mask >> l & 1 != 0 {
-                    stats.triangle(h.hit >> l & 1 != 0);
-                }
-            }
+            stats.triangles(mask, h.hit);
             if h.hit != 0 {
                 let (t, u, v) = (h.t.to_array(), h.u.to_array(), h.v.to_array());
                 let mut m = h.hit;
@@ -306,11 +302,7 @@ impl Bvh {
             let b = &self.blocks[(first + k) as usize];
             let mask = lane_mask(count, k);
             let h = r4.intersect(b, mask, t_max);
-            for l in 0..4 {
-                if mask >> l & 1 != 0 {
-                    stats.triangle(h.hit >> l & 1 != 0);
-                }
-            }
+            stats.triangles(mask, h.hit);
             if h.hit != 0 {
                 return true;
             }
