@@ -1,15 +1,16 @@
 //! One row of a pruning level (Widmer et al. 2015, §3.3) with four *parents* in the lanes of
 //! `Vec4`s: the build's fast path over whole levels (level 1 alone has `W H / 4` parents).
 //!
-//! The children of four neighbouring parents are read straight from the two child rows
-//! below them (no per-node index arithmetic): two SSE2 loads of two nodes per parent and a
-//! 4x4 transpose give, for each child position (0,0), (1,0), (0,1), (1,1), that child's `a`
-//! and `b` words of the four parents in lanes; the tags, `z_c`, flags and the f16 slopes are
-//! decoded in those lanes (the same integer operations as [`super::node`]'s scalar decode). Every lane does exactly the operations
-//! of the scalar definition ([`MergeCtx::parent`] with `lanes == false`: `merge` and
-//! `proxy` in [`super::merge`]) in its order — IEEE square root, division, products and sums
-//! are correctly rounded per lane, there is no fused multiply-add — so the nodes are the same
-//! bits (`tests/quadtree_build.rs` compares whole trees with the reference build):
+//! The children of four neighbouring parents are read straight from the two child rows below
+//! them (no per-node index arithmetic): two SSE2 loads of two nodes per parent and a 4x4
+//! transpose give, for each child position (0,0), (1,0), (0,1), (1,1), that child's `a` and `b`
+//! words of the four parents in lanes; the tags, `z_c`, flags and the f16 slopes are decoded in
+//! those lanes (the same integer operations as [`super::node`]'s scalar decode). Every lane
+//! does exactly the operations of the scalar definition ([`MergeCtx::parent`] with `lanes ==
+//! false`: `merge` and `proxy` in [`super::merge`]) in its order — IEEE square root, division,
+//! products and sums are correctly rounded per lane, there is no fused multiply-add — so the
+//! nodes are the same bits (`tests/quadtree_build.rs` compares whole trees with the reference
+//! build):
 //!
 //! - the child normals `(g_x, g_y, -1) / sqrt(1 + g_x^2 + g_y^2)`, their sum from `+0` in
 //!   child order and glam's `normalize_or_zero` (`1 / sqrt(dot)`, kept if finite and `> 0`);
@@ -39,31 +40,13 @@ use glam::{BVec4A, Vec4};
 use super::merge::{MergeCtx, plane_range, union};
 use super::node::{FLAG_CRACK, Node};
 use super::tree::{Level, Z_EPS};
+use super::trigger_lanes::f16x4;
 
 /// Lane-wise IEEE square root (`sqrtps`).
 #[inline(always)]
 fn sqrt4(v: Vec4) -> Vec4 {
     // SAFETY: SSE is part of the x86_64 baseline.
     unsafe { Vec4::from(_mm_sqrt_ps(v.into())) }
-}
-
-/// [`super::node::f16_bits_to_f32`] of the low 16 bits of each lane (the same integer
-/// operations, the subnormal case by the same exact conversion and product).
-#[inline(always)]
-pub(super) fn f16x4(h: __m128i) -> Vec4 {
-    // SAFETY: SSE2 is part of the x86_64 baseline.
-    unsafe {
-        let mag = _mm_and_si128(h, _mm_set1_epi32(0x7fff));
-        let normal = _mm_add_epi32(_mm_slli_epi32(mag, 13), _mm_set1_epi32(0x3800_0000));
-        let sub = _mm_castps_si128(_mm_mul_ps(
-            _mm_cvtepi32_ps(mag),
-            _mm_castsi128_ps(_mm_set1_epi32(0x3380_0000)),
-        ));
-        let is_sub = _mm_cmplt_epi32(mag, _mm_set1_epi32(0x400));
-        let v = _mm_or_si128(_mm_and_si128(sub, is_sub), _mm_andnot_si128(is_sub, normal));
-        let sign = _mm_slli_epi32(_mm_and_si128(h, _mm_set1_epi32(0x8000)), 16);
-        Vec4::from(_mm_castsi128_ps(_mm_or_si128(v, sign)))
-    }
 }
 
 /// The four parents' children as words: `a[k]`, `b[k]` hold child `k`'s `a` and `b` of the
@@ -155,11 +138,12 @@ impl Kids {
     #[inline(always)]
     fn aabb_union(&self, out: &mut [Node]) -> bool {
         let mut special = 0;
-        let ranges = [0, 1, 2, 3].map(|k| {
+        let mut range = |k: usize| {
             special |= self.special(k);
             // SAFETY: SSE2 baseline.
             unsafe { (_mm_castsi128_ps(self.a[k]), _mm_castsi128_ps(self.b[k])) }
-        });
+        };
+        let ranges = [range(0), range(1), range(2), range(3)];
         if special != 0 {
             return false;
         }
@@ -197,7 +181,8 @@ impl Kids {
             _mm_storeu_si128(a.as_mut_ptr() as *mut __m128i, self.a[k]);
             _mm_storeu_si128(b.as_mut_ptr() as *mut __m128i, self.b[k]);
         }
-        [0, 1, 2, 3].map(|p| Node { a: a[p], b: b[p] })
+        let n = |p: usize| Node { a: a[p], b: b[p] };
+        [n(0), n(1), n(2), n(3)]
     }
 
     /// Child `k`'s `z_c` per lane ([`Node::zc`]).
@@ -314,7 +299,7 @@ impl MergeCtx {
             if kids.aabb_union(out) {
                 return;
             }
-            let ks = [0, 1, 2, 3].map(|k| kids.nodes(k));
+            let ks = [kids.nodes(0), kids.nodes(1), kids.nodes(2), kids.nodes(3)];
             for (p, o) in out.iter_mut().enumerate() {
                 *o = union((0..4).map(|k| ks[k][p].zrange()));
             }
@@ -400,7 +385,7 @@ impl MergeCtx {
             // that is not finite; `z_c` and a finite spread give finite values, and neither
             // `lo - Z_EPS` nor `hi + Z_EPS` is `-0`, so `maxps` / `minps` are the clamp) or
             // an AABB child's stored range, then their union in lanes.
-            let ranges = [0, 1, 2, 3].map(|k| {
+            let range = |k: usize| {
                 // SAFETY: SSE2 baseline.
                 unsafe {
                     let plane = _mm_castsi128_ps(_mm_srai_epi32::<31>(kids.a[k]));
@@ -422,7 +407,8 @@ impl MergeCtx {
                         sel(plane, hi, _mm_castsi128_ps(kids.b[k])),
                     )
                 }
-            });
+            };
+            let ranges = [range(0), range(1), range(2), range(3)];
             let (a, b) = union_lanes(ranges);
             for (p, o) in out.iter_mut().enumerate() {
                 *o = merged[p].unwrap_or(Node { a: a[p], b: b[p] });
@@ -430,7 +416,7 @@ impl MergeCtx {
             return;
         }
         let spread = spread.map(|v| v.to_array());
-        let ks = [0, 1, 2, 3].map(|k| kids.nodes(k));
+        let ks = [kids.nodes(0), kids.nodes(1), kids.nodes(2), kids.nodes(3)];
         for (p, o) in out.iter_mut().enumerate() {
             *o = merged[p].unwrap_or_else(|| {
                 union((0..4).map(|k| {
@@ -562,11 +548,11 @@ mod tests {
     use crate::quadtree::prune::{Allow, parent_of};
     use crate::quadtree::test_rng::Rng;
 
-    /// Rows of four parents in lanes equal the scalar definition ([`MergeCtx::parent`]
-    /// with `lanes == false`) node for node, with the unions of the parents that do not
-    /// merge in lanes: random child levels 0-3 mixing plane children (near-coplanar,
-    /// clamped and f16-maximum slopes, flagged) with empty and AABB
-    /// children (some inverted, from `0`, up to `+inf`), blocked parents, odd widths.
+    /// Rows of four parents in lanes equal the scalar definition ([`MergeCtx::parent`] with
+    /// `lanes == false`) node for node, with the unions of the parents that do not merge in
+    /// lanes: random child levels 0-3 mixing plane children (near-coplanar, clamped and
+    /// f16-maximum slopes, flagged) with empty and AABB children (some inverted, from `0`, up
+    /// to `+inf`), blocked parents, odd widths.
     #[test]
     fn rows_equal_the_definition() {
         let mut rng = Rng(0x0dd5_eed5_1234_4321);

@@ -311,8 +311,14 @@ pub(crate) fn init_row<T: Copy>(row: &mut [MaybeUninit<T>], value: T) -> &mut [T
     unsafe { &mut *(row as *mut [MaybeUninit<T>] as *mut [T]) }
 }
 
+/// Vectors of at most this many values are made by [`par_rows`] on the calling thread (the
+/// small levels of the pruning and of the effective levels: a parallel pass costs a join,
+/// which under load waits for a descheduled thread, for a few microseconds of work).
+pub(crate) const SERIAL_ROWS_MAX: usize = 4096;
+
 /// A vector of `len` values made in parallel by rows of `row_len` (the last may be
-/// shorter): row `r` is set to `value` ([`init_row`]) and handed to `f(r, row)`.
+/// shorter; on the calling thread when `len <= SERIAL_ROWS_MAX`): row `r` is set to `value`
+/// ([`init_row`]) and handed to `f(r, row)`.
 pub(crate) fn par_rows<T: Copy + Send + Sync>(
     len: usize,
     row_len: usize,
@@ -320,8 +326,17 @@ pub(crate) fn par_rows<T: Copy + Send + Sync>(
     f: impl Fn(usize, &mut [T]) + Sync + Send,
 ) -> Vec<T> {
     let mut v = Vec::with_capacity(len);
+    // One code path for both (a second call site of `f` changes what LLVM inlines into
+    // it): a minimum length above the row count keeps rayon from splitting, so the rows
+    // run on the calling thread without a join.
+    let min_rows = if len <= SERIAL_ROWS_MAX {
+        usize::MAX
+    } else {
+        1
+    };
     v.spare_capacity_mut()[..len]
         .par_chunks_mut(row_len.max(1))
+        .with_min_len(min_rows)
         .enumerate()
         .for_each(|(r, row)| f(r, init_row(row, value)));
     // SAFETY: the rows cover `0..len` and each was initialised by `init_row`.

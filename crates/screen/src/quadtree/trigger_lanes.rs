@@ -29,12 +29,30 @@ use core::arch::x86_64::*;
 use glam::Vec4;
 
 use super::cascade::SAFE_MARGIN;
-use super::merge_rows::f16x4;
 use super::node::Node;
 use crate::LayerPlanes;
 
 // SAFETY (all `unsafe` blocks below): SSE and SSE2 are part of the x86_64 baseline; the
 // unaligned loads read four consecutive, bounds-checked elements.
+
+/// [`super::node::f16_bits_to_f32`] of the low 16 bits of each lane (the same integer
+/// operations, the subnormal case by the same exact conversion and product).
+#[inline(always)]
+pub(super) fn f16x4(h: __m128i) -> Vec4 {
+    // SAFETY: SSE2 is part of the x86_64 baseline.
+    unsafe {
+        let mag = _mm_and_si128(h, _mm_set1_epi32(0x7fff));
+        let normal = _mm_add_epi32(_mm_slli_epi32(mag, 13), _mm_set1_epi32(0x3800_0000));
+        let sub = _mm_castps_si128(_mm_mul_ps(
+            _mm_cvtepi32_ps(mag),
+            _mm_castsi128_ps(_mm_set1_epi32(0x3380_0000)),
+        ));
+        let is_sub = _mm_cmplt_epi32(mag, _mm_set1_epi32(0x400));
+        let v = _mm_or_si128(_mm_and_si128(sub, is_sub), _mm_andnot_si128(is_sub, normal));
+        let sign = _mm_slli_epi32(_mm_and_si128(h, _mm_set1_epi32(0x8000)), 16);
+        Vec4::from(_mm_castsi128_ps(_mm_or_si128(v, sign)))
+    }
+}
 
 /// `select(m, a, b)` per lane.
 #[inline(always)]
