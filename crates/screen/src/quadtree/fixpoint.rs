@@ -48,7 +48,7 @@ use rayon::prelude::*;
 use super::cascade::{deeper_front, pixel_trigger_lanes, proxy_safe_front};
 use super::merge::MergeCtx;
 use super::node::NO_PLANE;
-use super::node::{Node, decode_plane, decode_plane_at, node_centre};
+use super::node::{Node, decode_plane, decode_plane_at};
 use super::prune::Blocked;
 use super::tree::{Level, plane_levels};
 use crate::LayerPlanes;
@@ -259,30 +259,10 @@ fn merged_triggers(
         #[cfg(not(target_arch = "x86_64"))]
         avx2: false,
     };
-    // The nodes' footprint centres (`node_centre`'s values): `x` per level and column, `y`
-    // per level for each pair of rows.
-    let xcent: Vec<Vec<f32>> = levels
-        .iter()
-        .enumerate()
-        .map(|(l, lv)| {
-            (0..lv.w)
-                .map(|qx| node_centre(l as u32, qx, 0, wf, hf).0)
-                .collect()
-        })
-        .collect();
     tz.par_chunks_mut(2 * wu)
         .enumerate()
         .flat_map_iter(|(m, rows)| {
             let j = 2 * m;
-            let mut ycent = [0.0f32; 32];
-            for (l, y) in ycent.iter_mut().enumerate().take(levels.len()) {
-                *y = node_centre(l as u32, 0, j as u32 >> l, wf, hf).1;
-            }
-            let plane_of = |l: u32, qx: u32, qy: u32| {
-                let lv = &levels[l as usize];
-                let (xc, yc) = (xcent[l as usize][qx as usize], ycent[l as usize]);
-                decode_plane_at(lv.nodes[(qy * lv.w + qx) as usize], l, xc, yc, wf, hf)
-            };
             let base = j * wu;
             // Row `j`'s effective levels: its runs of level >= 1 are row `j + 1`'s.
             let er = &eff[j * wu..(j + 1) * wu];
@@ -318,7 +298,8 @@ fn merged_triggers(
                 }
                 let l = l as u32;
                 let (qx, qy) = (i as u32 >> l, j >> l);
-                let p = plane_of(l, qx, qy);
+                let lv = &levels[l as usize];
+                let p = decode_plane(lv.nodes[(qy * lv.w + qx) as usize], l, qx, qy, wf, hf);
                 let end = (((qx + 1) << l) as usize).min(wu);
                 let t_pair = proxy_safe_front(p, (cols.xe[i], cols.xe[end]), y_pair);
                 if certified(&fr0[i..end], t_pair) && certified(&fr1[i..end.min(fr1.len())], t_pair)
@@ -343,7 +324,8 @@ fn merged_triggers(
                     let mut n = next_r;
                     while n < next {
                         let qx = n as u32 >> l;
-                        let p = plane_of(l, qx, qy);
+                        let p =
+                            decode_plane(lv.nodes[(qy * lv.w + qx) as usize], l, qx, qy, wf, hf);
                         let end = (((qx + 1) << l) as usize).min(wu);
                         n = run.merged_run(row, fr, er, jr, (n, end), (l, qx, qy), p, newly);
                     }
