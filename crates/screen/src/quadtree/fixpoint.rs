@@ -47,6 +47,7 @@ use rayon::prelude::*;
 
 use super::cascade::{deeper_front, pixel_trigger_lanes, proxy_safe_front};
 use super::merge::MergeCtx;
+use super::node::NO_PLANE;
 use super::node::{Node, decode_plane, decode_plane_at};
 use super::prune::Blocked;
 use super::tree::{Level, plane_levels};
@@ -279,21 +280,31 @@ fn merged_triggers(
                 ((j + 1 + !row1.is_empty() as u32) as f32) / hf,
             );
             let (mut newly0, mut newly1) = (Vec::new(), Vec::new());
-            // The runs with their planes (`merged_scan`), in order; a run that lanes of an
-            // earlier one already did (`i < pos`) is skipped.
-            let mut runs = Vec::with_capacity(wu / 2 + 1);
-            super::merged_scan::runs(er, j, levels, (wf, hf), &mut runs);
-            let mut pos = 0;
-            for r in &runs {
-                if r.i < pos {
+            let mut i = 0;
+            while i < wu {
+                let l = er[i];
+                if l == NO_PLANE || l == 0 {
+                    // Eight levels of 0 or `NO_PLANE` at once (each byte `b` is `(b & 1)
+                    // 255` then), else one.
+                    if i % 8 == 0 && i + 8 <= wu {
+                        let v = u64::from_le_bytes(er[i..i + 8].try_into().unwrap());
+                        if (v & 0x0101_0101_0101_0101) * 255 == v {
+                            i += 8;
+                            continue;
+                        }
+                    }
+                    i += 1;
                     continue;
                 }
-                let (i, end, l, qx, qy, p) = (r.i, r.end, r.l, r.qx, j >> r.l, r.p);
+                let l = l as u32;
+                let (qx, qy) = (i as u32 >> l, j >> l);
                 let lv = &levels[l as usize];
+                let p = decode_plane(lv.nodes[(qy * lv.w + qx) as usize], l, qx, qy, wf, hf);
+                let end = (((qx + 1) << l) as usize).min(wu);
                 let t_pair = proxy_safe_front(p, (cols.xe[i], cols.xe[end]), y_pair);
                 if certified(&fr0[i..end], t_pair) && certified(&fr1[i..end.min(fr1.len())], t_pair)
                 {
-                    pos = end;
+                    i = end;
                     continue;
                 }
                 let next0 = run.merged_run(row0, fr0, er, j, (i, end), (l, qx, qy), p, &mut newly0);
@@ -319,7 +330,7 @@ fn merged_triggers(
                         n = run.merged_run(row, fr, er, jr, (n, end), (l, qx, qy), p, newly);
                     }
                 }
-                pos = next;
+                i = next;
             }
             newly0.append(&mut newly1);
             newly0

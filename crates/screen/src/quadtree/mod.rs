@@ -103,7 +103,6 @@ mod merge_rows;
 mod merge_rows8;
 #[cfg(target_arch = "x86_64")]
 mod merged_avx2;
-mod merged_scan;
 pub mod node;
 mod prune;
 mod setup;
