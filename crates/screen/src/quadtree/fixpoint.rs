@@ -254,10 +254,6 @@ fn merged_triggers(
         wu,
         deeper,
         levels,
-        #[cfg(target_arch = "x86_64")]
-        avx2: super::merged_avx2::available(),
-        #[cfg(not(target_arch = "x86_64"))]
-        avx2: false,
     };
     tz.par_chunks_mut(2 * wu)
         .enumerate()
@@ -346,8 +342,6 @@ struct RunCtx<'a> {
     wu: usize,
     deeper: &'a [LayerPlanes],
     levels: &'a [Level],
-    /// Whether eight pixels per step run in AVX2 lanes (`merged_avx2`).
-    avx2: bool,
 }
 
 impl RunCtx<'_> {
@@ -380,56 +374,6 @@ impl RunCtx<'_> {
         if certified(&fr[i..end], t_run) {
             return end;
         }
-        // Four runs of two pixels (level 1) or two of four (level 2) starting at a multiple
-        // of 8: eight pixels in AVX2 lanes, each run with its node's plane (`merged_avx2`,
-        // same bits). A caller's catch-up from inside those eight pixels never starts at a
-        // multiple of 8, so it stays inside them.
-        #[cfg(target_arch = "x86_64")]
-        if self.avx2 && (l == 1 || l == 2) && i % 8 == 0 && i + 8 <= wu {
-            let lv = &self.levels[l as usize];
-            let plane = |d: u32| {
-                decode_plane(
-                    lv.nodes[(qy * lv.w + qx + d) as usize],
-                    l,
-                    qx + d,
-                    qy,
-                    wf,
-                    hf,
-                )
-            };
-            let mut t = [0.0f32; 8];
-            let bits = if l == 1 && er[i + 2] == 1 && er[i + 4] == 1 && er[i + 6] == 1 {
-                // SAFETY: the CPU has AVX2 (checked in `available`).
-                Some(unsafe {
-                    super::merged_avx2::merged_triggers8(
-                        base + i,
-                        [p, plane(1), plane(2), plane(3)],
-                        &cols.xe[i..],
-                        y,
-                        deeper,
-                        &mut t,
-                    )
-                })
-            } else if l == 2 && er[i + 4] == 2 {
-                // SAFETY: as above.
-                Some(unsafe {
-                    super::merged_avx2::merged_triggers8(
-                        base + i,
-                        [p, plane(1)],
-                        &cols.xe[i..],
-                        y,
-                        deeper,
-                        &mut t,
-                    )
-                })
-            } else {
-                None
-            };
-            if let Some(bits) = bits {
-                store_triggers8(&t, bits, base + i, &mut row[i..], newly);
-                return i + 8;
-            }
-        }
         // Two runs of two pixels (level 1) starting at a multiple of 4: four pixels in
         // lanes, each pair with its node's plane (`trigger_lanes`, same bits).
         #[cfg(target_arch = "x86_64")]
@@ -451,30 +395,6 @@ impl RunCtx<'_> {
         // Runs of 4 pixels or more (levels >= 2, starting at a multiple of 4): four pixels
         // per step in lanes (`trigger_lanes`, same bits).
         #[cfg(target_arch = "x86_64")]
-        if l >= 3 && self.avx2 {
-            // Eight pixels per step in AVX2 lanes (`merged_avx2`, same bits).
-            while i + 8 <= end {
-                if certified(&fr[i..i + 8], t_run) {
-                    i += 8;
-                    continue;
-                }
-                let mut t = [0.0f32; 8];
-                // SAFETY: the CPU has AVX2 (checked in `available`).
-                let bits = unsafe {
-                    super::merged_avx2::merged_triggers8(
-                        base + i,
-                        [p],
-                        &cols.xe[i..],
-                        y,
-                        deeper,
-                        &mut t,
-                    )
-                };
-                store_triggers8(&t, bits, base + i, &mut row[i..], newly);
-                i += 8;
-            }
-        }
-        #[cfg(target_arch = "x86_64")]
         if l >= 2 {
             while i + 4 <= end {
                 if certified(&fr[i..i + 4], t_run) {
@@ -488,7 +408,7 @@ impl RunCtx<'_> {
             }
         }
         #[cfg(not(target_arch = "x86_64"))]
-        let _ = (er, qx, qy, wf, l, self.avx2);
+        let _ = (er, qx, qy, wf, l);
         for (ii, t) in row.iter_mut().enumerate().take(end).skip(i) {
             if fr[ii] >= t_run {
                 continue;
@@ -648,19 +568,6 @@ fn reprune(ctx: &MergeCtx, levels: &mut [Level], newly: &[u32], w: u32) -> Vec<(
         cur = next;
     }
     dissolved
-}
-
-/// The trigger depths `t` of the pixels `k0 ..k0 + 8` into `row[..8]`, and those whose bit
-/// is set in `finite` on `newly`.
-#[cfg(target_arch = "x86_64")]
-#[inline]
-fn store_triggers8(t: &[f32; 8], finite: u32, k0: usize, row: &mut [f32], newly: &mut Vec<u32>) {
-    row[..8].copy_from_slice(t);
-    let mut bits = finite;
-    while bits != 0 {
-        newly.push(k0 as u32 + bits.trailing_zeros());
-        bits &= bits - 1;
-    }
 }
 
 /// Stores four lanes' trigger depths of pixels `k0..k0 + 4` in `row[..4]` and lists those

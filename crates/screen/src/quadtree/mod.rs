@@ -101,8 +101,6 @@ mod merge_lanes;
 mod merge_rows;
 #[cfg(target_arch = "x86_64")]
 mod merge_rows8;
-#[cfg(target_arch = "x86_64")]
-mod merged_avx2;
 pub mod node;
 mod prune;
 mod setup;

@@ -34,7 +34,7 @@ use crate::LayerPlanes;
 /// `p` must point to eight readable `Vec3`s (24 `f32`s).
 #[inline]
 #[target_feature(enable = "avx2")]
-pub(super) unsafe fn soa8(p: *const Vec3) -> (__m256, __m256, __m256) {
+unsafe fn soa8(p: *const Vec3) -> (__m256, __m256, __m256) {
     let p = p as *const f32;
     // SAFETY: 24 readable floats (the caller's contract).
     let (v0, v1, v2) = unsafe {
