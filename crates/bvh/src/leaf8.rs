@@ -75,7 +75,6 @@ impl<'a> ClosestCtx<'a> {
             self.best = Best { t, tri, u, v };
             self.t_max = t;
             self.limit = t.next_up();
-            prefetch_prim_id(self.bvh, tri);
         }
     }
 
@@ -161,22 +160,6 @@ impl<'a> ClosestCtx<'a> {
             self.offer_exact(b, l);
         }
     }
-}
-
-/// Prefetches the primitive id of triangle `tri` (`Bvh::prim_ids`), read once the traversal
-/// ends ([`Best::hit`]): a hint, so that the id's cache miss overlaps the rest of the traversal
-/// instead of following it.
-#[inline(always)]
-fn prefetch_prim_id(bvh: &Bvh, tri: u32) {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: prefetches never fault; the address is only a hint.
-    unsafe {
-        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-        let p = bvh.prim_ids.as_ptr().wrapping_add(tri as usize);
-        _mm_prefetch::<_MM_HINT_T0>(p as *const i8);
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = (bvh, tri);
 }
 
 /// The leaf step of `Bvh::traverse8`: a struct with an `#[inline(always)]` method, not a
