@@ -502,22 +502,11 @@ impl Best {
 /// `None` when the stack runs empty. Entries below `*sp` must have been written.
 #[inline(always)]
 pub(crate) fn pop_closer(stack: &[MaybeUninit<u64>], sp: &mut usize, t_max: f32) -> Option<u32> {
-    pop_within(stack, sp, t_max * ROBUST_FAR_SCALE)
-}
-
-/// [`pop_closer`] with the scaled bound `t_far_max = t_max * ROBUST_FAR_SCALE` given (the
-/// 8-wide traversal scales it once per change of `t_max`).
-#[inline(always)]
-pub(crate) fn pop_within(
-    stack: &[MaybeUninit<u64>],
-    sp: &mut usize,
-    t_far_max: f32,
-) -> Option<u32> {
     while *sp > 0 {
         *sp -= 1;
         // SAFETY: the caller wrote every entry below `*sp` (the pushes of its traversal).
         let e = unsafe { stack.get_unchecked(*sp).assume_init() };
-        if f32::from_bits((e >> 32) as u32) <= t_far_max {
+        if f32::from_bits((e >> 32) as u32) <= t_max * ROBUST_FAR_SCALE {
             return Some(e as u32);
         }
     }

@@ -12,12 +12,6 @@
 //! hit    = t_near <= t_far
 //! ```
 //!
-//! with the far scaling folded into the far planes' reciprocals: `t_far = min(t_max * S,
-//! (far_x - o_x) * (inv_x * S2), ...)` with `S = 1 + 2 gamma(3)` and `S2` two floats above it
-//! ([`FAR_INV_SCALE`]), so the per-node dependent chain loses a multiplication. It culls
-//! nothing the form above keeps (proof at [`FAR_INV_SCALE`]), so the node test stays a
-//! conservative cull and every answer is unchanged.
-//!
 //! computed as `(o_x - near_x) * (-inv_x)`: negation is exact and IEEE subtraction and
 //! multiplication are sign-symmetric, so every product is the same value (a zero product may
 //! have the other sign; `max(x, acc)` returns `acc` on equal zeros, so `t_near` is
@@ -53,27 +47,13 @@ use crate::leaf8::{AllLeaf, AnyLeaf, ClosestCtx, ClosestLeaf, LeafTest8};
 use crate::node::{is_leaf, leaf_first};
 use crate::node8::Node8;
 use crate::stats::{Counter, NoStats, TraversalStats};
-use crate::traverse::{Best, pop_within, sort_dedup_hits};
+use crate::traverse::{Best, pop_closer, sort_dedup_hits};
 use crate::tri4::Tri4Ray;
 use parallax_core::simd::{max_or_rhs, min_or_rhs};
 
 /// Stack entries of the 8-wide traversal: a node pushes at most 7, and the build checks
 /// `7 * depth8 < STACK8_SIZE`.
 pub(crate) const STACK8_SIZE: usize = 576;
-
-/// The scale of the far planes' reciprocals: `S2 = 1 + 10 * 2^-24`, two floats above
-/// `S = ROBUST_FAR_SCALE = 1 + 6 * 2^-24`.
-///
-/// Claim: for finite `s = o - b` and `r = -1 / d` with `s * r >= 0` (no underflow),
-/// `fl(s * fl(r * S2)) >= fl(fl(s * r) * S)`. Both sides have the sign of `s * r`; with
-/// `u = 2^-24`, `|fl(r * S2)| >= |r| S2 (1 - u)` and `|fl(s * r) * S| <= |s r| (1 + u) S`,
-/// and `S2 (1 - u) = 1 + 9u - 10u^2 > (1 + u)(1 + 6u) = 1 + 7u + 6u^2`; rounding is monotone.
-/// Also `fl(min(t_max, p_x, p_y, p_z) * S) = min(fl(t_max * S), fl(p_x * S), ...)`
-/// (monotone), and `s * inf` is NaN or infinite in both forms. So for `t_min >= 0` every lane
-/// the unfolded test (`Aabb::intersect`'s form) hits is hit: its lanes with a negative
-/// per-axis far distance are culled by `t_near >= t_min >= 0` in both. NaN lanes are the same
-/// lanes in both forms and ignored by the same min / max order.
-pub(crate) const FAR_INV_SCALE: f32 = f32::from_bits(ROBUST_FAR_SCALE.to_bits() + 2);
 
 /// A ray prepared for the 8-lane slab test.
 #[derive(Clone, Copy, Debug)]
@@ -82,8 +62,6 @@ pub(crate) struct RayBoxes8 {
     /// `-1 / dir`: the slab distances are `(o - b) * (-1 / d)`, equal to `(b - o) * (1 / d)`
     /// (negation is exact), with the bounds row as the subtraction's memory operand.
     neg_inv: [f32; 3],
-    /// `neg_inv * FAR_INV_SCALE`: the far planes' reciprocals ([`FAR_INV_SCALE`]).
-    neg_inv_far: [f32; 3],
     /// Byte offsets into `Node8::bounds` of the near / far plane rows (`32 * (2 axis + sign)`).
     near: [usize; 3],
     far: [usize; 3],
@@ -100,7 +78,6 @@ impl RayBoxes8 {
         Self {
             org: ray.origin.to_array(),
             neg_inv: (-inv).to_array(),
-            neg_inv_far: (-inv * FAR_INV_SCALE).to_array(),
             near: [32 * sx, 32 * (2 + sy), 32 * (4 + sz)],
             far: [32 * (1 - sx), 32 * (3 - sy), 32 * (5 - sz)],
             t_min: ray.t_min,
@@ -120,9 +97,7 @@ pub(crate) trait NodeTest8 {
     /// The lanes of the closest-hit leaf step's two-block triangle test (`lanes8.rs`): AVX2
     /// where the node test is, the portable twin elsewhere.
     type Pair: Pair8;
-    /// The test for the ray's interval up to `t_far_max = t_max * ROBUST_FAR_SCALE` (the far
-    /// bound already scaled, [`FAR_INV_SCALE`]).
-    fn test(&self, node: &Node8, t_far_max: f32) -> (u32, Self::Dist);
+    fn test(&self, node: &Node8, t_max: f32) -> (u32, Self::Dist);
     /// A copy whose values the node test reads are loaded from `self` at this point of the
     /// program, not kept in registers from an earlier read: after a call, which clobbers
     /// every vector register, that is one load per value instead of a spill and a reload.
@@ -163,7 +138,7 @@ impl NodeTest8 for Portable8 {
     }
 
     #[inline(always)]
-    fn test(&self, node: &Node8, t_far_max: f32) -> (u32, [f32; 8]) {
+    fn test(&self, node: &Node8, t_max: f32) -> (u32, [f32; 8]) {
         let rb = &self.0;
         let base = node.bounds.as_ptr() as *const u8;
         let mut mask = 0;
@@ -178,18 +153,15 @@ impl NodeTest8 for Portable8 {
             };
             let o = rb.org.map(Vec4::splat);
             let i = rb.neg_inv.map(Vec4::splat);
-            let f = rb.neg_inv_far.map(Vec4::splat);
             let tnx = (o[0] - b(rb.near[0])) * i[0];
             let tny = (o[1] - b(rb.near[1])) * i[1];
             let tnz = (o[2] - b(rb.near[2])) * i[2];
-            let tfx = (o[0] - b(rb.far[0])) * f[0];
-            let tfy = (o[1] - b(rb.far[1])) * f[1];
-            let tfz = (o[2] - b(rb.far[2])) * f[2];
+            let tfx = (o[0] - b(rb.far[0])) * i[0];
+            let tfy = (o[1] - b(rb.far[1])) * i[1];
+            let tfz = (o[2] - b(rb.far[2])) * i[2];
             let t_near = max_or_rhs(tnz, max_or_rhs(tny, max_or_rhs(tnx, Vec4::splat(rb.t_min))));
-            let t_far = min_or_rhs(
-                tfz,
-                min_or_rhs(tfy, min_or_rhs(tfx, Vec4::splat(t_far_max))),
-            );
+            let t_far = min_or_rhs(tfz, min_or_rhs(tfy, min_or_rhs(tfx, Vec4::splat(t_max))));
+            let t_far = t_far * ROBUST_FAR_SCALE;
             let hit = t_near.cmple(t_far);
             mask |= hit.bitmask() << (4 * h);
             t[4 * h..4 * h + 4].copy_from_slice(&t_near.to_array());
@@ -205,8 +177,6 @@ pub(crate) struct Avx2Boxes8 {
     org: [std::arch::x86_64::__m256; 3],
     /// `-1 / dir` ([`RayBoxes8`]).
     inv: [std::arch::x86_64::__m256; 3],
-    /// `-1 / dir * FAR_INV_SCALE` ([`FAR_INV_SCALE`]).
-    inv_far: [std::arch::x86_64::__m256; 3],
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -220,11 +190,9 @@ impl Avx2Boxes8 {
         unsafe {
             let [ox, oy, oz] = rb.org;
             let [ix, iy, iz] = rb.neg_inv;
-            let [fx, fy, fz] = rb.neg_inv_far;
             Self {
                 org: [_mm256_set1_ps(ox), _mm256_set1_ps(oy), _mm256_set1_ps(oz)],
                 inv: [_mm256_set1_ps(ix), _mm256_set1_ps(iy), _mm256_set1_ps(iz)],
-                inv_far: [_mm256_set1_ps(fx), _mm256_set1_ps(fy), _mm256_set1_ps(fz)],
                 rb,
             }
         }
@@ -247,11 +215,6 @@ impl NodeTest8 for Avx2Boxes8 {
             Self {
                 org: [rv(&self.org[0]), rv(&self.org[1]), rv(&self.org[2])],
                 inv: [rv(&self.inv[0]), rv(&self.inv[1]), rv(&self.inv[2])],
-                inv_far: [
-                    rv(&self.inv_far[0]),
-                    rv(&self.inv_far[1]),
-                    rv(&self.inv_far[2]),
-                ],
                 rb: RayBoxes8 {
                     near: [rv(&rb.near[0]), rv(&rb.near[1]), rv(&rb.near[2])],
                     far: [rv(&rb.far[0]), rv(&rb.far[1]), rv(&rb.far[2])],
@@ -281,7 +244,7 @@ impl NodeTest8 for Avx2Boxes8 {
     }
 
     #[inline(always)]
-    fn test(&self, node: &Node8, t_far_max: f32) -> (u32, Self::Dist) {
+    fn test(&self, node: &Node8, t_max: f32) -> (u32, Self::Dist) {
         use std::arch::x86_64::*;
         let rb = &self.rb;
         let base = node.bounds.as_ptr() as *const u8;
@@ -294,21 +257,22 @@ impl NodeTest8 for Avx2Boxes8 {
                     _mm256_load_ps(base.add($off) as *const f32)
                 };
             }
-            let (o, i, f) = (&self.org, &self.inv, &self.inv_far);
+            let (o, i) = (&self.org, &self.inv);
             let tnx = _mm256_mul_ps(_mm256_sub_ps(o[0], b!(rb.near[0])), i[0]);
             let tny = _mm256_mul_ps(_mm256_sub_ps(o[1], b!(rb.near[1])), i[1]);
             let tnz = _mm256_mul_ps(_mm256_sub_ps(o[2], b!(rb.near[2])), i[2]);
-            let tfx = _mm256_mul_ps(_mm256_sub_ps(o[0], b!(rb.far[0])), f[0]);
-            let tfy = _mm256_mul_ps(_mm256_sub_ps(o[1], b!(rb.far[1])), f[1]);
-            let tfz = _mm256_mul_ps(_mm256_sub_ps(o[2], b!(rb.far[2])), f[2]);
+            let tfx = _mm256_mul_ps(_mm256_sub_ps(o[0], b!(rb.far[0])), i[0]);
+            let tfy = _mm256_mul_ps(_mm256_sub_ps(o[1], b!(rb.far[1])), i[1]);
+            let tfz = _mm256_mul_ps(_mm256_sub_ps(o[2], b!(rb.far[2])), i[2]);
             let t_near = _mm256_max_ps(
                 tnz,
                 _mm256_max_ps(tny, _mm256_max_ps(tnx, _mm256_set1_ps(rb.t_min))),
             );
             let t_far = _mm256_min_ps(
                 tfz,
-                _mm256_min_ps(tfy, _mm256_min_ps(tfx, _mm256_set1_ps(t_far_max))),
+                _mm256_min_ps(tfy, _mm256_min_ps(tfx, _mm256_set1_ps(t_max))),
             );
+            let t_far = _mm256_mul_ps(t_far, _mm256_set1_ps(ROBUST_FAR_SCALE));
             let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(t_near, t_far);
             (_mm256_movemask_ps(hit) as u32, t_near)
         }
@@ -393,8 +357,6 @@ impl Bvh {
         stats: &mut C,
         leaf: &mut L,
     ) {
-        // The far bound of the node test and the pops, `t_max` scaled once per change.
-        let mut t_far_max = t_max * ROBUST_FAR_SCALE;
         let mut stack = [MaybeUninit::<u64>::uninit(); STACK8_SIZE];
         let mut sp = 0usize;
         let mut cur = root;
@@ -418,7 +380,7 @@ impl Bvh {
                 if PREFETCH_CHILD_LINE {
                     prefetch_child_line(node);
                 }
-                let (mask, dist) = nt.test(node, t_far_max);
+                let (mask, dist) = nt.test(node, t_max);
                 if mask != 0 {
                     // Leaf children come first (`node8.rs`): start the loads of the hit leaves'
                     // triangle blocks now, so their misses overlap the work until they are
@@ -488,7 +450,7 @@ impl Bvh {
                     cur = unsafe { *ks.get_unchecked(n - 1) } as u32;
                     continue;
                 }
-                match pop_within(&stack, &mut sp, t_far_max) {
+                match pop_closer(&stack, &mut sp, t_max) {
                     Some(next) => cur = next,
                     None => return,
                 }
@@ -497,8 +459,7 @@ impl Bvh {
             if leaf.test(self, cur, &mut t_max, stats) {
                 return;
             }
-            t_far_max = t_max * ROBUST_FAR_SCALE;
-            match pop_within(&stack, &mut sp, t_far_max) {
+            match pop_closer(&stack, &mut sp, t_max) {
                 Some(next) => cur = next,
                 None => return,
             }
