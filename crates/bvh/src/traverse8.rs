@@ -323,17 +323,19 @@ impl Bvh {
         #[cfg(target_arch = "x86_64")]
         {
             use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-            // Branch-free: the first hit leaf lane only (none: the node's own first line).
-            let m = mask & node.leaf_mask;
-            let c = (m.trailing_zeros() & 7) as usize;
-            let r = node.child[c];
-            let b = self.blocks.as_ptr().wrapping_add(leaf_first(r) as usize) as *const i8;
-            let b = std::hint::select_unpredictable(m != 0, b, node as *const Node8 as *const i8);
-            // SAFETY: prefetches never fault; the address is only a hint.
-            unsafe {
-                _mm_prefetch::<_MM_HINT_T0>(b);
-                _mm_prefetch::<_MM_HINT_T0>(b.wrapping_add(64));
-                _mm_prefetch::<_MM_HINT_T0>(b.wrapping_add(128));
+            let mut m = mask & node.leaf_mask;
+            while m != 0 {
+                let c = m.trailing_zeros() as usize;
+                m &= m - 1;
+                let r = node.child[c];
+                debug_assert!(is_leaf(r));
+                let b = self.blocks.as_ptr().wrapping_add(leaf_first(r) as usize) as *const i8;
+                // SAFETY: prefetches never fault; the address is only a hint.
+                unsafe {
+                    _mm_prefetch::<_MM_HINT_T0>(b);
+                    _mm_prefetch::<_MM_HINT_T0>(b.wrapping_add(64));
+                    _mm_prefetch::<_MM_HINT_T0>(b.wrapping_add(128));
+                }
             }
         }
         #[cfg(not(target_arch = "x86_64"))]
