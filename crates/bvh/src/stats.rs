@@ -66,7 +66,7 @@ pub trait Counter {
     fn leaf(&mut self);
     fn triangle(&mut self, hit: bool);
     /// One [`Counter::triangle`] per set bit of `tested` (lanes of a SIMD triangle test), hit
-    /// where `hit` has the bit too. Inlines to nothing for [`NoStats`].
+    /// where `hit` has the bit too. [`NoStats`] overrides it with an empty body.
     #[inline(always)]
     fn triangles(&mut self, tested: u32, hit: u32) {
         let mut m = tested;
@@ -91,6 +91,10 @@ impl Counter for NoStats {
     fn leaf(&mut self) {}
     #[inline(always)]
     fn triangle(&mut self, _: bool) {}
+    /// Empty: the default's loop over the set bits would stay in the kernels (LLVM keeps a
+    /// side-effect-free loop whose termination it does not prove).
+    #[inline(always)]
+    fn triangles(&mut self, _: u32, _: u32) {}
 }
 
 impl Counter for TraversalStats {
