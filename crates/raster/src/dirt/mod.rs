@@ -45,7 +45,6 @@ mod build;
 mod capture;
 pub mod clip;
 mod cube;
-mod cull;
 mod fill;
 pub mod mip;
 mod setup;

@@ -24,7 +24,6 @@ use parallax_scene::TriangleMesh;
 use parallax_scene::camera::Pinhole;
 
 use super::clip::Poly;
-use super::cull::FaceCull;
 
 /// Guard band (pixels) around the film: triangles are clipped to it in camera space before
 /// projection, so projected coordinates stay small (well conditioned) whatever the near plane.
@@ -137,37 +136,6 @@ impl ViewXf {
         }
     }
 
-    /// The signed axes of an axis view's rotation rows (the cube faces).
-    pub fn axes(&self) -> Option<[(usize, f64); 3]> {
-        self.axes
-    }
-
-    /// The guard planes' slopes `[ax_lo, ax_hi, ay_lo, ay_hi]`.
-    pub fn slopes(&self) -> [f64; 4] {
-        self.slopes
-    }
-
-    /// The near plane (view depth).
-    pub fn near(&self) -> f64 {
-        self.near
-    }
-
-    /// Whether this is an axis view with `other`'s eye, near plane and guard slopes (its
-    /// outcodes are `other`'s of permuted, signed components: [`super::cull::FaceCull`]).
-    pub fn shares_cull_with(&self, other: &ViewXf) -> bool {
-        self.axes.is_some()
-            && self.eye == other.eye
-            && self.near == other.near
-            && self.slopes == other.slopes
-    }
-
-    /// Whether [`Self::setup`] drops the triangle with corner offsets `d` by its outcodes.
-    #[cfg(test)]
-    pub fn outcode_culled(&self, d: &[[f64; 3]; 3]) -> bool {
-        let q = [self.rotate(d[0]), self.rotate(d[1]), self.rotate(d[2])];
-        self.cut(&q).is_none()
-    }
-
     #[cfg(test)]
     fn to_camera(&self, p: DVec3) -> DVec3 {
         self.rotate((p - self.eye).to_array())
@@ -235,10 +203,20 @@ impl ViewXf {
         })
     }
 
-    /// The planes camera-space triangle `q` crosses (bit `k`: some corner outside plane `k`
-    /// of `planes`), or `None` when all three corners are outside one plane (culled).
+    /// Sets triangle `t` up for the fill (module docs): its entry, with its clipped
+    /// projection written to `poly`, or `None` when nothing of it is left in the view; `d` are
+    /// its finite corners minus the view's eye.
     #[inline(always)]
-    fn cut(&self, q: &[DVec3; 3]) -> Option<u32> {
+    pub fn setup(
+        &self,
+        t: usize,
+        d: &[[f64; 3]; 3],
+        world_mag: f64,
+        poly: &mut Poly,
+    ) -> Option<SetupEntry> {
+        let q = [self.rotate(d[0]), self.rotate(d[1]), self.rotate(d[2])];
+        // Outside one plane with all three corners: culled; else the planes some corner is
+        // outside of cut it.
         // The near plane first: it alone culls most triangles behind a cube face.
         let n = [
             self.near_out(q[0]),
@@ -256,24 +234,7 @@ impl ViewXf {
         if o[0] & o[1] & o[2] != 0 {
             return None;
         }
-        Some(o[0] | o[1] | o[2])
-    }
-
-    /// Sets triangle `t` up for the fill (module docs): its entry, with its clipped
-    /// projection written to `poly`, or `None` when nothing of it is left in the view; `d` are
-    /// its finite corners minus the view's eye.
-    #[inline(always)]
-    pub fn setup(
-        &self,
-        t: usize,
-        d: &[[f64; 3]; 3],
-        world_mag: f64,
-        poly: &mut Poly,
-    ) -> Option<SetupEntry> {
-        let q = [self.rotate(d[0]), self.rotate(d[1]), self.rotate(d[2])];
-        // Outside one plane with all three corners: culled; else the planes some corner is
-        // outside of cut it.
-        let cut = self.cut(&q)?;
+        let cut = o[0] | o[1] | o[2];
         if cut == 0 {
             poly.v[0] = self.project(q[0]);
             poly.v[1] = self.project(q[1]);
@@ -317,21 +278,16 @@ impl ViewXf {
     /// view; stops at `f`'s first error. Each triangle's corners are read and converted once
     /// for all views, and their offsets from the eye once for the views that share it
     /// (`same_eye[k]`: view `k` has the eye of view `k - 1`; the camera view and the cube
-    /// faces around its eye). `cull` (of `views`, [`FaceCull::new`]) decides the outcode cull
-    /// of its group of views once per triangle.
+    /// faces around its eye).
     #[inline(always)]
     pub fn setup_range<E>(
         views: &[ViewXf],
         same_eye: &[bool],
-        cull: Option<&FaceCull>,
         mesh: &TriangleMesh,
         range: std::ops::Range<usize>,
         mut f: impl FnMut(usize, &SetupEntry, &[DVec3]) -> Result<(), E>,
     ) -> Result<(), E> {
         let mut poly = Poly::EMPTY;
-        // The cube faces' outcode cull for all of them at once: a face not in `keep` would
-        // drop the triangle by its outcodes.
-        let (members, first) = cull.map_or((0, usize::MAX), |c| (c.members(), c.first_view()));
         for t in range {
             let [a, b, c] = mesh.triangle(t);
             // Finite corners have finite camera-space points in every view (f32
@@ -342,16 +298,9 @@ impl ViewXf {
             let world_mag = a.abs().max(b.abs()).max(c.abs()).max_element() as f64;
             let p = [a.as_dvec3(), b.as_dvec3(), c.as_dvec3()];
             let mut d = [[0.0; 3]; 3];
-            let mut keep = u32::MAX;
             for (k, xf) in views.iter().enumerate() {
                 if !same_eye[k] {
                     d = p.map(|p| (p - xf.eye).to_array());
-                }
-                if k == first {
-                    keep = cull.map_or(u32::MAX, |c| c.keep(&d) | !members);
-                }
-                if k < 32 && keep >> k & 1 == 0 {
-                    continue;
                 }
                 if let Some(e) = xf.setup(t, &d, world_mag, &mut poly) {
                     f(k, &e, poly.verts())?;
