@@ -11,7 +11,8 @@
 //! `N` times), `bvh` (the BVH build `N` times), `trace-dirt` / `trace-bvh` (the diffuse rays of
 //! `bench dirt` traced `N` times). 1024x512 film, the `bench dirt` defaults
 //! ([`DIRT_DEFAULTS`]; `DIRT_NOCAM` set: no camera view, the cube alone; `DIRT_FACE`,
-//! `DIRT_TILE`, `DIRT_BUCKETS`: other face size, `S`, `B`; `DIRT_STATS`: print each build's
+//! `DIRT_TILE`, `DIRT_BUCKETS`: other face size, `S`, `B`; `DIRT_CAMERA_TILE`: the camera
+//! view's `S` (`none`: the faces' `S`); `DIRT_STATS`: print each build's
 //! fragments, entries and a hash of its arrays; `DIRT_TIME`: the min and median CPU time of
 //! the `dirt` / `bvh` builds). One thread unless
 //! `RAYON_NUM_THREADS` says otherwise.
@@ -131,6 +132,9 @@ fn main() {
     opts.face_size = env("DIRT_FACE", opts.face_size);
     opts.capture.tile_size = env("DIRT_TILE", opts.capture.tile_size);
     opts.capture.buckets = env("DIRT_BUCKETS", opts.capture.buckets);
+    if let Ok(s) = std::env::var("DIRT_CAMERA_TILE") {
+        opts.camera_tile_size = (s != "none").then(|| s.parse().expect("DIRT_CAMERA_TILE"));
+    }
     let build = || DirtViews::build(&scene.mesh, pinhole, eye, &opts).expect("dirt");
     let mut hits = 0u64;
     match args[2].as_str() {

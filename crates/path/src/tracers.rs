@@ -260,6 +260,7 @@ mod tests {
                         buckets,
                         ..DIRT_DEFAULTS.capture
                     },
+                    ..DIRT_DEFAULTS
                 },
                 ..TracerOptions::default()
             };

@@ -34,6 +34,7 @@ fn main() {
                     buckets: p(3),
                     ..Default::default()
                 },
+                camera_tile_size: None,
             };
             let v = DirtViews::build(&scene.mesh, Some(&cam), desc.eye, &o).unwrap();
             for c in v.views() {

@@ -568,6 +568,7 @@ fn views_are_deterministic_across_thread_counts() {
         let o = DirtViewsOptions {
             face_size: 24,
             capture: opts(2, 5),
+            camera_tile_size: None,
         };
         pool.install(|| DirtViews::build(&scene.mesh, Some(&cam), desc.eye, &o).unwrap())
     };
@@ -582,6 +583,42 @@ fn views_are_deterministic_across_thread_counts() {
     assert_eq!(a.views().count(), 7);
 }
 
+/// A camera view with its own tile size is the capture that view gets alone at that size, and
+/// the cube faces keep theirs (the views share only the setup pass and the entry budget).
+#[test]
+fn camera_tile_size_sets_the_camera_view_s() {
+    let scene = Scene::load("atrium").unwrap();
+    let desc = scene.camera(None).unwrap();
+    let cam = Pinhole::new(&desc, 64, 40).unwrap();
+    let build = |camera_tile_size| {
+        let o = DirtViewsOptions {
+            face_size: 24,
+            capture: opts(2, 5),
+            camera_tile_size,
+        };
+        DirtViews::build(&scene.mesh, Some(&cam), desc.eye, &o).unwrap()
+    };
+    let (coarse, same) = (build(Some(8)), build(None));
+    let c = coarse.camera.as_ref().unwrap();
+    assert_eq!(c.tile_size(), 8);
+    assert_eq!((c.stats().cells_x, c.stats().cells_y), (8, 5));
+    let alone = DirtCapture::build(&scene.mesh, &cam, &opts(8, 5)).unwrap();
+    assert_eq!(c.offsets(), alone.offsets());
+    assert_eq!(c.ids(), alone.ids());
+    assert_eq!(c.cell_records(), alone.cell_records());
+    assert_eq!(c.mip_arrays().1, alone.mip_arrays().1);
+    for (x, y) in coarse.cube.faces.iter().zip(&same.cube.faces) {
+        assert_eq!(x.tile_size(), 2);
+        assert_eq!(x.offsets(), y.offsets());
+        assert_eq!(x.ids(), y.ids());
+        assert_eq!(x.mip_arrays().1, y.mip_arrays().1);
+    }
+    let fine = same.camera.as_ref().unwrap();
+    assert_eq!(fine.tile_size(), 2);
+    assert!(c.stats().fragments < fine.stats().fragments);
+    assert!(c.stats().fragments > 0);
+}
+
 /// The views are set up and rasterized together: each view is billed that stage's wall time
 /// in proportion to its fragments, so the views' `setup_ms` are proportional to their
 /// fragment counts (and the camera view, with most fragments, gets the largest share).
@@ -593,6 +630,7 @@ fn setup_time_is_billed_by_fragments() {
     let o = DirtViewsOptions {
         face_size: 32,
         capture: opts(1, 8),
+        camera_tile_size: None,
     };
     let views = DirtViews::build(&scene.mesh, Some(&cam), desc.eye, &o).unwrap();
     let st: Vec<_> = views.views().map(|v| v.stats().clone()).collect();

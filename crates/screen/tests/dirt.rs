@@ -126,6 +126,7 @@ fn views_opts(face: u32, tile: u32, buckets: u32) -> DirtViewsOptions {
             buckets,
             ..DirtOptions::default()
         },
+        camera_tile_size: None,
     }
 }
 

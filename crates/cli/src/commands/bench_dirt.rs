@@ -27,9 +27,14 @@ pub struct DirtBenchArgs {
     /// Cube face size in pixels.
     #[arg(long, default_value_t = 128)]
     pub face: u32,
-    /// Tile size S (a power of two): one primitive list per S x S pixels.
-    #[arg(long, default_value_t = 4)]
-    pub tile: u32,
+    /// Tile size S (a power of two): one primitive list per S x S pixels [default: 4 for the
+    /// cube faces, 8 for the camera view (the tracers' configuration); given alone, S of every
+    /// view].
+    #[arg(long)]
+    pub tile: Option<u32>,
+    /// The camera view's tile size S [default: 8, or `--tile` when that is given].
+    #[arg(long)]
+    pub camera_tile: Option<u32>,
     /// Depth buckets B per cell.
     #[arg(long, default_value_t = 16)]
     pub buckets: u32,
@@ -76,13 +81,19 @@ pub fn run_bench(a: &DirtBenchArgs, quiet: bool) -> Result<()> {
     }
     let scene = a.view.load_scene()?;
     let camera = a.view.camera(&scene, a.width, a.height)?;
+    const TRACING: DirtViewsOptions = DirtViewsOptions::TRACING;
     let opts = DirtBenchOptions {
         views: DirtViewsOptions {
             face_size: a.face,
             capture: DirtOptions {
-                tile_size: a.tile,
+                tile_size: a.tile.unwrap_or(TRACING.capture.tile_size),
                 buckets: a.buckets,
                 ..DirtOptions::default()
+            },
+            camera_tile_size: match (a.camera_tile, a.tile) {
+                (Some(s), _) => Some(s),
+                (None, Some(_)) => None,
+                (None, None) => TRACING.camera_tile_size,
             },
         },
         repeats: a.repeats,
@@ -118,7 +129,7 @@ pub fn run_bench(a: &DirtBenchArgs, quiet: bool) -> Result<()> {
 fn print(r: &DirtBenchReport) {
     let o = &r.options.views;
     println!(
-        "DIRT vs BVH, {}x{}, {}cube faces {}^2, S = {}, B = {}, {} threads, best of {} interleaved rounds\n",
+        "DIRT vs BVH, {}x{}, {}cube faces {}^2, S = {}{}, B = {}, {} threads, best of {} interleaved rounds\n",
         r.width,
         r.height,
         if r.options.camera_view {
@@ -128,6 +139,10 @@ fn print(r: &DirtBenchReport) {
         },
         o.face_size,
         o.capture.tile_size,
+        match o.camera_tile_size {
+            Some(s) if r.options.camera_view => format!(" (camera view S = {s})"),
+            _ => String::new(),
+        },
         o.capture.buckets,
         r.threads,
         r.options.repeats

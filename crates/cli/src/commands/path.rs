@@ -52,9 +52,13 @@ pub struct PathFlags {
     /// DIRT: cube face size in pixels [default: 128].
     #[arg(long)]
     pub dirt_face: Option<u32>,
-    /// DIRT: tile size S (a power of two), one primitive list per S x S pixels [default: 4].
+    /// DIRT: tile size S (a power of two), one primitive list per S x S pixels [default: 4 for
+    /// the cube faces, 8 for the camera view; given alone, S of every view].
     #[arg(long)]
     pub dirt_tile: Option<u32>,
+    /// DIRT: the camera view's tile size S [default: 8, or `--dirt-tile` when that is given].
+    #[arg(long)]
+    pub dirt_camera_tile: Option<u32>,
     /// DIRT: depth buckets B per cell [default: 16].
     #[arg(long)]
     pub dirt_buckets: Option<u32>,
@@ -164,6 +168,12 @@ impl PathFlags {
         d.face_size = self.dirt_face.unwrap_or(d.face_size);
         d.capture.tile_size = self.dirt_tile.unwrap_or(d.capture.tile_size);
         d.capture.buckets = self.dirt_buckets.unwrap_or(d.capture.buckets);
+        // `--dirt-tile` alone sets S for every view.
+        d.camera_tile_size = match (self.dirt_camera_tile, self.dirt_tile) {
+            (Some(s), _) => Some(s),
+            (None, Some(_)) => None,
+            (None, None) => d.camera_tile_size,
+        };
         o
     }
 

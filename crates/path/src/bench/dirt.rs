@@ -17,7 +17,7 @@
 //!
 //! | option | type | default | meaning |
 //! |---|---|---|---|
-//! | `views` | [`DirtViewsOptions`] | [`DIRT_DEFAULTS`]: face 128, S 4, B 16 | the configuration of the build and Table 1 |
+//! | `views` | [`DirtViewsOptions`] | [`DIRT_DEFAULTS`]: face 128, S 4 (camera view 8), B 16 | the configuration of the build and Table 1 |
 //! | `repeats` | u32 | 3 | interleaved rounds per measurement (best reported) |
 //! | `sweep_buckets` | `Vec<u32>` | 1, 4, 8, 16, 32 | `B` values of the bucket sweep (at the configured `S`) |
 //! | `sweep_tiles` | `Vec<u32>` | 1, 2, 4, 8 | `S` values of the tile sweep (at the configured `B`) |
@@ -226,19 +226,24 @@ pub fn run(
     let configs = opts
         .sweep_buckets
         .iter()
-        .map(|&b| (opts.views.capture.tile_size, b))
+        .map(|&b| {
+            let c = &opts.views;
+            (c.capture.tile_size, b, c.camera_tile_size)
+        })
+        // The tile sweep sets S for every view.
         .chain(
             opts.sweep_tiles
                 .iter()
-                .map(|&s| (s, opts.views.capture.buckets)),
+                .map(|&s| (s, opts.views.capture.buckets, None)),
         );
-    for (tile, buckets) in configs {
+    for (tile, buckets, camera_tile_size) in configs {
         let v = DirtViewsOptions {
             capture: DirtOptions {
                 tile_size: tile,
                 buckets,
                 ..opts.views.capture
             },
+            camera_tile_size,
             ..opts.views
         };
         sweep.push(sweep_row(

@@ -114,23 +114,35 @@ pub(super) fn build(
     view: &Pinhole,
     opts: &DirtOptions,
 ) -> Result<DirtCapture, DirtError> {
-    let caps = build_views(mesh, std::slice::from_ref(view), opts)?;
+    let caps = build_views(mesh, std::slice::from_ref(view), opts, &[opts.tile_size])?;
     Ok(caps.into_iter().next().expect("one view"))
 }
 
 /// The captures of several views of one mesh (the camera view and the cube map's faces):
 /// the triangle setup and rasterization in one pass over the mesh for all of them
 /// ([`setup_and_raster`]), then every later stage parallel over all views at once;
-/// `opts.max_entries` bounds the entries of all views together.
+/// `opts.max_entries` bounds the entries of all views together. View `k` is built with tile
+/// size `tiles[k]` (the other options are `opts`' for every view).
 pub(super) fn build_views(
     mesh: &TriangleMesh,
     views: &[Pinhole],
     opts: &DirtOptions,
+    tiles: &[u32],
 ) -> Result<Vec<DirtCapture>, DirtError> {
     let t_start = Instant::now();
+    assert_eq!(views.len(), tiles.len(), "one tile size per view");
     let grids = views
         .iter()
-        .map(|v| grid(v, opts))
+        .zip(tiles)
+        .map(|(v, &s)| {
+            grid(
+                v,
+                &DirtOptions {
+                    tile_size: s,
+                    ..*opts
+                },
+            )
+        })
         .collect::<Result<Vec<_>, _>>()?;
     let xfs: Vec<ViewXf> = views
         .iter()
@@ -284,7 +296,13 @@ fn finish_views(
         .zip(views)
         .zip(grids)
         .zip(&in_view)
-        .map(|(((outs, view), g), &in_view)| assemble_view(outs, view, g, opts, in_view, ntri))
+        .map(|(((outs, view), g), &in_view)| {
+            let opts = DirtOptions {
+                tile_size: g.s,
+                ..*opts
+            };
+            assemble_view(outs, view, g, &opts, in_view, ntri)
+        })
         .collect();
     // The assembly and the mips ran together: their wall time split by their work.
     let asm_wall = ms(t_asm);

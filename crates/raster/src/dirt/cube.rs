@@ -26,7 +26,7 @@ impl DirtCube {
         let views: Vec<_> = (0..6).map(|i| cube.face_camera(i)).collect();
         Ok(DirtCube {
             cube: cube.clone(),
-            faces: super::build::build_views(mesh, &views, opts)?,
+            faces: super::build::build_views(mesh, &views, opts, &[opts.tile_size; 6])?,
         })
     }
 

@@ -8,6 +8,7 @@
 //! |---|---|---|---|
 //! | `face_size` | u32 | 256 | cube face size in pixels (`1..=`[`MAX_FACE_SIZE`]) |
 //! | `capture` | [`DirtOptions`] | S = 1, B = 8 | tile size `S`, buckets `B`, near plane and entry budget of every view (the budget bounds the sum over all views) |
+//! | `camera_tile_size` | `Option<u32>` | `None` | the camera view's `S` when it differs from the cube faces' (`capture.tile_size`); a coarser camera grid lists fewer cell-triangle pairs (a cheaper build) in larger cells (more triangle tests per ray) |
 //!
 //! The camera view and the six faces are built together: one triangle setup pass over the mesh
 //! for all seven views, then the fill of every band of every view in one parallel loop (one
@@ -33,12 +34,14 @@ pub const MAX_FACE_SIZE: u32 = 4096;
 pub struct DirtViewsOptions {
     pub face_size: u32,
     pub capture: DirtOptions,
+    pub camera_tile_size: Option<u32>,
 }
 
 impl DirtViewsOptions {
-    /// The configuration tracing uses: 128^2 cube faces, 4 x 4 tiles, 16 buckets (the
-    /// fastest trace of `bench dirt`'s sweeps at a build close to the BVH's;
-    /// docs/notes/dirt.md).
+    /// The configuration tracing uses: 128^2 cube faces, 4 x 4 tiles on the faces and 8 x 8 on
+    /// the camera view, 16 buckets (the fastest trace of `bench dirt`'s sweeps at a build close
+    /// to the BVH's; the camera view's coarser grid lists ~55 % fewer cell-triangle pairs for
+    /// about the same trace; docs/notes/dirt.md).
     pub const TRACING: DirtViewsOptions = DirtViewsOptions {
         face_size: 128,
         capture: DirtOptions {
@@ -48,6 +51,7 @@ impl DirtViewsOptions {
             max_entries: 1 << 28,
             cell_depth: super::CellDepth::Corners,
         },
+        camera_tile_size: Some(8),
     };
 }
 
@@ -56,6 +60,7 @@ impl Default for DirtViewsOptions {
         Self {
             face_size: 256,
             capture: DirtOptions::default(),
+            camera_tile_size: None,
         }
     }
 }
@@ -117,12 +122,18 @@ impl DirtViews {
             .cloned()
             .chain((0..6).map(|i| cube_map.face_camera(i)))
             .collect();
+        let s = opts.capture.tile_size;
+        let tiles: Vec<u32> = camera
+            .map(|_| opts.camera_tile_size.unwrap_or(s))
+            .into_iter()
+            .chain([s; 6])
+            .collect();
         let ((triangles, triangles_ms), caps) = rayon::join(
             || {
                 let t = Instant::now();
                 (DirtTriangles::from_mesh(mesh), ms(t))
             },
-            || super::build::build_views(mesh, &pinholes, &opts.capture),
+            || super::build::build_views(mesh, &pinholes, &opts.capture, &tiles),
         );
         let mut caps = caps?;
         let faces = caps.split_off(caps.len() - 6);

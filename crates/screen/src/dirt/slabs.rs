@@ -360,6 +360,7 @@ mod tests {
                     buckets,
                     ..DirtOptions::default()
                 },
+                camera_tile_size: None,
             };
             let views = DirtViews::build(&m, None, glam::Vec3::ZERO, &opts).expect("build");
             for cap in &views.cube.faces {
