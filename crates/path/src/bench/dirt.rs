@@ -312,10 +312,7 @@ impl BuiltDirt {
     }
 
     fn bytes(&self) -> u64 {
-        self.tracer.views().bytes()
-            + self.tracer.texel_bytes()
-            + self.tracer.cell_line_bytes()
-            + self.tracer.corner_bytes()
+        self.tracer.views().bytes() + self.tracer.texel_bytes() + self.tracer.cell_line_bytes()
     }
 }
 
@@ -548,11 +545,8 @@ fn memory_rows(name: &str, camera: &Camera, tracer: &DirtTracer) -> Vec<MemoryRo
             "(not counted by the paper)",
             views.triangles.len() as u64,
             0.0,
-            views.triangles.bytes() + tracer.corner_bytes(),
-            &format!(
-                "36 bytes per triangle: three f32 corners; + the tracer's shared corners: {} distinct corners (12 bytes each) and 8 bytes of corner indices per triangle",
-                tracer.corner_count()
-            ),
+            views.triangles.bytes(),
+            "36 bytes per triangle: three f32 corners",
         ),
         row(
             "hit buffer",

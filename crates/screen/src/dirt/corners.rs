@@ -1,12 +1,12 @@
 //! The triangle buffer as the tracer's tests read it (Vardis et al. 2017, §3 (iii) "vertex
 //! buffer" and Algorithm 1 line 13, `hit(r, pr_k)`): each distinct corner once, in a vertex
-//! buffer, and per triangle the index of its first corner and the other two as `i16` offsets
-//! from it (8 bytes), as the GPU version reads an indexed vertex buffer.
+//! buffer, and per triangle the indices of its three corners, as the GPU version reads an
+//! indexed vertex buffer.
 //!
 //! The capture's triangle buffer ([`DirtTri`], nine `f32` a triangle) repeats a corner for
 //! every triangle that shares it (about six in a closed mesh). The tests of a ray read the
 //! corners of triangles scattered over the whole buffer; a buffer of one vertex per distinct
-//! corner plus 8 bytes of indices a triangle is smaller, so more of it stays in cache.
+//! corner plus three `u32` indices a triangle is smaller, so more of it stays in cache.
 //!
 //! **Exactness.** Corners are shared only when their three coordinates are equal bit for bit
 //! (`-0.0` and `0.0` are different corners, a NaN is a corner of its own bits), so corner `k`
@@ -14,9 +14,7 @@
 //! same `f32` values gives the same answer (`tri4`, tested here and in `tests/dirt.rs`).
 //!
 //! **Order.** Vertices are numbered in the order the triangles (mesh order) first use them,
-//! so triangles near each other in the mesh read vertices near each other. A triangle whose
-//! corners lie more than `i16::MAX` apart in that numbering gets fresh copies of its three
-//! corners (same bits) at the end of the buffer, which later triangles then share.
+//! so triangles near each other in the mesh read vertices near each other.
 //!
 //! **Layout.** The vertex buffer ends with one padding vertex, so that a 16-byte load at any
 //! corner (its three coordinates and the next `f32`, `tri4`'s gather) stays inside it.
@@ -30,35 +28,7 @@ pub(crate) struct Corners {
     /// Distinct corners in first-use order, then one padding vertex.
     verts: Vec<Vec3>,
     /// Per triangle, its corners' indices into `verts` (each `< verts.len() - 1`).
-    idx: Vec<TriIndex>,
-}
-
-/// A triangle's corner indices: `a`, `a + d[0]`, `a + d[1]`.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-#[repr(C, align(8))]
-struct TriIndex {
-    a: u32,
-    d: [i16; 2],
-}
-
-impl TriIndex {
-    #[inline(always)]
-    fn get(self) -> [u32; 3] {
-        [
-            self.a,
-            self.a.wrapping_add_signed(self.d[0] as i32),
-            self.a.wrapping_add_signed(self.d[1] as i32),
-        ]
-    }
-
-    /// The form of `ix`, if its offsets fit.
-    fn new(ix: [u32; 3]) -> Option<TriIndex> {
-        let d = |k: usize| i16::try_from(ix[k] as i64 - ix[0] as i64).ok();
-        Some(TriIndex {
-            a: ix[0],
-            d: [d(1)?, d(2)?],
-        })
-    }
+    idx: Vec<[u32; 3]>,
 }
 
 impl Corners {
@@ -74,9 +44,7 @@ impl Corners {
         let mut idx = Vec::with_capacity(tris.len());
         for t in tris {
             let mut ix = [0u32; 3];
-            let mut slots = [0usize; 3];
-            let corners = [t.p0, t.p1, t.p2];
-            for (k, p) in corners.into_iter().enumerate() {
+            for (k, p) in [t.p0, t.p1, t.p2].into_iter().enumerate() {
                 let b = p.to_array().map(f32::to_bits);
                 let h = (b[0] as u64)
                     .wrapping_mul(0x9E37_79B9_7F4A_7C15)
@@ -98,26 +66,8 @@ impl Corners {
                     }
                     s = (s + 1) & mask;
                 };
-                slots[k] = s;
             }
-            let ti = TriIndex::new(ix).unwrap_or_else(|| {
-                // Corners too far apart: fresh copies, which the table now names.
-                let first = verts.len() as u32;
-                for (k, p) in corners.into_iter().enumerate() {
-                    if table[slots[k]] >= first {
-                        // A corner repeated within this triangle: copied already.
-                        ix[k] = table[slots[k]];
-                        continue;
-                    }
-                    let v = verts.len() as u32;
-                    table[slots[k]] = v;
-                    verts.push(p);
-                    vbits.push(p.to_array().map(f32::to_bits));
-                    ix[k] = v;
-                }
-                TriIndex::new(ix).expect("three consecutive vertices")
-            });
-            idx.push(ti);
+            idx.push(ix);
         }
         verts.push(Vec3::ZERO);
         Corners { verts, idx }
@@ -137,18 +87,13 @@ impl Corners {
     /// Triangle `id`'s corner indices.
     #[inline(always)]
     pub fn indices(&self, id: u32) -> [u32; 3] {
-        self.idx[id as usize].get()
+        self.idx[id as usize]
     }
 
     /// Triangle `id`'s corners, bit for bit the capture's.
     #[inline(always)]
     pub fn tri(&self, id: u32) -> [Vec3; 3] {
-        let [a, b, c] = self.indices(id);
-        [
-            self.verts[a as usize],
-            self.verts[b as usize],
-            self.verts[c as usize],
-        ]
+        self.idx[id as usize].map(|i| self.verts[i as usize])
     }
 
     /// The vertex buffer, padding vertex included: every index of [`Self::indices`] `i`
@@ -230,50 +175,8 @@ mod tests {
         distinct.sort_unstable();
         distinct.dedup();
         assert_eq!(c.vertex_count(), distinct.len());
-        assert!(
-            c.vertex_count() < tris.len() * 3 / 4,
-            "{}",
-            c.vertex_count()
-        );
+        assert!(c.vertex_count() < tris.len() * 3 / 4, "{}", c.vertex_count());
         assert_eq!(c.verts().len(), c.vertex_count() + 1);
-    }
-
-    /// Triangles whose corners lie more than `i16::MAX` apart in first-use order read back
-    /// bit for bit through fresh copies, and later triangles share the copies.
-    #[test]
-    fn far_corners_get_copies() {
-        let p = |i: u32| Vec3::new(i as f32, (i % 7) as f32, -(i as f32) * 0.5);
-        let mut tris: Vec<DirtTri> = (0..12_000)
-            .map(|i| DirtTri {
-                p0: p(3 * i),
-                p1: p(3 * i + 1),
-                p2: p(3 * i + 2),
-            })
-            .collect();
-        // Corners first used 36 000 and 35 997 vertices back, a new one; then a repeat.
-        let far = DirtTri {
-            p0: p(1),
-            p1: p(4),
-            p2: p(1_000_000),
-        };
-        tris.extend([far, far]);
-        // A degenerate far triangle (a corner twice).
-        tris.push(DirtTri {
-            p0: p(7),
-            p1: p(7),
-            p2: p(36_000 - 1),
-        });
-        let c = Corners::new(&tris);
-        let bits = |p: Vec3| p.to_array().map(f32::to_bits);
-        for (i, t) in tris.iter().enumerate() {
-            assert_eq!(c.tri(i as u32).map(bits), [t.p0, t.p1, t.p2].map(bits));
-        }
-        // 36 001 distinct corners; the far triangle's three copied once (the repeat shares
-        // them), the degenerate one's two distinct corners copied once each.
-        assert_eq!(c.vertex_count(), 36_001 + 3 + 2);
-        assert_eq!(c.indices(12_000), c.indices(12_001));
-        let [a, b, _] = c.indices(12_002);
-        assert_eq!(a, b);
     }
 
     #[test]

@@ -148,17 +148,6 @@ impl DirtTracer {
             .sum()
     }
 
-    /// Bytes of the tracer's shared-corner triangle buffer (`corners`: the distinct corners
-    /// and the corner indices), beside the capture's [`DirtViews::bytes`].
-    pub fn corner_bytes(&self) -> u64 {
-        self.corners.bytes()
-    }
-
-    /// Distinct corners of the triangle buffer (the tracer's vertex buffer, `corners`).
-    pub fn corner_count(&self) -> usize {
-        self.corners.vertex_count()
-    }
-
     /// The same tracer on every compiled copy this CPU runs (module docs), the build's
     /// baseline (the portable twin) first, the copy [`Self::new`] picks last: the same answers
     /// and counters on each. For tests and for in-process comparisons of the copies.

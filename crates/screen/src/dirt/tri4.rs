@@ -22,11 +22,11 @@
 //! many cells and buckets along the ray is tested once per stay in its slot. Its answer would
 //! be the same again, and it was offered to `best` already, so skipping it is exact.
 
+use glam::{Vec3, Vec4};
+use parallax_core::math::{WatertightRay, shear_vertex, watertight_lanes};
 use super::best::{Best, DirtCounters};
 use super::corners::Corners;
 use super::view::Isa;
-use glam::{Vec3, Vec4};
-use parallax_core::math::{WatertightRay, shear_vertex, watertight_lanes};
 
 /// Slots of the per-ray mailbox (a power of two).
 const MAILBOX: usize = 64;
@@ -266,20 +266,13 @@ fn gather_sse(c: &Corners, ids: [u32; 4]) -> [[Vec4; 3]; 3] {
         _mm_loadu_ps, _mm_movehl_ps, _mm_movelh_ps, _mm_unpackhi_ps, _mm_unpacklo_ps,
     };
     const _: () = assert!(std::mem::size_of::<Vec3>() == 12);
-    // (Written out: `array::map` is not always inlined here.)
-    let t = [
-        c.indices(ids[0]),
-        c.indices(ids[1]),
-        c.indices(ids[2]),
-        c.indices(ids[3]),
-    ];
+    let t = ids.map(|id| c.indices(id));
     let base = c.verts().as_ptr() as *const f32;
     // SAFETY: SSE is part of the x86_64 baseline; `Vec3` is three `f32` (size checked above);
     // every corner index `i` of a `Corners` is below `verts().len() - 1` (its invariant: the
     // buffer ends with a padding vertex), so floats `3 i .. 3 i + 4` are inside the buffer.
     let rows = |k: usize| unsafe {
-        let at = |l: usize| _mm_loadu_ps(base.add(3 * t[l][k] as usize));
-        let (a, b, c, d) = (at(0), at(1), at(2), at(3));
+        let [a, b, c, d] = t.map(|ix| _mm_loadu_ps(base.add(3 * ix[k] as usize)));
         let (lo01, lo23) = (_mm_unpacklo_ps(a, b), _mm_unpacklo_ps(c, d));
         let (hi01, hi23) = (_mm_unpackhi_ps(a, b), _mm_unpackhi_ps(c, d));
         [
