@@ -56,7 +56,6 @@
 
 mod best;
 mod cells;
-mod corners;
 mod slabs;
 #[cfg(test)]
 mod test_soup;
@@ -74,7 +73,6 @@ use rayon::prelude::*;
 use best::Best;
 pub use best::DirtCounters;
 use cells::CellLines;
-use corners::Corners;
 use slabs::Slabs;
 use tri4::Query;
 use view::{Exit, Isa, ViewConsts, ViewRay};
@@ -90,8 +88,6 @@ pub struct DirtTracer {
     slabs: Vec<Slabs>,
     /// The views' level-0 cells, one cache line each (`cells`), in the order of `consts`.
     cells: Vec<CellLines>,
-    /// The capture's triangle buffer with shared corners (`corners`), as the tests read it.
-    corners: Corners,
     /// Per cube face, the face across its left, right, top and bottom film edges.
     neighbours: [[usize; 4]; 6],
     /// The instruction set the tracer runs on (the same results on each).
@@ -105,15 +101,10 @@ impl DirtTracer {
         // The views' masks are independent: built side by side (`bench dirt` times this
         // construction as part of DIRT's build).
         let captures: Vec<_> = views.views().collect();
-        let ((slabs, cells), corners) = rayon::join(
-            || {
-                captures
-                    .into_par_iter()
-                    .map(|cap| (Slabs::new(cap), CellLines::new(cap)))
-                    .unzip()
-            },
-            || Corners::new(views.triangles.as_slice()),
-        );
+        let (slabs, cells) = captures
+            .into_par_iter()
+            .map(|cap| (Slabs::new(cap), CellLines::new(cap)))
+            .unzip();
         let neighbours = std::array::from_fn(|i| {
             let b = views.cube.cube.face_camera(i).frame.basis;
             [-b.x_axis, b.x_axis, b.y_axis, -b.y_axis].map(CubeMap::face_of)
@@ -123,7 +114,6 @@ impl DirtTracer {
             consts,
             slabs,
             cells,
-            corners,
             neighbours,
             isa: Isa::detect(),
         }
@@ -236,7 +226,7 @@ impl DirtTracer {
             return Best::NONE;
         };
         let wt = WatertightRay::new(ray);
-        let mut q = Query::new(wt, &self.corners, any);
+        let mut q = Query::new(wt, self.views.triangles.as_slice(), any);
         self.trace_views(ray, t0, t1, &mut q);
         *counters += q.counters;
         q.best

@@ -12,11 +12,10 @@
 //! rule, so the answer equals the scalar loop's ([`Query::test_scalar`], the slow twin, tested
 //! equal in this module's tests).
 //!
-//! **Corners.** The triangles' corners are read through their indices from the shared vertex
-//! buffer (`corners`), bit for bit the capture's. The four triangles' corners are turned into
-//! lanes by three 4x4 transposes of unaligned 16-byte loads, one per corner (`gather`: SSE, the
-//! x86_64 baseline; one component at a time elsewhere, the portable twin, tested bit-equal):
-//! moves only, so the lanes hold the very corners.
+//! **Corners.** The four triangles' corners are turned into lanes by three 4x4 transposes of
+//! unaligned 16-byte loads (`gather`: SSE, the x86_64 baseline; one component at a time
+//! elsewhere, the portable twin, tested bit-equal): moves only, so the lanes hold the very
+//! corners.
 //!
 //! **Mailbox.** Triangles tested lately (direct-mapped by id) are skipped: a triangle listed in
 //! many cells and buckets along the ray is tested once per stay in its slot. Its answer would
@@ -24,8 +23,9 @@
 
 use glam::{Vec3, Vec4};
 use parallax_core::math::{WatertightRay, shear_vertex, watertight_lanes};
+use parallax_raster::dirt::DirtTri;
+
 use super::best::{Best, DirtCounters};
-use super::corners::Corners;
 use super::view::Isa;
 
 /// Slots of the per-ray mailbox (a power of two).
@@ -38,7 +38,7 @@ pub(crate) struct Query<'a> {
     org: [Vec4; 3],
     shear: [Vec4; 3],
     t_min: Vec4,
-    pub tris: &'a Corners,
+    pub tris: &'a [DirtTri],
     /// Occlusion query: stop at the first hit.
     pub any: bool,
     pub best: Best,
@@ -47,7 +47,7 @@ pub(crate) struct Query<'a> {
 }
 
 impl<'a> Query<'a> {
-    pub fn new(wt: WatertightRay, tris: &'a Corners, any: bool) -> Self {
+    pub fn new(wt: WatertightRay, tris: &'a [DirtTri], any: bool) -> Self {
         let o = wt.origin;
         Query {
             org: [wt.kx, wt.ky, wt.kz].map(|k| Vec4::splat(o[k])),
@@ -160,9 +160,9 @@ impl<'a> Query<'a> {
                 continue;
             }
             self.counters.tests += 1;
-            let [p0, p1, p2] = self.tris.tri(id);
+            let tri = &self.tris[id as usize];
             let lim = self.best.limit(self.wt.t_max);
-            if let Some(h) = self.wt.intersect_within(p0, p1, p2, lim) {
+            if let Some(h) = self.wt.intersect_within(tri.p0, tri.p1, tri.p2, lim) {
                 self.best.offer(h.t, id, h.u, h.v);
                 if self.any {
                     return true;
@@ -177,8 +177,9 @@ impl<'a> Query<'a> {
     fn test4(&mut self, ids: &[u32; 4], n: usize) -> bool {
         self.counters.tests += n as u64;
         // Padding lanes repeat lane 0 (masked off below).
-        let lane = |l: usize| ids[if l < n { l } else { 0 }];
-        let corners = gather(self.tris, [lane(0), lane(1), lane(2), lane(3)]);
+        let tri = |l: usize| &self.tris[ids[if l < n { l } else { 0 }] as usize];
+        let t = [tri(0), tri(1), tri(2), tri(3)];
+        let corners = gather(t);
         let (kx, ky, kz) = (self.wt.kx, self.wt.ky, self.wt.kz);
         let project = |p: &[Vec4; 3]| shear_vertex([p[kx], p[ky], p[kz]], self.org, self.shear);
         let (va, vb, vc) = (
@@ -214,9 +215,9 @@ impl<'a> Query<'a> {
         while m != 0 {
             let l = m.trailing_zeros() as usize;
             m &= m - 1;
-            let [p0, p1, p2] = self.tris.tri(ids[l]);
+            let tri = t[l];
             let lim = self.best.limit(self.wt.t_max);
-            if let Some(h) = self.wt.intersect_within(p0, p1, p2, lim) {
+            if let Some(h) = self.wt.intersect_within(tri.p0, tri.p1, tri.p2, lim) {
                 self.best.offer(h.t, ids[l], h.u, h.v);
                 if self.any {
                     return true;
@@ -227,61 +228,64 @@ impl<'a> Query<'a> {
     }
 }
 
-/// The corners of four triangles as lanes, `[corner][axis]` (lane `l`: triangle `ids[l]`).
+/// The corners of four triangles as lanes, `[corner][axis]` (lane `l`: triangle `t[l]`).
 #[inline(always)]
-fn gather(c: &Corners, ids: [u32; 4]) -> [[Vec4; 3]; 3] {
+fn gather(t: [&DirtTri; 4]) -> [[Vec4; 3]; 3] {
     #[cfg(target_arch = "x86_64")]
     {
-        gather_sse(c, ids)
+        gather_sse(t)
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
-        gather_scalar(c, ids)
+        gather_scalar(t)
     }
 }
 
 /// [`gather`] one component at a time (the portable twin).
 #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
 #[inline(always)]
-fn gather_scalar(c: &Corners, ids: [u32; 4]) -> [[Vec4; 3]; 3] {
-    let t = ids.map(|id| c.tri(id));
-    std::array::from_fn(|k| {
-        let p = t.map(|tri| tri[k]);
+fn gather_scalar(t: [&DirtTri; 4]) -> [[Vec4; 3]; 3] {
+    let soa = |corner: fn(&DirtTri) -> Vec3| {
+        let p = t.map(corner);
         [
             Vec4::new(p[0].x, p[1].x, p[2].x, p[3].x),
             Vec4::new(p[0].y, p[1].y, p[2].y, p[3].y),
             Vec4::new(p[0].z, p[1].z, p[2].z, p[3].z),
         ]
-    })
+    };
+    [soa(|t| t.p0), soa(|t| t.p1), soa(|t| t.p2)]
 }
 
-/// [`gather`] as three 4x4 transposes of unaligned 16-byte loads, one per corner (SSE, part of
-/// the x86_64 baseline: no run-time dispatch needed): a load at vertex `i` holds its `x`, `y`,
-/// `z` and a float of the next vertex (dropped). Moves only: bit-identical to
+/// [`gather`] as three 4x4 transposes of unaligned loads (SSE, part of the x86_64 baseline:
+/// no run-time dispatch needed): floats 0-3 of each triangle hold `p0` (and `p1.x`), floats
+/// 3-6 `p1` (and `p2.x`), floats 5-8 `p1.z` and `p2`. Moves only: bit-identical to
 /// [`gather_scalar`] (tested).
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn gather_sse(c: &Corners, ids: [u32; 4]) -> [[Vec4; 3]; 3] {
+fn gather_sse(t: [&DirtTri; 4]) -> [[Vec4; 3]; 3] {
     use std::arch::x86_64::{
         _mm_loadu_ps, _mm_movehl_ps, _mm_movelh_ps, _mm_unpackhi_ps, _mm_unpacklo_ps,
     };
-    const _: () = assert!(std::mem::size_of::<Vec3>() == 12);
-    let t = ids.map(|id| c.indices(id));
-    let base = c.verts().as_ptr() as *const f32;
-    // SAFETY: SSE is part of the x86_64 baseline; `Vec3` is three `f32` (size checked above);
-    // every corner index `i` of a `Corners` is below `verts().len() - 1` (its invariant: the
-    // buffer ends with a padding vertex), so floats `3 i .. 3 i + 4` are inside the buffer.
+    const _: () = assert!(std::mem::size_of::<DirtTri>() == 36);
+    // SAFETY: SSE is part of the x86_64 baseline; `DirtTri` is `repr(C)`, nine `f32` (three
+    // `repr(C)` `Vec3`, size checked above), and the loads at floats `k <= 5` read floats
+    // `k..k + 4` of the triangle.
     let rows = |k: usize| unsafe {
-        let [a, b, c, d] = t.map(|ix| _mm_loadu_ps(base.add(3 * ix[k] as usize)));
+        let [a, b, c, d] = t.map(|tri| _mm_loadu_ps((tri as *const DirtTri as *const f32).add(k)));
+        // `(a0, b0, a1, b1)`, `(c0, d0, c1, d1)`, `(a2, b2, a3, b3)`, `(c2, d2, c3, d3)`.
         let (lo01, lo23) = (_mm_unpacklo_ps(a, b), _mm_unpacklo_ps(c, d));
         let (hi01, hi23) = (_mm_unpackhi_ps(a, b), _mm_unpackhi_ps(c, d));
         [
-            Vec4::from(_mm_movelh_ps(lo01, lo23)),
-            Vec4::from(_mm_movehl_ps(lo23, lo01)),
-            Vec4::from(_mm_movelh_ps(hi01, hi23)),
+            _mm_movelh_ps(lo01, lo23),
+            _mm_movehl_ps(lo23, lo01),
+            _mm_movelh_ps(hi01, hi23),
+            _mm_movehl_ps(hi23, hi01),
         ]
     };
-    [rows(0), rows(1), rows(2)]
+    let [x0, y0, z0, _] = rows(0);
+    let [x1, y1, z1, _] = rows(3);
+    let [_, x2, y2, z2] = rows(5);
+    [[x0, y0, z0], [x1, y1, z1], [x2, y2, z2]].map(|c| c.map(Vec4::from))
 }
 
 #[cfg(test)]
@@ -289,7 +293,6 @@ mod tests {
     use super::*;
     use parallax_core::Ray;
     use parallax_core::sampling::Rng;
-    use parallax_raster::dirt::DirtTri;
 
     /// The SSE gather moves the very bits of the scalar one, on finite, infinite, NaN and
     /// negative-zero corners.
@@ -321,26 +324,12 @@ mod tests {
                 }
             })
             .collect();
-        let c = Corners::new(&tris);
         let bits = |g: [[Vec4; 3]; 3]| g.map(|c| c.map(|v| v.to_array().map(f32::to_bits)));
-        for i in 0..tris.len() as u32 - 3 {
-            let t = [i, i + 1, i + 2, i + 3];
-            assert_eq!(bits(gather(&c, t)), bits(gather_scalar(&c, t)));
-            // The lanes hold the capture's corners.
-            let want = std::array::from_fn(|k| {
-                let p = t.map(|id| {
-                    let tri = &tris[id as usize];
-                    [tri.p0, tri.p1, tri.p2][k]
-                });
-                [
-                    Vec4::new(p[0].x, p[1].x, p[2].x, p[3].x),
-                    Vec4::new(p[0].y, p[1].y, p[2].y, p[3].y),
-                    Vec4::new(p[0].z, p[1].z, p[2].z, p[3].z),
-                ]
-            });
-            assert_eq!(bits(gather(&c, t)), bits(want));
-            let r = [i + 3, i + 3, i, i + 2];
-            assert_eq!(bits(gather(&c, r)), bits(gather_scalar(&c, r)));
+        for w in tris.windows(4) {
+            let t = [&w[0], &w[1], &w[2], &w[3]];
+            assert_eq!(bits(gather(t)), bits(gather_scalar(t)));
+            let r = [&w[3], &w[3], &w[0], &w[2]];
+            assert_eq!(bits(gather(r)), bits(gather_scalar(r)));
         }
     }
 
@@ -379,7 +368,6 @@ mod tests {
             });
         }
         let ids: Vec<u32> = (0..tris.len() as u32).collect();
-        let tris = Corners::new(&tris);
         let mut rays = vec![
             Ray::new(Vec3::ZERO, Vec3::Z),
             Ray::new(Vec3::new(1.0, 0.0, 0.0), Vec3::Z),
