@@ -92,6 +92,7 @@ use glam::{Mat3, Vec3, Vec4};
 use parallax_scene::camera::{Camera, Pinhole};
 
 use crate::SampleSet;
+use crate::cast::lanes16::LaneReduce;
 
 /// Unit roundoff of f32 (`2^-24`), the `U` of the bound above (the same constant as the
 /// watertight set-up's in `tri.rs`).
@@ -405,5 +406,265 @@ impl PacketBox {
         } else {
             (PacketClass::Partial, 0)
         }
+    }
+
+    /// [`PacketBox::classify_edges`] of the triangles `j..j + T::N` of `a` at once, one lane
+    /// per triangle (4 in an SSE register, 8 in an AVX one): per lane the products, sums and
+    /// compares of the per-triangle test's lanes, in the same order, so lane `k`'s decision
+    /// ([`RunClass::get`]) is `classify_edges` of triangle `j + k` (tested below). Lanes past
+    /// the caller's run hold other or stale triangles and are not read.
+    #[inline(always)]
+    pub fn classify_run<T: LaneReduce>(&self, a: &AffineRuns, j: usize) -> RunClass {
+        assert!(j + T::N <= a.cap);
+        let (xc, yc) = (T::splat(self.xc.x), T::splat(self.yc.x));
+        let (rx, ry, ka) = (
+            T::splat(self.rx.x),
+            T::splat(self.ry.x),
+            T::splat(self.ka.x),
+        );
+        let (zero, big) = (T::splat(0.0), T::splat(N1_SKIP));
+        // SAFETY (every load): streams below `STREAMS`, `j + T::N <= cap` (above).
+        let bk = unsafe { a.load::<T>(18, j) } * T::splat(self.kb);
+        let (mut out, mut inn, mut ok) = (0u32, [0u32; 3], u32::MAX);
+        for (e, ie) in inn.iter_mut().enumerate() {
+            let s = 6 * e;
+            // SAFETY: as above.
+            let (mx, my, mz) = unsafe {
+                (
+                    a.load::<T>(s, j),
+                    a.load::<T>(s + 1, j),
+                    a.load::<T>(s + 2, j),
+                )
+            };
+            // SAFETY: as above.
+            let (amx, amy, n1) = unsafe {
+                (
+                    a.load::<T>(s + 3, j),
+                    a.load::<T>(s + 4, j),
+                    a.load::<T>(s + 5, j),
+                )
+            };
+            let c = mx * xc + my * yc - mz;
+            let r = amx * rx + amy * ry;
+            let tau = n1 * ka + bk;
+            out |= T::bits((c + r + tau).lt(zero));
+            *ie = T::bits((c - r - tau).gt(zero));
+            ok &= T::bits(n1.lt(big));
+        }
+        RunClass {
+            out,
+            inn: inn[0] & inn[1] & inn[2],
+            edges: inn.map(|x| x & ok),
+        }
+    }
+}
+
+/// The affine forms of a tile's set-up triangles as a structure of arrays, for the run test
+/// ([`PacketBox::classify_run`]): per edge `i` the streams `m_x`, `m_y`, `m_z`, `|m_x|`,
+/// `|m_y|`, `|n_i|_1` of [`AffineTri`] (lanes `i`), then the edge band `TriSetup::bound`, each
+/// `cap` floats long (`RUN_PAD` more than the tile list, so a run's last chunk loads in bounds).
+#[derive(Clone, Debug, Default)]
+pub struct AffineRuns {
+    v: Vec<f32>,
+    cap: usize,
+}
+
+/// Streams of [`AffineRuns`]: six per edge and the band.
+const STREAMS: usize = 19;
+/// Floats past the last triangle of every stream: the widest run chunk.
+const RUN_PAD: usize = 16;
+
+impl AffineRuns {
+    /// Room for the triangles `0..n` (grown only; the contents are undefined until
+    /// [`AffineRuns::set`]).
+    pub fn reserve(&mut self, n: usize) {
+        if self.cap < n + RUN_PAD {
+            self.cap = (n + RUN_PAD).next_multiple_of(64);
+            self.v.clear();
+            self.v.resize(STREAMS * self.cap, 0.0);
+        }
+    }
+
+    /// The number of triangles [`AffineRuns::set`] accepts.
+    #[inline(always)]
+    pub fn len(&self) -> usize {
+        self.cap.saturating_sub(RUN_PAD)
+    }
+
+    /// Whether no triangle fits.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Stores triangle `j`'s affine form `a` and edge band `bound` (`j < self.len()`).
+    #[inline(always)]
+    pub fn set(&mut self, j: usize, a: &AffineTri, bound: f32) {
+        let c = self.cap;
+        assert!(j < self.len());
+        let mut put = |s: usize, x: f32| {
+            // SAFETY: `s < STREAMS` and `j < cap`, so `s cap + j < STREAMS cap = v.len()`.
+            unsafe { *self.v.get_unchecked_mut(s * c + j) = x };
+        };
+        for e in 0..3 {
+            let vals = [a.mx[e], a.my[e], a.mz[e], a.amx[e], a.amy[e], a.n1[e]];
+            for (k, x) in vals.into_iter().enumerate() {
+                put(6 * e + k, x);
+            }
+        }
+        put(18, bound);
+    }
+
+    /// Lanes `j..j + T::N` of stream `s`.
+    ///
+    /// # Safety
+    /// `s < STREAMS` and `j + T::N <= self.cap`.
+    #[inline(always)]
+    unsafe fn load<T: LaneReduce>(&self, s: usize, j: usize) -> T {
+        let o = s * self.cap + j;
+        // SAFETY: the caller's: `o + T::N <= (s + 1) cap <= v.len()`.
+        T::load_n(unsafe { self.v.get_unchecked(o..o + T::N) })
+    }
+}
+
+/// [`PacketBox::classify_run`]'s decisions for a chunk of a run's triangles, one bit per
+/// triangle (lane).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RunClass {
+    out: u32,
+    inn: u32,
+    /// Per edge the triangles whose edge is certainly inside for every ray, where edges may
+    /// be skipped (`|n_i|_1 < N1_SKIP` on all three edges).
+    edges: [u32; 3],
+}
+
+impl RunClass {
+    /// Lane `k`'s decision, as [`PacketBox::classify_edges`] of its triangle.
+    #[inline(always)]
+    pub fn get(&self, k: usize) -> (PacketClass, u32) {
+        if self.out >> k & 1 != 0 {
+            (PacketClass::Out, 0)
+        } else if self.inn >> k & 1 != 0 {
+            (PacketClass::In, 0)
+        } else {
+            let [a, b, c] = self.edges.map(|e| e >> k & 1);
+            (PacketClass::Partial, a | b << 1 | c << 2)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Uniform floats in [0, 1) from an xorshift stream seeded with `x`.
+    fn uniform(mut x: u64) -> impl FnMut() -> f32 {
+        move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 40) as f32 / (1u64 << 24) as f32
+        }
+    }
+
+    /// A random affine form and edge band: covectors of mixed magnitudes, some non-finite or
+    /// huge (`|n_i|_1 >= N1_SKIP`: no edge skipped).
+    fn random_tri(f: &mut impl FnMut() -> f32) -> (AffineTri, f32) {
+        let mut v = |f: &mut dyn FnMut() -> f32| {
+            let s = 10f32.powi((f() * 4.0) as i32 - 2);
+            Vec4::new(f() - 0.5, f() - 0.5, f() - 0.5, 0.0) * s
+        };
+        let (mut mx, my, mut mz) = (v(f), v(f), v(f));
+        let mut n1 = mx.abs() + my.abs() + mz.abs();
+        match (f() * 40.0) as u32 {
+            0 => mx.x = f32::NAN,
+            1 => mz.y = f32::INFINITY,
+            2 => n1.z = 2.0 * N1_SKIP,
+            3 => n1.x = f32::NAN,
+            _ => {}
+        }
+        let a = AffineTri {
+            mx,
+            my,
+            mz,
+            amx: mx.abs(),
+            amy: my.abs(),
+            n1,
+        };
+        (a, f() * 1e-3)
+    }
+
+    /// The run test in `T` lanes against the per-triangle test, every chunk of `tris`.
+    fn check_chunks<T: LaneReduce>(
+        pb: &PacketBox,
+        tris: &[(AffineTri, f32)],
+        runs: &AffineRuns,
+        run: impl Fn(&PacketBox, &AffineRuns, usize) -> RunClass,
+        seen: &mut [u32; 4],
+    ) {
+        for j in (0..tris.len()).step_by(T::N) {
+            let rc = run(pb, runs, j);
+            for (k, (a, bound)) in tris[j..].iter().enumerate().take(T::N) {
+                let want = pb.classify_edges(a, *bound);
+                assert_eq!(rc.get(k), want, "{pb:?} {a:?} {bound}");
+                let i = match want {
+                    (PacketClass::Out, _) => 0,
+                    (PacketClass::In, _) => 1,
+                    (PacketClass::Partial, 0) => 2,
+                    (PacketClass::Partial, _) => 3,
+                };
+                seen[i] += 1;
+            }
+        }
+    }
+
+    /// [`PacketBox::classify_run`] decides every triangle of a run as
+    /// [`PacketBox::classify_edges`] (class and skipped edges), in four SSE lanes and (where
+    /// AVX2 is detected) eight AVX lanes, on random packet boxes and runs of 1 to 40 triangles
+    /// with non-finite and huge covectors among them.
+    #[test]
+    fn classify_run_equals_per_triangle() {
+        let mut f = uniform(0x51f1_5e3c_a7b4_9d21);
+        let (mut seen4, mut seen8) = ([0u32; 4], [0u32; 4]);
+        for _ in 0..600 {
+            let r = |f: &mut dyn FnMut() -> f32| 10f32.powi(-((f() * 4.0) as i32)) * f();
+            let pb = PacketBox {
+                xc: Vec4::splat((f() - 0.5) * 4.0),
+                yc: Vec4::splat((f() - 0.5) * 4.0),
+                rx: Vec4::splat(r(&mut f)),
+                ry: Vec4::splat(r(&mut f)),
+                ka: Vec4::splat(f() * 1e-5),
+                kb: f() * 1e-3,
+            };
+            let n = 1 + (f() * 40.0) as usize;
+            let tris: Vec<_> = (0..n).map(|_| random_tri(&mut f)).collect();
+            let mut runs = AffineRuns::default();
+            runs.reserve(n);
+            assert!(runs.len() >= n);
+            for (j, (a, bound)) in tris.iter().enumerate() {
+                runs.set(j, a, *bound);
+            }
+            let sse = |pb: &PacketBox, a: &AffineRuns, j: usize| pb.classify_run::<Vec4>(a, j);
+            check_chunks::<Vec4>(&pb, &tris, &runs, sse, &mut seen4);
+            #[cfg(target_arch = "x86_64")]
+            if crate::cast::isa::avx2_detected() {
+                // SAFETY: AVX2 was detected.
+                let avx = |pb: &PacketBox, a: &AffineRuns, j: usize| unsafe { y8_run(pb, a, j) };
+                check_chunks::<crate::cast::lanes256::Y8>(&pb, &tris, &runs, avx, &mut seen8);
+            }
+        }
+        assert!(seen4.iter().all(|&c| c > 100), "{seen4:?}");
+        #[cfg(target_arch = "x86_64")]
+        if crate::cast::isa::avx2_detected() {
+            assert_eq!(seen8, seen4);
+        } else {
+            eprintln!("AVX2 not detected: the eight-lane run test not compared");
+        }
+    }
+
+    /// [`PacketBox::classify_run`] in eight AVX lanes.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn y8_run(pb: &PacketBox, a: &AffineRuns, j: usize) -> RunClass {
+        pb.classify_run::<crate::cast::lanes256::Y8>(a, j)
     }
 }
