@@ -28,10 +28,6 @@ pub trait LaneReduce: Lanes {
     /// for `lanes512::Z16` (one AVX-512 register). The walk's decisions are the same for any
     /// (`kernel.rs`).
     const RUN_GROUP: usize = 4;
-    /// Triangles per affine run test (`PacketBox::classify_run`, `cast/setup/affine.rs`): 4
-    /// (one SSE register per value), 8 for `lanes256::Y8` and `Y16` (one AVX register). The
-    /// decisions are the same for any.
-    const TRI_GROUP: usize = 4;
     /// Lanes `0..N` from `a[..N]` (`N <= 16`).
     #[inline(always)]
     fn load16(a: &[f32; 16]) -> Self {

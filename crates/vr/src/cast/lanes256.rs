@@ -200,7 +200,6 @@ impl Lanes for Y8 {
 }
 
 impl LaneReduce for Y8 {
-    const TRI_GROUP: usize = 8;
     #[inline(always)]
     fn load16(a: &[f32; 16]) -> Self {
         // SAFETY: module docs; `a` holds 16 f32.
@@ -331,7 +330,6 @@ impl Lanes for Y16 {
 impl LaneReduce for Y16 {
     /// Eight runs per interval test: one `Y8` register per axis and bound.
     const RUN_GROUP: usize = 8;
-    const TRI_GROUP: usize = 8;
     #[inline(always)]
     fn load16(a: &[f32; 16]) -> Self {
         // SAFETY: module docs; `a` holds 16 f32.

@@ -106,10 +106,8 @@ pub fn refine_run(tt: &mut TileTris, first: usize, end: usize, blocks: &[Tri4]) 
             }
             s.bound = bound[l];
             s.rho = rho[l];
-            if let Some(fr) = &tt.frame
-                && j + l < tt.affr.len()
-            {
-                tt.affr.set(j + l, &fr.affine(&s.n), s.bound);
+            if let (Some(fr), Some(a)) = (&tt.frame, tt.aff.get_mut(j + l)) {
+                *a = fr.affine(&s.n);
             }
         }
         j += k;

@@ -58,7 +58,7 @@ use parallax_bvh::Tri4;
 use parallax_core::math::WatertightRay;
 use parallax_core::simd::Lanes;
 
-use super::affine::{AffineRuns, PacketBox, PacketClass, RunClass};
+use super::affine::{PacketBox, PacketClass};
 use super::bands::refine_run;
 use super::kernel::{PacketSlab, SetupWork, dot_n, edge_band, min_edge};
 use super::tri::{RHO_MAX, TileTris, exact_t};
@@ -172,22 +172,19 @@ pub(super) fn closest_edges<L: LaneReduce>(
             if tt.tris[first].rho.is_nan() {
                 refine_run(tt, first, end, blocks);
             }
-            // The run's triangles as a slice: no bounds check per triangle.
+            // The run's triangles and affine forms as slices of one length: no bounds check
+            // per triangle.
             let tris = &tt.tris[first..end];
-            let mut rc = RunClass::default();
+            let affs = match pbox {
+                Some(_) => &tt.aff[first..end],
+                None => &[],
+            };
             for (k, tr) in tris.iter().enumerate() {
-                // The affine packet test (`affine.rs`), `L::TRI_GROUP` triangles of the run at
-                // once: every lane certainly out or in. A partial packet's edges certainly
-                // inside for every lane (`skip`) take no per-lane test
-                // (`PacketBox::classify_edges`).
-                let kk = k % L::TRI_GROUP;
-                if let Some(pb) = pbox
-                    && kk == 0
-                {
-                    rc = classify_run::<L>(pb, &tt.affr, first + k);
-                }
-                let (class, skip) = match pbox {
-                    Some(_) if !tr.all_in => rc.get(kk),
+                // The affine packet test (`affine.rs`): every lane certainly out or in.
+                // A partial packet's edges certainly inside for every lane (`skip`) take no
+                // per-lane test (`PacketBox::classify_edges`).
+                let (class, skip) = match (pbox, affs.get(k)) {
+                    (Some(pb), Some(a)) if !tr.all_in => pb.classify_edges(a, tr.bound),
                     _ => (PacketClass::Partial, 0),
                 };
                 if class == PacketClass::Out {
@@ -329,15 +326,4 @@ fn ill_conditioned<L: Lanes>(
         }
     }
     changed
-}
-
-/// [`PacketBox::classify_run`] of the triangles `j..j + L::TRI_GROUP` of `a`: eight AVX lanes
-/// for the AVX2 kernels, four SSE lanes otherwise (the same decisions).
-#[inline(always)]
-fn classify_run<L: LaneReduce>(pb: &PacketBox, a: &AffineRuns, j: usize) -> RunClass {
-    #[cfg(target_arch = "x86_64")]
-    if L::TRI_GROUP == 8 {
-        return pb.classify_run::<crate::cast::lanes256::Y8>(a, j);
-    }
-    pb.classify_run::<glam::Vec4>(a, j)
 }

@@ -541,9 +541,11 @@ pub unsafe fn test_tile_setup(
         let film_x = set.samples[samples[0] as usize].film.x;
         tt.frame = FilmFrame::of(set, tt.origin, film_x);
         if tt.frame.is_some() {
-            // Grown only: `refine_run` writes triangle `j`'s affine form before any read of it
-            // in this tile (every triangle of the lazy set-up is refined before its first test).
-            tt.affr.reserve(tt.tris.len());
+            // Grown only: `refine_run` writes `aff[j]` before any read of it in this tile
+            // (every triangle of the lazy set-up is refined before its first test).
+            if tt.aff.len() < tt.tris.len() {
+                tt.aff.resize(tt.tris.len(), Default::default());
+            }
         }
     }
     let slack = 1e-5 * (scale.abs() + 1.0);

@@ -14,7 +14,7 @@ use parallax_bvh::Tri4;
 use parallax_core::Ray;
 use parallax_core::math::WatertightRay;
 
-use super::affine::{AffineRuns, FilmFrame};
+use super::affine::{AffineTri, FilmFrame};
 use crate::beam::Beam;
 
 /// Unit roundoff of f32 (`2^-24`): `fl(x op y) = (x op y)(1 + δ)`, `|δ| <= U`.
@@ -418,10 +418,10 @@ pub struct TileTris {
     /// The cone of the tile's rays (for the lazy band, [`TileTris::refine`]).
     pub cone: Cone,
     /// The film frame of the tile's eye when the affine packet test runs
-    /// (`cast/setup/affine.rs`), and the affine forms of `tris` with their edge bands in
-    /// structure of arrays (filled by [`TileTris::refine`]), for the run test.
+    /// (`cast/setup/affine.rs`), and `aff[j]`, the affine form of `tris[j]` (filled by
+    /// [`TileTris::refine`]).
     pub frame: Option<FilmFrame>,
-    pub affr: AffineRuns,
+    pub aff: Vec<AffineTri>,
     /// Scratch of `setup_tile` (`cast/setup/tile.rs`): the tile's triangles in list order
     /// and each leaf's end in that list.
     pub ents: Vec<u32>,
@@ -447,10 +447,8 @@ impl TileTris {
             Some(e) => {
                 s.bound = e.bound;
                 s.rho = e.rho;
-                if let Some(fr) = &self.frame
-                    && j < self.affr.len()
-                {
-                    self.affr.set(j, &fr.affine(&s.n), s.bound);
+                if let (Some(fr), Some(a)) = (&self.frame, self.aff.get_mut(j)) {
+                    *a = fr.affine(&s.n);
                 }
             }
             // (Never: the same checks passed in the lazy set-up.)
