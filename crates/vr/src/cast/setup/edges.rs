@@ -116,8 +116,6 @@ pub(super) fn closest_edges<L: LaneReduce>(
     let nseg = tt.segs.len();
     let group = L::RUN_GROUP;
     let interval = packet.has_interval();
-    // Whether the walk reads the per-lane limits `box_lim` (`PacketSlab::reaches`).
-    let lane_lim = !interval || L::N < 16;
     let mut base = 0usize;
     'walk: while base < nseg {
         if hit_lanes == valid && tt.segs[base].near > exit_depth + slack {
@@ -272,31 +270,20 @@ pub(super) fn closest_edges<L: LaneReduce>(
                 changed = true;
             }
             if changed {
-                // A lane has a hit iff its best `1/t` is positive (every win raises `best`
-                // above 0).
+                // `1 / best` once per packet (the same IEEE division as per lane); a lane has a
+                // hit iff its best `1/t` is positive (every win raises `best` above 0).
+                box_lim = one / best;
                 hit_lanes = L::bits(best.gt(zero)) & valid;
-                // The largest `1 / best` of the valid lanes as one division of the smallest
-                // `best`: `best` is never NaN and at least +0, where the IEEE `1 / x` is
-                // non-increasing, so `max fl(1 / b) = fl(1 / min b)` bit for bit.
-                lim_max = 1.0 / L::select(valid_m, best, L::splat(f32::INFINITY)).hmin();
-                // The per-lane limits only where read: the per-lane slab test (without the
-                // interval, or below 16 lanes), and the exit depth, read only once every lane
-                // has a hit.
-                if lane_lim {
-                    box_lim = one / best;
-                }
-                if hit_lanes == valid {
-                    let lim = if lane_lim { box_lim } else { one / best };
-                    let depth = sign_v * (oa_v + lim * rays.d[axis]);
-                    exit_depth = L::select(valid_m, depth, L::splat(f32::NEG_INFINITY)).hmax();
-                }
+                let depth = sign_v * (oa_v + box_lim * rays.d[axis]);
+                exit_depth = L::select(valid_m, depth, L::splat(f32::NEG_INFINITY)).hmax();
+                lim_max = L::select(valid_m, box_lim, L::splat(f32::NEG_INFINITY)).hmax();
             }
         }
     }
-    // Hit lanes: `t = 1 / best`; the others keep `inf`.
+    // Hit lanes: `t = 1 / best` (= `box_lim`); the others keep `inf`.
     if hit_lanes != 0 {
         let hit_m = L::and(best.gt(zero), valid_m);
-        L::select(hit_m, one / best, L::splat(f32::INFINITY)).write(&mut out.t);
+        L::select(hit_m, box_lim, L::splat(f32::INFINITY)).write(&mut out.t);
     }
     out
 }
