@@ -293,3 +293,66 @@ fn packet_classification_never_contradicts_the_watertight_test() {
     );
     assert!(counts.iter().all(|&c| c > 100), "{counts:?}");
 }
+
+/// `PacketBox::new` (the film rectangle's packets in one register) equals the scalar
+/// `PacketBox::new_general` field for field, bit for bit, on both eyes of a stereo rig and on a
+/// pinhole: random pixel-sized to half-eye boxes inside, across and outside the eye's
+/// rectangle, boxes on its borders, empty and non-finite ones.
+#[test]
+fn packet_box_equals_the_scalar_form() {
+    let scene = Scene::load("atrium").unwrap();
+    let mut rng = Rng(11);
+    let (mut region, mut other, mut none) = (0u32, 0u32, 0u32);
+    for kind in [ModelKind::Stereo, ModelKind::Pinhole] {
+        let set = SampleSet::grid(camera(&scene, kind, 40, 30), 16);
+        let (eyes, ew, h) = match &set.camera {
+            Camera::Stereo(rig) => (2, rig.eye_width() as f32, 30.0),
+            Camera::Pinhole(p) => (1, p.width as f32, p.height as f32),
+            _ => unreachable!(),
+        };
+        for e in 0..eyes {
+            let x0 = e as f32 * ew;
+            let origin = match &set.camera {
+                Camera::Stereo(rig) => rig.eyes[e].frame.position,
+                Camera::Pinhole(p) => p.frame.position,
+                _ => unreachable!(),
+            };
+            let fr = FilmFrame::of(&set, origin, x0 + 0.5).unwrap();
+            let mut boxes = vec![
+                (x0, x0 + ew, 0.0, h),
+                (x0, x0, 0.0, 0.0),
+                (x0 + ew, x0 + ew, h, h),
+                (x0 - 1e-3, x0 + 1.0, 0.0, 1.0),
+                (x0 + 1.0, x0 + 0.5, 0.0, 1.0),
+                (f32::NAN, x0 + 1.0, 0.0, 1.0),
+                (x0, x0 + 1.0, -f32::INFINITY, 1.0),
+            ];
+            for _ in 0..4000 {
+                let size = [0.9, 3.9, ew * 0.5][(rng.next() * 3.0) as usize];
+                let fx = x0 - 2.0 + rng.next() * (ew + 4.0);
+                let fy = -2.0 + rng.next() * (h + 4.0);
+                let (sx, sy) = (rng.next() * size, rng.next() * size);
+                boxes.push((fx, fx + sx, fy, fy + sy));
+            }
+            for (a, b, c, d) in boxes {
+                let fast = PacketBox::new(&fr, a, b, c, d);
+                let slow = PacketBox::new_general(&fr, a, b, c, d);
+                match (&fast, &slow) {
+                    (Some(f), Some(s)) => {
+                        // Bit for bit (`==` would equate signed zeros).
+                        assert_eq!(format!("{f:?}"), format!("{s:?}"), "{a} {b} {c} {d}");
+                        let inside = a >= x0 && b <= x0 + ew && c >= 0.0 && d <= h;
+                        if inside { region += 1 } else { other += 1 }
+                    }
+                    (None, None) => none += 1,
+                    _ => panic!("{a} {b} {c} {d}: {fast:?} vs {slow:?}"),
+                }
+            }
+        }
+    }
+    eprintln!("packet boxes: region {region}, other {other}, none {none}");
+    assert!(
+        region > 1000 && other > 100 && none > 100,
+        "{region} {other} {none}"
+    );
+}

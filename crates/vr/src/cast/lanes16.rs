@@ -18,6 +18,18 @@ use parallax_core::simd::{F8, Lanes};
 pub trait LaneReduce: Lanes {
     fn hmin(self) -> f32;
     fn hmax(self) -> f32;
+    /// `[v[0].hmin(), v[1].hmin(), v[2].hmin(), v[3].hmin()]` bit for bit: lane types with a
+    /// four-lane quarter form run the four last steps of their trees at once
+    /// ([`hmin_of_quarters`]).
+    #[inline(always)]
+    fn hmin4(v: [Self; 4]) -> Vec4 {
+        Vec4::new(v[0].hmin(), v[1].hmin(), v[2].hmin(), v[3].hmin())
+    }
+    /// `[v[0].hmax(), ..]` bit for bit, as [`LaneReduce::hmin4`].
+    #[inline(always)]
+    fn hmax4(v: [Self; 4]) -> Vec4 {
+        Vec4::new(v[0].hmax(), v[1].hmax(), v[2].hmax(), v[3].hmax())
+    }
     /// Lanes `0..N` into `out[..N]`.
     fn write(self, out: &mut [f32]);
     /// `out[l] = v` for the lanes `l` of `m`, the other entries unchanged (`out` holds at
@@ -41,6 +53,52 @@ pub trait LaneReduce: Lanes {
     }
 }
 
+/// The 4 x 4 transpose of `q` (`c[k]` = lane `k` of every register).
+#[inline(always)]
+fn transpose4(q: [Vec4; 4]) -> [Vec4; 4] {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::*;
+        let [a, b, c, d] = q;
+        let (a, b, c, d) = (
+            __m128::from(a),
+            __m128::from(b),
+            __m128::from(c),
+            __m128::from(d),
+        );
+        // SAFETY: SSE is part of the x86-64 baseline.
+        unsafe {
+            let (t0, t1) = (_mm_unpacklo_ps(a, b), _mm_unpacklo_ps(c, d));
+            let (t2, t3) = (_mm_unpackhi_ps(a, b), _mm_unpackhi_ps(c, d));
+            [
+                Vec4::from(_mm_movelh_ps(t0, t1)),
+                Vec4::from(_mm_movehl_ps(t1, t0)),
+                Vec4::from(_mm_movelh_ps(t2, t3)),
+                Vec4::from(_mm_movehl_ps(t3, t2)),
+            ]
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        std::array::from_fn(|k| Vec4::new(q[0][k], q[1][k], q[2][k], q[3][k]))
+    }
+}
+
+/// Lane `k`: `q[k].hmin()` of [`Vec4`] (`min2(min2(x, y), min2(z, w))`, `min2(a, b) = a < b ?
+/// a : b`) for the four registers at once: a transpose and three `minps` of the same pairs.
+#[inline(always)]
+pub fn hmin_of_quarters(q: [Vec4; 4]) -> Vec4 {
+    let [c0, c1, c2, c3] = transpose4(q);
+    Lanes::min_or_rhs(Lanes::min_or_rhs(c0, c1), Lanes::min_or_rhs(c2, c3))
+}
+
+/// Lane `k`: `q[k].hmax()` of [`Vec4`], as [`hmin_of_quarters`].
+#[inline(always)]
+pub fn hmax_of_quarters(q: [Vec4; 4]) -> Vec4 {
+    let [c0, c1, c2, c3] = transpose4(q);
+    Lanes::max_or_rhs(Lanes::max_or_rhs(c0, c1), Lanes::max_or_rhs(c2, c3))
+}
+
 #[inline(always)]
 fn min2(a: f32, b: f32) -> f32 {
     if a < b { a } else { b }
@@ -51,6 +109,14 @@ fn max2(a: f32, b: f32) -> f32 {
 }
 
 impl LaneReduce for Vec4 {
+    #[inline(always)]
+    fn hmin4(v: [Self; 4]) -> Vec4 {
+        hmin_of_quarters(v)
+    }
+    #[inline(always)]
+    fn hmax4(v: [Self; 4]) -> Vec4 {
+        hmax_of_quarters(v)
+    }
     #[inline(always)]
     fn load_n(a: &[f32]) -> Self {
         Vec4::from_slice(&a[..4])
@@ -116,7 +182,29 @@ impl LaneReduce for F8 {
     }
 }
 
+/// The first steps of [`V16`]'s `hmin` tree: quarters pairwise, then the two.
+#[inline(always)]
+fn qmin(x: V16) -> Vec4 {
+    let q = x.0;
+    Lanes::min_or_rhs(Lanes::min_or_rhs(q[0], q[1]), Lanes::min_or_rhs(q[2], q[3]))
+}
+
+/// The first steps of [`V16`]'s `hmax` tree.
+#[inline(always)]
+fn qmax(x: V16) -> Vec4 {
+    let q = x.0;
+    Lanes::max_or_rhs(Lanes::max_or_rhs(q[0], q[1]), Lanes::max_or_rhs(q[2], q[3]))
+}
+
 impl LaneReduce for V16 {
+    #[inline(always)]
+    fn hmin4([a, b, c, d]: [Self; 4]) -> Vec4 {
+        hmin_of_quarters([qmin(a), qmin(b), qmin(c), qmin(d)])
+    }
+    #[inline(always)]
+    fn hmax4([a, b, c, d]: [Self; 4]) -> Vec4 {
+        hmax_of_quarters([qmax(a), qmax(b), qmax(c), qmax(d)])
+    }
     #[inline(always)]
     fn hmin(self) -> f32 {
         // `a < b ? a : b` per lane (`minps` on SSE2, NaN in either gives `b`), quarters
@@ -379,6 +467,17 @@ pub(crate) mod tests {
                 let v = V16::from_fn(|i| x[i]);
                 assert!(same(v.hmin(), tree(&x, true)), "{x:?}");
                 assert!(same(v.hmax(), tree(&x, false)), "{x:?}");
+                // Four reductions at once, `V16` and `Vec4`: each register's own reduction.
+                let four = [v, v * v, V16::splat(0.0) - v, v + V16::splat(1.0)];
+                let (mn, mx) = (V16::hmin4(four), V16::hmax4(four));
+                let q = v.0;
+                let (qn, qx) = (Vec4::hmin4(q), Vec4::hmax4(q));
+                for k in 0..4 {
+                    assert!(same(mn[k], four[k].hmin()), "{x:?}");
+                    assert!(same(mx[k], four[k].hmax()), "{x:?}");
+                    assert!(same(qn[k], q[k].hmin()), "{x:?}");
+                    assert!(same(qx[k], q[k].hmax()), "{x:?}");
+                }
             }
         }
     }

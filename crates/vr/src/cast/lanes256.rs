@@ -200,6 +200,27 @@ impl Lanes for Y8 {
 }
 
 impl LaneReduce for Y8 {
+    // (No closures here: they would not be compiled with the caller's AVX2 features.)
+    #[inline(always)]
+    fn hmin4([a, b, c, d]: [Self; 4]) -> Vec4 {
+        let q = [
+            quarter_min(a.0),
+            quarter_min(b.0),
+            quarter_min(c.0),
+            quarter_min(d.0),
+        ];
+        crate::cast::lanes16::hmin_of_quarters(q)
+    }
+    #[inline(always)]
+    fn hmax4([a, b, c, d]: [Self; 4]) -> Vec4 {
+        let q = [
+            quarter_max(a.0),
+            quarter_max(b.0),
+            quarter_max(c.0),
+            quarter_max(d.0),
+        ];
+        crate::cast::lanes16::hmax_of_quarters(q)
+    }
     #[inline(always)]
     fn load16(a: &[f32; 16]) -> Self {
         // SAFETY: module docs; `a` holds 16 f32.
@@ -327,9 +348,31 @@ impl Lanes for Y16 {
     }
 }
 
+/// The first steps of [`Y16`]'s `hmin` tree: quarters 0 and 1, 2 and 3, then the two.
+#[inline(always)]
+fn qmin16(x: Y16) -> Vec4 {
+    Lanes::min_or_rhs(quarter_min(x.0[0]), quarter_min(x.0[1]))
+}
+
+/// The first steps of [`Y16`]'s `hmax` tree.
+#[inline(always)]
+fn qmax16(x: Y16) -> Vec4 {
+    Lanes::max_or_rhs(quarter_max(x.0[0]), quarter_max(x.0[1]))
+}
+
 impl LaneReduce for Y16 {
     /// Eight runs per interval test: one `Y8` register per axis and bound.
     const RUN_GROUP: usize = 8;
+    #[inline(always)]
+    fn hmin4([a, b, c, d]: [Self; 4]) -> Vec4 {
+        let q = [qmin16(a), qmin16(b), qmin16(c), qmin16(d)];
+        crate::cast::lanes16::hmin_of_quarters(q)
+    }
+    #[inline(always)]
+    fn hmax4([a, b, c, d]: [Self; 4]) -> Vec4 {
+        let q = [qmax16(a), qmax16(b), qmax16(c), qmax16(d)];
+        crate::cast::lanes16::hmax_of_quarters(q)
+    }
     #[inline(always)]
     fn load16(a: &[f32; 16]) -> Self {
         // SAFETY: module docs; `a` holds 16 f32.
@@ -438,6 +481,13 @@ mod tests {
             let max = Lanes::max_or_rhs(q[0], q[1]).hmax();
             assert!(same(a.hmin(), min), "hmin {xa:?}");
             assert!(same(a.hmax(), max), "hmax {xa:?}");
+        }
+        // Four reductions at once: each register's own reduction, bit for bit.
+        let four = [a, b, a * b, a - b];
+        let (mn, mx) = (L::hmin4(four), L::hmax4(four));
+        for k in 0..4 {
+            assert!(same(mn[k], four[k].hmin()), "hmin4 {xa:?} {xb:?}");
+            assert!(same(mx[k], four[k].hmax()), "hmax4 {xa:?} {xb:?}");
         }
         let (mut x, mut y) = ([0.0f32; 16], [0.0f32; 16]);
         a.write(&mut x);

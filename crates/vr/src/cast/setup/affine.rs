@@ -124,6 +124,13 @@ pub struct FilmFrame {
     ka: f32,
     kb: f32,
     region: bool,
+    /// Per lane `[x(fx0), x(fx1), y(fy1), y(fy0)]` of [`PacketBox::new`] in one register: the
+    /// film sizes `[w, w, h, h]`, shifts `[sx, sx, sy, sy]` and tangents `[tx, tx, ty, ty]`;
+    /// the generator roundings `[ex, ey, ex, ey]` of the region.
+    wv: Vec4,
+    sv: Vec4,
+    tv: Vec4,
+    ev: Vec4,
 }
 
 impl FilmFrame {
@@ -171,6 +178,10 @@ impl FilmFrame {
             ka: 0.0,
             kb: 0.0,
             region: false,
+            wv: Vec4::new(w, w, h, h),
+            sv: Vec4::new(p.shift.x, p.shift.x, p.shift.y, p.shift.y),
+            tv: Vec4::new(tx, tx, ty, ty),
+            ev: Vec4::ZERO,
         };
         // The rectangle's worst case (module docs, "Per-frame factors"): `e_x`, `e_y` at
         // `|f| = w`, `h`; `|xc| + rx` bounded by the largest `|x|` over the rectangle `m` as
@@ -184,6 +195,7 @@ impl FilmFrame {
         let (ka, kb) = fr.factors(ax, ay, ex, ey);
         if [ex, ey, ka, kb, ax, ay].iter().all(|x| x.is_finite()) {
             (fr.ex, fr.ey, fr.ka, fr.kb, fr.region) = (ex, ey, ka, kb, true);
+            fr.ev = Vec4::new(ex, ey, ex, ey);
         }
         Some(fr)
     }
@@ -282,7 +294,7 @@ pub struct AffineTri {
 }
 
 /// A packet's camera-space box and the per-packet factors of `tau` (module docs).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PacketBox {
     xc: Vec4,
     yc: Vec4,
@@ -309,6 +321,9 @@ pub enum PacketClass {
 /// is then finite, so the smallest of any subset of them is independent of the order.
 const N1_SKIP: f32 = 1e37;
 
+/// `true` in lanes 0-1.
+const XY: glam::BVec4A = glam::BVec4A::from_array([true, true, false, false]);
+
 /// `true` in lanes 0-2.
 const XYZ: glam::BVec4A = glam::BVec4A::from_array([true, true, true, false]);
 
@@ -316,8 +331,58 @@ impl PacketBox {
     /// The box of a packet whose lanes' float film positions lie in `[fx0, fx1] x [fy0, fy1]`
     /// (exact float minimum and maximum of the lanes' `film + offset * footprint`, before the
     /// eye's x offset); `None` if it leaves the frame's eye or is not finite.
-    #[inline]
+    #[inline(always)]
     pub fn new(fr: &FilmFrame, fx0: f32, fx1: f32, fy0: f32, fy1: f32) -> Option<Self> {
+        // Inside the eye's film rectangle (eye-local): the frame's factors (module docs,
+        // "Per-frame factors"), no per-packet bound; `x(f)`, `y(f)` of the four film
+        // coordinates and the two sides' centre and radius in one register each, per lane
+        // the operations of `FilmFrame::xf` / `yf` and `side` below in their order (the same
+        // bits; tested against `new_general` below).
+        let (gx0, gx1) = (fx0 - fr.x0, fx1 - fr.x0);
+        let inside = if fr.x0 == 0.0 {
+            fx0 >= fr.fx_lo && fx1 < fr.fx_hi
+        } else {
+            fx0 >= fr.fx_lo && fx1 <= fr.fx_hi
+        };
+        let film = if fr.x0 == 0.0 {
+            Vec4::new(fx0, fx1, fy1, fy0)
+        } else {
+            Vec4::new(gx0, gx1, fy1, fy0)
+        };
+        if fr.region
+            && inside
+            && fx0 <= fx1
+            && fy0 <= fy1
+            && film.x >= 0.0
+            && film.y <= fr.w
+            && fy0 >= 0.0
+            && fy1 <= fr.h
+        {
+            let q = Vec4::splat(2.0) * film / fr.wv;
+            let u = Vec4::select(XY, q - Vec4::ONE, Vec4::ONE - q);
+            // [xl, xh, yl, yh]
+            let v = (u + fr.sv) * fr.tv;
+            let (l, h) = (Vec4::new(v.x, v.z, 0.0, 0.0), Vec4::new(v.y, v.w, 0.0, 0.0));
+            let c = Vec4::splat(0.5) * (l + h);
+            let r =
+                (Vec4::splat(0.5) * (h - l) + fr.ev + Vec4::splat(2.0 * U) * (l.abs() + h.abs()))
+                    * Vec4::splat(1.0 + 8.0 * U);
+            return Some(PacketBox {
+                xc: Vec4::splat(c.x),
+                yc: Vec4::splat(c.y),
+                rx: Vec4::splat(r.x),
+                ry: Vec4::splat(r.y),
+                ka: Vec4::splat(fr.ka),
+                kb: fr.kb,
+            });
+        }
+        Self::new_general(fr, fx0, fx1, fy0, fy1)
+    }
+
+    /// [`PacketBox::new`] lane by lane (scalar), for every packet (the reference of the
+    /// register form above, and the path of packets outside the eye's film rectangle).
+    #[inline(never)]
+    pub fn new_general(fr: &FilmFrame, fx0: f32, fx1: f32, fy0: f32, fy1: f32) -> Option<Self> {
         // The stereo eye test of the ray generation: x in [0, w) left, [w, 2w] right.
         let inside = if fr.x0 == 0.0 {
             fx0 >= fr.fx_lo && fx1 < fr.fx_hi

@@ -148,15 +148,27 @@ impl<L: Lanes> PacketSlab<L> {
         // `dinf` as `new`'s scalar loop (`0.max(x) = x`, NaN lanes ignored, the sign of a zero
         // never seen: the band `bound * dinf` is only compared), by one horizontal maximum.
         let (mut s, dinf_l) = Self::lanes(d);
-        s.dinf = max_or_rhs(dinf_l, L::splat(0.0)).hmax();
-        let (x0, x1) = (s.inv[0].hmin(), s.inv[0].hmax());
-        let (y0, y1) = (s.inv[1].hmin(), s.inv[1].hmax());
-        let (z0, z1) = (s.inv[2].hmin(), s.inv[2].hmax());
-        let ok = |r0: f32, r1: f32| r0.is_finite() && r1.is_finite() && (r0 > 0.0 || r1 < 0.0);
-        if ok(x0, x1) && ok(y0, y1) && ok(z0, z1) {
-            let i1 = Vec4::new(x1, y1, z1, 0.0);
+        // The seven reductions in two passes of four (`hmin4` / `hmax4`: each value's own
+        // reduction, bit for bit): lanes x, y, z the interval's ends, lane `w` of the maxima
+        // `dinf`.
+        let [x, y, z] = s.inv;
+        let lo = L::hmin4([x, y, z, z]);
+        let hi = L::hmax4([x, y, z, max_or_rhs(dinf_l, L::splat(0.0))]);
+        s.dinf = hi.w;
+        let (x0, y0, z0) = (lo.x, lo.y, lo.z);
+        let (x1, y1, z1) = (hi.x, hi.y, hi.z);
+        // Per axis: both ends finite and of one sign (`r0 > 0 || r1 < 0`), the three axes in
+        // lanes x, y, z of one register.
+        let (i0, i1) = (
+            Vec4::select(XYZ, lo, Vec4::ZERO),
+            Vec4::select(XYZ, hi, Vec4::ZERO),
+        );
+        let ok = i0.is_finite_mask()
+            & i1.is_finite_mask()
+            & (i0.cmpgt(Vec4::ZERO) | i1.cmplt(Vec4::ZERO));
+        if ok.bitmask() & 7 == 7 {
             s.interval = Some(Interval {
-                i0: Vec4::new(x0, y0, z0, 0.0),
+                i0,
                 i1,
                 neg: i1.cmplt(Vec4::ZERO),
                 s0: [Vec4::splat(x0), Vec4::splat(y0), Vec4::splat(z0)],

@@ -255,6 +255,31 @@ impl Out<'_> {
     unsafe fn run(&self, (i, k0): (u32, u32), c: &ClosestN, n: usize) {
         let o = i as usize * self.spp + k0 as usize;
         let n = n.min(MAX_LANES);
+        let t0 = c.tri[0];
+        if n == MAX_LANES {
+            // A full packet: fixed-size copies (vector stores, no `memcpy` call), and "one
+            // triangle on every lane" as an OR of XORs over two halves (vector operations).
+            let mut acc = [0u32; MAX_LANES / 2];
+            for (l, a) in acc.iter_mut().enumerate() {
+                *a = (c.tri[l] ^ t0) | (c.tri[l + MAX_LANES / 2] ^ t0);
+            }
+            let same = acc.iter().fold(0, |a, &x| a | x) == 0;
+            // SAFETY: the caller's: `MAX_LANES` entries from `o`, not overlapping `c`.
+            unsafe {
+                (self.t.add(o) as *mut [f32; MAX_LANES]).write_unaligned(c.t);
+                let prim = self.prim.add(o) as *mut [u32; MAX_LANES];
+                if t0 != u32::MAX && same {
+                    prim.write_unaligned([self.prim_ids[t0 as usize]; MAX_LANES]);
+                } else {
+                    // A miss (`u32::MAX`) fails the look-up to `NO_ID`, as in `Out::spp1`.
+                    let ids = c
+                        .tri
+                        .map(|tri| self.prim_ids.get(tri as usize).copied().unwrap_or(NO_ID));
+                    prim.write_unaligned(ids);
+                }
+            }
+            return;
+        }
         // SAFETY: the caller's; the two buffers do not overlap `c`, so the `t` run is one
         // copy (a miss has `t = inf` in `c` already).
         let prim = unsafe {
@@ -262,13 +287,7 @@ impl Out<'_> {
             std::slice::from_raw_parts_mut(self.prim.add(o), n)
         };
         // One triangle on every lane (a pixel inside one triangle): one `prim_ids` look-up.
-        // (A full packet folds all lanes without an early exit: one vector compare.)
-        let t0 = c.tri[0];
-        let same = if n == MAX_LANES {
-            c.tri.iter().fold(0, |a, &x| a | (x ^ t0)) == 0
-        } else {
-            c.tri[..n].iter().all(|&x| x == t0)
-        };
+        let same = c.tri[..n].iter().all(|&x| x == t0);
         if t0 != u32::MAX && same {
             prim.fill(self.prim_ids[t0 as usize]);
             return;
