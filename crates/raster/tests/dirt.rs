@@ -619,6 +619,19 @@ fn camera_tile_size_sets_the_camera_view_s() {
     assert!(c.stats().fragments > 0);
 }
 
+#[test]
+fn tile_flags_set_the_camera_and_face_s() {
+    let base = DirtViewsOptions::TRACING;
+    let sizes = |o: DirtViewsOptions| (o.capture.tile_size, o.camera_tile_size);
+    assert_eq!(sizes(base.with_tile_flags(None, None)), (4, Some(8)));
+    assert_eq!(sizes(base.with_tile_flags(Some(2), None)), (2, None));
+    assert_eq!(sizes(base.with_tile_flags(None, Some(16))), (4, Some(16)));
+    assert_eq!(
+        sizes(base.with_tile_flags(Some(2), Some(16))),
+        (2, Some(16))
+    );
+}
+
 /// The views are set up and rasterized together: each view is billed that stage's wall time
 /// in proportion to its fragments, so the views' `setup_ms` are proportional to their
 /// fragment counts (and the camera view, with most fragments, gets the largest share).

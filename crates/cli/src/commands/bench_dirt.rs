@@ -86,16 +86,13 @@ pub fn run_bench(a: &DirtBenchArgs, quiet: bool) -> Result<()> {
         views: DirtViewsOptions {
             face_size: a.face,
             capture: DirtOptions {
-                tile_size: a.tile.unwrap_or(TRACING.capture.tile_size),
+                tile_size: TRACING.capture.tile_size,
                 buckets: a.buckets,
                 ..DirtOptions::default()
             },
-            camera_tile_size: match (a.camera_tile, a.tile) {
-                (Some(s), _) => Some(s),
-                (None, Some(_)) => None,
-                (None, None) => TRACING.camera_tile_size,
-            },
-        },
+            camera_tile_size: TRACING.camera_tile_size,
+        }
+        .with_tile_flags(a.tile, a.camera_tile),
         repeats: a.repeats,
         sweep_buckets: if a.no_sweep {
             vec![]

@@ -164,16 +164,12 @@ impl PathFlags {
     /// The tracers' options of the flags (out-of-range values are reported by the build).
     pub fn tracer_options(&self) -> TracerOptions {
         let mut o = TracerOptions::default();
+        o.dirt = o
+            .dirt
+            .with_tile_flags(self.dirt_tile, self.dirt_camera_tile);
         let d = &mut o.dirt;
         d.face_size = self.dirt_face.unwrap_or(d.face_size);
-        d.capture.tile_size = self.dirt_tile.unwrap_or(d.capture.tile_size);
         d.capture.buckets = self.dirt_buckets.unwrap_or(d.capture.buckets);
-        // `--dirt-tile` alone sets S for every view.
-        d.camera_tile_size = match (self.dirt_camera_tile, self.dirt_tile) {
-            (Some(s), _) => Some(s),
-            (None, Some(_)) => None,
-            (None, None) => d.camera_tile_size,
-        };
         o
     }
 

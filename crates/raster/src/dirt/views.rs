@@ -55,6 +55,23 @@ impl DirtViewsOptions {
     };
 }
 
+impl DirtViewsOptions {
+    /// These options with a user's two tile flags applied: `camera` sets the camera view's S;
+    /// `all` sets S of the cube faces and, when `camera` is not given, of the camera view too;
+    /// neither keeps these options' sizes.
+    pub fn with_tile_flags(mut self, all: Option<u32>, camera: Option<u32>) -> Self {
+        if let Some(s) = all {
+            self.capture.tile_size = s;
+        }
+        self.camera_tile_size = match (camera, all) {
+            (Some(s), _) => Some(s),
+            (None, Some(_)) => None,
+            (None, None) => self.camera_tile_size,
+        };
+        self
+    }
+}
+
 impl Default for DirtViewsOptions {
     fn default() -> Self {
         Self {
