@@ -89,6 +89,9 @@ pub(crate) struct CellLines {
     /// Whether the lines hold the bucket ranges and entries (module docs); if not, read the
     /// capture's offsets and ids.
     pub compact: bool,
+    /// The keys of each triangle's view depth range (`depth::ranges`, `lo | hi << 16`;
+    /// empty: no entry skipped).
+    pub ranges: Vec<u32>,
 }
 
 impl CellLines {
@@ -172,7 +175,11 @@ impl CellLines {
                 at += e - s;
             }
         }
-        CellLines { lines, compact }
+        CellLines {
+            lines,
+            compact,
+            ranges: Vec::new(),
+        }
     }
 
     /// The lines as `u16` halves (the entries of [`Entries::Packed`]).
