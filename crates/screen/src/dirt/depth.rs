@@ -13,10 +13,9 @@
 //!
 //! **Rounding.** Both sides are widened so that the comparison never drops a triangle whose
 //! hit lies in the span:
-//! - a triangle's range ([`ranges`]) is `[min, max]` of its corners' view depths, computed
-//!   as `r_z · eye - r_z · p` (`r_z` the view's backward axis), each within a few ulps of
-//!   `|p|_1 + |eye|_1` of `-r_z · (p - eye)`; widened by `REL (reach + |eye|_1)`, `reach` the
-//!   largest `|p|_1` over the triangle buffer's bounds (`REL = 2^-15`: 512 ulps);
+//! - a triangle's range ([`ranges`]) is `[min, max]` of its corners' view depths
+//!   `-r_z · (p - eye)`, each off by at most a few ulps of `|p - eye|_1`; widened by
+//!   `REL · max |p - eye|_1` over the corners (`REL = 2^-15`: 512 ulps);
 //! - the ray's span in a cell ([`Span::new`]) is `[min, max]` of the walk's depths at the cell's
 //!   entry and exit (`1 / w`, within a few ulps of the ray's depth there, `walk` module docs),
 //!   widened by `REL` of each end and by the segment's own rounding bound
@@ -26,7 +25,6 @@
 //! skipped. Views without ranges (empty: unit tests of the lists alone) skip nothing.
 
 use glam::Vec3;
-use parallax_core::math::Aabb;
 use parallax_raster::dirt::DirtTri;
 
 use super::view::ViewConsts;
@@ -61,53 +59,31 @@ pub(crate) fn key(z: f32) -> u32 {
     }
 }
 
-/// The view depth range of each triangle of `tris` (whose corners lie in `bounds`), widened
-/// (module docs), as the [`key`]s of its ends in one word (`lo | hi << 16`).
-pub(crate) fn ranges(vc: &ViewConsts, tris: &[DirtTri], bounds: &Aabb) -> Vec<u32> {
-    let rc = RangeConsts::new(vc, bounds);
+/// The view depth range of each triangle, widened (module docs), as the [`key`]s of its ends
+/// in one word (`lo | hi << 16`).
+pub(crate) fn ranges(vc: &ViewConsts, tris: &[DirtTri]) -> Vec<u32> {
     tris.iter()
         .map(|t| {
-            let [lo, hi] = rc.range(t);
+            let [lo, hi] = range(vc, t);
             key_lo(lo) | key(hi) << 16
         })
         .collect()
 }
 
-/// A view's constants for [`ranges`].
-struct RangeConsts {
-    /// The view's depth axis (backward: depth is `-axis · (p - eye)`).
-    axis: Vec3,
-    /// `axis · eye`.
-    c: f32,
-    /// The widening, `REL (reach + |eye|_1)` with `reach` the largest `|p|_1` of a corner in
-    /// the bounds (module docs: a bound on `|p - eye|_1`, so on the depths' rounding).
-    m: f32,
-}
-
-impl RangeConsts {
-    fn new(vc: &ViewConsts, bounds: &Aabb) -> RangeConsts {
-        let l1 = |q: Vec3| q.x.abs() + q.y.abs() + q.z.abs();
-        let reach = l1(bounds.min.abs().max(bounds.max.abs()));
-        let axis = vc.rows[2];
-        RangeConsts {
-            axis,
-            c: axis.dot(vc.eye),
-            m: REL * (reach + l1(vc.eye)),
-        }
-    }
-
-    /// Triangle `t`'s widened view depth range: its corners' depths `axis · eye - axis · p`
-    /// (within a few ulps of `reach + |eye|_1` of the depths `-axis · (p - eye)`), less and
-    /// plus `m`; everything when a corner's depth is NaN or the margin is not finite.
-    #[inline(always)]
-    fn range(&self, t: &DirtTri) -> [f32; 2] {
-        let z = [t.p0, t.p1, t.p2].map(|p| self.c - self.axis.dot(p));
-        let (lo, hi) = (z[0].min(z[1]).min(z[2]), z[0].max(z[1]).max(z[2]));
-        if (z[0] + z[1] + z[2] + self.m).is_finite() {
-            [lo - self.m, hi + self.m]
-        } else {
-            [f32::NEG_INFINITY, f32::INFINITY]
-        }
+/// Triangle `t`'s widened view depth range (module docs); everything for a NaN corner.
+#[inline(always)]
+fn range(vc: &ViewConsts, t: &DirtTri) -> [f32; 2] {
+    let axis = vc.rows[2];
+    let l1 = |q: Vec3| q.x.abs() + q.y.abs() + q.z.abs();
+    let q = [t.p0 - vc.eye, t.p1 - vc.eye, t.p2 - vc.eye];
+    let z = q.map(|q| -axis.dot(q));
+    let m = REL * l1(q[0]).max(l1(q[1])).max(l1(q[2]));
+    let lo = z[0].min(z[1]).min(z[2]);
+    let hi = z[0].max(z[1]).max(z[2]);
+    if lo.is_nan() || hi.is_nan() || m.is_nan() {
+        [f32::NEG_INFINITY, f32::INFINITY]
+    } else {
+        [lo - m, hi + m]
     }
 }
 
@@ -151,7 +127,7 @@ impl<'z> Span<'z> {
     #[inline(always)]
     pub fn misses(&self, id: u32) -> bool {
         match self.ranges.get(id as usize) {
-            Some(&r) => (r & 0xffff > self.hi) | (r >> 16 < self.lo),
+            Some(&r) => r & 0xffff > self.hi || r >> 16 < self.lo,
             None => false,
         }
     }
@@ -176,15 +152,13 @@ mod tests {
         let views =
             DirtViews::build(&soup, None, glam::Vec3::new(0.1, 0.2, 0.3), &opts).expect("build");
         let tris = views.triangles.as_slice();
-        let bounds = views.triangles.bounds();
         let mut inside = 0u32;
         for cap in views.views() {
             let vc = ViewConsts::new(cap);
-            let keys = ranges(&vc, tris, &bounds);
-            let rc = RangeConsts::new(&vc, &bounds);
+            let keys = ranges(&vc, tris);
             assert_eq!(keys.len(), tris.len());
             for (t, &k) in tris.iter().zip(&keys) {
-                let r = rc.range(t);
+                let r = range(&vc, t);
                 let k = [k & 0xffff, k >> 16];
                 assert!(r[0] < r[1] && k[0] <= k[1]);
                 for c in 0..12 {

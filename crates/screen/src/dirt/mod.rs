@@ -105,12 +105,12 @@ impl DirtTracer {
         // The views' masks are independent: built side by side (`bench dirt` times this
         // construction as part of DIRT's build).
         let captures: Vec<_> = views.views().zip(&consts).collect();
-        let (tris, bounds) = (views.triangles.as_slice(), views.triangles.bounds());
+        let tris = views.triangles.as_slice();
         let (slabs, cells) = captures
             .into_par_iter()
             .map(|(cap, vc)| {
                 let mut lines = CellLines::new(cap);
-                lines.ranges = depth::ranges(vc, tris, &bounds);
+                lines.ranges = depth::ranges(vc, tris);
                 (Slabs::new(cap), lines)
             })
             .unzip();

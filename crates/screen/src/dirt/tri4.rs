@@ -63,9 +63,8 @@ impl<'a> Query<'a> {
         }
     }
 
-    /// True when `id` was tested lately (and marks it tested): the mailbox of the slow twin;
-    /// `test_body` does the same without a branch.
-    #[cfg(test)]
+    /// True when `id` was tested lately (and marks it tested).
+    #[inline(always)]
     fn seen(&mut self, id: u32) -> bool {
         let slot = &mut self.mailbox[id as usize & (MAILBOX - 1)];
         if *slot == id {
@@ -144,16 +143,12 @@ impl<'a> Query<'a> {
         let mut n = 0;
         for &d in ids {
             let id = base + d.into();
-            // Without branches on the two skips (their outcomes are data-dependent): a
-            // triangle whose range misses the span is not tested and not marked in the
-            // mailbox, as a later cell may need it (`depth`); one tested lately is not tested
-            // again; the others are marked and join the block. `n < 4` here.
-            let miss = span.misses(id);
-            let slot = &mut self.mailbox[id as usize & (MAILBOX - 1)];
-            let old = *slot;
-            *slot = if miss { old } else { id };
-            block[n & 3] = id;
-            n += (!miss & (old != id)) as usize;
+            // Not marked in the mailbox: a later cell may need it (`depth`).
+            if span.misses(id) || self.seen(id) {
+                continue;
+            }
+            block[n] = id;
+            n += 1;
             if n == 4 {
                 if self.test4(&block, 4) {
                     return true;
