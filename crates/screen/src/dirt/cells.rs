@@ -89,9 +89,6 @@ pub(crate) struct CellLines {
     /// Whether the lines hold the bucket ranges and entries (module docs); if not, read the
     /// capture's offsets and ids.
     pub compact: bool,
-    /// The keys of each triangle's view depth range (`depth::ranges`, `lo | hi << 16`;
-    /// empty: no entry skipped).
-    pub ranges: Vec<u32>,
 }
 
 impl CellLines {
@@ -175,11 +172,7 @@ impl CellLines {
                 at += e - s;
             }
         }
-        CellLines {
-            lines,
-            compact,
-            ranges: Vec::new(),
-        }
+        CellLines { lines, compact }
     }
 
     /// The lines as `u16` halves (the entries of [`Entries::Packed`]).

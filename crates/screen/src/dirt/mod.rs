@@ -11,9 +11,6 @@
 //! - `cells`: one cache line per finest cell (its record, bucket ends and first list
 //!   entries as `u16`; the rest of the lists after the lines), the walk's read of a cell and
 //!   its ids;
-//! - `depth`: per view, each triangle's depth range (two `u16` keys); a listed triangle whose
-//!   range misses the ray's depth span in the traced cell is not tested there, and why that is
-//!   exact;
 //! - `tri4`: the ray-triangle tests of a bucket, four triangles at a time, and the per-ray
 //!   mailbox;
 //! - this file: the multi-view driver (§4.2.1: "If no valid hit is found within the current
@@ -59,7 +56,6 @@
 
 mod best;
 mod cells;
-mod depth;
 mod slabs;
 #[cfg(test)]
 mod test_soup;
@@ -101,18 +97,13 @@ pub struct DirtTracer {
 impl DirtTracer {
     /// A tracer over a built capture.
     pub fn new(views: DirtViews) -> DirtTracer {
-        let consts: Vec<ViewConsts> = views.views().map(ViewConsts::new).collect();
+        let consts = views.views().map(ViewConsts::new).collect();
         // The views' masks are independent: built side by side (`bench dirt` times this
         // construction as part of DIRT's build).
-        let captures: Vec<_> = views.views().zip(&consts).collect();
-        let tris = views.triangles.as_slice();
+        let captures: Vec<_> = views.views().collect();
         let (slabs, cells) = captures
             .into_par_iter()
-            .map(|(cap, vc)| {
-                let mut lines = CellLines::new(cap);
-                lines.ranges = depth::ranges(vc, tris);
-                (Slabs::new(cap), lines)
-            })
+            .map(|cap| (Slabs::new(cap), CellLines::new(cap)))
             .unzip();
         let neighbours = std::array::from_fn(|i| {
             let b = views.cube.cube.face_camera(i).frame.basis;
@@ -143,11 +134,7 @@ impl DirtTracer {
     pub fn cell_line_bytes(&self) -> u64 {
         self.cells
             .iter()
-            .map(|c| {
-                std::mem::size_of_val(c.lines.as_slice())
-                    + std::mem::size_of_val(c.ranges.as_slice())
-            })
-            .map(|b| b as u64)
+            .map(|c| std::mem::size_of_val(c.lines.as_slice()) as u64)
             .sum()
     }
 

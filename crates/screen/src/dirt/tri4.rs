@@ -26,7 +26,6 @@ use parallax_core::math::{WatertightRay, shear_vertex, watertight_lanes};
 use parallax_raster::dirt::DirtTri;
 
 use super::best::{Best, DirtCounters};
-use super::depth::Span;
 use super::view::Isa;
 
 /// Slots of the per-ray mailbox (a power of two).
@@ -74,45 +73,40 @@ impl<'a> Query<'a> {
         false
     }
 
-    /// Tests the triangles `ids` not tested lately and whose depth range meets `span`
-    /// (`depth`), four at a time; true when an occlusion query found a hit. `ISA`: the `Isa`
-    /// of the copy to run (the caller's: the CPU has it); the same source and results on each.
+    /// Tests the triangles `ids` not tested lately, four at a time; true when an occlusion
+    /// query found a hit. `ISA`: the `Isa` of the copy to run (the caller's: the CPU has it);
+    /// the same source and results on each.
     #[inline(always)]
-    pub fn test<const ISA: u8>(&mut self, ids: &[u32], span: Span) -> bool {
-        self.test_in::<ISA, u32>(0, ids, span)
+    pub fn test<const ISA: u8>(&mut self, ids: &[u32]) -> bool {
+        self.test_in::<ISA, u32>(0, ids)
     }
 
     /// [`Self::test`] on the triangles `base + d` for the entries `d` of `ids` (`u16` list
     /// entries relative to a cell's base, `cells`).
     #[inline(always)]
-    pub fn test16<const ISA: u8>(&mut self, base: u32, ids: &[u16], span: Span) -> bool {
-        self.test_in::<ISA, u16>(base, ids, span)
+    pub fn test16<const ISA: u8>(&mut self, base: u32, ids: &[u16]) -> bool {
+        self.test_in::<ISA, u16>(base, ids)
     }
 
     #[inline(always)]
-    fn test_in<const ISA: u8, T: Copy + Into<u32>>(
-        &mut self,
-        base: u32,
-        ids: &[T],
-        span: Span,
-    ) -> bool {
+    fn test_in<const ISA: u8, T: Copy + Into<u32>>(&mut self, base: u32, ids: &[T]) -> bool {
         #[cfg(target_arch = "x86_64")]
         {
             // SAFETY: the walk's copies pass their own `Isa`, chosen by `Isa::detect`.
             if ISA == Isa::X86V4 as u8 {
-                return unsafe { self.test_v4(base, ids, span) };
+                return unsafe { self.test_v4(base, ids) };
             }
             if ISA == Isa::X86V3 as u8 {
-                return unsafe { self.test_v3(base, ids, span) };
+                return unsafe { self.test_v3(base, ids) };
             }
         }
-        self.test_baseline(base, ids, span)
+        self.test_baseline(base, ids)
     }
 
     /// [`Self::test`] for the build's baseline instruction set (the portable twin).
     #[inline(never)]
-    fn test_baseline<T: Copy + Into<u32>>(&mut self, base: u32, ids: &[T], span: Span) -> bool {
-        self.test_body(base, ids, span)
+    fn test_baseline<T: Copy + Into<u32>>(&mut self, base: u32, ids: &[T]) -> bool {
+        self.test_body(base, ids)
     }
 
     /// [`Self::test`] compiled for x86-64-v3 (AVX2, BMI1/2, LZCNT; no FMA).
@@ -122,8 +116,8 @@ impl<'a> Query<'a> {
     #[cfg(target_arch = "x86_64")]
     #[inline(never)]
     #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
-    unsafe fn test_v3<T: Copy + Into<u32>>(&mut self, base: u32, ids: &[T], span: Span) -> bool {
-        self.test_body(base, ids, span)
+    unsafe fn test_v3<T: Copy + Into<u32>>(&mut self, base: u32, ids: &[T]) -> bool {
+        self.test_body(base, ids)
     }
 
     /// [`Self::test`] compiled for x86-64-v3 and AVX-512 F/VL/BW/DQ.
@@ -133,18 +127,17 @@ impl<'a> Query<'a> {
     #[cfg(target_arch = "x86_64")]
     #[inline(never)]
     #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt,avx512f,avx512vl,avx512bw,avx512dq")]
-    unsafe fn test_v4<T: Copy + Into<u32>>(&mut self, base: u32, ids: &[T], span: Span) -> bool {
-        self.test_body(base, ids, span)
+    unsafe fn test_v4<T: Copy + Into<u32>>(&mut self, base: u32, ids: &[T]) -> bool {
+        self.test_body(base, ids)
     }
 
     #[inline(always)]
-    fn test_body<T: Copy + Into<u32>>(&mut self, base: u32, ids: &[T], span: Span) -> bool {
+    fn test_body<T: Copy + Into<u32>>(&mut self, base: u32, ids: &[T]) -> bool {
         let mut block = [0u32; 4];
         let mut n = 0;
         for &d in ids {
             let id = base + d.into();
-            // Not marked in the mailbox: a later cell may need it (`depth`).
-            if span.misses(id) || self.seen(id) {
+            if self.seen(id) {
                 continue;
             }
             block[n] = id;
@@ -392,17 +385,14 @@ mod tests {
                 for len in [1, 3, 4, 5, 8, 13, ids.len()] {
                     let wt = WatertightRay::new(ray);
                     let (mut a, mut b) = (Query::new(wt, &tris, any), Query::new(wt, &tris, any));
-                    let (ra, rb) = (
-                        a.test::<0>(&ids[..len], Span::ALL),
-                        b.test_scalar(&ids[..len]),
-                    );
+                    let (ra, rb) = (a.test::<0>(&ids[..len]), b.test_scalar(&ids[..len]));
                     for isa in Isa::available() {
                         // Every copy the CPU runs: the same answer and counters bit for bit.
                         let mut c = Query::new(wt, &tris, any);
                         let rc = match isa {
-                            Isa::Baseline => c.test::<0>(&ids[..len], Span::ALL),
-                            Isa::X86V3 => c.test::<1>(&ids[..len], Span::ALL),
-                            Isa::X86V4 => c.test::<2>(&ids[..len], Span::ALL),
+                            Isa::Baseline => c.test::<0>(&ids[..len]),
+                            Isa::X86V3 => c.test::<1>(&ids[..len]),
+                            Isa::X86V4 => c.test::<2>(&ids[..len]),
                         };
                         assert_eq!(ra, rc);
                         let (x, y) = (a.best, c.best);
@@ -420,11 +410,11 @@ mod tests {
                         let (mut d, mut e) =
                             (Query::new(wt, &tris, any), Query::new(wt, &tris, any));
                         let rd = match isa {
-                            Isa::Baseline => d.test16::<0>(base, &rel, Span::ALL),
-                            Isa::X86V3 => d.test16::<1>(base, &rel, Span::ALL),
-                            Isa::X86V4 => d.test16::<2>(base, &rel, Span::ALL),
+                            Isa::Baseline => d.test16::<0>(base, &rel),
+                            Isa::X86V3 => d.test16::<1>(base, &rel),
+                            Isa::X86V4 => d.test16::<2>(base, &rel),
                         };
-                        assert_eq!(rd, e.test::<0>(&ids[len / 2..len], Span::ALL));
+                        assert_eq!(rd, e.test::<0>(&ids[len / 2..len]));
                         let (x, y) = (d.best, e.best);
                         assert_eq!(
                             (x.prim, x.t.to_bits(), x.u.to_bits(), x.v.to_bits()),

@@ -27,8 +27,7 @@
 //! **Bucket tracing.** The ray's depth span in the cell gives the bucket range by eq. 1
 //! ([`bucket_index`], the capture's own function); buckets are visited in ray order (towards
 //! the far plane: ascending; towards the eye: descending), the empty ones skipped by the
-//! record's mask, and every triangle listed in them whose depth range meets the ray's depth
-//! span in the cell (`depth`: the others' hits lie in other cells, which list them) is
+//! record's mask, and every triangle listed in them is
 //! tested with the watertight test, four at a time (`tri4`: the lanes of
 //! [`parallax_core::math::watertight_lanes`], the scalar
 //! [`parallax_core::math::WatertightRay::intersect_within`] where an edge function is exactly
@@ -66,7 +65,6 @@
 use parallax_raster::dirt::{DirtCapture, bucket_index};
 
 use super::cells::{CellLine, CellLines, Entries};
-use super::depth::{REL, Span};
 use super::slabs::Slabs;
 use super::tri4::Query;
 use super::view::{Isa, MAX_LEVELS, ViewConsts, ViewRay};
@@ -135,8 +133,6 @@ struct Segment {
     t_b: f32,
     dt: f32,
     z_b: f32,
-    /// The rounding bound of the ray's depths, `REL (|o|_1 + t_b |d|_1)` (`depth`).
-    margin: f32,
 }
 
 impl Segment {
@@ -161,7 +157,6 @@ impl Segment {
             t_b,
             dt: t_b - t_a,
             z_b,
-            margin: REL * (l1(r.o) + t_b.abs() * l1(r.d)),
         }
     }
 
@@ -183,12 +178,6 @@ impl Segment {
             f32::INFINITY
         }
     }
-}
-
-/// `|x| + |y| + |z|`.
-#[inline(always)]
-fn l1(v: glam::Vec3) -> f32 {
-    v.x.abs() + v.y.abs() + v.z.abs()
 }
 
 /// `min` and `max` of two finite-or-infinite, non-NaN floats (plain comparisons; `f32::min`
@@ -372,9 +361,8 @@ fn walk_body<const UX: bool, const UY: bool, const W_FALLS: bool, const ISA: u8>
             let index = cy as usize * vc.cells_x as usize + cx as usize;
             let rec = &lines[index];
             let nb = vc.buckets;
-            let depths = (1.0 / w_l, 1.0 / w_exit);
-            let b_a = bucket_at(rec.zmin, rec.scale, nb, depths.0);
-            let b_b = bucket_at(rec.zmin, rec.scale, nb, depths.1);
+            let b_a = bucket_at(rec.zmin, rec.scale, nb, 1.0 / w_l);
+            let b_b = bucket_at(rec.zmin, rec.scale, nb, 1.0 / w_exit);
             // Skip the cell when every bucket of the range is empty (null head pointers).
             if any_bucket(rec.mask, b_a.min(b_b), b_a.max(b_b), nb) {
                 let cell = Cell {
@@ -383,7 +371,6 @@ fn walk_body<const UX: bool, const UY: bool, const W_FALLS: bool, const ISA: u8>
                     scale: rec.scale,
                     mask: rec.mask,
                     buckets: (b_a, b_b),
-                    depths,
                     l_exit,
                 };
                 if trace_cell::<ISA>(vc, cap, cells, rec, r, seg, &cell, &mut hit_l, q) {
@@ -462,8 +449,6 @@ struct Cell {
     mask: u32,
     /// The buckets of the ray's depth at entry and at exit.
     buckets: (u32, u32),
-    /// The ray's depths at entry and at exit.
-    depths: (f32, f32),
     /// `λ` where the ray leaves the cell.
     l_exit: f32,
 }
@@ -488,7 +473,6 @@ fn trace_cell<const ISA: u8>(
     let (b_a, b_b) = c.buckets;
     let (offsets, ids, halves) = (cap.offsets(), cap.ids(), cells.halves());
     let ascending = b_a <= b_b;
-    let span = Span::new(&cells.ranges, c.depths.0, c.depths.1, seg.margin);
     let mut b = b_a;
     loop {
         if any_bucket(c.mask, b, b, nb) {
@@ -497,8 +481,8 @@ fn trace_cell<const ISA: u8>(
                 // The bucket's entries in the cell's line, then after the lines (`cells`).
                 Entries::Packed { base, ranges } => ranges
                     .iter()
-                    .any(|&(s, e)| s < e && q.test16::<ISA>(base, &halves[s..e], span)),
-                Entries::Capture(s, e) => q.test::<ISA>(&ids[s..e], span),
+                    .any(|&(s, e)| s < e && q.test16::<ISA>(base, &halves[s..e])),
+                Entries::Capture(s, e) => q.test::<ISA>(&ids[s..e]),
             };
             if found {
                 return true;
