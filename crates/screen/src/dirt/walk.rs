@@ -384,22 +384,21 @@ fn walk_body<const UX: bool, const UY: bool, const W_FALLS: bool, const ISA: u8>
             end = Some(WalkEnd::Continue);
             break;
         }
-        // Both axes' next cells by selects, not branches (which axis the ray leaves by is
-        // data-dependent): across the boundary on the axis (or both) the ray leaves by, the
-        // refined cell on the other (at level 0 `refine` gives the cell itself).
         let lv = level as u32;
-        let (step_x, step_y) = (l_col <= l_row, l_row <= l_col);
-        let (nx, x_on) = next_cell::<UX>(cx, kx, vc.cells_x);
-        let (ny, y_on) = next_cell::<UY>(cy, ky, vc.cells_y);
-        let rx = refine::<UX>(cx, tx, lv, seg.x + l_exit * seg.dx, vc.cells_x);
-        let ry = refine::<UY>(cy, ty, lv, seg.y + l_exit * seg.dy, vc.cells_y);
-        cx = if step_x { nx } else { rx };
-        cy = if step_y { ny } else { ry };
-        if step_x && !x_on {
-            xs = Axis::STILL;
-        }
-        if step_y && !y_on {
-            ys = Axis::STILL;
+        if l_col <= l_row {
+            cx = next_cell::<UX>(cx, kx, &mut xs, vc.cells_x);
+            if l_row == l_col {
+                cy = next_cell::<UY>(cy, ky, &mut ys, vc.cells_y);
+            } else if level > 0 {
+                let y = seg.y + l_exit * seg.dy;
+                cy = refine::<UY>(cy, ty, lv, y, vc.cells_y);
+            }
+        } else {
+            cy = next_cell::<UY>(cy, ky, &mut ys, vc.cells_y);
+            if level > 0 {
+                let x = seg.x + l_exit * seg.dx;
+                cx = refine::<UX>(cx, tx, lv, x, vc.cells_x);
+            }
         }
         l = l_exit;
         w_l = w_exit;
@@ -550,18 +549,22 @@ fn cell_index(f: f32, n: u32) -> u32 {
 }
 
 /// The cell across boundary `k` (in cells) in the ray's direction along the axis (`UP`:
-/// towards higher indices). Used only for an axis whose crossing comes before the
-/// segment's end, so a moving one (computed for both: the walk selects). Off the grid before the end of the walk's interval
+/// towards higher indices). Only called for an axis whose crossing comes before the
+/// segment's end, so a moving one. Off the grid before the end of the walk's interval
 /// (clipped to the frustum), the ray runs along the film's edge within rounding of it (its
 /// film direction is numerically undecided): it stays in the edge cells and the axis stops
 /// stepping.
-///
-/// Returns the cell and whether it is across (if not: `c`, and the caller stops the axis).
 #[inline(always)]
-fn next_cell<const UP: bool>(c: u32, k: u32, n: u32) -> (u32, bool) {
-    let on = if UP { k < n } else { k > 0 };
-    let across = if UP { k } else { k.wrapping_sub(1) };
-    (if on { across } else { c }, on)
+fn next_cell<const UP: bool>(c: u32, k: u32, axis: &mut Axis, n: u32) -> u32 {
+    if UP {
+        if k < n {
+            return k;
+        }
+    } else if k > 0 {
+        return k - 1;
+    }
+    *axis = Axis::STILL;
+    c
 }
 
 /// The cell coordinate (along the axis the ray did not leave through) at the exit of texel `t`
