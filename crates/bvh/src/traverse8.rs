@@ -239,7 +239,8 @@ impl NodeTest8 for Avx2Boxes8 {
 
     #[inline(always)]
     fn leaf_closest<C: Counter>(&self, ctx: &mut ClosestCtx, leaf: u32, stats: &mut C) {
-        ctx.leaf::<C, crate::lanes8::A8>(leaf, stats)
+        // SAFETY: AVX2 was detected (`new`).
+        unsafe { crate::leaf8::leaf_closest8_avx2(ctx, leaf, stats) }
     }
 
     #[inline(always)]
