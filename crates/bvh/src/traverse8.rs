@@ -47,7 +47,7 @@ use crate::leaf8::{AllLeaf, AnyLeaf, ClosestCtx, ClosestLeaf, LeafTest8};
 use crate::node::{is_leaf, leaf_first};
 use crate::node8::Node8;
 use crate::stats::{Counter, NoStats, TraversalStats};
-use crate::traverse::{Best, pop_closer, sort_dedup_hits};
+use crate::traverse::{Best, pop_closer, ray_ok, sort_dedup_hits};
 use crate::tri4::Tri4Ray;
 use parallax_core::simd::{max_or_rhs, min_or_rhs};
 
@@ -92,7 +92,7 @@ impl RayBoxes8 {
 /// `j`-th hit lane in lane order, the other entries are `0`. The distances of hit lanes are
 /// `>= t_min`, so their bits order as the floats where `t_min >= 0`; a key is never `0`
 /// (child `0` is the root, no node's child), so the padding sorts below every key.
-pub(crate) trait NodeTest8 {
+pub(crate) trait NodeTest8: Copy {
     type Dist: Copy;
     /// The lanes of the closest-hit leaf step's two-block triangle test (`lanes8.rs`): AVX2
     /// where the node test is, the portable twin elsewhere.
@@ -116,6 +116,7 @@ pub(crate) trait NodeTest8 {
 }
 
 /// The portable twin: two 4-lane halves.
+#[derive(Clone, Copy)]
 pub(crate) struct Portable8(pub RayBoxes8);
 
 impl NodeTest8 for Portable8 {
@@ -170,10 +171,14 @@ impl NodeTest8 for Portable8 {
     }
 }
 
-/// The AVX2 node test (construct only after detecting AVX2).
+/// The AVX2 node test (construct only after detecting AVX2): the plane offsets and `t_min`
+/// of [`RayBoxes8`] and its origin and `-1 / dir` broadcast to rows.
 #[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
 pub(crate) struct Avx2Boxes8 {
-    rb: RayBoxes8,
+    near: [usize; 3],
+    far: [usize; 3],
+    t_min: f32,
     org: [std::arch::x86_64::__m256; 3],
     /// `-1 / dir` ([`RayBoxes8`]).
     inv: [std::arch::x86_64::__m256; 3],
@@ -193,7 +198,9 @@ impl Avx2Boxes8 {
             Self {
                 org: [_mm256_set1_ps(ox), _mm256_set1_ps(oy), _mm256_set1_ps(oz)],
                 inv: [_mm256_set1_ps(ix), _mm256_set1_ps(iy), _mm256_set1_ps(iz)],
-                rb,
+                near: rb.near,
+                far: rb.far,
+                t_min: rb.t_min,
             }
         }
     }
@@ -209,18 +216,14 @@ impl NodeTest8 for Avx2Boxes8 {
     #[inline(always)]
     fn reload(&self) -> Self {
         use std::ptr::read_volatile as rv;
-        let rb = &self.rb;
         // SAFETY: every pointer is a reference to a field of `self`.
         unsafe {
             Self {
                 org: [rv(&self.org[0]), rv(&self.org[1]), rv(&self.org[2])],
                 inv: [rv(&self.inv[0]), rv(&self.inv[1]), rv(&self.inv[2])],
-                rb: RayBoxes8 {
-                    near: [rv(&rb.near[0]), rv(&rb.near[1]), rv(&rb.near[2])],
-                    far: [rv(&rb.far[0]), rv(&rb.far[1]), rv(&rb.far[2])],
-                    t_min: rv(&rb.t_min),
-                    ..*rb
-                },
+                near: [rv(&self.near[0]), rv(&self.near[1]), rv(&self.near[2])],
+                far: [rv(&self.far[0]), rv(&self.far[1]), rv(&self.far[2])],
+                t_min: rv(&self.t_min),
             }
         }
     }
@@ -246,7 +249,7 @@ impl NodeTest8 for Avx2Boxes8 {
     #[inline(always)]
     fn test(&self, node: &Node8, t_max: f32) -> (u32, Self::Dist) {
         use std::arch::x86_64::*;
-        let rb = &self.rb;
+        let rb = self;
         let base = node.bounds.as_ptr() as *const u8;
         // SAFETY: a value of this type exists only where AVX2 was detected (`new`); loads are
         // 32-byte aligned rows of the 64-byte aligned node at offsets `32 * i`, `i < 6`.
@@ -310,11 +313,6 @@ impl<C: Counter, T: NodeTest8> LeafTest8<C> for ClosestLeaf<'_, T> {
     }
 }
 
-#[inline(always)]
-fn ray_ok(ray: &Ray) -> bool {
-    ray.is_valid() && ray.t_min <= ray.t_max
-}
-
 impl Bvh {
     /// Prefetches the first three cache lines of the triangle block of each hit leaf lane
     /// (`Node8::leaf_mask`).
@@ -351,7 +349,7 @@ impl Bvh {
     #[inline(always)]
     fn traverse8<C: Counter, T: NodeTest8, L: LeafTest8<C>, const ORDERED: bool>(
         &self,
-        nt: &T,
+        nt0: &T,
         root: u32,
         mut t_max: f32,
         stats: &mut C,
@@ -367,10 +365,10 @@ impl Bvh {
             // reloaded at every pop (`NodeTest8::reload`).
             let reloaded;
             let nt = if L::CALLS {
-                reloaded = nt.reload();
+                reloaded = nt0.reload();
                 &reloaded
             } else {
-                nt
+                nt0
             };
             while !is_leaf(cur) {
                 debug_assert!((cur as usize) < self.nodes8.len());
@@ -542,10 +540,23 @@ impl Bvh {
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,popcnt")]
+    #[inline]
     unsafe fn closest8_avx2<C: Counter>(&self, ray: &Ray, stats: &mut C) -> Option<Hit> {
         // SAFETY: AVX2 is enabled for this function (the caller detected it).
         let nt = unsafe { Avx2Boxes8::new(RayBoxes8::new(ray)) };
         self.closest8(&nt, ray, stats)
+    }
+
+    #[inline(never)]
+    fn closest8_portable_nostats(&self, ray: &Ray) -> Option<Hit> {
+        self.closest8(&Portable8(RayBoxes8::new(ray)), ray, &mut NoStats)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,popcnt")]
+    unsafe fn closest8_avx2_nostats(&self, ray: &Ray) -> Option<Hit> {
+        // SAFETY: AVX2 is enabled for this function (the caller detected it).
+        unsafe { self.closest8_avx2(ray, &mut NoStats) }
     }
 
     #[inline]
@@ -611,7 +622,16 @@ impl Bvh {
     /// tied triangles, [`BuildOptions`](crate::BuildOptions)). Traverses the 8-wide tree (AVX2 node
     /// test where the CPU has it).
     pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
-        self.closest_hit8(ray, &mut NoStats)
+        // `closest_hit8` without a stats argument: no frame for it here, the kernel a tail call.
+        if self.nodes8.is_empty() || !ray_ok(ray) {
+            return None;
+        }
+        #[cfg(target_arch = "x86_64")]
+        if use_avx2() {
+            // SAFETY: AVX2 was detected.
+            return unsafe { self.closest8_avx2_nostats(ray) };
+        }
+        self.closest8_portable_nostats(ray)
     }
 
     /// [`Self::closest_hit`], adding the work done (8-wide nodes) to `stats`.
@@ -660,8 +680,22 @@ impl Bvh {
     }
 }
 
+/// Whether the CPU has AVX2 and POPCNT: detected once, then one load and compare per call
+/// (the two `is_x86_feature_detected!` were two cache reads and tests per ray).
 #[cfg(target_arch = "x86_64")]
 #[inline]
 pub(crate) fn use_avx2() -> bool {
-    std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("popcnt")
+    use std::sync::atomic::{AtomicU8, Ordering::Relaxed};
+    /// 0: not detected yet, 1: no, 2: yes.
+    static AVX2: AtomicU8 = AtomicU8::new(0);
+    #[cold]
+    fn detect() -> bool {
+        let yes = std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("popcnt");
+        AVX2.store(1 + yes as u8, Relaxed);
+        yes
+    }
+    match AVX2.load(Relaxed) {
+        0 => detect(),
+        v => v == 2,
+    }
 }
