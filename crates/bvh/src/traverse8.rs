@@ -92,16 +92,12 @@ impl RayBoxes8 {
 /// `j`-th hit lane in lane order, the other entries are `0`. The distances of hit lanes are
 /// `>= t_min`, so their bits order as the floats where `t_min >= 0`; a key is never `0`
 /// (child `0` is the root, no node's child), so the padding sorts below every key.
-pub(crate) trait NodeTest8: Copy {
+pub(crate) trait NodeTest8 {
     type Dist: Copy;
     /// The lanes of the closest-hit leaf step's two-block triangle test (`lanes8.rs`): AVX2
     /// where the node test is, the portable twin elsewhere.
     type Pair: Pair8;
     fn test(&self, node: &Node8, t_max: f32) -> (u32, Self::Dist);
-    /// A copy whose values the node test reads are loaded from `self` at this point of the
-    /// program, not kept in registers from an earlier read: after a call, which clobbers
-    /// every vector register, that is one load per value instead of a spill and a reload.
-    fn reload(&self) -> Self;
     fn hit_keys(&self, node: &Node8, t: Self::Dist, mask: u32) -> [u64; 8];
     /// The keys of the two hit lanes of a two-bit `mask`, in lane order (`hit_keys`' first two
     /// entries).
@@ -116,17 +112,11 @@ pub(crate) trait NodeTest8: Copy {
 }
 
 /// The portable twin: two 4-lane halves.
-#[derive(Clone, Copy)]
 pub(crate) struct Portable8(pub RayBoxes8);
 
 impl NodeTest8 for Portable8 {
     type Dist = [f32; 8];
     type Pair = parallax_core::simd::F8;
-
-    #[inline(always)]
-    fn reload(&self) -> Self {
-        Portable8(self.0)
-    }
 
     #[inline(always)]
     fn hit_keys(&self, node: &Node8, t: [f32; 8], mask: u32) -> [u64; 8] {
@@ -174,7 +164,6 @@ impl NodeTest8 for Portable8 {
 /// The AVX2 node test (construct only after detecting AVX2): the plane offsets and `t_min`
 /// of [`RayBoxes8`] and its origin and `-1 / dir` broadcast to rows.
 #[cfg(target_arch = "x86_64")]
-#[derive(Clone, Copy)]
 pub(crate) struct Avx2Boxes8 {
     near: [usize; 3],
     far: [usize; 3],
@@ -211,23 +200,6 @@ impl NodeTest8 for Avx2Boxes8 {
     type Dist = std::arch::x86_64::__m256;
     type Pair = crate::lanes8::A8;
 
-    /// Volatile loads of the rows, plane offsets and `t_min` the test reads (the compiler
-    /// may neither merge them with earlier reads nor move them); the other fields are copies.
-    #[inline(always)]
-    fn reload(&self) -> Self {
-        use std::ptr::read_volatile as rv;
-        // SAFETY: every pointer is a reference to a field of `self`.
-        unsafe {
-            Self {
-                org: [rv(&self.org[0]), rv(&self.org[1]), rv(&self.org[2])],
-                inv: [rv(&self.inv[0]), rv(&self.inv[1]), rv(&self.inv[2])],
-                near: [rv(&self.near[0]), rv(&self.near[1]), rv(&self.near[2])],
-                far: [rv(&self.far[0]), rv(&self.far[1]), rv(&self.far[2])],
-                t_min: rv(&self.t_min),
-            }
-        }
-    }
-
     #[inline(always)]
     fn hit_keys(&self, node: &Node8, t_near: Self::Dist, mask: u32) -> [u64; 8] {
         // SAFETY: AVX2 was detected (`new`).
@@ -242,8 +214,10 @@ impl NodeTest8 for Avx2Boxes8 {
 
     #[inline(always)]
     fn leaf_closest<C: Counter>(&self, ctx: &mut ClosestCtx, leaf: u32, stats: &mut C) {
-        // SAFETY: AVX2 was detected (`new`).
-        unsafe { crate::leaf8::leaf_closest8_avx2(ctx, leaf, stats) }
+        // Inlined with the context opaque (module docs of `leaf8.rs`): the ray values are read
+        // in the step, not hoisted to the kernel entry.
+        let ctx = std::hint::black_box(ctx);
+        ctx.leaf::<C, crate::lanes8::A8>(leaf, stats)
     }
 
     #[inline(always)]
@@ -304,7 +278,6 @@ fn prefetch_child_line(node: &Node8) {
 }
 
 impl<C: Counter, T: NodeTest8> LeafTest8<C> for ClosestLeaf<'_, T> {
-    const CALLS: bool = true;
     #[inline(always)]
     fn test(&mut self, _: &Bvh, leaf: u32, t_max: &mut f32, stats: &mut C) -> bool {
         self.nt.leaf_closest(&mut self.ctx, leaf, stats);
@@ -349,7 +322,7 @@ impl Bvh {
     #[inline(always)]
     fn traverse8<C: Counter, T: NodeTest8, L: LeafTest8<C>, const ORDERED: bool>(
         &self,
-        nt0: &T,
+        nt: &T,
         root: u32,
         mut t_max: f32,
         stats: &mut C,
@@ -360,16 +333,6 @@ impl Bvh {
         let mut cur = root;
         let nodes = self.nodes8.as_ptr();
         loop {
-            // A leaf step that is a call clobbers every vector register: the node test's ray
-            // values are read again here, once per leaf, rather than spilled around the call or
-            // reloaded at every pop (`NodeTest8::reload`).
-            let reloaded;
-            let nt = if L::CALLS {
-                reloaded = nt0.reload();
-                &reloaded
-            } else {
-                nt0
-            };
             while !is_leaf(cur) {
                 debug_assert!((cur as usize) < self.nodes8.len());
                 // SAFETY: inner child references index the node array (build invariant).
