@@ -115,6 +115,8 @@ impl RayBoxes {
 #[inline(always)]
 pub(crate) fn ray_ok(ray: &Ray) -> bool {
     let (o, d) = (ray.origin, ray.dir);
+    // `x - x` on purpose: 0 or NaN, the finiteness test (doc above).
+    #[allow(clippy::eq_op)]
     let z = (o - o) + (d - d);
     (z.x + z.y + z.z == 0.0) & (d.length_squared() > 0.0) & (ray.t_min <= ray.t_max)
 }
