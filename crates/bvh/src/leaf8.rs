@@ -7,22 +7,20 @@
 //! **One context pointer.** Everything the step reads or updates besides the leaf reference
 //! is one [`ClosestCtx`]: the triangle blocks, the prepared ray, the traversal's `t_max`, the
 //! closest hit so far and its tie-break limit ([`Best::limit`], kept current when a hit is
-//! accepted instead of recomputed per block). The AVX2 kernel calls the step out of line
-//! ([`leaf_closest8_avx2`]: the context and the leaf reference); the
-//! portable kernel inlines the same generic step ([`ClosestCtx::leaf`]) on `F8` lanes.
+//! accepted instead of recomputed per block). Both kernels inline the same generic step
+//! ([`ClosestCtx::leaf`]), the AVX2 kernel on `A8` lanes, the portable kernel on `F8`.
 //!
-//! Why out of line in the AVX2 kernel: inlined into the traversal loop, the leaf step's many
-//! live values took the vector and general registers, and the node loop (~12 nodes per bounce
-//! ray against ~2.4 leaves) reloaded its six broadcast ray rows (`org`, `-1 / dir`) and six
-//! plane offsets from the stack at every node. As a call, the loop keeps them in registers and
-//! saves them around the call instead, once per leaf (all vector registers are caller-saved in
-//! the System V ABI). The function carries the kernel's target features (`avx2,popcnt`), so its
-//! 8-lane test is the AVX2 `A8` and its 4-lane test SSE, the same instructions as when inlined.
+//! **The context opaque in the AVX2 kernel.** There the step is inlined with the context
+//! passed through `std::hint::black_box`, so the compiler no longer sees the prepared ray's
+//! values: they are read from the context in the step, once per leaf. Without it, LLVM hoisted
+//! the step's broadcasts of the ray to the kernel's entry and kept them on the stack (a cost
+//! per ray, whether or not its leaves needed them); an out-of-line step instead paid a call
+//! per leaf (callee-saved registers, the node test's rows read again after it).
 //!
 //! | query | leaf step in the AVX2 kernel | in the portable kernel |
 //! |---|---|---|
-//! | closest hit | [`leaf_closest8_avx2`] (a call) | [`ClosestCtx::leaf`] on `F8`, inlined |
-//! | any hit | `Bvh::leaf_any`, inlined (a call measured slower: an any-hit ray ends at its first hit leaf) | the same |
+//! | closest hit | [`ClosestCtx::leaf`] on `A8`, inlined, context opaque | [`ClosestCtx::leaf`] on `F8`, inlined |
+//! | any hit | `Bvh::leaf_any`, inlined (an any-hit ray ends at its first hit leaf) | the same |
 //! | all hits | `Bvh::leaf_all`, inlined | the same |
 //!
 //! **Invariant:** the step computes, block for block, what `Bvh::leaf_closest` computes (the
@@ -39,6 +37,19 @@ use crate::stats::Counter;
 use crate::traverse::Best;
 use crate::tri4::{Tri4, Tri4Ray, blocks_for, lane_mask};
 use parallax_core::math::WatertightRay;
+
+/// `t.next_up()`, with a positive finite `t` (every hit of a ray with `t_min >= 0`) as one
+/// integer increment of its bits instead of the general NaN / infinity / sign branches.
+#[inline(always)]
+pub(crate) fn next_up(t: f32) -> f32 {
+    let b = t.to_bits();
+    // `b - 1 < 0x7f7f_ffff` exactly for `b` in `1..=0x7f7f_ffff`: the positive finite floats.
+    if b.wrapping_sub(1) < 0x7f7f_ffff {
+        f32::from_bits(b + 1)
+    } else {
+        t.next_up()
+    }
+}
 
 /// The closest-hit state of one ray's traversal, behind the one pointer the leaf step takes
 /// (module docs).
@@ -74,7 +85,7 @@ impl<'a> ClosestCtx<'a> {
         if t < b.t || (t == b.t && tri < b.tri) || b.tri == u32::MAX {
             self.best = Best { t, tri, u, v };
             self.t_max = t;
-            self.limit = t.next_up();
+            self.limit = next_up(t);
         }
     }
 
@@ -166,9 +177,6 @@ impl<'a> ClosestCtx<'a> {
 /// closure, so that it inlines into the AVX2 traversal and is compiled with its target features
 /// (closures do not inherit them, and a leaf closure became an out-of-line SSE call per leaf).
 pub(crate) trait LeafTest8<C: Counter> {
-    /// Whether the step may be an out-of-line call (the traversal then re-reads the node
-    /// test's values after each leaf, `NodeTest8::reload`).
-    const CALLS: bool = false;
     /// Tests the leaf of reference `leaf`, may shrink `t_max`; `true` stops the traversal.
     fn test(&mut self, bvh: &Bvh, leaf: u32, t_max: &mut f32, stats: &mut C) -> bool;
 }
@@ -212,18 +220,32 @@ impl<C: Counter> LeafTest8<C> for AllLeaf<'_> {
     }
 }
 
-/// The AVX2 kernel's closest-hit leaf step: [`ClosestCtx::leaf`] on `A8` lanes, out of line
-/// (module docs).
-///
-/// # Safety
-/// The CPU must support AVX2 and POPCNT.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,popcnt")]
-#[inline(never)]
-pub(crate) unsafe fn leaf_closest8_avx2<C: Counter>(
-    ctx: &mut ClosestCtx,
-    leaf: u32,
-    stats: &mut C,
-) {
-    ctx.leaf::<C, crate::lanes8::A8>(leaf, stats)
+#[cfg(test)]
+mod tests {
+    /// `next_up` is `f32::next_up` on zeros, subnormals, normals, the largest finite value,
+    /// infinities, NaN and negatives, and on a sweep of bit patterns.
+    #[test]
+    fn next_up_matches_std() {
+        let special = [
+            0.0,
+            -0.0,
+            f32::from_bits(1),
+            f32::MIN_POSITIVE,
+            1.0,
+            f32::MAX,
+            -f32::MAX,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            -1.0,
+            -f32::from_bits(1),
+        ];
+        let sweep = (0..=u32::MAX).step_by(65_521).map(f32::from_bits);
+        let mut fast = 0;
+        for t in special.into_iter().chain(sweep) {
+            assert_eq!(super::next_up(t).to_bits(), t.next_up().to_bits(), "{t:e}");
+            fast += (t > 0.0 && t.is_finite()) as u32;
+        }
+        assert!(fast > 1000, "{fast}");
+    }
 }

@@ -47,7 +47,7 @@ use crate::leaf8::{AllLeaf, AnyLeaf, ClosestCtx, ClosestLeaf, LeafTest8};
 use crate::node::{is_leaf, leaf_first};
 use crate::node8::Node8;
 use crate::stats::{Counter, NoStats, TraversalStats};
-use crate::traverse::{Best, pop_closer, sort_dedup_hits};
+use crate::traverse::{Best, pop_closer, ray_ok, sort_dedup_hits};
 use crate::tri4::Tri4Ray;
 use parallax_core::simd::{max_or_rhs, min_or_rhs};
 
@@ -98,10 +98,6 @@ pub(crate) trait NodeTest8 {
     /// where the node test is, the portable twin elsewhere.
     type Pair: Pair8;
     fn test(&self, node: &Node8, t_max: f32) -> (u32, Self::Dist);
-    /// A copy whose values the node test reads are loaded from `self` at this point of the
-    /// program, not kept in registers from an earlier read: after a call, which clobbers
-    /// every vector register, that is one load per value instead of a spill and a reload.
-    fn reload(&self) -> Self;
     fn hit_keys(&self, node: &Node8, t: Self::Dist, mask: u32) -> [u64; 8];
     /// The keys of the two hit lanes of a two-bit `mask`, in lane order (`hit_keys`' first two
     /// entries).
@@ -121,11 +117,6 @@ pub(crate) struct Portable8(pub RayBoxes8);
 impl NodeTest8 for Portable8 {
     type Dist = [f32; 8];
     type Pair = parallax_core::simd::F8;
-
-    #[inline(always)]
-    fn reload(&self) -> Self {
-        Portable8(self.0)
-    }
 
     #[inline(always)]
     fn hit_keys(&self, node: &Node8, t: [f32; 8], mask: u32) -> [u64; 8] {
@@ -170,10 +161,13 @@ impl NodeTest8 for Portable8 {
     }
 }
 
-/// The AVX2 node test (construct only after detecting AVX2).
+/// The AVX2 node test (construct only after detecting AVX2): the plane offsets and `t_min`
+/// of [`RayBoxes8`] and its origin and `-1 / dir` broadcast to rows.
 #[cfg(target_arch = "x86_64")]
 pub(crate) struct Avx2Boxes8 {
-    rb: RayBoxes8,
+    near: [usize; 3],
+    far: [usize; 3],
+    t_min: f32,
     org: [std::arch::x86_64::__m256; 3],
     /// `-1 / dir` ([`RayBoxes8`]).
     inv: [std::arch::x86_64::__m256; 3],
@@ -193,7 +187,9 @@ impl Avx2Boxes8 {
             Self {
                 org: [_mm256_set1_ps(ox), _mm256_set1_ps(oy), _mm256_set1_ps(oz)],
                 inv: [_mm256_set1_ps(ix), _mm256_set1_ps(iy), _mm256_set1_ps(iz)],
-                rb,
+                near: rb.near,
+                far: rb.far,
+                t_min: rb.t_min,
             }
         }
     }
@@ -203,27 +199,6 @@ impl Avx2Boxes8 {
 impl NodeTest8 for Avx2Boxes8 {
     type Dist = std::arch::x86_64::__m256;
     type Pair = crate::lanes8::A8;
-
-    /// Volatile loads of the rows, plane offsets and `t_min` the test reads (the compiler
-    /// may neither merge them with earlier reads nor move them); the other fields are copies.
-    #[inline(always)]
-    fn reload(&self) -> Self {
-        use std::ptr::read_volatile as rv;
-        let rb = &self.rb;
-        // SAFETY: every pointer is a reference to a field of `self`.
-        unsafe {
-            Self {
-                org: [rv(&self.org[0]), rv(&self.org[1]), rv(&self.org[2])],
-                inv: [rv(&self.inv[0]), rv(&self.inv[1]), rv(&self.inv[2])],
-                rb: RayBoxes8 {
-                    near: [rv(&rb.near[0]), rv(&rb.near[1]), rv(&rb.near[2])],
-                    far: [rv(&rb.far[0]), rv(&rb.far[1]), rv(&rb.far[2])],
-                    t_min: rv(&rb.t_min),
-                    ..*rb
-                },
-            }
-        }
-    }
 
     #[inline(always)]
     fn hit_keys(&self, node: &Node8, t_near: Self::Dist, mask: u32) -> [u64; 8] {
@@ -239,14 +214,16 @@ impl NodeTest8 for Avx2Boxes8 {
 
     #[inline(always)]
     fn leaf_closest<C: Counter>(&self, ctx: &mut ClosestCtx, leaf: u32, stats: &mut C) {
-        // SAFETY: AVX2 was detected (`new`).
-        unsafe { crate::leaf8::leaf_closest8_avx2(ctx, leaf, stats) }
+        // Inlined with the context opaque (module docs of `leaf8.rs`): the ray values are read
+        // in the step, not hoisted to the kernel entry.
+        let ctx = std::hint::black_box(ctx);
+        ctx.leaf::<C, crate::lanes8::A8>(leaf, stats)
     }
 
     #[inline(always)]
     fn test(&self, node: &Node8, t_max: f32) -> (u32, Self::Dist) {
         use std::arch::x86_64::*;
-        let rb = &self.rb;
+        let rb = self;
         let base = node.bounds.as_ptr() as *const u8;
         // SAFETY: a value of this type exists only where AVX2 was detected (`new`); loads are
         // 32-byte aligned rows of the 64-byte aligned node at offsets `32 * i`, `i < 6`.
@@ -301,18 +278,12 @@ fn prefetch_child_line(node: &Node8) {
 }
 
 impl<C: Counter, T: NodeTest8> LeafTest8<C> for ClosestLeaf<'_, T> {
-    const CALLS: bool = true;
     #[inline(always)]
     fn test(&mut self, _: &Bvh, leaf: u32, t_max: &mut f32, stats: &mut C) -> bool {
         self.nt.leaf_closest(&mut self.ctx, leaf, stats);
         *t_max = self.ctx.t_max;
         false
     }
-}
-
-#[inline(always)]
-fn ray_ok(ray: &Ray) -> bool {
-    ray.is_valid() && ray.t_min <= ray.t_max
 }
 
 impl Bvh {
@@ -362,16 +333,6 @@ impl Bvh {
         let mut cur = root;
         let nodes = self.nodes8.as_ptr();
         loop {
-            // A leaf step that is a call clobbers every vector register: the node test's ray
-            // values are read again here, once per leaf, rather than spilled around the call or
-            // reloaded at every pop (`NodeTest8::reload`).
-            let reloaded;
-            let nt = if L::CALLS {
-                reloaded = nt.reload();
-                &reloaded
-            } else {
-                nt
-            };
             while !is_leaf(cur) {
                 debug_assert!((cur as usize) < self.nodes8.len());
                 // SAFETY: inner child references index the node array (build invariant).
@@ -542,10 +503,23 @@ impl Bvh {
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,popcnt")]
+    #[inline]
     unsafe fn closest8_avx2<C: Counter>(&self, ray: &Ray, stats: &mut C) -> Option<Hit> {
         // SAFETY: AVX2 is enabled for this function (the caller detected it).
         let nt = unsafe { Avx2Boxes8::new(RayBoxes8::new(ray)) };
         self.closest8(&nt, ray, stats)
+    }
+
+    #[inline(never)]
+    fn closest8_portable_nostats(&self, ray: &Ray) -> Option<Hit> {
+        self.closest8(&Portable8(RayBoxes8::new(ray)), ray, &mut NoStats)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,popcnt")]
+    unsafe fn closest8_avx2_nostats(&self, ray: &Ray) -> Option<Hit> {
+        // SAFETY: AVX2 is enabled for this function (the caller detected it).
+        unsafe { self.closest8_avx2(ray, &mut NoStats) }
     }
 
     #[inline]
@@ -611,7 +585,16 @@ impl Bvh {
     /// tied triangles, [`BuildOptions`](crate::BuildOptions)). Traverses the 8-wide tree (AVX2 node
     /// test where the CPU has it).
     pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
-        self.closest_hit8(ray, &mut NoStats)
+        // `closest_hit8` without a stats argument: no frame for it here, the kernel a tail call.
+        if self.nodes8.is_empty() || !ray_ok(ray) {
+            return None;
+        }
+        #[cfg(target_arch = "x86_64")]
+        if use_avx2() {
+            // SAFETY: AVX2 was detected.
+            return unsafe { self.closest8_avx2_nostats(ray) };
+        }
+        self.closest8_portable_nostats(ray)
     }
 
     /// [`Self::closest_hit`], adding the work done (8-wide nodes) to `stats`.
@@ -660,8 +643,22 @@ impl Bvh {
     }
 }
 
+/// Whether the CPU has AVX2 and POPCNT: detected once, then one load and compare per call
+/// (the two `is_x86_feature_detected!` were two cache reads and tests per ray).
 #[cfg(target_arch = "x86_64")]
 #[inline]
 pub(crate) fn use_avx2() -> bool {
-    std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("popcnt")
+    use std::sync::atomic::{AtomicU8, Ordering::Relaxed};
+    /// 0: not detected yet, 1: no, 2: yes.
+    static AVX2: AtomicU8 = AtomicU8::new(0);
+    #[cold]
+    fn detect() -> bool {
+        let yes = std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("popcnt");
+        AVX2.store(1 + yes as u8, Relaxed);
+        yes
+    }
+    match AVX2.load(Relaxed) {
+        0 => detect(),
+        v => v == 2,
+    }
 }
