@@ -8,7 +8,7 @@
 //! intersection with the same ray-triangle test gives the same `t` and barycentrics as any
 //! other structure built from the mesh (the BVH).
 
-use glam::{BVec3, Vec3};
+use glam::Vec3;
 use parallax_core::Aabb;
 use parallax_scene::TriangleMesh;
 use rayon::prelude::*;
@@ -44,7 +44,10 @@ impl DirtTriangles {
             .par_chunks(4096)
             .map(|c| {
                 c.iter().fold(Aabb::EMPTY, |b, t| {
-                    grow_finite(grow_finite(grow_finite(b, t.p0), t.p1), t.p2)
+                    [t.p0, t.p1, t.p2]
+                        .into_iter()
+                        .filter(|p| p.is_finite())
+                        .fold(b, Aabb::grow)
                 })
             })
             .reduce(|| Aabb::EMPTY, Aabb::union);
@@ -84,21 +87,6 @@ impl DirtTriangles {
     /// Bytes held (the corners).
     pub fn bytes(&self) -> u64 {
         std::mem::size_of_val(self.tris.as_slice()) as u64
-    }
-}
-
-/// `b` grown by `p` if `p` is finite, else `b`: a non-finite corner is replaced by the
-/// empty box's own `+inf` / `-inf`, which `min` / `max` leave unchanged (no branch).
-#[inline(always)]
-fn grow_finite(b: Aabb, p: Vec3) -> Aabb {
-    let finite = p.is_finite();
-    Aabb {
-        min: b
-            .min
-            .min(Vec3::select(BVec3::splat(finite), p, Vec3::INFINITY)),
-        max: b
-            .max
-            .max(Vec3::select(BVec3::splat(finite), p, Vec3::NEG_INFINITY)),
     }
 }
 
