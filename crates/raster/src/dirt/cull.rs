@@ -21,8 +21,9 @@
 //! outside when the sums' maximum is `< 0` (or their minimum `> 0`). So the cull computes the
 //! 18 sums per corner, their maximum and minimum over the corners, and one bit per (sum,
 //! sign); a face is dropped when one of its five (sum, sign) bits is set — exactly when the
-//! setup's outcodes drop it. The AVX2 version holds the 18 sums in five vectors of four lanes and
-//! tests the faces' masks in the lanes of two; [`FaceCull::keep_portable`] is its scalar twin; the tests check both against the setup.
+//! setup's outcodes drop it. The AVX2 version holds the 18 sums in five vectors of four lanes
+//! and tests the faces' masks in the lanes of two; [`FaceCull::keep_portable`] is its scalar
+//! twin; the tests (in `setup.rs`) check both against the setup's own outcodes.
 
 use glam::DVec3;
 
