@@ -133,6 +133,7 @@ impl FaceCull {
     }
 
     /// Bits of the views in the group.
+    #[cfg(test)]
     pub fn members(&self) -> u32 {
         self.members
     }
