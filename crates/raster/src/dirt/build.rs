@@ -26,6 +26,7 @@ use rayon::prelude::*;
 use super::capture::{
     DirtCapture, DirtError, DirtOptions, DirtStats, MAX_BUCKETS, MAX_CELL_BUCKETS, MAX_TILE_SIZE,
 };
+use super::cull::FaceCull;
 use super::fill::{
     BILL_EVERY, BandOut, FillJob, Grid, RawFrag, ViewFrags, bill, fill_band, raster,
 };
@@ -172,6 +173,7 @@ fn setup_and_raster(
 ) -> Result<Vec<Vec<ViewFrags>>, DirtError> {
     let n = mesh.triangle_count();
     let same_eye = ViewXf::same_eyes(xfs);
+    let cull = FaceCull::new(&xfs.iter().map(ViewXf::axis_view).collect::<Vec<_>>());
     let chunks: Vec<Result<Vec<ViewFrags>, DirtError>> = (0..n.div_ceil(SETUP_CHUNK))
         .into_par_iter()
         .map(|c| {
@@ -184,7 +186,7 @@ fn setup_and_raster(
                 let mut in_view = vec![0u64; xfs.len()];
                 let mut unbilled = 0u64;
                 let range = c * SETUP_CHUNK..((c + 1) * SETUP_CHUNK).min(n);
-                ViewXf::setup_range(xfs, &same_eye, mesh, range, |v, e, poly| {
+                ViewXf::setup_range(xfs, &same_eye, cull.as_ref(), mesh, range, |v, e, poly| {
                     let out = &mut raw[v];
                     if let Some(n) = raster(e, poly, &grids[v], &xfs[v], opts.cell_depth, out) {
                         in_view[v] += 1;

@@ -45,6 +45,7 @@ mod build;
 mod capture;
 pub mod clip;
 mod cube;
+mod cull;
 mod fill;
 pub mod mip;
 mod setup;

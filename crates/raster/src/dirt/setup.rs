@@ -10,6 +10,8 @@
 //! cube faces) transforms by picking components instead of dot products (the same values);
 //! finiteness is checked once per triangle for all views, and so are the corners' offsets
 //! from the eye for views that share it (the camera view and the cube faces around its eye).
+//! The cube faces' outcode test is made for all six at once ([`FaceCull`], `cull.rs`), and
+//! only the faces it keeps are set up.
 //!
 //! **The `w` plane.** A triangle's plane `n . q = d` in camera space meets the ray through film
 //! position `(x, y)`, direction `(u, v, -1)` with `u = a0 + x ax`, `v = b0 - y by`, at view
@@ -24,6 +26,7 @@ use parallax_scene::TriangleMesh;
 use parallax_scene::camera::Pinhole;
 
 use super::clip::Poly;
+use super::cull::{AxisView, FaceCull};
 
 /// Guard band (pixels) around the film: triangles are clipped to it in camera space before
 /// projection, so projected coordinates stay small (well conditioned) whatever the near plane.
@@ -136,6 +139,23 @@ impl ViewXf {
         }
     }
 
+    /// What [`FaceCull`] needs of this view.
+    pub fn axis_view(&self) -> AxisView {
+        AxisView {
+            axes: self.axes,
+            slopes: self.slopes,
+            near: self.near,
+            eye: self.eye,
+        }
+    }
+
+    /// Whether [`Self::setup`] drops the triangle with corner offsets `d` by its outcodes.
+    #[cfg(test)]
+    pub fn outcode_culled(&self, d: &[[f64; 3]; 3]) -> bool {
+        let q = [self.rotate(d[0]), self.rotate(d[1]), self.rotate(d[2])];
+        self.cut(&q).is_none()
+    }
+
     #[cfg(test)]
     fn to_camera(&self, p: DVec3) -> DVec3 {
         self.rotate((p - self.eye).to_array())
@@ -203,20 +223,10 @@ impl ViewXf {
         })
     }
 
-    /// Sets triangle `t` up for the fill (module docs): its entry, with its clipped
-    /// projection written to `poly`, or `None` when nothing of it is left in the view; `d` are
-    /// its finite corners minus the view's eye.
+    /// The planes camera-space triangle `q` crosses (bit `k`: some corner outside plane `k`
+    /// of `planes`), or `None` when all three corners are outside one plane (culled).
     #[inline(always)]
-    pub fn setup(
-        &self,
-        t: usize,
-        d: &[[f64; 3]; 3],
-        world_mag: f64,
-        poly: &mut Poly,
-    ) -> Option<SetupEntry> {
-        let q = [self.rotate(d[0]), self.rotate(d[1]), self.rotate(d[2])];
-        // Outside one plane with all three corners: culled; else the planes some corner is
-        // outside of cut it.
+    fn cut(&self, q: &[DVec3; 3]) -> Option<u32> {
         // The near plane first: it alone culls most triangles behind a cube face.
         let n = [
             self.near_out(q[0]),
@@ -234,7 +244,24 @@ impl ViewXf {
         if o[0] & o[1] & o[2] != 0 {
             return None;
         }
-        let cut = o[0] | o[1] | o[2];
+        Some(o[0] | o[1] | o[2])
+    }
+
+    /// Sets triangle `t` up for the fill (module docs): its entry, with its clipped
+    /// projection written to `poly`, or `None` when nothing of it is left in the view; `d` are
+    /// its finite corners minus the view's eye.
+    #[inline(always)]
+    pub fn setup(
+        &self,
+        t: usize,
+        d: &[[f64; 3]; 3],
+        world_mag: f64,
+        poly: &mut Poly,
+    ) -> Option<SetupEntry> {
+        let q = [self.rotate(d[0]), self.rotate(d[1]), self.rotate(d[2])];
+        // Outside one plane with all three corners: culled; else the planes some corner is
+        // outside of cut it.
+        let cut = self.cut(&q)?;
         if cut == 0 {
             poly.v[0] = self.project(q[0]);
             poly.v[1] = self.project(q[1]);
@@ -278,16 +305,19 @@ impl ViewXf {
     /// view; stops at `f`'s first error. Each triangle's corners are read and converted once
     /// for all views, and their offsets from the eye once for the views that share it
     /// (`same_eye[k]`: view `k` has the eye of view `k - 1`; the camera view and the cube
-    /// faces around its eye).
+    /// faces around its eye). With `cull`, the setup of its member views runs only for the
+    /// faces it keeps (the same entries: it drops just what their outcodes drop).
     #[inline(always)]
     pub fn setup_range<E>(
         views: &[ViewXf],
         same_eye: &[bool],
+        cull: Option<&FaceCull>,
         mesh: &TriangleMesh,
         range: std::ops::Range<usize>,
         mut f: impl FnMut(usize, &SetupEntry, &[DVec3]) -> Result<(), E>,
     ) -> Result<(), E> {
         let mut poly = Poly::EMPTY;
+        let first = cull.map_or(usize::MAX, |c| c.first_view());
         for t in range {
             let [a, b, c] = mesh.triangle(t);
             // Finite corners have finite camera-space points in every view (f32
@@ -298,13 +328,29 @@ impl ViewXf {
             let world_mag = a.abs().max(b.abs()).max(c.abs()).max_element() as f64;
             let p = [a.as_dvec3(), b.as_dvec3(), c.as_dvec3()];
             let mut d = [[0.0; 3]; 3];
-            for (k, xf) in views.iter().enumerate() {
+            let mut k = 0;
+            while k < views.len() {
+                let xf = &views[k];
                 if !same_eye[k] {
                     d = p.map(|p| (p - xf.eye).to_array());
+                }
+                if let (true, Some(c)) = (k == first, cull) {
+                    // The group's views (consecutive, one eye): only the kept ones.
+                    let mut keep = c.keep(&d);
+                    while keep != 0 {
+                        let j = keep.trailing_zeros() as usize;
+                        keep &= keep - 1;
+                        if let Some(e) = views[j].setup(t, &d, world_mag, &mut poly) {
+                            f(j, &e, poly.verts())?;
+                        }
+                    }
+                    k += c.len();
+                    continue;
                 }
                 if let Some(e) = xf.setup(t, &d, world_mag, &mut poly) {
                     f(k, &e, poly.verts())?;
                 }
+                k += 1;
             }
         }
         Ok(())
@@ -368,5 +414,87 @@ mod tests {
             cut.iter().all(|&c| c > 100 && c < 7 * 5000 - 100),
             "{cut:?}"
         );
+    }
+
+    fn axis_views(xfs: &[ViewXf]) -> Vec<AxisView> {
+        xfs.iter().map(ViewXf::axis_view).collect()
+    }
+
+    /// The cull keeps exactly the faces whose setup does not drop the triangle by its
+    /// outcodes (never one the setup keeps), the AVX2 and scalar bits the same, on random
+    /// triangles around the eye: small and large, near the faces' boundary planes (`x = ±y`
+    /// ...), through the near plane, with zero components.
+    #[test]
+    fn cull_equals_the_setup_outcodes() {
+        for (eye, face) in [(Vec3::new(0.5, -1.25, 3.0), 32), (Vec3::ZERO, 128)] {
+            let cube = CubeMap { eye, face };
+            let desc =
+                parallax_scene::CameraDesc::new(eye, Vec3::new(-2.0, 0.5, 0.0), Vec3::Y, 50.0);
+            let mut views: Vec<Pinhole> = vec![Pinhole::new(&desc, 64, 32).unwrap()];
+            views.extend((0..6).map(|i| cube.face_camera(i)));
+            let xfs: Vec<ViewXf> = views.iter().map(|v| ViewXf::new(v, 1e-3)).collect();
+            let cull = FaceCull::new(&axis_views(&xfs)).expect("the six faces");
+            assert_eq!(cull.members(), 0b111_1110);
+            assert_eq!((cull.first_view(), cull.len()), (1, 6));
+            let e = eye.as_dvec3();
+            let mut rng = parallax_core::Rng::new(5, 7);
+            let mut poly = Poly::EMPTY;
+            let (mut kept, mut dropped, mut clipped_away) = (0u64, 0u64, 0u64);
+            for i in 0..20_000 {
+                let mut u = || rng.next_f32() as f64 - 0.5;
+                let size = [1e-3, 0.1, 2.0, 50.0][i % 4];
+                let centre = DVec3::new(u(), u(), u()) * [0.01, 1.0, 10.0][i % 3];
+                let mut corner = |c: DVec3| {
+                    let mut p = c + DVec3::new(u(), u(), u()) * size;
+                    // Corners on the faces' boundary planes, the axes, the near plane.
+                    match i % 9 {
+                        0 => p.y = p.x,
+                        1 => p.z = -p.x,
+                        2 => p.x = 0.0,
+                        3 => p.y = 1e-3,
+                        4 => p.z = -1e-3,
+                        _ => {}
+                    }
+                    // Through f32, as the mesh holds them.
+                    (p + e).as_vec3().as_dvec3()
+                };
+                let p = [corner(centre), corner(centre), corner(centre)];
+                let d = p.map(|p| (p - e).to_array());
+                let keep = cull.keep(&d);
+                assert_eq!(keep, cull.keep_portable(&d), "triangle {i}");
+                for (k, xf) in xfs.iter().enumerate().skip(1) {
+                    let entry = xf.setup(0, &d, 1.0, &mut poly);
+                    let outcode_culled = xf.outcode_culled(&d);
+                    assert_eq!(keep >> k & 1 == 0, outcode_culled, "triangle {i} face {k}");
+                    if outcode_culled {
+                        assert!(entry.is_none(), "triangle {i} face {k}");
+                        dropped += 1;
+                    } else if entry.is_some() {
+                        kept += 1;
+                    } else {
+                        clipped_away += 1;
+                    }
+                }
+            }
+            assert!(
+                kept > 10_000 && dropped > 50_000,
+                "{kept} {dropped} {clipped_away}"
+            );
+        }
+    }
+
+    /// Views whose guard slopes differ in magnitude (a non-square face) form no group.
+    #[test]
+    fn unequal_slopes_form_no_group() {
+        let cube = CubeMap {
+            eye: Vec3::ZERO,
+            face: 16,
+        };
+        let mut faces: Vec<Pinhole> = (0..6).map(|i| cube.face_camera(i)).collect();
+        faces[3].width = 20;
+        let xfs: Vec<ViewXf> = faces.iter().map(|v| ViewXf::new(v, 1e-3)).collect();
+        assert!(FaceCull::new(&axis_views(&xfs)).is_none());
+        let xfs: Vec<ViewXf> = faces[..3].iter().map(|v| ViewXf::new(v, 1e-3)).collect();
+        assert!(FaceCull::new(&axis_views(&xfs)).is_some());
     }
 }
