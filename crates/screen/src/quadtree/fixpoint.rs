@@ -41,7 +41,6 @@
 //! **Invariants:** the blocked set only grows, so the loop ends; level 0 is never changed.
 
 use core::mem::MaybeUninit;
-use core::sync::atomic::{AtomicU8, Ordering::Relaxed};
 
 use glam::Vec4;
 use rayon::prelude::*;
@@ -248,19 +247,6 @@ fn merged_triggers(
     let cols = Columns::new(w, ctx.wf);
     let (wf, hf) = (ctx.wf, ctx.hf);
     let wu = w as usize;
-    let h = fronts.len() / wu.max(1);
-    // Per node of level >= 2, whether its whole footprint is certified (`SAFE`), not
-    // (`MIXED`), or not yet known (`UNKNOWN`): each pair of rows the node covers may be the
-    // first to reach it, and the answer does not depend on which one computes it.
-    let node_cert: Vec<Vec<AtomicU8>> = levels
-        .iter()
-        .skip(2)
-        .map(|lv| {
-            (0..lv.w as usize * lv.h as usize)
-                .map(|_| AtomicU8::new(UNKNOWN))
-                .collect()
-        })
-        .collect();
     let run = RunCtx {
         cols: &cols,
         wf,
@@ -309,30 +295,8 @@ fn merged_triggers(
                 let l = l as u32;
                 let (qx, qy) = (i as u32 >> l, j >> l);
                 let lv = &levels[l as usize];
-                let end = (((qx + 1) << l) as usize).min(wu);
-                // A node over more than one pair: its certificate over the whole footprint,
-                // once (by the first pair to reach it), then only looked up.
-                let whole = (l >= 2).then(|| &node_cert[l as usize - 2][(qy * lv.w + qx) as usize]);
-                let state = whole.map_or(MIXED, |c| c.load(Relaxed));
-                if state == SAFE {
-                    i = end;
-                    continue;
-                }
                 let p = decode_plane(lv.nodes[(qy * lv.w + qx) as usize], l, qx, qy, wf, hf);
-                if let (Some(c), UNKNOWN) = (whole, state) {
-                    let x0 = (qx << l) as usize;
-                    let rows = ((qy << l) as usize, (((qy + 1) << l) as usize).min(h));
-                    let yr = ((rows.0 as f32) / hf, (rows.1 as f32) / hf);
-                    let t = proxy_safe_front(p, (cols.xe[x0], cols.xe[end]), yr);
-                    let safe = (rows.0..rows.1).fold(true, |all, r| {
-                        all & certified(&fronts[r * wu + x0..r * wu + end], t)
-                    });
-                    c.store(if safe { SAFE } else { MIXED }, Relaxed);
-                    if safe {
-                        i = end;
-                        continue;
-                    }
-                }
+                let end = (((qx + 1) << l) as usize).min(wu);
                 let t_pair = proxy_safe_front(p, (cols.xe[i], cols.xe[end]), y_pair);
                 if certified(&fr0[i..end], t_pair) && certified(&fr1[i..end.min(fr1.len())], t_pair)
                 {
@@ -369,11 +333,6 @@ fn merged_triggers(
         })
         .collect()
 }
-
-/// The states of a merged node's whole-footprint certificate in [`merged_triggers`].
-const UNKNOWN: u8 = 0;
-const SAFE: u8 = 1;
-const MIXED: u8 = 2;
 
 /// What [`merged_triggers`]' rows share.
 struct RunCtx<'a> {
