@@ -156,7 +156,7 @@ impl Kids {
 
     /// The lanes whose child `k` is an AABB node with a NaN or `-0` word, as a bit mask.
     #[inline(always)]
-    fn special(&self, k: usize) -> u32 {
+    pub(super) fn special(&self, k: usize) -> u32 {
         // SAFETY: SSE2 baseline.
         unsafe {
             let neg0 = _mm_set1_epi32(i32::MIN);

@@ -9,7 +9,9 @@
 //! slopes encoded by `vcvtps2ph` (`leaf_avx2::f16x8`, the definition's rounding); the fixed
 //! thresholds (`cos_norm`, `gamma_dist`) and flag `O` are applied in lanes, the adaptive
 //! ones per lane. When all eight parents merge, their nodes are stored straight from the
-//! lanes; otherwise the parents take `merge_rows`' own per-group code
+//! lanes; otherwise the parents that do not merge get their AABB nodes (the children's
+//! z-range union) in the same lanes (`ranges8`), or, in a group with an AABB child whose
+//! word is NaN or `-0`, the parents take `merge_rows`' own per-group code
 //! (`MergeCtx::group4`) with the merges passed in. Every lane does the four-lane kernel's operations in its order —
 //! IEEE square root, division, products and sums are correctly rounded per lane, `minps` /
 //! `maxps` pick the same operand in 8 lanes as in 4, nothing is fused (no FMA is enabled) —
@@ -32,10 +34,21 @@ use super::merge::MergeCtx;
 use super::merge_rows::{CORNER, KID, Kids};
 use super::node::{FLAG_CRACK, Node};
 use super::prune::Allow;
-use super::tree::Level;
+use super::tree::{Level, Z_EPS};
 
 /// Largest finite f16.
 const F16_MAX: f32 = 65504.0;
+
+/// Per-thread counts of the groups of eight whose parents that do not merge took
+/// `ranges8` and of those that took `group4`, for the test to check that both run.
+#[cfg(test)]
+mod tally {
+    use std::cell::Cell;
+    thread_local! {
+        pub(super) static RANGES8: Cell<usize> = const { Cell::new(0) };
+        pub(super) static GROUP4: Cell<usize> = const { Cell::new(0) };
+    }
+}
 
 /// Eight f32 lanes. SAFETY (every method): only called from code compiled with AVX2 that
 /// runs after AVX2 was detected (module docs).
@@ -257,6 +270,16 @@ impl MergeCtx {
             let merged: [Option<Node>; 8] = core::array::from_fn(|p| {
                 (mask & (1 << p) != 0).then_some(Node { a: a[p], b: b[p] })
             });
+            if let Some((a, b)) = self.ranges8(l, &lo, &hi) {
+                #[cfg(test)]
+                tally::RANGES8.with(|c| c.set(c.get() + 1));
+                for (p, o) in o_lo.iter_mut().chain(o_hi.iter_mut()).enumerate() {
+                    *o = merged[p].unwrap_or(Node { a: a[p], b: b[p] });
+                }
+                continue;
+            }
+            #[cfg(test)]
+            tally::GROUP4.with(|c| c.set(c.get() + 1));
             let (m_lo, m_hi) = (
                 [merged[0], merged[1], merged[2], merged[3]],
                 [merged[4], merged[5], merged[6], merged[7]],
@@ -266,6 +289,83 @@ impl MergeCtx {
                 self.group4(l, qx0 as u32 + 4, qy, &hi, o_hi, allow, Some(m_hi));
             }
         }
+    }
+
+    /// The AABB nodes of the eight parents of `lo` (lanes 0-3) and `hi` (lanes 4-7) that do
+    /// not merge, as `merge_rows`' `group4` makes them when no child of the group is an
+    /// AABB with a NaN or `-0` word (else `None`, and the caller takes `group4`): per child
+    /// the spread `(|gx| half) / W + (|gy| half) / H` (`half` dilated by `crack_px` where the
+    /// child has flag `O`), a plane child's `plane_range` (`[0, 1]` for a spread that is
+    /// not finite) or an AABB child's stored range, their union by `minps` / `maxps` from
+    /// `(+inf, -inf)` in child order, and `union_lanes`' encoding — the four-lane code's
+    /// operations in its order, so the same bits. A group with no plane child gets the
+    /// union of the stored ranges, as `group4`'s `aabb_union` (all empty: `Node::EMPTY`).
+    /// Returns the nodes' `a` and `b` words (lanes that merged: garbage).
+    #[inline(always)]
+    fn ranges8(&self, l: u32, lo: &Kids, hi: &Kids) -> Option<([u32; 8], [u32; 8])> {
+        let special = (0..4).fold(0, |m, k| m | lo.special(k) | hi.special(k));
+        if special != 0 {
+            return None;
+        }
+        let s = F8::splat;
+        let cl = l - 1;
+        let (ws, hs) = (
+            f32::from_bits(self.wf.to_bits() - (cl << 23)),
+            f32::from_bits(self.hf.to_bits() - (cl << 23)),
+        );
+        let size = (1u32 << cl) as f32;
+        let (dil, none) = (s(0.5 * size + self.crack_px), s(0.5 * size + 0.0));
+        let (zero, one, eps) = (s(0.0), s(1.0), s(Z_EPS));
+        let clamp = |v: F8| v.max_ps(zero).min(one);
+        let (mut zlo, mut zhi) = (s(f32::INFINITY), s(f32::NEG_INFINITY));
+        let (la, ha) = (lo.words_a(), hi.words_a());
+        for k in 0..4 {
+            let (ex, ey) = increments8(lo, hi, k);
+            let (gx, gy) = (ex * s(ws), ey * s(hs));
+            // SAFETY: AVX2 (module docs).
+            let (a, b, crack, zc, plane) = unsafe {
+                let a = _mm256_set_m128i(ha[k], la[k]);
+                let b = _mm256_set_m128i(hi.word_b(k), lo.word_b(k));
+                let flag = _mm256_set1_epi32(FLAG_CRACK as i32);
+                let crack = _mm256_cmpeq_epi32(_mm256_and_si256(a, flag), flag);
+                let zc = _mm256_and_si256(a, _mm256_set1_epi32(0x7fff_fffc));
+                (
+                    F8(_mm256_castsi256_ps(a)),
+                    F8(_mm256_castsi256_ps(b)),
+                    M8(_mm256_castsi256_ps(crack)),
+                    F8(_mm256_castsi256_ps(zc)),
+                    M8(_mm256_castsi256_ps(_mm256_srai_epi32::<31>(a))),
+                )
+            };
+            let half = F8::select(crack, dil, none);
+            let sp = (gx.abs() * half) / s(self.wf) + (gy.abs() * half) / s(self.hf);
+            let finite = sp.finite();
+            let rlo = F8::select(finite, clamp((zc - sp) - eps), zero);
+            let rhi = F8::select(finite, clamp((zc + sp) + eps), one);
+            zlo = F8::select(plane, rlo, a).min(zlo);
+            zhi = F8::select(plane, rhi, b).max_ps(zhi);
+        }
+        let e = Node::EMPTY;
+        let (mut aw, mut bw) = ([0u32; 8], [0u32; 8]);
+        // SAFETY: AVX2 (module docs); 32-byte stores into 32-byte arrays.
+        unsafe {
+            let empty = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_GT_OS>(zlo.0, zhi.0));
+            let zmin = _mm256_castps_si256(_mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_GT_OS>(zlo.0, _mm256_setzero_ps()),
+                zlo.0,
+            ));
+            let a = _mm256_or_si256(
+                _mm256_and_si256(empty, _mm256_set1_epi32(e.a as i32)),
+                _mm256_andnot_si256(empty, zmin),
+            );
+            let b = _mm256_or_si256(
+                _mm256_and_si256(empty, _mm256_set1_epi32(e.b as i32)),
+                _mm256_andnot_si256(empty, _mm256_castps_si256(zhi.0)),
+            );
+            _mm256_storeu_si256(aw.as_mut_ptr() as *mut __m256i, a);
+            _mm256_storeu_si256(bw.as_mut_ptr() as *mut __m256i, b);
+        }
+        Some((aw, bw))
     }
 
     /// `merge_rows`' `merge4` for eight parents: lanes 0-3 the parents of `lo`, 4-7 those
@@ -431,6 +531,10 @@ mod tests {
         }
         let mut rng = Rng(0x1234_5678_9abc_def1);
         let (mut merged, mut total) = (0usize, 0usize);
+        let tally0 = (
+            tally::RANGES8.with(|c| c.get()),
+            tally::GROUP4.with(|c| c.get()),
+        );
         for case in 0..48u32 {
             let ctx = MergeCtx::test_case(case);
             let (wf, hf) = (ctx.wf, ctx.hf);
@@ -450,6 +554,17 @@ mod tests {
                     match rng.next() % 16 {
                         0 => Node::EMPTY,
                         1 => Node::aabb(rng.f(0.0, 0.5), rng.f(0.5, 1.0)),
+                        // AABB words that are NaN or `-0` (`group4`'s scalar path), rarely.
+                        3 if rng.next().is_multiple_of(4) => match rng.next() % 2 {
+                            0 => Node {
+                                a: 0x7fc0_0000,
+                                b: 0x3f00_0000,
+                            },
+                            _ => Node {
+                                a: 0,
+                                b: 0x8000_0000,
+                            },
+                        },
                         // Slopes clamped to the f16 maximum.
                         2 => Node::plane_with_gradient(
                             rng.f(0.2, 0.8),
@@ -502,6 +617,13 @@ mod tests {
         assert!(
             merged > total / 4 && merged < total,
             "{merged} of {total} parents merged"
+        );
+        // Groups with parents that do not merge took both paths.
+        let ranges8 = tally::RANGES8.with(|c| c.get()) - tally0.0;
+        let group4 = tally::GROUP4.with(|c| c.get()) - tally0.1;
+        assert!(
+            ranges8 > 20 && group4 > 20,
+            "{ranges8} groups by ranges8, {group4} by group4"
         );
     }
 }

@@ -15,6 +15,28 @@
 //! pair of halves) are masked out of the safety test and do not enter the deeper front. The
 //! deeper layers' normals are transposed from their `Vec3`s eight at a time (`soa8`). The
 //! test below compares rows with the four-lane kernel.
+//!
+//! **The bounded step.** Per deeper layer the definition divides four numerators `N_c = (cj
+//! - nx x_c) - ny y_c` by `nz` (`< -1e-6` in live lanes) and tests every corner. Where a
+//! group of eight allows it, one division does: IEEE rounding is monotone (`a <= b` implies
+//! `rnd(a op y) <= rnd(b op y)` for `+`, `-`, and for `*`, `/` by a positive operand, reversed
+//! by a negative one), so `N_c <= N_max = max_c N_c` gives `z_c = N_c / nz >= N_max / nz =
+//! z_min` at every corner, and `z_min` is the smallest corner `z`. The definition's running
+//! minimum (a strict `<` compare-select, NaN never enters) then ends at `z_min`'s value,
+//! with `z_min`'s bits wherever equal values have equal bits: every value but zero, so
+//! lanes whose `z_min` is `±0` (whose corners may hold both zeros, the first one kept)
+//! take the exact step, as do lanes with a NaN numerator (`maxps` would drop it). A
+//! non-zero non-NaN `z_min` also means `nz` is finite (`N / ±inf` is `±0` or NaN), so then
+//! no `z_c` is NaN, as the definition's NaN test finds. The safety test:
+//! the own plane's `pnz` is `-2^k < 0`, so `pnz z_c <= pnz z_min`, and `f_c = (q_c + pnz z_c)
+//! - pc <= (q_max + pnz z_min) - pc = g` with `q_max` the largest of the four `q_c` (lanes
+//! with a NaN `q_c` do not take the bounded step);
+//! `g <= -margin` (an ordered compare: false for NaN) proves every corner safe, as the
+//! definition's `f_c <= -margin` would find. Lanes whose own leaf is not a plane are bad
+//! whatever the corners say, so they need no bound. A group takes the bounded step when
+//! every live lane has ordered numerators, a non-zero non-NaN `z_min` and (a plane) `g <=
+//! -margin` with ordered `q_c`; otherwise the group's four exact divisions and corner
+//! tests (the test below asserts that rows take both steps).
 
 use core::arch::x86_64::*;
 use core::mem::MaybeUninit;
@@ -24,6 +46,17 @@ use glam::Vec3;
 use super::cascade::SAFE_MARGIN;
 use super::node::Node;
 use crate::LayerPlanes;
+
+/// Per-thread counts of the deeper layers' groups of eight that took the bounded step and
+/// the exact one (module docs), for the tests to check that both are exercised.
+#[cfg(test)]
+pub(super) mod tally {
+    use std::cell::Cell;
+    thread_local! {
+        pub(crate) static BOUNDED: Cell<usize> = const { Cell::new(0) };
+        pub(crate) static EXACT: Cell<usize> = const { Cell::new(0) };
+    }
+}
 
 /// Eight `Vec3`s at `p` as `(x, y, z)` lanes, pixels `0..4` in the low halves: the
 /// 128-bit rows `v0 = x0 y0 z0 x1`, `v1 = y1 z1 x2 y2`, `v2 = z2 x3 y3 z3` of the first four
@@ -149,6 +182,13 @@ pub(super) unsafe fn pixel_triggers_row8(
             _mm256_add_ps(px0, py1),
             _mm256_add_ps(px1, py1),
         ];
+        // The largest of the own plane's corner terms, for the bounded step; lanes with a
+        // NaN term never take it.
+        let qmax = _mm256_max_ps(_mm256_max_ps(q[0], q[1]), _mm256_max_ps(q[2], q[3]));
+        let qok = _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_ORD_Q>(q[0], q[1]),
+            _mm256_cmp_ps::<_CMP_ORD_Q>(q[2], q[3]),
+        );
         let mut front = s(f32::INFINITY);
         let mut bad = _mm256_setzero_ps();
         // Lanes with an edge-on deeper plane or a NaN corner `z`: deeper front `-inf`.
@@ -179,17 +219,49 @@ pub(super) unsafe fn pixel_triggers_row8(
             if _mm256_movemask_ps(live) == 0 {
                 continue;
             }
-            // `z = (cj - nx x - ny y) / nz` per corner, left to right.
+            // The numerators `cj - nx x - ny y` per corner, left to right.
             let (c0, c1) = (
                 _mm256_sub_ps(cj, _mm256_mul_ps(nx, x0)),
                 _mm256_sub_ps(cj, _mm256_mul_ps(nx, x1)),
             );
             let (ny0, ny1) = (_mm256_mul_ps(ny, sy0), _mm256_mul_ps(ny, sy1));
+            let num = [
+                _mm256_sub_ps(c0, ny0),
+                _mm256_sub_ps(c1, ny0),
+                _mm256_sub_ps(c0, ny1),
+                _mm256_sub_ps(c1, ny1),
+            ];
+            // The bounded step (module docs): the corners' smallest `z` by one division,
+            // that of the largest numerator, and the safety test bounded from it.
+            let nmax = _mm256_max_ps(_mm256_max_ps(num[0], num[1]), _mm256_max_ps(num[2], num[3]));
+            let zmin = _mm256_div_ps(nmax, nz);
+            let ordered = _mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_ORD_Q>(num[0], num[1]),
+                _mm256_cmp_ps::<_CMP_ORD_Q>(num[2], num[3]),
+            );
+            let nonzero = _mm256_cmp_ps::<_CMP_NEQ_OQ>(zmin, z0);
+            let g = _mm256_sub_ps(_mm256_add_ps(qmax, _mm256_mul_ps(pnz, zmin)), pc);
+            let safe = _mm256_and_ps(qok, _mm256_cmp_ps::<_CMP_LE_OQ>(g, margin));
+            let ok = _mm256_and_ps(
+                _mm256_and_ps(ordered, nonzero),
+                _mm256_or_ps(safe, not_plane),
+            );
+            if _mm256_movemask_ps(_mm256_andnot_ps(ok, live)) == 0 {
+                #[cfg(test)]
+                tally::BOUNDED.with(|c| c.set(c.get() + 1));
+                let lower = _mm256_and_ps(live, _mm256_cmp_ps::<_CMP_LT_OS>(zmin, front));
+                front = _mm256_blendv_ps(front, zmin, lower);
+                bad = _mm256_or_ps(bad, _mm256_and_ps(live, not_plane));
+                continue;
+            }
+            #[cfg(test)]
+            tally::EXACT.with(|c| c.set(c.get() + 1));
+            // The exact step: `z = (cj - nx x - ny y) / nz` per corner.
             let z = [
-                _mm256_div_ps(_mm256_sub_ps(c0, ny0), nz),
-                _mm256_div_ps(_mm256_sub_ps(c1, ny0), nz),
-                _mm256_div_ps(_mm256_sub_ps(c0, ny1), nz),
-                _mm256_div_ps(_mm256_sub_ps(c1, ny1), nz),
+                _mm256_div_ps(num[0], nz),
+                _mm256_div_ps(num[1], nz),
+                _mm256_div_ps(num[2], nz),
+                _mm256_div_ps(num[3], nz),
             ];
             // A NaN at any corner (`unord` of two operands: either is NaN).
             let nan = _mm256_or_ps(
@@ -292,14 +364,31 @@ mod tests {
             return;
         }
         let mut rng = Rng(0x0bad_cafe_dead_beef);
+        let tally0 = (
+            tally::BOUNDED.with(|c| c.get()),
+            tally::EXACT.with(|c| c.get()),
+        );
         let (wf, hf) = (1600.0f32, 900.0f32);
         let (mut finite, mut total) = (0usize, 0usize);
         for case in 0..64u32 {
             let w = 8 * (1 + case as usize % 9) + (case as usize % 8);
             let (j, rows) = (case % 3, 3u32);
             let k0 = j as usize * w;
+            // Half the cases coherent: own planes of moderate slopes and deeper planes
+            // mostly far behind them, so that whole groups of eight are provably safe.
+            let coherent = case % 4 >= 2;
             let nodes: Vec<Node> = (0..w)
                 .map(|_| match rng.next() % 8 {
+                    2 if coherent => Node::plane_with_gradient(
+                        rng.f(0.0, 1.0),
+                        rng.f(-3.0, 3.0),
+                        rng.f(-3.0, 3.0),
+                        0,
+                        wf,
+                        hf,
+                        0,
+                    )
+                    .unwrap_or(Node::EMPTY),
                     0 => Node::EMPTY,
                     1 => Node::aabb(rng.f(0.0, 0.5), rng.f(0.5, 1.0)),
                     // Slopes clamped to the f16 maximum, subnormal halves, ordinary ones.
@@ -325,18 +414,36 @@ mod tests {
                     .unwrap_or(Node::EMPTY),
                 })
                 .collect();
+            let xe: Vec<f32> = (0..=w).map(|i| i as f32 / wf).collect();
             let deeper: Vec<LayerPlanes> = (0..1 + case % 2)
                 .map(|_| {
                     let n = w * rows as usize;
-                    let normal: Vec<Vec3> = (0..n)
-                        .map(|_| match rng.next() % 8 {
-                            0 => Vec3::ZERO,
-                            1 => Vec3::new(1.0, 0.0, 0.0),
-                            2 => Vec3::new(0.6, 0.8, -1e-7),
-                            _ => Vec3::new(rng.f(-0.5, 0.5), rng.f(-0.5, 0.5), -1.0).normalize(),
+                    // Some planes through `z = 0` at the footprint's left corners (`cj =
+                    // nx x0`, `ny = 0`: zero numerators there), for the exact step's zero
+                    // guard; some far behind or in front, for the bounded step.
+                    let (normal, offset): (Vec<Vec3>, Vec<f32>) = (0..n)
+                        .map(|p| match rng.next() % 10 {
+                            _ if coherent && rng.next() % 16 != 0 => {
+                                let nv = Vec3::new(rng.f(-0.5, 0.5), rng.f(-0.5, 0.5), -1.0);
+                                (nv.normalize(), rng.f(-8.0, -2.0))
+                            }
+                            0 => (Vec3::ZERO, rng.f(-1.2, 0.2)),
+                            1 => (Vec3::new(1.0, 0.0, 0.0), rng.f(-1.2, 0.2)),
+                            2 => (Vec3::new(0.6, 0.8, -1e-7), rng.f(-1.2, 0.2)),
+                            3 => {
+                                let nv = Vec3::new(rng.f(-0.5, 0.5), 0.0, -1.0).normalize();
+                                (nv, nv.x * xe[p % w])
+                            }
+                            4 => {
+                                let nv = Vec3::new(rng.f(-0.5, 0.5), rng.f(-0.5, 0.5), -1.0);
+                                (nv.normalize(), rng.f(-8.0, 8.0))
+                            }
+                            _ => {
+                                let nv = Vec3::new(rng.f(-0.5, 0.5), rng.f(-0.5, 0.5), -1.0);
+                                (nv.normalize(), rng.f(-1.2, 0.2))
+                            }
                         })
-                        .collect();
-                    let offset = (0..n).map(|_| rng.f(-1.2, 0.2)).collect();
+                        .unzip();
                     LayerPlanes {
                         width: w as u32,
                         height: rows,
@@ -346,7 +453,6 @@ mod tests {
                     }
                 })
                 .collect();
-            let xe: Vec<f32> = (0..=w).map(|i| i as f32 / wf).collect();
             let xc: Vec<f32> = (0..w).map(|i| ((i as f32 + 0.5) * 1.0) / wf).collect();
             let y = (
                 (j as f32) / hf,
@@ -422,6 +528,13 @@ mod tests {
         assert!(
             finite > total / 10 && finite < total,
             "{finite} of {total} finite"
+        );
+        // Both steps ran, each on a fair share of the groups.
+        let bounded = tally::BOUNDED.with(|c| c.get()) - tally0.0;
+        let exact = tally::EXACT.with(|c| c.get()) - tally0.1;
+        assert!(
+            bounded > (bounded + exact) / 10 && exact > (bounded + exact) / 10,
+            "{bounded} bounded and {exact} exact steps"
         );
     }
 }
