@@ -34,6 +34,8 @@ pub struct CullScratch {
     pub nodes: Vec<u32>,
     pub entries: Vec<Entry>,
     pub leaves: Vec<LeafRef>,
+    /// The sort keys of `leaves` ([`sort_leaves`]).
+    pub keys: Vec<u64>,
 }
 
 /// Classifies the four children of a node against a beam: `(miss mask, contained mask)`, bit
@@ -271,9 +273,34 @@ pub fn tile_cull<C: Classify4>(bvh: &Bvh, cls: &C, entries: &[Entry], s: &mut Cu
             }
         }
     }
-    // `near` by `total_cmp`, then `leaf`, as one integer key: the same order.
-    s.leaves
-        .sort_unstable_by_key(|x| (total_order_key(x.near) as u64) << 32 | x.leaf as u64);
+    sort_leaves(&mut s.leaves, &mut s.keys);
+}
+
+/// Sorts `leaves` by `near` (`total_cmp`), then `leaf`: each as one integer key
+/// ([`total_order_key`] and the leaf), the keys sorted as plain `u64` (no key computed per
+/// comparison) and the leaves read back from them (the key is a bijection), so the list is
+/// the one `sort_unstable_by_key` on the same key gives.
+fn sort_leaves(leaves: &mut [LeafRef], keys: &mut Vec<u64>) {
+    keys.clear();
+    keys.extend(
+        leaves
+            .iter()
+            .map(|x| (total_order_key(x.near) as u64) << 32 | x.leaf as u64),
+    );
+    keys.sort_unstable();
+    for (x, &k) in leaves.iter_mut().zip(keys.iter()) {
+        *x = LeafRef {
+            leaf: k as u32,
+            near: from_total_order_key((k >> 32) as u32),
+        };
+    }
+}
+
+/// The inverse of [`total_order_key`] (bit for bit, NaN payloads included).
+#[inline(always)]
+fn from_total_order_key(k: u32) -> f32 {
+    let b = (k ^ 0x8000_0000) as i32;
+    f32::from_bits((b ^ ((((b >> 31) as u32) >> 1) as i32)) as u32)
 }
 
 /// An unsigned key whose order is [`f32::total_cmp`]'s (its sign-magnitude to two's-complement
@@ -326,7 +353,50 @@ fn collect_all(
 
 #[cfg(test)]
 mod tests {
-    use super::total_order_key;
+    use super::{LeafRef, from_total_order_key, sort_leaves, total_order_key};
+
+    /// The key sort gives the list of `sort_unstable_by_key` on the same key, and the key
+    /// reads back bit for bit.
+    #[test]
+    fn sort_leaves_equals_sort_by_key() {
+        let mut x = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x
+        };
+        let special = [0.0f32, -0.0, f32::INFINITY, f32::NAN, -f32::NAN, 1e-45, 2.5];
+        let mut keys = Vec::new();
+        for n in [0usize, 1, 2, 7, 33, 200, 1000] {
+            let mut a: Vec<LeafRef> = (0..n)
+                .map(|_| {
+                    let r = next();
+                    let near = if r % 4 == 0 {
+                        special[(r >> 8) as usize % special.len()]
+                    } else {
+                        f32::from_bits((r >> 16) as u32)
+                    };
+                    // Few distinct leaves: equal keys occur.
+                    LeafRef {
+                        leaf: (r >> 48) as u32 % 50,
+                        near,
+                    }
+                })
+                .collect();
+            for v in &a {
+                let k = total_order_key(v.near);
+                assert_eq!(from_total_order_key(k).to_bits(), v.near.to_bits());
+            }
+            let mut b = a.clone();
+            b.sort_unstable_by_key(|x| (total_order_key(x.near) as u64) << 32 | x.leaf as u64);
+            sort_leaves(&mut a, &mut keys);
+            let bits = |v: &[LeafRef]| -> Vec<(u32, u32)> {
+                v.iter().map(|x| (x.leaf, x.near.to_bits())).collect()
+            };
+            assert_eq!(bits(&a), bits(&b), "n = {n}");
+        }
+    }
 
     /// The key orders like `f32::total_cmp` on zeros, subnormals, infinities, NaNs of both
     /// signs and random bit patterns.

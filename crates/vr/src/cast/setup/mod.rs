@@ -140,6 +140,7 @@
 pub mod affine;
 mod bands;
 pub mod edges;
+mod emit;
 pub mod full;
 mod kernel;
 mod lazy;
