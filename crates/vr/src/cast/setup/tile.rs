@@ -498,19 +498,6 @@ mod tests {
         }
     }
 
-    fn bits(s: &TriSetup) -> Vec<u32> {
-        let mut v: Vec<u32> = s.n.iter().flatten().map(|x| x.to_bits()).collect();
-        v.extend(s.g.map(f32::to_bits));
-        v.extend([
-            s.tri,
-            s.src,
-            s.bound.to_bits(),
-            s.rho.to_bits(),
-            s.all_in as u32,
-        ]);
-        v
-    }
-
     #[test]
     fn lane_setup_equals_scalar_bit_for_bit() {
         let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
@@ -544,7 +531,7 @@ mod tests {
                     assert_eq!(class == CornerClass::AllIn, inm >> l & 1 != 0, "{v:?}");
                     s.all_in = class == CornerClass::AllIn;
                     let t = lane_of(&x, l, 7, src, s.all_in);
-                    assert_eq!(bits(&s), bits(&t), "{v:?} {o:?}");
+                    assert_eq!(s.bits(), t.bits(), "{v:?} {o:?}");
                 }
             }
         }
@@ -596,7 +583,7 @@ mod tests {
         {
             assert_eq!(a.tris.len(), b.tris.len());
             for (x, y) in a.tris.iter().zip(&b.tris) {
-                assert_eq!(bits(x), bits(y));
+                assert_eq!(x.bits(), y.bits());
             }
             assert_eq!(a.segs.len(), b.segs.len());
             for (x, y) in a.segs.iter().zip(&b.segs) {
@@ -647,7 +634,7 @@ mod tests {
                 b.refine(j, &blocks);
             }
             for (x, y) in a.tris.iter().zip(&b.tris) {
-                assert_eq!(bits(x), bits(y), "{x:?} {y:?}");
+                assert_eq!(x.bits(), y.bits(), "{x:?} {y:?}");
                 refined += 1;
             }
             // The AVX2 form (gathered vertices) equals the portable one.
@@ -668,7 +655,7 @@ mod tests {
                 }
                 assert_eq!(c.tris.len(), a.tris.len());
                 for (x, y) in a.tris.iter().zip(&c.tris) {
-                    assert_eq!(bits(x), bits(y), "{x:?} {y:?}");
+                    assert_eq!(x.bits(), y.bits(), "{x:?} {y:?}");
                     avx2 += 1;
                 }
             }

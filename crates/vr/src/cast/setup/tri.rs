@@ -48,6 +48,24 @@ pub struct TriSetup {
     pub all_in: bool,
 }
 
+#[cfg(test)]
+impl TriSetup {
+    /// The fields as bits, for bit-for-bit comparisons in tests (`rho` may be NaN, so
+    /// `PartialEq` would fail on equal set-ups).
+    pub(crate) fn bits(&self) -> Vec<u32> {
+        let mut v: Vec<u32> = self.n.iter().flatten().map(|x| x.to_bits()).collect();
+        v.extend(self.g.map(f32::to_bits));
+        v.extend([
+            self.tri,
+            self.src,
+            self.bound.to_bits(),
+            self.rho.to_bits(),
+            self.all_in as u32,
+        ]);
+        v
+    }
+}
+
 /// `((a_x b_x + a_y b_y) + a_z b_z)` in f32 without contraction: the kernel's evaluation order.
 #[inline(always)]
 pub fn dot3(a: [f32; 3], d: Vec3) -> f32 {
