@@ -37,6 +37,19 @@ use super::setup::{SetupEntry, ViewXf, WPlane};
 /// Relative margin on a clipped depth range.
 const DEPTH_REL_MARGIN: f64 = 1.0 / 65536.0;
 
+/// One cell-triangle pair with the (widened) view-depth range.
+#[derive(Clone, Copy)]
+pub(super) struct Fragment {
+    cell: u32,
+    tri: u32,
+    zlo: f32,
+    zhi: f32,
+    /// Its first and last bucket (eq. 1a/1b), once the cell's bounds are known: computed by
+    /// the count pass, read by the fill pass.
+    b0: u16,
+    b1: u16,
+}
+
 /// The cell grid and its split into bands of whole cell rows.
 pub(super) struct Grid {
     pub s: u32,
@@ -364,23 +377,25 @@ pub(super) struct FillJob<'a> {
 }
 
 thread_local! {
-    /// Each worker's bucket ranges of a band's fragments (`b0 | b1 << 16`, eq. 1a/1b), kept
-    /// across bands and builds (no allocation once warm).
-    static SPANS: std::cell::RefCell<Vec<u32>> = const { std::cell::RefCell::new(Vec::new()) };
+    /// Each worker's fragment buffer, kept across bands and builds (no allocation once warm).
+    static FRAGMENTS: std::cell::RefCell<Vec<Fragment>> =
+        const { std::cell::RefCell::new(Vec::new()) };
 }
 
 /// Fill Depth and Fill Primitives of band `band` from its fragments.
 pub(super) fn fill_band(job: &FillJob, band: u32) -> Result<BandOut, DirtError> {
-    SPANS.with_borrow_mut(|spans| {
-        spans.clear();
-        fill_band_with(job, band, spans)
+    FRAGMENTS.with_borrow_mut(|frags| {
+        frags.clear();
+        fill_band_with(job, band, frags)
     })
 }
 
-/// [`fill_band`] with an empty buffer for the fragments' bucket ranges: the fragments are
-/// read in place from the chunks three times (depth bounds, counts, fill), the count pass
-/// keeping each one's first and last bucket for the fill.
-fn fill_band_with(job: &FillJob, band: u32, spans: &mut Vec<u32>) -> Result<BandOut, DirtError> {
+/// [`fill_band`] with an empty fragment buffer.
+fn fill_band_with(
+    job: &FillJob,
+    band: u32,
+    frags: &mut Vec<Fragment>,
+) -> Result<BandOut, DirtError> {
     let FillJob {
         chunks,
         grid: g,
@@ -409,6 +424,14 @@ fn fill_band_with(job: &FillJob, band: u32, spans: &mut Vec<u32>) -> Result<Band
             // Branch-free (a new triangle in a cell is nearer or farther unpredictably).
             cell.zmin = select_bits(f.zlo < cell.zmin, f.zlo, cell.zmin);
             cell.zmax = select_bits(f.zhi > cell.zmax, f.zhi, cell.zmax);
+            frags.push(Fragment {
+                cell: k,
+                tri: f.tri,
+                zlo: f.zlo,
+                zhi: f.zhi,
+                b0: 0,
+                b1: 0,
+            });
         }
     }
 
@@ -423,28 +446,25 @@ fn fill_band_with(job: &FillJob, band: u32, spans: &mut Vec<u32>) -> Result<Band
     // The non-empty mask of a cell is the union of its fragments' bucket ranges.
     let mut offsets = vec![0u32; ncells * nb + 1];
     let mut total = 0u64;
-    for ch in chunks {
-        for f in ch.band(band) {
-            let k = (f.cell - cell0) as usize;
-            let cell = &mut cells[k];
-            let b0 = fast_bucket_index(cell.zmin, cell.scale, g.buckets, f.zlo) as usize;
-            let b1 = fast_bucket_index(cell.zmin, cell.scale, g.buckets, f.zhi) as usize;
-            cell.mask |= fast_bucket_mask(b0 as u32, b1 as u32, g.buckets);
-            spans.push(b0 as u32 | (b1 as u32) << 16);
-            let base = k * nb;
-            if b0 == b1 {
-                offsets[base + b0] += 1;
-            } else {
-                for o in &mut offsets[base + b0..base + b1 + 1] {
-                    *o += 1;
-                }
+    for f in frags.iter_mut() {
+        let cell = &mut cells[f.cell as usize];
+        let b0 = fast_bucket_index(cell.zmin, cell.scale, g.buckets, f.zlo) as usize;
+        let b1 = fast_bucket_index(cell.zmin, cell.scale, g.buckets, f.zhi) as usize;
+        cell.mask |= fast_bucket_mask(b0 as u32, b1 as u32, g.buckets);
+        (f.b0, f.b1) = (b0 as u16, b1 as u16);
+        let base = f.cell as usize * nb;
+        if b0 == b1 {
+            offsets[base + b0] += 1;
+        } else {
+            for o in &mut offsets[base + b0..base + b1 + 1] {
+                *o += 1;
             }
-            total += (b1 - b0 + 1) as u64;
         }
+        total += (b1 - b0 + 1) as u64;
     }
     // Entries beyond fragments (triangles in several buckets) count against the budget too
     // (the fragments were billed by the rasterization).
-    let mut extra = total - spans.len() as u64;
+    let mut extra = total - frags.len() as u64;
     bill(budget, &mut extra, opts.max_entries)?;
     // The running sum kept in a register (not reloaded from the previous slot).
     let mut sum = 0u32;
@@ -454,22 +474,17 @@ fn fill_band_with(job: &FillJob, band: u32, spans: &mut Vec<u32>) -> Result<Band
     }
     offsets[ncells * nb] = total as u32;
     let mut ids = vec![0u32; total as usize];
-    let mut i = spans.len();
-    for ch in chunks.iter().rev() {
-        for f in ch.band(band).iter().rev() {
-            i -= 1;
-            let span = spans[i];
-            let (b0, b1) = ((span & 0xffff) as usize, (span >> 16) as usize);
-            let base = (f.cell - cell0) as usize * nb;
-            if b0 == b1 {
-                let end = &mut offsets[base + b0];
+    for f in frags.iter().rev() {
+        let (b0, b1) = (f.b0 as usize, f.b1 as usize);
+        let base = f.cell as usize * nb;
+        if b0 == b1 {
+            let end = &mut offsets[base + b0];
+            *end -= 1;
+            ids[*end as usize] = f.tri;
+        } else {
+            for end in &mut offsets[base + b0..base + b1 + 1] {
                 *end -= 1;
                 ids[*end as usize] = f.tri;
-            } else {
-                for end in &mut offsets[base + b0..base + b1 + 1] {
-                    *end -= 1;
-                    ids[*end as usize] = f.tri;
-                }
             }
         }
     }
@@ -477,7 +492,7 @@ fn fill_band_with(job: &FillJob, band: u32, spans: &mut Vec<u32>) -> Result<Band
         cells,
         offsets,
         ids,
-        fragments: spans.len() as u64,
+        fragments: frags.len() as u64,
     })
 }
 
