@@ -213,6 +213,7 @@ impl ViewXf {
     }
 
     /// The `w` plane of the camera-space triangle `q` (module docs).
+    #[inline(always)]
     fn w_plane(&self, q: &[DVec3; 3]) -> Option<WPlane> {
         let n = (q[1] - q[0]).cross(q[2] - q[0]);
         let d = n.dot(q[0]);
