@@ -261,14 +261,7 @@ pub(super) fn raster(
     let t = e.tri;
     let (r0, r1) = Grid::span(e.y.0, e.y.1, g.s, 0, g.cells_y)?;
     let mut n = 0u32;
-    // Row `r`'s screen band, stepped with the rows (no division per row).
-    let mut band = r0 / g.band_rows;
-    let mut band_end = (band + 1) * g.band_rows;
     for r in r0..r1 + 1 {
-        if r == band_end {
-            band += 1;
-            band_end += g.band_rows;
-        }
         let top = r as f64 * s - m;
         let bottom = ((r as f64 + 1.0) * s).min(xf.h) + m;
         // A polygon inside the slab is its own cut (the same points `row_span` would add).
@@ -286,7 +279,7 @@ pub(super) fn raster(
         // The fragment of cell column `c` with `w` range `[wlo, whi]` (w = 1 / depth > 0
         // after the near clip).
         let rbase = r * g.cells_x;
-        let out = &mut out[band as usize];
+        let out = &mut out[(r / g.band_rows) as usize];
         let mut emit = |c: u32, wlo: f64, whi: f64| {
             let (zlo, zhi) = widen(1.0 / whi, 1.0 / wlo, e.abs_margin);
             n += 1;
