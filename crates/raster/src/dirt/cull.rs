@@ -21,7 +21,10 @@
 //! outside when the sums' maximum is `< 0` (or their minimum `> 0`). So the cull computes the
 //! 18 sums per corner, their maximum and minimum over the corners, and one bit per (sum,
 //! sign); a face is dropped when one of its five (sum, sign) bits is set — exactly when the
-//! setup's outcodes drop it. The AVX2 version holds the 18 sums in five vectors of four lanes
+//! setup's outcodes drop it. Likewise some corner is outside when the sums' minimum is `< 0`
+//! (or their maximum `> 0`): a kept face none of whose five (sum, sign) bits of that kind is
+//! set has every corner inside every plane, and its setup skips its own outcode test (no
+//! clipping). The AVX2 version holds the 18 sums in five vectors of four lanes
 //! and tests the faces' masks in the lanes of two; [`FaceCull::keep_portable`] is its scalar
 //! twin; the tests (in `setup.rs`) check both against the setup's own outcodes.
 
@@ -149,9 +152,10 @@ impl FaceCull {
     }
 
     /// Bits of the group's views whose setup does not drop the triangle with corner offsets
-    /// `d` from the eye by its outcodes (module docs).
+    /// `d` from the eye by its outcodes, and the bits of those (a subset) whose outcodes are
+    /// all zero: every corner inside every clip plane (module docs).
     #[inline(always)]
-    pub fn keep(&self, d: &[[f64; 3]; 3]) -> u32 {
+    pub fn keep(&self, d: &[[f64; 3]; 3]) -> (u32, u32) {
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
             // SAFETY: `avx2` is set only when the CPU has AVX2 (`avx2_available`).
@@ -161,15 +165,19 @@ impl FaceCull {
     }
 
     /// [`Self::keep`] in scalar code.
-    pub fn keep_portable(&self, d: &[[f64; 3]; 3]) -> u32 {
-        let culled = self.culled_portable(d);
-        let kept = (0..MAX_GROUP).fold(0, |m, f| m | ((culled & self.masks[f] == 0) as u32) << f);
-        (kept << self.first) & self.members
+    pub fn keep_portable(&self, d: &[[f64; 3]; 3]) -> (u32, u32) {
+        let (culled, cut) = self.culled_portable(d);
+        let faces = |bits: u64| {
+            let f = (0..MAX_GROUP).fold(0, |m, f| m | ((bits & self.masks[f] == 0) as u32) << f);
+            (f << self.first) & self.members
+        };
+        (faces(culled), faces(cut))
     }
 
-    /// The (sum, sign) bits of `d` (bit `s`: sum `s` `< 0` at every corner; bit `32 + s`:
-    /// `> 0` at every corner), in scalar code.
-    fn culled_portable(&self, d: &[[f64; 3]; 3]) -> u64 {
+    /// The (sum, sign) bits of `d`: bit `s` when sum `s` is `< 0` at every corner, bit
+    /// `32 + s` when `> 0` at every corner; and with "some corner" for "every corner", in
+    /// scalar code.
+    fn culled_portable(&self, d: &[[f64; 3]; 3]) -> (u64, u64) {
         let mut max = [f64::NEG_INFINITY; SUMS];
         let mut min = [f64::INFINITY; SUMS];
         for c in d {
@@ -201,9 +209,13 @@ impl FaceCull {
                 min[s] = min[s].min(sums[s]);
             }
         }
-        (0..SUMS).fold(0, |m, s| {
+        let all = (0..SUMS).fold(0, |m, s| {
             m | ((max[s] < 0.0) as u64) << s | ((min[s] > 0.0) as u64) << (32 + s)
-        })
+        });
+        let some = (0..SUMS).fold(0, |m, s| {
+            m | ((min[s] < 0.0) as u64) << s | ((max[s] > 0.0) as u64) << (32 + s)
+        });
+        (all, some)
     }
 
     /// [`Self::keep`] with the sums in five AVX2 vectors (module docs) and the faces' masks
@@ -213,7 +225,7 @@ impl FaceCull {
     /// The CPU must support AVX2.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn keep_avx2(&self, d: &[[f64; 3]; 3]) -> u32 {
+    unsafe fn keep_avx2(&self, d: &[[f64; 3]; 3]) -> (u32, u32) {
         use std::arch::x86_64::*;
         let a = _mm256_set1_pd(self.a);
         let near = _mm256_setr_pd(self.near, self.near, self.near, 0.0);
@@ -246,13 +258,15 @@ impl FaceCull {
         }
         // Lane 3 of the near sums holds 0: never set (0 is neither < 0 nor > 0).
         let zero = _mm256_setzero_pd();
-        let mut culled = 0u64;
+        let (mut culled, mut cut) = (0u64, 0u64);
         for k in 0..5 {
             let lt = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(max[k], zero)) as u64;
             let gt = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_GT_OQ>(min[k], zero)) as u64;
             culled |= lt << (4 * k) | gt << (32 + 4 * k);
+            let lt = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(min[k], zero)) as u64;
+            let gt = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_GT_OQ>(max[k], zero)) as u64;
+            cut |= lt << (4 * k) | gt << (32 + 4 * k);
         }
-        let c = _mm256_set1_epi64x(culled as i64);
         let z = _mm256_setzero_si256();
         // SAFETY: two loads of four u64 from the eight masks.
         let (m0, m1) = unsafe {
@@ -261,15 +275,19 @@ impl FaceCull {
                 _mm256_loadu_si256(self.masks.as_ptr().add(4).cast()),
             )
         };
-        let k0 = _mm256_movemask_pd(_mm256_castsi256_pd(_mm256_cmpeq_epi64(
-            _mm256_and_si256(c, m0),
-            z,
-        )));
-        let k1 = _mm256_movemask_pd(_mm256_castsi256_pd(_mm256_cmpeq_epi64(
-            _mm256_and_si256(c, m1),
-            z,
-        )));
-        (((k0 | k1 << 4) as u32) << self.first) & self.members
+        let faces = |bits: u64| {
+            let c = _mm256_set1_epi64x(bits as i64);
+            let k0 = _mm256_movemask_pd(_mm256_castsi256_pd(_mm256_cmpeq_epi64(
+                _mm256_and_si256(c, m0),
+                z,
+            )));
+            let k1 = _mm256_movemask_pd(_mm256_castsi256_pd(_mm256_cmpeq_epi64(
+                _mm256_and_si256(c, m1),
+                z,
+            )));
+            (((k0 | k1 << 4) as u32) << self.first) & self.members
+        };
+        (faces(culled), faces(cut))
     }
 }
 

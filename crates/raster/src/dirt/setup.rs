@@ -11,7 +11,8 @@
 //! finiteness is checked once per triangle for all views, and so are the corners' offsets
 //! from the eye for views that share it (the camera view and the cube faces around its eye).
 //! The cube faces' outcode test is made for all six at once ([`FaceCull`], `cull.rs`), and
-//! only the faces it keeps are set up.
+//! only the faces it keeps are set up; a kept face with every corner inside every plane (the
+//! cull says so too) skips its own outcode test.
 //!
 //! **The `w` plane.** A triangle's plane `n . q = d` in camera space meets the ray through film
 //! position `(x, y)`, direction `(u, v, -1)` with `u = a0 + x ax`, `v = b0 - y by`, at view
@@ -156,6 +157,13 @@ impl ViewXf {
         self.cut(&q).is_none()
     }
 
+    /// The outcode bits [`Self::setup`] clips by (`None`: culled).
+    #[cfg(test)]
+    pub fn outcode_cut(&self, d: &[[f64; 3]; 3]) -> Option<u32> {
+        let q = [self.rotate(d[0]), self.rotate(d[1]), self.rotate(d[2])];
+        self.cut(&q)
+    }
+
     #[cfg(test)]
     fn to_camera(&self, p: DVec3) -> DVec3 {
         self.rotate((p - self.eye).to_array())
@@ -205,6 +213,7 @@ impl ViewXf {
     }
 
     /// The `w` plane of the camera-space triangle `q` (module docs).
+    #[inline(always)]
     fn w_plane(&self, q: &[DVec3; 3]) -> Option<WPlane> {
         let n = (q[1] - q[0]).cross(q[2] - q[0]);
         let d = n.dot(q[0]);
@@ -258,10 +267,24 @@ impl ViewXf {
         world_mag: f64,
         poly: &mut Poly,
     ) -> Option<SetupEntry> {
+        self.setup_with(t, d, world_mag, poly, false)
+    }
+
+    /// [`Self::setup`]; with `inside`, the caller knows every corner is inside every clip
+    /// plane (all outcodes zero, [`FaceCull::keep`]) and the outcode test is skipped.
+    #[inline(always)]
+    fn setup_with(
+        &self,
+        t: usize,
+        d: &[[f64; 3]; 3],
+        world_mag: f64,
+        poly: &mut Poly,
+        inside: bool,
+    ) -> Option<SetupEntry> {
         let q = [self.rotate(d[0]), self.rotate(d[1]), self.rotate(d[2])];
         // Outside one plane with all three corners: culled; else the planes some corner is
         // outside of cut it.
-        let cut = self.cut(&q)?;
+        let cut = if inside { 0 } else { self.cut(&q)? };
         if cut == 0 {
             poly.v[0] = self.project(q[0]);
             poly.v[1] = self.project(q[1]);
@@ -336,11 +359,12 @@ impl ViewXf {
                 }
                 if let (true, Some(c)) = (k == first, cull) {
                     // The group's views (consecutive, one eye): only the kept ones.
-                    let mut keep = c.keep(&d);
+                    let (mut keep, inside) = c.keep(&d);
                     while keep != 0 {
                         let j = keep.trailing_zeros() as usize;
                         keep &= keep - 1;
-                        if let Some(e) = views[j].setup(t, &d, world_mag, &mut poly) {
+                        let inside = inside >> j & 1 != 0;
+                        if let Some(e) = views[j].setup_with(t, &d, world_mag, &mut poly, inside) {
                             f(j, &e, poly.verts())?;
                         }
                     }
@@ -440,6 +464,7 @@ mod tests {
             let mut rng = parallax_core::Rng::new(5, 7);
             let mut poly = Poly::EMPTY;
             let (mut kept, mut dropped, mut clipped_away) = (0u64, 0u64, 0u64);
+            let (mut n_inside, mut n_cut) = (0u64, 0u64);
             for i in 0..20_000 {
                 let mut u = || rng.next_f32() as f64 - 0.5;
                 let size = [1e-3, 0.1, 2.0, 50.0][i % 4];
@@ -460,12 +485,16 @@ mod tests {
                 };
                 let p = [corner(centre), corner(centre), corner(centre)];
                 let d = p.map(|p| (p - e).to_array());
-                let keep = cull.keep(&d);
-                assert_eq!(keep, cull.keep_portable(&d), "triangle {i}");
+                let (keep, inside) = cull.keep(&d);
+                assert_eq!((keep, inside), cull.keep_portable(&d), "triangle {i}");
                 for (k, xf) in xfs.iter().enumerate().skip(1) {
                     let entry = xf.setup(0, &d, 1.0, &mut poly);
                     let outcode_culled = xf.outcode_culled(&d);
                     assert_eq!(keep >> k & 1 == 0, outcode_culled, "triangle {i} face {k}");
+                    let uncut = xf.outcode_cut(&d) == Some(0);
+                    assert_eq!(inside >> k & 1 != 0, uncut, "triangle {i} face {k}");
+                    n_inside += uncut as u64;
+                    n_cut += (!uncut && !outcode_culled) as u64;
                     if outcode_culled {
                         assert!(entry.is_none(), "triangle {i} face {k}");
                         dropped += 1;
@@ -480,6 +509,8 @@ mod tests {
                 kept > 10_000 && dropped > 50_000,
                 "{kept} {dropped} {clipped_away}"
             );
+            // Both kinds of kept face were met.
+            assert!(n_inside > 1000 && n_cut > 1000, "{n_inside} {n_cut}");
         }
     }
 

@@ -14,7 +14,7 @@ use parallax_scene::TriangleMesh;
 use rayon::prelude::*;
 
 /// One triangle's corners.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C)]
 pub struct DirtTri {
     pub p0: Vec3,
@@ -30,25 +30,29 @@ pub struct DirtTriangles {
 }
 
 impl DirtTriangles {
-    /// Gathers the corners of every triangle of `mesh` (in parallel).
+    /// Gathers the corners of every triangle of `mesh` (in parallel), growing the bounds of
+    /// the finite ones in the same pass (corner by corner, in order).
     pub fn from_mesh(mesh: &TriangleMesh) -> DirtTriangles {
-        let tris: Vec<DirtTri> = (0..mesh.triangle_count())
-            .into_par_iter()
-            .with_min_len(4096)
-            .map(|i| {
-                let [p0, p1, p2] = mesh.triangle(i);
-                DirtTri { p0, p1, p2 }
-            })
-            .collect();
+        const CHUNK: usize = 4096;
+        let mut tris = vec![DirtTri::default(); mesh.triangle_count()];
         let bounds = tris
-            .par_chunks(4096)
-            .map(|c| {
-                c.iter().fold(Aabb::EMPTY, |b, t| {
-                    [t.p0, t.p1, t.p2]
-                        .into_iter()
-                        .filter(|p| p.is_finite())
-                        .fold(b, Aabb::grow)
-                })
+            .par_chunks_mut(CHUNK)
+            .enumerate()
+            .map(|(c, out)| {
+                let mut b = Aabb::EMPTY;
+                for (i, o) in (c * CHUNK..).zip(out) {
+                    let [p0, p1, p2] = mesh.triangle(i);
+                    *o = DirtTri { p0, p1, p2 };
+                    if p0.is_finite() && p1.is_finite() && p2.is_finite() {
+                        b = b.grow(p0).grow(p1).grow(p2);
+                    } else {
+                        b = [p0, p1, p2]
+                            .into_iter()
+                            .filter(|p| p.is_finite())
+                            .fold(b, Aabb::grow);
+                    }
+                }
+                b
             })
             .reduce(|| Aabb::EMPTY, Aabb::union);
         DirtTriangles { tris, bounds }
@@ -117,6 +121,54 @@ mod tests {
             DirtTriangles::from_mesh(&TriangleMesh::default())
                 .bounds()
                 .is_empty()
+        );
+    }
+
+    /// The bounds grown in the gathering pass equal, bit for bit, the fold over every finite
+    /// corner (chunk by chunk, then the chunks' union), on a mesh of several chunks with
+    /// non-finite corners beside finite ones; the extreme corners sit in triangles with a
+    /// non-finite corner, so skipping those triangles (or not filtering) fails.
+    #[test]
+    fn bounds_are_the_fold_over_the_finite_corners() {
+        let mut rng = parallax_core::Rng::new(3, 11);
+        let mut mesh = TriangleMesh::default();
+        for i in 0..3 * 10_000u32 {
+            let mut c = || (rng.next_f32() - 0.5) * 100.0;
+            let p = match i % 97 {
+                0 => Vec3::new(f32::NAN, c(), c()),
+                1 => Vec3::new(c(), f32::INFINITY, c()),
+                _ => Vec3::new(c(), c(), c()),
+            };
+            mesh.positions.push(p);
+        }
+        // Finite extremes beside a NaN corner (positions 0 and 3 * 97 are NaN ones).
+        mesh.positions[1] = Vec3::splat(1e3);
+        mesh.positions[3 * 97 + 2] = Vec3::splat(-1e3);
+        mesh.indices = (0..10_000u32)
+            .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+            .collect();
+        mesh.material_ids = vec![0; 10_000];
+        let t = DirtTriangles::from_mesh(&mesh);
+        let reference = (0..10_000)
+            .collect::<Vec<_>>()
+            .chunks(4096)
+            .map(|c| {
+                c.iter()
+                    .flat_map(|&i| mesh.triangle(i))
+                    .filter(|p| p.is_finite())
+                    .fold(Aabb::EMPTY, Aabb::grow)
+            })
+            .fold(Aabb::EMPTY, Aabb::union);
+        let bits = |b: Aabb| {
+            (
+                b.min.to_array().map(f32::to_bits),
+                b.max.to_array().map(f32::to_bits),
+            )
+        };
+        assert_eq!(bits(t.bounds()), bits(reference));
+        assert_eq!(
+            (t.bounds().min, t.bounds().max),
+            (Vec3::splat(-1e3), Vec3::splat(1e3))
         );
     }
 }
