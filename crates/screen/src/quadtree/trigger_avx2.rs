@@ -29,14 +29,16 @@
 //! non-zero non-NaN `z_min` also means `nz` is finite (`N / ±inf` is `±0` or NaN), so then
 //! no `z_c` is NaN, as the definition's NaN test finds. The safety test:
 //! the own plane's `pnz` is `-2^k < 0`, so `pnz z_c <= pnz z_min`, and `f_c = (q_c + pnz z_c)
-//! - pc <= (q_max + pnz z_min) - pc = g` with `q_max` the largest of the four `q_c` (lanes
-//! with a NaN `q_c` do not take the bounded step);
+//! - pc <= (q_max + pnz z_min) - pc = g` with `q_max` the largest of the four `q_c`. In a
+//! plane lane the four `q_c` are finite, so `maxps` finds their largest: the halves are
+//! finite, so `gx`, `gy` and `m = max(|gx|, |gy|, 1)` are, the scale `sc` is the power of
+//! two with `m sc` in `[1, 2)` (so `|pnx|, |pny| < 2`) and the corners lie in `[0, 1]`;
 //! `g <= -margin` (an ordered compare: false for NaN) proves every corner safe, as the
 //! definition's `f_c <= -margin` would find. Lanes whose own leaf is not a plane are bad
 //! whatever the corners say, so they need no bound. A group takes the bounded step when
 //! every live lane has ordered numerators, a non-zero non-NaN `z_min` and (a plane) `g <=
-//! -margin` with ordered `q_c`; otherwise the group's four exact divisions and corner
-//! tests (the test below asserts that rows take both steps).
+//! -margin`; otherwise the group's four exact divisions and corner tests (the test below
+//! asserts that rows take both steps).
 
 use core::arch::x86_64::*;
 use core::mem::MaybeUninit;
@@ -119,7 +121,23 @@ pub(super) unsafe fn pixel_triggers_row8(
             .all(|pj| pj.normal.len() >= k0 + n8 && pj.offset.len() >= k0 + n8)
     );
     let s = _mm256_set1_ps;
-    let halves = _mm_setr_epi8(0, 1, 4, 5, 8, 9, 12, 13, 2, 3, 6, 7, 10, 11, 14, 15);
+    let mut halves = _mm256_setr_epi8(
+        0, 1, 4, 5, 8, 9, 12, 13, 2, 3, 6, 7, 10, 11, 14, 15, 0, 1, 4, 5, 8, 9, 12, 13, 2, 3, 6, 7,
+        10, 11, 14, 15,
+    );
+    let mut order = _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7);
+    // Both controls opaque to the compiler (an empty `asm!` that may change them), so that
+    // the byte shuffle and the word permute stay two instructions: with constants LLVM
+    // rewrites the chain of shuffles into a dozen.
+    // SAFETY: the empty template changes nothing.
+    unsafe {
+        core::arch::asm!(
+            "/* {h} {o} */",
+            h = inout(ymm_reg) halves,
+            o = inout(ymm_reg) order,
+            options(pure, nomem, nostack, preserves_flags)
+        );
+    }
     let neg0 = s(-0.0);
     let (sy0, sy1, syc) = (s(y0), s(y1), s(yc));
     let margin = s(-SAFE_MARGIN);
@@ -128,32 +146,32 @@ pub(super) unsafe fn pixel_triggers_row8(
         let k = k0 + i;
         // SAFETY: `i + 8 <= n8` and the slices hold `n8` (`xe`: `n8 + 1`) elements
         // (asserted); `Node` is two `u32`s (`repr(C)`).
-        let (lo0, hi0, lo1, hi1, xcv, x0, x1) = unsafe {
+        let (l0, l1, xcv, x0, x1) = unsafe {
             let np = nodes.as_ptr().add(i) as *const f32;
             (
-                _mm_loadu_ps(np),
-                _mm_loadu_ps(np.add(4)),
-                _mm_loadu_ps(np.add(8)),
-                _mm_loadu_ps(np.add(12)),
+                _mm256_loadu_ps(np),
+                _mm256_loadu_ps(np.add(8)),
                 _mm256_loadu_ps(xc.as_ptr().add(i)),
                 _mm256_loadu_ps(xe.as_ptr().add(i)),
                 _mm256_loadu_ps(xe.as_ptr().add(i + 1)),
             )
         };
-        // The own planes (`decode_plane_at`, level 0), four lanes of `a` / `b` at a time.
-        let a_lo = _mm_castps_si128(_mm_shuffle_ps::<0b10_00_10_00>(lo0, hi0));
-        let b_lo = _mm_castps_si128(_mm_shuffle_ps::<0b11_01_11_01>(lo0, hi0));
-        let a_hi = _mm_castps_si128(_mm_shuffle_ps::<0b10_00_10_00>(lo1, hi1));
-        let b_hi = _mm_castps_si128(_mm_shuffle_ps::<0b11_01_11_01>(lo1, hi1));
+        // The own planes (`decode_plane_at`, level 0). The nodes' words `a b` of pixels
+        // `0..4` in `l0` and `4..8` in `l1`: the in-lane shuffles take the `a` (`b`) words
+        // in the lane order `0 1 4 5 | 2 3 6 7`, a 64-bit permute puts `a` in pixel order.
+        let a = _mm256_castpd_si256(_mm256_permute4x64_pd::<0b11_01_10_00>(_mm256_castps_pd(
+            _mm256_shuffle_ps::<0b10_00_10_00>(l0, l1),
+        )));
+        let b = _mm256_castps_si256(_mm256_shuffle_ps::<0b11_01_11_01>(l0, l1));
         // The f16 slopes, eight lanes at a time by F16C (the same values as `f16x4` for
         // every finite half, module docs): per node, `b`'s low half is `gx`, its high half
-        // `gy`; one byte shuffle per four nodes puts the `gx` halves in the low eight bytes
-        // and the `gy` halves in the high eight.
-        let t_lo = _mm_shuffle_epi8(b_lo, halves);
-        let t_hi = _mm_shuffle_epi8(b_hi, halves);
-        let gx = _mm256_mul_ps(_mm256_cvtph_ps(_mm_unpacklo_epi64(t_lo, t_hi)), s(wf));
-        let gy = _mm256_mul_ps(_mm256_cvtph_ps(_mm_unpackhi_epi64(t_lo, t_hi)), s(hf));
-        let a = _mm256_set_m128i(a_hi, a_lo);
+        // `gy`; the byte shuffle puts each lane's `gx` halves in its low eight bytes and its
+        // `gy` halves in the high eight (32-bit words `gx0gx1 gx4gx5 gy0gy1 gy4gy5 |
+        // gx2gx3 gx6gx7 gy2gy3 gy6gy7`), the word permute the eight `gx` in pixel order in
+        // the low 128 bits and the eight `gy` in the high 128.
+        let t = _mm256_permutevar8x32_epi32(_mm256_shuffle_epi8(b, halves), order);
+        let gx = _mm256_mul_ps(_mm256_cvtph_ps(_mm256_castsi256_si128(t)), s(wf));
+        let gy = _mm256_mul_ps(_mm256_cvtph_ps(_mm256_extracti128_si256::<1>(t)), s(hf));
         let m = _mm256_max_ps(_mm256_andnot_ps(neg0, gx), _mm256_andnot_ps(neg0, gy));
         let m = _mm256_max_ps(m, s(1.0));
         let e = _mm256_and_si256(_mm256_castps_si256(m), _mm256_set1_epi32(0x7f80_0000));
@@ -182,13 +200,9 @@ pub(super) unsafe fn pixel_triggers_row8(
             _mm256_add_ps(px0, py1),
             _mm256_add_ps(px1, py1),
         ];
-        // The largest of the own plane's corner terms, for the bounded step; lanes with a
-        // NaN term never take it.
+        // The largest of the own plane's corner terms, for the bounded step (finite in
+        // plane lanes, module docs).
         let qmax = _mm256_max_ps(_mm256_max_ps(q[0], q[1]), _mm256_max_ps(q[2], q[3]));
-        let qok = _mm256_and_ps(
-            _mm256_cmp_ps::<_CMP_ORD_Q>(q[0], q[1]),
-            _mm256_cmp_ps::<_CMP_ORD_Q>(q[2], q[3]),
-        );
         let mut front = s(f32::INFINITY);
         let mut bad = _mm256_setzero_ps();
         // Lanes with an edge-on deeper plane or a NaN corner `z`: deeper front `-inf`.
@@ -241,7 +255,7 @@ pub(super) unsafe fn pixel_triggers_row8(
             );
             let nonzero = _mm256_cmp_ps::<_CMP_NEQ_OQ>(zmin, z0);
             let g = _mm256_sub_ps(_mm256_add_ps(qmax, _mm256_mul_ps(pnz, zmin)), pc);
-            let safe = _mm256_and_ps(qok, _mm256_cmp_ps::<_CMP_LE_OQ>(g, margin));
+            let safe = _mm256_cmp_ps::<_CMP_LE_OQ>(g, margin);
             let ok = _mm256_and_ps(
                 _mm256_and_ps(ordered, nonzero),
                 _mm256_or_ps(safe, not_plane),
