@@ -297,7 +297,13 @@ pub(super) unsafe fn pixel_triggers_row8(
         }
         let t = _mm256_sub_ps(front, s(SAFE_MARGIN));
         let t = _mm256_and_ps(_mm256_cmp_ps::<_CMP_GT_OS>(t, _mm256_setzero_ps()), t);
-        let t = _mm256_blendv_ps(s(f32::INFINITY), t, bad);
+        // `bad` is a full-lane mask (compares and their ANDs / ORs): select by bitwise
+        // operations, which LLVM keeps as they are (a `blendv` made it narrow the mask to
+        // 16-bit lanes and widen it back).
+        let t = _mm256_or_ps(
+            _mm256_and_ps(bad, t),
+            _mm256_andnot_ps(bad, s(f32::INFINITY)),
+        );
         // SAFETY: `tz[i..i + 8]` and `fronts[i..i + 8]` are in bounds (`i + 8 <= n8 <= W`,
         // asserted).
         unsafe {
