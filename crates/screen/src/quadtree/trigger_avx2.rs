@@ -112,6 +112,57 @@ pub(super) unsafe fn pixel_triggers_row8(
     deeper: &[LayerPlanes],
     listed: &mut Vec<u32>,
 ) -> usize {
+    // One deeper layer (the fixed point's case) in its own copy: a known trip count.
+    // SAFETY: the same CPU features; the caller's contract.
+    unsafe {
+        if deeper.len() == 1 {
+            row8::<true>(
+                tz,
+                fronts,
+                nodes,
+                k0,
+                xe,
+                xc,
+                (y0, y1, yc),
+                (wf, hf),
+                deeper,
+                listed,
+            )
+        } else {
+            row8::<false>(
+                tz,
+                fronts,
+                nodes,
+                k0,
+                xe,
+                xc,
+                (y0, y1, yc),
+                (wf, hf),
+                deeper,
+                listed,
+            )
+        }
+    }
+}
+
+/// [`pixel_triggers_row8`], for exactly one deeper layer if `ONE`.
+///
+/// # Safety
+/// The CPU must have AVX2 and F16C.
+#[allow(clippy::too_many_arguments)]
+#[target_feature(enable = "avx2,f16c")]
+unsafe fn row8<const ONE: bool>(
+    tz: &mut [MaybeUninit<f32>],
+    fronts: &mut [MaybeUninit<f32>],
+    nodes: &[Node],
+    k0: usize,
+    xe: &[f32],
+    xc: &[f32],
+    (y0, y1, yc): (f32, f32, f32),
+    (wf, hf): (f32, f32),
+    deeper: &[LayerPlanes],
+    listed: &mut Vec<u32>,
+) -> usize {
     let w = tz.len();
     let n8 = w & !7;
     assert!(nodes.len() >= n8 && xe.len() > n8 && xc.len() >= n8 && fronts.len() >= n8);
@@ -209,7 +260,7 @@ pub(super) unsafe fn pixel_triggers_row8(
         let mut void = _mm256_setzero_ps();
         // Lanes where the own plane is not a plane: every live lane is unsafe.
         let not_plane = _mm256_xor_ps(plane, _mm256_castsi256_ps(_mm256_set1_epi32(-1)));
-        for pj in deeper {
+        for pj in if ONE { &deeper[..1] } else { deeper } {
             // SAFETY: pixels `k .. k + 8` of the deeper layer exist (asserted).
             let ((nx, ny, nz), cj) = unsafe {
                 (
