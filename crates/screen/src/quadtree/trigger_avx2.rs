@@ -16,29 +16,28 @@
 //! deeper layers' normals are transposed from their `Vec3`s eight at a time (`soa8`). The
 //! test below compares rows with the four-lane kernel.
 //!
-//! **The bounded step.** Per deeper layer the definition divides four numerators `N_c = (cj
-//! - nx x_c) - ny y_c` by `nz` (`< -1e-6` in live lanes) and tests every corner. Where a
-//! group of eight allows it, one division does: IEEE rounding is monotone (`a <= b` implies
-//! `rnd(a op y) <= rnd(b op y)` for `+`, `-`, and for `*`, `/` by a positive operand, reversed
-//! by a negative one), so `N_c <= N_max = max_c N_c` gives `z_c = N_c / nz >= N_max / nz =
-//! z_min` at every corner, and `z_min` is the smallest corner `z`. The definition's running
-//! minimum (a strict `<` compare-select, NaN never enters) then ends at `z_min`'s value,
-//! with `z_min`'s bits wherever equal values have equal bits: every value but zero, so
-//! lanes whose `z_min` is `±0` (whose corners may hold both zeros, the first one kept)
-//! take the exact step, as do lanes with a NaN numerator (`maxps` would drop it). A
-//! non-zero non-NaN `z_min` also means `nz` is finite (`N / ±inf` is `±0` or NaN), so then
-//! no `z_c` is NaN, as the definition's NaN test finds. The safety test:
-//! the own plane's `pnz` is `-2^k < 0`, so `pnz z_c <= pnz z_min`, and `f_c = (q_c + pnz z_c)
-//! - pc <= (q_max + pnz z_min) - pc = g` with `q_max` the largest of the four `q_c`. In a
-//! plane lane the four `q_c` are finite, so `maxps` finds their largest: the halves are
-//! finite, so `gx`, `gy` and `m = max(|gx|, |gy|, 1)` are, the scale `sc` is the power of
-//! two with `m sc` in `[1, 2)` (so `|pnx|, |pny| < 2`) and the corners lie in `[0, 1]`;
-//! `g <= -margin` (an ordered compare: false for NaN) proves every corner safe, as the
+//! **The bounded step.** Per deeper layer the definition divides four numerators `N_c = (cj -
+//! nx x_c) - ny y_c` by `nz` (`< -1e-6` in live lanes) and tests every corner. Where a group of
+//! eight allows it, one division does: IEEE rounding is monotone (`a <= b` implies `rnd(a op y)
+//! <= rnd(b op y)` for `+`, `-`, and for `*`, `/` by a positive operand, reversed by a negative
+//! one), so `N_c <= N_max = max_c N_c` gives `z_c = N_c / nz >= N_max / nz = z_min` at every
+//! corner, and `z_min` is the smallest corner `z`. The definition's running minimum (a strict
+//! `<` compare-select, NaN never enters) then ends at `z_min`'s value, with `z_min`'s bits
+//! wherever equal values have equal bits: every value but zero, so lanes whose `z_min` is `±0`
+//! (whose corners may hold both zeros, the first one kept) take the exact step, as do lanes
+//! with a NaN numerator (`maxps` would drop it). A non-zero non-NaN `z_min` also means `nz` is
+//! finite (`N / ±inf` is `±0` or NaN), so then no `z_c` is NaN, as the definition's NaN test
+//! finds. The safety test: the own plane's `pnz` is `-2^k < 0`, so `pnz z_c <= pnz z_min`, and
+//! `f_c = (q_c + pnz z_c) - pc <= (q_max + pnz z_min) - pc = g` with `q_max` the largest of the
+//! four `q_c`. In a plane lane the four `q_c` are finite, so `maxps` finds their largest: the
+//! halves are finite, so `gx`, `gy` and `m = max(|gx|, |gy|, 1)` are, the scale `sc` is the
+//! power of two with `m sc` in `[1, 2)` (so `|pnx|, |pny| < 2`) and the corners lie in `[0,
+//! 1]`; `g <= -margin` (an ordered compare: false for NaN) proves every corner safe, as the
 //! definition's `f_c <= -margin` would find. Lanes whose own leaf is not a plane are bad
-//! whatever the corners say, so they need no bound. A group takes the bounded step when
-//! every live lane has ordered numerators, a non-zero non-NaN `z_min` and (a plane) `g <=
-//! -margin`; otherwise the group's four exact divisions and corner tests (the test below
-//! asserts that rows take both steps).
+//! whatever the corners say, so they need no bound. A group takes the bounded step when every
+//! live lane has ordered numerators, a non-zero non-NaN `z_min` and (a plane) `g <= -margin`;
+//! otherwise the group's four exact divisions and corner tests (the test below asserts that
+//! rows take both steps).
 
 use core::arch::x86_64::*;
 use core::mem::MaybeUninit;
