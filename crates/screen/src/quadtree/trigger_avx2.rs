@@ -16,27 +16,28 @@
 //! deeper layers' normals are transposed from their `Vec3`s eight at a time (`soa8`). The
 //! test below compares rows with the four-lane kernel.
 //!
-//! **The bounded step.** Per deeper layer the definition divides four numerators `N_c = (cj
-//! - nx x_c) - ny y_c` by `nz` (`< -1e-6` in live lanes) and tests every corner. Where a
-//! group of eight allows it, one division does: IEEE rounding is monotone (`a <= b` implies
-//! `rnd(a op y) <= rnd(b op y)` for `+`, `-`, and for `*`, `/` by a positive operand, reversed
-//! by a negative one), so `N_c <= N_max = max_c N_c` gives `z_c = N_c / nz >= N_max / nz =
-//! z_min` at every corner, and `z_min` is the smallest corner `z`. The definition's running
-//! minimum (a strict `<` compare-select, NaN never enters) then ends at `z_min`'s value,
-//! with `z_min`'s bits wherever equal values have equal bits: every value but zero, so
-//! lanes whose `z_min` is `±0` (whose corners may hold both zeros, the first one kept)
-//! take the exact step, as do lanes with a NaN numerator (`maxps` would drop it). A
-//! non-zero non-NaN `z_min` also means `nz` is finite (`N / ±inf` is `±0` or NaN), so then
-//! no `z_c` is NaN, as the definition's NaN test finds. The safety test:
-//! the own plane's `pnz` is `-2^k < 0`, so `pnz z_c <= pnz z_min`, and `f_c = (q_c + pnz z_c)
-//! - pc <= (q_max + pnz z_min) - pc = g` with `q_max` the largest of the four `q_c` (lanes
-//! with a NaN `q_c` do not take the bounded step);
-//! `g <= -margin` (an ordered compare: false for NaN) proves every corner safe, as the
+//! **The bounded step.** Per deeper layer the definition divides four numerators `N_c = (cj -
+//! nx x_c) - ny y_c` by `nz` (`< -1e-6` in live lanes) and tests every corner. Where a group of
+//! eight allows it, one division does: IEEE rounding is monotone (`a <= b` implies `rnd(a op y)
+//! <= rnd(b op y)` for `+`, `-`, and for `*`, `/` by a positive operand, reversed by a negative
+//! one), so `N_c <= N_max = max_c N_c` gives `z_c = N_c / nz >= N_max / nz = z_min` at every
+//! corner, and `z_min` is the smallest corner `z`. The definition's running minimum (a strict
+//! `<` compare-select, NaN never enters) then ends at `z_min`'s value, with `z_min`'s bits
+//! wherever equal values have equal bits: every value but zero, so lanes whose `z_min` is `±0`
+//! (whose corners may hold both zeros, the first one kept) take the exact step, as do lanes
+//! with a NaN numerator (`maxps` would drop it). A non-zero non-NaN `z_min` also means `nz` is
+//! finite (`N / ±inf` is `±0` or NaN), so then no `z_c` is NaN, as the definition's NaN test
+//! finds. The safety test: the own plane's `pnz` is `-2^k < 0`, so `pnz z_c <= pnz z_min`, and
+//! `f_c = (q_c + pnz z_c) - pc <= (q_max + pnz z_min) - pc = g` with `q_max` the largest of the
+//! four `q_c`. In a plane lane the four `q_c` are finite, so `maxps` finds their largest: the
+//! halves are finite, so `gx`, `gy` and `m = max(|gx|, |gy|, 1)` are, the scale `sc` is the
+//! power of two with `m sc` in `[1, 2)` (so `|pnx|, |pny| < 2`) and the corners lie in `[0,
+//! 1]`; `g <= -margin` (an ordered compare: false for NaN) proves every corner safe, as the
 //! definition's `f_c <= -margin` would find. Lanes whose own leaf is not a plane are bad
-//! whatever the corners say, so they need no bound. A group takes the bounded step when
-//! every live lane has ordered numerators, a non-zero non-NaN `z_min` and (a plane) `g <=
-//! -margin` with ordered `q_c`; otherwise the group's four exact divisions and corner
-//! tests (the test below asserts that rows take both steps).
+//! whatever the corners say, so they need no bound. A group takes the bounded step when every
+//! live lane has ordered numerators, a non-zero non-NaN `z_min` and (a plane) `g <= -margin`;
+//! otherwise the group's four exact divisions and corner tests (the test below asserts that
+//! rows take both steps).
 
 use core::arch::x86_64::*;
 use core::mem::MaybeUninit;
@@ -110,6 +111,57 @@ pub(super) unsafe fn pixel_triggers_row8(
     deeper: &[LayerPlanes],
     listed: &mut Vec<u32>,
 ) -> usize {
+    // One deeper layer (the fixed point's case) in its own copy: a known trip count.
+    // SAFETY: the same CPU features; the caller's contract.
+    unsafe {
+        if deeper.len() == 1 {
+            row8::<true>(
+                tz,
+                fronts,
+                nodes,
+                k0,
+                xe,
+                xc,
+                (y0, y1, yc),
+                (wf, hf),
+                deeper,
+                listed,
+            )
+        } else {
+            row8::<false>(
+                tz,
+                fronts,
+                nodes,
+                k0,
+                xe,
+                xc,
+                (y0, y1, yc),
+                (wf, hf),
+                deeper,
+                listed,
+            )
+        }
+    }
+}
+
+/// [`pixel_triggers_row8`], for exactly one deeper layer if `ONE`.
+///
+/// # Safety
+/// The CPU must have AVX2 and F16C.
+#[allow(clippy::too_many_arguments)]
+#[target_feature(enable = "avx2,f16c")]
+unsafe fn row8<const ONE: bool>(
+    tz: &mut [MaybeUninit<f32>],
+    fronts: &mut [MaybeUninit<f32>],
+    nodes: &[Node],
+    k0: usize,
+    xe: &[f32],
+    xc: &[f32],
+    (y0, y1, yc): (f32, f32, f32),
+    (wf, hf): (f32, f32),
+    deeper: &[LayerPlanes],
+    listed: &mut Vec<u32>,
+) -> usize {
     let w = tz.len();
     let n8 = w & !7;
     assert!(nodes.len() >= n8 && xe.len() > n8 && xc.len() >= n8 && fronts.len() >= n8);
@@ -119,7 +171,23 @@ pub(super) unsafe fn pixel_triggers_row8(
             .all(|pj| pj.normal.len() >= k0 + n8 && pj.offset.len() >= k0 + n8)
     );
     let s = _mm256_set1_ps;
-    let halves = _mm_setr_epi8(0, 1, 4, 5, 8, 9, 12, 13, 2, 3, 6, 7, 10, 11, 14, 15);
+    let mut halves = _mm256_setr_epi8(
+        0, 1, 4, 5, 8, 9, 12, 13, 2, 3, 6, 7, 10, 11, 14, 15, 0, 1, 4, 5, 8, 9, 12, 13, 2, 3, 6, 7,
+        10, 11, 14, 15,
+    );
+    let mut order = _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7);
+    // Both controls opaque to the compiler (an empty `asm!` that may change them), so that
+    // the byte shuffle and the word permute stay two instructions: with constants LLVM
+    // rewrites the chain of shuffles into a dozen.
+    // SAFETY: the empty template changes nothing.
+    unsafe {
+        core::arch::asm!(
+            "/* {h} {o} */",
+            h = inout(ymm_reg) halves,
+            o = inout(ymm_reg) order,
+            options(pure, nomem, nostack, preserves_flags)
+        );
+    }
     let neg0 = s(-0.0);
     let (sy0, sy1, syc) = (s(y0), s(y1), s(yc));
     let margin = s(-SAFE_MARGIN);
@@ -128,32 +196,32 @@ pub(super) unsafe fn pixel_triggers_row8(
         let k = k0 + i;
         // SAFETY: `i + 8 <= n8` and the slices hold `n8` (`xe`: `n8 + 1`) elements
         // (asserted); `Node` is two `u32`s (`repr(C)`).
-        let (lo0, hi0, lo1, hi1, xcv, x0, x1) = unsafe {
+        let (l0, l1, xcv, x0, x1) = unsafe {
             let np = nodes.as_ptr().add(i) as *const f32;
             (
-                _mm_loadu_ps(np),
-                _mm_loadu_ps(np.add(4)),
-                _mm_loadu_ps(np.add(8)),
-                _mm_loadu_ps(np.add(12)),
+                _mm256_loadu_ps(np),
+                _mm256_loadu_ps(np.add(8)),
                 _mm256_loadu_ps(xc.as_ptr().add(i)),
                 _mm256_loadu_ps(xe.as_ptr().add(i)),
                 _mm256_loadu_ps(xe.as_ptr().add(i + 1)),
             )
         };
-        // The own planes (`decode_plane_at`, level 0), four lanes of `a` / `b` at a time.
-        let a_lo = _mm_castps_si128(_mm_shuffle_ps::<0b10_00_10_00>(lo0, hi0));
-        let b_lo = _mm_castps_si128(_mm_shuffle_ps::<0b11_01_11_01>(lo0, hi0));
-        let a_hi = _mm_castps_si128(_mm_shuffle_ps::<0b10_00_10_00>(lo1, hi1));
-        let b_hi = _mm_castps_si128(_mm_shuffle_ps::<0b11_01_11_01>(lo1, hi1));
+        // The own planes (`decode_plane_at`, level 0). The nodes' words `a b` of pixels
+        // `0..4` in `l0` and `4..8` in `l1`: the in-lane shuffles take the `a` (`b`) words
+        // in the lane order `0 1 4 5 | 2 3 6 7`, a 64-bit permute puts `a` in pixel order.
+        let a = _mm256_castpd_si256(_mm256_permute4x64_pd::<0b11_01_10_00>(_mm256_castps_pd(
+            _mm256_shuffle_ps::<0b10_00_10_00>(l0, l1),
+        )));
+        let b = _mm256_castps_si256(_mm256_shuffle_ps::<0b11_01_11_01>(l0, l1));
         // The f16 slopes, eight lanes at a time by F16C (the same values as `f16x4` for
         // every finite half, module docs): per node, `b`'s low half is `gx`, its high half
-        // `gy`; one byte shuffle per four nodes puts the `gx` halves in the low eight bytes
-        // and the `gy` halves in the high eight.
-        let t_lo = _mm_shuffle_epi8(b_lo, halves);
-        let t_hi = _mm_shuffle_epi8(b_hi, halves);
-        let gx = _mm256_mul_ps(_mm256_cvtph_ps(_mm_unpacklo_epi64(t_lo, t_hi)), s(wf));
-        let gy = _mm256_mul_ps(_mm256_cvtph_ps(_mm_unpackhi_epi64(t_lo, t_hi)), s(hf));
-        let a = _mm256_set_m128i(a_hi, a_lo);
+        // `gy`; the byte shuffle puts each lane's `gx` halves in its low eight bytes and its
+        // `gy` halves in the high eight (32-bit words `gx0gx1 gx4gx5 gy0gy1 gy4gy5 |
+        // gx2gx3 gx6gx7 gy2gy3 gy6gy7`), the word permute the eight `gx` in pixel order in
+        // the low 128 bits and the eight `gy` in the high 128.
+        let t = _mm256_permutevar8x32_epi32(_mm256_shuffle_epi8(b, halves), order);
+        let gx = _mm256_mul_ps(_mm256_cvtph_ps(_mm256_castsi256_si128(t)), s(wf));
+        let gy = _mm256_mul_ps(_mm256_cvtph_ps(_mm256_extracti128_si256::<1>(t)), s(hf));
         let m = _mm256_max_ps(_mm256_andnot_ps(neg0, gx), _mm256_andnot_ps(neg0, gy));
         let m = _mm256_max_ps(m, s(1.0));
         let e = _mm256_and_si256(_mm256_castps_si256(m), _mm256_set1_epi32(0x7f80_0000));
@@ -182,20 +250,16 @@ pub(super) unsafe fn pixel_triggers_row8(
             _mm256_add_ps(px0, py1),
             _mm256_add_ps(px1, py1),
         ];
-        // The largest of the own plane's corner terms, for the bounded step; lanes with a
-        // NaN term never take it.
+        // The largest of the own plane's corner terms, for the bounded step (finite in
+        // plane lanes, module docs).
         let qmax = _mm256_max_ps(_mm256_max_ps(q[0], q[1]), _mm256_max_ps(q[2], q[3]));
-        let qok = _mm256_and_ps(
-            _mm256_cmp_ps::<_CMP_ORD_Q>(q[0], q[1]),
-            _mm256_cmp_ps::<_CMP_ORD_Q>(q[2], q[3]),
-        );
         let mut front = s(f32::INFINITY);
         let mut bad = _mm256_setzero_ps();
         // Lanes with an edge-on deeper plane or a NaN corner `z`: deeper front `-inf`.
         let mut void = _mm256_setzero_ps();
         // Lanes where the own plane is not a plane: every live lane is unsafe.
         let not_plane = _mm256_xor_ps(plane, _mm256_castsi256_ps(_mm256_set1_epi32(-1)));
-        for pj in deeper {
+        for pj in if ONE { &deeper[..1] } else { deeper } {
             // SAFETY: pixels `k .. k + 8` of the deeper layer exist (asserted).
             let ((nx, ny, nz), cj) = unsafe {
                 (
@@ -241,7 +305,7 @@ pub(super) unsafe fn pixel_triggers_row8(
             );
             let nonzero = _mm256_cmp_ps::<_CMP_NEQ_OQ>(zmin, z0);
             let g = _mm256_sub_ps(_mm256_add_ps(qmax, _mm256_mul_ps(pnz, zmin)), pc);
-            let safe = _mm256_and_ps(qok, _mm256_cmp_ps::<_CMP_LE_OQ>(g, margin));
+            let safe = _mm256_cmp_ps::<_CMP_LE_OQ>(g, margin);
             let ok = _mm256_and_ps(
                 _mm256_and_ps(ordered, nonzero),
                 _mm256_or_ps(safe, not_plane),
@@ -283,7 +347,13 @@ pub(super) unsafe fn pixel_triggers_row8(
         }
         let t = _mm256_sub_ps(front, s(SAFE_MARGIN));
         let t = _mm256_and_ps(_mm256_cmp_ps::<_CMP_GT_OS>(t, _mm256_setzero_ps()), t);
-        let t = _mm256_blendv_ps(s(f32::INFINITY), t, bad);
+        // `bad` is a full-lane mask (compares and their ANDs / ORs): select by bitwise
+        // operations, which LLVM keeps as they are (a `blendv` made it narrow the mask to
+        // 16-bit lanes and widen it back).
+        let t = _mm256_or_ps(
+            _mm256_and_ps(bad, t),
+            _mm256_andnot_ps(bad, s(f32::INFINITY)),
+        );
         // SAFETY: `tz[i..i + 8]` and `fronts[i..i + 8]` are in bounds (`i + 8 <= n8 <= W`,
         // asserted).
         unsafe {
