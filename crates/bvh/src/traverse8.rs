@@ -103,6 +103,13 @@ pub(crate) trait NodeTest8 {
     /// entries).
     fn pair_keys(&self, node: &Node8, t: Self::Dist, mask: u32) -> (u64, u64);
 
+    /// The ray prepared for this kernel's triangle tests: `Tri4Ray::new(WatertightRay::new(ray))`
+    /// or a bit-identical register form of it.
+    #[inline(always)]
+    fn tri_ray(&self, ray: &Ray) -> Tri4Ray {
+        Tri4Ray::new(WatertightRay::new(ray))
+    }
+
     /// The closest-hit leaf step of this test's kernel ([`ClosestCtx::leaf`] on
     /// [`Self::Pair`] lanes) for leaf reference `leaf`. Inlined by default.
     #[inline(always)]
@@ -210,6 +217,12 @@ impl NodeTest8 for Avx2Boxes8 {
     fn pair_keys(&self, node: &Node8, t_near: Self::Dist, mask: u32) -> (u64, u64) {
         // SAFETY: AVX2 was detected (`new`).
         unsafe { keys8::pair_keys_avx2(t_near, &node.child, mask) }
+    }
+
+    #[inline(always)]
+    fn tri_ray(&self, ray: &Ray) -> Tri4Ray {
+        // SAFETY: AVX2 was detected (`new`).
+        unsafe { Tri4Ray::new_avx2(ray) }
     }
 
     #[inline(always)]
@@ -429,7 +442,7 @@ impl Bvh {
 
     #[inline(always)]
     fn closest8<C: Counter, T: NodeTest8>(&self, nt: &T, ray: &Ray, stats: &mut C) -> Option<Hit> {
-        let r4 = Tri4Ray::new(WatertightRay::new(ray));
+        let r4 = nt.tri_ray(ray);
         let mut best = Best::new();
         let mut t_max = ray.t_max;
         self.closest8_from(nt, &r4, 0, &mut t_max, &mut best, stats);
@@ -461,7 +474,7 @@ impl Bvh {
     #[inline(always)]
     fn any8<C: Counter, T: NodeTest8>(&self, nt: &T, ray: &Ray, stats: &mut C) -> bool {
         let mut leaf = AnyLeaf {
-            r4: Tri4Ray::new(WatertightRay::new(ray)),
+            r4: nt.tri_ray(ray),
             found: false,
         };
         self.traverse8::<C, T, _, false>(nt, 0, ray.t_max, stats, &mut leaf);
