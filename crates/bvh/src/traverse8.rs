@@ -71,10 +71,11 @@ pub(crate) struct RayBoxes8 {
 impl RayBoxes8 {
     #[inline(always)]
     pub fn new(ray: &Ray) -> Self {
-        // 1 / ±0 = ±inf; 0 * inf = NaN is ignored by the min / max order (module docs).
-        let inv = ray.dir.recip();
-        let neg = |x: f32| x.is_sign_negative() as usize;
-        let (sx, sy, sz) = (neg(inv.x), neg(inv.y), neg(inv.z));
+        // 1 / ±0 = ±inf; 0 * inf = NaN is ignored by the min / max order (module docs). The
+        // three reciprocals as one 4-lane division (`Vec3A`), their signs as one lane mask.
+        let inv = glam::Vec3A::from(ray.dir).recip();
+        let m = inv.is_negative_bitmask() as usize;
+        let (sx, sy, sz) = (m & 1, (m >> 1) & 1, (m >> 2) & 1);
         Self {
             org: ray.origin.to_array(),
             neg_inv: (-inv).to_array(),
@@ -675,3 +676,7 @@ pub(crate) fn use_avx2() -> bool {
         v => v == 2,
     }
 }
+
+#[cfg(test)]
+#[path = "traverse8_tests.rs"]
+mod tests;
