@@ -516,7 +516,7 @@ impl Bvh {
     }
 
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,popcnt")]
+    #[target_feature(enable = "avx2,popcnt,bmi1")]
     #[inline]
     unsafe fn closest8_avx2<C: Counter>(&self, ray: &Ray, stats: &mut C) -> Option<Hit> {
         // SAFETY: AVX2 is enabled for this function (the caller detected it).
@@ -530,7 +530,7 @@ impl Bvh {
     }
 
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,popcnt")]
+    #[target_feature(enable = "avx2,popcnt,bmi1")]
     unsafe fn closest8_avx2_nostats(&self, ray: &Ray) -> Option<Hit> {
         // SAFETY: AVX2 is enabled for this function (the caller detected it).
         unsafe { self.closest8_avx2(ray, &mut NoStats) }
@@ -657,7 +657,7 @@ impl Bvh {
     }
 }
 
-/// Whether the CPU has AVX2 and POPCNT: detected once, then one load and compare per call
+/// Whether the CPU has AVX2, POPCNT and BMI1: detected once, then one load and compare per call
 /// (the two `is_x86_feature_detected!` were two cache reads and tests per ray).
 #[cfg(target_arch = "x86_64")]
 #[inline]
@@ -667,7 +667,9 @@ pub(crate) fn use_avx2() -> bool {
     static AVX2: AtomicU8 = AtomicU8::new(0);
     #[cold]
     fn detect() -> bool {
-        let yes = std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("popcnt");
+        let yes = std::is_x86_feature_detected!("avx2")
+            && std::is_x86_feature_detected!("popcnt")
+            && std::is_x86_feature_detected!("bmi1");
         AVX2.store(1 + yes as u8, Relaxed);
         yes
     }
