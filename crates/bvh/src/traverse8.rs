@@ -71,10 +71,11 @@ pub(crate) struct RayBoxes8 {
 impl RayBoxes8 {
     #[inline(always)]
     pub fn new(ray: &Ray) -> Self {
-        // 1 / ±0 = ±inf; 0 * inf = NaN is ignored by the min / max order (module docs).
-        let inv = ray.dir.recip();
-        let neg = |x: f32| x.is_sign_negative() as usize;
-        let (sx, sy, sz) = (neg(inv.x), neg(inv.y), neg(inv.z));
+        // 1 / ±0 = ±inf; 0 * inf = NaN is ignored by the min / max order (module docs). The
+        // three reciprocals as one 4-lane division (`Vec3A`), their signs as one lane mask.
+        let inv = glam::Vec3A::from(ray.dir).recip();
+        let m = inv.is_negative_bitmask() as usize;
+        let (sx, sy, sz) = (m & 1, (m >> 1) & 1, (m >> 2) & 1);
         Self {
             org: ray.origin.to_array(),
             neg_inv: (-inv).to_array(),
@@ -102,6 +103,13 @@ pub(crate) trait NodeTest8 {
     /// The keys of the two hit lanes of a two-bit `mask`, in lane order (`hit_keys`' first two
     /// entries).
     fn pair_keys(&self, node: &Node8, t: Self::Dist, mask: u32) -> (u64, u64);
+
+    /// The ray prepared for this kernel's triangle tests: `Tri4Ray::new(WatertightRay::new(ray))`
+    /// or a bit-identical register form of it.
+    #[inline(always)]
+    fn tri_ray(&self, ray: &Ray) -> Tri4Ray {
+        Tri4Ray::new(WatertightRay::new(ray))
+    }
 
     /// The closest-hit leaf step of this test's kernel ([`ClosestCtx::leaf`] on
     /// [`Self::Pair`] lanes) for leaf reference `leaf`. Inlined by default.
@@ -210,6 +218,12 @@ impl NodeTest8 for Avx2Boxes8 {
     fn pair_keys(&self, node: &Node8, t_near: Self::Dist, mask: u32) -> (u64, u64) {
         // SAFETY: AVX2 was detected (`new`).
         unsafe { keys8::pair_keys_avx2(t_near, &node.child, mask) }
+    }
+
+    #[inline(always)]
+    fn tri_ray(&self, ray: &Ray) -> Tri4Ray {
+        // SAFETY: AVX2 was detected (`new`).
+        unsafe { Tri4Ray::new_avx2(ray) }
     }
 
     #[inline(always)]
@@ -429,7 +443,7 @@ impl Bvh {
 
     #[inline(always)]
     fn closest8<C: Counter, T: NodeTest8>(&self, nt: &T, ray: &Ray, stats: &mut C) -> Option<Hit> {
-        let r4 = Tri4Ray::new(WatertightRay::new(ray));
+        let r4 = nt.tri_ray(ray);
         let mut best = Best::new();
         let mut t_max = ray.t_max;
         self.closest8_from(nt, &r4, 0, &mut t_max, &mut best, stats);
@@ -461,7 +475,7 @@ impl Bvh {
     #[inline(always)]
     fn any8<C: Counter, T: NodeTest8>(&self, nt: &T, ray: &Ray, stats: &mut C) -> bool {
         let mut leaf = AnyLeaf {
-            r4: Tri4Ray::new(WatertightRay::new(ray)),
+            r4: nt.tri_ray(ray),
             found: false,
         };
         self.traverse8::<C, T, _, false>(nt, 0, ray.t_max, stats, &mut leaf);
@@ -502,7 +516,7 @@ impl Bvh {
     }
 
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,popcnt")]
+    #[target_feature(enable = "avx2,popcnt,bmi1")]
     #[inline]
     unsafe fn closest8_avx2<C: Counter>(&self, ray: &Ray, stats: &mut C) -> Option<Hit> {
         // SAFETY: AVX2 is enabled for this function (the caller detected it).
@@ -516,7 +530,7 @@ impl Bvh {
     }
 
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,popcnt")]
+    #[target_feature(enable = "avx2,popcnt,bmi1")]
     unsafe fn closest8_avx2_nostats(&self, ray: &Ray) -> Option<Hit> {
         // SAFETY: AVX2 is enabled for this function (the caller detected it).
         unsafe { self.closest8_avx2(ray, &mut NoStats) }
@@ -643,7 +657,7 @@ impl Bvh {
     }
 }
 
-/// Whether the CPU has AVX2 and POPCNT: detected once, then one load and compare per call
+/// Whether the CPU has AVX2, POPCNT and BMI1: detected once, then one load and compare per call
 /// (the two `is_x86_feature_detected!` were two cache reads and tests per ray).
 #[cfg(target_arch = "x86_64")]
 #[inline]
@@ -653,7 +667,9 @@ pub(crate) fn use_avx2() -> bool {
     static AVX2: AtomicU8 = AtomicU8::new(0);
     #[cold]
     fn detect() -> bool {
-        let yes = std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("popcnt");
+        let yes = std::is_x86_feature_detected!("avx2")
+            && std::is_x86_feature_detected!("popcnt")
+            && std::is_x86_feature_detected!("bmi1");
         AVX2.store(1 + yes as u8, Relaxed);
         yes
     }
@@ -662,3 +678,7 @@ pub(crate) fn use_avx2() -> bool {
         v => v == 2,
     }
 }
+
+#[cfg(test)]
+#[path = "traverse8_tests.rs"]
+mod tests;

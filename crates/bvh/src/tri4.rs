@@ -124,18 +124,15 @@ pub(crate) struct Tri8Hits {
     pub v: [f32; 8],
 }
 
-/// A ray prepared for the 4-triangle test: the permutation and shear of Woop et al. 2013, §3,
-/// splatted into lanes, the origin already in permuted order (`org[i]` = origin axis `k[i]`).
+/// A ray prepared for the 4-triangle test: the permutation and shear of Woop et al. 2013, §3
+/// ([`WatertightRay`]) and the origin in permuted order (`org[i]` = origin axis `k[i]`), all
+/// scalars: the tests broadcast them into lanes where they use them (a broadcast load costs
+/// what a vector load does, and the per-ray set-up stores 4 bytes per value, not 16).
 #[derive(Clone, Copy, Debug)]
 pub struct Tri4Ray {
+    /// `kx, ky, kz < 3` (checked once in [`Tri4Ray::new`] / [`Tri4Ray::new_avx2`]).
     pub wt: WatertightRay,
-    org: [Vec4; 3],
-    /// `[kx, ky, kz]`, each `< 3` (checked once in [`Tri4Ray::new`]).
-    k: [usize; 3],
-    sx: Vec4,
-    sy: Vec4,
-    sz: Vec4,
-    t_min: Vec4,
+    org: [f32; 3],
 }
 
 impl Tri4Ray {
@@ -144,17 +141,59 @@ impl Tri4Ray {
         let o = wt.origin.to_array();
         assert!(wt.kx < 3 && wt.ky < 3 && wt.kz < 3);
         Self {
-            org: [
-                Vec4::splat(o[wt.kx]),
-                Vec4::splat(o[wt.ky]),
-                Vec4::splat(o[wt.kz]),
-            ],
-            k: [wt.kx, wt.ky, wt.kz],
-            sx: Vec4::splat(wt.sx),
-            sy: Vec4::splat(wt.sy),
-            sz: Vec4::splat(wt.sz),
-            t_min: Vec4::splat(wt.t_min),
+            org: [o[wt.kx], o[wt.ky], o[wt.kz]],
             wt,
+        }
+    }
+
+    /// `Tri4Ray::new(WatertightRay::new(ray))` with the permutation applied in registers
+    /// (`vpermilps` on the direction and the origin, no stack array indexed by `k`) and the
+    /// three shear constants by one division `(d[kx], d[ky], 1) / d[kz]` (the same IEEE
+    /// quotients as the scalar divisions). Bit-identical fields (tested below).
+    ///
+    /// # Safety
+    /// The CPU must support AVX.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    #[inline]
+    pub unsafe fn new_avx2(ray: &parallax_core::Ray) -> Self {
+        use std::arch::x86_64::*;
+        let (d, o) = (ray.dir, ray.origin);
+        let kz = parallax_core::math::dominant_axis(d);
+        // SAFETY: AVX is available (caller); register operations only.
+        unsafe {
+            let d4 = _mm_setr_ps(d.x, d.y, d.z, 0.0);
+            let o4 = _mm_setr_ps(o.x, o.y, o.z, 0.0);
+            // `d[kz] < 0.0` from the lanes' compare mask (a NaN lane compares false).
+            let neg = _mm_movemask_ps(_mm_cmplt_ps(d4, _mm_setzero_ps())) as usize;
+            let swap = (neg >> kz) & 1 != 0;
+            let kx0 = (kz + 1) % 3;
+            let ky0 = (kx0 + 1) % 3;
+            let (kx, ky) = if swap { (ky0, kx0) } else { (kx0, ky0) };
+            assert!(kx < 3 && ky < 3 && kz < 3);
+            let ctrl = _mm_setr_epi32(kx as i32, ky as i32, kz as i32, kz as i32);
+            let pd = _mm_permutevar_ps(d4, ctrl);
+            let po = _mm_permutevar_ps(o4, ctrl);
+            let num = _mm_blend_ps::<0b0100>(pd, _mm_set1_ps(1.0));
+            let s = _mm_div_ps(num, _mm_permute_ps::<0b1010_1010>(pd));
+            let mut sv = [0.0f32; 4];
+            _mm_storeu_ps(sv.as_mut_ptr(), s);
+            let mut ov = [0.0f32; 4];
+            _mm_storeu_ps(ov.as_mut_ptr(), po);
+            Self {
+                wt: WatertightRay {
+                    origin: o,
+                    kx,
+                    ky,
+                    kz,
+                    sx: sv[0],
+                    sy: sv[1],
+                    sz: sv[2],
+                    t_min: ray.t_min,
+                    t_max: ray.t_max,
+                },
+                org: [ov[0], ov[1], ov[2]],
+            }
         }
     }
 
@@ -172,12 +211,12 @@ impl Tri4Ray {
         mask: u32,
         t_lim: f32,
     ) -> Tri8Hits {
-        let [kx, ky, kz] = self.k;
         let wt = &self.wt;
+        let [kx, ky, kz] = [wt.kx, wt.ky, wt.kz];
         let o = [
-            L::splat(self.org[0].x),
-            L::splat(self.org[1].x),
-            L::splat(self.org[2].x),
+            L::splat(self.org[0]),
+            L::splat(self.org[1]),
+            L::splat(self.org[2]),
         ];
         let shear = [L::splat(wt.sx), L::splat(wt.sy), L::splat(wt.sz)];
         // `kx, ky, kz < 3` (`new`): in bounds.
@@ -242,8 +281,10 @@ impl Tri4Ray {
     /// ```
     #[inline(always)]
     pub fn intersect(&self, b: &Tri4, mask: u32, t_lim: f32) -> Tri4Hits {
-        let [kx, ky, kz] = self.k;
-        let shear = [self.sx, self.sy, self.sz];
+        let wt = &self.wt;
+        let [kx, ky, kz] = [wt.kx, wt.ky, wt.kz];
+        let shear = [wt.sx, wt.sy, wt.sz].map(Vec4::splat);
+        let org = self.org.map(Vec4::splat);
         let proj = |v: usize| {
             let p = &b.p[v];
             // SAFETY: `kx, ky, kz < 3` (`new`).
@@ -254,7 +295,7 @@ impl Tri4Ray {
                     *p.get_unchecked(kz),
                 ]
             };
-            shear_vertex(q, self.org, shear)
+            shear_vertex(q, org, shear)
         };
         let (va, vb, vc) = (proj(0), proj(1), proj(2));
         let r = watertight_lanes(va, vb, vc);
@@ -271,7 +312,7 @@ impl Tri4Ray {
             };
         }
         let d = r.distance(va[2], vb[2], vc[2]);
-        let in_range = (d.t.cmpgt(self.t_min) & d.t.cmplt(Vec4::splat(t_lim))).bitmask();
+        let in_range = (d.t.cmpgt(Vec4::splat(wt.t_min)) & d.t.cmplt(Vec4::splat(t_lim))).bitmask();
         Tri4Hits {
             hit: r.same_sign & d.nonzero & in_range & mask & !exact,
             exact,
@@ -381,5 +422,58 @@ mod pair_tests {
             hits > 500 && exact > 2000,
             "{hits} hits, {exact} exact lanes"
         );
+    }
+
+    /// `Tri4Ray::new_avx2` against `Tri4Ray::new(WatertightRay::new(ray))`: every field
+    /// bit-identical, on directions with zero, negative-zero and tied components (every
+    /// branch of the permutation) and random ones. Returns how many rays took each `kz` and
+    /// how many swapped `kx, ky`.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn check_new_avx2() -> ([u32; 3], u32) {
+        let mut rng = Rng::new(23, 5);
+        let special = [0.0f32, -0.0, 1.0, -1.0, 0.5, -0.5, 3.0, -3.0, 1e-30, -1e-30];
+        let (mut per_kz, mut swaps) = ([0u32; 3], 0u32);
+        for i in 0..20_000 {
+            let mut c = || {
+                if i % 2 == 0 {
+                    special[rng.next_bounded(special.len() as u32) as usize]
+                } else {
+                    rng.next_f32() * 4.0 - 2.0
+                }
+            };
+            let d = Vec3::new(c(), c(), c());
+            let o = Vec3::new(c() * 7.0, c() - 1.0, c() * 0.3);
+            let mut ray = Ray::new(o, d);
+            ray.t_min = rng.next_f32();
+            ray.t_max = 10.0 * rng.next_f32();
+            let a = Tri4Ray::new(WatertightRay::new(&ray));
+            // SAFETY: AVX is enabled for this function.
+            let b = unsafe { Tri4Ray::new_avx2(&ray) };
+            let (wa, wb) = (&a.wt, &b.wt);
+            assert_eq!([wa.kx, wa.ky, wa.kz], [wb.kx, wb.ky, wb.kz], "{ray:?}");
+            let bits = |w: &WatertightRay, org: [f32; 3]| {
+                let f = [
+                    w.origin.x, w.origin.y, w.origin.z, w.sx, w.sy, w.sz, w.t_min, w.t_max,
+                ];
+                (f.map(f32::to_bits), org.map(f32::to_bits))
+            };
+            assert_eq!(bits(wa, a.org), bits(wb, b.org), "{ray:?}");
+            per_kz[wa.kz] += 1;
+            swaps += (wa.kx != (wa.kz + 1) % 3) as u32;
+        }
+        (per_kz, swaps)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn new_avx2_matches_new() {
+        if !std::is_x86_feature_detected!("avx") {
+            return;
+        }
+        // SAFETY: AVX detected above.
+        let (per_kz, swaps) = unsafe { check_new_avx2() };
+        assert!(per_kz.iter().all(|&n| n > 4000), "{per_kz:?}");
+        assert!((7000..13_000).contains(&swaps), "{swaps}");
     }
 }

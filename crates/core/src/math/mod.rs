@@ -16,7 +16,7 @@ pub use frustum::{Containment, Frustum};
 pub use plane::Plane;
 pub use ray::{Ray, RayDifferential};
 pub use triangle::{
-    LaneDistance, TriangleHit, WatertightLanes, WatertightRay, edge_functions,
+    LaneDistance, TriangleHit, WatertightLanes, WatertightRay, dominant_axis, edge_functions,
     intersect_triangle_moller, scaled_distance, shear_vertex, watertight_lanes,
     watertight_permutation,
 };

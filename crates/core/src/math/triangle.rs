@@ -37,19 +37,26 @@ use glam::{DVec2, Vec3};
 use super::Ray;
 use crate::simd::Lanes;
 
+/// Woop et al. 2013, §3: the axis `kz < 3` of the largest `|d[kz]|` (the first of equal
+/// ones in the order of [`watertight_permutation`]'s compares).
+#[inline(always)]
+pub fn dominant_axis(d: Vec3) -> usize {
+    let a = d.abs();
+    // `a.x > a.y ? (a.x > a.z ? 0 : 2) : (a.y > a.z ? 1 : 2)` as selects of the three
+    // compares: no branch to mispredict per ray.
+    let (xy, xz, yz) = (a.x > a.y, a.x > a.z, a.y > a.z);
+    if xy {
+        2 * !xz as usize
+    } else {
+        2 - yz as usize
+    }
+}
+
 /// Woop et al. 2013, §3: the dominant axis `kz` of `d`, and `kx, ky` the next two, swapped when
 /// `d[kz] < 0` so that the winding is kept. Returns `[kx, ky, kz]`.
 #[inline(always)]
 pub fn watertight_permutation(d: Vec3) -> [usize; 3] {
-    let a = d.abs();
-    // `a.x > a.y ? (a.x > a.z ? 0 : 2) : (a.y > a.z ? 1 : 2)` as selects of the three
-    // compares, and the swap as a select: no branch to mispredict per ray.
-    let (xy, xz, yz) = (a.x > a.y, a.x > a.z, a.y > a.z);
-    let kz = if xy {
-        2 * !xz as usize
-    } else {
-        2 - yz as usize
-    };
+    let kz = dominant_axis(d);
     let kx = (kz + 1) % 3;
     let ky = (kx + 1) % 3;
     let swap = d.to_array()[kz] < 0.0;
