@@ -140,7 +140,6 @@
 pub mod affine;
 mod bands;
 pub mod edges;
-mod emit;
 pub mod full;
 mod kernel;
 mod lazy;

@@ -6,11 +6,8 @@
 //! AVX-512 lanes where the CPU has them, else 8 AVX lanes where it has AVX2, else 4 SSE lanes;
 //! `cast/isa.rs`), classified against the tile's
 //! corners in the same registers, and the kept triangles appended to the tile's list in order,
-//! each leaf's run closed after its last triangle ([`setup_tile`]). On lane types with gathers
-//! (AVX2's `Y8`, [`LaneReduce::gather`]) a pack's nine vertex coordinates and triangle indices
-//! are one `vgatherdps` each, and its kept triangles are appended by two 8 x 8 transposes
-//! (`cast/setup/emit.rs`). Runs' full bands are computed four triangles at a time in SSE
-//! lanes (`cast/setup/bands.rs`).
+//! each leaf's run closed after its last triangle ([`setup_tile`]). Runs' full bands are
+//! computed four triangles at a time in SSE lanes (`cast/setup/bands.rs`).
 //!
 //! **Invariant: the same bits as the scalar set-up**, for every lane type. Every lane runs
 //! exactly the operations of [`TriSetup::new_with`] (lazy band) and [`BeamCorners::classify`]
@@ -36,9 +33,6 @@ use parallax_bvh::node::{leaf_count, leaf_first};
 use parallax_core::Aabb;
 use parallax_core::math::watertight_permutation;
 
-use super::emit::push_kept;
-#[cfg(target_arch = "x86_64")]
-use super::emit::push_kept8_avx2;
 use super::lazy::{LazySetupN, PACK};
 use super::tri::{
     BeamCorners, Cone, CornerClass, RHO_MAX, RunBoxes16, Segment, TileTris, TriSetup,
@@ -53,11 +47,6 @@ use crate::cast::lanes512::Z16;
 
 /// Leaves ahead of the set-up's gather whose triangle blocks are prefetched ([`prefetch_leaf`]).
 const PREFETCH_LEAVES: usize = 8;
-
-/// f32s per [`Tri4`] (the stride of the vertex gather).
-const TRI4_F32: usize = std::mem::size_of::<Tri4>() / 4;
-const _: () = assert!(std::mem::offset_of!(Tri4, p) == 0 && TRI4_F32 == 40);
-const _: () = assert!(std::mem::offset_of!(Tri4, tri) == 36 * 4);
 
 /// Prefetches the triangle blocks of leaf `r` (every cache line of each 160-byte [`Tri4`]):
 /// the set-up's first touch of a block (its `tri` indices, then its vertices) was its most
@@ -84,6 +73,24 @@ fn prefetch_leaf(blocks: &[Tri4], r: u32) {
     let _ = (blocks, r);
 }
 
+/// Lane `l` of [`LazySetupN::arrays`] as a [`TriSetup`] (lazy: `rho` NaN).
+#[inline(always)]
+fn lane_of(x: &[[f32; PACK]; 13], l: usize, tri: u32, src: u32, all_in: bool) -> TriSetup {
+    TriSetup {
+        n: [
+            [x[0][l], x[1][l], x[2][l]],
+            [x[3][l], x[4][l], x[5][l]],
+            [x[6][l], x[7][l], x[8][l]],
+        ],
+        g: [x[9][l], x[10][l], x[11][l]],
+        tri,
+        src,
+        bound: x[12][l],
+        rho: f32::NAN,
+        all_in,
+    }
+}
+
 /// The state `setup_tile` starts from: the beam's corners, cone and watertight permutation.
 fn begin(beam: &Beam, origin: Vec3, out: &mut TileTris) -> Option<BeamCorners> {
     out.origin = origin;
@@ -107,9 +114,10 @@ fn begin(beam: &Beam, origin: Vec3, out: &mut TileTris) -> Option<BeamCorners> {
     corners
 }
 
-/// Appends the run of leaf `r` (its kept triangles `tris[previous end..end]`, box `bx`).
+/// Appends the run of leaf `r` (its kept triangles `tris[previous end..]`, box `bx`).
 #[inline(always)]
-fn end_run(out: &mut TileTris, end: u32, r: &LeafRef, bx: Aabb) {
+fn end_run(out: &mut TileTris, r: &LeafRef, bx: Aabb) {
+    let end = out.tris.len() as u32;
     if out.segs.last().map_or(0, |s| s.end) < end {
         let (lo, hi) = (bx.min - out.origin, bx.max - out.origin);
         let k = out.segs.len();
@@ -252,43 +260,20 @@ fn setup_tile_lanes<L: LaneReduce>(
     let mut x = [[0.0f32; PACK]; 13];
     let mut mn = [[0.0f32; PACK]; 3];
     let mut mx = [[0.0f32; PACK]; 3];
-    // The vertices as f32 offsets in `blocks` fit in `i32` (the gather's indices).
-    let gather = blocks.len() <= i32::MAX as usize / TRI4_F32;
-    let base = blocks.as_ptr().cast::<f32>();
-    let (mut srcs, mut tri) = ([0u32; PACK], [0.0f32; PACK]);
     for (pi, pack) in ents.chunks(L::N).enumerate() {
+        for (l, &src) in pack.iter().enumerate() {
+            let b = &blocks[(src >> 2) as usize];
+            let ln = (src & 3) as usize;
+            for v in 0..3 {
+                for a in 0..3 {
+                    pa[v][a][l] = b.p[v][a].as_ref()[ln];
+                }
+            }
+        }
         let mut p = [[L::splat(0.0); 3]; 3];
-        let mut idx = [0i32; PACK];
-        if gather {
-            // Lane `l`: triangle `src & 3` of block `src >> 2` (`< blocks.len()`: `ents` was
-            // built by indexing `blocks`); lanes past the pack repeat lane 0 (never kept).
-            for (l, &src) in pack.iter().enumerate() {
-                idx[l] = ((src >> 2) as usize * TRI4_F32 + (src & 3) as usize) as i32;
-            }
-            for l in pack.len()..L::N {
-                idx[l] = idx[0];
-            }
-            for v in 0..3 {
-                for a in 0..3 {
-                    // SAFETY: `Tri4` is `repr(C)`, `p: [[Vec4; 3]; 3]` first: `p[v][a]` lane
-                    // `ln` of block `b` is f32 `TRI4_F32 b + 4 (3 v + a) + ln`, inside `blocks`.
-                    p[v][a] = unsafe { L::gather(base.add(4 * (3 * v + a)), &idx) };
-                }
-            }
-        } else {
-            for (l, &src) in pack.iter().enumerate() {
-                let b = &blocks[(src >> 2) as usize];
-                let ln = (src & 3) as usize;
-                for v in 0..3 {
-                    for a in 0..3 {
-                        pa[v][a][l] = b.p[v][a].as_ref()[ln];
-                    }
-                }
-            }
-            for v in 0..3 {
-                for a in 0..3 {
-                    p[v][a] = L::load_n(&pa[v][a]);
-                }
+        for v in 0..3 {
+            for a in 0..3 {
+                p[v][a] = L::load_n(&pa[v][a]);
             }
         }
         let s = LazySetupN::new(&p, origin, radius);
@@ -314,47 +299,24 @@ fn setup_tile_lanes<L: LaneReduce>(
                     .max_or_rhs(p[2][a])
                     .write(&mut mx[a]);
             }
-            // The kept lanes' triangle indices (as f32 bits) and sources.
-            srcs[..pack.len()].copy_from_slice(pack);
-            if gather {
-                // SAFETY: as the vertices' gather; `tri[ln]` of block `b` is f32
-                // `TRI4_F32 b + 36 + ln` (`Tri4::tri` at byte 144), inside `blocks`.
-                unsafe { L::gather(base.add(36), &idx) }.write(&mut tri);
-            } else {
-                for (l, &src) in pack.iter().enumerate() {
-                    let t = blocks[(src >> 2) as usize].tri[(src & 3) as usize];
-                    tri[l] = f32::from_bits(t);
-                }
-            }
-            #[cfg(target_arch = "x86_64")]
-            if L::AVX2 && L::N == 8 {
-                // SAFETY: `L` only exists inside AVX2 code (`LaneReduce::AVX2`).
-                unsafe { push_kept8_avx2(&mut out.tris, &x, &tri, &srcs, keep, inm) };
-            } else {
-                push_kept(&mut out.tris, &x, &tri, &srcs, keep, inm);
-            }
-            #[cfg(not(target_arch = "x86_64"))]
-            push_kept(&mut out.tris, &x, &tri, &srcs, keep, inm);
         }
-        // The list's length before the pack's kept triangles: each leaf's run ends at the
-        // kept lanes before its end.
-        let before = out.tris.len() - keep.count_ones() as usize;
-        for l in 0..pack.len() {
+        for (l, &src) in pack.iter().enumerate() {
             let q = (L::N * pi + l) as u32;
             while ends[li] == q {
-                let end = before + (keep & ((1u32 << l) - 1)).count_ones() as usize;
-                end_run(out, end as u32, &leaves[li], bx);
+                end_run(out, &leaves[li], bx);
                 bx = Aabb::EMPTY;
                 li += 1;
             }
             if keep >> l & 1 != 0 {
+                let tri = blocks[(src >> 2) as usize].tri[(src & 3) as usize];
+                out.tris.push(lane_of(&x, l, tri, src, inm >> l & 1 != 0));
                 bx.min = bx.min.min(Vec3::new(mn[0][l], mn[1][l], mn[2][l]));
                 bx.max = bx.max.max(Vec3::new(mx[0][l], mx[1][l], mx[2][l]));
             }
         }
     }
     while li < leaves.len() {
-        end_run(out, out.tris.len() as u32, &leaves[li], bx);
+        end_run(out, &leaves[li], bx);
         bx = Aabb::EMPTY;
         li += 1;
     }
@@ -407,7 +369,7 @@ pub fn setup_tile_scalar(
             out.tris.push(s);
             bx = bx.grow(v[0]).grow(v[1]).grow(v[2]);
         }
-        end_run(out, out.tris.len() as u32, r, bx);
+        end_run(out, r, bx);
     }
 }
 
@@ -415,7 +377,6 @@ pub fn setup_tile_scalar(
 mod tests {
     use super::*;
     use crate::cast::setup::bands::refine_run;
-    use crate::cast::setup::emit::lane_of;
     use parallax_bvh::node::ChildRef;
 
     /// xorshift64*, deterministic.
@@ -609,7 +570,7 @@ mod tests {
     #[test]
     fn run_refine_equals_scalar_refine() {
         let mut rng = Rng(0x5151_7e57_c0ff_ee01);
-        let (mut refined, mut avx2) = (0, 0);
+        let mut refined = 0;
         for _ in 0..20 {
             let o = rng.v(10.0);
             let tris = triangles(&mut rng, o);
@@ -624,7 +585,6 @@ mod tests {
             let mut a = TileTris::default();
             setup_tile(&blocks, &leaves, &bm, o, true, &mut a);
             let mut b = a.clone();
-            let mut c = a.clone();
             let mut first = 0;
             for seg in a.segs.clone() {
                 refine_run(&mut a, first, seg.end as usize, &blocks);
@@ -637,36 +597,7 @@ mod tests {
                 assert_eq!(x.bits(), y.bits(), "{x:?} {y:?}");
                 refined += 1;
             }
-            // The AVX2 form (gathered vertices) equals the portable one.
-            #[cfg(target_arch = "x86_64")]
-            if crate::cast::isa::avx2_detected() {
-                let mut first = 0;
-                for seg in c.segs.clone() {
-                    // SAFETY: AVX2 detected.
-                    unsafe {
-                        crate::cast::setup::bands::refine_run_avx2(
-                            &mut c,
-                            first,
-                            seg.end as usize,
-                            &blocks,
-                        )
-                    };
-                    first = seg.end as usize;
-                }
-                assert_eq!(c.tris.len(), a.tris.len());
-                for (x, y) in a.tris.iter().zip(&c.tris) {
-                    assert_eq!(x.bits(), y.bits(), "{x:?} {y:?}");
-                    avx2 += 1;
-                }
-            }
-            let _ = &mut c;
         }
         assert!(refined > 1000, "{refined}");
-        #[cfg(target_arch = "x86_64")]
-        if crate::cast::isa::avx2_detected() {
-            assert_eq!(avx2, refined);
-        } else {
-            eprintln!("AVX2 not detected: refine_run_avx2 not compared");
-        }
     }
 }
