@@ -51,24 +51,6 @@ pub trait LaneReduce: Lanes {
     fn load_n(a: &[f32]) -> Self {
         Self::from_fn(|l| a[l])
     }
-    /// Whether the lane type only exists inside AVX2 code (`lanes256`), so its users may call
-    /// AVX2 helpers (`cast/setup/bands.rs` `refine_run_avx2`).
-    const AVX2: bool = false;
-    /// Lanes `0..N` as `*base.add(idx[l])`: one gather instruction where the lane type has it
-    /// (the same bits as the scalar loads).
-    ///
-    /// # Safety
-    /// For every `l < N`, `idx[l] >= 0` and `base.add(idx[l])` is a readable, initialised
-    /// f32 inside one allocation.
-    #[inline(always)]
-    unsafe fn gather(base: *const f32, idx: &[i32; 16]) -> Self {
-        let mut a = [0.0f32; 16];
-        for l in 0..Self::N {
-            // SAFETY: the caller's contract.
-            a[l] = unsafe { *base.add(idx[l] as usize) };
-        }
-        Self::load16(&a)
-    }
 }
 
 /// The 4 x 4 transpose of `q` (`c[k]` = lane `k` of every register).

@@ -201,16 +201,6 @@ impl Lanes for Y8 {
 
 impl LaneReduce for Y8 {
     // (No closures here: they would not be compiled with the caller's AVX2 features.)
-    const AVX2: bool = true;
-    #[inline(always)]
-    unsafe fn gather(base: *const f32, idx: &[i32; 16]) -> Self {
-        // SAFETY: module docs (AVX2 code); the caller's contract: every lane's element is
-        // readable. `vgatherdps` loads the same bits as the scalar loads.
-        unsafe {
-            let i = _mm256_loadu_si256(idx.as_ptr().cast());
-            Y8(_mm256_i32gather_ps::<4>(base, i))
-        }
-    }
     #[inline(always)]
     fn hmin4([a, b, c, d]: [Self; 4]) -> Vec4 {
         let q = [
@@ -373,7 +363,6 @@ fn qmax16(x: Y16) -> Vec4 {
 impl LaneReduce for Y16 {
     /// Eight runs per interval test: one `Y8` register per axis and bound.
     const RUN_GROUP: usize = 8;
-    const AVX2: bool = true;
     #[inline(always)]
     fn hmin4([a, b, c, d]: [Self; 4]) -> Vec4 {
         let q = [qmin16(a), qmin16(b), qmin16(c), qmin16(d)];

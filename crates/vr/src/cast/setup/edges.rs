@@ -24,7 +24,7 @@
 //! - **Lazy band.** The tile's triangles are set up with a crude conservative band (enough
 //!   for the corner classification); a triangle's full band (and its depth condition `rho`)
 //!   is computed when a packet first enters its run, for the whole run four triangles at a
-//!   time (`refine_run` in `cast/setup/bands.rs`, bit-identical to `TileTris::refine`), so
+//!   time (`refine_run` in `cast/setup/tile.rs`, bit-identical to `TileTris::refine`), so
 //!   triangles dropped all-out or in runs never entered skip the band analysis.
 //! - Ill-conditioned triangles (`rho > RHO_MAX`: seen nearly edge-on, or their plane nearly
 //!   through the origin, where `g . d` may even have the wrong sign) take the watertight
@@ -60,8 +60,6 @@ use parallax_core::simd::Lanes;
 
 use super::affine::{PacketBox, PacketClass};
 use super::bands::refine_run;
-#[cfg(target_arch = "x86_64")]
-use super::bands::refine_run_avx2;
 use super::kernel::{PacketSlab, SetupWork, dot_n, edge_band, min_edge};
 use super::tri::{RHO_MAX, TileTris, exact_t};
 use crate::cast::lanes16::LaneReduce;
@@ -172,14 +170,6 @@ pub(super) fn closest_edges<L: LaneReduce>(
             // The full bands of the run's lazy triangles, four at a time (every triangle of an
             // entered run is reached: the loop below never stops early).
             if tt.tris[first].rho.is_nan() {
-                #[cfg(target_arch = "x86_64")]
-                if L::AVX2 {
-                    // SAFETY: `L` only exists inside AVX2 code (`LaneReduce::AVX2`).
-                    unsafe { refine_run_avx2(tt, first, end, blocks) };
-                } else {
-                    refine_run(tt, first, end, blocks);
-                }
-                #[cfg(not(target_arch = "x86_64"))]
                 refine_run(tt, first, end, blocks);
             }
             // The run's triangles and affine forms as slices of one length: no bounds check
