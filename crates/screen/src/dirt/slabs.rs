@@ -96,22 +96,6 @@ impl Texel {
         (self.slabs >> a) << (63 - (b - a)) != 0
     }
 
-    /// The walk's whole texel test, `w1 >= lo && w0 <= hi && meets(w0, w1)` for `w0 <= w1`
-    /// (and false where either is NaN), computed without a branch: the three conditions
-    /// are evaluated and combined with `&`, so the walk branches once per texel on the
-    /// outcome instead of on each condition in turn.
-    #[inline(always)]
-    pub fn overlaps(&self, w0: f32, w1: f32) -> bool {
-        let s = self.shift();
-        let base = self.lo.to_bits() >> s;
-        let (a, b) = (slab(w0, s, base), slab(w1, s, base));
-        // `b >= a` when the bounds hold (`w0 <= w1`, `slab` monotone); otherwise the shift
-        // is garbage (masked to 6 bits) and the result is discarded by the bounds.
-        let k = 63u32.wrapping_sub(b.wrapping_sub(a)) & 63;
-        let slabs = (self.slabs >> a) << k != 0;
-        (w1 >= self.lo) & (w0 <= self.hi) & slabs
-    }
-
     /// The bit patterns of the reciprocal depths of slab `k` inside `[lo, hi]` (as `u64`, an
     /// inclusive range).
     fn slab_bits(&self, k: u32) -> (u64, u64) {
@@ -271,7 +255,7 @@ fn first_shift(a: u32, b: u32) -> u32 {
 #[inline(always)]
 pub(crate) fn slab(w: f32, shift: u32, base: u32) -> u32 {
     let b = (w.to_bits() as i32).max(0) as u32;
-    (b >> shift).saturating_sub(base).min(SLABS - 1)
+    ((b >> shift).max(base) - base).min(SLABS - 1)
 }
 
 #[cfg(test)]

@@ -351,7 +351,7 @@ fn walk_body<const UX: bool, const UY: bool, const W_FALLS: bool, const ISA: u8>
             + tx as usize;
         let t = &texels[texel];
         // The min-max bounds, then the depth slabs (`slabs`).
-        let overlaps = t.overlaps(w_lo, w_hi);
+        let overlaps = w_hi >= t.lo && w_lo <= t.hi && t.meets(w_lo, w_hi);
         if overlaps {
             if level > 0 {
                 level -= 1;
