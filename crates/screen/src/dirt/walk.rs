@@ -18,13 +18,9 @@
 //! crossings in the ray's film direction, or the end of the segment); the ray's `w` over
 //! `[λ, λ_exit]` is the interval between its values at the two ends. Disjoint from the
 //! texel's reciprocal bounds, or (`slabs`) its slabs of `w` missing every occupied slab of the
-//! texel: the texel is skipped, the walk moves to `λ_exit`, and one level up if the move
-//! left the texel's parent (a skip by the slabs drops only cells whose buckets at the ray's
-//! depths are all empty, `slabs` module docs). Inside the parent it stays at the level: the
-//! parent is, as a rule, the texel the walk came down from, and its test over the rest of its
-//! interval would mostly overlap again and send the walk back down. Which levels the walk
-//! tests changes which texels it skips whole, not the answer: the argument below holds for
-//! any order of levels (a texel's test is conservative for every cell under it). Overlapping above level 0: one level down. At level 0: the cell's record (bounds, eq. 1
+//! texel: the texel is skipped, the walk moves to `λ_exit` and one level up (a skip by the
+//! slabs drops only cells whose buckets at the ray's depths are all empty, `slabs` module
+//! docs). Overlapping above level 0: one level down. At level 0: the cell's record (bounds, eq. 1
 //! scale, non-empty bucket mask), the buckets of the ray's depth span there, and if any of
 //! them holds a triangle, bucket tracing; then on to `λ_exit`.
 //!
@@ -389,21 +385,13 @@ fn walk_body<const UX: bool, const UY: bool, const W_FALLS: bool, const ISA: u8>
             break;
         }
         let lv = level as u32;
-        // Whether the move leaves the texel's parent (at `level + 1`): the crossed boundary
-        // `k` (a multiple of `2^level`) is one of the parent's when `k >> level` is even,
-        // for either direction of the axis (`parent_edge`).
-        let left_parent;
         if l_col <= l_row {
             cx = next_cell::<UX>(cx, kx, &mut xs, vc.cells_x);
             if l_row == l_col {
                 cy = next_cell::<UY>(cy, ky, &mut ys, vc.cells_y);
-                left_parent = parent_edge(kx, lv) | parent_edge(ky, lv);
-            } else {
-                if level > 0 {
-                    let y = seg.y + l_exit * seg.dy;
-                    cy = refine::<UY>(cy, ty, lv, y, vc.cells_y);
-                }
-                left_parent = parent_edge(kx, lv);
+            } else if level > 0 {
+                let y = seg.y + l_exit * seg.dy;
+                cy = refine::<UY>(cy, ty, lv, y, vc.cells_y);
             }
         } else {
             cy = next_cell::<UY>(cy, ky, &mut ys, vc.cells_y);
@@ -411,16 +399,12 @@ fn walk_body<const UX: bool, const UY: bool, const W_FALLS: bool, const ISA: u8>
                 let x = seg.x + l_exit * seg.dx;
                 cx = refine::<UX>(cx, tx, lv, x, vc.cells_x);
             }
-            left_parent = parent_edge(ky, lv);
         }
         l = l_exit;
         w_l = w_exit;
-        // Up a level after a skip that leaves the parent texel (Hi-Z). Inside the parent the
-        // walk stays at this level: the parent's test over the rest of its interval mostly
-        // overlaps again (the walk came down from it), a visit spent only to come back down.
-        // After tracing a cell the ray is among surfaces, where the next cell is likely to
-        // overlap too: stay at the finest level.
-        if !overlaps && left_parent && level < vc.top {
+        // Up a level after a skip (Hi-Z); after tracing a cell the ray is among surfaces,
+        // where the next cell is likely to overlap too: stay at the finest level.
+        if !overlaps && level < vc.top {
             level += 1;
         }
     }
@@ -558,13 +542,6 @@ fn any_bucket(mask: u32, b0: u32, b1: u32, buckets: u32) -> bool {
     ((mask >> (lo & 31)) << ((31 - (hi - lo)) & 31)) != 0
 }
 
-/// Whether boundary `k` (in cells, a multiple of `2^level`) between two texels of `level`
-/// is also a boundary of their parents at `level + 1`: `k / 2^level` even.
-#[inline(always)]
-fn parent_edge(k: u32, level: u32) -> bool {
-    (k >> (level & 31)) & 1 == 0
-}
-
 /// `floor(f)` clamped to `[0, n)`.
 #[inline(always)]
 fn cell_index(f: f32, n: u32) -> u32 {
@@ -644,32 +621,6 @@ mod tests {
                 }
             }
         }
-    }
-
-    /// [`parent_edge`] says whether the texels on the two sides of a boundary have different
-    /// parents, for every texel boundary of a grid of 300 cells (levels 0-9), in both
-    /// directions of the axis (the walk's `k` is the same boundary for either).
-    #[test]
-    fn parent_edge_is_a_parent_boundary() {
-        let (mut parent, mut inside) = (0u32, 0u32);
-        for level in 0..10u32 {
-            let texels = 300u32.div_ceil(1 << level);
-            for t in 1..texels {
-                // Boundary between texels `t - 1` and `t`, in cells.
-                let k = t << level;
-                let (before, after) = ((k - 1) >> level, k >> level);
-                assert_eq!((before, after), (t - 1, t));
-                let differ = before >> 1 != after >> 1;
-                assert_eq!(parent_edge(k, level), differ, "k {k} level {level}");
-                if differ {
-                    parent += 1;
-                } else {
-                    inside += 1;
-                }
-            }
-        }
-        // Every other boundary of a level is its parent's.
-        assert!(parent > 0 && inside > 0 && parent.abs_diff(inside) <= 10);
     }
 
     /// [`any_bucket`] is the mask test by [`bucket_mask`].
