@@ -88,7 +88,7 @@ impl Node8 {
 }
 
 /// What the 8-wide traversal reads of a node besides its boxes: [`Node8`] and the quantised
-/// [`crate::node8q::Node8Q`].
+/// quantised `Node8Q` (`node8q.rs`).
 pub(crate) trait Node8Refs {
     /// Child references, as [`Node8::child`].
     fn child(&self) -> &[u32; 8];
@@ -99,21 +99,6 @@ pub(crate) trait Node8Refs {
 }
 
 impl Node8Refs for Node8 {
-    #[inline(always)]
-    fn child(&self) -> &[u32; 8] {
-        &self.child
-    }
-    #[inline(always)]
-    fn leaf_mask(&self) -> u32 {
-        self.leaf_mask
-    }
-    #[inline(always)]
-    fn num_children(&self) -> u32 {
-        self.num_children
-    }
-}
-
-impl Node8Refs for crate::node8q::Node8Q {
     #[inline(always)]
     fn child(&self) -> &[u32; 8] {
         &self.child

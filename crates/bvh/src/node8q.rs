@@ -29,7 +29,7 @@
 //! the whole quantised tree unavailable ([`quantise_tree`] returns an empty vector).
 
 use crate::node::EMPTY;
-use crate::node8::{Node8, WIDTH8};
+use crate::node8::{Node8, Node8Refs, WIDTH8};
 
 /// The smallest step: keeps `q * scale` a normal float, exact.
 const MIN_SCALE: f32 = 1.0 / (1u64 << 60) as f32 / (1u64 << 40) as f32; // 2^-100
@@ -150,6 +150,21 @@ impl Node8Q {
     #[inline]
     pub fn plane(&self, row: usize, lane: usize) -> f32 {
         dequantise(self.origin[row / 2], self.scale[row / 2], self.q[row][lane])
+    }
+}
+
+impl Node8Refs for Node8Q {
+    #[inline(always)]
+    fn child(&self) -> &[u32; 8] {
+        &self.child
+    }
+    #[inline(always)]
+    fn leaf_mask(&self) -> u32 {
+        self.leaf_mask
+    }
+    #[inline(always)]
+    fn num_children(&self) -> u32 {
+        self.num_children
     }
 }
 
