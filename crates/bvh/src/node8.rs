@@ -88,7 +88,7 @@ impl Node8 {
 }
 
 /// What the 8-wide traversal reads of a node besides its boxes: [`Node8`] and the quantised
-/// quantised `Node8Q` (`node8q.rs`).
+/// `Node8Q` (`node8q.rs`).
 pub(crate) trait Node8Refs {
     /// Child references, as [`Node8::child`].
     fn child(&self) -> &[u32; 8];

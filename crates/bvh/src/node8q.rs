@@ -1,5 +1,5 @@
 //! Conservatively quantised 8-wide nodes: the [`Node8`] tree with each child box stored as
-//! 8-bit offsets from a per-node origin, in steps of a power-of-two scale per axis (the
+//! 8-bit offsets from a per-node origin, in steps of a scale per axis (the
 //! compressed nodes of Ylitie, Karras & Laine 2017 §3.1 and Embree's `BVH8` quantised node,
 //! Wald et al. 2014 §3.1), derived from the 8-wide tree after the build and after a refit. A
 //! node is two cache lines instead of four.
@@ -11,16 +11,14 @@
 //! | 0..48 | `q: [[u8; 8]; 6]` | `min_x, max_x, min_y, max_y, min_z, max_z` in steps, one lane per child |
 //! | 48..60 | `origin: [f32; 3]` | the node's box minimum |
 //! | 60..64 | `valid` | bit `i` set iff lane `i` is used (the first `num_children` lanes) |
-//! | 64..76 | `scale: [f32; 3]` | the step per axis, a power of two |
+//! | 64..76 | `scale: [f32; 3]` | the step per axis |
 //! | 76..80 | `leaf_mask` | as [`Node8::leaf_mask`] |
 //! | 80..112 | `child: [u32; 8]` | as [`Node8::child`] (same references, same node indices) |
 //! | 112..116 | `num_children` | as [`Node8::num_children`] |
 //! | 116..128 | padding | zero |
 //!
 //! The plane of row `r`, lane `i` is `dequantise(origin[axis], scale[axis], q[r][i])`
-//! `= origin + q * scale` in f32: the product is exact (eight bits times a power of two that is
-//! a normal float), so the one rounding of the addition makes a fused multiply-add and a
-//! multiply then add the same value. The quantisation rounds outward and checks each plane
+//! `= fma(q, scale, origin)` in f32, one rounding (a fused multiply-add in both node tests). The quantisation rounds outward and checks each plane
 //! with that same function (lower planes `<=` the exact minimum, upper planes `>=` the exact
 //! maximum), so every dequantised box **contains** its child's exact box: a slab test on the
 //! dequantised boxes only culls less, and a traversal over them returns what the exact tree
@@ -31,7 +29,7 @@
 use crate::node::EMPTY;
 use crate::node8::{Node8, Node8Refs, WIDTH8};
 
-/// The smallest step: keeps `q * scale` a normal float, exact.
+/// The smallest step (a flat node needs none; any positive step serves).
 const MIN_SCALE: f32 = 1.0 / (1u64 << 60) as f32 / (1u64 << 40) as f32; // 2^-100
 
 /// A quantised 8-wide node (layout in the module docs).
@@ -43,7 +41,7 @@ pub struct Node8Q {
     pub origin: [f32; 3],
     /// Bit `i` set iff lane `i` is used.
     pub valid: u32,
-    /// The step per axis (a power of two).
+    /// The step per axis.
     pub scale: [f32; 3],
     pub leaf_mask: u32,
     pub child: [u32; 8],
@@ -59,30 +57,25 @@ const _: () = assert!(std::mem::offset_of!(Node8Q, child) == 80);
 /// The plane `origin + q * scale` (module docs: exact product, one rounding).
 #[inline(always)]
 pub fn dequantise(origin: f32, scale: f32, q: u8) -> f32 {
-    origin + q as f32 * scale
+    (q as f32).mul_add(scale, origin)
 }
 
-/// The smallest power of two `s >= MIN_SCALE` with `dequantise(lo, s, 255) >= hi`, if it is
+/// The smallest step `s >= MIN_SCALE` with `dequantise(lo, s, 255) >= hi`, if it is
 /// finite.
 fn axis_scale(lo: f32, hi: f32) -> Option<f32> {
     if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
         return None;
     }
-    let ext = (hi as f64 - lo as f64) / 255.0;
-    let mut s = if ext > MIN_SCALE as f64 {
-        (2.0f64).powi(ext.log2().ceil() as i32) as f32
-    } else {
-        MIN_SCALE
-    };
+    let mut s = (((hi as f64 - lo as f64) / 255.0) as f32).max(MIN_SCALE);
     if !s.is_finite() {
         return None;
     }
     // Rounding of the estimate either way: settle on the smallest step that reaches `hi`.
     while s.is_finite() && dequantise(lo, s, 255) < hi {
-        s *= 2.0;
+        s = s.next_up();
     }
-    while s / 2.0 >= MIN_SCALE && dequantise(lo, s / 2.0, 255) >= hi {
-        s /= 2.0;
+    while s.next_down() >= MIN_SCALE && dequantise(lo, s.next_down(), 255) >= hi {
+        s = s.next_down();
     }
     (s.is_finite() && dequantise(lo, s, 255).is_finite()).then_some(s)
 }
@@ -231,7 +224,6 @@ mod tests {
             assert_eq!(q.valid, (1 << used) - 1);
             for a in 0..3 {
                 let s = q.scale[a];
-                assert_eq!(s.to_bits() & 0x007f_ffff, 0, "power of two");
                 assert!(s >= MIN_SCALE);
                 for i in 0..used {
                     let (lo, hi) = (n.bounds[2 * a][i], n.bounds[2 * a + 1][i]);
@@ -251,19 +243,22 @@ mod tests {
         assert!(tight > 100, "{tight}");
     }
 
-    /// An extent beyond `f32::MAX` cannot be stepped: no quantised node.
+    /// A non-finite extent cannot be stepped: no quantised node; `[-f32::MAX, f32::MAX]` can.
     #[test]
-    fn overflowing_extent_is_refused() {
+    fn non_finite_extent_is_refused() {
         let mut n = Node8::EMPTY;
         n.set_child_bounds(
             0,
             Aabb {
-                min: glam::Vec3::splat(-3e38),
-                max: glam::Vec3::splat(3e38),
+                min: glam::Vec3::splat(-f32::MAX),
+                max: glam::Vec3::splat(f32::MAX),
             },
         );
         n.child[0] = 1;
         n.num_children = 1;
+        let q = Node8Q::quantise(&n).expect("finite extent");
+        assert!(q.plane(0, 0) <= -f32::MAX && q.plane(1, 0) >= f32::MAX);
+        n.bounds[1][0] = f32::INFINITY;
         assert!(Node8Q::quantise(&n).is_none());
         assert!(quantise_tree(&[n]).is_empty());
     }

@@ -3,8 +3,8 @@
 //!
 //! The loop is the 8-wide kernel of `traverse8.rs` (`Bvh::traverse8`, generic over the node
 //! layout); only the node test differs. It first dequantises the six plane rows of the node,
-//! `origin + q * scale` per lane (AVX2: one `vpmovzxbd`, one `vcvtdq2ps` and one FMA per row;
-//! the portable twin: a multiply then an add, the same value since the product is exact), then
+//! `fma(q, scale, origin)` per lane (AVX2: one `vpmovzxbd`, one `vcvtdq2ps` and one FMA per
+//! row; the portable twin: `f32::mul_add` per lane, the same single rounding), then
 //! runs the robust slab test of `traverse8.rs` on those f32 boxes, unchanged (Ize 2013 far
 //! scaling, no FMA in the slab). Each dequantised box contains its child's exact box, so the
 //! test culls no box the ray touches, and the closest hit, the lexicographic minimum of
@@ -55,8 +55,8 @@ impl NodeTest8 for Portable8Q {
         // Row `off / 32` of `RayBoxes8`'s byte offsets; axis `a`.
         let plane = |off: usize, a: usize, h: usize| {
             let q = &node.q[off / 32][4 * h..4 * h + 4];
-            let q = Vec4::new(q[0] as f32, q[1] as f32, q[2] as f32, q[3] as f32);
-            q * node.scale[a] + Vec4::splat(node.origin[a])
+            let d = |k: usize| crate::node8q::dequantise(node.origin[a], node.scale[a], q[k]);
+            Vec4::new(d(0), d(1), d(2), d(3))
         };
         for h in 0..2 {
             let o = rb.org.map(Vec4::splat);
