@@ -8,7 +8,6 @@ use parallax_core::Aabb;
 
 use crate::node::Node4;
 use crate::node8::Node8;
-use crate::node8q::Node8Q;
 use crate::tri::Tri;
 use crate::tri4::{self, Tri4};
 
@@ -19,9 +18,6 @@ pub struct Bvh {
     pub(crate) nodes: Vec<Node4>,
     /// The 8-wide traversal tree over the same leaves (`node8.rs`).
     pub(crate) nodes8: Vec<Node8>,
-    /// The quantised form of `nodes8` (`node8q.rs`), same indices; empty where a node could
-    /// not be quantised.
-    pub(crate) nodes8q: Vec<Node8Q>,
     pub(crate) tris: Vec<Tri>,
     pub(crate) prim_ids: Vec<u32>,
     pub(crate) blocks: Vec<tri4::Tri4>,
@@ -43,12 +39,6 @@ impl Bvh {
         &self.nodes8
     }
 
-    /// The quantised 8-wide tree (layout in [`crate::node8q`]; empty where the build could not
-    /// quantise a node).
-    pub fn nodes8q(&self) -> &[Node8Q] {
-        &self.nodes8q
-    }
-
     /// Number of triangles indexed (the mesh's triangles).
     pub fn triangle_count(&self) -> usize {
         self.prim_count
@@ -65,7 +55,6 @@ impl Bvh {
     pub fn bytes(&self) -> usize {
         self.nodes.len() * size_of::<Node4>()
             + self.nodes8.len() * size_of::<Node8>()
-            + self.nodes8q.len() * size_of::<Node8Q>()
             + self.tris.len() * size_of::<Tri>()
             + self.blocks.len() * size_of::<Tri4>()
             + self.prim_ids.len() * size_of::<u32>()

@@ -1,6 +1,5 @@
 //! Building a [`Bvh`]: validation, the binned-SAH binary build (`build.rs`), and the two
-//! collapses into 4-wide (`collapse.rs`) and 8-wide (`collapse8.rs`) nodes over the same leaves,
-//! and the quantised form of the 8-wide tree (`node8q.rs`).
+//! collapses into 4-wide (`collapse.rs`) and 8-wide (`collapse8.rs`) nodes over the same leaves.
 
 use std::time::Instant;
 
@@ -10,7 +9,7 @@ use rayon::prelude::*;
 
 use crate::bvh::Bvh;
 use crate::options::{BuildOptions, BvhError};
-use crate::{build, collapse, collapse8, node, node8q, traverse, traverse8};
+use crate::{build, collapse, collapse8, node, traverse, traverse8};
 
 impl Bvh {
     /// Builds with the default [`BuildOptions`]. Panics only where [`Bvh::try_build_with`]
@@ -50,7 +49,6 @@ impl Bvh {
             return Ok(Bvh {
                 nodes: Vec::new(),
                 nodes8: Vec::new(),
-                nodes8q: Vec::new(),
                 tris: Vec::new(),
                 prim_ids: Vec::new(),
                 blocks: Vec::new(),
@@ -90,11 +88,9 @@ impl Bvh {
             c8.depth
         );
         let bounds = c.nodes[0].bounds();
-        let nodes8q = node8q::quantise_tree(&c8.nodes);
         Ok(Bvh {
             nodes: c.nodes,
             nodes8: c8.nodes,
-            nodes8q,
             tris: c.tris,
             prim_ids: c.prim_ids,
             blocks: c.blocks,

@@ -14,7 +14,6 @@
 use glam::{BVec4A, Vec4};
 use parallax_core::Ray;
 
-use crate::node8::Node8;
 use crate::traverse8::{NodeTest8, Portable8, RayBoxes8};
 
 // The SIMD lanes' `load_rays` (AVX-512 here, AVX2 in `lanes16/avx2.rs`) read a `Ray` as eight
@@ -46,7 +45,7 @@ pub(crate) trait Lanes16: Copy {
     /// Whether a value of this type proves AVX2 (256-bit ops for the 8-lane interval test).
     const AVX2: bool;
     /// The single-ray node test of the same ISA (for rays the packet hands over).
-    type Single: NodeTest8<Node = Node8>;
+    type Single: NodeTest8;
     fn single(self, rb: RayBoxes8) -> Self::Single;
     fn splat(self, x: f32) -> Self::V;
     fn load(self, a: &F16) -> Self::V;

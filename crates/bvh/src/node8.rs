@@ -86,29 +86,3 @@ impl Node8 {
         (0..WIDTH8).fold(Aabb::EMPTY, |a, i| a.union(self.child_bounds(i)))
     }
 }
-
-/// What the 8-wide traversal reads of a node besides its boxes: [`Node8`] and the quantised
-/// `Node8Q` (`node8q.rs`).
-pub(crate) trait Node8Refs {
-    /// Child references, as [`Node8::child`].
-    fn child(&self) -> &[u32; 8];
-    /// As [`Node8::leaf_mask`].
-    fn leaf_mask(&self) -> u32;
-    /// As [`Node8::num_children`].
-    fn num_children(&self) -> u32;
-}
-
-impl Node8Refs for Node8 {
-    #[inline(always)]
-    fn child(&self) -> &[u32; 8] {
-        &self.child
-    }
-    #[inline(always)]
-    fn leaf_mask(&self) -> u32 {
-        self.leaf_mask
-    }
-    #[inline(always)]
-    fn num_children(&self) -> u32 {
-        self.num_children
-    }
-}

@@ -110,8 +110,6 @@ impl Bvh {
                 }
             }
         }
-        // The quantised tree is derived from the 8-wide one again.
-        self.nodes8q = crate::node8q::quantise_tree(&self.nodes8);
         self.bounds = self.nodes.first().map_or(Aabb::EMPTY, |n| n.bounds());
         Ok(start.elapsed())
     }

@@ -45,7 +45,7 @@ use crate::keys8;
 use crate::lanes8::Pair8;
 use crate::leaf8::{AllLeaf, AnyLeaf, ClosestCtx, ClosestLeaf, LeafTest8};
 use crate::node::{is_leaf, leaf_first};
-use crate::node8::{Node8, Node8Refs};
+use crate::node8::Node8;
 use crate::stats::{Counter, NoStats, TraversalStats};
 use crate::traverse::{Best, pop_closer, ray_ok, sort_dedup_hits};
 use crate::tri4::Tri4Ray;
@@ -58,14 +58,14 @@ pub(crate) const STACK8_SIZE: usize = 576;
 /// A ray prepared for the 8-lane slab test.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct RayBoxes8 {
-    pub org: [f32; 3],
+    org: [f32; 3],
     /// `-1 / dir`: the slab distances are `(o - b) * (-1 / d)`, equal to `(b - o) * (1 / d)`
     /// (negation is exact), with the bounds row as the subtraction's memory operand.
-    pub neg_inv: [f32; 3],
+    neg_inv: [f32; 3],
     /// Byte offsets into `Node8::bounds` of the near / far plane rows (`32 * (2 axis + sign)`).
-    pub near: [usize; 3],
-    pub far: [usize; 3],
-    pub t_min: f32,
+    near: [usize; 3],
+    far: [usize; 3],
+    t_min: f32,
 }
 
 impl RayBoxes8 {
@@ -94,19 +94,15 @@ impl RayBoxes8 {
 /// `>= t_min`, so their bits order as the floats where `t_min >= 0`; a key is never `0`
 /// (child `0` is the root, no node's child), so the padding sorts below every key.
 pub(crate) trait NodeTest8 {
-    /// The node layout this test reads ([`Node8`], or the quantised `Node8Q`).
-    type Node: Node8Refs;
     type Dist: Copy;
     /// The lanes of the closest-hit leaf step's two-block triangle test (`lanes8.rs`): AVX2
     /// where the node test is, the portable twin elsewhere.
     type Pair: Pair8;
-    fn test(&self, node: &Self::Node, t_max: f32) -> (u32, Self::Dist);
-    fn hit_keys(&self, node: &Self::Node, t: Self::Dist, mask: u32) -> [u64; 8];
+    fn test(&self, node: &Node8, t_max: f32) -> (u32, Self::Dist);
+    fn hit_keys(&self, node: &Node8, t: Self::Dist, mask: u32) -> [u64; 8];
     /// The keys of the two hit lanes of a two-bit `mask`, in lane order (`hit_keys`' first two
     /// entries).
-    fn pair_keys(&self, node: &Self::Node, t: Self::Dist, mask: u32) -> (u64, u64);
-    /// The tree of [`Self::Node`]s of `bvh`, root first.
-    fn nodes(bvh: &Bvh) -> &[Self::Node];
+    fn pair_keys(&self, node: &Node8, t: Self::Dist, mask: u32) -> (u64, u64);
 
     /// The ray prepared for this kernel's triangle tests: `Tri4Ray::new(WatertightRay::new(ray))`
     /// or a bit-identical register form of it.
@@ -127,13 +123,7 @@ pub(crate) trait NodeTest8 {
 pub(crate) struct Portable8(pub RayBoxes8);
 
 impl NodeTest8 for Portable8 {
-    type Node = Node8;
     type Dist = [f32; 8];
-
-    #[inline(always)]
-    fn nodes(bvh: &Bvh) -> &[Node8] {
-        &bvh.nodes8
-    }
     type Pair = parallax_core::simd::F8;
 
     #[inline(always)]
@@ -215,13 +205,7 @@ impl Avx2Boxes8 {
 
 #[cfg(target_arch = "x86_64")]
 impl NodeTest8 for Avx2Boxes8 {
-    type Node = Node8;
     type Dist = std::arch::x86_64::__m256;
-
-    #[inline(always)]
-    fn nodes(bvh: &Bvh) -> &[Node8] {
-        &bvh.nodes8
-    }
     type Pair = crate::lanes8::A8;
 
     #[inline(always)]
@@ -296,12 +280,12 @@ const PREFETCH_CHILD_LINE: bool = true;
 
 /// Prefetches the cache line of `node.child` (a hint: never faults, changes no result).
 #[inline(always)]
-fn prefetch_child_line<N: Node8Refs>(node: &N) {
+fn prefetch_child_line(node: &Node8) {
     #[cfg(target_arch = "x86_64")]
     // SAFETY: prefetches never fault; the address is inside `node`.
     unsafe {
         use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-        _mm_prefetch::<_MM_HINT_T0>(node.child().as_ptr() as *const i8);
+        _mm_prefetch::<_MM_HINT_T0>(node.child.as_ptr() as *const i8);
     }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = node;
@@ -320,15 +304,15 @@ impl Bvh {
     /// Prefetches the first three cache lines of the triangle block of each hit leaf lane
     /// (`Node8::leaf_mask`).
     #[inline(always)]
-    fn prefetch_leaves<N: Node8Refs>(&self, node: &N, mask: u32) {
+    fn prefetch_leaves(&self, node: &Node8, mask: u32) {
         #[cfg(target_arch = "x86_64")]
         {
             use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-            let mut m = mask & node.leaf_mask();
+            let mut m = mask & node.leaf_mask;
             while m != 0 {
                 let c = m.trailing_zeros() as usize;
                 m &= m - 1;
-                let r = node.child()[c];
+                let r = node.child[c];
                 debug_assert!(is_leaf(r));
                 let b = self.blocks.as_ptr().wrapping_add(leaf_first(r) as usize) as *const i8;
                 // SAFETY: prefetches never fault; the address is only a hint.
@@ -361,13 +345,13 @@ impl Bvh {
         let mut stack = [MaybeUninit::<u64>::uninit(); STACK8_SIZE];
         let mut sp = 0usize;
         let mut cur = root;
-        let nodes = T::nodes(self).as_ptr();
+        let nodes = self.nodes8.as_ptr();
         loop {
             while !is_leaf(cur) {
-                debug_assert!((cur as usize) < T::nodes(self).len());
+                debug_assert!((cur as usize) < self.nodes8.len());
                 // SAFETY: inner child references index the node array (build invariant).
                 let node = unsafe { &*nodes.add(cur as usize) };
-                stats.node(node.num_children());
+                stats.node(node.num_children);
                 if PREFETCH_CHILD_LINE {
                     prefetch_child_line(node);
                 }
@@ -380,7 +364,7 @@ impl Bvh {
                         self.prefetch_leaves(node, mask);
                     }
                     if mask & (mask - 1) == 0 {
-                        cur = node.child()[mask.trailing_zeros() as usize];
+                        cur = node.child[mask.trailing_zeros() as usize];
                         continue;
                     }
                     let n = mask.count_ones() as usize;
@@ -458,12 +442,7 @@ impl Bvh {
     }
 
     #[inline(always)]
-    pub(crate) fn closest8<C: Counter, T: NodeTest8>(
-        &self,
-        nt: &T,
-        ray: &Ray,
-        stats: &mut C,
-    ) -> Option<Hit> {
+    fn closest8<C: Counter, T: NodeTest8>(&self, nt: &T, ray: &Ray, stats: &mut C) -> Option<Hit> {
         let r4 = nt.tri_ray(ray);
         let mut best = Best::new();
         let mut t_max = ray.t_max;
@@ -516,7 +495,7 @@ impl Bvh {
 
 impl Bvh {
     #[inline]
-    pub(crate) fn closest_hit8<C: Counter>(&self, ray: &Ray, stats: &mut C) -> Option<Hit> {
+    fn closest_hit8<C: Counter>(&self, ray: &Ray, stats: &mut C) -> Option<Hit> {
         stats.ray();
         if self.nodes8.is_empty() || !ray_ok(ray) {
             return None;
@@ -546,13 +525,13 @@ impl Bvh {
     }
 
     #[inline(never)]
-    pub(crate) fn closest8_portable_nostats(&self, ray: &Ray) -> Option<Hit> {
+    fn closest8_portable_nostats(&self, ray: &Ray) -> Option<Hit> {
         self.closest8(&Portable8(RayBoxes8::new(ray)), ray, &mut NoStats)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,popcnt,bmi1")]
-    pub(crate) unsafe fn closest8_avx2_nostats(&self, ray: &Ray) -> Option<Hit> {
+    unsafe fn closest8_avx2_nostats(&self, ray: &Ray) -> Option<Hit> {
         // SAFETY: AVX2 is enabled for this function (the caller detected it).
         unsafe { self.closest8_avx2(ray, &mut NoStats) }
     }
@@ -614,6 +593,38 @@ impl Bvh {
         self.all8(&nt, ray, out, s)
     }
 
+    /// The closest intersection with `ray` in `(t_min, t_max)`, or `None`. Both faces of a
+    /// triangle are hit. Invalid rays (non-finite, zero direction) hit nothing. Exact ties in
+    /// `t` go to the lower index in [`Bvh::triangles`] (with spatial splits: to one of the
+    /// tied triangles, [`BuildOptions`](crate::BuildOptions)). Traverses the 8-wide tree (AVX2 node
+    /// test where the CPU has it).
+    pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
+        // `closest_hit8` without a stats argument: no frame for it here, the kernel a tail call.
+        if self.nodes8.is_empty() || !ray_ok(ray) {
+            return None;
+        }
+        #[cfg(target_arch = "x86_64")]
+        if use_avx2() {
+            // SAFETY: AVX2 was detected.
+            return unsafe { self.closest8_avx2_nostats(ray) };
+        }
+        self.closest8_portable_nostats(ray)
+    }
+
+    /// [`Self::closest_hit`], adding the work done (8-wide nodes) to `stats`.
+    pub fn closest_hit_with_stats(&self, ray: &Ray, stats: &mut TraversalStats) -> Option<Hit> {
+        self.closest_hit8(ray, stats)
+    }
+
+    /// [`Self::closest_hit`] with the portable node test even where AVX2 exists: the twin the
+    /// tests hold the AVX2 path against.
+    pub fn closest_hit8_portable(&self, ray: &Ray) -> Option<Hit> {
+        if self.nodes8.is_empty() || !ray_ok(ray) {
+            return None;
+        }
+        self.closest8(&Portable8(RayBoxes8::new(ray)), ray, &mut NoStats)
+    }
+
     /// Whether anything intersects `ray` in `(t_min, t_max)` (occlusion / shadow rays). Stops
     /// at the first hit found, in no particular order.
     pub fn any_hit(&self, ray: &Ray) -> bool {
@@ -646,7 +657,7 @@ impl Bvh {
     }
 }
 
-/// Whether the CPU has AVX2, FMA, POPCNT and BMI1 (the quantised node test's FMA): detected once, then one load and compare per call
+/// Whether the CPU has AVX2, POPCNT and BMI1: detected once, then one load and compare per call
 /// (the two `is_x86_feature_detected!` were two cache reads and tests per ray).
 #[cfg(target_arch = "x86_64")]
 #[inline]
@@ -657,7 +668,6 @@ pub(crate) fn use_avx2() -> bool {
     #[cold]
     fn detect() -> bool {
         let yes = std::is_x86_feature_detected!("avx2")
-            && std::is_x86_feature_detected!("fma")
             && std::is_x86_feature_detected!("popcnt")
             && std::is_x86_feature_detected!("bmi1");
         AVX2.store(1 + yes as u8, Relaxed);

@@ -5,7 +5,7 @@
 //! ```text
 //! cargo build --release -p parallax-embree --features embree --example ray_cost
 //! target/release/examples/ray_cost SCENE EYE TARGET FOV_Y METHOD MODE [WIDTH HEIGHT]
-//!   METHOD: bvh | bvhx (the exact, unquantised 8-wide tree) | bvh4 | packet | packet4 | packet64 | embree1 | embree16 | stats (work counters) |
+//!   METHOD: bvh | bvh4 | packet | packet4 | packet64 | embree1 | embree16 | stats (work counters) |
 //!           any (`Bvh::any_hit`) | embree_occluded (`rtcOccluded1`) |
 //!           build (build times) | treehash (a hash of both trees, the blocks and the prim ids:
 //!           equal hashes = the same BVH) | a comma-separated list (interleaved A/B, best of 7)
@@ -180,11 +180,6 @@ fn tracer<'a>(
     let mut he = vec![None; 64];
     match method {
         "bvh" => Box::new(|c| c.iter().filter(|r| bvh.closest_hit(r).is_some()).count()),
-        "bvhx" => Box::new(|c| {
-            c.iter()
-                .filter(|r| bvh.closest_hit8_exact(r).is_some())
-                .count()
-        }),
         "bvh4" => Box::new(|c| c.iter().filter(|r| bvh.closest_hit4(r).is_some()).count()),
         "packet" => Box::new(move |c| {
             bvh.closest_hit_packet(c, &mut hb);
