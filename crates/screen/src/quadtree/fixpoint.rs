@@ -29,7 +29,9 @@
 //!   has the same run in both rows of a pair `2m`, `2m + 1`: one decode and one certificate
 //!   per node and pair of rows, `merged_triggers`); on x86_64 runs of level >= 2 four
 //!   pixels per step and two adjacent level-1 runs together, one pixel per lane
-//!   (`trigger_lanes`);
+//!   (`trigger_lanes`); with AVX2 the pair certificates of the runs of levels 1 to 3 are
+//!   taken eight nodes at a time and the scan visits only the runs left, by windows of 64
+//!   pixels (`merged_cert`);
 //! - a rebuild only recomputes the ancestors of the newly blocked pixels: every other node
 //!   has the same children and the same "may merge" answer as before. A recomputed node may
 //!   not merge (it covers a blocked pixel), so it is an AABB or empty;
@@ -247,6 +249,11 @@ fn merged_triggers(
     let cols = Columns::new(w, ctx.wf);
     let (wf, hf) = (ctx.wf, ctx.hf);
     let wu = w as usize;
+    // The pair certificates of runs of levels 1 to `MAX_LEVEL` eight nodes at a time in
+    // AVX2 lanes (`merged_cert`, the same answers), where the CPU has it.
+    #[cfg(target_arch = "x86_64")]
+    let lanes = super::merged_cert::available()
+        .then(|| super::merged_cert::LevelCols::new(&cols.xe, wf, hf));
     let run = RunCtx {
         cols: &cols,
         wf,
@@ -276,8 +283,48 @@ fn merged_triggers(
                 ((j + 1 + !row1.is_empty() as u32) as f32) / hf,
             );
             let (mut newly0, mut newly1) = (Vec::new(), Vec::new());
+            // With AVX2, whole windows of 64 pixels of the pair (up to `lanes_end`) at a
+            // time: the pixels still to scan (`todo`: the runs of levels 1 to `MAX_LEVEL`
+            // that the lanes did not certify, and the runs of higher levels) of the window
+            // that ends at `wend` (`merged_cert::uncertified64`).
+            #[cfg(target_arch = "x86_64")]
+            let pair = match &lanes {
+                Some(lc) if !row1.is_empty() => {
+                    super::merged_cert::PairRows::new(levels, lc, j, y_pair, (wf, hf), (fr0, fr1))
+                }
+                _ => None,
+            };
+            #[cfg(target_arch = "x86_64")]
+            let lanes_end = pair.as_ref().map_or(0, |p| p.end);
+            #[cfg(target_arch = "x86_64")]
+            let (mut todo, mut wend) = (0u64, 0usize);
             let mut i = 0;
             while i < wu {
+                #[cfg(target_arch = "x86_64")]
+                if i < lanes_end {
+                    if i >= wend {
+                        let w0 = i & !63;
+                        // SAFETY: `pair` is `Some` only where `available()`; `w0 + 64 <=
+                        // lanes_end`.
+                        todo = unsafe {
+                            super::merged_cert::uncertified64(
+                                &er[w0..w0 + 64],
+                                pair.as_ref().unwrap(),
+                                w0,
+                            )
+                        };
+                        wend = w0 + 64;
+                    }
+                    // `i` is at a run's end or a window's start: the next pixel to scan is
+                    // the start of a run.
+                    let w0 = wend - 64;
+                    let rest = todo & (u64::MAX << (i - w0));
+                    if rest == 0 {
+                        i = wend;
+                        continue;
+                    }
+                    i = w0 + rest.trailing_zeros() as usize;
+                }
                 let l = er[i];
                 if l == NO_PLANE || l == 0 {
                     // Eight levels of 0 or `NO_PLANE` at once (each byte `b` is `(b & 1)
@@ -295,6 +342,7 @@ fn merged_triggers(
                 let l = l as u32;
                 let (qx, qy) = (i as u32 >> l, j >> l);
                 let lv = &levels[l as usize];
+                debug_assert_eq!(i % (1 << l), 0, "a run starts at its node's first column");
                 let p = decode_plane(lv.nodes[(qy * lv.w + qx) as usize], l, qx, qy, wf, hf);
                 let end = (((qx + 1) << l) as usize).min(wu);
                 let t_pair = proxy_safe_front(p, (cols.xe[i], cols.xe[end]), y_pair);

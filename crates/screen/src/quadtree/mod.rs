@@ -101,6 +101,8 @@ mod merge_lanes;
 mod merge_rows;
 #[cfg(target_arch = "x86_64")]
 mod merge_rows8;
+#[cfg(target_arch = "x86_64")]
+mod merged_cert;
 pub mod node;
 mod prune;
 mod setup;
