@@ -21,6 +21,13 @@
 //!   packet — every lane certainly outside (skipped) or certainly inside (no per-lane edge
 //!   test) — with a rigorous error bound; partial packets take the per-lane test below. The
 //!   decisions equal the watertight test's, so the buffer is unchanged (`tests/affine.rs`).
+//! - **Edges first at 1 spp** (`edges_first`, the full 1-spp packets of `run_setup`): a 1-spp
+//!   packet is a block of 4 x 4 pixels, and most triangles that reach it cover none of its
+//!   lanes, while few fail the depth test (`g . d >= best`) on every lane. So there the edge
+//!   values come before `g . d`, and a triangle with no valid lane within or above the band
+//!   is skipped without its depth test (`kernel.rs` `edge_reach`); per lane the same compares
+//!   of the same values decide, in another order. At 16 spp (one pixel per packet, most later
+//!   triangles behind the best) the depth test stays first.
 //! - **Lazy band.** The tile's triangles are set up with a crude conservative band (enough
 //!   for the corner classification); a triangle's full band (and its depth condition `rho`)
 //!   is computed when a packet first enters its run, for the whole run four triangles at a
@@ -60,7 +67,7 @@ use parallax_core::simd::Lanes;
 
 use super::affine::{PacketBox, PacketClass};
 use super::bands::refine_run;
-use super::kernel::{PacketSlab, SetupWork, dot_n, edge_band, min_edge};
+use super::kernel::{PacketSlab, SetupWork, dot_n, edge_band, edge_reach, min_edge};
 use super::tri::{RHO_MAX, TileTris, exact_t};
 use crate::cast::lanes16::LaneReduce;
 use crate::cast::packet::{ClosestN, MAX_LANES, RaysN};
@@ -78,6 +85,7 @@ pub(super) fn closest_edges<L: LaneReduce>(
     sign: f32,
     slack: f32,
     pbox: Option<&PacketBox>,
+    edges_first: bool,
     work: &mut SetupWork,
 ) -> ClosestN {
     let valid = rays.valid;
@@ -191,13 +199,24 @@ pub(super) fn closest_edges<L: LaneReduce>(
                     work.packet_out += 1;
                     continue;
                 }
-                let gd = dot_n(tr.g, dx, dy, dz);
                 if tr.rho > RHO_MAX {
                     // Ill-conditioned: the watertight test decides coverage and depth.
                     changed |=
                         ill_conditioned(rays, blocks, tr, valid, dinf, &mut best, &mut out, work);
                     continue;
                 }
+                // Edges first (module docs): the triangle is skipped when no valid lane is
+                // within or above the band, before its `g . d`.
+                let edges = if edges_first && class != PacketClass::In && !tr.all_in {
+                    let e = edge_reach(tr, rays.d, dinf, valid, 7 & !skip);
+                    if e.1 == 0 {
+                        continue;
+                    }
+                    Some(e)
+                } else {
+                    None
+                };
+                let gd = dot_n(tr.g, dx, dy, dz);
                 let ge = gd.ge(best);
                 let cand = L::bits(ge) & valid;
                 if cand == 0 {
@@ -207,6 +226,9 @@ pub(super) fn closest_edges<L: LaneReduce>(
                 let (inn_m, mut unsure) = if class == PacketClass::In {
                     work.packet_in += 1;
                     (ge, 0)
+                } else if let Some((inside, maybe)) = edges {
+                    let inn_m = L::and(ge, inside);
+                    (inn_m, maybe & cand & !L::bits(inn_m))
                 } else {
                     edge_band(tr, rays.d, dinf, ge, cand, 7 & !skip)
                 };

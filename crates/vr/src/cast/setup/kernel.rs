@@ -68,6 +68,26 @@ pub(super) fn edge_band<L: Lanes>(
     (inside, unsure)
 }
 
+/// [`edge_band`] before the depth test (`edges_first` in `cast/setup/edges.rs`): the mask
+/// of lanes above the band (`m > b`) and the bits of the valid lanes `valid` within or above it
+/// (`m >= -b`), of the edges `need`. [`edge_band`]'s `(inside, unsure)` for candidates `cand`
+/// (bits within `valid`, mask `ge`) are `(ge & above, reach & cand & !bits(ge & above))`:
+/// the same compares of the same `m` and `b`. With `b = bound |d|_inf >= 0` (or NaN) a lane
+/// above the band is within reach, so no bit of `reach` means no lane inside or unsure.
+#[inline(always)]
+pub(super) fn edge_reach<L: Lanes>(
+    tr: &TriSetup,
+    d: [L; 3],
+    dinf: f32,
+    valid: u32,
+    need: u32,
+) -> (L::M, u32) {
+    debug_assert!(!tr.all_in && !(tr.bound < 0.0));
+    let m = min_edge_of(&tr.n, d, need);
+    let b = L::splat(tr.bound * dinf);
+    (m.gt(b), L::bits(m.ge(L::splat(0.0) - b)) & valid)
+}
+
 /// Entry and exit `t` of one slab (`lo`, `hi` relative to the origin).
 #[inline(always)]
 pub(super) fn slab<L: Lanes>(lo: f32, hi: f32, inv: L, neg: L::M) -> (L, L) {
@@ -535,5 +555,80 @@ mod tests {
             Z16::load16(&dl[2]),
         ];
         PacketSlab::<Z16>::with_interval(d).interval_reaches16(rb, lim)
+    }
+
+    /// [`edge_reach`] (the edges-first order of `edges.rs`) decides every lane as
+    /// [`edge_band`]: the inside mask and the band's bits from its two results, and no lane
+    /// inside or in the band where it reaches none; on random covectors, directions, bands
+    /// (zero, tiny, huge, infinite), edge subsets and candidate masks, with huge covectors
+    /// and directions whose products overflow (infinite and NaN edge values).
+    #[test]
+    fn edge_reach_equals_edge_band() {
+        let mut f = uniform(0x5851_f42d_4c95_7f2d);
+        let (mut skipped, mut inside_any, mut unsure_any, mut nan_lanes) = (0, 0, 0, 0);
+        for i in 0..20_000 {
+            let big = if i % 7 == 0 { 1e30 } else { 1.0 };
+            let n = [0, 1, 2].map(|_| [f(), f(), f()].map(|c| (c - 0.5) * 2.0 * big));
+            let bound = match i % 5 {
+                0 => 0.0,
+                1 => f32::INFINITY,
+                2 => f() * 1e-6,
+                _ => f() * 0.1,
+            };
+            let tr = TriSetup {
+                n,
+                g: [0.0; 3],
+                tri: 0,
+                src: 0,
+                bound,
+                rho: f32::NAN,
+                all_in: false,
+            };
+            let scale = if i % 11 == 0 { 1e10 } else { 1.0 };
+            let valid = if i % 3 == 0 {
+                (f() * 65536.0) as u32 & 0xffff
+            } else {
+                0xffff
+            };
+            let base = [f() - 0.5, f() - 0.5, f() - 0.5];
+            let d = [0, 1, 2].map(|a| {
+                V16::from_fn(|l| {
+                    if valid >> l & 1 == 0 {
+                        0.0
+                    } else {
+                        (base[a] + (f() - 0.5) * 0.2) * scale
+                    }
+                })
+            });
+            let dinf = (0..16).fold(0.0f32, |m, l| {
+                m.max(
+                    d[0].get(l)
+                        .abs()
+                        .max(d[1].get(l).abs())
+                        .max(d[2].get(l).abs()),
+                )
+            });
+            let ge = V16::from_fn(|_| if f() < 0.8 { 1.0 } else { 0.0 }).gt(V16::splat(0.0));
+            let cand = V16::bits(ge) & valid;
+            let need = 1 + (f() * 7.0) as u32 % 7;
+            let (inside, unsure) = edge_band(&tr, d, dinf, ge, cand, need);
+            let (above, reach) = edge_reach(&tr, d, dinf, valid, need);
+            let inn = V16::and(ge, above);
+            assert_eq!(V16::bits(inn), V16::bits(inside), "{tr:?} {need}");
+            assert_eq!(reach & cand & !V16::bits(inn), unsure, "{tr:?} {need}");
+            if reach == 0 {
+                assert_eq!((V16::bits(inside) & valid, unsure), (0, 0), "{tr:?}");
+                skipped += 1;
+            }
+            inside_any += (V16::bits(inside) & valid != 0) as u32;
+            unsure_any += (unsure != 0) as u32;
+            let m = min_edge_of(&tr.n, d, need);
+            nan_lanes += (0..16).filter(|&l| m.get(l).is_nan()).count();
+        }
+        assert!(
+            skipped > 1000 && inside_any > 1000 && unsure_any > 100,
+            "{skipped} {inside_any} {unsure_any}"
+        );
+        assert!(nan_lanes > 0, "no NaN edge value tested");
     }
 }

@@ -344,11 +344,13 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
     }
     // The set-up kernel on a packet (`rays`, `pbox`).
     macro_rules! closest {
-        ($rays:expr, $pbox:expr) => {
+        ($rays:expr, $pbox:expr, $first:expr) => {
             if FULL {
                 full::closest_full($rays, blocks, &*tt, axis, sign, slack, &mut work)
             } else {
-                edges::closest_edges($rays, blocks, tt, axis, sign, slack, $pbox, &mut work)
+                edges::closest_edges(
+                    $rays, blocks, tt, axis, sign, slack, $pbox, $first, &mut work,
+                )
             }
         };
     }
@@ -366,7 +368,8 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
         if let Some((rays, (lo, hi))) = spp1 {
             let pbox = frame.and_then(|fr| PacketBox::new(&fr, lo.x, hi.x, lo.y, hi.y));
             rays_n += n as u64;
-            let c = closest!(&rays, pbox.as_ref());
+            // (Edges first: `edges.rs`; the other packets keep the depth test first.)
+            let c = closest!(&rays, pbox.as_ref(), true);
             // SAFETY: as below.
             unsafe { out.spp1(&samples[j..j + n], &c) };
             j += n;
@@ -414,7 +417,7 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
                 }
             }
         }
-        let c = closest!(&rays, pbox.as_ref());
+        let c = closest!(&rays, pbox.as_ref(), false);
         // One sample's consecutive subsamples: `pair` maps consecutive `j` to `(sample, j % spp)`
         // (`test_tile_setup`), so a last lane at `k0 + n - 1` of the first lane's sample means
         // no wrap to the next sample in between.
