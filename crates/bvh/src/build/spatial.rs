@@ -465,7 +465,7 @@ fn spatial_partition(
             min: r.min(),
             max: r.max(),
         };
-        let (b0, b1) = (s.grid.bins3(bx.min)[a], s.grid.bins3(bx.max)[a]);
+        let (b0, b1) = (s.grid.bin(bx.min[a], a), s.grid.bin(bx.max[a], a));
         if b1 < s.split {
             refs[w] = r;
             w += 1;
