@@ -276,7 +276,9 @@ impl Grid {
         g
     }
 
-    #[inline(always)]
+    /// The bin of coordinate `x` on axis `a`: the scalar definition, which the tests hold
+    /// [`Grid::bins3`] and [`Grid::at_or_after`] to.
+    #[cfg(test)]
     fn bin(&self, x: f32, a: usize) -> usize {
         let i = (((x - self.lo[a]) * self.scale[a]) as i32).clamp(0, self.bins as i32 - 1);
         i as usize & (SPATIAL_BINS - 1)
@@ -295,6 +297,16 @@ impl Grid {
             i[1] as usize & (SPATIAL_BINS - 1),
             i[2] as usize & (SPATIAL_BINS - 1),
         ]
+    }
+
+    /// Bit `a` set when [`Grid::bin`] of `p[a]` is `split` or more (`split` in `1..bins`):
+    /// `(f as i32).clamp(0, bins - 1) >= split` holds exactly when `f >= split` (the
+    /// truncation of `f < split` is below `split`, a NaN bins to 0 and compares false), with
+    /// `f` the same subtraction and product as in [`Grid::bin`], in lanes.
+    #[inline(always)]
+    fn at_or_after(&self, p: Vec3A, split: usize) -> u32 {
+        let f = (p - self.lo_v) * self.scale_v;
+        f.cmpge(Vec3A::splat(split as f32)).bitmask()
     }
 
     /// The plane between bins `i - 1` and `i`.
@@ -455,6 +467,7 @@ fn spatial_partition(
     ctx: &Ctx,
 ) -> (usize, usize) {
     let (a, pos) = (s.axis, s.grid.plane(s.split, s.axis));
+    let bit = 1u32 << a;
     let (mut lb, mut rb) = (s.left, s.right);
     let (mut nl, mut nr) = (s.n_l as f32, s.n_r as f32);
     let mut right: Vec<PrimRef> = Vec::with_capacity(s.n_r as usize);
@@ -465,13 +478,13 @@ fn spatial_partition(
             min: r.min(),
             max: r.max(),
         };
-        let (b0, b1) = (s.grid.bin(bx.min[a], a), s.grid.bin(bx.max[a], a));
-        if b1 < s.split {
+        // `bin(max) < split`, `bin(min) >= split` ([`Grid::at_or_after`]).
+        if s.grid.at_or_after(bx.max, s.split) & bit == 0 {
             refs[w] = r;
             w += 1;
             continue;
         }
-        if b0 >= s.split {
+        if s.grid.at_or_after(bx.min, s.split) & bit != 0 {
             right.push(r);
             continue;
         }

@@ -148,6 +148,76 @@ fn lane_bins_equal_the_scalar_bins() {
 }
 
 #[test]
+fn side_of_plane_in_lanes_equals_the_scalar_bins() {
+    let mut rnd = uniform(9, 40.0);
+    let special = [
+        0.0,
+        -0.0,
+        4.0,
+        8.0,
+        15.999_999,
+        16.0,
+        -1.0,
+        3e9,
+        -3e9,
+        f32::NAN,
+    ];
+    let (mut after, mut before) = (0, 0);
+    for bins in [2usize, 3, 7, 16] {
+        let bounds = Aabb::new(Vec3::new(-3.0, 0.0, -1e3), Vec3::new(5.0, 16.0, 7e3));
+        let grid = Grid::new(&bounds, bins);
+        let mut check = |p: Vec3| {
+            for split in 1..bins {
+                let m = grid.at_or_after(Vec3A::from(p), split);
+                for a in 0..3 {
+                    let want = grid.bin(p[a], a) >= split;
+                    assert_eq!(m >> a & 1 == 1, want, "{bins} {split} {p:?} {a}");
+                    if want { after += 1 } else { before += 1 }
+                }
+            }
+        };
+        for &x in &special {
+            check(Vec3::new(x, x, x));
+        }
+        for _ in 0..20_000 {
+            check(Vec3::new(rnd() * 0.2, rnd() * 0.4 + 8.0, rnd() * 200.0));
+        }
+        // Values on the planes themselves.
+        for i in 0..=bins {
+            check(Vec3::new(
+                grid.plane(i, 0),
+                grid.plane(i, 1),
+                grid.plane(i, 2),
+            ));
+        }
+    }
+    // Coordinates whose `f` is exactly the split index: the floats next to where the
+    // boundary lies (positive boxes, so that stepping the bits steps the value).
+    let mut exact = 0;
+    for (bins, lo, hi) in [
+        (16, 1.0, 9.0),
+        (7, 2.5, 1000.0),
+        (11, 0.125, 0.75),
+        (5, 3.0, 4.0),
+    ] {
+        let grid = Grid::new(&Aabb::new(Vec3::splat(lo), Vec3::splat(hi)), bins);
+        for split in 1..bins {
+            let x0 = lo + split as f32 / grid.scale[0];
+            for k in -64i32..=64 {
+                let x = f32::from_bits(x0.to_bits().wrapping_add_signed(k));
+                exact += usize::from((x - grid.lo[0]) * grid.scale[0] == split as f32);
+                let m = grid.at_or_after(Vec3A::splat(x), split);
+                assert_eq!(m & 1 == 1, grid.bin(x, 0) >= split, "{bins} {split} {x}");
+            }
+        }
+    }
+    assert!(
+        after > 100_000 && before > 100_000 && exact > 4,
+        "{after} {before} {exact}"
+    );
+}
+
+#[test]
 fn sweep_of_entry_and_exit_boxes_equals_clipping_to_every_bin() {
     let mut rnd = uniform(11, 1.0);
     let (mut compared, mut crossing) = (0, 0);
