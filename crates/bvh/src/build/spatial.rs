@@ -338,9 +338,9 @@ fn bin_spatial(refs: &[PrimRef], grid: &Grid) -> SBins {
             max: r.max(),
         };
         let (b0, b1) = (grid.bins3(bx.min), grid.bins3(bx.max));
-        bin_axis::<0>(bx, b0[0], b1[0], b_x, grid);
-        bin_axis::<1>(bx, b0[1], b1[1], b_y, grid);
-        bin_axis::<2>(bx, b0[2], b1[2], b_z, grid);
+        bin_axis(bx, b0[0], b1[0], b_x);
+        bin_axis(bx, b0[1], b1[1], b_y);
+        bin_axis(bx, b0[2], b1[2], b_z);
     }
     bins
 }
@@ -349,18 +349,10 @@ fn bin_spatial(refs: &[PrimRef], grid: &Grid) -> SBins {
 /// box) in the bin of its minimum, an exit (and its box) in the bin of its maximum. The sweep
 /// clips the unions to the plane ([`sweep_axis`]), which gives the boxes of the reference's
 /// box clipped to every bin it crosses (module docs: the binning does not clip the triangle)
-/// without visiting those bins.
+/// without visiting those bins. An axis of zero extent (scale 0) is binned too, all in bin 0,
+/// and the sweep skips it.
 #[inline(always)]
-fn bin_axis<const A: usize>(
-    bx: BoxA,
-    b0: usize,
-    b1: usize,
-    bins: &mut [SBin; SPATIAL_BINS],
-    grid: &Grid,
-) {
-    if grid.scale[A] == 0.0 {
-        return;
-    }
+fn bin_axis(bx: BoxA, b0: usize, b1: usize, bins: &mut [SBin; SPATIAL_BINS]) {
     let e = &mut bins[b0];
     e.enter += 1;
     e.enter_box = e.enter_box.union(bx);
