@@ -8,9 +8,10 @@
 //! - if `λ > α · A(root)` (§4.5, `split_alpha`), the node has at least [`MIN_SPATIAL_REFS`]
 //!   references and duplication budget is left, a spatial split: up to `SPATIAL_BINS`
 //!   equal-width bins per axis over the node's box (`4 + n / 20`, as the object bins); each
-//!   reference records an entry in the bin of its minimum and an exit in the bin of its
-//!   maximum, and grows every bin it crosses by its box clipped to the bin's slab; a sweep
-//!   gives `A(left) N(entries left) + A(right) N(exits right)` per plane (§4.2);
+//!   reference records an entry (and its box) in the bin of its minimum and an exit (and its
+//!   box) in the bin of its maximum; a sweep gives `A(left) N(entries left) + A(right)
+//!   N(exits right)` per plane (§4.2), each side's box being the union of the references' boxes
+//!   clipped to the side's bins (computed from the per-bin unions, `sweep_axis`);
 //! - the cheaper of the two (or a leaf) is taken. A spatial split sends each reference that
 //!   straddles the plane to both sides with "chopped" boxes (the box of the triangle's part on
 //!   that side, intersected with the reference's box, §4.2), unless moving it whole to one side
@@ -42,7 +43,7 @@ use rayon::prelude::*;
 
 use super::{
     BNode, BTree, Bins, BoxA, MAX_SAH_DEPTH, PAR_BIN_THRESHOLD, PrimRef, UNUSED, find_object_split,
-    median_split, new_bins, node_bounds, object_partition, sah_count,
+    median_split, new_bins, node_bounds, object_partition, sah_count, trunc3,
 };
 use crate::options::BuildOptions;
 
@@ -219,15 +220,19 @@ fn split(
     Some((mid, n - mid))
 }
 
+/// One spatial bin of one axis: the references whose box starts in it (`enter`, and the union
+/// of their boxes) and those whose box ends in it (`exit`, likewise).
 #[derive(Clone, Copy)]
 struct SBin {
-    bounds: BoxA,
+    enter_box: BoxA,
+    exit_box: BoxA,
     enter: u32,
     exit: u32,
 }
 
 const EMPTY_SBIN: SBin = SBin {
-    bounds: BoxA::EMPTY,
+    enter_box: BoxA::EMPTY,
+    exit_box: BoxA::EMPTY,
     enter: 0,
     exit: 0,
 };
@@ -241,6 +246,11 @@ struct Grid {
     lo: [f32; 3],
     width: [f32; 3],
     scale: [f32; 3],
+    /// `lo` and `scale` in lanes (`w` = 0, so that a reference's `w` lane, its id bits, gives
+    /// 0 and never a denormal), and `bins - 1` in every lane: [`Grid::bins3`].
+    lo_v: Vec3A,
+    scale_v: Vec3A,
+    last_v: Vec3A,
 }
 
 impl Grid {
@@ -251,6 +261,9 @@ impl Grid {
             lo: bounds.min.to_array(),
             width: [0.0; 3],
             scale: [0.0; 3],
+            lo_v: Vec3A::ZERO,
+            scale_v: Vec3A::ZERO,
+            last_v: Vec3A::splat((bins - 1) as f32),
         };
         for a in 0..3 {
             if e[a] > 0.0 {
@@ -258,13 +271,42 @@ impl Grid {
                 g.scale[a] = bins as f32 * (1.0 - 1e-6) / e[a];
             }
         }
+        g.lo_v = Vec3A::from_vec4(bounds.min.extend(0.0));
+        g.scale_v = Vec3A::from_vec4(Vec3::from(g.scale).extend(0.0));
         g
     }
 
-    #[inline(always)]
+    /// The bin of coordinate `x` on axis `a`: the scalar definition, which the tests hold
+    /// [`Grid::bins3`] and [`Grid::at_or_after`] to.
+    #[cfg(test)]
     fn bin(&self, x: f32, a: usize) -> usize {
         let i = (((x - self.lo[a]) * self.scale[a]) as i32).clamp(0, self.bins as i32 - 1);
         i as usize & (SPATIAL_BINS - 1)
+    }
+
+    /// [`Grid::bin`] of the three coordinates of `p` at once, in lanes: the same subtraction
+    /// and product, then `last < f ? last : f` (keeps a NaN) and `x > 0 ? x : 0` (turns it and
+    /// negatives into 0) before the truncation, which is `(f as i32).clamp(0, bins - 1)` for
+    /// every `f` (as the object binner's `Binner::bin`).
+    #[inline(always)]
+    fn bins3(&self, p: Vec3A) -> [usize; 3] {
+        let f = (p - self.lo_v) * self.scale_v;
+        let i = trunc3(self.last_v.min(f).max(Vec3A::ZERO));
+        [
+            i[0] as usize & (SPATIAL_BINS - 1),
+            i[1] as usize & (SPATIAL_BINS - 1),
+            i[2] as usize & (SPATIAL_BINS - 1),
+        ]
+    }
+
+    /// Bit `a` set when [`Grid::bin`] of `p[a]` is `split` or more (`split` in `1..bins`):
+    /// `(f as i32).clamp(0, bins - 1) >= split` holds exactly when `f >= split` (the
+    /// truncation of `f < split` is below `split`, a NaN bins to 0 and compares false), with
+    /// `f` the same subtraction and product as in [`Grid::bin`], in lanes.
+    #[inline(always)]
+    fn at_or_after(&self, p: Vec3A, split: usize) -> u32 {
+        let f = (p - self.lo_v) * self.scale_v;
+        f.cmpge(Vec3A::splat(split as f32)).bitmask()
     }
 
     /// The plane between bins `i - 1` and `i`.
@@ -291,47 +333,38 @@ fn bin_spatial(refs: &[PrimRef], grid: &Grid) -> SBins {
     let mut bins = [[EMPTY_SBIN; SPATIAL_BINS]; 3];
     let [b_x, b_y, b_z] = &mut bins;
     for r in refs {
-        bin_axis::<0>(r, b_x, grid);
-        bin_axis::<1>(r, b_y, grid);
-        bin_axis::<2>(r, b_z, grid);
+        let bx = BoxA {
+            min: r.min(),
+            max: r.max(),
+        };
+        let (b0, b1) = (grid.bins3(bx.min), grid.bins3(bx.max));
+        bin_axis(bx, b0[0], b1[0], b_x);
+        bin_axis(bx, b0[1], b1[1], b_y);
+        bin_axis(bx, b0[2], b1[2], b_z);
     }
     bins
 }
 
-/// Bins one reference on axis `A`: an entry, an exit, and in every bin it crosses its box
-/// clipped to the bin's slab (module docs: the binning does not clip the triangle).
+/// Bins one reference (box `bx`, from bin `b0` to bin `b1`) on axis `A`: an entry (and its
+/// box) in the bin of its minimum, an exit (and its box) in the bin of its maximum. The sweep
+/// clips the unions to the plane ([`sweep_axis`]), which gives the boxes of the reference's
+/// box clipped to every bin it crosses (module docs: the binning does not clip the triangle)
+/// without visiting those bins. An axis of zero extent (scale 0) is binned too, all in bin 0,
+/// and the sweep skips it.
 #[inline(always)]
-fn bin_axis<const A: usize>(r: &PrimRef, bins: &mut [SBin; SPATIAL_BINS], grid: &Grid) {
-    if grid.scale[A] == 0.0 {
-        return;
-    }
-    let bx = BoxA {
-        min: r.min(),
-        max: r.max(),
-    };
-    let (b0, b1) = (grid.bin(bx.min[A], A), grid.bin(bx.max[A], A));
-    bins[b0].enter += 1;
-    bins[b1].exit += 1;
-    if b0 == b1 {
-        bins[b0].bounds = bins[b0].bounds.union(bx);
-        return;
-    }
-    for i in b0..=b1 {
-        let mut p = bx;
-        if i > b0 {
-            p.min[A] = grid.plane(i, A).max(bx.min[A]);
-        }
-        if i < b1 {
-            p.max[A] = grid.plane(i + 1, A).min(bx.max[A]);
-        }
-        let bin = &mut bins[i & (SPATIAL_BINS - 1)];
-        bin.bounds = bin.bounds.union(p);
-    }
+fn bin_axis(bx: BoxA, b0: usize, b1: usize, bins: &mut [SBin; SPATIAL_BINS]) {
+    let e = &mut bins[b0];
+    e.enter += 1;
+    e.enter_box = e.enter_box.union(bx);
+    let x = &mut bins[b1];
+    x.exit += 1;
+    x.exit_box = x.exit_box.union(bx);
 }
 
 fn merge_sbins(mut a: SBins, b: SBins) -> SBins {
     for (x, y) in a.iter_mut().flatten().zip(b.iter().flatten()) {
-        x.bounds = x.bounds.union(y.bounds);
+        x.enter_box = x.enter_box.union(y.enter_box);
+        x.exit_box = x.exit_box.union(y.exit_box);
         x.enter += y.enter;
         x.exit += y.exit;
     }
@@ -352,38 +385,66 @@ fn find_spatial_split(refs: &[PrimRef], bounds: &Aabb, block: usize) -> Option<S
         if grid.scale[axis] == 0.0 {
             continue;
         }
-        let nb = grid.bins;
-        let mut right = [(BoxA::EMPTY, 0u32, 0.0f32); SPATIAL_BINS];
-        let (mut acc, mut cnt) = (BoxA::EMPTY, 0u32);
-        for i in (1..nb).rev() {
-            acc = acc.union(bins[i].bounds);
-            cnt += bins[i].exit;
-            right[i] = (acc, cnt, acc.aabb().surface_area() * sah_count(cnt, block));
-        }
-        let (mut acc, mut cnt) = (BoxA::EMPTY, 0u32);
-        for i in 1..nb {
-            acc = acc.union(bins[i - 1].bounds);
-            cnt += bins[i - 1].enter;
-            let (rb, rn, rc) = right[i];
-            if cnt == 0 || rn == 0 {
-                continue;
-            }
-            let cost = acc.aabb().surface_area() * sah_count(cnt, block) + rc;
-            if best.as_ref().is_none_or(|b| cost < b.cost) {
-                best = Some(SpatialSplit {
-                    cost,
-                    axis,
-                    split: i,
-                    grid,
-                    left: acc,
-                    right: rb,
-                    n_l: cnt,
-                    n_r: rn,
-                });
-            }
-        }
+        sweep_axis(bins, &grid, axis, block, &mut best);
     }
     best
+}
+
+/// The plane sweep over the bins of one axis; keeps the cheapest split in `best`.
+///
+/// The box of the left side at plane `i` is the union of the references' boxes clipped to
+/// the bins `0..i`: a reference that ends left of the plane (`exit` bin `< i`) adds its whole
+/// box; one that starts left and ends right adds its box with the maximum on the axis lowered
+/// to the plane. Since `min(max(a, b), p) = max(min(a, p), min(b, p))`, that is the union of
+/// the exit boxes of bins `0..i` and the union of the entry boxes of bins `0..i` with its
+/// maximum lowered to the plane (a box clipped that way lies inside the reference's whole box
+/// when the reference also ends left). The right side mirrors it. These are the boxes (and
+/// the costs) of clipping each reference to every bin it crosses, without visiting those bins.
+fn sweep_axis(
+    bins: &[SBin; SPATIAL_BINS],
+    grid: &Grid,
+    axis: usize,
+    block: usize,
+    best: &mut Option<SpatialSplit>,
+) {
+    let nb = grid.bins;
+    let mut right = [(BoxA::EMPTY, 0u32, 0.0f32); SPATIAL_BINS];
+    let (mut whole, mut cut, mut cnt) = (BoxA::EMPTY, BoxA::EMPTY, 0u32);
+    for i in (1..nb).rev() {
+        whole = whole.union(bins[i].enter_box);
+        cut = cut.union(bins[i].exit_box);
+        cnt += bins[i].exit;
+        let mut c = cut;
+        c.min[axis] = c.min[axis].max(grid.plane(i, axis));
+        let acc = whole.union(c);
+        right[i] = (acc, cnt, acc.aabb().surface_area() * sah_count(cnt, block));
+    }
+    let (mut whole, mut cut, mut cnt) = (BoxA::EMPTY, BoxA::EMPTY, 0u32);
+    for i in 1..nb {
+        whole = whole.union(bins[i - 1].exit_box);
+        cut = cut.union(bins[i - 1].enter_box);
+        cnt += bins[i - 1].enter;
+        let (rb, rn, rc) = right[i];
+        if cnt == 0 || rn == 0 {
+            continue;
+        }
+        let mut c = cut;
+        c.max[axis] = c.max[axis].min(grid.plane(i, axis));
+        let acc = whole.union(c);
+        let cost = acc.aabb().surface_area() * sah_count(cnt, block) + rc;
+        if best.as_ref().is_none_or(|b| cost < b.cost) {
+            *best = Some(SpatialSplit {
+                cost,
+                axis,
+                split: i,
+                grid: *grid,
+                left: acc,
+                right: rb,
+                n_l: cnt,
+                n_r: rn,
+            });
+        }
+    }
 }
 
 /// Applies the spatial split `s` to `refs[..n]`: references entirely left of the plane stay
@@ -398,6 +459,7 @@ fn spatial_partition(
     ctx: &Ctx,
 ) -> (usize, usize) {
     let (a, pos) = (s.axis, s.grid.plane(s.split, s.axis));
+    let bit = 1u32 << a;
     let (mut lb, mut rb) = (s.left, s.right);
     let (mut nl, mut nr) = (s.n_l as f32, s.n_r as f32);
     let mut right: Vec<PrimRef> = Vec::with_capacity(s.n_r as usize);
@@ -408,13 +470,13 @@ fn spatial_partition(
             min: r.min(),
             max: r.max(),
         };
-        let (b0, b1) = (s.grid.bin(bx.min[a], a), s.grid.bin(bx.max[a], a));
-        if b1 < s.split {
+        // `bin(max) < split`, `bin(min) >= split` ([`Grid::at_or_after`]).
+        if s.grid.at_or_after(bx.max, s.split) & bit == 0 {
             refs[w] = r;
             w += 1;
             continue;
         }
-        if b0 >= s.split {
+        if s.grid.at_or_after(bx.min, s.split) & bit != 0 {
             right.push(r);
             continue;
         }
@@ -516,84 +578,5 @@ fn split_box_axis<const A: usize>(tri: &[Vec3A; 3], bx: BoxA, pos: f32) -> (BoxA
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Uniform values in `[-half, half)` from a 32-bit LCG.
-    fn uniform(seed: u32, half: f32) -> impl FnMut() -> f32 {
-        let mut s = seed;
-        move || {
-            s = s.wrapping_mul(747796405).wrapping_add(2891336453);
-            (s >> 8) as f32 / (1 << 24) as f32 * 2.0 * half - half
-        }
-    }
-
-    /// A random triangle and its bounding box.
-    fn triangle_and_box(rnd: &mut impl FnMut() -> f32) -> ([Vec3; 3], BoxA) {
-        let mut corner = || Vec3::new(rnd(), rnd(), rnd());
-        let tri = [corner(), corner(), corner()];
-        let bx = BoxA {
-            min: Vec3A::from(tri[0].min(tri[1]).min(tri[2])),
-            max: Vec3A::from(tri[0].max(tri[1]).max(tri[2])),
-        };
-        (tri, bx)
-    }
-
-    #[test]
-    fn split_boxes_contain_the_triangle_parts() {
-        let mut rnd = uniform(3, 100.0);
-        for _ in 0..20_000 {
-            let (tri, bx) = triangle_and_box(&mut rnd);
-            let a = (rnd().abs() as usize) % 3;
-            let pos = rnd();
-            let (l, r) = split_box(&tri, bx, a, pos);
-            // Points of the triangle (barycentric samples, in f64) lie in the box of their side.
-            for i in 0..=16 {
-                for j in 0..=16 - i {
-                    let (u, v) = (i as f64 / 16.0, j as f64 / 16.0);
-                    let p: [f64; 3] = std::array::from_fn(|k| {
-                        (1.0 - u - v) * tri[0][k] as f64
-                            + u * tri[1][k] as f64
-                            + v * tri[2][k] as f64
-                    });
-                    let inside = |b: BoxA| {
-                        (0..3).all(|k| b.min[k] as f64 <= p[k] && p[k] <= b.max[k] as f64)
-                    };
-                    if p[a] <= pos as f64 {
-                        assert!(inside(l), "{tri:?} {a} {pos} {p:?}");
-                    }
-                    if p[a] >= pos as f64 {
-                        assert!(inside(r), "{tri:?} {a} {pos} {p:?}");
-                    }
-                }
-            }
-        }
-    }
-
-    #[test]
-    fn crossing_points_on_the_plane_lie_in_both_boxes() {
-        // The exact crossing of each edge (in f64) must lie in both boxes.
-        let mut rnd = uniform(5, 1000.0);
-        for _ in 0..50_000 {
-            let (tri, bx) = triangle_and_box(&mut rnd);
-            let a = 1;
-            let pos = rnd() * 0.5;
-            let (l, r) = split_box(&tri, bx, a, pos);
-            for k in 0..3 {
-                let (v, w) = (tri[k], tri[(k + 1) % 3]);
-                let (va, wa) = (v[a] as f64, w[a] as f64);
-                let p = pos as f64;
-                if (va < p && wa > p) || (va > p && wa < p) {
-                    let t = (p - va) / (wa - va);
-                    for c in 0..3 {
-                        let x = v[c] as f64 + t * (w[c] as f64 - v[c] as f64);
-                        let x = if c == a { p } else { x };
-                        for b in [l, r] {
-                            assert!(b.min[c] as f64 <= x && x <= b.max[c] as f64);
-                        }
-                    }
-                }
-            }
-        }
-    }
-}
+#[path = "spatial_tests.rs"]
+mod tests;
