@@ -116,31 +116,28 @@ fn build_rec(
     if n <= 1 {
         return leaf(arena);
     }
-    let (n_l, n_r, right) = if depth >= MAX_SAH_DEPTH || cbounds.extent().max_element() <= 0.0 {
+    let (n_l, n_r) = if depth >= MAX_SAH_DEPTH || cbounds.extent().max_element() <= 0.0 {
         if n <= opts.max_leaf_size {
             return leaf(arena);
         }
         let mid = median_split(&mut refs[..n], &cbounds);
-        (mid, n - mid, None)
+        (mid, n - mid)
     } else {
         match split(refs, n, &bounds, &cbounds, ctx, scratch) {
             Some(s) => s,
             None => return leaf(arena),
         }
     };
-    // The left side keeps its references at the front; the right side's (at `n_l..n_l + n_r`,
-    // or in `right` after a spatial partition) move to the start of its capacity range. A
-    // left side too small for spatial splits gets no spare slots (the right side then stays
-    // where it is).
+    // The left side keeps its references at the front; the right side's (now at
+    // `n_l..n_l + n_r`) move to the start of its capacity range. A left side too small for
+    // spatial splits gets no spare slots (the right side then stays where it is).
     let spare = cap - n_l - n_r;
     let c_l = if n_l >= MIN_SPATIAL_REFS {
         n_l + (spare as u64 * n_l as u64 / (n_l + n_r) as u64) as usize
     } else {
         n_l
     };
-    if let Some(right) = right {
-        refs[c_l..c_l + n_r].copy_from_slice(&right);
-    } else if c_l != n_l {
+    if c_l != n_l {
         refs.copy_within(n_l..n_l + n_r, c_l);
     }
     let (l, r) = refs.split_at_mut(c_l);
@@ -165,14 +162,9 @@ fn build_rec(
     2 * off_r - 1
 }
 
-/// A split's side sizes `(n_l, n_r)`, and the right side's references when they are not at
-/// `refs[n_l..n_l + n_r]` (a spatial partition returns them apart, so that they are copied
-/// once, to their capacity range).
-type Sides = (usize, usize, Option<Vec<PrimRef>>);
-
 /// Chooses between a leaf, the object split and a spatial split of the node over
-/// `refs[..n]`; for a split, lays out its left side at `refs[..n_l]` and its right side at
-/// `refs[n_l..n_l + n_r]` or apart ([`Sides`]; `n_l + n_r <= refs.len()`).
+/// `refs[..n]`; for a split, lays out its sides at `refs[..n_l]` and `refs[n_l..n_l + n_r]`
+/// (`n_l + n_r <= refs.len()`) and returns `(n_l, n_r)`.
 fn split(
     refs: &mut [PrimRef],
     n: usize,
@@ -180,7 +172,7 @@ fn split(
     cbounds: &Aabb,
     ctx: &Ctx,
     scratch: &mut Bins,
-) -> Option<Sides> {
+) -> Option<(usize, usize)> {
     let opts = ctx.opts;
     let o = find_object_split(&refs[..n], cbounds, opts, scratch);
     let mut best = o.cost;
@@ -209,25 +201,23 @@ fn split(
         return None;
     }
     if let Some(s) = spatial {
-        let (n_l, right) = spatial_partition(refs, n, &s, ctx);
-        let n_r = right.len();
+        let (n_l, n_r) = spatial_partition(refs, n, &s, ctx);
         if n_l > 0 && n_r > 0 {
-            return Some((n_l, n_r, Some(right)));
+            return Some((n_l, n_r));
         }
         // Chopping (a side without a part of some triangle) and unsplitting moved every
         // reference to one side: split those (still covering the node) at the median.
         let m = n_l + n_r;
-        refs[n_l..m].copy_from_slice(&right);
         let (_, cb) = node_bounds(&refs[..m]);
         let mid = median_split(&mut refs[..m], &cb);
-        return Some((mid, m - mid, None));
+        return Some((mid, m - mid));
     }
     let mid = if o.cost.is_finite() {
         object_partition(&mut refs[..n], &o, cbounds)
     } else {
         median_split(&mut refs[..n], cbounds)
     };
-    Some((mid, n - mid, None))
+    Some((mid, n - mid))
 }
 
 /// One spatial bin of one axis: the references whose box starts in it (`enter`, and the union
@@ -458,16 +448,16 @@ fn sweep_axis(
 }
 
 /// Applies the spatial split `s` to `refs[..n]`: references entirely left of the plane stay
-/// at the front, those entirely right go to the returned vector, in order; a straddling one
-/// goes whole to one side when that is cheaper (unsplitting, §4.4), else its clipped pieces go
-/// to both. Returns the left side's size and the right side (the sizes' sum fits
-/// `refs.len()`: the sweep's counts bound it, and the caller checked them).
+/// at the front, those entirely right follow them; a straddling one goes whole to one side
+/// when that is cheaper (unsplitting, §4.4), else its clipped pieces go to both. Returns the
+/// side sizes (their sum fits `refs.len()`: the sweep's counts bound it, and the caller checked
+/// them).
 fn spatial_partition(
     refs: &mut [PrimRef],
     n: usize,
     s: &SpatialSplit,
     ctx: &Ctx,
-) -> (usize, Vec<PrimRef>) {
+) -> (usize, usize) {
     let (a, pos) = (s.axis, s.grid.plane(s.split, s.axis));
     let bit = 1u32 << a;
     let (mut lb, mut rb) = (s.left, s.right);
@@ -522,7 +512,8 @@ fn spatial_partition(
         }
     }
     debug_assert!(w + right.len() <= refs.len());
-    (w, right)
+    refs[w..w + right.len()].copy_from_slice(&right);
+    (w, right.len())
 }
 
 #[inline(always)]
