@@ -321,3 +321,82 @@ fn crossing_points_on_the_plane_lie_in_both_boxes() {
         }
     }
 }
+
+/// The bins of [`bin_spatial_avx`] and [`bin_spatial_portable`] are bit for bit equal, and
+/// their [`NegBox::boxa`] is bit for bit the union of the references' [`BoxA`]s taken in the
+/// same order (the layout with the maximum negated changes no bit: signed zeros, NaNs and
+/// infinities included).
+#[test]
+fn negated_max_bins_equal_the_box_unions() {
+    let special = [
+        0.0,
+        -0.0,
+        1.0,
+        -1.0,
+        3.0,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        f32::NAN,
+    ];
+    let mut rnd = uniform(11, 8.0);
+    let mut pick = uniform(12, 1.0);
+    let mut coord = |rnd: &mut dyn FnMut() -> f32| {
+        let u = pick();
+        if u < -0.5 {
+            special[((u + 1.0) * 16.0) as usize % special.len()]
+        } else {
+            (rnd() * 4.0).round() / 4.0
+        }
+    };
+    let mut refs = Vec::new();
+    for id in 0..4000u32 {
+        let a = Vec3::new(coord(&mut rnd), coord(&mut rnd), coord(&mut rnd));
+        let b = Vec3::new(coord(&mut rnd), coord(&mut rnd), coord(&mut rnd));
+        refs.push(PrimRef::new(a.min(b), a.max(b), id));
+    }
+    let bits = |v: Vec3A| v.to_array().map(f32::to_bits);
+    for bins in [2usize, 7, 16] {
+        let grid = Grid::new(&Aabb::new(Vec3::splat(-8.0), Vec3::splat(8.0)), bins);
+        let portable = bin_spatial_portable(&refs, &grid);
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx") {
+            // SAFETY: AVX checked.
+            let avx = unsafe { bin_spatial_avx(&refs, &grid) };
+            for (p, v) in portable.iter().flatten().zip(avx.iter().flatten()) {
+                let lanes = |b: NegBox| b.0.map(|x| x.to_array().map(f32::to_bits));
+                assert_eq!(lanes(p.enter_box), lanes(v.enter_box));
+                assert_eq!(lanes(p.exit_box), lanes(v.exit_box));
+                assert_eq!((p.enter, p.exit), (v.enter, v.exit));
+            }
+        }
+        let mut want = [[(BoxA::EMPTY, BoxA::EMPTY, 0u32, 0u32); SPATIAL_BINS]; 3];
+        for r in &refs {
+            let bx = BoxA {
+                min: r.min(),
+                max: r.max(),
+            };
+            let (b0, b1) = (grid.bins3(bx.min), grid.bins3(bx.max));
+            for a in 0..3 {
+                let e = &mut want[a][b0[a]];
+                e.0 = e.0.union(bx);
+                e.2 += 1;
+                let x = &mut want[a][b1[a]];
+                x.1 = x.1.union(bx);
+                x.3 += 1;
+            }
+        }
+        let mut special_lanes = 0;
+        for (p, w) in portable.iter().flatten().zip(want.iter().flatten()) {
+            let (e, x) = (p.enter_box.boxa(), p.exit_box.boxa());
+            assert_eq!((bits(e.min), bits(e.max)), (bits(w.0.min), bits(w.0.max)));
+            assert_eq!((bits(x.min), bits(x.max)), (bits(w.1.min), bits(w.1.max)));
+            assert_eq!((p.enter, p.exit), (w.2, w.3));
+            if p.enter > 0 {
+                let lanes = [e.min.to_array(), e.max.to_array()];
+                special_lanes += lanes.iter().flatten().filter(|m| m.is_infinite()).count();
+            }
+        }
+        // The special values reached the bins.
+        assert!(special_lanes > 0);
+    }
+}
