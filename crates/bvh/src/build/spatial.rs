@@ -43,9 +43,11 @@ use glam::{Vec3, Vec3A, Vec4};
 use parallax_core::Aabb;
 use rayon::prelude::*;
 
+use super::object_bins::{Bin, sah_count, trunc3};
+use super::prim_ref::BoxA;
 use super::{
-    BNode, BTree, Bins, BoxA, MAX_SAH_DEPTH, PAR_BIN_THRESHOLD, PrimRef, UNUSED, find_object_split,
-    median_split, new_bins, node_bounds, object_partition, sah_count, trunc3,
+    BNode, BTree, Bins, MAX_SAH_DEPTH, PAR_BIN_THRESHOLD, PrimRef, UNUSED, find_object_split,
+    median_split, new_bins, node_bounds, object_partition,
 };
 use crate::options::BuildOptions;
 
@@ -181,7 +183,7 @@ fn split(
     let mut spatial = None;
     if o.cost.is_finite() && n < refs.len() && n >= MIN_SPATIAL_REFS {
         let bins = &scratch.0[o.axis][..o.binner.bins];
-        let side = |r: &[super::Bin]| r.iter().fold(BoxA::EMPTY, |b, x| b.union(x.bounds));
+        let side = |r: &[Bin]| r.iter().fold(BoxA::EMPTY, |b, x| b.union(x.bounds));
         let (bl, br) = (side(&bins[..o.split]), side(&bins[o.split..]));
         let overlap = BoxA {
             min: bl.min.max(br.min),
