@@ -4,12 +4,18 @@
 //! a sweep over the bin boundaries evaluates the surface area heuristic of each (module docs
 //! of `build.rs`) and returns the cheapest. Nodes with more than [`PAR_BIN_THRESHOLD`]
 //! references are binned over rayon chunks whose bins are merged.
+//!
+//! A bin keeps its box as a [`NegBox`] (the minimum and the negated maximum, Embree's layout),
+//! so that adding a reference is one 8-lane minimum (`bin_into_avx`, AVX at run time, with
+//! the portable twin `bin_into_portable` tested equal) and the sweep's running unions are
+//! lane-wise minima; the boxes, areas and costs are bit for bit those of [`BoxA`] and
+//! [`Aabb`] unions (tests in `object_bins_tests.rs`).
 
 use glam::{Vec3, Vec3A};
 use parallax_core::Aabb;
 use rayon::prelude::*;
 
-use super::prim_ref::{BoxA, PrimRef};
+use super::prim_ref::{BoxA, NegBox, PrimRef};
 use crate::options::{BuildOptions, MAX_BINS};
 
 /// Nodes with more triangles than this are binned in parallel chunks.
@@ -22,23 +28,29 @@ pub(crate) fn sah_count(cnt: u32, block: usize) -> f32 {
     cnt.div_ceil(block as u32) as f32
 }
 
+/// Bins of the three axes: per bin a count and the union of its references' boxes as a
+/// [`NegBox`] (minimum and negated maximum), so that adding a reference's box is one 8-lane
+/// minimum.
 #[derive(Clone, Copy)]
-pub(super) struct Bin {
-    pub(super) bounds: BoxA,
-    pub(super) count: u32,
+#[repr(C, align(32))]
+pub(super) struct Bins {
+    pub(super) boxes: [[NegBox; MAX_BINS]; 3],
+    pub(super) counts: [[u32; MAX_BINS]; 3],
 }
 
-const EMPTY_BIN: Bin = Bin {
-    bounds: BoxA::EMPTY,
-    count: 0,
-};
-
-/// Bins of the three axes.
-#[derive(Clone, Copy)]
-pub(super) struct Bins(pub(super) [[Bin; MAX_BINS]; 3]);
-
 pub(super) fn new_bins() -> Bins {
-    Bins([[EMPTY_BIN; MAX_BINS]; 3])
+    Bins {
+        boxes: [[NegBox::EMPTY; MAX_BINS]; 3],
+        counts: [[0; MAX_BINS]; 3],
+    }
+}
+
+impl Bins {
+    /// The union of the boxes of bins `range` of `axis`, in bin order.
+    pub(super) fn union(&self, axis: usize, range: std::ops::Range<usize>) -> BoxA {
+        let b = &self.boxes[axis][range];
+        b.iter().fold(NegBox::EMPTY, |u, x| u.union(*x)).boxa()
+    }
 }
 
 /// Maps doubled centroids to bin indices: `bin = floor((c - min) * scale)`, clamped.
@@ -127,28 +139,62 @@ fn bin_refs(refs: &[PrimRef], binner: &Binner) -> Bins {
     bins
 }
 
-/// Resets the first `binner.bins` bins of each axis and bins `refs` into them.
+/// Resets the first `binner.bins` bins of each axis and bins `refs` into them:
+/// [`bin_into_avx`] where the CPU has AVX, else [`bin_into_portable`] (tested equal).
 fn bin_into(refs: &[PrimRef], binner: &Binner, bins: &mut Bins) {
-    for axis_bins in bins.0.iter_mut() {
-        axis_bins[..binner.bins].fill(EMPTY_BIN);
+    for axis in 0..3 {
+        bins.boxes[axis][..binner.bins].fill(NegBox::EMPTY);
+        bins.counts[axis][..binner.bins].fill(0);
     }
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx") {
+        // SAFETY: AVX is present.
+        return unsafe { bin_into_avx(refs, binner, bins) };
+    }
+    bin_into_portable(refs, binner, bins)
+}
+
+fn bin_into_portable(refs: &[PrimRef], binner: &Binner, bins: &mut Bins) {
     for r in refs {
         let b = binner.bin(r.centroid2());
-        let (lo, hi) = (r.min(), r.max());
-        for (axis_bins, &k) in bins.0.iter_mut().zip(&b) {
-            let bin = &mut axis_bins[k];
-            bin.count += 1;
-            bin.bounds.min = bin.bounds.min.min(lo);
-            bin.bounds.max = bin.bounds.max.max(hi);
+        let bx = NegBox::of(r);
+        for (axis, &k) in b.iter().enumerate() {
+            bins.counts[axis][k] += 1;
+            bins.boxes[axis][k] = bins.boxes[axis][k].union(bx);
         }
     }
 }
 
-fn merge_bins(mut a: Bins, b: Bins) -> Bins {
+/// [`bin_into_portable`] with each box union as one 8-lane `vminps` (and the reference's
+/// [`NegBox`] as one load and one sign flip); the operand order of [`NegBox::union`].
+///
+/// # Safety
+/// The CPU must support AVX.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+unsafe fn bin_into_avx(refs: &[PrimRef], binner: &Binner, bins: &mut Bins) {
+    use std::arch::x86_64::*;
+    let neg_hi = _mm256_setr_ps(0.0, 0.0, 0.0, 0.0, -0.0, -0.0, -0.0, -0.0);
+    for r in refs {
+        // SAFETY: `PrimRef` is `lo`, `hi` in 32 aligned bytes (`repr(C, align(32))`), as
+        // `NegBox`; the bins are `NegBox`es.
+        unsafe {
+            let v = _mm256_xor_ps(_mm256_load_ps(r as *const PrimRef as *const f32), neg_hi);
+            let b = binner.bin(r.centroid2());
+            for (axis, &k) in b.iter().enumerate() {
+                bins.counts[axis][k] += 1;
+                let p = &mut bins.boxes[axis][k] as *mut NegBox as *mut f32;
+                _mm256_store_ps(p, _mm256_min_ps(_mm256_load_ps(p), v));
+            }
+        }
+    }
+}
+
+fn merge_bins(mut a: Bins, b: &Bins) -> Bins {
     for axis in 0..3 {
         for i in 0..MAX_BINS {
-            a.0[axis][i].count += b.0[axis][i].count;
-            a.0[axis][i].bounds = a.0[axis][i].bounds.union(b.0[axis][i].bounds);
+            a.counts[axis][i] += b.counts[axis][i];
+            a.boxes[axis][i] = a.boxes[axis][i].union(b.boxes[axis][i]);
         }
     }
     a
@@ -180,7 +226,7 @@ pub(super) fn find_object_split(
         *scratch = refs
             .par_chunks(8192)
             .map(|c| bin_refs(c, &binner))
-            .reduce(new_bins, merge_bins);
+            .reduce(new_bins, |a, b| merge_bins(a, &b));
     } else {
         bin_into(refs, &binner, scratch);
     }
@@ -192,22 +238,22 @@ pub(super) fn find_object_split(
         if binner.scale[axis] == 0.0 {
             continue;
         }
-        let bins = &bins.0[axis][..nb];
+        let (boxes, counts) = (&bins.boxes[axis][..nb], &bins.counts[axis][..nb]);
         let mut right_cost = [0.0f32; MAX_BINS];
-        let (mut acc, mut cnt) = (Aabb::EMPTY, 0u32);
+        let (mut acc, mut cnt) = (NegBox::EMPTY, 0u32);
         for i in (1..nb).rev() {
-            acc = acc.union(bins[i].bounds.aabb());
-            cnt += bins[i].count;
-            right_cost[i] = acc.surface_area() * sah_count(cnt, opts.sah_block_size);
+            acc = acc.union(boxes[i]);
+            cnt += counts[i];
+            right_cost[i] = acc.area() * sah_count(cnt, opts.sah_block_size);
         }
-        let (mut acc, mut cnt) = (Aabb::EMPTY, 0u32);
+        let (mut acc, mut cnt) = (NegBox::EMPTY, 0u32);
         for i in 1..nb {
-            acc = acc.union(bins[i - 1].bounds.aabb());
-            cnt += bins[i - 1].count;
+            acc = acc.union(boxes[i - 1]);
+            cnt += counts[i - 1];
             if cnt == 0 || cnt as usize == n {
                 continue;
             }
-            let cost = acc.surface_area() * sah_count(cnt, opts.sah_block_size) + right_cost[i];
+            let cost = acc.area() * sah_count(cnt, opts.sah_block_size) + right_cost[i];
             if cost < best.0 {
                 best = (cost, axis, i);
             }
@@ -222,62 +268,5 @@ pub(super) fn find_object_split(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn lane_bin_index_equals_the_scalar_clamp() {
-        let mut s = 11u32;
-        let mut rnd = || {
-            s = s.wrapping_mul(747796405).wrapping_add(2891336453);
-            s
-        };
-        let special = [
-            0.0,
-            -0.0,
-            0.5,
-            0.999_999_9,
-            1.0,
-            30.999_998,
-            31.0,
-            31.5,
-            32.0,
-            1e9,
-            3e9,
-            -0.5,
-            -1.0,
-            -3e9,
-            f32::INFINITY,
-            f32::NEG_INFINITY,
-            f32::NAN,
-            f32::MIN_POSITIVE,
-        ];
-        for bins in [2usize, 5, 17, 32] {
-            let binner = Binner {
-                min: Vec3A::ZERO,
-                scale: Vec3A::ONE,
-                last: Vec3A::splat((bins - 1) as f32),
-                bins,
-            };
-            let check = |f: Vec3A| {
-                let b = binner.bin(f);
-                for axis in 0..3 {
-                    assert_eq!(b[axis], binner.index(f[axis]), "{f:?} {bins}");
-                    assert_eq!(b[axis], binner.bin_axis(f, axis), "{f:?} {bins}");
-                }
-                let g = binner.last.min(f).max(Vec3A::ZERO);
-                assert_eq!(trunc3(g)[..3], trunc3_portable(g)[..3], "{g:?}");
-            };
-            for &x in &special {
-                for &y in &special {
-                    check(Vec3A::new(x, y, special[(rnd() % 18) as usize]));
-                }
-            }
-            for _ in 0..100_000 {
-                let f = f32::from_bits(rnd());
-                let g = (rnd() % 4000) as f32 / 100.0 - 2.0;
-                check(Vec3A::new(f, g, -g));
-            }
-        }
-    }
-}
+#[path = "object_bins_tests.rs"]
+mod tests;

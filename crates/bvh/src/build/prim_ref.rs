@@ -101,3 +101,48 @@ impl BoxA {
         }
     }
 }
+
+/// A box as eight lanes: its minimum, then its maximum negated (Embree's layout), so that the
+/// union of two boxes is one lane-wise minimum (one 8-lane `vminps` with AVX). `union` keeps
+/// the operand order of [`BoxA::union`] (`minps` returns its second operand on equal values
+/// and NaN, as `maxps` does, and negation only flips signs), so [`NegBox::boxa`] of a union
+/// is bit for bit the union of the [`BoxA`]s.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(32))]
+pub(super) struct NegBox(pub(super) [Vec4; 2]);
+
+impl NegBox {
+    pub(super) const EMPTY: NegBox = NegBox([Vec4::INFINITY, Vec4::INFINITY]);
+
+    #[inline(always)]
+    pub(super) fn of(r: &PrimRef) -> NegBox {
+        NegBox([r.lo, -r.hi])
+    }
+
+    #[inline(always)]
+    pub(super) fn union(self, o: NegBox) -> NegBox {
+        NegBox([self.0[0].min(o.0[0]), self.0[1].min(o.0[1])])
+    }
+
+    #[inline(always)]
+    pub(super) fn boxa(self) -> BoxA {
+        BoxA {
+            min: Vec3A::from_vec4(self.0[0]),
+            max: Vec3A::from_vec4(-self.0[1]),
+        }
+    }
+
+    /// [`Aabb::surface_area`] of [`NegBox::boxa`], bit for bit, from the lanes: the same
+    /// emptiness test (`!(min <= max)` on some axis gives 0), the same extent (`max - min`,
+    /// then `d > 0 ? d : 0`, which turns the NaN of an infinite side into 0) and the same sum
+    /// of products in the same order.
+    #[inline(always)]
+    pub(super) fn area(self) -> f32 {
+        let (lo, hi) = (self.0[0], -self.0[1]);
+        if lo.cmple(hi).bitmask() & 7 != 7 {
+            return 0.0;
+        }
+        let e = (hi - lo).max(Vec4::ZERO);
+        2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
+    }
+}

@@ -39,12 +39,12 @@
 //! slots (a subtree owning capacity `c` owns `2 c - 1` arena slots), so the recursion keeps
 //! writing disjoint slices in parallel; slots past a node's references stay unused.
 
-use glam::{Vec3, Vec3A, Vec4};
+use glam::{Vec3, Vec3A};
 use parallax_core::Aabb;
 use rayon::prelude::*;
 
-use super::object_bins::{Bin, sah_count, trunc3};
-use super::prim_ref::BoxA;
+use super::object_bins::{sah_count, trunc3};
+use super::prim_ref::{BoxA, NegBox};
 use super::{
     BNode, BTree, Bins, MAX_SAH_DEPTH, PAR_BIN_THRESHOLD, PrimRef, UNUSED, find_object_split,
     median_split, new_bins, node_bounds, object_partition,
@@ -182,9 +182,10 @@ fn split(
     let mut best = o.cost;
     let mut spatial = None;
     if o.cost.is_finite() && n < refs.len() && n >= MIN_SPATIAL_REFS {
-        let bins = &scratch.0[o.axis][..o.binner.bins];
-        let side = |r: &[Bin]| r.iter().fold(BoxA::EMPTY, |b, x| b.union(x.bounds));
-        let (bl, br) = (side(&bins[..o.split]), side(&bins[o.split..]));
+        let (bl, br) = (
+            scratch.union(o.axis, 0..o.split),
+            scratch.union(o.axis, o.split..o.binner.bins),
+        );
         let overlap = BoxA {
             min: bl.min.max(br.min),
             max: bl.max.min(br.max),
@@ -222,37 +223,6 @@ fn split(
         median_split(&mut refs[..n], cbounds)
     };
     Some((mid, n - mid))
-}
-
-/// A box as eight lanes: its minimum, then its maximum negated (Embree's layout), so that the
-/// union of two boxes is one lane-wise minimum (one 8-lane `vminps` with AVX). `union` keeps
-/// the operand order of [`BoxA::union`] (`minps` returns its second operand on equal values
-/// and NaN, as `maxps` does, and negation only flips signs), so [`NegBox::boxa`] of a union
-/// is bit for bit the union of the [`BoxA`]s.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C, align(32))]
-struct NegBox([Vec4; 2]);
-
-impl NegBox {
-    const EMPTY: NegBox = NegBox([Vec4::INFINITY, Vec4::INFINITY]);
-
-    #[inline(always)]
-    fn of(r: &PrimRef) -> NegBox {
-        NegBox([r.lo, -r.hi])
-    }
-
-    #[inline(always)]
-    fn union(self, o: NegBox) -> NegBox {
-        NegBox([self.0[0].min(o.0[0]), self.0[1].min(o.0[1])])
-    }
-
-    #[inline(always)]
-    fn boxa(self) -> BoxA {
-        BoxA {
-            min: Vec3A::from_vec4(self.0[0]),
-            max: Vec3A::from_vec4(-self.0[1]),
-        }
-    }
 }
 
 /// One spatial bin of one axis: the references whose box starts in it (`enter`, and the union

@@ -1,0 +1,191 @@
+//! Unit tests of `object_bins.rs`: the lane bin indices, the bins with the negated maximum.
+
+use super::*;
+use glam::Vec4;
+
+#[test]
+fn lane_bin_index_equals_the_scalar_clamp() {
+    let mut s = 11u32;
+    let mut rnd = || {
+        s = s.wrapping_mul(747796405).wrapping_add(2891336453);
+        s
+    };
+    let special = [
+        0.0,
+        -0.0,
+        0.5,
+        0.999_999_9,
+        1.0,
+        30.999_998,
+        31.0,
+        31.5,
+        32.0,
+        1e9,
+        3e9,
+        -0.5,
+        -1.0,
+        -3e9,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        f32::NAN,
+        f32::MIN_POSITIVE,
+    ];
+    for bins in [2usize, 5, 17, 32] {
+        let binner = Binner {
+            min: Vec3A::ZERO,
+            scale: Vec3A::ONE,
+            last: Vec3A::splat((bins - 1) as f32),
+            bins,
+        };
+        let check = |f: Vec3A| {
+            let b = binner.bin(f);
+            for axis in 0..3 {
+                assert_eq!(b[axis], binner.index(f[axis]), "{f:?} {bins}");
+                assert_eq!(b[axis], binner.bin_axis(f, axis), "{f:?} {bins}");
+            }
+            let g = binner.last.min(f).max(Vec3A::ZERO);
+            assert_eq!(trunc3(g)[..3], trunc3_portable(g)[..3], "{g:?}");
+        };
+        for &x in &special {
+            for &y in &special {
+                check(Vec3A::new(x, y, special[(rnd() % 18) as usize]));
+            }
+        }
+        for _ in 0..100_000 {
+            let f = f32::from_bits(rnd());
+            let g = (rnd() % 4000) as f32 / 100.0 - 2.0;
+            check(Vec3A::new(f, g, -g));
+        }
+    }
+}
+
+/// Uniform values in `[-half, half)` from a 32-bit LCG.
+fn uniform(seed: u32, half: f32) -> impl FnMut() -> f32 {
+    let mut s = seed;
+    move || {
+        s = s.wrapping_mul(747796405).wrapping_add(2891336453);
+        (s >> 8) as f32 / (1 << 24) as f32 * 2.0 * half - half
+    }
+}
+
+/// Coordinates on a quarter grid in `[-8, 8)`, and one in four a special value (signed
+/// zeros, infinities, NaN), so that equal values, signed zeros and NaNs reach the unions.
+fn coords(seed: u32) -> impl FnMut() -> f32 {
+    let special = [
+        0.0,
+        -0.0,
+        1.0,
+        -1.0,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        f32::NAN,
+    ];
+    let (mut rnd, mut pick) = (uniform(seed, 8.0), uniform(seed + 1, 1.0));
+    move || {
+        let u = pick();
+        if u < -0.5 {
+            special[((u + 1.0) * 14.0) as usize % special.len()]
+        } else {
+            (rnd() * 4.0).round() / 4.0
+        }
+    }
+}
+
+fn lanes(b: &NegBox) -> [[u32; 4]; 2] {
+    b.0.map(|x| x.to_array().map(f32::to_bits))
+}
+
+/// [`NegBox::area`] is bit for bit [`Aabb::surface_area`] of [`NegBox::boxa`]: empty boxes,
+/// sides of infinite length and NaN coordinates included.
+#[test]
+fn negated_max_area_equals_the_aabb_area() {
+    let mut c = coords(3);
+    let (mut empty, mut infinite, mut finite) = (0, 0, 0);
+    for _ in 0..200_000 {
+        let (a, b) = (Vec4::new(c(), c(), c(), c()), Vec4::new(c(), c(), c(), c()));
+        // Mostly ordered boxes (min <= max), some not.
+        let (lo, hi) = if c() < 6.0 {
+            (a.min(b), a.max(b))
+        } else {
+            (a, b)
+        };
+        let nb = NegBox([lo, -hi]);
+        let want = nb.boxa().aabb().surface_area();
+        assert_eq!(nb.area().to_bits(), want.to_bits(), "{lo:?} {hi:?}");
+        if want == 0.0 {
+            empty += 1;
+        } else if want.is_infinite() {
+            infinite += 1;
+        } else {
+            finite += 1;
+        }
+    }
+    assert!(empty > 0 && infinite > 0 && finite > 0);
+}
+
+/// References with special coordinates, bounded boxes (min <= max on every axis).
+fn special_refs(seed: u32, n: u32) -> Vec<PrimRef> {
+    let mut c = coords(seed);
+    (0..n)
+        .map(|id| {
+            let a = Vec3::new(c(), c(), c());
+            let b = Vec3::new(c(), c(), c());
+            PrimRef::new(a.min(b), a.max(b), id)
+        })
+        .collect()
+}
+
+/// The bins of [`bin_into_avx`] and [`bin_into_portable`] are bit for bit equal, and their
+/// [`NegBox::boxa`] is bit for bit the union of the references' [`BoxA`]s in reference order
+/// (the binning before the negated maximum), with the same counts.
+#[test]
+fn negated_max_object_bins_equal_the_box_unions() {
+    let refs = special_refs(21, 5000);
+    for bins in [2usize, 9, 32] {
+        let cb = Aabb::new(Vec3::splat(-16.0), Vec3::splat(16.0));
+        let binner = Binner::new(&cb, bins);
+        let mut portable = new_bins();
+        bin_into_portable(&refs, &binner, &mut portable);
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx") {
+            let mut avx = new_bins();
+            // SAFETY: AVX checked.
+            unsafe { bin_into_avx(&refs, &binner, &mut avx) };
+            for a in 0..3 {
+                for i in 0..MAX_BINS {
+                    assert_eq!(lanes(&portable.boxes[a][i]), lanes(&avx.boxes[a][i]));
+                }
+            }
+            assert_eq!(portable.counts, avx.counts);
+        }
+        let mut want = [[(BoxA::EMPTY, 0u32); MAX_BINS]; 3];
+        for r in &refs {
+            let b = binner.bin(r.centroid2());
+            for a in 0..3 {
+                let w = &mut want[a][b[a]];
+                w.0 = w.0.union(BoxA {
+                    min: r.min(),
+                    max: r.max(),
+                });
+                w.1 += 1;
+            }
+        }
+        let bits = |v: Vec3A| v.to_array().map(f32::to_bits);
+        let mut special = 0;
+        for a in 0..3 {
+            for i in 0..bins {
+                let (got, w) = (portable.boxes[a][i].boxa(), want[a][i].0);
+                assert_eq!((bits(got.min), bits(got.max)), (bits(w.min), bits(w.max)));
+                assert_eq!(portable.counts[a][i], want[a][i].1);
+                let l = [got.min.to_array(), got.max.to_array()];
+                special += l
+                    .iter()
+                    .flatten()
+                    .filter(|x| !x.is_finite() || **x == 0.0)
+                    .count();
+            }
+        }
+        // The special values reached the bins.
+        assert!(special > 0);
+    }
+}
