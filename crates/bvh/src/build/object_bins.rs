@@ -35,13 +35,14 @@ pub(crate) fn sah_count(cnt: u32, block: usize) -> f32 {
 #[repr(C, align(32))]
 pub(super) struct Bins {
     pub(super) boxes: [[NegBox; MAX_BINS]; 3],
-    pub(super) counts: [[u32; MAX_BINS]; 3],
+    /// Per bin, the counts of the three axes (lane 3 unused), so the sweep loads them at once.
+    pub(super) counts: [[u32; 4]; MAX_BINS],
 }
 
 pub(super) fn new_bins() -> Bins {
     Bins {
         boxes: [[NegBox::EMPTY; MAX_BINS]; 3],
-        counts: [[0; MAX_BINS]; 3],
+        counts: [[0; 4]; MAX_BINS],
     }
 }
 
@@ -144,8 +145,8 @@ fn bin_refs(refs: &[PrimRef], binner: &Binner) -> Bins {
 fn bin_into(refs: &[PrimRef], binner: &Binner, bins: &mut Bins) {
     for axis in 0..3 {
         bins.boxes[axis][..binner.bins].fill(NegBox::EMPTY);
-        bins.counts[axis][..binner.bins].fill(0);
     }
+    bins.counts[..binner.bins].fill([0; 4]);
     #[cfg(target_arch = "x86_64")]
     if std::is_x86_feature_detected!("avx") {
         // SAFETY: AVX is present.
@@ -159,7 +160,7 @@ fn bin_into_portable(refs: &[PrimRef], binner: &Binner, bins: &mut Bins) {
         let b = binner.bin(r.centroid2());
         let bx = NegBox::of(r);
         for (axis, &k) in b.iter().enumerate() {
-            bins.counts[axis][k] += 1;
+            bins.counts[k][axis] += 1;
             bins.boxes[axis][k] = bins.boxes[axis][k].union(bx);
         }
     }
@@ -182,7 +183,7 @@ unsafe fn bin_into_avx(refs: &[PrimRef], binner: &Binner, bins: &mut Bins) {
             let v = _mm256_xor_ps(_mm256_load_ps(r as *const PrimRef as *const f32), neg_hi);
             let b = binner.bin(r.centroid2());
             for (axis, &k) in b.iter().enumerate() {
-                bins.counts[axis][k] += 1;
+                bins.counts[k][axis] += 1;
                 let p = &mut bins.boxes[axis][k] as *mut NegBox as *mut f32;
                 _mm256_store_ps(p, _mm256_min_ps(_mm256_load_ps(p), v));
             }
@@ -193,7 +194,7 @@ unsafe fn bin_into_avx(refs: &[PrimRef], binner: &Binner, bins: &mut Bins) {
 fn merge_bins(mut a: Bins, b: &Bins) -> Bins {
     for axis in 0..3 {
         for i in 0..MAX_BINS {
-            a.counts[axis][i] += b.counts[axis][i];
+            a.counts[i][axis] += b.counts[i][axis];
             a.boxes[axis][i] = a.boxes[axis][i].union(b.boxes[axis][i]);
         }
     }
@@ -230,40 +231,181 @@ pub(super) fn find_object_split(
     } else {
         bin_into(refs, &binner, scratch);
     }
-    let bins = &*scratch;
-
-    // Sweep: right-to-left accumulated area * count, then left-to-right cost evaluation.
-    let mut best = (f32::INFINITY, 0usize, 0usize); // (cost, axis, first bin of the right side)
-    for axis in 0..3 {
-        if binner.scale[axis] == 0.0 {
-            continue;
-        }
-        let (boxes, counts) = (&bins.boxes[axis][..nb], &bins.counts[axis][..nb]);
-        let mut right_cost = [0.0f32; MAX_BINS];
-        let (mut acc, mut cnt) = (NegBox::EMPTY, 0u32);
-        for i in (1..nb).rev() {
-            acc = acc.union(boxes[i]);
-            cnt += counts[i];
-            right_cost[i] = acc.area() * sah_count(cnt, opts.sah_block_size);
-        }
-        let (mut acc, mut cnt) = (NegBox::EMPTY, 0u32);
-        for i in 1..nb {
-            acc = acc.union(boxes[i - 1]);
-            cnt += counts[i - 1];
-            if cnt == 0 || cnt as usize == n {
-                continue;
-            }
-            let cost = acc.area() * sah_count(cnt, opts.sah_block_size) + right_cost[i];
-            if cost < best.0 {
-                best = (cost, axis, i);
-            }
-        }
-    }
+    let skip = [0, 1, 2].map(|a| binner.scale[a] == 0.0);
+    let block = opts.sah_block_size;
+    #[cfg(target_arch = "x86_64")]
+    let best = if block.is_power_of_two() && std::is_x86_feature_detected!("avx") {
+        // SAFETY: AVX is present.
+        unsafe { sweep_avx(scratch, nb, n, skip, block) }
+    } else {
+        sweep_portable(scratch, nb, n, skip, block)
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let best = sweep_portable(scratch, nb, n, skip, block);
     ObjectSplit {
         cost: best.0,
         axis: best.1,
         split: best.2,
         binner,
+    }
+}
+
+/// The SAH sweep over the first `nb` bins of the axes not in `skip`, for a node of `n`
+/// references: right-to-left accumulated area * count, then left-to-right cost evaluation.
+/// Returns the least cost, its axis and the first bin of its right side (the first in axis,
+/// then bin order among equal costs; `(inf, 0, 0)` when no boundary separates the centroids).
+fn sweep_portable(
+    bins: &Bins,
+    nb: usize,
+    n: usize,
+    skip: [bool; 3],
+    block: usize,
+) -> (f32, usize, usize) {
+    let mut best = (f32::INFINITY, 0usize, 0usize);
+    for axis in 0..3 {
+        if skip[axis] {
+            continue;
+        }
+        let boxes = &bins.boxes[axis][..nb];
+        let mut right_cost = [0.0f32; MAX_BINS];
+        let (mut acc, mut cnt) = (NegBox::EMPTY, 0u32);
+        for i in (1..nb).rev() {
+            acc = acc.union(boxes[i]);
+            cnt += bins.counts[i][axis];
+            right_cost[i] = acc.area() * sah_count(cnt, block);
+        }
+        let (mut acc, mut cnt) = (NegBox::EMPTY, 0u32);
+        for i in 1..nb {
+            acc = acc.union(boxes[i - 1]);
+            cnt += bins.counts[i - 1][axis];
+            if cnt == 0 || cnt as usize == n {
+                continue;
+            }
+            let cost = acc.area() * sah_count(cnt, block) + right_cost[i];
+            if cost < best.0 {
+                best = (cost, axis, i);
+            }
+        }
+    }
+    best
+}
+
+/// [`NegBox::area`] of three boxes (8 lanes each), in lanes 0-2 (lane 3 repeats lane 2): the
+/// boxes transposed to one vector per coordinate, then the same operations per lane.
+///
+/// # Safety
+/// The CPU must support AVX.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+#[inline]
+unsafe fn area3(
+    a0: std::arch::x86_64::__m256,
+    a1: std::arch::x86_64::__m256,
+    a2: std::arch::x86_64::__m256,
+) -> std::arch::x86_64::__m128 {
+    use std::arch::x86_64::*;
+    // Per 128-bit half (minimum, negated maximum): t0 = x0 x1 y0 y1, t1 = z0 z1 w0 w1,
+    // t2 = x2 x2 y2 y2, t3 = z2 z2 w2 w2.
+    let (t0, t1) = (_mm256_unpacklo_ps(a0, a1), _mm256_unpackhi_ps(a0, a1));
+    let (t2, t3) = (_mm256_unpacklo_ps(a2, a2), _mm256_unpackhi_ps(a2, a2));
+    let x = _mm256_shuffle_ps::<0b01_00_01_00>(t0, t2);
+    let y = _mm256_shuffle_ps::<0b11_10_11_10>(t0, t2);
+    let z = _mm256_shuffle_ps::<0b01_00_01_00>(t1, t3);
+    let sign = _mm_set1_ps(-0.0);
+    let (lx, hx) = (
+        _mm256_castps256_ps128(x),
+        _mm_xor_ps(_mm256_extractf128_ps::<1>(x), sign),
+    );
+    let (ly, hy) = (
+        _mm256_castps256_ps128(y),
+        _mm_xor_ps(_mm256_extractf128_ps::<1>(y), sign),
+    );
+    let (lz, hz) = (
+        _mm256_castps256_ps128(z),
+        _mm_xor_ps(_mm256_extractf128_ps::<1>(z), sign),
+    );
+    let full = _mm_and_ps(
+        _mm_and_ps(_mm_cmple_ps(lx, hx), _mm_cmple_ps(ly, hy)),
+        _mm_cmple_ps(lz, hz),
+    );
+    let zero = _mm_setzero_ps();
+    let (ex, ey, ez) = (
+        _mm_max_ps(_mm_sub_ps(hx, lx), zero),
+        _mm_max_ps(_mm_sub_ps(hy, ly), zero),
+        _mm_max_ps(_mm_sub_ps(hz, lz), zero),
+    );
+    let s = _mm_add_ps(
+        _mm_add_ps(_mm_mul_ps(ex, ey), _mm_mul_ps(ey, ez)),
+        _mm_mul_ps(ez, ex),
+    );
+    _mm_and_ps(_mm_mul_ps(_mm_set1_ps(2.0), s), full)
+}
+
+/// [`sweep_portable`] with the three axes in lanes: per boundary, three 8-lane unions, the
+/// areas of [`area3`], the counts of the three axes added at once and [`sah_count`] as a shift
+/// (`block` a power of two), then per lane the first least cost, and the first axis among
+/// equal least costs.
+///
+/// # Safety
+/// The CPU must support AVX.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+unsafe fn sweep_avx(
+    bins: &Bins,
+    nb: usize,
+    n: usize,
+    skip: [bool; 3],
+    block: usize,
+) -> (f32, usize, usize) {
+    use std::arch::x86_64::*;
+    debug_assert!(block.is_power_of_two() && (2..=MAX_BINS).contains(&nb));
+    let (round, shift) = (
+        _mm_set1_epi32(block as i32 - 1),
+        _mm_cvtsi32_si128(block.trailing_zeros() as i32),
+    );
+    // SAFETY: `Bins` is aligned to 32 bytes and its `NegBox`es are 32 bytes; the counts are
+    // 16-byte rows. Indices are below `nb <= MAX_BINS`.
+    unsafe {
+        // `ceil(cnt / block)` as a float, as `sah_count`.
+        let sah = |c: __m128i| _mm_cvtepi32_ps(_mm_srl_epi32(_mm_add_epi32(c, round), shift));
+        let bx =
+            |a: usize, i: usize| _mm256_load_ps(&bins.boxes[a][i] as *const NegBox as *const f32);
+        let cnt_at = |i: usize| _mm_loadu_si128(bins.counts[i].as_ptr() as *const __m128i);
+        let mut right_cost = [_mm_setzero_ps(); MAX_BINS];
+        let inf = _mm256_set1_ps(f32::INFINITY);
+        let (mut a0, mut a1, mut a2, mut cnt) = (inf, inf, inf, _mm_setzero_si128());
+        for i in (1..nb).rev() {
+            a0 = _mm256_min_ps(a0, bx(0, i));
+            a1 = _mm256_min_ps(a1, bx(1, i));
+            a2 = _mm256_min_ps(a2, bx(2, i));
+            cnt = _mm_add_epi32(cnt, cnt_at(i));
+            right_cost[i] = _mm_mul_ps(area3(a0, a1, a2), sah(cnt));
+        }
+        let (zero, all) = (_mm_setzero_si128(), _mm_set1_epi32(n as i32));
+        let (mut best_c, mut best_i) = (_mm_set1_ps(f32::INFINITY), _mm_setzero_ps());
+        let (mut a0, mut a1, mut a2, mut cnt) = (inf, inf, inf, _mm_setzero_si128());
+        for i in 1..nb {
+            a0 = _mm256_min_ps(a0, bx(0, i - 1));
+            a1 = _mm256_min_ps(a1, bx(1, i - 1));
+            a2 = _mm256_min_ps(a2, bx(2, i - 1));
+            cnt = _mm_add_epi32(cnt, cnt_at(i - 1));
+            let cost = _mm_add_ps(_mm_mul_ps(area3(a0, a1, a2), sah(cnt)), right_cost[i]);
+            // `cnt == 0 || cnt == n`: no split here; its cost becomes infinite (never `<`).
+            let none = _mm_or_si128(_mm_cmpeq_epi32(cnt, zero), _mm_cmpeq_epi32(cnt, all));
+            let cost = _mm_blendv_ps(cost, _mm_set1_ps(f32::INFINITY), _mm_castsi128_ps(none));
+            let better = _mm_cmplt_ps(cost, best_c);
+            best_c = _mm_blendv_ps(best_c, cost, better);
+            best_i = _mm_blendv_ps(best_i, _mm_castsi128_ps(_mm_set1_epi32(i as i32)), better);
+        }
+        let c: [f32; 4] = std::mem::transmute(best_c);
+        let k: [u32; 4] = std::mem::transmute(best_i);
+        let mut best = (f32::INFINITY, 0usize, 0usize);
+        for axis in 0..3 {
+            if !skip[axis] && c[axis] < best.0 {
+                best = (c[axis], axis, k[axis] as usize);
+            }
+        }
+        best
     }
 }
 

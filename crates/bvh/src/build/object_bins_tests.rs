@@ -176,7 +176,7 @@ fn negated_max_object_bins_equal_the_box_unions() {
             for i in 0..bins {
                 let (got, w) = (portable.boxes[a][i].boxa(), want[a][i].0);
                 assert_eq!((bits(got.min), bits(got.max)), (bits(w.min), bits(w.max)));
-                assert_eq!(portable.counts[a][i], want[a][i].1);
+                assert_eq!(portable.counts[i][a], want[a][i].1);
                 let l = [got.min.to_array(), got.max.to_array()];
                 special += l
                     .iter()
@@ -187,5 +187,107 @@ fn negated_max_object_bins_equal_the_box_unions() {
         }
         // The special values reached the bins.
         assert!(special > 0);
+    }
+}
+
+/// [`sweep_avx`] returns the cost bits, axis and bin of [`sweep_portable`] on the bins of
+/// random nodes (sizes 2 to 2000, quarter-grid coordinates so that equal costs occur, some
+/// nodes flat on an axis, some on the diagonal so that all three axes tie), for the blocks
+/// of 1, 2 and 4.
+#[test]
+fn lane_sweep_equals_the_scalar_sweep() {
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx") {
+        let mut rnd = uniform(31, 1.0);
+        let (mut ties, mut splits, mut none) = (0, 0, 0);
+        for node in 0..3000u32 {
+            let n = 2 + ((rnd() + 1.0) * 0.5 * [8.0, 60.0, 2000.0][node as usize % 3]) as u32;
+            let mut c = uniform(1000 + node, 8.0);
+            let kind = node % 5;
+            let refs: Vec<PrimRef> = (0..n)
+                .map(|id| {
+                    let q = |x: f32| (x * 2.0).round() / 2.0;
+                    let p = match kind {
+                        0 => Vec3::splat(q(c())),
+                        1 => Vec3::new(q(c()), 1.0, q(c())),
+                        _ => Vec3::new(q(c()), q(c()), q(c())),
+                    };
+                    let e = Vec3::new(q(c()).abs(), q(c()).abs(), q(c()).abs()) * 0.25;
+                    PrimRef::new(p, p + e, id)
+                })
+                .collect();
+            let (_, cb) = super::super::node_bounds(&refs);
+            let nb = 32usize.min(4 + refs.len() / 20).max(2);
+            let binner = Binner::new(&cb, nb);
+            let mut bins = new_bins();
+            bin_into_portable(&refs, &binner, &mut bins);
+            let skip = [0, 1, 2].map(|a| binner.scale[a] == 0.0);
+            for block in [1usize, 2, 4] {
+                let want = sweep_portable(&bins, nb, refs.len(), skip, block);
+                // SAFETY: AVX checked.
+                let got = unsafe { sweep_avx(&bins, nb, refs.len(), skip, block) };
+                assert_eq!(
+                    (got.0.to_bits(), got.1, got.2),
+                    (want.0.to_bits(), want.1, want.2)
+                );
+                if want.0.is_finite() {
+                    splits += 1;
+                } else {
+                    none += 1;
+                }
+                // Another axis reaches the same least cost: the first axis must win.
+                let per_axis = [0, 1, 2].map(|a| {
+                    let mut s = [true; 3];
+                    s[a] = skip[a];
+                    s.iter_mut().enumerate().for_each(|(b, x)| *x |= b != a);
+                    sweep_portable(&bins, nb, refs.len(), s, block).0
+                });
+                if want.0.is_finite() && per_axis.iter().filter(|&&x| x == want.0).count() > 1 {
+                    ties += 1;
+                }
+            }
+        }
+        assert!(splits > 0 && ties > 0, "{splits} {ties} {none}");
+    }
+}
+
+/// [`area3`]'s three lanes are bit for bit [`NegBox::area`] of its three boxes, on boxes with
+/// special coordinates (empty, infinite sides, NaN).
+#[test]
+fn lane_areas_equal_the_negated_max_area() {
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx") {
+        use std::arch::x86_64::*;
+        let mut c = coords(41);
+        let mut boxes = || {
+            let (a, b) = (Vec4::new(c(), c(), c(), c()), Vec4::new(c(), c(), c(), c()));
+            let (lo, hi) = if c() < 6.0 {
+                (a.min(b), a.max(b))
+            } else {
+                (a, b)
+            };
+            NegBox([lo, -hi])
+        };
+        let mut kinds = [0usize; 3];
+        for _ in 0..100_000 {
+            let b = [boxes(), boxes(), boxes()];
+            // SAFETY: AVX checked; `NegBox` is 32 aligned bytes.
+            let got: [f32; 4] = unsafe {
+                let v = |x: &NegBox| _mm256_load_ps(x as *const NegBox as *const f32);
+                std::mem::transmute(area3(v(&b[0]), v(&b[1]), v(&b[2])))
+            };
+            for a in 0..3 {
+                let want = b[a].area();
+                assert_eq!(got[a].to_bits(), want.to_bits(), "{:?}", b[a]);
+                kinds[if want == 0.0 {
+                    0
+                } else if want.is_finite() {
+                    1
+                } else {
+                    2
+                }] += 1;
+            }
+        }
+        assert!(kinds.iter().all(|&k| k > 0), "{kinds:?}");
     }
 }
