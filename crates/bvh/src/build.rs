@@ -196,7 +196,7 @@ fn node_bounds_a(refs: &[PrimRef]) -> (BoxA, BoxA) {
 fn object_partition(refs: &mut [PrimRef], o: &ObjectSplit, cbounds: &Aabb) -> usize {
     let n = refs.len();
     let (binner, axis, split) = (&o.binner, o.axis, o.split);
-    let mid = partition(refs, |r| binner.bin_axis(r.centroid2(), axis) < split);
+    let mid = partition(refs, binner.left_of(axis, split));
     if mid == 0 || mid == n {
         return median_split(refs, cbounds);
     }

@@ -95,13 +95,29 @@ impl Binner {
         ]
     }
 
-    /// Bin index on one axis (the partition needs only the split axis).
-    #[inline(always)]
+    /// Bin index on one axis: the scalar definition, which the tests hold [`Binner::bin`] and
+    /// [`Binner::left_of`] to.
+    #[cfg(test)]
     pub(super) fn bin_axis(&self, c: Vec3A, axis: usize) -> usize {
         self.index((c[axis] - self.min[axis]) * self.scale[axis])
     }
 
+    /// The partition's side test of a split before bin `split` (in `1..bins`) on `axis`: true
+    /// when the reference's centroid bins before `split` ([`Binner::bin_axis`]). That is the
+    /// case exactly when `!(f >= split)`, with `f` the same sum, subtraction and product (the
+    /// truncation of `f < split` is below `split`, a NaN bins to 0 and compares false), so
+    /// the test needs neither the conversion nor the clamp.
     #[inline(always)]
+    pub(super) fn left_of(&self, axis: usize, split: usize) -> impl Fn(&PrimRef) -> bool {
+        debug_assert!(axis < 3 && (1..self.bins).contains(&split));
+        let (m, s, sp) = (self.min[axis], self.scale[axis], split as f32);
+        move |r: &PrimRef| {
+            let (lo, hi) = r.axis_min_max(axis);
+            !((lo + hi - m) * s >= sp)
+        }
+    }
+
+    #[cfg(test)]
     fn index(&self, f: f32) -> usize {
         // `NaN as i32` is 0; the mask (a no-op, bins <= MAX_BINS = 32) drops bounds checks.
         (f as i32).clamp(0, self.bins as i32 - 1) as usize & (MAX_BINS - 1)

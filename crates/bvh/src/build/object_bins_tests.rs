@@ -291,3 +291,59 @@ fn lane_areas_equal_the_negated_max_area() {
         assert!(kinds.iter().all(|&k| k > 0), "{kinds:?}");
     }
 }
+
+/// [`Binner::left_of`] is `bin_axis(centroid, axis) < split` for every split, on centroids at
+/// special values and exactly on the split planes (it fails if `>=` becomes `>`).
+#[test]
+fn side_by_compare_equals_the_bin_index() {
+    let special = [
+        0.0,
+        -0.0,
+        0.5,
+        1.0,
+        1.5,
+        2.0,
+        2.999_999_8,
+        3.0,
+        16.0,
+        31.0,
+        31.5,
+        32.0,
+        1e9,
+        -0.5,
+        -1.0,
+        -1e9,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        f32::NAN,
+        f32::MIN_POSITIVE,
+    ];
+    let mut rnd = uniform(51, 40.0);
+    let mut on_plane = 0;
+    for bins in [2usize, 5, 17, 32] {
+        for scale in [Vec3A::ONE, Vec3A::new(0.5, 2.0, 0.0)] {
+            let binner = Binner {
+                min: Vec3A::ZERO,
+                scale,
+                last: Vec3A::splat((bins - 1) as f32),
+                bins,
+            };
+            let mut values: Vec<f32> = special.to_vec();
+            values.extend((0..200).map(|_| rnd()));
+            values.extend((0..bins).map(|i| i as f32 / 0.5));
+            for &v in &values {
+                // Centroid `v + 0` on x, y, z (the reference's `hi` is 0).
+                let r = PrimRef::new(Vec3::splat(v), Vec3::ZERO, 7);
+                for axis in 0..3 {
+                    for split in 1..bins {
+                        let want = binner.bin_axis(r.centroid2(), axis) < split;
+                        assert_eq!(binner.left_of(axis, split)(&r), want, "{v} {axis} {split}");
+                        let f = (r.centroid2()[axis] - binner.min[axis]) * binner.scale[axis];
+                        on_plane += (f == split as f32) as usize;
+                    }
+                }
+            }
+        }
+    }
+    assert!(on_plane > 0);
+}

@@ -56,6 +56,15 @@ impl PrimRef {
         }
     }
 
+    /// The box's minimum and maximum on `axis` (0, 1 or 2) from memory, without a dynamic
+    /// lane index.
+    #[inline(always)]
+    pub(super) fn axis_min_max(&self, axis: usize) -> (f32, f32) {
+        // SAFETY: `PrimRef` is `repr(C)` of two `Vec4`, i.e. eight `f32` without padding.
+        let a = unsafe { &*(self as *const PrimRef as *const [f32; 8]) };
+        (a[axis & 3], a[4 + (axis & 3)])
+    }
+
     /// Twice the box centre (the factor 2 cancels in binning). Lane `w` is a normal float.
     #[inline(always)]
     pub(super) fn centroid2(&self) -> Vec3A {
