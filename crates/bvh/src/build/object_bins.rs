@@ -85,14 +85,19 @@ impl Binner {
     /// the truncation of a value in `0..=bins - 1` is its floor.
     #[inline(always)]
     fn bin(&self, c: Vec3A) -> [usize; 3] {
-        let f = (c - self.min) * self.scale;
-        let g = self.last.min(f).max(Vec3A::ZERO);
-        let i = trunc3(g);
+        let i = trunc3(self.clamped(c));
         [
             i[0] as usize & (MAX_BINS - 1),
             i[1] as usize & (MAX_BINS - 1),
             i[2] as usize & (MAX_BINS - 1),
         ]
+    }
+
+    /// `f` clamped to `0..=bins - 1` per lane, NaN -> 0 ([`Binner::bin`] before the truncation).
+    #[inline(always)]
+    fn clamped(&self, c: Vec3A) -> Vec3A {
+        let f = (c - self.min) * self.scale;
+        self.last.min(f).max(Vec3A::ZERO)
     }
 
     /// Bin index on one axis: the scalar definition, which the tests hold [`Binner::bin`] and
@@ -183,7 +188,9 @@ fn bin_into_portable(refs: &[PrimRef], binner: &Binner, bins: &mut Bins) {
 }
 
 /// [`bin_into_portable`] with each box union as one 8-lane `vminps` (and the reference's
-/// [`NegBox`] as one load and one sign flip); the operand order of [`NegBox::union`].
+/// [`NegBox`] as one load and one sign flip; the operand order of [`NegBox::union`]), and
+/// the three axes' bin indices ([`Binner::bin`]: the same clamp and truncation, masked to
+/// `0..MAX_BINS`) turned into byte offsets of the boxes and counts in lanes.
 ///
 /// # Safety
 /// The CPU must support AVX.
@@ -191,18 +198,28 @@ fn bin_into_portable(refs: &[PrimRef], binner: &Binner, bins: &mut Bins) {
 #[target_feature(enable = "avx")]
 unsafe fn bin_into_avx(refs: &[PrimRef], binner: &Binner, bins: &mut Bins) {
     use std::arch::x86_64::*;
+    const AXIS_BYTES: usize = MAX_BINS * std::mem::size_of::<NegBox>();
     let neg_hi = _mm256_setr_ps(0.0, 0.0, 0.0, 0.0, -0.0, -0.0, -0.0, -0.0);
+    let mask = _mm_set1_epi32(MAX_BINS as i32 - 1);
+    let boxes = bins.boxes.as_mut_ptr() as *mut u8;
+    let counts = bins.counts.as_mut_ptr() as *mut u8;
     for r in refs {
         // SAFETY: `PrimRef` is `lo`, `hi` in 32 aligned bytes (`repr(C, align(32))`), as
-        // `NegBox`; the bins are `NegBox`es.
+        // `NegBox`. The masked indices are below `MAX_BINS`, so the offsets stay inside the
+        // axis' `MAX_BINS` boxes (32 bytes each, aligned) and counts rows (16 bytes each).
         unsafe {
             let v = _mm256_xor_ps(_mm256_load_ps(r as *const PrimRef as *const f32), neg_hi);
-            let b = binner.bin(r.centroid2());
-            for (axis, &k) in b.iter().enumerate() {
-                bins.counts[k][axis] += 1;
-                let p = &mut bins.boxes[axis][k] as *mut NegBox as *mut f32;
+            let i = _mm_and_si128(_mm_cvttps_epi32(binner.clamped(r.centroid2()).into()), mask);
+            let (ob, oc) = (_mm_slli_epi32::<5>(i), _mm_slli_epi32::<4>(i));
+            let add = |ob: i32, oc: i32, axis: usize| {
+                let c = counts.add(oc as usize + 4 * axis) as *mut u32;
+                *c += 1;
+                let p = boxes.add(axis * AXIS_BYTES + ob as usize) as *mut f32;
                 _mm256_store_ps(p, _mm256_min_ps(_mm256_load_ps(p), v));
-            }
+            };
+            add(_mm_cvtsi128_si32(ob), _mm_cvtsi128_si32(oc), 0);
+            add(_mm_extract_epi32::<1>(ob), _mm_extract_epi32::<1>(oc), 1);
+            add(_mm_extract_epi32::<2>(ob), _mm_extract_epi32::<2>(oc), 2);
         }
     }
 }
