@@ -112,6 +112,7 @@ impl Binner {
     /// case exactly when `!(f >= split)`, with `f` the same sum, subtraction and product (the
     /// truncation of `f < split` is below `split`, a NaN bins to 0 and compares false), so
     /// the test needs neither the conversion nor the clamp.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // a NaN `f` must give true
     #[inline(always)]
     pub(super) fn left_of(&self, axis: usize, split: usize) -> impl Fn(&PrimRef) -> bool {
         debug_assert!(axis < 3 && (1..self.bins).contains(&split));
@@ -287,6 +288,7 @@ pub(super) fn find_object_split(
 /// references: right-to-left accumulated area * count, then left-to-right cost evaluation.
 /// Returns the least cost, its axis and the first bin of its right side (the first in axis,
 /// then bin order among equal costs; `(inf, 0, 0)` when no boundary separates the centroids).
+#[allow(clippy::needless_range_loop)] // the axis addresses the boxes, counts and `skip`
 fn sweep_portable(
     bins: &Bins,
     nb: usize,
@@ -383,6 +385,7 @@ unsafe fn area3(
 /// The CPU must support AVX.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx")]
+#[allow(clippy::needless_range_loop)] // the loop index addresses several arrays in step
 unsafe fn sweep_avx(
     bins: &Bins,
     nb: usize,

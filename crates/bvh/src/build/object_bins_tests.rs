@@ -139,6 +139,7 @@ fn special_refs(seed: u32, n: u32) -> Vec<PrimRef> {
 /// [`NegBox::boxa`] is bit for bit the union of the references' [`BoxA`]s in reference order
 /// (the binning before the negated maximum), with the same counts.
 #[test]
+#[allow(clippy::needless_range_loop)] // the loop indices address several arrays in step
 fn negated_max_object_bins_equal_the_box_unions() {
     let refs = special_refs(21, 5000);
     for bins in [2usize, 9, 32] {
