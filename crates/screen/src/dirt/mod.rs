@@ -55,6 +55,7 @@
 //! `docs/notes/dirt.md`.
 
 mod best;
+mod block;
 mod cells;
 mod slabs;
 #[cfg(test)]
