@@ -32,8 +32,6 @@
 //! | [`WIDE`] | mask bit 31 | a cell read from the capture (> 255 entries or an id span > `u16::MAX`) |
 
 use parallax_raster::dirt::DirtCapture;
-#[cfg(not(target_arch = "x86_64"))]
-use parallax_raster::dirt::bucket_index;
 
 /// Bucket ends a line holds: compact lines need `B <= ENDS`.
 pub(crate) const ENDS: usize = 16;
@@ -240,46 +238,9 @@ fn halves_mut(lines: &mut [CellLine]) -> &mut [u16] {
     }
 }
 
-/// [`parallax_raster::dirt::bucket_index`] (eq. 1) with the conversion done by `cvttss2si` on 64 bits, which needs
-/// no saturation fix-ups: for `v > 0` below `2^63` it is `floor(v)`, above (and `+inf`) it is
-/// `i64::MIN`, `2^63` as `u64`; either way the `min` with `buckets - 1` gives what the
-/// saturating `v as u32` gives. Tested equal to `bucket_index`.
-#[inline(always)]
-pub(crate) fn bucket_at(zmin: f32, scale: f32, buckets: u32, z: f32) -> u32 {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{_mm_cvttss_si64, _mm_set_ss};
-        let v = (z - zmin) * scale;
-        if v > 0.0 {
-            // SAFETY: SSE is part of the x86_64 baseline.
-            let i = unsafe { _mm_cvttss_si64(_mm_set_ss(v)) } as u64;
-            i.min(buckets as u64 - 1) as u32
-        } else {
-            0
-        }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    bucket_index(zmin, scale, buckets, z)
-}
-
-/// Whether `mask` (a cell's non-empty buckets, [`parallax_raster::dirt::bucket_mask`]) has a bit of buckets
-/// `b0..=b1` (`b0 <= b1 < buckets`): `mask & bucket_mask(b0, b1, buckets) != 0` in two
-/// shifts (the bits at and above `b0`'s, then only the `b1 - b0 + 1` lowest kept).
-#[inline(always)]
-pub(crate) fn any_bucket(mask: u32, b0: u32, b1: u32, buckets: u32) -> bool {
-    let (lo, hi) = if buckets <= 32 {
-        (b0, b1)
-    } else {
-        let g = buckets.div_ceil(32);
-        (b0 / g, b1 / g)
-    };
-    ((mask >> (lo & 31)) << ((31 - (hi - lo)) & 31)) != 0
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use parallax_raster::dirt::{bucket_index, bucket_mask};
 
     /// Every bucket's entries from a line (its two ranges, plus the base) are the capture's
     /// CSR range, on random soups' views: B = 16 compact, with cells of every kind (all
@@ -357,70 +318,5 @@ mod tests {
             kinds.iter().all(|&k| k > 0),
             "cells of every kind: {kinds:?}"
         );
-    }
-
-    /// [`bucket_at`] is [`bucket_index`].
-    #[test]
-    fn bucket_at_is_bucket_index() {
-        let zs = [
-            0.0f32,
-            -1.0,
-            0.5,
-            1.0,
-            1.000_001,
-            2.5,
-            3.999_999,
-            4.0,
-            7.75,
-            100.0,
-            1e9,
-            4.3e9,
-            1e19,
-            1e30,
-            f32::MAX,
-            f32::INFINITY,
-            f32::NAN,
-        ];
-        for buckets in [1u32, 2, 16, 32, 255, 1 << 20] {
-            for &(zmin, scale) in &[(0.0f32, 1.0f32), (1.0, 0.37), (0.25, 16.0), (2.0, 1e-3)] {
-                for &z in &zs {
-                    for z in [z, z + zmin, z * 0.5 + zmin] {
-                        assert_eq!(
-                            bucket_at(zmin, scale, buckets, z),
-                            bucket_index(zmin, scale, buckets, z),
-                            "z {z} zmin {zmin} scale {scale} buckets {buckets}"
-                        );
-                    }
-                }
-            }
-        }
-    }
-
-    /// [`any_bucket`] is the mask test by [`bucket_mask`].
-    #[test]
-    fn any_bucket_is_the_mask_test() {
-        let masks = [
-            0u32,
-            1,
-            0x8000_0000,
-            u32::MAX,
-            0x0001_0000,
-            0x5555_5555,
-            0xa0a0_0001,
-            0x0000_0ff0,
-        ];
-        for buckets in [1u32, 2, 7, 16, 31, 32, 33, 48, 64, 100, 255] {
-            for b0 in 0..buckets {
-                for b1 in b0..buckets {
-                    for &m in &masks {
-                        assert_eq!(
-                            any_bucket(m, b0, b1, buckets),
-                            m & bucket_mask(b0, b1, buckets) != 0,
-                            "mask {m:#x} buckets {b0}..={b1} of {buckets}"
-                        );
-                    }
-                }
-            }
-        }
     }
 }

@@ -55,7 +55,6 @@
 //! `docs/notes/dirt.md`.
 
 mod best;
-mod block;
 mod cells;
 mod slabs;
 #[cfg(test)]

@@ -20,12 +20,9 @@
 //! texel's reciprocal bounds, or (`slabs`) its slabs of `w` missing every occupied slab of the
 //! texel: the texel is skipped, the walk moves to `λ_exit` and one level up (a skip by the
 //! slabs drops only cells whose buckets at the ray's depths are all empty, `slabs` module
-//! docs). Overlapping above level 0: one level down, except at level 2, where the 4x4 level-0
-//! cells under the texel are tested in one step (`block`: the cells the level-0 walk would
-//! trace there, in its order, over the same `λ` and `w`), and a walk starts at level 2. At
-//! level 0: the cell's record (bounds, eq. 1 scale, non-empty bucket mask), the buckets of the
-//! ray's depth span there, and if any of them holds a triangle, bucket tracing; then on to
-//! `λ_exit`.
+//! docs). Overlapping above level 0: one level down. At level 0: the cell's record (bounds, eq. 1
+//! scale, non-empty bucket mask), the buckets of the ray's depth span there, and if any of
+//! them holds a triangle, bucket tracing; then on to `λ_exit`.
 //!
 //! **Bucket tracing.** The ray's depth span in the cell gives the bucket range by eq. 1
 //! ([`bucket_index`], the capture's own function); buckets are visited in ray order (towards
@@ -67,8 +64,7 @@
 
 use parallax_raster::dirt::{DirtCapture, bucket_index};
 
-use super::block;
-use super::cells::{CellLine, CellLines, Entries, any_bucket, bucket_at};
+use super::cells::{CellLine, CellLines, Entries};
 use super::slabs::Slabs;
 use super::tri4::Query;
 use super::view::{Isa, MAX_LEVELS, ViewConsts, ViewRay};
@@ -322,14 +318,12 @@ fn walk_body<const UX: bool, const UY: bool, const W_FALLS: bool, const ISA: u8>
     q: &mut Query,
 ) -> WalkEnd {
     let texels = slabs.texels.as_slice();
-    let mut blk = block::Block::EMPTY;
+    let lines = cells.lines.as_slice();
 
     // The start cell (clamped onto the grid: the start may lie on the frustum's boundary).
     let mut cx = cell_index(seg.x, vc.cells_x);
     let mut cy = cell_index(seg.y, vc.cells_y);
-    // Start at the blocks' level (`block`): a block holding the start cell tests it first;
-    // a skipped level-2 texel holds no cell the walk would trace (Hi-Z).
-    let mut level = block::LEVEL.min(vc.top);
+    let mut level = 0usize;
     let mut l = 0.0f32;
     let mut w_l = seg.w;
     let mut hit_l = HitLambda::NONE;
@@ -358,61 +352,31 @@ fn walk_body<const UX: bool, const UY: bool, const W_FALLS: bool, const ISA: u8>
         let t = &texels[texel];
         // The min-max bounds, then the depth slabs (`slabs`).
         let overlaps = w_hi >= t.lo && w_lo <= t.hi && t.meets(w_lo, w_hi);
-        let mut overlaps = overlaps;
         if overlaps {
-            // The level-0 cells to trace: bit 31 for the walk's own cell, or a block's mask.
-            let (bx, by) = (tx << block::LEVEL, ty << block::LEVEL);
-            let mut m = 1u32 << 31;
             if level > 0 {
-                let n = block::SIDE;
-                if level != block::LEVEL || bx + n > vc.cells_x || by + n > vc.cells_y {
-                    level -= 1;
-                    continue;
-                }
-                // The 4x4 cells under the texel in one step (`block`).
-                let br = block::Ray {
-                    bx,
-                    by,
-                    x_inv: xs.inv,
-                    x_c: xs.c,
-                    y_inv: ys.inv,
-                    y_c: ys.c,
-                    i0: cx - bx,
-                    j0: cy - by,
-                    l,
-                    w_l,
-                    w: seg.w,
-                    dw: seg.dw,
-                    ux: UX,
-                    uy: UY,
-                    w_falls: W_FALLS,
-                };
-                let width = vc.level_width[0] as usize;
-                let row0 = vc.level_offset[0] as usize + by as usize * width + bx as usize;
-                m = if ISA != Isa::Baseline as u8 {
-                    block::test::<true>(texels, row0, width, &br, &mut blk)
-                } else {
-                    block::test::<false>(texels, row0, width, &br, &mut blk)
-                };
-                overlaps = m != 0;
+                level -= 1;
+                continue;
             }
-            while m != 0 {
-                let p = m.trailing_zeros();
-                m &= m - 1;
-                let (c, v) = if p == 31 {
-                    ((cx, cy), (w_l, w_exit, l_exit))
-                } else {
-                    let (i, j) = block::cell_of::<UX, UY>(p);
-                    let k = block::lane(i, j);
-                    ((bx + i, by + j), (blk.w_in[k], blk.w_out[k], blk.exit[k]))
+            q.counters.cells += 1;
+            let index = cy as usize * vc.cells_x as usize + cx as usize;
+            let rec = &lines[index];
+            let nb = vc.buckets;
+            let b_a = bucket_at(rec.zmin, rec.scale, nb, 1.0 / w_l);
+            let b_b = bucket_at(rec.zmin, rec.scale, nb, 1.0 / w_exit);
+            // Skip the cell when every bucket of the range is empty (null head pointers).
+            if any_bucket(rec.mask, b_a.min(b_b), b_a.max(b_b), nb) {
+                let cell = Cell {
+                    index,
+                    zmin: rec.zmin,
+                    scale: rec.scale,
+                    mask: rec.mask,
+                    buckets: (b_a, b_b),
+                    l_exit,
                 };
-                if visit::<ISA>(vc, cap, cells, c, v, r, seg, &mut hit_l, q) {
+                if trace_cell::<ISA>(vc, cap, cells, rec, r, seg, &cell, &mut hit_l, q) {
                     end = Some(WalkEnd::Done);
                     break;
                 }
-            }
-            if end.is_some() {
-                break;
             }
         }
         // On to the next texel.
@@ -449,43 +413,6 @@ fn walk_body<const UX: bool, const UY: bool, const W_FALLS: bool, const ISA: u8>
         q.counters.truncated += 1;
         WalkEnd::Continue
     })
-}
-
-/// A level-0 cell `(cx, cy)` the walk reaches with its texel overlapping, over `λ` up to
-/// `l_exit` with the ray's `w` from `w_in` to `w_out`: its buckets of those depths, and if any
-/// of them holds a triangle, bucket tracing; true when the answer is known.
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn visit<const ISA: u8>(
-    vc: &ViewConsts,
-    cap: &DirtCapture,
-    cells: &CellLines,
-    (cx, cy): (u32, u32),
-    (w_in, w_out, l_exit): (f32, f32, f32),
-    r: &ViewRay,
-    seg: &Segment,
-    hit_l: &mut HitLambda,
-    q: &mut Query,
-) -> bool {
-    q.counters.cells += 1;
-    let index = cy as usize * vc.cells_x as usize + cx as usize;
-    let rec = &cells.lines[index];
-    let nb = vc.buckets;
-    let b_a = bucket_at(rec.zmin, rec.scale, nb, 1.0 / w_in);
-    let b_b = bucket_at(rec.zmin, rec.scale, nb, 1.0 / w_out);
-    // Skip the cell when every bucket of the range is empty (null head pointers).
-    if !any_bucket(rec.mask, b_a.min(b_b), b_a.max(b_b), nb) {
-        return false;
-    }
-    let cell = Cell {
-        index,
-        zmin: rec.zmin,
-        scale: rec.scale,
-        mask: rec.mask,
-        buckets: (b_a, b_b),
-        l_exit,
-    };
-    trace_cell::<ISA>(vc, cap, cells, rec, r, seg, &cell, hit_l, q)
 }
 
 /// `λ` of the best hit so far, computed once per best hit.
@@ -579,6 +506,42 @@ fn trace_cell<const ISA: u8>(
     }
 }
 
+/// [`bucket_index`] (eq. 1) with the conversion done by `cvttss2si` on 64 bits, which needs
+/// no saturation fix-ups: for `v > 0` below `2^63` it is `floor(v)`, above (and `+inf`) it is
+/// `i64::MIN`, `2^63` as `u64`; either way the `min` with `buckets - 1` gives what the
+/// saturating `v as u32` gives. Tested equal to [`bucket_index`].
+#[inline(always)]
+fn bucket_at(zmin: f32, scale: f32, buckets: u32, z: f32) -> u32 {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_cvttss_si64, _mm_set_ss};
+        let v = (z - zmin) * scale;
+        if v > 0.0 {
+            // SAFETY: SSE is part of the x86_64 baseline.
+            let i = unsafe { _mm_cvttss_si64(_mm_set_ss(v)) } as u64;
+            i.min(buckets as u64 - 1) as u32
+        } else {
+            0
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    bucket_index(zmin, scale, buckets, z)
+}
+
+/// Whether `mask` (a cell's non-empty buckets, [`parallax_raster::dirt::bucket_mask`]) has a bit of buckets
+/// `b0..=b1` (`b0 <= b1 < buckets`): `mask & bucket_mask(b0, b1, buckets) != 0` in two
+/// shifts (the bits at and above `b0`'s, then only the `b1 - b0 + 1` lowest kept).
+#[inline(always)]
+fn any_bucket(mask: u32, b0: u32, b1: u32, buckets: u32) -> bool {
+    let (lo, hi) = if buckets <= 32 {
+        (b0, b1)
+    } else {
+        let g = buckets.div_ceil(32);
+        (b0 / g, b1 / g)
+    };
+    ((mask >> (lo & 31)) << ((31 - (hi - lo)) & 31)) != 0
+}
+
 /// `floor(f)` clamped to `[0, n)`.
 #[inline(always)]
 fn cell_index(f: f32, n: u32) -> u32 {
@@ -616,4 +579,75 @@ fn refine<const UP: bool>(c: u32, t: u32, level: u32, f: f32, n: u32) -> u32 {
     let f = if f > 0.0 { f as u32 } else { 0 };
     let f = f.clamp(lo, hi);
     if UP { f.max(c) } else { f.min(c) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use parallax_raster::dirt::bucket_mask;
+
+    /// [`bucket_at`] is [`bucket_index`].
+    #[test]
+    fn bucket_at_is_bucket_index() {
+        let zs = [
+            0.0f32,
+            -1.0,
+            0.5,
+            1.0,
+            1.000_001,
+            2.5,
+            3.999_999,
+            4.0,
+            7.75,
+            100.0,
+            1e9,
+            4.3e9,
+            1e19,
+            1e30,
+            f32::MAX,
+            f32::INFINITY,
+            f32::NAN,
+        ];
+        for buckets in [1u32, 2, 16, 32, 255, 1 << 20] {
+            for &(zmin, scale) in &[(0.0f32, 1.0f32), (1.0, 0.37), (0.25, 16.0), (2.0, 1e-3)] {
+                for &z in &zs {
+                    for z in [z, z + zmin, z * 0.5 + zmin] {
+                        assert_eq!(
+                            bucket_at(zmin, scale, buckets, z),
+                            bucket_index(zmin, scale, buckets, z),
+                            "z {z} zmin {zmin} scale {scale} buckets {buckets}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    /// [`any_bucket`] is the mask test by [`bucket_mask`].
+    #[test]
+    fn any_bucket_is_the_mask_test() {
+        let masks = [
+            0u32,
+            1,
+            0x8000_0000,
+            u32::MAX,
+            0x0001_0000,
+            0x5555_5555,
+            0xa0a0_0001,
+            0x0000_0ff0,
+        ];
+        for buckets in [1u32, 2, 7, 16, 31, 32, 33, 48, 64, 100, 255] {
+            for b0 in 0..buckets {
+                for b1 in b0..buckets {
+                    for &m in &masks {
+                        assert_eq!(
+                            any_bucket(m, b0, b1, buckets),
+                            m & bucket_mask(b0, b1, buckets) != 0,
+                            "mask {m:#x} buckets {b0}..={b1} of {buckets}"
+                        );
+                    }
+                }
+            }
+        }
+    }
 }
