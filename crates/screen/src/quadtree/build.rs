@@ -50,8 +50,7 @@ use super::merge::MergeCtx;
 use super::node::{FLAG_CRACK, Node};
 use super::prune::Blocked;
 use super::tree::{
-    Level, QuadTree, Z_FLOOR_TABLE_MAX, Z_REGION_MIN_GAIN, Z_SKIP_MARGIN, init_row, par_rows,
-    plane_levels,
+    Level, QuadTree, Z_FLOOR_TABLE_MAX, Z_REGION_MIN_GAIN, Z_SKIP_MARGIN, init_row, plane_levels,
 };
 use crate::planes::layer_size;
 use crate::{LayerPlanes, NormalSource, ScreenError, UnitCube};
@@ -506,68 +505,6 @@ impl QuadTree {
         }
         self.trigger_z = tz;
         cur
-    }
-}
-
-impl QuadTree {
-    /// [`Self::mark_unsafe`] given the unsafe pixels `px` (indices `j W + i`, those with a
-    /// finite `tz`, any order): only their ancestors are visited. Per level, a dense array
-    /// of the nodes' smallest trigger depth below them is filled from the nodes listed for
-    /// the level below (no sort): at level 1 the listed pixels, above it the distinct nodes
-    /// the level below marked (a node is listed when its minimum is first lowered from
-    /// `+inf`), and each listed node is marked once with its minimum — the same nodes with
-    /// the same minima as [`Self::mark_unsafe`] (the trigger depths are `+0` or positive and
-    /// never NaN, so their minimum does not depend on the order or grouping it is taken in;
-    /// marking a node again with the same value changes nothing).
-    pub(crate) fn mark_unsafe_listed(&mut self, tz: Vec<f32>, px: &[u32]) -> Vec<f32> {
-        let (w, nl) = (self.width, self.levels.len());
-        // The pixels' coordinates and trigger depths, one division each.
-        let mut cur: Vec<(u32, u32, f32)> =
-            px.iter().map(|&k| (k % w, k / w, tz[k as usize])).collect();
-        let l0 = &mut self.levels[0];
-        for &(x, y, t) in &cur {
-            l0.nodes[(y * l0.w + x) as usize].mark_unsafe(t);
-        }
-        let mut mins: Vec<f32> = Vec::new();
-        if nl == 1 {
-            mins.resize(l0.nodes.len(), f32::INFINITY);
-            for &(x, y, t) in &cur {
-                mins[(y * l0.w + x) as usize] = t;
-            }
-        }
-        let mut next: Vec<(u32, u32, f32)> = Vec::with_capacity(cur.len());
-        for l in 1..nl {
-            let lv = &mut self.levels[l];
-            // The dense minima set to `+inf` in parallel rows (level 1's is the largest;
-            // the levels above shrink, so its allocation is reused).
-            let (len, lw) = (lv.nodes.len(), lv.w);
-            if l == 1 {
-                mins = par_rows(len, lw as usize, f32::INFINITY, |_, _| {});
-            } else {
-                mins.truncate(len);
-                mins.par_chunks_mut(lw as usize)
-                    .for_each(|r| r.fill(f32::INFINITY));
-            }
-            next.clear();
-            for &(x, y, t) in &cur {
-                let (x, y) = (x >> 1, y >> 1);
-                let m = &mut mins[(y * lw + x) as usize];
-                if *m == f32::INFINITY {
-                    next.push((x, y, 0.0));
-                }
-                if t < *m {
-                    *m = t;
-                }
-            }
-            for e in next.iter_mut() {
-                let i = (e.1 * lw + e.0) as usize;
-                e.2 = mins[i];
-                lv.nodes[i].mark_unsafe(e.2);
-            }
-            core::mem::swap(&mut cur, &mut next);
-        }
-        self.trigger_z = tz;
-        mins
     }
 }
 

@@ -81,14 +81,20 @@ pub(super) fn fixed_point(
     // Trigger depths of the effective planes: the pixel planes' except under merged nodes,
     // which hold no blocked pixel, so only they can be newly unsafe.
     let mut newly = merged_triggers(&mut tz, &fronts, ctx, w, deeper, &levels, &eff);
+    // The pixels blocked by the iterations (not in `listed`: they were under merged nodes).
+    let mut added: Vec<u32> = Vec::new();
     while !newly.is_empty() {
-        listed.extend_from_slice(&newly);
+        added.extend_from_slice(&newly);
         let dissolved = reprune(ctx, &mut levels, &newly, w);
         newly = refill(&mut tz, &mut eff, ctx, (w, h), deeper, &levels, &dissolved);
     }
-    // A pixel blocked after a proxy made it unsafe may be safe against its own plane.
-    listed.retain(|&k| tz[k as usize].is_finite());
-    listed.sort_unstable();
+    // The pixels listed by the leaf pass keep their pixel planes' (finite) trigger depths.
+    debug_assert!(listed.iter().all(|&k| tz[k as usize].is_finite()));
+    if !added.is_empty() {
+        added.sort_unstable();
+        // A pixel blocked after a proxy made it unsafe may be safe against its own plane.
+        listed = super::mark_listed::merge_finite(&listed, &added, &tz);
+    }
     (levels, tz, eff, Some(listed))
 }
 
