@@ -142,7 +142,7 @@ mod tests {
                 let nodes = (0..lw * lh)
                     .map(|_| {
                         let z = rng.f(0.0, 1.0);
-                        if rng.next() % 3 == 0 {
+                        if rng.next().is_multiple_of(3) {
                             let (gx, gy) = (rng.f(-0.5, 0.5), rng.f(-0.5, 0.5));
                             Node::plane_with_gradient(z, gx, gy, l, w as f32, h as f32, 0)
                                 .unwrap_or(Node::EMPTY)
@@ -200,7 +200,7 @@ mod tests {
                     let run = 1 + (rng.next() % 12) as usize;
                     let end = (k + run).min(tz.len());
                     for t in tz[k..end].iter_mut() {
-                        *t = if rng.next() % 8 == 0 {
+                        *t = if rng.next().is_multiple_of(8) {
                             0.0
                         } else {
                             rng.f(0.0, 1.2)
