@@ -50,8 +50,7 @@ use super::merge::MergeCtx;
 use super::node::{FLAG_CRACK, Node};
 use super::prune::Blocked;
 use super::tree::{
-    Level, QuadTree, Z_FLOOR_TABLE_MAX, Z_REGION_MIN_GAIN, Z_SKIP_MARGIN, init_row, par_rows,
-    plane_levels,
+    Level, QuadTree, Z_FLOOR_TABLE_MAX, Z_REGION_MIN_GAIN, Z_SKIP_MARGIN, init_row, plane_levels,
 };
 use crate::planes::layer_size;
 use crate::{LayerPlanes, NormalSource, ScreenError, UnitCube};
@@ -214,7 +213,18 @@ impl QuadTree {
         padding.par_chunks_mut(w0 as usize).for_each(|row| {
             init_row(row, Node::EMPTY);
         });
-        if !deeper.is_empty() && !reference {
+        // Level 1 when made in the leaf pass (`leaves_and_level1`).
+        #[cfg_attr(not(target_arch = "x86_64"), allow(unused_mut))]
+        let mut level1: Option<Level> = None;
+        #[cfg(target_arch = "x86_64")]
+        if !deeper.is_empty() && !reference && nlev >= 2 {
+            let (l1, px) = leaves_and_level1(image, (w, h, w0, h0), &ctx, deeper, &leaf_row);
+            level1 = Some(l1);
+            px_triggers = Some(px);
+        }
+        if level1.is_some() {
+            // Made with level 1 above.
+        } else if !deeper.is_empty() && !reference {
             let cols = super::fixpoint::Columns::new(w, wf);
             // Every value is written by the row pass (`pixel_triggers_row`).
             let (mut tz, mut fronts) = (Vec::with_capacity(n_px), Vec::with_capacity(n_px));
@@ -260,7 +270,8 @@ impl QuadTree {
             (levels, tz, eff, None)
         } else {
             let px = px_triggers.expect("computed with the leaves");
-            super::fixpoint::fixed_point(&ctx, level0, nlev, (w, h), deeper, px)
+            let first = [Some(level0), level1].into_iter().flatten().collect();
+            super::fixpoint::fixed_point(&ctx, first, nlev, (w, h), deeper, px)
         };
         let mut tree = Self {
             width: w,
@@ -509,66 +520,91 @@ impl QuadTree {
     }
 }
 
-impl QuadTree {
-    /// [`Self::mark_unsafe`] given the unsafe pixels `px` (indices `j W + i`, those with a
-    /// finite `tz`, any order): only their ancestors are visited. Per level, a dense array
-    /// of the nodes' smallest trigger depth below them is filled from the nodes listed for
-    /// the level below (no sort): at level 1 the listed pixels, above it the distinct nodes
-    /// the level below marked (a node is listed when its minimum is first lowered from
-    /// `+inf`), and each listed node is marked once with its minimum — the same nodes with
-    /// the same minima as [`Self::mark_unsafe`] (the trigger depths are `+0` or positive and
-    /// never NaN, so their minimum does not depend on the order or grouping it is taken in;
-    /// marking a node again with the same value changes nothing).
-    pub(crate) fn mark_unsafe_listed(&mut self, tz: Vec<f32>, px: &[u32]) -> Vec<f32> {
-        let (w, nl) = (self.width, self.levels.len());
-        // The pixels' coordinates and trigger depths, one division each.
-        let mut cur: Vec<(u32, u32, f32)> =
-            px.iter().map(|&k| (k % w, k / w, tz[k as usize])).collect();
-        let l0 = &mut self.levels[0];
-        for &(x, y, t) in &cur {
-            l0.nodes[(y * l0.w + x) as usize].mark_unsafe(t);
-        }
-        let mut mins: Vec<f32> = Vec::new();
-        if nl == 1 {
-            mins.resize(l0.nodes.len(), f32::INFINITY);
-            for &(x, y, t) in &cur {
-                mins[(y * l0.w + x) as usize] = t;
+/// The fixed point's leaf pass with level 1 (x86_64, two levels or more): per pair of pixel
+/// rows `2m`, `2m + 1` of `image` (level 0's image rows, padded width `w0`), the rows' leaves
+/// (`leaf_row`) and their pixel-plane trigger depths and deeper fronts
+/// ([`super::fixpoint::pixel_triggers_row`]), then level-1 row `m` from them while they are in
+/// cache — the nodes of [`super::prune::prune`]'s level 1 with the same blocked pixels (the
+/// pair's listed ones), by the same row kernel. Returns level 1 (`w0 / 2 x h0 / 2`, padding
+/// rows empty) and `(tz, listed, fronts)` as the row-by-row pass makes them.
+#[cfg(target_arch = "x86_64")]
+#[allow(clippy::type_complexity)]
+fn leaves_and_level1(
+    image: &mut [core::mem::MaybeUninit<Node>],
+    (w, h, w0, h0): (u32, u32, u32, u32),
+    ctx: &MergeCtx,
+    deeper: &[LayerPlanes],
+    leaf_row: &(impl Fn(&mut [Node], u32) + Sync),
+) -> (Level, (Vec<f32>, Vec<u32>, Vec<f32>)) {
+    let (wu, w0u, n_px) = (w as usize, w0 as usize, (w * h) as usize);
+    let (pw, ph) = (w0u / 2, (h0 / 2) as usize);
+    // Level-1 rows and columns over the image; the other rows are padding (empty).
+    let (ih, iw) = ((h as usize).div_ceil(2), wu.div_ceil(2));
+    let cols = super::fixpoint::Columns::new(w, ctx.wf);
+    let (mut tz, mut fronts) = (Vec::with_capacity(n_px), Vec::with_capacity(n_px));
+    let mut l1: Vec<Node> = Vec::with_capacity(pw * ph);
+    let (l1_img, l1_pad) = l1.spare_capacity_mut()[..pw * ph].split_at_mut(ih * pw);
+    l1_pad.par_chunks_mut(pw).for_each(|row| {
+        init_row(row, Node::EMPTY);
+    });
+    // The second child row of the last pair when `h` is odd: a padding row (empty).
+    let empty = vec![Node::EMPTY; if h % 2 == 1 { w0u } else { 0 }];
+    let listed: Vec<u32> = image
+        .par_chunks_mut(2 * w0u)
+        .zip(tz.spare_capacity_mut()[..n_px].par_chunks_mut(2 * wu))
+        .zip(fronts.spare_capacity_mut()[..n_px].par_chunks_mut(2 * wu))
+        .zip(l1_img.par_chunks_mut(pw))
+        .enumerate()
+        .flat_map_iter(|(m, (((rows, t), f), out))| {
+            let j0 = 2 * m as u32;
+            let (r0, r1) = rows.split_at_mut(w0u);
+            let ((t0, t1), (f0, f1)) = (t.split_at_mut(wu), f.split_at_mut(wu));
+            let r0 = init_row(r0, Node::EMPTY);
+            leaf_row(r0, j0);
+            let pt = |t, f, row: &[Node], j| {
+                super::fixpoint::pixel_triggers_row(t, f, row, j, ctx, &cols, deeper)
+            };
+            let mut listed = pt(t0, f0, r0, j0);
+            if !r1.is_empty() {
+                let r1 = init_row(r1, Node::EMPTY);
+                leaf_row(r1, j0 + 1);
+                listed.append(&mut pt(t1, f1, r1, j0 + 1));
             }
-        }
-        let mut next: Vec<(u32, u32, f32)> = Vec::with_capacity(cur.len());
-        for l in 1..nl {
-            let lv = &mut self.levels[l];
-            // The dense minima set to `+inf` in parallel rows (level 1's is the largest;
-            // the levels above shrink, so its allocation is reused).
-            let (len, lw) = (lv.nodes.len(), lv.w);
-            if l == 1 {
-                mins = par_rows(len, lw as usize, f32::INFINITY, |_, _| {});
+            // Level-1 row `m`: its parents over a listed pixel do not merge.
+            let mut blocked = vec![false; pw];
+            let base = j0 as usize * wu;
+            for &k in &listed {
+                let d = k as usize - base;
+                blocked[(if d >= wu { d - wu } else { d }) >> 1] = true;
+            }
+            // SAFETY: both rows of the pair were initialised (`init_row`).
+            let two = unsafe { &*(rows as *const [_] as *const [Node]) };
+            let scratch;
+            let two = if two.len() == 2 * w0u {
+                two
             } else {
-                mins.truncate(len);
-                mins.par_chunks_mut(lw as usize)
-                    .for_each(|r| r.fill(f32::INFINITY));
-            }
-            next.clear();
-            for &(x, y, t) in &cur {
-                let (x, y) = (x >> 1, y >> 1);
-                let m = &mut mins[(y * lw + x) as usize];
-                if *m == f32::INFINITY {
-                    next.push((x, y, 0.0));
-                }
-                if t < *m {
-                    *m = t;
-                }
-            }
-            for e in next.iter_mut() {
-                let i = (e.1 * lw + e.0) as usize;
-                e.2 = mins[i];
-                lv.nodes[i].mark_unsafe(e.2);
-            }
-            core::mem::swap(&mut cur, &mut next);
-        }
-        self.trigger_z = tz;
-        mins
+                scratch = [two, &empty[..]].concat();
+                &scratch[..]
+            };
+            let out = init_row(out, Node::EMPTY);
+            let allow = super::prune::Allow(Some(&blocked));
+            ctx.parent_row_fast_of(two, 1, m as u32, &mut out[..iw.min(pw)], allow);
+            listed
+        })
+        .collect();
+    // SAFETY: the pairs cover `0..n_px` (`pixel_triggers_row` wrote every value) and level
+    // 1's image rows; the padding rows were initialised above.
+    unsafe {
+        tz.set_len(n_px);
+        fronts.set_len(n_px);
+        l1.set_len(pw * ph);
     }
+    let level1 = Level {
+        w: pw as u32,
+        h: ph as u32,
+        nodes: l1,
+    };
+    (level1, (tz, listed, fronts))
 }
 
 /// Flag `O` of G-buffer leaves: [`crate::planes::crack_flags`] over the decoded leaf planes

@@ -11,7 +11,10 @@
 //! - the pixel planes' trigger depths are computed by the leaf pass, each row right after
 //!   its leaves (`pixel_triggers_row`, no second pass over level 0); the pixel planes are
 //!   decoded from the leaves only where a deeper plane needs them (pixel centres tabulated
-//!   per column and row), not copied into a [`LayerPlanes`] first; on x86_64 four pixels
+//!   per column and row), not copied into a [`LayerPlanes`] first; on x86_64 (two levels or
+//!   more) the same pass makes level 1, each row right after the leaves of its two child rows
+//!   and with their blocked pixels (`leaves_and_level1` in `build.rs`), so the pruning goes
+//!   on from level 2 without reading level 0 again; on x86_64 four pixels
 //!   per step, one per lane (`trigger_lanes`; eight with AVX2, `trigger_avx2`), elsewhere each pixel's four footprint corners
 //!   in lanes ([`super::cascade::pixel_trigger_lanes`]);
 //! - the blocked pixels are kept as a list, not a `W x H` map: pruning marks only their
@@ -60,10 +63,11 @@ use crate::LayerPlanes;
 /// is the pixel's own leaf or where it has none), and the unsafe pixels (indices `j W + i` of the
 /// finite trigger depths, ascending). `deeper` is not empty; `(tz, listed)`: the trigger
 /// depths of the pixel planes and the pixels where they are finite, ascending, and the
-/// pixels' deeper fronts (computed with the leaves, [`pixel_triggers_row`] per row).
+/// pixels' deeper fronts (computed with the leaves, [`pixel_triggers_row`] per row);
+/// `first`: level 0, and level 1 if the leaf pass made it (the pruning goes on from there).
 pub(super) fn fixed_point(
     ctx: &MergeCtx,
-    level0: Level,
+    first: Vec<Level>,
     nlev: u32,
     (w, h): (u32, u32),
     deeper: &[LayerPlanes],
@@ -73,7 +77,7 @@ pub(super) fn fixed_point(
     // them is needed: a pixel under a merged node is not blocked (its node would not have
     // merged, and the set only grows), and a pixel whose effective node is its own leaf
     // gets the trigger depth of its pixel plane, finite only if it was listed from the start.
-    let mut levels = super::prune::prune(ctx, level0, nlev, Blocked::List(&listed), w, h);
+    let mut levels = super::prune::prune_from(ctx, first, nlev, Blocked::List(&listed), w, h);
     let mut eff = plane_levels(&levels, w, h);
     if ctx.never {
         return (levels, tz, eff, Some(listed));
@@ -81,14 +85,20 @@ pub(super) fn fixed_point(
     // Trigger depths of the effective planes: the pixel planes' except under merged nodes,
     // which hold no blocked pixel, so only they can be newly unsafe.
     let mut newly = merged_triggers(&mut tz, &fronts, ctx, w, deeper, &levels, &eff);
+    // The pixels blocked by the iterations (not in `listed`: they were under merged nodes).
+    let mut added: Vec<u32> = Vec::new();
     while !newly.is_empty() {
-        listed.extend_from_slice(&newly);
+        added.extend_from_slice(&newly);
         let dissolved = reprune(ctx, &mut levels, &newly, w);
         newly = refill(&mut tz, &mut eff, ctx, (w, h), deeper, &levels, &dissolved);
     }
-    // A pixel blocked after a proxy made it unsafe may be safe against its own plane.
-    listed.retain(|&k| tz[k as usize].is_finite());
-    listed.sort_unstable();
+    // The pixels listed by the leaf pass keep their pixel planes' (finite) trigger depths.
+    debug_assert!(listed.iter().all(|&k| tz[k as usize].is_finite()));
+    if !added.is_empty() {
+        added.sort_unstable();
+        // A pixel blocked after a proxy made it unsafe may be safe against its own plane.
+        listed = super::mark_listed::merge_finite(&listed, &added, &tz);
+    }
     (levels, tz, eff, Some(listed))
 }
 

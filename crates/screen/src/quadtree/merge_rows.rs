@@ -39,7 +39,7 @@ use glam::{BVec4A, Vec4};
 
 use super::merge::{MergeCtx, plane_range, union};
 use super::node::{FLAG_CRACK, Node};
-use super::tree::{Level, Z_EPS};
+use super::tree::Z_EPS;
 use super::trigger_lanes::f16x4;
 
 /// Lane-wise IEEE square root (`sqrtps`).
@@ -251,21 +251,34 @@ fn union_lanes(ranges: [(__m128, __m128); 4]) -> ([u32; 4], [u32; 4]) {
 }
 
 impl MergeCtx {
-    /// Row `qy` of level `l` (`out`: the row's nodes) from level `l - 1` (`child`), equal
-    /// node for node to [`MergeCtx::parent`] of each parent's four children; `allow`: which
-    /// parents may merge (contain no blocked pixel).
+    /// [`Self::parent_row_of`] with the child rows read from level `l - 1` (`child`).
+    #[cfg(test)]
     pub(super) fn parent_row(
         &self,
-        child: &Level,
+        child: &super::tree::Level,
         l: u32,
         qy: u32,
         out: &mut [Node],
         allow: super::prune::Allow,
     ) {
-        let cw = child.w as usize;
-        let y0 = 2 * qy as usize;
-        let r0 = &child.nodes[y0 * cw..(y0 + 1) * cw];
-        let r1 = &child.nodes[(y0 + 1) * cw..(y0 + 2) * cw];
+        let (cw, y0) = (child.w as usize, 2 * qy as usize);
+        let rows = &child.nodes[y0 * cw..(y0 + 2) * cw];
+        self.parent_row_of(rows.split_at(cw), l, qy, out, allow);
+    }
+
+    /// Row `qy` of level `l` (`out`: the row's nodes) from rows `2 qy`, `2 qy + 1` of level
+    /// `l - 1` (`r0`, `r1`, of one length), equal node for node to [`MergeCtx::parent`] of
+    /// each parent's four children; `allow`: which parents may merge (contain no blocked
+    /// pixel).
+    pub(super) fn parent_row_of(
+        &self,
+        (r0, r1): (&[Node], &[Node]),
+        l: u32,
+        qy: u32,
+        out: &mut [Node],
+        allow: super::prune::Allow,
+    ) {
+        let r1 = &r1[..r0.len()];
         for (g, outs) in out.chunks_mut(4).enumerate() {
             let qx0 = 4 * g;
             let kids = Kids::gather(r0, r1, qx0, outs.len());
@@ -604,7 +617,7 @@ mod tests {
                     }
                 })
                 .collect();
-            let child = Level {
+            let child = crate::quadtree::tree::Level {
                 w: cw,
                 h: ch,
                 nodes,

@@ -21,7 +21,7 @@
 //! `F8` / `M8` wrap `__m256` with `#[inline(always)]` methods and are only used inside
 //! [`MergeCtx::parent_row_fast`]'s AVX2 entry point (after `is_x86_feature_detected!`), so
 //! every intrinsic compiles to one instruction there. The test below compares rows of random
-//! levels with `merge_rows`' [`MergeCtx::parent_row`] (the SSE2 twin); the build's tests
+//! levels with `merge_rows`' [`MergeCtx::parent_row_of`] (the SSE2 twin); the build's tests
 //! compare whole trees with the reference build.
 
 use core::arch::x86_64::*;
@@ -202,11 +202,25 @@ fn increments8(lo: &Kids, hi: &Kids, k: usize) -> (F8, F8) {
 }
 
 impl MergeCtx {
-    /// [`MergeCtx::parent_row`] (same arguments, same nodes), eight parents per step in
-    /// AVX2 lanes if the CPU has AVX2 and F16C.
+    /// [`Self::parent_row_fast_of`] with the child rows read from level `l - 1` (`child`).
     pub(super) fn parent_row_fast(
         &self,
         child: &Level,
+        l: u32,
+        qy: u32,
+        out: &mut [Node],
+        allow: Allow,
+    ) {
+        let (cw, y0) = (child.w as usize, 2 * qy as usize);
+        self.parent_row_fast_of(&child.nodes[y0 * cw..(y0 + 2) * cw], l, qy, out, allow);
+    }
+
+    /// [`MergeCtx::parent_row_of`] (same nodes), eight parents per step in AVX2 lanes if the
+    /// CPU has AVX2 and F16C; `two`: child rows `2 qy` and `2 qy + 1` of level `l - 1`, one
+    /// after the other.
+    pub(super) fn parent_row_fast_of(
+        &self,
+        two: &[Node],
         l: u32,
         qy: u32,
         out: &mut [Node],
@@ -216,18 +230,17 @@ impl MergeCtx {
             && std::arch::is_x86_feature_detected!("f16c")
         {
             // SAFETY: the CPU has AVX2 and F16C (checked).
-            unsafe { self.parent_row8(child, l, qy, out, allow) }
+            unsafe { self.parent_row8(two, l, qy, out, allow) }
         } else {
-            self.parent_row(child, l, qy, out, allow)
+            self.parent_row_of(two.split_at(two.len() / 2), l, qy, out, allow)
         }
     }
 
     #[target_feature(enable = "avx2,f16c")]
-    fn parent_row8(&self, child: &Level, l: u32, qy: u32, out: &mut [Node], allow: Allow) {
-        let cw = child.w as usize;
-        let y0 = 2 * qy as usize;
-        let r0 = &child.nodes[y0 * cw..(y0 + 1) * cw];
-        let r1 = &child.nodes[(y0 + 1) * cw..(y0 + 2) * cw];
+    fn parent_row8(&self, two: &[Node], l: u32, qy: u32, out: &mut [Node], allow: Allow) {
+        let cw = two.len() / 2;
+        let r0 = &two[..cw];
+        let r1 = &two[cw..2 * cw];
         for (g, outs) in out.chunks_mut(8).enumerate() {
             let qx0 = 8 * g;
             let n = outs.len();
@@ -607,8 +620,10 @@ mod tests {
                 let mut four = vec![Node { a: 1, b: 1 }; pw as usize];
                 let mut eight = vec![Node { a: 2, b: 2 }; pw as usize];
                 ctx.parent_row(&child, l, qy, &mut four, allow);
+                let (cw, y0) = (cw as usize, 2 * qy as usize);
+                let two = &child.nodes[y0 * cw..(y0 + 2) * cw];
                 // SAFETY: AVX2 and F16C (checked above).
-                unsafe { ctx.parent_row8(&child, l, qy, &mut eight, allow) };
+                unsafe { ctx.parent_row8(two, l, qy, &mut eight, allow) };
                 assert_eq!(four, eight, "case {case}, level {l}, row {qy}");
                 merged += four.iter().filter(|n| n.is_plane()).count();
                 total += four.len();

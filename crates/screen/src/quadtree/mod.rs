@@ -95,6 +95,7 @@ mod leaf_avx2;
 #[cfg(target_arch = "x86_64")]
 mod leaf_lanes;
 mod leaves;
+mod mark_listed;
 pub mod merge;
 mod merge_lanes;
 #[cfg(target_arch = "x86_64")]

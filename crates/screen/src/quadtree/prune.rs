@@ -165,14 +165,28 @@ pub(super) fn prune(
     w: u32,
     h: u32,
 ) -> Vec<Level> {
+    prune_from(ctx, vec![level0], nlev, blocked_px, w, h)
+}
+
+/// [`prune`] continued from its first levels `levels` (level 0 and possibly more, built as
+/// [`prune`] builds them; more than level 0 only with [`Blocked::None`] or
+/// [`Blocked::List`]): the levels `levels.len()..nlev` added.
+pub(super) fn prune_from(
+    ctx: &MergeCtx,
+    mut levels: Vec<Level>,
+    nlev: u32,
+    blocked_px: Blocked,
+    w: u32,
+    h: u32,
+) -> Vec<Level> {
+    debug_assert!(levels.len() == 1 || !matches!(blocked_px, Blocked::Pixels(_)));
     let mut blocked: Vec<bool> = Vec::new();
     // The listed pixels' coordinates, one division each (not one per level).
     let xy: Vec<(u32, u32)> = match blocked_px {
         Blocked::List(px) => px.iter().map(|&k| (k % w, k / w)).collect(),
         _ => Vec::new(),
     };
-    let mut levels = vec![level0];
-    for l in 1..nlev {
+    for l in levels.len() as u32..nlev {
         let child = levels.last().unwrap();
         let (pw, ph) = (child.w / 2, child.h / 2);
         match blocked_px {
