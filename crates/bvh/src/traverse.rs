@@ -497,7 +497,7 @@ impl Best {
 
     #[inline(always)]
     pub fn hit(&self) -> Option<Hit> {
-        (self.tri != u32::MAX).then(|| Hit {
+        (self.tri != u32::MAX).then_some(Hit {
             prim: self.tri,
             t: self.t,
             u: self.u,
