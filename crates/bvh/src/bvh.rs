@@ -21,6 +21,8 @@ pub struct Bvh {
     pub(crate) tris: Vec<Tri>,
     pub(crate) prim_ids: Vec<u32>,
     pub(crate) blocks: Vec<tri4::Tri4>,
+    /// The index in `tris` of each block's lane 0 (blocks hold primitive ids, `tri4.rs`).
+    pub(crate) block_tris: Vec<u32>,
     pub(crate) bounds: Aabb,
     pub(crate) depth: u32,
     /// Triangles of the mesh (the triangle copies can be more: spatial splits duplicate).
@@ -57,6 +59,7 @@ impl Bvh {
             + self.nodes8.len() * size_of::<Node8>()
             + self.tris.len() * size_of::<Tri>()
             + self.blocks.len() * size_of::<Tri4>()
+            + self.block_tris.len() * size_of::<u32>()
             + self.prim_ids.len() * size_of::<u32>()
     }
 
@@ -97,7 +100,7 @@ impl Bvh {
         if count == 0 {
             return 0..0;
         }
-        let start = self.blocks[first as usize].tri[0] as usize;
+        let start = self.block_tris[first as usize] as usize;
         start..start + count as usize
     }
 

@@ -66,6 +66,8 @@ pub(crate) struct Collapsed {
     pub prim_ids: Vec<u32>,
     /// The leaves' triangles in blocks of four (`tri4.rs`); leaf references index these.
     pub blocks: Vec<Tri4>,
+    /// The index in `tris` of each block's lane 0.
+    pub block_tris: Vec<u32>,
     /// Depth of the deepest wide node (root = 1).
     pub depth: u32,
     /// The first block of each binary leaf, indexed by the leaf's first reference (`start`):
@@ -121,17 +123,19 @@ pub(crate) fn collapse(
         .map(|&(first, count)| {
             let mut b = Tri4::EMPTY;
             for l in 0..count as usize {
-                let index = first + l as u32;
-                b.set(l, &tris[index as usize], index);
+                let index = (first + l as u32) as usize;
+                b.set(l, &tris[index], prim_ids[index]);
             }
             b
         })
         .collect();
+    let block_tris = block_starts.iter().map(|&(first, _)| first).collect();
     Collapsed {
         nodes,
         tris,
         prim_ids,
         blocks,
+        block_tris,
         depth,
         leaf_blocks,
     }

@@ -26,7 +26,7 @@
 //! **Invariant:** the step computes, block for block, what `Bvh::leaf_closest` computes (the
 //! same lane tests under the same limit, hits offered to the same [`Best`]): results are
 //! bit-identical to the portable kernel's (`tests/simd_twins.rs`), to the 4-wide tree's and to
-//! the scalar test's (the closest hit is the lexicographic minimum of `(t, triangle)` over the
+//! the scalar test's (the closest hit is the lexicographic minimum of `(t, primitive id)` over the
 //! hits in range, whatever order they are offered in).
 
 use crate::bvh::Bvh;
@@ -181,7 +181,7 @@ pub(crate) trait LeafTest8<C: Counter> {
     fn test(&mut self, bvh: &Bvh, leaf: u32, t_max: &mut f32, stats: &mut C) -> bool;
 }
 
-/// Closest hit: keeps the lexicographic minimum of `(t, triangle index)` and the traversal's
+/// Closest hit: keeps the lexicographic minimum of `(t, primitive id)` and the traversal's
 /// `t_max` in `ctx`.
 pub(crate) struct ClosestLeaf<'a, T> {
     /// The node test, whose kernel's leaf step this runs (`NodeTest8::leaf_closest`; the

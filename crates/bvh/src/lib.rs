@@ -20,7 +20,7 @@
 //!   closest hit, any hit, all hits. `traverse.rs` is the same loop over the 4-wide tree
 //!   ([`Bvh::closest_hit4`], ...), kept as the twin; `closest_hit_scalar` / `any_hit_scalar` use
 //!   the per-triangle scalar test. `_with_stats` variants count the work ([`TraversalStats`]).
-//!   Closest-hit ties in `t` go to the lower triangle index.
+//!   Closest-hit ties in `t` go to the lower primitive id (the scene's triangle index).
 //! - **Packets** ([`Bvh::closest_hit_packet`], `packet8.rs`): up to [`PACKET_SIZE`] = 16
 //!   coherent rays traverse the 8-wide tree together, one SIMD lane per ray (AVX-512 or AVX2
 //!   behind runtime detection, portable twin, `lanes16.rs`; [`PacketLanes`]), with interval culling of whole packets
@@ -42,11 +42,11 @@
 //! stack, HVVR §5.3-5.4), the preorder layout for linear refit, and exact (watertight, robust)
 //! answers that equal brute force; a general-purpose crate hides those.
 //!
-//! **Invariant:** for any ray, [`Bvh::closest_hit`] returns a hit at the same `t` as
-//! [`brute_force_closest`] (the same triangle unless two are hit at the same `t`), and
+//! **Invariant:** for any ray, [`Bvh::closest_hit`] returns exactly the hit of
+//! [`brute_force_closest`] (an exact tie in `t` goes to the lowest primitive id in both, with
+//! or without spatial splits: the triangle blocks hold primitive ids, so the rule does not
+//! depend on the tree or on which copy of a split triangle a ray reaches), and
 //! [`Bvh::all_hits`] the same set as [`brute_force_all`]: the BVH only culls, never decides.
-//! (With spatial splits, exact ties in `t` between different triangles go to one of them, not
-//! necessarily the lowest index, and the twins agree on `t` but may differ on such ties.)
 //! Every fast path (8-wide AVX2, 16-lane AVX-512 and AVX2 packets, the 4-wide tree) returns bit for bit
 //! what its twin returns (`tests/simd_twins.rs`, `tests/packets.rs`).
 //!

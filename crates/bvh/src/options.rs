@@ -23,8 +23,9 @@ pub(crate) const MAX_BINS: usize = 32;
 ///
 /// With `spatial_splits`, a triangle can sit in several leaves: [`crate::Bvh::triangles`]
 /// then holds more entries than the mesh has triangles (the queries report each primitive
-/// once), and exact ties in `t` between different triangles go to one of them (no longer
-/// to the lowest index: which copy a ray reaches depends on the traversal order).
+/// once). Closest-hit ties keep their rule: the blocks hold primitive ids, so an exact tie in
+/// `t` between different triangles goes to the lowest primitive id whichever copy a ray
+/// reaches, as with the default build (`tests/ties.rs`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct BuildOptions {
     pub bins: usize,

@@ -17,7 +17,7 @@
 //!   with its own axis permutation, so mixed permutations within a packet need no special case.
 //!
 //! **Invariant:** every ray's answer equals [`Bvh::closest_hit`] exactly (prim, t, u, v): both
-//! return the lexicographic minimum of `(t, triangle index)` over the hits (ties at `t` are kept
+//! return the lexicographic minimum of `(t, primitive id)` over the hits (ties at `t` are kept
 //! for the tie-break by inclusive culling), and a ray's box tests here are conservative exactly
 //! when its single-ray box tests are. `tests/packets.rs` checks it.
 //!
@@ -323,7 +323,7 @@ impl Bvh {
             loop {
                 if sp == 0 {
                     for (i, o) in out.iter_mut().enumerate().take(rays.len()) {
-                        *o = best[i].hit(&self.prim_ids);
+                        *o = best[i].hit();
                     }
                     return;
                 }

@@ -28,7 +28,7 @@
 //! **Invariant:** every ray's answer equals [`Bvh::closest_hit`] exactly (prim, t, u, v): both
 //! interval tests only cull children that the ray's own slab test culls (their ranges contain
 //! the ray's origin, `1 / dir`, `t_min` and current `t_max`), the pops only drop rays with a
-//! closer hit, and each ray keeps the lexicographic minimum of `(t, triangle index)` over the
+//! closer hit, and each ray keeps the lexicographic minimum of `(t, primitive id)` over the
 //! hits it finds. `tests/packets.rs` checks it for every lane type the CPU supports (AVX-512,
 //! AVX2) and the portable twin.
 
@@ -242,9 +242,7 @@ impl Bvh {
             loop {
                 if sp == 0 {
                     for (i, o) in out.iter_mut().enumerate().take(rays.len()) {
-                        *o = ps[i / PACKET_SIZE]
-                            .best(i % PACKET_SIZE)
-                            .hit(&self.prim_ids);
+                        *o = ps[i / PACKET_SIZE].best(i % PACKET_SIZE).hit();
                     }
                     return;
                 }

@@ -31,7 +31,7 @@
 //!
 //! **Invariant:** every ray's answer equals [`Bvh::closest_hit`] exactly (prim, t, u, v): the
 //! node tests only cull conservatively, and each ray keeps the lexicographic minimum of
-//! `(t, triangle index)` over the hits it finds (ties at `t` kept by inclusive culling), which
+//! `(t, primitive id)` over the hits it finds (ties at `t` kept by inclusive culling), which
 //! is what the single-ray traversal returns whatever the order. `tests/packets.rs` checks it.
 
 use std::mem::MaybeUninit;
@@ -489,7 +489,7 @@ impl Bvh {
             loop {
                 if sp == 0 {
                     for (i, o) in out.iter_mut().enumerate().take(rays.len()) {
-                        *o = p.best(i).hit(&self.prim_ids);
+                        *o = p.best(i).hit();
                     }
                     return;
                 }

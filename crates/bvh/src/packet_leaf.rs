@@ -100,7 +100,7 @@ impl Packet {
 
     /// The watertight test of triangle `j` of block `b` (laid out as `q`) against the rays of
     /// `mask` (all sharing the axis permutation `k`), keeping each ray's lexicographically
-    /// smallest `(t, index)`.
+    /// smallest `(t, primitive id)`.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn triangle<L: Lanes16, const SHARED: bool>(
@@ -134,7 +134,7 @@ impl Packet {
             let t = l.mul(t_scaled, inv);
             let t_cur = l.load(&self.t_max);
             // Rays with a hit already (`best_tri != u32::MAX`) also take a tie at `t_cur`
-            // with a lower index (`Best::limit` / `Best::offer`).
+            // with a lower primitive id (`Best::limit` / `Best::offer`).
             let has_hit = inside & !l.gt_u32(inside, &self.best_tri, u32::MAX - 1);
             let closer = l.lt(t, t_cur) | (l.eq(t, t_cur) & l.gt_u32(has_hit, &self.best_tri, tri));
             let acc = inside & l.ne(det, zero) & l.gt(t, l.load(&self.t_min)) & closer;

@@ -45,19 +45,22 @@ impl Bvh {
             .with_min_len(1024)
             .for_each(|(tri, &id)| *tri = Tri::new(mesh.triangle(id as usize)));
         let tris = &self.tris;
-        self.blocks.par_iter_mut().with_min_len(1024).for_each(|b| {
-            for l in 0..4 {
-                if b.tri[l] != u32::MAX {
-                    let i = b.tri[l];
-                    b.set(l, &tris[i as usize], i);
+        self.blocks
+            .par_iter_mut()
+            .zip(self.block_tris.par_iter())
+            .with_min_len(1024)
+            .for_each(|(b, &start)| {
+                for l in 0..4 {
+                    if b.tri[l] != u32::MAX {
+                        b.set(l, &tris[start as usize + l], b.tri[l]);
+                    }
                 }
-            }
-        });
+            });
 
         // Leaf lanes, in parallel over nodes.
-        let blocks = &self.blocks;
+        let block_tris = &self.block_tris;
         let leaf_bounds = |first: u32, count: u32| {
-            let start = blocks[first as usize].tri[0] as usize;
+            let start = block_tris[first as usize] as usize;
             tris[start..start + count as usize]
                 .iter()
                 .fold(Aabb::EMPTY, |b, t| b.union(t.bounds()))

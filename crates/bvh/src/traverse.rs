@@ -227,9 +227,10 @@ impl Bvh {
 
     /// Closest hit with the SIMD leaf test (`tri4.rs`), or the scalar per-triangle test
     /// (`SIMD = false`, the slow twin kept for tests). Both break exact ties in `t` towards the
-    /// lower index in [`Bvh::triangles`], so the answer is the lexicographic minimum of
-    /// `(t, index)` over all hits, whatever order the leaves are visited in (the packet
-    /// traversal relies on this to return exactly the single-ray answer).
+    /// lower primitive id (the scene's triangle index), so the answer is the lexicographic
+    /// minimum of `(t, primitive id)` over all hits, whatever the tree (with or without spatial
+    /// splits) and whatever order the leaves are visited in (the packet traversal relies on
+    /// this to return exactly the single-ray answer): brute force's answer.
     #[inline(always)]
     fn closest_impl<C: Counter, const SIMD: bool>(&self, ray: &Ray, stats: &mut C) -> Option<Hit> {
         stats.ray();
@@ -250,13 +251,13 @@ impl Bvh {
                         .intersect_within(tri.p0, tri.p1, tri.p2, best.limit(*t_max));
                     stats.triangle(h.is_some());
                     if let Some(h) = h {
-                        best.offer(h.t, i as u32, h.u, h.v, t_max);
+                        best.offer(h.t, self.prim_ids[i], h.u, h.v, t_max);
                     }
                 }
             }
             false
         });
-        best.hit(&self.prim_ids)
+        best.hit()
     }
 
     /// Tests the blocks of a leaf against one ray and keeps the closest hit in `best`.
@@ -393,7 +394,7 @@ impl Bvh {
     }
 
     /// [`Bvh::closest_hit`] over the 4-wide tree (the twin of the 8-wide traversal; same
-    /// answer bit for bit: both return the lexicographic minimum of `(t, index)`).
+    /// answer bit for bit: both return the lexicographic minimum of `(t, primitive id)`).
     pub fn closest_hit4(&self, ray: &Ray) -> Option<Hit> {
         self.closest_impl::<_, true>(ray, &mut NoStats)
     }
@@ -449,7 +450,9 @@ fn offer_exact(r4: &Tri4Ray, b: &Tri4, i: usize, best: &mut Best, t_max: &mut f3
     }
 }
 
-/// The closest hit so far: `(t, index in the triangle array)` compared lexicographically.
+/// The closest hit so far: `(t, primitive id)` compared lexicographically, so that on an exact
+/// `t` tie the scene's lowest triangle index wins whatever the tree and the visiting order (the
+/// rule of `reference::brute_force_closest`; copies of one triangle give the same hit record).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Best {
     pub t: f32,
@@ -483,7 +486,7 @@ impl Best {
     }
 
     /// Offers a hit with `t` below [`Self::limit`]; keeps it if it is closer, or as close with a
-    /// lower triangle index, and then shrinks `t_max` to it.
+    /// lower primitive id, and then shrinks `t_max` to it.
     #[inline(always)]
     pub fn offer(&mut self, t: f32, tri: u32, u: f32, v: f32, t_max: &mut f32) {
         if t < self.t || (t == self.t && tri < self.tri) || self.tri == u32::MAX {
@@ -493,9 +496,9 @@ impl Best {
     }
 
     #[inline(always)]
-    pub fn hit(&self, prim_ids: &[u32]) -> Option<Hit> {
-        (self.tri != u32::MAX).then(|| Hit {
-            prim: prim_ids[self.tri as usize],
+    pub fn hit(&self) -> Option<Hit> {
+        (self.tri != u32::MAX).then_some(Hit {
+            prim: self.tri,
             t: self.t,
             u: self.u,
             v: self.v,

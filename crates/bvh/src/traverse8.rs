@@ -447,7 +447,7 @@ impl Bvh {
         let mut best = Best::new();
         let mut t_max = ray.t_max;
         self.closest8_from(nt, &r4, 0, &mut t_max, &mut best, stats);
-        best.hit(&self.prim_ids)
+        best.hit()
     }
 
     /// The closest-hit traversal of the subtree `root` (an inner node or a leaf reference),

@@ -7,9 +7,10 @@
 //! block `k` of the leaf is its triangle `4 k + l`. A block stores the nine coordinates of its
 //! triangles as `[vertex][axis]` lanes (`p[0][0]` = the x of vertex 0 of all four triangles), so
 //! the ray's axis permutation `(kx, ky, kz)` picks whole `Vec4`s by address, with no dynamic
-//! `Vec3` component index in the hot code. `tri[l]` is the index of the lane's triangle in
-//! [`crate::Bvh::triangles`] (`u32::MAX` for padding lanes; padding coordinates are zero and the
-//! lane is masked off by the leaf's count). 160 bytes per block, as Embree's `Triangle4`
+//! `Vec3` component index in the hot code. `tri[l]` is the scene's index of the lane's triangle
+//! (its primitive id, the same for every copy of a triangle split by spatial splits; `u32::MAX`
+//! for padding lanes, whose coordinates are zero and which the leaf's count masks off), so the
+//! closest-hit tie rule on `(t, tri)` is the tree-independent `(t, primitive id)`. 160 bytes per block, as Embree's `Triangle4`
 //! (176 bytes with precomputed edges), 32-byte aligned: 160 = 5 x 32, so every block of the
 //! array spans exactly three cache lines (16-byte alignment let every other block straddle
 //! four).
@@ -42,7 +43,7 @@ use crate::tri::Tri;
 pub struct Tri4 {
     /// `p[vertex][axis]`, lane `l` = triangle `l` of the block.
     pub p: [[Vec4; 3]; 3],
-    /// Index into the BVH's triangle array per lane, `u32::MAX` for padding.
+    /// The scene's triangle index (primitive id) per lane, `u32::MAX` for padding.
     pub tri: [u32; 4],
 }
 
@@ -55,15 +56,15 @@ impl Tri4 {
         tri: [u32::MAX; 4],
     };
 
-    /// Sets lane `l` to triangle `t`, index `index` in the BVH's triangle array.
+    /// Sets lane `l` to triangle `t`, the scene's triangle `prim`.
     #[inline]
-    pub fn set(&mut self, l: usize, t: &Tri, index: u32) {
+    pub fn set(&mut self, l: usize, t: &Tri, prim: u32) {
         for (v, p) in [t.p0, t.p1, t.p2].into_iter().enumerate() {
             self.p[v][0][l] = p.x;
             self.p[v][1][l] = p.y;
             self.p[v][2][l] = p.z;
         }
-        self.tri[l] = index;
+        self.tri[l] = prim;
     }
 
     /// Vertex `v` of lane `l` (the same f32 values the block was filled with).

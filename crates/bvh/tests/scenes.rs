@@ -108,14 +108,37 @@ fn japanese_classroom() {
     );
 }
 
+/// The SBVH's closest hit is the default tree's, record for record (primitive, `t`, `u`, `v`),
+/// for every ray of `rays_for(scene, random, w, h)`: the tie rule does not depend on the tree.
+fn same_as_default_tree(scene: &Scene, sbvh: &Bvh, random: usize, w: u32, h: u32) {
+    let bvh = Bvh::build(&scene.mesh);
+    let rays = rays_for(scene, random, w, h);
+    let hits: usize = rays
+        .par_iter()
+        .map(|r| {
+            let a = sbvh.closest_hit(r);
+            assert_eq!(
+                a,
+                bvh.closest_hit(r),
+                "{}: SBVH vs default tree for {r:?}",
+                scene.name
+            );
+            a.is_some() as usize
+        })
+        .sum();
+    assert!(hits > rays.len() / 5, "{}: {hits} hits", scene.name);
+}
+
 /// Spatial splits: closest / any / all hits still equal brute force (each primitive reported
-/// once), on the scenes whose large tilted triangles get split.
+/// once), on the scenes whose large tilted triangles get split; the closest hits are the
+/// default tree's.
 #[test]
 fn sponza_spatial_splits() {
     let scene = load("sponza_dabrovic/sponza_dabrovic.glb");
     let bvh = check_scene_with(&scene, 400, 16, 12, &spatial());
     // The build did split references (Sponza is the scene SBVH is for).
     assert!(bvh.reference_count() > scene.mesh.triangle_count());
+    same_as_default_tree(&scene, &bvh, 20_000, 160, 120);
 }
 
 #[test]
@@ -123,6 +146,7 @@ fn japanese_classroom_spatial_splits() {
     let scene = load("japanese_classroom/japanese_classroom.glb");
     let bvh = check_scene_with(&scene, 400, 16, 12, &spatial());
     assert!(bvh.reference_count() > scene.mesh.triangle_count());
+    same_as_default_tree(&scene, &bvh, 20_000, 160, 120);
 }
 
 #[test]

@@ -187,7 +187,6 @@ pub fn closest_one(
 pub unsafe fn test_tile(
     set: &SampleSet,
     blocks: &[Tri4],
-    prim_ids: &[u32],
     samples: &[u32],
     groups: &[LeafGroup],
     boxes: &[LeafBox],
@@ -207,7 +206,7 @@ pub unsafe fn test_tile(
                 *prim.add(o) = NO_ID;
                 *t.add(o) = f32::INFINITY;
             } else {
-                *prim.add(o) = prim_ids[tri as usize];
+                *prim.add(o) = tri;
                 *t.add(o) = bt;
             }
         }

@@ -262,7 +262,6 @@ fn cast_from(
         t: out.t.as_mut_ptr(),
     };
     let blocks_ = bvh.blocks();
-    let prim_ids = bvh.prim_ids();
     let tally = hierarchy.blocks.par_iter().map_init(
         || {
             (
@@ -325,7 +324,6 @@ fn cast_from(
                             set,
                             stored,
                             blocks_,
-                            prim_ids,
                             samples,
                             film,
                             tt,
@@ -355,8 +353,7 @@ fn cast_from(
                 // sizes checked above), so this tile's entries are written by no other tile.
                 let w = unsafe {
                     test_tile(
-                        set, blocks_, prim_ids, samples, groups, boxes, &tb, scale, lanes,
-                        ptr.prim, ptr.t,
+                        set, blocks_, samples, groups, boxes, &tb, scale, lanes, ptr.prim, ptr.t,
                     )
                 };
                 let c = Instant::now();

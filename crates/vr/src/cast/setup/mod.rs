@@ -199,15 +199,18 @@ pub enum SetupExactness {
 
 /// Where the set-up kernels write their results: the visibility buffer's entries
 /// `sample * spp + k` (raw pointers: every sample's entries are written by one tile only).
+/// The kernels' `tri` values are the blocks' primitive ids (`parallax_bvh::Tri4::tri`), stored
+/// as they are; a miss is `u32::MAX`, which is [`NO_ID`].
 #[derive(Clone, Copy)]
-struct Out<'a> {
+struct Out {
     prim: *mut u32,
     t: *mut f32,
-    prim_ids: &'a [u32],
     spp: usize,
 }
 
-impl Out<'_> {
+const _: () = assert!(NO_ID == u32::MAX);
+
+impl Out {
     /// Stores subsample `(i, k)`'s closest hit (`tri` = `u32::MAX`: none).
     ///
     /// # Safety
@@ -221,15 +224,14 @@ impl Out<'_> {
                 *self.prim.add(o) = NO_ID;
                 *self.t.add(o) = f32::INFINITY;
             } else {
-                *self.prim.add(o) = self.prim_ids[tri as usize];
+                *self.prim.add(o) = tri;
                 *self.t.add(o) = bt;
             }
         }
     }
 
     /// Stores lane `l` of `c` as the one subsample of sample `idx[l]` (`spp == 1`: entry
-    /// `idx[l]`; a miss has `t = inf` in `c` and `tri = u32::MAX`, whose `prim_ids` look-up
-    /// fails to [`NO_ID`]).
+    /// `idx[l]`; a miss has `t = inf` in `c` and `tri = u32::MAX` = [`NO_ID`]).
     ///
     /// # Safety
     /// As [`Out::one`], for the entries `idx`.
@@ -237,10 +239,9 @@ impl Out<'_> {
     unsafe fn spp1(&self, idx: &[u32], c: &ClosestN) {
         debug_assert_eq!(self.spp, 1);
         for (l, &i) in idx.iter().enumerate().take(MAX_LANES) {
-            let p = self.prim_ids.get(c.tri[l] as usize).copied();
             // SAFETY: the caller's.
             unsafe {
-                *self.prim.add(i as usize) = p.unwrap_or(NO_ID);
+                *self.prim.add(i as usize) = c.tri[l];
                 *self.t.add(i as usize) = c.t[l];
             }
         }
@@ -255,46 +256,20 @@ impl Out<'_> {
     unsafe fn run(&self, (i, k0): (u32, u32), c: &ClosestN, n: usize) {
         let o = i as usize * self.spp + k0 as usize;
         let n = n.min(MAX_LANES);
-        let t0 = c.tri[0];
         if n == MAX_LANES {
-            // A full packet: fixed-size copies (vector stores, no `memcpy` call), and "one
-            // triangle on every lane" as an OR of XORs over two halves (vector operations).
-            let mut acc = [0u32; MAX_LANES / 2];
-            for (l, a) in acc.iter_mut().enumerate() {
-                *a = (c.tri[l] ^ t0) | (c.tri[l + MAX_LANES / 2] ^ t0);
-            }
-            let same = acc.iter().fold(0, |a, &x| a | x) == 0;
+            // A full packet: fixed-size copies (vector stores, no `memcpy` call).
             // SAFETY: the caller's: `MAX_LANES` entries from `o`, not overlapping `c`.
             unsafe {
                 (self.t.add(o) as *mut [f32; MAX_LANES]).write_unaligned(c.t);
-                let prim = self.prim.add(o) as *mut [u32; MAX_LANES];
-                if t0 != u32::MAX && same {
-                    prim.write_unaligned([self.prim_ids[t0 as usize]; MAX_LANES]);
-                } else {
-                    // A miss (`u32::MAX`) fails the look-up to `NO_ID`, as in `Out::spp1`.
-                    let ids = c
-                        .tri
-                        .map(|tri| self.prim_ids.get(tri as usize).copied().unwrap_or(NO_ID));
-                    prim.write_unaligned(ids);
-                }
+                (self.prim.add(o) as *mut [u32; MAX_LANES]).write_unaligned(c.tri);
             }
             return;
         }
-        // SAFETY: the caller's; the two buffers do not overlap `c`, so the `t` run is one
-        // copy (a miss has `t = inf` in `c` already).
-        let prim = unsafe {
+        // SAFETY: the caller's; the buffers do not overlap `c`, so each run is one copy (a
+        // miss has `t = inf` and `tri = NO_ID` in `c` already).
+        unsafe {
             std::ptr::copy_nonoverlapping(c.t.as_ptr(), self.t.add(o), n);
-            std::slice::from_raw_parts_mut(self.prim.add(o), n)
-        };
-        // One triangle on every lane (a pixel inside one triangle): one `prim_ids` look-up.
-        let same = c.tri[..n].iter().all(|&x| x == t0);
-        if t0 != u32::MAX && same {
-            prim.fill(self.prim_ids[t0 as usize]);
-            return;
-        }
-        // A miss (`u32::MAX`) fails the look-up to `NO_ID`, as in `Out::spp1`.
-        for (p, &tri) in prim.iter_mut().zip(&c.tri[..n]) {
-            *p = self.prim_ids.get(tri as usize).copied().unwrap_or(NO_ID);
+            std::ptr::copy_nonoverlapping(c.tri.as_ptr(), self.prim.add(o), n);
         }
     }
 }
@@ -314,7 +289,7 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
     samples: &[u32],
     film: Option<[&[f32]; 3]>,
     pair: impl Fn(usize) -> (u32, u32),
-    out: Out<'_>,
+    out: Out,
 ) -> SetupWork {
     let total = samples.len() * set.spp as usize;
     let mut work = SetupWork::default();
@@ -491,7 +466,7 @@ macro_rules! isa_entry {
             samples: &[u32],
             film: Option<[&[f32]; 3]>,
             pair: impl Fn(usize) -> (u32, u32),
-            out: Out<'_>,
+            out: Out,
         ) -> SetupWork {
             run_setup::<$lanes, FULL>(
                 set, stored, blocks, tt, axis, sign, slack, samples, film, pair, out,
@@ -536,7 +511,6 @@ pub unsafe fn test_tile_setup(
     set: &SampleSet,
     stored: Option<&RayBuffer>,
     blocks: &[Tri4],
-    prim_ids: &[u32],
     samples: &[u32],
     film: Option<[&[f32]; 3]>,
     tt: &mut TileTris,
@@ -580,12 +554,7 @@ pub unsafe fn test_tile_setup(
             (samples[j / spp], (j % spp) as u32)
         }
     };
-    let out = Out {
-        prim,
-        t,
-        prim_ids,
-        spp,
-    };
+    let out = Out { prim, t, spp };
     let (axis, sign) = (beam.axis as usize, beam.sign);
     // `run!(f)` / `run!(f, L)`: `f` (with lane type `L`) for the chosen exactness.
     macro_rules! run {
