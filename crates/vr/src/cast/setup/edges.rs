@@ -65,10 +65,10 @@ use parallax_bvh::Tri4;
 use parallax_core::math::WatertightRay;
 use parallax_core::simd::Lanes;
 
-use super::affine::{AffineTri, PacketBox, PacketClass};
+use super::affine::{PacketBox, PacketClass};
 use super::bands::refine_run;
 use super::kernel::{PacketSlab, SetupWork, dot_n, edge_band, edge_reach, min_edge};
-use super::tri::{RHO_MAX, TileTris, TriSetup, exact_t};
+use super::tri::{RHO_MAX, TileTris, exact_t};
 use crate::cast::lanes16::LaneReduce;
 use crate::cast::packet::{ClosestN, MAX_LANES, RaysN};
 
@@ -86,12 +86,13 @@ pub(super) fn closest_edges<L: LaneReduce>(
     slack: f32,
     pbox: Option<&PacketBox>,
     edges_first: bool,
-    warm: &mut u32,
     work: &mut SetupWork,
 ) -> ClosestN {
     let valid = rays.valid;
     let zero = L::splat(0.0);
-    let out = ClosestN {
+    let [dx, dy, dz] = rays.d;
+    let mut best = zero;
+    let mut out = ClosestN {
         t: [f32::INFINITY; MAX_LANES],
         tri: [u32::MAX; MAX_LANES],
     };
@@ -109,13 +110,6 @@ pub(super) fn closest_edges<L: LaneReduce>(
     let (sign_v, oa_v) = (L::splat(sign), L::splat(oa));
     let mut lim_max = f32::INFINITY;
     let dinf = packet.dinf;
-    let mut st = Walk {
-        best: zero,
-        out,
-        valid,
-        valid_m,
-        dinf,
-    };
     // (A full packet without a population count: the baseline x86-64 target has no
     // `popcnt`, its bit-trick expansion is ~15 instructions.)
     let lanes = if valid == (1 << L::N) - 1 {
@@ -127,28 +121,6 @@ pub(super) fn closest_edges<L: LaneReduce>(
     // pass, `reach_group`), then only the runs it passes, bit by bit. `lim_max` only
     // decreases and the test is monotone in it, so a run failing at `run_lim` fails at
     // `lim_max`; a run passing is tested again if `lim_max` changed since.
-    // `1 / best` once per packet (the same IEEE division as per lane); a lane has a hit iff
-    // its best `1/t` is positive (every win raises `best` above 0).
-    macro_rules! update {
-        () => {
-            box_lim = one / st.best;
-            hit_lanes = L::bits(st.best.gt(zero)) & valid;
-            let depth = sign_v * (oa_v + box_lim * rays.d[axis]);
-            exit_depth = L::select(valid_m, depth, L::splat(f32::NEG_INFINITY)).hmax();
-            lim_max = L::select(valid_m, box_lim, L::splat(f32::NEG_INFINITY)).hmax();
-        };
-    }
-    // Warm start (module docs): the triangle that last won a lane of the previous packet of
-    // the tile first, when its band is set up (its run was entered), so the walk starts with
-    // its best and limits. The walk tests it again in its run: equal pairs never win.
-    if let Some(tr) = tt.tris.get(*warm as usize)
-        && !tr.rho.is_nan()
-    {
-        let aff = pbox.zip(tt.aff.get(*warm as usize));
-        if test_tri(&mut st, rays, blocks, tr, aff, edges_first, work) {
-            update!();
-        }
-    }
     let nseg = tt.segs.len();
     let group = L::RUN_GROUP;
     let interval = packet.has_interval();
@@ -216,162 +188,126 @@ pub(super) fn closest_edges<L: LaneReduce>(
                 None => &[],
             };
             for (k, tr) in tris.iter().enumerate() {
-                let won = test_tri(
-                    &mut st,
-                    rays,
-                    blocks,
-                    tr,
-                    pbox.zip(affs.get(k)),
-                    edges_first,
-                    work,
-                );
-                if won {
-                    changed = true;
-                    *warm = (first + k) as u32;
+                // The affine packet test (`affine.rs`): every lane certainly out or in.
+                // A partial packet's edges certainly inside for every lane (`skip`) take no
+                // per-lane test (`PacketBox::classify_edges`).
+                let (class, skip) = match (pbox, affs.get(k)) {
+                    (Some(pb), Some(a)) if !tr.all_in => pb.classify_edges(a, tr.bound),
+                    _ => (PacketClass::Partial, 0),
+                };
+                if class == PacketClass::Out {
+                    work.packet_out += 1;
+                    continue;
                 }
+                if tr.rho > RHO_MAX {
+                    // Ill-conditioned: the watertight test decides coverage and depth.
+                    changed |=
+                        ill_conditioned(rays, blocks, tr, valid, dinf, &mut best, &mut out, work);
+                    continue;
+                }
+                // Edges first (module docs): the triangle is skipped when no valid lane is
+                // within or above the band, before its `g . d`.
+                let edges = if edges_first && class != PacketClass::In && !tr.all_in {
+                    let e = edge_reach(tr, rays.d, dinf, valid, 7 & !skip);
+                    if e.1 == 0 {
+                        continue;
+                    }
+                    Some(e)
+                } else {
+                    None
+                };
+                let gd = dot_n(tr.g, dx, dy, dz);
+                let ge = gd.ge(best);
+                let cand = L::bits(ge) & valid;
+                if cand == 0 {
+                    continue;
+                }
+                // Certainly inside (a mask), plus the band's lanes the watertight test accepts.
+                let (inn_m, mut unsure) = if class == PacketClass::In {
+                    work.packet_in += 1;
+                    (ge, 0)
+                } else if let Some((inside, maybe)) = edges {
+                    let inn_m = L::and(ge, inside);
+                    (inn_m, maybe & cand & !L::bits(inn_m))
+                } else {
+                    edge_band(tr, rays.d, dinf, ge, cand, 7 & !skip)
+                };
+                let mut extra = 0u32;
+                // Within the edge band: the watertight test decides coverage (~0.2% of pairs).
+                if unsure != 0 {
+                    work.edge_band += unsure.count_ones() as u64;
+                    work.exact_tests += unsure.count_ones() as u64;
+                }
+                while unsure != 0 {
+                    let l = unsure.trailing_zeros() as usize;
+                    unsure &= unsure - 1;
+                    let wt = &WatertightRay::new(&rays.lane(l));
+                    if exact_t(wt, blocks, tr.src).is_some() {
+                        extra |= 1 << l;
+                    }
+                }
+                let ib = (L::bits(inn_m) & valid) | extra;
+                if ib == 0 {
+                    continue;
+                }
+                let gt_m = L::and(inn_m, gd.gt(best));
+                let gt = L::bits(gt_m) & valid;
+                // (The second mask only for band lanes the watertight test accepted: rare.)
+                let mut win = if extra == 0 {
+                    gt
+                } else {
+                    gt | (extra & L::bits(gd.gt(best)))
+                };
+                // Ties (equal `1/t`, a hit so far): the lower triangle index wins.
+                let mut tie = ib & !win;
+                while tie != 0 {
+                    let l = tie.trailing_zeros() as usize;
+                    tie &= tie - 1;
+                    if out.tri[l] != u32::MAX && tr.tri < out.tri[l] {
+                        win |= 1 << l;
+                    }
+                }
+                if win == 0 {
+                    continue;
+                }
+                if win == gt {
+                    // The winners are the mask's valid lanes: one blend each.
+                    best = L::select(gt_m, gd, best);
+                    L::set_u32(L::and(gt_m, valid_m), tr.tri, &mut out.tri);
+                } else {
+                    best = L::from_fn(|l| {
+                        if win >> l & 1 != 0 {
+                            gd.get(l)
+                        } else {
+                            best.get(l)
+                        }
+                    });
+                    let mut w = win;
+                    while w != 0 {
+                        let l = w.trailing_zeros() as usize;
+                        w &= w - 1;
+                        out.tri[l] = tr.tri;
+                    }
+                }
+                changed = true;
             }
             if changed {
-                update!();
+                // `1 / best` once per packet (the same IEEE division as per lane); a lane has a
+                // hit iff its best `1/t` is positive (every win raises `best` above 0).
+                box_lim = one / best;
+                hit_lanes = L::bits(best.gt(zero)) & valid;
+                let depth = sign_v * (oa_v + box_lim * rays.d[axis]);
+                exit_depth = L::select(valid_m, depth, L::splat(f32::NEG_INFINITY)).hmax();
+                lim_max = L::select(valid_m, box_lim, L::splat(f32::NEG_INFINITY)).hmax();
             }
         }
     }
     // Hit lanes: `t = 1 / best` (= `box_lim`); the others keep `inf`.
     if hit_lanes != 0 {
-        let hit_m = L::and(st.best.gt(zero), valid_m);
-        L::select(hit_m, box_lim, L::splat(f32::INFINITY)).write(&mut st.out.t);
+        let hit_m = L::and(best.gt(zero), valid_m);
+        L::select(hit_m, box_lim, L::splat(f32::INFINITY)).write(&mut out.t);
     }
-    st.out
-}
-
-/// The walk's state per packet: the best `1/t` per lane and its triangle, with the packet's
-/// valid lanes (bits and mask) and `|d|_inf`.
-struct Walk<L: Lanes> {
-    best: L,
-    out: ClosestN,
-    valid: u32,
-    valid_m: L::M,
-    dinf: f32,
-}
-
-/// One set-up triangle `tr` against the packet (module docs): the affine packet test with the
-/// triangle's affine form `aff` (when the packet has a box), the edges (first with
-/// `edges_first`), `g . d` and the band's watertight tests; the lanes it wins take its `1/t`
-/// and index in `st`. Returns whether it won a lane.
-#[inline(always)]
-fn test_tri<L: LaneReduce>(
-    st: &mut Walk<L>,
-    rays: &RaysN<L>,
-    blocks: &[Tri4],
-    tr: &TriSetup,
-    aff: Option<(&PacketBox, &AffineTri)>,
-    edges_first: bool,
-    work: &mut SetupWork,
-) -> bool {
-    let (valid, valid_m, dinf) = (st.valid, st.valid_m, st.dinf);
-    let [dx, dy, dz] = rays.d;
-    let best = &mut st.best;
-    let out = &mut st.out;
-    // The affine packet test (`affine.rs`): every lane certainly out or in. A partial
-    // packet's edges certainly inside for every lane (`skip`) take no per-lane test
-    // (`PacketBox::classify_edges`).
-    let (class, skip) = match aff {
-        Some((pb, a)) if !tr.all_in => pb.classify_edges(a, tr.bound),
-        _ => (PacketClass::Partial, 0),
-    };
-    if class == PacketClass::Out {
-        work.packet_out += 1;
-        return false;
-    }
-    if tr.rho > RHO_MAX {
-        // Ill-conditioned: the watertight test decides coverage and depth.
-        return ill_conditioned(rays, blocks, tr, valid, dinf, best, out, work);
-    }
-    // Edges first (module docs): the triangle is skipped when no valid lane is within or
-    // above the band, before its `g . d`.
-    let edges = if edges_first && class != PacketClass::In && !tr.all_in {
-        let e = edge_reach(tr, rays.d, dinf, valid, 7 & !skip);
-        if e.1 == 0 {
-            return false;
-        }
-        Some(e)
-    } else {
-        None
-    };
-    let gd = dot_n(tr.g, dx, dy, dz);
-    let ge = gd.ge(*best);
-    let cand = L::bits(ge) & valid;
-    if cand == 0 {
-        return false;
-    }
-    // Certainly inside (a mask), plus the band's lanes the watertight test accepts.
-    let (inn_m, mut unsure) = if class == PacketClass::In {
-        work.packet_in += 1;
-        (ge, 0)
-    } else if let Some((inside, maybe)) = edges {
-        let inn_m = L::and(ge, inside);
-        (inn_m, maybe & cand & !L::bits(inn_m))
-    } else {
-        edge_band(tr, rays.d, dinf, ge, cand, 7 & !skip)
-    };
-    let mut extra = 0u32;
-    // Within the edge band: the watertight test decides coverage (~0.2% of pairs).
-    if unsure != 0 {
-        work.edge_band += unsure.count_ones() as u64;
-        work.exact_tests += unsure.count_ones() as u64;
-    }
-    while unsure != 0 {
-        let l = unsure.trailing_zeros() as usize;
-        unsure &= unsure - 1;
-        let wt = &WatertightRay::new(&rays.lane(l));
-        if exact_t(wt, blocks, tr.src).is_some() {
-            extra |= 1 << l;
-        }
-    }
-    let ib = (L::bits(inn_m) & valid) | extra;
-    if ib == 0 {
-        return false;
-    }
-    let gt_m = L::and(inn_m, gd.gt(*best));
-    let gt = L::bits(gt_m) & valid;
-    // (The second mask only for band lanes the watertight test accepted: rare.)
-    let mut win = if extra == 0 {
-        gt
-    } else {
-        gt | (extra & L::bits(gd.gt(*best)))
-    };
-    // Ties (equal `1/t`, a hit so far): the lower triangle index wins.
-    let mut tie = ib & !win;
-    while tie != 0 {
-        let l = tie.trailing_zeros() as usize;
-        tie &= tie - 1;
-        if out.tri[l] != u32::MAX && tr.tri < out.tri[l] {
-            win |= 1 << l;
-        }
-    }
-    if win == 0 {
-        return false;
-    }
-    if win == gt {
-        // The winners are the mask's valid lanes: one blend each.
-        *best = L::select(gt_m, gd, *best);
-        L::set_u32(L::and(gt_m, valid_m), tr.tri, &mut out.tri);
-    } else {
-        let b = *best;
-        *best = L::from_fn(|l| {
-            if win >> l & 1 != 0 {
-                gd.get(l)
-            } else {
-                b.get(l)
-            }
-        });
-        let mut w = win;
-        while w != 0 {
-            let l = w.trailing_zeros() as usize;
-            w &= w - 1;
-            out.tri[l] = tr.tri;
-        }
-    }
-    true
+    out
 }
 
 /// An ill-conditioned triangle (`rho > RHO_MAX`) against every lane: certainly-out lanes

@@ -342,9 +342,6 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
             lanes[c] = (L::from_fn(|l| o[l].x), L::from_fn(|l| o[l].y));
         }
     }
-    // The list position of the triangle that last won a lane of the previous packet (the
-    // warm start of `edges.rs`; none yet).
-    let mut warm = u32::MAX;
     // The set-up kernel on a packet (`rays`, `pbox`).
     macro_rules! closest {
         ($rays:expr, $pbox:expr, $first:expr) => {
@@ -352,7 +349,7 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
                 full::closest_full($rays, blocks, &*tt, axis, sign, slack, &mut work)
             } else {
                 edges::closest_edges(
-                    $rays, blocks, tt, axis, sign, slack, $pbox, $first, &mut warm, &mut work,
+                    $rays, blocks, tt, axis, sign, slack, $pbox, $first, &mut work,
                 )
             }
         };
