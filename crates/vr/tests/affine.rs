@@ -9,7 +9,7 @@ use parallax_core::Ray;
 use parallax_core::math::WatertightRay;
 use parallax_scene::camera::{Camera, CameraOptions, ModelKind};
 use parallax_scene::{CameraDesc, Scene};
-use parallax_vr::cast::setup::affine::{FilmFrame, PacketBox, PacketClass};
+use parallax_vr::cast::setup::affine::{CLASS_IN, CLASS_OUT, FilmFrame, PacketBox, PacketClass};
 use parallax_vr::cast::setup::{Cone, TriSetup};
 use parallax_vr::{CastOptions, Hierarchy, Isa, SampleSet, VisibilityBuffer, cast_opts};
 
@@ -188,6 +188,14 @@ fn check_tri(set16: &SampleSet, set1: &SampleSet, tri: [Vec3; 3], counts: &mut [
                 };
                 let (class, inside) = pb.classify_edges(&fr.affine(&ts.n), ts.bound);
                 assert_eq!(class, pb.classify(&fr.affine(&ts.n), ts.bound));
+                // The branch-free word of the run walk: the same class and skip bits.
+                let code = pb.classify_bits(&fr.affine(&ts.n), ts.bound);
+                let word = match class {
+                    PacketClass::Out => CLASS_OUT,
+                    PacketClass::In => CLASS_IN,
+                    PacketClass::Partial => inside,
+                };
+                assert_eq!(code, word, "{tri:?}");
                 // An edge certainly inside for the packet is positive (in f64) on every ray.
                 for e in (0..3).filter(|e| inside >> e & 1 != 0) {
                     assert_eq!(class, PacketClass::Partial);

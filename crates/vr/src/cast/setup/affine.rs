@@ -321,6 +321,11 @@ pub enum PacketClass {
 /// is then finite, so the smallest of any subset of them is independent of the order.
 const N1_SKIP: f32 = 1e37;
 
+/// [`PacketBox::classify_bits`] of an `Out` packet.
+pub const CLASS_OUT: u32 = 16;
+/// [`PacketBox::classify_bits`] of an `In` packet.
+pub const CLASS_IN: u32 = 8;
+
 /// `true` in lanes 0-1.
 const XY: glam::BVec4A = glam::BVec4A::from_array([true, true, false, false]);
 
@@ -446,6 +451,27 @@ impl PacketBox {
         self.classify_edges(a, bound).0
     }
 
+    /// [`PacketBox::classify_edges`] as one word, without branches (for a run's triangles in
+    /// one pass, `cast/setup/edges.rs`): [`CLASS_OUT`] for `Out`, [`CLASS_IN`] for `In`, else
+    /// the skip bits of a partial packet (bits 0-2). The same compares of the same values.
+    #[inline(always)]
+    pub fn classify_bits(&self, a: &AffineTri, bound: f32) -> u32 {
+        let c = a.mx * self.xc + a.my * self.yc - a.mz;
+        let r = a.amx * self.rx + a.amy * self.ry;
+        let tau = a.n1 * self.ka + Vec4::splat(bound * self.kb);
+        let hi = c + r;
+        let lo = c - r;
+        let out = (((hi + tau).cmplt(Vec4::ZERO) & XYZ).bitmask() != 0) as u32;
+        let inn = (lo - tau).cmpgt(Vec4::ZERO).bitmask() & 7;
+        let small = (a.n1.cmplt(Vec4::splat(N1_SKIP)).bitmask() & 7 == 7) as u32;
+        let all = (inn == 7) as u32;
+        // Partial: the inside edges when every covector is small, else none. (Masks, not
+        // selects: the class changes from triangle to triangle, a branch would mispredict.)
+        let partial = inn & small.wrapping_neg() & all.wrapping_sub(1);
+        let code = (all * CLASS_IN) | partial;
+        (code & out.wrapping_sub(1)) | (out * CLASS_OUT)
+    }
+
     /// [`PacketBox::classify`] and, for a partial packet, the bits of the edges every ray of
     /// the packet is certainly inside (edge `i`: bit `i`), whose per-lane test can be skipped
     /// (module docs, "Per-edge decisions"); 0 for the other classes and for triangles with a
@@ -470,5 +496,67 @@ impl PacketBox {
         } else {
             (PacketClass::Partial, 0)
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The branch-free word equals [`PacketBox::classify_edges`] on random boxes and affine
+    /// forms, with huge, infinite and NaN values.
+    #[test]
+    fn classify_bits_equals_classify_edges() {
+        let mut x = 0x9e37_79b9_7f4a_7c15u64;
+        let mut f = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let u = (x >> 40) as f32 / (1u64 << 24) as f32;
+            match x & 63 {
+                0 => f32::NAN,
+                1 => f32::INFINITY,
+                2 => -f32::INFINITY,
+                3 => 1e38,
+                _ => (u - 0.5) * 4.0,
+            }
+        };
+        let mut seen = [0u32; 4];
+        for _ in 0..200_000 {
+            let kb = f().abs() * 0.01;
+            let bound = f().abs() * 0.01;
+            let mut v = || Vec4::new(f(), f(), f(), f());
+            let pb = PacketBox {
+                xc: v(),
+                yc: v(),
+                rx: v().abs(),
+                ry: v().abs(),
+                ka: v().abs() * 0.01,
+                kb,
+            };
+            let a = AffineTri {
+                mx: v(),
+                my: v(),
+                mz: v(),
+                amx: v().abs(),
+                amy: v().abs(),
+                n1: v().abs(),
+            };
+            let (class, skip) = pb.classify_edges(&a, bound);
+            let word = match class {
+                PacketClass::Out => CLASS_OUT,
+                PacketClass::In => CLASS_IN,
+                PacketClass::Partial => skip,
+            };
+            assert_eq!(pb.classify_bits(&a, bound), word, "{pb:?} {a:?} {bound}");
+            let k = match class {
+                PacketClass::Out => 0,
+                PacketClass::In => 1,
+                PacketClass::Partial if skip != 0 => 2,
+                PacketClass::Partial => 3,
+            };
+            seen[k] += 1;
+        }
+        assert!(seen.iter().all(|&c| c > 500), "{seen:?}");
     }
 }

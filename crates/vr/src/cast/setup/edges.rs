@@ -21,6 +21,10 @@
 //!   packet — every lane certainly outside (skipped) or certainly inside (no per-lane edge
 //!   test) — with a rigorous error bound; partial packets take the per-lane test below. The
 //!   decisions equal the watertight test's, so the buffer is unchanged (`tests/affine.rs`).
+//!   The walk classifies an entered run's triangles (16 at a time) in one pass without
+//!   branches (`PacketBox::classify_bits`: the class changes from triangle to triangle, so a
+//!   branch per triangle would often be mispredicted), then visits only those not out, by
+//!   their bits, in list order.
 //! - **Edges first at 1 spp** (`edges_first`, the full 1-spp packets of `run_setup`): a 1-spp
 //!   packet is a block of 4 x 4 pixels, and most triangles that reach it cover none of its
 //!   lanes, while few fail the depth test (`g . d >= best`) on every lane. So there the edge
@@ -65,10 +69,10 @@ use parallax_bvh::Tri4;
 use parallax_core::math::WatertightRay;
 use parallax_core::simd::Lanes;
 
-use super::affine::{PacketBox, PacketClass};
+use super::affine::{CLASS_IN, CLASS_OUT, PacketBox, PacketClass};
 use super::bands::refine_run;
 use super::kernel::{PacketSlab, SetupWork, dot_n, edge_band, edge_reach, min_edge};
-use super::tri::{RHO_MAX, TileTris, exact_t};
+use super::tri::{RHO_MAX, TileTris, TriSetup, exact_t};
 use crate::cast::lanes16::LaneReduce;
 use crate::cast::packet::{ClosestN, MAX_LANES, RaysN};
 
@@ -187,109 +191,150 @@ pub(super) fn closest_edges<L: LaneReduce>(
                 Some(_) => &tt.aff[first..end],
                 None => &[],
             };
-            for (k, tr) in tris.iter().enumerate() {
-                // The affine packet test (`affine.rs`): every lane certainly out or in.
-                // A partial packet's edges certainly inside for every lane (`skip`) take no
-                // per-lane test (`PacketBox::classify_edges`).
-                let (class, skip) = match (pbox, affs.get(k)) {
-                    (Some(pb), Some(a)) if !tr.all_in => pb.classify_edges(a, tr.bound),
-                    _ => (PacketClass::Partial, 0),
-                };
-                if class == PacketClass::Out {
-                    work.packet_out += 1;
-                    continue;
-                }
-                if tr.rho > RHO_MAX {
-                    // Ill-conditioned: the watertight test decides coverage and depth.
-                    changed |=
-                        ill_conditioned(rays, blocks, tr, valid, dinf, &mut best, &mut out, work);
-                    continue;
-                }
-                // Edges first (module docs): the triangle is skipped when no valid lane is
-                // within or above the band, before its `g . d`.
-                let edges = if edges_first && class != PacketClass::In && !tr.all_in {
-                    let e = edge_reach(tr, rays.d, dinf, valid, 7 & !skip);
-                    if e.1 == 0 {
+            // The triangle `tr` with the affine class `class` and skipped edges `skip`
+            // (`PacketBox::classify_edges`) against the packet's lanes.
+            macro_rules! test_tri {
+                ($tr:expr, $class:expr, $skip:expr) => {{
+                    let (tr, class, skip): (&TriSetup, PacketClass, u32) = ($tr, $class, $skip);
+                    if tr.rho > RHO_MAX {
+                        // Ill-conditioned: the watertight test decides coverage and depth.
+                        changed |= ill_conditioned(
+                            rays, blocks, tr, valid, dinf, &mut best, &mut out, work,
+                        );
                         continue;
                     }
-                    Some(e)
-                } else {
-                    None
-                };
-                let gd = dot_n(tr.g, dx, dy, dz);
-                let ge = gd.ge(best);
-                let cand = L::bits(ge) & valid;
-                if cand == 0 {
-                    continue;
-                }
-                // Certainly inside (a mask), plus the band's lanes the watertight test accepts.
-                let (inn_m, mut unsure) = if class == PacketClass::In {
-                    work.packet_in += 1;
-                    (ge, 0)
-                } else if let Some((inside, maybe)) = edges {
-                    let inn_m = L::and(ge, inside);
-                    (inn_m, maybe & cand & !L::bits(inn_m))
-                } else {
-                    edge_band(tr, rays.d, dinf, ge, cand, 7 & !skip)
-                };
-                let mut extra = 0u32;
-                // Within the edge band: the watertight test decides coverage (~0.2% of pairs).
-                if unsure != 0 {
-                    work.edge_band += unsure.count_ones() as u64;
-                    work.exact_tests += unsure.count_ones() as u64;
-                }
-                while unsure != 0 {
-                    let l = unsure.trailing_zeros() as usize;
-                    unsure &= unsure - 1;
-                    let wt = &WatertightRay::new(&rays.lane(l));
-                    if exact_t(wt, blocks, tr.src).is_some() {
-                        extra |= 1 << l;
-                    }
-                }
-                let ib = (L::bits(inn_m) & valid) | extra;
-                if ib == 0 {
-                    continue;
-                }
-                let gt_m = L::and(inn_m, gd.gt(best));
-                let gt = L::bits(gt_m) & valid;
-                // (The second mask only for band lanes the watertight test accepted: rare.)
-                let mut win = if extra == 0 {
-                    gt
-                } else {
-                    gt | (extra & L::bits(gd.gt(best)))
-                };
-                // Ties (equal `1/t`, a hit so far): the lower triangle index wins.
-                let mut tie = ib & !win;
-                while tie != 0 {
-                    let l = tie.trailing_zeros() as usize;
-                    tie &= tie - 1;
-                    if out.tri[l] != u32::MAX && tr.tri < out.tri[l] {
-                        win |= 1 << l;
-                    }
-                }
-                if win == 0 {
-                    continue;
-                }
-                if win == gt {
-                    // The winners are the mask's valid lanes: one blend each.
-                    best = L::select(gt_m, gd, best);
-                    L::set_u32(L::and(gt_m, valid_m), tr.tri, &mut out.tri);
-                } else {
-                    best = L::from_fn(|l| {
-                        if win >> l & 1 != 0 {
-                            gd.get(l)
-                        } else {
-                            best.get(l)
+                    // Edges first (module docs): the triangle is skipped when no valid lane is
+                    // within or above the band, before its `g . d`.
+                    let edges = if edges_first && class != PacketClass::In && !tr.all_in {
+                        let e = edge_reach(tr, rays.d, dinf, valid, 7 & !skip);
+                        if e.1 == 0 {
+                            continue;
                         }
-                    });
-                    let mut w = win;
-                    while w != 0 {
-                        let l = w.trailing_zeros() as usize;
-                        w &= w - 1;
-                        out.tri[l] = tr.tri;
+                        Some(e)
+                    } else {
+                        None
+                    };
+                    let gd = dot_n(tr.g, dx, dy, dz);
+                    let ge = gd.ge(best);
+                    let cand = L::bits(ge) & valid;
+                    if cand == 0 {
+                        continue;
+                    }
+                    // Certainly inside (a mask), plus the band's lanes the watertight test accepts.
+                    let (inn_m, mut unsure) = if class == PacketClass::In {
+                        work.packet_in += 1;
+                        (ge, 0)
+                    } else if let Some((inside, maybe)) = edges {
+                        let inn_m = L::and(ge, inside);
+                        (inn_m, maybe & cand & !L::bits(inn_m))
+                    } else {
+                        edge_band(tr, rays.d, dinf, ge, cand, 7 & !skip)
+                    };
+                    let mut extra = 0u32;
+                    // Within the edge band: the watertight test decides coverage (~0.2% of pairs).
+                    if unsure != 0 {
+                        work.edge_band += unsure.count_ones() as u64;
+                        work.exact_tests += unsure.count_ones() as u64;
+                    }
+                    while unsure != 0 {
+                        let l = unsure.trailing_zeros() as usize;
+                        unsure &= unsure - 1;
+                        let wt = &WatertightRay::new(&rays.lane(l));
+                        if exact_t(wt, blocks, tr.src).is_some() {
+                            extra |= 1 << l;
+                        }
+                    }
+                    let ib = (L::bits(inn_m) & valid) | extra;
+                    if ib == 0 {
+                        continue;
+                    }
+                    let gt_m = L::and(inn_m, gd.gt(best));
+                    let gt = L::bits(gt_m) & valid;
+                    // (The second mask only for band lanes the watertight test accepted: rare.)
+                    let mut win = if extra == 0 {
+                        gt
+                    } else {
+                        gt | (extra & L::bits(gd.gt(best)))
+                    };
+                    // Ties (equal `1/t`, a hit so far): the lower triangle index wins.
+                    let mut tie = ib & !win;
+                    while tie != 0 {
+                        let l = tie.trailing_zeros() as usize;
+                        tie &= tie - 1;
+                        if out.tri[l] != u32::MAX && tr.tri < out.tri[l] {
+                            win |= 1 << l;
+                        }
+                    }
+                    if win == 0 {
+                        continue;
+                    }
+                    if win == gt {
+                        // The winners are the mask's valid lanes: one blend each.
+                        best = L::select(gt_m, gd, best);
+                        L::set_u32(L::and(gt_m, valid_m), tr.tri, &mut out.tri);
+                    } else {
+                        best = L::from_fn(|l| {
+                            if win >> l & 1 != 0 {
+                                gd.get(l)
+                            } else {
+                                best.get(l)
+                            }
+                        });
+                        let mut w = win;
+                        while w != 0 {
+                            let l = w.trailing_zeros() as usize;
+                            w &= w - 1;
+                            out.tri[l] = tr.tri;
+                        }
+                    }
+                    changed = true;
+                }};
+            }
+            match pbox {
+                // The affine packet test (`affine.rs`) of up to 32 triangles of the run in one
+                // pass without branches (every lane certainly out or in; a partial packet's
+                // edges certainly inside for every lane, `skip`, take no per-lane test), then
+                // the triangles not out, by their bits.
+                Some(pb) => {
+                    let mut c0 = 0;
+                    loop {
+                        let n = (tris.len() - c0).min(16);
+                        let (ts, fs) = (&tris[c0..c0 + n], &affs[c0..c0 + n]);
+                        // Per triangle `k` of the chunk: 4 bits of class word at `4 k`
+                        // (`CLASS_IN` or the skip bits), bit `k` of `live` if not out.
+                        let mut codes = 0u64;
+                        let mut live = 0u32;
+                        for k in 0..n {
+                            let (tr, a) = (&ts[k], &fs[k]);
+                            let code = pb.classify_bits(a, tr.bound);
+                            // (All-in triangles: partial, no edge skipped.)
+                            let code = if tr.all_in { 0 } else { code };
+                            codes |= ((code & 15) as u64) << (4 * k);
+                            live |= ((code != CLASS_OUT) as u32) << k;
+                        }
+                        work.packet_out += (n as u32 - live.count_ones()) as u64;
+                        while live != 0 {
+                            let k = live.trailing_zeros() as usize;
+                            live &= live - 1;
+                            let code = (codes >> (4 * k)) as u32 & 15;
+                            let class = if code == CLASS_IN {
+                                PacketClass::In
+                            } else {
+                                PacketClass::Partial
+                            };
+                            test_tri!(&ts[k], class, code & 7);
+                        }
+                        c0 += 16;
+                        if c0 >= tris.len() {
+                            break;
+                        }
                     }
                 }
-                changed = true;
+                None => {
+                    for tr in tris {
+                        test_tri!(tr, PacketClass::Partial, 0);
+                    }
+                }
             }
             if changed {
                 // `1 / best` once per packet (the same IEEE division as per lane); a lane has a

@@ -24,11 +24,38 @@ pub(super) fn min_edge<L: Lanes>(n: &[[f32; 3]; 3], [dx, dy, dz]: [L; 3]) -> L {
         .min_or_rhs(dot_n(n[2], dx, dy, dz))
 }
 
+/// The edges of [`min_edge_of`] per `need` (bits 0-2), as three covector indices: the
+/// needed edges in ascending order, the last one repeated (`min_or_rhs(m, e) = m` when `m` is
+/// already `min_or_rhs(.., e)`, bit for bit, NaN too); `need = 0` (never asked) edge 0.
+const EDGES_OF: [[u8; 3]; 8] = [
+    [0, 0, 0],
+    [0, 0, 0],
+    [1, 1, 1],
+    [0, 1, 1],
+    [2, 2, 2],
+    [0, 2, 2],
+    [1, 2, 2],
+    [0, 1, 2],
+];
+
 /// The smallest edge value `n_i . d` per lane over the edges `need` (bits `i`, not 0; the
 /// others are certainly inside for every lane: [`super::affine::PacketBox::classify_edges`]),
-/// in [`min_edge`]'s order (all values finite there, so any order gives the same minimum).
+/// in [`min_edge`]'s order. Branch-free: always three dot products, of the covectors
+/// [`EDGES_OF`] picks (a repeated last edge leaves the minimum unchanged bit for bit), so the
+/// edge subset, which changes from triangle to triangle, costs no jump; equal to
+/// [`min_edge_of_match`] (tested).
 #[inline(always)]
 pub(super) fn min_edge_of<L: Lanes>(n: &[[f32; 3]; 3], [dx, dy, dz]: [L; 3], need: u32) -> L {
+    let [a, b, c] = EDGES_OF[need as usize & 7];
+    dot_n(n[a as usize], dx, dy, dz)
+        .min_or_rhs(dot_n(n[b as usize], dx, dy, dz))
+        .min_or_rhs(dot_n(n[c as usize], dx, dy, dz))
+}
+
+/// [`min_edge_of`] by a `match` on `need` (one or two dot products for one or two edges):
+/// the reference of the branch-free form.
+#[cfg(test)]
+pub(super) fn min_edge_of_match<L: Lanes>(n: &[[f32; 3]; 3], [dx, dy, dz]: [L; 3], need: u32) -> L {
     match need {
         1 => dot_n(n[0], dx, dy, dz),
         2 => dot_n(n[1], dx, dy, dz),
@@ -630,5 +657,36 @@ mod tests {
             "{skipped} {inside_any} {unsure_any}"
         );
         assert!(nan_lanes > 0, "no NaN edge value tested");
+    }
+
+    /// The branch-free edge subset equals the `match` form bit for bit, for every subset, on
+    /// finite, huge (overflowing), infinite and NaN edge values.
+    #[test]
+    fn min_edge_of_equals_the_match_form() {
+        let mut f = uniform(0x2545_f491_4f6c_dd1d);
+        let (mut nan, mut inf) = (0, 0);
+        for i in 0..20_000 {
+            let big = match i % 6 {
+                0 => 1e30,
+                1 => f32::INFINITY,
+                _ => 1.0,
+            };
+            let mut n = [0, 1, 2].map(|_| [f(), f(), f()].map(|c| (c - 0.5) * 2.0 * big));
+            if i % 13 == 0 {
+                n[i / 13 % 3][i % 3] = f32::NAN;
+            }
+            let scale = if i % 11 == 0 { 1e10 } else { 1.0 };
+            let d = [0, 1, 2].map(|_| V16::from_fn(|_| (f() - 0.5) * scale));
+            for need in 1..8 {
+                let a = min_edge_of(&n, d, need);
+                let b = min_edge_of_match(&n, d, need);
+                for l in 0..16 {
+                    assert_eq!(a.get(l).to_bits(), b.get(l).to_bits(), "{n:?} {need} {l}");
+                    nan += a.get(l).is_nan() as u32;
+                    inf += a.get(l).is_infinite() as u32;
+                }
+            }
+        }
+        assert!(nan > 100 && inf > 100, "{nan} {inf}");
     }
 }
