@@ -21,8 +21,7 @@
 //!   packet — every lane certainly outside (skipped) or certainly inside (no per-lane edge
 //!   test) — with a rigorous error bound; partial packets take the per-lane test below. The
 //!   decisions equal the watertight test's, so the buffer is unchanged (`tests/affine.rs`).
-//!   The walk classifies an entered run's triangles (a fixed 8 per pass, the last pass's
-//!   surplus slots masked off, so no loop exit depends on the run's length) without
+//!   The walk classifies an entered run's triangles (16 at a time) in one pass without
 //!   branches (`PacketBox::classify_bits`: the class changes from triangle to triangle, so a
 //!   branch per triangle would often be mispredicted), then visits only those not out, by
 //!   their bits, in list order.
@@ -76,10 +75,6 @@ use super::kernel::{PacketSlab, SetupWork, dot_n, edge_band, edge_reach, min_edg
 use super::tri::{RHO_MAX, TileTris, TriSetup, exact_t};
 use crate::cast::lanes16::LaneReduce;
 use crate::cast::packet::{ClosestN, MAX_LANES, RaysN};
-
-/// The triangles of an entered run classified per pass (`closest_edges`): a fixed count, the
-/// last chunk's missing slots masked off.
-const CLASS_CHUNK: usize = 8;
 
 /// The closest hit of every lane of `rays` against the set-up list (module docs); `axis` /
 /// `sign` are the tile beam's dominant axis (the near-depth order), `slack` the early-exit
@@ -296,32 +291,27 @@ pub(super) fn closest_edges<L: LaneReduce>(
                 }};
             }
             match pbox {
-                // The affine packet test (`affine.rs`) of the run's triangles, 8 per
+                // The affine packet test (`affine.rs`) of up to 32 triangles of the run in one
                 // pass without branches (every lane certainly out or in; a partial packet's
                 // edges certainly inside for every lane, `skip`, take no per-lane test), then
                 // the triangles not out, by their bits.
                 Some(pb) => {
                     let mut c0 = 0;
                     loop {
-                        let n = (tris.len() - c0).min(CLASS_CHUNK);
+                        let n = (tris.len() - c0).min(16);
                         let (ts, fs) = (&tris[c0..c0 + n], &affs[c0..c0 + n]);
                         // Per triangle `k` of the chunk: 4 bits of class word at `4 k`
-                        // (`CLASS_IN` or the skip bits), bit `k` of `live` if not out. Always
-                        // `CLASS_CHUNK` classifications (no loop exit that depends on the
-                        // run's length): slots past the chunk's end classify its last
-                        // triangle again and are masked off.
+                        // (`CLASS_IN` or the skip bits), bit `k` of `live` if not out.
                         let mut codes = 0u64;
                         let mut live = 0u32;
-                        for k in 0..CLASS_CHUNK {
-                            let j = k.min(n - 1);
-                            let (tr, a) = (&ts[j], &fs[j]);
+                        for k in 0..n {
+                            let (tr, a) = (&ts[k], &fs[k]);
                             let code = pb.classify_bits(a, tr.bound);
                             // (All-in triangles: partial, no edge skipped.)
                             let code = if tr.all_in { 0 } else { code };
                             codes |= ((code & 15) as u64) << (4 * k);
                             live |= ((code != CLASS_OUT) as u32) << k;
                         }
-                        live &= (1u32 << n) - 1;
                         work.packet_out += (n as u32 - live.count_ones()) as u64;
                         while live != 0 {
                             let k = live.trailing_zeros() as usize;
@@ -334,7 +324,7 @@ pub(super) fn closest_edges<L: LaneReduce>(
                             };
                             test_tri!(&ts[k], class, code & 7);
                         }
-                        c0 += CLASS_CHUNK;
+                        c0 += 16;
                         if c0 >= tris.len() {
                             break;
                         }
