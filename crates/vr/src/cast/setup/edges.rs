@@ -71,7 +71,7 @@ use parallax_core::simd::Lanes;
 
 use super::affine::{CLASS_IN, CLASS_OUT, PacketBox, PacketClass};
 use super::bands::refine_run;
-use super::kernel::{PacketSlab, SetupWork, dot_n, edge_band, edge_reach, min_edge, min_edge_of};
+use super::kernel::{PacketSlab, SetupWork, dot_n, edge_band, edge_reach, min_edge};
 use super::tri::{RHO_MAX, TileTris, TriSetup, exact_t};
 use crate::cast::lanes16::LaneReduce;
 use crate::cast::packet::{ClosestN, MAX_LANES, RaysN};
@@ -330,30 +330,6 @@ pub(super) fn closest_edges<L: LaneReduce>(
                         }
                     }
                 }
-                // Edges first (1 spp): which of up to 32 triangles of the run any valid lane
-                // reaches (`reaches_any`, the skip test of `test_tri` above) in one pass
-                // without branches, then those, by their bits, in list order (the skip test
-                // passes again there).
-                None if edges_first => {
-                    let mut c0 = 0;
-                    loop {
-                        let n = (tris.len() - c0).min(32);
-                        let ts = &tris[c0..c0 + n];
-                        let mut live = 0u32;
-                        for (k, tr) in ts.iter().enumerate() {
-                            live |= (reaches_any(tr, rays.d, dinf, valid) as u32) << k;
-                        }
-                        while live != 0 {
-                            let k = live.trailing_zeros() as usize;
-                            live &= live - 1;
-                            test_tri!(&ts[k], PacketClass::Partial, 0);
-                        }
-                        c0 += 32;
-                        if c0 >= tris.len() {
-                            break;
-                        }
-                    }
-                }
                 None => {
                     for tr in tris {
                         test_tri!(tr, PacketClass::Partial, 0);
@@ -377,19 +353,6 @@ pub(super) fn closest_edges<L: LaneReduce>(
         L::select(hit_m, box_lim, L::splat(f32::INFINITY)).write(&mut out.t);
     }
     out
-}
-
-/// Whether the closest-hit walk's edges-first test (`test_tri` in [`closest_edges`], a partial
-/// packet without skipped edges) goes past the edge values for `tr`: an ill-conditioned or
-/// all-in triangle, or one whose smallest edge value is within or above the band for a valid
-/// lane ([`edge_reach`]'s bits, the same compares of the same values). Without branches: the
-/// edge values are computed for every triangle (ignored for the first two kinds).
-#[inline(always)]
-fn reaches_any<L: Lanes>(tr: &TriSetup, d: [L; 3], dinf: f32, valid: u32) -> bool {
-    let m = min_edge_of(&tr.n, d, 7);
-    let b = L::splat(tr.bound * dinf);
-    let reach = L::bits(m.ge(L::splat(0.0) - b)) & valid;
-    (tr.rho > RHO_MAX) | tr.all_in | (reach != 0)
 }
 
 /// An ill-conditioned triangle (`rho > RHO_MAX`) against every lane: certainly-out lanes
@@ -430,90 +393,4 @@ fn ill_conditioned<L: Lanes>(
         }
     }
     changed
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::cast::lanes16::V16;
-
-    fn uniform(mut x: u64) -> impl FnMut() -> f32 {
-        move || {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            (x >> 40) as f32 / (1u64 << 24) as f32
-        }
-    }
-
-    /// [`reaches_any`] (the 1-spp pass over a run) is `true` exactly where the walk's
-    /// per-triangle test goes past its edges-first skip: ill-conditioned, all-in, or
-    /// [`edge_reach`] with bits; on random covectors (huge ones whose edge values overflow),
-    /// bands (zero, tiny, infinite, NaN), `rho`, directions and valid masks.
-    #[test]
-    fn reaches_any_equals_the_skip_test() {
-        let mut f = uniform(0x2545_f491_4f6c_dd1d);
-        let (mut reached, mut skipped, mut special) = (0u32, 0u32, 0u32);
-        for i in 0..20_000 {
-            let big = if i % 7 == 0 { 1e30 } else { 1.0 };
-            let n = [0, 1, 2].map(|_| [f(), f(), f()].map(|c| (c - 0.5) * 2.0 * big));
-            let bound = match i % 6 {
-                0 => 0.0,
-                1 => f32::INFINITY,
-                2 => f() * 1e-6,
-                3 => f32::NAN,
-                _ => f() * 0.1,
-            };
-            let rho = if i % 13 == 0 {
-                RHO_MAX * 2.0
-            } else {
-                f() * RHO_MAX
-            };
-            let tr = TriSetup {
-                n,
-                g: [0.0; 3],
-                tri: 0,
-                src: 0,
-                bound,
-                rho,
-                all_in: i % 17 == 0,
-            };
-            let valid = if i % 3 == 0 {
-                (f() * 65536.0) as u32 & 0xffff
-            } else {
-                0xffff
-            };
-            let base = [f() - 0.5, f() - 0.5, f() - 0.5];
-            let d = [0, 1, 2].map(|a| {
-                V16::from_fn(|l| {
-                    if valid >> l & 1 == 0 {
-                        0.0
-                    } else {
-                        base[a] + (f() - 0.5) * 0.2
-                    }
-                })
-            });
-            let dinf = (0..16).fold(0.0f32, |m, l| {
-                m.max(
-                    d[0].get(l)
-                        .abs()
-                        .max(d[1].get(l).abs())
-                        .max(d[2].get(l).abs()),
-                )
-            });
-            let want = if tr.rho > RHO_MAX || tr.all_in {
-                special += 1;
-                true
-            } else {
-                edge_reach(&tr, d, dinf, valid, 7).1 != 0
-            };
-            assert_eq!(reaches_any(&tr, d, dinf, valid), want, "{tr:?} {valid:x}");
-            reached += want as u32;
-            skipped += !want as u32;
-        }
-        assert!(
-            reached > 1000 && skipped > 1000 && special > 1000,
-            "{reached} {skipped} {special}"
-        );
-    }
 }
