@@ -9,11 +9,21 @@
 //! `2m` and `2m + 1` of a level are a contiguous part of its list, each row ascending, and
 //! one merge of the two by `x / 2` gives the parents in row `m` in order, each once with the
 //! smallest trigger depth of its listed children — no dense array of minima per level and
-//! no sort. The fixed point ([`super::fixpoint`]) hands over that ascending list by one merge
+//! no sort. The lower levels are marked by two halves of the list in parallel, split at a
+//! pixel row that no node of those levels straddles; their lists concatenated are the one
+//! list the levels above go on from. The fixed point ([`super::fixpoint`]) hands over that ascending list by one merge
 //! of its two ascending parts, the pixels listed by the leaf pass and those its iterations
 //! blocked, keeping the finite ones ([`merge_finite`]).
 
+use super::node::Node;
 use super::tree::QuadTree;
+
+/// The halves are split at a multiple of `2^SPLIT_LEVEL` pixel rows: levels up to
+/// `SPLIT_LEVEL` are marked by the two halves in parallel, the (short) lists above serially.
+const SPLIT_LEVEL: usize = 5;
+
+/// A listed node: `(x, y, trigger depth)`.
+type Entry = (u32, u32, f32);
 
 impl QuadTree {
     /// [`Self::mark_unsafe`] given the unsafe pixels `px` (indices `j W + i`, those with a
@@ -24,27 +34,35 @@ impl QuadTree {
     /// trigger depth of its listed children), no dense array of minima; each listed node is
     /// marked once with its minimum — the same nodes with the same minima as
     /// [`Self::mark_unsafe`] (the trigger depths are `+0` or positive and never NaN, so their
-    /// minimum does not depend on the order or grouping it is taken in). Returns the top
-    /// level's minima (dense, as [`Self::mark_unsafe`]).
+    /// minimum does not depend on the order or grouping it is taken in). Levels `0..=s`
+    /// (`s = min(SPLIT_LEVEL, top)`) are marked by two halves of the list in parallel
+    /// (`rayon::join`), split at a pixel row `ys`, a multiple of `2^s` near the median
+    /// pixel's row: every node of those levels lies in one half, the halves' nodes are
+    /// disjoint row ranges of each level, and their level-`s` lists concatenated are the
+    /// list of one pass; the levels above go on from it serially. Returns the top level's
+    /// minima (dense, as [`Self::mark_unsafe`]).
     pub(crate) fn mark_unsafe_listed(&mut self, tz: Vec<f32>, px: &[u32]) -> Vec<f32> {
         debug_assert!(px.windows(2).all(|p| p[0] < p[1]), "ascending");
         let (w, nl) = (self.width, self.levels.len());
-        // The pixels' coordinates and trigger depths, marked; ascending, so the row only
-        // grows (no division).
-        let l0 = &mut self.levels[0];
-        let mut cur: Vec<(u32, u32, f32)> = Vec::with_capacity(px.len());
-        let (mut y, mut row) = (0u32, 0u32);
-        for &k in px {
-            while k - row >= w {
-                y += 1;
-                row += w;
-            }
-            let (x, t) = (k - row, tz[k as usize]);
-            l0.nodes[(y * l0.w + x) as usize].mark_unsafe(t);
-            cur.push((x, y, t));
-        }
-        let mut next: Vec<(u32, u32, f32)> = Vec::with_capacity(cur.len());
-        for l in 1..nl {
+        let s = (nl - 1).min(SPLIT_LEVEL);
+        let ys = px.get(px.len() / 2).map_or(0, |&k| ((k / w) >> s) << s);
+        let ks = px.partition_point(|&k| k < ys * w);
+        let (mut lo, mut hi): (Vec<_>, Vec<_>) = self.levels[..=s]
+            .iter_mut()
+            .enumerate()
+            .map(|(l, lv)| {
+                let (a, b) = lv.nodes.split_at_mut(((ys >> l) * lv.w) as usize);
+                ((a, lv.w), (b, lv.w))
+            })
+            .unzip();
+        let (tzr, (pa, pb)) = (&tz, px.split_at(ks));
+        let (mut cur, upper) = rayon::join(
+            || mark_part(&mut lo, w, 0, tzr, pa),
+            || mark_part(&mut hi, w, ys, tzr, pb),
+        );
+        cur.extend_from_slice(&upper);
+        let mut next: Vec<Entry> = Vec::with_capacity(cur.len());
+        for l in s + 1..nl {
             let lv = &mut self.levels[l];
             parents_listed(&cur, &mut next);
             for &(x, y, t) in &next {
@@ -62,11 +80,47 @@ impl QuadTree {
     }
 }
 
+/// Marks the listed pixels `px` (ascending, all in pixel rows `y0..`) and their ancestors in
+/// `levels` (per level from 0 the nodes of rows `y0 >> l..` and the level's width) and
+/// returns the last level's list (global coordinates).
+fn mark_part(
+    levels: &mut [(&mut [Node], u32)],
+    w: u32,
+    y0: u32,
+    tz: &[f32],
+    px: &[u32],
+) -> Vec<Entry> {
+    // The pixels' coordinates and trigger depths, marked; ascending, so the row only grows
+    // (no division).
+    let mut cur: Vec<Entry> = Vec::with_capacity(px.len());
+    let (nodes, lw) = &mut levels[0];
+    let (mut y, mut row) = (y0, y0 * w);
+    for &k in px {
+        while k - row >= w {
+            y += 1;
+            row += w;
+        }
+        let (x, t) = (k - row, tz[k as usize]);
+        nodes[((y - y0) * *lw + x) as usize].mark_unsafe(t);
+        cur.push((x, y, t));
+    }
+    let mut next: Vec<Entry> = Vec::with_capacity(cur.len());
+    for (l, (nodes, lw)) in levels.iter_mut().enumerate().skip(1) {
+        let yl = y0 >> l;
+        parents_listed(&cur, &mut next);
+        for &(x, y, t) in &next {
+            nodes[((y - yl) * *lw + x) as usize].mark_unsafe(t);
+        }
+        core::mem::swap(&mut cur, &mut next);
+    }
+    cur
+}
+
 /// The parents of the listed nodes `cur` (`(x, y, minimum)`, row-major without repeats) as
 /// the same kind of list in `out` (cleared first), each with the smallest minimum of its
 /// listed children: per parent row `m`, the listed nodes of rows `2m` and `2m + 1` (a
 /// contiguous part of `cur`, each row ascending in `x`) merged by `x / 2`.
-fn parents_listed(cur: &[(u32, u32, f32)], out: &mut Vec<(u32, u32, f32)>) {
+fn parents_listed(cur: &[Entry], out: &mut Vec<Entry>) {
     out.clear();
     let n = cur.len();
     let mut s = 0;
@@ -178,7 +232,9 @@ mod tests {
     }
 
     /// The marking from the list equals the scan of every pixel: every node bit for
-    /// bit, the trigger depths and the top level's minima, on images of odd and even sizes, with sparse and clustered unsafe pixels (and none, and one level).
+    /// bit, the trigger depths and the top level's minima, on images of odd and even sizes, with sparse and clustered unsafe pixels (and none, and one level). The two
+    /// halves split below the top (8 and 9 levels: levels above `SPLIT_LEVEL` go on from
+    /// the concatenated lists) and at the top (4 levels, one level) are both covered.
     #[test]
     fn listed_marking_equals_the_scan() {
         let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
