@@ -273,23 +273,7 @@ impl QuadTree {
             let first = [Some(level0), level1].into_iter().flatten().collect();
             super::fixpoint::fixed_point(&ctx, first, nlev, (w, h), deeper, px)
         };
-        let mut tree = Self {
-            width: w,
-            height: h,
-            wf,
-            hf,
-            levels,
-            crack_px: opts.crack_dilation,
-            trigger_z: Vec::new(),
-            unsafe_count: 0,
-            plane_top: 0,
-            plane_level: Vec::new(),
-            z_floor: 0.0,
-            z_floor_rect: Vec::new(),
-            z_floor_dir: Vec::new(),
-            z_floor_tw: 0,
-            z_floor_th: 0,
-        };
+        let mut tree = Self::from_levels(w, h, levels, opts.crack_dilation);
         // Top-down: the small upper levels are scanned first.
         tree.plane_top = (0..tree.levels.len())
             .rev()

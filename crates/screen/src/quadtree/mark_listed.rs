@@ -212,23 +212,7 @@ mod tests {
                 }
             })
             .collect();
-        QuadTree {
-            width: w,
-            height: h,
-            wf: w as f32,
-            hf: h as f32,
-            levels,
-            crack_px: 0.0,
-            trigger_z: Vec::new(),
-            unsafe_count: 0,
-            plane_top: 0,
-            plane_level: Vec::new(),
-            z_floor: 0.0,
-            z_floor_rect: Vec::new(),
-            z_floor_dir: Vec::new(),
-            z_floor_tw: 0,
-            z_floor_th: 0,
-        }
+        QuadTree::from_levels(w, h, levels, 0.0)
     }
 
     /// The marking from the list equals the scan of every pixel: every node bit for

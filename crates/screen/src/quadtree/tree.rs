@@ -86,6 +86,28 @@ pub const Z_FLOOR_TABLE_MAX: usize = 4096;
 pub const Z_SKIP_MARGIN: f32 = 1e-3;
 
 impl QuadTree {
+    /// A tree over a `w x h` image with the given levels and nothing derived yet: no
+    /// trigger depths, unsafe pixels, plane top or depth floor (the build fills them).
+    pub(super) fn from_levels(w: u32, h: u32, levels: Vec<Level>, crack_px: f32) -> Self {
+        Self {
+            width: w,
+            height: h,
+            wf: w as f32,
+            hf: h as f32,
+            levels,
+            crack_px,
+            trigger_z: Vec::new(),
+            unsafe_count: 0,
+            plane_top: 0,
+            plane_level: Vec::new(),
+            z_floor: 0.0,
+            z_floor_rect: Vec::new(),
+            z_floor_dir: Vec::new(),
+            z_floor_tw: 0,
+            z_floor_th: 0,
+        }
+    }
+
     /// The highest level holding a plane node (0 when there is none).
     pub fn plane_top(&self) -> usize {
         self.plane_top
