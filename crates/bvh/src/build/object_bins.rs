@@ -7,7 +7,9 @@
 //!
 //! A bin keeps its box as a [`NegBox`] (the minimum and the negated maximum, Embree's layout),
 //! so that adding a reference is one 8-lane minimum (`bin_into_avx`, AVX at run time, with
-//! the portable twin `bin_into_portable` tested equal) and the sweep's running unions are
+//! the portable twin `bin_into_portable` tested equal; nodes of [`AVX_BIN_MAX`] references
+//! or more take the portable loop, which bins them faster per reference on Zen 3, see
+//! docs/notes/bvh.md) and the sweep's running unions are
 //! lane-wise minima; the boxes, areas and costs are bit for bit those of [`BoxA`] and
 //! [`Aabb`] unions (tests in `object_bins_tests.rs`).
 
@@ -20,6 +22,10 @@ use crate::options::{BuildOptions, MAX_BINS};
 
 /// Nodes with more triangles than this are binned in parallel chunks.
 pub(crate) const PAR_BIN_THRESHOLD: usize = 32 * 1024;
+
+/// Nodes (or parallel chunks) with fewer references than this are binned by `bin_into_avx`;
+/// larger ones by `bin_into_portable` (the same bins bit for bit).
+pub(crate) const AVX_BIN_MAX: usize = 1024;
 
 /// The SAH's intersection count of `cnt` triangles in leaves tested `block` triangles at a
 /// time: `ceil(cnt / block)` (`block = 1`: the triangle count).
@@ -163,14 +169,15 @@ fn bin_refs(refs: &[PrimRef], binner: &Binner) -> Bins {
 }
 
 /// Resets the first `binner.bins` bins of each axis and bins `refs` into them:
-/// [`bin_into_avx`] where the CPU has AVX, else [`bin_into_portable`] (tested equal).
+/// [`bin_into_avx`] where the CPU has AVX and `refs` has fewer than [`AVX_BIN_MAX`]
+/// references, else [`bin_into_portable`] (tested equal).
 fn bin_into(refs: &[PrimRef], binner: &Binner, bins: &mut Bins) {
     for axis in 0..3 {
         bins.boxes[axis][..binner.bins].fill(NegBox::EMPTY);
     }
     bins.counts[..binner.bins].fill([0; 4]);
     #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx") {
+    if refs.len() < AVX_BIN_MAX && std::is_x86_feature_detected!("avx") {
         // SAFETY: AVX is present.
         return unsafe { bin_into_avx(refs, binner, bins) };
     }

@@ -135,6 +135,40 @@ fn special_refs(seed: u32, n: u32) -> Vec<PrimRef> {
         .collect()
 }
 
+/// `bin_into` (AVX below `AVX_BIN_MAX` references, the portable loop from there on) gives
+/// the portable loop's bins on both sides of the limit, over scratch left dirty by a
+/// previous node.
+#[test]
+fn bin_into_equals_the_portable_loop_on_both_sides_of_the_avx_limit() {
+    let all = special_refs(23, 3 * AVX_BIN_MAX as u32);
+    for n in [AVX_BIN_MAX - 1, AVX_BIN_MAX, 3 * AVX_BIN_MAX] {
+        let refs = &all[..n];
+        for nb in [2usize, 9, 32] {
+            let cb = Aabb::new(Vec3::splat(-16.0), Vec3::splat(16.0));
+            let binner = Binner::new(&cb, nb);
+            let mut want = new_bins();
+            bin_into_portable(refs, &binner, &mut want);
+            let mut got = new_bins();
+            bin_into(&all[n / 2..], &Binner::new(&cb, 32), &mut got);
+            bin_into(refs, &binner, &mut got);
+            for a in 0..3 {
+                for i in 0..nb {
+                    assert_eq!(
+                        lanes(&got.boxes[a][i]),
+                        lanes(&want.boxes[a][i]),
+                        "{n} {nb}"
+                    );
+                }
+            }
+            assert_eq!(got.counts[..nb], want.counts[..nb], "{n} {nb}");
+            assert_eq!(
+                want.counts[..nb].iter().map(|c| c[0]).sum::<u32>(),
+                n as u32
+            );
+        }
+    }
+}
+
 /// The bins of [`bin_into_avx`] and [`bin_into_portable`] are bit for bit equal, and their
 /// [`NegBox::boxa`] is bit for bit the union of the references' [`BoxA`]s in reference order
 /// (the binning before the negated maximum), with the same counts.
