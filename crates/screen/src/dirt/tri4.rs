@@ -50,8 +50,12 @@ impl<'a> Query<'a> {
     pub fn new(wt: WatertightRay, tris: &'a [DirtTri], any: bool) -> Self {
         let o = wt.origin;
         Query {
-            org: [wt.kx, wt.ky, wt.kz].map(|k| Vec4::splat(o[k])),
-            shear: [wt.sx, wt.sy, wt.sz].map(Vec4::splat),
+            org: [
+                Vec4::splat(o[wt.kx]),
+                Vec4::splat(o[wt.ky]),
+                Vec4::splat(o[wt.kz]),
+            ],
+            shear: [Vec4::splat(wt.sx), Vec4::splat(wt.sy), Vec4::splat(wt.sz)],
             t_min: Vec4::splat(wt.t_min),
             wt,
             tris,
@@ -271,7 +275,8 @@ fn gather_sse(t: [&DirtTri; 4]) -> [[Vec4; 3]; 3] {
     // `repr(C)` `Vec3`, size checked above), and the loads at floats `k <= 5` read floats
     // `k..k + 4` of the triangle.
     let rows = |k: usize| unsafe {
-        let [a, b, c, d] = t.map(|tri| _mm_loadu_ps((tri as *const DirtTri as *const f32).add(k)));
+        let load = |tri: &DirtTri| _mm_loadu_ps((tri as *const DirtTri as *const f32).add(k));
+        let (a, b, c, d) = (load(t[0]), load(t[1]), load(t[2]), load(t[3]));
         // `(a0, b0, a1, b1)`, `(c0, d0, c1, d1)`, `(a2, b2, a3, b3)`, `(c2, d2, c3, d3)`.
         let (lo01, lo23) = (_mm_unpacklo_ps(a, b), _mm_unpacklo_ps(c, d));
         let (hi01, hi23) = (_mm_unpackhi_ps(a, b), _mm_unpackhi_ps(c, d));
@@ -285,7 +290,14 @@ fn gather_sse(t: [&DirtTri; 4]) -> [[Vec4; 3]; 3] {
     let [x0, y0, z0, _] = rows(0);
     let [x1, y1, z1, _] = rows(3);
     let [_, x2, y2, z2] = rows(5);
-    [[x0, y0, z0], [x1, y1, z1], [x2, y2, z2]].map(|c| c.map(Vec4::from))
+    // Written out rather than by `array::map`: in some builds the nested `map` was compiled as
+    // out-of-line `try_map` calls with copies of the corners through the stack.
+    let v = Vec4::from;
+    [
+        [v(x0), v(y0), v(z0)],
+        [v(x1), v(y1), v(z1)],
+        [v(x2), v(y2), v(z2)],
+    ]
 }
 
 #[cfg(test)]
