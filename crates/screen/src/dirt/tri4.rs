@@ -454,4 +454,108 @@ mod tests {
             "too few hits ({hits}) for the test to mean anything"
         );
     }
+
+    /// Lists with repeated ids (within a list, across the lists of one ray, and ids sharing a
+    /// mailbox slot): every copy tests the same triangles as the scalar twin (the same count
+    /// of tests, so the same repeats skipped) and gives the same answer bit for bit, on `u32`
+    /// and `u16` entries.
+    #[test]
+    fn mailbox_skips_the_scalar_twins_repeats() {
+        let mut rng = Rng::for_pixel(3, 9, 2, 7);
+        let mut v = |s: f32| {
+            Vec3::new(
+                rng.next_f32() - 0.5,
+                rng.next_f32() - 0.5,
+                rng.next_f32() - 0.5,
+            ) * s
+        };
+        let tris: Vec<DirtTri> = (0..300)
+            .map(|_| {
+                let c = v(3.0);
+                DirtTri {
+                    p0: c + v(2.0),
+                    p1: c + v(2.0),
+                    p2: c + v(2.0),
+                }
+            })
+            .collect();
+        let rays: Vec<Ray> = (0..300)
+            .filter_map(|_| {
+                let d = v(1.0);
+                (d.length() > 1e-3).then(|| Ray::new(v(4.0), d.normalize()))
+            })
+            .collect();
+        let mut pick = Rng::for_pixel(5, 5, 1, 8);
+        let (mut skipped, mut hits) = (0u64, 0u32);
+        for ray in &rays {
+            // Four lists of 1-24 entries from a few ids, some `MAILBOX` apart (one slot).
+            let pool: Vec<u32> = (0..10)
+                .map(|k| {
+                    let id = (pick.next_f32() * 200.0) as u32;
+                    if k % 3 == 0 { id % 64 + 128 } else { id }
+                })
+                .collect();
+            let lists: Vec<Vec<u32>> = (0..4)
+                .map(|_| {
+                    let n = 1 + (pick.next_f32() * 24.0) as usize;
+                    (0..n)
+                        .map(|_| pool[(pick.next_f32() * pool.len() as f32) as usize % pool.len()])
+                        .collect()
+                })
+                .collect();
+            let total: u64 = lists.iter().map(|l| l.len() as u64).sum();
+            let wt = WatertightRay::new(ray);
+            for any in [false, true] {
+                let mut scalar = Query::new(wt, &tris, any);
+                // An occlusion query stops at its first hit (as the walk does).
+                let mut rs = Vec::new();
+                for l in &lists {
+                    rs.push(scalar.test_scalar(l));
+                    if any && rs[rs.len() - 1] {
+                        break;
+                    }
+                }
+                for isa in Isa::available() {
+                    for rel in [false, true] {
+                        let mut q = Query::new(wt, &tris, any);
+                        let r: Vec<bool> = lists[..rs.len()]
+                            .iter()
+                            .map(|l| {
+                                let base = if rel { *l.iter().min().unwrap() } else { 0 };
+                                let d: Vec<u16> = l.iter().map(|&i| (i - base) as u16).collect();
+                                match (isa, rel) {
+                                    (Isa::Baseline, false) => q.test::<0>(l),
+                                    (Isa::X86V3, false) => q.test::<1>(l),
+                                    (Isa::X86V4, false) => q.test::<2>(l),
+                                    (Isa::Baseline, true) => q.test16::<0>(base, &d),
+                                    (Isa::X86V3, true) => q.test16::<1>(base, &d),
+                                    (Isa::X86V4, true) => q.test16::<2>(base, &d),
+                                }
+                            })
+                            .collect();
+                        assert_eq!(r, rs);
+                        if any {
+                            // The four-wide test may count the rest of the hit's block.
+                            assert_eq!(q.best.found(), scalar.best.found());
+                            continue;
+                        }
+                        assert_eq!(q.counters.tests, scalar.counters.tests);
+                        let (x, y) = (q.best, scalar.best);
+                        assert_eq!(
+                            (x.prim, x.t.to_bits(), x.u.to_bits(), x.v.to_bits()),
+                            (y.prim, y.t.to_bits(), y.u.to_bits(), y.v.to_bits()),
+                        );
+                    }
+                }
+                if !any {
+                    skipped += total - scalar.counters.tests;
+                    hits += scalar.best.found() as u32;
+                }
+            }
+        }
+        assert!(
+            skipped > 1000 && hits > 20,
+            "too few repeats ({skipped}) or hits ({hits}) for the test to mean anything"
+        );
+    }
 }
