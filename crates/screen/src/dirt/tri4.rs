@@ -67,7 +67,6 @@ impl<'a> Query<'a> {
     }
 
     /// True when `id` was tested lately (and marks it tested).
-    #[cfg(test)]
     #[inline(always)]
     fn seen(&mut self, id: u32) -> bool {
         let slot = &mut self.mailbox[id as usize & (MAILBOX - 1)];
@@ -142,13 +141,11 @@ impl<'a> Query<'a> {
         let mut n = 0;
         for &d in ids {
             let id = base + d.into();
-            // The mailbox without a branch: the entry is written to the block either way and
-            // kept (the count advanced) only when it was not tested lately.
-            let slot = &mut self.mailbox[id as usize & (MAILBOX - 1)];
-            let fresh = *slot != id;
-            *slot = id;
-            block[n & 3] = id;
-            n += fresh as usize;
+            if self.seen(id) {
+                continue;
+            }
+            block[n] = id;
+            n += 1;
             if n == 4 {
                 if self.test4(&block, 4) {
                     return true;
