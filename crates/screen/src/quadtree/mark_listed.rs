@@ -23,7 +23,7 @@ use super::tree::QuadTree;
 const SPLIT_LEVEL: usize = 5;
 
 /// A listed node: `(x, y, trigger depth)`.
-pub(super) type Entry = (u32, u32, f32);
+type Entry = (u32, u32, f32);
 
 impl QuadTree {
     /// [`Self::mark_unsafe`] given the unsafe pixels `px` (indices `j W + i`, those with a
@@ -120,7 +120,7 @@ fn mark_part(
 /// the same kind of list in `out` (cleared first), each with the smallest minimum of its
 /// listed children: per parent row `m`, the listed nodes of rows `2m` and `2m + 1` (a
 /// contiguous part of `cur`, each row ascending in `x`) merged by `x / 2`.
-pub(super) fn parents_listed(cur: &[Entry], out: &mut Vec<Entry>) {
+fn parents_listed(cur: &[Entry], out: &mut Vec<Entry>) {
     out.clear();
     let n = cur.len();
     let mut s = 0;
