@@ -46,8 +46,8 @@ use rayon::prelude::*;
 use super::object_bins::{sah_count, trunc3};
 use super::prim_ref::{BoxA, NegBox};
 use super::{
-    BNode, BTree, Bins, MAX_SAH_DEPTH, PAR_BIN_THRESHOLD, PrimRef, UNUSED, find_object_split,
-    median_split, new_bins, node_bounds, object_partition,
+    BNode, BTree, Bins, MAX_SAH_DEPTH, PAR_BIN_THRESHOLD, PrimRef, find_object_split, median_split,
+    new_arena, new_bins, node_bounds, object_partition,
 };
 use crate::options::BuildOptions;
 
@@ -71,6 +71,11 @@ struct Ctx<'a> {
     min_overlap: f32,
 }
 
+/// The references' capacity for `n` triangles: `n` and the duplication budget (module docs).
+pub(crate) fn reference_capacity(n: usize, opts: &BuildOptions) -> usize {
+    n + (n as f64 * opts.split_budget as f64) as usize
+}
+
 /// Builds the binary tree with spatial splits over `refs` (not empty; one reference per
 /// triangle). `refs` grows by the duplication budget; on return every leaf's range in it
 /// holds that leaf's references (clipped boxes, the triangle's id), and slots outside leaves
@@ -81,9 +86,9 @@ pub(crate) fn build_binary_spatial(
     opts: &BuildOptions,
 ) -> BTree {
     let n = refs.len();
-    let cap = n + (n as f64 * opts.split_budget as f64) as usize;
+    let cap = reference_capacity(n, opts);
     refs.resize(cap, refs[0]);
-    let mut nodes = vec![UNUSED; 2 * cap - 1];
+    let mut nodes = new_arena(2 * cap - 1);
     let (root_box, _) = node_bounds(&refs[..n]);
     let ctx = Ctx {
         corners,
