@@ -39,8 +39,6 @@
 //! slots (a subtree owning capacity `c` owns `2 c - 1` arena slots), so the recursion keeps
 //! writing disjoint slices in parallel; slots past a node's references stay unused.
 
-use std::sync::Mutex;
-
 use glam::{Vec3, Vec3A};
 use parallax_core::Aabb;
 use rayon::prelude::*;
@@ -71,19 +69,6 @@ struct Ctx<'a> {
     opts: &'a BuildOptions,
     /// `α · A(root)`: object splits whose children overlap by more try a spatial split.
     min_overlap: f32,
-    /// Per thread of the pool (and one for other threads): the buffer of the right side of
-    /// [`spatial_partition`], reused by the thread's later nodes, so that the build allocates
-    /// and first touches it once per thread instead of once per node.
-    right: Vec<Mutex<Vec<PrimRef>>>,
-}
-
-impl Ctx<'_> {
-    /// The calling thread's buffer of [`Ctx::right`].
-    fn right_buffer(&self) -> std::sync::MutexGuard<'_, Vec<PrimRef>> {
-        let last = self.right.len() - 1;
-        let i = rayon::current_thread_index().map_or(last, |i| i.min(last));
-        self.right[i].lock().unwrap_or_else(|e| e.into_inner())
-    }
 }
 
 /// The references' capacity for `n` triangles: `n` and the duplication budget (module docs).
@@ -109,9 +94,6 @@ pub(crate) fn build_binary_spatial(
         corners,
         opts,
         min_overlap: opts.split_alpha * root_box.surface_area(),
-        right: (0..=rayon::current_num_threads())
-            .map(|_| Mutex::new(Vec::new()))
-            .collect(),
     };
     let root = build_rec(refs, n, 0, &mut nodes, 0, &ctx, &mut new_bins());
     BTree { nodes, root }
@@ -530,9 +512,7 @@ fn spatial_partition(
     let bit = 1u32 << a;
     let (mut lb, mut rb) = (s.left, s.right);
     let (mut nl, mut nr) = (s.n_l as f32, s.n_r as f32);
-    let mut right = ctx.right_buffer();
-    right.clear();
-    right.reserve(s.n_r as usize);
+    let mut right: Vec<PrimRef> = Vec::with_capacity(s.n_r as usize);
     let mut w = 0;
     for i in 0..n {
         let r = refs[i];
