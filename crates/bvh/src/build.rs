@@ -28,7 +28,7 @@
 use parallax_core::Aabb;
 use rayon::prelude::*;
 
-use crate::huge_pages::huge_vec;
+use crate::huge_pages::HugeBuf;
 use crate::options::BuildOptions;
 
 mod object_bins;
@@ -71,7 +71,7 @@ impl BNode {
 /// ranges, so the parallel recursion writes disjoint slices and no node is boxed). Slots
 /// of ranges that end as one leaf stay unused.
 pub(crate) struct BTree {
-    pub nodes: Vec<BNode>,
+    pub nodes: HugeBuf<BNode>,
     pub root: u32,
 }
 
@@ -95,10 +95,8 @@ const UNUSED: BNode = BNode::Leaf {
 };
 
 /// An arena of `len` unused slots, on huge pages where the system allows (`huge_pages.rs`).
-fn new_arena(len: usize) -> Vec<BNode> {
-    let mut nodes = huge_vec(len);
-    nodes.resize(len, UNUSED);
-    nodes
+fn new_arena(len: usize) -> HugeBuf<BNode> {
+    HugeBuf::new(len, UNUSED)
 }
 
 /// Builds the binary tree over `refs` (not empty), reordering them so that every leaf is a

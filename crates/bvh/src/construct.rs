@@ -3,12 +3,13 @@
 
 use std::time::Instant;
 
+use glam::Vec3;
 use parallax_core::Aabb;
 use parallax_scene::TriangleMesh;
 use rayon::prelude::*;
 
 use crate::bvh::Bvh;
-use crate::huge_pages::huge_vec;
+use crate::huge_pages::HugeBuf;
 use crate::options::{BuildOptions, BvhError};
 use crate::{build, collapse, collapse8, node, traverse, traverse8};
 
@@ -66,13 +67,18 @@ impl Bvh {
         } else {
             n
         };
-        let mut refs: Vec<build::PrimRef> = huge_vec(cap);
-        refs.par_extend((0..n).into_par_iter().with_min_len(4096).map(|i| {
-            let [a, b, c] = mesh.triangle(i);
-            build::PrimRef::new(a.min(b).min(c), a.max(b).max(c), i as u32)
-        }));
+        let mut refs = HugeBuf::new(cap, build::PrimRef::new(Vec3::ZERO, Vec3::ZERO, 0));
+        refs[..n]
+            .par_chunks_mut(4096)
+            .enumerate()
+            .for_each(|(k, chunk)| {
+                for (i, r) in (k * 4096..).zip(chunk) {
+                    let [a, b, c] = mesh.triangle(i);
+                    *r = build::PrimRef::new(a.min(b).min(c), a.max(b).max(c), i as u32);
+                }
+            });
         let tree = if opts.spatial_splits {
-            build::build_binary_spatial(&mut refs, &|id| mesh.triangle(id as usize), &opts)
+            build::build_binary_spatial(&mut refs, n, &|id| mesh.triangle(id as usize), &opts)
         } else {
             build::build_binary(&mut refs, &opts)
         };

@@ -7,7 +7,13 @@
 //! (`madvise(MADV_HUGEPAGE)`, Linux) to back the whole 2 MiB pages inside the untouched
 //! allocation with transparent huge pages, one fault per 2 MiB, where the system's THP mode is
 //! `always` or `madvise`. The advice changes neither the contents nor the layout: on other
-//! systems, with THP off, or where the kernel refuses, the vector is an ordinary one.
+//! systems, with THP off, or where the kernel refuses, the vector is an ordinary one. A
+//! vector's first and last partial 2 MiB stay 4 KiB pages; [`HugeBuf`], for the arrays that
+//! stay inside the build (the references, the binary arena), is whole 2 MiB pages instead.
+
+use std::alloc::{Layout, alloc, dealloc, handle_alloc_error};
+use std::ops::{Deref, DerefMut};
+use std::ptr::NonNull;
 
 /// The transparent huge page size of x86-64 and of 4 KiB-page arm64 kernels.
 pub(crate) const HUGE_PAGE: usize = 2 << 20;
@@ -26,6 +32,74 @@ fn huge_range(p: usize, len: usize) -> Option<(usize, usize)> {
     let start = p.checked_next_multiple_of(HUGE_PAGE)?;
     let end = p.checked_add(len)? / HUGE_PAGE * HUGE_PAGE;
     (end > start).then(|| (start, end - start))
+}
+
+/// `len` copies of a value in an allocation of whole [`HUGE_PAGE`]s, aligned to one, when it
+/// spans at least one, advised as [`huge_vec`]: every 2 MiB of it can be a huge page, where a
+/// vector's first and last partial 2 MiB stay 4 KiB pages. The build's references and binary
+/// arena.
+pub(crate) struct HugeBuf<T: Copy> {
+    ptr: NonNull<T>,
+    len: usize,
+    layout: Layout,
+}
+
+// SAFETY: `HugeBuf` owns its elements as a `Vec` does.
+unsafe impl<T: Copy + Send> Send for HugeBuf<T> {}
+// SAFETY: shared access only reads the elements.
+unsafe impl<T: Copy + Sync> Sync for HugeBuf<T> {}
+
+impl<T: Copy> HugeBuf<T> {
+    pub(crate) fn new(len: usize, value: T) -> Self {
+        let size = size_of::<T>()
+            .checked_mul(len)
+            .expect("HugeBuf size overflows");
+        // At least one huge page: whole huge pages, the last one included.
+        let (size, align) = if size >= HUGE_PAGE {
+            let whole = size.checked_next_multiple_of(HUGE_PAGE);
+            (whole.expect("HugeBuf size overflows"), HUGE_PAGE)
+        } else {
+            (size, align_of::<T>())
+        };
+        let layout = Layout::from_size_align(size, align).expect("HugeBuf layout");
+        let ptr = if size == 0 {
+            NonNull::dangling()
+        } else {
+            // SAFETY: the layout's size is not zero.
+            let p = unsafe { alloc(layout) }.cast::<T>();
+            NonNull::new(p).unwrap_or_else(|| handle_alloc_error(layout))
+        };
+        advise_huge(ptr.as_ptr().cast(), size);
+        for i in 0..len {
+            // SAFETY: `i < len`, inside the allocation of `len` elements (or `T` is zero-sized).
+            unsafe { ptr.as_ptr().add(i).write(value) };
+        }
+        HugeBuf { ptr, len, layout }
+    }
+}
+
+impl<T: Copy> Deref for HugeBuf<T> {
+    type Target = [T];
+    fn deref(&self) -> &[T] {
+        // SAFETY: `len` initialised elements from `ptr`, owned by `self`.
+        unsafe { std::slice::from_raw_parts(self.ptr.as_ptr(), self.len) }
+    }
+}
+
+impl<T: Copy> DerefMut for HugeBuf<T> {
+    fn deref_mut(&mut self) -> &mut [T] {
+        // SAFETY: as `deref`, borrowed mutably through `self`.
+        unsafe { std::slice::from_raw_parts_mut(self.ptr.as_ptr(), self.len) }
+    }
+}
+
+impl<T: Copy> Drop for HugeBuf<T> {
+    fn drop(&mut self) {
+        if self.layout.size() != 0 {
+            // SAFETY: allocated in `new` with this layout (`T: Copy` needs no drop).
+            unsafe { dealloc(self.ptr.as_ptr().cast(), self.layout) };
+        }
+    }
 }
 
 #[cfg(target_os = "linux")]
@@ -72,6 +146,25 @@ mod tests {
         );
         let e: Vec<[u8; 0]> = huge_vec(1 << 40);
         assert!(e.is_empty());
+    }
+
+    #[test]
+    fn huge_buf_holds_the_value_and_its_big_allocations_start_at_a_huge_page() {
+        for len in [0usize, 1, 1000, HUGE_PAGE / 36 + 1, 3 * HUGE_PAGE / 36 + 7] {
+            let mut b = HugeBuf::new(len, [7u32; 9]);
+            assert_eq!(b.len(), len);
+            assert!(b.iter().all(|x| *x == [7; 9]));
+            if len * 36 >= HUGE_PAGE {
+                assert_eq!(b.as_ptr() as usize % HUGE_PAGE, 0);
+                assert_eq!(b.layout.size() % HUGE_PAGE, 0);
+                assert!(b.layout.size() >= len * 36);
+            }
+            if let Some(x) = b.last_mut() {
+                x[0] = 1;
+                assert_eq!(b[len - 1][0], 1);
+            }
+        }
+        assert_eq!(HugeBuf::new(5, ()).len(), 5);
     }
 
     /// Where the kernel has transparent huge pages, the advised range is marked (`hg` in the

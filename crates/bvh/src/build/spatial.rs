@@ -76,18 +76,20 @@ pub(crate) fn reference_capacity(n: usize, opts: &BuildOptions) -> usize {
     n + (n as f64 * opts.split_budget as f64) as usize
 }
 
-/// Builds the binary tree with spatial splits over `refs` (not empty; one reference per
-/// triangle). `refs` grows by the duplication budget; on return every leaf's range in it
-/// holds that leaf's references (clipped boxes, the triangle's id), and slots outside leaves
-/// are unused.
+/// Builds the binary tree with spatial splits over the `n` references at the start of `refs`
+/// (`n > 0`, one reference per triangle; `refs.len()` is [`reference_capacity`]`(n)`, the rest
+/// being room for the duplicates); on return every leaf's range in `refs` holds that leaf's
+/// references (clipped boxes, the triangle's id), and slots outside leaves are unused.
 pub(crate) fn build_binary_spatial(
-    refs: &mut Vec<PrimRef>,
+    refs: &mut [PrimRef],
+    n: usize,
     corners: Corners<'_>,
     opts: &BuildOptions,
 ) -> BTree {
-    let n = refs.len();
-    let cap = reference_capacity(n, opts);
-    refs.resize(cap, refs[0]);
+    let cap = refs.len();
+    debug_assert_eq!(cap, reference_capacity(n, opts));
+    let (init, spare) = refs.split_at_mut(n);
+    spare.fill(init[0]);
     let mut nodes = new_arena(2 * cap - 1);
     let (root_box, _) = node_bounds(&refs[..n]);
     let ctx = Ctx {
