@@ -28,6 +28,7 @@
 use parallax_core::Aabb;
 use rayon::prelude::*;
 
+use crate::huge_pages::HugeBuf;
 use crate::options::BuildOptions;
 
 mod object_bins;
@@ -36,7 +37,7 @@ mod spatial;
 use object_bins::{Bins, ObjectSplit, PAR_BIN_THRESHOLD, find_object_split, new_bins, sah_count};
 use prim_ref::BoxA;
 pub(crate) use prim_ref::PrimRef;
-pub(crate) use spatial::build_binary_spatial;
+pub(crate) use spatial::{build_binary_spatial, reference_capacity};
 
 /// Below this depth the binned SAH decides; deeper nodes split at the object median.
 pub(crate) const MAX_SAH_DEPTH: u32 = 48;
@@ -70,7 +71,7 @@ impl BNode {
 /// ranges, so the parallel recursion writes disjoint slices and no node is boxed). Slots
 /// of ranges that end as one leaf stay unused.
 pub(crate) struct BTree {
-    pub nodes: Vec<BNode>,
+    pub nodes: HugeBuf<BNode>,
     pub root: u32,
 }
 
@@ -93,10 +94,15 @@ const UNUSED: BNode = BNode::Leaf {
     count: 0,
 };
 
+/// An arena of `len` unused slots, on huge pages where the system allows (`huge_pages.rs`).
+fn new_arena(len: usize) -> HugeBuf<BNode> {
+    HugeBuf::new(len, UNUSED)
+}
+
 /// Builds the binary tree over `refs` (not empty), reordering them so that every leaf is a
 /// contiguous range.
 pub(crate) fn build_binary(refs: &mut [PrimRef], opts: &BuildOptions) -> BTree {
-    let mut nodes = vec![UNUSED; 2 * refs.len() - 1];
+    let mut nodes = new_arena(2 * refs.len() - 1);
     let root = build_rec(refs, 0, &mut nodes, 0, opts, &mut new_bins());
     BTree { nodes, root }
 }

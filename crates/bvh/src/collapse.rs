@@ -13,6 +13,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::build::{BNode, BTree, PrimRef};
+use crate::huge_pages::huge_vec;
 use crate::node::{ChildRef, Node4};
 use crate::tri::Tri;
 use crate::tri4::{Tri4, blocks_for};
@@ -75,23 +76,26 @@ pub(crate) struct Collapsed {
     pub leaf_blocks: Vec<u32>,
 }
 
-/// Collapses `tree` (built over `refs`) into 4-wide nodes; `corners(id)` gives a triangle's
-/// vertices. A serial pass lays out the nodes and numbers the leaves' triangles and blocks in
+/// Collapses `tree` (built over `refs`) into 4-wide nodes (room for `node_hint` reserved);
+/// `corners(id)` gives a triangle's vertices. A serial pass lays out the nodes and numbers the leaves' triangles and blocks in
 /// the order the preorder walk reaches them; the triangles and blocks are then gathered in
 /// parallel (each triangle and block is a function of its number alone, so the result does
 /// not depend on the threads).
 pub(crate) fn collapse(
     tree: &BTree,
     refs: &[PrimRef],
+    node_hint: usize,
     corners: impl Fn(u32) -> [Vec3; 3] + Sync,
 ) -> Collapsed {
+    let mut leaf_blocks = huge_vec(refs.len());
+    leaf_blocks.resize(refs.len(), u32::MAX);
     let mut ctx = Ctx {
         tree,
-        nodes: Vec::new(),
+        nodes: huge_vec(node_hint),
         depth: 0,
-        leaf_blocks: vec![u32::MAX; refs.len()],
-        order: Vec::with_capacity(refs.len()),
-        block_starts: Vec::with_capacity(refs.len() / 2),
+        leaf_blocks,
+        order: huge_vec(refs.len()),
+        block_starts: huge_vec(refs.len() / 2),
     };
     let root = tree.node(tree.root);
     match root {
@@ -107,28 +111,34 @@ pub(crate) fn collapse(
         block_starts,
         ..
     } = ctx;
-    let tris: Vec<Tri> = order
-        .par_iter()
-        .with_min_len(1024)
-        .map(|&k| Tri::new(corners(refs[k as usize].id())))
-        .collect();
-    let prim_ids: Vec<u32> = order
-        .par_iter()
-        .with_min_len(4096)
-        .map(|&k| refs[k as usize].id())
-        .collect();
-    let blocks: Vec<Tri4> = block_starts
-        .par_iter()
-        .with_min_len(256)
-        .map(|&(first, count)| {
-            let mut b = Tri4::EMPTY;
-            for l in 0..count as usize {
-                let index = (first + l as u32) as usize;
-                b.set(l, &tris[index], prim_ids[index]);
-            }
-            b
-        })
-        .collect();
+    let mut tris: Vec<Tri> = huge_vec(order.len());
+    tris.par_extend(
+        order
+            .par_iter()
+            .with_min_len(1024)
+            .map(|&k| Tri::new(corners(refs[k as usize].id()))),
+    );
+    let mut prim_ids: Vec<u32> = huge_vec(order.len());
+    prim_ids.par_extend(
+        order
+            .par_iter()
+            .with_min_len(4096)
+            .map(|&k| refs[k as usize].id()),
+    );
+    let mut blocks: Vec<Tri4> = huge_vec(block_starts.len());
+    blocks.par_extend(
+        block_starts
+            .par_iter()
+            .with_min_len(256)
+            .map(|&(first, count)| {
+                let mut b = Tri4::EMPTY;
+                for l in 0..count as usize {
+                    let index = (first + l as u32) as usize;
+                    b.set(l, &tris[index], prim_ids[index]);
+                }
+                b
+            }),
+    );
     let block_tris = block_starts.iter().map(|&(first, _)| first).collect();
     Collapsed {
         nodes,

@@ -9,6 +9,7 @@
 
 use crate::build::{BNode, BTree};
 use crate::collapse::open_largest;
+use crate::huge_pages::huge_vec;
 use crate::node::ChildRef;
 use crate::node8::Node8;
 use rayon::prelude::*;
@@ -39,7 +40,7 @@ impl Collapsed8 {
 /// place of its first block (module docs).
 pub(crate) fn collapse8(tree: &BTree, node_hint: usize) -> Collapsed8 {
     let mut out = Collapsed8 {
-        nodes: Vec::with_capacity(node_hint),
+        nodes: huge_vec(node_hint),
         depth: 0,
     };
     let root = tree.node(tree.root);

@@ -3,11 +3,13 @@
 
 use std::time::Instant;
 
+use glam::Vec3;
 use parallax_core::Aabb;
 use parallax_scene::TriangleMesh;
 use rayon::prelude::*;
 
 use crate::bvh::Bvh;
+use crate::huge_pages::HugeBuf;
 use crate::options::{BuildOptions, BvhError};
 use crate::{build, collapse, collapse8, node, traverse, traverse8};
 
@@ -59,23 +61,31 @@ impl Bvh {
                 build_time: start.elapsed(),
             });
         }
-        let mut refs: Vec<build::PrimRef> = (0..n)
-            .into_par_iter()
-            .with_min_len(4096)
-            .map(|i| {
-                let [a, b, c] = mesh.triangle(i);
-                build::PrimRef::new(a.min(b).min(c), a.max(b).max(c), i as u32)
-            })
-            .collect();
+        // Room for the spatial splits' duplicates from the start (no reallocation later).
+        let cap = if opts.spatial_splits {
+            build::reference_capacity(n, &opts)
+        } else {
+            n
+        };
+        let mut refs = HugeBuf::new(cap, build::PrimRef::new(Vec3::ZERO, Vec3::ZERO, 0));
+        refs[..n]
+            .par_chunks_mut(4096)
+            .enumerate()
+            .for_each(|(k, chunk)| {
+                for (i, r) in (k * 4096..).zip(chunk) {
+                    let [a, b, c] = mesh.triangle(i);
+                    *r = build::PrimRef::new(a.min(b).min(c), a.max(b).max(c), i as u32);
+                }
+            });
         let tree = if opts.spatial_splits {
-            build::build_binary_spatial(&mut refs, &|id| mesh.triangle(id as usize), &opts)
+            build::build_binary_spatial(&mut refs, n, &|id| mesh.triangle(id as usize), &opts)
         } else {
             build::build_binary(&mut refs, &opts)
         };
         // Both collapses only read the binary tree: the 8-wide one runs next to the 4-wide
         // one and then points its leaves at the blocks the 4-wide one laid out.
         let (c, mut c8) = rayon::join(
-            || collapse::collapse(&tree, &refs, |id| mesh.triangle(id as usize)),
+            || collapse::collapse(&tree, &refs, n / 6 + 1, |id| mesh.triangle(id as usize)),
             || collapse8::collapse8(&tree, n / 6 + 1),
         );
         c8.point_leaves_at_blocks(&c.leaf_blocks);

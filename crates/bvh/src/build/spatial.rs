@@ -46,8 +46,8 @@ use rayon::prelude::*;
 use super::object_bins::{sah_count, trunc3};
 use super::prim_ref::{BoxA, NegBox};
 use super::{
-    BNode, BTree, Bins, MAX_SAH_DEPTH, PAR_BIN_THRESHOLD, PrimRef, UNUSED, find_object_split,
-    median_split, new_bins, node_bounds, object_partition,
+    BNode, BTree, Bins, MAX_SAH_DEPTH, PAR_BIN_THRESHOLD, PrimRef, find_object_split, median_split,
+    new_arena, new_bins, node_bounds, object_partition,
 };
 use crate::options::BuildOptions;
 
@@ -71,19 +71,26 @@ struct Ctx<'a> {
     min_overlap: f32,
 }
 
-/// Builds the binary tree with spatial splits over `refs` (not empty; one reference per
-/// triangle). `refs` grows by the duplication budget; on return every leaf's range in it
-/// holds that leaf's references (clipped boxes, the triangle's id), and slots outside leaves
-/// are unused.
+/// The references' capacity for `n` triangles: `n` and the duplication budget (module docs).
+pub(crate) fn reference_capacity(n: usize, opts: &BuildOptions) -> usize {
+    n + (n as f64 * opts.split_budget as f64) as usize
+}
+
+/// Builds the binary tree with spatial splits over the `n` references at the start of `refs`
+/// (`n > 0`, one reference per triangle; `refs.len()` is [`reference_capacity`]`(n)`, the rest
+/// being room for the duplicates); on return every leaf's range in `refs` holds that leaf's
+/// references (clipped boxes, the triangle's id), and slots outside leaves are unused.
 pub(crate) fn build_binary_spatial(
-    refs: &mut Vec<PrimRef>,
+    refs: &mut [PrimRef],
+    n: usize,
     corners: Corners<'_>,
     opts: &BuildOptions,
 ) -> BTree {
-    let n = refs.len();
-    let cap = n + (n as f64 * opts.split_budget as f64) as usize;
-    refs.resize(cap, refs[0]);
-    let mut nodes = vec![UNUSED; 2 * cap - 1];
+    let cap = refs.len();
+    debug_assert_eq!(cap, reference_capacity(n, opts));
+    let (init, spare) = refs.split_at_mut(n);
+    spare.fill(init[0]);
+    let mut nodes = new_arena(2 * cap - 1);
     let (root_box, _) = node_bounds(&refs[..n]);
     let ctx = Ctx {
         corners,
