@@ -73,8 +73,8 @@ fn prefetch_leaf(blocks: &[Tri4], r: u32) {
     let _ = (blocks, r);
 }
 
-/// Lane `l` of [`LazySetupN::arrays`] as a [`TriSetup`] (lazy: `rho` NaN).
-#[inline(always)]
+/// Lane `l` of [`LazySetupN::arrays`] as a [`TriSetup`] (lazy: `rho` NaN): the tests' form.
+#[cfg(test)]
 fn lane_of(x: &[[f32; PACK]; 13], l: usize, tri: u32, src: u32, all_in: bool) -> TriSetup {
     TriSetup {
         n: [
@@ -87,6 +87,22 @@ fn lane_of(x: &[[f32; PACK]; 13], l: usize, tri: u32, src: u32, all_in: bool) ->
         src,
         bound: x[12][l],
         rho: f32::NAN,
+        all_in,
+    }
+}
+
+/// The set-up triangle whose fields in `TriSetup`'s order are `a` (`n[0]`, `n[1]`,
+/// `n[2][0..2]`) and `b` (`n[2][2]`, `g`, `tri` and `src` as f32 bits, `bound`, `rho`): a
+/// lane of the pack's rows after [`LaneReduce::transpose8`].
+#[inline(always)]
+fn from_rows(a: &[f32; 8], b: &[f32; 8], all_in: bool) -> TriSetup {
+    TriSetup {
+        n: [[a[0], a[1], a[2]], [a[3], a[4], a[5]], [a[6], a[7], b[0]]],
+        g: [b[1], b[2], b[3]],
+        tri: b[4].to_bits(),
+        src: b[5].to_bits(),
+        bound: b[6],
+        rho: b[7],
         all_in,
     }
 }
@@ -257,13 +273,18 @@ fn setup_tile_lanes<L: LaneReduce>(
     let mut li = 0usize;
     let mut bx = Aabb::EMPTY;
     let mut pa = [[[0.0f32; PACK]; 3]; 3];
-    let mut x = [[0.0f32; PACK]; 13];
     let mut mn = [[0.0f32; PACK]; 3];
     let mut mx = [[0.0f32; PACK]; 3];
+    // Per lane the triangle index and source (as f32 bits), and the kept lanes' rows
+    // (`row_a`, `row_b`: `from_rows`).
+    let (mut tri_s, mut src_s) = ([0.0f32; PACK], [0.0f32; PACK]);
+    let (mut ta, mut tb) = ([[0.0f32; 8]; PACK], [[0.0f32; 8]; PACK]);
     for (pi, pack) in ents.chunks(L::N).enumerate() {
         for (l, &src) in pack.iter().enumerate() {
             let b = &blocks[(src >> 2) as usize];
             let ln = (src & 3) as usize;
+            tri_s[l] = f32::from_bits(b.tri[ln]);
+            src_s[l] = f32::from_bits(src);
             for v in 0..3 {
                 for a in 0..3 {
                     pa[v][a][l] = b.p[v][a].as_ref()[ln];
@@ -287,7 +308,27 @@ fn setup_tile_lanes<L: LaneReduce>(
         out.counts.all_in += (keep & inm).count_ones() as u64;
         out.counts.partial += (keep & !inm).count_ones() as u64;
         if keep != 0 {
-            s.arrays(&mut x);
+            let n = &s.n;
+            L::transpose8(
+                [
+                    n[0][0], n[0][1], n[0][2], n[1][0], n[1][1], n[1][2], n[2][0], n[2][1],
+                ],
+                &mut ta,
+            );
+            let (tri_l, src_l) = (L::load_n(&tri_s), L::load_n(&src_s));
+            L::transpose8(
+                [
+                    n[2][2],
+                    s.g[0],
+                    s.g[1],
+                    s.g[2],
+                    tri_l,
+                    src_l,
+                    s.bound,
+                    L::splat(f32::NAN),
+                ],
+                &mut tb,
+            );
             // Per lane the triangle's box (`Aabb::grow`'s `min` / `max` of its vertices).
             for a in 0..3 {
                 p[0][a]
@@ -300,7 +341,7 @@ fn setup_tile_lanes<L: LaneReduce>(
                     .write(&mut mx[a]);
             }
         }
-        for (l, &src) in pack.iter().enumerate() {
+        for l in 0..pack.len() {
             let q = (L::N * pi + l) as u32;
             while ends[li] == q {
                 end_run(out, &leaves[li], bx);
@@ -308,8 +349,7 @@ fn setup_tile_lanes<L: LaneReduce>(
                 li += 1;
             }
             if keep >> l & 1 != 0 {
-                let tri = blocks[(src >> 2) as usize].tri[(src & 3) as usize];
-                out.tris.push(lane_of(&x, l, tri, src, inm >> l & 1 != 0));
+                out.tris.push(from_rows(&ta[l], &tb[l], inm >> l & 1 != 0));
                 bx.min = bx.min.min(Vec3::new(mn[0][l], mn[1][l], mn[2][l]));
                 bx.max = bx.max.max(Vec3::new(mx[0][l], mx[1][l], mx[2][l]));
             }
