@@ -40,6 +40,9 @@ pub trait LaneReduce: Lanes {
     /// for `lanes512::Z16` (one AVX-512 register). The walk's decisions are the same for any
     /// (`kernel.rs`).
     const RUN_GROUP: usize = 4;
+    /// Lanes that only exist inside AVX2 code (`lanes256`'s): the per-tile set-up's gather takes
+    /// its AVX form there (`cast/setup/rows.rs`).
+    const AVX2: bool = false;
     /// Lanes `0..N` from `a[..N]` (`N <= 16`).
     #[inline(always)]
     fn load16(a: &[f32; 16]) -> Self {

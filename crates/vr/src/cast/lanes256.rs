@@ -200,6 +200,7 @@ impl Lanes for Y8 {
 }
 
 impl LaneReduce for Y8 {
+    const AVX2: bool = true;
     // (No closures here: they would not be compiled with the caller's AVX2 features.)
     #[inline(always)]
     fn hmin4([a, b, c, d]: [Self; 4]) -> Vec4 {

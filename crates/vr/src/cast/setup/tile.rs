@@ -24,7 +24,6 @@
 //!
 //! | name | value | meaning |
 //! |---|---|---|
-//! | `PREFETCH_LEAVES` | 8 | leaves ahead whose triangle blocks are prefetched |
 //! | `isa` | [`Isa::available`] | lanes of the lazy set-up: 16 AVX-512, 8 AVX, 4 SSE (`Isa::Sse`: the portable twin) |
 
 use glam::{Vec3, Vec4};
@@ -34,6 +33,7 @@ use parallax_core::Aabb;
 use parallax_core::math::watertight_permutation;
 
 use super::lazy::{LazySetupN, PACK};
+use super::rows::PAD;
 use super::tri::{
     BeamCorners, Cone, CornerClass, RHO_MAX, RunBoxes16, Segment, TileTris, TriSetup,
 };
@@ -44,34 +44,6 @@ use crate::cast::lanes16::LaneReduce;
 use crate::cast::lanes256::Y8;
 #[cfg(target_arch = "x86_64")]
 use crate::cast::lanes512::Z16;
-
-/// Leaves ahead of the set-up's gather whose triangle blocks are prefetched ([`prefetch_leaf`]).
-const PREFETCH_LEAVES: usize = 8;
-
-/// Prefetches the triangle blocks of leaf `r` (every cache line of each 160-byte [`Tri4`]):
-/// the set-up's first touch of a block (its `tri` indices, then its vertices) was its most
-/// expensive load (thread CPU time, `docs/notes/vr.md`). No effect on any value.
-#[inline(always)]
-fn prefetch_leaf(blocks: &[Tri4], r: u32) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-        let first = leaf_first(r) as usize;
-        let end = (first + leaf_count(r).div_ceil(4) as usize).min(blocks.len());
-        for b in blocks.get(first..end).unwrap_or(&[]) {
-            let p = (b as *const Tri4).cast::<i8>();
-            // SAFETY: prefetches never fault; the offsets stay inside the block.
-            unsafe {
-                _mm_prefetch::<_MM_HINT_T0>(p);
-                _mm_prefetch::<_MM_HINT_T0>(p.add(64));
-                _mm_prefetch::<_MM_HINT_T0>(p.add(128));
-                _mm_prefetch::<_MM_HINT_T0>(p.add(159));
-            }
-        }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = (blocks, r);
-}
 
 /// Lane `l` of [`LazySetupN::arrays`] as a [`TriSetup`] (lazy: `rho` NaN): the tests' form.
 #[cfg(test)]
@@ -90,6 +62,9 @@ fn lane_of(x: &[[f32; PACK]; 13], l: usize, tri: u32, src: u32, all_in: bool) ->
         all_in,
     }
 }
+
+// A pack's loads stay inside the gathered rows.
+const _: () = assert!(PAD >= PACK);
 
 /// The set-up triangle whose fields in `TriSetup`'s order are `a` (`n[0]`, `n[1]`,
 /// `n[2][0..2]`) and `b` (`n[2][2]`, `g`, `tri` and `src` as f32 bits, `bound`, `rho`): a
@@ -250,59 +225,32 @@ fn setup_tile_lanes<L: LaneReduce>(
 ) {
     let corners = begin(beam, origin, out);
     let radius = out.cone.radius;
-    // The tile's triangles in list order (`4 * block + lane`) and each leaf's end in it.
-    let (mut ents, mut ends) = (std::mem::take(&mut out.ents), std::mem::take(&mut out.ends));
-    ents.clear();
-    ends.clear();
-    for r in leaves.iter().take(PREFETCH_LEAVES) {
-        prefetch_leaf(blocks, r.leaf);
-    }
-    for (li, r) in leaves.iter().enumerate() {
-        if let Some(ahead) = leaves.get(li + PREFETCH_LEAVES) {
-            prefetch_leaf(blocks, ahead.leaf);
-        }
-        let (first, count) = (leaf_first(r.leaf), leaf_count(r.leaf));
-        for j in 0..count {
-            let bi = first + j / 4;
-            if blocks[bi as usize].tri[(j % 4) as usize] != u32::MAX {
-                ents.push(4 * first + j);
-            }
-        }
-        ends.push(ents.len() as u32);
-    }
+    // The tile's triangles in list order, as rows (`cast/setup/rows.rs`), and each leaf's end.
+    let (mut rows, mut ends) = (std::mem::take(&mut out.rows), std::mem::take(&mut out.ends));
+    rows.gather(blocks, leaves, L::AVX2, &mut ends);
     let mut li = 0usize;
     let mut bx = Aabb::EMPTY;
-    let mut pa = [[[0.0f32; PACK]; 3]; 3];
     let mut mn = [[0.0f32; PACK]; 3];
     let mut mx = [[0.0f32; PACK]; 3];
-    // Per lane the triangle index and source (as f32 bits), and the kept lanes' rows
-    // (`row_a`, `row_b`: `from_rows`).
-    let (mut tri_s, mut src_s) = ([0.0f32; PACK], [0.0f32; PACK]);
+    // The kept lanes' rows (`from_rows`).
     let (mut ta, mut tb) = ([[0.0f32; 8]; PACK], [[0.0f32; 8]; PACK]);
-    for (pi, pack) in ents.chunks(L::N).enumerate() {
-        for (l, &src) in pack.iter().enumerate() {
-            let b = &blocks[(src >> 2) as usize];
-            let ln = (src & 3) as usize;
-            tri_s[l] = f32::from_bits(b.tri[ln]);
-            src_s[l] = f32::from_bits(src);
-            for v in 0..3 {
-                for a in 0..3 {
-                    pa[v][a][l] = b.p[v][a].as_ref()[ln];
-                }
-            }
-        }
+    for pi in 0..rows.len.div_ceil(L::N) {
+        let base = L::N * pi;
+        let len = (rows.len - base).min(L::N);
+        let r = &rows.rows;
         let mut p = [[L::splat(0.0); 3]; 3];
         for v in 0..3 {
             for a in 0..3 {
-                p[v][a] = L::load_n(&pa[v][a]);
+                p[v][a] = L::load_n(&r[3 * v + a][base..]);
             }
         }
+        let (tri_l, src_l) = (L::load_n(&r[9][base..]), L::load_n(&r[10][base..]));
         let s = LazySetupN::new(&p, origin, radius);
         let (outm, inm) = match &corners {
             Some(c) => s.classify(c),
             None => (0, 0),
         };
-        let valid = (1u32 << pack.len()) - 1;
+        let valid = (1u32 << len) - 1;
         let keep = valid & s.ok & !outm;
         out.counts.all_out += (valid & !keep).count_ones() as u64;
         out.counts.all_in += (keep & inm).count_ones() as u64;
@@ -315,7 +263,6 @@ fn setup_tile_lanes<L: LaneReduce>(
                 ],
                 &mut ta,
             );
-            let (tri_l, src_l) = (L::load_n(&tri_s), L::load_n(&src_s));
             L::transpose8(
                 [
                     n[2][2],
@@ -341,7 +288,7 @@ fn setup_tile_lanes<L: LaneReduce>(
                     .write(&mut mx[a]);
             }
         }
-        for l in 0..pack.len() {
+        for l in 0..len {
             let q = (L::N * pi + l) as u32;
             while ends[li] == q {
                 end_run(out, &leaves[li], bx);
@@ -360,7 +307,7 @@ fn setup_tile_lanes<L: LaneReduce>(
         bx = Aabb::EMPTY;
         li += 1;
     }
-    (out.ents, out.ends) = (ents, ends);
+    (out.rows, out.ends) = (rows, ends);
 }
 
 /// The scalar twin of [`setup_tile`]: one triangle at a time ([`TriSetup::new_with`],
