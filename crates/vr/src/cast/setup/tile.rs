@@ -1,11 +1,13 @@
 //! The per-tile set-up of a tile's triangle list (HVVR, Hunt et al. 2018, §5.5: "triangle setup
 //! ... tile-corner classification", module docs of [`super`]) `L::N` triangles at a time: the
-//! tile's triangles, in list order, are gathered from the BVH's leaf blocks ([`Tri4`]) into
-//! packs of `L::N` consecutive ones (across blocks and leaves: Sponza's leaf blocks hold ~2.2
-//! triangles on average), set up together in lanes ([`LazySetupN`], `cast/setup/lazy.rs`: 16
+//! tile's triangles, in list order, are gathered from the BVH's leaf blocks ([`Tri4`]) as one
+//! row per value (`cast/setup/rows.rs`) and loaded in packs of `L::N` consecutive ones
+//! (across blocks and leaves: Sponza's leaf blocks hold ~2.2 triangles on average), set up
+//! together in lanes ([`LazySetupN`], `cast/setup/lazy.rs`: 16
 //! AVX-512 lanes where the CPU has them, else 8 AVX lanes where it has AVX2, else 4 SSE lanes;
 //! `cast/isa.rs`), classified against the tile's
-//! corners in the same registers, and the kept triangles appended to the tile's list in order,
+//! corners in the same registers, and the kept triangles appended to the tile's list in order
+//! (one row per triangle from a transpose of the pack's registers, `LaneReduce::transpose8`),
 //! each leaf's run closed after its last triangle ([`setup_tile`]). Runs' full bands are
 //! computed four triangles at a time in SSE lanes (`cast/setup/bands.rs`).
 //!
