@@ -40,6 +40,9 @@ pub trait LaneReduce: Lanes {
     /// for `lanes512::Z16` (one AVX-512 register). The walk's decisions are the same for any
     /// (`kernel.rs`).
     const RUN_GROUP: usize = 4;
+    /// Lanes that only exist inside AVX2 code (`lanes256`'s): the per-tile set-up's gather takes
+    /// its AVX form there (`cast/setup/rows.rs`).
+    const AVX2: bool = false;
     /// Lanes `0..N` from `a[..N]` (`N <= 16`).
     #[inline(always)]
     fn load16(a: &[f32; 16]) -> Self {
@@ -50,6 +53,22 @@ pub trait LaneReduce: Lanes {
     #[inline(always)]
     fn load_n(a: &[f32]) -> Self {
         Self::from_fn(|l| a[l])
+    }
+    /// The 8 x `N` transpose of `rows`: `out[l][r]` = lane `l` of `rows[r]` for `l < N`
+    /// (`out[N..]` unchanged), bits moved only: a set-up pack's lanes as one row per triangle
+    /// (`cast/setup/tile.rs`). This form stores the rows and copies lane by lane; `Y8` runs
+    /// an 8 x 8 transpose in AVX registers.
+    #[inline(always)]
+    fn transpose8(rows: [Self; 8], out: &mut [[f32; 8]; 16]) {
+        let mut t = [[0.0f32; 16]; 8];
+        for (r, t) in rows.into_iter().zip(t.iter_mut()) {
+            r.write(t);
+        }
+        for (l, o) in out.iter_mut().enumerate().take(Self::N) {
+            for (r, t) in t.iter().enumerate() {
+                o[r] = t[l];
+            }
+        }
     }
 }
 

@@ -200,6 +200,7 @@ impl Lanes for Y8 {
 }
 
 impl LaneReduce for Y8 {
+    const AVX2: bool = true;
     // (No closures here: they would not be compiled with the caller's AVX2 features.)
     #[inline(always)]
     fn hmin4([a, b, c, d]: [Self; 4]) -> Vec4 {
@@ -231,6 +232,46 @@ impl LaneReduce for Y8 {
         let a: &[f32; 8] = a[..8].try_into().expect("8 lanes");
         // SAFETY: module docs; `a` holds 8 f32.
         Y8(unsafe { _mm256_loadu_ps(a.as_ptr()) })
+    }
+    #[inline(always)]
+    fn transpose8(rows: [Self; 8], out: &mut [[f32; 8]; 16]) {
+        // SAFETY: module docs (AVX); unpacks, shuffles and lane permutes move bits only; each
+        // store writes the 8 f32 of one `out[l]`.
+        unsafe {
+            let r = [
+                rows[0].0, rows[1].0, rows[2].0, rows[3].0, rows[4].0, rows[5].0, rows[6].0,
+                rows[7].0,
+            ];
+            let t0 = _mm256_unpacklo_ps(r[0], r[1]);
+            let t1 = _mm256_unpackhi_ps(r[0], r[1]);
+            let t2 = _mm256_unpacklo_ps(r[2], r[3]);
+            let t3 = _mm256_unpackhi_ps(r[2], r[3]);
+            let t4 = _mm256_unpacklo_ps(r[4], r[5]);
+            let t5 = _mm256_unpackhi_ps(r[4], r[5]);
+            let t6 = _mm256_unpacklo_ps(r[6], r[7]);
+            let t7 = _mm256_unpackhi_ps(r[6], r[7]);
+            let s0 = _mm256_shuffle_ps::<0x44>(t0, t2);
+            let s1 = _mm256_shuffle_ps::<0xEE>(t0, t2);
+            let s2 = _mm256_shuffle_ps::<0x44>(t1, t3);
+            let s3 = _mm256_shuffle_ps::<0xEE>(t1, t3);
+            let s4 = _mm256_shuffle_ps::<0x44>(t4, t6);
+            let s5 = _mm256_shuffle_ps::<0xEE>(t4, t6);
+            let s6 = _mm256_shuffle_ps::<0x44>(t5, t7);
+            let s7 = _mm256_shuffle_ps::<0xEE>(t5, t7);
+            let c = [
+                _mm256_permute2f128_ps::<0x20>(s0, s4),
+                _mm256_permute2f128_ps::<0x20>(s1, s5),
+                _mm256_permute2f128_ps::<0x20>(s2, s6),
+                _mm256_permute2f128_ps::<0x20>(s3, s7),
+                _mm256_permute2f128_ps::<0x31>(s0, s4),
+                _mm256_permute2f128_ps::<0x31>(s1, s5),
+                _mm256_permute2f128_ps::<0x31>(s2, s6),
+                _mm256_permute2f128_ps::<0x31>(s3, s7),
+            ];
+            for (o, c) in out.iter_mut().zip(c) {
+                _mm256_storeu_ps(o.as_mut_ptr(), c);
+            }
+        }
     }
     #[inline(always)]
     fn hmin(self) -> f32 {
@@ -495,6 +536,33 @@ mod tests {
         assert_eq!(x[..n].iter().map(|v| v.to_bits()).collect::<Vec<_>>(), {
             y[..n].iter().map(|v| v.to_bits()).collect::<Vec<_>>()
         });
+        // The transpose: lane `l` of row `k` at `out[l][k]`, bit for bit (NaN payloads and
+        // signed zeros of `A` / `B`), the rows past `N` untouched.
+        let rows: [L; 8] = std::array::from_fn(|k| {
+            L::from_fn(|i| {
+                if k % 2 == 0 {
+                    xa[(i + k) % 16]
+                } else {
+                    xb[(i + 5 * k) % 16]
+                }
+            })
+        });
+        let mut out = [[f32::from_bits(0x7fc0_1234); 8]; 16];
+        L::transpose8(rows, &mut out);
+        for (l, o) in out.iter().enumerate() {
+            for (k, row) in rows.iter().enumerate() {
+                let want = if l < n {
+                    row.get(l).to_bits()
+                } else {
+                    0x7fc0_1234
+                };
+                assert_eq!(
+                    o[k].to_bits(),
+                    want,
+                    "transpose8 lane {l} row {k} ({n} lanes)"
+                );
+            }
+        }
         let (mut s, mut t) = ([7u32; 16], [7u32; 16]);
         L::set_u32(a.lt(b), 42, &mut s);
         V16::set_u32(p.lt(q), 42, &mut t);

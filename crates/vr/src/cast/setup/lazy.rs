@@ -158,8 +158,8 @@ impl<L: LaneReduce> LazySetupN<L> {
     }
 
     /// The lanes as arrays: `[n_0 x, y, z, n_1 .., n_2 .., g x, y, z, bound][lane]` (lanes
-    /// `0..L::N`).
-    #[inline(always)]
+    /// `0..L::N`): the tests' form of the lanes.
+    #[cfg(test)]
     pub fn arrays(&self, x: &mut [[f32; PACK]; 13]) {
         let n = &self.n;
         let v = [

@@ -143,6 +143,7 @@ pub mod edges;
 pub mod full;
 mod kernel;
 mod lazy;
+mod rows;
 mod tile;
 mod tri;
 

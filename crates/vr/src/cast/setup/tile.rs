@@ -1,11 +1,13 @@
 //! The per-tile set-up of a tile's triangle list (HVVR, Hunt et al. 2018, §5.5: "triangle setup
 //! ... tile-corner classification", module docs of [`super`]) `L::N` triangles at a time: the
-//! tile's triangles, in list order, are gathered from the BVH's leaf blocks ([`Tri4`]) into
-//! packs of `L::N` consecutive ones (across blocks and leaves: Sponza's leaf blocks hold ~2.2
-//! triangles on average), set up together in lanes ([`LazySetupN`], `cast/setup/lazy.rs`: 16
+//! tile's triangles, in list order, are gathered from the BVH's leaf blocks ([`Tri4`]) as one
+//! row per value (`cast/setup/rows.rs`) and loaded in packs of `L::N` consecutive ones
+//! (across blocks and leaves: Sponza's leaf blocks hold ~2.2 triangles on average), set up
+//! together in lanes ([`LazySetupN`], `cast/setup/lazy.rs`: 16
 //! AVX-512 lanes where the CPU has them, else 8 AVX lanes where it has AVX2, else 4 SSE lanes;
 //! `cast/isa.rs`), classified against the tile's
-//! corners in the same registers, and the kept triangles appended to the tile's list in order,
+//! corners in the same registers, and the kept triangles appended to the tile's list in order
+//! (one row per triangle from a transpose of the pack's registers, `LaneReduce::transpose8`),
 //! each leaf's run closed after its last triangle ([`setup_tile`]). Runs' full bands are
 //! computed four triangles at a time in SSE lanes (`cast/setup/bands.rs`).
 //!
@@ -24,7 +26,6 @@
 //!
 //! | name | value | meaning |
 //! |---|---|---|
-//! | `PREFETCH_LEAVES` | 8 | leaves ahead whose triangle blocks are prefetched |
 //! | `isa` | [`Isa::available`] | lanes of the lazy set-up: 16 AVX-512, 8 AVX, 4 SSE (`Isa::Sse`: the portable twin) |
 
 use glam::{Vec3, Vec4};
@@ -34,6 +35,7 @@ use parallax_core::Aabb;
 use parallax_core::math::watertight_permutation;
 
 use super::lazy::{LazySetupN, PACK};
+use super::rows::PAD;
 use super::tri::{
     BeamCorners, Cone, CornerClass, RHO_MAX, RunBoxes16, Segment, TileTris, TriSetup,
 };
@@ -45,36 +47,8 @@ use crate::cast::lanes256::Y8;
 #[cfg(target_arch = "x86_64")]
 use crate::cast::lanes512::Z16;
 
-/// Leaves ahead of the set-up's gather whose triangle blocks are prefetched ([`prefetch_leaf`]).
-const PREFETCH_LEAVES: usize = 8;
-
-/// Prefetches the triangle blocks of leaf `r` (every cache line of each 160-byte [`Tri4`]):
-/// the set-up's first touch of a block (its `tri` indices, then its vertices) was its most
-/// expensive load (thread CPU time, `docs/notes/vr.md`). No effect on any value.
-#[inline(always)]
-fn prefetch_leaf(blocks: &[Tri4], r: u32) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-        let first = leaf_first(r) as usize;
-        let end = (first + leaf_count(r).div_ceil(4) as usize).min(blocks.len());
-        for b in blocks.get(first..end).unwrap_or(&[]) {
-            let p = (b as *const Tri4).cast::<i8>();
-            // SAFETY: prefetches never fault; the offsets stay inside the block.
-            unsafe {
-                _mm_prefetch::<_MM_HINT_T0>(p);
-                _mm_prefetch::<_MM_HINT_T0>(p.add(64));
-                _mm_prefetch::<_MM_HINT_T0>(p.add(128));
-                _mm_prefetch::<_MM_HINT_T0>(p.add(159));
-            }
-        }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = (blocks, r);
-}
-
-/// Lane `l` of [`LazySetupN::arrays`] as a [`TriSetup`] (lazy: `rho` NaN).
-#[inline(always)]
+/// Lane `l` of [`LazySetupN::arrays`] as a [`TriSetup`] (lazy: `rho` NaN): the tests' form.
+#[cfg(test)]
 fn lane_of(x: &[[f32; PACK]; 13], l: usize, tri: u32, src: u32, all_in: bool) -> TriSetup {
     TriSetup {
         n: [
@@ -87,6 +61,25 @@ fn lane_of(x: &[[f32; PACK]; 13], l: usize, tri: u32, src: u32, all_in: bool) ->
         src,
         bound: x[12][l],
         rho: f32::NAN,
+        all_in,
+    }
+}
+
+// A pack's loads stay inside the gathered rows.
+const _: () = assert!(PAD >= PACK);
+
+/// The set-up triangle whose fields in `TriSetup`'s order are `a` (`n[0]`, `n[1]`,
+/// `n[2][0..2]`) and `b` (`n[2][2]`, `g`, `tri` and `src` as f32 bits, `bound`, `rho`): a
+/// lane of the pack's rows after [`LaneReduce::transpose8`].
+#[inline(always)]
+fn from_rows(a: &[f32; 8], b: &[f32; 8], all_in: bool) -> TriSetup {
+    TriSetup {
+        n: [[a[0], a[1], a[2]], [a[3], a[4], a[5]], [a[6], a[7], b[0]]],
+        g: [b[1], b[2], b[3]],
+        tri: b[4].to_bits(),
+        src: b[5].to_bits(),
+        bound: b[6],
+        rho: b[7],
         all_in,
     }
 }
@@ -234,60 +227,57 @@ fn setup_tile_lanes<L: LaneReduce>(
 ) {
     let corners = begin(beam, origin, out);
     let radius = out.cone.radius;
-    // The tile's triangles in list order (`4 * block + lane`) and each leaf's end in it.
-    let (mut ents, mut ends) = (std::mem::take(&mut out.ents), std::mem::take(&mut out.ends));
-    ents.clear();
-    ends.clear();
-    for r in leaves.iter().take(PREFETCH_LEAVES) {
-        prefetch_leaf(blocks, r.leaf);
-    }
-    for (li, r) in leaves.iter().enumerate() {
-        if let Some(ahead) = leaves.get(li + PREFETCH_LEAVES) {
-            prefetch_leaf(blocks, ahead.leaf);
-        }
-        let (first, count) = (leaf_first(r.leaf), leaf_count(r.leaf));
-        for j in 0..count {
-            let bi = first + j / 4;
-            if blocks[bi as usize].tri[(j % 4) as usize] != u32::MAX {
-                ents.push(4 * first + j);
-            }
-        }
-        ends.push(ents.len() as u32);
-    }
+    // The tile's triangles in list order, as rows (`cast/setup/rows.rs`), and each leaf's end.
+    let (mut rows, mut ends) = (std::mem::take(&mut out.rows), std::mem::take(&mut out.ends));
+    rows.gather(blocks, leaves, L::AVX2, &mut ends);
     let mut li = 0usize;
     let mut bx = Aabb::EMPTY;
-    let mut pa = [[[0.0f32; PACK]; 3]; 3];
-    let mut x = [[0.0f32; PACK]; 13];
     let mut mn = [[0.0f32; PACK]; 3];
     let mut mx = [[0.0f32; PACK]; 3];
-    for (pi, pack) in ents.chunks(L::N).enumerate() {
-        for (l, &src) in pack.iter().enumerate() {
-            let b = &blocks[(src >> 2) as usize];
-            let ln = (src & 3) as usize;
-            for v in 0..3 {
-                for a in 0..3 {
-                    pa[v][a][l] = b.p[v][a].as_ref()[ln];
-                }
-            }
-        }
+    // The kept lanes' rows (`from_rows`).
+    let (mut ta, mut tb) = ([[0.0f32; 8]; PACK], [[0.0f32; 8]; PACK]);
+    for pi in 0..rows.len.div_ceil(L::N) {
+        let base = L::N * pi;
+        let len = (rows.len - base).min(L::N);
+        let r = &rows.rows;
         let mut p = [[L::splat(0.0); 3]; 3];
         for v in 0..3 {
             for a in 0..3 {
-                p[v][a] = L::load_n(&pa[v][a]);
+                p[v][a] = L::load_n(&r[3 * v + a][base..]);
             }
         }
+        let (tri_l, src_l) = (L::load_n(&r[9][base..]), L::load_n(&r[10][base..]));
         let s = LazySetupN::new(&p, origin, radius);
         let (outm, inm) = match &corners {
             Some(c) => s.classify(c),
             None => (0, 0),
         };
-        let valid = (1u32 << pack.len()) - 1;
+        let valid = (1u32 << len) - 1;
         let keep = valid & s.ok & !outm;
         out.counts.all_out += (valid & !keep).count_ones() as u64;
         out.counts.all_in += (keep & inm).count_ones() as u64;
         out.counts.partial += (keep & !inm).count_ones() as u64;
         if keep != 0 {
-            s.arrays(&mut x);
+            let n = &s.n;
+            L::transpose8(
+                [
+                    n[0][0], n[0][1], n[0][2], n[1][0], n[1][1], n[1][2], n[2][0], n[2][1],
+                ],
+                &mut ta,
+            );
+            L::transpose8(
+                [
+                    n[2][2],
+                    s.g[0],
+                    s.g[1],
+                    s.g[2],
+                    tri_l,
+                    src_l,
+                    s.bound,
+                    L::splat(f32::NAN),
+                ],
+                &mut tb,
+            );
             // Per lane the triangle's box (`Aabb::grow`'s `min` / `max` of its vertices).
             for a in 0..3 {
                 p[0][a]
@@ -300,7 +290,7 @@ fn setup_tile_lanes<L: LaneReduce>(
                     .write(&mut mx[a]);
             }
         }
-        for (l, &src) in pack.iter().enumerate() {
+        for l in 0..len {
             let q = (L::N * pi + l) as u32;
             while ends[li] == q {
                 end_run(out, &leaves[li], bx);
@@ -308,8 +298,7 @@ fn setup_tile_lanes<L: LaneReduce>(
                 li += 1;
             }
             if keep >> l & 1 != 0 {
-                let tri = blocks[(src >> 2) as usize].tri[(src & 3) as usize];
-                out.tris.push(lane_of(&x, l, tri, src, inm >> l & 1 != 0));
+                out.tris.push(from_rows(&ta[l], &tb[l], inm >> l & 1 != 0));
                 bx.min = bx.min.min(Vec3::new(mn[0][l], mn[1][l], mn[2][l]));
                 bx.max = bx.max.max(Vec3::new(mx[0][l], mx[1][l], mx[2][l]));
             }
@@ -320,7 +309,7 @@ fn setup_tile_lanes<L: LaneReduce>(
         bx = Aabb::EMPTY;
         li += 1;
     }
-    (out.ents, out.ends) = (ents, ends);
+    (out.rows, out.ends) = (rows, ends);
 }
 
 /// The scalar twin of [`setup_tile`]: one triangle at a time ([`TriSetup::new_with`],

@@ -15,6 +15,7 @@ use parallax_core::Ray;
 use parallax_core::math::WatertightRay;
 
 use super::affine::{AffineTri, FilmFrame};
+use super::rows::TileRows;
 use crate::beam::Beam;
 
 /// Unit roundoff of f32 (`2^-24`): `fl(x op y) = (x op y)(1 + δ)`, `|δ| <= U`.
@@ -441,8 +442,8 @@ pub struct TileTris {
     pub frame: Option<FilmFrame>,
     pub aff: Vec<AffineTri>,
     /// Scratch of `setup_tile` (`cast/setup/tile.rs`): the tile's triangles in list order
-    /// and each leaf's end in that list.
-    pub ents: Vec<u32>,
+    /// (`cast/setup/rows.rs`) and each leaf's end in that list.
+    pub rows: TileRows,
     pub ends: Vec<u32>,
 }
 
