@@ -19,6 +19,7 @@ pub(crate) const MAX_BINS: usize = 32;
 /// | `parallel_threshold` | usize | 4096 | nodes above this many triangles build their children in parallel |
 /// | `spatial_splits` | bool | false | also consider spatial splits (SBVH, Stich et al. 2009; `build.rs`) |
 /// | `split_alpha` | f32 | 1e-5 | SBVH: try spatial splits where the object split's child overlap exceeds this fraction of the root's area |
+/// | `split_overlap` | f32 | 0.2 | SBVH: ...and also this fraction of the node's own area (0: the root rule alone) |
 /// | `split_budget` | f32 | 0.3 | SBVH: most duplicated references, as a fraction of the triangle count, clamped to 0..=4 |
 ///
 /// With `spatial_splits`, a triangle can sit in several leaves: [`crate::Bvh::triangles`]
@@ -37,6 +38,7 @@ pub struct BuildOptions {
     pub spatial_splits: bool,
     pub split_alpha: f32,
     pub split_budget: f32,
+    pub split_overlap: f32,
 }
 
 impl Default for BuildOptions {
@@ -51,6 +53,7 @@ impl Default for BuildOptions {
             spatial_splits: false,
             split_alpha: 1e-5,
             split_budget: 0.3,
+            split_overlap: 0.2,
         }
     }
 }
@@ -75,6 +78,11 @@ impl BuildOptions {
                 self.split_budget.clamp(0.0, 4.0)
             } else {
                 0.3
+            },
+            split_overlap: if self.split_overlap >= 0.0 {
+                self.split_overlap
+            } else {
+                0.2
             },
         }
     }

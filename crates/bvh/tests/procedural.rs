@@ -102,6 +102,7 @@ fn build_options_do_not_change_results() {
         BuildOptions {
             spatial_splits: true,
             split_alpha: 0.0,
+            split_overlap: 0.0,
             split_budget: 4.0,
             max_leaf_size: 1,
             parallel_threshold: 0,
@@ -110,6 +111,7 @@ fn build_options_do_not_change_results() {
         BuildOptions {
             spatial_splits: true,
             split_alpha: f32::NAN,
+            split_overlap: f32::NAN,
             split_budget: f32::INFINITY,
             bins: 3,
             ..Default::default()
@@ -122,6 +124,34 @@ fn build_options_do_not_change_results() {
             check_all(&bvh, &mesh, r, &format!("{opts:?}"));
         }
     }
+}
+
+/// `split_overlap`: a spatial split needs the object split's child overlap to exceed that
+/// fraction of the node's own area. At 1 no overlap can (it lies inside the node), so nothing
+/// is duplicated; lowering it lets more nodes split (here: 16 large triangles across 3000
+/// small ones). Every setting answers as brute force.
+#[test]
+fn split_overlap_limits_the_spatial_splits() {
+    let mut mesh = soup(3000, 0.2, 21);
+    mesh.append(&soup(16, 1.0, 22), 0);
+    let rays = random_rays(400, Vec3::splat(-2.0), Vec3::splat(2.0), 12);
+    let refs = |split_overlap: f32| {
+        let opts = BuildOptions {
+            spatial_splits: true,
+            split_overlap,
+            ..Default::default()
+        };
+        let bvh = Bvh::build_with(&mesh, &opts);
+        for r in &rays {
+            check_closest(&bvh, &mesh, r, &format!("split_overlap {split_overlap}"));
+        }
+        bvh.reference_count()
+    };
+    let default = BuildOptions::default().split_overlap;
+    let (none, half, dflt) = (refs(1.0), refs(0.5), refs(default));
+    assert_eq!(none, 3016);
+    assert!(half > none, "{half}");
+    assert!(dflt > half, "{dflt} {half}");
 }
 
 /// Rays with zero direction components (`inv_dir = ±inf`), many of them lying exactly in the

@@ -76,6 +76,7 @@ fn rigid_motion_with_spatial_splits() {
     let opts = BuildOptions {
         spatial_splits: true,
         split_alpha: 0.0,
+        split_overlap: 0.0,
         split_budget: 1.0,
         ..Default::default()
     };

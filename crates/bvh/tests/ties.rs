@@ -158,10 +158,11 @@ fn exact_ties_go_to_the_lowest_primitive_in_every_tree_and_path() {
             },
         ),
         (
-            "spatial splits, alpha 0, budget 4, one triangle per leaf",
+            "spatial splits, alpha 0, overlap 0, budget 4, one triangle per leaf",
             BuildOptions {
                 spatial_splits: true,
                 split_alpha: 0.0,
+                split_overlap: 0.0,
                 split_budget: 4.0,
                 max_leaf_size: 1,
                 ..Default::default()

@@ -29,6 +29,7 @@ fn builds(mesh: &TriangleMesh) -> [Bvh; 2] {
     let spatial = BuildOptions {
         spatial_splits: true,
         split_alpha: 0.0,
+        split_overlap: 0.0,
         split_budget: 4.0,
         max_leaf_size: 1,
         ..Default::default()

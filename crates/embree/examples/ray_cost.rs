@@ -46,15 +46,16 @@ fn main() {
     let (method, mode) = (a[5].as_str(), a[6].as_str());
     let w: u32 = a.get(7).map_or(1280, |s| s.parse().unwrap());
     let h: u32 = a.get(8).map_or(720, |s| s.parse().unwrap());
-    // `BVH_SPATIAL=1` builds with spatial splits (SBVH); `BVH_SPLIT_ALPHA`, `BVH_SPLIT_BUDGET`
-    // override their parameters; `BVH_SAH_BLOCK`, `BVH_MAX_LEAF` the SAH's leaf block size and
-    // the largest leaf.
+    // `BVH_SPATIAL=1` builds with spatial splits (SBVH); `BVH_SPLIT_ALPHA`, `BVH_SPLIT_BUDGET`,
+    // `BVH_SPLIT_OVERLAP` override their parameters; `BVH_SAH_BLOCK`, `BVH_MAX_LEAF` the SAH's
+    // leaf block size and the largest leaf.
     let env = |k: &str| std::env::var(k).ok().and_then(|v| v.parse::<f32>().ok());
     let d = BuildOptions::default();
     let opts = BuildOptions {
         spatial_splits: std::env::var("BVH_SPATIAL").is_ok_and(|v| v == "1"),
         split_alpha: env("BVH_SPLIT_ALPHA").unwrap_or(d.split_alpha),
         split_budget: env("BVH_SPLIT_BUDGET").unwrap_or(d.split_budget),
+        split_overlap: env("BVH_SPLIT_OVERLAP").unwrap_or(d.split_overlap),
         sah_block_size: env("BVH_SAH_BLOCK").map_or(d.sah_block_size, |x| x as usize),
         max_leaf_size: env("BVH_MAX_LEAF").map_or(d.max_leaf_size, |x| x as usize),
         ..d

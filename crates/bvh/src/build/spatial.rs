@@ -5,7 +5,9 @@
 //! Per node (§4):
 //! - the binned object split of the parent module, and the surface area `λ` of the overlap of
 //!   its two children's boxes;
-//! - if `λ > α · A(root)` (§4.5, `split_alpha`), the node has at least [`MIN_SPATIAL_REFS`]
+//! - if `λ > α · A(root)` (§4.5, `split_alpha`) and `λ > β · A(node)` (`split_overlap`: the
+//!   object split's children overlap by a sizeable part of the node itself, which the root
+//!   rule alone does not ask of large nodes), the node has at least [`MIN_SPATIAL_REFS`]
 //!   references and duplication budget is left, a spatial split: up to `SPATIAL_BINS`
 //!   equal-width bins per axis over the node's box (`4 + n / 20`, as the object bins); each
 //!   reference records an entry (and its box) in the bin of its minimum and an exit (and its
@@ -197,7 +199,9 @@ fn split(
             min: bl.min.max(br.min),
             max: bl.max.min(br.max),
         };
-        if overlap.aabb().surface_area() > ctx.min_overlap
+        let lambda = overlap.aabb().surface_area();
+        if lambda > ctx.min_overlap
+            && lambda > opts.split_overlap * bounds.surface_area()
             && let Some(s) = find_spatial_split(&refs[..n], bounds, opts.sah_block_size)
             && s.cost < best
             && (s.n_l + s.n_r) as usize <= refs.len()
