@@ -31,9 +31,7 @@
 //! are made a row at a time (`leaves.rs`), their directions from per-column and per-row
 //! tables of the same products and `z` with [`UnitCube::z_of_depth`]'s constant terms
 //! computed once, four pixels at a time in AVX2 lanes (`leaf_avx2`, run-time detection) or
-//! one pixel at a time in SSE2 lanes (`leaf_lanes`); on x86_64 (two levels or more) the
-//! leaves are made by pairs of rows and level 1 from each pair while it is in cache
-//! (`leaf_pass`), the pruning going on from level 2;
+//! one pixel at a time in SSE2 lanes (`leaf_lanes`);
 //! a level's merges run with four parents in lanes (`merge_rows`); without deeper layers the
 //! per-pixel plane levels come from level 1 down (`tree::plane_levels`); with deeper layers
 //! the pruning fixed point is computed incrementally (`fixpoint`), its pixel-plane trigger
@@ -215,22 +213,14 @@ impl QuadTree {
         padding.par_chunks_mut(w0 as usize).for_each(|row| {
             init_row(row, Node::EMPTY);
         });
-        // Level 1 when made in the leaf pass (`leaf_pass.rs`).
+        // Level 1 when made in the leaf pass (`leaves_and_level1`).
         #[cfg_attr(not(target_arch = "x86_64"), allow(unused_mut))]
         let mut level1: Option<Level> = None;
         #[cfg(target_arch = "x86_64")]
-        if !reference && nlev >= 2 {
-            let dims = (w, h, w0, h0);
-            if deeper.is_empty() {
-                level1 = Some(super::leaf_pass::leaves_with_level1(
-                    image, dims, &ctx, &leaf_row,
-                ));
-            } else {
-                let (l1, px) =
-                    super::leaf_pass::leaves_and_level1(image, dims, &ctx, deeper, &leaf_row);
-                level1 = Some(l1);
-                px_triggers = Some(px);
-            }
+        if !deeper.is_empty() && !reference && nlev >= 2 {
+            let (l1, px) = leaves_and_level1(image, (w, h, w0, h0), &ctx, deeper, &leaf_row);
+            level1 = Some(l1);
+            px_triggers = Some(px);
         }
         if level1.is_some() {
             // Made with level 1 above.
@@ -270,18 +260,17 @@ impl QuadTree {
             h: h0,
             nodes: leaves,
         };
-        let first: Vec<Level> = [Some(level0), level1].into_iter().flatten().collect();
         let (levels, tz, eff, unsafe_px) = if deeper.is_empty() {
-            let levels = super::prune::prune_from(&ctx, first, nlev, Blocked::None, w, h);
+            let levels = super::prune::prune(&ctx, level0, nlev, Blocked::None, w, h);
             // No cascade: the plane levels straight from level 1 (`plane_levels`).
             (levels, Vec::new(), Vec::new(), None)
         } else if reference {
-            let level0 = first.into_iter().next().expect("level 0");
             let (levels, tz, eff) =
                 super::prune::fixed_point_reference(&ctx, level0, nlev, (w, h), deeper);
             (levels, tz, eff, None)
         } else {
             let px = px_triggers.expect("computed with the leaves");
+            let first = [Some(level0), level1].into_iter().flatten().collect();
             super::fixpoint::fixed_point(&ctx, first, nlev, (w, h), deeper, px)
         };
         let mut tree = Self::from_levels(w, h, levels, opts.crack_dilation);
@@ -513,6 +502,93 @@ impl QuadTree {
         self.trigger_z = tz;
         cur
     }
+}
+
+/// The fixed point's leaf pass with level 1 (x86_64, two levels or more): per pair of pixel
+/// rows `2m`, `2m + 1` of `image` (level 0's image rows, padded width `w0`), the rows' leaves
+/// (`leaf_row`) and their pixel-plane trigger depths and deeper fronts
+/// ([`super::fixpoint::pixel_triggers_row`]), then level-1 row `m` from them while they are in
+/// cache — the nodes of [`super::prune::prune`]'s level 1 with the same blocked pixels (the
+/// pair's listed ones), by the same row kernel. Returns level 1 (`w0 / 2 x h0 / 2`, padding
+/// rows empty) and `(tz, listed, fronts)` as the row-by-row pass makes them.
+#[cfg(target_arch = "x86_64")]
+#[allow(clippy::type_complexity)]
+fn leaves_and_level1(
+    image: &mut [core::mem::MaybeUninit<Node>],
+    (w, h, w0, h0): (u32, u32, u32, u32),
+    ctx: &MergeCtx,
+    deeper: &[LayerPlanes],
+    leaf_row: &(impl Fn(&mut [Node], u32) + Sync),
+) -> (Level, (Vec<f32>, Vec<u32>, Vec<f32>)) {
+    let (wu, w0u, n_px) = (w as usize, w0 as usize, (w * h) as usize);
+    let (pw, ph) = (w0u / 2, (h0 / 2) as usize);
+    // Level-1 rows and columns over the image; the other rows are padding (empty).
+    let (ih, iw) = ((h as usize).div_ceil(2), wu.div_ceil(2));
+    let cols = super::fixpoint::Columns::new(w, ctx.wf);
+    let (mut tz, mut fronts) = (Vec::with_capacity(n_px), Vec::with_capacity(n_px));
+    let mut l1: Vec<Node> = Vec::with_capacity(pw * ph);
+    let (l1_img, l1_pad) = l1.spare_capacity_mut()[..pw * ph].split_at_mut(ih * pw);
+    l1_pad.par_chunks_mut(pw).for_each(|row| {
+        init_row(row, Node::EMPTY);
+    });
+    // The second child row of the last pair when `h` is odd: a padding row (empty).
+    let empty = vec![Node::EMPTY; if h % 2 == 1 { w0u } else { 0 }];
+    let listed: Vec<u32> = image
+        .par_chunks_mut(2 * w0u)
+        .zip(tz.spare_capacity_mut()[..n_px].par_chunks_mut(2 * wu))
+        .zip(fronts.spare_capacity_mut()[..n_px].par_chunks_mut(2 * wu))
+        .zip(l1_img.par_chunks_mut(pw))
+        .enumerate()
+        .flat_map_iter(|(m, (((rows, t), f), out))| {
+            let j0 = 2 * m as u32;
+            let (r0, r1) = rows.split_at_mut(w0u);
+            let ((t0, t1), (f0, f1)) = (t.split_at_mut(wu), f.split_at_mut(wu));
+            let r0 = init_row(r0, Node::EMPTY);
+            leaf_row(r0, j0);
+            let pt = |t, f, row: &[Node], j| {
+                super::fixpoint::pixel_triggers_row(t, f, row, j, ctx, &cols, deeper)
+            };
+            let mut listed = pt(t0, f0, r0, j0);
+            if !r1.is_empty() {
+                let r1 = init_row(r1, Node::EMPTY);
+                leaf_row(r1, j0 + 1);
+                listed.append(&mut pt(t1, f1, r1, j0 + 1));
+            }
+            // Level-1 row `m`: its parents over a listed pixel do not merge.
+            let mut blocked = vec![false; pw];
+            let base = j0 as usize * wu;
+            for &k in &listed {
+                let d = k as usize - base;
+                blocked[(if d >= wu { d - wu } else { d }) >> 1] = true;
+            }
+            // SAFETY: both rows of the pair were initialised (`init_row`).
+            let two = unsafe { &*(rows as *const [_] as *const [Node]) };
+            let scratch;
+            let two = if two.len() == 2 * w0u {
+                two
+            } else {
+                scratch = [two, &empty[..]].concat();
+                &scratch[..]
+            };
+            let out = init_row(out, Node::EMPTY);
+            let allow = super::prune::Allow(Some(&blocked));
+            ctx.parent_row_fast_of(two, 1, m as u32, &mut out[..iw.min(pw)], allow);
+            listed
+        })
+        .collect();
+    // SAFETY: the pairs cover `0..n_px` (`pixel_triggers_row` wrote every value) and level
+    // 1's image rows; the padding rows were initialised above.
+    unsafe {
+        tz.set_len(n_px);
+        fronts.set_len(n_px);
+        l1.set_len(pw * ph);
+    }
+    let level1 = Level {
+        w: pw as u32,
+        h: ph as u32,
+        nodes: l1,
+    };
+    (level1, (tz, listed, fronts))
 }
 
 /// Flag `O` of G-buffer leaves: [`crate::planes::crack_flags`] over the decoded leaf planes

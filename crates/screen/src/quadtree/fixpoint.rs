@@ -13,7 +13,7 @@
 //!   decoded from the leaves only where a deeper plane needs them (pixel centres tabulated
 //!   per column and row), not copied into a [`LayerPlanes`] first; on x86_64 (two levels or
 //!   more) the same pass makes level 1, each row right after the leaves of its two child rows
-//!   and with their blocked pixels (`leaves_and_level1` in `leaf_pass.rs`), so the pruning goes
+//!   and with their blocked pixels (`leaves_and_level1` in `build.rs`), so the pruning goes
 //!   on from level 2 without reading level 0 again; on x86_64 four pixels
 //!   per step, one per lane (`trigger_lanes`; eight with AVX2, `trigger_avx2`), elsewhere each pixel's four footprint corners
 //!   in lanes ([`super::cascade::pixel_trigger_lanes`]);

@@ -94,8 +94,6 @@ mod fixpoint;
 mod leaf_avx2;
 #[cfg(target_arch = "x86_64")]
 mod leaf_lanes;
-#[cfg(target_arch = "x86_64")]
-mod leaf_pass;
 mod leaves;
 mod mark_listed;
 pub mod merge;
