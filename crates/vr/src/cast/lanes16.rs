@@ -327,7 +327,9 @@ impl Lanes for V16 {
     }
     #[inline(always)]
     fn sqrt(self) -> Self {
-        V16(self.0.map(Vec4::sqrt))
+        // Written out: `[Vec4; 4]::map` compiled to an out-of-line `try_map` call per packet.
+        let [a, b, c, d] = self.0;
+        V16([a.sqrt(), b.sqrt(), c.sqrt(), d.sqrt()])
     }
     quarters!(lt, M16);
     quarters!(gt, M16);
