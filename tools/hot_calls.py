@@ -1,0 +1,107 @@
+#!/usr/bin/env python3
+"""Checks that the hot kernels of a release binary make no out-of-line calls to helpers that
+are meant to vanish into them.
+
+Why: a closure of `array::map` / `Lanes::from_fn`, a glam operator or an intrinsic called
+from a function that is not compiled for its target feature can stay an out-of-line call when
+an unrelated change moves an inlining decision. In DIRT's four-wide triangle test this cost
+1.5-1.7x the CPU time per ray with no change to the tracer's source (docs/notes/dirt.md, the
+`try_map` entry). Callgrind sees the extra instructions, wall-time pairs see the cost, but
+neither says why; the disassembly does.
+
+How: `objdump -d -C` of the binary, the call instructions of every function whose demangled
+name matches one of HOT, and the callees among them that match one of FORBIDDEN. Prints a
+table per function and exits 1 if any forbidden call is found, else 0.
+
+Usage (after `cargo build --release [--features embree] --bin parallax`):
+
+    python3 tools/hot_calls.py [target/release/parallax] [--all]
+
+`--all` lists forbidden calls from every `parallax_*` function, hot or not (for a look
+around; cold paths such as constructors may call them).
+"""
+import re
+import subprocess
+import sys
+
+# The kernels the benches time, in the copies this project runs on x86-64 with AVX2 / AVX-512
+# (the portable copies run only where those are missing).
+HOT = [
+    r"parallax_screen::dirt::tri4::Query::test_v[34]\b",
+    r"parallax_screen::dirt::walk::walk_dir_v[34]\b",
+    r"parallax_screen::dirt::DirtTracer::trace_v[34]\b",
+    r"parallax_screen::dirt::DirtTracer::(closest_hit|occluded)_counted\b",
+    r"parallax_bvh::traverse8::.*::(closest8|any8)_avx2",
+    r"parallax_bvh::packet_lanes::.*::packets_avx(2|512)\b",
+    r"parallax_bvh::packet::.*::packet16_avx2\b",
+    r"parallax_vr::cast::setup::run_setup_avx(2|2_16|512)\b",
+    r"parallax_vr::cast::setup::bands::refine_run\b",
+    r"parallax_vr::cast::packet::run_packets_avx2\b",
+    r"parallax_screen::quadtree::merge_rows8::.*::parent_row8\b",
+    r"parallax_screen::quadtree::.*row_avx2\b",
+]
+
+# Helpers that must be inlined where they are used in a kernel.
+FORBIDDEN = [
+    r"try_map",
+    r"core::array::.*::map\b",
+    r"::from_fn::\{\{closure\}\}",
+    r"core::core_arch::",
+    r"^<glam::",
+]
+
+FUNC = re.compile(r"^[0-9a-f]+ <(.*)>:$")
+CALL = re.compile(r"\bcall\s+[0-9a-f]*\s*<(.*)>")
+
+
+def calls(binary):
+    """Yields (function, callee) for every direct call in the binary's text."""
+    out = subprocess.run(
+        ["objdump", "-d", "-C", "--no-show-raw-insn", binary],
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout
+    func = None
+    for line in out.splitlines():
+        m = FUNC.match(line)
+        if m:
+            func = m.group(1)
+            continue
+        m = CALL.search(line)
+        if m and func is not None:
+            yield func, m.group(1)
+
+
+def main():
+    args = [a for a in sys.argv[1:] if not a.startswith("--")]
+    everything = "--all" in sys.argv[1:]
+    binary = args[0] if args else "target/release/parallax"
+    hot = [re.compile(p) for p in HOT]
+    bad = [re.compile(p) for p in FORBIDDEN]
+    counts, seen_hot = {}, set()
+    for func, callee in calls(binary):
+        is_hot = any(p.search(func) for p in hot)
+        if is_hot:
+            seen_hot.add(func)
+        if not (is_hot or (everything and "parallax_" in func)):
+            continue
+        if any(p.search(callee) for p in bad):
+            key = (func, callee)
+            counts[key] = counts.get(key, 0) + 1
+    print(f"{binary}: {len(seen_hot)} hot functions found (of {len(HOT)} patterns)")
+    if not seen_hot:
+        print("no hot function found: not a parallax release binary, or the names moved")
+        return 1
+    if not counts:
+        print("no forbidden out-of-line calls")
+        return 0
+    print("| calls | function | callee |\n|---|---|---|")
+    for (func, callee), n in sorted(counts.items(), key=lambda kv: -kv[1]):
+        print(f"| {n} | `{func}` | `{callee}` |")
+    hot_hits = sum(n for (f, _), n in counts.items() if any(p.search(f) for p in hot))
+    return 1 if hot_hits else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
