@@ -306,6 +306,15 @@ mod tests {
     use parallax_core::Ray;
     use parallax_core::sampling::Rng;
 
+    /// A point uniform in the cube of side `s` around the origin.
+    fn random_in_cube(rng: &mut Rng, s: f32) -> Vec3 {
+        Vec3::new(
+            rng.next_f32() - 0.5,
+            rng.next_f32() - 0.5,
+            rng.next_f32() - 0.5,
+        ) * s
+    }
+
     /// The SSE gather moves the very bits of the scalar one, on finite, infinite, NaN and
     /// negative-zero corners.
     #[test]
@@ -352,13 +361,7 @@ mod tests {
     #[test]
     fn four_wide_equals_scalar() {
         let mut rng = Rng::for_pixel(7, 1, 2, 3);
-        let mut v = |s: f32| {
-            Vec3::new(
-                rng.next_f32() - 0.5,
-                rng.next_f32() - 0.5,
-                rng.next_f32() - 0.5,
-            ) * s
-        };
+        let mut v = |s: f32| random_in_cube(&mut rng, s);
         // A fan of triangles around the z axis sharing a centre vertex and edges, plus random
         // ones: rays along z through the centre hit edges and the vertex exactly.
         let mut tris = Vec::new();
@@ -462,13 +465,7 @@ mod tests {
     #[test]
     fn mailbox_skips_the_scalar_twins_repeats() {
         let mut rng = Rng::for_pixel(3, 9, 2, 7);
-        let mut v = |s: f32| {
-            Vec3::new(
-                rng.next_f32() - 0.5,
-                rng.next_f32() - 0.5,
-                rng.next_f32() - 0.5,
-            ) * s
-        };
+        let mut v = |s: f32| random_in_cube(&mut rng, s);
         let tris: Vec<DirtTri> = (0..300)
             .map(|_| {
                 let c = v(3.0);
