@@ -438,21 +438,19 @@ fn check_stats(bvh: &Bvh) {
     assert!(any.triangle_tests <= s.triangle_tests, "{any:?} vs {s:?}");
 }
 
-/// The SBVH build (`spatial_splits: true`), on a mesh whose large triangles it splits: every triangle in at least one leaf, the copies within the duplication budget
+/// The default build, the SBVH (`spatial_splits: true`), on a mesh whose large triangles it
+/// splits: every triangle in at least one leaf, the copies within the duplication budget
 /// (`n + split_budget n` references), and every point of a triangle inside the box of a leaf
 /// holding it (the pieces' boxes cover the triangle: what makes the traversal exact, module
 /// docs of `build/spatial.rs`), checked at the vertices, edge midpoints, centroid and random
 /// points, with a tolerance of 1e-6 of the scene size for the rounding of the points.
 #[test]
 fn sbvh_structure_invariants() {
+    assert!(BuildOptions::default().spatial_splits);
     let mut mesh = soup(3000, 0.2, 21);
     mesh.append(&soup(16, 1.0, 22), 0);
     let n = mesh.triangle_count();
-    let opts = BuildOptions {
-        spatial_splits: true,
-        ..Default::default()
-    };
-    let bvh = Bvh::build_with(&mesh, &opts);
+    let bvh = Bvh::build(&mesh);
     let leaf_boxes = check_structure(&bvh, &mesh);
     let budget = BuildOptions::default().split_budget;
     assert!(bvh.reference_count() > n, "no reference was split");

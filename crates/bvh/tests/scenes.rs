@@ -151,6 +151,7 @@ fn sponza_spatial_splits() {
     // The build did split references (Sponza is the scene SBVH is for).
     assert!(bvh.reference_count() > scene.mesh.triangle_count());
     same_as_object_split_tree(&scene, &bvh, 20_000, 160, 120);
+    assert_eq!(spatial(), BuildOptions::default());
 }
 
 #[test]

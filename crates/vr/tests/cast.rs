@@ -313,9 +313,11 @@ fn check_setup(
 /// 1 and 4, atrium and cornell.
 ///
 /// - `Full`: 0 differences, bit-identical `t`. Its band's watertight tests are measured
-///   (printed) and bounded at 5% of the ray-triangle tests: 0.2-2.9% here, most of them depth
-///   ties between overlapping coplanar faces (bit-identical `1/t` covectors, which only the
-///   exact test can order); the edge band alone is ~0.2%.
+///   (printed) and bounded at 5% of the ray-triangle tests: 0.2-0.9% here (the default build,
+///   the SBVH), most of them depth ties between overlapping coplanar faces (bit-identical
+///   `1/t` covectors, which only the exact test can order); the edge band alone is ~0.2%.
+///   (Up to 5.9% when a split triangle's repeated entries in a tile's list were set up and
+///   tied with themselves: `set_up_kernel_on_both_builds`.)
 /// - `Edges` (default): exact coverage, depth by `1/t`. The differences are depth ties: on
 ///   cornell the blocks stand on the floor and their bottom faces overlap the floor
 ///   coplanarly, so both faces give the same `1/t` up to rounding and HVVR's `1/t` order
