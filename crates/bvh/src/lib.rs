@@ -2,9 +2,10 @@
 //! every image-space result of parallax is scored against.
 //!
 //! - **Build** ([`Bvh::build`]): binned SAH over triangle centroids (Wald 2007), parallel with
-//!   rayon, optionally with spatial splits ([`BuildOptions::spatial_splits`]: SBVH, Stich,
+//!   rayon, with spatial splits by default ([`BuildOptions::spatial_splits`]: SBVH, Stich,
 //!   Friedrich & Dietrich 2009, `build/spatial.rs`; a triangle may then sit in several leaves
-//!   and every query still reports it once), producing a binary tree that is collapsed twice by opening the children of largest
+//!   and every query still reports it once; `spatial_splits: false` builds the object-split
+//!   tree, each triangle in one leaf), producing a binary tree that is collapsed twice by opening the children of largest
 //!   surface area (Wald, Benthin & Boulos 2008; Ernst & Greiner 2008): into 4-wide nodes
 //!   (`collapse.rs`) and into 8-wide nodes (`collapse8.rs`) over the same leaves.
 //! - **Layouts**: [`Node4`] (`node.rs`), 128-byte SoA nodes in depth-first preorder with leaf

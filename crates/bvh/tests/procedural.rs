@@ -9,16 +9,24 @@ use parallax_bvh::{BuildOptions, Bvh, TraversalStats};
 use parallax_core::Ray;
 use parallax_scene::TriangleMesh;
 
+/// Both builds (the default SBVH and the object-split tree) answer as brute force; returns the
+/// default build's hits.
 fn check_mesh(mesh: &TriangleMesh, rays: &[Ray], what: &str) -> usize {
-    let bvh = Bvh::build(mesh);
-    let mut hits = 0;
-    for r in rays {
-        hits += check_closest(&bvh, mesh, r, what).is_some() as usize;
+    let mut hits = [0; 2];
+    for (k, opts) in [BuildOptions::default(), object_splits()]
+        .iter()
+        .enumerate()
+    {
+        let bvh = Bvh::build_with(mesh, opts);
+        for r in rays {
+            hits[k] += check_closest(&bvh, mesh, r, what).is_some() as usize;
+        }
+        for r in rays.iter().step_by(7) {
+            check_all(&bvh, mesh, r, what);
+        }
     }
-    for r in rays.iter().step_by(7) {
-        check_all(&bvh, mesh, r, what);
-    }
-    hits
+    assert_eq!(hits[0], hits[1], "{what}");
+    hits[0]
 }
 
 #[test]
@@ -58,7 +66,7 @@ fn closed_meshes_and_grid_match_brute_force() {
 fn build_options_do_not_change_results() {
     let mesh = soup(2000, 0.1, 5);
     let rays = random_rays(500, Vec3::splat(-1.5), Vec3::splat(1.5), 6);
-    for opts in [
+    let shapes = [
         BuildOptions {
             max_leaf_size: 1,
             bins: 2,
@@ -90,9 +98,17 @@ fn build_options_do_not_change_results() {
         BuildOptions {
             sah_block_size: 100,
             max_leaf_size: 15,
-            spatial_splits: true,
             ..Default::default()
         },
+    ];
+    // Each shape option with spatial splits (the default) and without.
+    let both = shapes.iter().flat_map(|o| {
+        [true, false].map(|spatial_splits| BuildOptions {
+            spatial_splits,
+            ..o.clone()
+        })
+    });
+    let spatial = [
         // Spatial splits: no budget, every overlap (alpha 0), a large budget, invalid values.
         BuildOptions {
             spatial_splits: true,
@@ -116,7 +132,8 @@ fn build_options_do_not_change_results() {
             bins: 3,
             ..Default::default()
         },
-    ] {
+    ];
+    for opts in both.chain(spatial) {
         let bvh = Bvh::build_with(&mesh, &opts);
         assert_eq!(bvh.triangle_count(), 2000);
         for r in &rays {
@@ -291,16 +308,24 @@ fn degenerate_triangles_and_invalid_rays_never_panic() {
     }
 }
 
-#[test]
-fn structure_invariants_and_stats() {
-    let mesh = soup(3000, 0.05, 11);
-    let bvh = Bvh::build(&mesh);
-    // Every triangle exactly once, leaves within the size bound, children after parents.
-    let mut seen = vec![0u32; 3000];
-    for &id in bvh.prim_ids() {
-        seen[id as usize] += 1;
+/// The object-split build (`spatial_splits: false`, the CLI's `--no-spatial-splits`).
+fn object_splits() -> BuildOptions {
+    BuildOptions {
+        spatial_splits: false,
+        ..Default::default()
     }
-    assert!(seen.iter().all(|&c| c == 1));
+}
+
+/// The tree's structure, for either build: children after parents in both trees, every inner
+/// child's box its node's bounds, leaves within the size bound, the 8-wide tree over the same
+/// leaves (each entry of `triangles()` in exactly one 8-wide leaf), and per 4-wide leaf box
+/// `b` and triangle of the leaf: the triangle's box meets `b`, and `b` lies inside the union
+/// of the leaf's triangle boxes (a leaf's box is the union of its references' boxes, each
+/// inside its triangle's box: the whole box in the object-split build, a clipped piece of it
+/// after a spatial split). Returns the 4-wide leaf boxes holding each primitive.
+fn check_structure(bvh: &Bvh, mesh: &TriangleMesh) -> Vec<Vec<parallax_core::Aabb>> {
+    let max_leaf = BuildOptions::default().max_leaf_size as u32;
+    let mut leaf_boxes = vec![Vec::new(); mesh.triangle_count()];
     for (i, n) in bvh.nodes().iter().enumerate() {
         assert!((1..=4).contains(&n.num_children));
         for lane in 0..n.num_children as usize {
@@ -311,17 +336,22 @@ fn structure_invariants_and_stats() {
                     assert_eq!(bvh.nodes()[c as usize].bounds(), b);
                 }
                 parallax_bvh::ChildRef::Leaf { first, count } => {
-                    let max_leaf = BuildOptions::default().max_leaf_size as u32;
                     assert!((1..=max_leaf).contains(&count));
-                    for t in &bvh.triangles()[bvh.leaf_triangles(first, count)] {
-                        let tb = t.bounds();
-                        assert!(b.contains(tb.min) && b.contains(tb.max));
+                    let mut union = parallax_core::Aabb::EMPTY;
+                    for k in bvh.leaf_triangles(first, count) {
+                        let tb = bvh.triangles()[k].bounds();
+                        assert!(
+                            tb.min.cmple(b.max).all() && b.min.cmple(tb.max).all(),
+                            "leaf box {b:?} misses its triangle's box {tb:?}"
+                        );
+                        union = union.union(tb);
+                        leaf_boxes[bvh.prim_ids()[k] as usize].push(b);
                     }
+                    assert!(union.contains(b.min) && union.contains(b.max));
                 }
             }
         }
     }
-    // The 8-wide tree: the same leaves (each triangle once), children after parents.
     let mut seen8 = vec![0u32; bvh.triangles().len()];
     for (i, n) in bvh.nodes8().iter().enumerate() {
         assert!((1..=8).contains(&n.num_children));
@@ -340,7 +370,7 @@ fn structure_invariants_and_stats() {
                     for t in bvh.leaf_triangles(first, count) {
                         seen8[t] += 1;
                         let tb = bvh.triangles()[t].bounds();
-                        assert!(b.contains(tb.min) && b.contains(tb.max));
+                        assert!(tb.min.cmple(b.max).all() && b.min.cmple(tb.max).all());
                     }
                 }
             }
@@ -348,6 +378,23 @@ fn structure_invariants_and_stats() {
     }
     assert!(seen8.iter().all(|&c| c == 1));
     assert_eq!(bvh.nodes8()[0].bounds(), mesh.bounds());
+    assert_eq!(bvh.bounds(), mesh.bounds());
+    leaf_boxes
+}
+
+/// The object-split build (`spatial_splits: false`): every triangle in exactly one leaf, whose
+/// box holds the whole triangle; the trees' sizes and the traversal's work counts.
+#[test]
+fn structure_invariants_and_stats() {
+    let mesh = soup(3000, 0.05, 11);
+    let bvh = Bvh::build_with(&mesh, &object_splits());
+    let leaf_boxes = check_structure(&bvh, &mesh);
+    assert_eq!(bvh.reference_count(), 3000);
+    for (p, boxes) in leaf_boxes.iter().enumerate() {
+        assert_eq!(boxes.len(), 1, "triangle {p}");
+        let tb = parallax_core::Aabb::from_points(mesh.triangle(p));
+        assert!(boxes[0].contains(tb.min) && boxes[0].contains(tb.max));
+    }
     // (261 vs 354 nodes here: leaves of up to eight leave fewer 4-wide nodes to merge.)
     assert!(
         bvh.nodes8().len() * 4 < bvh.node_count() * 3,
@@ -355,7 +402,6 @@ fn structure_invariants_and_stats() {
         bvh.nodes8().len(),
         bvh.node_count()
     );
-    assert_eq!(bvh.bounds(), mesh.bounds());
     assert!(bvh.bytes() >= bvh.node_count() * 128 + 3000 * 40);
     // A 4-wide tree over 3000 triangles in leaves of <= 8 needs at least 94 nodes; SAH trees
     // are far from degenerate (depth well below the object count).
@@ -365,7 +411,12 @@ fn structure_invariants_and_stats() {
         bvh.node_count(),
         bvh.depth()
     );
+    check_stats(&bvh);
+}
 
+/// The traversal's work counts on 1000 random rays: the stats variants answer as the plain
+/// queries, the 8-wide tree visits fewer nodes than the 4-wide one, culling works.
+fn check_stats(bvh: &Bvh) {
     let rays = random_rays(1000, Vec3::splat(-1.5), Vec3::splat(1.5), 12);
     let mut s = TraversalStats::default();
     let mut any = TraversalStats::default();
@@ -385,6 +436,57 @@ fn structure_invariants_and_stats() {
     // query does no more work than a closest-hit query.
     assert!(s.per_ray(s.triangle_tests) < 150.0, "{s:?}");
     assert!(any.triangle_tests <= s.triangle_tests, "{any:?} vs {s:?}");
+}
+
+/// The default build, the SBVH (`spatial_splits: true`), on a mesh whose large triangles it
+/// splits: every triangle in at least one leaf, the copies within the duplication budget
+/// (`n + split_budget n` references), and every point of a triangle inside the box of a leaf
+/// holding it (the pieces' boxes cover the triangle: what makes the traversal exact, module
+/// docs of `build/spatial.rs`), checked at the vertices, edge midpoints, centroid and random
+/// points, with a tolerance of 1e-6 of the scene size for the rounding of the points.
+#[test]
+fn sbvh_structure_invariants() {
+    assert!(BuildOptions::default().spatial_splits);
+    let mut mesh = soup(3000, 0.2, 21);
+    mesh.append(&soup(16, 1.0, 22), 0);
+    let n = mesh.triangle_count();
+    let bvh = Bvh::build(&mesh);
+    let leaf_boxes = check_structure(&bvh, &mesh);
+    let budget = BuildOptions::default().split_budget;
+    assert!(bvh.reference_count() > n, "no reference was split");
+    assert!(bvh.reference_count() <= n + (n as f64 * budget as f64) as usize);
+    assert_eq!(bvh.triangle_count(), n);
+    let tol = 1e-6 * mesh.bounds().extent().max_element();
+    let mut rng = Rng::new(23);
+    let mut split = 0;
+    for (p, boxes) in leaf_boxes.iter().enumerate() {
+        assert!(!boxes.is_empty(), "triangle {p} in no leaf");
+        split += (boxes.len() > 1) as usize;
+        let [a, b, c] = mesh.triangle(p);
+        let mut points = vec![a, b, c, (a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5];
+        points.push((a + b + c) / 3.0);
+        for _ in 0..20 {
+            let (u, v) = (rng.f32(), rng.f32());
+            let (u, v) = if u + v > 1.0 {
+                (1.0 - u, 1.0 - v)
+            } else {
+                (u, v)
+            };
+            points.push(a + (b - a) * u + (c - a) * v);
+        }
+        for q in points {
+            assert!(
+                boxes
+                    .iter()
+                    .any(|bx| (q - bx.min).min_element() >= -tol
+                        && (bx.max - q).min_element() >= -tol),
+                "triangle {p}: point {q} in none of its {} leaf boxes",
+                boxes.len()
+            );
+        }
+    }
+    assert!(split > 0);
+    check_stats(&bvh);
 }
 
 /// The SAH in blocks of four (the default) packs leaves to the 4-triangle blocks the traversal

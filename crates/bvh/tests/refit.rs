@@ -45,25 +45,41 @@ fn compare(refitted: &Bvh, mesh: &TriangleMesh, rays: &[Ray], what: &str) {
     }
 }
 
+/// The default build (SBVH) and the object-split build (`spatial_splits: false`).
+fn builds() -> [(&'static str, BuildOptions); 2] {
+    [
+        ("default", BuildOptions::default()),
+        (
+            "object splits",
+            BuildOptions {
+                spatial_splits: false,
+                ..Default::default()
+            },
+        ),
+    ]
+}
+
 #[test]
 fn rigid_motion_of_one_object() {
-    let mut mesh = scene();
-    let mut bvh = Bvh::build(&mesh);
-    let obj = mesh.objects[0].clone();
-    let rot = Mat3::from_rotation_y(0.7) * Mat3::from_rotation_x(-0.4);
-    let range = obj.first_vertex as usize..(obj.first_vertex + obj.vertex_count) as usize;
-    for p in &mut mesh.positions[range] {
-        *p = rot * *p + Vec3::new(1.5, 0.8, -0.5);
+    for (what, opts) in builds() {
+        let mut mesh = scene();
+        let mut bvh = Bvh::build_with(&mesh, &opts);
+        let obj = mesh.objects[0].clone();
+        let rot = Mat3::from_rotation_y(0.7) * Mat3::from_rotation_x(-0.4);
+        let range = obj.first_vertex as usize..(obj.first_vertex + obj.vertex_count) as usize;
+        for p in &mut mesh.positions[range] {
+            *p = rot * *p + Vec3::new(1.5, 0.8, -0.5);
+        }
+        let t = bvh.refit(&mesh).unwrap();
+        assert!(t.as_secs_f64() < 1.0);
+        let rays = random_rays(
+            1500,
+            Vec3::new(-2.0, -1.5, -2.0),
+            Vec3::new(3.5, 2.0, 2.0),
+            4,
+        );
+        compare(&bvh, &mesh, &rays, &format!("rigid, {what}"));
     }
-    let t = bvh.refit(&mesh).unwrap();
-    assert!(t.as_secs_f64() < 1.0);
-    let rays = random_rays(
-        1500,
-        Vec3::new(-2.0, -1.5, -2.0),
-        Vec3::new(3.5, 2.0, 2.0),
-        4,
-    );
-    compare(&bvh, &mesh, &rays, "rigid");
 }
 
 /// A BVH built with spatial splits (duplicated triangles, clipped leaf boxes) refits to the
@@ -100,16 +116,18 @@ fn rigid_motion_with_spatial_splits() {
 
 #[test]
 fn random_jitter_of_every_vertex() {
-    let mut mesh = scene();
-    let mut bvh = Bvh::build(&mesh);
-    let mut rng = Rng::new(9);
-    for round in 0..3 {
-        for p in &mut mesh.positions {
-            *p += rng.vec3_in(Vec3::splat(-0.05), Vec3::splat(0.05));
+    for (what, opts) in builds() {
+        let mut mesh = scene();
+        let mut bvh = Bvh::build_with(&mesh, &opts);
+        let mut rng = Rng::new(9);
+        for round in 0..3 {
+            for p in &mut mesh.positions {
+                *p += rng.vec3_in(Vec3::splat(-0.05), Vec3::splat(0.05));
+            }
+            bvh.refit(&mesh).unwrap();
+            let rays = random_rays(800, Vec3::splat(-2.0), Vec3::new(3.5, 2.0, 2.0), round);
+            compare(&bvh, &mesh, &rays, &format!("jitter, {what}"));
         }
-        bvh.refit(&mesh).unwrap();
-        let rays = random_rays(800, Vec3::splat(-2.0), Vec3::new(3.5, 2.0, 2.0), round);
-        compare(&bvh, &mesh, &rays, "jitter");
     }
 }
 

@@ -28,14 +28,25 @@ fn rays_for(scene: &Scene, random: usize, w: u32, h: u32) -> Vec<Ray> {
     rays
 }
 
+/// `check_scene_with` on the object-split build (`spatial_splits: false`, the CLI's
+/// `--no-spatial-splits`; the default build is the SBVH, tested by the `_spatial_splits`
+/// tests below).
 fn check_scene(scene: &Scene, random: usize, w: u32, h: u32) {
-    check_scene_with(scene, random, w, h, &BuildOptions::default());
+    check_scene_with(scene, random, w, h, &object_splits());
 }
 
-/// The build with spatial splits (SBVH).
+/// The build with spatial splits (SBVH; the default, spelled out).
 fn spatial() -> BuildOptions {
     BuildOptions {
         spatial_splits: true,
+        ..Default::default()
+    }
+}
+
+/// The build without spatial splits (each triangle in exactly one leaf).
+fn object_splits() -> BuildOptions {
+    BuildOptions {
+        spatial_splits: false,
         ..Default::default()
     }
 }
@@ -94,12 +105,12 @@ fn load(rel: &str) -> Scene {
 }
 
 #[test]
-fn sponza() {
+fn sponza_object_splits() {
     check_scene(&load("sponza_dabrovic/sponza_dabrovic.glb"), 200, 12, 9);
 }
 
 #[test]
-fn japanese_classroom() {
+fn japanese_classroom_object_splits() {
     check_scene(
         &load("japanese_classroom/japanese_classroom.glb"),
         200,
@@ -108,10 +119,11 @@ fn japanese_classroom() {
     );
 }
 
-/// The SBVH's closest hit is the default tree's, record for record (primitive, `t`, `u`, `v`),
-/// for every ray of `rays_for(scene, random, w, h)`: the tie rule does not depend on the tree.
-fn same_as_default_tree(scene: &Scene, sbvh: &Bvh, random: usize, w: u32, h: u32) {
-    let bvh = Bvh::build(&scene.mesh);
+/// The SBVH's closest hit is the object-split tree's, record for record (primitive, `t`, `u`,
+/// `v`), for every ray of `rays_for(scene, random, w, h)`: the tie rule does not depend on the
+/// tree.
+fn same_as_object_split_tree(scene: &Scene, sbvh: &Bvh, random: usize, w: u32, h: u32) {
+    let bvh = Bvh::build_with(&scene.mesh, &object_splits());
     let rays = rays_for(scene, random, w, h);
     let hits: usize = rays
         .par_iter()
@@ -120,7 +132,7 @@ fn same_as_default_tree(scene: &Scene, sbvh: &Bvh, random: usize, w: u32, h: u32
             assert_eq!(
                 a,
                 bvh.closest_hit(r),
-                "{}: SBVH vs default tree for {r:?}",
+                "{}: SBVH vs object-split tree for {r:?}",
                 scene.name
             );
             a.is_some() as usize
@@ -131,14 +143,15 @@ fn same_as_default_tree(scene: &Scene, sbvh: &Bvh, random: usize, w: u32, h: u32
 
 /// Spatial splits: closest / any / all hits still equal brute force (each primitive reported
 /// once), on the scenes whose large tilted triangles get split; the closest hits are the
-/// default tree's.
+/// object-split tree's. `Bvh::build` builds this tree (the default options).
 #[test]
 fn sponza_spatial_splits() {
     let scene = load("sponza_dabrovic/sponza_dabrovic.glb");
     let bvh = check_scene_with(&scene, 400, 16, 12, &spatial());
     // The build did split references (Sponza is the scene SBVH is for).
     assert!(bvh.reference_count() > scene.mesh.triangle_count());
-    same_as_default_tree(&scene, &bvh, 20_000, 160, 120);
+    same_as_object_split_tree(&scene, &bvh, 20_000, 160, 120);
+    assert_eq!(spatial(), BuildOptions::default());
 }
 
 #[test]
@@ -146,7 +159,7 @@ fn japanese_classroom_spatial_splits() {
     let scene = load("japanese_classroom/japanese_classroom.glb");
     let bvh = check_scene_with(&scene, 400, 16, 12, &spatial());
     assert!(bvh.reference_count() > scene.mesh.triangle_count());
-    same_as_default_tree(&scene, &bvh, 20_000, 160, 120);
+    same_as_object_split_tree(&scene, &bvh, 20_000, 160, 120);
 }
 
 #[test]
@@ -172,17 +185,17 @@ fn small_and_builtin_scenes_spatial_splits() {
 }
 
 #[test]
-fn stanford_bunny() {
+fn stanford_bunny_object_splits() {
     check_scene(&load("stanford_bunny/bun_zipper.ply"), 600, 24, 18);
 }
 
 #[test]
-fn box_textured() {
+fn box_textured_object_splits() {
     check_scene(&load("box_textured/BoxTextured.glb"), 2000, 32, 24);
 }
 
 #[test]
-fn builtin_scenes() {
+fn builtin_scenes_object_splits() {
     for name in parallax_scene::builtin::NAMES.iter() {
         let scene = parallax_scene::builtin::by_name(name)
             .unwrap_or_else(|| panic!("built-in {name} listed but not found"));

@@ -1,8 +1,8 @@
 //! Exact `t` ties between different triangles: the closest hit is the lowest primitive id at
 //! the smallest `t` (brute force's rule), on every path (8- and 4-wide single rays, the scalar
-//! twin, 16-ray packets, 64-ray packets, every lane type) and in every tree: the default build
-//! and builds with spatial splits, which duplicate references, give the same primitive for
-//! every ray. The mesh is made of ties: each triangle of a random soup and of two overlapping
+//! twin, 16-ray packets, 64-ray packets, every lane type) and in every tree: the object-split
+//! build and builds with spatial splits (the default among them), which duplicate references,
+//! give the same primitive for every ray. The mesh is made of ties: each triangle of a random soup and of two overlapping
 //! coplanar grids is stored three times under scattered indices.
 
 mod common;
@@ -149,14 +149,14 @@ fn exact_ties_go_to_the_lowest_primitive_in_every_tree_and_path() {
     );
 
     let builds = [
-        ("default", BuildOptions::default()),
         (
-            "spatial splits",
+            "object splits",
             BuildOptions {
-                spatial_splits: true,
+                spatial_splits: false,
                 ..Default::default()
             },
         ),
+        ("default (spatial splits)", BuildOptions::default()),
         (
             "spatial splits, alpha 0, overlap 0, budget 4, one triangle per leaf",
             BuildOptions {
@@ -169,8 +169,9 @@ fn exact_ties_go_to_the_lowest_primitive_in_every_tree_and_path() {
             },
         ),
         (
-            "one triangle per leaf",
+            "object splits, one triangle per leaf",
             BuildOptions {
+                spatial_splits: false,
                 max_leaf_size: 1,
                 ..Default::default()
             },

@@ -23,9 +23,14 @@ fn targets(mesh: &TriangleMesh) -> Vec<Vec3> {
     t
 }
 
-/// The BVH with the default build and with spatial splits forced everywhere (alpha 0, large
-/// budget, one triangle per leaf: most triangles are cut into pieces).
-fn builds(mesh: &TriangleMesh) -> [Bvh; 2] {
+/// The BVH with the object-split build (`spatial_splits: false`), the default build (SBVH)
+/// and with spatial splits forced everywhere (alpha 0, large budget, one triangle per leaf:
+/// most triangles are cut into pieces).
+fn builds(mesh: &TriangleMesh) -> [Bvh; 3] {
+    let object = BuildOptions {
+        spatial_splits: false,
+        ..Default::default()
+    };
     let spatial = BuildOptions {
         spatial_splits: true,
         split_alpha: 0.0,
@@ -34,7 +39,11 @@ fn builds(mesh: &TriangleMesh) -> [Bvh; 2] {
         max_leaf_size: 1,
         ..Default::default()
     };
-    [Bvh::build(mesh), Bvh::build_with(mesh, &spatial)]
+    [
+        Bvh::build_with(mesh, &object),
+        Bvh::build(mesh),
+        Bvh::build_with(mesh, &spatial),
+    ]
 }
 
 fn closed_convex_meshes() -> Vec<(&'static str, TriangleMesh)> {

@@ -227,6 +227,38 @@ fn bad_input_gives_clear_errors() {
     }
 }
 
+/// `bench rays` builds the SBVH by default; `--no-spatial-splits` the object-split tree; the
+/// old `--spatial-splits` (now the default) is still accepted, but not with its opposite.
+#[test]
+fn bench_rays_spatial_split_flags() {
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "bench",
+            "rays",
+            "--scene",
+            "cornell",
+            "--width",
+            "16",
+            "--height",
+            "12",
+            "--repeats",
+            "1",
+            "--no-msaa",
+            "--methods",
+            "single",
+        ];
+        args.extend_from_slice(extra);
+        parallax(&args)
+    };
+    for ok in [&[][..], &["--no-spatial-splits"], &["--spatial-splits"]] {
+        let o = run(ok);
+        assert!(o.status.success(), "{ok:?}: {}", stderr(&o));
+    }
+    let o = run(&["--spatial-splits", "--no-spatial-splits"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("cannot be used with"), "{}", stderr(&o));
+}
+
 #[test]
 fn bench_rays_writes_json_rows() {
     let d = out_dir("bench");

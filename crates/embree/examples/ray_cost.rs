@@ -46,13 +46,14 @@ fn main() {
     let (method, mode) = (a[5].as_str(), a[6].as_str());
     let w: u32 = a.get(7).map_or(1280, |s| s.parse().unwrap());
     let h: u32 = a.get(8).map_or(720, |s| s.parse().unwrap());
-    // `BVH_SPATIAL=1` builds with spatial splits (SBVH); `BVH_SPLIT_ALPHA`, `BVH_SPLIT_BUDGET`,
+    // `BVH_SPATIAL=0` builds without spatial splits (the object-split tree; unset or any
+    // other value: the default, the SBVH); `BVH_SPLIT_ALPHA`, `BVH_SPLIT_BUDGET`,
     // `BVH_SPLIT_OVERLAP` override their parameters; `BVH_SAH_BLOCK`, `BVH_MAX_LEAF` the SAH's
     // leaf block size and the largest leaf.
     let env = |k: &str| std::env::var(k).ok().and_then(|v| v.parse::<f32>().ok());
     let d = BuildOptions::default();
     let opts = BuildOptions {
-        spatial_splits: std::env::var("BVH_SPATIAL").is_ok_and(|v| v == "1"),
+        spatial_splits: std::env::var("BVH_SPATIAL").map_or(d.spatial_splits, |v| v != "0"),
         split_alpha: env("BVH_SPLIT_ALPHA").unwrap_or(d.split_alpha),
         split_budget: env("BVH_SPLIT_BUDGET").unwrap_or(d.split_budget),
         split_overlap: env("BVH_SPLIT_OVERLAP").unwrap_or(d.split_overlap),

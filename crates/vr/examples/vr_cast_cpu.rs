@@ -10,9 +10,10 @@
 //! without the affine packet test, `edges-affine` = `edges` with it on every kernel: `CastOptions::affine_always`). Optional further arguments:
 //! `lanes` (8th, default 4: `CastOptions::lanes`; a suffix `sse` / `avx2` caps `CastOptions::isa`
 //! at that tier, e.g. `16sse` the portable twin) and a head pose `eye target fov_y` (9th-11th,
-//! e.g. `-9,3.5,0 8,5,0 60`; default the scene's camera).
+//! e.g. `-9,3.5,0 8,5,0 60`; default the scene's camera). `BVH_SPATIAL=0` builds the BVH
+//! without spatial splits (the object-split tree; default: the SBVH, `Bvh::build`).
 
-use parallax_bvh::Bvh;
+use parallax_bvh::{BuildOptions, Bvh};
 use parallax_core::cpu_time::{ms_between, thread_cpu_ns};
 use parallax_scene::Scene;
 use parallax_scene::camera::{Camera, CameraOptions, ModelKind};
@@ -46,7 +47,13 @@ fn main() {
         .unwrap();
     pool.install(|| {
         let scene = Scene::load(&scene_name).expect("scene");
-        let bvh = Bvh::build(&scene.mesh);
+        let bvh = Bvh::build_with(
+            &scene.mesh,
+            &BuildOptions {
+                spatial_splits: std::env::var("BVH_SPATIAL").map_or(true, |v| v != "0"),
+                ..Default::default()
+            },
+        );
         let v3 = |s: &str| {
             let c: Vec<f32> = s.split(',').map(|x| x.parse().unwrap()).collect();
             glam::Vec3::new(c[0], c[1], c[2])
@@ -125,11 +132,13 @@ fn main() {
         println!("  buffer hash {hash:016x}");
         let tris = (stats.tris_all_out + stats.tris_partial + stats.tris_all_in).max(1) as f64;
         println!(
-            "  set-up triangles: all-out {:.4} partial {:.4} all-in {:.4} of {tris}, packet-triangle tests / ray {:.4}",
+            "  set-up triangles: all-out {:.4} partial {:.4} all-in {:.4} of {tris}, packet-triangle tests / ray {:.4}; \
+             {} repeated list entries dropped (a split triangle's other leaves)",
             stats.tris_all_out as f64 / tris,
             stats.tris_partial as f64 / tris,
             stats.tris_all_in as f64 / tris,
-            stats.tri_tests as f64 / stats.rays.max(1) as f64
+            stats.tri_tests as f64 / stats.rays.max(1) as f64,
+            stats.tris_repeated
         );
         println!(
             "  last round: block cull {:.1} ms, tile cull + set-up {:.1} ms, sample test {:.1} ms",

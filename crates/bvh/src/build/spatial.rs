@@ -1,6 +1,6 @@
 //! Spatial splits: the SBVH build (Stich, Friedrich & Dietrich 2009, "Spatial Splits in
-//! Bounding Volume Hierarchies", HPG 2009), an option of the binned SAH build
-//! ([`BuildOptions::spatial_splits`]).
+//! Bounding Volume Hierarchies", HPG 2009), the default of the binned SAH build
+//! ([`BuildOptions::spatial_splits`]; `false` builds the object-split tree).
 //!
 //! Per node (§4):
 //! - the binned object split of the parent module, and the surface area `λ` of the overlap of

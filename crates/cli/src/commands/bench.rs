@@ -57,8 +57,12 @@ pub struct RaysArgs {
     /// embree1, embree8, embree16, embree1m. `single` (the reference) always runs.
     #[arg(long, value_delimiter = ',', value_parser = parse_method)]
     pub methods: Vec<rays::Method>,
-    /// Build parallax's BVH with spatial splits (SBVH).
+    /// Build parallax's BVH without spatial splits (the object-split tree, each triangle in
+    /// one leaf); the default build is the SBVH.
     #[arg(long)]
+    pub no_spatial_splits: bool,
+    /// Accepted for older scripts: spatial splits are the default.
+    #[arg(long, hide = true, conflicts_with = "no_spatial_splits")]
     pub spatial_splits: bool,
     /// Write the rows as JSON.
     #[arg(long)]
@@ -124,7 +128,7 @@ pub fn run(cmd: &BenchCommand, quiet: bool) -> Result<()> {
                 embree_quality: a.embree_quality,
                 methods: a.methods.clone(),
                 bvh: parallax_bvh::BuildOptions {
-                    spatial_splits: a.spatial_splits,
+                    spatial_splits: !a.no_spatial_splits,
                     ..Default::default()
                 },
             };

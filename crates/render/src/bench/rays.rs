@@ -32,7 +32,7 @@
 //! | `msaa` | bool | true | include the `msaa16` mode |
 //! | `embree_quality` | [`Quality`] | `High` | Embree's build quality for the traced scene |
 //! | `methods` | `Vec<Method>` | all | the traced methods (`bvh single`, the reference, always runs) |
-//! | `bvh` | [`BuildOptions`] | default | parallax's BVH build (e.g. spatial splits) |
+//! | `bvh` | [`BuildOptions`] | default | parallax's BVH build (the default: spatial splits, SBVH; `spatial_splits: false` the object-split tree) |
 
 use std::time::Instant;
 

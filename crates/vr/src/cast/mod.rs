@@ -62,6 +62,9 @@ pub struct CastStats {
     pub tris_all_out: u64,
     pub tris_partial: u64,
     pub tris_all_in: u64,
+    /// Entries of the set-up tiles' lists dropped as repeats of a triangle kept earlier in the
+    /// list (a triangle the SBVH put in several leaves; `cast/setup/rows.rs`).
+    pub tris_repeated: u64,
     /// Ray-triangle tests of the set-up kernel (valid rays of its packet-triangle tests).
     pub setup_pair_tests: u64,
     /// Watertight tests the set-up kernel ran inside its uncertainty band (edge value within
@@ -388,6 +391,7 @@ fn cast_from(
         tris_all_out: t.corners.all_out,
         tris_partial: t.corners.partial,
         tris_all_in: t.corners.all_in,
+        tris_repeated: t.corners.repeated,
         setup_pair_tests: t.setup.pair_tests,
         setup_exact_tests: t.setup.exact_tests,
         setup_final_tests: t.setup.final_tests,
@@ -449,6 +453,7 @@ impl Tally {
         self.corners.all_out += o.corners.all_out;
         self.corners.partial += o.corners.partial;
         self.corners.all_in += o.corners.all_in;
+        self.corners.repeated += o.corners.repeated;
         self
     }
 }

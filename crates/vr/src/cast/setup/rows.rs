@@ -7,6 +7,18 @@
 //! moved to the front: one lane at a time in the portable form, with one `vpermilps` per row
 //! (a 16-entry table of lane orders) where the CPU has AVX ([`TileRows::gather`]).
 //!
+//! **Each triangle once.** A build with spatial splits (the SBVH, the BVH's default) puts a
+//! triangle in every leaf that holds a piece of it, and a tile's list often holds two of them:
+//! the same triangle set up twice, tested twice per ray, and, tying with itself at the same
+//! `1/t`, sent to the watertight test by the depth band (`SetupExactness::Full`). The gather
+//! keeps a triangle's first entry in list order and drops the later ones ([`SeenIds`]: the
+//! ids kept so far in this tile, no allocation once grown). The first entry is in the leaf of
+//! smallest near depth among those holding the triangle, and every hit on the triangle lies in
+//! the box of one of them, at or beyond that near depth; so the kernels' early exit before
+//! that leaf is still valid. The leaf's run box is the box of its kept triangles, whole
+//! (`cast/setup/tile.rs`), so the packets' leaf box test sees the whole triangle too. The
+//! scalar set-up ([`super::setup_tile_scalar`]) drops the same entries.
+//!
 //! **Invariant:** both forms write the same first `len` entries of every row and the same leaf
 //! ends (the AVX form also writes up to three entries past a block's valid lanes, which the
 //! next block overwrites or which stay past `len`); values are moved, never computed on
@@ -40,6 +52,76 @@ const PREFETCH_LEAVES: usize = 8;
 pub struct TileRows {
     pub rows: [Vec<f32>; ROWS],
     pub len: usize,
+    /// Entries of the last gather's leaves dropped as repeats of a kept triangle.
+    pub repeated: u64,
+    /// The triangle ids kept by the last gather (or by the scalar set-up).
+    pub seen: SeenIds,
+}
+
+/// The triangle ids kept so far in one tile's list (module docs, "each triangle once"): open
+/// addressing with linear probing over `2^k >= 2 n` slots for a tile of at most `n` entries,
+/// each slot `stamp << 32 | id` with the tile's stamp, so a tile starts without clearing the
+/// table and a slot of an earlier tile reads as empty.
+#[derive(Clone, Debug, Default)]
+pub struct SeenIds {
+    slots: Vec<u64>,
+    /// The current tile's stamp (never 0 once begun: 0 marks a slot never written).
+    stamp: u32,
+    /// `64 - k`: a hash's top `k` bits index the slots.
+    shift: u32,
+}
+
+impl SeenIds {
+    /// Starts a tile of at most `n` entries (grows the table if needed).
+    pub fn begin(&mut self, n: usize) {
+        let bits = (2 * n.max(8)).next_power_of_two().trailing_zeros();
+        let size = 1usize << bits;
+        if self.slots.len() < size {
+            self.slots.resize(size, 0);
+        }
+        self.shift = 64 - bits;
+        self.stamp = self.stamp.wrapping_add(1);
+        if self.stamp == 0 {
+            self.slots.fill(0);
+            self.stamp = 1;
+        }
+    }
+
+    /// Records `id` in this tile; false if it was recorded before. At most the `n` of
+    /// [`SeenIds::begin`] ids per tile (the table stays at most half full, so probing ends).
+    #[inline(always)]
+    pub fn insert(&mut self, id: u32) -> bool {
+        let mask = (1usize << (64 - self.shift)) - 1;
+        // Fibonacci hashing: the top bits of `id * 2^64 / phi` (consecutive ids spread).
+        let mut i = ((id as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15) >> self.shift) as usize;
+        let tagged = (self.stamp as u64) << 32 | id as u64;
+        loop {
+            let s = self.slots[i];
+            if s == tagged {
+                return false;
+            }
+            if (s >> 32) as u32 != self.stamp {
+                self.slots[i] = tagged;
+                return true;
+            }
+            i = (i + 1) & mask;
+        }
+    }
+
+    /// The lanes of `m` whose triangle of `b` is new in this tile (recorded), in lane order.
+    #[inline(always)]
+    fn keep_new(&mut self, b: &Tri4, m: u32) -> u32 {
+        let mut keep = m;
+        let mut w = m;
+        while w != 0 {
+            let l = w.trailing_zeros() as usize;
+            w &= w - 1;
+            if !self.insert(b.tri[l]) {
+                keep &= !(1 << l);
+            }
+        }
+        keep
+    }
 }
 
 /// Prefetches the triangle blocks of leaf `r` (every cache line of each 160-byte [`Tri4`]):
@@ -92,9 +174,9 @@ fn filled(b: &Tri4) -> u32 {
 }
 
 impl TileRows {
-    /// Gathers the triangles of `leaves` (module docs) and sets `ends[k]` to the number of
-    /// triangles of the leaves `0..=k`. `avx`: the AVX form where the CPU has AVX2 (else the
-    /// portable one).
+    /// Gathers the triangles of `leaves`, each once (module docs), and sets `ends[k]` to the
+    /// number of triangles kept from the leaves `0..=k`. `avx`: the AVX form where the CPU has
+    /// AVX2 (else the portable one).
     #[inline(always)]
     pub fn gather(&mut self, blocks: &[Tri4], leaves: &[LeafRef], avx: bool, ends: &mut Vec<u32>) {
         let total: usize = leaves.iter().map(|r| leaf_count(r.leaf) as usize).sum();
@@ -105,6 +187,8 @@ impl TileRows {
             }
         }
         ends.clear();
+        self.seen.begin(total);
+        let mut repeated = 0;
         #[cfg(target_arch = "x86_64")]
         let avx = avx && crate::cast::isa::avx2_detected();
         #[cfg(not(target_arch = "x86_64"))]
@@ -122,25 +206,27 @@ impl TileRows {
                 let bi = first + k;
                 let b = &blocks[bi as usize];
                 let inside = (1u32 << (count - 4 * k).min(4)) - 1;
+                let valid = inside & filled(b);
+                let m = self.seen.keep_new(b, valid);
+                repeated += (valid & !m).count_ones() as u64;
                 #[cfg(target_arch = "x86_64")]
                 if avx {
                     // SAFETY: AVX detected (`avx` below); `off + 4 <= cap` (`off` counts
                     // triangles of the leaves so far, at most `total`).
-                    off = unsafe { self.block_avx(b, bi, inside, off) };
+                    off = unsafe { self.block_avx(b, bi, m, off) };
                     continue;
                 }
-                off = self.block(b, bi, inside, off);
+                off = self.block(b, bi, m, off);
             }
             ends.push(off as u32);
         }
         self.len = off;
+        self.repeated = repeated;
     }
 
-    /// The valid lanes of block `bi` (`inside` and filled) at `off..`, one at a time; the
-    /// new end.
+    /// The lanes `m` of block `bi` at `off..`, one at a time; the new end.
     #[inline(always)]
-    fn block(&mut self, b: &Tri4, bi: u32, inside: u32, mut off: usize) -> usize {
-        let m = inside & filled(b);
+    fn block(&mut self, b: &Tri4, bi: u32, m: u32, mut off: usize) -> usize {
         for l in 0..4 {
             if m >> l & 1 != 0 {
                 for v in 0..3 {
@@ -162,16 +248,13 @@ impl TileRows {
     /// The CPU must support AVX.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    unsafe fn block_avx(&mut self, b: &Tri4, bi: u32, inside: u32, off: usize) -> usize {
+    unsafe fn block_avx(&mut self, b: &Tri4, bi: u32, m: u32, off: usize) -> usize {
         use std::arch::x86_64::*;
-        assert!(off + 4 <= self.rows[0].len());
+        assert!(off + 4 <= self.rows[0].len() && m < 16);
         // SAFETY: AVX (the caller); every row holds at least `off + 4` entries (all rows have
         // the same length, `gather`), the loads read a block's 16-byte lanes.
         unsafe {
             let t = _mm_loadu_si128(b.tri.as_ptr().cast());
-            let empty =
-                _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(t, _mm_set1_epi32(-1)))) as u32;
-            let m = inside & !empty & 15;
             let perm = _mm_loadu_si128(ORDER[m as usize].as_ptr().cast());
             for v in 0..3 {
                 for a in 0..3 {
@@ -194,6 +277,36 @@ impl TileRows {
 mod tests {
     use super::*;
     use parallax_bvh::node::ChildRef;
+
+    /// `SeenIds` answers as a fresh hash set per tile: tiles of 0 to 3000 entries (the table
+    /// grows and shrinks its mask), ids clustered or spread, and the stamp wrapping around
+    /// (the table cleared once, no slot of an earlier tile read as this tile's).
+    #[test]
+    fn seen_ids_equal_a_hash_set_per_tile() {
+        let mut seen = SeenIds::default();
+        let mut x = 0x9e37_79b9u32;
+        for tile in 0..400u32 {
+            if tile == 200 {
+                seen.stamp = u32::MAX - 2;
+            }
+            let n = ((tile * 7919) % 3001) as usize;
+            seen.begin(n);
+            let mut set = std::collections::HashSet::new();
+            for k in 0..n {
+                x ^= x << 13;
+                x ^= x >> 17;
+                x ^= x << 5;
+                // Repeats, runs of consecutive ids and ids across the whole range.
+                let id = match k % 3 {
+                    0 => x % (n as u32 / 2 + 1),
+                    1 => tile * 64 + k as u32 / 3,
+                    _ => x,
+                };
+                assert_eq!(seen.insert(id), set.insert(id), "tile {tile} id {id}");
+            }
+        }
+        assert!(seen.stamp < 200, "{}", seen.stamp);
+    }
 
     /// The AVX gather writes the same rows (bit for bit, up to `len`) and leaf ends as the
     /// portable one, on blocks with filled and empty lanes in any pattern, arbitrary bits
@@ -239,7 +352,7 @@ mod tests {
             }
             let (mut a, mut b) = (TileRows::default(), TileRows::default());
             let (mut ea, mut eb) = (Vec::new(), Vec::new());
-            let mut lists = 0;
+            let (mut lists, mut repeats) = (0, 0);
             for round in 0..200 {
                 // Leaves in any order, of 1 to 15 triangles.
                 let leaves: Vec<LeafRef> = (0..(round % 40 + 1))
@@ -260,22 +373,32 @@ mod tests {
                         |r: &[f32]| r[..a.len].iter().map(|v| v.to_bits()).collect::<Vec<_>>();
                     assert_eq!(bits(x), bits(y));
                 }
-                // The list itself: every valid lane of every leaf, in order.
+                // The list itself: every valid lane of every leaf, in order, each triangle
+                // id once (leaves overlap here, as a split triangle's leaves do).
                 let mut want = Vec::new();
+                let mut seen = std::collections::HashSet::new();
+                let mut dropped = 0;
                 for r in &leaves {
                     let (first, count) = (leaf_first(r.leaf), leaf_count(r.leaf));
                     for j in 0..count {
                         let bi = first + j / 4;
-                        if blocks[bi as usize].tri[(j % 4) as usize] != u32::MAX {
-                            want.push(4 * first + j);
+                        let t = blocks[bi as usize].tri[(j % 4) as usize];
+                        if t != u32::MAX {
+                            if seen.insert(t) {
+                                want.push(4 * first + j);
+                            } else {
+                                dropped += 1;
+                            }
                         }
                     }
                 }
                 let got: Vec<u32> = a.rows[10][..a.len].iter().map(|v| v.to_bits()).collect();
                 assert_eq!(got, want);
+                assert_eq!((a.repeated, b.repeated), (dropped, dropped));
                 lists += want.len();
+                repeats += dropped;
             }
-            assert!(lists > 10_000, "{lists}");
+            assert!(lists > 10_000 && repeats > 100, "{lists} {repeats}");
         }
     }
 }

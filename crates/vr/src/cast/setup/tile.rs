@@ -1,7 +1,8 @@
 //! The per-tile set-up of a tile's triangle list (HVVR, Hunt et al. 2018, §5.5: "triangle setup
 //! ... tile-corner classification", module docs of [`super`]) `L::N` triangles at a time: the
-//! tile's triangles, in list order, are gathered from the BVH's leaf blocks ([`Tri4`]) as one
-//! row per value (`cast/setup/rows.rs`) and loaded in packs of `L::N` consecutive ones
+//! tile's triangles, in list order and each once (a triangle in several leaves at its first
+//! entry), are gathered from the BVH's leaf blocks ([`Tri4`]) as one row per value
+//! (`cast/setup/rows.rs`) and loaded in packs of `L::N` consecutive ones
 //! (across blocks and leaves: Sponza's leaf blocks hold ~2.2 triangles on average), set up
 //! together in lanes ([`LazySetupN`], `cast/setup/lazy.rs`: 16
 //! AVX-512 lanes where the CPU has them, else 8 AVX lanes where it has AVX2, else 4 SSE lanes;
@@ -230,6 +231,7 @@ fn setup_tile_lanes<L: LaneReduce>(
     // The tile's triangles in list order, as rows (`cast/setup/rows.rs`), and each leaf's end.
     let (mut rows, mut ends) = (std::mem::take(&mut out.rows), std::mem::take(&mut out.ends));
     rows.gather(blocks, leaves, L::AVX2, &mut ends);
+    out.counts.repeated += rows.repeated;
     let mut li = 0usize;
     let mut bx = Aabb::EMPTY;
     let mut mn = [[0.0f32; PACK]; 3];
@@ -324,6 +326,10 @@ pub fn setup_tile_scalar(
 ) {
     let corners = begin(beam, origin, out);
     let cone = out.cone;
+    // Each triangle once, at its first entry in list order (as the gather, `rows.rs`).
+    out.rows
+        .seen
+        .begin(leaves.iter().map(|r| leaf_count(r.leaf) as usize).sum());
     for r in leaves {
         let mut bx = Aabb::EMPTY;
         let (first, count) = (leaf_first(r.leaf), leaf_count(r.leaf));
@@ -332,6 +338,10 @@ pub fn setup_tile_scalar(
             let b = &blocks[bi as usize];
             let ln = (j % 4) as usize;
             if b.tri[ln] == u32::MAX {
+                continue;
+            }
+            if !out.rows.seen.insert(b.tri[ln]) {
+                out.counts.repeated += 1;
                 continue;
             }
             let v = [b.vertex(ln, 0), b.vertex(ln, 1), b.vertex(ln, 2)];

@@ -418,6 +418,9 @@ pub struct SetupCounts {
     pub all_out: u64,
     pub partial: u64,
     pub all_in: u64,
+    /// Entries of the tile lists dropped as repeats of a triangle kept earlier in the list
+    /// (a triangle in several leaves: spatial splits; `cast/setup/rows.rs`), not set up.
+    pub repeated: u64,
 }
 
 /// The set-up triangle list of a tile (per-thread scratch, reused).
