@@ -1,6 +1,7 @@
 //! Building a [`Bvh`]: validation, the binned-SAH binary build (`build.rs`), and the two
 //! collapses into 4-wide (`collapse.rs`) and 8-wide (`collapse8.rs`) nodes over the same leaves.
 
+use std::sync::OnceLock;
 use std::time::Instant;
 
 use glam::Vec3;
@@ -59,6 +60,7 @@ impl Bvh {
                 depth: 0,
                 prim_count: 0,
                 build_time: start.elapsed(),
+                block_copies: OnceLock::new(),
             });
         }
         // Room for the spatial splits' duplicates from the start (no reallocation later).
@@ -110,6 +112,7 @@ impl Bvh {
             depth: c.depth,
             prim_count: n,
             build_time: start.elapsed(),
+            block_copies: OnceLock::new(),
         })
     }
 }

@@ -520,3 +520,43 @@ fn sah_in_blocks_packs_leaves() {
         fill(&blocks)
     );
 }
+
+/// `Bvh::block_copies` marks exactly the block lanes whose triangle id sits in more than one
+/// lane of the blocks (the SBVH's split triangles), and is empty for the object-split tree
+/// (every triangle once); a refit keeps it.
+#[test]
+fn block_copies_mark_the_split_triangles() {
+    let mut mesh = soup(3000, 0.2, 21);
+    mesh.append(&soup(16, 1.0, 22), 0);
+    let bvh = Bvh::build(&mesh);
+    assert!(bvh.reference_count() > mesh.triangle_count());
+    let mut count = vec![0u32; mesh.triangle_count()];
+    for b in bvh.blocks() {
+        for &id in b.tri.iter().filter(|&&id| id != u32::MAX) {
+            count[id as usize] += 1;
+        }
+    }
+    let copies = bvh.block_copies();
+    assert_eq!(copies.len(), bvh.blocks().len());
+    let mut marked = 0;
+    for (b, &m) in bvh.blocks().iter().zip(copies) {
+        for l in 0..4 {
+            let want = b.tri[l] != u32::MAX && count[b.tri[l] as usize] > 1;
+            assert_eq!(m >> l & 1 != 0, want, "{:?} lane {l}", b.tri);
+            marked += want as usize;
+        }
+        assert_eq!(m >> 4, 0);
+    }
+    assert!(marked > 0);
+    let mut refit = bvh.clone();
+    refit.refit(&mesh).unwrap();
+    assert_eq!(refit.block_copies(), copies);
+    let plain = Bvh::build_with(
+        &mesh,
+        &BuildOptions {
+            spatial_splits: false,
+            ..BuildOptions::default()
+        },
+    );
+    assert!(plain.block_copies().is_empty());
+}

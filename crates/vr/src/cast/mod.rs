@@ -265,6 +265,8 @@ fn cast_from(
         t: out.t.as_mut_ptr(),
     };
     let blocks_ = bvh.blocks();
+    // The lanes whose triangle sits in several leaves (the SBVH's split triangles).
+    let copies = bvh.block_copies();
     let tally = hierarchy.blocks.par_iter().map_init(
         || {
             (
@@ -316,7 +318,16 @@ fn cast_from(
                 if let Some(o) = origin {
                     let lazy = opts.exactness == SetupExactness::Edges;
                     // The set-up's lanes follow the kernel's tier: the same list either way.
-                    setup_tile_with(isa, blocks_, &scratch.leaves, &tile.beam, o, lazy, tt);
+                    setup_tile_with(
+                        isa,
+                        blocks_,
+                        copies,
+                        &scratch.leaves,
+                        &tile.beam,
+                        o,
+                        lazy,
+                        tt,
+                    );
                     // The 1-spp film lanes of these samples (`Hierarchy::film`).
                     let film = (hierarchy.film[0].len() == set.samples.len())
                         .then(|| hierarchy.film.each_ref().map(|v| &v[range.clone()]));

@@ -108,11 +108,13 @@ impl SeenIds {
         }
     }
 
-    /// The lanes of `m` whose triangle of `b` is new in this tile (recorded), in lane order.
+    /// The lanes of `m` whose triangle of `b` is new in this tile, the lanes of `copies` (their
+    /// triangles sit in several leaves) looked up and recorded in lane order, the others kept
+    /// without a look-up (a triangle in one leaf reaches a tile's list once).
     #[inline(always)]
-    fn keep_new(&mut self, b: &Tri4, m: u32) -> u32 {
+    fn keep_new_copies(&mut self, b: &Tri4, m: u32, copies: u32) -> u32 {
         let mut keep = m;
-        let mut w = m;
+        let mut w = m & copies;
         while w != 0 {
             let l = w.trailing_zeros() as usize;
             w &= w - 1;
@@ -175,10 +177,19 @@ fn filled(b: &Tri4) -> u32 {
 
 impl TileRows {
     /// Gathers the triangles of `leaves`, each once (module docs), and sets `ends[k]` to the
-    /// number of triangles kept from the leaves `0..=k`. `avx`: the AVX form where the CPU has
-    /// AVX2 (else the portable one).
+    /// number of triangles kept from the leaves `0..=k`. `copies`: per block the lanes whose
+    /// triangle sits in several leaves ([`parallax_bvh::Bvh::block_copies`]; empty: none), the
+    /// only ones looked up in [`SeenIds`]. `avx`: the AVX form where the CPU has AVX2 (else the
+    /// portable one).
     #[inline(always)]
-    pub fn gather(&mut self, blocks: &[Tri4], leaves: &[LeafRef], avx: bool, ends: &mut Vec<u32>) {
+    pub fn gather(
+        &mut self,
+        blocks: &[Tri4],
+        copies: &[u8],
+        leaves: &[LeafRef],
+        avx: bool,
+        ends: &mut Vec<u32>,
+    ) {
         let total: usize = leaves.iter().map(|r| leaf_count(r.leaf) as usize).sum();
         let cap = total + PAD + 4;
         for r in &mut self.rows {
@@ -187,7 +198,10 @@ impl TileRows {
             }
         }
         ends.clear();
-        self.seen.begin(total);
+        let dedup = !copies.is_empty();
+        if dedup {
+            self.seen.begin(total);
+        }
         let mut repeated = 0;
         #[cfg(target_arch = "x86_64")]
         let avx = avx && crate::cast::isa::avx2_detected();
@@ -207,7 +221,12 @@ impl TileRows {
                 let b = &blocks[bi as usize];
                 let inside = (1u32 << (count - 4 * k).min(4)) - 1;
                 let valid = inside & filled(b);
-                let m = self.seen.keep_new(b, valid);
+                let m = if dedup {
+                    self.seen
+                        .keep_new_copies(b, valid, copies[bi as usize] as u32)
+                } else {
+                    valid
+                };
                 repeated += (valid & !m).count_ones() as u64;
                 #[cfg(target_arch = "x86_64")]
                 if avx {
@@ -311,7 +330,8 @@ mod tests {
     /// The AVX gather writes the same rows (bit for bit, up to `len`) and leaf ends as the
     /// portable one, on blocks with filled and empty lanes in any pattern, arbitrary bits
     /// (NaNs, infinities, signed zeros) and leaves of 1 to 15 triangles; and both hold the
-    /// list `4 * block + lane` of the valid lanes in order.
+    /// list `4 * block + lane` of the valid lanes in order, a repeated triangle dropped where
+    /// its lane is marked in `copies` (every lane, random lanes, none).
     #[test]
     fn avx_gather_equals_portable_gather() {
         #[cfg(target_arch = "x86_64")]
@@ -353,7 +373,15 @@ mod tests {
             let (mut a, mut b) = (TileRows::default(), TileRows::default());
             let (mut ea, mut eb) = (Vec::new(), Vec::new());
             let (mut lists, mut repeats) = (0, 0);
-            for round in 0..200 {
+            // The lanes looked up in the seen set: every lane, random lanes, none (empty).
+            let all = vec![15u8; blocks.len()];
+            let some: Vec<u8> = (0..blocks.len()).map(|_| (next() % 16) as u8).collect();
+            for round in 0..300 {
+                let copies: &[u8] = match round % 3 {
+                    0 => &all,
+                    1 => &some,
+                    _ => &[],
+                };
                 // Leaves in any order, of 1 to 15 triangles.
                 let leaves: Vec<LeafRef> = (0..(round % 40 + 1))
                     .map(|_| {
@@ -365,8 +393,8 @@ mod tests {
                         }
                     })
                     .collect();
-                a.gather(&blocks, &leaves, false, &mut ea);
-                b.gather(&blocks, &leaves, true, &mut eb);
+                a.gather(&blocks, copies, &leaves, false, &mut ea);
+                b.gather(&blocks, copies, &leaves, true, &mut eb);
                 assert_eq!((a.len, &ea), (b.len, &eb));
                 for (x, y) in a.rows.iter().zip(&b.rows) {
                     let bits =
@@ -374,7 +402,8 @@ mod tests {
                     assert_eq!(bits(x), bits(y));
                 }
                 // The list itself: every valid lane of every leaf, in order, each triangle
-                // id once (leaves overlap here, as a split triangle's leaves do).
+                // id of a marked lane once (leaves overlap here, as a split triangle's
+                // leaves do; an unmarked lane is kept each time).
                 let mut want = Vec::new();
                 let mut seen = std::collections::HashSet::new();
                 let mut dropped = 0;
@@ -383,8 +412,11 @@ mod tests {
                     for j in 0..count {
                         let bi = first + j / 4;
                         let t = blocks[bi as usize].tri[(j % 4) as usize];
+                        let marked = copies
+                            .get(bi as usize)
+                            .is_some_and(|&m| m >> (j % 4) & 1 != 0);
                         if t != u32::MAX {
-                            if seen.insert(t) {
+                            if !marked || seen.insert(t) {
                                 want.push(4 * first + j);
                             } else {
                                 dropped += 1;

@@ -138,6 +138,7 @@ fn end_run(out: &mut TileTris, r: &LeafRef, bx: Aabb) {
 /// `cast/setup/lazy.rs`), the full one scalar.
 pub fn setup_tile(
     blocks: &[Tri4],
+    copies: &[u8],
     leaves: &[LeafRef],
     beam: &Beam,
     origin: Vec3,
@@ -147,6 +148,7 @@ pub fn setup_tile(
     setup_tile_with(
         Isa::Avx512.available(),
         blocks,
+        copies,
         leaves,
         beam,
         origin,
@@ -161,6 +163,7 @@ pub fn setup_tile(
 pub fn setup_tile_with(
     isa: Isa,
     blocks: &[Tri4],
+    copies: &[u8],
     leaves: &[LeafRef],
     beam: &Beam,
     origin: Vec3,
@@ -168,18 +171,20 @@ pub fn setup_tile_with(
     out: &mut TileTris,
 ) {
     if !lazy {
-        return setup_tile_scalar(blocks, leaves, beam, origin, lazy, out);
+        return setup_tile_scalar(blocks, copies, leaves, beam, origin, lazy, out);
     }
     debug_assert!(isa <= isa.available(), "{isa:?} not detected");
     #[cfg(target_arch = "x86_64")]
     match isa {
         // SAFETY: the caller's `isa` is available: AVX-512F detected.
-        Isa::Avx512 => return unsafe { setup_tile_avx512(blocks, leaves, beam, origin, out) },
+        Isa::Avx512 => {
+            return unsafe { setup_tile_avx512(blocks, copies, leaves, beam, origin, out) };
+        }
         // SAFETY: the caller's `isa` is available: AVX2 (and the bit instructions) detected.
-        Isa::Avx2 => return unsafe { setup_tile_avx2(blocks, leaves, beam, origin, out) },
+        Isa::Avx2 => return unsafe { setup_tile_avx2(blocks, copies, leaves, beam, origin, out) },
         Isa::Sse => {}
     }
-    setup_tile_lanes::<Vec4>(blocks, leaves, beam, origin, out)
+    setup_tile_lanes::<Vec4>(blocks, copies, leaves, beam, origin, out)
 }
 
 /// [`setup_tile_lanes`] with eight AVX lanes.
@@ -190,12 +195,13 @@ pub fn setup_tile_with(
 #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
 unsafe fn setup_tile_avx2(
     blocks: &[Tri4],
+    copies: &[u8],
     leaves: &[LeafRef],
     beam: &Beam,
     origin: Vec3,
     out: &mut TileTris,
 ) {
-    setup_tile_lanes::<Y8>(blocks, leaves, beam, origin, out)
+    setup_tile_lanes::<Y8>(blocks, copies, leaves, beam, origin, out)
 }
 
 /// [`setup_tile_lanes`] with sixteen AVX-512 lanes.
@@ -206,12 +212,13 @@ unsafe fn setup_tile_avx2(
 #[target_feature(enable = "avx512f")]
 unsafe fn setup_tile_avx512(
     blocks: &[Tri4],
+    copies: &[u8],
     leaves: &[LeafRef],
     beam: &Beam,
     origin: Vec3,
     out: &mut TileTris,
 ) {
-    setup_tile_lanes::<Z16>(blocks, leaves, beam, origin, out)
+    setup_tile_lanes::<Z16>(blocks, copies, leaves, beam, origin, out)
 }
 
 /// The lazy [`setup_tile`] in lanes `L`: packs of `L::N` consecutive triangles of the tile
@@ -221,6 +228,7 @@ unsafe fn setup_tile_avx512(
 #[inline(always)]
 fn setup_tile_lanes<L: LaneReduce>(
     blocks: &[Tri4],
+    copies: &[u8],
     leaves: &[LeafRef],
     beam: &Beam,
     origin: Vec3,
@@ -230,7 +238,7 @@ fn setup_tile_lanes<L: LaneReduce>(
     let radius = out.cone.radius;
     // The tile's triangles in list order, as rows (`cast/setup/rows.rs`), and each leaf's end.
     let (mut rows, mut ends) = (std::mem::take(&mut out.rows), std::mem::take(&mut out.ends));
-    rows.gather(blocks, leaves, L::AVX2, &mut ends);
+    rows.gather(blocks, copies, leaves, L::AVX2, &mut ends);
     out.counts.repeated += rows.repeated;
     let mut li = 0usize;
     let mut bx = Aabb::EMPTY;
@@ -318,6 +326,7 @@ fn setup_tile_lanes<L: LaneReduce>(
 /// [`BeamCorners::classify`]); the reference of the lane set-up's tests.
 pub fn setup_tile_scalar(
     blocks: &[Tri4],
+    copies: &[u8],
     leaves: &[LeafRef],
     beam: &Beam,
     origin: Vec3,
@@ -326,10 +335,14 @@ pub fn setup_tile_scalar(
 ) {
     let corners = begin(beam, origin, out);
     let cone = out.cone;
-    // Each triangle once, at its first entry in list order (as the gather, `rows.rs`).
-    out.rows
-        .seen
-        .begin(leaves.iter().map(|r| leaf_count(r.leaf) as usize).sum());
+    // Each triangle once, at its first entry in list order (as the gather, `rows.rs`): only
+    // the triangles in several leaves (`copies`) can repeat.
+    let dedup = !copies.is_empty();
+    if dedup {
+        out.rows
+            .seen
+            .begin(leaves.iter().map(|r| leaf_count(r.leaf) as usize).sum());
+    }
     for r in leaves {
         let mut bx = Aabb::EMPTY;
         let (first, count) = (leaf_first(r.leaf), leaf_count(r.leaf));
@@ -340,7 +353,7 @@ pub fn setup_tile_scalar(
             if b.tri[ln] == u32::MAX {
                 continue;
             }
-            if !out.rows.seen.insert(b.tri[ln]) {
+            if dedup && copies[bi as usize] >> ln & 1 != 0 && !out.rows.seen.insert(b.tri[ln]) {
                 out.counts.repeated += 1;
                 continue;
             }
@@ -524,16 +537,21 @@ mod tests {
                 beam(&mut rng, o)
             };
             let mut b = TileTris::default();
-            setup_tile_scalar(&blocks, &leaves, &bm, o, true, &mut b);
+            setup_tile_scalar(&blocks, &[], &leaves, &bm, o, true, &mut b);
+            // Every lane marked as a triangle in several leaves: the look-ups find no repeat
+            // (every id once here) and change nothing.
+            let all = vec![15u8; blocks.len()];
             // Every tier this CPU has (the AVX ones only where detected).
             for isa in [Isa::Sse, Isa::Avx2, Isa::Avx512] {
                 if isa.available() != isa {
                     eprintln!("{isa:?} not detected: its set-up lanes are not tested here");
                     continue;
                 }
-                let mut a = TileTris::default();
-                setup_tile_with(isa, &blocks, &leaves, &bm, o, true, &mut a);
-                same_lists(&a, &b);
+                for copies in [&[][..], &all[..]] {
+                    let mut a = TileTris::default();
+                    setup_tile_with(isa, &blocks, copies, &leaves, &bm, o, true, &mut a);
+                    same_lists(&a, &b);
+                }
             }
         }
     }
@@ -582,7 +600,7 @@ mod tests {
                 .collect();
             let bm = beam(&mut rng, o);
             let mut a = TileTris::default();
-            setup_tile(&blocks, &leaves, &bm, o, true, &mut a);
+            setup_tile(&blocks, &[], &leaves, &bm, o, true, &mut a);
             let mut b = a.clone();
             let mut first = 0;
             for seg in a.segs.clone() {
