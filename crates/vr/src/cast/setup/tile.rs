@@ -160,6 +160,7 @@ pub fn setup_tile(
 /// [`setup_tile`] in the lanes of the tier `isa` (one the CPU has, [`Isa::available`]): 16
 /// AVX-512 lanes, 8 AVX lanes or 4 SSE lanes (the portable twin). Every tier gives the same
 /// list.
+#[allow(clippy::too_many_arguments)]
 pub fn setup_tile_with(
     isa: Isa,
     blocks: &[Tri4],
