@@ -124,14 +124,10 @@ impl Bvh {
                 return Vec::new();
             }
             let mut count = vec![0u8; self.prim_count];
-            let ids = || {
-                self.blocks
-                    .iter()
-                    .flat_map(|b| b.tri)
-                    .filter(|&id| id != u32::MAX)
-            };
-            for id in ids() {
-                count[id as usize] = count[id as usize].saturating_add(1);
+            for id in self.blocks.iter().flat_map(|b| b.tri) {
+                if id != u32::MAX {
+                    count[id as usize] = count[id as usize].saturating_add(1);
+                }
             }
             let copies = |id: u32| id != u32::MAX && count[id as usize] > 1;
             self.blocks

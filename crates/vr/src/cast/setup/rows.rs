@@ -12,7 +12,8 @@
 //! the same triangle set up twice, tested twice per ray, and, tying with itself at the same
 //! `1/t`, sent to the watertight test by the depth band (`SetupExactness::Full`). The gather
 //! keeps a triangle's first entry in list order and drops the later ones ([`SeenIds`]: the
-//! ids kept so far in this tile, no allocation once grown). The first entry is in the leaf of
+//! ids kept so far in this tile, no allocation once grown), looking up only the lanes
+//! [`parallax_bvh::Bvh::block_copies`] marks (a triangle in one leaf cannot repeat). The first entry is in the leaf of
 //! smallest near depth among those holding the triangle, and every hit on the triangle lies in
 //! the box of one of them, at or beyond that near depth; so the kernels' early exit before
 //! that leaf is still valid. The leaf's run box is the box of its kept triangles, whole
