@@ -24,19 +24,21 @@ use glam::{DMat4, Vec3};
 use super::node::{FLAG_CRACK, Node};
 
 /// Largest finite f16.
-const F16_MAX: f32 = 65504.0;
+pub(super) const F16_MAX: f32 = 65504.0;
 
-/// The constants of the four-pixel leaf map of one layer; exists only on CPUs with AVX2
-/// and F16C.
+/// The constants of the four-pixel leaf map of one layer (and of the eight-pixel one of
+/// `leaf_avx512`); exists only on CPUs with AVX2 and F16C.
 pub(super) struct LeafMap4 {
     /// `M^T`'s entries, `m[c][r]` = column `c`, row `r` (`x_axis` .. `w_axis`).
-    m: [[f64; 4]; 4],
-    position: Vec3,
-    back: Vec3,
-    inv_near: f64,
-    z_den: f64,
+    pub(super) m: [[f64; 4]; 4],
+    pub(super) position: Vec3,
+    pub(super) back: Vec3,
+    pub(super) inv_near: f64,
+    pub(super) z_den: f64,
     /// `1 / W`, `1 / H`: [`Node::plane_with_gradient`]'s scale at level 0.
-    scale: [f32; 2],
+    pub(super) scale: [f32; 2],
+    /// Whether the CPU runs `leaf_avx512` (checked once).
+    avx512: bool,
 }
 
 impl LeafMap4 {
@@ -65,12 +67,15 @@ impl LeafMap4 {
             inv_near,
             z_den,
             scale: [size / wf, size / hf],
+            avx512: super::leaf_avx512::available(),
         })
     }
 
     /// The leaves of the first `4 floor(W / 4)` pixels of a row of `W = out.len()` pixels
     /// (`col` the per-column direction terms as x, y, z columns, `rj` the row's term,
     /// `depth`, `normals`, `flags` the row's pixels); returns how many pixels it wrote.
+    /// Eight pixels per step where the CPU has AVX-512 (`leaf_avx512`, the same bits), then
+    /// four.
     ///
     /// # Safety
     /// The CPU must have AVX2 and F16C (`self` exists only then).
@@ -83,12 +88,28 @@ impl LeafMap4 {
         flags: Option<&[bool]>,
         out: &mut [Node],
     ) -> usize {
+        let done = if self.avx512 {
+            // SAFETY: the CPU has AVX-512 (checked in `new`).
+            unsafe { self.row_avx512(col, rj, depth, normals, flags, out) }
+        } else {
+            0
+        };
         // SAFETY: AVX2 and F16C by the caller's contract.
-        unsafe { self.row_avx2(col, rj, depth, normals, flags, out) }
+        done + unsafe {
+            self.row_avx2(
+                col.map(|c| &c[done..]),
+                rj,
+                &depth[done..],
+                &normals[done..],
+                flags.map(|f| &f[done..]),
+                &mut out[done..],
+            )
+        }
     }
 
+    /// [`Self::row`] four pixels per step.
     #[target_feature(enable = "avx2,f16c")]
-    fn row_avx2(
+    pub(super) fn row_avx2(
         &self,
         col: [&[f32]; 3],
         rj: Vec3,
@@ -269,7 +290,7 @@ pub(super) fn f16x8(v: __m256) -> __m128i {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::quadtree::leaf_lanes::LeafMap;
     use crate::quadtree::node::{f16_bits_to_f32, f32_to_f16_bits};
@@ -331,10 +352,96 @@ mod tests {
         }
     }
 
-    /// Rows of the AVX2 kernel equal the one-pixel SSE2 path (`leaf_lanes`, with the same
-    /// direction, sample point and `z` as `leaves.rs`) bit for bit: random pixels, and
-    /// depths / normals that are zero, negative, infinite, NaN, tiny or huge, normals
-    /// perpendicular to the view (infinite and 0/0 slopes), flags on and off.
+    /// A random row of the leaf map: the map and the row's inputs, and what the expected
+    /// leaves are computed from (`map`, `position`, `back`, `inv_near`, `z_den`, `cols`).
+    pub(in crate::quadtree) struct Case {
+        pub(in crate::quadtree) map4: LeafMap4,
+        map: LeafMap,
+        position: Vec3,
+        back: Vec3,
+        pub(in crate::quadtree) rj: Vec3,
+        inv_near: f64,
+        z_den: f64,
+        cols: Vec<Vec3>,
+        pub(in crate::quadtree) soa: [Vec<f32>; 3],
+        pub(in crate::quadtree) depth: Vec<f32>,
+        pub(in crate::quadtree) normals: Vec<Vec3>,
+        pub(in crate::quadtree) flags: Vec<bool>,
+    }
+
+    /// 64 random rows (widths 256 to 263, so that the eight- and four-pixel kernels share
+    /// rows): random pixels, and depths / normals that are zero, negative, infinite, NaN,
+    /// tiny or huge, normals perpendicular to the view (infinite and 0/0 slopes), flags.
+    pub(in crate::quadtree) fn random_cases() -> Vec<Case> {
+        let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+        (0..64)
+            .map(|case| {
+                // A random invertible-ish affine-projective `M^T`, camera, and row terms.
+                let mut col4 = || {
+                    DVec4::new(
+                        rng.f(-2.0, 2.0) as f64,
+                        rng.f(-2.0, 2.0) as f64,
+                        rng.f(-2.0, 2.0) as f64,
+                        rng.f(-2.0, 2.0) as f64,
+                    )
+                };
+                let mt = DMat4::from_cols(col4(), col4(), col4(), col4());
+                let v3 =
+                    |rng: &mut Rng, s: f32| Vec3::new(rng.f(-s, s), rng.f(-s, s), rng.f(-s, s));
+                let (position, back, rj) =
+                    (v3(&mut rng, 10.0), v3(&mut rng, 1.0), v3(&mut rng, 1.0));
+                let (near, far) = (0.05f64 + case as f64 * 0.01, 100.0f64);
+                let (inv_near, z_den) = (1.0 / near, 1.0 / near - 1.0 / far);
+                let w = 4 * 64 + (case % 8);
+                let (wf, hf) = (w as f32, 37.0f32);
+                let map4 = LeafMap4::new(&mt, position, back, inv_near, z_den, wf, hf).unwrap();
+                let map = LeafMap::new(&mt, wf, hf);
+                let cols: Vec<Vec3> = (0..w).map(|_| v3(&mut rng, 1.0)).collect();
+                let special = [0.0, -0.0, -1.0, f32::INFINITY, f32::NAN, 1e-30, 1e30, 0.01];
+                let depth: Vec<f32> = (0..w)
+                    .map(|_| match rng.next() % 8 {
+                        0 => special[(rng.next() % 8) as usize],
+                        _ => rng.f(0.01, 50.0),
+                    })
+                    .collect();
+                let normals: Vec<Vec3> = (0..w)
+                    .map(|i| match rng.next() % 8 {
+                        0 => Vec3::ZERO,
+                        1 => Vec3::new(-0.0, 0.0, -0.0),
+                        2 => Vec3::new(0.0, 0.0, f32::NAN),
+                        // Perpendicular to the pixel's view direction.
+                        3 => ((cols[i] + rj) + back).cross(Vec3::X),
+                        _ => v3(&mut rng, 1.0).normalize_or_zero(),
+                    })
+                    .collect();
+                let flags: Vec<bool> = (0..w).map(|_| rng.next().is_multiple_of(3)).collect();
+                let soa = [
+                    cols.iter().map(|c| c.x).collect(),
+                    cols.iter().map(|c| c.y).collect(),
+                    cols.iter().map(|c| c.z).collect(),
+                ];
+                Case {
+                    map4,
+                    map,
+                    position,
+                    back,
+                    rj,
+                    inv_near,
+                    z_den,
+                    cols,
+                    soa,
+                    depth,
+                    normals,
+                    flags,
+                }
+            })
+            .collect()
+    }
+
+    /// Rows of the leaf kernels (`LeafMap4::row`: eight pixels per step where the CPU has
+    /// AVX-512, then four) equal the one-pixel SSE2 path (`leaf_lanes`, with the same
+    /// direction, sample point and `z` as `leaves.rs`) bit for bit, on [`random_cases`], flags
+    /// on and off.
     #[test]
     fn rows_equal_the_one_pixel_path() {
         if !(std::arch::is_x86_feature_detected!("avx2")
@@ -343,81 +450,41 @@ mod tests {
             eprintln!("no AVX2 and F16C: nothing to compare");
             return;
         }
-        let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
         let mut checked = 0usize;
-        for case in 0..64 {
-            // A random invertible-ish affine-projective `M^T`, camera, and row terms.
-            let mut col4 = || {
-                DVec4::new(
-                    rng.f(-2.0, 2.0) as f64,
-                    rng.f(-2.0, 2.0) as f64,
-                    rng.f(-2.0, 2.0) as f64,
-                    rng.f(-2.0, 2.0) as f64,
-                )
-            };
-            let mt = DMat4::from_cols(col4(), col4(), col4(), col4());
-            let v3 = |rng: &mut Rng, s: f32| Vec3::new(rng.f(-s, s), rng.f(-s, s), rng.f(-s, s));
-            let (position, back, rj) = (v3(&mut rng, 10.0), v3(&mut rng, 1.0), v3(&mut rng, 1.0));
-            let (near, far) = (0.05f64 + case as f64 * 0.01, 100.0f64);
-            let (inv_near, z_den) = (1.0 / near, 1.0 / near - 1.0 / far);
-            let w = 4 * 64 + (case % 4);
-            let (wf, hf) = (w as f32, 37.0f32);
-            let map4 = LeafMap4::new(&mt, position, back, inv_near, z_den, wf, hf).unwrap();
-            let map = LeafMap::new(&mt, wf, hf);
-            let cols: Vec<Vec3> = (0..w).map(|_| v3(&mut rng, 1.0)).collect();
-            let special = [0.0, -0.0, -1.0, f32::INFINITY, f32::NAN, 1e-30, 1e30, 0.01];
-            let depth: Vec<f32> = (0..w)
-                .map(|_| match rng.next() % 8 {
-                    0 => special[(rng.next() % 8) as usize],
-                    _ => rng.f(0.01, 50.0),
-                })
-                .collect();
-            let normals: Vec<Vec3> = (0..w)
-                .map(|i| match rng.next() % 8 {
-                    0 => Vec3::ZERO,
-                    1 => Vec3::new(-0.0, 0.0, -0.0),
-                    2 => Vec3::new(0.0, 0.0, f32::NAN),
-                    // Perpendicular to the pixel's view direction.
-                    3 => ((cols[i] + rj) + back).cross(Vec3::X),
-                    _ => v3(&mut rng, 1.0).normalize_or_zero(),
-                })
-                .collect();
-            let flags: Vec<bool> = (0..w).map(|_| rng.next().is_multiple_of(3)).collect();
-            for fl in [None, Some(&flags[..])] {
-                let soa: [Vec<f32>; 3] = [
-                    cols.iter().map(|c| c.x).collect(),
-                    cols.iter().map(|c| c.y).collect(),
-                    cols.iter().map(|c| c.z).collect(),
-                ];
+        for (case, c) in random_cases().iter().enumerate() {
+            let w = c.depth.len();
+            for fl in [None, Some(&c.flags[..])] {
                 let mut out = vec![Node { a: 1, b: 1 }; w];
+                // SAFETY: the CPU has AVX2 and F16C (checked).
                 let n = unsafe {
-                    map4.row(
-                        [&soa[0], &soa[1], &soa[2]],
-                        rj,
-                        &depth,
-                        &normals,
+                    c.map4.row(
+                        [&c.soa[0], &c.soa[1], &c.soa[2]],
+                        c.rj,
+                        &c.depth,
+                        &c.normals,
                         fl,
                         &mut out,
                     )
                 };
                 assert_eq!(n, w & !3);
                 for i in 0..n {
-                    let (d, nn) = (depth[i], normals[i]);
+                    let (d, nn) = (c.depth[i], c.normals[i]);
                     let want = if !(d.is_finite() && d > 0.0) || nn == Vec3::ZERO {
                         Node::EMPTY
                     } else {
-                        let p = position + ((cols[i] + rj) + back) * d;
-                        let z = ((inv_near - 1.0 / d as f64) / z_den) as f32;
+                        let p = c.position + ((c.cols[i] + c.rj) + c.back) * d;
+                        let z = ((c.inv_near - 1.0 / d as f64) / c.z_den) as f32;
                         let f = if fl.is_some_and(|f| f[i]) {
                             FLAG_CRACK
                         } else {
                             0
                         };
-                        map.leaf(p, nn, z, f)
+                        c.map.leaf(p, nn, z, f)
                     };
                     assert_eq!(out[i], want, "case {case} pixel {i}: d {d:e}, n {nn}");
                     checked += usize::from(want != Node::EMPTY);
                 }
+                assert!(out[n..].iter().all(|o| *o == Node { a: 1, b: 1 }));
             }
         }
         assert!(checked > 10_000, "{checked} plane leaves compared");

@@ -93,6 +93,8 @@ mod fixpoint;
 #[cfg(target_arch = "x86_64")]
 mod leaf_avx2;
 #[cfg(target_arch = "x86_64")]
+mod leaf_avx512;
+#[cfg(target_arch = "x86_64")]
 mod leaf_lanes;
 mod leaves;
 mod mark_listed;
