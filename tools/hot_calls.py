@@ -37,7 +37,7 @@ HOT = [
     r"parallax_vr::cast::setup::run_setup_avx(2|2_16|512)\b",
     r"parallax_vr::cast::setup::bands::refine_run\b",
     r"parallax_vr::cast::packet::run_packets_avx2\b",
-    r"parallax_screen::quadtree::merge_rows8::.*::parent_row8\b",
+    r"parallax_screen::quadtree::merge_rows(8|16)::.*::parent_row(8|16)\b",
     r"parallax_screen::quadtree::.*row_avx(2|512)\b",
     r"parallax_screen::quadtree::trigger_avx512::pixel_triggers_row16\b",
 ]

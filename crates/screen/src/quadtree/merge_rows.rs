@@ -110,6 +110,14 @@ impl Kids {
         self.a
     }
 
+    /// The four children's `a` words ORed, per lane (a flag any child has).
+    #[inline(always)]
+    pub(super) fn or_words_a(&self) -> __m128i {
+        let w = self.a;
+        // SAFETY: SSE2 baseline.
+        unsafe { _mm_or_si128(_mm_or_si128(w[0], w[1]), _mm_or_si128(w[2], w[3])) }
+    }
+
     /// Child `k`'s `b` words of the four parents in lanes.
     #[inline(always)]
     pub(super) fn word_b(&self, k: usize) -> __m128i {

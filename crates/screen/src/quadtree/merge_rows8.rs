@@ -180,6 +180,143 @@ impl M8 {
     }
 }
 
+/// The lanes of [`MergeCtx::merge_wide`]: eight parents (`F8`, AVX2) or sixteen
+/// (`merge_rows16::F16`, AVX-512). Every method is one instruction (or a fixed sequence) of
+/// the same IEEE operation per lane, so the generic merge does the same operations in the
+/// same order at either width. The children come as consecutive [`Kids`], four parents each.
+pub(super) trait MergeLanes:
+    Copy
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+{
+    type M: MergeMask;
+    /// Parents per step (8 or 16).
+    const N: usize;
+    fn splat(v: f32) -> Self;
+    /// Lane `p` holds `p step` (small integers times `step`: exact).
+    fn ramp(step: f32) -> Self;
+    /// The first `N` lanes (the rest 0).
+    fn to_array(self) -> [f32; 16];
+    fn sqrt(self) -> Self;
+    /// `minps(self, o)`, as glam's `Vec4::min`.
+    fn min(self, o: Self) -> Self;
+    /// `maxps(self, o)`: `self > o ? self : o` per lane.
+    fn max_ps(self, o: Self) -> Self;
+    /// `|self|` (sign bit cleared).
+    fn abs(self) -> Self;
+    fn gt(self, o: Self) -> Self::M;
+    fn lt(self, o: Self) -> Self::M;
+    fn ge(self, o: Self) -> Self::M;
+    /// Lanes that are not NaN.
+    fn ordered(self) -> Self::M;
+    /// glam's `is_finite_mask`: `|self| < inf`.
+    fn finite(self) -> Self::M;
+    /// `a` where `m`, else `b`.
+    fn select(m: Self::M, a: Self, b: Self) -> Self;
+    /// Child `k`'s stored increments of the parents of `kids` ([`increments8`]).
+    fn increments(kids: &[Kids], k: usize) -> (Self, Self);
+    /// Child `k`'s `z_c` of the parents of `kids` ([`Kids::zc`]).
+    fn zc(kids: &[Kids], k: usize) -> Self;
+}
+
+/// A lane mask of a [`MergeLanes`].
+pub(super) trait MergeMask: Copy {
+    fn and(self, o: Self) -> Self;
+    /// Bit `p` set iff lane `p` is.
+    fn bits(self) -> u32;
+}
+
+impl MergeLanes for F8 {
+    type M = M8;
+    const N: usize = 8;
+    #[inline(always)]
+    fn splat(v: f32) -> F8 {
+        F8::splat(v)
+    }
+    #[inline(always)]
+    fn ramp(step: f32) -> F8 {
+        F8::lanes(core::array::from_fn(|p| p as f32 * step))
+    }
+    #[inline(always)]
+    fn to_array(self) -> [f32; 16] {
+        let a = F8::to_array(self);
+        let mut r = [0.0; 16];
+        r[..8].copy_from_slice(&a);
+        r
+    }
+    #[inline(always)]
+    fn sqrt(self) -> F8 {
+        F8::sqrt(self)
+    }
+    #[inline(always)]
+    fn min(self, o: F8) -> F8 {
+        F8::min(self, o)
+    }
+    #[inline(always)]
+    fn max_ps(self, o: F8) -> F8 {
+        F8::max_ps(self, o)
+    }
+    #[inline(always)]
+    fn abs(self) -> F8 {
+        F8::abs(self)
+    }
+    #[inline(always)]
+    fn gt(self, o: F8) -> M8 {
+        F8::gt(self, o)
+    }
+    #[inline(always)]
+    fn lt(self, o: F8) -> M8 {
+        F8::lt(self, o)
+    }
+    #[inline(always)]
+    fn ge(self, o: F8) -> M8 {
+        F8::ge(self, o)
+    }
+    #[inline(always)]
+    fn ordered(self) -> M8 {
+        F8::ordered(self)
+    }
+    #[inline(always)]
+    fn finite(self) -> M8 {
+        F8::finite(self)
+    }
+    #[inline(always)]
+    fn select(m: M8, a: F8, b: F8) -> F8 {
+        F8::select(m, a, b)
+    }
+    #[inline(always)]
+    fn increments(kids: &[Kids], k: usize) -> (F8, F8) {
+        increments8(&kids[0], &kids[1], k)
+    }
+    #[inline(always)]
+    fn zc(kids: &[Kids], k: usize) -> F8 {
+        F8::join(kids[0].zc(k), kids[1].zc(k))
+    }
+}
+
+impl MergeMask for M8 {
+    #[inline(always)]
+    fn and(self, o: M8) -> M8 {
+        M8::and(self, o)
+    }
+    #[inline(always)]
+    fn bits(self) -> u32 {
+        M8::bits(self)
+    }
+}
+
+/// The proxy of [`MergeCtx::merge_wide`] per lane: `z_c` and the increments `x`, `y`
+/// (clamped to the f16 range, not yet encoded), and the lanes that merge (bits).
+pub(super) struct Merged<F> {
+    pub(super) mask: u32,
+    pub(super) zc: F,
+    pub(super) ex: F,
+    pub(super) ey: F,
+}
+
 /// Child `k`'s stored increments ([`Kids::increments`]) of the eight parents of `lo`
 /// (lanes 0-3) and `hi` (lanes 4-7), by F16C: `vcvtph2ps` equals `f16x4` (and
 /// `node::f16_bits_to_f32`) for every finite half (test in `trigger_avx2`), and plane
@@ -215,9 +352,9 @@ impl MergeCtx {
         self.parent_row_fast_of(&child.nodes[y0 * cw..(y0 + 2) * cw], l, qy, out, allow);
     }
 
-    /// [`MergeCtx::parent_row_of`] (same nodes), eight parents per step in AVX2 lanes if the
-    /// CPU has AVX2 and F16C; `two`: child rows `2 qy` and `2 qy + 1` of level `l - 1`, one
-    /// after the other.
+    /// [`MergeCtx::parent_row_of`] (same nodes), sixteen parents per step in AVX-512 lanes
+    /// (`merge_rows16`) and then eight in AVX2 lanes, where the CPU has them (AVX2 and
+    /// F16C); `two`: child rows `2 qy` and `2 qy + 1` of level `l - 1`, one after the other.
     pub(super) fn parent_row_fast_of(
         &self,
         two: &[Node],
@@ -229,35 +366,51 @@ impl MergeCtx {
         if std::arch::is_x86_feature_detected!("avx2")
             && std::arch::is_x86_feature_detected!("f16c")
         {
+            let first = if super::merge_rows16::available() {
+                // SAFETY: the CPU has AVX-512 (checked).
+                unsafe { self.parent_row16(two, l, qy, out, allow) }
+            } else {
+                0
+            };
             // SAFETY: the CPU has AVX2 and F16C (checked).
-            unsafe { self.parent_row8(two, l, qy, out, allow) }
+            unsafe { self.parent_row8(two, l, qy, out, allow, first) }
         } else {
             self.parent_row_of(two.split_at(two.len() / 2), l, qy, out, allow)
         }
     }
 
+    /// The parents `first..` of the row (`first` a multiple of 8), eight per step.
     #[target_feature(enable = "avx2,f16c")]
-    fn parent_row8(&self, two: &[Node], l: u32, qy: u32, out: &mut [Node], allow: Allow) {
+    pub(super) fn parent_row8(
+        &self,
+        two: &[Node],
+        l: u32,
+        qy: u32,
+        out: &mut [Node],
+        allow: Allow,
+        first: usize,
+    ) {
+        debug_assert_eq!(first % 8, 0);
         let cw = two.len() / 2;
         let r0 = &two[..cw];
         let r1 = &two[cw..2 * cw];
-        for (g, outs) in out.chunks_mut(8).enumerate() {
-            let qx0 = 8 * g;
+        for (g, outs) in out[first..].chunks_mut(8).enumerate() {
+            let qx0 = first + 8 * g;
             let n = outs.len();
-            let (o_lo, o_hi) = outs.split_at_mut(n.min(4));
-            let lo = Kids::gather(r0, r1, qx0, o_lo.len());
-            let hi = Kids::gather(r0, r1, qx0 + 4, o_hi.len());
+            let kids = [
+                Kids::gather(r0, r1, qx0, n.min(4)),
+                Kids::gather(r0, r1, qx0 + 4, n.saturating_sub(4)),
+            ];
             let mut planes = 0xff;
             for k in 0..4 {
-                planes &= lo.planes(k) | (hi.planes(k) << 4);
+                planes &= kids[0].planes(k) | (kids[1].planes(k) << 4);
             }
-            let planes = planes & allow.mask8(qx0);
-            let mut cand = [false; 8];
-            for (p, c) in cand.iter_mut().enumerate().take(n) {
-                *c = !self.never && planes & (1 << p) != 0;
-            }
-            let (mask, av, bv) = if cand.iter().any(|&c| c) {
-                self.merge8(l, qx0 as u32, qy, &lo, &hi, cand)
+            let planes = planes & allow.mask8(qx0) & ((1u32 << n) - 1);
+            let cand = if self.never { 0 } else { planes };
+            let (mask, av, bv) = if cand != 0 {
+                let m = self.merge_wide::<F8>(l, qx0 as u32, qy, &kids, cand);
+                let (av, bv) = encode8(&m, &kids[0], &kids[1]);
+                (m.mask, av, bv)
             } else {
                 let z = _mm256_setzero_si256();
                 (0, z, z)
@@ -280,27 +433,48 @@ impl MergeCtx {
                 _mm256_storeu_si256(a.as_mut_ptr() as *mut __m256i, av);
                 _mm256_storeu_si256(b.as_mut_ptr() as *mut __m256i, bv);
             }
-            let merged: [Option<Node>; 8] = core::array::from_fn(|p| {
-                (mask & (1 << p) != 0).then_some(Node { a: a[p], b: b[p] })
-            });
-            if let Some((a, b)) = self.ranges8(l, &lo, &hi) {
-                #[cfg(test)]
-                tally::RANGES8.with(|c| c.set(c.get() + 1));
-                for (p, o) in o_lo.iter_mut().chain(o_hi.iter_mut()).enumerate() {
-                    *o = merged[p].unwrap_or(Node { a: a[p], b: b[p] });
-                }
-                continue;
-            }
+            self.finish8(l, qx0, qy, &kids, outs, allow, mask, (&a, &b));
+        }
+    }
+
+    /// The nodes of eight parents (`outs`, from column `qx0`; children `kids`) of which
+    /// those in `mask` merged into the nodes `(a[p], b[p])`: the others get their AABB
+    /// nodes (`ranges8`), or in a group with an AABB child whose word is NaN or `-0`,
+    /// `merge_rows`' own per-group code (`MergeCtx::group4`) with the merges passed in.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    pub(super) fn finish8(
+        &self,
+        l: u32,
+        qx0: usize,
+        qy: u32,
+        kids: &[Kids; 2],
+        outs: &mut [Node],
+        allow: Allow,
+        mask: u32,
+        (a, b): (&[u32; 8], &[u32; 8]),
+    ) {
+        let merged: [Option<Node>; 8] =
+            core::array::from_fn(|p| (mask & (1 << p) != 0).then_some(Node { a: a[p], b: b[p] }));
+        let (lo, hi) = (&kids[0], &kids[1]);
+        let (o_lo, o_hi) = outs.split_at_mut(outs.len().min(4));
+        if let Some((a, b)) = self.ranges8(l, lo, hi) {
             #[cfg(test)]
-            tally::GROUP4.with(|c| c.set(c.get() + 1));
-            let (m_lo, m_hi) = (
-                [merged[0], merged[1], merged[2], merged[3]],
-                [merged[4], merged[5], merged[6], merged[7]],
-            );
-            self.group4(l, qx0 as u32, qy, &lo, o_lo, allow, Some(m_lo));
-            if !o_hi.is_empty() {
-                self.group4(l, qx0 as u32 + 4, qy, &hi, o_hi, allow, Some(m_hi));
+            tally::RANGES8.with(|c| c.set(c.get() + 1));
+            for (p, o) in o_lo.iter_mut().chain(o_hi.iter_mut()).enumerate() {
+                *o = merged[p].unwrap_or(Node { a: a[p], b: b[p] });
             }
+            return;
+        }
+        #[cfg(test)]
+        tally::GROUP4.with(|c| c.set(c.get() + 1));
+        let (m_lo, m_hi) = (
+            [merged[0], merged[1], merged[2], merged[3]],
+            [merged[4], merged[5], merged[6], merged[7]],
+        );
+        self.group4(l, qx0 as u32, qy, lo, o_lo, allow, Some(m_lo));
+        if !o_hi.is_empty() {
+            self.group4(l, qx0 as u32 + 4, qy, hi, o_hi, allow, Some(m_hi));
         }
     }
 
@@ -381,20 +555,21 @@ impl MergeCtx {
         Some((aw, bw))
     }
 
-    /// `merge_rows`' `merge4` for eight parents: lanes 0-3 the parents of `lo`, 4-7 those
-    /// of `hi` (`cand`: four plane children, allowed to merge). Returns the lanes that
-    /// merged as a bit mask and their nodes' `a` and `b` words (other lanes: garbage).
+    /// `merge_rows`' `merge4` for `F::N` parents: lanes `4 i .. 4 i + 4` the parents of
+    /// `kids[i]` (`cand`: bits of the parents with four plane children, allowed to merge).
+    /// Returns the lanes that merged and their proxies (other lanes: garbage). Generic over
+    /// the lane width ([`MergeLanes`]): eight parents in AVX2 lanes (`parent_row8`),
+    /// sixteen in AVX-512 lanes (`merge_rows16`), the same operations per lane.
     #[inline(always)]
-    fn merge8(
+    pub(super) fn merge_wide<F: MergeLanes>(
         &self,
         l: u32,
         qx0: u32,
         qy: u32,
-        lo: &Kids,
-        hi: &Kids,
-        cand: [bool; 8],
-    ) -> (u32, __m256i, __m256i) {
-        let s = F8::splat;
+        kids: &[Kids],
+        cand_bits: u32,
+    ) -> Merged<F> {
+        let s = F::splat;
         let cl = l - 1;
         let (ws, hs) = (
             f32::from_bits(self.wf.to_bits() - (cl << 23)),
@@ -405,7 +580,7 @@ impl MergeCtx {
         let (mut nx, mut ny, mut nz) = ([s(0.0); 4], [s(0.0); 4], [s(0.0); 4]);
         let (mut sx, mut sy, mut sz) = (s(0.0), s(0.0), s(0.0));
         for k in 0..4 {
-            let (ex, ey) = increments8(lo, hi, k);
+            let (ex, ey) = F::increments(kids, k);
             gx[k] = ex * s(ws);
             gy[k] = ey * s(hs);
             let r = s(1.0) / (s(1.0) + gx[k] * gx[k] + gy[k] * gy[k]).sqrt();
@@ -418,20 +593,22 @@ impl MergeCtx {
         let rcp = s(1.0) / (sx * sx + sy * sy + sz * sz).sqrt();
         let ok = rcp.finite().and(rcp.gt(s(0.0)));
         let (nnx, nny, nnz) = (
-            F8::select(ok, sx * rcp, s(0.0)),
-            F8::select(ok, sy * rcp, s(0.0)),
-            F8::select(ok, sz * rcp, s(0.0)),
+            F::select(ok, sx * rcp, s(0.0)),
+            F::select(ok, sy * rcp, s(0.0)),
+            F::select(ok, sz * rcp, s(0.0)),
         );
         let mut min_cos = s(f32::INFINITY);
         for k in 0..4 {
             min_cos = min_cos.min(nx[k] * nnx + ny[k] * nny + nz[k] * nnz);
         }
-        let cand_bits = (0..8).fold(0u32, |m, p| m | (u32::from(cand[p]) << p));
         let valid = cand_bits & nnz.lt(s(-1e-6)).bits() & min_cos.gt(s(self.loosest_cos())).bits();
         if valid == 0 {
-            // SAFETY: AVX (module docs).
-            let z = unsafe { _mm256_setzero_si256() };
-            return (0, z, z);
+            return Merged {
+                mask: 0,
+                zc: s(0.0),
+                ex: s(0.0),
+                ey: s(0.0),
+            };
         }
         // The 16 child corners projected on the proxy normal, child-major.
         let size = (1u32 << cl) as f32;
@@ -440,12 +617,12 @@ impl MergeCtx {
         let init: f32 = core::iter::empty::<f32>().sum();
         let mut acc = s(init);
         let mut proj = [s(0.0); 16];
-        let steps = F8::lanes([0.0, 2.0, 4.0, 6.0, 8.0, 10.0, 12.0, 14.0]);
+        let steps = F::ramp(2.0);
         for (k, &(kx, ky)) in KID.iter().enumerate() {
             let cx = s((2 * qx0 + kx as u32) as f32) + steps;
             let xc = ((cx + s(0.5)) * s(size)) / s(self.wf);
             let yc = s((((2 * qy + ky as u32) as f32 + 0.5) * size) / self.hf);
-            let zc = F8::join(lo.zc(k), hi.zc(k));
+            let zc = F::zc(kids, k);
             for (m, &(cx, cy)) in CORNER.iter().enumerate() {
                 let (dx, dy) = (cx * hx, cy * hy);
                 let (px, py, pz) = (xc + s(dx), yc + s(dy), zc + gx[k] * s(dx) + gy[k] * s(dy));
@@ -462,16 +639,16 @@ impl MergeCtx {
         }
         let dmax = dm / -nnz;
         let psize = (1u32 << l) as f32;
-        let px = F8::lanes([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]);
+        let px = F::ramp(1.0);
         let xc = ((s(qx0 as f32) + px + s(0.5)) * s(psize)) / s(self.wf);
         let yc = s(((qy as f32 + 0.5) * psize) / self.hf);
         let zcv = (c - nnx * xc - nny * yc) / nnz;
         let inv = s(-1.0) / nnz;
         // [`Node::plane_with_gradient`] of every lane: the increments `g (2^l / W)`,
         // `g (2^l / H)`, `None` unless `z_c` is finite and `>= 0` and neither increment is
-        // NaN; clamped (`maxps` / `minps` are `clamp` for non-NaN values) and f16-encoded
-        // as in `leaf_avx2`; `z_c` rounded to 21 bits, the tag, and flag `O` where a
-        // child has it.
+        // NaN; clamped (`maxps` / `minps` are `clamp` for non-NaN values); the caller
+        // f16-encodes them as in `leaf_avx2`, rounds `z_c` to 21 bits and adds the tag and
+        // flag `O` where a child has it.
         let size = (1u32 << l) as f32;
         let (ex, ey) = (
             (nnx * inv) * s(size / self.wf),
@@ -484,31 +661,12 @@ impl MergeCtx {
             .and(ey.ordered())
             .bits();
         let (lo_, hi_) = (s(-F16_MAX), s(F16_MAX));
-        let clamp = |e: F8| e.max_ps(lo_).min(hi_);
+        let clamp = |e: F| e.max_ps(lo_).min(hi_);
         let (ex, ey) = (clamp(ex), clamp(ey));
-        // SAFETY: AVX2 (module docs).
-        let (av, bv) = unsafe {
-            // The halves of `x` and `y`, interleaved into the words `x | y << 16`.
-            let (hx, hy) = (f16x8(ex.0), f16x8(ey.0));
-            let bv = _mm256_set_m128i(_mm_unpackhi_epi16(hx, hy), _mm_unpacklo_epi16(hx, hy));
-            let bits = _mm256_and_si256(
-                _mm256_add_epi32(_mm256_castps_si256(zcv.0), _mm256_set1_epi32(2)),
-                _mm256_set1_epi32(!3),
-            );
-            let (la, ha) = (lo.words_a(), hi.words_a());
-            let or4 =
-                |w: [__m128i; 4]| _mm_or_si128(_mm_or_si128(w[0], w[1]), _mm_or_si128(w[2], w[3]));
-            let crack = _mm256_and_si256(
-                _mm256_set_m128i(or4(ha), or4(la)),
-                _mm256_set1_epi32(FLAG_CRACK as i32),
-            );
-            let tag = _mm256_set1_epi32(0x8000_0000u32 as i32);
-            (_mm256_or_si256(_mm256_or_si256(bits, tag), crack), bv)
-        };
         let thr = if self.adaptive {
             // Per lane, the thresholds at the proxy's depth.
             let (zc, min_cos, dmax) = (zcv.to_array(), min_cos.to_array(), dmax.to_array());
-            (0..8).fold(0u32, |m, p| {
+            (0..F::N).fold(0u32, |m, p| {
                 if valid & (1 << p) == 0 {
                     return m;
                 }
@@ -520,34 +678,49 @@ impl MergeCtx {
             // `cos_thr(0)`, `dist_thr(0)`: the fixed thresholds.
             min_cos.gt(s(self.cos_norm)).bits() & dmax.lt(s(self.gamma_dist)).bits()
         };
-        (valid & thr & ok_node, av, bv)
+        Merged {
+            mask: valid & thr & ok_node,
+            zc: zcv,
+            ex,
+            ey,
+        }
+    }
+}
+
+/// The `a` and `b` words of the eight proxies of `m` (lanes of `lo`, `hi`): the increments'
+/// halves interleaved into `x | y << 16`, `z_c` rounded to 21 bits, the tag, and flag `O`
+/// where a child has it.
+#[inline(always)]
+fn encode8(m: &Merged<F8>, lo: &Kids, hi: &Kids) -> (__m256i, __m256i) {
+    // SAFETY: AVX2 and F16C (module docs).
+    unsafe {
+        let (hx, hy) = (f16x8(m.ex.0), f16x8(m.ey.0));
+        let bv = _mm256_set_m128i(_mm_unpackhi_epi16(hx, hy), _mm_unpacklo_epi16(hx, hy));
+        let bits = _mm256_and_si256(
+            _mm256_add_epi32(_mm256_castps_si256(m.zc.0), _mm256_set1_epi32(2)),
+            _mm256_set1_epi32(!3),
+        );
+        let crack = _mm256_and_si256(
+            _mm256_set_m128i(hi.or_words_a(), lo.or_words_a()),
+            _mm256_set1_epi32(FLAG_CRACK as i32),
+        );
+        let tag = _mm256_set1_epi32(0x8000_0000u32 as i32);
+        (_mm256_or_si256(_mm256_or_si256(bits, tag), crack), bv)
     }
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::quadtree::test_rng::Rng;
 
-    /// Rows made eight parents per step equal `merge_rows`' four-parent rows (the SSE2
-    /// twin) node for node: random child levels 0-3 of near-coplanar plane patches (so most
-    /// parents merge, some fail the cosine or distance test; some nearly flat, with
-    /// f16-subnormal increments), with empty and AABB children, planes with clamped slopes,
-    /// flagged planes, blocked parents, odd row widths, fixed and adaptive thresholds.
-    #[test]
-    fn rows_equal_the_four_parent_rows() {
-        if !(std::arch::is_x86_feature_detected!("avx2")
-            && std::arch::is_x86_feature_detected!("f16c"))
-        {
-            eprintln!("no AVX2 and F16C: nothing to compare");
-            return;
-        }
+    /// Calls `f(ctx, child, l, qy, allow)` for every parent row of 48 random child levels
+    /// 0-3 of near-coplanar plane patches (so most parents merge, some fail the cosine or
+    /// distance test; some nearly flat, with f16-subnormal increments), with empty and AABB
+    /// children, AABB words that are NaN or `-0`, planes with clamped slopes, flagged
+    /// planes, blocked parents, rows of 1 to 40 parents, fixed and adaptive thresholds.
+    pub(in crate::quadtree) fn random_rows(mut f: impl FnMut(&MergeCtx, &Level, u32, u32, Allow)) {
         let mut rng = Rng(0x1234_5678_9abc_def1);
-        let (mut merged, mut total) = (0usize, 0usize);
-        let tally0 = (
-            tally::RANGES8.with(|c| c.get()),
-            tally::GROUP4.with(|c| c.get()),
-        );
         for case in 0..48u32 {
             let ctx = MergeCtx::test_case(case);
             let (wf, hf) = (ctx.wf, ctx.hf);
@@ -617,18 +790,39 @@ mod tests {
                 .collect();
             for qy in 0..ph {
                 let allow = Allow(Some(&blocked[(qy * pw) as usize..((qy + 1) * pw) as usize]));
-                let mut four = vec![Node { a: 1, b: 1 }; pw as usize];
-                let mut eight = vec![Node { a: 2, b: 2 }; pw as usize];
-                ctx.parent_row(&child, l, qy, &mut four, allow);
-                let (cw, y0) = (cw as usize, 2 * qy as usize);
-                let two = &child.nodes[y0 * cw..(y0 + 2) * cw];
-                // SAFETY: AVX2 and F16C (checked above).
-                unsafe { ctx.parent_row8(two, l, qy, &mut eight, allow) };
-                assert_eq!(four, eight, "case {case}, level {l}, row {qy}");
-                merged += four.iter().filter(|n| n.is_plane()).count();
-                total += four.len();
+                f(&ctx, &child, l, qy, allow);
             }
         }
+    }
+
+    /// Rows made eight parents per step equal `merge_rows`' four-parent rows (the SSE2
+    /// twin) node for node, on [`random_rows`].
+    #[test]
+    fn rows_equal_the_four_parent_rows() {
+        if !(std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("f16c"))
+        {
+            eprintln!("no AVX2 and F16C: nothing to compare");
+            return;
+        }
+        let (mut merged, mut total) = (0usize, 0usize);
+        let tally0 = (
+            tally::RANGES8.with(|c| c.get()),
+            tally::GROUP4.with(|c| c.get()),
+        );
+        random_rows(|ctx, child, l, qy, allow| {
+            let pw = child.w as usize / 2;
+            let mut four = vec![Node { a: 1, b: 1 }; pw];
+            let mut eight = vec![Node { a: 2, b: 2 }; pw];
+            ctx.parent_row(child, l, qy, &mut four, allow);
+            let (cw, y0) = (child.w as usize, 2 * qy as usize);
+            let two = &child.nodes[y0 * cw..(y0 + 2) * cw];
+            // SAFETY: AVX2 and F16C (checked above).
+            unsafe { ctx.parent_row8(two, l, qy, &mut eight, allow, 0) };
+            assert_eq!(four, eight, "level {l}, row {qy}");
+            merged += four.iter().filter(|n| n.is_plane()).count();
+            total += four.len();
+        });
         assert!(
             merged > total / 4 && merged < total,
             "{merged} of {total} parents merged"

@@ -103,6 +103,8 @@ mod merge_lanes;
 #[cfg(target_arch = "x86_64")]
 mod merge_rows;
 #[cfg(target_arch = "x86_64")]
+mod merge_rows16;
+#[cfg(target_arch = "x86_64")]
 mod merge_rows8;
 #[cfg(target_arch = "x86_64")]
 mod merged_cert;
