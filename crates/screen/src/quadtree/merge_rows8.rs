@@ -18,6 +18,8 @@
 //! so the nodes are the same bits; the pixel columns `2 (qx0 + p) + kx` and the parent
 //! columns `qx0 + p` are exact small integers in f32 whichever group they start from.
 //!
+//! The merge itself ([`MergeCtx::merge_wide`]) is generic over the lanes ([`MergeLanes`]):
+//! `F8` here, `merge_rows16`'s sixteen AVX-512 lanes there, the same operations per lane.
 //! `F8` / `M8` wrap `__m256` with `#[inline(always)]` methods and are only used inside
 //! [`MergeCtx::parent_row_fast`]'s AVX2 entry point (after `is_x86_feature_detected!`), so
 //! every intrinsic compiles to one instruction there. The test below compares rows of random
