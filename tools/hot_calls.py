@@ -40,6 +40,7 @@ HOT = [
     r"parallax_screen::quadtree::merge_rows(8|16)::.*::parent_row(8|16)\b",
     r"parallax_screen::quadtree::.*row_avx(2|512)\b",
     r"parallax_screen::quadtree::trigger_avx512::pixel_triggers_row16\b",
+    r"parallax_screen::quadtree::eff_planes_avx512::.*::row16\b",
 ]
 
 # Helpers that must be inlined where they are used in a kernel.

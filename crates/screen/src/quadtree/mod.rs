@@ -89,6 +89,8 @@ pub mod build;
 pub mod cascade;
 #[cfg(target_arch = "x86_64")]
 mod eff_lanes;
+#[cfg(target_arch = "x86_64")]
+mod eff_planes_avx512;
 mod fixpoint;
 #[cfg(target_arch = "x86_64")]
 mod leaf_avx2;

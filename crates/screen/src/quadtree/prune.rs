@@ -50,7 +50,7 @@ pub(super) fn fixed_point_reference(
             // No merging: the effective planes are the pixel planes.
             break tz;
         }
-        let eff = decoded_planes(w, h, ctx.wf, ctx.hf, |i, j| {
+        let eff = decoded_planes(w, h, ctx.wf, ctx.hf, super::tree::no_rows, |i, j| {
             let n0 = levels[0].nodes[(j * levels[0].w + i) as usize];
             if !n0.is_plane() {
                 return None;
@@ -261,7 +261,7 @@ pub(super) fn prune_from(
 
 /// The decoded pixel planes of a level-0 array in [`LayerPlanes`] form.
 fn leaf_planes(level0: &Level, w: u32, h: u32, wf: f32, hf: f32) -> LayerPlanes {
-    decoded_planes(w, h, wf, hf, |i, j| {
+    decoded_planes(w, h, wf, hf, super::tree::no_rows, |i, j| {
         let node = level0.nodes[(j * level0.w + i) as usize];
         node.is_plane().then_some((node, 0, i, j))
     })

@@ -218,7 +218,24 @@ impl QuadTree {
     pub fn effective_planes(&self) -> LayerPlanes {
         let lv = self.effective_levels();
         let w0 = self.levels[0].w;
-        decoded_planes(self.width, self.height, self.wf, self.hf, |i, j| {
+        // Sixteen pixels per step where the CPU has AVX-512 (`eff_planes_avx512`, the same
+        // bits), the rest of each row below.
+        #[cfg(target_arch = "x86_64")]
+        let rows = super::eff_planes_avx512::available()
+            .then(|| super::eff_planes_avx512::PlaneRows::new(&self.levels, self.wf, self.hf))
+            .flatten();
+        let fast = |j: u32, n: &mut [_], o: &mut [_], f: &mut [_]| {
+            #[cfg(target_arch = "x86_64")]
+            if let Some(r) = &rows {
+                let k0 = (j * w0) as usize;
+                // SAFETY: the CPU has AVX-512 (checked); `lv` are the effective levels of
+                // these levels.
+                return unsafe { r.row16(j, &lv[k0..k0 + n.len()], n, o, f) };
+            }
+            let _ = (j, n, o, f);
+            0
+        };
+        decoded_planes(self.width, self.height, self.wf, self.hf, fast, |i, j| {
             let l = lv[(j * w0 + i) as usize];
             (l != NO_PLANE).then(|| {
                 let l = l as u32;
@@ -231,9 +248,14 @@ impl QuadTree {
     /// [`Self::effective_planes`] by the definition: per pixel, climb to its effective node
     /// ([`Self::effective_node`]) and decode it (the slow twin of the tests).
     pub fn effective_planes_by_climbing(&self) -> LayerPlanes {
-        decoded_planes(self.width, self.height, self.wf, self.hf, |i, j| {
-            self.effective_node(i, j)
-        })
+        decoded_planes(
+            self.width,
+            self.height,
+            self.wf,
+            self.hf,
+            no_rows,
+            |i, j| self.effective_node(i, j),
+        )
     }
 
     /// Per level-0 node (`levels[0].w x levels[0].h`, padding included), the level of its
@@ -244,6 +266,16 @@ impl QuadTree {
     pub(crate) fn effective_levels(&self) -> Vec<u8> {
         effective_levels(&self.levels)
     }
+}
+
+/// The row kernel of [`decoded_planes`] that does nothing (every pixel by the scalar loop).
+pub(crate) fn no_rows(
+    _: u32,
+    _: &mut [MaybeUninit<Vec3>],
+    _: &mut [MaybeUninit<f32>],
+    _: &mut [MaybeUninit<bool>],
+) -> usize {
+    0
 }
 
 /// [`QuadTree::effective_levels`] of the levels `levels` (level 0 first).
@@ -373,6 +405,13 @@ pub(crate) fn decoded_planes(
     h: u32,
     wf: f32,
     hf: f32,
+    row_fast: impl Fn(
+        u32,
+        &mut [MaybeUninit<Vec3>],
+        &mut [MaybeUninit<f32>],
+        &mut [MaybeUninit<bool>],
+    ) -> usize
+    + Sync,
     node_of: impl Fn(u32, u32) -> Option<(Node, u32, u32, u32)> + Sync,
 ) -> LayerPlanes {
     let n = (w * h) as usize;
@@ -391,7 +430,8 @@ pub(crate) fn decoded_planes(
             // pixels of the row, decoded once (the decode is a function of the node and its
             // position only). Every pixel of the row is written (zero where no plane).
             let mut last: Option<((Node, u32, u32, u32), Vec3, f32)> = None;
-            for (i, ((nv, ov), fv)) in nrow.iter_mut().zip(orow).zip(frow).enumerate() {
+            let done = row_fast(j as u32, nrow, orow, frow);
+            for (i, ((nv, ov), fv)) in nrow.iter_mut().zip(orow).zip(frow).enumerate().skip(done) {
                 let (nn, c, f) = match node_of(i as u32, j as u32) {
                     Some(key) => {
                         let (nn, c) = match last {
