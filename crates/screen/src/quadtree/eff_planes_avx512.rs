@@ -33,14 +33,8 @@ use glam::Vec3;
 use super::node::{FLAG_CRACK, NO_PLANE};
 use super::tree::Level;
 
-/// Whether this CPU runs [`PlaneRows::row16`].
-pub(super) fn available() -> bool {
-    std::arch::is_x86_feature_detected!("avx512f")
-        && std::arch::is_x86_feature_detected!("avx512bw")
-        && std::arch::is_x86_feature_detected!("avx512dq")
-        && std::arch::is_x86_feature_detected!("avx512vl")
-        && std::arch::is_x86_feature_detected!("f16c")
-}
+/// Whether this CPU runs [`PlaneRows::row16`] (the build's AVX-512 kernels' one check).
+pub(super) use super::avx512_available as available;
 
 /// The levels' node arrays as the gather reads them: per level the byte offset of its first
 /// node from level 0's and its width in nodes (lanes past the last level: 0).

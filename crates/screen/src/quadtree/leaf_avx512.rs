@@ -30,14 +30,8 @@ use glam::Vec3;
 use super::leaf_avx2::{F16_MAX, LeafMap4};
 use super::node::{FLAG_CRACK, Node};
 
-/// Whether this CPU runs [`LeafMap4::row_avx512`].
-pub(super) fn available() -> bool {
-    std::arch::is_x86_feature_detected!("avx512f")
-        && std::arch::is_x86_feature_detected!("avx512bw")
-        && std::arch::is_x86_feature_detected!("avx512dq")
-        && std::arch::is_x86_feature_detected!("avx512vl")
-        && std::arch::is_x86_feature_detected!("f16c")
-}
+/// Whether this CPU runs [`LeafMap4::row_avx512`] (the build's AVX-512 kernels' one check).
+pub(super) use super::avx512_available as available;
 
 /// `vpermt2ps` indices of coordinate `c` of eight `Vec3`s held in `v0` (floats 0-15) and
 /// `v1` (floats 16-23): lane `i` takes float `3 i + c` (an index of 16 or more picks from

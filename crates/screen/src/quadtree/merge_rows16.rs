@@ -31,18 +31,12 @@ use core::ops::{Add, Div, Mul, Neg, Sub};
 
 use super::merge::MergeCtx;
 use super::merge_rows::Kids;
-use super::merge_rows8::{MergeLanes, MergeMask, Merged};
+use super::merge_rows8::{MergeLanes, MergeMask, Merged, lane_ops};
 use super::node::{FLAG_CRACK, Node};
 use super::prune::Allow;
 
-/// Whether this CPU runs [`MergeCtx::parent_row16`].
-pub(super) fn available() -> bool {
-    std::arch::is_x86_feature_detected!("avx512f")
-        && std::arch::is_x86_feature_detected!("avx512bw")
-        && std::arch::is_x86_feature_detected!("avx512dq")
-        && std::arch::is_x86_feature_detected!("avx512vl")
-        && std::arch::is_x86_feature_detected!("f16c")
-}
+/// Whether this CPU runs [`MergeCtx::parent_row16`] (the build's AVX-512 kernels' one check).
+pub(super) use super::avx512_available as available;
 
 /// Sixteen f32 lanes. SAFETY (every method): only called from code compiled with AVX-512
 /// that runs after [`available`] (module docs).
@@ -53,22 +47,7 @@ struct F16(__m512);
 #[derive(Clone, Copy)]
 struct M16(__mmask16);
 
-macro_rules! op {
-    ($tr:ident, $f:ident, $i:ident) => {
-        impl $tr for F16 {
-            type Output = F16;
-            #[inline(always)]
-            fn $f(self, o: F16) -> F16 {
-                // SAFETY: AVX-512 (module docs).
-                F16(unsafe { $i(self.0, o.0) })
-            }
-        }
-    };
-}
-op!(Add, add, _mm512_add_ps);
-op!(Sub, sub, _mm512_sub_ps);
-op!(Mul, mul, _mm512_mul_ps);
-op!(Div, div, _mm512_div_ps);
+lane_ops!(F16: _mm512_add_ps, _mm512_sub_ps, _mm512_mul_ps, _mm512_div_ps);
 
 impl Neg for F16 {
     type Output = F16;

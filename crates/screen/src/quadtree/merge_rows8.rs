@@ -61,22 +61,29 @@ struct F8(__m256);
 #[derive(Clone, Copy)]
 struct M8(__m256);
 
-macro_rules! op {
-    ($tr:ident, $f:ident, $i:ident) => {
-        impl $tr for F8 {
-            type Output = F8;
+/// `Add`, `Sub`, `Mul`, `Div` of a lane type `$t` (a tuple struct of one register) by the
+/// intrinsics given, one instruction each (SAFETY: the lane type's contract, module docs);
+/// `F8` here, `merge_rows16::F16` there.
+macro_rules! lane_ops {
+    ($t:ident: $add:ident, $sub:ident, $mul:ident, $div:ident) => {
+        lane_ops!(@one $t, Add, add, $add);
+        lane_ops!(@one $t, Sub, sub, $sub);
+        lane_ops!(@one $t, Mul, mul, $mul);
+        lane_ops!(@one $t, Div, div, $div);
+    };
+    (@one $t:ident, $tr:ident, $f:ident, $i:ident) => {
+        impl $tr for $t {
+            type Output = $t;
             #[inline(always)]
-            fn $f(self, o: F8) -> F8 {
-                // SAFETY: AVX (module docs).
-                F8(unsafe { $i(self.0, o.0) })
+            fn $f(self, o: $t) -> $t {
+                // SAFETY: the lane type's contract (module docs).
+                $t(unsafe { $i(self.0, o.0) })
             }
         }
     };
 }
-op!(Add, add, _mm256_add_ps);
-op!(Sub, sub, _mm256_sub_ps);
-op!(Mul, mul, _mm256_mul_ps);
-op!(Div, div, _mm256_div_ps);
+pub(super) use lane_ops;
+lane_ops!(F8: _mm256_add_ps, _mm256_sub_ps, _mm256_mul_ps, _mm256_div_ps);
 
 impl Neg for F8 {
     type Output = F8;
@@ -89,11 +96,6 @@ impl Neg for F8 {
 }
 
 impl F8 {
-    #[inline(always)]
-    fn splat(v: f32) -> F8 {
-        // SAFETY: AVX (module docs).
-        F8(unsafe { _mm256_set1_ps(v) })
-    }
     /// Lanes 0-3 from `lo`, 4-7 from `hi`.
     #[inline(always)]
     fn join(lo: Vec4, hi: Vec4) -> F8 {
@@ -104,81 +106,6 @@ impl F8 {
     fn lanes(v: [f32; 8]) -> F8 {
         // SAFETY: AVX (module docs).
         F8(unsafe { _mm256_loadu_ps(v.as_ptr()) })
-    }
-    #[inline(always)]
-    fn to_array(self) -> [f32; 8] {
-        let mut a = [0.0f32; 8];
-        // SAFETY: AVX (module docs); a 32-byte store into a 32-byte array.
-        unsafe { _mm256_storeu_ps(a.as_mut_ptr(), self.0) };
-        a
-    }
-    #[inline(always)]
-    fn sqrt(self) -> F8 {
-        // SAFETY: AVX (module docs).
-        F8(unsafe { _mm256_sqrt_ps(self.0) })
-    }
-    /// `minps(self, o)`, as glam's `Vec4::min`.
-    #[inline(always)]
-    fn min(self, o: F8) -> F8 {
-        // SAFETY: AVX (module docs).
-        F8(unsafe { _mm256_min_ps(self.0, o.0) })
-    }
-    /// `maxps(self, o)`: `self > o ? self : o` per lane.
-    #[inline(always)]
-    fn max_ps(self, o: F8) -> F8 {
-        // SAFETY: AVX (module docs).
-        F8(unsafe { _mm256_max_ps(self.0, o.0) })
-    }
-    /// `|self|` (sign bit cleared), as glam's `Vec4::abs`.
-    #[inline(always)]
-    fn abs(self) -> F8 {
-        // SAFETY: AVX (module docs).
-        F8(unsafe { _mm256_andnot_ps(_mm256_set1_ps(-0.0), self.0) })
-    }
-    #[inline(always)]
-    fn gt(self, o: F8) -> M8 {
-        // SAFETY: AVX (module docs).
-        M8(unsafe { _mm256_cmp_ps::<_CMP_GT_OS>(self.0, o.0) })
-    }
-    #[inline(always)]
-    fn lt(self, o: F8) -> M8 {
-        // SAFETY: AVX (module docs).
-        M8(unsafe { _mm256_cmp_ps::<_CMP_LT_OS>(self.0, o.0) })
-    }
-    #[inline(always)]
-    fn ge(self, o: F8) -> M8 {
-        // SAFETY: AVX (module docs).
-        M8(unsafe { _mm256_cmp_ps::<_CMP_GE_OS>(self.0, o.0) })
-    }
-    /// Lanes that are not NaN.
-    #[inline(always)]
-    fn ordered(self) -> M8 {
-        // SAFETY: AVX (module docs).
-        M8(unsafe { _mm256_cmp_ps::<_CMP_ORD_Q>(self.0, self.0) })
-    }
-    /// glam's `is_finite_mask`: `|self| < inf`.
-    #[inline(always)]
-    fn finite(self) -> M8 {
-        self.abs().lt(F8::splat(f32::INFINITY))
-    }
-    /// glam's `Vec4::select`: `(a & m) | (b & !m)`.
-    #[inline(always)]
-    fn select(m: M8, a: F8, b: F8) -> F8 {
-        // SAFETY: AVX (module docs).
-        F8(unsafe { _mm256_or_ps(_mm256_andnot_ps(m.0, b.0), _mm256_and_ps(a.0, m.0)) })
-    }
-}
-
-impl M8 {
-    #[inline(always)]
-    fn and(self, o: M8) -> M8 {
-        // SAFETY: AVX (module docs).
-        M8(unsafe { _mm256_and_ps(self.0, o.0) })
-    }
-    #[inline(always)]
-    fn bits(self) -> u32 {
-        // SAFETY: AVX (module docs).
-        unsafe { _mm256_movemask_ps(self.0) as u32 }
     }
 }
 
@@ -236,7 +163,8 @@ impl MergeLanes for F8 {
     const N: usize = 8;
     #[inline(always)]
     fn splat(v: f32) -> F8 {
-        F8::splat(v)
+        // SAFETY: AVX (module docs).
+        F8(unsafe { _mm256_set1_ps(v) })
     }
     #[inline(always)]
     fn ramp(step: f32) -> F8 {
@@ -244,50 +172,60 @@ impl MergeLanes for F8 {
     }
     #[inline(always)]
     fn to_array(self) -> [f32; 16] {
-        let a = F8::to_array(self);
-        let mut r = [0.0; 16];
-        r[..8].copy_from_slice(&a);
-        r
+        let mut a = [0.0f32; 16];
+        // SAFETY: AVX (module docs); a 32-byte store into the first half of a 64-byte array.
+        unsafe { _mm256_storeu_ps(a.as_mut_ptr(), self.0) };
+        a
     }
     #[inline(always)]
     fn sqrt(self) -> F8 {
-        F8::sqrt(self)
+        // SAFETY: AVX (module docs).
+        F8(unsafe { _mm256_sqrt_ps(self.0) })
     }
     #[inline(always)]
     fn min(self, o: F8) -> F8 {
-        F8::min(self, o)
+        // SAFETY: AVX (module docs).
+        F8(unsafe { _mm256_min_ps(self.0, o.0) })
     }
     #[inline(always)]
     fn max_ps(self, o: F8) -> F8 {
-        F8::max_ps(self, o)
+        // SAFETY: AVX (module docs).
+        F8(unsafe { _mm256_max_ps(self.0, o.0) })
     }
     #[inline(always)]
     fn abs(self) -> F8 {
-        F8::abs(self)
+        // SAFETY: AVX (module docs).
+        F8(unsafe { _mm256_andnot_ps(_mm256_set1_ps(-0.0), self.0) })
     }
     #[inline(always)]
     fn gt(self, o: F8) -> M8 {
-        F8::gt(self, o)
+        // SAFETY: AVX (module docs).
+        M8(unsafe { _mm256_cmp_ps::<_CMP_GT_OS>(self.0, o.0) })
     }
     #[inline(always)]
     fn lt(self, o: F8) -> M8 {
-        F8::lt(self, o)
+        // SAFETY: AVX (module docs).
+        M8(unsafe { _mm256_cmp_ps::<_CMP_LT_OS>(self.0, o.0) })
     }
     #[inline(always)]
     fn ge(self, o: F8) -> M8 {
-        F8::ge(self, o)
+        // SAFETY: AVX (module docs).
+        M8(unsafe { _mm256_cmp_ps::<_CMP_GE_OS>(self.0, o.0) })
     }
     #[inline(always)]
     fn ordered(self) -> M8 {
-        F8::ordered(self)
+        // SAFETY: AVX (module docs).
+        M8(unsafe { _mm256_cmp_ps::<_CMP_ORD_Q>(self.0, self.0) })
     }
     #[inline(always)]
     fn finite(self) -> M8 {
-        F8::finite(self)
+        self.abs().lt(F8::splat(f32::INFINITY))
     }
+    /// glam's `Vec4::select`: `(a & m) | (b & !m)`.
     #[inline(always)]
     fn select(m: M8, a: F8, b: F8) -> F8 {
-        F8::select(m, a, b)
+        // SAFETY: AVX (module docs).
+        F8(unsafe { _mm256_or_ps(_mm256_andnot_ps(m.0, b.0), _mm256_and_ps(a.0, m.0)) })
     }
     #[inline(always)]
     fn increments(kids: &[Kids], k: usize) -> (F8, F8) {
@@ -302,11 +240,13 @@ impl MergeLanes for F8 {
 impl MergeMask for M8 {
     #[inline(always)]
     fn and(self, o: M8) -> M8 {
-        M8::and(self, o)
+        // SAFETY: AVX (module docs).
+        M8(unsafe { _mm256_and_ps(self.0, o.0) })
     }
     #[inline(always)]
     fn bits(self) -> u32 {
-        M8::bits(self)
+        // SAFETY: AVX (module docs).
+        unsafe { _mm256_movemask_ps(self.0) as u32 }
     }
 }
 

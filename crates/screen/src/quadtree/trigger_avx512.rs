@@ -36,14 +36,8 @@ use super::cascade::SAFE_MARGIN;
 use super::node::Node;
 use crate::LayerPlanes;
 
-/// Whether this CPU runs [`pixel_triggers_row16`].
-pub(super) fn available() -> bool {
-    std::arch::is_x86_feature_detected!("avx512f")
-        && std::arch::is_x86_feature_detected!("avx512bw")
-        && std::arch::is_x86_feature_detected!("avx512dq")
-        && std::arch::is_x86_feature_detected!("avx512vl")
-        && std::arch::is_x86_feature_detected!("f16c")
-}
+/// Whether this CPU runs [`pixel_triggers_row16`] (the build's AVX-512 kernels' one check).
+pub(super) use super::avx512_available as available;
 
 /// `vpermt2ps` indices of the transpose (`soa16`): `[first; second]` per coordinate.
 const fn soa_idx(c: usize) -> [[i32; 16]; 2] {
