@@ -498,7 +498,7 @@ isa_entry!(
 isa_entry!(
     /// [`run_setup`] with sixteen AVX-512 lanes ([`Z16`], one register per packet).
     run_setup_avx512,
-    "avx512f",
+    "avx512f,avx512vl,avx512bw,avx512dq,avx2,bmi1,bmi2,lzcnt,popcnt",
     Z16
 );
 
@@ -585,7 +585,7 @@ pub unsafe fn test_tile_setup(
     }
     #[cfg(target_arch = "x86_64")]
     if z16 {
-        // SAFETY: the caller's `isa` is available: AVX-512F detected.
+        // SAFETY: the caller's `isa` is available: the AVX-512 tier detected (`avx512_detected`).
         return unsafe { run!(run_setup_avx512) };
     }
     #[cfg(target_arch = "x86_64")]

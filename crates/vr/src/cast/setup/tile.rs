@@ -177,7 +177,7 @@ pub fn setup_tile_with(
     debug_assert!(isa <= isa.available(), "{isa:?} not detected");
     #[cfg(target_arch = "x86_64")]
     match isa {
-        // SAFETY: the caller's `isa` is available: AVX-512F detected.
+        // SAFETY: the caller's `isa` is available: the AVX-512 tier detected (`avx512_detected`).
         Isa::Avx512 => {
             return unsafe { setup_tile_avx512(blocks, copies, leaves, beam, origin, out) };
         }
@@ -208,9 +208,9 @@ unsafe fn setup_tile_avx2(
 /// [`setup_tile_lanes`] with sixteen AVX-512 lanes.
 ///
 /// # Safety
-/// The CPU must support AVX-512F.
+/// The CPU must support the AVX-512 tier (`crate::cast::isa::avx512_detected`).
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
+#[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,bmi1,bmi2,lzcnt,popcnt")]
 unsafe fn setup_tile_avx512(
     blocks: &[Tri4],
     copies: &[u8],
