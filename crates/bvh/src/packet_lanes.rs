@@ -10,7 +10,7 @@
 //!
 //! | lanes | needs | 16 lanes as |
 //! |---|---|---|
-//! | [`PacketLanes::Avx512`] | AVX-512 F/VL/BW/DQ, AVX2, POPCNT, BMI1/2, LZCNT | one `__m512`, masks in `k` registers |
+//! | [`PacketLanes::Avx512`] | AVX-512F, AVX2, POPCNT | one `__m512`, masks in `k` registers |
 //! | [`PacketLanes::Avx2`] | AVX2, POPCNT | two `__m256`, masks by `movemask` (`lanes16/avx2.rs`) |
 //! | [`PacketLanes::Portable`] | - | four glam `Vec4` |
 
@@ -53,14 +53,8 @@ impl PacketLanes {
             #[cfg(target_arch = "x86_64")]
             Self::Avx512 => {
                 std::is_x86_feature_detected!("avx512f")
-                    && std::is_x86_feature_detected!("avx512vl")
-                    && std::is_x86_feature_detected!("avx512bw")
-                    && std::is_x86_feature_detected!("avx512dq")
                     && std::is_x86_feature_detected!("avx2")
                     && std::is_x86_feature_detected!("popcnt")
-                    && std::is_x86_feature_detected!("bmi1")
-                    && std::is_x86_feature_detected!("bmi2")
-                    && std::is_x86_feature_detected!("lzcnt")
             }
             #[cfg(not(target_arch = "x86_64"))]
             _ => false,
@@ -153,10 +147,10 @@ impl Bvh {
     }
 
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,bmi1,bmi2,lzcnt,popcnt")]
+    #[target_feature(enable = "avx512f,avx2,popcnt")]
     unsafe fn packets_avx512<const P64: bool>(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
-        // SAFETY: AVX-512F and AVX2 are enabled for this function (the caller detected them
-        // with the rest, `is_supported`).
+        // SAFETY: AVX-512F, AVX2 and POPCNT are enabled for this function (the caller
+        // detected them, `is_supported`).
         self.packets::<P64, _>(unsafe { Avx512::new() }, rays, out)
     }
 
