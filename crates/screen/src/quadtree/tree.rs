@@ -400,6 +400,8 @@ pub(crate) fn par_rows<T: Copy + Send + Sync>(
 
 /// Per pixel `(i, j)` of a `w x h` layer, the decoded plane of the node `node_of(i, j)`
 /// (`(node, level, qx, qy)`, or `None` for no plane) in [`LayerPlanes`] form, rows in parallel.
+/// `row_fast(j, normal, offset, flag)` may write the first pixels of row `j` itself (the same
+/// values) and returns how many it wrote; the rest are decoded here ([`no_rows`]: none).
 pub(crate) fn decoded_planes(
     w: u32,
     h: u32,
