@@ -13,6 +13,11 @@ How: `objdump -d -C` of the binary, the call instructions of every function whos
 name matches one of HOT, and the callees among them that match one of FORBIDDEN. Prints a
 table per function and exits 1 if any forbidden call is found, else 0.
 
+Also a software bit count in a hot kernel: `count_ones` compiled without the `popcnt` target
+feature becomes a shift-and-mask sequence with the constant 0x33333333 (the AVX-512 entry
+points of the beam caster and the BVH packets were compiled that way until their feature
+lists named POPCNT: docs/notes/vr.md, 2026-12-06). Counted like a forbidden call.
+
 Usage (after `cargo build --release [--features embree] --bin parallax`):
 
     python3 tools/hot_calls.py [target/release/parallax] [--all]
@@ -54,6 +59,9 @@ FORBIDDEN = [
 
 FUNC = re.compile(r"^[0-9a-f]+ <(.*)>:$")
 CALL = re.compile(r"\bcall\s+[0-9a-f]*\s*<(.*)>")
+# The 2-bit step's mask of a software population count (`0x33333333` or its 64-bit form).
+SOFT_POPCOUNT = re.compile(r"\$0x3333333333333333\b|\$0x33333333\b")
+SOFT_POPCOUNT_NAME = "software bit count (no POPCNT)"
 
 
 def calls(binary):
@@ -70,9 +78,13 @@ def calls(binary):
         if m:
             func = m.group(1)
             continue
+        if func is None:
+            continue
         m = CALL.search(line)
-        if m and func is not None:
+        if m:
             yield func, m.group(1)
+        elif SOFT_POPCOUNT.search(line):
+            yield func, SOFT_POPCOUNT_NAME
 
 
 def main():
@@ -88,7 +100,7 @@ def main():
             seen_hot.add(func)
         if not (is_hot or (everything and "parallax_" in func)):
             continue
-        if any(p.search(callee) for p in bad):
+        if callee == SOFT_POPCOUNT_NAME or any(p.search(callee) for p in bad):
             key = (func, callee)
             counts[key] = counts.get(key, 0) + 1
     print(f"{binary}: {len(seen_hot)} hot functions found (of {len(HOT)} patterns)")

@@ -232,8 +232,8 @@ pub unsafe fn test_tile(
     let mut single = TileWork::default();
     let fallback = |r: &Ray| closest_one(r, blocks, groups, beam, slack, &mut single);
     #[cfg(target_arch = "x86_64")]
-    let (pw, rays) = if lanes == 8 && std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: AVX2 was detected.
+    let (pw, rays) = if lanes == 8 && crate::cast::isa::avx2_detected() {
+        // SAFETY: the AVX2 tier was detected.
         unsafe {
             crate::cast::packet::run_packets_avx2(
                 set, blocks, boxes, beam, slack, total, pair, write, fallback,

@@ -571,12 +571,13 @@ pub(crate) fn for_each_packet<L: Lanes>(
     rays_n
 }
 
-/// [`run_packets`] with eight AVX lanes.
+/// [`run_packets`] with eight AVX lanes (and the AVX2 tier's bit instructions: the lane
+/// counts by `popcnt`).
 ///
 /// # Safety
-/// The CPU must support AVX2 (checked by the caller with `is_x86_feature_detected!`).
+/// The CPU must support the AVX2 tier ([`crate::cast::isa::avx2_detected`]).
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
+#[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
 #[allow(clippy::too_many_arguments)]
 pub(crate) unsafe fn run_packets_avx2(
     set: &SampleSet,
