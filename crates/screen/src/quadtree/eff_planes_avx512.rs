@@ -30,8 +30,7 @@ use core::mem::MaybeUninit;
 
 use glam::Vec3;
 
-use super::node::{FLAG_CRACK, NO_PLANE};
-use super::tree::Level;
+use super::node::{FLAG_CRACK, NO_PLANE, Node};
 
 /// Whether this CPU runs [`PlaneRows::row16`] (the build's AVX-512 kernels' one check).
 pub(super) use super::avx512_available as available;
@@ -74,16 +73,17 @@ const fn aos_idx(row: usize) -> [[i32; 16]; 2] {
 const AOS_IDX: [[[i32; 16]; 2]; 3] = [aos_idx(0), aos_idx(1), aos_idx(2)];
 
 impl PlaneRows {
-    /// The gather tables of `levels` (a `wf x hf` layer); `None` with more than 16 levels.
-    pub(super) fn new(levels: &[Level], wf: f32, hf: f32) -> Option<Self> {
-        if levels.len() > 16 {
+    /// The gather tables of the levels `levels` (per level its nodes and its width in
+    /// nodes, level 0 first) of a `wf x hf` layer; `None` with more than 16 levels.
+    pub(super) fn new(levels: &[(&[Node], u32)], wf: f32, hf: f32) -> Option<Self> {
+        if levels.is_empty() || levels.len() > 16 {
             return None;
         }
-        let base = levels[0].nodes.as_ptr() as *const u8;
+        let base = levels[0].0.as_ptr() as *const u8;
         let (mut offsets, mut widths) = ([0i64; 16], [0i32; 16]);
-        for (l, lv) in levels.iter().enumerate() {
-            offsets[l] = (lv.nodes.as_ptr() as isize).wrapping_sub(base as isize) as i64;
-            widths[l] = lv.w as i32;
+        for (l, &(nodes, w)) in levels.iter().enumerate() {
+            offsets[l] = (nodes.as_ptr() as isize).wrapping_sub(base as isize) as i64;
+            widths[l] = w as i32;
         }
         Some(Self {
             base,

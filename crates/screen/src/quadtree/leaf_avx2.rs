@@ -38,7 +38,7 @@ pub(super) struct LeafMap4 {
     /// `1 / W`, `1 / H`: [`Node::plane_with_gradient`]'s scale at level 0.
     pub(super) scale: [f32; 2],
     /// Whether the CPU runs `leaf_avx512` (checked once).
-    avx512: bool,
+    pub(super) avx512: bool,
 }
 
 impl LeafMap4 {
@@ -67,47 +67,12 @@ impl LeafMap4 {
             inv_near,
             z_den,
             scale: [size / wf, size / hf],
-            avx512: super::leaf_avx512::available(),
+            avx512: super::avx512_available(),
         })
     }
 
-    /// The leaves of the first `4 floor(W / 4)` pixels of a row of `W = out.len()` pixels
-    /// (`col` the per-column direction terms as x, y, z columns, `rj` the row's term,
-    /// `depth`, `normals`, `flags` the row's pixels); returns how many pixels it wrote.
-    /// Eight pixels per step where the CPU has AVX-512 (`leaf_avx512`, the same bits), then
-    /// four.
-    ///
-    /// # Safety
-    /// The CPU must have AVX2 and F16C (`self` exists only then).
-    pub(super) unsafe fn row(
-        &self,
-        col: [&[f32]; 3],
-        rj: Vec3,
-        depth: &[f32],
-        normals: &[Vec3],
-        flags: Option<&[bool]>,
-        out: &mut [Node],
-    ) -> usize {
-        let done = if self.avx512 {
-            // SAFETY: the CPU has AVX-512 (checked in `new`).
-            unsafe { self.row_avx512(col, rj, depth, normals, flags, out) }
-        } else {
-            0
-        };
-        // SAFETY: AVX2 and F16C by the caller's contract.
-        done + unsafe {
-            self.row_avx2(
-                col.map(|c| &c[done..]),
-                rj,
-                &depth[done..],
-                &normals[done..],
-                flags.map(|f| &f[done..]),
-                &mut out[done..],
-            )
-        }
-    }
-
-    /// [`Self::row`] four pixels per step.
+    /// [`Self::row`] four pixels per step: the first `4 floor(W / 4)` pixels of the row
+    /// (`W = out.len()`); returns how many pixels it wrote.
     #[target_feature(enable = "avx2,f16c")]
     pub(super) fn row_avx2(
         &self,

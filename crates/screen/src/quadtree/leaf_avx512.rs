@@ -1,7 +1,7 @@
 //! The leaves of eight pixels of a row at a time in AVX-512 lanes (Widmer et al. 2015, §3.2;
 //! run-time detection of AVX-512 F, BW, DQ, VL and F16C): `leaf_avx2`'s kernel with twice the
-//! lanes, the path [`super::leaf_avx2::LeafMap4::row`] takes first where the CPU has them
-//! (the four-lane kernel does the rest of the row, the one-pixel path the tail).
+//! lanes, and [`LeafMap4::row`], which runs it first where the CPU has them (the four-lane
+//! kernel does the rest of the row, the one-pixel path of `leaves.rs` the tail).
 //!
 //! **Same bits.** Every lane does the four-lane kernel's operations on the same operands in
 //! the same order (its module docs list them: the direction `(col + row) + back`, `p =
@@ -30,8 +30,8 @@ use glam::Vec3;
 use super::leaf_avx2::{F16_MAX, LeafMap4};
 use super::node::{FLAG_CRACK, Node};
 
-/// Whether this CPU runs [`LeafMap4::row_avx512`] (the build's AVX-512 kernels' one check).
-pub(super) use super::avx512_available as available;
+#[cfg(test)]
+use super::avx512_available as available;
 
 /// `vpermt2ps` indices of coordinate `c` of eight `Vec3`s held in `v0` (floats 0-15) and
 /// `v1` (floats 16-23): lane `i` takes float `3 i + c` (an index of 16 or more picks from
@@ -53,11 +53,47 @@ const SOA_IDX: [[i32; 16]; 3] = [soa_idx(0), soa_idx(1), soa_idx(2)];
 const NODE_IDX: [i32; 16] = [0, 16, 1, 17, 2, 18, 3, 19, 4, 20, 5, 21, 6, 22, 7, 23];
 
 impl LeafMap4 {
+    /// The leaves of the first `4 floor(W / 4)` pixels of a row of `W = out.len()` pixels
+    /// (`col` the per-column direction terms as x, y, z columns, `rj` the row's term,
+    /// `depth`, `normals`, `flags` the row's pixels); returns how many pixels it wrote.
+    /// Eight pixels per step where the CPU has AVX-512 (`leaf_avx512`, the same bits), then
+    /// four.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2 and F16C (`self` exists only then).
+    pub(super) unsafe fn row(
+        &self,
+        col: [&[f32]; 3],
+        rj: Vec3,
+        depth: &[f32],
+        normals: &[Vec3],
+        flags: Option<&[bool]>,
+        out: &mut [Node],
+    ) -> usize {
+        let done = if self.avx512 {
+            // SAFETY: the CPU has AVX-512 (checked in `new`).
+            unsafe { self.row_avx512(col, rj, depth, normals, flags, out) }
+        } else {
+            0
+        };
+        // SAFETY: AVX2 and F16C by the caller's contract.
+        done + unsafe {
+            self.row_avx2(
+                col.map(|c| &c[done..]),
+                rj,
+                &depth[done..],
+                &normals[done..],
+                flags.map(|f| &f[done..]),
+                &mut out[done..],
+            )
+        }
+    }
+
     /// [`LeafMap4::row`]'s leaves eight pixels per step: the first `8 floor(W / 8)` pixels of
     /// the row (`W = out.len()`); returns how many pixels it wrote.
     ///
     /// # Safety
-    /// The CPU must have what [`available`] checks.
+    /// The CPU must have what `quadtree::avx512_available` checks.
     #[target_feature(enable = "avx512f,avx512bw,avx512dq,avx512vl,f16c")]
     pub(super) unsafe fn row_avx512(
         &self,

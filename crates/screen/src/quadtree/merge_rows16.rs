@@ -1,8 +1,9 @@
 //! One row of a pruning level (Widmer et al. 2015, §3.3) with sixteen parents per step in
 //! AVX-512 lanes (run-time detection of AVX-512 F, BW, DQ, VL and F16C): `merge_rows8`'s
-//! merge ([`MergeCtx::merge_wide`], generic over the lanes) in the lanes of `__m512`s, the
-//! path [`MergeCtx::parent_row_fast_of`] takes first where the CPU has them (the eight-parent
-//! kernel does the rest of the row).
+//! merge ([`MergeCtx::merge_wide`], generic over the lanes) in the lanes of `__m512`s; and
+//! the rows' entry point [`MergeCtx::parent_row_fast_of`], which takes it first where the CPU
+//! has them (the eight-parent kernel does the rest of the row; without AVX2, `merge_rows`'
+//! four-parent rows).
 //!
 //! **Same bits.** The merge is the same generic code as the eight-parent kernel's, each
 //! [`MergeLanes`] method the same IEEE operation per lane (`vsqrtps`, `vdivps`, products
@@ -34,6 +35,7 @@ use super::merge_rows::Kids;
 use super::merge_rows8::{MergeLanes, MergeMask, Merged, lane_ops};
 use super::node::{FLAG_CRACK, Node};
 use super::prune::Allow;
+use super::tree::Level;
 
 /// Whether this CPU runs [`MergeCtx::parent_row16`] (the build's AVX-512 kernels' one check).
 pub(super) use super::avx512_available as available;
@@ -229,6 +231,46 @@ const NODE_IDX: [[i32; 16]; 2] = [
 ];
 
 impl MergeCtx {
+    /// [`Self::parent_row_fast_of`] with the child rows read from level `l - 1` (`child`).
+    pub(super) fn parent_row_fast(
+        &self,
+        child: &Level,
+        l: u32,
+        qy: u32,
+        out: &mut [Node],
+        allow: Allow,
+    ) {
+        let (cw, y0) = (child.w as usize, 2 * qy as usize);
+        self.parent_row_fast_of(&child.nodes[y0 * cw..(y0 + 2) * cw], l, qy, out, allow);
+    }
+
+    /// [`MergeCtx::parent_row_of`] (same nodes), sixteen parents per step in AVX-512 lanes
+    /// (`merge_rows16`) and then eight in AVX2 lanes, where the CPU has them (AVX2 and
+    /// F16C); `two`: child rows `2 qy` and `2 qy + 1` of level `l - 1`, one after the other.
+    pub(super) fn parent_row_fast_of(
+        &self,
+        two: &[Node],
+        l: u32,
+        qy: u32,
+        out: &mut [Node],
+        allow: Allow,
+    ) {
+        if std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("f16c")
+        {
+            let first = if available() {
+                // SAFETY: the CPU has AVX-512 (checked).
+                unsafe { self.parent_row16(two, l, qy, out, allow) }
+            } else {
+                0
+            };
+            // SAFETY: the CPU has AVX2 and F16C (checked).
+            unsafe { self.parent_row8(two, l, qy, out, allow, first) }
+        } else {
+            self.parent_row_of(two.split_at(two.len() / 2), l, qy, out, allow)
+        }
+    }
+
     /// `parent_row8` sixteen parents per step: the first `16 floor(P / 16)` parents of the
     /// row (`P = out.len()`; `two` the child rows `2 qy`, `2 qy + 1` of level `l - 1`, one
     /// after the other); returns how many it did.

@@ -36,7 +36,7 @@ use super::merge::MergeCtx;
 use super::merge_rows::{CORNER, KID, Kids};
 use super::node::{FLAG_CRACK, Node};
 use super::prune::Allow;
-use super::tree::{Level, Z_EPS};
+use super::tree::Z_EPS;
 
 /// Largest finite f16.
 const F16_MAX: f32 = 65504.0;
@@ -281,46 +281,6 @@ fn increments8(lo: &Kids, hi: &Kids, k: usize) -> (F8, F8) {
 }
 
 impl MergeCtx {
-    /// [`Self::parent_row_fast_of`] with the child rows read from level `l - 1` (`child`).
-    pub(super) fn parent_row_fast(
-        &self,
-        child: &Level,
-        l: u32,
-        qy: u32,
-        out: &mut [Node],
-        allow: Allow,
-    ) {
-        let (cw, y0) = (child.w as usize, 2 * qy as usize);
-        self.parent_row_fast_of(&child.nodes[y0 * cw..(y0 + 2) * cw], l, qy, out, allow);
-    }
-
-    /// [`MergeCtx::parent_row_of`] (same nodes), sixteen parents per step in AVX-512 lanes
-    /// (`merge_rows16`) and then eight in AVX2 lanes, where the CPU has them (AVX2 and
-    /// F16C); `two`: child rows `2 qy` and `2 qy + 1` of level `l - 1`, one after the other.
-    pub(super) fn parent_row_fast_of(
-        &self,
-        two: &[Node],
-        l: u32,
-        qy: u32,
-        out: &mut [Node],
-        allow: Allow,
-    ) {
-        if std::arch::is_x86_feature_detected!("avx2")
-            && std::arch::is_x86_feature_detected!("f16c")
-        {
-            let first = if super::merge_rows16::available() {
-                // SAFETY: the CPU has AVX-512 (checked).
-                unsafe { self.parent_row16(two, l, qy, out, allow) }
-            } else {
-                0
-            };
-            // SAFETY: the CPU has AVX2 and F16C (checked).
-            unsafe { self.parent_row8(two, l, qy, out, allow, first) }
-        } else {
-            self.parent_row_of(two.split_at(two.len() / 2), l, qy, out, allow)
-        }
-    }
-
     /// The parents `first..` of the row (`first` a multiple of 8), eight per step.
     #[target_feature(enable = "avx2,f16c")]
     pub(super) fn parent_row8(
@@ -655,6 +615,7 @@ fn encode8(m: &Merged<F8>, lo: &Kids, hi: &Kids) -> (__m256i, __m256i) {
 pub(super) mod tests {
     use super::*;
     use crate::quadtree::test_rng::Rng;
+    use crate::quadtree::tree::Level;
 
     /// Calls `f(ctx, child, l, qy, allow)` for every parent row of 48 random child levels
     /// 0-3 of near-coplanar plane patches (so most parents merge, some fail the cosine or

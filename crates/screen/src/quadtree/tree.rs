@@ -222,7 +222,10 @@ impl QuadTree {
         // bits), the rest of each row below.
         #[cfg(target_arch = "x86_64")]
         let rows = super::eff_planes_avx512::available()
-            .then(|| super::eff_planes_avx512::PlaneRows::new(&self.levels, self.wf, self.hf))
+            .then(|| {
+                let levels: Vec<_> = self.levels.iter().map(|lv| (&lv.nodes[..], lv.w)).collect();
+                super::eff_planes_avx512::PlaneRows::new(&levels, self.wf, self.hf)
+            })
             .flatten();
         let fast = |j: u32, n: &mut [_], o: &mut [_], f: &mut [_]| {
             #[cfg(target_arch = "x86_64")]
