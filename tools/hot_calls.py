@@ -46,6 +46,7 @@ HOT = [
     r"parallax_screen::quadtree::.*row_avx(2|512)\b",
     r"parallax_screen::quadtree::trigger_avx512::pixel_triggers_row16\b",
     r"parallax_screen::quadtree::eff_planes_avx512::.*::row16\b",
+    r"parallax_raster::dirt::(build::chunk_frags_v4|fill::fill_band_v4)\b",
 ]
 
 # Helpers that must be inlined where they are used in a kernel.

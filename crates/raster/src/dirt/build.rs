@@ -130,6 +130,44 @@ pub(super) fn build_views(
     opts: &DirtOptions,
     tiles: &[u32],
 ) -> Result<Vec<DirtCapture>, DirtError> {
+    build_views_isa(mesh, views, opts, tiles, wide_available())
+}
+
+/// Whether the CPU runs the build's AVX-512 copies: the setup and rasterization of a chunk
+/// and the fill of a band compiled a second time with the x86-64-v4 features
+/// (`avx512f,avx512vl,avx512bw,avx512dq,avx2,fma,bmi1,bmi2,lzcnt,popcnt,f16c`: [`chunk_frags_v4`], [`super::fill::fill_band_v4`]). Same captures bit for bit:
+/// the same IEEE operations (Rust contracts nothing into FMA); what changes is the
+/// instructions, e.g. one `vcvttss2usi` for a float-to-unsigned cast. Tested by
+/// `wide_build_equals_the_baseline`; measured in `docs/notes/dirt.md` (2026-12-06).
+pub(super) fn wide_available() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx512f")
+            && std::arch::is_x86_feature_detected!("avx512vl")
+            && std::arch::is_x86_feature_detected!("avx512bw")
+            && std::arch::is_x86_feature_detected!("avx512dq")
+            && std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("fma")
+            && std::arch::is_x86_feature_detected!("bmi1")
+            && std::arch::is_x86_feature_detected!("bmi2")
+            && std::arch::is_x86_feature_detected!("lzcnt")
+            && std::arch::is_x86_feature_detected!("popcnt")
+            && std::arch::is_x86_feature_detected!("f16c")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    false
+}
+
+/// [`build_views`] with the AVX-512 copies of the hot stages (`wide`, only where
+/// [`wide_available`]) or without.
+fn build_views_isa(
+    mesh: &TriangleMesh,
+    views: &[Pinhole],
+    opts: &DirtOptions,
+    tiles: &[u32],
+    wide: bool,
+) -> Result<Vec<DirtCapture>, DirtError> {
+    debug_assert!(!wide || wide_available());
     let t_start = Instant::now();
     assert_eq!(views.len(), tiles.len(), "one tile size per view");
     let grids = views
@@ -150,8 +188,8 @@ pub(super) fn build_views(
         .map(|v| ViewXf::new(v, opts.near as f64))
         .collect();
     let budget = AtomicU64::new(0);
-    let frags = setup_and_raster(mesh, &xfs, &grids, opts, &budget)?;
-    finish_views(mesh, views, opts, &grids, frags, &budget, t_start)
+    let frags = setup_and_raster(mesh, &xfs, &grids, opts, &budget, wide)?;
+    finish_views(mesh, views, opts, &grids, frags, &budget, t_start, wide)
 }
 
 thread_local! {
@@ -170,41 +208,30 @@ fn setup_and_raster(
     grids: &[Grid],
     opts: &DirtOptions,
     budget: &AtomicU64,
+    wide: bool,
 ) -> Result<Vec<Vec<ViewFrags>>, DirtError> {
     let n = mesh.triangle_count();
     let same_eye = ViewXf::same_eyes(xfs);
     let cull = FaceCull::new(&xfs.iter().map(ViewXf::axis_view).collect::<Vec<_>>());
+    let ctx = ChunkCtx {
+        mesh,
+        xfs,
+        same_eye: &same_eye,
+        cull: cull.as_ref(),
+        grids,
+        opts,
+        budget,
+    };
     let chunks: Vec<Result<Vec<ViewFrags>, DirtError>> = (0..n.div_ceil(SETUP_CHUNK))
         .into_par_iter()
         .map(|c| {
-            RAW.with_borrow_mut(|raw| {
-                raw.resize_with(xfs.len(), Vec::new);
-                for (r, g) in raw.iter_mut().zip(grids) {
-                    r.resize_with(g.bands() as usize, Vec::new);
-                    r.iter_mut().for_each(Vec::clear);
-                }
-                let mut in_view = vec![0u64; xfs.len()];
-                let mut unbilled = 0u64;
-                let range = c * SETUP_CHUNK..((c + 1) * SETUP_CHUNK).min(n);
-                ViewXf::setup_range(xfs, &same_eye, cull.as_ref(), mesh, range, |v, e, poly| {
-                    let out = &mut raw[v];
-                    if let Some(n) = raster(e, poly, &grids[v], &xfs[v], opts.cell_depth, out) {
-                        in_view[v] += 1;
-                        unbilled += n as u64;
-                    }
-                    if unbilled >= BILL_EVERY {
-                        bill(budget, &mut unbilled, opts.max_entries)?;
-                    }
-                    Ok(())
-                })?;
-                bill(budget, &mut unbilled, opts.max_entries)?;
-                Ok(raw
-                    .iter()
-                    .zip(grids)
-                    .zip(in_view)
-                    .map(|((r, _), iv)| ViewFrags::concat(&r[..], iv))
-                    .collect())
-            })
+            #[cfg(target_arch = "x86_64")]
+            if wide {
+                // SAFETY: `wide` only where the CPU has the features (`build_views_isa`).
+                return unsafe { chunk_frags_v4(&ctx, c) };
+            }
+            let _ = wide;
+            chunk_frags(&ctx, c)
         })
         .collect();
     let mut per_view: Vec<Vec<ViewFrags>> = xfs.iter().map(|_| Vec::new()).collect();
@@ -214,6 +241,75 @@ fn setup_and_raster(
         }
     }
     Ok(per_view)
+}
+
+/// What every chunk of [`setup_and_raster`] reads.
+struct ChunkCtx<'a> {
+    mesh: &'a TriangleMesh,
+    xfs: &'a [ViewXf],
+    same_eye: &'a [bool],
+    cull: Option<&'a FaceCull>,
+    grids: &'a [Grid],
+    opts: &'a DirtOptions,
+    budget: &'a AtomicU64,
+}
+
+/// The body of [`chunk_frags`] and [`chunk_frags_v4`]: a macro, so that its closures (the
+/// rasterization callback holds the hot code) are written inside each function and the
+/// AVX-512 copy's closures inherit its target features (a closure written in a function
+/// without them would stay one shared, baseline copy).
+macro_rules! chunk_frags_body {
+    ($x:ident, $c:ident) => {{
+        let x: &ChunkCtx = $x;
+        let c: usize = $c;
+        let (xfs, grids, opts) = (x.xfs, x.grids, x.opts);
+        let n = x.mesh.triangle_count();
+        RAW.with_borrow_mut(|raw| {
+            raw.resize_with(xfs.len(), Vec::new);
+            for (r, g) in raw.iter_mut().zip(grids) {
+                r.resize_with(g.bands() as usize, Vec::new);
+                r.iter_mut().for_each(Vec::clear);
+            }
+            let mut in_view = vec![0u64; xfs.len()];
+            let mut unbilled = 0u64;
+            let range = c * SETUP_CHUNK..((c + 1) * SETUP_CHUNK).min(n);
+            ViewXf::setup_range(xfs, x.same_eye, x.cull, x.mesh, range, |v, e, poly| {
+                let out = &mut raw[v];
+                if let Some(n) = raster(e, poly, &grids[v], &xfs[v], opts.cell_depth, out) {
+                    in_view[v] += 1;
+                    unbilled += n as u64;
+                }
+                if unbilled >= BILL_EVERY {
+                    bill(x.budget, &mut unbilled, opts.max_entries)?;
+                }
+                Ok(())
+            })?;
+            bill(x.budget, &mut unbilled, opts.max_entries)?;
+            Ok(raw
+                .iter()
+                .zip(grids)
+                .zip(in_view)
+                .map(|((r, _), iv)| ViewFrags::concat(&r[..], iv))
+                .collect())
+        })
+    }};
+}
+
+/// The fragments of chunk `c` ([`SETUP_CHUNK`] triangles) for every view, grouped by band.
+fn chunk_frags(x: &ChunkCtx, c: usize) -> Result<Vec<ViewFrags>, DirtError> {
+    chunk_frags_body!(x, c)
+}
+
+/// [`chunk_frags`] compiled with the x86-64-v4 features ([`wide_available`]).
+///
+/// # Safety
+/// The CPU must have them ([`wide_available`]).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(
+    enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma,bmi1,bmi2,lzcnt,popcnt,f16c"
+)]
+unsafe fn chunk_frags_v4(x: &ChunkCtx, c: usize) -> Result<Vec<ViewFrags>, DirtError> {
+    chunk_frags_body!(x, c)
 }
 
 /// `wall` ms split over the views in proportion to their measured `work` (evenly if none).
@@ -244,6 +340,7 @@ fn finish_views(
     frags: Vec<Vec<ViewFrags>>,
     budget: &AtomicU64,
     t_start: Instant,
+    wide: bool,
 ) -> Result<Vec<DirtCapture>, DirtError> {
     let nv = views.len();
     let setup_ms = ms(t_start);
@@ -265,6 +362,11 @@ fn finish_views(
                 opts,
                 budget,
             };
+            #[cfg(target_arch = "x86_64")]
+            if wide {
+                // SAFETY: `wide` only where the CPU has the features (`build_views_isa`).
+                return unsafe { super::fill::fill_band_v4(&job, band) }.map(|o| (o, ms(t)));
+            }
             fill_band(&job, band).map(|o| (o, ms(t)))
         })
         .collect();
@@ -406,4 +508,63 @@ fn assemble_view(
     };
     cap.stats.bytes = cap.bytes();
     (cap, assemble, ms(t))
+}
+
+#[cfg(test)]
+mod tests {
+    use parallax_scene::Scene;
+    use parallax_scene::camera::CubeMap;
+
+    use super::*;
+
+    /// The captures' arrays, as text (f32 `Debug` round-trips every value, NaN included).
+    fn arrays(caps: &[DirtCapture]) -> Vec<String> {
+        caps.iter()
+            .map(|c| {
+                format!(
+                    "{} {} {:?} {:?} {:?} {:?} {:?} {:?}",
+                    c.cells_x,
+                    c.cells_y,
+                    c.offsets,
+                    c.ids,
+                    c.levels,
+                    c.bounds,
+                    c.recip_bounds,
+                    c.cells
+                )
+            })
+            .collect()
+    }
+
+    /// The build with the AVX-512 copies of its hot stages (where the CPU has them) makes the
+    /// same captures as the build without: the camera view and the six cube faces of the
+    /// atrium and of the foliage scene (thin, slanted triangles), two tile sizes.
+    #[test]
+    fn wide_build_equals_the_baseline() {
+        if !wide_available() {
+            eprintln!("no AVX-512: nothing to compare");
+            return;
+        }
+        let mut entries = 0;
+        for name in ["atrium", "foliage"] {
+            let scene = Scene::load(name).unwrap();
+            let desc = scene.camera(None).unwrap();
+            let cube = CubeMap::new(&desc, 48).unwrap();
+            let mut views = vec![Pinhole::new(&desc, 160, 96).unwrap()];
+            views.extend((0..6).map(|i| cube.face_camera(i)));
+            for tile in [1, 4] {
+                let opts = DirtOptions {
+                    tile_size: tile,
+                    buckets: 8,
+                    ..DirtOptions::default()
+                };
+                let tiles = vec![tile; views.len()];
+                let base = build_views_isa(&scene.mesh, &views, &opts, &tiles, false).unwrap();
+                let wide = build_views_isa(&scene.mesh, &views, &opts, &tiles, true).unwrap();
+                assert_eq!(arrays(&base), arrays(&wide), "{name}, S = {tile}");
+                entries += base.iter().map(|c| c.ids.len()).sum::<usize>();
+            }
+        }
+        assert!(entries > 10_000, "{entries} list entries compared");
+    }
 }

@@ -390,7 +390,25 @@ pub(super) fn fill_band(job: &FillJob, band: u32) -> Result<BandOut, DirtError> 
     })
 }
 
+/// [`fill_band`] compiled with the build's x86-64-v4 features (`build::wide_available`).
+///
+/// # Safety
+/// The CPU must have them (`build::wide_available`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(
+    enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma,bmi1,bmi2,lzcnt,popcnt,f16c"
+)]
+pub(super) unsafe fn fill_band_v4(job: &FillJob, band: u32) -> Result<BandOut, DirtError> {
+    // The closure written here, not [`fill_band`]'s: it holds the inlined fill and takes this
+    // function's target features.
+    FRAGMENTS.with_borrow_mut(|frags| {
+        frags.clear();
+        fill_band_with(job, band, frags)
+    })
+}
+
 /// [`fill_band`] with an empty fragment buffer.
+#[inline(always)]
 fn fill_band_with(
     job: &FillJob,
     band: u32,
