@@ -31,8 +31,8 @@ use core::arch::x86_64::*;
 use core::ops::{Add, Div, Mul, Neg, Sub};
 
 use super::merge::MergeCtx;
-use super::merge_rows::Kids;
-use super::merge_rows8::{MergeLanes, MergeMask, Merged, lane_ops};
+use super::merge_kids::Kids;
+use super::merge_wide::{MergeLanes, MergeMask, Merged, lane_ops};
 use super::node::{FLAG_CRACK, Node};
 use super::prune::Allow;
 use super::tree::Level;

@@ -101,6 +101,8 @@ mod leaf_lanes;
 mod leaves;
 mod mark_listed;
 pub mod merge;
+#[cfg(target_arch = "x86_64")]
+mod merge_kids;
 mod merge_lanes;
 #[cfg(target_arch = "x86_64")]
 mod merge_rows;
@@ -108,6 +110,8 @@ mod merge_rows;
 mod merge_rows16;
 #[cfg(target_arch = "x86_64")]
 mod merge_rows8;
+#[cfg(target_arch = "x86_64")]
+mod merge_wide;
 #[cfg(target_arch = "x86_64")]
 mod merged_cert;
 pub mod node;
