@@ -8,6 +8,7 @@
 //!
 //! **Invariant:** nothing in this crate knows about scenes, cameras or acceleration structures.
 
+pub mod cpu;
 pub mod cpu_time;
 pub mod error;
 pub mod image;

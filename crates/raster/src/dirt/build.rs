@@ -133,29 +133,14 @@ pub(super) fn build_views(
     build_views_isa(mesh, views, opts, tiles, wide_available())
 }
 
-/// Whether the CPU runs the build's AVX-512 copies: the setup and rasterization of a chunk
-/// and the fill of a band compiled a second time with the x86-64-v4 features
-/// (`avx512f,avx512vl,avx512bw,avx512dq,avx2,fma,bmi1,bmi2,lzcnt,popcnt,f16c`: [`chunk_frags_v4`], [`super::fill::fill_band_v4`]). Same captures bit for bit:
-/// the same IEEE operations (Rust contracts nothing into FMA); what changes is the
-/// instructions, e.g. one `vcvttss2usi` for a float-to-unsigned cast. Tested by
-/// `wide_build_equals_the_baseline`; measured in `docs/notes/dirt.md` (2026-12-06).
+/// Whether the CPU runs the build's AVX-512 copies ([`parallax_core::cpu::x86_64_v4`]): the
+/// setup and rasterization of a chunk ([`chunk_frags_v4`]) and the fill of a band
+/// ([`super::fill::fill_band_v4`]) compiled a second time with the x86-64-v4 features. Same
+/// captures bit for bit: the same IEEE operations (Rust contracts nothing into FMA); what
+/// changes is the instructions, e.g. one `vcvttss2usi` for a float-to-unsigned cast. Tested
+/// by `wide_build_equals_the_baseline`; measured in `docs/notes/dirt.md` (2026-12-06).
 pub(super) fn wide_available() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("avx512f")
-            && std::arch::is_x86_feature_detected!("avx512vl")
-            && std::arch::is_x86_feature_detected!("avx512bw")
-            && std::arch::is_x86_feature_detected!("avx512dq")
-            && std::arch::is_x86_feature_detected!("avx2")
-            && std::arch::is_x86_feature_detected!("fma")
-            && std::arch::is_x86_feature_detected!("bmi1")
-            && std::arch::is_x86_feature_detected!("bmi2")
-            && std::arch::is_x86_feature_detected!("lzcnt")
-            && std::arch::is_x86_feature_detected!("popcnt")
-            && std::arch::is_x86_feature_detected!("f16c")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    false
+    parallax_core::cpu::x86_64_v4()
 }
 
 /// [`build_views`] with the AVX-512 copies of the hot stages (`wide`, only where

@@ -64,14 +64,10 @@ impl Isa {
     /// Every copy this CPU runs, the best last.
     pub fn available() -> Vec<Isa> {
         let mut v = vec![Isa::Baseline];
-        #[cfg(target_arch = "x86_64")]
-        {
-            use std::arch::is_x86_feature_detected as has;
-            if has!("avx2") && has!("bmi1") && has!("bmi2") && has!("lzcnt") && has!("popcnt") {
-                v.push(Isa::X86V3);
-                if has!("avx512f") && has!("avx512vl") && has!("avx512bw") && has!("avx512dq") {
-                    v.push(Isa::X86V4);
-                }
+        if parallax_core::cpu::x86_64_v3() {
+            v.push(Isa::X86V3);
+            if parallax_core::cpu::x86_64_v4() {
+                v.push(Isa::X86V4);
             }
         }
         v

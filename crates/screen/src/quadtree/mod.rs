@@ -129,14 +129,11 @@ mod trigger_avx512;
 mod trigger_lanes;
 
 /// Whether this CPU runs the AVX-512 kernels of the build (`leaf_avx512`, `merge_rows16`,
-/// `trigger_avx512`, `eff_planes_avx512`): AVX-512 F, BW, DQ, VL and F16C.
+/// `trigger_avx512`, `eff_planes_avx512`; their features: AVX-512 F, BW, DQ, VL and F16C,
+/// within x86-64-v4).
 #[cfg(target_arch = "x86_64")]
 fn avx512_available() -> bool {
-    std::arch::is_x86_feature_detected!("avx512f")
-        && std::arch::is_x86_feature_detected!("avx512bw")
-        && std::arch::is_x86_feature_detected!("avx512dq")
-        && std::arch::is_x86_feature_detected!("avx512vl")
-        && std::arch::is_x86_feature_detected!("f16c")
+    parallax_core::cpu::x86_64_v4()
 }
 
 pub use cascade::QuadTreeTracer;

@@ -55,21 +55,12 @@ pub fn avx2_detected() -> bool {
     false
 }
 
-/// Whether the CPU runs the AVX-512 tier: AVX-512 F, VL, BW and DQ, and the AVX2 tier's
-/// features ([`avx2_detected`]: the kernels' bit scans, population counts and shifts compile
-/// to `tzcnt`, `popcnt`, `shrx`, `blsr` in both tiers).
+/// Whether the CPU runs the AVX-512 tier: x86-64-v4 (AVX-512 F, VL, BW and DQ, and the AVX2
+/// tier's features: the kernels' bit scans, population counts and shifts compile to `tzcnt`,
+/// `popcnt`, `shrx`, `blsr` in both tiers).
 #[inline]
 pub fn avx512_detected() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("avx512f")
-            && std::arch::is_x86_feature_detected!("avx512vl")
-            && std::arch::is_x86_feature_detected!("avx512bw")
-            && std::arch::is_x86_feature_detected!("avx512dq")
-            && avx2_detected()
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    false
+    parallax_core::cpu::x86_64_v4()
 }
 
 #[cfg(test)]
