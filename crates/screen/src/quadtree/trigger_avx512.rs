@@ -134,11 +134,13 @@ pub(super) unsafe fn pixel_triggers_row16(
     let si = _mm512_set1_epi32;
     let evens: [i32; 16] = core::array::from_fn(|d| 2 * d as i32);
     let odds: [i32; 16] = core::array::from_fn(|d| 2 * d as i32 + 1);
+    let ramp: [i32; 16] = core::array::from_fn(|d| d as i32);
     // SAFETY: 16 `i32`s each.
-    let (evens, odds) = unsafe {
+    let (evens, odds, lane_ids) = unsafe {
         (
             _mm512_loadu_si512(evens.as_ptr() as *const _),
             _mm512_loadu_si512(odds.as_ptr() as *const _),
+            _mm512_loadu_si512(ramp.as_ptr() as *const _),
         )
     };
     let neg0 = si(i32::MIN);
@@ -255,11 +257,17 @@ pub(super) unsafe fn pixel_triggers_row16(
             );
         }
         // The finite ones: `|t| < inf`.
-        let mut bits = _mm512_cmp_ps_mask::<_CMP_LT_OQ>(_mm512_abs_ps(t), s(f32::INFINITY)) as u32;
-        while bits != 0 {
-            let d = bits.trailing_zeros() as usize;
-            listed.push((k + d) as u32);
-            bits &= bits - 1;
+        let bits = _mm512_cmp_ps_mask::<_CMP_LT_OQ>(_mm512_abs_ps(t), s(f32::INFINITY));
+        // Their indices `k + d` appended in lane order by one compressing store (no branch
+        // per listed pixel: the listed pixels of a row come in irregular runs).
+        listed.reserve(16);
+        let len = listed.len();
+        // SAFETY: room for 16 more `u32`s (reserved); the store writes `popcnt(bits)` of
+        // them, which `set_len` then covers.
+        unsafe {
+            let ids = _mm512_add_epi32(si(k as i32), lane_ids);
+            _mm512_mask_compressstoreu_epi32(listed.as_mut_ptr().add(len) as *mut _, bits, ids);
+            listed.set_len(len + bits.count_ones() as usize);
         }
         i += 16;
     }
