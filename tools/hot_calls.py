@@ -22,6 +22,13 @@ Usage (after `cargo build --release [--features embree] --bin parallax`):
 
     python3 tools/hot_calls.py [target/release/parallax] [--all]
 
+Anywhere in the project (hot or not): an out-of-line call to a `core::core_arch` vector
+intrinsic means a function that uses SIMD lanes without being compiled for their target
+feature (a generic or `#[inline(never)]` helper called from a kernel): each such call moves
+one vector operation through memory. The beam caster's `ill_conditioned` made 110 of them
+until it was inlined into its callers (docs/notes/vr.md, 2026-12-06). Such calls fail the
+check too.
+
 `--all` lists forbidden calls from every `parallax_*` function, hot or not (for a look
 around; cold paths such as constructors may call them).
 """
@@ -48,6 +55,9 @@ HOT = [
     r"parallax_screen::quadtree::eff_planes_avx512::.*::row16\b",
     r"parallax_raster::dirt::(build::chunk_frags_v4|fill::fill_band_v4)\b",
 ]
+
+# Intrinsics that must never be called out of line from the project's code (module docs).
+NEVER_OUT_OF_LINE = re.compile(r"core::core_arch::x86(_64)?::(avx|sse|f16c|fma)")
 
 # Helpers that must be inlined where they are used in a kernel.
 FORBIDDEN = [
@@ -94,11 +104,16 @@ def main():
     binary = args[0] if args else "target/release/parallax"
     hot = [re.compile(p) for p in HOT]
     bad = [re.compile(p) for p in FORBIDDEN]
-    counts, seen_hot = {}, set()
+    counts, seen_hot, everywhere = {}, set(), 0
     for func, callee in calls(binary):
         is_hot = any(p.search(func) for p in hot)
         if is_hot:
             seen_hot.add(func)
+        if "parallax_" in func and NEVER_OUT_OF_LINE.search(callee):
+            key = (func, callee)
+            counts[key] = counts.get(key, 0) + 1
+            everywhere += 1
+            continue
         if not (is_hot or (everything and "parallax_" in func)):
             continue
         if callee == SOFT_POPCOUNT_NAME or any(p.search(callee) for p in bad):
@@ -115,7 +130,7 @@ def main():
     for (func, callee), n in sorted(counts.items(), key=lambda kv: -kv[1]):
         print(f"| {n} | `{func}` | `{callee}` |")
     hot_hits = sum(n for (f, _), n in counts.items() if any(p.search(f) for p in hot))
-    return 1 if hot_hits else 0
+    return 1 if hot_hits or everywhere else 0
 
 
 if __name__ == "__main__":

@@ -358,7 +358,10 @@ pub(super) fn closest_edges<L: LaneReduce>(
 /// An ill-conditioned triangle (`rho > RHO_MAX`) against every lane: certainly-out lanes
 /// (edge value below minus the band) skip it, the others take the watertight test, whose
 /// `t` is compared as `1/t` with the lane's best. Returns whether a lane's best changed.
-#[inline(never)]
+/// Inlined into its callers: a separate copy is compiled without the entry point's target
+/// features, and every lane operation in it becomes an out-of-line intrinsic call
+/// (`tools/hot_calls.py` checks).
+#[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn ill_conditioned<L: Lanes>(
     rays: &RaysN<L>,
