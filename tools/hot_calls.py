@@ -13,6 +13,11 @@ How: `objdump -d -C` of the binary, the call instructions of every function whos
 name matches one of HOT, and the callees among them that match one of FORBIDDEN. Prints a
 table per function and exits 1 if any forbidden call is found, else 0.
 
+Calls through the GOT (how the binary reaches `floorf` and the other rounding functions of
+the x86-64 baseline) are resolved to their symbols; the LDC tracer's DDA called `floorf`
+four times per block until it took `parallax_core::math::floor_i64` (docs/notes/ldc.md,
+2026-12-06).
+
 Also a software bit count in a hot kernel: `count_ones` compiled without the `popcnt` target
 feature becomes a shift-and-mask sequence with the constant 0x33333333 (the AVX-512 entry
 points of the beam caster and the BVH packets were compiled that way until their feature
@@ -54,6 +59,7 @@ HOT = [
     r"parallax_screen::quadtree::trigger_avx512::pixel_triggers_row16\b",
     r"parallax_screen::quadtree::eff_planes_avx512::.*::row16\b",
     r"parallax_raster::dirt::(build::chunk_frags_v4|fill::fill_band_v4)\b",
+    r"parallax_screen::ldc::traverse::.*::trace\b",
 ]
 
 # Intrinsics that must never be called out of line from the project's code (module docs).
@@ -66,17 +72,45 @@ FORBIDDEN = [
     r"::from_fn::\{\{closure\}\}",
     r"core::core_arch::",
     r"^<glam::",
+    # `f32::floor` and friends: a library call on the x86-64 baseline (no SSE4.1 `roundss`);
+    # `parallax_core::math::floor_i32` / `floor_i64` are the inline forms.
+    r"^(floor|ceil|round|trunc)f?$",
 ]
 
 FUNC = re.compile(r"^[0-9a-f]+ <(.*)>:$")
 CALL = re.compile(r"\bcall\s+[0-9a-f]*\s*<(.*)>")
+# A call through the global offset table (`call *0x..(%rip)  # <slot>`): the callee is the
+# symbol the slot's relocation points at (`got_targets`).
+GOT_CALL = re.compile(r"\bcall\s+\*0x[0-9a-f]+\(%rip\)\s+#\s*([0-9a-f]+)")
 # The 2-bit step's mask of a software population count (`0x33333333` or its 64-bit form).
 SOFT_POPCOUNT = re.compile(r"\$0x3333333333333333\b|\$0x33333333\b")
 SOFT_POPCOUNT_NAME = "software bit count (no POPCNT)"
 
 
+def got_targets(binary):
+    """The symbol each GOT slot of the binary points at (`objdump -R` relative relocations,
+    resolved with `nm`)."""
+    names = {}
+    for line in subprocess.run(
+        ["nm", "-C", binary], check=True, capture_output=True, text=True
+    ).stdout.splitlines():
+        parts = line.split(maxsplit=2)
+        if len(parts) == 3:
+            names.setdefault(int(parts[0], 16), parts[2])
+    slots = {}
+    for line in subprocess.run(
+        ["objdump", "-R", binary], check=True, capture_output=True, text=True
+    ).stdout.splitlines():
+        m = re.match(r"^([0-9a-f]+) R_X86_64_RELATIVE\s+\*ABS\*\+0x([0-9a-f]+)$", line)
+        if m and int(m.group(2), 16) in names:
+            slots[int(m.group(1), 16)] = names[int(m.group(2), 16)]
+    return slots
+
+
 def calls(binary):
-    """Yields (function, callee) for every direct call in the binary's text."""
+    """Yields (function, callee) for every direct call in the binary's text, and for every
+    call through the GOT whose slot resolves to a symbol."""
+    slots = got_targets(binary)
     out = subprocess.run(
         ["objdump", "-d", "-C", "--no-show-raw-insn", binary],
         check=True,
@@ -94,6 +128,10 @@ def calls(binary):
         m = CALL.search(line)
         if m:
             yield func, m.group(1)
+            continue
+        m = GOT_CALL.search(line)
+        if m and int(m.group(1), 16) in slots:
+            yield func, slots[int(m.group(1), 16)]
         elif SOFT_POPCOUNT.search(line):
             yield func, SOFT_POPCOUNT_NAME
 

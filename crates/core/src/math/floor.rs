@@ -2,8 +2,10 @@
 //! rounding instruction, so `f32::floor` is a library call in hot loops. Shared by the view
 //! warp's resampling and the reprojection's footprints.
 //!
-//! **Invariants:** [`floor_i32`]`(f) == f.floor() as i32` for every `|f| <` [`FLOOR_EXACT`]
-//! (tested against `f32::floor`, including -0.0, tiny and near-bound values).
+//! **Invariants:** [`floor_i32`]`(f) == f.floor() as i32` for every `|f| <` [`FLOOR_EXACT`];
+//! [`floor_i64`]`(f) == f.floor() as i64` for every `f` (NaN and infinities included, with
+//! `as`'s saturation). Tested against `f32::floor`, including -0.0, tiny and near-bound
+//! values.
 
 /// Bound under which [`floor_i32`] is exact (2^23: every f32 at or above it is an integer).
 pub const FLOOR_EXACT: f32 = 8_388_608.0;
@@ -17,6 +19,18 @@ pub fn floor_i32(f: f32) -> i32 {
     let t: i32 = unsafe { f.to_int_unchecked() };
     // Truncation rounds negative non-integers up: step down (t is exact in f32).
     t - ((t as f32) > f) as i32
+}
+
+/// `f.floor() as i64` for every `f32` (NaN: 0, out of range: saturated, as `as` does), without
+/// the libm call: [`floor_i32`] below [`FLOOR_EXACT`], where the rest of the f32s are already
+/// integers (or NaN or infinite) and `as` alone gives the same value.
+#[inline(always)]
+pub fn floor_i64(f: f32) -> i64 {
+    if f.abs() < FLOOR_EXACT {
+        floor_i32(f) as i64
+    } else {
+        f as i64
+    }
 }
 
 #[cfg(test)]
@@ -51,6 +65,24 @@ mod tests {
                 v.push(f);
             }
             v.push((x % 20_000) as f32 * 0.013 - 130.0);
+        }
+        for &f in &v {
+            assert_eq!(floor_i64(f), f.floor() as i64, "{f}");
+        }
+        for f in [
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            FLOOR_EXACT,
+            -FLOOR_EXACT,
+            8_388_609.0,
+            -8_388_609.0,
+            1e19,
+            -1e19,
+            f32::MAX,
+            f32::MIN,
+        ] {
+            assert_eq!(floor_i64(f), f.floor() as i64, "{f}");
         }
         for f in v {
             let want = f.floor();

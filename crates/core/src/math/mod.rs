@@ -10,7 +10,7 @@ mod ray;
 mod triangle;
 
 pub use aabb::{Aabb, ROBUST_FAR_SCALE};
-pub use floor::{FLOOR_EXACT, floor_i32};
+pub use floor::{FLOOR_EXACT, floor_i32, floor_i64};
 pub use frame::Frame;
 pub use frustum::{Containment, Frustum};
 pub use plane::Plane;

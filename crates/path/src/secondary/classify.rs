@@ -25,6 +25,7 @@
 //! (`rays - agree` of [`super::Agreement`]) with the same tolerance.
 
 use glam::Vec3;
+use parallax_core::math::floor_i64;
 use parallax_core::{Ray, WorldHit, WorldStats, WorldTracer};
 use parallax_raster::ldc::image_axes;
 use parallax_scene::Scene;
@@ -172,8 +173,8 @@ impl Classifier<'_> {
         let cap = &cube.ldis[axis].capture;
         let (u, v) = image_axes(axis);
         let s = cube.pixel_size;
-        let x = ((p[u] - cube.bounds.min[u]) / s).floor() as i64;
-        let y = ((p[v] - cube.bounds.min[v]) / s).floor() as i64;
+        let x = floor_i64((p[u] - cube.bounds.min[u]) / s);
+        let y = floor_i64((p[v] - cube.bounds.min[v]) / s);
         let holds = |xx: i64, yy: i64| {
             xx >= 0
                 && yy >= 0

@@ -3,6 +3,7 @@
 //! block's `[min, max]`, and the sample test at every pixel. Nothing is allocated; every loop
 //! has a step bound.
 
+use parallax_core::math::floor_i64;
 use parallax_core::{Ray, WorldStats};
 
 use super::{LdcTracer, LdiTrace, SampleTest};
@@ -40,7 +41,7 @@ impl DdaAxis {
     /// The axis at parameter `t` of `o + t d`, its cell clamped to `lo..=hi`.
     #[inline]
     fn new(o: f32, d: f32, t: f32, size: f32, lo: i64, hi: i64) -> Self {
-        let cell = (((o + t * d) / size).floor() as i64).clamp(lo, hi);
+        let cell = floor_i64((o + t * d) / size).clamp(lo, hi);
         if d > 0.0 {
             Self {
                 cell,

@@ -48,6 +48,7 @@
 //! What each part gains (and costs) on atrium and Sponza: `docs/notes/synth.md`.
 
 use glam::{UVec2, Vec2, Vec3};
+use parallax_core::math::floor_i64;
 use parallax_screen::{DdaTracer, ScreenTracer, TraceResult, TraceStats};
 
 use super::hit::{same_surface, same_surface_tol};
@@ -239,7 +240,7 @@ pub(super) fn silhouette_guard(
     }
     for k in 0..=path {
         let s = sq - step * k as f32;
-        let (x, y) = (s.x.floor() as i64, s.y.floor() as i64);
+        let (x, y) = (floor_i64(s.x), floor_i64(s.y));
         let Some(dc) = depth0(x, y) else {
             break;
         };
@@ -322,7 +323,7 @@ pub(super) fn nearer_neighbour_guard(
     if !(fx.is_finite() && fy.is_finite()) {
         return r;
     }
-    let (x0, y0) = (fx.floor() as i64, fy.floor() as i64);
+    let (x0, y0) = (floor_i64(fx), floor_i64(fy));
     let found = [(0, 0), (1, 0), (0, 1), (1, 1)]
         .iter()
         .any(|(dx, dy)| between(x0 + dx, y0 + dy));
