@@ -13,6 +13,12 @@ How: `objdump -d -C` of the binary, the call instructions of every function whos
 name matches one of HOT, and the callees among them that match one of FORBIDDEN. Prints a
 table per function and exits 1 if any forbidden call is found, else 0.
 
+A hot kernel must not call a closure written outside it: a closure is compiled with the
+target features of the function it is written in, so one defined in a shared generic helper
+and called from an AVX2 / AVX-512 entry point runs as baseline code, out of line. The beam
+caster's watertight AVX2 tier ran its whole packet kernel that way (docs/notes/vr.md,
+2026-12-06). Exceptions: ALLOWED_CLOSURES.
+
 Calls through the GOT (how the binary reaches `floorf` and the other rounding functions of
 the x86-64 baseline) are resolved to their symbols; the LDC tracer's DDA called `floorf`
 four times per block until it took `parallax_core::math::floor_i64` (docs/notes/ldc.md,
@@ -60,6 +66,17 @@ HOT = [
     r"parallax_screen::quadtree::eff_planes_avx512::.*::row16\b",
     r"parallax_raster::dirt::(build::chunk_frags_v4|fill::fill_band_v4)\b",
     r"parallax_screen::ldc::traverse::.*::trace\b",
+]
+
+# Closures a hot kernel may call out of line (module docs): (caller pattern, callee pattern,
+# why). A closure defined inside the kernel itself is always allowed (it has the kernel's
+# target features; such calls are once per band or chunk).
+ALLOWED_CLOSURES = [
+    (
+        r"parallax_vr::cast::packet::run_packets_avx2",
+        r"parallax_vr::cast::intersect::test_tile::\{\{closure\}\}",
+        "the fallback of a declined packet: one ray through `closest_one`, rare",
+    ),
 ]
 
 # Intrinsics that must never be called out of line from the project's code (module docs).
@@ -136,6 +153,16 @@ def calls(binary):
             yield func, SOFT_POPCOUNT_NAME
 
 
+def foreign_closure_allowed(func, callee):
+    """Whether hot `func` may call closure `callee` out of line: one of its own closures (the
+    callee's path starts with the kernel's), or an entry of ALLOWED_CLOSURES."""
+    own = re.sub(r"::\{\{closure\}\}.*$", "", callee)
+    base = re.sub(r"::\{\{closure\}\}.*$", "", func)
+    if own == base or own.startswith(base + "::"):
+        return True
+    return any(re.search(f, func) and re.search(c, callee) for f, c, _ in ALLOWED_CLOSURES)
+
+
 def main():
     args = [a for a in sys.argv[1:] if not a.startswith("--")]
     everything = "--all" in sys.argv[1:]
@@ -153,6 +180,10 @@ def main():
             everywhere += 1
             continue
         if not (is_hot or (everything and "parallax_" in func)):
+            continue
+        if is_hot and "{{closure}}" in callee and not foreign_closure_allowed(func, callee):
+            key = (func, callee)
+            counts[key] = counts.get(key, 0) + 1
             continue
         if callee == SOFT_POPCOUNT_NAME or any(p.search(callee) for p in bad):
             key = (func, callee)

@@ -234,11 +234,15 @@ impl DirtTracer {
 
     #[inline(always)]
     fn trace_views(&self, ray: &Ray, t0: f32, t1: f32, q: &mut Query) {
-        let camera = self.has_camera().then(|| {
+        // (No closure: it would be compiled without the tracer copy's target features and
+        // called out of line once per ray.)
+        let camera = if self.has_camera() {
             let vc = &self.consts[0];
             let vr = vc.ray(ray.origin, ray.dir);
-            (vc, vr, vc.clip(&vr, t0, t1))
-        });
+            Some((vc, vr, vc.clip(&vr, t0, t1)))
+        } else {
+            None
+        };
         match camera {
             Some((vc, vr, Some((a, b)))) => {
                 if self.trace_cube(ray, t0, a, q) == WalkEnd::Done {

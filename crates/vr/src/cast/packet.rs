@@ -439,12 +439,23 @@ fn closest_n<L: Lanes>(
             let ln = (j % 4) as usize;
             let tri = blk.tri[ln];
             work.tri_tests += 1;
-            let proj = |v: usize| {
-                let p = &blk.p[v];
-                let at = |k: usize| L::splat(p[k][ln]);
-                shear_vertex([at(kx), at(ky), at(kz)], [okx, oky, okz], [sx, sy, sz])
-            };
-            let (va, vb, vc) = (proj(0), proj(1), proj(2));
+            // (A macro, not a closure: a closure here is compiled without the AVX2 entry
+            // point's features and called out of line, three times per triangle.)
+            macro_rules! proj {
+                ($v:expr) => {{
+                    let p = &blk.p[$v];
+                    shear_vertex(
+                        [
+                            L::splat(p[kx][ln]),
+                            L::splat(p[ky][ln]),
+                            L::splat(p[kz][ln]),
+                        ],
+                        [okx, oky, okz],
+                        [sx, sy, sz],
+                    )
+                }};
+            }
+            let (va, vb, vc) = (proj!(0), proj!(1), proj!(2));
             let r = watertight_lanes(va, vb, vc);
             let d = r.distance(va[2], vb[2], vc[2]);
             let exact = r.exact & m;
@@ -503,6 +514,42 @@ fn closest_n<L: Lanes>(
     Some(out)
 }
 
+/// The body of [`run_packets`] and [`run_packets_avx2`], written into each: the per-packet
+/// closure it hands to [`for_each_packet`] holds the whole packet kernel, and a closure is
+/// compiled with the target features of the function it is written in — inside a shared
+/// generic helper it stayed a baseline-compiled function called once per packet from the
+/// AVX2 entry point, which made the 8-lane tier slower than the 4-lane one
+/// (`docs/notes/vr.md`, 2026-12-06).
+macro_rules! run_packets_body {
+    ($l:ty, $set:expr, $blocks:expr, $leaves:expr, $beam:expr, $slack:expr, $total:expr,
+     $pair:expr, $write:expr, $fallback:expr) => {{
+        let (blocks, leaves, beam, slack) = ($blocks, $leaves, $beam, $slack);
+        let (mut write, mut fallback) = ($write, $fallback);
+        let mut pw = PacketWork::default();
+        let rays_n =
+            for_each_packet::<$l>($set, None, $total, $pair, |batch, rays| {
+                match closest_n(rays, blocks, leaves, beam, slack, &mut pw) {
+                    Some(c) => {
+                        for (l, &p) in batch.iter().enumerate() {
+                            write(p, c.t[l], c.tri[l]);
+                        }
+                    }
+                    None => {
+                        for (l, &p) in batch.iter().enumerate() {
+                            let (bt, tri) = if rays.valid >> l & 1 != 0 {
+                                fallback(&rays.lane(l))
+                            } else {
+                                (f32::INFINITY, u32::MAX)
+                            };
+                            write(p, bt, tri);
+                        }
+                    }
+                }
+            });
+        (pw, rays_n)
+    }};
+}
+
 /// Runs every subsample ray `0..total` of a tile (`pair(j)` = its `(sample, k)`) through the
 /// packet kernel with `L::N` lanes; `write(j, t, tri)` stores a result and `fallback(ray)`
 /// answers rays of packets the kernel declines.
@@ -516,30 +563,12 @@ pub(crate) fn run_packets<L: Lanes>(
     slack: f32,
     total: usize,
     pair: impl Fn(usize) -> (u32, u32),
-    mut write: impl FnMut((u32, u32), f32, u32),
-    mut fallback: impl FnMut(&Ray) -> (f32, u32),
+    write: impl FnMut((u32, u32), f32, u32),
+    fallback: impl FnMut(&Ray) -> (f32, u32),
 ) -> (PacketWork, u64) {
-    let mut pw = PacketWork::default();
-    let rays_n = for_each_packet::<L>(set, None, total, pair, |batch, rays| {
-        match closest_n(rays, blocks, leaves, beam, slack, &mut pw) {
-            Some(c) => {
-                for (l, &p) in batch.iter().enumerate() {
-                    write(p, c.t[l], c.tri[l]);
-                }
-            }
-            None => {
-                for (l, &p) in batch.iter().enumerate() {
-                    let (bt, tri) = if rays.valid >> l & 1 != 0 {
-                        fallback(&rays.lane(l))
-                    } else {
-                        (f32::INFINITY, u32::MAX)
-                    };
-                    write(p, bt, tri);
-                }
-            }
-        }
-    });
-    (pw, rays_n)
+    run_packets_body!(
+        L, set, blocks, leaves, beam, slack, total, pair, write, fallback
+    )
 }
 
 /// Cuts subsample rays `0..total` of a tile (`pair(j)` = its `(sample, k)`) into packets of
@@ -590,8 +619,8 @@ pub(crate) unsafe fn run_packets_avx2(
     write: impl FnMut((u32, u32), f32, u32),
     fallback: impl FnMut(&Ray) -> (f32, u32),
 ) -> (PacketWork, u64) {
-    run_packets::<F8>(
-        set, blocks, leaves, beam, slack, total, pair, write, fallback,
+    run_packets_body!(
+        F8, set, blocks, leaves, beam, slack, total, pair, write, fallback
     )
 }
 
