@@ -59,7 +59,7 @@ HOT = [
     r"parallax_bvh::packet::.*::packet16_avx2\b",
     r"parallax_vr::cast::setup::run_setup_avx(2|2_16|512)\b",
     r"parallax_vr::cast::setup::bands::refine_run\b",
-    r"parallax_vr::cast::packet::run_packets_avx2\b",
+    r"parallax_vr::cast::packet_kernel::run_packets_avx2\b",
     r"parallax_screen::quadtree::merge_rows(8|16)::.*::parent_row(8|16)\b",
     r"parallax_screen::quadtree::.*row_avx(2|512)\b",
     r"parallax_screen::quadtree::trigger_avx512::pixel_triggers_row16\b",
@@ -73,7 +73,7 @@ HOT = [
 # target features; such calls are once per band or chunk).
 ALLOWED_CLOSURES = [
     (
-        r"parallax_vr::cast::packet::run_packets_avx2",
+        r"parallax_vr::cast::packet_kernel::run_packets_avx2",
         r"parallax_vr::cast::intersect::test_tile::\{\{closure\}\}",
         "the fallback of a declined packet: one ray through `closest_one`, rare",
     ),

@@ -34,7 +34,7 @@ use parallax_core::{NO_ID, Ray};
 use crate::SampleSet;
 use crate::beam::PreparedBeam;
 use crate::cast::leaves::{LeafBox, LeafGroup};
-use crate::cast::packet::run_packets;
+use crate::cast::packet_kernel::run_packets;
 
 /// Keeps `(t, tri)` if it is closer than the best so far, or as close with a lower triangle
 /// index (the BVH's tie-break).
@@ -235,7 +235,7 @@ pub unsafe fn test_tile(
     let (pw, rays) = if lanes == 8 && crate::cast::isa::avx2_detected() {
         // SAFETY: the AVX2 tier was detected.
         unsafe {
-            crate::cast::packet::run_packets_avx2(
+            crate::cast::packet_kernel::run_packets_avx2(
                 set, blocks, boxes, beam, slack, total, pair, write, fallback,
             )
         }

@@ -13,6 +13,7 @@ pub(crate) mod lanes256;
 pub(crate) mod lanes512;
 pub mod leaves;
 pub mod packet;
+pub(crate) mod packet_kernel;
 pub mod setup;
 pub mod stored;
 
