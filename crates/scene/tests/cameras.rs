@@ -484,3 +484,40 @@ fn differentials_agree_with_finite_differences() {
         assert!(checked > 300, "{kind:?}: {checked}");
     }
 }
+
+/// `CameraModel::ray` is `generate_ray`'s ray bit for bit, for every model and channel, on
+/// random film positions inside, on and outside the film (and NaN), random lens samples and an
+/// out-of-range channel; both say `None` at the same places.
+#[test]
+fn ray_alone_equals_the_generated_ray() {
+    let opts = CameraOptions::default();
+    let mut rng = Rng(0x7a1e_5eed);
+    let mut range = |lo: f32, hi: f32| lo + (hi - lo) * rng.next_f32();
+    let bits = |r: &parallax_core::Ray| {
+        [r.origin.to_array(), r.dir.to_array()].map(|v| v.map(f32::to_bits))
+    };
+    for kind in ModelKind::ALL {
+        let cam = build(kind, &desc(), &opts);
+        let (w, h) = (cam.width() as f32, cam.height() as f32);
+        let mut films: Vec<Vec2> = (0..2000)
+            .map(|_| Vec2::new(range(-0.2, 1.2) * w, range(-0.2, 1.2) * h))
+            .collect();
+        films.extend([
+            Vec2::ZERO,
+            Vec2::new(w, h),
+            Vec2::new(w, h) * 0.5,
+            Vec2::NAN,
+        ]);
+        let (mut some, mut none) = (0, 0);
+        for &film in &films {
+            let lens = Vec2::new(range(0.0, 1.0), range(0.0, 1.0));
+            for c in 0..4 {
+                let full = cam.generate_ray(film, lens, c).map(|r| bits(&r.ray));
+                let alone = cam.ray(film, lens, c).map(|r| bits(&r));
+                assert_eq!(alone, full, "{kind:?} film {film} lens {lens} channel {c}");
+                if full.is_some() { some += 1 } else { none += 1 }
+            }
+        }
+        assert!(some > 1000, "{kind:?}: {some} rays, {none} none");
+    }
+}

@@ -93,8 +93,6 @@ impl SampleSet {
     pub fn subsample_ray(&self, i: usize, k: usize) -> Option<Ray> {
         let s = &self.samples[i];
         let film = s.film + self.offsets[k] * s.footprint;
-        self.camera
-            .generate_ray(film, self.lens[k], s.channel as usize)
-            .map(|r| r.ray)
+        self.camera.ray(film, self.lens[k], s.channel as usize)
     }
 }

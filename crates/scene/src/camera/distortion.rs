@@ -140,7 +140,32 @@ impl Distorted {
     }
 }
 
+impl Distorted {
+    /// The ray's part of [`CameraModel::generate_ray`] (shared with [`CameraModel::ray`], so
+    /// both give the same bits): the lens coordinates `n`, `s = |n|^2`, the gain `g(s)`, the
+    /// length of the camera-space direction before normalising, and the world direction.
+    #[inline(always)]
+    fn lens_ray(&self, film: Vec2, channel: usize) -> Option<(Vec2, f32, f32, f32, Vec3)> {
+        if channel > 2 {
+            return None;
+        }
+        let n = self.lens_coords(film);
+        let s = n.length_squared();
+        let g = self.gain(channel, s);
+        let t = self.pinhole.tan_half_y;
+        let nu = n * g;
+        let d = Vec3::new(nu.x * t, nu.y * t, -1.0);
+        let len = d.length();
+        let dir = self.pinhole.frame.dir_to_world(d / len);
+        Some((n, s, g, len, dir))
+    }
+}
+
 impl CameraModel for Distorted {
+    fn ray(&self, film: Vec2, _lens: Vec2, channel: usize) -> Option<Ray> {
+        let (.., dir) = self.lens_ray(film, channel)?;
+        Some(Ray::new(self.pinhole.frame.position, dir))
+    }
     fn width(&self) -> u32 {
         self.pinhole.width
     }
@@ -149,20 +174,11 @@ impl CameraModel for Distorted {
     }
 
     fn generate_ray(&self, film: Vec2, _lens: Vec2, channel: usize) -> Option<CameraRay> {
-        if channel > 2 {
-            return None;
-        }
+        let (n, s, g, len, dir) = self.lens_ray(film, channel)?;
         let [k1, k2] = self.coeffs[channel];
-        let n = self.lens_coords(film);
-        let s = n.length_squared();
-        let g = self.gain(channel, s);
         let dg = k1 + 2.0 * k2 * s; // g'(s)
         let t = self.pinhole.tan_half_y;
-        let nu = n * g;
-        let d = Vec3::new(nu.x * t, nu.y * t, -1.0);
-        let len = d.length();
         let frame = &self.pinhole.frame;
-        let dir = frame.dir_to_world(d / len);
         // d n / dx = (2/h, 0), d n / dy = (0, -2/h); d n_u = g dn + 2 g' (n . dn) n.
         let k = 2.0 / self.pinhole.height as f32;
         let dnu_dx = (Vec2::X * g + n * (2.0 * dg * n.x)) * k;

@@ -85,15 +85,12 @@ impl Fisheye {
     }
 }
 
-impl CameraModel for Fisheye {
-    fn width(&self) -> u32 {
-        self.width
-    }
-    fn height(&self) -> u32 {
-        self.height
-    }
-
-    fn generate_ray(&self, film: Vec2, _lens: Vec2, _channel: usize) -> Option<CameraRay> {
+impl Fisheye {
+    /// The ray's part of [`CameraModel::generate_ray`] (shared with [`CameraModel::ray`], so
+    /// both give the same bits): the angles `(u, v)`, the [`sinc_terms`] of their length and
+    /// the camera-space direction; `None` outside the image circle.
+    #[inline(always)]
+    fn camera_dir(&self, film: Vec2) -> Option<((f32, f32), (f32, f32), Vec3)> {
         let n = self.normalized(film);
         if n.is_nan() || n.length_squared() > 1.0 {
             return None;
@@ -102,7 +99,25 @@ impl CameraModel for Fisheye {
         let theta = uv.length();
         let (s, t) = sinc_terms(theta);
         let (u, v) = (uv.x, uv.y);
-        let d = Vec3::new(u * s, v * s, -theta.cos());
+        Some(((u, v), (s, t), Vec3::new(u * s, v * s, -theta.cos())))
+    }
+}
+
+impl CameraModel for Fisheye {
+    fn width(&self) -> u32 {
+        self.width
+    }
+    fn height(&self) -> u32 {
+        self.height
+    }
+
+    fn ray(&self, film: Vec2, _lens: Vec2, _channel: usize) -> Option<Ray> {
+        let (.., d) = self.camera_dir(film)?;
+        Some(Ray::new(self.frame.position, self.frame.dir_to_world(d)))
+    }
+
+    fn generate_ray(&self, film: Vec2, _lens: Vec2, _channel: usize) -> Option<CameraRay> {
+        let ((u, v), (s, t), d) = self.camera_dir(film)?;
         let d_du = Vec3::new(s + u * u * t, u * v * t, u * s);
         let d_dv = Vec3::new(u * v * t, s + v * v * t, v * s);
         let dir = self.frame.dir_to_world(d);

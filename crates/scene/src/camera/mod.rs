@@ -151,6 +151,9 @@ impl CameraModel for Camera {
     fn generate_ray(&self, film: Vec2, lens: Vec2, channel: usize) -> Option<CameraRay> {
         self.inner().generate_ray(film, lens, channel)
     }
+    fn ray(&self, film: Vec2, lens: Vec2, channel: usize) -> Option<parallax_core::Ray> {
+        self.inner().ray(film, lens, channel)
+    }
     fn project(&self, p: Vec3, channel: usize) -> Option<Vec2> {
         self.inner().project(p, channel)
     }

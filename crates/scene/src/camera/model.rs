@@ -36,6 +36,13 @@ pub trait CameraModel {
     /// without per-channel distortion). `None` where the film position maps to no ray (outside
     /// a fisheye's circle, off the film).
     fn generate_ray(&self, film: Vec2, lens: Vec2, channel: usize) -> Option<CameraRay>;
+    /// The ray of [`Self::generate_ray`] alone, without its differential and depth axis (what
+    /// a ray caster needs), equal to `generate_ray(film, lens, channel).map(|r| r.ray)` bit for
+    /// bit. Models whose differential costs more than the ray override it.
+    #[inline]
+    fn ray(&self, film: Vec2, lens: Vec2, channel: usize) -> Option<Ray> {
+        self.generate_ray(film, lens, channel).map(|r| r.ray)
+    }
     /// The film position of world point `p` (for the centre of the lens / channel `channel`),
     /// or `None` if it is behind the camera or outside the model's field of view.
     fn project(&self, p: Vec3, channel: usize) -> Option<Vec2>;
