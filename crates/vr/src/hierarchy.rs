@@ -21,6 +21,16 @@
 //! bounds (directions over more than a hemisphere, e.g. a 210-degree fisheye block at the rim)
 //! is split in two and retried; a single sample that cannot be bounded gets the safe
 //! [`Beam::EVERYTHING`].
+//!
+//! **Lens beams** (thin lens, more than one subsample: [`Hierarchy::lens_beams`]). A tile's rays
+//! start anywhere on the lens disc, so its beam has no single origin and the per-tile triangle
+//! set-up (`cast/setup`) cannot use it. But the lens sample of subsample `k` is the same for
+//! every sample (`SampleSet::lens`), so the tile's rays with lens sample `k` all start at one
+//! point: per tile and `k` the beam of those rays alone, and the caster sets the tile up once
+//! per lens point. Such tiles hold [`TILE_RAYS`] samples ([`tile_samples_of`]), so that each
+//! of the `spp` set-ups serves as many rays as a 1-spp tile's. (HVVR §5 widens the tile beams
+//! "to accommodate the distribution of ray origins" and tests every subsample on the GPU; its
+//! Table 5 puts the thin-lens intersect at 2.8x the pinhole eyes' at 0.5 m focus.)
 
 use crate::beam::{Beam, BeamBuilder};
 use parallax_scene::camera::Camera;
@@ -40,6 +50,24 @@ pub const BLOCK_TILES: usize = 64;
 /// tiles 497, `docs/notes/vr.md`). Blocks keep at most `TILE_SAMPLES * BLOCK_TILES` samples.
 pub fn tile_samples(spp: u32) -> usize {
     (TILE_RAYS / spp.max(1) as usize).max(TILE_SAMPLES)
+}
+
+/// Most samples per tile of `set`: [`tile_samples`], except for a thin lens at more than one
+/// subsample, whose tiles are cast one lens point at a time ([`Hierarchy::lens_beams`]): there
+/// [`TILE_RAYS`] samples, so that each of a tile's per-lens-point set-ups serves as many rays
+/// as a 1-spp tile's (measured in `docs/notes/vr.md`).
+pub fn tile_samples_of(set: &SampleSet) -> usize {
+    if lens_bundles(set) {
+        TILE_RAYS
+    } else {
+        tile_samples(set.spp)
+    }
+}
+
+/// Whether `set`'s tiles are cast one lens sample at a time (a thin lens, more than one
+/// subsample: the rays of one lens sample share the lens point as their origin).
+fn lens_bundles(set: &SampleSet) -> bool {
+    matches!(set.camera, Camera::ThinLens(_)) && set.spp > 1
 }
 
 /// Subsample rays per tile aimed at by [`tile_samples`].
@@ -93,6 +121,12 @@ pub struct Hierarchy {
     /// that the caster's 1-spp packets (sixteen consecutive samples of a tile) load their
     /// film lanes contiguously instead of gathering them through `order`; empty at other spp.
     pub film: [Vec<f32>; 3],
+    /// For a thin lens at more than one subsample: per tile and lens sample (`tile * spp +
+    /// k`) the beam of the tile's rays with lens sample `k` alone. They share one origin, the
+    /// lens point, so the caster sets the tile's triangles up once per lens sample and tests
+    /// each such ray bundle as a pinhole tile (`cast/mod.rs`); [`Beam::EVERYTHING`] where no
+    /// axis bounds the bundle. Empty for every other set.
+    pub lens_beams: Vec<Beam>,
 }
 
 /// The view (stereo eye, cube face) a film position belongs to.
@@ -138,22 +172,50 @@ fn morton(f: glam::Vec2) -> u32 {
     spread(f.x) | (spread(f.y) << 1)
 }
 
-/// The beam accumulator of the subsample rays of `idx`.
-fn rays_of(set: &SampleSet, idx: &[u32]) -> BeamBuilder {
-    let mut b = BeamBuilder::new();
+/// The beam accumulator of the subsample rays of `idx`, and for a set cast one lens sample at
+/// a time ([`lens_bundles`]) the beams of each lens sample's rays ([`Hierarchy::lens_beams`];
+/// the accumulator is then their union). Every ray is generated once.
+fn rays_of(set: &SampleSet, idx: &[u32]) -> (BeamBuilder, Vec<Beam>) {
+    let spp = set.spp as usize;
+    if !lens_bundles(set) {
+        let mut b = BeamBuilder::new();
+        for &i in idx {
+            for k in 0..spp {
+                if let Some(r) = set.fast_subsample_ray(i as usize, k) {
+                    b.add(&r);
+                }
+            }
+        }
+        return (b, Vec::new());
+    }
+    let mut per_k = vec![BeamBuilder::new(); spp];
     for &i in idx {
-        for k in 0..set.spp as usize {
+        for (k, b) in per_k.iter_mut().enumerate() {
             if let Some(r) = set.fast_subsample_ray(i as usize, k) {
                 b.add(&r);
             }
         }
     }
-    b
+    let mut all = BeamBuilder::new();
+    for b in &per_k {
+        all.merge(b);
+    }
+    let beams = per_k
+        .iter()
+        .map(|b| b.finish().unwrap_or(Beam::EVERYTHING))
+        .collect();
+    (all, beams)
 }
 
+/// A tile, its rays' accumulator and its lens beams (`rays_of`).
+type TileOut = (Tile, BeamBuilder, Vec<Beam>);
+
+/// A block and its tiles with their lens beams.
+type BlockOut = (Vec<(Tile, Vec<Beam>)>, Block);
+
 /// Tiles of one block's samples (`idx`, at offset `base` of the order array).
-fn build_tiles(set: &SampleSet, idx: &mut [u32], base: u32, out: &mut Vec<(Tile, BeamBuilder)>) {
-    if idx.len() > tile_samples(set.spp) {
+fn build_tiles(set: &SampleSet, idx: &mut [u32], base: u32, out: &mut Vec<TileOut>) {
+    if idx.len() > tile_samples_of(set) {
         let mid = median_split(set, idx);
         let (a, b) = idx.split_at_mut(mid);
         build_tiles(set, a, base, out);
@@ -163,7 +225,7 @@ fn build_tiles(set: &SampleSet, idx: &mut [u32], base: u32, out: &mut Vec<(Tile,
     // Z-order within the tile, so that consecutive samples (the caster's ray packets at low
     // spp) are neighbours on the film.
     idx.sort_unstable_by_key(|&i| (morton(set.samples[i as usize].film), i));
-    let acc = rays_of(set, idx);
+    let (acc, lens) = rays_of(set, idx);
     let beam = match acc.finish() {
         Some(b) => b,
         None if acc.count() == 0 || idx.len() == 1 => Beam::EVERYTHING,
@@ -183,17 +245,22 @@ fn build_tiles(set: &SampleSet, idx: &mut [u32], base: u32, out: &mut Vec<(Tile,
             beam,
         },
         acc,
+        lens,
     ));
 }
 
 /// Blocks (each with its tiles) of `idx`: split further while a block has too many tiles or no
 /// bounding beam.
-fn build_blocks(set: &SampleSet, idx: &mut [u32], base: u32) -> Vec<(Vec<Tile>, Block)> {
+fn build_blocks(
+    set: &SampleSet,
+    idx: &mut [u32],
+    base: u32,
+) -> Vec<(Vec<(Tile, Vec<Beam>)>, Block)> {
     let mut tiles = Vec::new();
     if idx.len() <= TILE_SAMPLES * BLOCK_TILES {
         build_tiles(set, idx, base, &mut tiles);
         let mut acc = BeamBuilder::new();
-        for (_, a) in &tiles {
+        for (_, a, _) in &tiles {
             acc.merge(a);
         }
         let beam = acc.finish();
@@ -204,7 +271,7 @@ fn build_blocks(set: &SampleSet, idx: &mut [u32], base: u32) -> Vec<(Vec<Tile>, 
                 rays: acc.count(),
                 beam: beam.unwrap_or(Beam::EVERYTHING),
             };
-            return vec![(tiles.into_iter().map(|(t, _)| t).collect(), block)];
+            return vec![(tiles.into_iter().map(|(t, _, l)| (t, l)).collect(), block)];
         }
     }
     let mid = median_split(set, idx);
@@ -271,15 +338,19 @@ impl Hierarchy {
             rest = tail;
             done = e;
         }
-        let parts: Vec<Vec<(Vec<Tile>, Block)>> = slices
+        let parts: Vec<Vec<BlockOut>> = slices
             .into_par_iter()
             .map(|(base, idx)| build_blocks(set, idx, base))
             .collect();
         let mut tiles = Vec::new();
         let mut blocks = Vec::new();
+        let mut lens_beams = Vec::new();
         for (t, mut b) in parts.into_iter().flatten() {
             b.first_tile = tiles.len() as u32;
-            tiles.extend(t);
+            for (tile, lens) in t {
+                tiles.push(tile);
+                lens_beams.extend(lens);
+            }
             blocks.push(b);
         }
         let film = if set.spp == 1 {
@@ -291,6 +362,7 @@ impl Hierarchy {
             Default::default()
         };
         Ok(Hierarchy {
+            lens_beams,
             film,
             order,
             tiles,

@@ -4,7 +4,7 @@
 use glam::{Vec2, Vec3};
 use parallax_scene::CameraDesc;
 use parallax_scene::camera::{Camera, CameraOptions, ModelKind};
-use parallax_vr::hierarchy::{BLOCK_TILES, tile_samples};
+use parallax_vr::hierarchy::{BLOCK_TILES, tile_samples, tile_samples_of};
 use parallax_vr::{Hierarchy, SampleSet};
 use proptest::prelude::*;
 
@@ -32,17 +32,41 @@ fn check(set: &SampleSet) -> Result<(), TestCaseError> {
         prop_assert!(b.tile_count as usize <= BLOCK_TILES && b.tile_count > 0);
         prop_assert_eq!(b.first_tile as usize, tiles_seen);
         tiles_seen += b.tile_count as usize;
-        for t in &h.tiles[b.first_tile as usize..(b.first_tile + b.tile_count) as usize] {
-            prop_assert!(t.len as usize <= tile_samples(set.spp) && t.len > 0);
+        let first = b.first_tile as usize;
+        for (ti, t) in h.tiles[first..first + b.tile_count as usize]
+            .iter()
+            .enumerate()
+        {
+            prop_assert!(t.len as usize <= tile_samples_of(set) && t.len > 0);
+            let spp = set.spp as usize;
+            let lens = h.lens_beams.get((first + ti) * spp..(first + ti + 1) * spp);
             for &i in &h.order[t.start as usize..(t.start + t.len) as usize] {
-                for k in 0..set.spp as usize {
+                for k in 0..spp {
                     if let Some(r) = set.subsample_ray(i as usize, k) {
                         prop_assert!(t.beam.contains_ray(&r, 0.0), "tile beam misses a ray");
                         prop_assert!(b.beam.contains_ray(&r, 0.0), "block beam misses a ray");
+                        if let Some(lb) = lens {
+                            let beam = &lb[k];
+                            prop_assert!(beam.contains_ray(&r, 0.0), "lens beam misses a ray");
+                            // One origin per lens sample: the set-up kernel's.
+                            prop_assert!(
+                                beam.origin.min == r.origin && beam.origin.max == r.origin
+                            );
+                        }
                     }
                 }
             }
         }
+        // Lens beams exactly for thin lenses at more than one subsample.
+        let thin = matches!(set.camera, Camera::ThinLens(_)) && set.spp > 1;
+        prop_assert_eq!(
+            h.lens_beams.len(),
+            if thin {
+                h.tiles.len() * set.spp as usize
+            } else {
+                0
+            }
+        );
     }
     prop_assert_eq!(tiles_seen, h.tiles.len());
     Ok(())
@@ -119,6 +143,27 @@ fn grid_tiles_are_16_by_8_from_8_spp() {
             assert_eq!(hi - lo, extent, "spp {spp}");
         }
     }
+}
+
+/// A thin lens at 8 spp is cast one lens point at a time: 32 x 32 pixel tiles (1024 rays per
+/// lens point, as a 1-spp tile), one lens beam per tile and lens sample.
+#[test]
+fn thin_lens_tiles_hold_1024_samples() {
+    let desc = CameraDesc::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0);
+    let cam = Camera::new(
+        ModelKind::ThinLens,
+        &desc,
+        256,
+        128,
+        &CameraOptions::default(),
+    )
+    .unwrap();
+    let set = SampleSet::depth_of_field(cam, 8).unwrap();
+    let h = Hierarchy::build(&set).unwrap();
+    assert_eq!(tile_samples_of(&set), 1024);
+    assert_eq!(h.tiles.len(), 256 * 128 / 1024);
+    assert_eq!(h.lens_beams.len(), h.tiles.len() * 8);
+    assert!(h.lens_beams.iter().all(|b| !b.everything));
 }
 
 #[test]

@@ -271,6 +271,15 @@ fn check_setup(
         stats.setup_final_tests,
         stats.setup_rescues,
     );
+    // A thin lens's tiles take the set-up kernel one lens point at a time
+    // (`Hierarchy::lens_beams`): one set-up per tile and lens sample.
+    if matches!(set.camera, Camera::ThinLens(_)) && set.spp > 1 {
+        assert_eq!(
+            stats.setup_tiles,
+            stats.tiles * set.spp as u64,
+            "{label}: tiles not cast per lens point"
+        );
+    }
     let hits = reference.prim.iter().filter(|&&p| p != u32::MAX).count();
     assert!(hits > n / 50, "{label}: scene not in view");
     // (A scene with coplanar overlapping faces, `coplanar_overlaps`, may have more depth ties

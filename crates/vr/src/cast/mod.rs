@@ -5,6 +5,12 @@
 //!
 //! HVVR runs the culling on the CPU and sample testing on the GPU; here all three stages run on
 //! the CPU threads, block after block.
+//!
+//! A tile whose rays share an origin (every model but the thin lens) takes the per-tile
+//! triangle set-up and its sample test (`setup`); a thin-lens tile at more than one subsample
+//! is culled once with its whole beam, then set up and tested once per lens point, on the rays
+//! that start there (`Hierarchy::lens_beams`); other tiles (or [`SampleTest::Watertight`]) take
+//! the watertight kernel over the tile's leaves.
 
 pub mod intersect;
 pub mod isa;
@@ -19,8 +25,8 @@ pub mod stored;
 
 use std::time::{Duration, Instant};
 
-use crate::beam::PreparedBeam;
 use crate::beam::{BLOCK_ENTRIES, CullScratch, SimdBeam, block_cull, tile_cull};
+use crate::beam::{Beam, PreparedBeam};
 use parallax_bvh::Bvh;
 use rayon::prelude::*;
 
@@ -301,7 +307,7 @@ fn cast_from(
             tt.counts = Default::default();
             let tiles = &hierarchy.tiles
                 [block.first_tile as usize..(block.first_tile + block.tile_count) as usize];
-            for tile in tiles {
+            for (ti, tile) in tiles.iter().enumerate() {
                 if tile.rays == 0 {
                     // SAFETY: as below (this tile's entries only).
                     unsafe { clear_samples(hierarchy, tile, set.spp as usize, ptr) };
@@ -312,54 +318,69 @@ fn cast_from(
                 tile_cull(bvh, &SimdBeam::new(&tb), &entries, scratch);
                 let range = tile.start as usize..(tile.start + tile.len) as usize;
                 let samples = &hierarchy.order[range.clone()];
+                // The ray bundles of the tile that share an origin: the tile itself, or (a thin
+                // lens) its rays through each lens point (`Hierarchy::lens_beams`), each set up
+                // and tested as a pinhole tile; none: the watertight kernel.
                 let origin = match opts.test {
                     SampleTest::TileSetup => shared_origin(&tile.beam),
                     SampleTest::Watertight => None,
                 };
-                if let Some(o) = origin {
+                let lens = match opts.test {
+                    SampleTest::TileSetup if origin.is_none() => {
+                        lens_bundles(hierarchy, block.first_tile as usize + ti)
+                    }
+                    _ => None,
+                };
+                let bundles = if origin.is_some() {
+                    1
+                } else {
+                    lens.map_or(0, <[Beam]>::len)
+                };
+                if bundles > 0 {
                     let lazy = opts.exactness == SetupExactness::Edges;
-                    // The set-up's lanes follow the kernel's tier: the same list either way.
-                    setup_tile_with(
-                        isa,
-                        blocks_,
-                        copies,
-                        &scratch.leaves,
-                        &tile.beam,
-                        o,
-                        lazy,
-                        tt,
-                    );
                     // The 1-spp film lanes of these samples (`Hierarchy::film`).
                     let film = (hierarchy.film[0].len() == set.samples.len())
                         .then(|| hierarchy.film.each_ref().map(|v| &v[range.clone()]));
-                    let b = Instant::now();
-                    // SAFETY: as below.
-                    let w = unsafe {
-                        test_tile_setup(
-                            set,
-                            stored,
-                            blocks_,
-                            samples,
-                            film,
-                            tt,
-                            &tile.beam,
-                            scale,
-                            lanes,
-                            isa,
-                            opts.exactness,
-                            opts.affine,
-                            opts.affine_always,
-                            ptr.prim,
-                            ptr.t,
-                        )
-                    };
-                    let c = Instant::now();
-                    tally.tile_ns += (b - a).as_nanos() as u64;
-                    tally.test_ns += (c - b).as_nanos() as u64;
+                    let mut mark = a;
+                    for q in 0..bundles {
+                        let (beam, o, lens_k) = match (origin, lens) {
+                            (Some(o), _) => (&tile.beam, o, None),
+                            (None, Some(lb)) => (&lb[q], lb[q].origin.min, Some(q as u32)),
+                            (None, None) => unreachable!("bundles == 0"),
+                        };
+                        // The set-up's lanes follow the kernel's tier: the same list either way.
+                        setup_tile_with(isa, blocks_, copies, &scratch.leaves, beam, o, lazy, tt);
+                        let b = Instant::now();
+                        // SAFETY: as below.
+                        let w = unsafe {
+                            test_tile_setup(
+                                set,
+                                stored,
+                                blocks_,
+                                samples,
+                                film,
+                                lens_k,
+                                tt,
+                                beam,
+                                scale,
+                                lanes,
+                                isa,
+                                opts.exactness,
+                                opts.affine,
+                                opts.affine_always,
+                                ptr.prim,
+                                ptr.t,
+                            )
+                        };
+                        let c = Instant::now();
+                        tally.tile_ns += (b - mark).as_nanos() as u64;
+                        tally.test_ns += (c - b).as_nanos() as u64;
+                        mark = c;
+                        tally.rays += w.rays;
+                        tally.setup.add(&w);
+                        tally.setup_tiles += 1;
+                    }
                     tally.tile_leaves += scratch.leaves.len() as u64;
-                    tally.rays += w.rays;
-                    tally.setup.add(&w);
-                    tally.setup_tiles += 1;
                     continue;
                 }
                 group_leaves(bvh, &scratch.leaves, groups, boxes);
@@ -412,6 +433,15 @@ fn cast_from(
         setup_packet_out: t.setup.packet_out,
         setup_packet_in: t.setup.packet_in,
     }
+}
+
+/// The lens beams of tile `ti` ([`Hierarchy::lens_beams`]) when every one has a single origin
+/// (the lens point) for the set-up kernel; `None` otherwise (no lens beams, or a bundle no axis
+/// bounds).
+fn lens_bundles(h: &Hierarchy, ti: usize) -> Option<&[Beam]> {
+    let spp = h.spp as usize;
+    let lb = h.lens_beams.get(ti * spp..(ti + 1) * spp)?;
+    lb.iter().all(|b| shared_origin(b).is_some()).then_some(lb)
 }
 
 /// Writes "no hit" to every subsample entry of `tile`'s samples (a tile without rays).

@@ -9,7 +9,7 @@
 use glam::{Vec2, Vec3};
 use parallax_core::Ray;
 use parallax_core::simd::Lanes;
-use parallax_scene::camera::{Camera, CameraFrame, Distorted, Pinhole};
+use parallax_scene::camera::{Camera, CameraFrame, Distorted, Pinhole, ThinLens};
 
 use crate::SampleSet;
 use crate::cast::lanes16::LaneReduce;
@@ -64,6 +64,31 @@ fn distorted_n<L: Lanes>(c: &Distorted, fx: L, fy: L, channel: usize) -> ([L; 3]
     let g = L::splat(1.0) + s * (L::splat(k1) + L::splat(k2) * s);
     let t = L::splat(p.tan_half_y);
     unit_to_world(&p.frame, nx * g * t, ny * g * t, L::splat(-1.0))
+}
+
+/// `SampleSet::fast_subsample_ray` of a thin lens on `N` film positions with one lens sample
+/// `lens`: lane-wise the same f32 operations (`camera_dir` as [`pinhole_n`], times the focus
+/// distance, minus the lens point, then [`unit_to_world`]); every lane's origin is the lens
+/// point in the world, computed once as the per-lane path computes it.
+#[inline(always)]
+fn thin_lens_n<L: Lanes>(c: &ThinLens, lens: Vec2, fx: L, fy: L) -> ([L; 3], [L; 3]) {
+    let p = &c.pinhole;
+    let w = L::splat(p.width as f32);
+    let h = L::splat(p.height as f32);
+    let one = L::splat(1.0);
+    let ndc_x = L::splat(2.0) * fx / w - one;
+    let ndc_y = one - L::splat(2.0) * fy / h;
+    let x = (ndc_x + L::splat(p.shift.x)) * L::splat(p.tan_half_x());
+    let y = (ndc_y + L::splat(p.shift.y)) * L::splat(p.tan_half_y);
+    let f = c.focus_distance;
+    let pl = c.lens_point(lens);
+    let dx = x * L::splat(f) - L::splat(pl.x);
+    let dy = y * L::splat(f) - L::splat(pl.y);
+    // (`camera_dir`'s `z = -1` times `f` is `-f` exactly.)
+    let dz = L::splat(-f - pl.z);
+    let (_, d) = unit_to_world(&p.frame, dx, dy, dz);
+    let o = p.frame.position + p.frame.dir_to_world(pl);
+    ([L::splat(o.x), L::splat(o.y), L::splat(o.z)], d)
 }
 
 /// The camera-space direction `(x, y, z)` normalised and turned into the world by `frame`,
@@ -162,6 +187,12 @@ pub(crate) fn gen_n_film<L: Lanes>(
                 let (o, d) = distorted_n(c, fx, fy, ch as usize);
                 return (RaysN { o, d, valid: full }, bx);
             }
+        }
+        // One lens sample in every lane (the caster's packets of a thin-lens tile, one lens
+        // sample at a time: `cast/mod.rs`).
+        Camera::ThinLens(c) if !nan && pairs[..n].iter().all(|&(_, k)| k == pairs[0].1) => {
+            let (o, d) = thin_lens_n(c, set.lens[pairs[0].1 as usize], fx, fy);
+            return (RaysN { o, d, valid: full }, bx);
         }
         _ => {}
     }
@@ -495,6 +526,74 @@ mod tests {
                 compare::<Vec4>(&set, &pairs);
             }
         }
+    }
+
+    /// `gen_n_film` on a thin lens (`thin_lens_n` for packets of one lens sample, the per-lane
+    /// path for mixed ones) equals `fast_subsample_ray` lane by lane, bit for bit, origins
+    /// included, on random packets in 16 and 4 lanes.
+    #[test]
+    fn thin_lens_packets_equal_the_per_lane_generator() {
+        let desc = CameraDesc::new(
+            Vec3::new(0.3, -1.2, 2.0),
+            Vec3::new(1.0, 0.5, -3.0),
+            Vec3::Y,
+            55.0,
+        );
+        let opts = CameraOptions {
+            aperture_radius: 0.07,
+            ..CameraOptions::default()
+        };
+        let cam = Camera::new(ModelKind::ThinLens, &desc, 48, 40, &opts).unwrap();
+        let set = SampleSet::depth_of_field(cam, 8).unwrap();
+        let mut s = 5u64;
+        let mut next = |m: u64| {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 33) % m
+        };
+        let n = set.samples.len() as u64;
+        let mut lanes_path = 0;
+        for p in 0..600 {
+            let lanes = if p % 2 == 0 { 16 } else { 4 };
+            // One lens sample per packet (the lanes' path), every fifth packet mixed.
+            let k = next(8) as u32;
+            let pairs: Vec<(u32, u32)> = (0..lanes)
+                .map(|_| {
+                    let kk = if p % 5 == 0 { next(8) as u32 } else { k };
+                    (next(n) as u32, kk)
+                })
+                .collect();
+            lanes_path += pairs.iter().all(|&(_, kk)| kk == pairs[0].1) as u32;
+            let (got, _) = if lanes == 16 {
+                let (r, b) = gen_n_film::<V16>(&set, None, &pairs);
+                (to_rays(&r, lanes), b)
+            } else {
+                let (r, b) = gen_n_film::<Vec4>(&set, None, &pairs);
+                (to_rays(&r, lanes), b)
+            };
+            for (l, &(i, k)) in pairs.iter().enumerate() {
+                let want = set
+                    .fast_subsample_ray(i as usize, k as usize)
+                    .expect("a ray");
+                assert_eq!(
+                    got[l].origin.to_array().map(f32::to_bits),
+                    want.origin.to_array().map(f32::to_bits),
+                    "lane {l} of {pairs:?}"
+                );
+                assert_eq!(
+                    got[l].dir.to_array().map(f32::to_bits),
+                    want.dir.to_array().map(f32::to_bits),
+                    "lane {l} of {pairs:?}"
+                );
+            }
+        }
+        assert!(lanes_path > 400, "{lanes_path} packets of one lens sample");
+    }
+
+    fn to_rays<L: Lanes>(r: &RaysN<L>, n: usize) -> Vec<Ray> {
+        assert_eq!(r.valid, (1u32 << n) - 1);
+        (0..n).map(|l| r.lane(l)).collect()
     }
 
     #[test]

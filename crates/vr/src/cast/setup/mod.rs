@@ -1,7 +1,7 @@
 //! Per-tile triangle set-up and the set-up sample test (Hunt et al. 2018, §5.5, "triangle
 //! setup ... tile-corner classification"): for a tile whose subsample rays share one origin `o`
-//! (pinhole, stereo eye, lens-distorted, foveated, fisheye / wide-FoV models — everything but
-//! the thin lens), every triangle of the tile's list is set up once relative to `o`, so that a
+//! (pinhole, stereo eye, lens-distorted, foveated, fisheye / wide-FoV models; a thin lens's
+//! tile one lens point at a time, `lens_k` of [`test_tile_setup`]), every triangle of the tile's list is set up once relative to `o`, so that a
 //! ray-triangle test is a few multiply-adds on the ray direction `d` alone:
 //!
 //! - **Edge covectors** `n_i = a_i x (a_{i+1} - a_i)` (`= a_i x a_{i+1}` exactly; `a_i = v_i - o`
@@ -128,8 +128,9 @@
 //!
 //! **Exactness** (tested in `tests/cast.rs` on every scheme): `Full` gives the same triangle and
 //! a bit-identical `t` as per-ray traversal for every subsample; `Edges` differs only in depth
-//! ties (both hit, `t` within 1e-5 relative). Tiles without a shared origin (thin lens) take the
-//! exact watertight kernel ([`crate::cast::intersect`]).
+//! ties (both hit, `t` within 1e-5 relative). Tiles without a shared origin (orthographic
+//! cameras, a thin-lens tile with a lens point's rays that no beam bounds) take the exact
+//! watertight kernel ([`crate::cast::intersect`]).
 //!
 //! **Parameters** (of [`test_tile_setup`], set through [`crate::CastOptions`]):
 //!
@@ -167,7 +168,7 @@ use crate::cast::lanes16::{LaneReduce, V16};
 use crate::cast::lanes256::{Y8, Y16};
 #[cfg(target_arch = "x86_64")]
 use crate::cast::lanes512::Z16;
-use crate::cast::packet::{ClosestN, MAX_LANES, gen_n_film, gen_spp1, sample_chunk};
+use crate::cast::packet::{ClosestN, MAX_LANES, RaysN, gen_n_film, gen_spp1, sample_chunk};
 use crate::cast::stored::RayBuffer;
 use crate::samples::MAX_SPP;
 use affine::{FilmFrame, PacketBox};
@@ -185,8 +186,9 @@ pub enum SampleTest {
     /// The BVH's watertight test per ray (Woop et al. 2013), bit-identical to per-ray traversal.
     Watertight,
     /// HVVR's per-tile triangle set-up with tile-corner classification (this module), exact
-    /// through its uncertainty band; tiles without a shared ray origin (thin lens) fall back
-    /// to [`SampleTest::Watertight`].
+    /// through its uncertainty band; a thin lens's tiles are set up per lens point
+    /// (`Hierarchy::lens_beams`); tiles without a shared ray origin otherwise fall back to
+    /// [`SampleTest::Watertight`].
     #[default]
     TileSetup,
 }
@@ -297,6 +299,7 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
     slack: f32,
     samples: &[u32],
     film: Option<[&[f32]; 3]>,
+    lens_k: Option<u32>,
     pair: impl Fn(usize) -> (u32, u32),
     out: Out,
 ) -> SetupWork {
@@ -337,6 +340,29 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
                 )
             }
         };
+    }
+    if let Some(k) = lens_k {
+        // One lens sample `k` of every sample (a thin-lens tile's rays from one lens point):
+        // packets of `L::N` consecutive samples, neighbours on the film, as at 1 spp (edges
+        // first).
+        let mut j = 0;
+        while j < samples.len() {
+            let n = (samples.len() - j).min(L::N);
+            for (p, &i) in pairs.iter_mut().zip(&samples[j..j + n]) {
+                *p = (i, k);
+            }
+            j += n;
+            let batch = &pairs[..n];
+            let (mut rays, _) = gen_n_film::<L>(set, stored, batch);
+            rays_n += clear_invalid(&mut rays, n);
+            let c = closest!(&rays, None, true);
+            for (l, &p) in batch.iter().enumerate() {
+                // SAFETY: as below.
+                unsafe { out.one(p, c.t[l], c.tri[l]) };
+            }
+        }
+        work.rays = rays_n;
+        return work;
     }
     let mut j = 0;
     while j < total {
@@ -388,19 +414,7 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
             (Some(fr), Some((lo, hi))) => PacketBox::new(fr, lo.x, hi.x, lo.y, hi.y),
             (Some(fr), None) => packet_box(fr, set, i0, batch, chunk.then(|| ranges[c])),
         };
-        // Invalid lanes get `d = 0`: `g . d = 0` is never a hit.
-        if rays.valid == (1 << n) - 1 {
-            rays_n += n as u64;
-        } else {
-            rays_n += rays.valid.count_ones() as u64;
-            for l in 0..n {
-                if rays.valid >> l & 1 == 0 {
-                    for a in 0..3 {
-                        rays.d[a] = L::from_fn(|i| if i == l { 0.0 } else { rays.d[a].get(i) });
-                    }
-                }
-            }
-        }
+        rays_n += clear_invalid(&mut rays, n);
         let c = closest!(&rays, pbox.as_ref(), false);
         // One sample's consecutive subsamples: `pair` maps consecutive `j` to `(sample, j % spp)`
         // (`test_tile_setup`), so a last lane at `k0 + n - 1` of the first lane's sample means
@@ -420,6 +434,23 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
     }
     work.rays = rays_n;
     work
+}
+
+/// Gives the invalid lanes of `rays` (`n` lanes in use) `d = 0` (`g . d = 0` is never a
+/// hit); returns the number of valid lanes.
+#[inline(always)]
+fn clear_invalid<L: LaneReduce>(rays: &mut RaysN<L>, n: usize) -> u64 {
+    if rays.valid == (1 << n) - 1 {
+        return n as u64;
+    }
+    for l in 0..n {
+        if rays.valid >> l & 1 == 0 {
+            for a in 0..3 {
+                rays.d[a] = L::from_fn(|i| if i == l { 0.0 } else { rays.d[a].get(i) });
+            }
+        }
+    }
+    rays.valid.count_ones() as u64
 }
 
 /// The camera-space box of a packet's rays (`affine.rs`): its film box is the exact float
@@ -474,11 +505,12 @@ macro_rules! isa_entry {
             slack: f32,
             samples: &[u32],
             film: Option<[&[f32]; 3]>,
+            lens_k: Option<u32>,
             pair: impl Fn(usize) -> (u32, u32),
             out: Out,
         ) -> SetupWork {
             run_setup::<$lanes, FULL>(
-                set, stored, blocks, tt, axis, sign, slack, samples, film, pair, out,
+                set, stored, blocks, tt, axis, sign, slack, samples, film, lens_k, pair, out,
             )
         }
     };
@@ -510,7 +542,9 @@ isa_entry!(
 /// (`Edges`), on the AVX-512 kernel and on the AVX2 16-lane kernel at 1 spp only with
 /// `affine_always`. `film`: the samples' film lanes
 /// at 1 spp ([`crate::Hierarchy::film`], `[x, y, footprint]` in `samples` order), read by
-/// the 1-spp packets instead of a gather through `samples`; `None` gathers.
+/// the 1-spp packets instead of a gather through `samples`; `None` gathers. `lens_k`: only
+/// subsample `k` of every sample (a thin-lens tile's rays through lens point `k`, which `tt`
+/// and `beam` were set up for: `Hierarchy::lens_beams`), else every subsample.
 ///
 /// # Safety
 /// As [`crate::cast::intersect::test_tile`]: `prim` and `t` valid for `set.ray_count()` elements,
@@ -522,6 +556,7 @@ pub unsafe fn test_tile_setup(
     blocks: &[Tri4],
     samples: &[u32],
     film: Option<[&[f32]; 3]>,
+    lens_k: Option<u32>,
     tt: &mut TileTris,
     beam: &Beam,
     scale: f32,
@@ -570,10 +605,10 @@ pub unsafe fn test_tile_setup(
         ($f:ident $(, $l:ty)?) => {
             match exactness {
                 SetupExactness::Edges => {
-                    $f::<$($l,)? false>(set, stored, blocks, tt, axis, sign, slack, samples, film, pair, out)
+                    $f::<$($l,)? false>(set, stored, blocks, tt, axis, sign, slack, samples, film, lens_k, pair, out)
                 }
                 SetupExactness::Full => {
-                    $f::<$($l,)? true>(set, stored, blocks, tt, axis, sign, slack, samples, film, pair, out)
+                    $f::<$($l,)? true>(set, stored, blocks, tt, axis, sign, slack, samples, film, lens_k, pair, out)
                 }
             }
         };
