@@ -32,7 +32,9 @@
 //! "to accommodate the distribution of ray origins" and tests every subsample on the GPU; its
 //! Table 5 puts the thin-lens intersect at 2.8x the pinhole eyes' at 0.5 m focus.)
 
-use crate::beam::{Beam, BeamBuilder};
+use crate::beam::{Beam, BeamBuilder, LaneBeamBuilder};
+use crate::cast::lanes16::V16;
+use crate::cast::packet::gen_n_film;
 use parallax_scene::camera::Camera;
 use rayon::prelude::*;
 
@@ -150,14 +152,28 @@ fn median_split(set: &SampleSet, idx: &mut [u32]) -> usize {
     let e = hi - lo;
     let axis = if e.x >= 2.0 * e.y { 0 } else { 1 };
     let mid = idx.len() / 2;
-    idx.select_nth_unstable_by(mid, |&a, &b| {
-        let (fa, fb) = (set.samples[a as usize].film, set.samples[b as usize].film);
-        fa[axis]
-            .total_cmp(&fb[axis])
-            .then(fa[1 - axis].total_cmp(&fb[1 - axis]))
-            .then(a.cmp(&b))
-    });
+    // The order `(film[axis], film[other])` by `total_cmp`, then the index, as one integer key
+    // per sample: the selection compares keys in one array instead of film positions gathered
+    // through `idx`. The two halves are the same sets either way (the order is total).
+    let mut keyed: Vec<(u64, u32)> = idx
+        .iter()
+        .map(|&i| {
+            let f = set.samples[i as usize].film;
+            let key = (total_order_key(f[axis]) as u64) << 32 | total_order_key(f[1 - axis]) as u64;
+            (key, i)
+        })
+        .collect();
+    keyed.select_nth_unstable(mid);
+    for (d, &(_, i)) in idx.iter_mut().zip(&keyed) {
+        *d = i;
+    }
     mid
+}
+
+/// An unsigned key whose order is `f32::total_cmp`'s.
+fn total_order_key(x: f32) -> u32 {
+    let b = x.to_bits();
+    if b >> 31 == 1 { !b } else { b | 1 << 31 }
 }
 
 /// Morton (Z-order) code of the pixel containing a film position (16 bits per axis).
@@ -174,36 +190,44 @@ fn morton(f: glam::Vec2) -> u32 {
 
 /// The beam accumulator of the subsample rays of `idx`, and for a set cast one lens sample at
 /// a time ([`lens_bundles`]) the beams of each lens sample's rays ([`Hierarchy::lens_beams`];
-/// the accumulator is then their union). Every ray is generated once.
+/// the accumulator is then their union). Every ray is generated once, sixteen at a time by the
+/// caster's own generator (`cast/packet.rs`: the rays it casts, bit for bit), and accumulated
+/// in lanes ([`LaneBeamBuilder`]).
 fn rays_of(set: &SampleSet, idx: &[u32]) -> (BeamBuilder, Vec<Beam>) {
     let spp = set.spp as usize;
+    let mut pairs = [(0u32, 0u32); 16];
     if !lens_bundles(set) {
-        let mut b = BeamBuilder::new();
-        for &i in idx {
-            for k in 0..spp {
-                if let Some(r) = set.fast_subsample_ray(i as usize, k) {
-                    b.add(&r);
-                }
+        // `(sample, k)` in order, sixteen at a time (one sample's subsamples from 16 spp up).
+        let mut acc = LaneBeamBuilder::<V16>::default();
+        let total = idx.len() * spp;
+        let mut j = 0;
+        while j < total {
+            let n = (total - j).min(16);
+            for (l, p) in pairs[..n].iter_mut().enumerate() {
+                *p = (idx[(j + l) / spp], ((j + l) % spp) as u32);
             }
+            let (r, _) = gen_n_film::<V16>(set, None, &pairs[..n]);
+            acc.add(r.o, r.d, r.valid & ((1u32 << n) - 1));
+            j += n;
         }
-        return (b, Vec::new());
-    }
-    let mut per_k = vec![BeamBuilder::new(); spp];
-    for &i in idx {
-        for (k, b) in per_k.iter_mut().enumerate() {
-            if let Some(r) = set.fast_subsample_ray(i as usize, k) {
-                b.add(&r);
-            }
-        }
+        return (acc.fold(), Vec::new());
     }
     let mut all = BeamBuilder::new();
-    for b in &per_k {
-        all.merge(b);
+    let mut beams = Vec::with_capacity(spp);
+    for k in 0..spp as u32 {
+        let mut acc = LaneBeamBuilder::<V16>::default();
+        for chunk in idx.chunks(16) {
+            for (p, &i) in pairs.iter_mut().zip(chunk) {
+                *p = (i, k);
+            }
+            let n = chunk.len();
+            let (r, _) = gen_n_film::<V16>(set, None, &pairs[..n]);
+            acc.add(r.o, r.d, r.valid & ((1u32 << n) - 1));
+        }
+        let b = acc.fold();
+        all.merge(&b);
+        beams.push(b.finish().unwrap_or(Beam::EVERYTHING));
     }
-    let beams = per_k
-        .iter()
-        .map(|b| b.finish().unwrap_or(Beam::EVERYTHING))
-        .collect();
     (all, beams)
 }
 
@@ -224,7 +248,15 @@ fn build_tiles(set: &SampleSet, idx: &mut [u32], base: u32, out: &mut Vec<TileOu
     }
     // Z-order within the tile, so that consecutive samples (the caster's ray packets at low
     // spp) are neighbours on the film.
-    idx.sort_unstable_by_key(|&i| (morton(set.samples[i as usize].film), i));
+    // (The key computed once per sample: `morton << 32 | i`, the order of `(morton, i)`.)
+    let mut keyed: Vec<u64> = idx
+        .iter()
+        .map(|&i| (morton(set.samples[i as usize].film) as u64) << 32 | i as u64)
+        .collect();
+    keyed.sort_unstable();
+    for (d, &k) in idx.iter_mut().zip(&keyed) {
+        *d = k as u32;
+    }
     let (acc, lens) = rays_of(set, idx);
     let beam = match acc.finish() {
         Some(b) => b,
@@ -251,11 +283,7 @@ fn build_tiles(set: &SampleSet, idx: &mut [u32], base: u32, out: &mut Vec<TileOu
 
 /// Blocks (each with its tiles) of `idx`: split further while a block has too many tiles or no
 /// bounding beam.
-fn build_blocks(
-    set: &SampleSet,
-    idx: &mut [u32],
-    base: u32,
-) -> Vec<(Vec<(Tile, Vec<Beam>)>, Block)> {
+fn build_blocks(set: &SampleSet, idx: &mut [u32], base: u32) -> Vec<BlockOut> {
     let mut tiles = Vec::new();
     if idx.len() <= TILE_SAMPLES * BLOCK_TILES {
         build_tiles(set, idx, base, &mut tiles);
@@ -370,5 +398,48 @@ impl Hierarchy {
             sample_count: n,
             spp: set.spp,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::total_order_key;
+
+    /// The median split's integer key orders floats as `f32::total_cmp` does: signed zeros,
+    /// infinities, NaNs of both signs, subnormals and random values, pair by pair.
+    #[test]
+    fn total_order_key_is_total_cmp() {
+        let mut v = vec![
+            0.0f32,
+            -0.0,
+            1.0,
+            -1.0,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            -f32::NAN,
+            f32::MIN_POSITIVE,
+            -f32::MIN_POSITIVE,
+            1e-45,
+            -1e-45,
+            f32::MAX,
+            f32::MIN,
+        ];
+        let mut s = 7u64;
+        for _ in 0..200 {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            v.push(f32::from_bits((s >> 32) as u32));
+        }
+        for &a in &v {
+            for &b in &v {
+                assert_eq!(
+                    total_order_key(a).cmp(&total_order_key(b)),
+                    a.total_cmp(&b),
+                    "{a} {b}"
+                );
+            }
+        }
     }
 }

@@ -25,6 +25,6 @@ pub use cull::{
     tile_cull,
 };
 pub use shape::{
-    BEAM_TOLERANCE, Beam, BeamBuilder, BeamTest, MIN_DOMINANT, PreparedBeam, plane_range1,
-    plane_range2,
+    BEAM_TOLERANCE, Beam, BeamBuilder, BeamTest, LaneBeamBuilder, MIN_DOMINANT, PreparedBeam,
+    plane_range1, plane_range2,
 };

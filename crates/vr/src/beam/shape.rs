@@ -44,6 +44,7 @@
 
 use glam::Vec3;
 
+use parallax_core::simd::Lanes;
 use parallax_core::{Aabb, Ray};
 
 /// Smallest `|d[a]| / |d|` a ray may have for axis `a` to bound it (about 84 degrees off the
@@ -390,6 +391,109 @@ impl BeamBuilder {
     }
 }
 
+/// [`BeamBuilder`] over packets of rays in SIMD lanes (the caster's packets, `cast/packet.rs`):
+/// lane-wise running extrema of the same per-ray values as [`BeamBuilder::add`] (the
+/// normalised direction by `Vec3::length`'s operations, the slopes by division), folded into a
+/// [`BeamBuilder`] once by [`Self::fold`]. The extrema, the origin box and the count equal
+/// those of adding the rays one by one; the sum of the normalised directions (which only picks
+/// the dominant axis) is summed in another order.
+#[derive(Clone, Copy)]
+pub struct LaneBeamBuilder<L> {
+    count: u32,
+    omin: [L; 3],
+    omax: [L; 3],
+    sum: [L; 3],
+    dmin: [L; 3],
+    dmax: [L; 3],
+    umin: [L; 3],
+    umax: [L; 3],
+    vmin: [L; 3],
+    vmax: [L; 3],
+}
+
+impl<L: Lanes> Default for LaneBeamBuilder<L> {
+    fn default() -> Self {
+        let (inf, ninf) = (L::splat(f32::INFINITY), L::splat(f32::NEG_INFINITY));
+        Self {
+            count: 0,
+            omin: [inf; 3],
+            omax: [ninf; 3],
+            sum: [L::splat(0.0); 3],
+            dmin: [inf; 3],
+            dmax: [ninf; 3],
+            umin: [inf; 3],
+            umax: [ninf; 3],
+            vmin: [inf; 3],
+            vmax: [ninf; 3],
+        }
+    }
+}
+
+impl<L: Lanes> LaneBeamBuilder<L> {
+    /// Adds the rays `(o, d)` of the lanes set in `valid` that [`Ray::is_valid`] accepts.
+    #[inline(always)]
+    pub fn add(&mut self, o: [L; 3], d: [L; 3], valid: u32) {
+        let zero = L::splat(0.0);
+        let (inf, ninf) = (L::splat(f32::INFINITY), L::splat(f32::NEG_INFINITY));
+        let finite = |x: L| L::and(x.gt(ninf), x.lt(inf));
+        let mut ok = L::from_fn(|l| (valid >> l & 1) as f32).gt(zero);
+        for a in 0..3 {
+            ok = L::and(ok, L::and(finite(o[a]), finite(d[a])));
+        }
+        let [x, y, z] = d;
+        let len2 = x * x + y * y + z * z;
+        ok = L::and(ok, len2.gt(zero));
+        let bits = L::bits(ok);
+        if bits == 0 {
+            return;
+        }
+        self.count += bits.count_ones();
+        let len = len2.sqrt();
+        let n = [x / len, y / len, z / len];
+        let lo = |acc: L, v: L, m: L::M| L::select(L::and(m, v.lt(acc)), v, acc);
+        let hi = |acc: L, v: L, m: L::M| L::select(L::and(m, v.gt(acc)), v, acc);
+        for a in 0..3 {
+            self.omin[a] = lo(self.omin[a], o[a], ok);
+            self.omax[a] = hi(self.omax[a], o[a], ok);
+            self.sum[a] = self.sum[a] + L::select(ok, n[a], zero);
+            self.dmin[a] = lo(self.dmin[a], n[a], ok);
+            self.dmax[a] = hi(self.dmax[a], n[a], ok);
+            // `|d[a]|` (`0 - d` is `-d` exactly for `d != 0`; zeros are masked out).
+            let da = L::select(d[a].lt(zero), zero - d[a], d[a]);
+            let m = L::and(ok, da.gt(zero));
+            let (u, v) = (d[(a + 1) % 3] / da, d[(a + 2) % 3] / da);
+            self.umin[a] = lo(self.umin[a], u, m);
+            self.umax[a] = hi(self.umax[a], u, m);
+            self.vmin[a] = lo(self.vmin[a], v, m);
+            self.vmax[a] = hi(self.vmax[a], v, m);
+        }
+    }
+
+    /// The rays added so far as a [`BeamBuilder`].
+    pub fn fold(&self) -> BeamBuilder {
+        let mut b = BeamBuilder::new();
+        if self.count == 0 {
+            return b;
+        }
+        b.count = self.count;
+        let min = |v: L| (0..L::N).fold(f32::INFINITY, |m, l| m.min(v.get(l)));
+        let max = |v: L| (0..L::N).fold(f32::NEG_INFINITY, |m, l| m.max(v.get(l)));
+        let sum = |v: L| (0..L::N).fold(0.0, |s, l| s + v.get(l));
+        let (omin, omax) = (self.omin.map(min), self.omax.map(max));
+        b.origin = Aabb::new(Vec3::from(omin), Vec3::from(omax));
+        b.sum = Vec3::from(self.sum.map(sum));
+        for a in 0..3 {
+            b.dmin[a] = min(self.dmin[a]);
+            b.dmax[a] = max(self.dmax[a]);
+            b.umin[a] = min(self.umin[a]);
+            b.umax[a] = max(self.umax[a]);
+            b.vmin[a] = min(self.vmin[a]);
+            b.vmax[a] = max(self.vmax[a]);
+        }
+        b
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -425,6 +529,63 @@ mod tests {
         for r in &rays {
             assert!(beam.contains_ray(r, 0.0));
         }
+    }
+
+    /// `LaneBeamBuilder` folds to `BeamBuilder::add` of the same rays one by one: the same
+    /// extrema, origin box and count bit for bit (the direction sum within rounding), with
+    /// invalid lanes, NaN, infinite and zero directions among random rays.
+    #[test]
+    fn lane_builder_equals_adding_rays_one_by_one() {
+        fn check<L: Lanes>(seed: u64) {
+            let mut s = seed;
+            let mut next = || {
+                s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                ((s >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
+            };
+            let (mut one, mut lanes) = (BeamBuilder::new(), LaneBeamBuilder::<L>::default());
+            for p in 0..300 {
+                let mut rays = Vec::new();
+                for l in 0..L::N {
+                    let o = Vec3::new(next(), next(), next()) * 3.0;
+                    let mut d = Vec3::new(next(), next() * 0.3, -1.0 - next().abs());
+                    match (p * 7 + l) % 23 {
+                        0 => d = Vec3::ZERO,
+                        1 => d.x = f32::NAN,
+                        2 => d.y = f32::INFINITY,
+                        3 => d.z = 0.0,
+                        _ => {}
+                    }
+                    rays.push(Ray::new(o, d));
+                }
+                let valid = (next().to_bits() | 1) & ((1u32 << L::N) - 1).max(1);
+                for (l, r) in rays.iter().enumerate() {
+                    if valid >> l & 1 == 1 {
+                        one.add(r);
+                    }
+                }
+                let comp = |f: fn(&Ray) -> Vec3, a: usize| L::from_fn(|l| f(&rays[l])[a]);
+                let o = [0, 1, 2].map(|a| comp(|r| r.origin, a));
+                let d = [0, 1, 2].map(|a| comp(|r| r.dir, a));
+                lanes.add(o, d, valid);
+            }
+            let got = lanes.fold();
+            assert!(one.count > 100);
+            assert_eq!(got.count, one.count);
+            assert_eq!(got.origin, one.origin);
+            let bits = |v: [f32; 3]| v.map(f32::to_bits);
+            assert_eq!(bits(got.dmin), bits(one.dmin));
+            assert_eq!(bits(got.dmax), bits(one.dmax));
+            assert_eq!(bits(got.umin), bits(one.umin));
+            assert_eq!(bits(got.umax), bits(one.umax));
+            assert_eq!(bits(got.vmin), bits(one.vmin));
+            assert_eq!(bits(got.vmax), bits(one.vmax));
+            assert!((got.sum - one.sum).length() <= 1e-4 * one.sum.length());
+            assert_eq!(got.finish(), one.finish());
+        }
+        check::<glam::Vec4>(3);
+        check::<crate::cast::lanes16::V16>(4);
     }
 
     #[test]
