@@ -1,5 +1,5 @@
 //! Geometry on glam: rays, boxes, planes, frusta and the watertight ray-triangle test; an
-//! exact integer floor.
+//! exact integer floor; sine and cosine with bit-identical SIMD twins.
 
 mod aabb;
 mod floor;
@@ -8,6 +8,7 @@ mod frustum;
 mod plane;
 mod ray;
 mod triangle;
+mod trig;
 
 pub use aabb::{Aabb, ROBUST_FAR_SCALE};
 pub use floor::{FLOOR_EXACT, floor_i32, floor_i64};
@@ -20,3 +21,4 @@ pub use triangle::{
     intersect_triangle_moller, scaled_distance, shear_vertex, watertight_lanes,
     watertight_permutation,
 };
+pub use trig::sin_cos_0_pi;

@@ -25,9 +25,16 @@
 //! `theta = 0.1` where the formula cancels):
 //! `d dir / du = (S + u^2 T, u v T, u S)`, `d dir / dv = (u v T, S + v^2 T, v S)`,
 //! scaled by `du/dx = fov.x / w`, `dv/dy = -fov.y / h`.
+//!
+//! The directions' sine and cosine come from [`sin_cos_0_pi`] (polynomials, absolute error
+//! below 2.5e-7), not libm: written once over SIMD lanes ([`Fisheye::dir_lanes`]), so the VR
+//! caster's packets of fisheye rays equal [`CameraModel::ray`] bit for bit. `T` (differentials
+//! only) keeps libm's.
 
 use glam::{Vec2, Vec3};
-use parallax_core::{Ray, math::RayDifferential};
+use parallax_core::Ray;
+use parallax_core::math::{RayDifferential, sin_cos_0_pi};
+use parallax_core::simd::Lanes;
 
 use super::{CameraFrame, CameraModel, CameraRay, angular_fov};
 use crate::{CameraDesc, Result};
@@ -41,19 +48,29 @@ pub struct Fisheye {
     pub fov: Vec2,
 }
 
-/// `(S, T)` of the module docs at `theta`.
+/// `S` of the module docs at `theta` (in `[0, pi]`) and `cos theta`, lane by lane (one value:
+/// `f32`): the sine and cosine by [`sin_cos_0_pi`] (not libm), so that the camera's SIMD twin
+/// ([`Fisheye::dir_lanes`]) gives its rays bit for bit; the Taylor series below `theta = 0.1`.
+#[inline(always)]
+fn sinc_cos<L: Lanes>(theta: L) -> (L, L) {
+    let c = |v: f32| L::splat(v);
+    let t2 = theta * theta;
+    // sin(t)/t = 1 - t^2/6 + t^4/120 - t^6/5040
+    let series = c(1.0) + t2 * (c(-1.0 / 6.0) + t2 * (c(1.0 / 120.0) - t2 / c(5040.0)));
+    let (sin, cos) = sin_cos_0_pi(theta);
+    (L::select(theta.lt(c(0.1)), series, sin / theta), cos)
+}
+
+/// `T` of the module docs at `theta` (the differentials only; libm's sine and cosine).
 #[inline]
-fn sinc_terms(theta: f32) -> (f32, f32) {
+fn sinc_derivative(theta: f32) -> f32 {
     let t2 = theta * theta;
     if theta < 0.1 {
-        // sin(t)/t = 1 - t^2/6 + t^4/120 - t^6/5040
         // (t cos t - sin t)/t^3 = -1/3 + t^2/30 - t^4/840 + t^6/45360
-        let s = 1.0 + t2 * (-1.0 / 6.0 + t2 * (1.0 / 120.0 - t2 / 5040.0));
-        let t = -1.0 / 3.0 + t2 * (1.0 / 30.0 + t2 * (-1.0 / 840.0 + t2 / 45360.0));
-        (s, t)
+        -1.0 / 3.0 + t2 * (1.0 / 30.0 + t2 * (-1.0 / 840.0 + t2 / 45360.0))
     } else {
         let (sin, cos) = theta.sin_cos();
-        (sin / theta, (theta * cos - sin) / (t2 * theta))
+        (theta * cos - sin) / (t2 * theta)
     }
 }
 
@@ -86,20 +103,31 @@ impl Fisheye {
 }
 
 impl Fisheye {
-    /// The ray's part of [`CameraModel::generate_ray`] (shared with [`CameraModel::ray`], so
-    /// both give the same bits): the angles `(u, v)`, the [`sinc_terms`] of their length and
-    /// the camera-space direction; `None` outside the image circle.
+    /// The camera-space directions of film positions `(fx, fy)` lane by lane (one value:
+    /// `f32`), with the angles `(u, v)` and `S` of the module docs, and the lanes inside the
+    /// image ellipse (`|n| <= 1`; NaN positions are outside). Every lane does the f32
+    /// operations of one, so a packet's rays equal [`CameraModel::ray`]'s bit for bit.
     #[inline(always)]
-    fn camera_dir(&self, film: Vec2) -> Option<((f32, f32), (f32, f32), Vec3)> {
-        let n = self.normalized(film);
-        if n.is_nan() || n.length_squared() > 1.0 {
-            return None;
-        }
-        let uv = n * self.fov * 0.5;
-        let theta = uv.length();
-        let (s, t) = sinc_terms(theta);
-        let (u, v) = (uv.x, uv.y);
-        Some(((u, v), (s, t), Vec3::new(u * s, v * s, -theta.cos())))
+    #[allow(clippy::type_complexity)]
+    pub fn dir_lanes<L: Lanes>(&self, fx: L, fy: L) -> ([L; 3], (L, L), L, L::M) {
+        let c = |v: f32| L::splat(v);
+        let nx = c(2.0) * fx / c(self.width as f32) - c(1.0);
+        let ny = c(1.0) - c(2.0) * fy / c(self.height as f32);
+        let inside = (nx * nx + ny * ny).le(c(1.0));
+        let u = nx * c(self.fov.x) * c(0.5);
+        let v = ny * c(self.fov.y) * c(0.5);
+        let theta = (u * u + v * v).sqrt();
+        let (s, cos) = sinc_cos(theta);
+        ([u * s, v * s, c(-1.0) * cos], (u, v), s, inside)
+    }
+
+    /// The ray's part of [`CameraModel::generate_ray`] (shared with [`CameraModel::ray`], so
+    /// both give the same bits): the angles `(u, v)`, `S` and the camera-space direction;
+    /// `None` outside the image circle.
+    #[inline(always)]
+    fn camera_dir(&self, film: Vec2) -> Option<((f32, f32), f32, Vec3)> {
+        let ([x, y, z], uv, s, inside) = self.dir_lanes(film.x, film.y);
+        inside.then_some((uv, s, Vec3::new(x, y, z)))
     }
 }
 
@@ -117,7 +145,8 @@ impl CameraModel for Fisheye {
     }
 
     fn generate_ray(&self, film: Vec2, _lens: Vec2, _channel: usize) -> Option<CameraRay> {
-        let ((u, v), (s, t), d) = self.camera_dir(film)?;
+        let ((u, v), s, d) = self.camera_dir(film)?;
+        let t = sinc_derivative((u * u + v * v).sqrt());
         let d_du = Vec3::new(s + u * u * t, u * v * t, u * s);
         let d_dv = Vec3::new(u * v * t, s + v * v * t, v * s);
         let dir = self.frame.dir_to_world(d);
@@ -167,13 +196,34 @@ mod tests {
 
     #[test]
     fn series_matches_the_formula_at_the_switch() {
-        let (s0, t0) = sinc_terms(0.0999999);
-        let (s1, t1) = sinc_terms(0.1000001);
+        let (s0, _) = sinc_cos(0.0999999f32);
+        let (s1, _) = sinc_cos(0.1000001f32);
+        let (t0, t1) = (sinc_derivative(0.0999999), sinc_derivative(0.1000001));
         assert!(
-            (s0 - s1).abs() < 1e-6 && (t0 - t1).abs() < 1e-4,
-            "{t0} {t1}"
+            (s0 - s1).abs() < 1e-5 && (t0 - t1).abs() < 1e-4,
+            "{s0} {s1} {t0} {t1}"
         );
-        assert_eq!(sinc_terms(0.0), (1.0, -1.0 / 3.0));
+        assert_eq!(sinc_cos(0.0f32).0, 1.0);
+        assert_eq!(sinc_derivative(0.0), -1.0 / 3.0);
+    }
+
+    /// The polynomial sine and cosine keep the directions unit length and on the stated
+    /// angle (within f32 noise) over the whole film.
+    #[test]
+    fn directions_are_unit_and_at_their_angle() {
+        let desc = CameraDesc::new(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 60.0);
+        let cam = Fisheye::new(&desc, 64, 64, Some(Vec2::new(360.0, 360.0))).unwrap();
+        for j in 0..=64 {
+            for i in 0..=64 {
+                let Some(((u, v), _, d)) = cam.camera_dir(Vec2::new(i as f32, j as f32)) else {
+                    continue;
+                };
+                let theta = (u as f64).hypot(v as f64);
+                assert!((d.length() - 1.0).abs() < 1e-6, "{d}");
+                let angle = (d.as_dvec3().angle_between(glam::DVec3::NEG_Z) - theta).abs();
+                assert!(angle < 2e-6, "{i} {j}: {angle}");
+            }
+        }
     }
 
     #[test]
