@@ -40,6 +40,14 @@ impl<L: Lanes> RaysN<L> {
 /// `camera_dir`, then [`unit_to_world`]).
 #[inline(always)]
 fn pinhole_n<L: Lanes>(p: &Pinhole, fx: L, fy: L) -> ([L; 3], [L; 3]) {
+    let (x, y) = camera_xy(p, fx, fy);
+    unit_to_world(&p.frame, x, y, L::splat(-1.0))
+}
+
+/// `Pinhole::camera_dir`'s `x` and `y` (its `z` is `-1`) on `N` film positions, lane-wise the
+/// same f32 operations.
+#[inline(always)]
+fn camera_xy<L: Lanes>(p: &Pinhole, fx: L, fy: L) -> (L, L) {
     let w = L::splat(p.width as f32);
     let h = L::splat(p.height as f32);
     let one = L::splat(1.0);
@@ -47,7 +55,7 @@ fn pinhole_n<L: Lanes>(p: &Pinhole, fx: L, fy: L) -> ([L; 3], [L; 3]) {
     let ndc_y = one - L::splat(2.0) * fy / h;
     let x = (ndc_x + L::splat(p.shift.x)) * L::splat(p.tan_half_x());
     let y = (ndc_y + L::splat(p.shift.y)) * L::splat(p.tan_half_y);
-    unit_to_world(&p.frame, x, y, L::splat(-1.0))
+    (x, y)
 }
 
 /// `Distorted::ray` on `N` film positions of colour `channel` (0-2): lane-wise the same f32
@@ -73,13 +81,7 @@ fn distorted_n<L: Lanes>(c: &Distorted, fx: L, fy: L, channel: usize) -> ([L; 3]
 #[inline(always)]
 fn thin_lens_n<L: Lanes>(c: &ThinLens, lens: Vec2, fx: L, fy: L) -> ([L; 3], [L; 3]) {
     let p = &c.pinhole;
-    let w = L::splat(p.width as f32);
-    let h = L::splat(p.height as f32);
-    let one = L::splat(1.0);
-    let ndc_x = L::splat(2.0) * fx / w - one;
-    let ndc_y = one - L::splat(2.0) * fy / h;
-    let x = (ndc_x + L::splat(p.shift.x)) * L::splat(p.tan_half_x());
-    let y = (ndc_y + L::splat(p.shift.y)) * L::splat(p.tan_half_y);
+    let (x, y) = camera_xy(p, fx, fy);
     let f = c.focus_distance;
     let pl = c.lens_point(lens);
     let dx = x * L::splat(f) - L::splat(pl.x);
@@ -486,56 +488,71 @@ mod tests {
         (some, none)
     }
 
+    /// A camera of `kind` on a 48 x 40 film, looking somewhere oblique.
+    fn oblique_camera(kind: ModelKind, fov: f32, opts: &CameraOptions) -> Camera {
+        let desc = CameraDesc::new(
+            Vec3::new(0.3, -1.2, 2.0),
+            Vec3::new(1.0, 0.5, -3.0),
+            Vec3::Y,
+            fov,
+        );
+        Camera::new(kind, &desc, 48, 40, opts).unwrap()
+    }
+
+    /// A pseudo-random `u64` below `m` per call (LCG).
+    fn rng(mut s: u64) -> impl FnMut(u64) -> u64 {
+        move |m| {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 33) % m
+        }
+    }
+
+    /// `gen_n_film` of `pairs` in `L` lanes against `fast_subsample_ray` per lane: a lane is
+    /// valid iff the per-lane generator gives a ray, and then its origin and direction are the
+    /// same bits. Returns the number of rays.
+    fn same_as_per_lane<L: Lanes>(set: &SampleSet, pairs: &[(u32, u32)]) -> u32 {
+        let (got, _) = gen_n_film::<L>(set, None, pairs);
+        let mut rays = 0;
+        for (l, &(i, k)) in pairs.iter().enumerate() {
+            let want = set.fast_subsample_ray(i as usize, k as usize);
+            assert_eq!(
+                got.valid >> l & 1 == 1,
+                want.is_some(),
+                "lane {l} of {pairs:?}"
+            );
+            let Some(want) = want else { continue };
+            rays += 1;
+            let r = got.lane(l);
+            let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+            assert_eq!(bits(r.origin), bits(want.origin), "lane {l} of {pairs:?}");
+            assert_eq!(bits(r.dir), bits(want.dir), "lane {l} of {pairs:?}");
+        }
+        rays
+    }
+
+    /// [`same_as_per_lane`] in 16 lanes for even `p`, 4 for odd.
+    fn same_as_per_lane_16_or_4(set: &SampleSet, pairs: &[(u32, u32)], p: usize) -> u32 {
+        if p % 2 == 0 {
+            same_as_per_lane::<V16>(set, pairs)
+        } else {
+            same_as_per_lane::<Vec4>(set, pairs)
+        }
+    }
+
     /// `gen_n_film` on a lens-distorted camera (`distorted_n` for packets of one colour
     /// channel, the per-lane path for mixed ones) equals `fast_subsample_ray` lane by lane, bit
     /// for bit, on random packets of random subsamples, in 16 and 4 lanes.
     #[test]
     fn distorted_packets_equal_the_per_lane_generator() {
-        let desc = CameraDesc::new(
-            Vec3::new(0.3, -1.2, 2.0),
-            Vec3::new(1.0, 0.5, -3.0),
-            Vec3::Y,
-            70.0,
-        );
-        let cam = Camera::new(
-            ModelKind::Distorted,
-            &desc,
-            48,
-            40,
-            &CameraOptions::default(),
-        )
-        .unwrap();
+        let cam = oblique_camera(ModelKind::Distorted, 70.0, &CameraOptions::default());
         let mut set = SampleSet::grid(cam, 8);
-        let mut s = 9u64;
-        let mut next = |m: u64| {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (s >> 33) % m
-        };
+        let mut next = rng(9);
         for smp in set.samples.iter_mut() {
             smp.channel = next(3) as u8;
         }
         let n = set.samples.len() as u64;
-        fn compare<L: Lanes>(set: &SampleSet, pairs: &[(u32, u32)]) {
-            let (got, _) = gen_n_film::<L>(set, None, pairs);
-            for (l, &(i, k)) in pairs.iter().enumerate() {
-                let want = set
-                    .fast_subsample_ray(i as usize, k as usize)
-                    .expect("a ray");
-                assert!(got.valid >> l & 1 == 1);
-                let r = got.lane(l);
-                assert_eq!(
-                    r.origin.to_array().map(f32::to_bits),
-                    want.origin.to_array().map(f32::to_bits)
-                );
-                assert_eq!(
-                    r.dir.to_array().map(f32::to_bits),
-                    want.dir.to_array().map(f32::to_bits),
-                    "lane {l} of {pairs:?}"
-                );
-            }
-        }
         for p in 0..600 {
             let lanes = if p % 2 == 0 { 16 } else { 4 };
             // Mostly one channel per packet (the lanes' path), every fifth packet mixed.
@@ -547,11 +564,7 @@ mod tests {
                     pairs.push((i as u32, next(8) as u32));
                 }
             }
-            if lanes == 16 {
-                compare::<V16>(&set, &pairs);
-            } else {
-                compare::<Vec4>(&set, &pairs);
-            }
+            assert_eq!(same_as_per_lane_16_or_4(&set, &pairs, p), lanes as u32);
         }
     }
 
@@ -560,25 +573,13 @@ mod tests {
     /// included, on random packets in 16 and 4 lanes.
     #[test]
     fn thin_lens_packets_equal_the_per_lane_generator() {
-        let desc = CameraDesc::new(
-            Vec3::new(0.3, -1.2, 2.0),
-            Vec3::new(1.0, 0.5, -3.0),
-            Vec3::Y,
-            55.0,
-        );
         let opts = CameraOptions {
             aperture_radius: 0.07,
             ..CameraOptions::default()
         };
-        let cam = Camera::new(ModelKind::ThinLens, &desc, 48, 40, &opts).unwrap();
+        let cam = oblique_camera(ModelKind::ThinLens, 55.0, &opts);
         let set = SampleSet::depth_of_field(cam, 8).unwrap();
-        let mut s = 5u64;
-        let mut next = |m: u64| {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (s >> 33) % m
-        };
+        let mut next = rng(5);
         let n = set.samples.len() as u64;
         let mut lanes_path = 0;
         for p in 0..600 {
@@ -592,28 +593,7 @@ mod tests {
                 })
                 .collect();
             lanes_path += pairs.iter().all(|&(_, kk)| kk == pairs[0].1) as u32;
-            let (got, _) = if lanes == 16 {
-                let (r, b) = gen_n_film::<V16>(&set, None, &pairs);
-                (to_rays(&r, lanes), b)
-            } else {
-                let (r, b) = gen_n_film::<Vec4>(&set, None, &pairs);
-                (to_rays(&r, lanes), b)
-            };
-            for (l, &(i, k)) in pairs.iter().enumerate() {
-                let want = set
-                    .fast_subsample_ray(i as usize, k as usize)
-                    .expect("a ray");
-                assert_eq!(
-                    got[l].origin.to_array().map(f32::to_bits),
-                    want.origin.to_array().map(f32::to_bits),
-                    "lane {l} of {pairs:?}"
-                );
-                assert_eq!(
-                    got[l].dir.to_array().map(f32::to_bits),
-                    want.dir.to_array().map(f32::to_bits),
-                    "lane {l} of {pairs:?}"
-                );
-            }
+            assert_eq!(same_as_per_lane_16_or_4(&set, &pairs, p), lanes as u32);
         }
         assert!(lanes_path > 400, "{lanes_path} packets of one lens sample");
     }
@@ -623,64 +603,23 @@ mod tests {
     /// ellipse have none), on random packets in 16 and 4 lanes.
     #[test]
     fn fisheye_packets_equal_the_per_lane_generator() {
-        let desc = CameraDesc::new(
-            Vec3::new(0.3, -1.2, 2.0),
-            Vec3::new(1.0, 0.5, -3.0),
-            Vec3::Y,
-            55.0,
-        );
-        let cam =
-            Camera::new(ModelKind::Fisheye, &desc, 48, 40, &CameraOptions::default()).unwrap();
+        let cam = oblique_camera(ModelKind::Fisheye, 55.0, &CameraOptions::default());
         // The grid (corners included), not `wide_fov`, which drops the corners.
         let set = SampleSet::grid(cam, 4);
-        let mut s = 11u64;
-        let mut next = |m: u64| {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (s >> 33) % m
-        };
+        let mut next = rng(11);
         let n = set.samples.len() as u64;
-        let (mut rays, mut misses) = (0, 0);
+        let (mut rays, mut lanes) = (0, 0);
         for p in 0..600 {
-            let lanes = if p % 2 == 0 { 16 } else { 4 };
-            let pairs: Vec<(u32, u32)> = (0..lanes)
+            let pairs: Vec<(u32, u32)> = (0..if p % 2 == 0 { 16 } else { 4 })
                 .map(|_| (next(n) as u32, next(4) as u32))
                 .collect();
-            fn lanes_of<L: Lanes>(set: &SampleSet, pairs: &[(u32, u32)]) -> (u32, Vec<Ray>) {
-                let (r, _) = gen_n_film::<L>(set, None, pairs);
-                (r.valid, (0..pairs.len()).map(|l| r.lane(l)).collect())
-            }
-            let (valid, got) = if lanes == 16 {
-                lanes_of::<V16>(&set, &pairs)
-            } else {
-                lanes_of::<Vec4>(&set, &pairs)
-            };
-            for (l, &(i, k)) in pairs.iter().enumerate() {
-                let want = set.fast_subsample_ray(i as usize, k as usize);
-                assert_eq!(valid >> l & 1 == 1, want.is_some(), "lane {l} of {pairs:?}");
-                let Some(want) = want else {
-                    misses += 1;
-                    continue;
-                };
-                rays += 1;
-                assert_eq!(
-                    got[l].origin.to_array().map(f32::to_bits),
-                    want.origin.to_array().map(f32::to_bits)
-                );
-                assert_eq!(
-                    got[l].dir.to_array().map(f32::to_bits),
-                    want.dir.to_array().map(f32::to_bits),
-                    "lane {l} of {pairs:?}"
-                );
-            }
+            lanes += pairs.len() as u32;
+            rays += same_as_per_lane_16_or_4(&set, &pairs, p);
         }
-        assert!(rays > 3000 && misses > 100, "{rays} rays, {misses} corners");
-    }
-
-    fn to_rays<L: Lanes>(r: &RaysN<L>, n: usize) -> Vec<Ray> {
-        assert_eq!(r.valid, (1u32 << n) - 1);
-        (0..n).map(|l| r.lane(l)).collect()
+        assert!(
+            rays > 3000 && lanes - rays > 100,
+            "{rays} rays of {lanes} lanes"
+        );
     }
 
     #[test]
