@@ -34,7 +34,10 @@
 
 use crate::beam::{Beam, BeamBuilder, LaneBeamBuilder};
 use crate::cast::lanes16::V16;
+#[cfg(target_arch = "x86_64")]
+use crate::cast::lanes512::Z16;
 use crate::cast::packet::gen_n_film;
+use parallax_core::simd::Lanes;
 use parallax_scene::camera::Camera;
 use rayon::prelude::*;
 
@@ -194,11 +197,34 @@ fn morton(f: glam::Vec2) -> u32 {
 /// caster's own generator (`cast/packet.rs`: the rays it casts, bit for bit), and accumulated
 /// in lanes ([`LaneBeamBuilder`]).
 fn rays_of(set: &SampleSet, idx: &[u32]) -> (BeamBuilder, Vec<Beam>) {
+    #[cfg(target_arch = "x86_64")]
+    if crate::cast::isa::avx512_detected() {
+        // SAFETY: the AVX-512 tier detected.
+        return unsafe { rays_of_avx512(set, idx) };
+    }
+    rays_of_lanes::<V16>(set, idx)
+}
+
+/// [`rays_of`] in sixteen AVX-512 lanes ([`Z16`]: one register per value; the same bits as the
+/// portable [`V16`], which runs four SSE registers).
+///
+/// # Safety
+/// The CPU must have the AVX-512 tier (`crate::cast::isa::avx512_detected`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,bmi1,bmi2,lzcnt,popcnt")]
+unsafe fn rays_of_avx512(set: &SampleSet, idx: &[u32]) -> (BeamBuilder, Vec<Beam>) {
+    rays_of_lanes::<Z16>(set, idx)
+}
+
+/// [`rays_of`] with the lanes `L` (sixteen of them).
+#[inline(always)]
+fn rays_of_lanes<L: Lanes>(set: &SampleSet, idx: &[u32]) -> (BeamBuilder, Vec<Beam>) {
+    debug_assert_eq!(L::N, 16);
     let spp = set.spp as usize;
     let mut pairs = [(0u32, 0u32); 16];
     if !lens_bundles(set) {
         // `(sample, k)` in order, sixteen at a time (one sample's subsamples from 16 spp up).
-        let mut acc = LaneBeamBuilder::<V16>::default();
+        let mut acc = LaneBeamBuilder::<L>::default();
         let total = idx.len() * spp;
         let mut j = 0;
         while j < total {
@@ -206,7 +232,7 @@ fn rays_of(set: &SampleSet, idx: &[u32]) -> (BeamBuilder, Vec<Beam>) {
             for (l, p) in pairs[..n].iter_mut().enumerate() {
                 *p = (idx[(j + l) / spp], ((j + l) % spp) as u32);
             }
-            let (r, _) = gen_n_film::<V16>(set, None, &pairs[..n]);
+            let (r, _) = gen_n_film::<L>(set, None, &pairs[..n]);
             acc.add(r.o, r.d, r.valid & ((1u32 << n) - 1));
             j += n;
         }
@@ -215,13 +241,13 @@ fn rays_of(set: &SampleSet, idx: &[u32]) -> (BeamBuilder, Vec<Beam>) {
     let mut all = BeamBuilder::new();
     let mut beams = Vec::with_capacity(spp);
     for k in 0..spp as u32 {
-        let mut acc = LaneBeamBuilder::<V16>::default();
+        let mut acc = LaneBeamBuilder::<L>::default();
         for chunk in idx.chunks(16) {
             for (p, &i) in pairs.iter_mut().zip(chunk) {
                 *p = (i, k);
             }
             let n = chunk.len();
-            let (r, _) = gen_n_film::<V16>(set, None, &pairs[..n]);
+            let (r, _) = gen_n_film::<L>(set, None, &pairs[..n]);
             acc.add(r.o, r.d, r.valid & ((1u32 << n) - 1));
         }
         let b = acc.fold();
@@ -403,7 +429,35 @@ impl Hierarchy {
 
 #[cfg(test)]
 mod tests {
-    use super::total_order_key;
+    use super::*;
+    use glam::Vec3;
+    use parallax_scene::CameraDesc;
+    use parallax_scene::camera::{CameraOptions, ModelKind};
+
+    /// The AVX-512 ray pass (where the CPU has it: the dispatch of `rays_of`) gives the same
+    /// beams, bit for bit, as the portable sixteen lanes, on every camera model's sets.
+    #[test]
+    fn ray_pass_tiers_agree() {
+        let desc = CameraDesc::new(Vec3::new(0.2, 1.0, 3.0), Vec3::ZERO, Vec3::Y, 60.0);
+        for kind in [
+            ModelKind::Pinhole,
+            ModelKind::ThinLens,
+            ModelKind::Fisheye,
+            ModelKind::Distorted,
+            ModelKind::Stereo,
+        ] {
+            let cam = Camera::new(kind, &desc, 40, 24, &CameraOptions::default()).unwrap();
+            for spp in [1, 4, 16] {
+                let set = SampleSet::grid(cam.clone(), spp);
+                let idx: Vec<u32> = (0..set.samples.len() as u32).step_by(3).collect();
+                let (a, la) = rays_of(&set, &idx);
+                let (b, lb) = rays_of_lanes::<V16>(&set, &idx);
+                assert_eq!(a.count(), b.count(), "{kind:?} {spp}");
+                assert_eq!(a.finish(), b.finish(), "{kind:?} {spp}");
+                assert_eq!(la, lb, "{kind:?} {spp}");
+            }
+        }
+    }
 
     /// The median split's integer key orders floats as `f32::total_cmp` does: signed zeros,
     /// infinities, NaNs of both signs, subnormals and random values, pair by pair.

@@ -431,11 +431,11 @@ impl<L: Lanes> Default for LaneBeamBuilder<L> {
 
 impl<L: Lanes> LaneBeamBuilder<L> {
     /// Adds the rays `(o, d)` of the lanes set in `valid` that [`Ray::is_valid`] accepts.
+    /// (No closures in here or in [`Self::fold`]: the hierarchy runs them inside an AVX-512
+    /// entry point, where a closure would call the lane intrinsics out of line.)
     #[inline(always)]
     pub fn add(&mut self, o: [L; 3], d: [L; 3], valid: u32) {
         let zero = L::splat(0.0);
-        let (inf, ninf) = (L::splat(f32::INFINITY), L::splat(f32::NEG_INFINITY));
-        let finite = |x: L| L::and(x.gt(ninf), x.lt(inf));
         let mut ok = L::from_fn(|l| (valid >> l & 1) as f32).gt(zero);
         for a in 0..3 {
             ok = L::and(ok, L::and(finite(o[a]), finite(d[a])));
@@ -450,48 +450,98 @@ impl<L: Lanes> LaneBeamBuilder<L> {
         self.count += bits.count_ones();
         let len = len2.sqrt();
         let n = [x / len, y / len, z / len];
-        let lo = |acc: L, v: L, m: L::M| L::select(L::and(m, v.lt(acc)), v, acc);
-        let hi = |acc: L, v: L, m: L::M| L::select(L::and(m, v.gt(acc)), v, acc);
         for a in 0..3 {
-            self.omin[a] = lo(self.omin[a], o[a], ok);
-            self.omax[a] = hi(self.omax[a], o[a], ok);
+            self.omin[a] = lower(self.omin[a], o[a], ok);
+            self.omax[a] = higher(self.omax[a], o[a], ok);
             self.sum[a] = self.sum[a] + L::select(ok, n[a], zero);
-            self.dmin[a] = lo(self.dmin[a], n[a], ok);
-            self.dmax[a] = hi(self.dmax[a], n[a], ok);
+            self.dmin[a] = lower(self.dmin[a], n[a], ok);
+            self.dmax[a] = higher(self.dmax[a], n[a], ok);
             // `|d[a]|` (`0 - d` is `-d` exactly for `d != 0`; zeros are masked out).
             let da = L::select(d[a].lt(zero), zero - d[a], d[a]);
             let m = L::and(ok, da.gt(zero));
             let (u, v) = (d[(a + 1) % 3] / da, d[(a + 2) % 3] / da);
-            self.umin[a] = lo(self.umin[a], u, m);
-            self.umax[a] = hi(self.umax[a], u, m);
-            self.vmin[a] = lo(self.vmin[a], v, m);
-            self.vmax[a] = hi(self.vmax[a], v, m);
+            self.umin[a] = lower(self.umin[a], u, m);
+            self.umax[a] = higher(self.umax[a], u, m);
+            self.vmin[a] = lower(self.vmin[a], v, m);
+            self.vmax[a] = higher(self.vmax[a], v, m);
         }
     }
 
     /// The rays added so far as a [`BeamBuilder`].
+    #[inline(always)]
     pub fn fold(&self) -> BeamBuilder {
         let mut b = BeamBuilder::new();
         if self.count == 0 {
             return b;
         }
         b.count = self.count;
-        let min = |v: L| (0..L::N).fold(f32::INFINITY, |m, l| m.min(v.get(l)));
-        let max = |v: L| (0..L::N).fold(f32::NEG_INFINITY, |m, l| m.max(v.get(l)));
-        let sum = |v: L| (0..L::N).fold(0.0, |s, l| s + v.get(l));
-        let (omin, omax) = (self.omin.map(min), self.omax.map(max));
-        b.origin = Aabb::new(Vec3::from(omin), Vec3::from(omax));
-        b.sum = Vec3::from(self.sum.map(sum));
+        let (mut omin, mut omax, mut sum) = ([0.0f32; 3], [0.0f32; 3], [0.0f32; 3]);
         for a in 0..3 {
-            b.dmin[a] = min(self.dmin[a]);
-            b.dmax[a] = max(self.dmax[a]);
-            b.umin[a] = min(self.umin[a]);
-            b.umax[a] = max(self.umax[a]);
-            b.vmin[a] = min(self.vmin[a]);
-            b.vmax[a] = max(self.vmax[a]);
+            omin[a] = lane_min(self.omin[a]);
+            omax[a] = lane_max(self.omax[a]);
+            sum[a] = lane_sum(self.sum[a]);
+            b.dmin[a] = lane_min(self.dmin[a]);
+            b.dmax[a] = lane_max(self.dmax[a]);
+            b.umin[a] = lane_min(self.umin[a]);
+            b.umax[a] = lane_max(self.umax[a]);
+            b.vmin[a] = lane_min(self.vmin[a]);
+            b.vmax[a] = lane_max(self.vmax[a]);
         }
+        b.origin = Aabb::new(Vec3::from(omin), Vec3::from(omax));
+        b.sum = Vec3::from(sum);
         b
     }
+}
+
+/// The lanes of `x` that are finite (`-inf < x < inf`).
+#[inline(always)]
+fn finite<L: Lanes>(x: L) -> L::M {
+    L::and(
+        x.gt(L::splat(f32::NEG_INFINITY)),
+        x.lt(L::splat(f32::INFINITY)),
+    )
+}
+
+/// `acc` with the lanes of `m` where `v < acc` taken from `v`.
+#[inline(always)]
+fn lower<L: Lanes>(acc: L, v: L, m: L::M) -> L {
+    L::select(L::and(m, v.lt(acc)), v, acc)
+}
+
+/// `acc` with the lanes of `m` where `v > acc` taken from `v`.
+#[inline(always)]
+fn higher<L: Lanes>(acc: L, v: L, m: L::M) -> L {
+    L::select(L::and(m, v.gt(acc)), v, acc)
+}
+
+/// The smallest lane of `v` (`f32::min`: NaN lanes ignored).
+#[inline(always)]
+fn lane_min<L: Lanes>(v: L) -> f32 {
+    let mut m = f32::INFINITY;
+    for l in 0..L::N {
+        m = m.min(v.get(l));
+    }
+    m
+}
+
+/// The largest lane of `v` (`f32::max`: NaN lanes ignored).
+#[inline(always)]
+fn lane_max<L: Lanes>(v: L) -> f32 {
+    let mut m = f32::NEG_INFINITY;
+    for l in 0..L::N {
+        m = m.max(v.get(l));
+    }
+    m
+}
+
+/// The sum of the lanes of `v`, lane 0 first.
+#[inline(always)]
+fn lane_sum<L: Lanes>(v: L) -> f32 {
+    let mut s = 0.0;
+    for l in 0..L::N {
+        s += v.get(l);
+    }
+    s
 }
 
 #[cfg(test)]
