@@ -36,7 +36,7 @@ use crate::beam::{Beam, BeamBuilder, LaneBeamBuilder};
 use crate::cast::lanes16::V16;
 #[cfg(target_arch = "x86_64")]
 use crate::cast::lanes512::Z16;
-use crate::cast::packet::gen_n_film;
+use crate::cast::packet::{gen_n_film, sample_chunk_lens};
 use parallax_core::simd::Lanes;
 use parallax_scene::camera::Camera;
 use rayon::prelude::*;
@@ -226,9 +226,23 @@ fn rays_of_lanes<L: Lanes>(set: &SampleSet, idx: &[u32]) -> (BeamBuilder, Vec<Be
         // `(sample, k)` in order, sixteen at a time (one sample's subsamples from 16 spp up).
         let mut acc = LaneBeamBuilder::<L>::default();
         let total = idx.len() * spp;
+        // A lens-distorted or fisheye camera's one-sample packets by `sample_chunk_lens` (the
+        // kernel's own one-sample path for them).
+        let lens_chunks = spp.is_multiple_of(16)
+            && matches!(set.camera, Camera::Distorted(_) | Camera::Fisheye(_));
         let mut j = 0;
         while j < total {
             let n = (total - j).min(16);
+            if lens_chunks {
+                let (i, k0) = (idx[j / spp], j % spp);
+                let o = &set.offsets[k0..k0 + 16];
+                let (ox, oy) = (L::from_fn(|l| o[l].x), L::from_fn(|l| o[l].y));
+                if let Some(r) = sample_chunk_lens::<L>(set, i, ox, oy) {
+                    acc.add(r.o, r.d, r.valid);
+                    j += n;
+                    continue;
+                }
+            }
             for (l, p) in pairs[..n].iter_mut().enumerate() {
                 *p = (idx[(j + l) / spp], ((j + l) % spp) as u32);
             }

@@ -386,6 +386,44 @@ pub(crate) fn sample_chunk<L: Lanes>(
     }
 }
 
+/// [`sample_chunk`] for the lens-distorted (one colour channel) and fisheye models: the same
+/// lane-wise film positions, then `distorted_n` / `fisheye_n`. Apart from `sample_chunk`,
+/// which the set-up kernel calls for its one-sample packets: these arms there made the
+/// pinhole eyes' 16-spp cast 4-6 % slower (`docs/notes/vr.md`); the kernel reaches them
+/// through [`gen_n_film`].
+#[inline(always)]
+pub(crate) fn sample_chunk_lens<L: Lanes>(
+    set: &SampleSet,
+    i0: u32,
+    ox: L,
+    oy: L,
+) -> Option<RaysN<L>> {
+    let s = &set.samples[i0 as usize];
+    let fp = s.footprint;
+    if !(fp >= 0.0) {
+        return None;
+    }
+    let full = (1u32 << L::N) - 1;
+    let fp_v = L::splat(fp);
+    let fx = L::splat(s.film.x) + ox * fp_v;
+    let fy = L::splat(s.film.y) + oy * fp_v;
+    match &set.camera {
+        Camera::Distorted(c) if s.channel <= 2 => {
+            let (o, d) = distorted_n(c, fx, fy, s.channel as usize);
+            Some(RaysN { o, d, valid: full })
+        }
+        Camera::Fisheye(c) => {
+            let (o, d, inside) = fisheye_n(c, fx, fy);
+            Some(RaysN {
+                o,
+                d,
+                valid: inside & full,
+            })
+        }
+        _ => None,
+    }
+}
+
 /// [`gen_n`] from a stored ray buffer: the same lanes (lanes past `pairs.len()` repeat lane 0).
 #[inline(always)]
 fn read_n<L: Lanes>(set: &SampleSet, buf: &RayBuffer, pairs: &[(u32, u32)]) -> RaysN<L> {
@@ -532,6 +570,23 @@ mod tests {
         rays
     }
 
+    /// `sample_chunk_lens` of sample `i`'s subsamples `k0..k0 + 4` in four lanes against
+    /// `fast_subsample_ray` per lane (valid lanes and bits).
+    fn one_sample_chunk_as_per_lane(set: &SampleSet, i: u32, k0: u32) {
+        let o = &set.offsets[k0 as usize..k0 as usize + 4];
+        let (ox, oy) = (Vec4::from_fn(|l| o[l].x), Vec4::from_fn(|l| o[l].y));
+        let got = sample_chunk_lens::<Vec4>(set, i, ox, oy).expect("a chunk");
+        for l in 0..4 {
+            let want = set.fast_subsample_ray(i as usize, (k0 + l as u32) as usize);
+            assert_eq!(got.valid >> l & 1 == 1, want.is_some(), "lane {l}");
+            if let Some(want) = want {
+                let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+                assert_eq!(bits(got.lane(l).dir), bits(want.dir), "lane {l}");
+                assert_eq!(bits(got.lane(l).origin), bits(want.origin), "lane {l}");
+            }
+        }
+    }
+
     /// [`same_as_per_lane`] in 16 lanes for even `p`, 4 for odd.
     fn same_as_per_lane_16_or_4(set: &SampleSet, pairs: &[(u32, u32)], p: usize) -> u32 {
         if p % 2 == 0 {
@@ -558,6 +613,11 @@ mod tests {
             // Mostly one channel per packet (the lanes' path), every fifth packet mixed.
             let ch = next(3) as u8;
             let mut pairs = Vec::new();
+            if p % 4 == 1 {
+                // One sample's consecutive subsamples (`sample_chunk_lens`).
+                let (i, k0) = (next(n) as u32, 4 * next(2) as u32);
+                one_sample_chunk_as_per_lane(&set, i, k0);
+            }
             while pairs.len() < lanes {
                 let i = next(n) as usize;
                 if p % 5 == 0 || set.samples[i].channel == ch {
@@ -610,6 +670,10 @@ mod tests {
         let n = set.samples.len() as u64;
         let (mut rays, mut lanes) = (0, 0);
         for p in 0..600 {
+            if p % 4 == 1 {
+                // One sample's subsamples (`sample_chunk_lens`).
+                one_sample_chunk_as_per_lane(&set, next(n) as u32, 0);
+            }
             let pairs: Vec<(u32, u32)> = (0..if p % 2 == 0 { 16 } else { 4 })
                 .map(|_| (next(n) as u32, next(4) as u32))
                 .collect();

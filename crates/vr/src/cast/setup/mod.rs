@@ -168,10 +168,13 @@ use crate::cast::lanes16::{LaneReduce, V16};
 use crate::cast::lanes256::{Y8, Y16};
 #[cfg(target_arch = "x86_64")]
 use crate::cast::lanes512::Z16;
-use crate::cast::packet::{ClosestN, MAX_LANES, RaysN, gen_n_film, gen_spp1, sample_chunk};
+use crate::cast::packet::{
+    ClosestN, MAX_LANES, RaysN, gen_n_film, gen_spp1, sample_chunk, sample_chunk_lens,
+};
 use crate::cast::stored::RayBuffer;
 use crate::samples::MAX_SPP;
 use affine::{FilmFrame, PacketBox};
+use parallax_scene::camera::Camera;
 
 pub use kernel::SetupWork;
 pub use tile::{setup_tile, setup_tile_scalar, setup_tile_with};
@@ -364,6 +367,7 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
         work.rays = rays_n;
         return work;
     }
+    let lens_chunk = matches!(set.camera, Camera::Distorted(_) | Camera::Fisheye(_));
     let mut j = 0;
     while j < total {
         let n = (total - j).min(L::N);
@@ -392,7 +396,11 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
         let c = k0 as usize / L::N;
         let chunk_rays = if chunk && stored.is_none() {
             let ((ox, oy), (a, b)) = (lanes[c], ranges[c]);
-            sample_chunk::<L>(set, i0, ox, oy, a.x, b.x)
+            if lens_chunk {
+                sample_chunk_lens::<L>(set, i0, ox, oy)
+            } else {
+                sample_chunk::<L>(set, i0, ox, oy, a.x, b.x)
+            }
         } else {
             None
         };
