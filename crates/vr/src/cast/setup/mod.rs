@@ -169,7 +169,7 @@ use crate::cast::lanes256::{Y8, Y16};
 #[cfg(target_arch = "x86_64")]
 use crate::cast::lanes512::Z16;
 use crate::cast::packet::{
-    ClosestN, MAX_LANES, RaysN, gen_n_film, gen_spp1, sample_chunk, sample_chunk_lens,
+    ClosestN, MAX_LANES, RaysN, gen_n_film, gen_samples, sample_chunk, sample_chunk_lens,
 };
 use crate::cast::stored::RayBuffer;
 use crate::samples::MAX_SPP;
@@ -257,6 +257,23 @@ impl Out {
             unsafe {
                 *self.prim.add(i as usize) = c.tri[l];
                 *self.t.add(i as usize) = c.t[l];
+            }
+        }
+    }
+
+    /// Stores `c`'s lanes as the whole samples `idx` (`spp` lanes each, in order: each
+    /// sample's entries are contiguous).
+    ///
+    /// # Safety
+    /// As [`Out::one`], for these samples' entries.
+    #[inline(always)]
+    unsafe fn samples(&self, idx: &[u32], c: &ClosestN) {
+        for (q, &i) in idx.iter().enumerate() {
+            let (o, l0) = (i as usize * self.spp, q * self.spp);
+            // SAFETY: the caller's; the buffers do not overlap `c`.
+            unsafe {
+                std::ptr::copy_nonoverlapping(c.t[l0..].as_ptr(), self.t.add(o), self.spp);
+                std::ptr::copy_nonoverlapping(c.tri[l0..].as_ptr(), self.prim.add(o), self.spp);
             }
         }
     }
@@ -368,14 +385,31 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
         return work;
     }
     let lens_chunk = matches!(set.camera, Camera::Distorted(_) | Camera::Fisheye(_));
+    // Packets of whole samples (`gen_samples`: pinhole and stereo cameras, below `L::N`
+    // subsamples; one sample's packets take the chunk path below) and the lanes' offsets
+    // `offsets[l % spp]`.
+    let whole_samples = L::N.is_multiple_of(spp)
+        && spp < L::N
+        && matches!(set.camera, Camera::Pinhole(_) | Camera::Stereo(_));
+    let shift = spp.trailing_zeros();
+    let whole_off = if whole_samples {
+        (
+            L::from_fn(|l| set.offsets[l % spp].x),
+            L::from_fn(|l| set.offsets[l % spp].y),
+        )
+    } else {
+        (zero, zero)
+    };
     let mut j = 0;
     while j < total {
         let n = (total - j).min(L::N);
         // One subsample per sample: the packet's samples are `samples[j..j + n]`, its rays
-        // from their film positions in lanes (`gen_spp1`), no `(sample, k)` pairs.
+        // from their film positions in lanes (`gen_samples`), no `(sample, k)` pairs.
         let spp1 = if spp == 1 && n == L::N && stored.is_none() {
             let f = film.map(|f| f.map(|v| &v[j..j + n]));
-            gen_spp1::<L>(set, f, &samples[j..j + n])
+            let o = set.offsets[0];
+            let off = (L::splat(o.x), L::splat(o.y));
+            gen_samples::<L>(set, f, &samples[j..j + n], 0, off)
         } else {
             None
         };
@@ -386,6 +420,24 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
             let c = closest!(&rays, pbox.as_ref(), true);
             // SAFETY: as below.
             unsafe { out.spp1(&samples[j..j + n], &c) };
+            j += n;
+            continue;
+        }
+        // Several whole samples (`spp` dividing `L::N`, below it; `j` is then a multiple of
+        // `spp`): the packet's samples are `samples[j / spp..(j + n) / spp]`, its rays from
+        // their film positions in lanes (`gen_samples`), no `(sample, k)` pairs.
+        let whole = if whole_samples && n == L::N && stored.is_none() {
+            let idx = &samples[j >> shift..(j + n) >> shift];
+            gen_samples::<L>(set, None, idx, shift, whole_off).map(|r| (r, idx))
+        } else {
+            None
+        };
+        if let Some(((rays, (lo, hi)), idx)) = whole {
+            let pbox = frame.and_then(|fr| PacketBox::new(&fr, lo.x, hi.x, lo.y, hi.y));
+            rays_n += n as u64;
+            let c = closest!(&rays, pbox.as_ref(), false);
+            // SAFETY: as below.
+            unsafe { out.samples(idx, &c) };
             j += n;
             continue;
         }
