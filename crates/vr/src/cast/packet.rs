@@ -14,6 +14,7 @@ use parallax_scene::camera::{Camera, CameraFrame, Distorted, Fisheye, Pinhole, T
 use crate::SampleSet;
 use crate::cast::lanes16::LaneReduce;
 use crate::cast::stored::RayBuffer;
+use crate::samples::Sample;
 /// Most rays per packet (the 16-lane set-up kernel, [`crate::cast::lanes16`]).
 pub const MAX_LANES: usize = 16;
 
@@ -353,16 +354,10 @@ pub(crate) fn sample_chunk<L: Lanes>(
     lo: f32,
     hi: f32,
 ) -> Option<RaysN<L>> {
-    let n = L::N;
     let s = &set.samples[i0 as usize];
     let fp = s.footprint;
-    if !(fp >= 0.0) {
-        return None;
-    }
-    let full = (1u32 << n) - 1;
-    let fp_v = L::splat(fp);
-    let fx = L::splat(s.film.x) + ox * fp_v;
-    let fy = L::splat(s.film.y) + oy * fp_v;
+    let (fx, fy) = chunk_film(s, ox, oy)?;
+    let full = (1u32 << L::N) - 1;
     match &set.camera {
         Camera::Pinhole(p) => {
             let (o, d) = pinhole_n(p, fx, fy);
@@ -388,11 +383,26 @@ pub(crate) fn sample_chunk<L: Lanes>(
     }
 }
 
+/// The film positions `film + offset * footprint` of sample `s`'s chunk in lanes (the
+/// offsets `ox`, `oy`; the per-lane path's f32 operations); `None` for a negative or NaN
+/// footprint (the per-lane path decides).
+#[inline(always)]
+fn chunk_film<L: Lanes>(s: &Sample, ox: L, oy: L) -> Option<(L, L)> {
+    let fp = s.footprint;
+    if fp.is_nan() || fp < 0.0 {
+        return None;
+    }
+    let fp_v = L::splat(fp);
+    Some((
+        L::splat(s.film.x) + ox * fp_v,
+        L::splat(s.film.y) + oy * fp_v,
+    ))
+}
+
 /// [`sample_chunk`] for the lens-distorted (one colour channel) and fisheye models: the same
-/// lane-wise film positions, then `distorted_n` / `fisheye_n`. Apart from `sample_chunk`,
-/// which the set-up kernel calls for its one-sample packets: these arms there made the
-/// pinhole eyes' 16-spp cast 4-6 % slower (`docs/notes/vr.md`); the kernel reaches them
-/// through [`gen_n_film`].
+/// lane-wise film positions, then `distorted_n` / `fisheye_n`. A function of its own, picked
+/// once per tile by the set-up kernel: these arms inside `sample_chunk`'s `match` made the
+/// pinhole eyes' 16-spp cast 4-6 % slower (`docs/notes/vr.md`).
 #[inline(always)]
 pub(crate) fn sample_chunk_lens<L: Lanes>(
     set: &SampleSet,
@@ -401,15 +411,8 @@ pub(crate) fn sample_chunk_lens<L: Lanes>(
     oy: L,
 ) -> Option<RaysN<L>> {
     let s = &set.samples[i0 as usize];
-    let fp = s.footprint;
-    // (A NaN footprint too: the per-lane path decides.)
-    if fp.is_nan() || fp < 0.0 {
-        return None;
-    }
+    let (fx, fy) = chunk_film(s, ox, oy)?;
     let full = (1u32 << L::N) - 1;
-    let fp_v = L::splat(fp);
-    let fx = L::splat(s.film.x) + ox * fp_v;
-    let fy = L::splat(s.film.y) + oy * fp_v;
     match &set.camera {
         Camera::Distorted(c) if s.channel <= 2 => {
             let (o, d) = distorted_n(c, fx, fy, s.channel as usize);
