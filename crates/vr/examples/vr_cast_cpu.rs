@@ -7,7 +7,7 @@
 //! `../shared/scenes/sponza_dabrovic/sponza_dabrovic.glb` from the repository root; `edges` =
 //! the set-up kernel with [`SetupExactness::Edges`] (default), `full` = with
 //! [`SetupExactness::Full`], `watertight` = the watertight kernel, `edges-plain` = `edges`
-//! without the affine packet test, `edges-affine` = `edges` with it on every kernel: `CastOptions::affine_always`). Optional further arguments:
+//! without the affine packet test, `edges-affine` = `edges` with it on every kernel: `CastOptions::affine_always`, `edges-walk` = `edges` without the sweep: `CastOptions::sweep`). Optional further arguments:
 //! `lanes` (8th, default 4: `CastOptions::lanes`; a suffix `sse` / `avx2` caps `CastOptions::isa`
 //! at that tier, e.g. `16sse` the portable twin) and a head pose `eye target fov_y` (9th-11th,
 //! e.g. `-9,3.5,0 8,5,0 60`; default the scene's camera). `BVH_SPATIAL=0` builds the BVH
@@ -34,7 +34,7 @@ fn main() {
     let (test, exactness) = match mode.as_str() {
         "watertight" => (SampleTest::Watertight, SetupExactness::Full),
         "full" => (SampleTest::TileSetup, SetupExactness::Full),
-        "edges" | "setup" | "edges-plain" | "edges-affine" => {
+        "edges" | "setup" | "edges-plain" | "edges-affine" | "edges-walk" => {
             (SampleTest::TileSetup, SetupExactness::Edges)
         }
         m => panic!("unknown mode {m:?}: edges, full or watertight"),
@@ -95,6 +95,8 @@ fn main() {
             affine: mode != "edges-plain",
             // `edges-affine`: the affine packet test on every kernel.
             affine_always: mode == "edges-affine",
+            // `edges-walk`: the run walk per packet instead of the sweep (`cast/setup/sweep.rs`).
+            sweep: mode != "edges-walk",
         };
         let mut beam = VisibilityBuffer::new(&set);
         let mut reference = VisibilityBuffer::new(&set);

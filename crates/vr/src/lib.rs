@@ -44,6 +44,7 @@
 //! | `isa` | [`Isa`] | `Avx512` | the widest instruction-set tier of the set-up kernel's 16-lane packets and the per-tile set-up: one AVX-512 register where the CPU has AVX-512F, else two AVX registers where it has AVX2, else four SSE registers (`Isa::Sse`: the portable twin); the same buffer |
 //! | `affine` | bool | true | the affine packet test before the set-up kernel's per-lane edge test (`Edges`, pinhole and stereo tiles; [`cast::setup::affine`]): decides whole packets against a triangle with a rigorous error bound; the same buffer; not on the AVX-512 kernel, nor on the AVX2 16-lane kernel at 1 spp, unless `affine_always` |
 //! | `affine_always` | bool | false | the affine packet test on the AVX-512 kernel and on the AVX2 16-lane kernel at 1 spp too (there it costs more than it saves, `docs/notes/vr.md`) |
+//! | `sweep` | bool | true | the set-up test with the tile's triangles outside and its packets inside ([`cast::setup`]'s `sweep.rs`) where a tile's 16-lane packets are whole 16-subsample chunks of pinhole or stereo samples (`Edges`); the same buffer |
 //!
 //! Measurements and what was tried: `docs/notes/vr.md`.
 

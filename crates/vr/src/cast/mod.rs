@@ -90,6 +90,8 @@ pub struct CastStats {
     /// (`cast/setup/affine.rs`): every ray certainly outside / certainly inside.
     pub setup_packet_out: u64,
     pub setup_packet_in: u64,
+    /// Set-up tiles swept (`cast/setup/sweep.rs`: [`CastOptions::sweep`]) instead of walked.
+    pub setup_swept_tiles: u64,
 }
 
 /// The caster's sample-test choice: the kernel and the SIMD width of its ray packets (`4` SSE,
@@ -120,6 +122,11 @@ pub struct CastOptions {
     /// test rarely decides whole: there it costs more than it saves (`docs/notes/vr.md`); the
     /// buffer is the same.
     pub affine_always: bool,
+    /// Sweep each tile's set-up triangles over all its packets (`cast/setup/sweep.rs`) instead
+    /// of walking the tile's runs once per packet, where a tile's packets are whole 16-subsample
+    /// chunks of pinhole or stereo samples ([`SetupExactness::Edges`]): the same buffer bit for
+    /// bit.
+    pub sweep: bool,
 }
 
 impl Default for CastOptions {
@@ -134,6 +141,7 @@ impl Default for CastOptions {
             isa: Isa::Avx512,
             affine: true,
             affine_always: false,
+            sweep: true,
         }
     }
 }
@@ -207,6 +215,7 @@ pub fn cast_with(
             isa: Isa::Avx512,
             affine: false,
             affine_always: false,
+            sweep: true,
         },
     )
 }
@@ -368,6 +377,7 @@ fn cast_from(
                                 opts.exactness,
                                 opts.affine,
                                 opts.affine_always,
+                                opts.sweep,
                                 ptr.prim,
                                 ptr.t,
                             )
@@ -430,6 +440,7 @@ fn cast_from(
         setup_final_tests: t.setup.final_tests,
         setup_rescues: t.setup.rescues,
         setup_edge_band: t.setup.edge_band,
+        setup_swept_tiles: t.setup.swept,
         setup_packet_out: t.setup.packet_out,
         setup_packet_in: t.setup.packet_in,
     }

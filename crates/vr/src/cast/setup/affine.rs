@@ -446,6 +446,15 @@ impl PacketBox {
 
     /// Classifies a set-up triangle (its affine form `a`, edge band `bound`) for every ray of
     /// the packet (module docs).
+    /// The box's centre, radii and factors as scalars `[xc, yc, rx, ry, ka, kb]` (every lane
+    /// of its registers holds the same value): one packet's entries of [`BoxLanes`].
+    #[inline(always)]
+    pub fn scalars(&self) -> [f32; 6] {
+        [
+            self.xc.x, self.yc.x, self.rx.x, self.ry.x, self.ka.x, self.kb,
+        ]
+    }
+
     #[inline(always)]
     pub fn classify(&self, a: &AffineTri, bound: f32) -> PacketClass {
         self.classify_edges(a, bound).0
@@ -499,64 +508,79 @@ impl PacketBox {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
+/// The boxes of `L::N` packets in lanes ([`PacketBox::scalars`] of each packet, one lane per
+/// packet): [`BoxLanes::classify`] decides one triangle against all of them at once.
+#[derive(Clone, Copy)]
+pub struct BoxLanes<L> {
+    pub xc: L,
+    pub yc: L,
+    pub rx: L,
+    pub ry: L,
+    pub ka: L,
+    pub kb: L,
+}
 
-    /// The branch-free word equals [`PacketBox::classify_edges`] on random boxes and affine
-    /// forms, with huge, infinite and NaN values.
-    #[test]
-    fn classify_bits_equals_classify_edges() {
-        let mut x = 0x9e37_79b9_7f4a_7c15u64;
-        let mut f = move || {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            let u = (x >> 40) as f32 / (1u64 << 24) as f32;
-            match x & 63 {
-                0 => f32::NAN,
-                1 => f32::INFINITY,
-                2 => -f32::INFINITY,
-                3 => 1e38,
-                _ => (u - 0.5) * 4.0,
-            }
-        };
-        let mut seen = [0u32; 4];
-        for _ in 0..200_000 {
-            let kb = f().abs() * 0.01;
-            let bound = f().abs() * 0.01;
-            let mut v = || Vec4::new(f(), f(), f(), f());
-            let pb = PacketBox {
-                xc: v(),
-                yc: v(),
-                rx: v().abs(),
-                ry: v().abs(),
-                ka: v().abs() * 0.01,
-                kb,
-            };
-            let a = AffineTri {
-                mx: v(),
-                my: v(),
-                mz: v(),
-                amx: v().abs(),
-                amy: v().abs(),
-                n1: v().abs(),
-            };
-            let (class, skip) = pb.classify_edges(&a, bound);
-            let word = match class {
-                PacketClass::Out => CLASS_OUT,
-                PacketClass::In => CLASS_IN,
-                PacketClass::Partial => skip,
-            };
-            assert_eq!(pb.classify_bits(&a, bound), word, "{pb:?} {a:?} {bound}");
-            let k = match class {
-                PacketClass::Out => 0,
-                PacketClass::In => 1,
-                PacketClass::Partial if skip != 0 => 2,
-                PacketClass::Partial => 3,
-            };
-            seen[k] += 1;
+/// [`BoxLanes::classify`] of one triangle against `L::N` packets: lane bits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LaneClasses {
+    /// Packets certainly outside some edge.
+    pub out: u32,
+    /// Per edge, the packets certainly inside it.
+    pub inn: [u32; 3],
+}
+
+impl LaneClasses {
+    /// Packet `k`'s class word of [`PacketBox::classify_bits`] (`CLASS_OUT`, `CLASS_IN` or
+    /// the skipped edges), given whether the triangle's covectors are small enough to skip
+    /// edges (`small`: [`AffineTri::small`]).
+    #[inline(always)]
+    pub fn code(&self, k: u32, small: bool) -> u32 {
+        if self.out >> k & 1 != 0 {
+            return CLASS_OUT;
         }
-        assert!(seen.iter().all(|&c| c > 500), "{seen:?}");
+        let inn =
+            (self.inn[0] >> k & 1) | (self.inn[1] >> k & 1) << 1 | (self.inn[2] >> k & 1) << 2;
+        if inn == 7 {
+            CLASS_IN
+        } else if small {
+            inn
+        } else {
+            0
+        }
     }
 }
+
+impl AffineTri {
+    /// Whether every edge's `|n_i|_1` is below [`N1_SKIP`] (module docs, "per-edge
+    /// decisions"): the partial packets' certainly-inside edges may be skipped.
+    #[inline(always)]
+    pub fn small(&self) -> bool {
+        self.n1.cmplt(Vec4::splat(N1_SKIP)).bitmask() & 7 == 7
+    }
+}
+
+impl<L: parallax_core::simd::Lanes> BoxLanes<L> {
+    /// [`PacketBox::classify_bits`] of the triangle `a` (band `bound`) against every lane's
+    /// packet: per edge and lane the same float operations in the same order (so lane `k`'s
+    /// [`LaneClasses::code`] equals `classify_bits` of packet `k`'s box, bit for bit; tested
+    /// below).
+    #[inline(always)]
+    pub fn classify(&self, a: &AffineTri, bound: f32) -> LaneClasses {
+        let zero = L::splat(0.0);
+        let bk = L::splat(bound) * self.kb;
+        let mut out = 0u32;
+        let mut inn = [0u32; 3];
+        for (e, inn_e) in inn.iter_mut().enumerate() {
+            let c = L::splat(a.mx[e]) * self.xc + L::splat(a.my[e]) * self.yc - L::splat(a.mz[e]);
+            let r = L::splat(a.amx[e]) * self.rx + L::splat(a.amy[e]) * self.ry;
+            let tau = L::splat(a.n1[e]) * self.ka + bk;
+            let (hi, lo) = (c + r, c - r);
+            out |= L::bits((hi + tau).lt(zero));
+            *inn_e = L::bits((lo - tau).gt(zero));
+        }
+        LaneClasses { out, inn }
+    }
+}
+
+#[cfg(test)]
+mod tests;

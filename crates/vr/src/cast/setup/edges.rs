@@ -94,7 +94,6 @@ pub(super) fn closest_edges<L: LaneReduce>(
 ) -> ClosestN {
     let valid = rays.valid;
     let zero = L::splat(0.0);
-    let [dx, dy, dz] = rays.d;
     let mut best = zero;
     let mut out = ClosestN {
         t: [f32::INFINITY; MAX_LANES],
@@ -191,105 +190,6 @@ pub(super) fn closest_edges<L: LaneReduce>(
                 Some(_) => &tt.aff[first..end],
                 None => &[],
             };
-            // The triangle `tr` with the affine class `class` and skipped edges `skip`
-            // (`PacketBox::classify_edges`) against the packet's lanes.
-            macro_rules! test_tri {
-                ($tr:expr, $class:expr, $skip:expr) => {{
-                    let (tr, class, skip): (&TriSetup, PacketClass, u32) = ($tr, $class, $skip);
-                    if tr.rho > RHO_MAX {
-                        // Ill-conditioned: the watertight test decides coverage and depth.
-                        changed |= ill_conditioned(
-                            rays, blocks, tr, valid, dinf, &mut best, &mut out, work,
-                        );
-                        continue;
-                    }
-                    // Edges first (module docs): the triangle is skipped when no valid lane is
-                    // within or above the band, before its `g . d`.
-                    let edges = if edges_first && class != PacketClass::In && !tr.all_in {
-                        let e = edge_reach(tr, rays.d, dinf, valid, 7 & !skip);
-                        if e.1 == 0 {
-                            continue;
-                        }
-                        Some(e)
-                    } else {
-                        None
-                    };
-                    let gd = dot_n(tr.g, dx, dy, dz);
-                    let ge = gd.ge(best);
-                    let cand = L::bits(ge) & valid;
-                    if cand == 0 {
-                        continue;
-                    }
-                    // Certainly inside (a mask), plus the band's lanes the watertight test accepts.
-                    let (inn_m, mut unsure) = if class == PacketClass::In {
-                        work.packet_in += 1;
-                        (ge, 0)
-                    } else if let Some((inside, maybe)) = edges {
-                        let inn_m = L::and(ge, inside);
-                        (inn_m, maybe & cand & !L::bits(inn_m))
-                    } else {
-                        edge_band(tr, rays.d, dinf, ge, cand, 7 & !skip)
-                    };
-                    let mut extra = 0u32;
-                    // Within the edge band: the watertight test decides coverage (~0.2% of pairs).
-                    if unsure != 0 {
-                        work.edge_band += unsure.count_ones() as u64;
-                        work.exact_tests += unsure.count_ones() as u64;
-                    }
-                    while unsure != 0 {
-                        let l = unsure.trailing_zeros() as usize;
-                        unsure &= unsure - 1;
-                        let wt = &WatertightRay::new(&rays.lane(l));
-                        if exact_t(wt, blocks, tr.src).is_some() {
-                            extra |= 1 << l;
-                        }
-                    }
-                    let ib = (L::bits(inn_m) & valid) | extra;
-                    if ib == 0 {
-                        continue;
-                    }
-                    let gt_m = L::and(inn_m, gd.gt(best));
-                    let gt = L::bits(gt_m) & valid;
-                    // (The second mask only for band lanes the watertight test accepted: rare.)
-                    let mut win = if extra == 0 {
-                        gt
-                    } else {
-                        gt | (extra & L::bits(gd.gt(best)))
-                    };
-                    // Ties (equal `1/t`, a hit so far): the lower triangle index wins.
-                    let mut tie = ib & !win;
-                    while tie != 0 {
-                        let l = tie.trailing_zeros() as usize;
-                        tie &= tie - 1;
-                        if out.tri[l] != u32::MAX && tr.tri < out.tri[l] {
-                            win |= 1 << l;
-                        }
-                    }
-                    if win == 0 {
-                        continue;
-                    }
-                    if win == gt {
-                        // The winners are the mask's valid lanes: one blend each.
-                        best = L::select(gt_m, gd, best);
-                        L::set_u32(L::and(gt_m, valid_m), tr.tri, &mut out.tri);
-                    } else {
-                        best = L::from_fn(|l| {
-                            if win >> l & 1 != 0 {
-                                gd.get(l)
-                            } else {
-                                best.get(l)
-                            }
-                        });
-                        let mut w = win;
-                        while w != 0 {
-                            let l = w.trailing_zeros() as usize;
-                            w &= w - 1;
-                            out.tri[l] = tr.tri;
-                        }
-                    }
-                    changed = true;
-                }};
-            }
             match pbox {
                 // The affine packet test (`affine.rs`) of up to 32 triangles of the run in one
                 // pass without branches (every lane certainly out or in; a partial packet's
@@ -322,7 +222,19 @@ pub(super) fn closest_edges<L: LaneReduce>(
                             } else {
                                 PacketClass::Partial
                             };
-                            test_tri!(&ts[k], class, code & 7);
+                            changed |= test_tri(
+                                rays,
+                                blocks,
+                                &ts[k],
+                                class,
+                                code & 7,
+                                edges_first,
+                                valid_m,
+                                dinf,
+                                &mut best,
+                                &mut out.tri,
+                                work,
+                            );
                         }
                         c0 += 16;
                         if c0 >= tris.len() {
@@ -332,7 +244,19 @@ pub(super) fn closest_edges<L: LaneReduce>(
                 }
                 None => {
                     for tr in tris {
-                        test_tri!(tr, PacketClass::Partial, 0);
+                        changed |= test_tri(
+                            rays,
+                            blocks,
+                            tr,
+                            PacketClass::Partial,
+                            0,
+                            edges_first,
+                            valid_m,
+                            dinf,
+                            &mut best,
+                            &mut out.tri,
+                            work,
+                        );
                     }
                 }
             }
@@ -355,6 +279,119 @@ pub(super) fn closest_edges<L: LaneReduce>(
     out
 }
 
+/// One packet (`rays`, lanes `valid` as a mask `valid_m`, `|d|_inf` `dinf`) against the set-up
+/// triangle `tr` with the affine class `class` and skipped edges `skip`
+/// (`PacketClass::Partial` and 0 without the affine test; `PacketClass::In`: every lane
+/// certainly inside): raises `best` (`1/t` per lane) and `tri` where it wins (module docs,
+/// "the result does not depend on the triangle order"). Returns whether a lane changed.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(super) fn test_tri<L: LaneReduce>(
+    rays: &RaysN<L>,
+    blocks: &[Tri4],
+    tr: &TriSetup,
+    class: PacketClass,
+    skip: u32,
+    edges_first: bool,
+    valid_m: L::M,
+    dinf: f32,
+    best: &mut L,
+    tri: &mut [u32; MAX_LANES],
+    work: &mut SetupWork,
+) -> bool {
+    let valid = rays.valid;
+    let [dx, dy, dz] = rays.d;
+    if tr.rho > RHO_MAX {
+        // Ill-conditioned: the watertight test decides coverage and depth.
+        return ill_conditioned(rays, blocks, tr, valid, dinf, best, tri, work);
+    }
+    // Edges first (module docs): the triangle is skipped when no valid lane is
+    // within or above the band, before its `g . d`.
+    let edges = if edges_first && class != PacketClass::In && !tr.all_in {
+        let e = edge_reach(tr, rays.d, dinf, valid, 7 & !skip);
+        if e.1 == 0 {
+            return false;
+        }
+        Some(e)
+    } else {
+        None
+    };
+    let gd = dot_n(tr.g, dx, dy, dz);
+    let ge = gd.ge(*best);
+    let cand = L::bits(ge) & valid;
+    if cand == 0 {
+        return false;
+    }
+    // Certainly inside (a mask), plus the band's lanes the watertight test accepts.
+    let (inn_m, mut unsure) = if class == PacketClass::In {
+        work.packet_in += 1;
+        (ge, 0)
+    } else if let Some((inside, maybe)) = edges {
+        let inn_m = L::and(ge, inside);
+        (inn_m, maybe & cand & !L::bits(inn_m))
+    } else {
+        edge_band(tr, rays.d, dinf, ge, cand, 7 & !skip)
+    };
+    let mut extra = 0u32;
+    // Within the edge band: the watertight test decides coverage (~0.2% of pairs).
+    if unsure != 0 {
+        work.edge_band += unsure.count_ones() as u64;
+        work.exact_tests += unsure.count_ones() as u64;
+    }
+    while unsure != 0 {
+        let l = unsure.trailing_zeros() as usize;
+        unsure &= unsure - 1;
+        let wt = &WatertightRay::new(&rays.lane(l));
+        if exact_t(wt, blocks, tr.src).is_some() {
+            extra |= 1 << l;
+        }
+    }
+    let ib = (L::bits(inn_m) & valid) | extra;
+    if ib == 0 {
+        return false;
+    }
+    let gt_m = L::and(inn_m, gd.gt(*best));
+    let gt = L::bits(gt_m) & valid;
+    // (The second mask only for band lanes the watertight test accepted: rare.)
+    let mut win = if extra == 0 {
+        gt
+    } else {
+        gt | (extra & L::bits(gd.gt(*best)))
+    };
+    // Ties (equal `1/t`, a hit so far): the lower triangle index wins.
+    let mut tie = ib & !win;
+    while tie != 0 {
+        let l = tie.trailing_zeros() as usize;
+        tie &= tie - 1;
+        if tri[l] != u32::MAX && tr.tri < tri[l] {
+            win |= 1 << l;
+        }
+    }
+    if win == 0 {
+        return false;
+    }
+    if win == gt {
+        // The winners are the mask's valid lanes: one blend each.
+        *best = L::select(gt_m, gd, *best);
+        L::set_u32(L::and(gt_m, valid_m), tr.tri, tri);
+    } else {
+        *best = L::from_fn(|l| {
+            if win >> l & 1 != 0 {
+                gd.get(l)
+            } else {
+                best.get(l)
+            }
+        });
+        let mut w = win;
+        while w != 0 {
+            let l = w.trailing_zeros() as usize;
+            w &= w - 1;
+            tri[l] = tr.tri;
+        }
+    }
+    true
+}
+
 /// An ill-conditioned triangle (`rho > RHO_MAX`) against every lane: certainly-out lanes
 /// (edge value below minus the band) skip it, the others take the watertight test, whose
 /// `t` is compared as `1/t` with the lane's best. Returns whether a lane's best changed.
@@ -370,7 +407,7 @@ fn ill_conditioned<L: Lanes>(
     valid: u32,
     dinf: f32,
     best: &mut L,
-    out: &mut ClosestN,
+    tri: &mut [u32; MAX_LANES],
     work: &mut SetupWork,
 ) -> bool {
     let mut maybe = valid;
@@ -389,9 +426,9 @@ fn ill_conditioned<L: Lanes>(
         };
         let g = 1.0 / tc;
         let b = best.get(l);
-        if g > b || (g == b && out.tri[l] != u32::MAX && tr.tri < out.tri[l]) {
+        if g > b || (g == b && tri[l] != u32::MAX && tr.tri < tri[l]) {
             *best = L::from_fn(|i| if i == l { g } else { best.get(i) });
-            out.tri[l] = tr.tri;
+            tri[l] = tr.tri;
             changed = true;
         }
     }

@@ -98,6 +98,12 @@
 //! BVH's robust slab test on the box of the leaf's *kept* triangles and skips the leaf if no
 //! ray can reach it before its closest hit so far.
 //!
+//! **The sweep** (`cast/setup/sweep.rs`, [`crate::CastOptions::sweep`]): where every 16-lane
+//! packet of a tile is one sample's chunk of 16 subsamples (pinhole and stereo eyes at 16 and
+//! 32 spp, `Edges`), the tile's packets are generated once and each set-up triangle is swept
+//! over all of them, its affine packet test on 16 packets per register; the same per-packet
+//! test and the same buffer as the walk above, without the walk's per-packet set-up.
+//!
 //! **Each triangle once** (`cast/setup/rows.rs`): a triangle split by the BVH's spatial splits
 //! (the SBVH, the default build) sits in several leaves, and a tile's list often reaches it
 //! twice. The gather keeps its first entry (the leaf of smallest near depth) and drops the
@@ -142,6 +148,7 @@
 //! | [`RHO_MAX`] | f32 | 0.05 | depth band above which a triangle always takes the watertight test |
 //! | `affine` | bool | true | the affine packet test ([`affine`]) before the per-lane edge test (`Edges` only) |
 //! | `affine_always` | bool | false | the affine packet test on the AVX-512 kernel and the AVX2 16-lane kernel at 1 spp too (slower there, `docs/notes/vr.md`) |
+//! | `sweep` | bool | true | the sweep (above) where it applies |
 //!
 //! Measurements (speed of `Edges` and `Full` against the kernel without a band, 4 vs 8 lanes,
 //! where the time goes): `docs/notes/vr.md`.
@@ -152,13 +159,15 @@ pub mod edges;
 pub mod full;
 mod kernel;
 mod lazy;
+mod out;
 mod rows;
+mod sweep;
 mod tile;
+mod tile_packets;
 mod tri;
 
 use glam::{Vec2, Vec4};
 use parallax_bvh::Tri4;
-use parallax_core::NO_ID;
 
 use crate::SampleSet;
 use crate::beam::Beam;
@@ -169,11 +178,12 @@ use crate::cast::lanes256::{Y8, Y16};
 #[cfg(target_arch = "x86_64")]
 use crate::cast::lanes512::Z16;
 use crate::cast::packet::{
-    ClosestN, MAX_LANES, RaysN, gen_n_film, gen_samples, sample_chunk, sample_chunk_lens,
+    MAX_LANES, RaysN, gen_n_film, gen_samples, sample_chunk, sample_chunk_lens,
 };
 use crate::cast::stored::RayBuffer;
 use crate::samples::MAX_SPP;
 use affine::{FilmFrame, PacketBox};
+use out::Out;
 use parallax_scene::camera::Camera;
 
 pub use kernel::SetupWork;
@@ -211,100 +221,6 @@ pub enum SetupExactness {
     Full,
 }
 
-/// Where the set-up kernels write their results: the visibility buffer's entries
-/// `sample * spp + k` (raw pointers: every sample's entries are written by one tile only).
-/// The kernels' `tri` values are the blocks' primitive ids (`parallax_bvh::Tri4::tri`), stored
-/// as they are; a miss is `u32::MAX`, which is [`NO_ID`].
-#[derive(Clone, Copy)]
-struct Out {
-    prim: *mut u32,
-    t: *mut f32,
-    spp: usize,
-}
-
-const _: () = assert!(NO_ID == u32::MAX);
-
-impl Out {
-    /// Stores subsample `(i, k)`'s closest hit (`tri` = `u32::MAX`: none).
-    ///
-    /// # Safety
-    /// Exclusive access to the entry, within the buffer (`test_tile_setup`).
-    #[inline(always)]
-    unsafe fn one(&self, (i, k): (u32, u32), bt: f32, tri: u32) {
-        let o = i as usize * self.spp + k as usize;
-        // SAFETY: the caller's.
-        unsafe {
-            if tri == u32::MAX {
-                *self.prim.add(o) = NO_ID;
-                *self.t.add(o) = f32::INFINITY;
-            } else {
-                *self.prim.add(o) = tri;
-                *self.t.add(o) = bt;
-            }
-        }
-    }
-
-    /// Stores lane `l` of `c` as the one subsample of sample `idx[l]` (`spp == 1`: entry
-    /// `idx[l]`; a miss has `t = inf` in `c` and `tri = u32::MAX` = [`NO_ID`]).
-    ///
-    /// # Safety
-    /// As [`Out::one`], for the entries `idx`.
-    #[inline(always)]
-    unsafe fn spp1(&self, idx: &[u32], c: &ClosestN) {
-        debug_assert_eq!(self.spp, 1);
-        for (l, &i) in idx.iter().enumerate().take(MAX_LANES) {
-            // SAFETY: the caller's.
-            unsafe {
-                *self.prim.add(i as usize) = c.tri[l];
-                *self.t.add(i as usize) = c.t[l];
-            }
-        }
-    }
-
-    /// Stores `c`'s lanes as the whole samples `idx` (`spp` lanes each, in order: each
-    /// sample's entries are contiguous).
-    ///
-    /// # Safety
-    /// As [`Out::one`], for these samples' entries.
-    #[inline(always)]
-    unsafe fn samples(&self, idx: &[u32], c: &ClosestN) {
-        for (q, &i) in idx.iter().enumerate() {
-            let (o, l0) = (i as usize * self.spp, q * self.spp);
-            // SAFETY: the caller's; the buffers do not overlap `c`.
-            unsafe {
-                std::ptr::copy_nonoverlapping(c.t[l0..].as_ptr(), self.t.add(o), self.spp);
-                std::ptr::copy_nonoverlapping(c.tri[l0..].as_ptr(), self.prim.add(o), self.spp);
-            }
-        }
-    }
-
-    /// Stores lanes `0..n` of `c`, the subsamples `k0..k0 + n` of sample `i` (contiguous
-    /// entries; a miss has `t = inf` in `c` already).
-    ///
-    /// # Safety
-    /// As [`Out::one`], for the `n` entries.
-    #[inline(always)]
-    unsafe fn run(&self, (i, k0): (u32, u32), c: &ClosestN, n: usize) {
-        let o = i as usize * self.spp + k0 as usize;
-        let n = n.min(MAX_LANES);
-        if n == MAX_LANES {
-            // A full packet: fixed-size copies (vector stores, no `memcpy` call).
-            // SAFETY: the caller's: `MAX_LANES` entries from `o`, not overlapping `c`.
-            unsafe {
-                (self.t.add(o) as *mut [f32; MAX_LANES]).write_unaligned(c.t);
-                (self.prim.add(o) as *mut [u32; MAX_LANES]).write_unaligned(c.tri);
-            }
-            return;
-        }
-        // SAFETY: the caller's; the buffers do not overlap `c`, so each run is one copy (a
-        // miss has `t = inf` and `tri = NO_ID` in `c` already).
-        unsafe {
-            std::ptr::copy_nonoverlapping(c.t.as_ptr(), self.t.add(o), n);
-            std::ptr::copy_nonoverlapping(c.tri.as_ptr(), self.prim.add(o), n);
-        }
-    }
-}
-
 /// Runs every subsample ray `0..samples.len() * spp` of a tile (`pair(j)` = its `(sample, k)`) through the
 /// set-up kernel with `L::N` lanes; the results go to `out`.
 #[inline(always)]
@@ -320,6 +236,7 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
     samples: &[u32],
     film: Option<[&[f32]; 3]>,
     lens_k: Option<u32>,
+    sweep: bool,
     pair: impl Fn(usize) -> (u32, u32),
     out: Out,
 ) -> SetupWork {
@@ -385,6 +302,17 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
         return work;
     }
     let lens_chunk = matches!(set.camera, Camera::Distorted(_) | Camera::Fisheye(_));
+    // The sweep (`sweep.rs`): whole tiles of 16-subsample chunks with affine boxes.
+    if !FULL && sweep && chunked && L::N == MAX_LANES && !lens_chunk && stored.is_none() {
+        let c = spp / L::N;
+        let (ch, rg) = (&lanes[..c], &ranges[..c]);
+        let swept = sweep::sweep_edges(
+            set, blocks, tt, axis, sign, slack, samples, ch, rg, out, &mut work,
+        );
+        if swept {
+            return work;
+        }
+    }
     // Packets of whole samples (`gen_samples`: pinhole and stereo cameras, below `L::N`
     // subsamples; one sample's packets take the chunk path below) and the lanes' offsets
     // `offsets[l % spp]`.
@@ -566,11 +494,12 @@ macro_rules! isa_entry {
             samples: &[u32],
             film: Option<[&[f32]; 3]>,
             lens_k: Option<u32>,
+            sweep: bool,
             pair: impl Fn(usize) -> (u32, u32),
             out: Out,
         ) -> SetupWork {
             run_setup::<$lanes, FULL>(
-                set, stored, blocks, tt, axis, sign, slack, samples, film, lens_k, pair, out,
+                set, stored, blocks, tt, axis, sign, slack, samples, film, lens_k, sweep, pair, out,
             )
         }
     };
@@ -605,6 +534,7 @@ isa_entry!(
 /// the 1-spp packets instead of a gather through `samples`; `None` gathers. `lens_k`: only
 /// subsample `k` of every sample (a thin-lens tile's rays through lens point `k`, which `tt`
 /// and `beam` were set up for: `Hierarchy::lens_beams`), else every subsample.
+/// `sweep`: the sweep (`sweep.rs`) on tiles of 16-subsample chunks (module docs).
 ///
 /// # Safety
 /// As [`crate::cast::intersect::test_tile`]: `prim` and `t` valid for `set.ray_count()` elements,
@@ -625,6 +555,7 @@ pub unsafe fn test_tile_setup(
     exactness: SetupExactness,
     affine: bool,
     affine_always: bool,
+    sweep: bool,
     prim: *mut u32,
     t: *mut f32,
 ) -> SetupWork {
@@ -636,8 +567,15 @@ pub unsafe fn test_tile_setup(
     // test pays there only when asked for (`CastOptions::affine_always`).
     let y16_spp1 = lanes == 16 && isa == Isa::Avx2 && spp == 1;
     let affine = affine && ((!z16 && !y16_spp1) || affine_always);
+    // The sweep (`sweep.rs`) on 16-lane packets of whole chunks; it needs the film frame.
+    let sweep = sweep
+        && exactness == SetupExactness::Edges
+        && lanes == 16
+        && lens_k.is_none()
+        && stored.is_none()
+        && spp.is_multiple_of(16);
     tt.frame = None;
-    if affine && exactness == SetupExactness::Edges && !samples.is_empty() {
+    if (affine || sweep) && exactness == SetupExactness::Edges && !samples.is_empty() {
         let film_x = set.samples[samples[0] as usize].film.x;
         tt.frame = FilmFrame::of(set, tt.origin, film_x);
         if tt.frame.is_some() {
@@ -665,10 +603,10 @@ pub unsafe fn test_tile_setup(
         ($f:ident $(, $l:ty)?) => {
             match exactness {
                 SetupExactness::Edges => {
-                    $f::<$($l,)? false>(set, stored, blocks, tt, axis, sign, slack, samples, film, lens_k, pair, out)
+                    $f::<$($l,)? false>(set, stored, blocks, tt, axis, sign, slack, samples, film, lens_k, sweep, pair, out)
                 }
                 SetupExactness::Full => {
-                    $f::<$($l,)? true>(set, stored, blocks, tt, axis, sign, slack, samples, film, lens_k, pair, out)
+                    $f::<$($l,)? true>(set, stored, blocks, tt, axis, sign, slack, samples, film, lens_k, sweep, pair, out)
                 }
             }
         };

@@ -16,6 +16,7 @@ use parallax_core::math::WatertightRay;
 
 use super::affine::{AffineTri, FilmFrame};
 use super::rows::TileRows;
+use super::tile_packets::TilePackets;
 use crate::beam::Beam;
 
 /// Unit roundoff of f32 (`2^-24`): `fl(x op y) = (x op y)(1 + δ)`, `|δ| <= U`.
@@ -448,6 +449,8 @@ pub struct TileTris {
     /// (`cast/setup/rows.rs`) and each leaf's end in that list.
     pub rows: TileRows,
     pub ends: Vec<u32>,
+    /// Scratch of the sweep (`cast/setup/sweep.rs`): the tile's packets side by side.
+    pub packets: TilePackets,
 }
 
 impl Default for Cone {

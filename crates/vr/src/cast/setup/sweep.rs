@@ -1,0 +1,288 @@
+//! The sweep: the set-up sample test with the tile's triangles outside and its packets
+//! inside (Hunt et al. 2018, §5.5: HVVR's GPU kernel loops over a tile's triangles per
+//! thread). For the 16-subsample packets of pinhole and stereo tiles
+//! ([`crate::SetupExactness::Edges`]), instead of walking the tile's runs once per packet
+//! (`edges.rs`), every packet of the tile is generated once ([`TilePackets`]) and each
+//! set-up triangle is swept over all of them:
+//!
+//! - **The affine test across packets.** A triangle's affine packet test
+//!   (`affine.rs`) runs on sixteen packets at once, one lane per packet
+//!   ([`BoxLanes::classify`]: the same float operations as `PacketBox::classify_bits`, so the
+//!   same class per packet); only the packets not certainly outside take the per-lane test
+//!   (`edges::test_tri`, the walk's own), as in the walk.
+//! - **The early exit per run.** Before each run (the tile's leaves in near-depth order) the
+//!   packets whose every lane has a hit nearer than the run's near depth (plus the slack)
+//!   leave the sweep, sixteen compares at once; the sweep ends when none is left. A packet's
+//!   exit depth is brought up to date after each run that changed its best, as the walk does.
+//! - **The same buffer.** The result of every lane is the maximum over the covering
+//!   triangles of `(1/t, -index)` (`edges.rs`, "the result does not depend on the triangle
+//!   order"), and a packet leaves only where no later triangle can exceed its best: the sweep
+//!   writes what the walk writes, bit for bit (tests: `cast/setup/sweep/tests.rs`, and the
+//!   casts of `tests/cast.rs`).
+//!
+//! What the walk pays per packet and the sweep does not: the packet's slab and interval set-up
+//! (three divisions, seven reductions), the run groups' interval tests and the loop over runs;
+//! and the affine test costs a lane per packet instead of a register. What it loses: the run
+//! boxes' per-packet cull (the per-triangle affine test is tighter; the depth test `g . d >=
+//! best` is the walk's). Measurements: `docs/notes/vr.md`.
+//!
+//! **Parameters:** none of its own; it runs for [`crate::CastOptions::sweep`] on tiles whose
+//! packets are each one sample's chunk of sixteen subsamples with an affine box (otherwise the
+//! walk runs).
+
+use glam::Vec2;
+use parallax_bvh::Tri4;
+
+use super::affine::{BoxLanes, CLASS_IN, CLASS_OUT, PacketBox, PacketClass};
+use super::bands::refine_run;
+use super::edges::test_tri;
+use super::kernel::{SetupWork, packet_dinf};
+use super::out::Out;
+use super::tile_packets::TilePackets;
+use super::tri::TileTris;
+use crate::SampleSet;
+use crate::cast::lanes16::LaneReduce;
+use crate::cast::packet::{ClosestN, MAX_LANES, RaysN, sample_chunk};
+
+/// Every lane of a packet.
+const FULL: u32 = (1 << MAX_LANES) - 1;
+
+/// The sweep of the tile `samples` (each `spp = chunks.len() * 16` subsamples: chunk `c` with
+/// the offset lanes `chunks[c]` and offset range `ranges[c]`) over the set-up list `tt`, the
+/// results to `out`. Returns `false`, having written nothing, when a packet has no chunk rays
+/// or no affine box (the caller then runs the walk); `L::N` must be 16 and `tt.frame` set.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(super) fn sweep_edges<L: LaneReduce>(
+    set: &SampleSet,
+    blocks: &[Tri4],
+    tt: &mut TileTris,
+    axis: usize,
+    sign: f32,
+    slack: f32,
+    samples: &[u32],
+    chunks: &[(L, L)],
+    ranges: &[(Vec2, Vec2)],
+    out: Out,
+    work: &mut SetupWork,
+) -> bool {
+    debug_assert_eq!(L::N, MAX_LANES);
+    let Some(fr) = tt.frame else {
+        return false;
+    };
+    if samples.len() * chunks.len() > ROWS_MAX * 16 {
+        return false;
+    }
+    let mut pk = std::mem::take(&mut tt.packets);
+    let ok = gen_packets(set, &fr, &mut pk, samples, chunks, ranges);
+    if ok {
+        sweep::<L>(blocks, tt, &mut pk, axis, sign, slack, work);
+        write_packets::<L>(&pk, samples, chunks.len(), out);
+        work.rays += (pk.best.len() * MAX_LANES) as u64;
+        work.swept += 1;
+    }
+    tt.packets = pk;
+    ok
+}
+
+/// Every packet of the tile into `pk`: its chunk rays (`sample_chunk`) and affine box.
+#[inline(always)]
+fn gen_packets<L: LaneReduce>(
+    set: &SampleSet,
+    fr: &super::affine::FilmFrame,
+    pk: &mut TilePackets,
+    samples: &[u32],
+    chunks: &[(L, L)],
+    ranges: &[(Vec2, Vec2)],
+) -> bool {
+    let cps = chunks.len();
+    pk.reset(samples.len() * cps);
+    let mut p = 0;
+    for &i in samples {
+        let s = &set.samples[i as usize];
+        for (&(ox, oy), &(a, b)) in chunks.iter().zip(ranges) {
+            let Some(rays) = sample_chunk::<L>(set, i, ox, oy, a.x, b.x) else {
+                return false;
+            };
+            if rays.valid != FULL {
+                return false;
+            }
+            // The film box of `packet_box` (`mod.rs`) from the chunk's offset range (the
+            // footprint is finite and `>= 0`: `sample_chunk` gave rays).
+            let (lo, hi) = (s.film + a * s.footprint, s.film + b * s.footprint);
+            let Some(pb) = PacketBox::new(fr, lo.x, hi.x, lo.y, hi.y) else {
+                return false;
+            };
+            for a in 0..3 {
+                rays.d[a].write(&mut pk.d[a][p]);
+            }
+            pk.dinf[p] = packet_dinf(rays.d);
+            let row = &mut pk.boxes[p / 16];
+            for (f, v) in pb.scalars().into_iter().enumerate() {
+                row[f][p % 16] = v;
+            }
+            p += 1;
+        }
+    }
+    true
+}
+
+/// The run-by-run sweep of `tt`'s set-up triangles over the packets `pk` (module docs).
+#[inline(always)]
+fn sweep<L: LaneReduce>(
+    blocks: &[Tri4],
+    tt: &mut TileTris,
+    pk: &mut TilePackets,
+    axis: usize,
+    sign: f32,
+    slack: f32,
+    work: &mut SetupWork,
+) {
+    let np = pk.best.len();
+    let rows = np.div_ceil(16);
+    let origin = tt.origin;
+    let o = [L::splat(origin.x), L::splat(origin.y), L::splat(origin.z)];
+    let zero = L::splat(0.0);
+    let all = zero.eq(zero);
+    let (sign_v, oa_v, one) = (L::splat(sign), L::splat(origin[axis]), L::splat(1.0));
+    // The packets of each row still in the sweep, and those whose best changed in this run.
+    let mut live = [0u32; ROWS_MAX];
+    let mut dirty = [0u32; ROWS_MAX];
+    debug_assert!(rows <= ROWS_MAX);
+    let mut first = 0usize;
+    for si in 0..tt.segs.len() {
+        let (near, end) = (tt.segs[si].near, tt.segs[si].end as usize);
+        let run = first..end;
+        first = end;
+        // The early exit: packets with every lane's hit nearer than the run's near depth.
+        let near_v = L::splat(near);
+        let mut any = 0u32;
+        for (r, live_r) in live.iter_mut().enumerate().take(rows) {
+            let exit = L::load16(pk.exit[16 * r..16 * r + 16].try_into().unwrap());
+            // (The packets of row `r`: all sixteen but in the last row.)
+            let present = FULL >> (16 - (np - 16 * r).min(16));
+            *live_r = present & !L::bits(near_v.gt(exit + L::splat(slack)));
+            any |= *live_r;
+        }
+        if any == 0 {
+            break;
+        }
+        if run.is_empty() {
+            continue;
+        }
+        if tt.tris[run.start].rho.is_nan() {
+            refine_run(tt, run.start, run.end, blocks);
+        }
+        for j in run {
+            let (tr, aff) = (&tt.tris[j], &tt.aff[j]);
+            let small = aff.small();
+            for r in 0..rows {
+                if live[r] == 0 {
+                    continue;
+                }
+                // (All-in triangles: partial, no edge skipped, as in the walk.)
+                let (mut test, cls) = if tr.all_in {
+                    (live[r], None)
+                } else {
+                    let b = &pk.boxes[r];
+                    let bl = BoxLanes {
+                        xc: L::load16(&b[0]),
+                        yc: L::load16(&b[1]),
+                        rx: L::load16(&b[2]),
+                        ry: L::load16(&b[3]),
+                        ka: L::load16(&b[4]),
+                        kb: L::load16(&b[5]),
+                    };
+                    let c = bl.classify(aff, tr.bound);
+                    (live[r] & !c.out, Some(c))
+                };
+                let n = live[r].count_ones();
+                work.tri_tests += n as u64;
+                work.pair_tests += n as u64 * MAX_LANES as u64;
+                work.packet_out += (n - test.count_ones()) as u64;
+                while test != 0 {
+                    let k = test.trailing_zeros();
+                    test &= test - 1;
+                    let code = match &cls {
+                        Some(c) => c.code(k, small),
+                        None => 0,
+                    };
+                    debug_assert_ne!(code, CLASS_OUT);
+                    let class = if code == CLASS_IN {
+                        PacketClass::In
+                    } else {
+                        PacketClass::Partial
+                    };
+                    let p = 16 * r + k as usize;
+                    let rays = RaysN {
+                        o,
+                        d: [
+                            L::load16(&pk.d[0][p]),
+                            L::load16(&pk.d[1][p]),
+                            L::load16(&pk.d[2][p]),
+                        ],
+                        valid: FULL,
+                    };
+                    let mut best = L::load16(&pk.best[p]);
+                    if test_tri(
+                        &rays,
+                        blocks,
+                        tr,
+                        class,
+                        code & 7,
+                        false,
+                        all,
+                        pk.dinf[p],
+                        &mut best,
+                        &mut pk.tri[p],
+                        work,
+                    ) {
+                        best.write(&mut pk.best[p]);
+                        dirty[r] |= 1 << k;
+                    }
+                }
+            }
+        }
+        // The exit depths of the packets this run changed (the walk's `exit_depth`).
+        for (r, dirty_r) in dirty.iter_mut().enumerate().take(rows) {
+            while *dirty_r != 0 {
+                let k = dirty_r.trailing_zeros() as usize;
+                *dirty_r &= *dirty_r - 1;
+                let p = 16 * r + k;
+                let best = L::load16(&pk.best[p]);
+                let hit = L::bits(best.gt(zero)) == FULL;
+                pk.exit[p] = if hit {
+                    let d = L::load16(&pk.d[axis][p]);
+                    (sign_v * (oa_v + (one / best) * d)).hmax()
+                } else {
+                    f32::INFINITY
+                };
+            }
+        }
+    }
+}
+
+/// Rows of sixteen packets a tile may hold: [`crate::hierarchy::tile_samples`] at 16 spp and
+/// above, `MAX_SPP / 16` chunks each.
+const ROWS_MAX: usize =
+    crate::hierarchy::TILE_SAMPLES * (crate::samples::MAX_SPP as usize / 16) / 16;
+
+/// Every packet's closest hits to `out`: `t = 1 / best` where a lane has a hit, the walk's
+/// `box_lim`.
+#[inline(always)]
+fn write_packets<L: LaneReduce>(pk: &TilePackets, samples: &[u32], cps: usize, out: Out) {
+    let (zero, one) = (L::splat(0.0), L::splat(1.0));
+    let inf = L::splat(f32::INFINITY);
+    for (p, (best, tri)) in pk.best.iter().zip(&pk.tri).enumerate() {
+        let b = L::load16(best);
+        let mut c = ClosestN {
+            t: [0.0; MAX_LANES],
+            tri: *tri,
+        };
+        L::select(b.gt(zero), one / b, inf).write(&mut c.t);
+        let (q, k) = (p / cps, p % cps);
+        // SAFETY: the caller of `test_tile_setup` guarantees exclusive access to these
+        // samples' entries; chunk `k` of sample `samples[q]` is entries `16 k..16 k + 16`.
+        unsafe { out.run((samples[q], (k * MAX_LANES) as u32), &c, MAX_LANES) };
+    }
+}

@@ -1,0 +1,43 @@
+//! The packets of one tile held side by side for the sweep (`cast/setup/sweep.rs`): each
+//! packet's ray directions, best `1/t` and triangle per lane, its `|d|_inf` and exit depth,
+//! and its affine box ([`super::affine::PacketBox::scalars`]) in rows of sixteen packets.
+//! Reused from tile to tile (per thread, in [`super::TileTris`]): no allocation once grown.
+
+use crate::cast::packet::MAX_LANES;
+
+/// A tile's packets (module docs). Arrays indexed by packet `p`; the box rows by `p / 16`
+/// (lane `p % 16`), padded with empty packets.
+#[derive(Clone, Debug, Default)]
+pub struct TilePackets {
+    /// Directions per axis, sixteen lanes per packet.
+    pub d: [Vec<[f32; MAX_LANES]>; 3],
+    /// Best `1/t` so far per lane (0: no hit).
+    pub best: Vec<[f32; MAX_LANES]>,
+    /// Triangle of the best hit per lane (`u32::MAX`: none).
+    pub tri: Vec<[u32; MAX_LANES]>,
+    /// The packet's largest `|d|_inf` over its lanes (the scale of the edge band).
+    pub dinf: Vec<f32>,
+    /// The packet's exit depth (the largest depth of its lanes' hits along the beam's axis)
+    /// once every lane has a hit; `+inf` before.
+    pub exit: Vec<f32>,
+    /// The box rows: `[xc, yc, rx, ry, ka, kb]`, sixteen packets per row.
+    pub boxes: Vec<[[f32; 16]; 6]>,
+}
+
+impl TilePackets {
+    /// Room for `n` packets; every best `1/t` 0, every triangle none, every exit depth
+    /// `+inf`.
+    pub fn reset(&mut self, n: usize) {
+        for d in &mut self.d {
+            d.resize(n, [0.0; MAX_LANES]);
+        }
+        self.best.clear();
+        self.best.resize(n, [0.0; MAX_LANES]);
+        self.tri.clear();
+        self.tri.resize(n, [u32::MAX; MAX_LANES]);
+        self.dinf.resize(n, 0.0);
+        self.exit.clear();
+        self.exit.resize(n.next_multiple_of(16), f32::INFINITY);
+        self.boxes.resize(n.div_ceil(16), [[0.0; 16]; 6]);
+    }
+}
