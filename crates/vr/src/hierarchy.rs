@@ -57,13 +57,23 @@ pub fn tile_samples(spp: u32) -> usize {
     (TILE_RAYS / spp.max(1) as usize).max(TILE_SAMPLES)
 }
 
+/// Subsample rays per tile of the pinhole and stereo sets from 16 spp ([`tile_samples_of`]).
+pub const SWEEP_TILE_RAYS: usize = 4096;
+
 /// Most samples per tile of `set`: [`tile_samples`], except for a thin lens at more than one
 /// subsample, whose tiles are cast one lens point at a time ([`Hierarchy::lens_beams`]): there
 /// [`TILE_RAYS`] samples, so that each of a tile's per-lens-point set-ups serves as many rays
-/// as a 1-spp tile's (measured in `docs/notes/vr.md`).
+/// as a 1-spp tile's (measured in `docs/notes/vr.md`). Pinhole and stereo sets from 16 spp,
+/// whose tiles the caster sweeps
+/// (`cast/setup/sweep.rs`), hold [`SWEEP_TILE_RAYS`] rays (256 samples at 16 spp, 128 at 32):
+/// the sweep's cost per packet stays at 256 packets per tile while the per-tile set-up's
+/// share halves; at 512 packets its sample test doubles (`docs/notes/vr.md`).
 pub fn tile_samples_of(set: &SampleSet) -> usize {
+    let swept = matches!(set.camera, Camera::Pinhole(_) | Camera::Stereo(_));
     if lens_bundles(set) {
         TILE_RAYS
+    } else if swept && set.spp >= 16 {
+        (SWEEP_TILE_RAYS / set.spp as usize).max(1)
     } else {
         tile_samples(set.spp)
     }

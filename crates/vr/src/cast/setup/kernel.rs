@@ -133,12 +133,10 @@ fn abs_n<L: Lanes>(x: L) -> L {
     L::select(x.lt(zero), zero - x, x)
 }
 
-/// The packet's largest `|d|_inf` over its lanes, as [`PacketSlab::with_interval`] computes
-/// it (invalid lanes have `d = 0`): the scale of the edge band.
+/// `|d|_inf` per lane.
 #[inline(always)]
-pub(super) fn packet_dinf<L: LaneReduce>([dx, dy, dz]: [L; 3]) -> f32 {
-    let dinf_l = max_or_rhs(abs_n(dx), max_or_rhs(abs_n(dy), abs_n(dz)));
-    max_or_rhs(dinf_l, L::splat(0.0)).hmax()
+pub(super) fn lane_dinf<L: Lanes>([dx, dy, dz]: [L; 3]) -> L {
+    max_or_rhs(abs_n(dx), max_or_rhs(abs_n(dy), abs_n(dz)))
 }
 
 /// Per-packet constants of the set-up kernels (`cast/setup/edges.rs`, `cast/setup/full.rs`): reciprocal

@@ -411,7 +411,9 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
         // SAFETY: the caller of `test_tile_setup` guarantees exclusive access to these
         // samples' entries.
         unsafe {
-            if run {
+            if run && n == MAX_LANES {
+                out.run_streamed((i0, k0), &c);
+            } else if run {
                 out.run((i0, k0), &c, n);
             } else {
                 for (l, &p) in batch.iter().enumerate() {
@@ -420,6 +422,7 @@ fn run_setup<L: LaneReduce, const FULL: bool>(
             }
         }
     }
+    out.fence();
     work.rays = rays_n;
     work
 }

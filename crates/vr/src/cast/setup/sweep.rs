@@ -36,13 +36,14 @@ use parallax_bvh::Tri4;
 use super::affine::{BoxLanes, CLASS_IN, CLASS_OUT, PacketBox, PacketClass};
 use super::bands::refine_run;
 use super::edges::test_tri;
-use super::kernel::{SetupWork, packet_dinf};
+use super::kernel::{SetupWork, lane_dinf};
 use super::out::Out;
 use super::tile_packets::TilePackets;
 use super::tri::TileTris;
 use crate::SampleSet;
 use crate::cast::lanes16::LaneReduce;
 use crate::cast::packet::{ClosestN, MAX_LANES, RaysN, sample_chunk};
+use parallax_core::simd::max_or_rhs;
 
 /// Every lane of a packet.
 const FULL: u32 = (1 << MAX_LANES) - 1;
@@ -98,6 +99,8 @@ fn gen_packets<L: LaneReduce>(
     let cps = chunks.len();
     pk.reset(samples.len() * cps);
     let mut p = 0;
+    // The lanes' largest `|d|_inf` over the packets (`packet_dinf` of them all at once).
+    let mut dinf = L::splat(0.0);
     for &i in samples {
         let s = &set.samples[i as usize];
         for (&(ox, oy), &(a, b)) in chunks.iter().zip(ranges) {
@@ -116,7 +119,7 @@ fn gen_packets<L: LaneReduce>(
             for a in 0..3 {
                 rays.d[a].write(&mut pk.d[a][p]);
             }
-            pk.dinf[p] = packet_dinf(rays.d);
+            dinf = max_or_rhs(dinf, lane_dinf(rays.d));
             let row = &mut pk.boxes[p / 16];
             for (f, v) in pb.scalars().into_iter().enumerate() {
                 row[f][p % 16] = v;
@@ -124,6 +127,7 @@ fn gen_packets<L: LaneReduce>(
             p += 1;
         }
     }
+    pk.dinf = dinf.hmax();
     true
 }
 
@@ -232,7 +236,7 @@ fn sweep<L: LaneReduce>(
                         code & 7,
                         false,
                         all,
-                        pk.dinf[p],
+                        pk.dinf,
                         &mut best,
                         &mut pk.tri[p],
                         work,
@@ -262,10 +266,9 @@ fn sweep<L: LaneReduce>(
     }
 }
 
-/// Rows of sixteen packets a tile may hold: [`crate::hierarchy::tile_samples`] at 16 spp and
-/// above, `MAX_SPP / 16` chunks each.
-const ROWS_MAX: usize =
-    crate::hierarchy::TILE_SAMPLES * (crate::samples::MAX_SPP as usize / 16) / 16;
+/// Rows of sixteen packets a swept tile may hold: the pinhole and stereo tiles' rays from 16
+/// spp ([`crate::hierarchy::tile_samples_of`]) in 16-lane packets.
+const ROWS_MAX: usize = crate::hierarchy::SWEEP_TILE_RAYS / MAX_LANES / 16;
 
 /// Every packet's closest hits to `out`: `t = 1 / best` where a lane has a hit, the walk's
 /// `box_lim`.
@@ -283,6 +286,7 @@ fn write_packets<L: LaneReduce>(pk: &TilePackets, samples: &[u32], cps: usize, o
         let (q, k) = (p / cps, p % cps);
         // SAFETY: the caller of `test_tile_setup` guarantees exclusive access to these
         // samples' entries; chunk `k` of sample `samples[q]` is entries `16 k..16 k + 16`.
-        unsafe { out.run((samples[q], (k * MAX_LANES) as u32), &c, MAX_LANES) };
+        unsafe { out.run_streamed((samples[q], (k * MAX_LANES) as u32), &c) };
     }
+    out.fence();
 }

@@ -15,8 +15,9 @@ pub struct TilePackets {
     pub best: Vec<[f32; MAX_LANES]>,
     /// Triangle of the best hit per lane (`u32::MAX`: none).
     pub tri: Vec<[u32; MAX_LANES]>,
-    /// The packet's largest `|d|_inf` over its lanes (the scale of the edge band).
-    pub dinf: Vec<f32>,
+    /// The largest `|d|_inf` over every packet's lanes (the scale of the edge band: an upper
+    /// bound of each packet's own, so each band stays conservative).
+    pub dinf: f32,
     /// The packet's exit depth (the largest depth of its lanes' hits along the beam's axis)
     /// once every lane has a hit; `+inf` before.
     pub exit: Vec<f32>,
@@ -35,7 +36,7 @@ impl TilePackets {
         self.best.resize(n, [0.0; MAX_LANES]);
         self.tri.clear();
         self.tri.resize(n, [u32::MAX; MAX_LANES]);
-        self.dinf.resize(n, 0.0);
+        self.dinf = 0.0;
         self.exit.clear();
         self.exit.resize(n.next_multiple_of(16), f32::INFINITY);
         self.boxes.resize(n.div_ceil(16), [[0.0; 16]; 6]);
