@@ -79,7 +79,7 @@ pub(super) fn sweep_edges<L: LaneReduce>(
     if ok {
         sweep::<L>(blocks, tt, &mut pk, axis, sign, slack, work);
         write_packets::<L>(&pk, samples, chunks.len(), out);
-        work.rays += (pk.best.len() * MAX_LANES) as u64;
+        work.rays += (pk.packets.len() * MAX_LANES) as u64;
         work.swept += 1;
     }
     tt.packets = pk;
@@ -117,7 +117,7 @@ fn gen_packets<L: LaneReduce>(
                 return false;
             };
             for a in 0..3 {
-                rays.d[a].write(&mut pk.d[a][p]);
+                rays.d[a].write(&mut pk.packets[p].d[a]);
             }
             dinf = max_or_rhs(dinf, lane_dinf(rays.d));
             let row = &mut pk.boxes[p / 16];
@@ -142,7 +142,7 @@ fn sweep<L: LaneReduce>(
     slack: f32,
     work: &mut SetupWork,
 ) {
-    let np = pk.best.len();
+    let np = pk.packets.len();
     let rows = np.div_ceil(16);
     let origin = tt.origin;
     let o = [L::splat(origin.x), L::splat(origin.y), L::splat(origin.z)];
@@ -177,18 +177,18 @@ fn sweep<L: LaneReduce>(
         if tt.tris[run.start].rho.is_nan() {
             refine_run(tt, run.start, run.end, blocks);
         }
-        for j in run {
-            let (tr, aff) = (&tt.tris[j], &tt.aff[j]);
+        let (tris, affs) = (&tt.tris[run.clone()], &tt.aff[run]);
+        for (tr, aff) in tris.iter().zip(affs) {
             let small = aff.small();
-            for r in 0..rows {
-                if live[r] == 0 {
+            let rows_of = live.iter().zip(dirty.iter_mut()).zip(&pk.boxes);
+            for (r, ((&live_r, dirty_r), b)) in rows_of.enumerate() {
+                if live_r == 0 {
                     continue;
                 }
                 // (All-in triangles: partial, no edge skipped, as in the walk.)
                 let (mut test, cls) = if tr.all_in {
-                    (live[r], None)
+                    (live_r, None)
                 } else {
-                    let b = &pk.boxes[r];
                     let bl = BoxLanes {
                         xc: L::load16(&b[0]),
                         yc: L::load16(&b[1]),
@@ -198,12 +198,14 @@ fn sweep<L: LaneReduce>(
                         kb: L::load16(&b[5]),
                     };
                     let c = bl.classify(aff, tr.bound);
-                    (live[r] & !c.out, Some(c))
+                    (live_r & !c.out, Some(c))
                 };
-                let n = live[r].count_ones();
+                let n = live_r.count_ones();
                 work.tri_tests += n as u64;
                 work.pair_tests += n as u64 * MAX_LANES as u64;
                 work.packet_out += (n - test.count_ones()) as u64;
+                // (The row's packets: `rows` rows of sixteen but the last.)
+                let row = &mut pk.packets[16 * r..(16 * r + 16).min(np)];
                 while test != 0 {
                     let k = test.trailing_zeros();
                     test &= test - 1;
@@ -217,17 +219,17 @@ fn sweep<L: LaneReduce>(
                     } else {
                         PacketClass::Partial
                     };
-                    let p = 16 * r + k as usize;
+                    let pkt = &mut row[k as usize];
                     let rays = RaysN {
                         o,
                         d: [
-                            L::load16(&pk.d[0][p]),
-                            L::load16(&pk.d[1][p]),
-                            L::load16(&pk.d[2][p]),
+                            L::load16(&pkt.d[0]),
+                            L::load16(&pkt.d[1]),
+                            L::load16(&pkt.d[2]),
                         ],
                         valid: FULL,
                     };
-                    let mut best = L::load16(&pk.best[p]);
+                    let mut best = L::load16(&pkt.best);
                     if test_tri(
                         &rays,
                         blocks,
@@ -238,11 +240,11 @@ fn sweep<L: LaneReduce>(
                         all,
                         pk.dinf,
                         &mut best,
-                        &mut pk.tri[p],
+                        &mut pkt.tri,
                         work,
                     ) {
-                        best.write(&mut pk.best[p]);
-                        dirty[r] |= 1 << k;
+                        best.write(&mut pkt.best);
+                        *dirty_r |= 1 << k;
                     }
                 }
             }
@@ -253,10 +255,11 @@ fn sweep<L: LaneReduce>(
                 let k = dirty_r.trailing_zeros() as usize;
                 *dirty_r &= *dirty_r - 1;
                 let p = 16 * r + k;
-                let best = L::load16(&pk.best[p]);
+                let pkt = &pk.packets[p];
+                let best = L::load16(&pkt.best);
                 let hit = L::bits(best.gt(zero)) == FULL;
                 pk.exit[p] = if hit {
-                    let d = L::load16(&pk.d[axis][p]);
+                    let d = L::load16(&pkt.d[axis]);
                     (sign_v * (oa_v + (one / best) * d)).hmax()
                 } else {
                     f32::INFINITY
@@ -276,11 +279,11 @@ const ROWS_MAX: usize = crate::hierarchy::SWEEP_TILE_RAYS / MAX_LANES / 16;
 fn write_packets<L: LaneReduce>(pk: &TilePackets, samples: &[u32], cps: usize, out: Out) {
     let (zero, one) = (L::splat(0.0), L::splat(1.0));
     let inf = L::splat(f32::INFINITY);
-    for (p, (best, tri)) in pk.best.iter().zip(&pk.tri).enumerate() {
-        let b = L::load16(best);
+    for (p, pkt) in pk.packets.iter().enumerate() {
+        let b = L::load16(&pkt.best);
         let mut c = ClosestN {
             t: [0.0; MAX_LANES],
-            tri: *tri,
+            tri: pkt.tri,
         };
         L::select(b.gt(zero), one / b, inf).write(&mut c.t);
         let (q, k) = (p / cps, p % cps);

@@ -5,16 +5,23 @@
 
 use crate::cast::packet::MAX_LANES;
 
-/// A tile's packets (module docs). Arrays indexed by packet `p`; the box rows by `p / 16`
-/// (lane `p % 16`), padded with empty packets.
+/// One packet's rays and closest hits so far, on five cache lines.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub struct Packet {
+    /// Directions per axis, sixteen lanes.
+    pub d: [[f32; MAX_LANES]; 3],
+    /// Best `1/t` so far per lane (0: no hit).
+    pub best: [f32; MAX_LANES],
+    /// Triangle of the best hit per lane (`u32::MAX`: none).
+    pub tri: [u32; MAX_LANES],
+}
+
+/// A tile's packets (module docs). The exit depths and box rows by row `p / 16`, lane
+/// `p % 16`, padded.
 #[derive(Clone, Debug, Default)]
 pub struct TilePackets {
-    /// Directions per axis, sixteen lanes per packet.
-    pub d: [Vec<[f32; MAX_LANES]>; 3],
-    /// Best `1/t` so far per lane (0: no hit).
-    pub best: Vec<[f32; MAX_LANES]>,
-    /// Triangle of the best hit per lane (`u32::MAX`: none).
-    pub tri: Vec<[u32; MAX_LANES]>,
+    pub packets: Vec<Packet>,
     /// The largest `|d|_inf` over every packet's lanes (the scale of the edge band: an upper
     /// bound of each packet's own, so each band stays conservative).
     pub dinf: f32,
@@ -29,13 +36,13 @@ impl TilePackets {
     /// Room for `n` packets; every best `1/t` 0, every triangle none, every exit depth
     /// `+inf`.
     pub fn reset(&mut self, n: usize) {
-        for d in &mut self.d {
-            d.resize(n, [0.0; MAX_LANES]);
-        }
-        self.best.clear();
-        self.best.resize(n, [0.0; MAX_LANES]);
-        self.tri.clear();
-        self.tri.resize(n, [u32::MAX; MAX_LANES]);
+        let empty = Packet {
+            d: [[0.0; MAX_LANES]; 3],
+            best: [0.0; MAX_LANES],
+            tri: [u32::MAX; MAX_LANES],
+        };
+        self.packets.clear();
+        self.packets.resize(n, empty);
         self.dinf = 0.0;
         self.exit.clear();
         self.exit.resize(n.next_multiple_of(16), f32::INFINITY);
