@@ -17,7 +17,7 @@
 //! - **The same buffer.** The result of every lane is the maximum over the covering
 //!   triangles of `(1/t, -index)` (`edges.rs`, "the result does not depend on the triangle
 //!   order"), and a packet leaves only where no later triangle can exceed its best: the sweep
-//!   writes what the walk writes, bit for bit (tests: `cast/setup/sweep/tests.rs`, and the
+//!   writes what the walk writes, bit for bit (tests: `tests/sweep.rs`, and the
 //!   casts of `tests/cast.rs`).
 //!
 //! What the walk pays per packet and the sweep does not: the packet's slab and interval set-up
