@@ -2,12 +2,10 @@
 
 use super::*;
 
-/// The branch-free word equals [`PacketBox::classify_edges`] on random boxes and affine
-/// forms, with huge, infinite and NaN values.
-#[test]
-fn classify_bits_equals_classify_edges() {
-    let mut x = 0x9e37_79b9_7f4a_7c15u64;
-    let mut f = move || {
+/// A xorshift stream of floats in (-2, 2) with NaN, infinities and 1e38 mixed in (one in 16).
+fn values(seed: u64) -> impl FnMut() -> f32 {
+    let mut x = seed;
+    move || {
         x ^= x << 13;
         x ^= x >> 7;
         x ^= x << 17;
@@ -19,7 +17,14 @@ fn classify_bits_equals_classify_edges() {
             3 => 1e38,
             _ => (u - 0.5) * 4.0,
         }
-    };
+    }
+}
+
+/// The branch-free word equals [`PacketBox::classify_edges`] on random boxes and affine
+/// forms, with huge, infinite and NaN values.
+#[test]
+fn classify_bits_equals_classify_edges() {
+    let mut f = values(0x9e37_79b9_7f4a_7c15);
     let mut seen = [0u32; 4];
     for _ in 0..200_000 {
         let kb = f().abs() * 0.01;
@@ -66,20 +71,7 @@ fn classify_bits_equals_classify_edges() {
 fn box_lanes_classify_equals_classify_bits() {
     use crate::cast::lanes16::V16;
     use parallax_core::simd::Lanes;
-    let mut x = 0x2545_f491_4f6c_dd1du64;
-    let mut f = move || {
-        x ^= x << 13;
-        x ^= x >> 7;
-        x ^= x << 17;
-        let u = (x >> 40) as f32 / (1u64 << 24) as f32;
-        match x & 63 {
-            0 => f32::NAN,
-            1 => f32::INFINITY,
-            2 => -f32::INFINITY,
-            3 => 1e38,
-            _ => (u - 0.5) * 4.0,
-        }
-    };
+    let mut f = values(0x2545_f491_4f6c_dd1d);
     let mut seen = [0u32; 4];
     for _ in 0..20_000 {
         let bound = f().abs() * 0.01;
