@@ -416,6 +416,34 @@ fn set_up_kernel_on_both_builds() {
     }
 }
 
+/// Ill-conditioned triangles (`rho > RHO_MAX`): the classroom from its framing camera, 410 m
+/// out (the file's 222 m ground quad makes the bounds large), where the building's small
+/// triangles are far below a pixel and their depth band exceeds `RHO_MAX` (it grows as
+/// `|a|^2`, `cast/setup/tri.rs`): the watertight test decides coverage and depth of a third
+/// of the pairs, in lanes where the tile's rays share one permutation (`exact_t_lanes`).
+/// Grid at 1 spp (the walk) and 16 spp (the sweep): as exact as per-ray traversal, on every
+/// lane width and tier (`check_setup`).
+#[test]
+fn tile_setup_kernel_agrees_on_ill_conditioned_triangles() {
+    let path = "../../../shared/scenes/japanese_classroom/japanese_classroom.glb";
+    let scene = Scene::load(path).expect("the real models in ../shared/scenes (README)");
+    let bvh = Bvh::build(&scene.mesh);
+    // The framing camera's view narrowed eightfold: the building fills the small film.
+    let mut desc = scene.camera(None).unwrap();
+    desc.fov_y_deg /= 8.0;
+    let cam = Camera::new(ModelKind::Pinhole, &desc, 64, 48, &CameraOptions::default()).unwrap();
+    for spp in [1, 16] {
+        let set = SampleSet::grid(cam.clone(), spp);
+        let label = format!("classroom framing camera spp {spp}");
+        let c = check_setup(&bvh, &set, &label, SetupExactness::Edges, false);
+        assert!(
+            c.band > 0.1,
+            "{label}: band {} (not ill-conditioned)",
+            c.band
+        );
+    }
+}
+
 /// One pixel per 16-lane packet: atrium stereo at 16 spp (the 16-lane kernel's MSAA case).
 #[test]
 fn tile_setup_kernel_agrees_at_16_spp() {

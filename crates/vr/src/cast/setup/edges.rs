@@ -72,7 +72,7 @@ use parallax_core::simd::Lanes;
 use super::affine::{CLASS_IN, CLASS_OUT, PacketBox, PacketClass};
 use super::bands::refine_run;
 use super::kernel::{PacketSlab, SetupWork, dot_n, edge_band, edge_reach, min_edge};
-use super::tri::{RHO_MAX, TileTris, TriSetup, exact_t};
+use super::tri::{RHO_MAX, TileTris, TriSetup, exact_t, exact_t_lanes, splat_vertices};
 use crate::cast::lanes16::LaneReduce;
 use crate::cast::packet::{ClosestN, MAX_LANES, RaysN};
 
@@ -94,6 +94,7 @@ pub(super) fn closest_edges<L: LaneReduce>(
 ) -> ClosestN {
     let valid = rays.valid;
     let zero = L::splat(0.0);
+    let perm = tt.perm;
     let mut best = zero;
     let mut out = ClosestN {
         t: [f32::INFINITY; MAX_LANES],
@@ -226,6 +227,7 @@ pub(super) fn closest_edges<L: LaneReduce>(
                                 rays,
                                 blocks,
                                 &ts[k],
+                                perm,
                                 class,
                                 code & 7,
                                 edges_first,
@@ -248,6 +250,7 @@ pub(super) fn closest_edges<L: LaneReduce>(
                             rays,
                             blocks,
                             tr,
+                            perm,
                             PacketClass::Partial,
                             0,
                             edges_first,
@@ -290,6 +293,7 @@ pub(super) fn test_tri<L: LaneReduce>(
     rays: &RaysN<L>,
     blocks: &[Tri4],
     tr: &TriSetup,
+    perm: Option<[usize; 3]>,
     class: PacketClass,
     skip: u32,
     edges_first: bool,
@@ -303,7 +307,7 @@ pub(super) fn test_tri<L: LaneReduce>(
     let [dx, dy, dz] = rays.d;
     if tr.rho > RHO_MAX {
         // Ill-conditioned: the watertight test decides coverage and depth.
-        return ill_conditioned(rays, blocks, tr, valid, dinf, best, tri, work);
+        return ill_conditioned(rays, blocks, tr, perm, valid, dinf, best, tri, work);
     }
     // Edges first (module docs): the triangle is skipped when no valid lane is
     // within or above the band, before its `g . d`.
@@ -395,6 +399,9 @@ pub(super) fn test_tri<L: LaneReduce>(
 /// An ill-conditioned triangle (`rho > RHO_MAX`) against every lane: certainly-out lanes
 /// (edge value below minus the band) skip it, the others take the watertight test, whose
 /// `t` is compared as `1/t` with the lane's best. Returns whether a lane's best changed.
+/// Where the tile's rays share one permutation (`perm`, `TileTris::perm`) the test runs in
+/// lanes ([`exact_t_lanes`], the scalar test's operations); lanes with an exactly-zero edge
+/// function, and every lane without `perm`, take the scalar test.
 /// Inlined into its callers: a separate copy is compiled without the entry point's target
 /// features, and every lane operation in it becomes an out-of-line intrinsic call
 /// (`tools/hot_calls.py` checks).
@@ -404,6 +411,7 @@ fn ill_conditioned<L: Lanes>(
     rays: &RaysN<L>,
     blocks: &[Tri4],
     tr: &crate::cast::setup::TriSetup,
+    perm: Option<[usize; 3]>,
     valid: u32,
     dinf: f32,
     best: &mut L,
@@ -415,14 +423,34 @@ fn ill_conditioned<L: Lanes>(
         let m = min_edge(&tr.n, rays.d);
         maybe &= L::bits(m.ge(L::splat(-tr.bound * dinf)));
     }
+    if maybe == 0 {
+        return false;
+    }
+    work.exact_tests += maybe.count_ones() as u64;
+    // The lanes' watertight `t` where the test accepts the ray (`hits`).
+    let (mut hits, mut scalar, mut tv) = (0u32, maybe, L::splat(f32::NAN));
+    if let Some(perm) = perm {
+        let (zero, hit, t) = exact_t_lanes(rays, perm, &splat_vertices(blocks, tr.src));
+        (hits, scalar, tv) = (hit & maybe, maybe & zero, t);
+    }
+    let (mut scalar_t, mut scalar_hits) = ([0.0f32; MAX_LANES], 0u32);
+    while scalar != 0 {
+        let l = scalar.trailing_zeros() as usize;
+        scalar &= scalar - 1;
+        if let Some(tc) = exact_t(&WatertightRay::new(&rays.lane(l)), blocks, tr.src) {
+            scalar_t[l] = tc;
+            scalar_hits |= 1 << l;
+        }
+    }
+    hits |= scalar_hits;
     let mut changed = false;
-    while maybe != 0 {
-        let l = maybe.trailing_zeros() as usize;
-        maybe &= maybe - 1;
-        work.exact_tests += 1;
-        let wt = &WatertightRay::new(&rays.lane(l));
-        let Some(tc) = exact_t(wt, blocks, tr.src) else {
-            continue;
+    while hits != 0 {
+        let l = hits.trailing_zeros() as usize;
+        hits &= hits - 1;
+        let tc = if scalar_hits >> l & 1 != 0 {
+            scalar_t[l]
+        } else {
+            tv.get(l)
         };
         let g = 1.0 / tc;
         let b = best.get(l);

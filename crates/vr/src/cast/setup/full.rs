@@ -9,11 +9,13 @@
 
 use glam::Vec3;
 use parallax_bvh::Tri4;
-use parallax_core::math::{WatertightRay, shear_vertex, watertight_lanes, watertight_permutation};
+use parallax_core::math::{WatertightRay, watertight_permutation};
 use parallax_core::simd::Lanes;
 
 use super::kernel::{PacketSlab, SetupWork, dot_n, edge_band};
-use super::tri::{RHO_EXACT, RHO_MAX, TileTris, U, exact_closest, exact_t};
+use super::tri::{
+    RHO_EXACT, RHO_MAX, TileTris, U, exact_closest, exact_t, exact_t_lanes, splat_vertices,
+};
 use crate::cast::packet::{ClosestN, MAX_LANES, RaysN};
 
 /// Per-lane state of the best hit so far: `1/t` (lanes), its band, and the triangle.
@@ -285,7 +287,6 @@ fn final_t_lanes<L: Lanes>(
             perm
         }
     };
-    let [kx, ky, kz] = perm;
     // Lanes outside `need` repeat the first lane's triangle (results ignored).
     let mut srcs = [0u32; MAX_LANES];
     let mut same = true;
@@ -301,13 +302,7 @@ fn final_t_lanes<L: Lanes>(
     // Usually every lane (subsamples of one pixel) has the same winner: splat its vertices.
     let mut p = [[L::splat(0.0); 3]; 3];
     if same {
-        let b = &blocks[(s0 >> 2) as usize];
-        let ln = (s0 & 3) as usize;
-        for (v, pv) in p.iter_mut().enumerate() {
-            for (k, pk) in pv.iter_mut().enumerate() {
-                *pk = L::splat(b.p[v][k][ln]);
-            }
-        }
+        p = splat_vertices(blocks, s0);
     } else {
         let mut raw = [[[0.0f32; MAX_LANES]; 3]; 3];
         for (l, &s) in srcs.iter().enumerate().take(L::N) {
@@ -325,19 +320,7 @@ fn final_t_lanes<L: Lanes>(
             }
         }
     }
-    let one = L::splat(1.0);
-    let dkz = rays.d[kz];
-    let shear = [rays.d[kx] / dkz, rays.d[ky] / dkz, one / dkz];
-    let o = [rays.o[kx], rays.o[ky], rays.o[kz]];
-    // Not a closure (lane intrinsics would not inline into it, `cast/lanes512.rs`).
-    let va = shear_vertex([p[0][kx], p[0][ky], p[0][kz]], o, shear);
-    let vb = shear_vertex([p[1][kx], p[1][ky], p[1][kz]], o, shear);
-    let vc = shear_vertex([p[2][kx], p[2][ky], p[2][kz]], o, shear);
-    let r = watertight_lanes(va, vb, vc);
-    let d = r.distance(va[2], vb[2], vc[2]);
-    let (exact, tv) = (r.exact, d.t);
-    let ok = r.same_sign & d.nonzero & L::bits(tv.gt(L::splat(0.0)));
-    let ok = ok & L::bits(tv.lt(L::splat(f32::INFINITY)));
+    let (exact, ok, tv) = exact_t_lanes(rays, perm, &p);
     let done = need & !exact;
     let mut m = done;
     while m != 0 {

@@ -144,7 +144,7 @@ fn sweep<L: LaneReduce>(
 ) {
     let np = pk.packets.len();
     let rows = np.div_ceil(16);
-    let origin = tt.origin;
+    let (origin, perm) = (tt.origin, tt.perm);
     let o = [L::splat(origin.x), L::splat(origin.y), L::splat(origin.z)];
     let zero = L::splat(0.0);
     let all = zero.eq(zero);
@@ -234,6 +234,7 @@ fn sweep<L: LaneReduce>(
                         &rays,
                         blocks,
                         tr,
+                        perm,
                         class,
                         code & 7,
                         false,

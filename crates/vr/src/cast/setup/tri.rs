@@ -12,12 +12,14 @@
 use glam::{Vec3, Vec4};
 use parallax_bvh::Tri4;
 use parallax_core::Ray;
-use parallax_core::math::WatertightRay;
+use parallax_core::math::{WatertightRay, shear_vertex, watertight_lanes};
+use parallax_core::simd::Lanes;
 
 use super::affine::{AffineTri, FilmFrame};
 use super::rows::TileRows;
 use super::tile_packets::TilePackets;
 use crate::beam::Beam;
+use crate::cast::packet::RaysN;
 
 /// Unit roundoff of f32 (`2^-24`): `fl(x op y) = (x op y)(1 + δ)`, `|δ| <= U`.
 pub(super) const U: f32 = f32::EPSILON * 0.5;
@@ -368,6 +370,51 @@ pub fn exact_t(wt: &WatertightRay, blocks: &[Tri4], src: u32) -> Option<f32> {
     .map(|h| h.t)
 }
 
+/// [`exact_t`] on every lane of `rays` at once, for rays that all have the watertight
+/// permutation `perm` (`TileTris::perm`) and the triangle `p[vertex][axis]` (per lane):
+/// lane-wise exactly the f32 operations of `WatertightRay::new` and `intersect_within` (the
+/// shear constants divided lane-wise; `t` in `(0, inf)`, the rays' `t_min` and `t_max`).
+/// Returns `(zero, hit, t)`: the lanes with an exactly-zero edge function, which only the
+/// scalar test decides (its f64 branch, Woop et al. 2013, §4.1); the other lanes whose ray
+/// the test accepts; and `t`, meaningful on `hit`.
+#[inline(always)]
+pub(super) fn exact_t_lanes<L: Lanes>(
+    rays: &RaysN<L>,
+    perm: [usize; 3],
+    p: &[[L; 3]; 3],
+) -> (u32, u32, L) {
+    let [kx, ky, kz] = perm;
+    let dkz = rays.d[kz];
+    let shear = [rays.d[kx] / dkz, rays.d[ky] / dkz, L::splat(1.0) / dkz];
+    let o = [rays.o[kx], rays.o[ky], rays.o[kz]];
+    // Not a closure (lane intrinsics would not inline into it, `cast/lanes512.rs`).
+    let va = shear_vertex([p[0][kx], p[0][ky], p[0][kz]], o, shear);
+    let vb = shear_vertex([p[1][kx], p[1][ky], p[1][kz]], o, shear);
+    let vc = shear_vertex([p[2][kx], p[2][ky], p[2][kz]], o, shear);
+    let r = watertight_lanes(va, vb, vc);
+    let d = r.distance(va[2], vb[2], vc[2]);
+    let ok = r.same_sign
+        & d.nonzero
+        & L::bits(d.t.gt(L::splat(0.0)))
+        & L::bits(d.t.lt(L::splat(f32::INFINITY)));
+    (r.exact, ok & !r.exact, d.t)
+}
+
+/// The vertices of set-up triangle `src` in every lane (`p[vertex][axis]`, [`exact_t_lanes`]).
+#[inline(always)]
+pub(super) fn splat_vertices<L: Lanes>(blocks: &[Tri4], src: u32) -> [[L; 3]; 3] {
+    let b = &blocks[(src >> 2) as usize];
+    let ln = (src & 3) as usize;
+    // Loops, not `map` closures (lane intrinsics would not inline into a closure).
+    let mut p = [[L::splat(0.0); 3]; 3];
+    for (v, pv) in p.iter_mut().enumerate() {
+        for (k, pk) in pv.iter_mut().enumerate() {
+            *pk = L::splat(b.p[v][k][ln]);
+        }
+    }
+    p
+}
+
 /// The closest hit `(t, set-up index)` of `ray` over every triangle of `tris` with the
 /// watertight test alone, the BVH's tie-break (the rescue path; also the tests' reference).
 pub fn exact_closest(ray: &Ray, blocks: &[Tri4], tris: &[TriSetup]) -> (f32, u32) {
@@ -486,4 +533,80 @@ impl TileTris {
 pub fn shared_origin(beam: &Beam) -> Option<Vec3> {
     (!beam.everything && !beam.origin.is_empty() && beam.origin.min == beam.origin.max)
         .then_some(beam.origin.min)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cast::lanes16::V16;
+    use parallax_core::math::watertight_permutation;
+
+    /// [`exact_t_lanes`] decides every lane without a zero edge function as [`exact_t`] does
+    /// (hit or not, `t` bit for bit), on sixteen rays of one origin around a direction and
+    /// triangles near, far, tiny, huge and degenerate (zero-area: its edge functions are often
+    /// exactly zero, which the lanes leave to the scalar test).
+    #[test]
+    fn exact_t_lanes_equals_exact_t() {
+        let mut x = 0x853c_49e6_748f_ea9bu64;
+        let mut f = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let mut v = |s: f32| Vec3::new(f() - 0.5, f() - 0.5, f() - 0.5) * s;
+        let (mut hits, mut misses, mut zeros, mut cases) = (0, 0, 0, 0);
+        for case in 0..6000 {
+            let o = v(if case % 3 == 0 { 800.0 } else { 20.0 });
+            let c = v(2.0).try_normalize().unwrap_or(Vec3::Z);
+            let spread = [1e-4, 3e-3, 0.05, 0.3][case % 4];
+            let d: Vec<Vec3> = (0..16).map(|_| c + v(spread)).collect();
+            let perm = watertight_permutation(d[0]);
+            if d.iter().any(|&di| watertight_permutation(di) != perm) {
+                continue;
+            }
+            cases += 1;
+            let dist = [0.05, 3.0, 400.0][case % 3];
+            let size = [1e-3, 0.5, 50.0, 5e3][(case / 4) % 4];
+            let centre = o + c * dist + v(size * 0.2);
+            let mut p = [centre + v(size), centre + v(size), centre + v(size)];
+            if case % 7 == 0 {
+                // Degenerate: the third vertex on the first edge.
+                p[2] = p[0] + (p[1] - p[0]) * 0.25;
+            }
+            if case % 11 == 0 {
+                // A vertex at the origin: two edge functions exactly zero on every lane.
+                p[0] = o;
+            }
+            let mut block = Tri4::EMPTY;
+            for (vi, pv) in p.iter().enumerate() {
+                for k in 0..3 {
+                    block.p[vi][k].x = pv[k];
+                }
+            }
+            let blocks = [block];
+            let lanes = |k: usize| V16::from_fn(|l| d[l][k]);
+            let rays = RaysN {
+                o: [V16::splat(o.x), V16::splat(o.y), V16::splat(o.z)],
+                d: [lanes(0), lanes(1), lanes(2)],
+                valid: 0xffff,
+            };
+            let (zero, hit, t) = exact_t_lanes(&rays, perm, &splat_vertices::<V16>(&blocks, 0));
+            for l in 0..16 {
+                if zero >> l & 1 != 0 {
+                    zeros += 1;
+                    continue;
+                }
+                let scalar = exact_t(&WatertightRay::new(&rays.lane(l)), &blocks, 0);
+                assert_eq!(hit >> l & 1 != 0, scalar.is_some(), "case {case} lane {l}");
+                if let Some(ts) = scalar {
+                    assert_eq!(ts.to_bits(), t.get(l).to_bits(), "case {case} lane {l}");
+                    hits += 1;
+                } else {
+                    misses += 1;
+                }
+            }
+        }
+        assert!(cases > 4000 && hits > 5000 && misses > 30000 && zeros > 3000);
+    }
 }
