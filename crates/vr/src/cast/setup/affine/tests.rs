@@ -20,6 +20,18 @@ fn values(seed: u64) -> impl FnMut() -> f32 {
     }
 }
 
+/// An affine form of random lanes from `v` (its magnitudes `amx`, `amy`, `n1` made `>= 0`).
+fn random_affine(v: &mut impl FnMut() -> Vec4) -> AffineTri {
+    AffineTri {
+        mx: v(),
+        my: v(),
+        mz: v(),
+        amx: v().abs(),
+        amy: v().abs(),
+        n1: v().abs(),
+    }
+}
+
 /// The branch-free word equals [`PacketBox::classify_edges`] on random boxes and affine
 /// forms, with huge, infinite and NaN values.
 #[test]
@@ -38,14 +50,7 @@ fn classify_bits_equals_classify_edges() {
             ka: v().abs() * 0.01,
             kb,
         };
-        let a = AffineTri {
-            mx: v(),
-            my: v(),
-            mz: v(),
-            amx: v().abs(),
-            amy: v().abs(),
-            n1: v().abs(),
-        };
+        let a = random_affine(&mut v);
         let (class, skip) = pb.classify_edges(&a, bound);
         let word = match class {
             PacketClass::Out => CLASS_OUT,
@@ -76,14 +81,7 @@ fn box_lanes_classify_equals_classify_bits() {
     for _ in 0..20_000 {
         let bound = f().abs() * 0.01;
         let mut v = || Vec4::new(f(), f(), f(), f());
-        let a = AffineTri {
-            mx: v(),
-            my: v(),
-            mz: v(),
-            amx: v().abs(),
-            amy: v().abs(),
-            n1: v().abs(),
-        };
+        let a = random_affine(&mut v);
         let boxes: [[f32; 6]; 16] = std::array::from_fn(|_| {
             [
                 f(),
