@@ -10,6 +10,13 @@
 //!   ([`BoxLanes::classify`]: the same float operations as `PacketBox::classify_bits`, so the
 //!   same class per packet); only the packets not certainly outside take the per-lane test
 //!   (`edges::test_tri`, the walk's own), as in the walk.
+//! - **The run-box test across packets.** Before a run's triangles, the walk's interval
+//!   test of a packet on the run's box (`PacketSlab::interval_reaches`: the packet's
+//!   reciprocal-direction interval, its largest closest-hit limit, the robust far scaling)
+//!   runs on sixteen packets at once, one lane per packet, the run's box splatted
+//!   ([`run_reaches`]); only the packets it passes meet the run's triangles. It is
+//!   conservative as the walk's is (every lane's reciprocal lies in its packet's interval,
+//!   float products are monotone), so it drops no hit.
 //! - **The early exit per run.** Before each run (the tile's leaves in near-depth order) the
 //!   packets whose every lane has a hit nearer than the run's near depth (plus the slack)
 //!   leave the sweep, sixteen compares at once; the sweep ends when none is left. A packet's
@@ -20,18 +27,20 @@
 //!   writes what the walk writes, bit for bit (tests: `tests/sweep.rs`, and the
 //!   casts of `tests/cast.rs`).
 //!
-//! What the walk pays per packet and the sweep does not: the packet's slab and interval set-up
-//! (three divisions, seven reductions), the run groups' interval tests and the loop over runs;
-//! and the affine test costs a lane per packet instead of a register. What it loses: the run
-//! boxes' per-packet cull (the per-triangle affine test is tighter; the depth test `g . d >=
-//! best` is the walk's). Measurements: `docs/notes/vr.md`.
+//! What the walk pays per packet and the sweep does not: the packet's slab set-up (three
+//! lane divisions), the run groups' interval tests and the loop over runs; the affine test
+//! costs a lane per packet instead of a register. What the sweep pays instead: one row of
+//! sixteen packets is the unit of work, so a row of which any packet reaches a run takes the
+//! run-box test and each of the run's triangles' affine tests for all sixteen.
+//! Measurements: `docs/notes/vr.md`.
 //!
 //! **Parameters:** none of its own; it runs for [`crate::CastOptions::sweep`] on tiles whose
 //! packets are each one sample's chunk of sixteen subsamples with an affine box (otherwise the
 //! walk runs).
 
-use glam::Vec2;
+use glam::{Vec2, Vec4};
 use parallax_bvh::Tri4;
+use parallax_core::math::ROBUST_FAR_SCALE;
 
 use super::affine::{BoxLanes, CLASS_IN, CLASS_OUT, PacketBox, PacketClass};
 use super::bands::refine_run;
@@ -39,7 +48,7 @@ use super::edges::test_tri;
 use super::kernel::{SetupWork, lane_dinf};
 use super::out::Out;
 use super::tile_packets::TilePackets;
-use super::tri::TileTris;
+use super::tri::{Segment, TileTris};
 use crate::SampleSet;
 use crate::cast::lanes16::LaneReduce;
 use crate::cast::packet::{ClosestN, MAX_LANES, RaysN, sample_chunk};
@@ -124,11 +133,56 @@ fn gen_packets<L: LaneReduce>(
             for (f, v) in pb.scalars().into_iter().enumerate() {
                 row[f][p % 16] = v;
             }
+            let (i0, i1) = interval(rays.d);
+            let row = &mut pk.intervals[p / 16];
+            for a in 0..3 {
+                row[a][p % 16] = i0[a];
+                row[3 + a][p % 16] = i1[a];
+            }
             p += 1;
         }
     }
     pk.dinf = dinf.hmax();
     true
+}
+
+/// A packet's reciprocal-direction interval per axis (lanes x, y, z): `[1 / max d, 1 / min d]`,
+/// which is `[min 1/d, max 1/d]` over the lanes bit for bit where every lane's `d` has one
+/// sign (an IEEE division is monotone in its divisor), as `PacketSlab::with_interval` takes
+/// it; `(0, 0)` on every axis where on one axis a lane's reciprocal is not finite or the signs
+/// differ (as the walk then has no interval test).
+#[inline(always)]
+fn interval<L: LaneReduce>([x, y, z]: [L; 3]) -> (Vec4, Vec4) {
+    let (lo, hi) = (L::hmin4([x, y, z, z]), L::hmax4([x, y, z, z]));
+    let (i0, i1) = (Vec4::ONE / hi, Vec4::ONE / lo);
+    let ok =
+        (lo.cmpgt(Vec4::ZERO) | hi.cmplt(Vec4::ZERO)) & i0.is_finite_mask() & i1.is_finite_mask();
+    if ok.bitmask() & 7 == 7 {
+        (i0, i1)
+    } else {
+        (Vec4::ZERO, Vec4::ZERO)
+    }
+}
+
+/// The walk's interval test (`PacketSlab::interval_reaches16`'s products and selects, one
+/// lane per packet instead of per run) of the run box `seg` against the sixteen packets of
+/// one row: their intervals `iv` ([`TilePackets::intervals`]) and limits `lim`. Bit `k` set
+/// iff packet `k` may reach the box before its limit; set on every packet without an
+/// interval (`(0, 0)` on every axis: entry 0, exit `min(lim, 0) = 0`).
+#[inline(always)]
+fn run_reaches<L: LaneReduce>(seg: &Segment, iv: &[[f32; 16]; 6], lim: &[f32; 16]) -> u32 {
+    let zero = L::splat(0.0);
+    let mut t_near = zero;
+    let mut t_far = L::load16(lim);
+    for a in 0..3 {
+        let (i0, i1) = (L::load16(&iv[a]), L::load16(&iv[3 + a]));
+        let neg = i1.lt(zero);
+        let (lo, hi) = (L::splat(seg.lo[a]), L::splat(seg.hi[a]));
+        let (n, f) = (L::select(neg, hi, lo), L::select(neg, lo, hi));
+        t_near = t_near.max_or_rhs((n * i0).min_or_rhs(n * i1));
+        t_far = t_far.min_or_rhs((f * i0).max_or_rhs(f * i1));
+    }
+    L::bits(t_near.le(t_far * L::splat(ROBUST_FAR_SCALE)))
 }
 
 /// The run-by-run sweep of `tt`'s set-up triangles over the packets `pk` (module docs).
@@ -174,13 +228,27 @@ fn sweep<L: LaneReduce>(
         if run.is_empty() {
             continue;
         }
+        // The run-box test of the live packets (module docs).
+        let seg = &tt.segs[si];
+        let mut reach = [0u32; ROWS_MAX];
+        let mut reach_any = 0u32;
+        for (r, (&live_r, reach_r)) in live.iter().zip(&mut reach).enumerate().take(rows) {
+            if live_r != 0 {
+                let lim = pk.lim[16 * r..16 * r + 16].try_into().unwrap();
+                *reach_r = live_r & run_reaches::<L>(seg, &pk.intervals[r], lim);
+                reach_any |= *reach_r;
+            }
+        }
+        if reach_any == 0 {
+            continue;
+        }
         if tt.tris[run.start].rho.is_nan() {
             refine_run(tt, run.start, run.end, blocks);
         }
         let (tris, affs) = (&tt.tris[run.clone()], &tt.aff[run]);
         for (tr, aff) in tris.iter().zip(affs) {
             let small = aff.small();
-            let rows_of = live.iter().zip(dirty.iter_mut()).zip(&pk.boxes);
+            let rows_of = reach.iter().zip(dirty.iter_mut()).zip(&pk.boxes);
             for (r, ((&live_r, dirty_r), b)) in rows_of.enumerate() {
                 if live_r == 0 {
                     continue;
@@ -259,9 +327,12 @@ fn sweep<L: LaneReduce>(
                 let pkt = &pk.packets[p];
                 let best = L::load16(&pkt.best);
                 let hit = L::bits(best.gt(zero)) == FULL;
+                // (`1 / best` is `+inf` on a lane without a hit: the walk's `lim_max`.)
+                let lim = one / best;
+                pk.lim[p] = lim.hmax();
                 pk.exit[p] = if hit {
                     let d = L::load16(&pkt.d[axis]);
-                    (sign_v * (oa_v + (one / best) * d)).hmax()
+                    (sign_v * (oa_v + lim * d)).hmax()
                 } else {
                     f32::INFINITY
                 };
@@ -294,3 +365,6 @@ fn write_packets<L: LaneReduce>(pk: &TilePackets, samples: &[u32], cps: usize, o
     }
     out.fence();
 }
+
+#[cfg(test)]
+mod tests;

@@ -1,6 +1,7 @@
 //! The packets of one tile held side by side for the sweep (`cast/setup/sweep.rs`): each
-//! packet's ray directions, best `1/t` and triangle per lane, its `|d|_inf` and exit depth,
-//! and its affine box ([`super::affine::PacketBox::scalars`]) in rows of sixteen packets.
+//! packet's ray directions, best `1/t` and triangle per lane, its `|d|_inf`, exit depth and
+//! closest-hit limit, its affine box ([`super::affine::PacketBox::scalars`]) and its
+//! reciprocal-direction interval in rows of sixteen packets.
 //! Reused from tile to tile (per thread, in [`super::TileTris`]): no allocation once grown.
 
 use crate::cast::packet::MAX_LANES;
@@ -28,13 +29,20 @@ pub struct TilePackets {
     /// The packet's exit depth (the largest depth of its lanes' hits along the beam's axis)
     /// once every lane has a hit; `+inf` before.
     pub exit: Vec<f32>,
+    /// The largest closest-hit limit `1/best` of the packet's lanes (`+inf` while a lane has
+    /// no hit): the far end of its run-box test.
+    pub lim: Vec<f32>,
     /// The box rows: `[xc, yc, rx, ry, ka, kb]`, sixteen packets per row.
     pub boxes: Vec<[[f32; 16]; 6]>,
+    /// The interval rows: per axis the smallest and largest reciprocal direction of the
+    /// packet's lanes, `[i0.x, i0.y, i0.z, i1.x, i1.y, i1.z]`, where every lane's is finite and
+    /// of one sign; both 0 on an axis where not (the run-box test then passes every box).
+    pub intervals: Vec<[[f32; 16]; 6]>,
 }
 
 impl TilePackets {
-    /// Room for `n` packets; every best `1/t` 0, every triangle none, every exit depth
-    /// `+inf`.
+    /// Room for `n` packets; every best `1/t` 0, every triangle none, every exit depth and
+    /// limit `+inf`.
     pub fn reset(&mut self, n: usize) {
         let empty = Packet {
             d: [[0.0; MAX_LANES]; 3],
@@ -46,6 +54,9 @@ impl TilePackets {
         self.dinf = 0.0;
         self.exit.clear();
         self.exit.resize(n.next_multiple_of(16), f32::INFINITY);
+        self.lim.clear();
+        self.lim.resize(n.next_multiple_of(16), f32::INFINITY);
         self.boxes.resize(n.div_ceil(16), [[0.0; 16]; 6]);
+        self.intervals.resize(n.div_ceil(16), [[0.0; 16]; 6]);
     }
 }
