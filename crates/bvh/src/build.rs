@@ -28,8 +28,8 @@
 use parallax_core::Aabb;
 use rayon::prelude::*;
 
-use crate::huge_pages::HugeBuf;
 use crate::options::BuildOptions;
+use parallax_core::huge_pages::HugeBuf;
 
 mod object_bins;
 mod prim_ref;
@@ -94,7 +94,7 @@ const UNUSED: BNode = BNode::Leaf {
     count: 0,
 };
 
-/// An arena of `len` unused slots, on huge pages where the system allows (`huge_pages.rs`).
+/// An arena of `len` unused slots, on huge pages where the system allows (`parallax_core::huge_pages`).
 fn new_arena(len: usize) -> HugeBuf<BNode> {
     HugeBuf::new(len, UNUSED)
 }

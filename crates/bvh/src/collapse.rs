@@ -13,10 +13,10 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::build::{BNode, BTree, PrimRef};
-use crate::huge_pages::huge_vec;
 use crate::node::{ChildRef, Node4};
 use crate::tri::Tri;
 use crate::tri4::{Tri4, blocks_for};
+use parallax_core::huge_pages::huge_vec;
 
 /// The children of a `W`-wide node whose binary children are `start`: repeatedly replaces the
 /// inner child of largest surface area by its two children, until there are `W` children or

@@ -9,9 +9,9 @@
 
 use crate::build::{BNode, BTree};
 use crate::collapse::open_largest;
-use crate::huge_pages::huge_vec;
 use crate::node::ChildRef;
 use crate::node8::Node8;
+use parallax_core::huge_pages::huge_vec;
 use rayon::prelude::*;
 
 /// The 8-wide tree: nodes (root first) and the depth of the deepest node (root = 1).

@@ -10,9 +10,9 @@ use parallax_scene::TriangleMesh;
 use rayon::prelude::*;
 
 use crate::bvh::Bvh;
-use crate::huge_pages::HugeBuf;
 use crate::options::{BuildOptions, BvhError};
 use crate::{build, collapse, collapse8, node, traverse, traverse8};
+use parallax_core::huge_pages::HugeBuf;
 
 impl Bvh {
     /// Builds with the default [`BuildOptions`]. Panics only where [`Bvh::try_build_with`]

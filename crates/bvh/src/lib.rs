@@ -61,7 +61,6 @@ mod collapse;
 mod collapse8;
 mod construct;
 mod hit;
-mod huge_pages;
 mod keys8;
 mod lanes16;
 mod lanes8;

@@ -11,6 +11,7 @@
 pub mod cpu;
 pub mod cpu_time;
 pub mod error;
+pub mod huge_pages;
 pub mod image;
 pub mod math;
 pub mod metrics;

@@ -1,10 +1,14 @@
 //! The visibility buffer (Hunt et al. 2018, §5.5 output): the closest triangle of every
 //! subsample ray of a [`SampleSet`], indexed `sample * spp + subsample`. The paper emits
 //! (triangle, sample-mask) pairs per tile; a flat per-subsample array carries the same
-//! information and lets every method be compared subsample by subsample.
+//! information and lets every method be compared subsample by subsample. Both arrays are
+//! [`HugeBuf`]s: on transparent huge pages where the system allows, and cache-line aligned,
+//! so the caster's whole-packet runs of 16 entries are whole lines for its non-temporal
+//! stores.
 
 use parallax_bvh::Bvh;
 use parallax_core::NO_ID;
+use parallax_core::huge_pages::HugeBuf;
 use rayon::prelude::*;
 
 use crate::SampleSet;
@@ -14,9 +18,9 @@ use crate::SampleSet;
 pub struct VisibilityBuffer {
     pub spp: u32,
     /// Original (mesh) triangle index of the closest hit, or [`NO_ID`].
-    pub prim: Vec<u32>,
+    pub prim: HugeBuf<u32>,
     /// World ray parameter of the closest hit (`f32::INFINITY` when none).
-    pub t: Vec<f32>,
+    pub t: HugeBuf<f32>,
 }
 
 impl VisibilityBuffer {
@@ -25,8 +29,8 @@ impl VisibilityBuffer {
         let n = set.ray_count();
         Self {
             spp: set.spp,
-            prim: vec![NO_ID; n],
-            t: vec![f32::INFINITY; n],
+            prim: HugeBuf::new(n, NO_ID),
+            t: HugeBuf::new(n, f32::INFINITY),
         }
     }
 

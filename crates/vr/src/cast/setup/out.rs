@@ -100,7 +100,10 @@ impl Out {
 
     /// [`Out::run`] of a full packet (`MAX_LANES` entries) by non-temporal stores where both
     /// arrays' entries are 16-byte aligned (x86-64): the entries are not read again by the
-    /// cast, and streaming them saves the read of each line before its write. Elsewhere
+    /// cast, and streaming them saves the read of each line before its write. The
+    /// [`crate::VisibilityBuffer`]'s arrays start on a cache line, so at 16 and 32 spp a
+    /// packet's run is one whole line of each (a run across two lines writes two partial
+    /// lines: measurements in `docs/notes/vr.md`). Elsewhere
     /// [`Out::run`]. The caller ends its stores with [`Out::fence`].
     ///
     /// # Safety

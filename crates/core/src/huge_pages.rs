@@ -1,27 +1,32 @@
-//! Transparent huge pages for the build's large arrays (the references, the binary arena, the
-//! collapses' nodes, triangles and blocks).
+//! Transparent huge pages for large arrays written once after they are allocated: the BVH
+//! build's references, binary arena and collapse outputs, and the beam caster's visibility
+//! buffer.
 //!
-//! Each of these arrays is written once, shortly after it is allocated, so in a fresh process
-//! every 4 KiB page of it is first touched by the build: one minor page fault (and a zeroed
-//! page) per 4 KiB. [`huge_vec`] reserves the capacity and asks the kernel
-//! (`madvise(MADV_HUGEPAGE)`, Linux) to back the whole 2 MiB pages inside the untouched
-//! allocation with transparent huge pages, one fault per 2 MiB, where the system's THP mode is
-//! `always` or `madvise`. The advice changes neither the contents nor the layout: on other
-//! systems, with THP off, or where the kernel refuses, the vector is an ordinary one. A
-//! vector's first and last partial 2 MiB stay 4 KiB pages; [`HugeBuf`], for the arrays that
-//! stay inside the build (the references, the binary arena), is whole 2 MiB pages instead.
+//! In a fresh process every 4 KiB page of such an array is first touched when it is written:
+//! one minor page fault (and a zeroed page) per 4 KiB. [`huge_vec`] reserves the capacity and
+//! asks the kernel (`madvise(MADV_HUGEPAGE)`, Linux) to back the whole 2 MiB pages inside the
+//! untouched allocation with transparent huge pages, one fault per 2 MiB, where the system's
+//! THP mode is `always` or `madvise`. The advice changes neither the contents nor the layout:
+//! on other systems, with THP off, or where the kernel refuses, the vector is an ordinary
+//! one. A vector's first and last partial 2 MiB stay 4 KiB pages; [`HugeBuf`] is whole 2 MiB
+//! pages instead, and starts on a cache line whatever its size: the arrays written by
+//! whole-line non-temporal stores (a misaligned 64-byte run fills two half lines, each
+//! written back as a partial line; measurements in `docs/notes/vr.md`).
 
 use std::alloc::{Layout, alloc, dealloc, handle_alloc_error};
 use std::ops::{Deref, DerefMut};
 use std::ptr::NonNull;
 
+/// The cache line of x86-64 and of most arm64 cores: [`HugeBuf`]'s smallest alignment.
+pub const CACHE_LINE: usize = 64;
+
 /// The transparent huge page size of x86-64 and of 4 KiB-page arm64 kernels.
-pub(crate) const HUGE_PAGE: usize = 2 << 20;
+pub const HUGE_PAGE: usize = 2 << 20;
 
 /// An empty vector with room for `cap` elements, whose whole 2 MiB pages are advised to be
 /// huge pages (module docs). Call it before anything is written to the memory: pages already
 /// touched stay as they are.
-pub(crate) fn huge_vec<T>(cap: usize) -> Vec<T> {
+pub fn huge_vec<T>(cap: usize) -> Vec<T> {
     let v: Vec<T> = Vec::with_capacity(cap);
     advise_huge(v.as_ptr().cast(), cap.saturating_mul(size_of::<T>()));
     v
@@ -36,9 +41,9 @@ fn huge_range(p: usize, len: usize) -> Option<(usize, usize)> {
 
 /// `len` copies of a value in an allocation of whole [`HUGE_PAGE`]s, aligned to one, when it
 /// spans at least one, advised as [`huge_vec`]: every 2 MiB of it can be a huge page, where a
-/// vector's first and last partial 2 MiB stay 4 KiB pages. The build's references and binary
-/// arena.
-pub(crate) struct HugeBuf<T: Copy> {
+/// vector's first and last partial 2 MiB stay 4 KiB pages. Smaller ones start on a
+/// [`CACHE_LINE`]. A fixed-length slice otherwise (`Deref`).
+pub struct HugeBuf<T: Copy> {
     ptr: NonNull<T>,
     len: usize,
     layout: Layout,
@@ -50,7 +55,7 @@ unsafe impl<T: Copy + Send> Send for HugeBuf<T> {}
 unsafe impl<T: Copy + Sync> Sync for HugeBuf<T> {}
 
 impl<T: Copy> HugeBuf<T> {
-    pub(crate) fn new(len: usize, value: T) -> Self {
+    pub fn new(len: usize, value: T) -> Self {
         let size = size_of::<T>()
             .checked_mul(len)
             .expect("HugeBuf size overflows");
@@ -59,7 +64,7 @@ impl<T: Copy> HugeBuf<T> {
             let whole = size.checked_next_multiple_of(HUGE_PAGE);
             (whole.expect("HugeBuf size overflows"), HUGE_PAGE)
         } else {
-            (size, align_of::<T>())
+            (size, align_of::<T>().max(CACHE_LINE))
         };
         let layout = Layout::from_size_align(size, align).expect("HugeBuf layout");
         let ptr = if size == 0 {
@@ -75,6 +80,52 @@ impl<T: Copy> HugeBuf<T> {
             unsafe { ptr.as_ptr().add(i).write(value) };
         }
         HugeBuf { ptr, len, layout }
+    }
+}
+
+impl<T: Copy> HugeBuf<T> {
+    /// A copy of `v` in a new buffer of its length.
+    pub fn from_slice(v: &[T]) -> Self
+    where
+        T: Default,
+    {
+        let mut b = Self::new(v.len(), T::default());
+        b.copy_from_slice(v);
+        b
+    }
+}
+
+impl<T: Copy + Default> Clone for HugeBuf<T> {
+    fn clone(&self) -> Self {
+        Self::from_slice(self)
+    }
+}
+
+impl<T: Copy + std::fmt::Debug> std::fmt::Debug for HugeBuf<T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_list().entries(self.iter()).finish()
+    }
+}
+
+impl<T: Copy + PartialEq> PartialEq for HugeBuf<T> {
+    fn eq(&self, other: &Self) -> bool {
+        **self == **other
+    }
+}
+
+impl<'a, T: Copy> IntoIterator for &'a HugeBuf<T> {
+    type Item = &'a T;
+    type IntoIter = std::slice::Iter<'a, T>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.iter()
+    }
+}
+
+impl<'a, T: Copy> IntoIterator for &'a mut HugeBuf<T> {
+    type Item = &'a mut T;
+    type IntoIter = std::slice::IterMut<'a, T>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.iter_mut()
     }
 }
 
@@ -154,6 +205,7 @@ mod tests {
             let mut b = HugeBuf::new(len, [7u32; 9]);
             assert_eq!(b.len(), len);
             assert!(b.iter().all(|x| *x == [7; 9]));
+            assert!(len == 0 || b.as_ptr() as usize % CACHE_LINE == 0, "{len}");
             if len * 36 >= HUGE_PAGE {
                 assert_eq!(b.as_ptr() as usize % HUGE_PAGE, 0);
                 assert_eq!(b.layout.size() % HUGE_PAGE, 0);
