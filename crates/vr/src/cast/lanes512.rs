@@ -27,7 +27,7 @@ use std::ops::{Add, Div, Mul, Sub};
 
 use parallax_core::simd::Lanes;
 
-use crate::cast::lanes16::{LaneReduce, V16};
+use crate::cast::lanes16::{LaneReduce, V16, hmax_of_quarters, hmin_of_quarters};
 
 /// Sixteen lanes in one `__m512` (module docs: only inside AVX-512F code).
 #[derive(Clone, Copy, Debug)]
@@ -71,6 +71,24 @@ impl Z16 {
     fn quarters(self) -> V16 {
         // SAFETY: `__m512` and `[Vec4; 4]` are both 64 bytes of 16 f32 in lane order.
         V16(unsafe { std::mem::transmute::<__m512, [glam::Vec4; 4]>(self.0) })
+    }
+
+    /// The first two steps of [`V16`]'s reduction tree in the register (`q` the quarters):
+    /// `f(f(q0, q1), f(q2, q3))` as one SSE register, `f` = `vminps` / `vmaxps` (`op`), by two
+    /// quarter swaps instead of a round trip through memory. The same operands in the same
+    /// order as `lanes16::qmin` / `qmax`, so the same bits.
+    #[inline(always)]
+    fn quarter_tree(self, op: unsafe fn(__m512, __m512) -> __m512) -> glam::Vec4 {
+        // SAFETY: module docs; `op` is `_mm512_min_ps` or `_mm512_max_ps` (inlined: a call of
+        // an intrinsic through a known function pointer is resolved at compile time).
+        unsafe {
+            let v = self.0;
+            // [q1, q0, q3, q2]: quarter 0 of `m` is f(q0, q1), quarter 2 f(q2, q3).
+            let m = op(v, _mm512_shuffle_f32x4::<0b10_11_00_01>(v, v));
+            // [m2, m3, m0, m1]: quarter 0 of `r` is f(m0, m2).
+            let r = op(m, _mm512_shuffle_f32x4::<0b01_00_11_10>(m, m));
+            glam::Vec4::from(_mm512_castps512_ps128(r))
+        }
     }
 }
 
@@ -158,11 +176,21 @@ impl LaneReduce for Z16 {
     }
     #[inline(always)]
     fn hmin(self) -> f32 {
-        self.quarters().hmin()
+        LaneReduce::hmin(self.quarter_tree(_mm512_min_ps))
     }
     #[inline(always)]
     fn hmax(self) -> f32 {
-        self.quarters().hmax()
+        LaneReduce::hmax(self.quarter_tree(_mm512_max_ps))
+    }
+    #[inline(always)]
+    fn hmin4([a, b, c, d]: [Self; 4]) -> glam::Vec4 {
+        let m = |z: Z16| z.quarter_tree(_mm512_min_ps);
+        hmin_of_quarters([m(a), m(b), m(c), m(d)])
+    }
+    #[inline(always)]
+    fn hmax4([a, b, c, d]: [Self; 4]) -> glam::Vec4 {
+        let m = |z: Z16| z.quarter_tree(_mm512_max_ps);
+        hmax_of_quarters([m(a), m(b), m(c), m(d)])
     }
     #[inline(always)]
     fn write(self, out: &mut [f32]) {
@@ -230,6 +258,29 @@ mod tests {
         let r = V16::from_fn(|i| if A[i].is_nan() { 0.5 } else { A[i] });
         assert!(same(c.hmin(), r.hmin()));
         assert!(same(c.hmax(), r.hmax()));
+        // Signed zeros decide which operand a reduction step returns: the same tree.
+        let zs = |k: usize| Z16::from_fn(|i| if (i * 7 + k) % 3 == 0 { -0.0 } else { 0.0 });
+        let vs = |k: usize| V16::from_fn(|i| if (i * 7 + k) % 3 == 0 { -0.0 } else { 0.0 });
+        for k in 0..3 {
+            assert!(same(zs(k).hmin(), vs(k).hmin()) && same(zs(k).hmax(), vs(k).hmax()));
+        }
+        let four = |f: fn(usize) -> f32| {
+            let z = [0, 1, 2, 3].map(|k| Z16::from_fn(|i| f(16 * k + i)));
+            let v = [0, 1, 2, 3].map(|k| V16::from_fn(|i| f(16 * k + i)));
+            let (a, b) = (Z16::hmin4(z), V16::hmin4(v));
+            let (c, d) = (Z16::hmax4(z), V16::hmax4(v));
+            for k in 0..4 {
+                assert!(same(a[k], b[k]) && same(c[k], d[k]), "hmin4 / hmax4 {k}");
+            }
+        };
+        four(|j| {
+            if A[j % 16].is_nan() {
+                B[j % 16]
+            } else {
+                A[j % 16] * (j / 16) as f32
+            }
+        });
+        four(|j| if j % 5 == 0 { -0.0 } else { 0.0 });
         let (mut x, mut y) = ([0.0f32; 16], [0.0f32; 16]);
         c.write(&mut x);
         r.write(&mut y);
