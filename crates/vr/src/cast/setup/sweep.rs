@@ -133,35 +133,53 @@ fn gen_packets<L: LaneReduce>(
             for (f, v) in pb.scalars().into_iter().enumerate() {
                 row[f][p % 16] = v;
             }
-            let (i0, i1) = interval(rays.d);
+            // The direction's range, turned into the interval row by row below.
+            let [x, y, z] = rays.d;
+            let (lo, hi) = (L::hmin4([x, y, z, z]), L::hmax4([x, y, z, z]));
             let row = &mut pk.intervals[p / 16];
             for a in 0..3 {
-                row[a][p % 16] = i0[a];
-                row[3 + a][p % 16] = i1[a];
+                row[a][p % 16] = hi[a];
+                row[3 + a][p % 16] = lo[a];
             }
             p += 1;
         }
+    }
+    for row in &mut pk.intervals[..p.div_ceil(16)] {
+        intervals_of_row::<L>(row);
     }
     pk.dinf = dinf.hmax();
     true
 }
 
-/// A packet's reciprocal-direction interval per axis (lanes x, y, z): `[1 / max d, 1 / min d]`,
-/// which is `[min 1/d, max 1/d]` over the lanes bit for bit where every lane's `d` has one
-/// sign (an IEEE division is monotone in its divisor), as `PacketSlab::with_interval` takes
-/// it; `(0, 0)` on every axis where on one axis a lane's reciprocal is not finite or the signs
-/// differ (as the walk then has no interval test).
+/// Sixteen packets' reciprocal-direction intervals from their direction ranges, in place: row
+/// `a` holds the largest `d` of axis `a` per packet and row `3 + a` the smallest on entry, and
+/// `[1 / max d, 1 / min d]` on return, which is `[min 1/d, max 1/d]` over the lanes bit for
+/// bit where every lane's `d` has one sign (an IEEE division is monotone in its divisor), as
+/// `PacketSlab::with_interval` takes it; `(0, 0)` on every axis of a packet where on one axis
+/// a lane's reciprocal is not finite or the signs differ (as the walk then has no interval
+/// test). One division per axis and end for sixteen packets.
 #[inline(always)]
-fn interval<L: LaneReduce>([x, y, z]: [L; 3]) -> (Vec4, Vec4) {
-    let (lo, hi) = (L::hmin4([x, y, z, z]), L::hmax4([x, y, z, z]));
-    let (i0, i1) = (Vec4::ONE / hi, Vec4::ONE / lo);
-    let ok =
-        (lo.cmpgt(Vec4::ZERO) | hi.cmplt(Vec4::ZERO)) & i0.is_finite_mask() & i1.is_finite_mask();
-    if ok.bitmask() & 7 == 7 {
-        (i0, i1)
-    } else {
-        (Vec4::ZERO, Vec4::ZERO)
+fn intervals_of_row<L: LaneReduce>(row: &mut [[f32; 16]; 6]) {
+    let (zero, one) = (L::splat(0.0), L::splat(1.0));
+    let mut ok = zero.eq(zero);
+    let mut iv = [zero; 6];
+    for a in 0..3 {
+        let (hi, lo) = (L::load16(&row[a]), L::load16(&row[3 + a]));
+        let (i0, i1) = (one / hi, one / lo);
+        let one_sign = L::or(lo.gt(zero), hi.lt(zero));
+        ok = L::and(ok, L::and(one_sign, L::and(finite(i0), finite(i1))));
+        (iv[a], iv[3 + a]) = (i0, i1);
     }
+    for (r, v) in row.iter_mut().zip(iv) {
+        L::select(ok, v, zero).write(r);
+    }
+}
+
+/// Lanes holding a finite value (`x - x` is 0 exactly there; a plain function, not a
+/// closure: the AVX-512 entry point inlines it).
+#[inline(always)]
+fn finite<L: LaneReduce>(x: L) -> L::M {
+    (x - x).eq(L::splat(0.0))
 }
 
 /// The walk's interval test (`PacketSlab::interval_reaches16`'s products and selects, one

@@ -4,7 +4,8 @@ use glam::Vec4;
 
 use super::super::kernel::PacketSlab;
 use super::super::tri::Segment;
-use super::{interval, run_reaches};
+use super::{intervals_of_row, run_reaches};
+use crate::cast::lanes16::LaneReduce;
 use crate::cast::lanes16::V16;
 use parallax_core::simd::Lanes;
 
@@ -36,14 +37,16 @@ fn run_reaches_equals_the_walks_interval_test() {
                 .map(|c| if c.abs() < 0.05 { c * 1e-3 } else { c });
             let spread = 10f32.powi(-(((f() * 5.0) as i32) + 1));
             let d = [0, 1, 2].map(|a| V16::from_fn(|_| base[a] + (f() - 0.5) * spread));
-            let (i0, i1) = interval(d);
+            let [x, y, z] = d;
+            let (lo, hi) = (V16::hmin4([x, y, z, z]), V16::hmax4([x, y, z, z]));
             for a in 0..3 {
-                iv[a][k] = i0[a];
-                iv[3 + a][k] = i1[a];
+                iv[a][k] = hi[a];
+                iv[3 + a][k] = lo[a];
             }
             lim[k] = [f32::INFINITY, 0.0, f() * 10.0, f() * 1e4][(f() * 4.0) as usize % 4];
             slabs.push(PacketSlab::<V16>::with_interval(d));
         }
+        intervals_of_row::<V16>(&mut iv);
         for _ in 0..8 {
             let s = 10f32.powi((f() * 8.0) as i32 - 3);
             let c = [f() - 0.5, f() - 0.5, f() - 0.5].map(|v| v * 4.0 * s);
