@@ -184,13 +184,26 @@ impl LaneReduce for Z16 {
     }
     #[inline(always)]
     fn hmin4([a, b, c, d]: [Self; 4]) -> glam::Vec4 {
-        let m = |z: Z16| z.quarter_tree(_mm512_min_ps);
-        hmin_of_quarters([m(a), m(b), m(c), m(d)])
+        // (No closure: module docs.)
+        let f = _mm512_min_ps;
+        let q = [
+            a.quarter_tree(f),
+            b.quarter_tree(f),
+            c.quarter_tree(f),
+            d.quarter_tree(f),
+        ];
+        hmin_of_quarters(q)
     }
     #[inline(always)]
     fn hmax4([a, b, c, d]: [Self; 4]) -> glam::Vec4 {
-        let m = |z: Z16| z.quarter_tree(_mm512_max_ps);
-        hmax_of_quarters([m(a), m(b), m(c), m(d)])
+        let f = _mm512_max_ps;
+        let q = [
+            a.quarter_tree(f),
+            b.quarter_tree(f),
+            c.quarter_tree(f),
+            d.quarter_tree(f),
+        ];
+        hmax_of_quarters(q)
     }
     #[inline(always)]
     fn write(self, out: &mut [f32]) {
