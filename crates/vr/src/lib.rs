@@ -59,6 +59,8 @@ pub mod reconstruct;
 pub mod resolve;
 pub mod samples;
 pub mod shade;
+#[cfg(test)]
+mod test_streams;
 pub mod visibility;
 
 pub use cast::setup::{SampleTest, SetupExactness};

@@ -8,7 +8,8 @@
 //! fused multiply-add; comparisons are ordered (false on NaN) except `ne` (`NEQ_UQ`, true on
 //! NaN); `max_or_rhs` / `min_or_rhs` are `vmaxps` / `vminps`, which return the second operand
 //! when either is NaN or both are zeros, exactly `a > b ? a : b` / `a < b ? a : b`; the
-//! horizontal reductions run [`V16`]'s own on the register's four quarters. So the set-up kernel
+//! horizontal reductions run [`V16`]'s tree, its first two steps by quarter swaps in the
+//! register (the same operands in the same order). So the set-up kernel
 //! gives bit-identical buffers with either lane type (tested here lane by lane and in
 //! `tests/cast.rs` on whole casts).
 //!
@@ -27,7 +28,9 @@ use std::ops::{Add, Div, Mul, Sub};
 
 use parallax_core::simd::Lanes;
 
-use crate::cast::lanes16::{LaneReduce, V16, hmax_of_quarters, hmin_of_quarters};
+#[cfg(doc)]
+use crate::cast::lanes16::V16;
+use crate::cast::lanes16::{LaneReduce, hmax_of_quarters, hmin_of_quarters};
 
 /// Sixteen lanes in one `__m512` (module docs: only inside AVX-512F code).
 #[derive(Clone, Copy, Debug)]
@@ -65,14 +68,6 @@ macro_rules! cmp {
 }
 
 impl Z16 {
-    /// The four SSE quarters (lane `i` = quarter `i / 4`, element `i % 4`), i.e. the [`V16`]
-    /// with the same lanes.
-    #[inline(always)]
-    fn quarters(self) -> V16 {
-        // SAFETY: `__m512` and `[Vec4; 4]` are both 64 bytes of 16 f32 in lane order.
-        V16(unsafe { std::mem::transmute::<__m512, [glam::Vec4; 4]>(self.0) })
-    }
-
     /// The first two steps of [`V16`]'s reduction tree in the register (`q` the quarters):
     /// `f(f(q0, q1), f(q2, q3))` as one SSE register, `f` = `vminps` / `vmaxps` (`op`), by two
     /// quarter swaps instead of a round trip through memory. The same operands in the same
@@ -228,6 +223,7 @@ impl LaneReduce for Z16 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cast::lanes16::V16;
 
     use crate::cast::lanes16::tests::{A, B, same};
 

@@ -38,7 +38,7 @@
 //! packets are each one sample's chunk of sixteen subsamples with an affine box (otherwise the
 //! walk runs).
 
-use glam::{Vec2, Vec4};
+use glam::Vec2;
 use parallax_bvh::Tri4;
 use parallax_core::math::ROBUST_FAR_SCALE;
 

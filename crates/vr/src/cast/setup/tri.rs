@@ -547,13 +547,7 @@ mod tests {
     /// exactly zero, which the lanes leave to the scalar test).
     #[test]
     fn exact_t_lanes_equals_exact_t() {
-        let mut x = 0x853c_49e6_748f_ea9bu64;
-        let mut f = move || {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            (x >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut f = crate::test_streams::uniform(0x853c_49e6_748f_ea9b);
         let mut v = |s: f32| Vec3::new(f() - 0.5, f() - 0.5, f() - 0.5) * s;
         let (mut hits, mut misses, mut zeros, mut cases) = (0, 0, 0, 0);
         for case in 0..6000 {

@@ -2,16 +2,7 @@
 
 use super::*;
 use crate::cast::lanes16::V16;
-
-/// Uniform floats in [0, 1) from an xorshift stream seeded with `x`.
-fn uniform(mut x: u64) -> impl FnMut() -> f32 {
-    move || {
-        x ^= x << 13;
-        x ^= x >> 7;
-        x ^= x << 17;
-        (x >> 40) as f32 / (1u64 << 24) as f32
-    }
-}
+use crate::test_streams::uniform;
 
 /// A packet's base direction (near-axis components shrunk) and its lanes' spread.
 fn packet_direction(f: &mut impl FnMut() -> f32) -> ([f32; 3], f32) {

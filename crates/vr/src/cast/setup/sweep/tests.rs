@@ -1,5 +1,6 @@
 //! Tests of `sweep.rs`.
 
+use crate::test_streams::uniform;
 use glam::Vec4;
 
 use super::super::kernel::PacketSlab;
@@ -8,16 +9,6 @@ use super::{intervals_of_row, run_reaches};
 use crate::cast::lanes16::LaneReduce;
 use crate::cast::lanes16::V16;
 use parallax_core::simd::Lanes;
-
-/// Uniform floats in [0, 1) from an xorshift stream seeded with `x`.
-fn uniform(mut x: u64) -> impl FnMut() -> f32 {
-    move || {
-        x ^= x << 13;
-        x ^= x >> 7;
-        x ^= x << 17;
-        (x >> 40) as f32 / (1u64 << 24) as f32
-    }
-}
 
 /// The run-box test of sixteen packets at once decides every packet as the walk's interval
 /// test of that packet alone (`PacketSlab::interval_reaches`, every box reached where the
