@@ -205,7 +205,10 @@ mod tests {
             let mut b = HugeBuf::new(len, [7u32; 9]);
             assert_eq!(b.len(), len);
             assert!(b.iter().all(|x| *x == [7; 9]));
-            assert!(len == 0 || b.as_ptr() as usize % CACHE_LINE == 0, "{len}");
+            assert!(
+                len == 0 || (b.as_ptr() as usize).is_multiple_of(CACHE_LINE),
+                "{len}"
+            );
             if len * 36 >= HUGE_PAGE {
                 assert_eq!(b.as_ptr() as usize % HUGE_PAGE, 0);
                 assert_eq!(b.layout.size() % HUGE_PAGE, 0);

@@ -268,8 +268,24 @@ mod tests {
         assert!(same(c.hmin(), r.hmin()));
         assert!(same(c.hmax(), r.hmax()));
         // Signed zeros decide which operand a reduction step returns: the same tree.
-        let zs = |k: usize| Z16::from_fn(|i| if (i * 7 + k) % 3 == 0 { -0.0 } else { 0.0 });
-        let vs = |k: usize| V16::from_fn(|i| if (i * 7 + k) % 3 == 0 { -0.0 } else { 0.0 });
+        let zs = |k: usize| {
+            Z16::from_fn(|i| {
+                if (i * 7 + k).is_multiple_of(3) {
+                    -0.0
+                } else {
+                    0.0
+                }
+            })
+        };
+        let vs = |k: usize| {
+            V16::from_fn(|i| {
+                if (i * 7 + k).is_multiple_of(3) {
+                    -0.0
+                } else {
+                    0.0
+                }
+            })
+        };
         for k in 0..3 {
             assert!(same(zs(k).hmin(), vs(k).hmin()) && same(zs(k).hmax(), vs(k).hmax()));
         }

@@ -175,11 +175,12 @@ fn intervals_of_row<L: LaneReduce>(row: &mut [[f32; 16]; 6]) {
     }
 }
 
-/// Lanes holding a finite value (`x - x` is 0 exactly there; a plain function, not a
+/// Lanes holding a finite value (ordered compares: false on NaN; a plain function, not a
 /// closure: the AVX-512 entry point inlines it).
 #[inline(always)]
 fn finite<L: LaneReduce>(x: L) -> L::M {
-    (x - x).eq(L::splat(0.0))
+    let inf = L::splat(f32::INFINITY);
+    L::and(x.lt(inf), x.gt(L::splat(0.0) - inf))
 }
 
 /// The walk's interval test (`PacketSlab::interval_reaches16`'s products and selects, one
