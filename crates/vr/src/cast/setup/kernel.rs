@@ -133,6 +133,14 @@ fn abs_n<L: Lanes>(x: L) -> L {
     L::select(x.lt(zero), zero - x, x)
 }
 
+/// Lanes holding a finite value (ordered compares: false on NaN and both infinities; a plain
+/// function, not a closure, so an AVX-512 entry point inlines it).
+#[inline(always)]
+pub(super) fn finite<L: Lanes>(x: L) -> L::M {
+    let inf = L::splat(f32::INFINITY);
+    L::and(x.lt(inf), x.gt(L::splat(0.0) - inf))
+}
+
 /// `|d|_inf` per lane.
 #[inline(always)]
 pub(super) fn lane_dinf<L: Lanes>([dx, dy, dz]: [L; 3]) -> L {

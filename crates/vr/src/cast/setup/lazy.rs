@@ -27,6 +27,7 @@
 use glam::Vec3;
 use parallax_core::simd::Lanes;
 
+use super::kernel::finite;
 use super::tri::{BeamCorners, SQRT3, U};
 use crate::cast::lanes16::LaneReduce;
 
@@ -64,12 +65,6 @@ fn abs<L: Lanes>(x: L) -> L {
 #[inline(always)]
 fn l1<L: Lanes>(a: [L; 3]) -> L {
     abs(a[0]) + abs(a[1]) + abs(a[2])
-}
-
-/// Lanes whose value is finite (`x - x` is `+0` for finite `x`, NaN otherwise).
-#[inline(always)]
-fn finite<L: Lanes>(x: L) -> L::M {
-    (x - x).eq(L::splat(0.0))
 }
 
 #[inline(always)]

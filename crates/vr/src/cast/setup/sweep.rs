@@ -45,7 +45,7 @@ use parallax_core::math::ROBUST_FAR_SCALE;
 use super::affine::{BoxLanes, CLASS_IN, CLASS_OUT, PacketBox, PacketClass};
 use super::bands::refine_run;
 use super::edges::test_tri;
-use super::kernel::{SetupWork, lane_dinf};
+use super::kernel::{SetupWork, finite, lane_dinf};
 use super::out::Out;
 use super::tile_packets::TilePackets;
 use super::tri::{Segment, TileTris};
@@ -173,14 +173,6 @@ fn intervals_of_row<L: LaneReduce>(row: &mut [[f32; 16]; 6]) {
     for (r, v) in row.iter_mut().zip(iv) {
         L::select(ok, v, zero).write(r);
     }
-}
-
-/// Lanes holding a finite value (ordered compares: false on NaN; a plain function, not a
-/// closure: the AVX-512 entry point inlines it).
-#[inline(always)]
-fn finite<L: LaneReduce>(x: L) -> L::M {
-    let inf = L::splat(f32::INFINITY);
-    L::and(x.lt(inf), x.gt(L::splat(0.0) - inf))
 }
 
 /// The walk's interval test (`PacketSlab::interval_reaches16`'s products and selects, one
