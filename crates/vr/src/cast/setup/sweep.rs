@@ -47,7 +47,7 @@ use super::bands::refine_run;
 use super::edges::test_tri;
 use super::kernel::{SetupWork, finite, lane_dinf};
 use super::out::Out;
-use super::tile_packets::TilePackets;
+use super::tile_packets::{Packet, TilePackets};
 use super::tri::{Segment, TileTris};
 use crate::SampleSet;
 use crate::cast::lanes16::LaneReduce;
@@ -125,9 +125,11 @@ fn gen_packets<L: LaneReduce>(
             let Some(pb) = PacketBox::new(fr, lo.x, hi.x, lo.y, hi.y) else {
                 return false;
             };
+            let mut d = [[0.0; MAX_LANES]; 3];
             for a in 0..3 {
-                rays.d[a].write(&mut pk.packets[p].d[a]);
+                rays.d[a].write(&mut d[a]);
             }
+            pk.packets[p] = Packet::fresh(d);
             dinf = max_or_rhs(dinf, lane_dinf(rays.d));
             let row = &mut pk.boxes[p / 16];
             for (f, v) in pb.scalars().into_iter().enumerate() {

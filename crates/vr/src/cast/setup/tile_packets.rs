@@ -40,17 +40,28 @@ pub struct TilePackets {
     pub intervals: Vec<[[f32; 16]; 6]>,
 }
 
-impl TilePackets {
-    /// Room for `n` packets; every best `1/t` 0, every triangle none, every exit depth and
-    /// limit `+inf`.
-    pub fn reset(&mut self, n: usize) {
-        let empty = Packet {
-            d: [[0.0; MAX_LANES]; 3],
+impl Packet {
+    /// A packet of directions `d` without hits: every best `1/t` 0, every triangle none.
+    #[inline(always)]
+    pub fn fresh(d: [[f32; MAX_LANES]; 3]) -> Self {
+        Self {
+            d,
             best: [0.0; MAX_LANES],
             tri: [u32::MAX; MAX_LANES],
-        };
-        self.packets.clear();
-        self.packets.resize(n, empty);
+        }
+    }
+}
+
+impl TilePackets {
+    /// Room for `n` packets, every exit depth and limit `+inf`. The packets keep whatever
+    /// they held (one pass fewer over the tile's packets): the caller writes each of the `n`
+    /// whole, [`Packet::fresh`].
+    pub fn reset(&mut self, n: usize) {
+        if self.packets.len() < n {
+            self.packets.resize(n, Packet::fresh([[0.0; MAX_LANES]; 3]));
+        } else {
+            self.packets.truncate(n);
+        }
         self.dinf = 0.0;
         self.exit.clear();
         self.exit.resize(n.next_multiple_of(16), f32::INFINITY);
