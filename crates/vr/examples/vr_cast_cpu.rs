@@ -11,7 +11,9 @@
 //! `lanes` (8th, default 4: `CastOptions::lanes`; a suffix `sse` / `avx2` caps `CastOptions::isa`
 //! at that tier, e.g. `16sse` the portable twin) and a head pose `eye target fov_y` (9th-11th,
 //! e.g. `-9,3.5,0 8,5,0 60`; default the scene's camera). `BVH_SPATIAL=0` builds the BVH
-//! without spatial splits (the object-split tree; default: the SBVH, `Bvh::build`).
+//! without spatial splits (the object-split tree; default: the SBVH, `Bvh::build`). Also prints
+//! the hierarchy's build time and the time to move it to a head turned by about a degree and
+//! back (`Hierarchy::repose`); the cast runs on the moved-back hierarchy.
 
 use parallax_bvh::{BuildOptions, Bvh};
 use parallax_core::cpu_time::{ms_between, thread_cpu_ns};
@@ -76,7 +78,34 @@ fn main() {
         )
         .unwrap();
         let set = SampleSet::grid(cam, spp);
-        let hier = Hierarchy::build(&set).unwrap();
+        // The hierarchy moved to a head turned by about a degree and back (`Hierarchy::repose`:
+        // what a moving head costs per frame instead of a build).
+        let turned = {
+            let f = desc.target - desc.eye;
+            let side = f.cross(desc.up).normalize() * (f.length() / 60.0);
+            let d = parallax_scene::CameraDesc {
+                target: desc.target + side,
+                ..desc
+            };
+            let cam = Camera::new(ModelKind::Stereo, &d, eye_w, h, &CameraOptions::default());
+            SampleSet {
+                camera: cam.unwrap(),
+                ..set.clone()
+            }
+        };
+        let a = thread_cpu_ns();
+        let mut hier = Hierarchy::build(&set).unwrap();
+        let b = thread_cpu_ns();
+        hier.repose(&turned).unwrap();
+        let c = thread_cpu_ns();
+        hier.repose(&set).unwrap();
+        let d = thread_cpu_ns();
+        println!(
+            "hierarchy: build {:.1} ms, moved to a turned head {:.2} ms and back {:.2} ms (thread CPU)",
+            ms_between(a, b),
+            ms_between(b, c),
+            ms_between(c, d)
+        );
         let opts = CastOptions {
             test,
             // `16sse`: the portable 16-lane twin (SSE tier); `16avx2`: at most the AVX2 tier.

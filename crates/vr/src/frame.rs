@@ -115,6 +115,11 @@ pub fn visibility_into(
         out.prim.len() == set.ray_count() && out.t.len() == set.ray_count() && out.spp == set.spp,
         "visibility buffer made for another sample set"
     );
+    if prepared.is_some_and(|h| h.camera != set.camera) {
+        return Err(VrError::Invalid(
+            "hierarchy built for another camera or pose: move it with Hierarchy::repose".into(),
+        ));
+    }
     Ok(match method {
         Visibility::PerRay => {
             trace_per_ray(bvh, set, out);

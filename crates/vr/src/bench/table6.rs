@@ -11,8 +11,10 @@
 //! (tile after tile, row-major pixels within a tile, a pixel's subsamples innermost), so a
 //! packet of 16 consecutive rays is one pixel's 16 subsamples at 16 spp (MSAA-style
 //! packets), half a pixel at 32, two pixels at 8, one 4x4-pixel tile at 1 spp. The beam
-//! caster is timed over the whole frame (both eyes, hierarchy built once outside the timed
-//! region as in `bench vr`), visibility only (the paper's HVVR figure includes shading).
+//! caster is timed over the whole frame of a moving head: both eyes, each with its hierarchy
+//! (built once, outside the timed region) moved from the previous frame's pose, turned by
+//! about a degree, to this one ([`crate::Hierarchy::repose`], HVVR §5.1's bounds moved per
+//! frame), then the cast; visibility only (the paper's HVVR figure includes shading).
 //!
 //! Timing: rounds; in each round the beam caster casts the frame, then every band is
 //! generated and traced by each ray tracer in turn (round robin, all rayon threads, chunks of
@@ -197,6 +199,17 @@ struct Tally {
     same_t: u64,
 }
 
+/// `head` turned to the right by about a degree (its target moved sideways by 1/60 of the
+/// viewing distance).
+fn turned(head: &CameraDesc) -> CameraDesc {
+    let f = head.target - head.eye;
+    let side = f.cross(head.up).normalize_or_zero() * (f.length() / 60.0);
+    CameraDesc {
+        target: head.target + side,
+        ..*head
+    }
+}
+
 /// Runs the table (module docs): for every spp, the beam caster and the ray tracers on both
 /// eyes' subsample rays of the `normal` scheme.
 pub fn run(
@@ -230,10 +243,12 @@ pub fn run(
                 ));
             }
         }
-        let hier = [
+        let mut hier = [
             prepare(Visibility::Beam, &sets[0])?,
             prepare(Visibility::Beam, &sets[1])?,
         ];
+        // The previous frame's head (module docs): turned by about a degree.
+        let before = scheme_sets("normal", &turned(head), opts.width, opts.height, spp)?;
         let mut out = [
             VisibilityBuffer::new(&sets[0]),
             VisibilityBuffer::new(&sets[1]),
@@ -245,8 +260,16 @@ pub fn run(
         let mut traced = 0u64;
         let mut answers: Vec<Vec<Answer>> = vec![Vec::new(); tracers.len()];
         for round in 0..opts.repeats.max(1) {
+            for (h, b) in hier.iter_mut().zip(&before) {
+                if let Some(h) = h {
+                    h.repose(b)?;
+                }
+            }
             let t0 = Instant::now();
             for e in 0..2 {
+                if let Some(h) = &mut hier[e] {
+                    h.repose(&sets[e])?;
+                }
                 visibility_into(
                     Visibility::Beam,
                     bvh,

@@ -179,7 +179,8 @@ fn scene_scale(bvh: &Bvh, h: &Hierarchy) -> f32 {
 /// writes the closest hits to `out` with the default [`CastOptions`]: for each subsample the
 /// closest triangle of [`crate::trace_per_ray`] up to depth ties within float tolerance, and
 /// its `t` within ~1e-5 relative (the set-up kernel with [`SetupExactness::Edges`], module
-/// docs of `cast/setup/mod.rs`; [`SetupExactness::Full`] is bit-identical). Panics if `hierarchy` or `out` was made for another set (a
+/// docs of `cast/setup/mod.rs`; [`SetupExactness::Full`] is bit-identical). Panics if `hierarchy`
+/// or `out` was made for another set, or `hierarchy` for another camera pose (a
 /// programming error).
 pub fn cast(
     bvh: &Bvh,
@@ -267,6 +268,10 @@ fn cast_from(
             && hierarchy.spp == set.spp
             && hierarchy.order.len() == set.samples.len(),
         "hierarchy built for another sample set"
+    );
+    assert!(
+        hierarchy.camera == set.camera,
+        "hierarchy built for another camera or pose (`Hierarchy::repose` moves it)"
     );
     assert!(
         out.prim.len() == set.ray_count() && out.t.len() == set.ray_count() && out.spp == set.spp,

@@ -32,6 +32,10 @@
 //! "to accommodate the distribution of ray origins" and tests every subsample on the GPU; its
 //! Table 5 puts the thin-lens intersect at 2.8x the pinhole eyes' at 0.5 m focus.)
 
+mod pose;
+
+pub use pose::Rect;
+
 use crate::beam::{Beam, BeamBuilder, LaneBeamBuilder};
 use crate::cast::lanes16::V16;
 #[cfg(target_arch = "x86_64")]
@@ -101,6 +105,16 @@ pub enum HierarchyError {
     },
     #[error("sample {index} has a non-finite film position or footprint")]
     BadSample { index: usize },
+    #[error(
+        "hierarchy built for {built} samples at spp {built_spp}, moved to a set of {samples} \
+         samples at spp {spp}: build a new one for another sample set"
+    )]
+    OtherSet {
+        built: usize,
+        built_spp: u32,
+        samples: usize,
+        spp: u32,
+    },
 }
 
 /// A tile: `len` samples `order[start..start + len]`, `rays` valid subsample rays among them.
@@ -142,6 +156,12 @@ pub struct Hierarchy {
     /// each such ray bundle as a pinhole tile (`cast/mod.rs`); [`Beam::EVERYTHING`] where no
     /// axis bounds the bundle. Empty for every other set.
     pub lens_beams: Vec<Beam>,
+    /// The camera (with its pose) the beams are for: the caster refuses another
+    /// ([`Hierarchy::repose`] moves them).
+    pub camera: Camera,
+    /// For the pinhole and the stereo rig: the pose-free camera-space rectangle of every
+    /// tile's rays, then of every block's (`hierarchy/pose.rs`); empty for other models.
+    pub rects: Vec<Rect>,
 }
 
 /// The view (stereo eye, cube face) a film position belongs to.
@@ -439,6 +459,26 @@ impl Hierarchy {
         } else {
             Default::default()
         };
+        let rects = if pose::movable(&set.camera) {
+            let tile_rects: Vec<Rect> = tiles
+                .par_iter()
+                .map(|t| {
+                    let idx = &order[t.start as usize..(t.start + t.len) as usize];
+                    // (Never `None`: a movable camera and finite samples, checked above.)
+                    pose::rect_of(set, idx).expect("a movable camera's rectangle")
+                })
+                .collect();
+            let block_rects: Vec<Rect> = blocks
+                .iter()
+                .map(|b| {
+                    let t = &tile_rects[b.first_tile as usize..][..b.tile_count as usize];
+                    t.iter().skip(1).fold(t[0], |a, r| a.union(*r))
+                })
+                .collect();
+            [tile_rects, block_rects].concat()
+        } else {
+            Vec::new()
+        };
         Ok(Hierarchy {
             lens_beams,
             film,
@@ -447,7 +487,58 @@ impl Hierarchy {
             blocks,
             sample_count: n,
             spp: set.spp,
+            camera: set.camera.clone(),
+            rects,
         })
+    }
+
+    /// Moves the beams to the camera of `set`: the sample set the hierarchy was built for,
+    /// with the camera moved (a new head pose). HVVR §5.1 computes the bounds once from the
+    /// lens parameters and only moves them per frame; so does this for the pinhole and the
+    /// stereo rig (`hierarchy/pose.rs`: per tile and block a few f64 operations, no ray). Any
+    /// other camera change (intrinsics, another model) or model is built anew
+    /// ([`Hierarchy::build`]). Errors on a set of another size; the samples themselves must be
+    /// the build's (a foveated set whose gaze moved is another set: build it anew).
+    pub fn repose(&mut self, set: &SampleSet) -> Result<(), HierarchyError> {
+        if set.samples.len() != self.sample_count || set.spp != self.spp {
+            return Err(HierarchyError::OtherSet {
+                built: self.sample_count,
+                built_spp: self.spp,
+                samples: set.samples.len(),
+                spp: set.spp,
+            });
+        }
+        if self.camera == set.camera {
+            return Ok(());
+        }
+        let moved = pose::with_frames_of(&self.camera, &set.camera);
+        if self.rects.is_empty() || moved.as_ref() != Some(&set.camera) {
+            *self = Self::build(set)?;
+            return Ok(());
+        }
+        let (tile_rects, block_rects) = self.rects.split_at(self.tiles.len());
+        let order = &self.order;
+        self.tiles
+            .par_iter_mut()
+            .zip(tile_rects)
+            .for_each(|(t, r)| {
+                t.beam = match pose::eye_frame(&set.camera, r.eye) {
+                    Some(f) => pose::rect_beam(f, r),
+                    // A tile with rays of both eyes: the beam of its rays.
+                    None => {
+                        let idx = &order[t.start as usize..(t.start + t.len) as usize];
+                        rays_of(set, idx).0.finish().unwrap_or(Beam::EVERYTHING)
+                    }
+                };
+            });
+        for (b, r) in self.blocks.iter_mut().zip(block_rects) {
+            b.beam = match pose::eye_frame(&set.camera, r.eye) {
+                Some(f) => pose::rect_beam(f, r),
+                None => Beam::EVERYTHING,
+            };
+        }
+        self.camera = set.camera.clone();
+        Ok(())
     }
 }
 

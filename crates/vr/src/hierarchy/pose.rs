@@ -1,0 +1,237 @@
+//! Moving a hierarchy's beams to a new head pose without regenerating its rays (Hunt et al.
+//! 2018, §5.1: the tile and block bounds "may be computed once, at the beginning of time, based
+//! upon the lens parameters of the system"; per frame the camera only moves them).
+//!
+//! **What is pose-free.** For the pinhole and each eye of the stereo rig, the subsample ray
+//! through film position `f` is `d = fl(B fl(v / |v|))` with the camera-space direction
+//! `v = (x(f), y(f), -1)` (`Pinhole::camera_dir`) and `B` the camera basis. `x(f)` is computed
+//! by float operations that are monotone in `f` (a division by the positive width, an addition,
+//! a product with the positive `tan`), and the film positions `film + offset * footprint` are
+//! monotone in the offset. So the float `x` of every ray of a tile lies in `[x(lo), x(hi)]`,
+//! `lo` and `hi` the smallest and largest float film `x` of its samples at the extreme offsets;
+//! likewise `y` (decreasing in `f`). This camera-space rectangle ([`Rect`]) depends on the film,
+//! the samples and the intrinsics only; the build stores one per tile and per block.
+//!
+//! **The world beam of a rectangle** ([`rect_beam`]). The exact directions `w = B v / |v|`,
+//! `v` in the rectangle, span the convex cone of the four corner directions `q_k = B (x_i, y_j,
+//! -1)` (computed in f64). Over that cone:
+//! - the dominant-axis slopes `w_b / |w_a|` are a central projection of the cone, whose image is
+//!   the convex hull of the corners' images: their extrema are the corners' (Overbeck et al.'s
+//!   beam of four rays);
+//! - `s w_a / |B v|` is at least its smallest corner value `c` (the set `{w : s w_a >= c |w|}`
+//!   is a convex cone containing the corners), and `|B v| >= sqrt(1 - e) |v|` with
+//!   `e = 3 max |B^T B - I|`, so `s w_a >= alpha = c sqrt(1 - e)`.
+//! - The float ray is within `delta = 13.2 U rb` of `w` per component (`rb >= max_j |B_j|_2`:
+//!   the normalising, `2.5 U` for `|v|` and one rounding per quotient, and the 3-term product;
+//!   the U-terms doubled as in `cast/setup/affine.rs`, step 1, where `v` itself is exact here).
+//!   So its slope `d_b / |d_a|` is within `delta (1 + |u|) / (alpha - delta)` of `w`'s, and the
+//!   caster's float slope one rounding further; the beam's slopes are widened by both and
+//!   rounded outwards to f32. The axis is accepted where `alpha - delta >= MIN_DOMINANT`, as
+//!   [`crate::beam::BeamBuilder::finish`] requires of its rays; otherwise the beam is
+//!   [`Beam::EVERYTHING`] (every box partial: slower, never wrong).
+//!
+//! The origin is the eye's position, the rays' origin bit for bit. Tiles whose subsamples fall
+//! on both eyes of a stereo film (a footprint across the eyes' seam) take the beam of their
+//! rays instead (`rays_of`), and their block [`Beam::EVERYTHING`].
+//!
+//! `tests/repose.rs`: every subsample ray of a moved camera lies in its tile's moved beam (with
+//! no tolerance), and the cast with a moved hierarchy equals the per-ray trace of the moved
+//! camera.
+
+use glam::{DMat3, DVec3, Vec2};
+use parallax_core::Aabb;
+use parallax_scene::camera::{Camera, CameraFrame, Pinhole};
+
+use crate::SampleSet;
+use crate::beam::{Beam, MIN_DOMINANT};
+
+/// Unit roundoff of f32 (`2^-24`).
+const U: f64 = f32::EPSILON as f64 * 0.5;
+
+/// A camera-space rectangle `[x0, x1] x [y0, y1]` (at `z = -1`) holding the float direction of
+/// every ray of a tile or block, and the eye (0, or 1 for the right eye of a stereo rig) whose
+/// frame turns it into the world; `eye = BOTH_EYES` for a tile with rays of both eyes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rect {
+    pub x: [f32; 2],
+    pub y: [f32; 2],
+    pub eye: u8,
+}
+
+/// [`Rect::eye`] of a tile with rays of both stereo eyes.
+pub const BOTH_EYES: u8 = u8::MAX;
+
+impl Rect {
+    /// The union of two rectangles of one eye ([`BOTH_EYES`] if the eyes differ).
+    pub fn union(self, o: Rect) -> Rect {
+        Rect {
+            x: [self.x[0].min(o.x[0]), self.x[1].max(o.x[1])],
+            y: [self.y[0].min(o.y[0]), self.y[1].max(o.y[1])],
+            eye: if self.eye == o.eye {
+                self.eye
+            } else {
+                BOTH_EYES
+            },
+        }
+    }
+}
+
+/// The eyes of a camera the rectangles apply to: the pinhole alone, or the stereo rig's two,
+/// with the film width of one eye (`+inf` for the pinhole); `None` for other models.
+fn eyes(camera: &Camera) -> Option<(&[Pinhole], f32)> {
+    match camera {
+        Camera::Pinhole(p) => Some((std::slice::from_ref(p), f32::INFINITY)),
+        Camera::Stereo(r) => Some((&r.eyes, r.eye_width() as f32)),
+        _ => None,
+    }
+}
+
+/// Whether rectangles of `set`'s camera can be moved ([`rect_of`]): the pinhole and the stereo
+/// rig.
+pub fn movable(camera: &Camera) -> bool {
+    eyes(camera).is_some()
+}
+
+/// `a` with the camera frames of `b`, if both are the same movable model (pinhole or stereo).
+pub fn with_frames_of(a: &Camera, b: &Camera) -> Option<Camera> {
+    let mut c = a.clone();
+    match (&mut c, b) {
+        (Camera::Pinhole(p), Camera::Pinhole(q)) => p.frame = q.frame,
+        (Camera::Stereo(r), Camera::Stereo(q)) => {
+            for (e, f) in r.eyes.iter_mut().zip(&q.eyes) {
+                e.frame = f.frame;
+            }
+        }
+        _ => return None,
+    }
+    Some(c)
+}
+
+/// The camera-space rectangle of the rays of samples `idx` of `set` (module docs); `None` for
+/// a camera [`movable`] does not take.
+pub fn rect_of(set: &SampleSet, idx: &[u32]) -> Option<Rect> {
+    let (eyes, w) = eyes(&set.camera)?;
+    let (mut olo, mut ohi) = (Vec2::INFINITY, Vec2::NEG_INFINITY);
+    for o in &set.offsets {
+        olo = olo.min(*o);
+        ohi = ohi.max(*o);
+    }
+    // Film extremes: `film + offset * footprint` is monotone in the offset (either way, by the
+    // footprint's sign), so each sample's lie at its two extreme offsets.
+    let (mut flo, mut fhi) = (Vec2::INFINITY, Vec2::NEG_INFINITY);
+    for &i in idx {
+        let s = &set.samples[i as usize];
+        let (a, b) = (s.film + olo * s.footprint, s.film + ohi * s.footprint);
+        flo = flo.min(a.min(b));
+        fhi = fhi.max(a.max(b));
+    }
+    if !(flo.is_finite() && fhi.is_finite()) {
+        return None;
+    }
+    // The eye of every ray (as the generators pick it: `x < w` left, else right).
+    let (eye, shift) = if fhi.x < w {
+        (0, 0.0)
+    } else if flo.x >= w {
+        (1, w)
+    } else {
+        return Some(Rect {
+            x: [0.0; 2],
+            y: [0.0; 2],
+            eye: BOTH_EYES,
+        });
+    };
+    let p = &eyes[eye as usize];
+    // The generator's own operations (`camera_dir`), at the film extremes: `x` increases and
+    // `y` decreases with the film position.
+    let (lo, hi) = (
+        p.camera_dir(Vec2::new(flo.x - shift, fhi.y)),
+        p.camera_dir(Vec2::new(fhi.x - shift, flo.y)),
+    );
+    Some(Rect {
+        x: [lo.x, hi.x],
+        y: [lo.y, hi.y],
+        eye,
+    })
+}
+
+/// The frame of eye `eye` of `camera` (a [`movable`] model).
+pub fn eye_frame(camera: &Camera, eye: u8) -> Option<&CameraFrame> {
+    let (eyes, _) = eyes(camera)?;
+    eyes.get(eye as usize).map(|p| &p.frame)
+}
+
+/// The world beam of the rays of rectangle `r` through `frame` (module docs).
+// (The tests are negated so that a NaN fails them.)
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+pub fn rect_beam(frame: &CameraFrame, r: &Rect) -> Beam {
+    if r.eye == BOTH_EYES || !(r.x.iter().chain(&r.y).all(|v| v.is_finite())) {
+        return Beam::EVERYTHING;
+    }
+    let b = DMat3::from_cols(
+        frame.basis.x_axis.as_dvec3(),
+        frame.basis.y_axis.as_dvec3(),
+        frame.basis.z_axis.as_dvec3(),
+    );
+    let rows = b.transpose();
+    let rb = [rows.x_axis, rows.y_axis, rows.z_axis]
+        .iter()
+        .map(|r| r.length())
+        .fold(0.0, f64::max)
+        * (1.0 + 1e-9);
+    let delta = 13.2 * U * rb * 1.01;
+    let g = b.transpose() * b - DMat3::IDENTITY;
+    let e = 3.0
+        * [g.x_axis, g.y_axis, g.z_axis]
+            .iter()
+            .map(|c| c.abs().max_element())
+            .fold(0.0, f64::max);
+    if !(e < 0.5) {
+        return Beam::EVERYTHING;
+    }
+    let shrink = (1.0 - e).sqrt() * (1.0 - 1e-12);
+    let corners = [
+        b * DVec3::new(r.x[0] as f64, r.y[0] as f64, -1.0),
+        b * DVec3::new(r.x[1] as f64, r.y[0] as f64, -1.0),
+        b * DVec3::new(r.x[0] as f64, r.y[1] as f64, -1.0),
+        b * DVec3::new(r.x[1] as f64, r.y[1] as f64, -1.0),
+    ];
+    let mean: DVec3 = corners.iter().map(|q| *q / q.length()).sum();
+    let mut axes = [0usize, 1, 2];
+    let m = mean.abs();
+    axes.sort_by(|&i, &j| m[j].total_cmp(&m[i]));
+    for a in axes {
+        let s = if mean[a] >= 0.0 { 1.0 } else { -1.0 };
+        let c = corners
+            .iter()
+            .map(|q| s * q[a] / q.length())
+            .fold(f64::INFINITY, f64::min);
+        let alpha = c * shrink;
+        if !(alpha - delta >= MIN_DOMINANT as f64) {
+            continue;
+        }
+        let (bx, cx) = ((a + 1) % 3, (a + 2) % 3);
+        let range = |k: usize| {
+            let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+            for q in &corners {
+                let u = q[k] / q[a].abs();
+                lo = lo.min(u);
+                hi = hi.max(u);
+            }
+            let m = delta * (1.0 + lo.abs().max(hi.abs())) / (alpha - delta);
+            let pad = |u: f64| m + 2.0 * U * (u.abs() + m) + 1e-12 * (1.0 + u.abs());
+            [
+                ((lo - pad(lo)) as f32).next_down(),
+                ((hi + pad(hi)) as f32).next_up(),
+            ]
+        };
+        return Beam {
+            axis: a as u8,
+            sign: s as f32,
+            u: range(bx),
+            v: range(cx),
+            origin: Aabb::EMPTY.grow(frame.position),
+            everything: false,
+        };
+    }
+    Beam::EVERYTHING
+}
