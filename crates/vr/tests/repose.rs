@@ -19,6 +19,18 @@ fn camera(kind: ModelKind, eye: Vec3, target: Vec3, w: u32, h: u32, fov: f32) ->
     Camera::new(kind, &desc, w, h, &CameraOptions::default()).unwrap()
 }
 
+/// The models whose beams `Hierarchy::repose` moves without a rebuild.
+const MOVABLE: [ModelKind; 3] = [ModelKind::Pinhole, ModelKind::Stereo, ModelKind::Distorted];
+
+/// The set of `camera` at `spp`: per-channel samples for the distorted eye (HVVR's subpixel
+/// grids), one grid otherwise.
+fn set_of(camera: Camera, spp: u32) -> SampleSet {
+    match camera {
+        Camera::Distorted(_) => SampleSet::distorted(camera, spp).unwrap(),
+        c => SampleSet::grid(c, spp),
+    }
+}
+
 /// Every ray of `set` in its tile's and its block's beam (no tolerance).
 fn rays_in_beams(set: &SampleSet, h: &Hierarchy) -> Result<(), TestCaseError> {
     for b in &h.blocks {
@@ -45,7 +57,7 @@ proptest! {
     /// leave unbounded: `EVERYTHING`, still holding every ray.)
     #[test]
     fn moved_beams_hold_every_ray(
-        stereo in any::<bool>(),
+        model in 0usize..3,
         w in 8u32..48,
         h in 8u32..40,
         spp in prop::sample::select(vec![1u32, 4, 16]),
@@ -53,13 +65,13 @@ proptest! {
         looks in prop::array::uniform2(prop::array::uniform3(-1.0f32..1.0)),
         fov in 20.0f32..120.0,
     ) {
-        let kind = if stereo { ModelKind::Stereo } else { ModelKind::Pinhole };
+        let kind = MOVABLE[model];
         let [e0, e1] = eyes.map(Vec3::from);
         let [l0, l1] = looks.map(Vec3::from);
         for l in [l0, l1] {
             prop_assume!(l.length() > 0.1 && l.normalize().dot(Vec3::Y).abs() < 0.95);
         }
-        let set0 = SampleSet::grid(camera(kind, e0, e0 + l0, w, h, fov), spp);
+        let set0 = set_of(camera(kind, e0, e0 + l0, w, h, fov), spp);
         let mut set1 = set0.clone();
         set1.camera = camera(kind, e1, e1 + l1, w, h, fov);
         let mut hier = Hierarchy::build(&set0).unwrap();
@@ -74,8 +86,8 @@ proptest! {
 }
 
 /// The exact cast (`SetupExactness::Full`) through a moved hierarchy equals per-ray traversal
-/// of the moved camera, bit for bit, on a scene, for the pinhole and the stereo rig at 1 and 16
-/// spp (the 16-spp sets take the sweep).
+/// of the moved camera, bit for bit, on a scene, for the pinhole, the stereo rig and the
+/// distorted eye at 1 and 16 spp (the pinholes' 16-spp sets take the sweep).
 #[test]
 fn cast_through_a_moved_hierarchy_equals_per_ray_traversal() {
     let scene = Scene::load("atrium").unwrap();
@@ -83,14 +95,14 @@ fn cast_through_a_moved_hierarchy_equals_per_ray_traversal() {
     let desc = scene.camera(None).unwrap();
     let turned = desc.eye + (desc.target - desc.eye).normalize() * 0.3;
     let aside = Vec3::new(0.7, 0.2, -0.4);
-    for kind in [ModelKind::Pinhole, ModelKind::Stereo] {
+    for kind in MOVABLE {
         let (w, h) = if kind == ModelKind::Stereo {
             (24, 32)
         } else {
             (48, 32)
         };
         for spp in [1, 16] {
-            let set0 = SampleSet::grid(camera(kind, desc.eye, desc.target, w, h, 60.0), spp);
+            let set0 = set_of(camera(kind, desc.eye, desc.target, w, h, 60.0), spp);
             let mut set1 = set0.clone();
             set1.camera = camera(kind, turned, desc.target + aside, w, h, 60.0);
             let mut hier = Hierarchy::build(&set0).unwrap();

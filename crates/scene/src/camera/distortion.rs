@@ -141,6 +141,25 @@ impl Distorted {
 }
 
 impl Distorted {
+    /// The camera-space direction through `film` for `channel` (0-2) before normalising,
+    /// `(x, y, -1)`: the ray's direction is its normalised turn into the world, bit for bit
+    /// (the same operations as [`CameraModel::ray`]).
+    pub fn camera_vector(&self, film: Vec2, channel: usize) -> Option<Vec3> {
+        (channel <= 2).then(|| self.lens_vector(film, channel).3)
+    }
+
+    /// The lens coordinates `n`, `s = |n|^2`, the gain `g(s)` and the camera-space direction
+    /// before normalising (`channel` at most 2).
+    #[inline(always)]
+    fn lens_vector(&self, film: Vec2, channel: usize) -> (Vec2, f32, f32, Vec3) {
+        let n = self.lens_coords(film);
+        let s = n.length_squared();
+        let g = self.gain(channel, s);
+        let t = self.pinhole.tan_half_y;
+        let nu = n * g;
+        (n, s, g, Vec3::new(nu.x * t, nu.y * t, -1.0))
+    }
+
     /// The ray's part of [`CameraModel::generate_ray`] (shared with [`CameraModel::ray`], so
     /// both give the same bits): the lens coordinates `n`, `s = |n|^2`, the gain `g(s)`, the
     /// length of the camera-space direction before normalising, and the world direction.
@@ -149,12 +168,7 @@ impl Distorted {
         if channel > 2 {
             return None;
         }
-        let n = self.lens_coords(film);
-        let s = n.length_squared();
-        let g = self.gain(channel, s);
-        let t = self.pinhole.tan_half_y;
-        let nu = n * g;
-        let d = Vec3::new(nu.x * t, nu.y * t, -1.0);
+        let (n, s, g, d) = self.lens_vector(film, channel);
         let len = d.length();
         let dir = self.pinhole.frame.dir_to_world(d / len);
         Some((n, s, g, len, dir))

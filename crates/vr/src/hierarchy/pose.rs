@@ -30,6 +30,10 @@
 //!   [`crate::beam::BeamBuilder::finish`] requires of its rays; otherwise the beam is
 //!   [`Beam::EVERYTHING`] (every box partial: slower, never wrong).
 //!
+//! The lens-distorted eye (`Distorted`) has the same ray form with `v = (x, y, -1)` from its
+//! radial gain, which is not monotone in the film position: its rectangles are the extremes
+//! over every ray of the tile (`Distorted::camera_vector`), computed once at the build.
+//!
 //! The origin is the eye's position, the rays' origin bit for bit. Tiles whose subsamples fall
 //! on both eyes of a stereo film (a footprint across the eyes' seam) take the beam of their
 //! rays instead (`rays_of`), and their block [`Beam::EVERYTHING`].
@@ -76,8 +80,9 @@ impl Rect {
     }
 }
 
-/// The eyes of a camera the rectangles apply to: the pinhole alone, or the stereo rig's two,
-/// with the film width of one eye (`+inf` for the pinhole); `None` for other models.
+/// The pinhole eyes of a camera whose film positions map monotonically to its camera-space
+/// directions (the pinhole alone, or the stereo rig's two), with the film width of one eye
+/// (`+inf` for the pinhole); `None` for other models.
 fn eyes(camera: &Camera) -> Option<(&[Pinhole], f32)> {
     match camera {
         Camera::Pinhole(p) => Some((std::slice::from_ref(p), f32::INFINITY)),
@@ -86,13 +91,15 @@ fn eyes(camera: &Camera) -> Option<(&[Pinhole], f32)> {
     }
 }
 
-/// Whether rectangles of `set`'s camera can be moved ([`rect_of`]): the pinhole and the stereo
-/// rig.
+/// Whether the beams of `camera`'s sets can be moved: the models whose rays are `fl(B fl(v /
+/// |v|))` from the eye with a camera-space `v = (x, y, -1)` — the pinhole, the stereo rig
+/// and the lens-distorted eye (whose `x`, `y` are not monotone in the film: its rectangles
+/// come from every ray, [`rect_of`]).
 pub fn movable(camera: &Camera) -> bool {
-    eyes(camera).is_some()
+    eyes(camera).is_some() || matches!(camera, Camera::Distorted(_))
 }
 
-/// `a` with the camera frames of `b`, if both are the same movable model (pinhole or stereo).
+/// `a` with the camera frames of `b`, if both are the same [`movable`] model.
 pub fn with_frames_of(a: &Camera, b: &Camera) -> Option<Camera> {
     let mut c = a.clone();
     match (&mut c, b) {
@@ -102,14 +109,26 @@ pub fn with_frames_of(a: &Camera, b: &Camera) -> Option<Camera> {
                 e.frame = f.frame;
             }
         }
+        (Camera::Distorted(d), Camera::Distorted(q)) => d.pinhole.frame = q.pinhole.frame,
         _ => return None,
     }
     Some(c)
 }
 
-/// The camera-space rectangle of the rays of samples `idx` of `set` (module docs); `None` for
-/// a camera [`movable`] does not take.
+/// The frame of eye `eye` of a [`movable`] camera.
+pub fn eye_frame(camera: &Camera, eye: u8) -> Option<&CameraFrame> {
+    match camera {
+        Camera::Distorted(d) => (eye == 0).then_some(&d.pinhole.frame),
+        c => eyes(c)?.0.get(eye as usize).map(|p| &p.frame),
+    }
+}
+
+/// The camera-space rectangle of the rays of samples `idx` of `set` (module docs); `None`
+/// for a camera [`movable`] does not take.
 pub fn rect_of(set: &SampleSet, idx: &[u32]) -> Option<Rect> {
+    if let Camera::Distorted(c) = &set.camera {
+        return Some(distorted_rect(set, c, idx));
+    }
     let (eyes, w) = eyes(&set.camera)?;
     let (mut olo, mut ohi) = (Vec2::INFINITY, Vec2::NEG_INFINITY);
     for o in &set.offsets {
@@ -126,7 +145,7 @@ pub fn rect_of(set: &SampleSet, idx: &[u32]) -> Option<Rect> {
         fhi = fhi.max(a.max(b));
     }
     if !(flo.is_finite() && fhi.is_finite()) {
-        return None;
+        return Some(UNBOUNDED);
     }
     // The eye of every ray (as the generators pick it: `x < w` left, else right).
     let (eye, shift) = if fhi.x < w {
@@ -154,10 +173,40 @@ pub fn rect_of(set: &SampleSet, idx: &[u32]) -> Option<Rect> {
     })
 }
 
-/// The frame of eye `eye` of `camera` (a [`movable`] model).
-pub fn eye_frame(camera: &Camera, eye: u8) -> Option<&CameraFrame> {
-    let (eyes, _) = eyes(camera)?;
-    eyes.get(eye as usize).map(|p| &p.frame)
+/// A rectangle [`rect_beam`] turns into [`Beam::EVERYTHING`] (non-finite rays).
+const UNBOUNDED: Rect = Rect {
+    x: [f32::NEG_INFINITY, f32::INFINITY],
+    y: [f32::NEG_INFINITY, f32::INFINITY],
+    eye: 0,
+};
+
+/// [`rect_of`] for the lens-distorted eye: the extremes of every ray's camera-space vector
+/// (`Distorted::camera_vector`, the generators' operations), sample by sample and subsample
+/// by subsample (the radial gain is not monotone in the film position).
+fn distorted_rect(set: &SampleSet, c: &parallax_scene::camera::Distorted, idx: &[u32]) -> Rect {
+    let (mut lo, mut hi) = (Vec2::INFINITY, Vec2::NEG_INFINITY);
+    for &i in idx {
+        let s = &set.samples[i as usize];
+        for o in &set.offsets {
+            // Rays of channels past 2 are invalid (never cast).
+            if let Some(v) = c.camera_vector(s.film + *o * s.footprint, s.channel as usize) {
+                if !(v.x.is_finite() && v.y.is_finite()) {
+                    return UNBOUNDED;
+                }
+                lo = lo.min(v.truncate());
+                hi = hi.max(v.truncate());
+            }
+        }
+    }
+    if lo.x > hi.x {
+        // No valid ray: a point rectangle (the tile casts nothing).
+        (lo, hi) = (Vec2::ZERO, Vec2::ZERO);
+    }
+    Rect {
+        x: [lo.x, hi.x],
+        y: [lo.y, hi.y],
+        eye: 0,
+    }
 }
 
 /// The world beam of the rays of rectangle `r` through `frame` (module docs).
