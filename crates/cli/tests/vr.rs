@@ -75,6 +75,62 @@ fn vr_presets_dof_and_ssaa_run() {
     }
 }
 
+/// A turning head over three frames: the beam caster's hierarchy built for the first and
+/// moved for the others. The first frame is the single-frame render; the exact beam caster
+/// (`beam-exact`, bit-identical to per-ray traversal) gives per-ray's images on every frame,
+/// so the moved hierarchies culled nothing they should not; the head does turn.
+#[test]
+fn vr_frames_of_a_turning_head_move_the_hierarchy() {
+    let run = |name: &str, extra: &[&str]| {
+        let d = out_dir(name);
+        let stats = d.join("s.json");
+        let mut a = vec![
+            "vr", "--scene", "cornell", "--preset", "vive", "--msaa", "4", "--width", "40",
+            "--height", "32", "--out",
+        ];
+        a.push(d.to_str().unwrap());
+        a.extend_from_slice(&["--stats", stats.to_str().unwrap()]);
+        a.extend_from_slice(extra);
+        let o = parallax(&a);
+        assert!(o.status.success(), "{extra:?}: {}", stderr(&o));
+        let json: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+        (d, String::from_utf8_lossy(&o.stdout).into_owned(), json)
+    };
+    let seq = ["--frames", "3", "--turn", "8"];
+    let (single, ..) = run("frames-single", &["--visibility", "beam-exact"]);
+    let (exact, out, json) = run(
+        "frames-exact",
+        &[&seq[..], &["--visibility", "beam-exact"]].concat(),
+    );
+    let (per_ray, ..) = run(
+        "frames-per-ray",
+        &[&seq[..], &["--visibility", "per-ray"]].concat(),
+    );
+    assert!(out.contains("moved"), "{out}");
+    let frames = json["frames"].as_array().unwrap();
+    let turns: Vec<f64> = frames
+        .iter()
+        .map(|f| f["turn_deg"].as_f64().unwrap())
+        .collect();
+    assert_eq!(turns, [0.0, 4.0, 8.0]);
+    let read = |d: &common::TestDir, f: &str| std::fs::read(d.join(f)).unwrap();
+    assert_eq!(read(&single, "left.png"), read(&exact, "left_000.png"));
+    for f in 0..3 {
+        for eye in ["left", "right"] {
+            let file = format!("{eye}_{f:03}.png");
+            assert!(
+                read(&exact, &file) == read(&per_ray, &file),
+                "{file} differs from per-ray"
+            );
+        }
+    }
+    assert!(
+        read(&exact, "left_000.png") != read(&exact, "left_002.png"),
+        "the head did not turn"
+    );
+}
+
 #[test]
 fn vr_rejects_bad_flags_clearly() {
     let d = out_dir("bad");
@@ -86,6 +142,9 @@ fn vr_rejects_bad_flags_clearly() {
         (&["--visibility", "magic"], "per-ray or beam"),
         (&["--preset", "quest"], "rift-cv1"),
         (&["--preset", "wide-210x130", "--subpixel"], "distorted"),
+        (&["--frames", "0"], "--frames"),
+        (&["--frames", "2", "--turn", "nan"], "--turn"),
+        (&["--frames", "2", "--turn", "400"], "360"),
     ] {
         let mut a = vec![
             "vr", "--scene", "cornell", "--width", "8", "--height", "8", "--out", ds,

@@ -195,7 +195,11 @@ pub struct FrameOptions {
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct EyeTimings {
     pub samples_ms: f64,
+    /// The whole visibility stage, [`EyeTimings::hierarchy_ms`] included.
     pub visibility_ms: f64,
+    /// The beam caster's hierarchy: built (the first frame) or moved to this frame's head
+    /// pose ([`Hierarchy::repose`]); 0 for per-ray visibility.
+    pub hierarchy_ms: f64,
     pub shade_ms: f64,
     pub reconstruct_ms: f64,
 }
@@ -238,6 +242,20 @@ pub fn render_eye_set(
     set: SampleSet,
     opts: &FrameOptions,
 ) -> Result<EyeFrame, VrError> {
+    render_eye_with(scene, bvh, set, opts, &mut None)
+}
+
+/// [`render_eye_set`] keeping the beam caster's hierarchy in `hierarchy` from frame to frame:
+/// built when `None`, else moved to `set`'s camera ([`Hierarchy::repose`]: a head that moved
+/// since the last frame, same samples). This is HVVR's frame loop: bounds computed once,
+/// moved per frame (§5.1).
+pub fn render_eye_with(
+    scene: &Scene,
+    bvh: &Bvh,
+    set: SampleSet,
+    opts: &FrameOptions,
+    hierarchy: &mut Option<Hierarchy>,
+) -> Result<EyeFrame, VrError> {
     if set.spp != opts.spp {
         return Err(VrError::Invalid(format!(
             "sample set has {} subsamples per sample, options say {}",
@@ -246,7 +264,13 @@ pub fn render_eye_set(
     }
     let samples_ms = 0.0;
     let t = Instant::now();
-    let vis = visibility(opts.visibility, bvh, &set)?;
+    match hierarchy {
+        Some(h) if opts.visibility != Visibility::PerRay => h.repose(&set)?,
+        _ => *hierarchy = prepare(opts.visibility, &set)?,
+    }
+    let hierarchy_ms = ms(t);
+    let mut vis = VisibilityBuffer::new(&set);
+    visibility_into(opts.visibility, bvh, &set, hierarchy.as_ref(), &mut vis)?;
     let visibility_ms = ms(t);
     let t = Instant::now();
     let shader = VrShader::new(scene, bvh, opts.shade);
@@ -263,6 +287,7 @@ pub fn render_eye_set(
         timings: EyeTimings {
             samples_ms,
             visibility_ms,
+            hierarchy_ms,
             shade_ms,
             reconstruct_ms,
         },

@@ -1,7 +1,8 @@
 //! `parallax vr`: one HVVR frame (Hunt et al. 2018) for a headset preset — both eyes rendered
 //! directly into the display's (distorted) sample pattern with MSAA or SSAA, written as
 //! `left.png`, `right.png` and `pattern.png` (the left eye's sample pattern), with stage timings
-//! and shade counts on stdout.
+//! and shade counts on stdout; with `--frames N`, a sequence of a turning head, the beam
+//! caster's hierarchy built once and moved per frame.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -10,10 +11,12 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use parallax_bvh::Bvh;
 use parallax_core::image::png::{self, ToneMapping, Tonemap};
+use parallax_scene::CameraDesc;
 use parallax_scene::animation::Animation;
 use parallax_scene::camera::{CameraModel, ModelKind};
+use parallax_vr::Hierarchy;
 use parallax_vr::frame::{
-    EyeFrame, FrameOptions, UpdateTimings, Visibility, render_eye_set, update_scene,
+    EyeFrame, FrameOptions, UpdateTimings, Visibility, render_eye_with, update_scene,
 };
 use parallax_vr::patterns::eye_set;
 use parallax_vr::presets::{Dof, HeadsetSpec, Preset, eye_cameras};
@@ -79,6 +82,24 @@ pub struct VrArgs {
     /// Write timings and counts as JSON.
     #[arg(long)]
     pub stats: Option<PathBuf>,
+    /// Frames to render while the head turns by `--turn` degrees about the up axis: the beam
+    /// caster's hierarchy is built for the first frame and moved for the others (HVVR §5.1),
+    /// and each frame's timings are printed. Files `left_000.png`, `right_000.png`, ... when
+    /// more than one.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    pub frames: u32,
+    /// Head turn over the frames in degrees (positive: to the left), with `--frames`.
+    #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
+    pub turn: f32,
+}
+
+/// `head` turned by `deg` degrees about its up axis, around the eye (positive: to the left).
+fn turned(head: &CameraDesc, deg: f32) -> CameraDesc {
+    let q = glam::Quat::from_axis_angle(head.up.normalize(), deg.to_radians());
+    CameraDesc {
+        target: head.eye + q * (head.target - head.eye),
+        ..*head
+    }
 }
 
 /// The headset of the flags: the preset, or `custom` from the camera flags; size overrides.
@@ -135,6 +156,17 @@ struct VrStats {
     shades: u64,
     shades_per_nonempty_pixel: f64,
     mrays_per_s: f64,
+    /// With `--frames` above 1: every frame's head turn and eye timings (the fields above
+    /// describe the last frame).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    frames: Vec<FrameStats>,
+}
+
+/// One frame of a `--frames` sequence.
+#[derive(Serialize)]
+struct FrameStats {
+    turn_deg: f32,
+    eyes: [parallax_vr::frame::EyeTimings; 2],
 }
 
 pub fn run(a: &VrArgs, quiet: bool) -> Result<()> {
@@ -168,7 +200,12 @@ pub fn run(a: &VrArgs, quiet: bool) -> Result<()> {
     if dof.is_some() && a.subpixel {
         bail!("--subpixel and depth of field do not compose yet (the thin lens is undistorted)");
     }
-    let cameras = eye_cameras(&spec, &head, dof)?;
+    if !(a.turn.is_finite() && a.turn.abs() <= 360.0) {
+        bail!(
+            "--turn must be a finite angle of at most 360 degrees, got {}",
+            a.turn
+        );
+    }
     let t = Instant::now();
     let mut bvh = Bvh::try_build(&scene.mesh)?;
     let build_ms = t.elapsed().as_secs_f64() * 1e3;
@@ -205,15 +242,52 @@ pub fn run(a: &VrArgs, quiet: bool) -> Result<()> {
         tonemap: Tonemap::AcesFilmic,
     };
     let mut eyes: Vec<EyeFrame> = Vec::with_capacity(2);
-    for (name, cam) in ["left", "right"].into_iter().zip(cameras) {
-        let t = Instant::now();
-        let set = eye_set(cam, a.msaa, a.subpixel, gaze)?;
-        let samples_ms = t.elapsed().as_secs_f64() * 1e3;
-        let mut eye = render_eye_set(&scene, &bvh, set, &opts)?;
-        eye.timings.samples_ms = samples_ms;
-        let path = a.out.join(format!("{name}.png"));
-        png::write_png(&path, &eye.image, &tm)?;
-        eyes.push(eye);
+    // Each eye's beam-caster hierarchy, kept from frame to frame.
+    let mut hierarchies: [Option<Hierarchy>; 2] = [None, None];
+    let mut frames = Vec::new();
+    for f in 0..a.frames {
+        let deg = if a.frames > 1 {
+            a.turn * f as f32 / (a.frames - 1) as f32
+        } else {
+            0.0
+        };
+        let cameras = eye_cameras(&spec, &turned(&head, deg), dof)?;
+        eyes.clear();
+        for (e, (name, cam)) in ["left", "right"].into_iter().zip(cameras).enumerate() {
+            let t = Instant::now();
+            let set = eye_set(cam, a.msaa, a.subpixel, gaze)?;
+            let samples_ms = t.elapsed().as_secs_f64() * 1e3;
+            let mut eye = render_eye_with(&scene, &bvh, set, &opts, &mut hierarchies[e])?;
+            eye.timings.samples_ms = samples_ms;
+            let file = if a.frames > 1 {
+                format!("{name}_{f:03}.png")
+            } else {
+                format!("{name}.png")
+            };
+            png::write_png(&a.out.join(file), &eye.image, &tm)?;
+            eyes.push(eye);
+        }
+        if a.frames > 1 {
+            let row = FrameStats {
+                turn_deg: deg,
+                eyes: [eyes[0].timings, eyes[1].timings],
+            };
+            if !quiet {
+                let [l, r] = row.eyes;
+                println!(
+                    "frame {f:3}: head turned {deg:6.2} deg, visibility {:.1} + {:.1} ms \
+                     (hierarchy {} {:.2} + {:.2} ms), shade {:.1} + {:.1} ms",
+                    l.visibility_ms,
+                    r.visibility_ms,
+                    if f == 0 { "built" } else { "moved" },
+                    l.hierarchy_ms,
+                    r.hierarchy_ms,
+                    l.shade_ms,
+                    r.shade_ms
+                );
+            }
+            frames.push(row);
+        }
     }
     let pattern = a.out.join("pattern.png");
     png::write_png(
@@ -242,6 +316,7 @@ pub fn run(a: &VrArgs, quiet: bool) -> Result<()> {
         shades,
         shades_per_nonempty_pixel: shades as f64 / nonempty.max(1) as f64,
         mrays_per_s: rays as f64 / (vis_ms.max(1e-9) * 1e3),
+        frames,
     };
     output::write_json(a.stats.as_deref(), &stats)?;
     if !quiet {
@@ -278,10 +353,19 @@ pub fn run(a: &VrArgs, quiet: bool) -> Result<()> {
             "both eyes: {rays} rays, {:.2} Mrays/s visibility, {shades} shades ({:.3} per non-empty pixel)",
             stats.mrays_per_s, stats.shades_per_nonempty_pixel
         );
-        println!(
-            "wrote {} (left.png, right.png, pattern.png)",
-            a.out.display()
-        );
+        if a.frames > 1 {
+            println!(
+                "wrote {} (left_000.png .. left_{last:03}.png, the right eye's likewise, \
+                 pattern.png); the table above is the last frame's",
+                a.out.display(),
+                last = a.frames - 1
+            );
+        } else {
+            println!(
+                "wrote {} (left.png, right.png, pattern.png)",
+                a.out.display()
+            );
+        }
     }
     Ok(())
 }
