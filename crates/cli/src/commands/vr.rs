@@ -264,7 +264,7 @@ pub fn run(a: &VrArgs, quiet: bool) -> Result<()> {
             } else {
                 format!("{name}.png")
             };
-            png::write_png(&a.out.join(file), &eye.image, &tm)?;
+            png::write_png(a.out.join(file), &eye.image, &tm)?;
             eyes.push(eye);
         }
         if a.frames > 1 {

@@ -126,8 +126,8 @@ fn gen_packets<L: LaneReduce>(
                 return false;
             };
             let mut d = [[0.0; MAX_LANES]; 3];
-            for a in 0..3 {
-                rays.d[a].write(&mut d[a]);
+            for (lanes, row) in rays.d.iter().zip(&mut d) {
+                lanes.write(row);
             }
             pk.packets[p] = Packet::fresh(d);
             dinf = max_or_rhs(dinf, lane_dinf(rays.d));
