@@ -208,7 +208,7 @@ fn vr_frame(
     head: &parallax_scene::CameraDesc,
 ) -> Result<DemoPiece> {
     use parallax_core::image::png::{self, ToneMapping, Tonemap};
-    use parallax_vr::frame::{FrameOptions, Visibility, render_eye_set};
+    use parallax_vr::frame::{FrameOptions, Visibility, render_eye_with};
     use parallax_vr::presets::{Preset, eye_cameras};
     use parallax_vr::reconstruct::pattern_image;
     use parallax_vr::resolve::ShadingMode;
@@ -232,9 +232,34 @@ fn vr_frame(
     let mut shades = 0u64;
     let mut nonempty = 0u64;
     let [l, r] = eye_cameras(&spec, head, None)?;
-    for (name, cam) in [("vr_rift_left", l), ("vr_rift_right", r)] {
+    // The head turned by 5 degrees for a next frame of the left eye: its hierarchy moved, not
+    // rebuilt (HVVR §5.1).
+    let q = glam::Quat::from_axis_angle(head.up.normalize(), 5f32.to_radians());
+    let next = parallax_scene::CameraDesc {
+        target: head.eye + q * (head.target - head.eye),
+        ..*head
+    };
+    let [l_next, _] = eye_cameras(&spec, &next, None)?;
+    let mut left_hierarchy = None;
+    let (mut built_ms, mut moved_ms) = (0.0, 0.0);
+    for (name, cam) in [
+        ("vr_rift_left", l),
+        ("vr_rift_right", r),
+        ("vr_rift_left_turned", l_next),
+    ] {
         let set = parallax_vr::patterns::eye_set(cam, opts.spp, true, Some([0.0, 0.0]))?;
-        let eye = render_eye_set(scene, bvh, set, &opts)?;
+        let mut own = None;
+        let hierarchy = if name == "vr_rift_right" {
+            &mut own
+        } else {
+            &mut left_hierarchy
+        };
+        let eye = render_eye_with(scene, bvh, set, &opts, hierarchy)?;
+        match name {
+            "vr_rift_left" => built_ms = eye.timings.hierarchy_ms,
+            "vr_rift_left_turned" => moved_ms = eye.timings.hierarchy_ms,
+            _ => {}
+        }
         png::write_png(a.out.join(format!("{name}.png")), &eye.image, &tm)?;
         if name == "vr_rift_left" {
             png::write_png(
@@ -253,16 +278,17 @@ fn vr_frame(
         section: section::HVVR,
         title: "A foveated VR frame, cast with beams".into(),
         what: format!(
-            "both eyes of a Rift CV1 rendered straight into the distorted display pattern, one ray set per colour channel, foveated around the centre, 8x MSAA, visibility by the beam caster ({:.2} shades per pixel); the last image shows the sample pattern",
+            "both eyes of a Rift CV1 rendered straight into the distorted display pattern, one ray set per colour channel, foveated around the centre, 8x MSAA, visibility by the beam caster ({:.2} shades per pixel); then the left eye's next frame with the head turned 5 degrees, its tile and block beams moved in {moved_ms:.2} ms instead of rebuilt ({built_ms:.1} ms); the last image shows the sample pattern",
             shades as f64 / nonempty.max(1) as f64
         ),
-        size: format!("2x {}x{}", spec.width, spec.height),
+        size: format!("3x {}x{}", spec.width, spec.height),
         spp: "8".into(),
         mrays: Some(rays as f64 / (ms * 1e3)),
         ms,
         images: [
             "vr_rift_left.png",
             "vr_rift_right.png",
+            "vr_rift_left_turned.png",
             "vr_rift_pattern.png",
         ]
         .map(String::from)
