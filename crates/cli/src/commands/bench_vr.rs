@@ -146,7 +146,9 @@ pub fn bench(a: &VrBenchArgs, quiet: bool) -> Result<()> {
         }
         if let Some(t) = &t6 {
             println!(
-                "\nTable 6: the beam caster against ray tracers on the same rays (`normal` scheme)\n"
+                "\nTable 6: the beam caster against ray tracers on the same rays (`normal` scheme; \
+                 the beam caster's frame includes moving its hierarchy from the previous frame's \
+                 head, turned by about a degree)\n"
             );
             print!("{}", table6::markdown(t));
         }
