@@ -12,7 +12,7 @@
 //! at that tier, e.g. `16sse` the portable twin) and a head pose `eye target fov_y` (9th-11th,
 //! e.g. `-9,3.5,0 8,5,0 60`; default the scene's camera). `BVH_SPATIAL=0` builds the BVH
 //! without spatial splits (the object-split tree; default: the SBVH, `Bvh::build`). Also prints
-//! the hierarchy's build time and the time to move it to a head turned by about a degree and
+//! the hierarchy's build time and the time to move it to a head turned by a degree and
 //! back (`Hierarchy::repose`); the cast runs on the moved-back hierarchy.
 
 use parallax_bvh::{BuildOptions, Bvh};
@@ -78,15 +78,10 @@ fn main() {
         )
         .unwrap();
         let set = SampleSet::grid(cam, spp);
-        // The hierarchy moved to a head turned by about a degree and back (`Hierarchy::repose`:
+        // The hierarchy moved to a head turned by a degree and back (`Hierarchy::repose`:
         // what a moving head costs per frame instead of a build).
         let turned = {
-            let f = desc.target - desc.eye;
-            let side = f.cross(desc.up).normalize() * (f.length() / 60.0);
-            let d = parallax_scene::CameraDesc {
-                target: desc.target + side,
-                ..desc
-            };
+            let d = desc.turned(1.0);
             let cam = Camera::new(ModelKind::Stereo, &d, eye_w, h, &CameraOptions::default());
             SampleSet {
                 camera: cam.unwrap(),

@@ -148,7 +148,7 @@ pub fn bench(a: &VrBenchArgs, quiet: bool) -> Result<()> {
             println!(
                 "\nTable 6: the beam caster against ray tracers on the same rays (`normal` scheme; \
                  the beam caster's frame includes moving its hierarchy from the previous frame's \
-                 head, turned by about a degree)\n"
+                 head, turned by a degree)\n"
             );
             print!("{}", table6::markdown(t));
         }

@@ -234,12 +234,7 @@ fn vr_frame(
     let [l, r] = eye_cameras(&spec, head, None)?;
     // The head turned by 5 degrees for a next frame of the left eye: its hierarchy moved, not
     // rebuilt (HVVR §5.1).
-    let q = glam::Quat::from_axis_angle(head.up.normalize(), 5f32.to_radians());
-    let next = parallax_scene::CameraDesc {
-        target: head.eye + q * (head.target - head.eye),
-        ..*head
-    };
-    let [l_next, _] = eye_cameras(&spec, &next, None)?;
+    let [l_next, _] = eye_cameras(&spec, &head.turned(5.0), None)?;
     let mut left_hierarchy = None;
     let (mut built_ms, mut moved_ms) = (0.0, 0.0);
     for (name, cam) in [

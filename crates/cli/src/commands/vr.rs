@@ -11,7 +11,6 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use parallax_bvh::Bvh;
 use parallax_core::image::png::{self, ToneMapping, Tonemap};
-use parallax_scene::CameraDesc;
 use parallax_scene::animation::Animation;
 use parallax_scene::camera::{CameraModel, ModelKind};
 use parallax_vr::Hierarchy;
@@ -91,15 +90,6 @@ pub struct VrArgs {
     /// Head turn over the frames in degrees (positive: to the left), with `--frames`.
     #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
     pub turn: f32,
-}
-
-/// `head` turned by `deg` degrees about its up axis, around the eye (positive: to the left).
-fn turned(head: &CameraDesc, deg: f32) -> CameraDesc {
-    let q = glam::Quat::from_axis_angle(head.up.normalize(), deg.to_radians());
-    CameraDesc {
-        target: head.eye + q * (head.target - head.eye),
-        ..*head
-    }
 }
 
 /// The headset of the flags: the preset, or `custom` from the camera flags; size overrides.
@@ -251,7 +241,7 @@ pub fn run(a: &VrArgs, quiet: bool) -> Result<()> {
         } else {
             0.0
         };
-        let cameras = eye_cameras(&spec, &turned(&head, deg), dof)?;
+        let cameras = eye_cameras(&spec, &head.turned(deg), dof)?;
         eyes.clear();
         for (e, (name, cam)) in ["left", "right"].into_iter().zip(cameras).enumerate() {
             let t = Instant::now();

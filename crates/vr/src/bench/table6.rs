@@ -13,7 +13,7 @@
 //! packets), half a pixel at 32, two pixels at 8, one 4x4-pixel tile at 1 spp. The beam
 //! caster is timed over the whole frame of a moving head: both eyes, each with its hierarchy
 //! (built once, outside the timed region) moved from the previous frame's pose, turned by
-//! about a degree, to this one ([`crate::Hierarchy::repose`], HVVR §5.1's bounds moved per
+//! a degree, to this one ([`crate::Hierarchy::repose`], HVVR §5.1's bounds moved per
 //! frame), then the cast; visibility only (the paper's HVVR figure includes shading).
 //!
 //! Timing: rounds; in each round the beam caster casts the frame, then every band is
@@ -199,17 +199,6 @@ struct Tally {
     same_t: u64,
 }
 
-/// `head` turned to the right by about a degree (its target moved sideways by 1/60 of the
-/// viewing distance).
-fn turned(head: &CameraDesc) -> CameraDesc {
-    let f = head.target - head.eye;
-    let side = f.cross(head.up).normalize_or_zero() * (f.length() / 60.0);
-    CameraDesc {
-        target: head.target + side,
-        ..*head
-    }
-}
-
 /// Runs the table (module docs): for every spp, the beam caster and the ray tracers on both
 /// eyes' subsample rays of the `normal` scheme.
 pub fn run(
@@ -247,8 +236,8 @@ pub fn run(
             prepare(Visibility::Beam, &sets[0])?,
             prepare(Visibility::Beam, &sets[1])?,
         ];
-        // The previous frame's head (module docs): turned by about a degree.
-        let before = scheme_sets("normal", &turned(head), opts.width, opts.height, spp)?;
+        // The previous frame's head (module docs): turned by a degree.
+        let before = scheme_sets("normal", &head.turned(1.0), opts.width, opts.height, spp)?;
         let mut out = [
             VisibilityBuffer::new(&sets[0]),
             VisibilityBuffer::new(&sets[1]),
