@@ -4,6 +4,8 @@
 
 use std::time::Instant;
 
+use rayon::prelude::*;
+
 use parallax_bvh::{Bvh, BvhError};
 use parallax_core::{Image, Rgb};
 use parallax_scene::animation::{Animate, AnimationError};
@@ -14,7 +16,7 @@ use crate::reconstruct::reconstruct;
 use crate::resolve::{Resolved, ShadingMode, resolve};
 use crate::shade::{ShadeOptions, VrShader};
 use crate::{
-    CastOptions, CastStats, Hierarchy, HierarchyError, PatternError, SampleSet, SampleTest,
+    CastOptions, CastStats, Hierarchy, HierarchyError, PatternError, Sample, SampleSet, SampleTest,
     SetupExactness, VisibilityBuffer, cast_opts, trace_per_ray,
 };
 
@@ -242,19 +244,87 @@ pub fn render_eye_set(
     set: SampleSet,
     opts: &FrameOptions,
 ) -> Result<EyeFrame, VrError> {
-    render_eye_with(scene, bvh, set, opts, &mut None)
+    render_eye_with(scene, bvh, set, opts, &mut EyeState::new())
 }
 
-/// [`render_eye_set`] keeping the beam caster's hierarchy in `hierarchy` from frame to frame:
-/// built when `None`, else moved to `set`'s camera ([`Hierarchy::repose`]: a head that moved
-/// since the last frame, same samples). This is HVVR's frame loop: bounds computed once,
-/// moved per frame (§5.1).
+/// What one eye keeps from frame to frame in HVVR's frame loop: the beam caster's hierarchy,
+/// computed once and moved to each new head pose (§5.1), and the visibility buffer of an
+/// earlier frame, written over rather than allocated and filled again (every visibility method
+/// writes every entry: the beam caster's tiles and blocks without rays clear their own,
+/// `tests/cast.rs` `a_reused_buffer_equals_a_fresh_one`). At 16 spp a 1080x1200 eye's buffer is
+/// 166 MB.
+///
+/// [`Hierarchy::repose`] moves the beams of the samples the hierarchy was built for; a set with
+/// other samples (a foveated set whose gaze moved, another pattern) needs a new hierarchy. So
+/// the state keeps those samples and subsample tables and compares each frame's set with them
+/// (a parallel comparison, ~1 ms for 1.3 M samples): equal, the hierarchy is moved; else built
+/// anew.
+#[derive(Default)]
+pub struct EyeState {
+    hierarchy: Option<Hierarchy>,
+    built_for: Option<SampleTables>,
+    spare: Option<VisibilityBuffer>,
+}
+
+/// A set's samples and subsample tables, without its camera.
+struct SampleTables {
+    samples: Vec<Sample>,
+    offsets: Vec<glam::Vec2>,
+    lens: Vec<glam::Vec2>,
+}
+
+impl SampleTables {
+    fn of(set: &SampleSet) -> Self {
+        Self {
+            samples: set.samples.clone(),
+            offsets: set.offsets.clone(),
+            lens: set.lens.clone(),
+        }
+    }
+
+    fn same(&self, set: &SampleSet) -> bool {
+        const CHUNK: usize = 1 << 14;
+        self.offsets == set.offsets
+            && self.lens == set.lens
+            && self.samples.len() == set.samples.len()
+            && self
+                .samples
+                .par_chunks(CHUNK)
+                .zip(set.samples.par_chunks(CHUNK))
+                .all(|(a, b)| a == b)
+    }
+}
+
+impl EyeState {
+    /// No hierarchy and no buffer yet: the first frame builds and allocates them.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Gives a finished frame's visibility buffer back, for the next frame of this eye.
+    pub fn recycle(&mut self, frame: EyeFrame) {
+        self.spare = Some(frame.vis);
+    }
+
+    /// The spare buffer if it fits `set`, else a new one.
+    fn buffer_for(&mut self, set: &SampleSet) -> VisibilityBuffer {
+        match self.spare.take() {
+            Some(v) if v.spp == set.spp && v.prim.len() == set.ray_count() => v,
+            _ => VisibilityBuffer::new(set),
+        }
+    }
+}
+
+/// [`render_eye_set`] keeping what `state` holds from frame to frame ([`EyeState`]): the
+/// hierarchy is moved to `set`'s camera ([`Hierarchy::repose`]: a head that moved since the
+/// last frame) when `set` has the samples it was built for, else built; the visibility buffer
+/// is the one [`EyeState::recycle`] gave back, if it fits.
 pub fn render_eye_with(
     scene: &Scene,
     bvh: &Bvh,
     set: SampleSet,
     opts: &FrameOptions,
-    hierarchy: &mut Option<Hierarchy>,
+    state: &mut EyeState,
 ) -> Result<EyeFrame, VrError> {
     if set.spp != opts.spp {
         return Err(VrError::Invalid(format!(
@@ -264,13 +334,23 @@ pub fn render_eye_with(
     }
     let samples_ms = 0.0;
     let t = Instant::now();
-    match hierarchy {
-        Some(h) if opts.visibility != Visibility::PerRay => h.repose(&set)?,
-        _ => *hierarchy = prepare(opts.visibility, &set)?,
+    let same = state.built_for.as_ref().is_some_and(|b| b.same(&set));
+    match &mut state.hierarchy {
+        Some(h) if same && opts.visibility != Visibility::PerRay => h.repose(&set)?,
+        hierarchy => {
+            *hierarchy = prepare(opts.visibility, &set)?;
+            state.built_for = hierarchy.as_ref().map(|_| SampleTables::of(&set));
+        }
     }
     let hierarchy_ms = ms(t);
-    let mut vis = VisibilityBuffer::new(&set);
-    visibility_into(opts.visibility, bvh, &set, hierarchy.as_ref(), &mut vis)?;
+    let mut vis = state.buffer_for(&set);
+    visibility_into(
+        opts.visibility,
+        bvh,
+        &set,
+        state.hierarchy.as_ref(),
+        &mut vis,
+    )?;
     let visibility_ms = ms(t);
     let t = Instant::now();
     let shader = VrShader::new(scene, bvh, opts.shade);

@@ -208,7 +208,7 @@ fn vr_frame(
     head: &parallax_scene::CameraDesc,
 ) -> Result<DemoPiece> {
     use parallax_core::image::png::{self, ToneMapping, Tonemap};
-    use parallax_vr::frame::{FrameOptions, Visibility, render_eye_with};
+    use parallax_vr::frame::{EyeState, FrameOptions, Visibility, render_eye_with};
     use parallax_vr::presets::{Preset, eye_cameras};
     use parallax_vr::reconstruct::pattern_image;
     use parallax_vr::resolve::ShadingMode;
@@ -235,7 +235,7 @@ fn vr_frame(
     // The head turned by 5 degrees for a next frame of the left eye: its hierarchy moved, not
     // rebuilt (HVVR §5.1).
     let [l_next, _] = eye_cameras(&spec, &head.turned(5.0), None)?;
-    let mut left_hierarchy = None;
+    let mut left = EyeState::new();
     let (mut built_ms, mut moved_ms) = (0.0, 0.0);
     for (name, cam) in [
         ("vr_rift_left", l),
@@ -243,13 +243,13 @@ fn vr_frame(
         ("vr_rift_left_turned", l_next),
     ] {
         let set = parallax_vr::patterns::eye_set(cam, opts.spp, true, Some([0.0, 0.0]))?;
-        let mut own = None;
-        let hierarchy = if name == "vr_rift_right" {
+        let mut own = EyeState::new();
+        let state = if name == "vr_rift_right" {
             &mut own
         } else {
-            &mut left_hierarchy
+            &mut left
         };
-        let eye = render_eye_with(scene, bvh, set, &opts, hierarchy)?;
+        let eye = render_eye_with(scene, bvh, set, &opts, state)?;
         match name {
             "vr_rift_left" => built_ms = eye.timings.hierarchy_ms,
             "vr_rift_left_turned" => moved_ms = eye.timings.hierarchy_ms,
@@ -266,6 +266,10 @@ fn vr_frame(
         rays += eye.set.ray_count() as u64;
         shades += eye.resolved.shades;
         nonempty += eye.resolved.nonempty;
+        if name == "vr_rift_left" {
+            // The turned frame writes over this frame's visibility buffer.
+            left.recycle(eye);
+        }
     }
     let ms = t.elapsed().as_secs_f64() * 1e3;
     Ok(DemoPiece {

@@ -13,9 +13,8 @@ use parallax_bvh::Bvh;
 use parallax_core::image::png::{self, ToneMapping, Tonemap};
 use parallax_scene::animation::Animation;
 use parallax_scene::camera::{CameraModel, ModelKind};
-use parallax_vr::Hierarchy;
 use parallax_vr::frame::{
-    EyeFrame, FrameOptions, UpdateTimings, Visibility, render_eye_with, update_scene,
+    EyeFrame, EyeState, FrameOptions, UpdateTimings, Visibility, render_eye_with, update_scene,
 };
 use parallax_vr::patterns::eye_set;
 use parallax_vr::presets::{Dof, HeadsetSpec, Preset, eye_cameras};
@@ -232,8 +231,8 @@ pub fn run(a: &VrArgs, quiet: bool) -> Result<()> {
         tonemap: Tonemap::AcesFilmic,
     };
     let mut eyes: Vec<EyeFrame> = Vec::with_capacity(2);
-    // Each eye's beam-caster hierarchy, kept from frame to frame.
-    let mut hierarchies: [Option<Hierarchy>; 2] = [None, None];
+    // Each eye's beam-caster hierarchy and visibility buffer, kept from frame to frame.
+    let mut states = [EyeState::new(), EyeState::new()];
     let mut frames = Vec::new();
     for f in 0..a.frames {
         let deg = if a.frames > 1 {
@@ -242,12 +241,14 @@ pub fn run(a: &VrArgs, quiet: bool) -> Result<()> {
             0.0
         };
         let cameras = eye_cameras(&spec, &head.turned(deg), dof)?;
-        eyes.clear();
+        for (state, eye) in states.iter_mut().zip(eyes.drain(..)) {
+            state.recycle(eye);
+        }
         for (e, (name, cam)) in ["left", "right"].into_iter().zip(cameras).enumerate() {
             let t = Instant::now();
             let set = eye_set(cam, a.msaa, a.subpixel, gaze)?;
             let samples_ms = t.elapsed().as_secs_f64() * 1e3;
-            let mut eye = render_eye_with(&scene, &bvh, set, &opts, &mut hierarchies[e])?;
+            let mut eye = render_eye_with(&scene, &bvh, set, &opts, &mut states[e])?;
             eye.timings.samples_ms = samples_ms;
             let file = if a.frames > 1 {
                 format!("{name}_{f:03}.png")
