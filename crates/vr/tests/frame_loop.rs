@@ -4,30 +4,43 @@
 
 use parallax_bvh::Bvh;
 use parallax_scene::Scene;
+use parallax_scene::camera::Camera;
 use parallax_vr::frame::{EyeState, FrameOptions, Visibility, render_eye_with};
 use parallax_vr::patterns::eye_set;
 use parallax_vr::presets::{Preset, eye_cameras};
 use parallax_vr::resolve::ShadingMode;
 use parallax_vr::shade::ShadeOptions;
 
-#[test]
-fn a_frame_over_the_last_frames_buffer_equals_a_frame_from_nothing() {
+/// The atrium, its BVH and the left eye of a small rift-cv1 headset at the scene's camera and
+/// with the head turned by `turn` degrees.
+fn atrium_eyes(turn: f32) -> (Scene, Bvh, Camera, Camera) {
     let scene = Scene::load("atrium").unwrap();
     let bvh = Bvh::build(&scene.mesh);
     let head = scene.camera(None).unwrap();
     let mut spec = Preset::RiftCv1.spec();
     (spec.width, spec.height) = (40, 44);
+    let [first, _] = eye_cameras(&spec, &head, None).unwrap();
+    let [turned, _] = eye_cameras(&spec, &head.turned(turn), None).unwrap();
+    (scene, bvh, first, turned)
+}
+
+/// Four-subsample MSAA frames without shadows, by `visibility`.
+fn options(visibility: Visibility) -> FrameOptions {
+    FrameOptions {
+        spp: 4,
+        mode: ShadingMode::Msaa,
+        visibility,
+        shade: ShadeOptions { shadows: false },
+    }
+}
+
+#[test]
+fn a_frame_over_the_last_frames_buffer_equals_a_frame_from_nothing() {
     // A large turn: much of what the first frame hit, the second misses or sees elsewhere, so
     // a stale entry left in the reused buffer would show.
-    let [first, _] = eye_cameras(&spec, &head, None).unwrap();
-    let [turned, _] = eye_cameras(&spec, &head.turned(40.0), None).unwrap();
+    let (scene, bvh, first, turned) = atrium_eyes(40.0);
     for visibility in [Visibility::Beam, Visibility::BeamExact, Visibility::PerRay] {
-        let opts = FrameOptions {
-            spp: 4,
-            mode: ShadingMode::Msaa,
-            visibility,
-            shade: ShadeOptions { shadows: false },
-        };
+        let opts = options(visibility);
         let set = |cam| eye_set(cam, opts.spp, true, Some([0.0, 0.0])).unwrap();
         let mut state = EyeState::new();
         let frame0 = render_eye_with(&scene, &bvh, set(first.clone()), &opts, &mut state).unwrap();
@@ -79,19 +92,8 @@ fn a_frame_over_the_last_frames_buffer_equals_a_frame_from_nothing() {
 /// per-ray traversal. Moving the old one would cull each sample by another sample's beam.
 #[test]
 fn other_samples_of_the_same_count_take_a_new_hierarchy() {
-    let scene = Scene::load("atrium").unwrap();
-    let bvh = Bvh::build(&scene.mesh);
-    let head = scene.camera(None).unwrap();
-    let mut spec = Preset::RiftCv1.spec();
-    (spec.width, spec.height) = (40, 44);
-    let [first, _] = eye_cameras(&spec, &head, None).unwrap();
-    let [turned, _] = eye_cameras(&spec, &head.turned(10.0), None).unwrap();
-    let opts = FrameOptions {
-        spp: 4,
-        mode: ShadingMode::Msaa,
-        visibility: Visibility::BeamExact,
-        shade: ShadeOptions { shadows: false },
-    };
+    let (scene, bvh, first, turned) = atrium_eyes(10.0);
+    let opts = options(Visibility::BeamExact);
     let mut state = EyeState::new();
     let set0 = eye_set(first, opts.spp, true, Some([0.0, 0.0])).unwrap();
     let mut set1 = eye_set(turned, opts.spp, true, Some([0.0, 0.0])).unwrap();
