@@ -20,7 +20,12 @@ fn camera(kind: ModelKind, eye: Vec3, target: Vec3, w: u32, h: u32, fov: f32) ->
 }
 
 /// The models whose beams `Hierarchy::repose` moves without a rebuild.
-const MOVABLE: [ModelKind; 3] = [ModelKind::Pinhole, ModelKind::Stereo, ModelKind::Distorted];
+const MOVABLE: [ModelKind; 4] = [
+    ModelKind::Pinhole,
+    ModelKind::Stereo,
+    ModelKind::Distorted,
+    ModelKind::Fisheye,
+];
 
 /// The set of `camera` at `spp`: per-channel samples for the distorted eye (HVVR's subpixel
 /// grids), one grid otherwise.
@@ -57,7 +62,7 @@ proptest! {
     /// leave unbounded: `EVERYTHING`, still holding every ray.)
     #[test]
     fn moved_beams_hold_every_ray(
-        model in 0usize..3,
+        model in 0usize..4,
         w in 8u32..48,
         h in 8u32..40,
         spp in prop::sample::select(vec![1u32, 4, 16]),
@@ -86,8 +91,8 @@ proptest! {
 }
 
 /// The exact cast (`SetupExactness::Full`) through a moved hierarchy equals per-ray traversal
-/// of the moved camera, bit for bit, on a scene, for the pinhole, the stereo rig and the
-/// distorted eye at 1 and 16 spp (the pinholes' 16-spp sets take the sweep).
+/// of the moved camera, bit for bit, on a scene, for the pinhole, the stereo rig, the
+/// distorted eye and the fisheye at 1 and 16 spp (the pinholes' 16-spp sets take the sweep).
 #[test]
 fn cast_through_a_moved_hierarchy_equals_per_ray_traversal() {
     let scene = Scene::load("atrium").unwrap();
@@ -96,10 +101,12 @@ fn cast_through_a_moved_hierarchy_equals_per_ray_traversal() {
     let turned = desc.eye + (desc.target - desc.eye).normalize() * 0.3;
     let aside = Vec3::new(0.7, 0.2, -0.4);
     for kind in MOVABLE {
-        let (w, h) = if kind == ModelKind::Stereo {
-            (24, 32)
-        } else {
-            (48, 32)
+        // (The fisheye's 210 x 130 degrees on a film large enough for tiles of tens of
+        // degrees.)
+        let (w, h) = match kind {
+            ModelKind::Stereo => (24, 32),
+            ModelKind::Fisheye => (144, 96),
+            _ => (48, 32),
         };
         for spp in [1, 16] {
             let set0 = set_of(camera(kind, desc.eye, desc.target, w, h, 60.0), spp);

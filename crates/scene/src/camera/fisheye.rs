@@ -129,6 +129,13 @@ impl Fisheye {
         let ([x, y, z], uv, s, inside) = self.dir_lanes(film.x, film.y);
         inside.then_some((uv, s, Vec3::new(x, y, z)))
     }
+
+    /// The camera-space direction of the ray through `film` before the camera frame turns it
+    /// (the ray's direction is `frame.dir_to_world` of it, bit for bit); `None` outside the
+    /// image circle. Pose-free: a moved head turns these vectors, it does not change them.
+    pub fn camera_vector(&self, film: Vec2) -> Option<Vec3> {
+        self.camera_dir(film).map(|(.., d)| d)
+    }
 }
 
 impl CameraModel for Fisheye {

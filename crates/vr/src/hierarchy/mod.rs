@@ -159,8 +159,9 @@ pub struct Hierarchy {
     /// The camera (with its pose) the beams are for: the caster refuses another
     /// ([`Hierarchy::repose`] moves them).
     pub camera: Camera,
-    /// For the pinhole and the stereo rig: the pose-free camera-space rectangle of every
-    /// tile's rays, then of every block's (`hierarchy/pose.rs`); empty for other models.
+    /// For the models `Hierarchy::repose` moves (pinhole, stereo rig, distorted eye, fisheye):
+    /// the pose-free camera-space rectangle of every tile's rays, then of every block's
+    /// (`hierarchy/pose.rs`); empty for other models.
     pub rects: Vec<Rect>,
 }
 
@@ -468,9 +469,17 @@ impl Hierarchy {
                     pose::rect_of(set, idx).expect("a movable camera's rectangle")
                 })
                 .collect();
+            let from_rays = pose::block_rect_from_rays(&set.camera);
             let block_rects: Vec<Rect> = blocks
-                .iter()
+                .par_iter()
                 .map(|b| {
+                    let ts = &tiles[b.first_tile as usize..][..b.tile_count as usize];
+                    if from_rays {
+                        // A block's tiles are consecutive in `order`.
+                        let (first, last) = (&ts[0], &ts[ts.len() - 1]);
+                        let idx = &order[first.start as usize..(last.start + last.len) as usize];
+                        return pose::rect_of(set, idx).expect("a movable camera's rectangle");
+                    }
                     let t = &tile_rects[b.first_tile as usize..][..b.tile_count as usize];
                     t.iter().skip(1).fold(t[0], |a, r| a.union(*r))
                 })
@@ -494,8 +503,9 @@ impl Hierarchy {
 
     /// Moves the beams to the camera of `set`: the sample set the hierarchy was built for,
     /// with the camera moved (a new head pose). HVVR §5.1 computes the bounds once from the
-    /// lens parameters and only moves them per frame; so does this for the pinhole and the
-    /// stereo rig (`hierarchy/pose.rs`: per tile and block a few f64 operations, no ray). Any
+    /// lens parameters and only moves them per frame; so does this for the pinhole, the stereo
+    /// rig, the lens-distorted eye and the fisheye (`hierarchy/pose.rs`: per tile and block a
+    /// few f64 operations, no ray). Any
     /// other camera change (intrinsics, another model) or model is built anew
     /// ([`Hierarchy::build`]). Errors on a set of another size; the samples themselves must be
     /// the build's (a foveated set whose gaze moved is another set: build it anew).

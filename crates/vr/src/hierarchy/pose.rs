@@ -34,6 +34,16 @@
 //! radial gain, which is not monotone in the film position: its rectangles are the extremes
 //! over every ray of the tile (`Distorted::camera_vector`), computed once at the build.
 //!
+//! **The fisheye** (up to 210 degrees: no single `z = -1` plane holds its rays) has rays
+//! `d = fl(B u)` with a pose-free float camera-space vector `u` (`Fisheye::camera_vector`, the
+//! generators' bits). A tile's rectangle is taken in its own camera-space basis
+//! `L = [e1, e2, -c]` ([`Rect::basis`]), `c` the rays' mean direction: every `u` is the positive
+//! multiple `-q_z L (q_x / -q_z, q_y / -q_z, -1)` of `q = L^-1 u` (computed in f64 and padded by
+//! `1e-9 (1 + |x|)`, far above its `~1e-15` error; a ray more than ~87 degrees off `c` leaves
+//! the rectangle unbounded). [`rect_beam`] then runs with `B L` for `B`: the corners' cone holds
+//! every `B u`, and `|fl(B u) - B u| <= 3.1 U rb |u|`, below the pinhole's `delta`. A block's
+//! rectangle comes from its own rays (the union of its tiles' would mix bases).
+//!
 //! The origin is the eye's position, the rays' origin bit for bit. Tiles whose subsamples fall
 //! on both eyes of a stereo film (a footprint across the eyes' seam) take the beam of their
 //! rays instead (`rays_of`), and their block [`Beam::EVERYTHING`].
@@ -44,7 +54,7 @@
 
 use glam::{DMat3, DVec3, Vec2};
 use parallax_core::Aabb;
-use parallax_scene::camera::{Camera, CameraFrame, Pinhole};
+use parallax_scene::camera::{Camera, CameraFrame, Fisheye, Pinhole};
 
 use crate::SampleSet;
 use crate::beam::{Beam, MIN_DOMINANT};
@@ -60,22 +70,29 @@ pub struct Rect {
     pub x: [f32; 2],
     pub y: [f32; 2],
     pub eye: u8,
+    /// The camera-space basis of the coordinates: every ray's camera-space vector is a positive
+    /// multiple of `basis * (x, y, -1)` for some `(x, y)` in the rectangle. The identity for
+    /// the pinhole, the stereo rig and the distorted eye; a frame about the rays' mean
+    /// direction for the fisheye (module docs).
+    pub basis: DMat3,
 }
 
 /// [`Rect::eye`] of a tile with rays of both stereo eyes.
 pub const BOTH_EYES: u8 = u8::MAX;
 
 impl Rect {
-    /// The union of two rectangles of one eye ([`BOTH_EYES`] if the eyes differ).
+    /// The union of two rectangles of one eye and one basis ([`BOTH_EYES`] if the eyes or the
+    /// bases differ).
     pub fn union(self, o: Rect) -> Rect {
         Rect {
             x: [self.x[0].min(o.x[0]), self.x[1].max(o.x[1])],
             y: [self.y[0].min(o.y[0]), self.y[1].max(o.y[1])],
-            eye: if self.eye == o.eye {
+            eye: if self.eye == o.eye && self.basis == o.basis {
                 self.eye
             } else {
                 BOTH_EYES
             },
+            basis: self.basis,
         }
     }
 }
@@ -94,9 +111,16 @@ fn eyes(camera: &Camera) -> Option<(&[Pinhole], f32)> {
 /// Whether the beams of `camera`'s sets can be moved: the models whose rays are `fl(B fl(v /
 /// |v|))` from the eye with a camera-space `v = (x, y, -1)` — the pinhole, the stereo rig
 /// and the lens-distorted eye (whose `x`, `y` are not monotone in the film: its rectangles
-/// come from every ray, [`rect_of`]).
+/// come from every ray, [`rect_of`]) — and the fisheye (`fl(B u)`, its rectangles in a basis
+/// per tile and block).
 pub fn movable(camera: &Camera) -> bool {
-    eyes(camera).is_some() || matches!(camera, Camera::Distorted(_))
+    eyes(camera).is_some() || matches!(camera, Camera::Distorted(_) | Camera::Fisheye(_))
+}
+
+/// Whether a block's rectangle is taken from its rays rather than as the union of its tiles'
+/// (the fisheye: each tile has its own basis).
+pub fn block_rect_from_rays(camera: &Camera) -> bool {
+    matches!(camera, Camera::Fisheye(_))
 }
 
 /// `a` with the camera frames of `b`, if both are the same [`movable`] model.
@@ -110,6 +134,7 @@ pub fn with_frames_of(a: &Camera, b: &Camera) -> Option<Camera> {
             }
         }
         (Camera::Distorted(d), Camera::Distorted(q)) => d.pinhole.frame = q.pinhole.frame,
+        (Camera::Fisheye(f), Camera::Fisheye(q)) => f.frame = q.frame,
         _ => return None,
     }
     Some(c)
@@ -119,6 +144,7 @@ pub fn with_frames_of(a: &Camera, b: &Camera) -> Option<Camera> {
 pub fn eye_frame(camera: &Camera, eye: u8) -> Option<&CameraFrame> {
     match camera {
         Camera::Distorted(d) => (eye == 0).then_some(&d.pinhole.frame),
+        Camera::Fisheye(f) => (eye == 0).then_some(&f.frame),
         c => eyes(c)?.0.get(eye as usize).map(|p| &p.frame),
     }
 }
@@ -126,8 +152,10 @@ pub fn eye_frame(camera: &Camera, eye: u8) -> Option<&CameraFrame> {
 /// The camera-space rectangle of the rays of samples `idx` of `set` (module docs); `None`
 /// for a camera [`movable`] does not take.
 pub fn rect_of(set: &SampleSet, idx: &[u32]) -> Option<Rect> {
-    if let Camera::Distorted(c) = &set.camera {
-        return Some(distorted_rect(set, c, idx));
+    match &set.camera {
+        Camera::Distorted(c) => return Some(distorted_rect(set, c, idx)),
+        Camera::Fisheye(f) => return Some(fisheye_rect(set, f, idx)),
+        _ => {}
     }
     let (eyes, w) = eyes(&set.camera)?;
     let (mut olo, mut ohi) = (Vec2::INFINITY, Vec2::NEG_INFINITY);
@@ -157,6 +185,7 @@ pub fn rect_of(set: &SampleSet, idx: &[u32]) -> Option<Rect> {
             x: [0.0; 2],
             y: [0.0; 2],
             eye: BOTH_EYES,
+            basis: DMat3::IDENTITY,
         });
     };
     let p = &eyes[eye as usize];
@@ -170,6 +199,7 @@ pub fn rect_of(set: &SampleSet, idx: &[u32]) -> Option<Rect> {
         x: [lo.x, hi.x],
         y: [lo.y, hi.y],
         eye,
+        basis: DMat3::IDENTITY,
     })
 }
 
@@ -178,6 +208,7 @@ const UNBOUNDED: Rect = Rect {
     x: [f32::NEG_INFINITY, f32::INFINITY],
     y: [f32::NEG_INFINITY, f32::INFINITY],
     eye: 0,
+    basis: DMat3::IDENTITY,
 };
 
 /// [`rect_of`] for the lens-distorted eye: the extremes of every ray's camera-space vector
@@ -206,6 +237,73 @@ fn distorted_rect(set: &SampleSet, c: &parallax_scene::camera::Distorted, idx: &
         x: [lo.x, hi.x],
         y: [lo.y, hi.y],
         eye: 0,
+        basis: DMat3::IDENTITY,
+    }
+}
+
+/// [`rect_of`] for the fisheye: the rectangle of the rays' camera-space vectors
+/// (`Fisheye::camera_vector`) in a basis about their mean direction (module docs).
+// (A test is negated so that a NaN fails it.)
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+fn fisheye_rect(set: &SampleSet, f: &Fisheye, idx: &[u32]) -> Rect {
+    let mut us = Vec::with_capacity(idx.len() * set.offsets.len());
+    for &i in idx {
+        let s = &set.samples[i as usize];
+        for o in &set.offsets {
+            // Rays outside the image circle are invalid (never cast).
+            if let Some(u) = f.camera_vector(s.film + *o * s.footprint) {
+                if !u.is_finite() {
+                    return UNBOUNDED;
+                }
+                us.push(u.as_dvec3());
+            }
+        }
+    }
+    let c = us
+        .iter()
+        .map(|u| *u / u.length())
+        .sum::<DVec3>()
+        .normalize_or_zero();
+    if c == DVec3::ZERO {
+        // No valid ray (a point rectangle: the tile casts nothing), or no mean direction.
+        return if us.is_empty() {
+            Rect {
+                x: [0.0; 2],
+                y: [0.0; 2],
+                eye: 0,
+                basis: DMat3::IDENTITY,
+            }
+        } else {
+            UNBOUNDED
+        };
+    }
+    let e1 = c.any_orthonormal_vector();
+    let basis = DMat3::from_cols(e1, c.cross(e1), -c);
+    let inv = basis.inverse();
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for u in &us {
+        let q = inv * *u;
+        let w = -q.z;
+        if !(w > 0.05 * u.length()) {
+            return UNBOUNDED;
+        }
+        for (k, v) in [q.x / w, q.y / w].into_iter().enumerate() {
+            lo[k] = lo[k].min(v);
+            hi[k] = hi[k].max(v);
+        }
+    }
+    let pad = |v: f64| 1e-9 * (1.0 + v.abs());
+    let side = |k: usize| {
+        [
+            ((lo[k] - pad(lo[k])) as f32).next_down(),
+            ((hi[k] + pad(hi[k])) as f32).next_up(),
+        ]
+    };
+    Rect {
+        x: side(0),
+        y: side(1),
+        eye: 0,
+        basis,
     }
 }
 
@@ -220,7 +318,7 @@ pub fn rect_beam(frame: &CameraFrame, r: &Rect) -> Beam {
         frame.basis.x_axis.as_dvec3(),
         frame.basis.y_axis.as_dvec3(),
         frame.basis.z_axis.as_dvec3(),
-    );
+    ) * r.basis;
     let rows = b.transpose();
     let rb = [rows.x_axis, rows.y_axis, rows.z_axis]
         .iter()
