@@ -68,6 +68,14 @@ impl ThinLens {
         Vec3::new(d.x, d.y, 0.0)
     }
 
+    /// The camera-space direction of the ray through `film` and lens sample `lens` before the
+    /// camera frame turns it (the ray's direction is `frame.dir_to_world` of it, its origin
+    /// `position + frame.dir_to_world(lens_point(lens))`, bit for bit). Pose-free.
+    pub fn camera_vector(&self, film: Vec2, lens: Vec2) -> Vec3 {
+        let d = self.pinhole.camera_dir(film) * self.focus_distance - self.lens_point(lens);
+        d / d.length()
+    }
+
     /// The world point on the focus plane that film position `film` is focused on.
     #[inline]
     pub fn focus_point(&self, film: Vec2) -> Vec3 {

@@ -41,6 +41,7 @@ use crate::cast::lanes16::V16;
 #[cfg(target_arch = "x86_64")]
 use crate::cast::lanes512::Z16;
 use crate::cast::packet::{gen_n_film, sample_chunk_lens};
+use parallax_core::Aabb;
 use parallax_core::simd::Lanes;
 use parallax_scene::camera::Camera;
 use rayon::prelude::*;
@@ -484,7 +485,19 @@ impl Hierarchy {
                     t.iter().skip(1).fold(t[0], |a, r| a.union(*r))
                 })
                 .collect();
-            [tile_rects, block_rects].concat()
+            // A thin lens cast one lens sample at a time: per tile and lens sample the
+            // rectangle of those rays alone (the lens beams').
+            let lens_rects: Vec<Rect> = match &set.camera {
+                Camera::ThinLens(c) if lens_bundles(set) => tiles
+                    .par_iter()
+                    .flat_map_iter(|t| {
+                        let idx = &order[t.start as usize..(t.start + t.len) as usize];
+                        (0..set.spp as usize).map(move |k| pose::lens_rect(set, c, idx, k..k + 1))
+                    })
+                    .collect(),
+                _ => Vec::new(),
+            };
+            [tile_rects, block_rects, lens_rects].concat()
         } else {
             Vec::new()
         };
@@ -526,26 +539,43 @@ impl Hierarchy {
             *self = Self::build(set)?;
             return Ok(());
         }
-        let (tile_rects, block_rects) = self.rects.split_at(self.tiles.len());
+        let (tile_rects, rest) = self.rects.split_at(self.tiles.len());
+        let (block_rects, lens_rects) = rest.split_at(self.blocks.len());
+        // The thin lens's ray origins at the new pose (one per lens sample), and their box:
+        // the origin of its tiles' and blocks' beams.
+        let origins = pose::lens_origins(set);
+        let origin_box = origins
+            .as_ref()
+            .map(|o| o.iter().fold(Aabb::EMPTY, |b, p| b.grow(*p)));
+        let beam_of = |r: &Rect| {
+            pose::eye_frame(&set.camera, r.eye).map(|f| match origin_box {
+                Some(ob) => pose::rect_beam_from(f, r, ob),
+                None => pose::rect_beam(f, r),
+            })
+        };
         let order = &self.order;
         self.tiles
             .par_iter_mut()
             .zip(tile_rects)
             .for_each(|(t, r)| {
-                t.beam = match pose::eye_frame(&set.camera, r.eye) {
-                    Some(f) => pose::rect_beam(f, r),
+                t.beam = beam_of(r).unwrap_or_else(|| {
                     // A tile with rays of both eyes: the beam of its rays.
-                    None => {
-                        let idx = &order[t.start as usize..(t.start + t.len) as usize];
-                        rays_of(set, idx).0.finish().unwrap_or(Beam::EVERYTHING)
-                    }
-                };
+                    let idx = &order[t.start as usize..(t.start + t.len) as usize];
+                    rays_of(set, idx).0.finish().unwrap_or(Beam::EVERYTHING)
+                });
             });
         for (b, r) in self.blocks.iter_mut().zip(block_rects) {
-            b.beam = match pose::eye_frame(&set.camera, r.eye) {
-                Some(f) => pose::rect_beam(f, r),
-                None => Beam::EVERYTHING,
-            };
+            b.beam = beam_of(r).unwrap_or(Beam::EVERYTHING);
+        }
+        if let (Some(origins), Some(frame)) = (&origins, pose::eye_frame(&set.camera, 0)) {
+            let spp = self.spp as usize;
+            self.lens_beams
+                .par_iter_mut()
+                .zip(lens_rects)
+                .enumerate()
+                .for_each(|(j, (beam, r))| {
+                    *beam = pose::rect_beam_from(frame, r, Aabb::EMPTY.grow(origins[j % spp]));
+                });
         }
         self.camera = set.camera.clone();
         Ok(())

@@ -44,7 +44,16 @@
 //! every `B u`, and `|fl(B u) - B u| <= 3.1 U rb |u|`, below the pinhole's `delta`. A block's
 //! rectangle comes from its own rays (the union of its tiles' would mix bases).
 //!
-//! The origin is the eye's position, the rays' origin bit for bit. Tiles whose subsamples fall
+//! **The thin lens** has the same form per lens sample `k`: the ray's direction is `fl(B u)`
+//! with the pose-free `u = fl(d / |d|)`, `d` from the focus point to the lens point
+//! (`ThinLens::camera_vector`), and its origin `o_k = fl(p + fl(B l_k))` for the camera-space
+//! lens point `l_k`. Its rectangles are taken as the fisheye's (a basis per rectangle): one per
+//! tile and block over every lens sample, and one per tile and lens sample for the caster's
+//! lens beams ([`crate::Hierarchy::lens_beams`]). Moving them recomputes each `o_k` by the
+//! generator's own operations (the rays' origins bit for bit): a lens beam's origin is its
+//! `o_k`, a tile's or block's the box of every `o_k`.
+//!
+//! The origin is otherwise the eye's position, the rays' origin bit for bit. Tiles whose subsamples fall
 //! on both eyes of a stereo film (a footprint across the eyes' seam) take the beam of their
 //! rays instead (`rays_of`), and their block [`Beam::EVERYTHING`].
 //!
@@ -52,9 +61,9 @@
 //! no tolerance), and the cast with a moved hierarchy equals the per-ray trace of the moved
 //! camera.
 
-use glam::{DMat3, DVec3, Vec2};
+use glam::{DMat3, DVec3, Vec2, Vec3};
 use parallax_core::Aabb;
-use parallax_scene::camera::{Camera, CameraFrame, Fisheye, Pinhole};
+use parallax_scene::camera::{Camera, CameraFrame, Fisheye, Pinhole, ThinLens};
 
 use crate::SampleSet;
 use crate::beam::{Beam, MIN_DOMINANT};
@@ -114,13 +123,35 @@ fn eyes(camera: &Camera) -> Option<(&[Pinhole], f32)> {
 /// come from every ray, [`rect_of`]) — and the fisheye (`fl(B u)`, its rectangles in a basis
 /// per tile and block).
 pub fn movable(camera: &Camera) -> bool {
-    eyes(camera).is_some() || matches!(camera, Camera::Distorted(_) | Camera::Fisheye(_))
+    eyes(camera).is_some()
+        || matches!(
+            camera,
+            Camera::Distorted(_) | Camera::Fisheye(_) | Camera::ThinLens(_)
+        )
 }
 
 /// Whether a block's rectangle is taken from its rays rather than as the union of its tiles'
-/// (the fisheye: each tile has its own basis).
+/// (the fisheye and the thin lens: each tile has its own basis).
 pub fn block_rect_from_rays(camera: &Camera) -> bool {
-    matches!(camera, Camera::Fisheye(_))
+    matches!(camera, Camera::Fisheye(_) | Camera::ThinLens(_))
+}
+
+/// The rays' origins of a [`movable`] camera at its pose: per lens sample of `set` for the
+/// thin lens (`fl(p + fl(B l_k))`, the generators' operations), else the one eye position
+/// (`None` for a stereo rig: its tiles take their eye's position).
+pub fn lens_origins(set: &SampleSet) -> Option<Vec<Vec3>> {
+    match &set.camera {
+        Camera::ThinLens(c) => {
+            let f = &c.pinhole.frame;
+            Some(
+                set.lens
+                    .iter()
+                    .map(|&l| f.position + f.dir_to_world(c.lens_point(l)))
+                    .collect(),
+            )
+        }
+        _ => None,
+    }
 }
 
 /// `a` with the camera frames of `b`, if both are the same [`movable`] model.
@@ -135,6 +166,7 @@ pub fn with_frames_of(a: &Camera, b: &Camera) -> Option<Camera> {
         }
         (Camera::Distorted(d), Camera::Distorted(q)) => d.pinhole.frame = q.pinhole.frame,
         (Camera::Fisheye(f), Camera::Fisheye(q)) => f.frame = q.frame,
+        (Camera::ThinLens(t), Camera::ThinLens(q)) => t.pinhole.frame = q.pinhole.frame,
         _ => return None,
     }
     Some(c)
@@ -145,6 +177,7 @@ pub fn eye_frame(camera: &Camera, eye: u8) -> Option<&CameraFrame> {
     match camera {
         Camera::Distorted(d) => (eye == 0).then_some(&d.pinhole.frame),
         Camera::Fisheye(f) => (eye == 0).then_some(&f.frame),
+        Camera::ThinLens(t) => (eye == 0).then_some(&t.pinhole.frame),
         c => eyes(c)?.0.get(eye as usize).map(|p| &p.frame),
     }
 }
@@ -155,6 +188,7 @@ pub fn rect_of(set: &SampleSet, idx: &[u32]) -> Option<Rect> {
     match &set.camera {
         Camera::Distorted(c) => return Some(distorted_rect(set, c, idx)),
         Camera::Fisheye(f) => return Some(fisheye_rect(set, f, idx)),
+        Camera::ThinLens(c) => return Some(lens_rect(set, c, idx, 0..set.lens.len())),
         _ => {}
     }
     let (eyes, w) = eyes(&set.camera)?;
@@ -243,8 +277,6 @@ fn distorted_rect(set: &SampleSet, c: &parallax_scene::camera::Distorted, idx: &
 
 /// [`rect_of`] for the fisheye: the rectangle of the rays' camera-space vectors
 /// (`Fisheye::camera_vector`) in a basis about their mean direction (module docs).
-// (A test is negated so that a NaN fails it.)
-#[allow(clippy::neg_cmp_op_on_partial_ord)]
 fn fisheye_rect(set: &SampleSet, f: &Fisheye, idx: &[u32]) -> Rect {
     let mut us = Vec::with_capacity(idx.len() * set.offsets.len());
     for &i in idx {
@@ -252,13 +284,37 @@ fn fisheye_rect(set: &SampleSet, f: &Fisheye, idx: &[u32]) -> Rect {
         for o in &set.offsets {
             // Rays outside the image circle are invalid (never cast).
             if let Some(u) = f.camera_vector(s.film + *o * s.footprint) {
-                if !u.is_finite() {
-                    return UNBOUNDED;
-                }
-                us.push(u.as_dvec3());
+                us.push(u);
             }
         }
     }
+    vectors_rect(&us)
+}
+
+/// [`rect_of`] for the thin lens, over the subsamples `ks` of the samples `idx` (each with its
+/// own lens sample): the rectangle of the rays' camera-space directions
+/// (`ThinLens::camera_vector`) in a basis about their mean (module docs).
+pub fn lens_rect(set: &SampleSet, c: &ThinLens, idx: &[u32], ks: std::ops::Range<usize>) -> Rect {
+    let mut us = Vec::with_capacity(idx.len() * ks.len());
+    for &i in idx {
+        let s = &set.samples[i as usize];
+        for k in ks.clone() {
+            us.push(c.camera_vector(s.film + set.offsets[k] * s.footprint, set.lens[k]));
+        }
+    }
+    vectors_rect(&us)
+}
+
+/// The rectangle of the camera-space vectors `us` in a basis about their mean direction (module
+/// docs, the fisheye); unbounded for a non-finite vector or one more than ~87 degrees off the
+/// mean, a point rectangle for none.
+// (A test is negated so that a NaN fails it.)
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+fn vectors_rect(us: &[Vec3]) -> Rect {
+    if !us.iter().all(|u| u.is_finite()) {
+        return UNBOUNDED;
+    }
+    let us: Vec<DVec3> = us.iter().map(|u| u.as_dvec3()).collect();
     let c = us
         .iter()
         .map(|u| *u / u.length())
@@ -307,10 +363,16 @@ fn fisheye_rect(set: &SampleSet, f: &Fisheye, idx: &[u32]) -> Rect {
     }
 }
 
-/// The world beam of the rays of rectangle `r` through `frame` (module docs).
+/// The world beam of the rays of rectangle `r` through `frame` from the eye's position
+/// (module docs).
+pub fn rect_beam(frame: &CameraFrame, r: &Rect) -> Beam {
+    rect_beam_from(frame, r, Aabb::EMPTY.grow(frame.position))
+}
+
+/// [`rect_beam`] for rays whose origins lie in `origin` (a thin lens's lens points).
 // (The tests are negated so that a NaN fails them.)
 #[allow(clippy::neg_cmp_op_on_partial_ord)]
-pub fn rect_beam(frame: &CameraFrame, r: &Rect) -> Beam {
+pub fn rect_beam_from(frame: &CameraFrame, r: &Rect, origin: Aabb) -> Beam {
     if r.eye == BOTH_EYES || !(r.x.iter().chain(&r.y).all(|v| v.is_finite())) {
         return Beam::EVERYTHING;
     }
@@ -376,7 +438,7 @@ pub fn rect_beam(frame: &CameraFrame, r: &Rect) -> Beam {
             sign: s as f32,
             u: range(bx),
             v: range(cx),
-            origin: Aabb::EMPTY.grow(frame.position),
+            origin,
             everything: false,
         };
     }
