@@ -18,8 +18,8 @@
 //! The beam caster's hierarchy is built once per sample set outside the timed region (HVVR
 //! builds it once per sample pattern) for the head of the frame before, turned by a degree,
 //! and each timed run moves it to this frame's head first ([`crate::Hierarchy::repose`], every
-//! scheme's camera model; the move is part of the frame, as in Table 6); `ms_traversal` = block
-//! + tile cull and `ms_intersect` = sample test, each as CPU time divided by the thread count (the stages run interleaved over
+//! scheme's camera model; the move is part of the frame, as in Table 6); `ms_traversal` = the
+//! block and tile culls and `ms_intersect` = sample test, each as CPU time divided by the thread count (the stages run interleaved over
 //! blocks), and `mrays_per_s` is from the wall time of the whole cast into a visibility buffer
 //! allocated once and reused by every method and repeat (per-ray and beam alike: paging in a
 //! fresh buffer inside the timed region would be timed too, `docs/notes/vr.md`).
