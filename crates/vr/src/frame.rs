@@ -301,9 +301,12 @@ impl EyeState {
         Self::default()
     }
 
-    /// Gives a finished frame's visibility buffer back, for the next frame of this eye.
-    pub fn recycle(&mut self, frame: EyeFrame) {
+    /// Gives a finished frame's visibility buffer back, for the next frame of this eye, and
+    /// returns its sample set: the next frame's set is this one with the moved camera (HVVR
+    /// computes the sample pattern once), not a new pattern computed again.
+    pub fn recycle(&mut self, frame: EyeFrame) -> SampleSet {
         self.spare = Some(frame.vis);
+        frame.set
     }
 
     /// The spare buffer if it fits `set`, else a new one.

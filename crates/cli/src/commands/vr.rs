@@ -13,6 +13,7 @@ use parallax_bvh::Bvh;
 use parallax_core::image::png::{self, ToneMapping, Tonemap};
 use parallax_scene::animation::Animation;
 use parallax_scene::camera::{CameraModel, ModelKind};
+use parallax_vr::SampleSet;
 use parallax_vr::frame::{
     EyeFrame, EyeState, FrameOptions, UpdateTimings, Visibility, render_eye_with, update_scene,
 };
@@ -241,12 +242,21 @@ pub fn run(a: &VrArgs, quiet: bool) -> Result<()> {
             0.0
         };
         let cameras = eye_cameras(&spec, &head.turned(deg), dof)?;
-        for (state, eye) in states.iter_mut().zip(eyes.drain(..)) {
-            state.recycle(eye);
+        // The last frame's sample sets, given the moved cameras below (the pattern depends on
+        // the intrinsics, which a head turn keeps).
+        let mut last: [Option<SampleSet>; 2] = [None, None];
+        for ((state, eye), l) in states.iter_mut().zip(eyes.drain(..)).zip(&mut last) {
+            *l = Some(state.recycle(eye));
         }
         for (e, (name, cam)) in ["left", "right"].into_iter().zip(cameras).enumerate() {
             let t = Instant::now();
-            let set = eye_set(cam, a.msaa, a.subpixel, gaze)?;
+            let set = match last[e].take() {
+                Some(mut set) => {
+                    set.camera = cam;
+                    set
+                }
+                None => eye_set(cam, a.msaa, a.subpixel, gaze)?,
+            };
             let samples_ms = t.elapsed().as_secs_f64() * 1e3;
             let mut eye = render_eye_with(&scene, &bvh, set, &opts, &mut states[e])?;
             eye.timings.samples_ms = samples_ms;
