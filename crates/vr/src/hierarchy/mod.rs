@@ -160,10 +160,54 @@ pub struct Hierarchy {
     /// The camera (with its pose) the beams are for: the caster refuses another
     /// ([`Hierarchy::repose`] moves them).
     pub camera: Camera,
-    /// For the models `Hierarchy::repose` moves (pinhole, stereo rig, distorted eye, fisheye):
-    /// the pose-free camera-space rectangle of every tile's rays, then of every block's
-    /// (`hierarchy/pose.rs`); empty for other models.
+    /// For the models `Hierarchy::repose` moves (pinhole, stereo rig, distorted eye, fisheye,
+    /// thin lens): the pose-free camera-space rectangle of every tile's rays, then of every
+    /// block's, then for a thin lens of every tile's per lens sample (`hierarchy/pose.rs`).
+    /// Computed on the first move; empty until then and for other models.
     pub rects: Vec<Rect>,
+}
+
+/// The pose-free rectangles of a [`pose::movable`] camera's set (`hierarchy/pose.rs`): every
+/// tile's, then every block's, then for a thin lens cast one lens sample at a time every
+/// tile's per lens sample ([`Hierarchy::rects`]).
+fn pose_rects(set: &SampleSet, order: &[u32], tiles: &[Tile], blocks: &[Block]) -> Vec<Rect> {
+    debug_assert!(pose::movable(&set.camera));
+    let tile_rects: Vec<Rect> = tiles
+        .par_iter()
+        .map(|t| {
+            let idx = &order[t.start as usize..(t.start + t.len) as usize];
+            // (Never `None`: `repose` calls this for a movable camera only.)
+            pose::rect_of(set, idx).expect("a movable camera's rectangle")
+        })
+        .collect();
+    let from_rays = pose::block_rect_from_rays(&set.camera);
+    let block_rects: Vec<Rect> = blocks
+        .par_iter()
+        .map(|b| {
+            let ts = &tiles[b.first_tile as usize..][..b.tile_count as usize];
+            if from_rays {
+                // A block's tiles are consecutive in `order`.
+                let (first, last) = (&ts[0], &ts[ts.len() - 1]);
+                let idx = &order[first.start as usize..(last.start + last.len) as usize];
+                return pose::rect_of(set, idx).expect("a movable camera's rectangle");
+            }
+            let t = &tile_rects[b.first_tile as usize..][..b.tile_count as usize];
+            t.iter().skip(1).fold(t[0], |a, r| a.union(*r))
+        })
+        .collect();
+    // A thin lens cast one lens sample at a time: per tile and lens sample the
+    // rectangle of those rays alone (the lens beams').
+    let lens_rects: Vec<Rect> = match &set.camera {
+        Camera::ThinLens(c) if lens_bundles(set) => tiles
+            .par_iter()
+            .flat_map_iter(|t| {
+                let idx = &order[t.start as usize..(t.start + t.len) as usize];
+                (0..set.spp as usize).map(move |k| pose::lens_rect(set, c, idx, k..k + 1))
+            })
+            .collect(),
+        _ => Vec::new(),
+    };
+    [tile_rects, block_rects, lens_rects].concat()
 }
 
 /// The view (stereo eye, cube face) a film position belongs to.
@@ -461,46 +505,6 @@ impl Hierarchy {
         } else {
             Default::default()
         };
-        let rects = if pose::movable(&set.camera) {
-            let tile_rects: Vec<Rect> = tiles
-                .par_iter()
-                .map(|t| {
-                    let idx = &order[t.start as usize..(t.start + t.len) as usize];
-                    // (Never `None`: a movable camera and finite samples, checked above.)
-                    pose::rect_of(set, idx).expect("a movable camera's rectangle")
-                })
-                .collect();
-            let from_rays = pose::block_rect_from_rays(&set.camera);
-            let block_rects: Vec<Rect> = blocks
-                .par_iter()
-                .map(|b| {
-                    let ts = &tiles[b.first_tile as usize..][..b.tile_count as usize];
-                    if from_rays {
-                        // A block's tiles are consecutive in `order`.
-                        let (first, last) = (&ts[0], &ts[ts.len() - 1]);
-                        let idx = &order[first.start as usize..(last.start + last.len) as usize];
-                        return pose::rect_of(set, idx).expect("a movable camera's rectangle");
-                    }
-                    let t = &tile_rects[b.first_tile as usize..][..b.tile_count as usize];
-                    t.iter().skip(1).fold(t[0], |a, r| a.union(*r))
-                })
-                .collect();
-            // A thin lens cast one lens sample at a time: per tile and lens sample the
-            // rectangle of those rays alone (the lens beams').
-            let lens_rects: Vec<Rect> = match &set.camera {
-                Camera::ThinLens(c) if lens_bundles(set) => tiles
-                    .par_iter()
-                    .flat_map_iter(|t| {
-                        let idx = &order[t.start as usize..(t.start + t.len) as usize];
-                        (0..set.spp as usize).map(move |k| pose::lens_rect(set, c, idx, k..k + 1))
-                    })
-                    .collect(),
-                _ => Vec::new(),
-            };
-            [tile_rects, block_rects, lens_rects].concat()
-        } else {
-            Vec::new()
-        };
         Ok(Hierarchy {
             lens_beams,
             film,
@@ -510,7 +514,7 @@ impl Hierarchy {
             sample_count: n,
             spp: set.spp,
             camera: set.camera.clone(),
-            rects,
+            rects: Vec::new(),
         })
     }
 
@@ -535,9 +539,14 @@ impl Hierarchy {
             return Ok(());
         }
         let moved = pose::with_frames_of(&self.camera, &set.camera);
-        if self.rects.is_empty() || moved.as_ref() != Some(&set.camera) {
+        if moved.as_ref() != Some(&set.camera) {
             *self = Self::build(set)?;
             return Ok(());
+        }
+        if self.rects.is_empty() {
+            // On the first move (a hierarchy never moved does not pay for them): from `set`,
+            // whose samples and intrinsics are the build's.
+            self.rects = pose_rects(set, &self.order, &self.tiles, &self.blocks);
         }
         let (tile_rects, rest) = self.rects.split_at(self.tiles.len());
         let (block_rects, lens_rects) = rest.split_at(self.blocks.len());

@@ -120,8 +120,8 @@ fn eyes(camera: &Camera) -> Option<(&[Pinhole], f32)> {
 /// Whether the beams of `camera`'s sets can be moved: the models whose rays are `fl(B fl(v /
 /// |v|))` from the eye with a camera-space `v = (x, y, -1)` — the pinhole, the stereo rig
 /// and the lens-distorted eye (whose `x`, `y` are not monotone in the film: its rectangles
-/// come from every ray, [`rect_of`]) — and the fisheye (`fl(B u)`, its rectangles in a basis
-/// per tile and block).
+/// come from every ray, [`rect_of`]) — and the fisheye and the thin lens (`fl(B u)`, their
+/// rectangles in a basis per rectangle).
 pub fn movable(camera: &Camera) -> bool {
     eyes(camera).is_some()
         || matches!(
