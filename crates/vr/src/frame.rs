@@ -264,6 +264,9 @@ pub struct EyeState {
     hierarchy: Option<Hierarchy>,
     built_for: Option<SampleTables>,
     spare: Option<VisibilityBuffer>,
+    /// Frames follow: a build also takes what the moves need ([`Hierarchy::prepare_moves`]),
+    /// so that each later frame's hierarchy time is the move alone.
+    moving: bool,
 }
 
 /// A set's samples and subsample tables, without its camera.
@@ -299,6 +302,15 @@ impl EyeState {
     /// No hierarchy and no buffer yet: the first frame builds and allocates them.
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// [`EyeState::new`] for a loop whose head will move: each build also takes what the
+    /// moves need ([`Hierarchy::prepare_moves`], timed with the build).
+    pub fn moving() -> Self {
+        Self {
+            moving: true,
+            ..Self::default()
+        }
     }
 
     /// Gives a finished frame's visibility buffer back, for the next frame of this eye, and
@@ -342,6 +354,9 @@ pub fn render_eye_with(
         Some(h) if same && opts.visibility != Visibility::PerRay => h.repose(&set)?,
         hierarchy => {
             *hierarchy = prepare(opts.visibility, &set)?;
+            if let Some(h) = hierarchy.as_mut().filter(|_| state.moving) {
+                h.prepare_moves(&set);
+            }
             state.built_for = hierarchy.as_ref().map(|_| SampleTables::of(&set));
         }
     }

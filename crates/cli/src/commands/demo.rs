@@ -235,7 +235,7 @@ fn vr_frame(
     // The head turned by 5 degrees for a next frame of the left eye: its hierarchy moved, not
     // rebuilt (HVVR §5.1).
     let [l_next, _] = eye_cameras(&spec, &head.turned(5.0), None)?;
-    let mut left = EyeState::new();
+    let mut left = EyeState::moving();
     let (mut built_ms, mut moved_ms) = (0.0, 0.0);
     for (name, cam) in [
         ("vr_rift_left", l),

@@ -233,7 +233,11 @@ pub fn run(a: &VrArgs, quiet: bool) -> Result<()> {
     };
     let mut eyes: Vec<EyeFrame> = Vec::with_capacity(2);
     // Each eye's beam-caster hierarchy and visibility buffer, kept from frame to frame.
-    let mut states = [EyeState::new(), EyeState::new()];
+    let mut states = if a.frames > 1 {
+        [EyeState::moving(), EyeState::moving()]
+    } else {
+        [EyeState::new(), EyeState::new()]
+    };
     let mut frames = Vec::new();
     for f in 0..a.frames {
         let deg = if a.frames > 1 {

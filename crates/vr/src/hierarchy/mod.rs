@@ -171,12 +171,11 @@ pub struct Hierarchy {
 /// tile's, then every block's, then for a thin lens cast one lens sample at a time every
 /// tile's per lens sample ([`Hierarchy::rects`]).
 fn pose_rects(set: &SampleSet, order: &[u32], tiles: &[Tile], blocks: &[Block]) -> Vec<Rect> {
-    debug_assert!(pose::movable(&set.camera));
     let tile_rects: Vec<Rect> = tiles
         .par_iter()
         .map(|t| {
             let idx = &order[t.start as usize..(t.start + t.len) as usize];
-            // (Never `None`: `repose` calls this for a movable camera only.)
+            // (Never `None`: called for a movable camera only.)
             pose::rect_of(set, idx).expect("a movable camera's rectangle")
         })
         .collect();
@@ -518,6 +517,20 @@ impl Hierarchy {
         })
     }
 
+    /// Takes the pose-free rectangles ([`Hierarchy::rects`]) now, for the hierarchy's own set
+    /// `set` (any pose), if its camera moves and they are not taken yet: a frame loop calls it
+    /// after the build, so that its moves cost only the move. [`Hierarchy::repose`] takes them
+    /// itself on the first move otherwise; a hierarchy never moved never pays for them.
+    pub fn prepare_moves(&mut self, set: &SampleSet) {
+        if self.rects.is_empty()
+            && pose::movable(&set.camera)
+            && set.samples.len() == self.sample_count
+            && set.spp == self.spp
+        {
+            self.rects = pose_rects(set, &self.order, &self.tiles, &self.blocks);
+        }
+    }
+
     /// Moves the beams to the camera of `set`: the sample set the hierarchy was built for,
     /// with the camera moved (a new head pose). HVVR §5.1 computes the bounds once from the
     /// lens parameters and only moves them per frame; so does this for the pinhole, the stereo
@@ -543,11 +556,9 @@ impl Hierarchy {
             *self = Self::build(set)?;
             return Ok(());
         }
-        if self.rects.is_empty() {
-            // On the first move (a hierarchy never moved does not pay for them): from `set`,
-            // whose samples and intrinsics are the build's.
-            self.rects = pose_rects(set, &self.order, &self.tiles, &self.blocks);
-        }
+        // On the first move unless taken before ([`Hierarchy::prepare_moves`]): from `set`,
+        // whose samples and intrinsics are the build's.
+        self.prepare_moves(set);
         let (tile_rects, rest) = self.rects.split_at(self.tiles.len());
         let (block_rects, lens_rects) = rest.split_at(self.blocks.len());
         // The thin lens's ray origins at the new pose (one per lens sample), and their box:
