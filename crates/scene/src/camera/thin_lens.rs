@@ -72,8 +72,19 @@ impl ThinLens {
     /// camera frame turns it (the ray's direction is `frame.dir_to_world` of it, its origin
     /// `position + frame.dir_to_world(lens_point(lens))`, bit for bit). Pose-free.
     pub fn camera_vector(&self, film: Vec2, lens: Vec2) -> Vec3 {
-        let d = self.pinhole.camera_dir(film) * self.focus_distance - self.lens_point(lens);
-        d / d.length()
+        let (_, d, len) = self.lens_ray(film, lens);
+        d / len
+    }
+
+    /// The camera-space lens point, the direction from it to the focus point and that
+    /// direction's length: the one computation of [`Self::camera_vector`] and the rays.
+    #[inline]
+    fn lens_ray(&self, film: Vec2, lens: Vec2) -> (Vec3, Vec3, f32) {
+        // The focus point lies at depth `focus` on the lens-centre ray (camera_dir has
+        // z = -1), the lens point on the z = 0 plane.
+        let p_lens = self.lens_point(lens);
+        let d = self.pinhole.camera_dir(film) * self.focus_distance - p_lens;
+        (p_lens, d, d.length())
     }
 
     /// The world point on the focus plane that film position `film` is focused on.
@@ -113,12 +124,7 @@ impl CameraModel for ThinLens {
 
     fn generate_ray(&self, film: Vec2, lens: Vec2, _channel: usize) -> Option<CameraRay> {
         let frame = &self.pinhole.frame;
-        // Camera space: the focus point lies at depth `focus` on the lens-centre ray
-        // (camera_dir has z = -1), the lens point on the z = 0 plane.
-        let p_focus = self.pinhole.camera_dir(film) * self.focus_distance;
-        let p_lens = self.lens_point(lens);
-        let d = p_focus - p_lens;
-        let len = d.length();
+        let (p_lens, d, len) = self.lens_ray(film, lens);
         let dir = frame.dir_to_world(d / len);
         let (dd_dx, dd_dy) = self.pinhole.film_dir_derivatives();
         let k = self.focus_distance;
