@@ -364,3 +364,77 @@ fn packet_box_equals_the_scalar_form() {
         "{region} {other} {none}"
     );
 }
+
+/// `FilmFrame::dir_rows` (the sweep's direction bounds of sixteen packets from their boxes)
+/// holds every lane's float ray, as the per-ray generator makes it, on both eyes of a stereo
+/// rig and on pinholes of narrow and wide fields of view in random poses: random packets from a
+/// point to several pixels inside the eye's film rectangle, their lanes at random points of
+/// the box and at its corners.
+#[test]
+fn direction_bounds_hold_every_float_ray() {
+    use parallax_scene::camera::CameraModel;
+    let mut rng = Rng(23);
+    let (mut packets, mut points) = (0u64, 0u64);
+    for case in 0..12 {
+        let kind = if case % 3 == 0 {
+            ModelKind::Stereo
+        } else {
+            ModelKind::Pinhole
+        };
+        let mut r3 = || Vec3::new(rng.next(), rng.next(), rng.next()) * 20.0 - 10.0;
+        let (eye, target) = (r3(), r3());
+        let fov = [20.0, 60.0, 110.0, 150.0][case % 4];
+        let desc = CameraDesc::new(eye, target, Vec3::Y, fov);
+        let (w, h) = (64, 48);
+        let cam = Camera::new(kind, &desc, w, h, &CameraOptions::default()).unwrap();
+        let set = SampleSet::grid(cam, 16);
+        let eyes: Vec<(f32, f32, Vec3)> = match &set.camera {
+            Camera::Stereo(rig) => {
+                let ew = rig.eye_width() as f32;
+                (0..2)
+                    .map(|e| (e as f32 * ew, ew, rig.eyes[e].frame.position))
+                    .collect()
+            }
+            Camera::Pinhole(p) => vec![(0.0, p.width as f32, p.frame.position)],
+            _ => unreachable!(),
+        };
+        for (x0, ew, origin) in eyes {
+            let fr = FilmFrame::of(&set, origin, x0 + 0.5).unwrap();
+            for _ in 0..200 {
+                // A packet: a film box inside the eye's rectangle, its lanes.
+                let size = [0.0, 1e-3, 1.0, 4.0][(rng.next() * 4.0) as usize];
+                let fx0 = x0 + rng.next() * (ew - size);
+                let fy0 = rng.next() * (h as f32 - size);
+                let (fx1, fy1) = (fx0 + size, fy0 + size);
+                assert!(fr.in_region(fx0, fx1, fy0, fy1));
+                let [xc, yc, rx, ry, _, _] =
+                    PacketBox::new(&fr, fx0, fx1, fy0, fy1).unwrap().scalars();
+                // (One lane: the same float operations as each lane of sixteen.)
+                let (lo, hi) = fr.dir_rows::<f32>([xc, yc, rx, ry]);
+                let mut pts = vec![(fx0, fy0), (fx1, fy1), (fx0, fy1), (fx1, fy0)];
+                for _ in 0..12 {
+                    pts.push((fx0 + rng.next() * size, fy0 + rng.next() * size));
+                }
+                for (fx, fy) in pts {
+                    let r = set
+                        .camera
+                        .generate_ray(Vec2::new(fx, fy), Vec2::ZERO, 0)
+                        .unwrap()
+                        .ray;
+                    for a in 0..3 {
+                        assert!(
+                            lo[a] <= r.dir[a] && r.dir[a] <= hi[a],
+                            "case {case} axis {a}: {} not in [{}, {}] at ({fx}, {fy})",
+                            r.dir[a],
+                            lo[a],
+                            hi[a]
+                        );
+                    }
+                    points += 1;
+                }
+                packets += 1;
+            }
+        }
+    }
+    assert!(points > 1_000, "{points} rays in {packets} packets");
+}

@@ -92,6 +92,7 @@ use glam::{Mat3, Vec3, Vec4};
 use parallax_scene::camera::{Camera, Pinhole};
 
 use crate::SampleSet;
+use parallax_core::simd::Lanes;
 
 /// Unit roundoff of f32 (`2^-24`), the `U` of the bound above (the same constant as the
 /// watertight set-up's in `tri.rs`).
@@ -131,6 +132,9 @@ pub struct FilmFrame {
     sv: Vec4,
     tv: Vec4,
     ev: Vec4,
+    /// The float ray's distance `Delta` from `B v* / |v*|` per component (module docs, step
+    /// 1) for every film position of the region (`+inf` without a region).
+    delta: f32,
 }
 
 impl FilmFrame {
@@ -182,6 +186,7 @@ impl FilmFrame {
             sv: Vec4::new(p.shift.x, p.shift.x, p.shift.y, p.shift.y),
             tv: Vec4::new(tx, tx, ty, ty),
             ev: Vec4::ZERO,
+            delta: f32::INFINITY,
         };
         // The rectangle's worst case (module docs, "Per-frame factors"): `e_x`, `e_y` at
         // `|f| = w`, `h`; `|xc| + rx` bounded by the largest `|x|` over the rectangle `m` as
@@ -196,6 +201,7 @@ impl FilmFrame {
         if [ex, ey, ka, kb, ax, ay].iter().all(|x| x.is_finite()) {
             (fr.ex, fr.ey, fr.ka, fr.kb, fr.region) = (ex, ey, ka, kb, true);
             fr.ev = Vec4::new(ex, ey, ex, ey);
+            fr.delta = fr.rb * (13.2 * U + 6.94 * (ex + ey)) * 1.01;
         }
         Some(fr)
     }
@@ -262,6 +268,67 @@ impl FilmFrame {
         }
     }
 
+    /// Whether a packet whose lanes' float film positions lie in `[fx0, fx1] x [fy0, fy1]`
+    /// (before the eye's x offset) is inside the eye and its film rectangle, where the
+    /// frame's factors and `Delta` hold (module docs, "Per-frame factors").
+    #[inline(always)]
+    pub fn in_region(&self, fx0: f32, fx1: f32, fy0: f32, fy1: f32) -> bool {
+        // The stereo eye test of the ray generation: x in [0, w) left, [w, 2w] right.
+        let inside = if self.x0 == 0.0 {
+            fx0 >= self.fx_lo && fx1 < self.fx_hi
+        } else {
+            fx0 >= self.fx_lo && fx1 <= self.fx_hi
+        };
+        let (gx0, gx1) = if self.x0 == 0.0 {
+            (fx0, fx1)
+        } else {
+            (fx0 - self.x0, fx1 - self.x0)
+        };
+        self.region
+            && inside
+            && fx0 <= fx1
+            && fy0 <= fy1
+            && gx0 >= 0.0
+            && gx1 <= self.w
+            && fy0 >= 0.0
+            && fy1 <= self.h
+    }
+
+    /// Bounds `(lo, hi)` per world axis of the float ray directions of every lane of sixteen
+    /// packets inside the region ([`Self::in_region`]), from their camera boxes in the lanes
+    /// of `xc, yc, rx, ry` (rows of [`PacketBox::scalars`]). Over a box, `B v` is affine (its
+    /// range from the centre and radius) and `|v|` lies between the box's nearest and
+    /// farthest point's length, so `B v / |v|` lies in a box per axis; the float ray is
+    /// within `Delta` of it (module docs, step 1). Widened by the rounding of these
+    /// operations (8 U of the magnitudes covers the three-term centre, the two-term radius,
+    /// the two sums and the products with `1 / |v|`).
+    #[inline(always)]
+    pub fn dir_rows<L: Lanes>(&self, [xc, yc, rx, ry]: [L; 4]) -> ([L; 3], [L; 3]) {
+        let zero = L::splat(0.0);
+        let one = L::splat(1.0);
+        let (axc, ayc) = (abs_l(xc), abs_l(yc));
+        let (ax, ay) = (axc + rx, ayc + ry);
+        let (nx, ny) = ((axc - rx).max_or_rhs(zero), (ayc - ry).max_or_rhs(zero));
+        let vmax = (one + ax * ax + ay * ay).sqrt() * L::splat(1.0 + 4.0 * U);
+        let vmin = (one + nx * nx + ny * ny).sqrt() * L::splat(1.0 - 4.0 * U);
+        let (ivmin, ivmax) = (one / vmin, one / vmax);
+        let mut lo = [zero; 3];
+        let mut hi = [zero; 3];
+        for a in 0..3 {
+            let (b0, b1, b2) = (self.b[0][a], self.b[1][a], self.b[2][a]);
+            let c = L::splat(b0) * xc + L::splat(b1) * yc - L::splat(b2);
+            let r = L::splat(b0.abs()) * rx + L::splat(b1.abs()) * ry;
+            let e = (L::splat(b0.abs()) * axc + L::splat(b1.abs()) * ayc + L::splat(b2.abs()) + r)
+                * L::splat(8.0 * U);
+            let (l, h) = (c - r - e, c + r + e);
+            let dl = L::select(l.lt(zero), l * ivmin, l * ivmax);
+            let dh = L::select(h.gt(zero), h * ivmin, h * ivmax);
+            let pad = L::splat(self.delta * 1.01) + (abs_l(dl) + abs_l(dh)) * L::splat(8.0 * U);
+            (lo[a], hi[a]) = (dl - pad, dh + pad);
+        }
+        (lo, hi)
+    }
+
     /// The affine form of set-up covectors `n` (module docs).
     pub fn affine(&self, n: &[[f32; 3]; 3]) -> AffineTri {
         // m_k = B_k . n (column k of B: the camera axis k in world space), per edge in lanes.
@@ -279,6 +346,14 @@ impl FilmFrame {
             n1: nx.abs() + ny.abs() + nz.abs(),
         }
     }
+}
+
+/// `|x|` per lane (a function, not a closure: closures have no target features, so their
+/// lane operations would be out-of-line calls inside the AVX-512 kernel).
+#[inline(always)]
+fn abs_l<L: Lanes>(x: L) -> L {
+    let zero = L::splat(0.0);
+    L::select(x.lt(zero), zero - x, x)
 }
 
 /// A set-up triangle's three edge covectors in camera space (`m_i = B^T n_i`, lanes 0-2;
@@ -343,26 +418,12 @@ impl PacketBox {
         // coordinates and the two sides' centre and radius in one register each, per lane
         // the operations of `FilmFrame::xf` / `yf` and `side` below in their order (the same
         // bits; tested against `new_general` below).
-        let (gx0, gx1) = (fx0 - fr.x0, fx1 - fr.x0);
-        let inside = if fr.x0 == 0.0 {
-            fx0 >= fr.fx_lo && fx1 < fr.fx_hi
-        } else {
-            fx0 >= fr.fx_lo && fx1 <= fr.fx_hi
-        };
-        let film = if fr.x0 == 0.0 {
-            Vec4::new(fx0, fx1, fy1, fy0)
-        } else {
-            Vec4::new(gx0, gx1, fy1, fy0)
-        };
-        if fr.region
-            && inside
-            && fx0 <= fx1
-            && fy0 <= fy1
-            && film.x >= 0.0
-            && film.y <= fr.w
-            && fy0 >= 0.0
-            && fy1 <= fr.h
-        {
+        if fr.in_region(fx0, fx1, fy0, fy1) {
+            let film = if fr.x0 == 0.0 {
+                Vec4::new(fx0, fx1, fy1, fy0)
+            } else {
+                Vec4::new(fx0 - fr.x0, fx1 - fr.x0, fy1, fy0)
+            };
             let q = Vec4::splat(2.0) * film / fr.wv;
             let u = Vec4::select(XY, q - Vec4::ONE, Vec4::ONE - q);
             // [xl, xh, yl, yh]

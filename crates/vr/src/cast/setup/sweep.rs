@@ -16,7 +16,11 @@
 //!   runs on sixteen packets at once, one lane per packet, the run's box splatted
 //!   ([`run_reaches`]); only the packets it passes meet the run's triangles. It is
 //!   conservative as the walk's is (every lane's reciprocal lies in its packet's interval,
-//!   float products are monotone), so it drops no hit.
+//!   float products are monotone), so it drops no hit. A packet's interval comes from bounds
+//!   of its lanes' directions: for packets inside the film frame's region, bounds from the
+//!   packet's affine box, sixteen packets at a time (`FilmFrame::dir_rows`: one pass instead
+//!   of two horizontal reductions per packet, a slightly wider interval); for the others the
+//!   lanes' own range.
 //! - **The early exit per run.** Before each run (the tile's leaves in near-depth order) the
 //!   packets whose every lane has a hit nearer than the run's near depth (plus the slack)
 //!   leave the sweep, sixteen compares at once; the sweep ends when none is left. A packet's
@@ -95,7 +99,8 @@ pub(super) fn sweep_edges<L: LaneReduce>(
     ok
 }
 
-/// Every packet of the tile into `pk`: its chunk rays (`sample_chunk`) and affine box.
+/// Every packet of the tile into `pk`: its chunk rays (`sample_chunk`), affine box and
+/// reciprocal-direction interval (module docs, "the run-box test").
 #[inline(always)]
 fn gen_packets<L: LaneReduce>(
     set: &SampleSet,
@@ -135,15 +140,36 @@ fn gen_packets<L: LaneReduce>(
             for (f, v) in pb.scalars().into_iter().enumerate() {
                 row[f][p % 16] = v;
             }
-            // The direction's range, turned into the interval row by row below.
-            let [x, y, z] = rays.d;
-            let (lo, hi) = (L::hmin4([x, y, z, z]), L::hmax4([x, y, z, z]));
-            let row = &mut pk.intervals[p / 16];
-            for a in 0..3 {
-                row[a][p % 16] = hi[a];
-                row[3 + a][p % 16] = lo[a];
+            // The direction's range, turned into the interval row by row below: for packets
+            // inside the frame's region bounded from their boxes sixteen at a time
+            // (`FilmFrame::dir_rows`), for the others the lanes' own range.
+            if !fr.in_region(lo.x, hi.x, lo.y, hi.y) {
+                let [x, y, z] = rays.d;
+                let (lo, hi) = (L::hmin4([x, y, z, z]), L::hmax4([x, y, z, z]));
+                pk.own_range.push((p as u32, lo, hi));
             }
             p += 1;
+        }
+    }
+    for (r, row) in pk.intervals[..p.div_ceil(16)].iter_mut().enumerate() {
+        let b = &pk.boxes[r];
+        // (No closure for the loads: it would call the lane loads out of line.)
+        let (lo, hi) = fr.dir_rows([
+            L::load16(&b[0]),
+            L::load16(&b[1]),
+            L::load16(&b[2]),
+            L::load16(&b[3]),
+        ]);
+        for a in 0..3 {
+            hi[a].write(&mut row[a]);
+            lo[a].write(&mut row[3 + a]);
+        }
+    }
+    for &(q, lo, hi) in &pk.own_range {
+        let (row, k) = (&mut pk.intervals[q as usize / 16], q as usize % 16);
+        for a in 0..3 {
+            row[a][k] = hi[a];
+            row[3 + a][k] = lo[a];
         }
     }
     for row in &mut pk.intervals[..p.div_ceil(16)] {

@@ -34,10 +34,13 @@ pub struct TilePackets {
     pub lim: Vec<f32>,
     /// The box rows: `[xc, yc, rx, ry, ka, kb]`, sixteen packets per row.
     pub boxes: Vec<[[f32; 16]; 6]>,
-    /// The interval rows: per axis the smallest and largest reciprocal direction of the
-    /// packet's lanes, `[i0.x, i0.y, i0.z, i1.x, i1.y, i1.z]`, where every lane's is finite and
-    /// of one sign; both 0 on an axis where not (the run-box test then passes every box).
+    /// The interval rows: per axis bounds of the reciprocal directions of the packet's lanes,
+    /// `[i0.x, i0.y, i0.z, i1.x, i1.y, i1.z]`, where they are finite and of one sign; both 0
+    /// on an axis where not (the run-box test then passes every box).
     pub intervals: Vec<[[f32; 16]; 6]>,
+    /// Packets whose direction range is their lanes' own (outside the film frame's region):
+    /// `(packet, smallest, largest)` per axis in lanes 0-2.
+    pub own_range: Vec<(u32, glam::Vec4, glam::Vec4)>,
 }
 
 impl Packet {
@@ -69,5 +72,6 @@ impl TilePackets {
         self.lim.resize(n.next_multiple_of(16), f32::INFINITY);
         self.boxes.resize(n.div_ceil(16), [[0.0; 16]; 6]);
         self.intervals.resize(n.div_ceil(16), [[0.0; 16]; 6]);
+        self.own_range.clear();
     }
 }
