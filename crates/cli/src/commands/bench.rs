@@ -81,13 +81,16 @@ fn parse_quality(s: &str) -> Result<parallax_embree::Quality, String> {
 fn print_rays(rows: &[rays::RaysRow], embree_missing: Option<&str>) {
     println!(
         "| scene | mode | method | rays | build ms | trace ms | Mrays/s | vs Embree best \
-         | same prim | same t | hit rate | threads |"
+         | per round: median [min, max] | same prim | same t | hit rate | threads |"
     );
-    println!("|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!("|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for r in rows {
         let vs = r.vs_embree_best.map_or("-".into(), |v| format!("{v:.2}x"));
+        let per_round = r.vs_embree_best_rounds.map_or("-".into(), |s| {
+            format!("{:.2}x [{:.2}, {:.2}]", s.median, s.min, s.max)
+        });
         println!(
-            "| {} | {} | {} | {} | {:.1} | {:.1} | {:.2} | {vs} | {:.4}% | {:.4}% | {:.3} | {} |",
+            "| {} | {} | {} | {} | {:.1} | {:.1} | {:.2} | {vs} | {per_round} | {:.4}% | {:.4}% | {:.3} | {} |",
             r.scene,
             r.mode,
             r.method,

@@ -21,7 +21,8 @@
 //! `rtcIntersect8`, `rtcIntersect16` and `rtcIntersect1M` streams. Timing: rounds of all
 //! methods in turn (round robin, so a burst of load from other processes hurts one run of each
 //! method, not all runs of one), best round per method and band, on all rayon threads, over
-//! chunks of [`CHUNK`] rays. Every method's answers are compared with parallax's single-ray
+//! chunks of [`CHUNK`] rays; each row also has its ratio to the best Embree method per round
+//! (median and range: the rounds share the host's state, so its drift cancels in each ratio). Every method's answers are compared with parallax's single-ray
 //! answers (same primitive, or both miss): parallax's packets must agree exactly, Embree on
 //! almost every ray (its test is not watertight, so at a shared edge it may report the
 //! neighbour).
@@ -43,6 +44,7 @@ use parallax_core::cpu_time::{ms_between, process_cpu_ns};
 use parallax_core::math::Frame;
 use parallax_core::sampling::lowdisc::sobol_2d;
 use parallax_core::sampling::{Rng, warp};
+use parallax_core::spread::Spread;
 use parallax_embree::{EmbreeHit, EmbreeScene, Options, Quality};
 use parallax_scene::Scene;
 use parallax_scene::camera::{Camera, CameraModel};
@@ -97,6 +99,12 @@ pub struct RaysRow {
     pub mrays_per_s: f64,
     /// Throughput over the best Embree method of the same mode (None without Embree).
     pub vs_embree_best: Option<f64>,
+    /// The same per round (that round's times of this method and of that Embree method, summed
+    /// over the mode's bands): median, min, max. On a host whose speed drifts between rounds
+    /// the drift cancels in each round's ratio and shows in the range.
+    pub vs_embree_best_rounds: Option<Spread>,
+    /// Every round's trace ms (summed over bands; `trace_ms` sums the bands' best rounds).
+    pub ms_trace_rounds: Vec<f64>,
     /// Fraction of rays whose closest primitive (or miss) equals parallax's single-ray answer.
     pub same_prim: f64,
     /// Fraction of rays with the same primitive, or a hit at the same distance (within 1e-5
@@ -328,9 +336,11 @@ pub fn bounce_rays(bvh: &Bvh, scene: &Scene, primary: &[Ray]) -> Vec<Ray> {
 }
 
 /// Per-method results accumulated over the bands of one mode.
-#[derive(Clone, Copy, Default)]
+#[derive(Clone, Default)]
 struct Acc {
     ms: f64,
+    /// Wall ms per round, summed over bands.
+    rounds: Vec<f64>,
     cpu_ms: f64,
     same: u64,
     same_t: u64,
@@ -350,14 +360,24 @@ fn time_band(
 ) {
     let mut outs: Vec<Vec<Answer>> = methods.iter().map(|_| vec![None; rays.len()]).collect();
     let mut best = vec![(f64::INFINITY, f64::INFINITY); methods.len()];
-    for _ in 0..repeats.max(1) {
-        for ((m, out), b) in methods.iter().zip(&mut outs).zip(&mut best) {
+    let rounds = repeats.max(1) as usize;
+    for a in acc.iter_mut() {
+        a.rounds.resize(rounds, 0.0);
+    }
+    for round in 0..rounds {
+        let it = methods
+            .iter()
+            .zip(&mut outs)
+            .zip(&mut best)
+            .zip(acc.iter_mut());
+        for (((m, out), b), a) in it {
             let (c0, t0) = (process_cpu_ns(), Instant::now());
             rays.par_chunks(CHUNK)
                 .zip(out.par_chunks_mut(CHUNK))
                 .for_each(|(r, o)| m.trace(bvh, emb, r, coherent, o));
             let wall = t0.elapsed().as_secs_f64() * 1e3;
             let cpu = ms_between(c0, process_cpu_ns());
+            a.rounds[round] += wall;
             if wall < b.0 {
                 *b = (wall, cpu);
             }
@@ -402,6 +422,8 @@ pub fn run(scene: &Scene, camera: &Camera, opts: &RaysOptions) -> Result<RaysRep
         trace_cpu_ms: 0.0,
         mrays_per_s: 0.0,
         vs_embree_best: None,
+        vs_embree_best_rounds: None,
+        ms_trace_rounds: Vec::new(),
         same_prim: 1.0,
         same_t: 1.0,
         hit_rate: 0.0,
@@ -495,12 +517,13 @@ pub fn run(scene: &Scene, camera: &Camera, opts: &RaysOptions) -> Result<RaysRep
             }
         }
         let mrays = |a: &Acc| n as f64 / (a.ms * 1e3);
+        // The Embree method of the highest throughput (best rounds) and its per-round times.
         let best_embree = methods
             .iter()
             .zip(&acc)
             .filter(|(m, _)| m.is_embree())
-            .map(|(_, a)| mrays(a))
-            .fold(None, |b: Option<f64>, x| Some(b.map_or(x, |b| b.max(x))));
+            .max_by(|(_, a), (_, b)| mrays(a).total_cmp(&mrays(b)))
+            .map(|(_, a)| (mrays(a), a.rounds.clone()));
         for (m, a) in methods.iter().zip(&acc) {
             let mut r = row(
                 mode,
@@ -511,7 +534,12 @@ pub fn run(scene: &Scene, camera: &Camera, opts: &RaysOptions) -> Result<RaysRep
             r.trace_ms = a.ms;
             r.trace_cpu_ms = a.cpu_ms;
             r.mrays_per_s = mrays(a);
-            r.vs_embree_best = best_embree.map(|b| mrays(a) / b);
+            r.vs_embree_best = best_embree.as_ref().map(|(b, _)| mrays(a) / b);
+            r.vs_embree_best_rounds = best_embree.as_ref().map(|(_, e)| {
+                let ratios: Vec<f64> = e.iter().zip(&a.rounds).map(|(e, o)| e / o).collect();
+                Spread::of(&ratios)
+            });
+            r.ms_trace_rounds = a.rounds.clone();
             r.same_prim = a.same as f64 / n.max(1) as f64;
             r.same_t = a.same_t as f64 / n.max(1) as f64;
             r.hit_rate = a.hits as f64 / n.max(1) as f64;
