@@ -22,8 +22,9 @@
 //! methods in turn (round robin, so a burst of load from other processes hurts one run of each
 //! method, not all runs of one), best round per method and band, on all rayon threads, over
 //! chunks of [`CHUNK`] rays; each row also has its ratio to the best Embree method per round
-//! (median and range: the rounds share the host's state, so its drift cancels in each ratio). Every method's answers are compared with parallax's single-ray
-//! answers (same primitive, or both miss): parallax's packets must agree exactly, Embree on
+//! (median and range: the rounds share the host's state, so its drift cancels in each
+//! ratio). Every method's answers are compared with parallax's single-ray answers (same
+//! primitive, or both miss): parallax's packets must agree exactly, Embree on
 //! almost every ray (its test is not watertight, so at a shared edge it may report the
 //! neighbour).
 //!
@@ -523,7 +524,7 @@ pub fn run(scene: &Scene, camera: &Camera, opts: &RaysOptions) -> Result<RaysRep
             .zip(&acc)
             .filter(|(m, _)| m.is_embree())
             .max_by(|(_, a), (_, b)| mrays(a).total_cmp(&mrays(b)))
-            .map(|(_, a)| (mrays(a), a.rounds.clone()));
+            .map(|(_, a)| (mrays(a), &a.rounds));
         for (m, a) in methods.iter().zip(&acc) {
             let mut r = row(
                 mode,
@@ -534,8 +535,8 @@ pub fn run(scene: &Scene, camera: &Camera, opts: &RaysOptions) -> Result<RaysRep
             r.trace_ms = a.ms;
             r.trace_cpu_ms = a.cpu_ms;
             r.mrays_per_s = mrays(a);
-            r.vs_embree_best = best_embree.as_ref().map(|(b, _)| mrays(a) / b);
-            r.vs_embree_best_rounds = best_embree.as_ref().map(|(_, e)| {
+            r.vs_embree_best = best_embree.map(|(b, _)| mrays(a) / b);
+            r.vs_embree_best_rounds = best_embree.map(|(_, e)| {
                 let ratios: Vec<f64> = e.iter().zip(&a.rounds).map(|(e, o)| e / o).collect();
                 Spread::of(&ratios)
             });

@@ -201,7 +201,7 @@ impl FilmFrame {
         if [ex, ey, ka, kb, ax, ay].iter().all(|x| x.is_finite()) {
             (fr.ex, fr.ey, fr.ka, fr.kb, fr.region) = (ex, ey, ka, kb, true);
             fr.ev = Vec4::new(ex, ey, ex, ey);
-            fr.delta = fr.rb * (13.2 * U + 6.94 * (ex + ey)) * 1.01;
+            fr.delta = fr.delta_of(ex, ey);
         }
         Some(fr)
     }
@@ -230,6 +230,14 @@ impl FilmFrame {
         4.1 * U * self.ty * (2.0 * fym / self.h + 1.0 + self.sy.abs()) * 1.01
     }
 
+    /// `Delta = rb (13.2 U + 6.94 (e_x + e_y))` (doubled U-terms, module docs step 1): the
+    /// float ray's distance from `B v* / |v*|` per component, for generator roundings `ex`,
+    /// `ey`.
+    #[inline(always)]
+    fn delta_of(&self, ex: f32, ey: f32) -> f32 {
+        self.rb * (13.2 * U + 6.94 * (ex + ey)) * 1.01
+    }
+
     /// `(ka, kb)` of `tau = n1 ka + bound kb` for a camera box with `|xc| + rx <= ax`,
     /// `|yc| + ry <= ay` and generator roundings `ex`, `ey` (module docs, steps 1-3; every
     /// operation monotone increasing in the four arguments).
@@ -238,7 +246,7 @@ impl FilmFrame {
         let vmax = (1.0 + ax * ax + ay * ay).sqrt() * 1.01;
         let s = (ax + ay + 1.0) * 1.01;
         // Doubled U-terms (module docs): Delta = rb (13.2 U + 6.94 (e_x + e_y)).
-        let delta = self.rb * (13.2 * U + 6.94 * (ex + ey)) * 1.01;
+        let delta = self.delta_of(ex, ey);
         let ka = (vmax * delta + 18.2 * U * self.bmax * s) * 1.01;
         let kb = vmax * (self.rb + delta) * 1.01;
         (ka, kb)
@@ -268,17 +276,23 @@ impl FilmFrame {
         }
     }
 
+    /// The stereo eye test of the ray generation for film x in `[fx0, fx1]`: x in `[0, w)`
+    /// left, `[w, 2w]` right (the whole film for a pinhole).
+    #[inline(always)]
+    fn in_eye(&self, fx0: f32, fx1: f32) -> bool {
+        if self.x0 == 0.0 {
+            fx0 >= self.fx_lo && fx1 < self.fx_hi
+        } else {
+            fx0 >= self.fx_lo && fx1 <= self.fx_hi
+        }
+    }
+
     /// Whether a packet whose lanes' float film positions lie in `[fx0, fx1] x [fy0, fy1]`
     /// (before the eye's x offset) is inside the eye and its film rectangle, where the
     /// frame's factors and `Delta` hold (module docs, "Per-frame factors").
     #[inline(always)]
     pub fn in_region(&self, fx0: f32, fx1: f32, fy0: f32, fy1: f32) -> bool {
-        // The stereo eye test of the ray generation: x in [0, w) left, [w, 2w] right.
-        let inside = if self.x0 == 0.0 {
-            fx0 >= self.fx_lo && fx1 < self.fx_hi
-        } else {
-            fx0 >= self.fx_lo && fx1 <= self.fx_hi
-        };
+        let inside = self.in_eye(fx0, fx1);
         let (gx0, gx1) = if self.x0 == 0.0 {
             (fx0, fx1)
         } else {
@@ -413,12 +427,26 @@ impl PacketBox {
     /// eye's x offset); `None` if it leaves the frame's eye or is not finite.
     #[inline(always)]
     pub fn new(fr: &FilmFrame, fx0: f32, fx1: f32, fy0: f32, fy1: f32) -> Option<Self> {
+        Self::new_in(fr, fr.in_region(fx0, fx1, fy0, fy1), fx0, fx1, fy0, fy1)
+    }
+
+    /// [`PacketBox::new`] for a caller that has asked [`FilmFrame::in_region`] already
+    /// (`region`, its answer for this box).
+    #[inline(always)]
+    pub fn new_in(
+        fr: &FilmFrame,
+        region: bool,
+        fx0: f32,
+        fx1: f32,
+        fy0: f32,
+        fy1: f32,
+    ) -> Option<Self> {
         // Inside the eye's film rectangle (eye-local): the frame's factors (module docs,
         // "Per-frame factors"), no per-packet bound; `x(f)`, `y(f)` of the four film
         // coordinates and the two sides' centre and radius in one register each, per lane
         // the operations of `FilmFrame::xf` / `yf` and `side` below in their order (the same
         // bits; tested against `new_general` below).
-        if fr.in_region(fx0, fx1, fy0, fy1) {
+        if region {
             let film = if fr.x0 == 0.0 {
                 Vec4::new(fx0, fx1, fy1, fy0)
             } else {
@@ -449,13 +477,7 @@ impl PacketBox {
     /// register form above, and the path of packets outside the eye's film rectangle).
     #[inline(never)]
     pub fn new_general(fr: &FilmFrame, fx0: f32, fx1: f32, fy0: f32, fy1: f32) -> Option<Self> {
-        // The stereo eye test of the ray generation: x in [0, w) left, [w, 2w] right.
-        let inside = if fr.x0 == 0.0 {
-            fx0 >= fr.fx_lo && fx1 < fr.fx_hi
-        } else {
-            fx0 >= fr.fx_lo && fx1 <= fr.fx_hi
-        };
-        if !(inside && fx0 <= fx1 && fy0 <= fy1) {
+        if !(fr.in_eye(fx0, fx1) && fx0 <= fx1 && fy0 <= fy1) {
             return None;
         }
         // The eye's film x (`fx - w` for the right eye: monotone, as the generator's).

@@ -127,7 +127,8 @@ fn gen_packets<L: LaneReduce>(
             // The film box of `packet_box` (`mod.rs`) from the chunk's offset range (the
             // footprint is finite and `>= 0`: `sample_chunk` gave rays).
             let (lo, hi) = (s.film + a * s.footprint, s.film + b * s.footprint);
-            let Some(pb) = PacketBox::new(fr, lo.x, hi.x, lo.y, hi.y) else {
+            let region = fr.in_region(lo.x, hi.x, lo.y, hi.y);
+            let Some(pb) = PacketBox::new_in(fr, region, lo.x, hi.x, lo.y, hi.y) else {
                 return false;
             };
             let mut d = [[0.0; MAX_LANES]; 3];
@@ -143,7 +144,7 @@ fn gen_packets<L: LaneReduce>(
             // The direction's range, turned into the interval row by row below: for packets
             // inside the frame's region bounded from their boxes sixteen at a time
             // (`FilmFrame::dir_rows`), for the others the lanes' own range.
-            if !fr.in_region(lo.x, hi.x, lo.y, hi.y) {
+            if !region {
                 let [x, y, z] = rays.d;
                 let (lo, hi) = (L::hmin4([x, y, z, z]), L::hmax4([x, y, z, z]));
                 pk.own_range.push((p as u32, lo, hi));
