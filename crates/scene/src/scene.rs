@@ -66,11 +66,22 @@ impl Scene {
                         }
                     ))
                 }),
-            None => Ok(self
-                .cameras
-                .first()
-                .map(|c| c.desc)
-                .unwrap_or_else(|| self.framing_camera())),
+            None => match self.cameras.first() {
+                Some(c) => Ok(c.desc),
+                None => {
+                    let desc = self.framing_camera();
+                    if desc.eye.is_finite() {
+                        Ok(desc)
+                    } else {
+                        let b = self.bounds();
+                        Err(SceneError::Camera(format!(
+                            "scene {:?} spans {} to {}: too large to frame a default camera in \
+                             f32; give one with --eye and --target",
+                            self.name, b.min, b.max
+                        )))
+                    }
+                }
+            },
         }
     }
 
@@ -151,5 +162,30 @@ mod tests {
         };
         e.add_default_lighting_if_unlit();
         assert!(e.lights.is_empty() && e.environment == Vec3::ZERO && !e.default_lighting);
+    }
+
+    /// A scene of one triangle with corners at `±x`.
+    fn one_triangle(x: f32) -> Scene {
+        Scene {
+            mesh: TriangleMesh {
+                positions: vec![Vec3::new(-x, 0.0, 0.0), Vec3::new(x, 0.0, 0.0), Vec3::Y * x],
+                indices: vec![[0, 1, 2]],
+                material_ids: vec![0],
+                ..TriangleMesh::default()
+            },
+            materials: vec![Material::default()],
+            ..Scene::default()
+        }
+    }
+
+    #[test]
+    fn the_default_camera_frames_the_bounds_or_says_it_cannot() {
+        let c = one_triangle(2.0).camera(None).unwrap();
+        assert!(c.eye.is_finite() && c.eye.z > 0.0 && c.target == Vec3::new(0.0, 1.0, 0.0));
+        // Corners near f32::MAX: the framing distance overflows.
+        match one_triangle(1e38).camera(None) {
+            Err(SceneError::Camera(m)) => assert!(m.contains("too large"), "{m}"),
+            other => panic!("expected a camera error, got {other:?}"),
+        }
     }
 }
