@@ -154,8 +154,10 @@ mod tests {
         assert_eq!(s.lights.len(), 1);
         s.add_default_lighting_if_unlit();
         assert_eq!(s.lights.len(), 1, "a lit scene is left as it is");
-        let mut emissive = Material::default();
-        emissive.emissive = Vec3::ONE;
+        let emissive = Material {
+            emissive: Vec3::ONE,
+            ..Material::default()
+        };
         let mut e = Scene {
             materials: vec![emissive],
             ..Scene::default()
