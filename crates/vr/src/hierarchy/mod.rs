@@ -32,6 +32,7 @@
 //! "to accommodate the distribution of ray origins" and tests every subsample on the GPU; its
 //! Table 5 puts the thin-lens intersect at 2.8x the pinhole eyes' at 0.5 m focus.)
 
+mod distorted_rect;
 mod pose;
 
 pub use pose::Rect;

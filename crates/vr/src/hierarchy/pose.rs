@@ -186,7 +186,7 @@ pub fn eye_frame(camera: &Camera, eye: u8) -> Option<&CameraFrame> {
 /// for a camera [`movable`] does not take.
 pub fn rect_of(set: &SampleSet, idx: &[u32]) -> Option<Rect> {
     match &set.camera {
-        Camera::Distorted(c) => return Some(distorted_rect(set, c, idx)),
+        Camera::Distorted(c) => return Some(super::distorted_rect::distorted_rect(set, c, idx)),
         Camera::Fisheye(f) => return Some(fisheye_rect(set, f, idx)),
         Camera::ThinLens(c) => return Some(lens_rect(set, c, idx, 0..set.lens.len())),
         _ => {}
@@ -238,17 +238,22 @@ pub fn rect_of(set: &SampleSet, idx: &[u32]) -> Option<Rect> {
 }
 
 /// A rectangle [`rect_beam`] turns into [`Beam::EVERYTHING`] (non-finite rays).
-const UNBOUNDED: Rect = Rect {
+pub(super) const UNBOUNDED: Rect = Rect {
     x: [f32::NEG_INFINITY, f32::INFINITY],
     y: [f32::NEG_INFINITY, f32::INFINITY],
     eye: 0,
     basis: DMat3::IDENTITY,
 };
 
-/// [`rect_of`] for the lens-distorted eye: the extremes of every ray's camera-space vector
-/// (`Distorted::camera_vector`, the generators' operations), sample by sample and subsample
-/// by subsample (the radial gain is not monotone in the film position).
-fn distorted_rect(set: &SampleSet, c: &parallax_scene::camera::Distorted, idx: &[u32]) -> Rect {
+/// [`rect_of`] for the lens-distorted eye by its definition: the extremes of every ray's
+/// camera-space `(x, y)` (`Distorted::camera_vector`), one ray at a time. The build runs the
+/// same in lanes (`distorted_rect.rs`, the same values; tested against this).
+#[cfg(test)]
+pub(super) fn distorted_rect_scalar(
+    set: &SampleSet,
+    c: &parallax_scene::camera::Distorted,
+    idx: &[u32],
+) -> Rect {
     let (mut lo, mut hi) = (Vec2::INFINITY, Vec2::NEG_INFINITY);
     for &i in idx {
         let s = &set.samples[i as usize];
@@ -263,13 +268,21 @@ fn distorted_rect(set: &SampleSet, c: &parallax_scene::camera::Distorted, idx: &
             }
         }
     }
-    if lo.x > hi.x {
-        // No valid ray: a point rectangle (the tile casts nothing).
-        (lo, hi) = (Vec2::ZERO, Vec2::ZERO);
-    }
+    distorted_rect_of([lo.x, hi.x], [lo.y, hi.y])
+}
+
+/// The distorted eye's rectangle of the extremes `x`, `y` of its rays: a point rectangle at
+/// the origin where there is no valid ray (the tile casts nothing); a zero bound as `+0`.
+pub(super) fn distorted_rect_of(x: [f32; 2], y: [f32; 2]) -> Rect {
+    let (x, y) = if x[0] > x[1] {
+        ([0.0; 2], [0.0; 2])
+    } else {
+        // `v + 0.0` is `v` but for `-0.0`, which becomes `+0.0`.
+        (x.map(|v| v + 0.0), y.map(|v| v + 0.0))
+    };
     Rect {
-        x: [lo.x, hi.x],
-        y: [lo.y, hi.y],
+        x,
+        y,
         eye: 0,
         basis: DMat3::IDENTITY,
     }
