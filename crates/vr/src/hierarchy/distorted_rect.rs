@@ -9,10 +9,11 @@
 //! coordinates `((x - w / 2) / h', (h' - y) / h')` with `h' = h / 2`, `s = n_x^2 + n_y^2`, the
 //! gain `1 + s (k1 + k2 s)` of the sample's colour channel, then `(n g) tan_half_y` per
 //! component. IEEE operations round per lane whatever the width, nothing is fused, so every
-//! lane's `(x, y)` is the scalar's, and the extremes of the same values are the same values.
-//! A zero extreme is returned as `+0` by both (the sign of a zero minimum depends on the order
-//! of the compares). Rays of channels past 2 are never cast and take no part; a non-finite
-//! vector makes the rectangle unbounded, as in the scalar form.
+//! lane's `(x, y)` is the scalar's, and the extremes of the same values are the same values
+//! (`pose.rs` makes the rectangle, with a zero bound as `+0`: the sign of a zero extreme
+//! depends on the order of the compares). Rays of channels past 2 are never cast and take no
+//! part; a non-finite vector makes the rectangle unbounded, as in the scalar form. Test:
+//! `pose.rs`, `lanes_equal_the_scalar_definition`.
 //!
 //! | parameter | value |
 //! |---|---|
@@ -22,33 +23,37 @@
 use parallax_core::simd::Lanes;
 use parallax_scene::camera::Distorted;
 
-use super::pose::{Rect, UNBOUNDED};
 use crate::SampleSet;
 use crate::cast::lanes16::V16;
 
-/// The rectangle of every subsample ray of the samples `idx` (module docs).
-pub(super) fn distorted_rect(set: &SampleSet, c: &Distorted, idx: &[u32]) -> Rect {
+/// The extremes `([x0, x1], [y0, y1])` of the camera-space vectors of every subsample ray of
+/// the samples `idx` (module docs; `x0 > x1` when there is no valid ray); `None` if one is not
+/// finite (the rectangle is then unbounded).
+pub(super) type Extremes = Option<([f32; 2], [f32; 2])>;
+
+/// [`Extremes`] of the samples `idx` (module docs), in the widest lanes this CPU has.
+pub(super) fn distorted_extremes(set: &SampleSet, c: &Distorted, idx: &[u32]) -> Extremes {
     #[cfg(target_arch = "x86_64")]
     if crate::cast::isa::avx512_detected() {
         // SAFETY: the AVX-512 tier detected.
-        return unsafe { distorted_rect_avx512(set, c, idx) };
+        return unsafe { extremes_avx512(set, c, idx) };
     }
-    distorted_rect_lanes::<V16>(set, c, idx)
+    extremes_lanes::<V16>(set, c, idx)
 }
 
-/// [`distorted_rect`] in AVX-512 lanes.
+/// [`distorted_extremes`] in AVX-512 lanes.
 ///
 /// # Safety
 /// The CPU must have the AVX-512 tier (`crate::cast::isa::avx512_detected`).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512vl,avx512bw,avx512dq,avx2,bmi1,bmi2,lzcnt,popcnt")]
-unsafe fn distorted_rect_avx512(set: &SampleSet, c: &Distorted, idx: &[u32]) -> Rect {
-    distorted_rect_lanes::<crate::cast::lanes512::Z16>(set, c, idx)
+unsafe fn extremes_avx512(set: &SampleSet, c: &Distorted, idx: &[u32]) -> Extremes {
+    extremes_lanes::<crate::cast::lanes512::Z16>(set, c, idx)
 }
 
-/// [`distorted_rect`] with the lanes `L` (sixteen of them).
+/// [`distorted_extremes`] with the lanes `L` (sixteen of them).
 #[inline(always)]
-fn distorted_rect_lanes<L: Lanes>(set: &SampleSet, c: &Distorted, idx: &[u32]) -> Rect {
+pub(super) fn extremes_lanes<L: Lanes>(set: &SampleSet, c: &Distorted, idx: &[u32]) -> Extremes {
     debug_assert_eq!(L::N, 16);
     let p = &c.pinhole;
     let hh = 0.5 * p.height as f32;
@@ -95,7 +100,7 @@ fn distorted_rect_lanes<L: Lanes>(set: &SampleSet, c: &Distorted, idx: &[u32]) -
             L::and(vy.lt(inf), vy.gt(ninf)),
         );
         if valid & !L::bits(finite) != 0 {
-            return UNBOUNDED;
+            return None;
         }
         let m = L::from_fn(|l| (valid >> l & 1) as f32).gt(zero);
         lo_x = L::select(m, vx, inf).min_or_rhs(lo_x);
@@ -109,71 +114,5 @@ fn distorted_rect_lanes<L: Lanes>(set: &SampleSet, c: &Distorted, idx: &[u32]) -
         (x0, y0) = (x0.min(lo_x.get(l)), y0.min(lo_y.get(l)));
         (x1, y1) = (x1.max(hi_x.get(l)), y1.max(hi_y.get(l)));
     }
-    super::pose::distorted_rect_of([x0, x1], [y0, y1])
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::hierarchy::pose;
-    use glam::Vec3;
-    use parallax_scene::CameraDesc;
-    use parallax_scene::camera::{Camera, CameraOptions, ModelKind};
-
-    /// The rectangles in lanes (the dispatched tier and the portable `V16`) equal the scalar
-    /// definition bit for bit: per-channel distorted sets at 1, 4, 8 and 16 spp, grids too,
-    /// over runs of samples of every length (a partial last step, runs shorter than a step) and
-    /// every sample alone, and a sample set with a sample of an invalid channel and one with a
-    /// non-finite film.
-    #[test]
-    fn lanes_equal_the_scalar_definition() {
-        let desc = CameraDesc::new(Vec3::new(0.2, 1.0, 3.0), Vec3::ZERO, Vec3::Y, 70.0);
-        let cam = Camera::new(
-            ModelKind::Distorted,
-            &desc,
-            36,
-            40,
-            &CameraOptions::default(),
-        )
-        .unwrap();
-        let Camera::Distorted(c) = &cam else {
-            unreachable!()
-        };
-        let bits = |r: Rect| (r.x.map(f32::to_bits), r.y.map(f32::to_bits));
-        let mut sets = Vec::new();
-        for spp in [1, 4, 8, 16] {
-            sets.push(SampleSet::distorted(cam.clone(), spp).unwrap());
-            sets.push(SampleSet::grid(cam.clone(), spp));
-        }
-        let mut odd = SampleSet::distorted(cam.clone(), 4).unwrap();
-        odd.samples[5].channel = 3;
-        sets.push(odd.clone());
-        odd.samples[9].film.x = f32::NAN;
-        sets.push(odd);
-        let mut checked = 0;
-        for set in &sets {
-            let n = set.samples.len() as u32;
-            for (start, len) in [(0, n), (0, 1), (3, 5), (7, 17), (n - 33, 33), (11, 0)] {
-                let idx: Vec<u32> = (start..start + len).collect();
-                let want = bits(pose::distorted_rect_scalar(set, c, &idx));
-                assert_eq!(bits(distorted_rect(set, c, &idx)), want, "{start} {len}");
-                assert_eq!(
-                    bits(distorted_rect_lanes::<V16>(set, c, &idx)),
-                    want,
-                    "{start} {len}"
-                );
-                checked += 1;
-            }
-            // Every sample alone: its rays are the extremes, so each ray's bits count.
-            for i in 0..n {
-                let want = bits(pose::distorted_rect_scalar(set, c, &[i]));
-                assert_eq!(bits(distorted_rect(set, c, &[i])), want, "sample {i}");
-            }
-        }
-        assert_eq!(checked, 60);
-        // The invalid channel takes no part, the NaN film makes the rectangle unbounded.
-        let nan_set = &sets[9];
-        assert_eq!(distorted_rect(nan_set, c, &[9]), UNBOUNDED);
-        assert_eq!(distorted_rect(&sets[8], c, &[5]).x, [0.0; 2]);
-    }
+    Some(([x0, x1], [y0, y1]))
 }
