@@ -67,6 +67,15 @@ pub fn min_or_rhs<L: Lanes>(a: L, b: L) -> L {
     a.min_or_rhs(b)
 }
 
+/// `|x|` per lane as `x < 0 ? 0 - x : x` (`-0.0` and NaN pass through unchanged). A plain
+/// function, not a closure, so that a kernel compiled with target features inlines its lane
+/// operations.
+#[inline(always)]
+pub fn abs_lanes<L: Lanes>(x: L) -> L {
+    let zero = L::splat(0.0);
+    L::select(x.lt(zero), zero - x, x)
+}
+
 /// One lane: the scalar reference every other implementation is tested against.
 impl Lanes for f32 {
     const N: usize = 1;

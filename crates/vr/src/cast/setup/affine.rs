@@ -92,7 +92,7 @@ use glam::{Mat3, Vec3, Vec4};
 use parallax_scene::camera::{Camera, Pinhole};
 
 use crate::SampleSet;
-use parallax_core::simd::Lanes;
+use parallax_core::simd::{Lanes, abs_lanes};
 
 /// Unit roundoff of f32 (`2^-24`), the `U` of the bound above (the same constant as the
 /// watertight set-up's in `tri.rs`).
@@ -320,7 +320,7 @@ impl FilmFrame {
     pub fn dir_rows<L: Lanes>(&self, [xc, yc, rx, ry]: [L; 4]) -> ([L; 3], [L; 3]) {
         let zero = L::splat(0.0);
         let one = L::splat(1.0);
-        let (axc, ayc) = (abs_l(xc), abs_l(yc));
+        let (axc, ayc) = (abs_lanes(xc), abs_lanes(yc));
         let (ax, ay) = (axc + rx, ayc + ry);
         let (nx, ny) = ((axc - rx).max_or_rhs(zero), (ayc - ry).max_or_rhs(zero));
         let vmax = (one + ax * ax + ay * ay).sqrt() * L::splat(1.0 + 4.0 * U);
@@ -337,7 +337,8 @@ impl FilmFrame {
             let (l, h) = (c - r - e, c + r + e);
             let dl = L::select(l.lt(zero), l * ivmin, l * ivmax);
             let dh = L::select(h.gt(zero), h * ivmin, h * ivmax);
-            let pad = L::splat(self.delta * 1.01) + (abs_l(dl) + abs_l(dh)) * L::splat(8.0 * U);
+            let pad =
+                L::splat(self.delta * 1.01) + (abs_lanes(dl) + abs_lanes(dh)) * L::splat(8.0 * U);
             (lo[a], hi[a]) = (dl - pad, dh + pad);
         }
         (lo, hi)
@@ -360,14 +361,6 @@ impl FilmFrame {
             n1: nx.abs() + ny.abs() + nz.abs(),
         }
     }
-}
-
-/// `|x|` per lane (a function, not a closure: closures have no target features, so their
-/// lane operations would be out-of-line calls inside the AVX-512 kernel).
-#[inline(always)]
-fn abs_l<L: Lanes>(x: L) -> L {
-    let zero = L::splat(0.0);
-    L::select(x.lt(zero), zero - x, x)
 }
 
 /// A set-up triangle's three edge covectors in camera space (`m_i = B^T n_i`, lanes 0-2;

@@ -4,7 +4,7 @@
 
 use glam::{BVec4A, Vec4};
 use parallax_core::math::ROBUST_FAR_SCALE;
-use parallax_core::simd::{Lanes, max_or_rhs, min_or_rhs};
+use parallax_core::simd::{Lanes, abs_lanes, max_or_rhs, min_or_rhs};
 
 use super::tri::{RunBoxes16, Segment, TriSetup};
 use crate::cast::lanes16::LaneReduce;
@@ -126,13 +126,6 @@ pub(super) fn slab<L: Lanes>(lo: f32, hi: f32, inv: L, neg: L::M) -> (L, L) {
 /// Lanes x, y, z of a [`Vec4`].
 const XYZ: BVec4A = BVec4A::from_array([true, true, true, false]);
 
-/// `|x|` per lane (a plain function, not a closure: see [`dot_n`]).
-#[inline(always)]
-fn abs_n<L: Lanes>(x: L) -> L {
-    let zero = L::splat(0.0);
-    L::select(x.lt(zero), zero - x, x)
-}
-
 /// Lanes holding a finite value (ordered compares: false on NaN and both infinities; a plain
 /// function, not a closure, so an AVX-512 entry point inlines it).
 #[inline(always)]
@@ -144,7 +137,7 @@ pub(super) fn finite<L: Lanes>(x: L) -> L::M {
 /// `|d|_inf` per lane.
 #[inline(always)]
 pub(super) fn lane_dinf<L: Lanes>([dx, dy, dz]: [L; 3]) -> L {
-    max_or_rhs(abs_n(dx), max_or_rhs(abs_n(dy), abs_n(dz)))
+    max_or_rhs(abs_lanes(dx), max_or_rhs(abs_lanes(dy), abs_lanes(dz)))
 }
 
 /// Per-packet constants of the set-up kernels (`cast/setup/edges.rs`, `cast/setup/full.rs`): reciprocal
@@ -189,7 +182,7 @@ impl<L: Lanes> PacketSlab<L> {
         let (zero, one) = (L::splat(0.0), L::splat(1.0));
         let inv = [one / dx, one / dy, one / dz];
         let neg = [inv[0].lt(zero), inv[1].lt(zero), inv[2].lt(zero)];
-        let dinf_l = max_or_rhs(abs_n(dx), max_or_rhs(abs_n(dy), abs_n(dz)));
+        let dinf_l = max_or_rhs(abs_lanes(dx), max_or_rhs(abs_lanes(dy), abs_lanes(dz)));
         let s = Self {
             inv,
             neg,
