@@ -64,15 +64,24 @@ fn camera_xy<L: Lanes>(p: &Pinhole, fx: L, fy: L) -> (L, L) {
 /// [`unit_to_world`]).
 #[inline(always)]
 fn distorted_n<L: Lanes>(c: &Distorted, fx: L, fy: L, channel: usize) -> ([L; 3], [L; 3]) {
+    let [k1, k2] = c.coeffs[channel];
+    let (x, y) = distorted_xy(c, fx, fy, L::splat(k1), L::splat(k2));
+    unit_to_world(&c.pinhole.frame, x, y, L::splat(-1.0))
+}
+
+/// `Distorted::camera_vector`'s `x`, `y` (its `z` is `-1`) on `N` film positions with the gain
+/// coefficients `k1`, `k2` per lane (each lane's colour channel): lane-wise the same f32
+/// operations (`lens_coords`, `|n|^2`, the gain `1 + s (k1 + k2 s)`, `(n g) tan_half_y`).
+#[inline(always)]
+pub(crate) fn distorted_xy<L: Lanes>(c: &Distorted, fx: L, fy: L, k1: L, k2: L) -> (L, L) {
     let p = &c.pinhole;
     let hh = 0.5 * p.height as f32;
     let nx = (fx - L::splat(0.5 * p.width as f32)) / L::splat(hh);
     let ny = (L::splat(hh) - fy) / L::splat(hh);
     let s = nx * nx + ny * ny;
-    let [k1, k2] = c.coeffs[channel];
-    let g = L::splat(1.0) + s * (L::splat(k1) + L::splat(k2) * s);
+    let g = L::splat(1.0) + s * (k1 + k2 * s);
     let t = L::splat(p.tan_half_y);
-    unit_to_world(&p.frame, nx * g * t, ny * g * t, L::splat(-1.0))
+    (nx * g * t, ny * g * t)
 }
 
 /// `SampleSet::fast_subsample_ray` of a thin lens on `N` film positions with one lens sample

@@ -5,10 +5,9 @@
 //!
 //! **Same values as the scalar definition** (`pose::distorted_rect_scalar`, one
 //! `Distorted::camera_vector` per ray). Each lane does `camera_vector`'s f32 operations on the
-//! same operands in its order: the film position `film + offset * footprint`, the lens
-//! coordinates `((x - w / 2) / h', (h' - y) / h')` with `h' = h / 2`, `s = n_x^2 + n_y^2`, the
-//! gain `1 + s (k1 + k2 s)` of the sample's colour channel, then `(n g) tan_half_y` per
-//! component. IEEE operations round per lane whatever the width, nothing is fused, so every
+//! same operands in its order: the film position `film + offset * footprint`, then the
+//! caster's own `cast::packet::distorted_xy` (the lens coordinates, `s = n_x^2 + n_y^2`, the
+//! gain `1 + s (k1 + k2 s)` of the sample's colour channel, `(n g) tan_half_y`). IEEE operations round per lane whatever the width, nothing is fused, so every
 //! lane's `(x, y)` is the scalar's, and the extremes of the same values are the same values
 //! (`pose.rs` makes the rectangle, with a zero bound as `+0`: the sign of a zero extreme
 //! depends on the order of the compares). Rays of channels past 2 are never cast and take no
@@ -25,6 +24,7 @@ use parallax_scene::camera::Distorted;
 
 use crate::SampleSet;
 use crate::cast::lanes16::V16;
+use crate::cast::packet::distorted_xy;
 
 /// The extremes `([x0, x1], [y0, y1])` of the camera-space vectors of every subsample ray of
 /// the samples `idx` (module docs; `x0 > x1` when there is no valid ray); `None` if one is not
@@ -55,14 +55,7 @@ unsafe fn extremes_avx512(set: &SampleSet, c: &Distorted, idx: &[u32]) -> Extrem
 #[inline(always)]
 pub(super) fn extremes_lanes<L: Lanes>(set: &SampleSet, c: &Distorted, idx: &[u32]) -> Extremes {
     debug_assert_eq!(L::N, 16);
-    let p = &c.pinhole;
-    let hh = 0.5 * p.height as f32;
-    let (half_w, hh_v, tan) = (
-        L::splat(0.5 * p.width as f32),
-        L::splat(hh),
-        L::splat(p.tan_half_y),
-    );
-    let (zero, one) = (L::splat(0.0), L::splat(1.0));
+    let zero = L::splat(0.0);
     let (inf, ninf) = (L::splat(f32::INFINITY), L::splat(f32::NEG_INFINITY));
     let (mut lo_x, mut lo_y, mut hi_x, mut hi_y) = (inf, inf, ninf, ninf);
     let spp = set.offsets.len();
@@ -89,11 +82,7 @@ pub(super) fn extremes_lanes<L: Lanes>(set: &SampleSet, c: &Distorted, idx: &[u3
         }
         let (x, y) = (L::from_fn(|l| fx[l]), L::from_fn(|l| fy[l]));
         let (a, b) = (L::from_fn(|l| k1[l]), L::from_fn(|l| k2[l]));
-        let nx = (x - half_w) / hh_v;
-        let ny = (hh_v - y) / hh_v;
-        let s = nx * nx + ny * ny;
-        let g = one + s * (a + b * s);
-        let (vx, vy) = (nx * g * tan, ny * g * tan);
+        let (vx, vy) = distorted_xy(c, x, y, a, b);
         // Finite: ordered compares against both infinities (false on NaN).
         let finite = L::and(
             L::and(vx.lt(inf), vx.gt(ninf)),
