@@ -51,16 +51,17 @@ mod tests {
     use super::*;
 
     fn quad() -> TriangleMesh {
-        let mut m = TriangleMesh::default();
-        m.positions = vec![
-            Vec3::new(-1.0, -1.0, 0.0),
-            Vec3::new(1.0, -1.0, 0.0),
-            Vec3::new(1.0, 1.0, 0.0),
-            Vec3::new(-1.0, 1.0, 0.0),
-        ];
-        m.indices = vec![[0, 1, 2], [0, 2, 3]];
-        m.material_ids = vec![0, 0];
-        m
+        TriangleMesh {
+            positions: vec![
+                Vec3::new(-1.0, -1.0, 0.0),
+                Vec3::new(1.0, -1.0, 0.0),
+                Vec3::new(1.0, 1.0, 0.0),
+                Vec3::new(-1.0, 1.0, 0.0),
+            ],
+            indices: vec![[0, 1, 2], [0, 2, 3]],
+            material_ids: vec![0, 0],
+            ..Default::default()
+        }
     }
 
     #[test]

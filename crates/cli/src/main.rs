@@ -66,14 +66,13 @@ enum Command {
 
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
-    if let Some(n) = cli.threads {
-        if let Err(e) = rayon::ThreadPoolBuilder::new()
+    if let Some(n) = cli.threads
+        && let Err(e) = rayon::ThreadPoolBuilder::new()
             .num_threads(n.max(1))
             .build_global()
-        {
-            eprintln!("error: cannot set up {n} threads: {e}");
-            return std::process::ExitCode::FAILURE;
-        }
+    {
+        eprintln!("error: cannot set up {n} threads: {e}");
+        return std::process::ExitCode::FAILURE;
     }
     match dispatch(cli.command, cli.quiet) {
         Ok(()) => std::process::ExitCode::SUCCESS,

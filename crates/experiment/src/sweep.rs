@@ -86,7 +86,7 @@ impl Experiment {
     pub fn point_count(&self) -> Result<usize, ExperimentError> {
         let mut n: u64 = 1;
         for a in &self.sweep {
-            n = n.checked_mul(a.values.len() as u64).unwrap_or(u64::MAX);
+            n = n.saturating_mul(a.values.len() as u64);
         }
         if n > self.max_points {
             let axes: Vec<String> = self

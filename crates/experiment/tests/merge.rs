@@ -37,7 +37,7 @@ fn merge_checks_completeness_and_overlap() {
         std::fs::read_to_string(out.join("sub/f3.txt")).unwrap(),
         "item 3"
     );
-    let m = merge(&[a.clone()], &root.join("out2"))
+    let m = merge(std::slice::from_ref(&a), &root.join("out2"))
         .unwrap_err()
         .to_string();
     assert!(m.contains("2 of 5 items missing"), "{m}");

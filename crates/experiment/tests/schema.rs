@@ -13,8 +13,7 @@ fn parse(text: &str) -> Result<Experiment, ExperimentError> {
 fn message(text: &str) -> String {
     parse(text)
         .and_then(|e| e.points().map(|_| e))
-        .err()
-        .expect("an error")
+        .expect_err("an error")
         .to_string()
 }
 

@@ -223,11 +223,11 @@ pub fn glb_chunks(glb: &[u8]) -> Option<(Vec<u8>, Vec<u8>)> {
 /// A GLB of a JSON and a BIN chunk, lengths and padding as the spec says.
 pub fn glb(json: &[u8], bin: &[u8]) -> Vec<u8> {
     let mut j = json.to_vec();
-    while j.len() % 4 != 0 {
+    while !j.len().is_multiple_of(4) {
         j.push(b' ');
     }
     let mut b = bin.to_vec();
-    while b.len() % 4 != 0 {
+    while !b.len().is_multiple_of(4) {
         b.push(0);
     }
     let total = 12 + 8 + j.len() + if b.is_empty() { 0 } else { 8 + b.len() };

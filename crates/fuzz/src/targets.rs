@@ -65,13 +65,13 @@ impl Target {
             }
             Target::Toml => {
                 let text = String::from_utf8_lossy(data);
-                if let Ok(e) = parallax_experiment::Experiment::parse(&text, file) {
-                    if let Ok(n) = e.point_count() {
-                        if n <= 1000 {
-                            let _ = e.points();
-                        } else {
-                            let _ = e.point(n - 1);
-                        }
+                if let Ok(e) = parallax_experiment::Experiment::parse(&text, file)
+                    && let Ok(n) = e.point_count()
+                {
+                    if n <= 1000 {
+                        let _ = e.points();
+                    } else {
+                        let _ = e.point(n - 1);
                     }
                 }
             }
@@ -178,10 +178,10 @@ pub fn seeds(work: &Path) -> Vec<(Target, Vec<u8>)> {
         parallax_core::Rgb::new(x as f32 / 6.0, y as f32 / 4.0, 0.5)
     }) {
         let p = work.join("seed.png");
-        if parallax_core::image::png::write_png_linear_clamped(&p, &img).is_ok() {
-            if let Ok(b) = std::fs::read(&p) {
-                out.push((Target::Png, b));
-            }
+        if parallax_core::image::png::write_png_linear_clamped(&p, &img).is_ok()
+            && let Ok(b) = std::fs::read(&p)
+        {
+            out.push((Target::Png, b));
         }
         let e = work.join("seed.exr");
         let ch: Vec<f32> = (0..24).map(|i| 1.0 + i as f32).collect();
@@ -192,10 +192,9 @@ pub fn seeds(work: &Path) -> Vec<(Target, Vec<u8>)> {
             &[("R", &ch), ("G", &ch), ("B", &ch), ("Z", &ch)],
         )
         .is_ok()
+            && let Ok(b) = std::fs::read(&e)
         {
-            if let Ok(b) = std::fs::read(&e) {
-                out.push((Target::Exr, b));
-            }
+            out.push((Target::Exr, b));
         }
     }
     out

@@ -116,7 +116,7 @@ fn filter_keeps_only_accepted_triangles() {
     let scene = parallax_scene::Scene::load("atrium").unwrap();
     let desc = scene.camera(None).unwrap();
     let (_, view) = pinhole(&desc, 64, 40);
-    let even = |p: u32| p % 2 == 0;
+    let even = |p: u32| p.is_multiple_of(2);
     let cap =
         capture_layers_filtered(&scene, &view, &RasterOptions::layers(2), Some(&even)).unwrap();
     let g = cap.gbuffer();

@@ -20,7 +20,7 @@ fn obj_with_mtl_materials_and_texture() {
     img.put_pixel(0, 0, image::Rgb([255, 128, 0]));
     img.save(d.join("tex.png")).unwrap();
     write(
-        &d,
+        d,
         "m.mtl",
         "newmtl red\nKd 1 0 0\nNs 98\nKe 0 0 2\n\
          newmtl mirror\nillum 5\nKd 0.2 0.2 0.2\nKs 0.9 0.9 0.9\n\
@@ -64,7 +64,7 @@ fn obj_without_its_mtl_uses_the_default_material() {
     let folder = tmp("obj-nomtl");
     let d = folder.path();
     let s = load(&write(
-        &d,
+        d,
         "a.obj",
         "mtllib gone.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl x\nf 1 2 3\n",
     ));
@@ -93,7 +93,7 @@ fn malformed_obj_is_a_parse_error() {
     let folder = tmp("obj-bad");
     let d = folder.path();
     let (e, msg) = load_err(&write(
-        &d,
+        d,
         "bad.obj",
         "v 0 0 zero\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
     ));
@@ -103,7 +103,7 @@ fn malformed_obj_is_a_parse_error() {
         "{msg}"
     );
     let (e, msg) = load_err(&write(
-        &d,
+        d,
         "range.obj",
         "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
     ));

@@ -159,7 +159,7 @@ fn build_rejects_mismatched_sizes_and_bad_options() {
         crack_dilation: f32::NAN,
         ..Default::default()
     };
-    assert!(QuadTreeTracer::build(&cube, &[g.clone()], &bad).is_err());
+    assert!(QuadTreeTracer::build(&cube, std::slice::from_ref(&g), &bad).is_err());
     // max_levels 0 and huge are clamped.
     for max_levels in [0, 1, 100] {
         let o = QuadTreeOptions {

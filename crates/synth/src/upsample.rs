@@ -167,7 +167,7 @@ pub fn upsample_range(
     on_frame: &mut dyn FnMut(usize, &UpsampleFrame) -> Result<(), SynthError>,
 ) -> Vec<Result<Vec<FrameTimes>, SynthError>> {
     let bad_range = opts.period == 0
-        || frames.start % opts.period != 0
+        || !frames.start.is_multiple_of(opts.period)
         || frames.end > opts.frames
         || frames.start > frames.end;
     if opts.frames == 0 || bad_range || !(opts.fps > 0.0) {

@@ -206,8 +206,7 @@ fn cube_maps_at_the_objects_need_a_reflective_object() {
         .collect();
     let bvh = Bvh::build(&scene.mesh);
     let err = CubeMaps::capture(&scene, &bvh, CubeAt::Objects, Vec3::ZERO, 32, 1, 0)
-        .err()
-        .expect("no reflective object")
+        .expect_err("no reflective object")
         .to_string();
     assert!(err.contains("no reflective object"), "{err}");
     assert!("mirror".parse::<CubeAt>().is_err());

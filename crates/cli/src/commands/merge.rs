@@ -34,7 +34,8 @@ pub fn run(a: &MergeArgs, quiet: bool) -> Result<()> {
         );
     }
     if s.kind == "run" && !a.no_report {
-        let page = parallax_experiment::report::write_report(&[a.out.clone()], None, false)?;
+        let page =
+            parallax_experiment::report::write_report(std::slice::from_ref(&a.out), None, false)?;
         if !quiet {
             println!("report: {}", page.display());
         }

@@ -66,7 +66,7 @@ pub fn run(a: &RenderArgs, quiet: bool) -> Result<()> {
     let out = reference::render(&scene, &bvh, &camera, &opts, &|n| pb.inc(n));
     pb.finish_and_clear();
     let trace_ms = timer.stage("trace");
-    let written = output::write_render(&a.out, &out.image, out.gbuffer.as_ref(), &aovs)?;
+    let written = output::write_render(&a.out, &out.image, out.gbuffer.as_ref(), aovs)?;
     timer.stage("write");
     let stats = RunStats {
         scene: scene.name.clone(),

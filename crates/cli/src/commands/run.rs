@@ -164,11 +164,12 @@ fn check_line(
                 )
             ));
         }
-        if e.key == "scene" {
-            if let Value::String(s) = &e.value {
-                let file = parallax_scene::builtin::room::parse(s).map_or(s.as_str(), |r| r.1);
-                if !parallax_scene::builtin::NAMES.contains(&file) && !Path::new(file).exists() {
-                    bail!(exp.key_error(
+        if e.key == "scene"
+            && let Value::String(s) = &e.value
+        {
+            let file = parallax_scene::builtin::room::parse(s).map_or(s.as_str(), |r| r.1);
+            if !parallax_scene::builtin::NAMES.contains(&file) && !Path::new(file).exists() {
+                bail!(exp.key_error(
                         e.line,
                         "scene",
                         format!(
@@ -176,7 +177,6 @@ fn check_line(
                             parallax_scene::builtin::NAMES.join(", ")
                         )
                     ));
-                }
             }
         }
         args.extend(flag_args(e));
@@ -479,7 +479,11 @@ pub fn run(a: &RunArgs, quiet: bool, sh: &Shell) -> Result<()> {
         None => {
             results::write_json(&out.join(RESULTS_FILE), &results)?;
             if !a.no_report {
-                let page = parallax_experiment::report::write_report(&[out.clone()], None, false)?;
+                let page = parallax_experiment::report::write_report(
+                    std::slice::from_ref(&out),
+                    None,
+                    false,
+                )?;
                 if !quiet {
                     println!("report: {}", page.display());
                 }

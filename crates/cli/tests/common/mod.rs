@@ -32,10 +32,10 @@ impl AsRef<Path> for TestDir {
 
 impl Drop for TestDir {
     fn drop(&mut self) {
-        if std::thread::panicking() {
-            if let Some(d) = self.0.take() {
-                eprintln!("test outputs kept in {}", d.keep().display());
-            }
+        if std::thread::panicking()
+            && let Some(d) = self.0.take()
+        {
+            eprintln!("test outputs kept in {}", d.keep().display());
         }
     }
 }

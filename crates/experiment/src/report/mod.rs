@@ -270,16 +270,16 @@ fn group(rows: &[Row], x: &str, y: &str) -> Vec<Series> {
 fn plots(r: &RunResults, rows: &[Row]) -> Result<Vec<String>, ExperimentError> {
     let mut out = Vec::new();
     let has = |k: &str| rows.iter().any(|r| r.num(k).is_some());
-    if let Some(t) = TIME_KEYS.iter().find(|k| has(k)) {
-        if has("psnr") {
-            out.extend(plot_svg(
-                "quality vs time",
-                &format!("{t}"),
-                "PSNR dB",
-                &group(rows, t, "psnr"),
-                false,
-            )?);
-        }
+    if let Some(t) = TIME_KEYS.iter().find(|k| has(k))
+        && has("psnr")
+    {
+        out.extend(plot_svg(
+            "quality vs time",
+            t,
+            "PSNR dB",
+            &group(rows, t, "psnr"),
+            false,
+        )?);
     }
     let sweep_keys: Vec<&str> = r
         .points

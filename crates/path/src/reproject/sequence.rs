@@ -129,7 +129,7 @@ pub fn eye_seed(seed: u64, f: u32, eye: Eye) -> u64 {
 
 /// The stream of the reference render of `eye` at frame `f` (independent of [`eye_seed`]).
 pub fn reference_seed(seed: u64, f: u32, eye: Eye) -> u64 {
-    splitmix64(eye_seed(seed, f, eye) ^ 0x5EED_0F_2EF5_EED5)
+    splitmix64(eye_seed(seed, f, eye) ^ 0x005E_ED0F_2EF5_EED5)
 }
 
 /// The pinhole of `eye` for head pose `head` and a `width x height` film (checked).

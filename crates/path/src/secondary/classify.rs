@@ -215,10 +215,10 @@ impl Classifier<'_> {
         if outside {
             return Class::Outside;
         }
-        if let (Some(b), Some(l)) = (bvh, ldc) {
-            if b.position.distance(l.position) < s {
-                return Class::Near;
-            }
+        if let (Some(b), Some(l)) = (bvh, ldc)
+            && b.position.distance(l.position) < s
+        {
+            return Class::Near;
         }
         let ldc_first = match (bvh, ldc) {
             (_, None) => false,

@@ -133,9 +133,7 @@ impl Poly {
 /// points two Sutherland-Hodgman steps would produce). `None` if the slab misses the polygon.
 #[inline]
 pub fn span_in_slab(verts: &[DVec3], axis: usize, lo: f64, hi: f64) -> Option<(DVec3, DVec3)> {
-    let Some(&last) = verts.last() else {
-        return None;
-    };
+    let &last = verts.last()?;
     let mut min = DVec3::INFINITY;
     let mut max = DVec3::NEG_INFINITY;
     let mut a = last;

@@ -42,12 +42,12 @@ fn validate(resolution: u32, opts: &LdcOptions) -> Result<(), RasterError> {
     if opts.max_layers == 0 {
         return Err(invalid("max_layers must be at least 1".into()));
     }
-    if let Some([lo, hi]) = opts.roi {
-        if !(lo.is_finite() && hi.is_finite() && lo.cmplt(hi).all()) {
-            return Err(invalid(format!(
-                "the region of interest needs finite min < max on every axis, got {lo} .. {hi}"
-            )));
-        }
+    if let Some([lo, hi]) = opts.roi
+        && !(lo.is_finite() && hi.is_finite() && lo.cmplt(hi).all())
+    {
+        return Err(invalid(format!(
+            "the region of interest needs finite min < max on every axis, got {lo} .. {hi}"
+        )));
     }
     Ok(())
 }

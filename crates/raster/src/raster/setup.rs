@@ -195,7 +195,7 @@ impl Setup {
         let y0 = first(lo[1]).max(0);
         let x1 = last(hi[0]).min(self.width as i64 - 1);
         let y1 = last(hi[1]).min(self.height as i64 - 1);
-        (x0 <= x1 && y0 <= y1).then(|| (x0 as u32, y0 as u32, x1 as u32, y1 as u32))
+        (x0 <= x1 && y0 <= y1).then_some((x0 as u32, y0 as u32, x1 as u32, y1 as u32))
     }
 }
 

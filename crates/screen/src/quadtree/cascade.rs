@@ -578,7 +578,7 @@ mod tests {
     fn certified_pixels_are_safe() {
         let (w, h) = (64u32, 48u32);
         let (wf, hf) = (w as f32, h as f32);
-        let mut rng = Rng(0x5eed_0f_c0ffee);
+        let mut rng = Rng(0x5eed_0fc0_ffee);
         let (mut certified, mut total) = (0usize, 0usize);
         for case in 0..400u32 {
             let l = 1 + case % 5;

@@ -337,7 +337,7 @@ impl<'a> PairRows<'a> {
 /// p.end`.
 #[target_feature(enable = "avx2,f16c")]
 pub(super) unsafe fn uncertified64(er: &[u8], p: &PairRows, w0: usize) -> u64 {
-    assert!(er.len() >= 64 && w0 % 64 == 0 && w0 + 64 <= p.end);
+    assert!(er.len() >= 64 && w0.is_multiple_of(64) && w0 + 64 <= p.end);
     // SAFETY: 64 readable bytes (asserted).
     let (v0, v1) = unsafe {
         (
@@ -512,14 +512,14 @@ mod tests {
     fn fill(rng: &mut Rng, er: &mut [u8], l: u32) {
         let n = 1usize << l;
         let run = match l {
-            1 => rng.next() % 2 == 0,
-            6 => rng.next() % 4 == 0,
-            _ => rng.next() % 3 == 0,
+            1 => rng.next().is_multiple_of(2),
+            6 => rng.next().is_multiple_of(4),
+            _ => rng.next().is_multiple_of(3),
         };
         if run {
             er[..n].fill(l as u8);
         } else if l == 1 {
-            let v = if rng.next() % 2 == 0 {
+            let v = if rng.next().is_multiple_of(2) {
                 0
             } else {
                 super::super::node::NO_PLANE
@@ -565,7 +565,11 @@ mod tests {
             for (l, lv) in levels.iter_mut().enumerate().skip(1) {
                 let qy = (j >> l) as usize;
                 for q in 0..lv.w as usize {
-                    let g = if rng.next() % 4 == 0 { 1e-3 } else { 20.0 };
+                    let g = if rng.next().is_multiple_of(4) {
+                        1e-3
+                    } else {
+                        20.0
+                    };
                     lv.nodes[qy * lv.w as usize + q] = Node::plane_with_gradient(
                         rng.f(0.0, 1.0),
                         rng.f(-g, g),

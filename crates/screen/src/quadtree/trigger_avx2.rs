@@ -493,7 +493,7 @@ mod tests {
                     // guard; some far behind or in front, for the bounded step.
                     let (normal, offset): (Vec<Vec3>, Vec<f32>) = (0..n)
                         .map(|p| match rng.next() % 10 {
-                            _ if coherent && rng.next() % 16 != 0 => {
+                            _ if coherent && !rng.next().is_multiple_of(16) => {
                                 let nv = Vec3::new(rng.f(-0.5, 0.5), rng.f(-0.5, 0.5), -1.0);
                                 (nv.normalize(), rng.f(-8.0, -2.0))
                             }

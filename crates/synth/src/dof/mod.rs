@@ -141,7 +141,7 @@ pub fn lens_strata(n: u32) -> (u32, u32) {
     let n = n.max(1);
     let rows = (1..=n)
         .take_while(|r| r * r <= n)
-        .filter(|r| n % r == 0)
+        .filter(|r| n.is_multiple_of(*r))
         .last()
         .unwrap_or(1);
     (n / rows, rows)

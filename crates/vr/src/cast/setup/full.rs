@@ -85,7 +85,7 @@ pub(super) fn closest_full<L: Lanes>(
         start = end;
         // The BVH's robust slab test (Ize 2013 far scaling) of the packet on the run's box:
         // runs no ray of the packet can reach (before its closest hit so far) are skipped.
-        if !packet.reaches(&seg, box_lim, valid) {
+        if !packet.reaches(seg, box_lim, valid) {
             continue;
         }
         work.tri_tests += tris.len() as u64;

@@ -464,7 +464,11 @@ mod tests {
         let (du, dv) = (rng.f() * 0.3, rng.f() * 0.3);
         Beam {
             axis: (rng.next() % 3) as u8,
-            sign: if rng.next() % 2 == 0 { 1.0 } else { -1.0 },
+            sign: if rng.next().is_multiple_of(2) {
+                1.0
+            } else {
+                -1.0
+            },
             u: [u0, u0 + du],
             v: [v0, v0 + dv],
             origin: Aabb::EMPTY.grow(o),
@@ -532,7 +536,7 @@ mod tests {
                 });
                 first += nb;
             }
-            let bm = if rng.next() % 5 == 0 {
+            let bm = if rng.next().is_multiple_of(5) {
                 Beam::EVERYTHING
             } else {
                 beam(&mut rng, o)
