@@ -37,11 +37,11 @@ fn edge_rays(eye: Vec3, a: Vec3, b: Vec3) -> Vec<Ray> {
 /// Every edge: the pair of faces and its rays.
 fn edges(eye: Vec3) -> Vec<(usize, usize, Vec<Ray>)> {
     let mut out = Vec::new();
-    for i in 0..6 {
-        for j in 0..6 {
+    for (i, &ai) in FACE_AXES.iter().enumerate() {
+        for (j, &aj) in FACE_AXES.iter().enumerate() {
             // Each unordered pair of perpendicular axes once (i < j), rays from i into j.
-            if i < j && FACE_AXES[i].dot(FACE_AXES[j]) == 0.0 {
-                out.push((i, j, edge_rays(eye, FACE_AXES[i], FACE_AXES[j])));
+            if i < j && ai.dot(aj) == 0.0 {
+                out.push((i, j, edge_rays(eye, ai, aj)));
             }
         }
     }

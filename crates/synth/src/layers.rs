@@ -195,6 +195,10 @@ pub fn capture_reference_with(
     })
 }
 
+/// What [`shaded_layers`] returns: the layers, their colours, and the milliseconds of
+/// capturing and of shading.
+pub(crate) type ShadedLayers = (Vec<GBuffer>, Vec<Image<Rgb>>, f64, f64);
+
 /// The layers of [`capture_reference_with`] and their colours, with the milliseconds of
 /// capturing and of shading; a view that sees nothing gives empty layers (environment
 /// colour), not an error. `only` (when given) keeps the triangles it accepts out of nothing
@@ -211,7 +215,7 @@ pub(crate) fn shaded_layers(
     only: Option<TriangleFilter>,
     shading: Shading,
     seed: u64,
-) -> Result<(Vec<GBuffer>, Vec<Image<Rgb>>, f64, f64), SynthError> {
+) -> Result<ShadedLayers, SynthError> {
     let t = Instant::now();
     let view = View::from_pinhole(camera)?;
     let capture = match only {

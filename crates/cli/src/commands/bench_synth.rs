@@ -17,8 +17,14 @@ use crate::args::{
 use crate::output;
 use crate::progress;
 
+/// One DDA row of a sweep: (layers, max steps if the row has them, PSNR, % miss, % occlusion).
+type DdaRow = (usize, Option<u32>, f64, f64, f64);
+
+/// The DDA sweep of one layer count: (layers, [(max steps, PSNR, % miss, % occlusion)]).
+type DdaSweep = (usize, Vec<(u32, f64, f64, f64)>);
+
 /// Prints the minimal artifact-free DDA max steps of each layer count of a sweep.
-fn print_dda_minimal(sweeps: &[(usize, Vec<(u32, f64, f64, f64)>)]) {
+fn print_dda_minimal(sweeps: &[DdaSweep]) {
     for (layers, sweep) in sweeps {
         if sweep.len() < 2 {
             continue;
@@ -35,10 +41,8 @@ fn print_dda_minimal(sweeps: &[(usize, Vec<(u32, f64, f64, f64)>)]) {
 }
 
 /// Groups the DDA rows of a sweep per layer count: (max steps, PSNR, % miss, % occlusion).
-fn dda_sweeps<'a>(
-    rows: impl Iterator<Item = (usize, Option<u32>, f64, f64, f64)> + 'a,
-) -> Vec<(usize, Vec<(u32, f64, f64, f64)>)> {
-    let mut out: Vec<(usize, Vec<(u32, f64, f64, f64)>)> = Vec::new();
+fn dda_sweeps<'a>(rows: impl Iterator<Item = DdaRow> + 'a) -> Vec<DdaSweep> {
+    let mut out: Vec<DdaSweep> = Vec::new();
     for (l, steps, p, m, o) in rows {
         let Some(n) = steps else { continue };
         match out.iter_mut().find(|(k, _)| *k == l) {

@@ -268,7 +268,7 @@ impl CubeMapTracer {
                     TraceResult::Miss => break,
                     TraceResult::Hit {
                         layer, pixel, t, ..
-                    } if self.from_behind(face, layer, pixel, ray) => {
+                    } if self.crosses_from_behind(face, layer, pixel, ray) => {
                         // Go on just past the crossing (module docs, "back sides").
                         r.t_min = t + self.skip_step(face, t, ray);
                         out.back_skips += 1;
@@ -347,7 +347,7 @@ impl CubeMapTracer {
 
     /// True when `ray` crosses the sample at `pixel` of `layer` of `face` from behind (its
     /// normal, which faces the eye, points along the ray).
-    fn from_behind(&self, face: usize, layer: u32, pixel: UVec2, ray: &Ray) -> bool {
+    fn crosses_from_behind(&self, face: usize, layer: u32, pixel: UVec2, ray: &Ray) -> bool {
         let Some(g) = self.faces[face].layers.get(layer as usize) else {
             return false;
         };

@@ -401,6 +401,9 @@ pub(crate) fn par_rows<T: Copy + Send + Sync>(
     v
 }
 
+/// A node with its level and position: `(node, level, qx, qy)`.
+type NodeAt = (Node, u32, u32, u32);
+
 /// Per pixel `(i, j)` of a `w x h` layer, the decoded plane of the node `node_of(i, j)`
 /// (`(node, level, qx, qy)`, or `None` for no plane) in [`LayerPlanes`] form, rows in parallel.
 /// `row_fast(j, normal, offset, flag)` may write the first pixels of row `j` itself (the same
@@ -417,7 +420,7 @@ pub(crate) fn decoded_planes(
         &mut [MaybeUninit<bool>],
     ) -> usize
     + Sync,
-    node_of: impl Fn(u32, u32) -> Option<(Node, u32, u32, u32)> + Sync,
+    node_of: impl Fn(u32, u32) -> Option<NodeAt> + Sync,
 ) -> LayerPlanes {
     let n = (w * h) as usize;
     let (mut normal, mut offset, mut flag) = (
@@ -434,7 +437,7 @@ pub(crate) fn decoded_planes(
             // The previous pixel's node and its decoded plane: a merged node covers a run of
             // pixels of the row, decoded once (the decode is a function of the node and its
             // position only). Every pixel of the row is written (zero where no plane).
-            let mut last: Option<((Node, u32, u32, u32), Vec3, f32)> = None;
+            let mut last: Option<(NodeAt, Vec3, f32)> = None;
             let done = row_fast(j as u32, nrow, orow, frow);
             for (i, ((nv, ov), fv)) in nrow.iter_mut().zip(orow).zip(frow).enumerate().skip(done) {
                 let (nn, c, f) = match node_of(i as u32, j as u32) {
