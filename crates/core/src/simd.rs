@@ -343,6 +343,7 @@ impl Lanes for F8 {
         F8::select(self.gt(o), self, o)
     }
     #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // the index addresses several arrays in step
     fn min_or_rhs(self, o: Self) -> Self {
         let mut r = [0.0f32; 8];
         for i in 0..8 {

@@ -19,6 +19,8 @@ impl Rng {
     pub fn new(seed: u64) -> Self {
         Rng(seed ^ 0x9e37_79b9_7f4a_7c15)
     }
+    /// The next 64 random bits (one SplitMix64 step).
+    #[allow(clippy::should_implement_trait)] // a public generator step, not an iterator
     pub fn next(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
         let mut z = self.0;

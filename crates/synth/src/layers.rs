@@ -206,6 +206,7 @@ pub(crate) type ShadedLayers = (Vec<GBuffer>, Vec<Image<Rgb>>, f64, f64);
 /// [`crate::reflect::objects`] leave their own object's far side out); `None` is the plain
 /// capture.
 #[allow(clippy::too_many_arguments)]
+#[allow(clippy::needless_range_loop)] // the index addresses several arrays in step
 pub(crate) fn shaded_layers(
     scene: &Scene,
     bvh: &Bvh,

@@ -238,6 +238,7 @@ fn bad_options_are_errors() {
 /// placements of the cube map (at the eye, and halfway between the eye and the mirrors).
 #[test]
 #[ignore]
+#[allow(clippy::needless_range_loop)] // the pixel index addresses several buffers in step
 fn error_split_by_what_the_cube_centre_sees() {
     let s = Setup::new(480, 270);
     let g = &s.reference.layers[0];

@@ -62,6 +62,7 @@ fn parse_and_name() {
 
 /// Stereo pair, 1 and 2 layers, every method: camera near plane vs fitted.
 #[test]
+#[allow(clippy::needless_range_loop)] // the eye index addresses both views and the truths
 fn stereo_camera_near_matches_fitted() {
     let (scene, bvh) = atrium();
     let desc = scene.camera(None).unwrap();

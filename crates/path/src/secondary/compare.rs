@@ -44,6 +44,7 @@ pub struct Comparison {
 /// Renders the view with `reference` and every tracer of `others`, scores them and replays the
 /// reference's batches through all (`repeats` interleaved rounds; agreement `tolerance` in
 /// world units).
+#[allow(clippy::too_many_arguments)]
 pub fn compare(
     scene: &Scene,
     camera: &Pinhole,

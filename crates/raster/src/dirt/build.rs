@@ -317,6 +317,7 @@ fn shares(wall: f64, work: &[f64]) -> Vec<f64> {
 /// mip chain run over the views in parallel. Each stage's wall time is split over the views
 /// in proportion to their work in it (the setup and rasterization's by the views' fragments),
 /// so the views' `total_ms` add up to the build's.
+#[allow(clippy::too_many_arguments)]
 fn finish_views(
     mesh: &TriangleMesh,
     views: &[Pinhole],

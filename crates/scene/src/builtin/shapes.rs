@@ -162,6 +162,7 @@ impl MeshBuilder {
         // for increasing `a`, so the +x and -z sides walk their lines backwards.
         let x_side = |x: f32| move |a: f32, y: f32| Vec3::new(x, y, a);
         let z_side = |z: f32| move |a: f32, y: f32| Vec3::new(a, y, z);
+        #[allow(clippy::type_complexity)] // a one-off local: (lines, point at (a, y), backwards)
         let sides: [(&[f32], &dyn Fn(f32, f32) -> Vec3, bool); 4] = [
             (zs, &x_side(xs[0]), false),
             (zs, &x_side(xs[nx]), true),

@@ -75,6 +75,7 @@ impl MergeCtx {
 
     /// The parent of `kids` (children at level `cl`, positions `pos`, in order
     /// (0,0), (1,0), (0,1), (1,1)); the parent is `(qx, qy)` at level `l`.
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn parent(
         &self,
         l: u32,

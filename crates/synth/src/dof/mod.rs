@@ -191,6 +191,7 @@ impl LensRays {
 
 /// The structure a depth-of-field image is traced through: the quad-tree (whose plane
 /// leaves the secondary samples need) or any other screen-space tracer.
+#[allow(clippy::large_enum_variant)] // one per reference image, never stored in bulk: no boxing
 pub enum DofStructure {
     QuadTree(QuadTreeTracer),
     Other(Method, Box<dyn ScreenTracer>),

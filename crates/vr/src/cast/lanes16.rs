@@ -504,6 +504,7 @@ pub(crate) mod tests {
     }
 
     #[test]
+    #[allow(clippy::needless_range_loop)] // the index addresses the array and the lanes in step
     fn every_lane_is_the_scalar_operation() {
         let (a, b) = (V16::from_fn(|i| A[i]), V16::from_fn(|i| B[i]));
         parallax_core::simd::assert_lanes_match_scalar(a, b, &A, &B);

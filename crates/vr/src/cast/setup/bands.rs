@@ -82,6 +82,7 @@ pub fn bands4(p: &[[Vec4; 3]; 3], o: Vec3, cone: &Cone) -> (Vec4, Vec4) {
 /// [`TileTris::refine`] of every lazy triangle of `tt.tris[first..end]` (a run), four at a
 /// time ([`bands4`]); the affine forms per triangle.
 #[inline(never)]
+#[allow(clippy::needless_range_loop)] // the index addresses several arrays in step
 pub fn refine_run(tt: &mut TileTris, first: usize, end: usize, blocks: &[Tri4]) {
     let mut j = first;
     while j < end {
