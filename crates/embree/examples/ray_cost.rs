@@ -172,12 +172,11 @@ fn main() {
     println!("{method} {mode}: {} rays, {hits} hits", rays.len());
 }
 
+/// A tracer over one chunk of rays, returning the hits.
+type Tracer<'a> = Box<dyn FnMut(&[Ray]) -> usize + 'a>;
+
 /// The tracer of `method` over one chunk of at most 64 rays; returns the hits.
-fn tracer<'a>(
-    method: &str,
-    bvh: &'a Bvh,
-    e: &'a EmbreeScene,
-) -> Box<dyn FnMut(&[Ray]) -> usize + 'a> {
+fn tracer<'a>(method: &str, bvh: &'a Bvh, e: &'a EmbreeScene) -> Tracer<'a> {
     let mut hb = vec![None; 64];
     let mut he = vec![None; 64];
     match method {

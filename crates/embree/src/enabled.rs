@@ -101,7 +101,6 @@ impl EmbreeScene {
             for (v, p) in vb.iter_mut().zip(&mesh.positions) {
                 *v = [p.x, p.y, p.z, 0.0];
             }
-            drop(vb);
             geom.set_new_buffer::<[u32; 3]>(BufferUsage::INDEX, 0, Format::UINT3, 12, nt)
                 .map_err(|e| err("rtcSetNewGeometryBuffer(index)", e))?
                 .copy_from_slice(&mesh.indices);
